@@ -1,0 +1,141 @@
+//! What the user typed, as clap parses it. Validated only for shape here; `cli::resolve`
+//! turns it into a [`crate::pipeline::Job`].
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "shutter",
+    version,
+    about = "Adds motion blur and depth of field to rendered frame sequences",
+    long_about = "Adds the camera effects a renderer left out - motion blur and depth of field - \
+to rendered frame sequences, reading colour, depth, velocity and previous/next position passes \
+from OpenEXR or 8/16-bit images.\n\nExit codes: 0 success, 1 a problem with input or output \
+files, 2 a usage error."
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Blur frames: read passes, apply an algorithm, write colour.
+    Blur(Box<BlurArgs>),
+    /// Print what is in image files: size, windows, channels, compression, matching presets.
+    Info(InfoArgs),
+    /// List the built-in presets, or show one.
+    Presets(PresetsArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct BlurArgs {
+    /// Preset name (shutter, blender, nuke, painted) or path to a .toml file; repeat to merge
+    /// several, later ones winning.
+    #[arg(long, value_name = "P")]
+    pub preset: Vec<String>,
+
+    /// Blur algorithm [default: from the preset, else none]. none copies colour through.
+    #[arg(long, value_name = "NAME")]
+    pub algorithm: Option<String>,
+
+    /// Colour pass: a file, or a sequence pattern with #### or %04d. With a multi-layer EXR
+    /// the preset finds the other passes in it.
+    #[arg(long, value_name = "PATH")]
+    pub color: String,
+
+    /// Depth pass file or pattern (default: looked up in the colour file).
+    #[arg(long, value_name = "PATH")]
+    pub depth: Option<String>,
+
+    /// Velocity pass file or pattern (default: looked up in the colour file).
+    #[arg(long, value_name = "PATH")]
+    pub velocity: Option<String>,
+
+    /// Previous-position pass file or pattern (default: looked up in the colour file).
+    #[arg(long, value_name = "PATH")]
+    pub prev: Option<String>,
+
+    /// Next-position pass file or pattern (default: looked up in the colour file).
+    #[arg(long, value_name = "PATH")]
+    pub next: Option<String>,
+
+    /// View layer substituted for {layer} in preset channel names (default: found in the file).
+    #[arg(long, value_name = "NAME")]
+    pub layer: Option<String>,
+
+    /// Fraction of the frame interval the shutter is open, centred on the frame (0.5 = 180°)
+    /// [default: from the preset, else 0.5].
+    #[arg(long, value_name = "F")]
+    pub shutter: Option<f32>,
+
+    /// Frames to process: 1001-1100, 1-99x2, 1,5,9-12 [default: every frame found on disk
+    /// for the colour pattern].
+    #[arg(long, value_name = "SPEC")]
+    pub frames: Option<String>,
+
+    /// Output file or pattern (.exr, .png, .tif, .tiff, .jpg, .jpeg).
+    #[arg(short, long, value_name = "PATH")]
+    pub output: String,
+
+    /// Write EXR as 16-bit half floats (default: 32-bit float).
+    #[arg(long)]
+    pub half: bool,
+
+    /// EXR compression: none, rle, zips, zip, piz, pxr24, b44, b44a, dwaa, dwab
+    /// [default: from the preset, else zip].
+    #[arg(long, value_name = "NAME")]
+    pub compression: Option<String>,
+
+    /// Bits per channel of PNG and TIFF output: 8 or 16 [default: from the preset, else 8].
+    #[arg(long, value_name = "BITS")]
+    pub bit_depth: Option<u8>,
+
+    /// Integer images (8/16-bit input colour and output) hold linear values, not sRGB.
+    #[arg(long)]
+    pub linear: bool,
+
+    /// Skip frames whose output already exists, so a rerun resumes.
+    #[arg(long)]
+    pub skip_existing: bool,
+
+    /// Print a JSON summary on stdout (frames, per-stage seconds, warnings).
+    #[arg(long)]
+    pub json: bool,
+
+    /// Report each frame on stderr even when it is not a terminal.
+    #[arg(short, long)]
+    pub verbose: bool,
+
+    /// Worker threads [default: RAYON_NUM_THREADS, else one per core].
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+}
+
+#[derive(Debug, Args)]
+pub struct InfoArgs {
+    /// Files to describe.
+    #[arg(required = true, value_name = "FILE")]
+    pub files: Vec<PathBuf>,
+
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct PresetsArgs {
+    #[command(subcommand)]
+    pub command: Option<PresetsCommand>,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum PresetsCommand {
+    /// Print a preset's TOML (a built-in name or a path).
+    Show {
+        /// Preset name or .toml path.
+        name: String,
+    },
+}

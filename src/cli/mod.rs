@@ -1,0 +1,413 @@
+//! The command line: parse (clap, in `args`), resolve to a job (preset merged, flags over
+//! preset values, frames listed), run, and report. Only this module prints.
+
+pub mod args;
+
+use std::io::IsTerminal;
+
+use clap::Parser;
+
+use crate::error::{Error, Result};
+use crate::io::exr::{parse_compression, ExrOptions, WRITABLE_COMPRESSIONS};
+use crate::io::file::{FileInfo, FileKind};
+use crate::io::output::{OutputFormat, OutputOptions};
+use crate::io::passes::{passes_found, Inputs};
+use crate::io::preset::{Preset, Transfer, BUILTIN};
+use crate::io::sequence::{parse_frames, PathPattern};
+use crate::motion::{Algorithm, BlurParams};
+use crate::pipeline::{run, Event, Job};
+
+use args::{BlurArgs, Cli, Command, InfoArgs, PresetsArgs, PresetsCommand};
+
+/// Parses the command line, runs it and returns the process exit code.
+pub fn main() -> i32 {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return e.exit_code();
+        }
+    };
+    let result = match cli.command {
+        Command::Blur(args) => blur(*args),
+        Command::Info(args) => info(args),
+        Command::Presets(args) => presets(args),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(error) => {
+            print_error(&error);
+            error.exit_code()
+        }
+    }
+}
+
+/// The most problems printed one by one; the rest are counted.
+const MAX_PRINTED_PROBLEMS: usize = 20;
+
+fn print_error(error: &Error) {
+    match error {
+        Error::Usage(message) => eprintln!("shutter: error: {message}"),
+        Error::Files(problems) => {
+            for problem in problems.iter().take(MAX_PRINTED_PROBLEMS) {
+                eprintln!("shutter: error: {problem}");
+            }
+            if problems.len() > MAX_PRINTED_PROBLEMS {
+                eprintln!(
+                    "shutter: error: ... and {} more problems",
+                    problems.len() - MAX_PRINTED_PROBLEMS
+                );
+            }
+            if problems.len() > 1 {
+                eprintln!(
+                    "shutter: {} problems found; nothing was written for the frames concerned",
+                    problems.len()
+                );
+            }
+        }
+    }
+}
+
+/// Turns the blur arguments into a job: the second phase of argument handling.
+pub fn resolve(args: &BlurArgs) -> Result<Job> {
+    let preset = Preset::load(&args.preset)?;
+    let algorithm_name = args
+        .algorithm
+        .clone()
+        .or_else(|| preset.blur.algorithm.clone())
+        .unwrap_or_else(|| "none".into());
+    let algorithm = Algorithm::parse(&algorithm_name).ok_or_else(|| {
+        let names: Vec<&str> = Algorithm::ALL.iter().map(|(n, _)| *n).collect();
+        Error::usage(format!(
+            "unknown algorithm '{algorithm_name}'; available: {}",
+            names.join(", ")
+        ))
+    })?;
+    let shutter = args.shutter.or(preset.blur.shutter).unwrap_or(0.5);
+    if !(0.0..=1.0).contains(&shutter) {
+        return Err(Error::usage(format!(
+            "--shutter {shutter} is outside 0..1 (the fraction of the frame the shutter is open)"
+        )));
+    }
+
+    let pattern = |p: &Option<String>| p.as_deref().map(PathPattern::parse).transpose();
+    let inputs = Inputs {
+        color: PathPattern::parse(&args.color)?,
+        depth: pattern(&args.depth)?,
+        velocity: pattern(&args.velocity)?,
+        prev: pattern(&args.prev)?,
+        next: pattern(&args.next)?,
+    };
+    let output = PathPattern::parse(&args.output)?;
+    if OutputFormat::from_path(&output.path(None)).is_none() {
+        return Err(Error::usage(format!(
+            "-o {}: unknown output format; use .exr, .png, .tif, .tiff, .jpg or .jpeg",
+            args.output
+        )));
+    }
+
+    let frames: Vec<Option<i64>> = match (&args.frames, inputs.is_sequence()) {
+        (Some(_), false) => {
+            return Err(Error::usage(
+                "--frames needs a sequence: give the inputs as patterns with #### or %04d",
+            ))
+        }
+        (Some(spec), true) => parse_frames(spec)?.into_iter().map(Some).collect(),
+        (None, true) => {
+            let source = inputs
+                .all()
+                .into_iter()
+                .map(|(_, p)| p)
+                .find(|p| p.is_sequence())
+                .expect("is_sequence");
+            let found = source.discover()?;
+            if found.is_empty() {
+                return Err(Error::usage(format!(
+                    "no files match '{}'; check the pattern or pass --frames",
+                    source.raw
+                )));
+            }
+            found.into_iter().map(Some).collect()
+        }
+        (None, false) => vec![None],
+    };
+    if inputs.is_sequence() && !output.is_sequence() {
+        return Err(Error::usage(
+            "-o must be a pattern with #### or %04d when the inputs are a sequence",
+        ));
+    }
+    if !inputs.is_sequence() && output.is_sequence() {
+        return Err(Error::usage(
+            "-o is a frame pattern but the inputs are single files; give input patterns and --frames",
+        ));
+    }
+
+    let compression_name = args
+        .compression
+        .clone()
+        .or_else(|| preset.output.compression.clone())
+        .unwrap_or_else(|| "zip".into());
+    let compression = parse_compression(&compression_name).ok_or_else(|| {
+        Error::usage(format!(
+            "unknown compression '{compression_name}'; use one of {}",
+            WRITABLE_COMPRESSIONS.join(", ")
+        ))
+    })?;
+    let bit_depth = args.bit_depth.or(preset.output.bit_depth).unwrap_or(8);
+    if bit_depth != 8 && bit_depth != 16 {
+        return Err(Error::usage(format!(
+            "--bit-depth {bit_depth}: use 8 or 16"
+        )));
+    }
+    let mut preset = preset;
+    if args.linear {
+        preset.color.transfer = Transfer::Linear;
+    }
+    let output_options = OutputOptions {
+        exr: ExrOptions {
+            compression,
+            half: args.half || preset.output.half.unwrap_or(false),
+        },
+        sixteen_bit: bit_depth == 16,
+        srgb: preset.color.transfer == Transfer::Srgb,
+    };
+
+    Ok(Job {
+        inputs,
+        output,
+        frames,
+        preset,
+        layer: args.layer.clone(),
+        algorithm,
+        params: BlurParams { shutter },
+        output_options,
+        skip_existing: args.skip_existing,
+    })
+}
+
+fn blur(args: BlurArgs) -> Result<()> {
+    if let Some(threads) = args.threads {
+        if threads == 0 {
+            return Err(Error::usage("--threads must be at least 1"));
+        }
+        // Fails only if the pool was already built, which cannot happen this early.
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build_global();
+    }
+    let job = resolve(&args)?;
+    let terminal = std::io::stderr().is_terminal();
+    let verbose = args.verbose;
+    let mut bar: Option<indicatif::ProgressBar> = None;
+    let mut on_event = |event: Event| match event {
+        Event::Started { frames } => {
+            if terminal && !verbose {
+                let b = indicatif::ProgressBar::new(frames as u64);
+                b.set_style(
+                    indicatif::ProgressStyle::with_template(
+                        "{bar:40} {pos}/{len} frames  {per_sec}  eta {eta}",
+                    )
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+                );
+                bar = Some(b);
+            } else if verbose {
+                eprintln!("shutter: {frames} frames to write");
+            }
+        }
+        Event::Written { path, .. } => match &bar {
+            Some(b) => b.inc(1),
+            None if verbose => eprintln!("shutter: wrote {}", path.display()),
+            None => {}
+        },
+        Event::Skipped { path, .. } => {
+            if verbose || terminal {
+                eprintln!("shutter: skipped {} (exists)", path.display());
+            }
+        }
+        Event::Warning(message) => match &bar {
+            Some(b) => b.println(format!("shutter: warning: {message}")),
+            None if verbose || terminal => eprintln!("shutter: warning: {message}"),
+            None => {}
+        },
+    };
+    let result = run(&job, &mut on_event);
+    if let Some(b) = bar.take() {
+        b.finish_and_clear();
+    }
+    let report = result?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).unwrap_or_default()
+        );
+    } else if verbose || terminal {
+        eprintln!(
+            "shutter: {} frames written, {} skipped in {:.2} s (read {:.2} s, process {:.2} s, write {:.2} s)",
+            report.frames_written,
+            report.frames_skipped,
+            report.wall_seconds,
+            report.read_seconds,
+            report.process_seconds,
+            report.write_seconds
+        );
+    }
+    Ok(())
+}
+
+fn info(args: InfoArgs) -> Result<()> {
+    let presets: Vec<Preset> = BUILTIN
+        .iter()
+        .map(|(name, _)| Preset::builtin(name))
+        .collect::<Result<_>>()?;
+    let mut problems = Vec::new();
+    let mut documents = Vec::new();
+    for path in &args.files {
+        let info = match FileInfo::probe(path) {
+            Ok(info) => info,
+            Err(problem) => {
+                problems.push(problem);
+                continue;
+            }
+        };
+        let mut matches: Vec<(String, Vec<&'static str>)> = presets
+            .iter()
+            .map(|p| (p.name.clone(), passes_found(&info, p)))
+            .filter(|(_, found)| !found.is_empty())
+            .collect();
+        // Best match first: most passes found; ties keep the built-in order.
+        matches.sort_by_key(|(_, found)| std::cmp::Reverse(found.len()));
+        if args.json {
+            documents.push(info_json(&info, &matches));
+        } else {
+            print!("{}", info_text(&info, &matches));
+        }
+    }
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&documents).unwrap_or_default()
+        );
+    }
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::Files(problems))
+    }
+}
+
+fn describe_kind(info: &FileInfo) -> String {
+    match &info.kind {
+        FileKind::Exr {
+            compression,
+            tiled,
+            multipart,
+        } => {
+            let mut compression = compression.clone();
+            compression.dedup();
+            format!(
+                "OpenEXR, {}, {}, {} compression",
+                if *tiled { "tiled" } else { "scan lines" },
+                if *multipart {
+                    "multi-part"
+                } else {
+                    "single part"
+                },
+                compression.join("/")
+            )
+        }
+        FileKind::Image {
+            format,
+            bits,
+            float,
+        } => format!(
+            "{}, {bits}-bit {}",
+            format.to_uppercase(),
+            if *float { "float" } else { "integer" }
+        ),
+    }
+}
+
+fn info_text(info: &FileInfo, matches: &[(String, Vec<&'static str>)]) -> String {
+    let w = &info.windows;
+    let mut text = format!("{}\n", info.path.display());
+    text.push_str(&format!("  format:         {}\n", describe_kind(info)));
+    text.push_str(&format!(
+        "  size:           {}x{}\n",
+        info.width, info.height
+    ));
+    text.push_str(&format!(
+        "  data window:    ({}, {}) - ({}, {})\n",
+        w.data_origin.0,
+        w.data_origin.1,
+        w.data_origin.0 + info.width as i32 - 1,
+        w.data_origin.1 + info.height as i32 - 1
+    ));
+    text.push_str(&format!(
+        "  display window: ({}, {}) - ({}, {})\n",
+        w.display.0,
+        w.display.1,
+        w.display.0 + w.display.2 as i32 - 1,
+        w.display.1 + w.display.3 as i32 - 1
+    ));
+    text.push_str("  channels:\n");
+    for c in &info.channels {
+        let name = c.alias.clone().unwrap_or_else(|| c.name.clone());
+        text.push_str(&format!("    {name:<28} {}\n", c.sample_type));
+    }
+    if matches.is_empty() {
+        text.push_str("  presets:        none match; write one (see README, Presets)\n");
+    } else {
+        for (i, (name, found)) in matches.iter().enumerate() {
+            let label = if i == 0 { "  presets:" } else { "" };
+            text.push_str(&format!("{label:<18}{name} ({})\n", found.join(", ")));
+        }
+    }
+    text
+}
+
+fn info_json(info: &FileInfo, matches: &[(String, Vec<&'static str>)]) -> serde_json::Value {
+    let w = &info.windows;
+    serde_json::json!({
+        "path": info.path.display().to_string(),
+        "format": describe_kind(info),
+        "width": info.width,
+        "height": info.height,
+        "data_window": [w.data_origin.0, w.data_origin.1,
+            w.data_origin.0 + info.width as i32 - 1, w.data_origin.1 + info.height as i32 - 1],
+        "display_window": [w.display.0, w.display.1,
+            w.display.0 + w.display.2 as i32 - 1, w.display.1 + w.display.3 as i32 - 1],
+        "compression": match &info.kind { FileKind::Exr { compression, .. } => compression.clone(), _ => vec![] },
+        "channels": info.channels.iter().map(|c| serde_json::json!({
+            "name": c.alias.clone().unwrap_or_else(|| c.name.clone()),
+            "type": c.sample_type,
+            "part": c.part,
+        })).collect::<Vec<_>>(),
+        "presets": matches.iter().map(|(name, found)| serde_json::json!({
+            "name": name, "passes": found,
+        })).collect::<Vec<_>>(),
+    })
+}
+
+fn presets(args: PresetsArgs) -> Result<()> {
+    match args.command {
+        None => {
+            for (name, _) in BUILTIN {
+                let preset = Preset::builtin(name)?;
+                println!("{name:<10} {}", preset.description);
+            }
+            Ok(())
+        }
+        Some(PresetsCommand::Show { name }) => {
+            if let Some((_, text)) = BUILTIN.iter().find(|(n, _)| *n == name) {
+                print!("{text}");
+                return Ok(());
+            }
+            // A file: check it loads, then print it as written.
+            Preset::load(std::slice::from_ref(&name))?;
+            let text = std::fs::read_to_string(&name)
+                .map_err(|e| Error::usage(format!("cannot read {name}: {e}")))?;
+            print!("{text}");
+            Ok(())
+        }
+    }
+}

@@ -1,0 +1,151 @@
+//! Error types: one for what the user typed wrong (exit code 2), one for problems with the
+//! files on disk (exit code 1). Every file problem names the file, the frame and, where it
+//! applies, the channel, and says what to do, on one line.
+
+use std::fmt;
+use std::path::PathBuf;
+
+/// What kind of problem a file has. Tests and callers match on this, users read the message.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ProblemKind {
+    /// The file does not exist or cannot be opened.
+    MissingFile,
+    /// A channel the preset asks for is not in the file.
+    MissingChannel,
+    /// Passes (or a pass and the colour) have different sizes.
+    SizeMismatch,
+    /// The file is damaged: bad header, truncated, undecodable data.
+    Corrupt,
+    /// A valid file that uses a feature shutter cannot read (e.g. HTJ2K, deep data).
+    Unsupported,
+    /// An output cannot be written, or would overwrite an input.
+    Output,
+}
+
+/// One problem with one file of one frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Problem {
+    pub kind: ProblemKind,
+    pub path: PathBuf,
+    /// The frame number, when the path comes from a sequence pattern.
+    pub frame: Option<i64>,
+    /// The pass the file was read for (`color`, `depth`, ...), if any.
+    pub pass: Option<&'static str>,
+    /// The channel concerned, if any.
+    pub channel: Option<String>,
+    /// What went wrong and what to do about it.
+    pub detail: String,
+}
+
+impl Problem {
+    pub fn new(kind: ProblemKind, path: impl Into<PathBuf>, detail: impl Into<String>) -> Self {
+        Self {
+            kind,
+            path: path.into(),
+            frame: None,
+            pass: None,
+            channel: None,
+            detail: detail.into(),
+        }
+    }
+
+    pub fn frame(mut self, frame: Option<i64>) -> Self {
+        self.frame = frame;
+        self
+    }
+
+    pub fn pass(mut self, pass: &'static str) -> Self {
+        self.pass = Some(pass);
+        self
+    }
+
+    pub fn channel(mut self, channel: impl Into<String>) -> Self {
+        self.channel = Some(channel.into());
+        self
+    }
+}
+
+impl fmt::Display for Problem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let what = match self.kind {
+            ProblemKind::MissingFile => "missing file",
+            ProblemKind::MissingChannel => "missing channel",
+            ProblemKind::SizeMismatch => "size mismatch",
+            ProblemKind::Corrupt => "corrupt file",
+            ProblemKind::Unsupported => "not supported",
+            ProblemKind::Output => "cannot write",
+        };
+        write!(f, "{what}: {}", self.path.display())?;
+        if let Some(frame) = self.frame {
+            write!(f, ", frame {frame}")?;
+        }
+        if let Some(pass) = self.pass {
+            write!(f, ", {pass} pass")?;
+        }
+        if let Some(channel) = &self.channel {
+            write!(f, ", channel {channel}")?;
+        }
+        // Keep the message on one line whatever the underlying error printed.
+        let detail = self.detail.replace('\n', " ");
+        write!(f, ": {detail}")
+    }
+}
+
+/// Everything the library can fail with.
+#[derive(Debug)]
+pub enum Error {
+    /// The request itself is wrong (bad flag value, unknown preset, bad frame spec): exit 2.
+    Usage(String),
+    /// One or more problems with input or output files, all found before anything was
+    /// written (preflight) or while a frame was processed: exit 1.
+    Files(Vec<Problem>),
+}
+
+impl Error {
+    pub fn usage(message: impl Into<String>) -> Self {
+        Error::Usage(message.into())
+    }
+
+    /// The process exit code for this error: 2 for usage errors, 1 for everything else.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            Error::Usage(_) => 2,
+            Error::Files(_) => 1,
+        }
+    }
+
+    /// The problems, if this is a file error.
+    pub fn problems(&self) -> &[Problem] {
+        match self {
+            Error::Usage(_) => &[],
+            Error::Files(problems) => problems,
+        }
+    }
+}
+
+impl From<Problem> for Error {
+    fn from(problem: Problem) -> Self {
+        Error::Files(vec![problem])
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Usage(message) => write!(f, "{message}"),
+            Error::Files(problems) => {
+                for (i, problem) in problems.iter().enumerate() {
+                    if i > 0 {
+                        writeln!(f)?;
+                    }
+                    write!(f, "{problem}")?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+impl std::error::Error for Error {}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;

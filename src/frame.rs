@@ -1,0 +1,176 @@
+//! The planar passes of one frame, in the canonical convention of DESIGN.md:
+//!
+//! - pixel (i, j) has its centre at (i + 0.5, j + 0.5); x grows right, y grows down;
+//! - colour is scene-linear RGB(A), premultiplied alpha, f32;
+//! - depth is positive linear distance along the view axis; `inf` means far;
+//! - velocity `v = p(0) - p(-1)` in pixels per frame;
+//! - `prev`/`next` are absolute screen positions p(-1)/p(+1) in pixels (x, y, optional z).
+//!
+//! Every plane is a row-major `Vec<f32>` of `width * height` samples. A pass that was not
+//! asked for is `None`: readers never decode what the operation does not use.
+
+/// One channel of one pass, row-major, `width * height` samples.
+pub type Plane = Vec<f32>;
+
+/// Which passes an operation needs. Readers decode exactly these.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Passes {
+    pub color: bool,
+    pub depth: bool,
+    pub velocity: bool,
+    pub prev: bool,
+    pub next: bool,
+}
+
+impl Passes {
+    pub const COLOR: Passes = Passes {
+        color: true,
+        depth: false,
+        velocity: false,
+        prev: false,
+        next: false,
+    };
+    pub const ALL: Passes = Passes {
+        color: true,
+        depth: true,
+        velocity: true,
+        prev: true,
+        next: true,
+    };
+
+    /// The names of the passes that are set, in canonical order.
+    pub fn names(self) -> Vec<&'static str> {
+        let mut names = Vec::new();
+        for (set, name) in [
+            (self.color, "color"),
+            (self.depth, "depth"),
+            (self.velocity, "velocity"),
+            (self.prev, "prev"),
+            (self.next, "next"),
+        ] {
+            if set {
+                names.push(name);
+            }
+        }
+        names
+    }
+}
+
+/// Colour: R, G, B and an optional alpha.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Color {
+    pub r: Plane,
+    pub g: Plane,
+    pub b: Plane,
+    pub a: Option<Plane>,
+}
+
+/// Absolute screen positions of the surface seen at each pixel, in pixels; `z` is its depth
+/// at that time when the renderer gives one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Positions {
+    pub x: Plane,
+    pub y: Plane,
+    pub z: Option<Plane>,
+}
+
+/// Velocity `p(0) - p(-1)` in pixels per frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Velocity {
+    pub x: Plane,
+    pub y: Plane,
+}
+
+/// Where the pixels sit in the file's coordinate space, kept so outputs keep the input's
+/// data and display windows (overscan, crops).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Windows {
+    /// Top-left corner of the data window.
+    pub data_origin: (i32, i32),
+    /// Display window: (x min, y min, width, height).
+    pub display: (i32, i32, usize, usize),
+}
+
+impl Windows {
+    pub fn full(width: usize, height: usize) -> Self {
+        Windows {
+            data_origin: (0, 0),
+            display: (0, 0, width, height),
+        }
+    }
+}
+
+/// The passes of one frame. All present planes have `width * height` samples.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    pub width: usize,
+    pub height: usize,
+    pub windows: Windows,
+    pub color: Option<Color>,
+    pub depth: Option<Plane>,
+    pub velocity: Option<Velocity>,
+    pub prev: Option<Positions>,
+    pub next: Option<Positions>,
+}
+
+impl Frame {
+    /// An empty frame of the given size: no passes yet.
+    pub fn new(width: usize, height: usize) -> Self {
+        Frame {
+            width,
+            height,
+            windows: Windows::full(width, height),
+            color: None,
+            depth: None,
+            velocity: None,
+            prev: None,
+            next: None,
+        }
+    }
+
+    pub fn pixel_count(&self) -> usize {
+        self.width * self.height
+    }
+
+    /// The screen position of the centre of pixel `index` (row-major).
+    pub fn pixel_centre(&self, index: usize) -> (f32, f32) {
+        let x = (index % self.width) as f32 + 0.5;
+        let y = (index / self.width) as f32 + 0.5;
+        (x, y)
+    }
+
+    /// Bytes held by the decoded planes (for memory accounting).
+    pub fn decoded_bytes(&self) -> usize {
+        let planes = self
+            .color
+            .as_ref()
+            .map_or(0, |c| 3 + c.a.is_some() as usize)
+            + self.depth.is_some() as usize
+            + 2 * self.velocity.is_some() as usize
+            + self.prev.as_ref().map_or(0, |p| 2 + p.z.is_some() as usize)
+            + self.next.as_ref().map_or(0, |p| 2 + p.z.is_some() as usize);
+        planes * self.pixel_count() * std::mem::size_of::<f32>()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pixel_centres_are_at_half_integers_y_down() {
+        let frame = Frame::new(4, 3);
+        assert_eq!(frame.pixel_centre(0), (0.5, 0.5));
+        assert_eq!(frame.pixel_centre(5), (1.5, 1.5));
+        assert_eq!(frame.pixel_centre(11), (3.5, 2.5));
+    }
+
+    #[test]
+    fn passes_names_in_canonical_order() {
+        assert_eq!(
+            Passes::ALL.names(),
+            ["color", "depth", "velocity", "prev", "next"]
+        );
+        assert_eq!(Passes::COLOR.names(), ["color"]);
+    }
+}

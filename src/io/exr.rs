@@ -1,0 +1,432 @@
+//! OpenEXR through the `exr` crate.
+//!
+//! Reading uses exr's block API rather than its image API: chunks are filtered by part
+//! (a part holding no wanted channel is never decompressed) and by level (only the full
+//! resolution level of a mip/rip-mapped file), then decompressed in parallel on our rayon
+//! pool — one task per band of rows — and copied straight into planar f32 buffers. Within a
+//! part every chunk holds all of its channels, so a single-part file is always inflated
+//! whole; only the wanted channels are converted and kept. f16, f32 and u32 channels all
+//! become f32.
+//!
+//! Writing uses exr's image API with scan-line blocks and an explicit compression (exr's
+//! default is RLE tiles, which is not what compositors expect).
+
+use std::fs::File;
+use std::io::{BufReader, Read, Seek, SeekFrom};
+use std::path::Path;
+
+use exr::block::chunk::{Chunk, CompressedBlock};
+use exr::block::lines::LineIndex;
+use exr::block::UncompressedBlock;
+use exr::compression::Compression;
+use exr::math::Vec2;
+use exr::meta::attribute::{IntegerBounds, SampleType, Text};
+use exr::meta::header::{Header, ImageAttributes, LayerAttributes};
+use exr::meta::{BlockDescription, MetaData};
+use exr::prelude::f16;
+use rayon::prelude::*;
+
+use crate::frame::{Plane, Windows};
+
+/// A channel of an EXR file: which part (exr calls it a layer) and which index in the part's
+/// sorted channel list.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ChannelRef {
+    pub part: usize,
+    pub index: usize,
+}
+
+/// Reads the headers only.
+pub fn read_meta(path: &Path) -> exr::error::Result<MetaData> {
+    MetaData::read_from_file(path, false)
+}
+
+/// The name of a compression method as users write it on the command line.
+pub fn compression_name(compression: Compression) -> &'static str {
+    match compression {
+        Compression::Uncompressed => "none",
+        Compression::RLE => "rle",
+        Compression::ZIP1 => "zips",
+        Compression::ZIP16 => "zip",
+        Compression::PIZ => "piz",
+        Compression::PXR24 => "pxr24",
+        Compression::B44 => "b44",
+        Compression::B44A => "b44a",
+        Compression::DWAA(_) => "dwaa",
+        Compression::DWAB(_) => "dwab",
+        Compression::HTJ2K32 => "htj2k32",
+        Compression::HTJ2K256 => "htj2k256",
+    }
+}
+
+/// The compression methods shutter can write, by name.
+pub const WRITABLE_COMPRESSIONS: &[&str] = &[
+    "none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa", "dwab",
+];
+
+/// Parses a compression name (see [`WRITABLE_COMPRESSIONS`]).
+pub fn parse_compression(name: &str) -> Option<Compression> {
+    Some(match name.to_ascii_lowercase().as_str() {
+        "none" | "uncompressed" => Compression::Uncompressed,
+        "rle" => Compression::RLE,
+        "zips" | "zip1" => Compression::ZIP1,
+        "zip" | "zip16" => Compression::ZIP16,
+        "piz" => Compression::PIZ,
+        "pxr24" => Compression::PXR24,
+        "b44" => Compression::B44,
+        "b44a" => Compression::B44A,
+        "dwaa" => Compression::DWAA(None),
+        "dwab" => Compression::DWAB(None),
+        _ => return None,
+    })
+}
+
+/// Why a file cannot be read, found from its header alone.
+pub fn unsupported_reason(header: &Header) -> Option<String> {
+    if header.deep {
+        return Some("deep data is not supported; flatten the image first".into());
+    }
+    if matches!(
+        header.compression,
+        Compression::HTJ2K32 | Compression::HTJ2K256
+    ) {
+        return Some(format!(
+            "{} compression cannot be decoded by the exr crate; re-save with ZIP, PIZ or DWA",
+            compression_name(header.compression)
+        ));
+    }
+    if let Some(channel) = header
+        .channels
+        .list
+        .iter()
+        .find(|c| c.sampling != Vec2(1, 1))
+    {
+        return Some(format!(
+            "channel {} is subsampled ({}x{}), which shutter does not read",
+            channel.name, channel.sampling.0, channel.sampling.1
+        ));
+    }
+    None
+}
+
+/// Checks, without decompressing anything, that every chunk the offset tables point at lies
+/// inside the file: catches truncated and half-copied files before any output is written.
+pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<(), String> {
+    let mut file = File::open(path).map_err(|e| e.to_string())?;
+    let file_len = file.metadata().map_err(|e| e.to_string())?.len();
+    let mut counting = CountingReader {
+        inner: BufReader::new(&mut file),
+        count: 0,
+    };
+    MetaData::read_from_buffered(&mut counting, false).map_err(|e| e.to_string())?;
+    let multipart = meta.requirements.has_multiple_layers;
+    let mut offsets = Vec::new();
+    for header in &meta.headers {
+        let tiled = matches!(header.blocks, BlockDescription::Tiles(_));
+        for _ in 0..header.chunk_count {
+            let mut bytes = [0u8; 8];
+            counting
+                .read_exact(&mut bytes)
+                .map_err(|_| "the chunk offset table is cut short".to_string())?;
+            offsets.push((u64::from_le_bytes(bytes), tiled));
+        }
+    }
+    drop(counting);
+    for (offset, tiled) in offsets {
+        // Chunk layout: [part number: i32 when multi-part] then the block coordinates (y for
+        // scan lines, four i32 for tiles), then the data size as i32, then the data.
+        let skip = if multipart { 4 } else { 0 } + if tiled { 16 } else { 4 };
+        let size_at = offset.checked_add(skip).ok_or("chunk offset overflows")?;
+        if size_at + 4 > file_len {
+            return Err(format!(
+                "the file is truncated: a chunk starts at byte {offset} of {file_len}"
+            ));
+        }
+        file.seek(SeekFrom::Start(size_at))
+            .map_err(|e| e.to_string())?;
+        let mut bytes = [0u8; 4];
+        file.read_exact(&mut bytes).map_err(|e| e.to_string())?;
+        let size = i32::from_le_bytes(bytes);
+        if size < 0 || size_at + 4 + size as u64 > file_len {
+            return Err(format!(
+                "the file is truncated: a chunk at byte {offset} needs {size} bytes, the file has {file_len}"
+            ));
+        }
+    }
+    Ok(())
+}
+
+struct CountingReader<R> {
+    inner: R,
+    count: u64,
+}
+
+impl<R: Read> Read for CountingReader<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.count += n as u64;
+        Ok(n)
+    }
+}
+
+/// The planes read from one file, with the file's size and windows.
+pub struct ReadChannels {
+    pub width: usize,
+    pub height: usize,
+    pub windows: Windows,
+    pub planes: Vec<Plane>,
+}
+
+/// The windows of a part: data window origin and the file's display window.
+pub fn windows_of(header: &Header) -> Windows {
+    let display = header.shared_attributes.display_window;
+    Windows {
+        data_origin: (
+            header.own_attributes.layer_position.0,
+            header.own_attributes.layer_position.1,
+        ),
+        display: (
+            display.position.0,
+            display.position.1,
+            display.size.0,
+            display.size.1,
+        ),
+    }
+}
+
+/// Reads the wanted channels (distinct) into planes, in the order asked for. All wanted
+/// channels must lie in parts of the same data-window size.
+pub fn read_channels(path: &Path, wanted: &[ChannelRef]) -> exr::error::Result<ReadChannels> {
+    let file = File::open(path)?;
+    let reader = exr::block::read(BufReader::new(file), false)?;
+    let meta = reader.meta_data().clone();
+
+    let first = wanted.first().map_or(0, |c| c.part);
+    let header = meta
+        .headers
+        .get(first)
+        .ok_or_else(|| invalid("part index"))?;
+    let (width, height) = (header.layer_size.0, header.layer_size.1);
+    let windows = windows_of(header);
+    for channel in wanted {
+        let part = meta
+            .headers
+            .get(channel.part)
+            .ok_or_else(|| invalid("part index"))?;
+        if part.layer_size != header.layer_size {
+            return Err(invalid(
+                "the parts holding the wanted channels differ in size",
+            ));
+        }
+        if channel.index >= part.channels.list.len() {
+            return Err(invalid("channel index"));
+        }
+        if let Some(reason) = unsupported_reason(part) {
+            return Err(unsupported(reason));
+        }
+    }
+
+    let mut planes: Vec<Plane> = wanted.iter().map(|_| vec![0.0; width * height]).collect();
+    if wanted.is_empty() || width == 0 || height == 0 {
+        return Ok(ReadChannels {
+            width,
+            height,
+            windows,
+            planes,
+        });
+    }
+
+    let parts: Vec<usize> = {
+        let mut parts: Vec<usize> = wanted.iter().map(|c| c.part).collect();
+        parts.sort_unstable();
+        parts.dedup();
+        parts
+    };
+    let chunks: Vec<Chunk> = reader
+        .filter_chunks(false, |_, tile, block| {
+            tile.level_index == Vec2(0, 0) && parts.contains(&block.layer)
+        })?
+        .collect::<exr::error::Result<_>>()?;
+
+    // Group the chunks into bands of rows: every chunk of a band covers the same rows, bands
+    // do not overlap, so each band can be written by its own task without locks.
+    let mut located = Vec::with_capacity(chunks.len());
+    for chunk in chunks {
+        let header = &meta.headers[chunk.layer_index];
+        let tile = header.get_block_data_indices(&chunk.compressed_block)?;
+        let bounds = header.get_absolute_block_pixel_coordinates(tile)?;
+        bounds.validate(Some(header.layer_size))?;
+        let y = bounds.position.1 as usize;
+        located.push((y, bounds.size.1, bounds.position.0 as usize, chunk));
+    }
+    located.sort_by_key(|(y, _, x, chunk)| (*y, *x, chunk.layer_index));
+    let mut bands: Vec<(usize, usize, Vec<Chunk>)> = Vec::new();
+    for (y, h, _, chunk) in located {
+        match bands.last_mut() {
+            Some((band_y, band_h, chunks)) if *band_y == y => {
+                *band_h = (*band_h).max(h);
+                chunks.push(chunk);
+            }
+            Some((band_y, band_h, _)) if y < *band_y + *band_h => {
+                return Err(invalid("overlapping chunks"));
+            }
+            _ => bands.push((y, h, vec![chunk])),
+        }
+    }
+    if let Some((y, h, _)) = bands.last() {
+        if y + h > height {
+            return Err(invalid("chunk outside the data window"));
+        }
+    }
+
+    // Carve each plane into one mutable slice per band.
+    let mut band_slices: Vec<Vec<&mut [f32]>> = bands.iter().map(|_| Vec::new()).collect();
+    for plane in planes.iter_mut() {
+        let mut rest: &mut [f32] = plane.as_mut_slice();
+        let mut consumed = 0;
+        for (slices, (y, h, _)) in band_slices.iter_mut().zip(&bands) {
+            let taken = std::mem::take(&mut rest);
+            let (_, tail) = taken.split_at_mut(y * width - consumed);
+            let (mine, tail) = tail.split_at_mut(h * width);
+            slices.push(mine);
+            rest = tail;
+            consumed = (y + h) * width;
+        }
+    }
+
+    let meta_ref = &meta;
+    bands
+        .into_par_iter()
+        .zip(band_slices.into_par_iter())
+        .try_for_each(|((band_y, _, chunks), mut slices)| {
+            for chunk in chunks {
+                if !matches!(
+                    chunk.compressed_block,
+                    CompressedBlock::ScanLine(_) | CompressedBlock::Tile(_)
+                ) {
+                    return Err(unsupported("deep data"));
+                }
+                let block = UncompressedBlock::decompress_chunk(chunk, meta_ref, false)?;
+                let header = &meta_ref.headers[block.index.layer];
+                for (range, line) in LineIndex::lines_in_block(block.index, &header.channels) {
+                    let target = wanted
+                        .iter()
+                        .position(|c| c.part == block.index.layer && c.index == line.channel);
+                    let Some(target) = target else { continue };
+                    let bytes = block.data.get(range).ok_or_else(|| invalid("block size"))?;
+                    let start = (line.position.1 - band_y) * width + line.position.0;
+                    let dest = slices[target]
+                        .get_mut(start..start + line.sample_count)
+                        .ok_or_else(|| invalid("line outside its band"))?;
+                    convert_line(header.channels.list[line.channel].sample_type, bytes, dest)?;
+                }
+            }
+            Ok(())
+        })?;
+
+    Ok(ReadChannels {
+        width,
+        height,
+        windows,
+        planes,
+    })
+}
+
+fn convert_line(kind: SampleType, bytes: &[u8], dest: &mut [f32]) -> exr::error::Result<()> {
+    let size = kind.bytes_per_sample();
+    if bytes.len() != dest.len() * size {
+        return Err(invalid("line byte count"));
+    }
+    match kind {
+        SampleType::F16 => {
+            for (d, b) in dest.iter_mut().zip(bytes.chunks_exact(2)) {
+                *d = f16::from_ne_bytes([b[0], b[1]]).to_f32();
+            }
+        }
+        SampleType::F32 => {
+            for (d, b) in dest.iter_mut().zip(bytes.chunks_exact(4)) {
+                *d = f32::from_ne_bytes([b[0], b[1], b[2], b[3]]);
+            }
+        }
+        SampleType::U32 => {
+            for (d, b) in dest.iter_mut().zip(bytes.chunks_exact(4)) {
+                *d = u32::from_ne_bytes([b[0], b[1], b[2], b[3]]) as f32;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// How to write an EXR.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExrOptions {
+    pub compression: Compression,
+    /// Write 16-bit half floats instead of 32-bit floats.
+    pub half: bool,
+}
+
+impl Default for ExrOptions {
+    fn default() -> Self {
+        ExrOptions {
+            compression: Compression::ZIP16,
+            half: false,
+        }
+    }
+}
+
+/// Writes named planes as one single-part scan-line EXR with the given windows. The writer
+/// should be buffered.
+pub fn write_channels(
+    writer: impl std::io::Write + Seek,
+    width: usize,
+    height: usize,
+    windows: Windows,
+    channels: Vec<(String, Plane)>,
+    options: ExrOptions,
+) -> exr::error::Result<()> {
+    use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
+    use exr::prelude::{Blocks, LineOrder, WritableImage};
+
+    let list = channels
+        .into_iter()
+        .map(|(name, plane)| {
+            let samples = if options.half {
+                FlatSamples::F16(plane.into_iter().map(f16::from_f32).collect())
+            } else {
+                FlatSamples::F32(plane)
+            };
+            AnyChannel::new(Text::from(name.as_str()), samples)
+        })
+        .collect();
+    let encoding = Encoding {
+        compression: options.compression,
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    };
+    let attributes = LayerAttributes {
+        layer_position: Vec2(windows.data_origin.0, windows.data_origin.1),
+        ..LayerAttributes::default()
+    };
+    let layer = Layer::new(
+        (width, height),
+        attributes,
+        encoding,
+        AnyChannels::sort(list),
+    );
+    let image = Image {
+        attributes: ImageAttributes::new(IntegerBounds::new(
+            (windows.display.0, windows.display.1),
+            (windows.display.2, windows.display.3),
+        )),
+        layer_data: layer,
+    };
+    image.write().to_buffered(writer)
+}
+
+fn invalid(message: impl Into<std::borrow::Cow<'static, str>>) -> exr::error::Error {
+    exr::error::Error::Invalid(message.into())
+}
+
+fn unsupported(message: impl Into<std::borrow::Cow<'static, str>>) -> exr::error::Error {
+    exr::error::Error::NotSupported(message.into())
+}

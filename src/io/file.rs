@@ -1,0 +1,295 @@
+//! What is in a file, from its header alone: size, windows, channels, compression. Used by
+//! preflight (before anything is decoded), by `shutter info`, and to plan which channels of
+//! which file each pass reads.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use crate::error::{Problem, ProblemKind};
+use crate::frame::{Plane, Windows};
+use crate::io::{exr as exr_io, image as image_io};
+
+/// The EXR magic number.
+const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+
+/// The kind of file.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FileKind {
+    Exr {
+        /// Compression of each part.
+        compression: Vec<&'static str>,
+        tiled: bool,
+        multipart: bool,
+    },
+    Image {
+        format: &'static str,
+        bits: u8,
+        float: bool,
+    },
+}
+
+/// One channel: its name, and where it lives.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChannelInfo {
+    /// The channel's name as stored.
+    pub name: String,
+    /// `part.name` when the file is multi-part and the part has a name not already in the
+    /// channel name: lets `forward.u` find channel `u` of a part named `forward`.
+    pub alias: Option<String>,
+    /// EXR part (0 for images).
+    pub part: usize,
+    /// Index in the part's channel list.
+    pub index: usize,
+    /// `f16`, `f32`, `u32`, `u8`, `u16`.
+    pub sample_type: &'static str,
+}
+
+/// A file's header, as shutter sees it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FileInfo {
+    pub path: PathBuf,
+    pub kind: FileKind,
+    pub width: usize,
+    pub height: usize,
+    pub windows: Windows,
+    pub channels: Vec<ChannelInfo>,
+}
+
+impl FileInfo {
+    /// Reads the header of an EXR, PNG, JPEG or TIFF file, and checks (without decoding
+    /// pixels) that the file can be read: supported features, chunks inside the file.
+    pub fn probe(path: &Path) -> Result<FileInfo, Problem> {
+        let mut magic = [0u8; 4];
+        let opened = std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut magic));
+        if let Err(e) = opened {
+            let kind = if path.exists() && e.kind() != std::io::ErrorKind::UnexpectedEof {
+                ProblemKind::MissingFile
+            } else if path.exists() {
+                ProblemKind::Corrupt
+            } else {
+                ProblemKind::MissingFile
+            };
+            let detail = if kind == ProblemKind::MissingFile && !path.exists() {
+                "no such file".to_string()
+            } else if kind == ProblemKind::Corrupt {
+                "the file is too short to be an image".to_string()
+            } else {
+                e.to_string()
+            };
+            return Err(Problem::new(kind, path, detail));
+        }
+        let is_exr_name = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        if magic == EXR_MAGIC {
+            probe_exr(path)
+        } else if is_exr_name {
+            Err(Problem::new(
+                ProblemKind::Corrupt,
+                path,
+                "not an OpenEXR file (bad magic number)",
+            ))
+        } else {
+            probe_image(path)
+        }
+    }
+
+    /// Index of the channel with this name (stored name first, then part-qualified alias).
+    pub fn find(&self, name: &str) -> Option<usize> {
+        self.channels
+            .iter()
+            .position(|c| c.name == name)
+            .or_else(|| {
+                self.channels
+                    .iter()
+                    .position(|c| c.alias.as_deref() == Some(name))
+            })
+    }
+
+    /// All channel names, for messages.
+    pub fn channel_list(&self) -> String {
+        if self.channels.is_empty() {
+            return "(none)".into();
+        }
+        self.channels
+            .iter()
+            .map(|c| c.alias.clone().unwrap_or_else(|| c.name.clone()))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// True for 8/16-bit integer images, where colour carries a transfer function.
+    pub fn is_integer_image(&self) -> bool {
+        matches!(self.kind, FileKind::Image { float: false, .. })
+    }
+
+    /// Decodes the given channels (indices into `channels`, distinct) into planes.
+    pub fn read(&self, channels: &[usize]) -> Result<Vec<Plane>, Problem> {
+        let corrupt = |detail: String| Problem::new(ProblemKind::Corrupt, &self.path, detail);
+        match self.kind {
+            FileKind::Exr { .. } => {
+                let refs: Vec<exr_io::ChannelRef> = channels
+                    .iter()
+                    .map(|&i| exr_io::ChannelRef {
+                        part: self.channels[i].part,
+                        index: self.channels[i].index,
+                    })
+                    .collect();
+                let read = exr_io::read_channels(&self.path, &refs).map_err(|e| match e {
+                    exr::error::Error::NotSupported(what) => {
+                        Problem::new(ProblemKind::Unsupported, &self.path, what.to_string())
+                    }
+                    exr::error::Error::Io(io) if io.kind() == std::io::ErrorKind::NotFound => {
+                        Problem::new(ProblemKind::MissingFile, &self.path, io.to_string())
+                    }
+                    other => corrupt(other.to_string()),
+                })?;
+                if (read.width, read.height) != (self.width, self.height) {
+                    return Err(Problem::new(
+                        ProblemKind::SizeMismatch,
+                        &self.path,
+                        "the file changed size since it was checked",
+                    ));
+                }
+                Ok(read.planes)
+            }
+            FileKind::Image { .. } => {
+                let (width, height, mut planes) =
+                    image_io::read_planes(&self.path).map_err(corrupt)?;
+                if (width, height) != (self.width, self.height) {
+                    return Err(Problem::new(
+                        ProblemKind::SizeMismatch,
+                        &self.path,
+                        "the file changed size since it was checked",
+                    ));
+                }
+                // A grey image's R, G and B share one plane: take it on its last use.
+                let mut result = Vec::with_capacity(channels.len());
+                for (k, &i) in channels.iter().enumerate() {
+                    let plane = self.channels[i].index;
+                    let used_later = channels[k + 1..]
+                        .iter()
+                        .any(|&j| self.channels[j].index == plane);
+                    let plane = planes
+                        .get_mut(plane)
+                        .ok_or_else(|| corrupt("fewer channels than the header said".into()))?;
+                    result.push(if used_later {
+                        plane.clone()
+                    } else {
+                        std::mem::take(plane)
+                    });
+                }
+                Ok(result)
+            }
+        }
+    }
+}
+
+fn probe_exr(path: &Path) -> Result<FileInfo, Problem> {
+    let meta = exr_io::read_meta(path).map_err(|e| match e {
+        exr::error::Error::NotSupported(what) => {
+            Problem::new(ProblemKind::Unsupported, path, what.to_string())
+        }
+        other => Problem::new(
+            ProblemKind::Corrupt,
+            path,
+            format!("cannot read the EXR header: {other}"),
+        ),
+    })?;
+    let Some(first) = meta.headers.first() else {
+        return Err(Problem::new(ProblemKind::Corrupt, path, "no parts"));
+    };
+    for header in &meta.headers {
+        if let Some(reason) = exr_io::unsupported_reason(header) {
+            return Err(Problem::new(ProblemKind::Unsupported, path, reason));
+        }
+    }
+    exr_io::check_chunk_table(path, &meta)
+        .map_err(|detail| Problem::new(ProblemKind::Corrupt, path, detail))?;
+    let multipart = meta.headers.len() > 1;
+    let mut channels = Vec::new();
+    for (part, header) in meta.headers.iter().enumerate() {
+        let part_name = header
+            .own_attributes
+            .layer_name
+            .as_ref()
+            .map(|n| n.to_string());
+        for (index, channel) in header.channels.list.iter().enumerate() {
+            let name = channel.name.to_string();
+            let alias = match &part_name {
+                Some(part_name) if multipart && !name.starts_with(&format!("{part_name}.")) => {
+                    Some(format!("{part_name}.{name}"))
+                }
+                _ => None,
+            };
+            channels.push(ChannelInfo {
+                name,
+                alias,
+                part,
+                index,
+                sample_type: match channel.sample_type {
+                    exr::meta::attribute::SampleType::F16 => "f16",
+                    exr::meta::attribute::SampleType::F32 => "f32",
+                    exr::meta::attribute::SampleType::U32 => "u32",
+                },
+            });
+        }
+    }
+    Ok(FileInfo {
+        path: path.to_path_buf(),
+        kind: FileKind::Exr {
+            compression: meta
+                .headers
+                .iter()
+                .map(|h| exr_io::compression_name(h.compression))
+                .collect(),
+            tiled: meta
+                .headers
+                .iter()
+                .any(|h| matches!(h.blocks, exr::meta::BlockDescription::Tiles(_))),
+            multipart,
+        },
+        width: first.layer_size.0,
+        height: first.layer_size.1,
+        windows: exr_io::windows_of(first),
+        channels,
+    })
+}
+
+fn probe_image(path: &Path) -> Result<FileInfo, Problem> {
+    let header = image_io::probe(path).map_err(|detail| {
+        let kind = if detail.starts_with("not a ") {
+            ProblemKind::Unsupported
+        } else {
+            ProblemKind::Corrupt
+        };
+        Problem::new(kind, path, detail)
+    })?;
+    let sample_type = match (header.float, header.bits) {
+        (true, _) => "f32",
+        (false, 16) => "u16",
+        _ => "u8",
+    };
+    Ok(FileInfo {
+        path: path.to_path_buf(),
+        kind: FileKind::Image {
+            format: header.format,
+            bits: header.bits,
+            float: header.float,
+        },
+        width: header.width,
+        height: header.height,
+        windows: Windows::full(header.width, header.height),
+        channels: header
+            .channels
+            .iter()
+            .map(|&(name, index)| ChannelInfo {
+                name: name.to_string(),
+                alias: None,
+                part: 0,
+                index,
+                sample_type,
+            })
+            .collect(),
+    })
+}

@@ -1,0 +1,289 @@
+//! 8/16-bit (and float TIFF) images through the `image` crate: PNG, JPEG, TIFF.
+//!
+//! Channels are exposed by name like EXR channels: `R`, `G`, `B`, `A` for colour images and
+//! `Y`, `A` for grey ones. Integer samples are normalised to [0, 1]; the sRGB transfer is
+//! removed for colour passes (not for data maps) by the caller through [`srgb_to_linear`].
+//! Integer files hold straight (unassociated) alpha; shutter works premultiplied, so colour
+//! is premultiplied on read and divided back on write.
+
+use std::io::{Seek, Write};
+use std::path::Path;
+use std::sync::OnceLock;
+
+use image::{ColorType, DynamicImage, ImageDecoder, ImageEncoder, ImageReader};
+
+use crate::frame::Plane;
+
+/// What the header of an integer image says.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageHeader {
+    pub width: usize,
+    pub height: usize,
+    /// (name, index of the decoded plane it reads).
+    pub channels: Vec<(&'static str, usize)>,
+    /// 8, 16 or 32 (float).
+    pub bits: u8,
+    pub float: bool,
+    pub format: &'static str,
+}
+
+/// Channel names and the decoded plane each reads. A grey image also answers to R, G and B
+/// (all reading its Y plane), so it works as a colour pass as well as a data map.
+fn channel_names(color: ColorType) -> Vec<(&'static str, usize)> {
+    match color.channel_count() {
+        1 => vec![("Y", 0), ("R", 0), ("G", 0), ("B", 0)],
+        2 => vec![("Y", 0), ("R", 0), ("G", 0), ("B", 0), ("A", 1)],
+        3 => vec![("R", 0), ("G", 1), ("B", 2)],
+        _ => vec![("R", 0), ("G", 1), ("B", 2), ("A", 3)],
+    }
+}
+
+/// Reads the header only.
+pub fn probe(path: &Path) -> Result<ImageHeader, String> {
+    let reader = ImageReader::open(path)
+        .map_err(|e| e.to_string())?
+        .with_guessed_format()
+        .map_err(|e| e.to_string())?;
+    let format = match reader.format() {
+        Some(image::ImageFormat::Png) => "png",
+        Some(image::ImageFormat::Jpeg) => "jpeg",
+        Some(image::ImageFormat::Tiff) => "tiff",
+        _ => return Err("not a PNG, JPEG, TIFF or EXR file".into()),
+    };
+    let decoder = reader.into_decoder().map_err(|e| e.to_string())?;
+    let (width, height) = decoder.dimensions();
+    let color = decoder.color_type();
+    let float = matches!(color, ColorType::Rgb32F | ColorType::Rgba32F);
+    let bits = (color.bytes_per_pixel() / color.channel_count()) * 8;
+    Ok(ImageHeader {
+        width: width as usize,
+        height: height as usize,
+        channels: channel_names(color),
+        bits,
+        float,
+        format,
+    })
+}
+
+/// The decoded planes of an image (indexed as in [`ImageHeader::channels`]), integer
+/// samples normalised to [0, 1], no transfer function applied.
+pub fn read_planes(path: &Path) -> Result<(usize, usize, Vec<Plane>), String> {
+    let image = ImageReader::open(path)
+        .map_err(|e| e.to_string())?
+        .with_guessed_format()
+        .map_err(|e| e.to_string())?
+        .decode()
+        .map_err(|e| e.to_string())?;
+    let (width, height) = (image.width() as usize, image.height() as usize);
+    let count = image.color().channel_count() as usize;
+    let n = width * height;
+    let mut planes: Vec<Plane> = (0..count).map(|_| vec![0.0; n]).collect();
+    let mut scatter = |values: &mut dyn Iterator<Item = f32>| {
+        for (i, value) in values.enumerate() {
+            planes[i % count][i / count] = value;
+        }
+    };
+    match &image {
+        DynamicImage::ImageLuma8(_)
+        | DynamicImage::ImageLumaA8(_)
+        | DynamicImage::ImageRgb8(_)
+        | DynamicImage::ImageRgba8(_) => {
+            scatter(&mut image.as_bytes().iter().map(|&b| b as f32 / 255.0));
+        }
+        DynamicImage::ImageLuma16(img) => {
+            scatter(&mut img.as_raw().iter().map(|&v| v as f32 / 65535.0))
+        }
+        DynamicImage::ImageLumaA16(img) => {
+            scatter(&mut img.as_raw().iter().map(|&v| v as f32 / 65535.0))
+        }
+        DynamicImage::ImageRgb16(img) => {
+            scatter(&mut img.as_raw().iter().map(|&v| v as f32 / 65535.0))
+        }
+        DynamicImage::ImageRgba16(img) => {
+            scatter(&mut img.as_raw().iter().map(|&v| v as f32 / 65535.0))
+        }
+        DynamicImage::ImageRgb32F(img) => scatter(&mut img.as_raw().iter().copied()),
+        DynamicImage::ImageRgba32F(img) => scatter(&mut img.as_raw().iter().copied()),
+        other => {
+            let converted = other.to_rgba32f();
+            planes = (0..4).map(|_| vec![0.0; n]).collect();
+            for (i, value) in converted.as_raw().iter().enumerate() {
+                planes[i % 4][i / 4] = *value;
+            }
+        }
+    }
+    Ok((width, height, planes))
+}
+
+/// sRGB electro-optical transfer: encoded [0, 1] to linear.
+pub fn srgb_to_linear(v: f32) -> f32 {
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Inverse of [`srgb_to_linear`]: linear to encoded, for values in [0, 1].
+pub fn linear_to_srgb(v: f32) -> f32 {
+    if v <= 0.003_130_8 {
+        v * 12.92
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Linear [0, 1] to 16-bit sRGB codes through a 64k-entry table of code boundaries, so the
+/// per-pixel cost is a binary search instead of a `powf`.
+fn srgb_encode_table() -> &'static [f32] {
+    static TABLE: OnceLock<Vec<f32>> = OnceLock::new();
+    TABLE.get_or_init(|| {
+        // Entry k: the linear value where code k+1 starts (midpoint between codes k and k+1).
+        (0..65535)
+            .map(|k| srgb_to_linear((k as f32 + 0.5) / 65535.0))
+            .collect()
+    })
+}
+
+/// Encodes a linear value as an integer code of `max` (255 or 65535) levels.
+pub fn encode(v: f32, srgb: bool, max: u32) -> u32 {
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    if !srgb {
+        return (v * max as f32 + 0.5) as u32;
+    }
+    if max == 65535 {
+        srgb_encode_table().partition_point(|&edge| edge <= v) as u32
+    } else {
+        (linear_to_srgb(v) * max as f32 + 0.5) as u32
+    }
+}
+
+/// Output format for integer images.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    Png,
+    Tiff,
+    Jpeg,
+}
+
+impl ImageFormat {
+    pub fn from_path(path: &Path) -> Option<Self> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "png" => Some(ImageFormat::Png),
+            "tif" | "tiff" => Some(ImageFormat::Tiff),
+            "jpg" | "jpeg" => Some(ImageFormat::Jpeg),
+            _ => None,
+        }
+    }
+}
+
+/// Writes premultiplied linear colour as an sRGB-encoded (or linear) integer image with
+/// straight alpha. JPEG has no alpha and no 16-bit: it is written 8-bit RGB.
+#[allow(clippy::too_many_arguments)]
+pub fn write_color(
+    writer: impl Write + Seek,
+    format: ImageFormat,
+    width: usize,
+    height: usize,
+    rgb: [&[f32]; 3],
+    alpha: Option<&[f32]>,
+    sixteen_bit: bool,
+    srgb: bool,
+) -> Result<(), String> {
+    let alpha = if format == ImageFormat::Jpeg {
+        None
+    } else {
+        alpha
+    };
+    let sixteen_bit = sixteen_bit && format != ImageFormat::Jpeg;
+    let channels = if alpha.is_some() { 4 } else { 3 };
+    let max = if sixteen_bit { 65535 } else { 255 };
+    let n = width * height;
+    let mut codes = vec![0u32; n * channels];
+    for i in 0..n {
+        let a = alpha.map_or(1.0, |a| {
+            let a = a[i];
+            if a.is_finite() {
+                a.clamp(0.0, 1.0)
+            } else {
+                0.0
+            }
+        });
+        // Unpremultiply; where alpha is 0 the colour is 0.
+        let unpremultiply = if a > 0.0 { 1.0 / a } else { 0.0 };
+        for c in 0..3 {
+            let v = if alpha.is_some() {
+                rgb[c][i] * unpremultiply
+            } else {
+                rgb[c][i]
+            };
+            codes[i * channels + c] = encode(v, srgb, max);
+        }
+        if alpha.is_some() {
+            codes[i * channels + 3] = encode(a, false, max);
+        }
+    }
+    let color_type = match (channels, sixteen_bit) {
+        (3, false) => image::ExtendedColorType::Rgb8,
+        (4, false) => image::ExtendedColorType::Rgba8,
+        (3, true) => image::ExtendedColorType::Rgb16,
+        _ => image::ExtendedColorType::Rgba16,
+    };
+    let bytes: Vec<u8> = if sixteen_bit {
+        codes
+            .iter()
+            .flat_map(|&c| (c as u16).to_ne_bytes())
+            .collect()
+    } else {
+        codes.iter().map(|&c| c as u8).collect()
+    };
+    let (w, h) = (width as u32, height as u32);
+    let result = match format {
+        ImageFormat::Png => {
+            image::codecs::png::PngEncoder::new(writer).write_image(&bytes, w, h, color_type)
+        }
+        ImageFormat::Tiff => {
+            image::codecs::tiff::TiffEncoder::new(writer).write_image(&bytes, w, h, color_type)
+        }
+        ImageFormat::Jpeg => image::codecs::jpeg::JpegEncoder::new_with_quality(writer, 95)
+            .write_image(&bytes, w, h, color_type),
+    };
+    result.map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_round_trips_every_8_bit_code() {
+        for code in 0..=255u32 {
+            let linear = srgb_to_linear(code as f32 / 255.0);
+            assert_eq!(encode(linear, true, 255), code);
+        }
+    }
+
+    #[test]
+    fn srgb_round_trips_every_16_bit_code() {
+        for code in (0..=65535u32).step_by(7).chain([65535]) {
+            let linear = srgb_to_linear(code as f32 / 65535.0);
+            assert_eq!(encode(linear, true, 65535), code, "code {code}");
+        }
+    }
+
+    #[test]
+    fn srgb_known_values() {
+        // 50% sRGB grey is 21.4% linear (IEC 61966-2-1).
+        assert!((srgb_to_linear(0.5) - 0.214_041).abs() < 1e-5);
+        assert!((linear_to_srgb(0.214_041) - 0.5).abs() < 1e-5);
+    }
+
+    #[test]
+    fn encode_clamps_and_maps_nan_to_zero() {
+        assert_eq!(encode(f32::NAN, true, 255), 0);
+        assert_eq!(encode(f32::INFINITY, true, 255), 255);
+        assert_eq!(encode(-3.0, false, 65535), 0);
+        assert_eq!(encode(7.0, false, 65535), 65535);
+    }
+}

@@ -1,0 +1,122 @@
+//! Writing frames: EXR (f32 or half, any compression exr writes), PNG/TIFF (8/16-bit) and
+//! JPEG, sRGB-encoded unless told linear. Every file is written to a temporary file in the
+//! destination folder and renamed into place, so an interrupted run never leaves a partial
+//! frame under the final name.
+
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use crate::error::{Problem, ProblemKind};
+use crate::frame::Frame;
+use crate::io::exr::{self as exr_io, ExrOptions};
+use crate::io::image::{self as image_io, ImageFormat};
+
+/// Output format, from the file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputFormat {
+    Exr,
+    Image(ImageFormat),
+}
+
+impl OutputFormat {
+    pub fn from_path(path: &Path) -> Option<Self> {
+        if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+        {
+            return Some(OutputFormat::Exr);
+        }
+        ImageFormat::from_path(path).map(OutputFormat::Image)
+    }
+}
+
+/// How outputs are encoded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OutputOptions {
+    pub exr: ExrOptions,
+    /// PNG/TIFF bits per channel: 8 or 16.
+    pub sixteen_bit: bool,
+    /// Apply the sRGB transfer to integer outputs.
+    pub srgb: bool,
+}
+
+impl Default for OutputOptions {
+    fn default() -> Self {
+        OutputOptions {
+            exr: ExrOptions::default(),
+            sixteen_bit: false,
+            srgb: true,
+        }
+    }
+}
+
+/// The temporary name a frame is written under before it is renamed into place. Starts with
+/// a dot so that sequence discovery and `####` patterns never mistake it for a frame.
+pub fn temporary_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// Writes the colour of `frame` to `path` atomically. The folder must exist.
+pub fn write_frame(
+    path: &Path,
+    frame: Frame,
+    options: &OutputOptions,
+    frame_number: Option<i64>,
+) -> Result<(), Problem> {
+    let fail = |detail: String| Problem::new(ProblemKind::Output, path, detail).frame(frame_number);
+    let format = OutputFormat::from_path(path).ok_or_else(|| {
+        fail("unknown output format; use .exr, .png, .tif, .tiff, .jpg or .jpeg".into())
+    })?;
+    let Some(color) = frame.color else {
+        return Err(fail("the frame has no colour to write".into()));
+    };
+    let temporary = temporary_path(path);
+    let file = File::create(&temporary).map_err(|e| fail(e.to_string()))?;
+    let mut writer = std::io::BufWriter::new(file);
+    let result = match format {
+        OutputFormat::Exr => {
+            let mut channels = vec![
+                ("R".to_string(), color.r),
+                ("G".to_string(), color.g),
+                ("B".to_string(), color.b),
+            ];
+            if let Some(a) = color.a {
+                channels.push(("A".to_string(), a));
+            }
+            exr_io::write_channels(
+                &mut writer,
+                frame.width,
+                frame.height,
+                frame.windows,
+                channels,
+                options.exr,
+            )
+            .map_err(|e| e.to_string())
+        }
+        OutputFormat::Image(format) => image_io::write_color(
+            &mut writer,
+            format,
+            frame.width,
+            frame.height,
+            [&color.r, &color.g, &color.b],
+            color.a.as_deref(),
+            options.sixteen_bit,
+            options.srgb,
+        ),
+    };
+    let result = result.and_then(|()| writer.flush().map_err(|e| e.to_string()));
+    drop(writer);
+    if let Err(detail) = result {
+        let _ = std::fs::remove_file(&temporary);
+        return Err(fail(detail));
+    }
+    std::fs::rename(&temporary, path).map_err(|e| {
+        let _ = std::fs::remove_file(&temporary);
+        fail(e.to_string())
+    })
+}

@@ -1,0 +1,302 @@
+//! The frame pipeline: preflight every frame, then read → process → write with the three
+//! stages overlapped (frame n+1 decodes while frame n is processed and frame n-1 is written),
+//! rayon inside each stage. Hand-offs are rendezvous channels, so at most about three frames
+//! are in memory whatever the sequence length. The library never prints: progress goes to a
+//! callback, the summary comes back as a [`Report`].
+
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::error::{Error, Problem, ProblemKind, Result};
+use crate::frame::Frame;
+use crate::io::output::{write_frame, OutputOptions};
+use crate::io::passes::{plan_frame, read_frame, FramePlan, Inputs, PlanOptions};
+use crate::io::preset::Preset;
+use crate::io::sequence::PathPattern;
+use crate::motion::{apply, Algorithm, BlurParams};
+
+/// A blur job, fully resolved (preset merged, flags applied, frames listed).
+#[derive(Clone, Debug)]
+pub struct Job {
+    pub inputs: Inputs,
+    pub output: PathPattern,
+    /// Frame numbers; `[None]` for a single still.
+    pub frames: Vec<Option<i64>>,
+    pub preset: Preset,
+    pub layer: Option<String>,
+    pub algorithm: Algorithm,
+    pub params: BlurParams,
+    pub output_options: OutputOptions,
+    pub skip_existing: bool,
+}
+
+/// What the pipeline tells its caller while it runs.
+#[derive(Clone, Debug)]
+pub enum Event {
+    /// Preflight passed; this many frames will be written.
+    Started { frames: usize },
+    /// A frame was written.
+    Written { frame: Option<i64>, path: PathBuf },
+    /// A frame was skipped because its output exists (`--skip-existing`).
+    Skipped { frame: Option<i64>, path: PathBuf },
+    /// Something the user should know; the job goes on.
+    Warning(String),
+}
+
+/// The summary of a run.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Report {
+    pub algorithm: String,
+    pub preset: String,
+    pub frames_written: usize,
+    pub frames_skipped: usize,
+    /// Seconds spent in each stage, summed over frames (the stages overlap in time).
+    pub read_seconds: f64,
+    pub process_seconds: f64,
+    pub write_seconds: f64,
+    pub preflight_seconds: f64,
+    /// Wall-clock seconds for the whole job.
+    pub wall_seconds: f64,
+    /// Peak resident memory of the process, in MiB, where the OS reports it.
+    pub peak_rss_mib: Option<f64>,
+    pub warnings: Vec<String>,
+}
+
+/// The most warnings a report keeps (the same warning on every frame is kept once).
+const MAX_WARNINGS: usize = 50;
+
+fn warn(report: &mut Report, on_event: &mut dyn FnMut(Event), message: String) {
+    if report.warnings.len() < MAX_WARNINGS && !report.warnings.contains(&message) {
+        report.warnings.push(message.clone());
+        on_event(Event::Warning(message));
+    }
+}
+
+/// True when two paths name the same file (or would, once the output exists).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => {
+            let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+            absolute(a) == absolute(b)
+        }
+    }
+}
+
+/// Checks every input of every frame from headers alone; returns the plans or all problems.
+pub fn preflight(job: &Job, frames: &[Option<i64>]) -> Result<Vec<FramePlan>> {
+    let options = PlanOptions {
+        preset: &job.preset,
+        layer: job.layer.as_deref(),
+        needs: job.algorithm.needs(),
+    };
+    let results: Vec<std::result::Result<FramePlan, Vec<Problem>>> = frames
+        .par_iter()
+        .map(|&frame| {
+            let mut plan = plan_frame(&job.inputs, frame, &options);
+            let output = job.output.path(frame);
+            let clash = job
+                .inputs
+                .all()
+                .into_iter()
+                .map(|(_, p)| p.path(frame))
+                .find(|input| same_file(input, &output));
+            if let Some(input) = clash {
+                let problem = Problem::new(
+                    ProblemKind::Output,
+                    &output,
+                    format!(
+                        "the output would overwrite the input {}; choose another -o",
+                        input.display()
+                    ),
+                )
+                .frame(frame);
+                plan = match plan {
+                    Ok(_) => Err(vec![problem]),
+                    Err(mut problems) => {
+                        problems.push(problem);
+                        Err(problems)
+                    }
+                };
+            }
+            plan
+        })
+        .collect();
+    let mut plans = Vec::with_capacity(results.len());
+    let mut problems = Vec::new();
+    for result in results {
+        match result {
+            Ok(plan) => plans.push(plan),
+            Err(found) => problems.extend(found),
+        }
+    }
+    if problems.is_empty() {
+        Ok(plans)
+    } else {
+        Err(Error::Files(problems))
+    }
+}
+
+/// Runs the job: preflight, then every frame through read → process → write.
+pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
+    let start = Instant::now();
+    let mut report = Report {
+        algorithm: job.algorithm.name().to_string(),
+        preset: job.preset.name.clone(),
+        ..Report::default()
+    };
+
+    // Passes given but not used are not read: say so.
+    let needs = job.algorithm.needs();
+    for (pass, _) in job.inputs.all() {
+        let used = match pass {
+            "color" => needs.color,
+            "depth" => needs.depth,
+            "velocity" => needs.velocity || needs.prev || needs.next,
+            "prev" => needs.prev || needs.velocity,
+            _ => needs.next || needs.velocity,
+        };
+        if !used {
+            warn(
+                &mut report,
+                on_event,
+                format!(
+                    "--{pass} is not read: algorithm {} does not use it",
+                    job.algorithm.name()
+                ),
+            );
+        }
+    }
+
+    let mut todo = Vec::with_capacity(job.frames.len());
+    for &frame in &job.frames {
+        let path = job.output.path(frame);
+        if job.skip_existing && path.exists() {
+            report.frames_skipped += 1;
+            on_event(Event::Skipped { frame, path });
+        } else {
+            todo.push(frame);
+        }
+    }
+
+    let preflight_start = Instant::now();
+    let plans = preflight(job, &todo)?;
+    report.preflight_seconds = preflight_start.elapsed().as_secs_f64();
+    for plan in &plans {
+        for warning in &plan.warnings {
+            warn(&mut report, on_event, warning.clone());
+        }
+    }
+
+    // Output folders are created only once every input is known to be good.
+    let mut folders: Vec<PathBuf> = todo
+        .iter()
+        .filter_map(|&f| job.output.path(f).parent().map(Path::to_path_buf))
+        .filter(|p| !p.as_os_str().is_empty())
+        .collect();
+    folders.sort();
+    folders.dedup();
+    for folder in folders {
+        std::fs::create_dir_all(&folder).map_err(|e| {
+            Problem::new(
+                ProblemKind::Output,
+                &folder,
+                format!("cannot create the output folder: {e}"),
+            )
+        })?;
+    }
+
+    on_event(Event::Started {
+        frames: plans.len(),
+    });
+    let (read_seconds, process_seconds) = std::thread::scope(|scope| -> Result<(f64, f64)> {
+        let (read_tx, read_rx) = mpsc::sync_channel::<std::result::Result<Frame, Problem>>(0);
+        let (done_tx, done_rx) =
+            mpsc::sync_channel::<std::result::Result<(Option<i64>, Frame), Problem>>(0);
+
+        let reader = scope.spawn(move || {
+            let mut seconds = 0.0;
+            for plan in &plans {
+                let t = Instant::now();
+                let frame = read_frame(plan);
+                seconds += t.elapsed().as_secs_f64();
+                let failed = frame.is_err();
+                if read_tx.send(frame).is_err() || failed {
+                    break;
+                }
+            }
+            seconds
+        });
+
+        let frames: Vec<Option<i64>> = todo.clone();
+        let processor = scope.spawn(move || {
+            let mut seconds = 0.0;
+            for (frame_number, frame) in frames.into_iter().zip(read_rx) {
+                let message = match frame {
+                    Ok(frame) => {
+                        let t = Instant::now();
+                        let out = apply(job.algorithm, &job.params, frame);
+                        seconds += t.elapsed().as_secs_f64();
+                        Ok((frame_number, out))
+                    }
+                    Err(problem) => Err(problem),
+                };
+                let failed = message.is_err();
+                if done_tx.send(message).is_err() || failed {
+                    break;
+                }
+            }
+            seconds
+        });
+
+        let mut failure = None;
+        for message in done_rx {
+            match message {
+                Ok((frame, out)) => {
+                    let path = job.output.path(frame);
+                    let t = Instant::now();
+                    let written = write_frame(&path, out, &job.output_options, frame);
+                    report.write_seconds += t.elapsed().as_secs_f64();
+                    match written {
+                        Ok(()) => {
+                            report.frames_written += 1;
+                            on_event(Event::Written { frame, path });
+                        }
+                        Err(problem) => {
+                            failure = Some(problem);
+                            break;
+                        }
+                    }
+                }
+                Err(problem) => {
+                    failure = Some(problem);
+                    break;
+                }
+            }
+        }
+        // Dropping the receiver (end of the loop) unblocks and stops the other stages.
+        let read_seconds = reader.join().unwrap_or(0.0);
+        let process_seconds = processor.join().unwrap_or(0.0);
+        match failure {
+            Some(problem) => Err(problem.into()),
+            None => Ok((read_seconds, process_seconds)),
+        }
+    })?;
+    report.read_seconds = read_seconds;
+    report.process_seconds = process_seconds;
+    report.wall_seconds = start.elapsed().as_secs_f64();
+    report.peak_rss_mib = peak_rss_mib();
+    Ok(report)
+}
+
+/// Peak resident set size from /proc (Linux); `None` elsewhere.
+pub fn peak_rss_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
+}

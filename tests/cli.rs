@@ -1,0 +1,570 @@
+//! The command line as a user runs it: the "done when" cases, errors and exit codes.
+
+use crate::support::*;
+
+#[test]
+fn none_on_separate_canonical_files_copies_rgb_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let rgba = write_canonical_frame(dir.path(), None, 37, 23);
+    let out = dir.path().join("out/out.exr");
+    let o = shutter(&[
+        "blur",
+        "--algorithm",
+        "none",
+        "--color",
+        &s(&dir.path().join("C.exr")),
+        "--depth",
+        &s(&dir.path().join("Z.exr")),
+        "--velocity",
+        &s(&dir.path().join("V.exr")),
+        "-o",
+        &s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let written = read_exr_reference(&out);
+    for (i, name) in ["R", "G", "B", "A"].iter().enumerate() {
+        assert_exact(channel(&written, name), &rgba[i], name);
+    }
+    assert_eq!(written.len(), 4, "only colour is written");
+}
+
+#[test]
+fn blender_multilayer_frame_with_preset_copies_rgb_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (20, 12);
+    let n = w * h;
+    let r = noise(n, 1, 0.0, 8.0);
+    let g = noise(n, 2, 0.0, 1.0);
+    let b = noise(n, 3, 0.0, 1.0);
+    let path = dir.path().join("shot.exr");
+    write_exr(
+        &path,
+        w,
+        h,
+        vec![
+            ("RenderLayer.Combined.R", r.clone()),
+            ("RenderLayer.Combined.G", g.clone()),
+            ("RenderLayer.Combined.B", b.clone()),
+            ("RenderLayer.Combined.A", vec![1.0; n]),
+            ("RenderLayer.Depth.Z", vec![3.0; n]),
+            ("RenderLayer.Vector.X", vec![0.0; n]),
+            ("RenderLayer.Vector.Y", vec![0.0; n]),
+            ("RenderLayer.Vector.Z", vec![0.0; n]),
+            ("RenderLayer.Vector.W", vec![0.0; n]),
+        ],
+    );
+    let out = dir.path().join("out.exr");
+    let o = shutter(&[
+        "blur",
+        "--preset",
+        "blender",
+        "--color",
+        &s(&path),
+        "-o",
+        &s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let written = read_exr_reference(&out);
+    assert_exact(channel(&written, "R"), &r, "R");
+    assert_exact(channel(&written, "G"), &g, "G");
+    assert_exact(channel(&written, "B"), &b, "B");
+}
+
+#[test]
+fn shipped_fixtures_run_as_in_the_readme() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = env!("CARGO_MANIFEST_DIR");
+    let out = format!("{}/blur.####.exr", dir.path().display());
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &format!("{root}/fixtures/canonical/color.####.exr"),
+        "--depth",
+        &format!("{root}/fixtures/canonical/depth.####.exr"),
+        "--velocity",
+        &format!("{root}/fixtures/canonical/velocity.####.exr"),
+        "-o",
+        &out,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for frame in 1..=3 {
+        let input = read_exr_reference(std::path::Path::new(&format!(
+            "{root}/fixtures/canonical/color.{frame:04}.exr"
+        )));
+        let output = read_exr_reference(&dir.path().join(format!("blur.{frame:04}.exr")));
+        for name in ["R", "G", "B", "A"] {
+            assert_exact(channel(&output, name), channel(&input, name), name);
+        }
+    }
+    let o = shutter(&[
+        "blur",
+        "--preset",
+        "blender",
+        "--color",
+        &format!("{root}/fixtures/blender/shot.0001.exr"),
+        "-o",
+        &s(&dir.path().join("b.png")),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn sequences_with_hashes_and_printf_patterns_and_frame_specs() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut colours = Vec::new();
+    for frame in 1..=5 {
+        colours.push(write_canonical_frame(dir.path(), Some(frame), 9, 7));
+    }
+    let hashes = shutter(&[
+        "blur",
+        "--color",
+        &format!("{}/C.####.exr", dir.path().display()),
+        "--frames",
+        "1-5x2",
+        "-o",
+        &format!("{}/a/out.####.exr", dir.path().display()),
+    ]);
+    assert!(hashes.status.success(), "{}", stderr(&hashes));
+    let printf = shutter(&[
+        "blur",
+        "--color",
+        &format!("{}/C.%04d.exr", dir.path().display()),
+        "--frames",
+        "2,4",
+        "-o",
+        &format!("{}/b/out.%04d.exr", dir.path().display()),
+    ]);
+    assert!(printf.status.success(), "{}", stderr(&printf));
+    for (folder, frames) in [("a", vec![1, 3, 5]), ("b", vec![2, 4])] {
+        let mut names: Vec<String> = std::fs::read_dir(dir.path().join(folder))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        let expected: Vec<String> = frames.iter().map(|f| format!("out.{f:04}.exr")).collect();
+        assert_eq!(names, expected);
+        for frame in frames {
+            let written =
+                read_exr_reference(&dir.path().join(format!("{folder}/out.{frame:04}.exr")));
+            assert_exact(channel(&written, "R"), &colours[frame - 1][0], "R");
+        }
+    }
+}
+
+#[test]
+fn frames_are_discovered_when_no_spec_is_given() {
+    let dir = tempfile::tempdir().unwrap();
+    for frame in [7, 8, 10] {
+        write_canonical_frame(dir.path(), Some(frame), 4, 4);
+    }
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &format!("{}/C.####.exr", dir.path().display()),
+        "-o",
+        &format!("{}/out/o.####.exr", dir.path().display()),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(report["frames_written"], 3);
+    assert!(dir.path().join("out/o.0010.exr").exists());
+}
+
+/// Runs a failing job into a fresh output folder (holding one older file) and checks the
+/// failure: exit code 1, one line per problem naming what is given, folder untouched.
+fn assert_fails_cleanly(args: &[&str], out_dir: &std::path::Path, expect: &[&str]) -> String {
+    let before = snapshot(out_dir);
+    let o = shutter(args);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "stderr: {err}");
+    for needle in expect {
+        assert!(err.contains(needle), "'{needle}' not in: {err}");
+    }
+    assert_eq!(snapshot(out_dir), before, "the output folder changed");
+    assert!(!err.contains("panicked"), "{err}");
+    err
+}
+
+#[test]
+fn missing_input_frame_fails_before_writing_anything() {
+    let dir = tempfile::tempdir().unwrap();
+    for frame in [1, 2, 4] {
+        write_canonical_frame(dir.path(), Some(frame), 6, 5);
+    }
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    std::fs::write(out_dir.join("keep.txt"), "older work").unwrap();
+    let err = assert_fails_cleanly(
+        &[
+            "blur",
+            "--color",
+            &format!("{}/C.####.exr", dir.path().display()),
+            "--frames",
+            "1-4",
+            "-o",
+            &format!("{}/o.####.exr", out_dir.display()),
+        ],
+        &out_dir,
+        &["missing file", "C.0003.exr", "frame 3", "color"],
+    );
+    assert_eq!(err.lines().count(), 1, "one line: {err}");
+}
+
+#[test]
+fn missing_channel_lists_the_channels_present_and_the_preset() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 6, 5);
+    let only_z = dir.path().join("only_rg.exr");
+    write_exr(
+        &only_z,
+        6,
+        5,
+        vec![("R", vec![0.0; 30]), ("G", vec![0.0; 30])],
+    );
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    let err = assert_fails_cleanly(
+        &[
+            "blur",
+            "--color",
+            &s(&only_z),
+            "-o",
+            &s(&out_dir.join("o.exr")),
+        ],
+        &out_dir,
+        &[
+            "missing channel",
+            "only_rg.exr",
+            "the file has G, R",
+            "preset shutter",
+            "color",
+        ],
+    );
+    assert_eq!(err.lines().count(), 1, "one line: {err}");
+}
+
+#[test]
+fn corrupt_and_truncated_exr_fail_before_writing_anything() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 64, 64);
+    let good = std::fs::read(dir.path().join("C.exr")).unwrap();
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir_all(&out_dir).unwrap();
+
+    let truncated = dir.path().join("truncated.exr");
+    std::fs::write(&truncated, &good[..good.len() * 2 / 3]).unwrap();
+    let garbage = dir.path().join("garbage.exr");
+    let mut bad = good.clone();
+    bad[0] = b'x';
+    std::fs::write(&garbage, &bad).unwrap();
+    let header = dir.path().join("header.exr");
+    std::fs::write(&header, &good[..40]).unwrap();
+
+    for (path, name) in [
+        (&truncated, "truncated.exr"),
+        (&garbage, "garbage.exr"),
+        (&header, "header.exr"),
+    ] {
+        let err = assert_fails_cleanly(
+            &[
+                "blur",
+                "--color",
+                &s(path),
+                "-o",
+                &s(&out_dir.join("o.exr")),
+            ],
+            &out_dir,
+            &["corrupt file", name],
+        );
+        assert_eq!(err.lines().count(), 1, "one line: {err}");
+    }
+}
+
+#[test]
+fn all_problems_of_all_frames_are_reported_together() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), Some(1), 6, 5);
+    write_canonical_frame(dir.path(), Some(3), 7, 5);
+    let o = shutter(&[
+        "blur",
+        "--algorithm",
+        "none",
+        "--color",
+        &format!("{}/C.####.exr", dir.path().display()),
+        "--frames",
+        "1-4",
+        "-o",
+        &format!("{}/out/o.####.exr", dir.path().display()),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(err.contains("C.0002.exr, frame 2"), "{err}");
+    assert!(err.contains("C.0004.exr, frame 4"), "{err}");
+    assert!(
+        !dir.path().join("out").exists(),
+        "no output folder is created"
+    );
+}
+
+#[test]
+fn size_mismatch_between_passes_is_an_error() {
+    // `none` reads colour only, so the check runs through the planner with every pass needed.
+    use shutter::io::passes::{plan_frame, Inputs, PlanOptions};
+    use shutter::io::preset::Preset;
+    use shutter::io::sequence::PathPattern;
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 6, 5);
+    let small = dir.path().join("small_z.exr");
+    write_exr(&small, 5, 5, vec![("Z", vec![1.0; 25])]);
+    let preset = Preset::builtin("shutter").unwrap();
+    let inputs = Inputs {
+        color: PathPattern::parse(&s(&dir.path().join("C.exr"))).unwrap(),
+        depth: Some(PathPattern::parse(&s(&small)).unwrap()),
+        velocity: None,
+        prev: None,
+        next: None,
+    };
+    let options = PlanOptions {
+        preset: &preset,
+        layer: None,
+        needs: shutter::Passes::ALL,
+    };
+    let problems = plan_frame(&inputs, None, &options).unwrap_err();
+    assert!(problems
+        .iter()
+        .any(|p| p.kind == shutter::ProblemKind::SizeMismatch
+            && p.to_string().contains("5x5 but the color pass is 6x5")));
+}
+
+#[test]
+fn output_equal_to_input_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 4, 4);
+    let input = dir.path().join("C.exr");
+    let before = std::fs::read(&input).unwrap();
+    let o = shutter(&["blur", "--color", &s(&input), "-o", &s(&input)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("overwrite the input"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&input).unwrap(), before);
+}
+
+#[test]
+fn skip_existing_resumes_a_run() {
+    let dir = tempfile::tempdir().unwrap();
+    for frame in 1..=3 {
+        write_canonical_frame(dir.path(), Some(frame), 4, 4);
+    }
+    let out = format!("{}/out/o.####.exr", dir.path().display());
+    let color = format!("{}/C.####.exr", dir.path().display());
+    std::fs::create_dir_all(dir.path().join("out")).unwrap();
+    std::fs::write(dir.path().join("out/o.0002.exr"), b"done before").unwrap();
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &color,
+        "-o",
+        &out,
+        "--skip-existing",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(report["frames_written"], 2);
+    assert_eq!(report["frames_skipped"], 1);
+    assert_eq!(
+        std::fs::read(dir.path().join("out/o.0002.exr")).unwrap(),
+        b"done before"
+    );
+}
+
+#[test]
+fn no_temporary_files_are_left_behind() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 4, 4);
+    let out_dir = dir.path().join("o");
+    for name in ["a.exr", "a.png", "a.tif", "a.jpg"] {
+        let o = shutter(&[
+            "blur",
+            "--color",
+            &s(&dir.path().join("C.exr")),
+            "-o",
+            &s(&out_dir.join(name)),
+        ]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+    }
+    let names: Vec<String> = std::fs::read_dir(&out_dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names.len(), 4, "{names:?}");
+    assert!(names.iter().all(|n| !n.starts_with('.')), "{names:?}");
+}
+
+#[test]
+fn usage_errors_exit_2() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), Some(1), 4, 4);
+    let color = format!("{}/C.####.exr", dir.path().display());
+    let out = format!("{}/o.####.exr", dir.path().display());
+    for args in [
+        vec!["blur", "--color", &color, "--frames", "9-1", "-o", &out],
+        vec![
+            "blur",
+            "--color",
+            &color,
+            "--algorithm",
+            "magic",
+            "-o",
+            &out,
+        ],
+        vec!["blur", "--color", &color, "--shutter", "1.5", "-o", &out],
+        vec![
+            "blur",
+            "--color",
+            &color,
+            "--compression",
+            "lzw",
+            "-o",
+            &out,
+        ],
+        vec!["blur", "--color", &color, "--preset", "maya", "-o", &out],
+        vec!["blur", "--color", &color, "-o", "single.exr"],
+        vec!["blur", "--color", &color, "-o", "out.####.gif"],
+        vec!["blur", "--color", &color],
+        vec!["frobnicate"],
+    ] {
+        let o = shutter(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+    }
+}
+
+#[test]
+fn json_summary_has_per_stage_times() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 8, 8);
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &s(&dir.path().join("C.exr")),
+        "--velocity",
+        &s(&dir.path().join("V.exr")),
+        "-o",
+        &s(&dir.path().join("o.exr")),
+        "--json",
+    ]);
+    assert!(o.status.success());
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    for key in [
+        "read_seconds",
+        "process_seconds",
+        "write_seconds",
+        "wall_seconds",
+    ] {
+        assert!(report[key].as_f64().unwrap() >= 0.0, "{key}");
+    }
+    assert_eq!(report["frames_written"], 1);
+    let warnings = report["warnings"].as_array().unwrap();
+    assert!(warnings
+        .iter()
+        .any(|w| w.as_str().unwrap().contains("--velocity is not read")));
+    assert!(
+        stderr(&o).is_empty(),
+        "silent on a non-terminal: {}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn passes_the_algorithm_does_not_use_are_never_opened() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 8, 8);
+    let broken = dir.path().join("broken.exr");
+    std::fs::write(&broken, b"not an exr at all").unwrap();
+    let o = shutter(&[
+        "blur",
+        "--algorithm",
+        "none",
+        "--color",
+        &s(&dir.path().join("C.exr")),
+        "--velocity",
+        &s(&broken),
+        "--prev",
+        &s(&dir.path().join("missing.exr")),
+        "-o",
+        &s(&dir.path().join("o.exr")),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn info_prints_size_channels_compression_and_matching_preset() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let o = shutter(&["info", &format!("{root}/fixtures/blender/shot.0001.exr")]);
+    assert!(o.status.success());
+    let text = stdout(&o);
+    for needle in [
+        "96x64",
+        "zip compression",
+        "ViewLayer.Vector.W",
+        "f32",
+        "data window:    (0, 0) - (95, 63)",
+        "blender (color, depth, velocity, prev, next)",
+    ] {
+        assert!(text.contains(needle), "'{needle}' not in:\n{text}");
+    }
+    let o = shutter(&[
+        "info",
+        "--json",
+        &format!("{root}/fixtures/canonical/depth.0001.exr"),
+    ]);
+    let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(json[0]["channels"][0]["type"], "f16");
+    let o = shutter(&["info", "no/such/file.exr"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("missing file"));
+}
+
+#[test]
+fn presets_list_and_show() {
+    let o = shutter(&["presets"]);
+    assert!(o.status.success());
+    let text = stdout(&o);
+    for name in ["shutter", "blender", "nuke", "painted"] {
+        assert!(text.lines().any(|l| l.starts_with(name)), "{name}: {text}");
+    }
+    let o = shutter(&["presets", "show", "nuke"]);
+    assert!(o.status.success());
+    assert!(stdout(&o).contains("forward.u"));
+    let o = shutter(&["presets", "show", "nope"]);
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn help_documents_every_blur_flag() {
+    let o = shutter(&["blur", "--help"]);
+    let text = stdout(&o);
+    for flag in [
+        "--preset",
+        "--algorithm",
+        "--color",
+        "--depth",
+        "--velocity",
+        "--prev",
+        "--next",
+        "--shutter",
+        "--frames",
+        "--output",
+        "--half",
+        "--compression",
+        "--bit-depth",
+        "--skip-existing",
+        "--json",
+        "--verbose",
+        "--layer",
+        "--linear",
+        "--threads",
+    ] {
+        assert!(text.contains(flag), "{flag} missing from help");
+    }
+}

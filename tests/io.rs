@@ -1,0 +1,383 @@
+//! Readers and writers on real files: every EXR compression, sample type and layout the
+//! exr crate reads, integer images and their transfer function.
+
+use std::path::Path;
+
+use exr::prelude::*;
+use shutter::io::file::FileInfo;
+use shutter::io::passes::{plan_frame, read_frame, Inputs, PlanOptions};
+use shutter::io::preset::Preset;
+use shutter::io::sequence::PathPattern;
+use shutter::Passes;
+
+use crate::support::*;
+
+/// Reads a file's colour through the full path (probe, plan, decode, convert).
+fn read_color(path: &Path) -> shutter::frame::Color {
+    let preset = Preset::builtin("shutter").unwrap();
+    let inputs = Inputs {
+        color: PathPattern::parse(&s(path)).unwrap(),
+        depth: None,
+        velocity: None,
+        prev: None,
+        next: None,
+    };
+    let options = PlanOptions {
+        preset: &preset,
+        layer: None,
+        needs: Passes::COLOR,
+    };
+    let plan = plan_frame(&inputs, None, &options).unwrap();
+    read_frame(&plan).unwrap().color.unwrap()
+}
+
+#[test]
+fn every_compression_round_trips() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (67, 45); // not a multiple of any block height
+    let n = w * h;
+    let r = noise(n, 1, 0.0, 2.0);
+    let g = noise(n, 2, 0.0, 1.0);
+    let b = noise(n, 3, 0.0, 1.0);
+    for name in shutter::io::exr::WRITABLE_COMPRESSIONS {
+        for half in [false, true] {
+            let path = dir.path().join(format!("{name}_{half}.exr"));
+            let options = shutter::io::exr::ExrOptions {
+                compression: shutter::io::exr::parse_compression(name).unwrap(),
+                half,
+            };
+            write_exr_with(
+                &path,
+                w,
+                h,
+                vec![("R", r.clone()), ("G", g.clone()), ("B", b.clone())],
+                options,
+            );
+            let reference = read_exr_reference(&path);
+            let color = read_color(&path);
+            // Whatever the codec did, our reader must agree with exr's own reader exactly.
+            assert_exact(&color.r, channel(&reference, "R"), name);
+            assert_exact(&color.b, channel(&reference, "B"), name);
+            // And lossless codecs give back what was written.
+            let lossless = !matches!(*name, "pxr24" | "b44" | "b44a" | "dwaa" | "dwab");
+            if lossless && !half {
+                assert_exact(&color.g, &g, name);
+            } else {
+                // Lossy codecs on white noise (their worst case): only roughly equal.
+                assert_close(&color.g, &g, 0.25, name);
+            }
+        }
+    }
+}
+
+fn layer_with(
+    name: Option<&str>,
+    size: (usize, usize),
+    blocks: Blocks,
+    compression: Compression,
+    channels: Vec<AnyChannel<FlatSamples>>,
+) -> Layer<AnyChannels<FlatSamples>> {
+    let attributes = match name {
+        Some(name) => LayerAttributes::named(name),
+        None => LayerAttributes::default(),
+    };
+    Layer::new(
+        size,
+        attributes,
+        Encoding {
+            compression,
+            blocks,
+            line_order: LineOrder::Increasing,
+        },
+        AnyChannels::sort(channels.into()),
+    )
+}
+
+#[test]
+fn tiled_f16_u32_and_mip_mapped_files_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (70, 33);
+    let n = w * h;
+    let r = noise(n, 4, 0.0, 1.0);
+    let r16: Vec<f16> = r.iter().map(|&v| f16::from_f32(v)).collect();
+    let g: Vec<u32> = (0..n as u32).collect();
+    let b = noise(n, 5, -1.0, 1.0);
+    let channels = vec![
+        AnyChannel::new("R", FlatSamples::F16(r16.clone())),
+        AnyChannel::new("G", FlatSamples::U32(g.clone())),
+        AnyChannel::new("B", FlatSamples::F32(b.clone())),
+    ];
+    for (label, blocks) in [
+        ("tiles", Blocks::Tiles(Vec2(16, 16))),
+        ("scanlines", Blocks::ScanLines),
+    ] {
+        for compression in [Compression::PIZ, Compression::ZIP1, Compression::RLE] {
+            let path = dir.path().join(format!("{label}_{compression}.exr"));
+            let layer = layer_with(None, (w, h), blocks, compression, channels.clone());
+            Image::from_layer(layer).write().to_file(&path).unwrap();
+            let color = read_color(&path);
+            let r_expected: Vec<f32> = r16.iter().map(|v| v.to_f32()).collect();
+            assert_exact(&color.r, &r_expected, "f16 channel");
+            let g_expected: Vec<f32> = g.iter().map(|&v| v as f32).collect();
+            assert_exact(&color.g, &g_expected, "u32 channel");
+            assert_exact(&color.b, &b, "f32 channel");
+        }
+    }
+}
+
+#[test]
+fn multi_part_files_find_channels_by_part_name() {
+    // Nuke can write each layer as its own part: channel `u` of part `forward`.
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (12, 9);
+    let n = w * h;
+    let r = noise(n, 6, 0.0, 1.0);
+    let u = noise(n, 7, -5.0, 5.0);
+    let v = noise(n, 8, -5.0, 5.0);
+    let rgba = layer_with(
+        Some("rgba"),
+        (w, h),
+        Blocks::ScanLines,
+        Compression::ZIP16,
+        vec![
+            AnyChannel::new("R", FlatSamples::F32(r.clone())),
+            AnyChannel::new("G", FlatSamples::F32(r.clone())),
+            AnyChannel::new("B", FlatSamples::F32(r.clone())),
+        ],
+    );
+    let forward = layer_with(
+        Some("forward"),
+        (w, h),
+        Blocks::ScanLines,
+        Compression::ZIP16,
+        vec![
+            AnyChannel::new("u", FlatSamples::F32(u.clone())),
+            AnyChannel::new("v", FlatSamples::F32(v.clone())),
+        ],
+    );
+    let path = dir.path().join("parts.exr");
+    let image = Image::empty(ImageAttributes::new(IntegerBounds::from_dimensions((w, h))))
+        .with_layer(rgba)
+        .with_layer(forward);
+    image.write().to_file(&path).unwrap();
+
+    let info = FileInfo::probe(&path).unwrap();
+    assert!(info.find("forward.u").is_some(), "{}", info.channel_list());
+
+    let preset = Preset::builtin("nuke").unwrap();
+    let inputs = Inputs {
+        color: PathPattern::parse(&s(&path)).unwrap(),
+        depth: None,
+        velocity: None,
+        prev: None,
+        next: None,
+    };
+    let options = PlanOptions {
+        preset: &preset,
+        layer: None,
+        needs: Passes {
+            color: true,
+            next: true,
+            ..Passes::default()
+        },
+    };
+    let plan = plan_frame(&inputs, None, &options).unwrap();
+    let frame = read_frame(&plan).unwrap();
+    assert_exact(&frame.color.unwrap().r, &r, "R");
+    let next = frame.next.unwrap();
+    let expected_x: Vec<f32> = (0..n).map(|i| (i % w) as f32 + 0.5 + u[i]).collect();
+    let expected_y: Vec<f32> = (0..n).map(|i| (i / w) as f32 + 0.5 - v[i]).collect();
+    assert_close(&next.x, &expected_x, 1e-5, "next x");
+    assert_close(&next.y, &expected_y, 1e-5, "next y");
+}
+
+#[test]
+fn data_and_display_windows_are_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (10, 6);
+    let n = w * h;
+    let mut layer = layer_with(
+        None,
+        (w, h),
+        Blocks::ScanLines,
+        Compression::ZIP16,
+        vec![
+            AnyChannel::new("R", FlatSamples::F32(vec![1.0; n])),
+            AnyChannel::new("G", FlatSamples::F32(vec![2.0; n])),
+            AnyChannel::new("B", FlatSamples::F32(vec![3.0; n])),
+        ],
+    );
+    layer.attributes.layer_position = Vec2(-3, 4);
+    let image = Image {
+        attributes: ImageAttributes::new(IntegerBounds::new((0, 0), (8, 8))),
+        layer_data: layer,
+    };
+    let input = dir.path().join("overscan.exr");
+    image.write().to_file(&input).unwrap();
+    let out = dir.path().join("out.exr");
+    let o = shutter(&["blur", "--color", &s(&input), "-o", &s(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let meta = exr::meta::MetaData::read_from_file(&out, false).unwrap();
+    let header = &meta.headers[0];
+    assert_eq!(header.own_attributes.layer_position, Vec2(-3, 4));
+    assert_eq!(header.layer_size, Vec2(10, 6));
+    assert_eq!(
+        header.shared_attributes.display_window,
+        IntegerBounds::new((0, 0), (8, 8))
+    );
+    assert_eq!(header.compression, Compression::ZIP16);
+    assert!(matches!(
+        header.blocks,
+        exr::meta::BlockDescription::ScanLines
+    ));
+}
+
+#[test]
+fn half_and_compression_flags_reach_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 5, 5);
+    let out = dir.path().join("h.exr");
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &s(&dir.path().join("C.exr")),
+        "--half",
+        "--compression",
+        "piz",
+        "-o",
+        &s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let meta = exr::meta::MetaData::read_from_file(&out, false).unwrap();
+    assert_eq!(meta.headers[0].compression, Compression::PIZ);
+    assert!(meta.headers[0]
+        .channels
+        .list
+        .iter()
+        .all(|c| c.sample_type == exr::meta::attribute::SampleType::F16));
+}
+
+#[test]
+fn png_round_trip_is_srgb_and_exact_at_8_and_16_bits() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16, 16);
+    // Every 8-bit code appears once, as sRGB.
+    let codes: Vec<u8> = (0..=255u8).collect();
+    let mut rgb = Vec::new();
+    for &c in &codes {
+        rgb.extend([c, 255 - c, c / 2]);
+    }
+    let input = dir.path().join("in.png");
+    image::save_buffer(&input, &rgb, w as u32, h as u32, image::ColorType::Rgb8).unwrap();
+    let color = read_color(&input);
+    // Decoded to linear: code 128 is 21.6% linear.
+    assert!((color.r[128] - 0.215_861).abs() < 1e-5, "{}", color.r[128]);
+    assert!(color.a.is_none());
+    for bits in ["8", "16"] {
+        let out = dir.path().join(format!("out{bits}.png"));
+        let o = shutter(&[
+            "blur",
+            "--color",
+            &s(&input),
+            "--bit-depth",
+            bits,
+            "-o",
+            &s(&out),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let back = image::open(&out).unwrap();
+        if bits == "8" {
+            assert_eq!(back.to_rgb8().into_raw(), rgb, "8-bit sRGB round trip");
+        } else {
+            let back16 = back.to_rgb16().into_raw();
+            let expected: Vec<u16> = rgb.iter().map(|&c| c as u16 * 257).collect();
+            assert_eq!(back16, expected, "16-bit holds the same sRGB codes");
+        }
+    }
+}
+
+#[test]
+fn straight_alpha_of_integer_images_is_premultiplied_in_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("a.png");
+    // One pixel: sRGB white at 50% alpha (straight).
+    image::save_buffer(&input, &[255, 255, 255, 128], 1, 1, image::ColorType::Rgba8).unwrap();
+    let color = read_color(&input);
+    let alpha = 128.0 / 255.0;
+    assert!(
+        (color.r[0] - alpha).abs() < 1e-6,
+        "premultiplied: {}",
+        color.r[0]
+    );
+    assert!((color.a.unwrap()[0] - alpha).abs() < 1e-6);
+    let out = dir.path().join("a_out.png");
+    let o = shutter(&["blur", "--color", &s(&input), "-o", &s(&out)]);
+    assert!(o.status.success());
+    assert_eq!(
+        image::open(&out).unwrap().to_rgba8().into_raw(),
+        [255, 255, 255, 128]
+    );
+}
+
+#[test]
+fn linear_flag_skips_the_transfer_function() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("lin.png");
+    image::save_buffer(&input, &[128, 64, 0], 1, 1, image::ColorType::Rgb8).unwrap();
+    let out = dir.path().join("lin.exr");
+    let o = shutter(&["blur", "--linear", "--color", &s(&input), "-o", &s(&out)]);
+    assert!(o.status.success());
+    let written = read_exr_reference(&out);
+    assert_exact(channel(&written, "R"), &[128.0 / 255.0], "R");
+    assert_exact(channel(&written, "G"), &[64.0 / 255.0], "G");
+}
+
+#[test]
+fn tiff_and_jpeg_outputs_are_readable() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 9, 7);
+    for (name, bits) in [("o.tif", "16"), ("o.tiff", "8"), ("o.jpg", "8")] {
+        let out = dir.path().join(name);
+        let o = shutter(&[
+            "blur",
+            "--color",
+            &s(&dir.path().join("C.exr")),
+            "--bit-depth",
+            bits,
+            "-o",
+            &s(&out),
+        ]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let img = image::open(&out).unwrap();
+        assert_eq!((img.width(), img.height()), (9, 7), "{name}");
+    }
+}
+
+#[test]
+fn garbage_files_never_panic() {
+    // Whatever the bytes, probing and reading give an error or a frame, never a panic.
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 33, 17);
+    let good = std::fs::read(dir.path().join("C.exr")).unwrap();
+    let path = dir.path().join("fuzz.exr");
+    for seed in 0..200u32 {
+        let mut bytes = good.clone();
+        let flips = noise(4, seed, 0.0, bytes.len() as f32);
+        for (k, at) in flips.iter().enumerate() {
+            let at = (*at as usize).min(bytes.len() - 1);
+            bytes[at] ^= 1 << ((seed as usize + k) % 8);
+        }
+        if seed % 3 == 0 {
+            let cut = (seed as usize * 37) % bytes.len();
+            bytes.truncate(cut.max(1));
+        }
+        std::fs::write(&path, &bytes).unwrap();
+        let result = std::panic::catch_unwind(|| {
+            if let Ok(info) = FileInfo::probe(&path) {
+                let all: Vec<usize> = (0..info.channels.len()).collect();
+                let _ = info.read(&all);
+            }
+        });
+        assert!(result.is_ok(), "panic on seed {seed}");
+    }
+}

@@ -1,0 +1,8 @@
+//! Integration tests: one binary, a module per area.
+#![allow(clippy::needless_range_loop)] // per-pixel maths reads best with an index
+
+mod support;
+
+mod cli;
+mod io;
+mod presets;

@@ -1,0 +1,532 @@
+//! Each preset reads a synthetic frame written in its renderer's convention back as the
+//! canonical values. Positions sit on pixel centres plus whole-pixel motion, so every
+//! canonical value is exactly representable and the EXR cases compare bit for bit.
+
+use std::path::Path;
+
+use shutter::frame::Frame;
+use shutter::io::passes::{plan_frame, read_frame, Inputs, PlanOptions};
+use shutter::io::preset::Preset;
+use shutter::io::sequence::PathPattern;
+use shutter::Passes;
+
+use crate::support::*;
+
+const W: usize = 11;
+const H: usize = 7;
+
+/// The canonical truth: per pixel, where the surface was one frame ago and will be one
+/// frame later (pixel centre plus whole-pixel offsets that vary across the image).
+struct Truth {
+    rgba: [Vec<f32>; 4],
+    depth: Vec<f32>,
+    prev: [Vec<f32>; 2],
+    next: [Vec<f32>; 2],
+}
+
+impl Truth {
+    fn new() -> Truth {
+        let n = W * H;
+        let mut prev = [vec![0.0; n], vec![0.0; n]];
+        let mut next = [vec![0.0; n], vec![0.0; n]];
+        for k in 0..n {
+            let (x, y) = ((k % W) as f32 + 0.5, (k / W) as f32 + 0.5);
+            let (i, j) = ((k % W) as f32, (k / W) as f32);
+            prev[0][k] = x - (i - 5.0);
+            prev[1][k] = y - (2.0 * j - 6.0);
+            next[0][k] = x + (3.0 - j);
+            next[1][k] = y + (i - 4.0);
+        }
+        Truth {
+            rgba: [
+                noise(n, 11, 0.0, 3.0),
+                noise(n, 12, 0.0, 1.0),
+                noise(n, 13, 0.0, 1.0),
+                noise(n, 14, 0.0, 1.0),
+            ],
+            depth: noise(n, 15, 0.5, 50.0),
+            prev,
+            next,
+        }
+    }
+
+    fn velocity(&self) -> [Vec<f32>; 2] {
+        let n = W * H;
+        let mut v = [vec![0.0; n], vec![0.0; n]];
+        for k in 0..n {
+            let (x, y) = ((k % W) as f32 + 0.5, (k / W) as f32 + 0.5);
+            v[0][k] = x - self.prev[0][k];
+            v[1][k] = y - self.prev[1][k];
+        }
+        v
+    }
+
+    fn check(&self, frame: &Frame, tolerance: f32, what: &str) {
+        let color = frame.color.as_ref().unwrap();
+        assert_close(&color.r, &self.rgba[0], tolerance, &format!("{what} R"));
+        assert_close(&color.g, &self.rgba[1], tolerance, &format!("{what} G"));
+        assert_close(&color.b, &self.rgba[2], tolerance, &format!("{what} B"));
+        let depth = frame.depth.as_ref().unwrap();
+        assert_close(
+            depth,
+            &self.depth,
+            tolerance * 100.0,
+            &format!("{what} depth"),
+        );
+        let v = self.velocity();
+        let velocity = frame.velocity.as_ref().unwrap();
+        assert_close(
+            &velocity.x,
+            &v[0],
+            tolerance * 64.0,
+            &format!("{what} velocity x"),
+        );
+        assert_close(
+            &velocity.y,
+            &v[1],
+            tolerance * 64.0,
+            &format!("{what} velocity y"),
+        );
+        let prev = frame.prev.as_ref().unwrap();
+        assert_close(
+            &prev.x,
+            &self.prev[0],
+            tolerance * 64.0,
+            &format!("{what} prev x"),
+        );
+        assert_close(
+            &prev.y,
+            &self.prev[1],
+            tolerance * 64.0,
+            &format!("{what} prev y"),
+        );
+        let next = frame.next.as_ref().unwrap();
+        assert_close(
+            &next.x,
+            &self.next[0],
+            tolerance * 64.0,
+            &format!("{what} next x"),
+        );
+        assert_close(
+            &next.y,
+            &self.next[1],
+            tolerance * 64.0,
+            &format!("{what} next y"),
+        );
+    }
+}
+
+fn read_all(preset: &Preset, inputs: &Inputs) -> Frame {
+    let options = PlanOptions {
+        preset,
+        layer: None,
+        needs: Passes::ALL,
+    };
+    let plan = plan_frame(inputs, None, &options).unwrap_or_else(|p| panic!("{p:?}"));
+    read_frame(&plan).unwrap()
+}
+
+fn inputs(color: &Path) -> Inputs {
+    Inputs {
+        color: PathPattern::parse(&s(color)).unwrap(),
+        depth: None,
+        velocity: None,
+        prev: None,
+        next: None,
+    }
+}
+
+fn pixel_centres() -> [Vec<f32>; 2] {
+    let n = W * H;
+    [
+        (0..n).map(|k| (k % W) as f32 + 0.5).collect(),
+        (0..n).map(|k| (k / W) as f32 + 0.5).collect(),
+    ]
+}
+
+#[test]
+fn shutter_preset_separate_files() {
+    let t = Truth::new();
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    write_exr(
+        &p("C.exr"),
+        W,
+        H,
+        vec![
+            ("R", t.rgba[0].clone()),
+            ("G", t.rgba[1].clone()),
+            ("B", t.rgba[2].clone()),
+            ("A", t.rgba[3].clone()),
+        ],
+    );
+    write_exr(&p("Z.exr"), W, H, vec![("Z", t.depth.clone())]);
+    let v = t.velocity();
+    write_exr(
+        &p("V.exr"),
+        W,
+        H,
+        vec![("X", v[0].clone()), ("Y", v[1].clone())],
+    );
+    write_exr(
+        &p("P.exr"),
+        W,
+        H,
+        vec![("R", t.prev[0].clone()), ("G", t.prev[1].clone())],
+    );
+    write_exr(
+        &p("N.exr"),
+        W,
+        H,
+        vec![
+            ("x", t.next[0].clone()),
+            ("y", t.next[1].clone()),
+            ("z", t.depth.clone()),
+        ],
+    );
+    let mut i = inputs(&p("C.exr"));
+    i.depth = Some(PathPattern::parse(&s(&p("Z.exr"))).unwrap());
+    i.velocity = Some(PathPattern::parse(&s(&p("V.exr"))).unwrap());
+    i.prev = Some(PathPattern::parse(&s(&p("P.exr"))).unwrap());
+    i.next = Some(PathPattern::parse(&s(&p("N.exr"))).unwrap());
+    let frame = read_all(&Preset::builtin("shutter").unwrap(), &i);
+    t.check(&frame, 0.0, "shutter");
+    assert_exact(
+        frame.next.as_ref().unwrap().z.as_ref().unwrap(),
+        &t.depth,
+        "next z",
+    );
+}
+
+#[test]
+fn shutter_preset_one_multilayer_file() {
+    let t = Truth::new();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("all.exr");
+    let v = t.velocity();
+    write_exr(
+        &path,
+        W,
+        H,
+        vec![
+            ("R", t.rgba[0].clone()),
+            ("G", t.rgba[1].clone()),
+            ("B", t.rgba[2].clone()),
+            ("A", t.rgba[3].clone()),
+            ("Z", t.depth.clone()),
+            ("velocity.X", v[0].clone()),
+            ("velocity.Y", v[1].clone()),
+            ("prev.X", t.prev[0].clone()),
+            ("prev.Y", t.prev[1].clone()),
+            ("next.X", t.next[0].clone()),
+            ("next.Y", t.next[1].clone()),
+        ],
+    );
+    let frame = read_all(&Preset::builtin("shutter").unwrap(), &inputs(&path));
+    t.check(&frame, 0.0, "shutter multi-layer");
+}
+
+#[test]
+fn blender_preset() {
+    let t = Truth::new();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("blender.exr");
+    let c = pixel_centres();
+    let n = W * H;
+    // Blender: X,Y = p(-1) - p(0), Z,W = p(0) - p(+1), y up.
+    let vx: Vec<f32> = (0..n).map(|k| t.prev[0][k] - c[0][k]).collect();
+    let vy: Vec<f32> = (0..n).map(|k| -(t.prev[1][k] - c[1][k])).collect();
+    let vz: Vec<f32> = (0..n).map(|k| c[0][k] - t.next[0][k]).collect();
+    let vw: Vec<f32> = (0..n).map(|k| -(c[1][k] - t.next[1][k])).collect();
+    let l = "My Layer";
+    let name = |pass: &str| format!("{l}.{pass}");
+    let names: Vec<String> = [
+        "Combined.R",
+        "Combined.G",
+        "Combined.B",
+        "Combined.A",
+        "Depth.Z",
+        "Vector.X",
+        "Vector.Y",
+        "Vector.Z",
+        "Vector.W",
+    ]
+    .iter()
+    .map(|p| name(p))
+    .collect();
+    let planes = vec![
+        t.rgba[0].clone(),
+        t.rgba[1].clone(),
+        t.rgba[2].clone(),
+        t.rgba[3].clone(),
+        t.depth.clone(),
+        vx,
+        vy,
+        vz,
+        vw,
+    ];
+    write_exr(
+        &path,
+        W,
+        H,
+        names.iter().map(|n| n.as_str()).zip(planes).collect(),
+    );
+    let frame = read_all(&Preset::builtin("blender").unwrap(), &inputs(&path));
+    t.check(&frame, 0.0, "blender");
+}
+
+#[test]
+fn blender_preset_with_two_view_layers_asks_for_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("two.exr");
+    let n = W * H;
+    let mut channels = Vec::new();
+    let names: Vec<String> = ["A", "B"]
+        .iter()
+        .flat_map(|l| ["R", "G", "B"].map(|c| format!("{l}.Combined.{c}")))
+        .collect();
+    for name in &names {
+        channels.push((name.as_str(), vec![0.5; n]));
+    }
+    write_exr(&path, W, H, channels);
+    let preset = Preset::builtin("blender").unwrap();
+    let options = PlanOptions {
+        preset: &preset,
+        layer: None,
+        needs: Passes::COLOR,
+    };
+    let problems = plan_frame(&inputs(&path), None, &options).unwrap_err();
+    assert!(problems[0]
+        .to_string()
+        .contains("several view layers (A, B)"));
+    let options = PlanOptions {
+        layer: Some("B"),
+        ..options
+    };
+    assert!(plan_frame(&inputs(&path), None, &options).is_ok());
+}
+
+#[test]
+fn nuke_preset() {
+    let t = Truth::new();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("nuke.exr");
+    let c = pixel_centres();
+    let n = W * H;
+    // Nuke: forward = p(+1) - p(0), backward = p(-1) - p(0), v up.
+    let fu: Vec<f32> = (0..n).map(|k| t.next[0][k] - c[0][k]).collect();
+    let fv: Vec<f32> = (0..n).map(|k| -(t.next[1][k] - c[1][k])).collect();
+    let bu: Vec<f32> = (0..n).map(|k| t.prev[0][k] - c[0][k]).collect();
+    let bv: Vec<f32> = (0..n).map(|k| -(t.prev[1][k] - c[1][k])).collect();
+    write_exr(
+        &path,
+        W,
+        H,
+        vec![
+            ("R", t.rgba[0].clone()),
+            ("G", t.rgba[1].clone()),
+            ("B", t.rgba[2].clone()),
+            ("A", t.rgba[3].clone()),
+            ("depth.Z", t.depth.clone()),
+            ("forward.u", fu),
+            ("forward.v", fv),
+            ("backward.u", bu),
+            ("backward.v", bv),
+        ],
+    );
+    let frame = read_all(&Preset::builtin("nuke").unwrap(), &inputs(&path));
+    t.check(&frame, 0.0, "nuke");
+}
+
+/// Writes a 16-bit PNG from values in [0, 1].
+fn write_png16(path: &Path, channels: &[&[f32]]) {
+    use image::ImageEncoder;
+    let n = W * H;
+    let mut bytes = Vec::with_capacity(n * channels.len() * 2);
+    for k in 0..n {
+        for c in channels {
+            let code = (c[k].clamp(0.0, 1.0) * 65535.0).round() as u16;
+            bytes.extend(code.to_ne_bytes());
+        }
+    }
+    let color = match channels.len() {
+        1 => image::ExtendedColorType::L16,
+        3 => image::ExtendedColorType::Rgb16,
+        _ => image::ExtendedColorType::Rgba16,
+    };
+    let file = std::fs::File::create(path).unwrap();
+    image::codecs::png::PngEncoder::new(file)
+        .write_image(&bytes, W as u32, H as u32, color)
+        .unwrap();
+}
+
+#[test]
+fn painted_preset() {
+    let t = Truth::new();
+    let preset = Preset::builtin("painted").unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    let n = W * H;
+    // Colour: opaque, sRGB-encoded.
+    let srgb: Vec<Vec<f32>> = (0..3)
+        .map(|c| {
+            t.rgba[c]
+                .iter()
+                .map(|&v| shutter::io::image::linear_to_srgb(v.min(1.0)))
+                .collect()
+        })
+        .collect();
+    write_png16(&p("photo.png"), &[&srgb[0], &srgb[1], &srgb[2]]);
+    // Depth: grey 0..1 = near..far.
+    let (near, far) = (preset.depth.near.unwrap(), preset.depth.far.unwrap());
+    let grey: Vec<f32> = t.depth.iter().map(|d| (d - near) / (far - near)).collect();
+    write_png16(&p("depth.png"), &[&grey]);
+    // Velocity: (r, g) = v / scale + 0.5, y down.
+    let scale = preset.velocity.scale;
+    let v = t.velocity();
+    let r: Vec<f32> = v[0].iter().map(|v| v / scale + 0.5).collect();
+    let g: Vec<f32> = v[1].iter().map(|v| v / scale + 0.5).collect();
+    write_png16(&p("velocity.png"), &[&r, &g, &vec![0.0; n]]);
+
+    let mut i = inputs(&p("photo.png"));
+    i.depth = Some(PathPattern::parse(&s(&p("depth.png"))).unwrap());
+    i.velocity = Some(PathPattern::parse(&s(&p("velocity.png"))).unwrap());
+    let options = PlanOptions {
+        preset: &preset,
+        layer: None,
+        needs: Passes {
+            next: false,
+            ..Passes::ALL
+        },
+    };
+    let plan = plan_frame(&i, None, &options).unwrap();
+    let frame = read_frame(&plan).unwrap();
+    // 16-bit quantisation: half a code step of 1/65535, times the scale for vectors.
+    let step = 0.5 / 65535.0;
+    let color = frame.color.as_ref().unwrap();
+    let expected_r: Vec<f32> = t.rgba[0].iter().map(|v| v.min(1.0)).collect();
+    assert_close(&color.r, &expected_r, 2e-5, "painted R");
+    assert_close(
+        frame.depth.as_ref().unwrap(),
+        &t.depth,
+        step * (far - near) * 1.01,
+        "painted depth",
+    );
+    let velocity = frame.velocity.as_ref().unwrap();
+    assert_close(
+        &velocity.x,
+        &v[0],
+        step * scale * 1.01,
+        "painted velocity x",
+    );
+    assert_close(
+        &velocity.y,
+        &v[1],
+        step * scale * 1.01,
+        "painted velocity y",
+    );
+    let prev = frame.prev.as_ref().unwrap();
+    assert_close(&prev.x, &t.prev[0], step * scale * 1.01, "painted prev x");
+}
+
+#[test]
+fn painted_mid_grey_is_exactly_still_at_8_bits() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("v.png");
+    image::save_buffer(
+        &path,
+        &[127, 128, 0, 128, 127, 0],
+        2,
+        1,
+        image::ColorType::Rgb8,
+    )
+    .unwrap();
+    let preset = Preset::builtin("painted").unwrap();
+    let color = dir.path().join("c.png");
+    image::save_buffer(&color, &[0; 6], 2, 1, image::ColorType::Rgb8).unwrap();
+    let mut i = inputs(&color);
+    i.velocity = Some(PathPattern::parse(&s(&path)).unwrap());
+    let options = PlanOptions {
+        preset: &preset,
+        layer: None,
+        needs: Passes {
+            velocity: true,
+            ..Passes::default()
+        },
+    };
+    let frame = read_frame(&plan_frame(&i, None, &options).unwrap()).unwrap();
+    let v = frame.velocity.unwrap();
+    assert_eq!(v.x, [0.0, 0.0]);
+    assert_eq!(v.y, [0.0, 0.0]);
+}
+
+#[test]
+fn a_custom_preset_expresses_normalised_forward_vectors_with_y_up() {
+    // A renderer storing forward motion 0..1 with 0.5 = still, in fractions of the screen,
+    // y up, in channels mv.r / mv.g: written as a preset file, as the README shows.
+    let dir = tempfile::tempdir().unwrap();
+    let preset_path = dir.path().join("engine.toml");
+    std::fs::write(
+        &preset_path,
+        r#"
+description = "test engine: forward vectors, 0.5 = still, normalised, y up"
+[next]
+channels = [["mv.r", "mv.g"]]
+meaning = "to_next"
+zero = 0.5
+scale = 0.5
+units = "normalized"
+y_up = true
+"#,
+    )
+    .unwrap();
+    let preset = Preset::load(&[s(&preset_path)]).unwrap();
+    let t = Truth::new();
+    let c = pixel_centres();
+    let n = W * H;
+    // stored = (p(+1) - p0) / (scale * size) + zero, y negated. Chosen so values are exact:
+    // offsets are whole pixels, W = 11 and H = 7 make fractions inexact, so compare closely.
+    let r: Vec<f32> = (0..n)
+        .map(|k| (t.next[0][k] - c[0][k]) / (0.5 * W as f32) + 0.5)
+        .collect();
+    let g: Vec<f32> = (0..n)
+        .map(|k| -(t.next[1][k] - c[1][k]) / (0.5 * H as f32) + 0.5)
+        .collect();
+    let path = dir.path().join("f.exr");
+    write_exr(
+        &path,
+        W,
+        H,
+        vec![
+            ("R", t.rgba[0].clone()),
+            ("G", t.rgba[1].clone()),
+            ("B", t.rgba[2].clone()),
+            ("mv.r", r),
+            ("mv.g", g),
+        ],
+    );
+    let options = PlanOptions {
+        preset: &preset,
+        layer: None,
+        needs: Passes {
+            color: true,
+            next: true,
+            velocity: true,
+            ..Passes::default()
+        },
+    };
+    let plan = plan_frame(&inputs(&path), None, &options).unwrap();
+    assert!(
+        plan.warnings.iter().any(|w| w.contains("linear motion")),
+        "velocity from forward vectors is flagged: {:?}",
+        plan.warnings
+    );
+    let frame = read_frame(&plan).unwrap();
+    let next = frame.next.unwrap();
+    assert_close(&next.x, &t.next[0], 1e-5, "next x");
+    assert_close(&next.y, &t.next[1], 1e-5, "next y");
+    // Velocity approximated as p(+1) - p0.
+    let velocity = frame.velocity.unwrap();
+    let expected: Vec<f32> = (0..n).map(|k| t.next[0][k] - c[0][k]).collect();
+    assert_close(&velocity.x, &expected, 1e-5, "velocity x");
+}
