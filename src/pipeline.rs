@@ -192,24 +192,6 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         }
     }
 
-    // Output folders are created only once every input is known to be good.
-    let mut folders: Vec<PathBuf> = todo
-        .iter()
-        .filter_map(|&f| job.output.path(f).parent().map(Path::to_path_buf))
-        .filter(|p| !p.as_os_str().is_empty())
-        .collect();
-    folders.sort();
-    folders.dedup();
-    for folder in folders {
-        std::fs::create_dir_all(&folder).map_err(|e| {
-            Problem::new(
-                ProblemKind::Output,
-                &folder,
-                format!("cannot create the output folder: {e}"),
-            )
-        })?;
-    }
-
     on_event(Event::Started {
         frames: plans.len(),
     });
@@ -259,7 +241,10 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                 Ok((frame, out)) => {
                     let path = job.output.path(frame);
                     let t = Instant::now();
-                    let written = write_frame(&path, out, &job.output_options, frame);
+                    // Folders are made only when a frame is ready to go in them, so a run
+                    // that fails earlier leaves the file system as it was.
+                    let written = create_parent(&path, frame)
+                        .and_then(|()| write_frame(&path, out, &job.output_options, frame));
                     report.write_seconds += t.elapsed().as_secs_f64();
                     match written {
                         Ok(()) => {
@@ -291,6 +276,22 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     report.wall_seconds = start.elapsed().as_secs_f64();
     report.peak_rss_mib = peak_rss_mib();
     Ok(report)
+}
+
+fn create_parent(path: &Path, frame: Option<i64>) -> std::result::Result<(), Problem> {
+    match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => {
+            std::fs::create_dir_all(parent).map_err(|e| {
+                Problem::new(
+                    ProblemKind::Output,
+                    parent,
+                    format!("cannot create the output folder: {e}"),
+                )
+                .frame(frame)
+            })
+        }
+        _ => Ok(()),
+    }
 }
 
 /// Peak resident set size from /proc (Linux); `None` elsewhere.

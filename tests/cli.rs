@@ -568,3 +568,89 @@ fn help_documents_every_blur_flag() {
         assert!(text.contains(flag), "{flag} missing from help");
     }
 }
+
+#[test]
+fn damage_inside_compressed_data_stops_the_run_without_a_partial_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    // Smooth pictures, so that ZIP really compresses: EXR stores a chunk raw when compression
+    // would not shrink it, and damage to raw samples is undetectable by any reader.
+    let (w, h) = (64, 64);
+    let smooth: Vec<f32> = (0..w * h).map(|k| (k % w) as f32 / w as f32).collect();
+    for frame in 1..=3 {
+        write_exr(
+            &dir.path().join(format!("C.{frame:04}.exr")),
+            w,
+            h,
+            vec![
+                ("R", smooth.clone()),
+                ("G", smooth.clone()),
+                ("B", smooth.clone()),
+                ("A", vec![1.0; w * h]),
+            ],
+        );
+    }
+    // Damage the middle of frame 2's compressed pixels: headers and chunk table stay valid,
+    // so only decoding can find it.
+    let path = dir.path().join("C.0002.exr");
+    let mut bytes = std::fs::read(&path).unwrap();
+    let middle = bytes.len() / 2;
+    for b in &mut bytes[middle..middle + 16] {
+        *b ^= 0xFF;
+    }
+    std::fs::write(&path, &bytes).unwrap();
+    let out_dir = dir.path().join("out");
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &format!("{}/C.####.exr", dir.path().display()),
+        "-o",
+        &format!("{}/o.####.exr", out_dir.display()),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("corrupt file") && err.contains("C.0002.exr, frame 2"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+    // Frame 1 may be whole; frame 2 is absent; no temporary file anywhere.
+    let names: Vec<String> = std::fs::read_dir(&out_dir)
+        .map(|d| {
+            d.map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect()
+        })
+        .unwrap_or_default();
+    assert!(
+        !names
+            .iter()
+            .any(|n| n.contains("0002") || n.starts_with('.')),
+        "{names:?}"
+    );
+    if names.contains(&"o.0001.exr".to_string()) {
+        let written = read_exr_reference(&out_dir.join("o.0001.exr"));
+        assert_eq!(written.len(), 4);
+    }
+}
+
+#[test]
+fn unwritable_output_is_a_file_error() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 4, 4);
+    // The output's folder would have to be inside a regular file.
+    let blocker = dir.path().join("blocker");
+    std::fs::write(&blocker, b"a file, not a folder").unwrap();
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &s(&dir.path().join("C.exr")),
+        "-o",
+        &s(&blocker.join("out.exr")),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(
+        err.contains("cannot write") && err.contains("blocker"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+}

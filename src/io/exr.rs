@@ -147,7 +147,12 @@ pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<(), String> {
         let mut bytes = [0u8; 4];
         file.read_exact(&mut bytes).map_err(|e| e.to_string())?;
         let size = i32::from_le_bytes(bytes);
-        if size < 0 || size_at + 4 + size as u64 > file_len {
+        if size < 0 {
+            return Err(format!(
+                "a chunk at byte {offset} has an invalid size ({size}); the file is damaged"
+            ));
+        }
+        if size_at + 4 + size as u64 > file_len {
             return Err(format!(
                 "the file is truncated: a chunk at byte {offset} needs {size} bytes, the file has {file_len}"
             ));
