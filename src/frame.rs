@@ -12,6 +12,11 @@
 /// One channel of one pass, row-major, `width * height` samples.
 pub type Plane = Vec<f32>;
 
+/// The screen position of the centre of pixel `index` of a row-major image `width` wide.
+pub fn pixel_centre(index: usize, width: usize) -> (f32, f32) {
+    ((index % width) as f32 + 0.5, (index / width) as f32 + 0.5)
+}
+
 /// Which passes an operation needs. Readers decode exactly these.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Passes {
@@ -134,9 +139,7 @@ impl Frame {
 
     /// The screen position of the centre of pixel `index` (row-major).
     pub fn pixel_centre(&self, index: usize) -> (f32, f32) {
-        let x = (index % self.width) as f32 + 0.5;
-        let y = (index / self.width) as f32 + 0.5;
-        (x, y)
+        pixel_centre(index, self.width)
     }
 
     /// Bytes held by the decoded planes (for memory accounting).

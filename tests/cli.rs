@@ -654,3 +654,25 @@ fn unwritable_output_is_a_file_error() {
     );
     assert_eq!(err.lines().count(), 1, "{err}");
 }
+
+#[test]
+fn output_is_bit_identical_for_any_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), Some(1), 190, 130);
+    let mut outputs = Vec::new();
+    for threads in ["1", "2", "3"] {
+        let out = dir.path().join(format!("t{threads}/o.####.exr"));
+        let o = shutter(&[
+            "blur",
+            "--threads",
+            threads,
+            "--color",
+            &format!("{}/C.####.exr", dir.path().display()),
+            "-o",
+            &s(&out),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        outputs.push(std::fs::read(dir.path().join(format!("t{threads}/o.0001.exr"))).unwrap());
+    }
+    assert!(outputs.windows(2).all(|w| w[0] == w[1]), "outputs differ");
+}

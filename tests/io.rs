@@ -381,3 +381,61 @@ fn garbage_files_never_panic() {
         assert!(result.is_ok(), "panic on seed {seed}");
     }
 }
+
+#[test]
+fn parts_without_wanted_channels_are_never_decompressed() {
+    // Two parts; the last chunk of the file (the vector part's) is damaged. Reading colour
+    // must not touch it; reading vectors must report it.
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (64, 48);
+    let n = w * h;
+    let smooth: Vec<f32> = (0..n).map(|k| (k % w) as f32 * 0.01).collect();
+    let part = |name: &str, channels: &[&str]| {
+        layer_with(
+            Some(name),
+            (w, h),
+            Blocks::ScanLines,
+            Compression::ZIP16,
+            channels
+                .iter()
+                .map(|c| AnyChannel::new(*c, FlatSamples::F32(smooth.clone())))
+                .collect(),
+        )
+    };
+    let image = Image::empty(ImageAttributes::new(IntegerBounds::from_dimensions((w, h))))
+        .with_layer(part("rgba", &["R", "G", "B"]))
+        .with_layer(part("forward", &["u", "v"]));
+    let path = dir.path().join("parts.exr");
+    image.write().to_file(&path).unwrap();
+    let mut bytes = std::fs::read(&path).unwrap();
+    let len = bytes.len();
+    for b in &mut bytes[len - 40..len - 20] {
+        *b ^= 0x5A;
+    }
+    std::fs::write(&path, &bytes).unwrap();
+
+    let preset = Preset::builtin("nuke").unwrap();
+    let inputs = Inputs {
+        color: PathPattern::parse(&s(&path)).unwrap(),
+        depth: None,
+        velocity: None,
+        prev: None,
+        next: None,
+    };
+    let needs_color = PlanOptions {
+        preset: &preset,
+        layer: None,
+        needs: Passes::COLOR,
+    };
+    let frame = read_frame(&plan_frame(&inputs, None, &needs_color).unwrap()).unwrap();
+    assert_exact(&frame.color.unwrap().r, &smooth, "R");
+    let needs_next = PlanOptions {
+        needs: Passes {
+            next: true,
+            ..Passes::default()
+        },
+        ..needs_color
+    };
+    let problem = read_frame(&plan_frame(&inputs, None, &needs_next).unwrap()).unwrap_err();
+    assert_eq!(problem.kind, shutter::ProblemKind::Corrupt, "{problem}");
+}

@@ -190,6 +190,9 @@ fn blur(args: BlurArgs) -> Result<()> {
         if threads == 0 {
             return Err(Error::usage("--threads must be at least 1"));
         }
+        // The exr crate builds its own pool for each parallel write and sizes it from this
+        // variable: set it so --threads bounds every pool. Nothing else runs yet.
+        std::env::set_var("RAYON_NUM_THREADS", threads.to_string());
         // Fails only if the pool was already built, which cannot happen this early.
         let _ = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -205,7 +208,7 @@ fn blur(args: BlurArgs) -> Result<()> {
                 let b = indicatif::ProgressBar::new(frames as u64);
                 b.set_style(
                     indicatif::ProgressStyle::with_template(
-                        "{bar:40} {pos}/{len} frames  {per_sec}  eta {eta}",
+                        "{bar:40} {pos}/{len} frames  {msg}  eta {eta}",
                     )
                     .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
                 );
@@ -215,7 +218,11 @@ fn blur(args: BlurArgs) -> Result<()> {
             }
         }
         Event::Written { path, .. } => match &bar {
-            Some(b) => b.inc(1),
+            Some(b) => {
+                b.inc(1);
+                let seconds = b.elapsed().as_secs_f64().max(1e-9);
+                b.set_message(format!("{:.2} frames/s", b.position() as f64 / seconds));
+            }
             None if verbose => eprintln!("shutter: wrote {}", path.display()),
             None => {}
         },

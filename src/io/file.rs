@@ -62,19 +62,13 @@ impl FileInfo {
         let mut magic = [0u8; 4];
         let opened = std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut magic));
         if let Err(e) = opened {
-            let kind = if path.exists() && e.kind() != std::io::ErrorKind::UnexpectedEof {
-                ProblemKind::MissingFile
-            } else if path.exists() {
-                ProblemKind::Corrupt
-            } else {
-                ProblemKind::MissingFile
-            };
-            let detail = if kind == ProblemKind::MissingFile && !path.exists() {
-                "no such file".to_string()
-            } else if kind == ProblemKind::Corrupt {
-                "the file is too short to be an image".to_string()
-            } else {
-                e.to_string()
+            let (kind, detail) = match e.kind() {
+                std::io::ErrorKind::NotFound => (ProblemKind::MissingFile, "no such file".into()),
+                std::io::ErrorKind::UnexpectedEof => (
+                    ProblemKind::Corrupt,
+                    "the file is too short to be an image".into(),
+                ),
+                _ => (ProblemKind::MissingFile, e.to_string()),
             };
             return Err(Problem::new(kind, path, detail));
         }

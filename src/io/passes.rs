@@ -15,7 +15,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::{Problem, ProblemKind};
-use crate::frame::{Color, Frame, Passes, Plane, Positions, Velocity};
+use crate::frame::{pixel_centre, Color, Frame, Passes, Plane, Positions, Velocity};
 use crate::io::file::FileInfo;
 use crate::io::image::srgb_to_linear;
 use crate::io::preset::{Meaning, Preset, Transfer, Units, VectorSpec};
@@ -643,8 +643,6 @@ impl Motion {
             let d = v - spec.zero;
             if d.abs() <= spec.dead_zone {
                 0.0
-            } else if s == 1.0 && sign == 1.0 {
-                d
             } else {
                 d * s * sign
             }
@@ -678,7 +676,7 @@ impl Motion {
             ..
         } = self;
         for (i, (vx, vy)) in x.iter_mut().zip(y.iter_mut()).enumerate() {
-            let (cx, cy) = centre(i, width);
+            let (cx, cy) = pixel_centre(i, width);
             let (dx, dy) = if absolute {
                 (*vx - cx, *vy - cy)
             } else {
@@ -707,7 +705,7 @@ impl Motion {
         } = self;
         let same_direction = backward == want_prev;
         for (i, (px, py)) in x.iter_mut().zip(y.iter_mut()).enumerate() {
-            let (cx, cy) = centre(i, width);
+            let (cx, cy) = pixel_centre(i, width);
             match (absolute, same_direction) {
                 (true, true) => {}
                 (true, false) => {
@@ -730,10 +728,6 @@ impl Motion {
             z: if same_direction { z } else { None },
         }
     }
-}
-
-fn centre(index: usize, width: usize) -> (f32, f32) {
-    ((index % width) as f32 + 0.5, (index / width) as f32 + 0.5)
 }
 
 /// The passes a preset finds in one file on its own (for `shutter info`): colour first, then
