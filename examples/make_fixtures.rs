@@ -11,6 +11,10 @@
 //! - `fixtures/blender/shot.0001.exr`: the same frame 2 as one Blender multi-layer file
 //!   (`ViewLayer.Combined.RGBA`, `ViewLayer.Depth.Z`, `ViewLayer.Vector.XYZW`, y up).
 //!
+//! - `fixtures/flip/{name}_{ref,test}.png`: small 8-bit sRGB image pairs whose mean FLIP
+//!   error NVIDIA's own implementation computed (`scripts/flip_vectors.py` writes
+//!   `fixtures/flip/expected.json`); the metrics tests compare ours against them.
+//!
 //! The motion is known in closed form, so passes are exact, not estimated.
 
 use std::fs::File;
@@ -104,7 +108,73 @@ fn write(path: &str, channels: Vec<(&str, Vec<f32>)>, half: bool) {
     write_channels(file, W, H, Windows::full(W, H), channels, options).expect("write fixture");
 }
 
+/// A deterministic value in [0, 1) per (seed, index).
+fn hash01(seed: u32, i: u32) -> f32 {
+    let mut h = i.wrapping_mul(0x9E37_79B9) ^ seed.wrapping_mul(0x85EB_CA6B);
+    h ^= h >> 15;
+    h = h.wrapping_mul(0x2C1B_3C6D);
+    h ^= h >> 12;
+    h as f32 / u32::MAX as f32
+}
+
+fn flip_pairs() {
+    const FW: usize = 64;
+    const FH: usize = 48;
+    std::fs::create_dir_all("fixtures/flip").expect("mkdir");
+    let save = |name: &str, f: &dyn Fn(usize, usize, usize) -> f32| {
+        let mut bytes = Vec::with_capacity(FW * FH * 3);
+        for j in 0..FH {
+            for i in 0..FW {
+                for c in 0..3 {
+                    bytes.push((f(i, j, c).clamp(0.0, 1.0) * 255.0).round() as u8);
+                }
+            }
+        }
+        image::save_buffer(
+            format!("fixtures/flip/{name}.png"),
+            &bytes,
+            FW as u32,
+            FH as u32,
+            image::ColorType::Rgb8,
+        )
+        .expect("save png");
+    };
+    let gradient = |i: usize, j: usize, c: usize| {
+        (i as f32 / FW as f32) * [1.0, 0.6, 0.3][c] + (j as f32 / FH as f32) * 0.3
+    };
+    save("gradient_ref", &gradient);
+    save("gradient_test", &|i, j, c| {
+        gradient(i, j, c) + 0.08 * (hash01(1, (j * FW + i) as u32 * 3 + c as u32) - 0.5)
+    });
+    let checker = |i: usize, j: usize, _c: usize| {
+        if (i / 8 + j / 8).is_multiple_of(2) {
+            0.9
+        } else {
+            0.1
+        }
+    };
+    save("checker_ref", &checker);
+    save("checker_test", &|i, j, c| checker(i + 1, j, c));
+    let disc = |i: usize, j: usize, c: usize, r: f32| {
+        let (x, y) = (i as f32 - 32.0, j as f32 - 24.0);
+        if x * x + y * y < r * r {
+            [0.9, 0.3, 0.1][c]
+        } else {
+            [0.1, 0.2, 0.4][c]
+        }
+    };
+    save("disc_ref", &|i, j, c| disc(i, j, c, 14.0));
+    save("disc_test", &|i, j, c| disc(i, j, c, 16.0));
+    save("noise_ref", &|i, j, c| {
+        hash01(2, (j * FW + i) as u32 * 3 + c as u32)
+    });
+    save("noise_test", &|i, j, c| {
+        hash01(3, (j * FW + i) as u32 * 3 + c as u32)
+    });
+}
+
 fn main() {
+    flip_pairs();
     std::fs::create_dir_all("fixtures/canonical").expect("mkdir");
     std::fs::create_dir_all("fixtures/blender").expect("mkdir");
     for frame in 1..=3 {

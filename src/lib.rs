@@ -11,8 +11,10 @@ pub mod cli;
 pub mod error;
 pub mod frame;
 pub mod io;
+pub mod metrics;
 pub mod motion;
 pub mod pipeline;
+pub mod truth;
 
 pub use error::{Error, Problem, ProblemKind, Result};
 pub use frame::{Frame, Passes};

@@ -5,4 +5,6 @@ mod support;
 
 mod cli;
 mod io;
+mod metrics;
 mod presets;
+mod truth;

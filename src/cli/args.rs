@@ -28,6 +28,8 @@ pub enum Command {
     Info(InfoArgs),
     /// List the built-in presets, or show one.
     Presets(PresetsArgs),
+    /// Write a procedural test scene: its passes and brute-force references.
+    Scene(SceneArgs),
 }
 
 #[derive(Debug, Args)]
@@ -138,4 +140,36 @@ pub enum PresetsCommand {
         /// Preset name or .toml path.
         name: String,
     },
+}
+
+#[derive(Debug, Args)]
+pub struct SceneArgs {
+    /// Scene name: rotor, orbit, figure, crossing, pan, zoom, gears, static, sparse, huge,
+    /// layers.
+    pub name: String,
+
+    /// Output folder: color, depth, velocity, prev, next and reference(_dof, _both)
+    /// .####.exr, and scene.json.
+    #[arg(short, long, value_name = "DIR")]
+    pub output: PathBuf,
+
+    /// Image size [default: 640x360].
+    #[arg(long, value_name = "WxH")]
+    pub size: Option<String>,
+
+    /// Number of frames (frame f is scene time f - 1).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub frames: usize,
+
+    /// Reference samples per pixel.
+    #[arg(long, value_name = "N", default_value_t = crate::truth::write::DEFAULT_SAMPLES)]
+    pub samples: usize,
+
+    /// Shutter fraction of the references (0.5 = 180°).
+    #[arg(long, value_name = "F", default_value_t = 0.5)]
+    pub shutter: f64,
+
+    /// Seed of the sample patterns (and of the layout of random scenes).
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
 }

@@ -17,7 +17,7 @@ use crate::io::sequence::{parse_frames, PathPattern};
 use crate::motion::{Algorithm, BlurParams};
 use crate::pipeline::{run, Event, Job};
 
-use args::{BlurArgs, Cli, Command, InfoArgs, PresetsArgs, PresetsCommand};
+use args::{BlurArgs, Cli, Command, InfoArgs, PresetsArgs, PresetsCommand, SceneArgs};
 
 /// Parses the command line, runs it and returns the process exit code.
 pub fn main() -> i32 {
@@ -32,6 +32,7 @@ pub fn main() -> i32 {
         Command::Blur(args) => blur(*args),
         Command::Info(args) => info(args),
         Command::Presets(args) => presets(args),
+        Command::Scene(args) => scene(args),
     };
     match result {
         Ok(()) => 0,
@@ -417,4 +418,47 @@ fn presets(args: PresetsArgs) -> Result<()> {
             Ok(())
         }
     }
+}
+
+/// Parses `WxH`.
+pub fn parse_size(text: &str) -> Result<(usize, usize)> {
+    let bad = || Error::usage(format!("bad size '{text}': use WxH, e.g. 640x360"));
+    let (w, h) = text.split_once(['x', 'X']).ok_or_else(bad)?;
+    let w: usize = w.trim().parse().map_err(|_| bad())?;
+    let h: usize = h.trim().parse().map_err(|_| bad())?;
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        return Err(bad());
+    }
+    Ok((w, h))
+}
+
+fn scene(args: SceneArgs) -> Result<()> {
+    let (width, height) = match &args.size {
+        Some(size) => parse_size(size)?,
+        None => crate::truth::write::DEFAULT_SIZE,
+    };
+    let options = crate::truth::write::SceneOptions {
+        width,
+        height,
+        frames: args.frames,
+        samples: args.samples,
+        shutter: args.shutter,
+        seed: args.seed,
+    };
+    let verbose = std::io::stderr().is_terminal();
+    let description =
+        crate::truth::write::write_scene(&args.name, &args.output, &options, &mut |frame, _| {
+            if verbose {
+                eprintln!("shutter: scene {} frame {frame} written", args.name);
+            }
+        })?;
+    if verbose {
+        eprintln!(
+            "shutter: {} frames of {} in {}",
+            description.frames,
+            description.scene,
+            args.output.display()
+        );
+    }
+    Ok(())
 }

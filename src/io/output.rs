@@ -4,11 +4,11 @@
 //! frame under the final name.
 
 use std::fs::File;
-use std::io::Write;
+use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use crate::error::{Problem, ProblemKind};
-use crate::frame::Frame;
+use crate::frame::{Frame, Plane, Windows};
 use crate::io::exr::{self as exr_io, ExrOptions};
 use crate::io::image::{self as image_io, ImageFormat};
 
@@ -61,6 +61,43 @@ pub fn temporary_path(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
+/// Writes a file atomically: `write` fills a buffered temporary file beside `path`, which is
+/// flushed and renamed into place; on any failure the temporary file is removed and `path`
+/// is untouched. The folder must exist.
+pub fn write_atomic(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> Result<(), String>,
+) -> Result<(), String> {
+    let temporary = temporary_path(path);
+    let file = File::create(&temporary).map_err(|e| e.to_string())?;
+    let mut writer = BufWriter::new(file);
+    let result = write(&mut writer).and_then(|()| writer.flush().map_err(|e| e.to_string()));
+    drop(writer);
+    if let Err(detail) = result {
+        let _ = std::fs::remove_file(&temporary);
+        return Err(detail);
+    }
+    std::fs::rename(&temporary, path).map_err(|e| {
+        let _ = std::fs::remove_file(&temporary);
+        e.to_string()
+    })
+}
+
+/// Writes named planes as an EXR, atomically.
+pub fn write_exr_atomic(
+    path: &Path,
+    width: usize,
+    height: usize,
+    windows: Windows,
+    channels: Vec<(String, Plane)>,
+    options: ExrOptions,
+) -> Result<(), String> {
+    write_atomic(path, |writer| {
+        exr_io::write_channels(writer, width, height, windows, channels, options)
+            .map_err(|e| e.to_string())
+    })
+}
+
 /// Writes the colour of `frame` to `path` atomically. The folder must exist.
 pub fn write_frame(
     path: &Path,
@@ -75,10 +112,7 @@ pub fn write_frame(
     let Some(color) = frame.color else {
         return Err(fail("the frame has no colour to write".into()));
     };
-    let temporary = temporary_path(path);
-    let file = File::create(&temporary).map_err(|e| fail(e.to_string()))?;
-    let mut writer = std::io::BufWriter::new(file);
-    let result = match format {
+    match format {
         OutputFormat::Exr => {
             let mut channels = vec![
                 ("R".to_string(), color.r),
@@ -88,35 +122,27 @@ pub fn write_frame(
             if let Some(a) = color.a {
                 channels.push(("A".to_string(), a));
             }
-            exr_io::write_channels(
-                &mut writer,
+            write_exr_atomic(
+                path,
                 frame.width,
                 frame.height,
                 frame.windows,
                 channels,
                 options.exr,
             )
-            .map_err(|e| e.to_string())
         }
-        OutputFormat::Image(format) => image_io::write_color(
-            &mut writer,
-            format,
-            frame.width,
-            frame.height,
-            [&color.r, &color.g, &color.b],
-            color.a.as_deref(),
-            options.sixteen_bit,
-            options.srgb,
-        ),
-    };
-    let result = result.and_then(|()| writer.flush().map_err(|e| e.to_string()));
-    drop(writer);
-    if let Err(detail) = result {
-        let _ = std::fs::remove_file(&temporary);
-        return Err(fail(detail));
+        OutputFormat::Image(format) => write_atomic(path, |writer| {
+            image_io::write_color(
+                writer,
+                format,
+                frame.width,
+                frame.height,
+                [&color.r, &color.g, &color.b],
+                color.a.as_deref(),
+                options.sixteen_bit,
+                options.srgb,
+            )
+        }),
     }
-    std::fs::rename(&temporary, path).map_err(|e| {
-        let _ = std::fs::remove_file(&temporary);
-        fail(e.to_string())
-    })
+    .map_err(fail)
 }

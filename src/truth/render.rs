@@ -1,0 +1,213 @@
+//! Rendering a scene: the passes a renderer writes (colour antialiased at the frame time,
+//! and the depth, velocity, previous and next positions of the surface seen at each pixel
+//! centre) and the brute-force references (motion blur: many time samples over the shutter;
+//! depth of field: many aperture samples; and both together).
+//!
+//! Reference samples follow a randomly shifted Kronecker sequence in five dimensions
+//! (sub-pixel x and y, time, aperture u and v; `sample::kronecker`), shifted per pixel by a
+//! hash. The colour pass uses the same sub-pixel positions. Time is snapped
+//! to a grid of `TIME_STEPS` instants across the shutter, whose scene poses are computed once
+//! per frame; at 4096 steps the snap moves a sample by φ/4096 of a frame, below a hundredth of
+//! a pixel for motion under 80 px per frame.
+
+use glam::DVec2;
+use rayon::prelude::*;
+
+use super::model::{Posed, Scene};
+use super::sample::{concentric_disk, kronecker, pixel_shift};
+use crate::frame::{Color, Frame, Plane, Positions, Velocity};
+
+/// Instants across the shutter at which scene poses are tabulated.
+pub const TIME_STEPS: usize = 4096;
+
+/// What to render.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderSettings {
+    /// Reference samples per pixel.
+    pub samples: usize,
+    /// Shutter fraction φ, centred on the frame.
+    pub shutter: f64,
+    pub seed: u64,
+}
+
+/// Which reference.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reference {
+    /// Time samples over the shutter, pinhole.
+    MotionBlur,
+    /// Aperture samples at the frame time.
+    DepthOfField,
+    /// Both.
+    Both,
+}
+
+fn accumulate(sum: &mut [f64; 3], color: [f32; 3]) {
+    for (s, c) in sum.iter_mut().zip(color) {
+        *s += c as f64;
+    }
+}
+
+/// Offsets below this many pixels are rounding in the closed-form transforms, not motion:
+/// they are written as exactly zero so that still surfaces are exactly still.
+const STILL: f64 = 1e-6;
+
+/// The passes of frame time `t` (colour, depth, velocity, prev, next). Colour is
+/// antialiased with `samples` sub-pixel samples at the same positions as the references use,
+/// so pixels that nothing crosses during the exposure are identical in colour and reference.
+pub fn render_passes(scene: &Scene, t: f64, samples: usize, seed: u64) -> Frame {
+    let (width, height) = (scene.width, scene.height);
+    let n = width * height;
+    let samples = samples.max(1);
+    let posed = scene.pose(t);
+    let order = scene.front_to_back();
+    let rows: Vec<Vec<[f32; 10]>> = (0..height)
+        .into_par_iter()
+        .map(|j| {
+            (0..width)
+                .map(|i| {
+                    let pixel = (j * width + i) as u64;
+                    let shift = pixel_shift(seed, pixel);
+                    let mut rgb = [0.0f64; 3];
+                    for k in 0..samples {
+                        let u = kronecker(k, &shift);
+                        let p = DVec2::new(i as f64 + u[0], j as f64 + u[1]);
+                        accumulate(&mut rgb, scene.trace(&posed, &order, p, DVec2::ZERO).color);
+                    }
+                    let scale = 1.0 / samples as f64;
+                    let centre = DVec2::new(i as f64 + 0.5, j as f64 + 0.5);
+                    let hit = scene.trace(&posed, &order, centre, DVec2::ZERO);
+                    let settle = |p: DVec2| {
+                        if (p - centre).length() < STILL {
+                            centre
+                        } else {
+                            p
+                        }
+                    };
+                    let prev = settle(scene.screen_position(&hit, t - 1.0));
+                    let next = settle(scene.screen_position(&hit, t + 1.0));
+                    [
+                        (rgb[0] * scale) as f32,
+                        (rgb[1] * scale) as f32,
+                        (rgb[2] * scale) as f32,
+                        hit.depth as f32,
+                        (centre.x - prev.x) as f32,
+                        (centre.y - prev.y) as f32,
+                        prev.x as f32,
+                        prev.y as f32,
+                        next.x as f32,
+                        next.y as f32,
+                    ]
+                })
+                .collect()
+        })
+        .collect();
+    let mut planes: Vec<Plane> = (0..10).map(|_| Vec::with_capacity(n)).collect();
+    for row in rows {
+        for px in row {
+            for (plane, value) in planes.iter_mut().zip(px) {
+                plane.push(value);
+            }
+        }
+    }
+    let mut it = planes.into_iter();
+    let mut take = || it.next().expect("ten planes");
+    let (r, g, b, depth) = (take(), take(), take(), take());
+    let velocity = Velocity {
+        x: take(),
+        y: take(),
+    };
+    let (px, py, nx, ny) = (take(), take(), take(), take());
+    let mut frame = Frame::new(width, height);
+    frame.color = Some(Color {
+        r,
+        g,
+        b,
+        a: Some(vec![1.0; n]),
+    });
+    frame.prev = Some(Positions {
+        x: px,
+        y: py,
+        z: Some(depth.clone()),
+    });
+    frame.next = Some(Positions {
+        x: nx,
+        y: ny,
+        z: Some(depth.clone()),
+    });
+    frame.depth = Some(depth);
+    frame.velocity = Some(velocity);
+    frame
+}
+
+/// A brute-force reference of frame time `t`: RGB planes.
+pub fn render_reference(
+    scene: &Scene,
+    t: f64,
+    kind: Reference,
+    settings: &RenderSettings,
+) -> [Plane; 3] {
+    let (width, height) = (scene.width, scene.height);
+    let samples = settings.samples.max(1);
+    let moving = kind != Reference::DepthOfField;
+    let steps = if moving { TIME_STEPS } else { 1 };
+    let poses: Vec<Posed> = (0..steps)
+        .into_par_iter()
+        .map(|s| {
+            if moving {
+                scene.pose(t + settings.shutter * ((s as f64 + 0.5) / steps as f64 - 0.5))
+            } else {
+                scene.pose(t)
+            }
+        })
+        .collect();
+    let order = scene.front_to_back();
+    let lens = kind != Reference::MotionBlur && scene.lens.is_some();
+    let seed = settings.seed;
+    let rows: Vec<Vec<[f32; 3]>> = (0..height)
+        .into_par_iter()
+        .map(|j| {
+            (0..width)
+                .map(|i| {
+                    let pixel = (j * width + i) as u64;
+                    let shift = pixel_shift(seed, pixel);
+                    let mut rgb = [0.0f64; 3];
+                    for k in 0..samples {
+                        let u = kronecker(k, &shift);
+                        let p = DVec2::new(i as f64 + u[0], j as f64 + u[1]);
+                        let posed = if moving {
+                            &poses[((u[2] * steps as f64) as usize).min(steps - 1)]
+                        } else {
+                            &poses[0]
+                        };
+                        let aperture = if lens {
+                            concentric_disk(u[3], u[4])
+                        } else {
+                            DVec2::ZERO
+                        };
+                        accumulate(&mut rgb, scene.trace(posed, &order, p, aperture).color);
+                    }
+                    let scale = 1.0 / samples as f64;
+                    [
+                        (rgb[0] * scale) as f32,
+                        (rgb[1] * scale) as f32,
+                        (rgb[2] * scale) as f32,
+                    ]
+                })
+                .collect()
+        })
+        .collect();
+    let n = width * height;
+    let mut out = [
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+    ];
+    for row in rows {
+        for px in row {
+            for c in 0..3 {
+                out[c].push(px[c]);
+            }
+        }
+    }
+    out
+}

@@ -1,0 +1,211 @@
+//! `shutter scene`: writes a scene's passes and references as EXR sequences in the canonical
+//! convention, so `shutter blur` reads them with nothing but the pass paths.
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use super::model::Scene;
+use super::render::{render_passes, render_reference, Reference, RenderSettings};
+use super::scenes::build;
+use crate::error::{Error, Problem, ProblemKind, Result};
+use crate::frame::{Plane, Windows};
+use crate::io::exr::ExrOptions;
+use crate::io::output::write_exr_atomic;
+
+/// Default reference samples per pixel: enough for the convergence test (`tests/truth.rs`).
+pub const DEFAULT_SAMPLES: usize = 1024;
+/// Default output size.
+pub const DEFAULT_SIZE: (usize, usize) = (640, 360);
+
+/// What to write.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneOptions {
+    pub width: usize,
+    pub height: usize,
+    pub frames: usize,
+    pub samples: usize,
+    pub shutter: f64,
+    pub seed: u64,
+}
+
+impl Default for SceneOptions {
+    fn default() -> Self {
+        SceneOptions {
+            width: DEFAULT_SIZE.0,
+            height: DEFAULT_SIZE.1,
+            frames: 1,
+            samples: DEFAULT_SAMPLES,
+            shutter: 0.5,
+            seed: 1,
+        }
+    }
+}
+
+/// The description written beside the frames (`scene.json`).
+#[derive(Clone, Debug, Serialize)]
+pub struct SceneDescription {
+    pub scene: String,
+    pub width: usize,
+    pub height: usize,
+    pub frames: usize,
+    pub samples: usize,
+    pub shutter: f64,
+    pub seed: u64,
+    /// Frame f is scene time f − 1 (frames).
+    pub first_frame: usize,
+    /// Patterns of the files written, by role.
+    pub files: Vec<(String, String)>,
+    pub lens: Option<LensDescription>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct LensDescription {
+    pub focal_mm: f64,
+    pub f_number: f64,
+    pub focus: f64,
+    pub sensor_mm: f64,
+}
+
+/// Builds a scene or explains which names exist.
+pub fn scene_by_name(name: &str, options: &SceneOptions) -> Result<Scene> {
+    if options.width == 0 || options.height == 0 {
+        return Err(Error::usage("--size must be at least 1x1"));
+    }
+    build(name, options.width, options.height, options.seed).ok_or_else(|| {
+        let names: Vec<&str> = super::scenes::SCENES.iter().map(|(n, _)| *n).collect();
+        Error::usage(format!(
+            "unknown scene '{name}'; scenes are {}",
+            names.join(", ")
+        ))
+    })
+}
+
+fn write(path: &Path, scene: &Scene, channels: Vec<(&str, Plane)>) -> Result<()> {
+    let channels = channels
+        .into_iter()
+        .map(|(n, p)| (n.to_string(), p))
+        .collect();
+    write_exr_atomic(
+        path,
+        scene.width,
+        scene.height,
+        Windows::full(scene.width, scene.height),
+        channels,
+        ExrOptions::default(),
+    )
+    .map_err(|detail| Problem::new(ProblemKind::Output, path, detail).into())
+}
+
+/// Writes every frame of the scene into `dir`; calls `on_frame` after each.
+pub fn write_scene(
+    name: &str,
+    dir: &Path,
+    options: &SceneOptions,
+    on_frame: &mut dyn FnMut(usize, &Path),
+) -> Result<SceneDescription> {
+    if !(0.0..=1.0).contains(&options.shutter) {
+        return Err(Error::usage(format!(
+            "--shutter {} is outside 0..1",
+            options.shutter
+        )));
+    }
+    if options.frames == 0 || options.samples == 0 {
+        return Err(Error::usage("--frames and --samples must be at least 1"));
+    }
+    let scene = scene_by_name(name, options)?;
+    std::fs::create_dir_all(dir).map_err(|e| {
+        Problem::new(
+            ProblemKind::Output,
+            dir,
+            format!("cannot create the folder: {e}"),
+        )
+    })?;
+    let settings = RenderSettings {
+        samples: options.samples,
+        shutter: options.shutter,
+        seed: options.seed,
+    };
+    let mut roles = vec!["color", "depth", "velocity", "prev", "next", "reference"];
+    if scene.lens.is_some() {
+        roles.extend(["reference_dof", "reference_both"]);
+    }
+    let file = |role: &str, frame: usize| -> PathBuf { dir.join(format!("{role}.{frame:04}.exr")) };
+    for frame in 1..=options.frames {
+        let t = (frame - 1) as f64;
+        let passes = render_passes(&scene, t, options.samples, options.seed);
+        let color = passes.color.expect("rendered");
+        let n = scene.width * scene.height;
+        write(
+            &file("color", frame),
+            &scene,
+            vec![
+                ("R", color.r),
+                ("G", color.g),
+                ("B", color.b),
+                ("A", vec![1.0; n]),
+            ],
+        )?;
+        write(
+            &file("depth", frame),
+            &scene,
+            vec![("Z", passes.depth.expect("rendered"))],
+        )?;
+        let velocity = passes.velocity.expect("rendered");
+        write(
+            &file("velocity", frame),
+            &scene,
+            vec![("X", velocity.x), ("Y", velocity.y)],
+        )?;
+        for (role, positions) in [("prev", passes.prev), ("next", passes.next)] {
+            let positions = positions.expect("rendered");
+            let mut channels = vec![("X", positions.x), ("Y", positions.y)];
+            if let Some(z) = positions.z {
+                channels.push(("Z", z));
+            }
+            write(&file(role, frame), &scene, channels)?;
+        }
+        let mut kinds = vec![("reference", Reference::MotionBlur)];
+        if scene.lens.is_some() {
+            kinds.push(("reference_dof", Reference::DepthOfField));
+            kinds.push(("reference_both", Reference::Both));
+        }
+        for (role, kind) in kinds {
+            let [r, g, b] = render_reference(&scene, t, kind, &settings);
+            write(
+                &file(role, frame),
+                &scene,
+                vec![("R", r), ("G", g), ("B", b), ("A", vec![1.0; n])],
+            )?;
+        }
+        on_frame(frame, &file("color", frame));
+    }
+    let description = SceneDescription {
+        scene: name.to_string(),
+        width: options.width,
+        height: options.height,
+        frames: options.frames,
+        samples: options.samples,
+        shutter: options.shutter,
+        seed: options.seed,
+        first_frame: 1,
+        files: roles
+            .iter()
+            .map(|r| (r.to_string(), format!("{r}.####.exr")))
+            .collect(),
+        lens: scene.lens.map(|l| LensDescription {
+            focal_mm: l.focal_mm,
+            f_number: l.f_number,
+            focus: l.focus,
+            sensor_mm: l.sensor_mm,
+        }),
+    };
+    let json = serde_json::to_string_pretty(&description).unwrap_or_default();
+    let path = dir.join("scene.json");
+    crate::io::output::write_atomic(&path, |w| {
+        use std::io::Write;
+        w.write_all(json.as_bytes()).map_err(|e| e.to_string())
+    })
+    .map_err(|detail| Problem::new(ProblemKind::Output, &path, detail))?;
+    Ok(description)
+}
