@@ -8,6 +8,7 @@
 //! - [`cli`]: the command line (the only part that prints).
 
 pub mod cli;
+pub mod diff;
 pub mod error;
 pub mod frame;
 pub mod io;

@@ -4,6 +4,7 @@
 mod support;
 
 mod cli;
+mod diff;
 mod io;
 mod metrics;
 mod presets;

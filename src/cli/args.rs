@@ -30,6 +30,9 @@ pub enum Command {
     Presets(PresetsArgs),
     /// Write a procedural test scene: its passes and brute-force references.
     Scene(SceneArgs),
+    /// Compare two images or sequences: metrics, a CI gate, a heatmap. Exit codes: 0 within
+    /// --fail, 1 over it, 2 an unreadable input or a size mismatch.
+    Diff(DiffArgs),
 }
 
 #[derive(Debug, Args)]
@@ -172,4 +175,49 @@ pub struct SceneArgs {
     /// Seed of the sample patterns (and of the layout of random scenes).
     #[arg(long, value_name = "S", default_value_t = 1)]
     pub seed: u64,
+}
+
+#[derive(Debug, Args)]
+pub struct DiffArgs {
+    /// First image (the reference), a file or a #### / %04d pattern.
+    pub a: String,
+
+    /// Second image (the one tested), a file or a pattern.
+    pub b: String,
+
+    /// The gating metric: rmse, psnr, ssim or flip (all four are printed).
+    #[arg(long, value_name = "M", default_value = "rmse")]
+    pub metric: String,
+
+    /// Report every frame whose metric is worse than this (exit code unchanged).
+    #[arg(long, value_name = "X")]
+    pub warn: Option<f64>,
+
+    /// Exit 1 when any frame's metric is worse than this.
+    #[arg(long, value_name = "Y")]
+    pub fail: Option<f64>,
+
+    /// Write the per-pixel error of the metric as a PNG (a pattern for sequences).
+    #[arg(long, value_name = "OUT.png")]
+    pub heatmap: Option<String>,
+
+    /// The sharp (unblurred) frame(s): also score the region blur changes.
+    #[arg(long, value_name = "PATH")]
+    pub sharp: Option<String>,
+
+    /// Frames to compare [default: every frame found on disk for A].
+    #[arg(long, value_name = "SPEC")]
+    pub frames: Option<String>,
+
+    /// Preset for finding colour channels (see shutter presets).
+    #[arg(long, value_name = "P")]
+    pub preset: Vec<String>,
+
+    /// 8/16-bit inputs hold linear values, not sRGB.
+    #[arg(long)]
+    pub linear: bool,
+
+    /// Print JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
 }

@@ -1,0 +1,241 @@
+//! `shutter diff`: compares two images or two sequences frame by frame, with a metric gate
+//! for CI (warn and fail thresholds) and a heatmap of the per-pixel error.
+
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::error::{Error, Problem, ProblemKind, Result};
+use crate::frame::{Color, Passes};
+use crate::io::passes::{plan_frame, read_frame, Inputs, PlanOptions};
+use crate::io::preset::Preset;
+use crate::io::sequence::PathPattern;
+use crate::metrics::{self, Metric, Rgb, Scores};
+
+/// A diff job.
+#[derive(Clone, Debug)]
+pub struct DiffJob {
+    pub a: PathPattern,
+    pub b: PathPattern,
+    /// The sharp (unblurred) frames, to score the region blur changes as well.
+    pub sharp: Option<PathPattern>,
+    pub frames: Vec<Option<i64>>,
+    pub metric: Metric,
+    pub warn: Option<f64>,
+    pub fail: Option<f64>,
+    pub heatmap: Option<PathPattern>,
+    pub preset: Preset,
+    pub linear: bool,
+}
+
+/// Scores of one frame.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameDiff {
+    pub frame: Option<i64>,
+    pub a: PathBuf,
+    pub b: PathBuf,
+    pub whole: Scores,
+    /// Over the pixels where `sharp` and `a` differ (when `--sharp` is given).
+    pub region: Option<Scores>,
+    /// The gating metric's value for this frame.
+    pub value: f64,
+    pub warned: bool,
+    pub failed: bool,
+}
+
+/// The outcome of a diff.
+#[derive(Clone, Debug, Serialize)]
+pub struct DiffReport {
+    pub metric: &'static str,
+    pub warn: Option<f64>,
+    pub fail: Option<f64>,
+    pub frames: Vec<FrameDiff>,
+    /// The worst value of the gating metric over the frames.
+    pub worst: f64,
+    pub warnings: Vec<String>,
+    pub failed: bool,
+}
+
+fn read_color(
+    pattern: &PathPattern,
+    frame: Option<i64>,
+    preset: &Preset,
+) -> std::result::Result<(usize, usize, Color), Problem> {
+    let inputs = Inputs {
+        color: pattern.clone(),
+        depth: None,
+        velocity: None,
+        prev: None,
+        next: None,
+    };
+    let options = PlanOptions {
+        preset,
+        layer: None,
+        needs: Passes::COLOR,
+    };
+    let plan = plan_frame(&inputs, frame, &options).map_err(|mut problems| problems.remove(0))?;
+    let read = read_frame(&plan)?;
+    let color = read.color.expect("colour was planned");
+    Ok((read.width, read.height, color))
+}
+
+fn rgb(color: &Color, width: usize, height: usize) -> Rgb<'_> {
+    Rgb {
+        width,
+        height,
+        planes: [&color.r, &color.g, &color.b],
+    }
+}
+
+/// The per-pixel error map of the gating metric, in [0, 1] for the heatmap, and the value
+/// that maps to 1.
+fn error_map(metric: Metric, a: &Rgb, b: &Rgb) -> (Vec<f32>, f64) {
+    match metric {
+        Metric::Flip => (metrics::flip_map(a, b), 1.0),
+        Metric::Ssim => {
+            let map = metrics::ssim::ssim_map(
+                &metrics::display_luma(a),
+                &metrics::display_luma(b),
+                a.width,
+                a.height,
+            );
+            (map.iter().map(|s| (1.0 - s).clamp(0.0, 1.0)).collect(), 1.0)
+        }
+        Metric::Rmse | Metric::Psnr => {
+            let (squared, _) = metrics::squared_error_map(a, b);
+            let map: Vec<f32> = squared.iter().map(|s| (s / 3.0).sqrt() as f32).collect();
+            let max = map.iter().copied().fold(0.0f32, f32::max).max(1e-12);
+            (map.iter().map(|v| v / max).collect(), max as f64)
+        }
+    }
+}
+
+/// Writes a per-pixel error map in [0, 1] as a PNG with the magma colour map.
+pub fn write_heatmap(path: &Path, width: usize, height: usize, map: &[f32]) -> Result<()> {
+    let lut = nv_flip::magma_lut().to_vec();
+    let mut bytes = Vec::with_capacity(map.len() * 3);
+    for v in map {
+        let index = (v.clamp(0.0, 1.0) * 255.0).round() as usize;
+        bytes.extend_from_slice(&lut[index * 3..index * 3 + 3]);
+    }
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent).map_err(|e| {
+            Problem::new(ProblemKind::Output, parent, format!("cannot create: {e}"))
+        })?;
+    }
+    crate::io::output::write_atomic(path, |w| {
+        use image::ImageEncoder;
+        image::codecs::png::PngEncoder::new(w)
+            .write_image(
+                &bytes,
+                width as u32,
+                height as u32,
+                image::ExtendedColorType::Rgb8,
+            )
+            .map_err(|e| e.to_string())
+    })
+    .map_err(|detail| Problem::new(ProblemKind::Output, path, detail).into())
+}
+
+/// Compares every frame. Unreadable inputs and size mismatches are errors (all of them
+/// reported); metric results, warnings and failures are in the report.
+pub fn run(job: &DiffJob) -> Result<DiffReport> {
+    let mut preset = job.preset.clone();
+    if job.linear {
+        preset.color.transfer = crate::io::preset::Transfer::Linear;
+    }
+    let results: Vec<std::result::Result<FrameDiff, Problem>> = job
+        .frames
+        .par_iter()
+        .map(|&frame| {
+            let (wa, ha, a) = read_color(&job.a, frame, &preset)?;
+            let (wb, hb, b) = read_color(&job.b, frame, &preset)?;
+            if (wa, ha) != (wb, hb) {
+                return Err(Problem::new(
+                    ProblemKind::SizeMismatch,
+                    job.b.path(frame),
+                    format!("{wb}x{hb} but {} is {wa}x{ha}", job.a.path(frame).display()),
+                )
+                .frame(frame));
+            }
+            let (ra, rb) = (rgb(&a, wa, ha), rgb(&b, wb, hb));
+            let whole = metrics::compare(&ra, &rb, None);
+            let region = match &job.sharp {
+                Some(sharp) => {
+                    let (ws, hs, s) = read_color(sharp, frame, &preset)?;
+                    if (ws, hs) != (wa, ha) {
+                        return Err(Problem::new(
+                            ProblemKind::SizeMismatch,
+                            sharp.path(frame),
+                            format!("{ws}x{hs} but the images are {wa}x{ha}"),
+                        )
+                        .frame(frame));
+                    }
+                    let mask = metrics::changed_region(&rgb(&s, ws, hs), &ra, 1e-3);
+                    Some(metrics::compare(&ra, &rb, Some(&mask)))
+                }
+                None => None,
+            };
+            if let Some(heatmap) = &job.heatmap {
+                let (map, _) = error_map(job.metric, &ra, &rb);
+                write_heatmap(&heatmap.path(frame), wa, ha, &map)
+                    .map_err(|e| e.problems()[0].clone())?;
+            }
+            let value = job.metric.of(&whole);
+            Ok(FrameDiff {
+                frame,
+                a: job.a.path(frame),
+                b: job.b.path(frame),
+                whole,
+                region,
+                value,
+                warned: job.warn.is_some_and(|w| job.metric.exceeds(value, w)),
+                failed: job.fail.is_some_and(|f| job.metric.exceeds(value, f)),
+            })
+        })
+        .collect();
+    let mut frames = Vec::new();
+    let mut problems = Vec::new();
+    for result in results {
+        match result {
+            Ok(frame) => frames.push(frame),
+            Err(problem) => problems.push(problem),
+        }
+    }
+    if !problems.is_empty() {
+        return Err(Error::Files(problems));
+    }
+    let worst = frames
+        .iter()
+        .map(|f| f.value)
+        .reduce(|a, b| {
+            if job.metric.exceeds(a, b) || a.is_nan() {
+                a
+            } else {
+                b
+            }
+        })
+        .unwrap_or(0.0);
+    let name = job.metric.name();
+    let mut warnings = Vec::new();
+    for f in &frames {
+        let label = f.frame.map_or(String::new(), |n| format!("frame {n}: "));
+        if f.warned {
+            warnings.push(format!(
+                "{label}{name} {:.6} crosses --warn {}",
+                f.value,
+                job.warn.unwrap_or_default()
+            ));
+        }
+    }
+    Ok(DiffReport {
+        metric: name,
+        warn: job.warn,
+        fail: job.fail,
+        failed: frames.iter().any(|f| f.failed),
+        frames,
+        worst,
+        warnings,
+    })
+}

@@ -1,0 +1,162 @@
+//! `shutter diff` as a CI gate.
+
+use crate::support::*;
+
+fn pair(dir: &std::path::Path, name: &str, w: usize, h: usize, seed: u32, offset: f32) -> String {
+    let path = dir.join(name);
+    write_exr(
+        &path,
+        w,
+        h,
+        vec![
+            (
+                "R",
+                noise(w * h, seed, 0.0, 1.0)
+                    .iter()
+                    .map(|v| v + offset)
+                    .collect(),
+            ),
+            ("G", noise(w * h, seed + 1, 0.0, 1.0)),
+            ("B", noise(w * h, seed + 2, 0.0, 2.0)),
+        ],
+    );
+    s(&path)
+}
+
+#[test]
+fn identical_images_pass_different_ones_fail_missing_ones_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = pair(dir.path(), "a.exr", 40, 30, 1, 0.0);
+    let b = pair(dir.path(), "b.exr", 40, 30, 1, 0.0);
+    let c = pair(dir.path(), "c.exr", 40, 30, 7, 0.0);
+    let o = shutter(&["diff", &a, &b, "--fail", "0"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stdout(&o).contains("rmse 0.000000"));
+    let o = shutter(&["diff", &a, &c, "--fail", "0.01"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("FAIL"));
+    let o = shutter(&["diff", &a, &s(&dir.path().join("nope.exr"))]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("missing file"));
+    let small = pair(dir.path(), "small.exr", 20, 30, 1, 0.0);
+    let o = shutter(&["diff", &a, &small]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("size mismatch"), "{}", stderr(&o));
+}
+
+#[test]
+fn rmse_agrees_with_an_independent_computation() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (37, 23);
+    let a = pair(dir.path(), "a.exr", w, h, 3, 0.0);
+    let b = pair(dir.path(), "b.exr", w, h, 5, 0.25);
+    let o = shutter(&["diff", &a, &b, "--json"]);
+    assert_eq!(o.status.code(), Some(0));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let ours = report["frames"][0]["whole"]["rmse"].as_f64().unwrap();
+    // Independent: straight from the files, in f64.
+    let (ra, rb) = (
+        read_exr_reference(std::path::Path::new(&a)),
+        read_exr_reference(std::path::Path::new(&b)),
+    );
+    let mut sum = 0.0f64;
+    for name in ["R", "G", "B"] {
+        for (x, y) in channel(&ra, name).iter().zip(channel(&rb, name)) {
+            sum += (*x as f64 - *y as f64).powi(2);
+        }
+    }
+    let expected = (sum / (3 * w * h) as f64).sqrt();
+    assert!((ours - expected).abs() < 1e-6, "{ours} vs {expected}");
+    let psnr = report["frames"][0]["whole"]["psnr"].as_f64().unwrap();
+    assert!((psnr + 20.0 * expected.log10()).abs() < 1e-4);
+}
+
+#[test]
+fn warn_is_reported_whenever_crossed_even_when_the_gate_passes() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = pair(dir.path(), "a.exr", 16, 16, 1, 0.0);
+    let b = pair(dir.path(), "b.exr", 16, 16, 1, 0.02);
+    // RMSE is 0.02 / sqrt(3) = 0.0115: over --warn 0.01, under --fail 0.05.
+    let o = shutter(&["diff", &a, &b, "--warn", "0.01", "--fail", "0.05"]);
+    assert_eq!(o.status.code(), Some(0));
+    assert!(stderr(&o).contains("crosses --warn 0.01"), "{}", stderr(&o));
+    let o = shutter(&["diff", &a, &b, "--warn", "0.02"]);
+    assert!(!stderr(&o).contains("warn"), "{}", stderr(&o));
+    // Similarity metrics gate the other way: SSIM below --fail fails.
+    let o = shutter(&["diff", &a, &b, "--metric", "ssim", "--fail", "0.99999"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stdout(&o));
+}
+
+#[test]
+fn sequences_are_compared_frame_by_frame_with_heatmaps() {
+    let dir = tempfile::tempdir().unwrap();
+    for frame in 1..=3 {
+        pair(dir.path(), &format!("a.{frame:04}.exr"), 24, 16, frame, 0.0);
+        let offset = if frame == 2 { 0.5 } else { 0.0 };
+        pair(
+            dir.path(),
+            &format!("b.{frame:04}.exr"),
+            24,
+            16,
+            frame,
+            offset,
+        );
+    }
+    let p = |n: &str| format!("{}/{n}.####.exr", dir.path().display());
+    let heat = format!("{}/heat/h.####.png", dir.path().display());
+    let o = shutter(&[
+        "diff",
+        &p("a"),
+        &p("b"),
+        "--fail",
+        "0.1",
+        "--heatmap",
+        &heat,
+        "--json",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let failed: Vec<bool> = report["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["failed"].as_bool().unwrap())
+        .collect();
+    assert_eq!(failed, [false, true, false]);
+    for frame in 1..=3 {
+        let png = image::open(dir.path().join(format!("heat/h.{frame:04}.png"))).unwrap();
+        assert_eq!((png.width(), png.height()), (24, 16));
+    }
+}
+
+#[test]
+fn sharp_frame_adds_changed_region_scores() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (8, 8);
+    let flat = |v: f32| vec![v; w * h];
+    let mut changed = flat(0.5);
+    changed[0] = 0.9; // one pixel differs from the sharp frame
+    let write = |name: &str, r: Vec<f32>| {
+        let path = dir.path().join(name);
+        write_exr(
+            &path,
+            w,
+            h,
+            vec![("R", r), ("G", flat(0.5)), ("B", flat(0.5))],
+        );
+        s(&path)
+    };
+    let sharp = write("sharp.exr", flat(0.5));
+    let reference = write("ref.exr", changed.clone());
+    let mut test_r = changed;
+    test_r[0] = 0.6;
+    let test = write("test.exr", test_r);
+    let o = shutter(&["diff", &reference, &test, "--sharp", &sharp, "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let region = &report["frames"][0]["region"];
+    assert_eq!(region["pixels"], 1);
+    // One pixel, error 0.3 in one channel of three: sqrt(0.09 / 3).
+    let expected = (0.09f64 / 3.0).sqrt();
+    assert!((region["rmse"].as_f64().unwrap() - expected).abs() < 1e-6);
+}
