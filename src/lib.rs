@@ -7,6 +7,7 @@
 //! - [`pipeline`]: preflight, then read → process → write overlapped.
 //! - [`cli`]: the command line (the only part that prints).
 
+pub mod bench;
 pub mod cli;
 pub mod diff;
 pub mod error;

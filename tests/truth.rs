@@ -162,3 +162,43 @@ fn references_converge_at_the_default_sample_count() {
         );
     }
 }
+
+#[test]
+fn scene_command_writes_the_passes_and_references() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = shutter(&[
+        "scene",
+        "layers",
+        "-o",
+        &s(dir.path()),
+        "--size",
+        "40x24",
+        "--samples",
+        "8",
+        "--frames",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for role in [
+        "color",
+        "depth",
+        "velocity",
+        "prev",
+        "next",
+        "reference",
+        "reference_dof",
+        "reference_both",
+    ] {
+        assert!(
+            dir.path().join(format!("{role}.0002.exr")).exists(),
+            "{role}"
+        );
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("scene.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["lens"]["f_number"], 1.4);
+    let o = shutter(&["scene", "nope", "-o", &s(dir.path())]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("rotor"));
+}

@@ -33,6 +33,9 @@ pub enum Command {
     /// Compare two images or sequences: metrics, a CI gate, a heatmap. Exit codes: 0 within
     /// --fail, 1 over it, 2 an unreadable input or a size mismatch.
     Diff(DiffArgs),
+    /// Time and score every algorithm setting on the truth scenes: bench.json, bench.md,
+    /// pareto.svg/.png and contact sheets.
+    Bench(BenchArgs),
 }
 
 #[derive(Debug, Args)]
@@ -220,4 +223,27 @@ pub struct DiffArgs {
     /// Print JSON on stdout.
     #[arg(long)]
     pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Comma-separated scenes [default: all].
+    #[arg(long, value_name = "LIST")]
+    pub scenes: Option<String>,
+
+    /// Frame size [default: 320x180].
+    #[arg(long, value_name = "WxH")]
+    pub size: Option<String>,
+
+    /// Output folder (scenes are cached under it and reused when their settings match).
+    #[arg(long, value_name = "DIR", default_value = "target/bench")]
+    pub out: PathBuf,
+
+    /// Reference samples per pixel.
+    #[arg(long, value_name = "N", default_value_t = crate::truth::write::DEFAULT_SAMPLES)]
+    pub samples: usize,
+
+    /// Timed runs per measurement (median kept), at least 5.
+    #[arg(long, value_name = "N", default_value_t = 5)]
+    pub runs: usize,
 }

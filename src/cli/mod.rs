@@ -17,7 +17,9 @@ use crate::io::sequence::{parse_frames, PathPattern};
 use crate::motion::{Algorithm, BlurParams};
 use crate::pipeline::{run, Event, Job};
 
-use args::{BlurArgs, Cli, Command, DiffArgs, InfoArgs, PresetsArgs, PresetsCommand, SceneArgs};
+use args::{
+    BenchArgs, BlurArgs, Cli, Command, DiffArgs, InfoArgs, PresetsArgs, PresetsCommand, SceneArgs,
+};
 
 /// Parses the command line, runs it and returns the process exit code.
 pub fn main() -> i32 {
@@ -33,6 +35,7 @@ pub fn main() -> i32 {
         Command::Info(args) => info(args),
         Command::Presets(args) => presets(args),
         Command::Scene(args) => scene(args),
+        Command::Bench(args) => bench(args),
         Command::Diff(args) => {
             return match diff(args) {
                 Ok(code) => code,
@@ -597,4 +600,39 @@ fn diff(args: DiffArgs) -> Result<i32> {
         return Ok(1);
     }
     Ok(0)
+}
+
+fn bench(args: BenchArgs) -> Result<()> {
+    let (width, height) = match &args.size {
+        Some(size) => parse_size(size)?,
+        None => (320, 180),
+    };
+    let scenes = match &args.scenes {
+        Some(list) => list.split(',').map(|s| s.trim().to_string()).collect(),
+        None => crate::truth::scenes::SCENES
+            .iter()
+            .map(|(n, _)| n.to_string())
+            .collect(),
+    };
+    let binary = std::env::current_exe()
+        .map_err(|e| Error::usage(format!("cannot find the shutter binary: {e}")))?;
+    let options = crate::bench::BenchOptions {
+        scenes,
+        width,
+        height,
+        out: args.out.clone(),
+        samples: args.samples,
+        runs: args.runs,
+        binary,
+    };
+    let started = std::time::Instant::now();
+    let report = crate::bench::run(&options, &mut |line| eprintln!("shutter: bench: {line}"))?;
+    print!("{}", crate::bench::markdown(&report));
+    eprintln!(
+        "shutter: bench: {} rows in {:.1} s; wrote {}/bench.json, bench.md, pareto.svg, pareto.png, contact/",
+        report.rows.len(),
+        started.elapsed().as_secs_f64(),
+        args.out.display()
+    );
+    Ok(())
 }

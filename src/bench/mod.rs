@@ -1,0 +1,363 @@
+//! `shutter bench`: every scene × algorithm × setting of the sweep, timed (compute only, and
+//! end to end through the `shutter blur` binary with its I/O) and scored against the scene's
+//! brute-force reference; written as bench.json, bench.md, pareto.svg/.png and one contact
+//! sheet per scene.
+
+pub mod plot;
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::error::{Error, Problem, ProblemKind, Result};
+use crate::frame::{Frame, Passes};
+use crate::io::passes::{plan_frame, read_frame, Inputs, PlanOptions};
+use crate::io::preset::Preset;
+use crate::io::sequence::PathPattern;
+use crate::metrics::{self, Rgb, Scores};
+use crate::motion::{apply, Algorithm, BlurParams};
+use crate::truth::scenes::SCENES;
+use crate::truth::write::{write_scene, SceneOptions};
+
+/// One point of the sweep: an algorithm with its parameters and the flags that set them.
+#[derive(Clone, Debug)]
+pub struct Setting {
+    pub label: String,
+    pub algorithm: Algorithm,
+    pub params: BlurParams,
+    /// The `shutter blur` flags for this setting (after `--algorithm`).
+    pub flags: Vec<String>,
+}
+
+/// The sweep: every algorithm that exists, with its settings. Later issues add theirs here.
+pub fn sweep() -> Vec<Setting> {
+    vec![Setting {
+        label: "none".into(),
+        algorithm: Algorithm::None,
+        params: BlurParams::default(),
+        flags: Vec::new(),
+    }]
+}
+
+/// What to run.
+#[derive(Clone, Debug)]
+pub struct BenchOptions {
+    pub scenes: Vec<String>,
+    pub width: usize,
+    pub height: usize,
+    pub out: PathBuf,
+    /// Reference samples per pixel.
+    pub samples: usize,
+    /// Timed runs per measurement (the median is kept); at least 5.
+    pub runs: usize,
+    /// The shutter binary for the end-to-end runs.
+    pub binary: PathBuf,
+}
+
+/// One row of the results.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub scene: String,
+    pub setting: String,
+    /// Median processing time, ms (the algorithm on decoded passes, no I/O).
+    pub compute_ms: f64,
+    /// Median wall time of `shutter blur` on the frame, ms (process start, read, write).
+    pub end_to_end_ms: f64,
+    /// Peak resident memory of that process, MiB.
+    pub peak_rss_mib: Option<f64>,
+    /// Errors against the reference over the whole frame.
+    pub whole: Scores,
+    /// Errors over the region blur changes (reference differs from the sharp frame).
+    pub region: Scores,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchReport {
+    pub width: usize,
+    pub height: usize,
+    pub samples: usize,
+    pub runs: usize,
+    pub threads: usize,
+    pub rows: Vec<Row>,
+}
+
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n == 0 {
+        0.0
+    } else if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        0.5 * (values[n / 2 - 1] + values[n / 2])
+    }
+}
+
+/// Makes (or reuses, when its scene.json matches) a scene's files.
+fn ensure_scene(name: &str, dir: &Path, options: &BenchOptions) -> Result<()> {
+    let scene_options = SceneOptions {
+        width: options.width,
+        height: options.height,
+        frames: 1,
+        samples: options.samples,
+        ..SceneOptions::default()
+    };
+    let wanted = serde_json::json!({
+        "scene": name, "width": options.width, "height": options.height,
+        "samples": options.samples, "shutter": scene_options.shutter, "seed": scene_options.seed,
+    });
+    if let Ok(text) = std::fs::read_to_string(dir.join("scene.json")) {
+        if let Ok(found) = serde_json::from_str::<serde_json::Value>(&text) {
+            let same = wanted
+                .as_object()
+                .is_some_and(|w| w.iter().all(|(k, v)| found.get(k) == Some(v)));
+            if same {
+                return Ok(());
+            }
+        }
+    }
+    write_scene(name, dir, &scene_options, &mut |_, _| {})?;
+    Ok(())
+}
+
+fn scene_inputs(dir: &Path) -> Inputs {
+    let pattern = |role: &str| {
+        PathPattern::parse(&format!("{}/{role}.####.exr", dir.display())).expect("valid pattern")
+    };
+    Inputs {
+        color: pattern("color"),
+        depth: Some(pattern("depth")),
+        velocity: Some(pattern("velocity")),
+        prev: Some(pattern("prev")),
+        next: Some(pattern("next")),
+    }
+}
+
+fn read_rgb(path: &Path) -> Result<Frame> {
+    let inputs = Inputs {
+        color: PathPattern::parse(&path.display().to_string())?,
+        depth: None,
+        velocity: None,
+        prev: None,
+        next: None,
+    };
+    let preset = Preset::builtin("shutter")?;
+    let options = PlanOptions {
+        preset: &preset,
+        layer: None,
+        needs: Passes::COLOR,
+    };
+    let plan = plan_frame(&inputs, None, &options).map_err(Error::Files)?;
+    Ok(read_frame(&plan)?)
+}
+
+fn rgb(frame: &Frame) -> Rgb<'_> {
+    let color = frame.color.as_ref().expect("colour read");
+    Rgb {
+        width: frame.width,
+        height: frame.height,
+        planes: [&color.r, &color.g, &color.b],
+    }
+}
+
+/// Runs the whole bench; `progress` gets a line per step.
+pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<BenchReport> {
+    if options.runs < 5 {
+        return Err(Error::usage("--runs must be at least 5"));
+    }
+    for name in &options.scenes {
+        if !SCENES.iter().any(|(n, _)| n == name) {
+            let names: Vec<&str> = SCENES.iter().map(|(n, _)| *n).collect();
+            return Err(Error::usage(format!(
+                "unknown scene '{name}'; scenes are {}",
+                names.join(", ")
+            )));
+        }
+    }
+    let preset = Preset::builtin("shutter")?;
+    let settings = sweep();
+    let mut rows = Vec::new();
+    let mut sheets = Vec::new();
+    for name in &options.scenes {
+        let dir = options.out.join("scenes").join(name);
+        let started = Instant::now();
+        ensure_scene(name, &dir, options)?;
+        progress(format!(
+            "{name}: scene ready ({:.1} s)",
+            started.elapsed().as_secs_f64()
+        ));
+        let inputs = scene_inputs(&dir);
+        let sharp = read_rgb(&dir.join("color.0001.exr"))?;
+        let reference = read_rgb(&dir.join("reference.0001.exr"))?;
+        let region = metrics::changed_region(&rgb(&sharp), &rgb(&reference), 1e-3);
+        let mut outputs = Vec::new();
+        for setting in &settings {
+            // Compute only: the algorithm on decoded passes, median of `runs`.
+            let plan_options = PlanOptions {
+                preset: &preset,
+                layer: None,
+                needs: setting.algorithm.needs(),
+            };
+            let plan = plan_frame(&inputs, Some(1), &plan_options).map_err(Error::Files)?;
+            let frame = read_frame(&plan)?;
+            let mut times = Vec::with_capacity(options.runs);
+            for _ in 0..options.runs {
+                let input = frame.clone();
+                let t = Instant::now();
+                let out = apply(setting.algorithm, &setting.params, input);
+                times.push(t.elapsed().as_secs_f64() * 1e3);
+                drop(out);
+            }
+            let compute_ms = median(times);
+
+            // End to end: the shutter binary on the frame, median of `runs`.
+            let out_dir = options.out.join("runs").join(name);
+            let output = out_dir.join(format!("{}.0001.exr", setting.label));
+            let mut walls = Vec::with_capacity(options.runs);
+            let mut peak: Option<f64> = None;
+            for _ in 0..options.runs {
+                let mut command = std::process::Command::new(&options.binary);
+                command.args(["blur", "--algorithm", setting.algorithm.name()]);
+                command.args(&setting.flags);
+                for (flag, pattern) in inputs.all() {
+                    command.arg(format!("--{flag}")).arg(&pattern.raw);
+                }
+                command
+                    .args(["--frames", "1", "--json", "-o"])
+                    .arg(out_dir.join(format!("{}.####.exr", setting.label)));
+                let t = Instant::now();
+                let result = command.output().map_err(|e| {
+                    Problem::new(
+                        ProblemKind::MissingFile,
+                        &options.binary,
+                        format!("cannot run the shutter binary: {e}"),
+                    )
+                })?;
+                walls.push(t.elapsed().as_secs_f64() * 1e3);
+                if !result.status.success() {
+                    return Err(Problem::new(
+                        ProblemKind::Output,
+                        &output,
+                        format!(
+                            "shutter blur failed: {}",
+                            String::from_utf8_lossy(&result.stderr).trim()
+                        ),
+                    )
+                    .into());
+                }
+                let report: serde_json::Value =
+                    serde_json::from_slice(&result.stdout).unwrap_or_default();
+                if let Some(rss) = report["peak_rss_mib"].as_f64() {
+                    peak = Some(peak.map_or(rss, |p: f64| p.max(rss)));
+                }
+            }
+            let blurred = read_rgb(&output)?;
+            let whole = metrics::compare(&rgb(&reference), &rgb(&blurred), None);
+            let scored = metrics::compare(&rgb(&reference), &rgb(&blurred), Some(&region));
+            progress(format!(
+                "{name}: {} compute {compute_ms:.2} ms, end to end {:.1} ms, region RMSE {:.5}",
+                setting.label,
+                median(walls.clone()),
+                scored.rmse
+            ));
+            rows.push(Row {
+                scene: name.clone(),
+                setting: setting.label.clone(),
+                compute_ms,
+                end_to_end_ms: median(walls),
+                peak_rss_mib: peak,
+                whole,
+                region: scored,
+            });
+            outputs.push((setting.label.clone(), blurred));
+        }
+        sheets.push((name.clone(), sharp, outputs, reference));
+    }
+    let report = BenchReport {
+        width: options.width,
+        height: options.height,
+        samples: options.samples,
+        runs: options.runs,
+        threads: rayon::current_num_threads(),
+        rows,
+    };
+    write_outputs(options, &report, &sheets)?;
+    Ok(report)
+}
+
+type Sheet = (String, Frame, Vec<(String, Frame)>, Frame);
+
+fn output_problem(path: &Path, detail: String) -> Error {
+    Problem::new(ProblemKind::Output, path, detail).into()
+}
+
+fn write_text(path: &Path, text: &str) -> Result<()> {
+    crate::io::output::write_atomic(path, |w| {
+        use std::io::Write;
+        w.write_all(text.as_bytes()).map_err(|e| e.to_string())
+    })
+    .map_err(|d| output_problem(path, d))
+}
+
+fn write_outputs(options: &BenchOptions, report: &BenchReport, sheets: &[Sheet]) -> Result<()> {
+    let out = &options.out;
+    std::fs::create_dir_all(out.join("contact")).map_err(|e| output_problem(out, e.to_string()))?;
+    write_text(
+        &out.join("bench.json"),
+        &serde_json::to_string_pretty(report).unwrap_or_default(),
+    )?;
+    write_text(&out.join("bench.md"), &markdown(report))?;
+    let svg = plot::pareto_svg(report);
+    write_text(&out.join("pareto.svg"), &svg)?;
+    let (w, h, pixels) = plot::pareto_png(report);
+    plot::write_png(&out.join("pareto.png"), w, h, &pixels)?;
+    for (name, sharp, outputs, reference) in sheets {
+        let mut panels: Vec<(&str, &Frame)> = vec![("sharp input", sharp)];
+        for (label, frame) in outputs {
+            panels.push((label, frame));
+        }
+        panels.push(("reference", reference));
+        let (w, h, pixels) = plot::contact_sheet(&panels);
+        plot::write_png(
+            &out.join("contact").join(format!("{name}.png")),
+            w,
+            h,
+            &pixels,
+        )?;
+    }
+    Ok(())
+}
+
+/// The results as a Markdown table.
+pub fn markdown(report: &BenchReport) -> String {
+    let mut text = format!(
+        "{}×{}, reference {} samples per pixel, median of {} runs, {} threads.\n\n\
+         Errors against the brute-force reference over the region blur changes (RMSE, PSNR \
+         on linear values; SSIM, FLIP on the sRGB display image) and RMSE over the whole \
+         frame.\n\n",
+        report.width, report.height, report.samples, report.runs, report.threads
+    );
+    text.push_str(
+        "| scene | setting | compute ms | end-to-end ms | peak RSS MiB | region px | RMSE | PSNR dB | SSIM | FLIP | RMSE whole |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for row in &report.rows {
+        text.push_str(&format!(
+            "| {} | {} | {:.2} | {:.1} | {} | {} | {:.5} | {:.2} | {:.4} | {:.4} | {:.5} |\n",
+            row.scene,
+            row.setting,
+            row.compute_ms,
+            row.end_to_end_ms,
+            row.peak_rss_mib
+                .map_or("-".to_string(), |m| format!("{m:.0}")),
+            row.region.pixels,
+            row.region.rmse,
+            row.region.psnr,
+            row.region.ssim,
+            row.region.flip,
+            row.whole.rmse,
+        ));
+    }
+    text
+}

@@ -1,0 +1,199 @@
+//! The bench's pictures: time-versus-error plots with the Pareto front marked (plotters, SVG
+//! and PNG, text in the DejaVu Sans Mono shipped in assets/) and labelled contact sheets.
+
+use std::path::Path;
+use std::sync::Once;
+
+use plotters::prelude::*;
+use plotters::style::{register_font, FontStyle};
+
+use super::BenchReport;
+use crate::error::{Problem, ProblemKind, Result};
+use crate::frame::Frame;
+use crate::metrics::{display_rgb8, Rgb};
+
+const FONT: &[u8] = include_bytes!("../../assets/DejaVuSansMono.ttf");
+const PANEL: (u32, u32) = (420, 300);
+const LABEL_HEIGHT: usize = 22;
+
+fn ensure_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // The font is compiled in and known good; a failure would only lose labels.
+        let _ = register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+}
+
+/// Indices of the points not dominated by another (less time and less error), by time.
+pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..points.len()).collect();
+    order.sort_by(|&a, &b| {
+        points[a]
+            .0
+            .total_cmp(&points[b].0)
+            .then(points[a].1.total_cmp(&points[b].1))
+    });
+    let mut front = Vec::new();
+    let mut best = f64::INFINITY;
+    for i in order {
+        if points[i].1 < best {
+            best = points[i].1;
+            front.push(i);
+        }
+    }
+    front
+}
+
+fn draw<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    report: &BenchReport,
+) -> std::result::Result<(), String> {
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let mut scenes: Vec<&str> = report.rows.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    let cols = 3.min(scenes.len().max(1));
+    let rows = scenes.len().div_ceil(cols).max(1);
+    let areas = root.split_evenly((rows, cols));
+    for (scene, area) in scenes.iter().zip(areas) {
+        let rows: Vec<_> = report.rows.iter().filter(|r| r.scene == *scene).collect();
+        let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.compute_ms, r.region.rmse)).collect();
+        let x_max = points.iter().map(|p| p.0).fold(0.0, f64::max).max(1e-3) * 1.25;
+        let y_max = points.iter().map(|p| p.1).fold(0.0, f64::max).max(1e-4) * 1.25;
+        let mut chart = ChartBuilder::on(&area)
+            .caption(*scene, ("sans-serif", 16))
+            .margin(8)
+            .x_label_area_size(34)
+            .y_label_area_size(56)
+            .build_cartesian_2d(0.0..x_max, 0.0..y_max)
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .max_light_lines(1)
+            .x_desc("compute ms")
+            .y_desc("RMSE, changed region")
+            .label_style(("sans-serif", 11))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(points.iter().zip(&rows).map(|(&(x, y), row)| {
+                EmptyElement::at((x, y))
+                    + Circle::new((0, 0), 4, BLUE.filled())
+                    + Text::new(row.setting.clone(), (6, -6), ("sans-serif", 11))
+            }))
+            .map_err(|e| e.to_string())?;
+        let front: Vec<(f64, f64)> = pareto_front(&points).iter().map(|&i| points[i]).collect();
+        chart
+            .draw_series(LineSeries::new(front.clone(), RED.stroke_width(2)))
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(
+                front
+                    .iter()
+                    .map(|&p| Circle::new(p, 6, RED.stroke_width(2))),
+            )
+            .map_err(|e| e.to_string())?;
+    }
+    root.present().map_err(|e| e.to_string())
+}
+
+fn plot_size(report: &BenchReport) -> (u32, u32) {
+    let mut scenes: Vec<&str> = report.rows.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    let cols = 3.min(scenes.len().max(1)) as u32;
+    let rows = scenes.len().div_ceil(cols as usize).max(1) as u32;
+    (PANEL.0 * cols, PANEL.1 * rows)
+}
+
+/// The time-versus-error plot as SVG: a panel per scene, the Pareto front in red.
+pub fn pareto_svg(report: &BenchReport) -> String {
+    ensure_font();
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, plot_size(report)).into_drawing_area();
+        let _ = draw(root, report);
+    }
+    svg
+}
+
+/// The same plot as RGB pixels.
+pub fn pareto_png(report: &BenchReport) -> (usize, usize, Vec<u8>) {
+    ensure_font();
+    let (w, h) = plot_size(report);
+    let mut pixels = vec![255u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut pixels, (w, h)).into_drawing_area();
+        let _ = draw(root, report);
+    }
+    (w as usize, h as usize, pixels)
+}
+
+/// Frames side by side, each under its label, tone mapped as the perceptual metrics see them.
+pub fn contact_sheet(panels: &[(&str, &Frame)]) -> (usize, usize, Vec<u8>) {
+    ensure_font();
+    let gap = 4;
+    let height = panels.iter().map(|(_, f)| f.height).max().unwrap_or(0) + LABEL_HEIGHT;
+    let width = panels
+        .iter()
+        .map(|(_, f)| f.width + gap)
+        .sum::<usize>()
+        .max(1);
+    let mut pixels = vec![32u8; width * height * 3];
+    let mut x0 = 0;
+    let mut labels = Vec::new();
+    for (label, frame) in panels {
+        if let Some(color) = &frame.color {
+            let rgb = display_rgb8(&Rgb {
+                width: frame.width,
+                height: frame.height,
+                planes: [&color.r, &color.g, &color.b],
+            });
+            for j in 0..frame.height {
+                let src = &rgb[j * frame.width * 3..(j + 1) * frame.width * 3];
+                let start = ((j + LABEL_HEIGHT) * width + x0) * 3;
+                pixels[start..start + src.len()].copy_from_slice(src);
+            }
+        }
+        labels.push((label.to_string(), x0));
+        x0 += frame.width + gap;
+    }
+    {
+        let root = BitMapBackend::with_buffer(&mut pixels, (width as u32, height as u32))
+            .into_drawing_area();
+        for (label, x) in labels {
+            let _ = root.draw(&Text::new(
+                label,
+                (x as i32 + 4, 4),
+                ("sans-serif", 14).into_font().color(&WHITE),
+            ));
+        }
+        let _ = root.present();
+    }
+    (width, height, pixels)
+}
+
+/// Writes RGB pixels as a PNG, atomically.
+pub fn write_png(path: &Path, width: usize, height: usize, pixels: &[u8]) -> Result<()> {
+    crate::io::output::write_atomic(path, |w| {
+        use image::ImageEncoder;
+        image::codecs::png::PngEncoder::new(w)
+            .write_image(
+                pixels,
+                width as u32,
+                height as u32,
+                image::ExtendedColorType::Rgb8,
+            )
+            .map_err(|e| e.to_string())
+    })
+    .map_err(|d| Problem::new(ProblemKind::Output, path, d).into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pareto_front_keeps_only_undominated_points() {
+        let points = [(1.0, 5.0), (2.0, 3.0), (3.0, 4.0), (4.0, 1.0), (0.5, 9.0)];
+        assert_eq!(pareto_front(&points), [4, 0, 1, 3]);
+    }
+}
