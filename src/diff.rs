@@ -62,13 +62,7 @@ fn read_color(
     frame: Option<i64>,
     preset: &Preset,
 ) -> std::result::Result<(usize, usize, Color), Problem> {
-    let inputs = Inputs {
-        color: pattern.clone(),
-        depth: None,
-        velocity: None,
-        prev: None,
-        next: None,
-    };
+    let inputs = Inputs::color_only(pattern.clone());
     let options = PlanOptions {
         preset,
         layer: None,

@@ -15,13 +15,7 @@ use crate::support::*;
 /// Reads a file's colour through the full path (probe, plan, decode, convert).
 fn read_color(path: &Path) -> shutter::frame::Color {
     let preset = Preset::builtin("shutter").unwrap();
-    let inputs = Inputs {
-        color: PathPattern::parse(&s(path)).unwrap(),
-        depth: None,
-        velocity: None,
-        prev: None,
-        next: None,
-    };
+    let inputs = Inputs::color_only(PathPattern::parse(&s(path)).unwrap());
     let options = PlanOptions {
         preset: &preset,
         layer: None,
@@ -165,13 +159,7 @@ fn multi_part_files_find_channels_by_part_name() {
     assert!(info.find("forward.u").is_some(), "{}", info.channel_list());
 
     let preset = Preset::builtin("nuke").unwrap();
-    let inputs = Inputs {
-        color: PathPattern::parse(&s(&path)).unwrap(),
-        depth: None,
-        velocity: None,
-        prev: None,
-        next: None,
-    };
+    let inputs = Inputs::color_only(PathPattern::parse(&s(&path)).unwrap());
     let options = PlanOptions {
         preset: &preset,
         layer: None,
@@ -415,13 +403,7 @@ fn parts_without_wanted_channels_are_never_decompressed() {
     std::fs::write(&path, &bytes).unwrap();
 
     let preset = Preset::builtin("nuke").unwrap();
-    let inputs = Inputs {
-        color: PathPattern::parse(&s(&path)).unwrap(),
-        depth: None,
-        velocity: None,
-        prev: None,
-        next: None,
-    };
+    let inputs = Inputs::color_only(PathPattern::parse(&s(&path)).unwrap());
     let needs_color = PlanOptions {
         preset: &preset,
         layer: None,

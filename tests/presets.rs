@@ -127,13 +127,7 @@ fn read_all(preset: &Preset, inputs: &Inputs) -> Frame {
 }
 
 fn inputs(color: &Path) -> Inputs {
-    Inputs {
-        color: PathPattern::parse(&s(color)).unwrap(),
-        depth: None,
-        velocity: None,
-        prev: None,
-        next: None,
-    }
+    Inputs::color_only(PathPattern::parse(&s(color)).unwrap())
 }
 
 fn pixel_centres() -> [Vec<f32>; 2] {

@@ -135,13 +135,7 @@ fn scene_inputs(dir: &Path) -> Inputs {
 }
 
 fn read_rgb(path: &Path) -> Result<Frame> {
-    let inputs = Inputs {
-        color: PathPattern::parse(&path.display().to_string())?,
-        depth: None,
-        velocity: None,
-        prev: None,
-        next: None,
-    };
+    let inputs = Inputs::color_only(PathPattern::parse(&path.display().to_string())?);
     let preset = Preset::builtin("shutter")?;
     let options = PlanOptions {
         preset: &preset,

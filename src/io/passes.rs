@@ -32,6 +32,17 @@ pub struct Inputs {
 }
 
 impl Inputs {
+    /// Colour only (other passes, if any, are looked up in the colour file).
+    pub fn color_only(color: PathPattern) -> Inputs {
+        Inputs {
+            color,
+            depth: None,
+            velocity: None,
+            prev: None,
+            next: None,
+        }
+    }
+
     /// Every pattern given, with the pass it was given for.
     pub fn all(&self) -> Vec<(&'static str, &PathPattern)> {
         let mut all = vec![("color", &self.color)];

@@ -14,7 +14,7 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use super::model::{Posed, Scene};
-use super::sample::{concentric_disk, kronecker, pixel_shift};
+use super::sample::{concentric_disk, kronecker, pixel_shift, DIMENSIONS};
 use crate::frame::{Color, Frame, Plane, Positions, Velocity};
 
 /// Instants across the shutter at which scene poses are tabulated.
@@ -41,10 +41,46 @@ pub enum Reference {
     Both,
 }
 
-fn accumulate(sum: &mut [f64; 3], color: [f32; 3]) {
-    for (s, c) in sum.iter_mut().zip(color) {
-        *s += c as f64;
+/// Evaluates `pixel(i, j)` for every pixel, rows in parallel, and returns the `K` values as
+/// `K` planes.
+fn render_planes<const K: usize>(
+    width: usize,
+    height: usize,
+    pixel: impl Fn(usize, usize) -> [f32; K] + Sync,
+) -> Vec<Plane> {
+    let rows: Vec<Vec<[f32; K]>> = (0..height)
+        .into_par_iter()
+        .map(|j| (0..width).map(|i| pixel(i, j)).collect())
+        .collect();
+    let mut planes: Vec<Plane> = (0..K).map(|_| Vec::with_capacity(width * height)).collect();
+    for value in rows.into_iter().flatten() {
+        for (plane, v) in planes.iter_mut().zip(value) {
+            plane.push(v);
+        }
     }
+    planes
+}
+
+/// The mean colour of `samples` rays through pixel (i, j): sample k uses point k of the
+/// pixel's shifted Kronecker sequence, `trace(u, p)` gets it and its sub-pixel position.
+fn pixel_mean(
+    i: usize,
+    j: usize,
+    width: usize,
+    samples: usize,
+    seed: u64,
+    trace: impl Fn(&[f64; DIMENSIONS], DVec2) -> [f32; 3],
+) -> [f32; 3] {
+    let shift = pixel_shift(seed, (j * width + i) as u64);
+    let mut sum = [0.0f64; 3];
+    for k in 0..samples {
+        let u = kronecker(k, &shift);
+        let color = trace(&u, DVec2::new(i as f64 + u[0], j as f64 + u[1]));
+        for (s, c) in sum.iter_mut().zip(color) {
+            *s += c as f64;
+        }
+    }
+    sum.map(|s| (s / samples as f64) as f32)
 }
 
 /// Offsets below this many pixels are rounding in the closed-form transforms, not motion:
@@ -60,55 +96,34 @@ pub fn render_passes(scene: &Scene, t: f64, samples: usize, seed: u64) -> Frame 
     let samples = samples.max(1);
     let posed = scene.pose(t);
     let order = scene.front_to_back();
-    let rows: Vec<Vec<[f32; 10]>> = (0..height)
-        .into_par_iter()
-        .map(|j| {
-            (0..width)
-                .map(|i| {
-                    let pixel = (j * width + i) as u64;
-                    let shift = pixel_shift(seed, pixel);
-                    let mut rgb = [0.0f64; 3];
-                    for k in 0..samples {
-                        let u = kronecker(k, &shift);
-                        let p = DVec2::new(i as f64 + u[0], j as f64 + u[1]);
-                        accumulate(&mut rgb, scene.trace(&posed, &order, p, DVec2::ZERO).color);
-                    }
-                    let scale = 1.0 / samples as f64;
-                    let centre = DVec2::new(i as f64 + 0.5, j as f64 + 0.5);
-                    let hit = scene.trace(&posed, &order, centre, DVec2::ZERO);
-                    let settle = |p: DVec2| {
-                        if (p - centre).length() < STILL {
-                            centre
-                        } else {
-                            p
-                        }
-                    };
-                    let prev = settle(scene.screen_position(&hit, t - 1.0));
-                    let next = settle(scene.screen_position(&hit, t + 1.0));
-                    [
-                        (rgb[0] * scale) as f32,
-                        (rgb[1] * scale) as f32,
-                        (rgb[2] * scale) as f32,
-                        hit.depth as f32,
-                        (centre.x - prev.x) as f32,
-                        (centre.y - prev.y) as f32,
-                        prev.x as f32,
-                        prev.y as f32,
-                        next.x as f32,
-                        next.y as f32,
-                    ]
-                })
-                .collect()
-        })
-        .collect();
-    let mut planes: Vec<Plane> = (0..10).map(|_| Vec::with_capacity(n)).collect();
-    for row in rows {
-        for px in row {
-            for (plane, value) in planes.iter_mut().zip(px) {
-                plane.push(value);
+    let planes = render_planes(width, height, |i, j| {
+        let [r, g, b] = pixel_mean(i, j, width, samples, seed, |_, p| {
+            scene.trace(&posed, &order, p, DVec2::ZERO).color
+        });
+        let centre = DVec2::new(i as f64 + 0.5, j as f64 + 0.5);
+        let hit = scene.trace(&posed, &order, centre, DVec2::ZERO);
+        let settle = |p: DVec2| {
+            if (p - centre).length() < STILL {
+                centre
+            } else {
+                p
             }
-        }
-    }
+        };
+        let prev = settle(scene.screen_position(&hit, t - 1.0));
+        let next = settle(scene.screen_position(&hit, t + 1.0));
+        [
+            r,
+            g,
+            b,
+            hit.depth as f32,
+            (centre.x - prev.x) as f32,
+            (centre.y - prev.y) as f32,
+            prev.x as f32,
+            prev.y as f32,
+            next.x as f32,
+            next.y as f32,
+        ]
+    });
     let mut it = planes.into_iter();
     let mut take = || it.next().expect("ten planes");
     let (r, g, b, depth) = (take(), take(), take(), take());
@@ -162,52 +177,18 @@ pub fn render_reference(
         .collect();
     let order = scene.front_to_back();
     let lens = kind != Reference::MotionBlur && scene.lens.is_some();
-    let seed = settings.seed;
-    let rows: Vec<Vec<[f32; 3]>> = (0..height)
-        .into_par_iter()
-        .map(|j| {
-            (0..width)
-                .map(|i| {
-                    let pixel = (j * width + i) as u64;
-                    let shift = pixel_shift(seed, pixel);
-                    let mut rgb = [0.0f64; 3];
-                    for k in 0..samples {
-                        let u = kronecker(k, &shift);
-                        let p = DVec2::new(i as f64 + u[0], j as f64 + u[1]);
-                        let posed = if moving {
-                            &poses[((u[2] * steps as f64) as usize).min(steps - 1)]
-                        } else {
-                            &poses[0]
-                        };
-                        let aperture = if lens {
-                            concentric_disk(u[3], u[4])
-                        } else {
-                            DVec2::ZERO
-                        };
-                        accumulate(&mut rgb, scene.trace(posed, &order, p, aperture).color);
-                    }
-                    let scale = 1.0 / samples as f64;
-                    [
-                        (rgb[0] * scale) as f32,
-                        (rgb[1] * scale) as f32,
-                        (rgb[2] * scale) as f32,
-                    ]
-                })
-                .collect()
+    let planes = render_planes(width, height, |i, j| {
+        pixel_mean(i, j, width, samples, settings.seed, |u, p| {
+            let posed = &poses[((u[2] * steps as f64) as usize).min(steps - 1)];
+            let aperture = if lens {
+                concentric_disk(u[3], u[4])
+            } else {
+                DVec2::ZERO
+            };
+            scene.trace(posed, &order, p, aperture).color
         })
-        .collect();
-    let n = width * height;
-    let mut out = [
-        Vec::with_capacity(n),
-        Vec::with_capacity(n),
-        Vec::with_capacity(n),
-    ];
-    for row in rows {
-        for px in row {
-            for c in 0..3 {
-                out[c].push(px[c]);
-            }
-        }
-    }
-    out
+    });
+    let mut it = planes.into_iter();
+    let mut take = || it.next().expect("three planes");
+    [take(), take(), take()]
 }
