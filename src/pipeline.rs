@@ -221,7 +221,8 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                 let message = match frame {
                     Ok(frame) => {
                         let t = Instant::now();
-                        let out = apply(job.algorithm, &job.params, frame);
+                        let out =
+                            apply(job.algorithm, &job.params, frame, frame_number.unwrap_or(0));
                         seconds += t.elapsed().as_secs_f64();
                         Ok((frame_number, out))
                     }

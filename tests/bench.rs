@@ -22,16 +22,20 @@ fn bench_runs_end_to_end_and_writes_its_reports() {
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
     let rows = report["rows"].as_array().unwrap();
-    assert_eq!(rows.len(), 2);
-    // Static: nothing to blur, so `none` is exact; sparse: `none` misses the blur.
-    assert_eq!(rows[0]["region"]["pixels"], 0);
-    assert!(rows[1]["region"]["rmse"].as_f64().unwrap() > 0.01);
+    let settings = shutter::bench::sweep().len();
+    assert_eq!(rows.len(), 2 * settings);
+    // Static: nothing to blur, so every setting is exact; sparse: `none` misses the blur.
+    assert!(rows[..settings]
+        .iter()
+        .all(|r| r["region"]["pixels"] == 0 && r["region"]["rmse"] == 0.0));
+    assert_eq!(rows[settings]["setting"], "none");
+    assert!(rows[settings]["region"]["rmse"].as_f64().unwrap() > 0.01);
     for file in ["bench.md", "pareto.svg", "pareto.png"] {
         assert!(out.join(file).metadata().unwrap().len() > 100, "{file}");
     }
     let sheet = image::open(out.join("contact/sparse.png")).unwrap();
-    // sharp | none | reference, 4 px apart, under a label strip.
-    assert_eq!(sheet.width(), 3 * (64 + 4));
+    // sharp | each setting | reference, 4 px apart, under a label strip.
+    assert_eq!(sheet.width(), (settings as u32 + 2) * (64 + 4));
     assert!(sheet.height() > 36);
     let svg = std::fs::read_to_string(out.join("pareto.svg")).unwrap();
     assert!(svg.contains("sparse") && svg.contains("RMSE"));

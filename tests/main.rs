@@ -9,4 +9,5 @@ mod diff;
 mod io;
 mod metrics;
 mod presets;
+mod reconstruct;
 mod truth;

@@ -16,7 +16,7 @@ use crate::io::passes::{plan_frame, read_frame, Inputs, PlanOptions};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::metrics::{self, Rgb, Scores};
-use crate::motion::{apply, Algorithm, BlurParams};
+use crate::motion::{apply, Algorithm, BlurParams, ReconstructParams, Variant};
 use crate::truth::scenes::SCENES;
 use crate::truth::write::{write_scene, SceneOptions};
 
@@ -32,12 +32,48 @@ pub struct Setting {
 
 /// The sweep: every algorithm that exists, with its settings. Later issues add theirs here.
 pub fn sweep() -> Vec<Setting> {
-    vec![Setting {
+    let mut settings = vec![Setting {
         label: "none".into(),
         algorithm: Algorithm::None,
         params: BlurParams::default(),
         flags: Vec::new(),
-    }]
+    }];
+    let reconstruct = |taps: usize, max_blur: usize, variant: Variant| {
+        let name = if variant == Variant::Dual {
+            "dual"
+        } else {
+            "paper"
+        };
+        Setting {
+            label: format!("reconstruct {name} S{taps} k{max_blur}"),
+            algorithm: Algorithm::Reconstruct,
+            params: BlurParams {
+                reconstruct: ReconstructParams {
+                    taps,
+                    max_blur,
+                    variant,
+                    ..ReconstructParams::default()
+                },
+                ..BlurParams::default()
+            },
+            flags: vec![
+                "--samples".into(),
+                taps.to_string(),
+                "--max-blur".into(),
+                max_blur.to_string(),
+                "--variant".into(),
+                name.into(),
+            ],
+        }
+    };
+    for taps in [5, 9, 15, 25] {
+        settings.push(reconstruct(taps, 20, Variant::Paper));
+    }
+    for max_blur in [10, 40] {
+        settings.push(reconstruct(15, max_blur, Variant::Paper));
+    }
+    settings.push(reconstruct(15, 20, Variant::Dual));
+    settings
 }
 
 /// What to run.
@@ -199,7 +235,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
             for _ in 0..options.runs {
                 let input = frame.clone();
                 let t = Instant::now();
-                let out = apply(setting.algorithm, &setting.params, input);
+                let out = apply(setting.algorithm, &setting.params, input, 1);
                 times.push(t.elapsed().as_secs_f64() * 1e3);
                 drop(out);
             }
@@ -207,7 +243,8 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
 
             // End to end: the shutter binary on the frame, median of `runs`.
             let out_dir = options.out.join("runs").join(name);
-            let output = out_dir.join(format!("{}.0001.exr", setting.label));
+            let file_stem = setting.label.replace(' ', "_");
+            let output = out_dir.join(format!("{file_stem}.0001.exr"));
             let mut walls = Vec::with_capacity(options.runs);
             let mut peak: Option<f64> = None;
             for _ in 0..options.runs {
@@ -219,7 +256,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                 }
                 command
                     .args(["--frames", "1", "--json", "-o"])
-                    .arg(out_dir.join(format!("{}.####.exr", setting.label)));
+                    .arg(out_dir.join(format!("{file_stem}.####.exr")));
                 let t = Instant::now();
                 let result = command.output().map_err(|e| {
                     Problem::new(

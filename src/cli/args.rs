@@ -79,6 +79,28 @@ pub struct BlurArgs {
     #[arg(long, value_name = "F")]
     pub shutter: Option<f32>,
 
+    /// reconstruct: largest blur radius k in pixels, also the tile size [default: preset,
+    /// else 20].
+    #[arg(long, value_name = "PX")]
+    pub max_blur: Option<usize>,
+
+    /// reconstruct: filter taps S, odd [default: preset, else 15].
+    #[arg(long, value_name = "S")]
+    pub samples: Option<usize>,
+
+    /// reconstruct: soft depth extent in scene units [default: preset, else 0.1].
+    #[arg(long, value_name = "Z")]
+    pub soft_z: Option<f32>,
+
+    /// reconstruct: no per-pixel jitter of the taps (ghosting instead of noise).
+    #[arg(long)]
+    pub no_jitter: bool,
+
+    /// reconstruct: paper (every tap along the neighbourhood's velocity) or dual (every
+    /// other tap along the pixel's own) [default: preset, else paper].
+    #[arg(long, value_name = "V")]
+    pub variant: Option<String>,
+
     /// Frames to process: 1001-1100, 1-99x2, 1,5,9-12 [default: every frame found on disk
     /// for the colour pattern].
     #[arg(long, value_name = "SPEC")]

@@ -14,7 +14,7 @@ use crate::io::output::{OutputFormat, OutputOptions};
 use crate::io::passes::{passes_found, Inputs};
 use crate::io::preset::{Preset, Transfer, BUILTIN};
 use crate::io::sequence::{parse_frames, PathPattern};
-use crate::motion::{Algorithm, BlurParams};
+use crate::motion::{Algorithm, BlurParams, ReconstructParams, Variant};
 use crate::pipeline::{run, Event, Job};
 
 use args::{
@@ -173,6 +173,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
             "--bit-depth {bit_depth}: use 8 or 16"
         )));
     }
+    let reconstruct = reconstruct_params(args, &preset)?;
     let mut preset = preset;
     if args.linear {
         preset.color.transfer = Transfer::Linear;
@@ -193,9 +194,56 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         preset,
         layer: args.layer.clone(),
         algorithm,
-        params: BlurParams { shutter },
+        params: BlurParams {
+            shutter,
+            reconstruct,
+        },
         output_options,
         skip_existing: args.skip_existing,
+    })
+}
+
+fn reconstruct_params(args: &BlurArgs, preset: &Preset) -> Result<ReconstructParams> {
+    let defaults = ReconstructParams::default();
+    let blur = &preset.blur;
+    let max_blur = args.max_blur.or(blur.max_blur).unwrap_or(defaults.max_blur);
+    if !(1..=512).contains(&max_blur) {
+        return Err(Error::usage(format!(
+            "--max-blur {max_blur}: use 1 to 512 pixels"
+        )));
+    }
+    let taps = args.samples.or(blur.samples).unwrap_or(defaults.taps);
+    if taps.is_multiple_of(2) || !(1..=255).contains(&taps) {
+        return Err(Error::usage(format!(
+            "--samples {taps}: use an odd number from 1 to 255"
+        )));
+    }
+    let soft_z = args.soft_z.or(blur.soft_z).unwrap_or(defaults.soft_z);
+    if !(soft_z.is_finite() && soft_z > 0.0) {
+        return Err(Error::usage(format!(
+            "--soft-z {soft_z}: use a positive depth extent in scene units"
+        )));
+    }
+    let variant_name = args
+        .variant
+        .clone()
+        .or_else(|| blur.variant.clone())
+        .unwrap_or_else(|| "paper".into());
+    let variant = match variant_name.as_str() {
+        "paper" => Variant::Paper,
+        "dual" => Variant::Dual,
+        other => {
+            return Err(Error::usage(format!(
+                "--variant {other}: use paper or dual"
+            )))
+        }
+    };
+    Ok(ReconstructParams {
+        max_blur,
+        taps,
+        soft_z,
+        jitter: !args.no_jitter && blur.jitter.unwrap_or(defaults.jitter),
+        variant,
     })
 }
 

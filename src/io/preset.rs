@@ -128,6 +128,21 @@ pub struct BlurSettings {
     /// Fraction of the frame interval the shutter is open (0.5 = 180°).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shutter: Option<f32>,
+    /// reconstruct: largest blur radius k (px), also the tile size.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_blur: Option<usize>,
+    /// reconstruct: filter taps S (odd).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub samples: Option<usize>,
+    /// reconstruct: soft depth extent, scene units.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub soft_z: Option<f32>,
+    /// reconstruct: jitter the taps per pixel.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jitter: Option<bool>,
+    /// reconstruct: "paper" or "dual".
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub variant: Option<String>,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]

@@ -1,19 +1,30 @@
 //! Motion-blur algorithms. Each takes a canonical [`Frame`] holding the passes it declared in
-//! [`Algorithm::needs`] and returns the blurred colour. Later issues add `reconstruct`
-//! (McGuire 2012), `scatter` (Guertin & Nowrouzezahrai) and `stretch` (Wloka) here.
+//! [`Algorithm::needs`] and returns the blurred colour: `reconstruct` (McGuire 2012: the
+//! `tile_max`, `neighbor_max` and `reconstruct` passes); later issues add `scatter`
+//! (Guertin & Nowrouzezahrai) and `stretch` (Wloka) here.
+
+pub mod neighbor_max;
+pub mod reconstruct;
+pub mod tile_max;
 
 use crate::frame::{Frame, Passes};
+pub use reconstruct::{ReconstructParams, Variant};
 
 /// The blur algorithms shutter knows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Algorithm {
     /// Copies colour through unchanged: the whole read/write path with no blur.
     None,
+    /// McGuire et al. 2012's reconstruction filter (gather along the dominant velocity).
+    Reconstruct,
 }
 
 impl Algorithm {
     /// Every algorithm, by name, for help texts and messages.
-    pub const ALL: &'static [(&'static str, Algorithm)] = &[("none", Algorithm::None)];
+    pub const ALL: &'static [(&'static str, Algorithm)] = &[
+        ("none", Algorithm::None),
+        ("reconstruct", Algorithm::Reconstruct),
+    ];
 
     pub fn parse(name: &str) -> Option<Algorithm> {
         Self::ALL
@@ -33,6 +44,13 @@ impl Algorithm {
     pub fn needs(self) -> Passes {
         match self {
             Algorithm::None => Passes::COLOR,
+            Algorithm::Reconstruct => Passes {
+                color: true,
+                depth: true,
+                velocity: true,
+                prev: false,
+                next: false,
+            },
         }
     }
 }
@@ -42,18 +60,29 @@ impl Algorithm {
 pub struct BlurParams {
     /// Fraction of the frame interval the shutter is open (0.5 = 180°), centred on the frame.
     pub shutter: f32,
+    pub reconstruct: ReconstructParams,
 }
 
 impl Default for BlurParams {
     fn default() -> Self {
-        BlurParams { shutter: 0.5 }
+        BlurParams {
+            shutter: 0.5,
+            reconstruct: ReconstructParams::default(),
+        }
     }
 }
 
-/// Applies the algorithm to one frame. The output frame holds the blurred colour (other
+/// Applies the algorithm to frame number `frame_number` (it seeds the per-pixel jitter, so
+/// the output depends on nothing else). The output frame holds the blurred colour (other
 /// passes are dropped: only colour is written).
-pub fn apply(algorithm: Algorithm, _params: &BlurParams, frame: Frame) -> Frame {
+pub fn apply(algorithm: Algorithm, params: &BlurParams, frame: Frame, frame_number: i64) -> Frame {
     match algorithm {
+        Algorithm::Reconstruct => reconstruct::reconstruct(
+            frame,
+            &params.reconstruct,
+            params.shutter,
+            frame_number as u64,
+        ),
         Algorithm::None => Frame {
             depth: None,
             velocity: None,

@@ -1,0 +1,273 @@
+//! reconstruct: the invariants of DESIGN.md, numerics, determinism, and accuracy on the truth
+//! scenes.
+
+use shutter::frame::{Color, Frame, Velocity};
+use shutter::metrics::{changed_region, rmse, Rgb};
+use shutter::motion::{apply, Algorithm, BlurParams, ReconstructParams, Variant};
+use shutter::truth::render::{render_passes, render_reference, Reference, RenderSettings};
+use shutter::truth::scenes::build;
+
+use crate::support::*;
+
+fn frame(w: usize, h: usize, seed: u32, speed: f32) -> Frame {
+    let n = w * h;
+    let mut f = Frame::new(w, h);
+    f.color = Some(Color {
+        r: noise(n, seed, 0.0, 4.0),
+        g: noise(n, seed + 1, 0.0, 1.0),
+        b: noise(n, seed + 2, -0.5, 1.0),
+        a: Some(noise(n, seed + 3, 0.0, 1.0)),
+    });
+    // Two depth layers with blocky motion, so tiles see many cases.
+    let layer = noise(n, seed + 4, 0.0, 1.0);
+    f.depth = Some(
+        layer
+            .iter()
+            .map(|&v| if v < 0.5 { 2.0 } else { 9.0 })
+            .collect(),
+    );
+    f.velocity = Some(Velocity {
+        x: noise(n, seed + 5, -speed, speed),
+        y: noise(n, seed + 6, -speed, speed),
+    });
+    f
+}
+
+fn variants() -> Vec<BlurParams> {
+    let mut all = Vec::new();
+    for (taps, max_blur, jitter, variant) in [
+        (15, 20, true, Variant::Paper),
+        (5, 7, false, Variant::Paper),
+        (9, 13, true, Variant::Dual),
+    ] {
+        all.push(BlurParams {
+            shutter: 0.75,
+            reconstruct: ReconstructParams {
+                max_blur,
+                taps,
+                jitter,
+                variant,
+                ..ReconstructParams::default()
+            },
+        });
+    }
+    all
+}
+
+fn planes(f: &Frame) -> [&[f32]; 4] {
+    let c = f.color.as_ref().unwrap();
+    [&c.r, &c.g, &c.b, c.a.as_deref().unwrap()]
+}
+
+#[test]
+fn zero_motion_returns_the_input_unchanged() {
+    let mut f = frame(57, 31, 1, 0.0);
+    // Sub-half-pixel motion is no motion too.
+    f.velocity.as_mut().unwrap().x[7] = 0.9;
+    for params in variants() {
+        let out = apply(Algorithm::Reconstruct, &params, f.clone(), 3);
+        for (a, b) in planes(&out).iter().zip(planes(&f)) {
+            assert_exact(a, b, "zero motion");
+        }
+    }
+}
+
+#[test]
+fn a_uniform_colour_stays_uniform_under_any_motion() {
+    let mut f = frame(61, 37, 2, 60.0);
+    let n = 61 * 37;
+    f.color = Some(Color {
+        r: vec![0.7; n],
+        g: vec![3.5; n],
+        b: vec![0.0; n],
+        a: Some(vec![1.0; n]),
+    });
+    for params in variants() {
+        let out = apply(Algorithm::Reconstruct, &params, f.clone(), 1);
+        let c = out.color.unwrap();
+        assert_exact(&c.r, &vec![0.7; n], "r");
+        assert_exact(&c.g, &vec![3.5; n], "g");
+        assert_exact(&c.b, &vec![0.0; n], "b");
+    }
+}
+
+#[test]
+fn output_stays_within_the_input_range_per_channel() {
+    for seed in [3, 30, 300] {
+        let f = frame(64, 48, seed, 40.0);
+        for params in variants() {
+            let out = apply(Algorithm::Reconstruct, &params, f.clone(), seed as i64);
+            for (o, i) in planes(&out).iter().zip(planes(&f)) {
+                let lo = i.iter().copied().fold(f32::INFINITY, f32::min);
+                let hi = i.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+                let slack = 1e-6 * hi.abs().max(lo.abs()).max(1.0);
+                assert!(
+                    o.iter().all(|v| *v >= lo - slack && *v <= hi + slack),
+                    "out of [{lo}, {hi}]"
+                );
+            }
+            assert!(
+                planes(&out)[0] != planes(&f)[0],
+                "motion must change something"
+            );
+        }
+    }
+}
+
+#[test]
+fn nan_inf_and_huge_inputs_give_finite_output() {
+    let mut f = frame(50, 40, 4, 30.0);
+    {
+        let c = f.color.as_mut().unwrap();
+        c.r[0] = f32::NAN;
+        c.g[100] = f32::INFINITY;
+        c.b[200] = f32::NEG_INFINITY;
+        c.r[300] = 3e38;
+    }
+    {
+        let v = f.velocity.as_mut().unwrap();
+        v.x[10] = f32::NAN;
+        v.y[20] = f32::INFINITY;
+        v.x[30] = -1e38;
+        v.y[40] = 1e20;
+    }
+    {
+        let d = f.depth.as_mut().unwrap();
+        d[50] = f32::NAN;
+        d[60] = f32::INFINITY;
+        d[70] = -5.0;
+        d[80] = 1e38;
+    }
+    for params in variants() {
+        let out = apply(Algorithm::Reconstruct, &params, f.clone(), 9);
+        for plane in planes(&out) {
+            assert!(plane.iter().all(|v| v.is_finite()), "non-finite output");
+        }
+    }
+}
+
+#[test]
+fn zero_velocity_pixel_inside_a_moving_neighbourhood() {
+    // A still pixel surrounded by motion: its weight 1/|V| must not divide by zero.
+    let mut f = frame(40, 40, 5, 25.0);
+    let v = f.velocity.as_mut().unwrap();
+    v.x[20 * 40 + 20] = 0.0;
+    v.y[20 * 40 + 20] = 0.0;
+    let out = apply(Algorithm::Reconstruct, &BlurParams::default(), f, 1);
+    assert!(planes(&out).iter().all(|p| p.iter().all(|v| v.is_finite())));
+}
+
+#[test]
+fn tile_grid_that_does_not_divide_the_image() {
+    // 23×17 with k = 20: one full-width partial tile row and column.
+    let f = frame(23, 17, 6, 30.0);
+    let out = apply(Algorithm::Reconstruct, &BlurParams::default(), f.clone(), 1);
+    assert_eq!(planes(&out)[0].len(), 23 * 17);
+    assert!(planes(&out)[0] != planes(&f)[0]);
+}
+
+#[test]
+fn output_is_identical_for_one_and_two_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let options = shutter::truth::write::SceneOptions {
+        width: 96,
+        height: 54,
+        samples: 4,
+        ..Default::default()
+    };
+    shutter::truth::write::write_scene("gears", dir.path(), &options, &mut |_, _| {}).unwrap();
+    let p = |role: &str| format!("{}/{role}.####.exr", dir.path().display());
+    let mut outputs = Vec::new();
+    for threads in ["1", "2"] {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"))
+            .env("RAYON_NUM_THREADS", threads)
+            .args([
+                "blur",
+                "--algorithm",
+                "reconstruct",
+                "--color",
+                &p("color"),
+                "--depth",
+                &p("depth"),
+                "--velocity",
+                &p("velocity"),
+                "-o",
+                &format!("{}/t{threads}.####.exr", dir.path().display()),
+            ])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        outputs.push(std::fs::read(dir.path().join(format!("t{threads}.0001.exr"))).unwrap());
+    }
+    assert_eq!(outputs[0], outputs[1]);
+}
+
+fn rgb(planes: &[Vec<f32>; 3], w: usize, h: usize) -> Rgb<'_> {
+    Rgb {
+        width: w,
+        height: h,
+        planes: [&planes[0], &planes[1], &planes[2]],
+    }
+}
+
+/// Region errors of `none` and `reconstruct` against the reference, at 160×90.
+fn scene_errors(name: &str) -> (f64, f64, Frame, Frame) {
+    let (w, h) = (160, 90);
+    let scene = build(name, w, h, 1).unwrap();
+    let passes = render_passes(&scene, 0.0, 256, 1);
+    let settings = RenderSettings {
+        samples: 256,
+        shutter: 0.5,
+        seed: 1,
+    };
+    let reference = render_reference(&scene, 0.0, Reference::MotionBlur, &settings);
+    let sharp_color = passes.color.clone().unwrap();
+    let sharp = [
+        sharp_color.r.clone(),
+        sharp_color.g.clone(),
+        sharp_color.b.clone(),
+    ];
+    let out = apply(
+        Algorithm::Reconstruct,
+        &BlurParams::default(),
+        passes.clone(),
+        1,
+    );
+    let c = out.color.clone().unwrap();
+    let blurred = [c.r, c.g, c.b];
+    let region = changed_region(&rgb(&sharp, w, h), &rgb(&reference, w, h), 1e-3);
+    let none = rmse(&rgb(&sharp, w, h), &rgb(&reference, w, h), Some(&region));
+    let ours = rmse(&rgb(&blurred, w, h), &rgb(&reference, w, h), Some(&region));
+    (none, ours, passes, out)
+}
+
+#[test]
+fn beats_the_unblurred_frame_on_rotor_and_pan() {
+    for name in ["rotor", "pan"] {
+        let (none, ours, _, _) = scene_errors(name);
+        assert!(
+            ours < 0.8 * none,
+            "{name}: reconstruct {ours} vs none {none}"
+        );
+    }
+}
+
+#[test]
+fn the_tracked_object_in_pan_stays_sharp() {
+    let (_, _, passes, out) = scene_errors("pan");
+    let (w, h) = (160, 90);
+    // The tracked disc: radius 60 px at 640×360 → 15 px here, centred; its inner part.
+    let before = passes.color.unwrap();
+    let after = out.color.unwrap();
+    let mut worst = 0.0f32;
+    for y in 0..h {
+        for x in 0..w {
+            let (dx, dy) = (x as f32 + 0.5 - 80.0, y as f32 + 0.5 - 45.0);
+            if dx * dx + dy * dy < 10.0 * 10.0 {
+                let i = y * w + x;
+                worst = worst.max((before.r[i] - after.r[i]).abs());
+            }
+        }
+    }
+    assert!(worst < 1e-4, "tracked object changed by {worst}");
+}
