@@ -150,28 +150,6 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         ..Report::default()
     };
 
-    // Passes given but not used are not read: say so.
-    let needs = job.algorithm.needs();
-    for (pass, _) in job.inputs.all() {
-        let used = match pass {
-            "color" => needs.color,
-            "depth" => needs.depth,
-            "velocity" => needs.velocity || needs.prev || needs.next,
-            "prev" => needs.prev || needs.velocity,
-            _ => needs.next || needs.velocity,
-        };
-        if !used {
-            warn(
-                &mut report,
-                on_event,
-                format!(
-                    "--{pass} is not read: algorithm {} does not use it",
-                    job.algorithm.name()
-                ),
-            );
-        }
-    }
-
     let mut todo = Vec::with_capacity(job.frames.len());
     for &frame in &job.frames {
         let path = job.output.path(frame);
@@ -186,6 +164,23 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     let preflight_start = Instant::now();
     let plans = preflight(job, &todo)?;
     report.preflight_seconds = preflight_start.elapsed().as_secs_f64();
+    // Pass files given but not read (the algorithm does not need them, or the pass came
+    // from another file): say so.
+    if let Some(plan) = plans.first() {
+        let read = plan.paths();
+        for (pass, pattern) in job.inputs.all() {
+            if !read.contains(&pattern.path(plan.frame).as_path()) {
+                warn(
+                    &mut report,
+                    on_event,
+                    format!(
+                        "--{pass} is not read: algorithm {} does not need it",
+                        job.algorithm.name()
+                    ),
+                );
+            }
+        }
+    }
     for plan in &plans {
         for warning in &plan.warnings {
             warn(&mut report, on_event, warning.clone());

@@ -271,3 +271,40 @@ fn the_tracked_object_in_pan_stays_sharp() {
     }
     assert!(worst < 1e-4, "tracked object changed by {worst}");
 }
+
+#[test]
+fn prev_and_next_are_never_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let options = shutter::truth::write::SceneOptions {
+        width: 48,
+        height: 27,
+        samples: 2,
+        ..Default::default()
+    };
+    shutter::truth::write::write_scene("crossing", dir.path(), &options, &mut |_, _| {}).unwrap();
+    let broken = dir.path().join("broken.exr");
+    std::fs::write(&broken, b"not an exr").unwrap();
+    let p = |role: &str| s(&dir.path().join(format!("{role}.0001.exr")));
+    let o = shutter(&[
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &p("color"),
+        "--depth",
+        &p("depth"),
+        "--velocity",
+        &p("velocity"),
+        "--prev",
+        &s(&broken),
+        "--next",
+        &s(&dir.path().join("missing.exr")),
+        "--json",
+        "-o",
+        &s(&dir.path().join("out.exr")),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let warnings = report["warnings"].to_string();
+    assert!(warnings.contains("--prev is not read") && warnings.contains("--next is not read"));
+}
