@@ -40,8 +40,8 @@ pub enum Command {
 
 #[derive(Debug, Args)]
 pub struct BlurArgs {
-    /// Preset name (shutter, blender, nuke, painted) or path to a .toml file; repeat to merge
-    /// several, later ones winning.
+    /// Preset name (shutter, blender, nuke, painted, preview, final) or path to a .toml file;
+    /// repeat to merge several, later ones winning.
     #[arg(long, value_name = "P")]
     pub preset: Vec<String>,
 

@@ -326,6 +326,7 @@ fn blur(args: BlurArgs) -> Result<()> {
 fn info(args: InfoArgs) -> Result<()> {
     let presets: Vec<Preset> = BUILTIN
         .iter()
+        .filter(|(name, _)| crate::io::preset::is_convention(name))
         .map(|(name, _)| Preset::builtin(name))
         .collect::<Result<_>>()?;
     let mut problems = Vec::new();

@@ -16,6 +16,8 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("blender", include_str!("../../presets/blender.toml")),
     ("nuke", include_str!("../../presets/nuke.toml")),
     ("painted", include_str!("../../presets/painted.toml")),
+    ("preview", include_str!("../../presets/preview.toml")),
+    ("final", include_str!("../../presets/final.toml")),
 ];
 
 /// How 8/16-bit colour values are encoded.
@@ -179,6 +181,19 @@ pub struct Preset {
     pub name: String,
 }
 
+/// True when the built-in preset describes how passes are stored (it has a colour, depth or
+/// motion section), as opposed to carrying settings only (preview, final).
+pub fn is_convention(name: &str) -> bool {
+    name == "shutter"
+        || builtin_text(name)
+            .and_then(|text| text.parse::<toml::Table>().ok())
+            .is_some_and(|table| {
+                ["color", "depth", "velocity", "prev", "next"]
+                    .iter()
+                    .any(|key| table.contains_key(*key))
+            })
+}
+
 /// The TOML text of a built-in preset.
 pub fn builtin_text(name: &str) -> Option<&'static str> {
     BUILTIN
@@ -317,10 +332,21 @@ mod tests {
     }
 
     #[test]
+    fn settings_presets_merge_over_a_renderer_preset() {
+        let preset = Preset::load(&["blender".into(), "final".into()]).unwrap();
+        assert_eq!(preset.velocity.meaning, Meaning::ToPrev);
+        assert_eq!(preset.blur.algorithm.as_deref(), Some("reconstruct"));
+        assert_eq!(preset.blur.samples, Some(25));
+        assert_eq!(preset.blur.variant.as_deref(), Some("dual"));
+    }
+
+    #[test]
     fn unknown_preset_lists_the_builtins() {
         let err = Preset::load(&["maya".into()]).unwrap_err();
         assert_eq!(err.exit_code(), 2);
-        assert!(err.to_string().contains("blender, nuke, painted"));
+        assert!(err
+            .to_string()
+            .contains("blender, nuke, painted, preview, final"));
     }
 
     #[test]
