@@ -168,15 +168,8 @@ fn tile_grid_that_does_not_divide_the_image() {
 
 #[test]
 fn output_is_identical_for_one_and_two_threads() {
-    let dir = tempfile::tempdir().unwrap();
-    let options = shutter::truth::write::SceneOptions {
-        width: 96,
-        height: 54,
-        samples: 4,
-        ..Default::default()
-    };
-    shutter::truth::write::write_scene("gears", dir.path(), &options, &mut |_, _| {}).unwrap();
-    let p = |role: &str| format!("{}/{role}.####.exr", dir.path().display());
+    let dir = small_scene("gears", 96, 54, 1, 4);
+    let p = |role: &str| role_pattern(dir.path(), role);
     let mut outputs = Vec::new();
     for threads in ["1", "2"] {
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"))
@@ -274,14 +267,7 @@ fn the_tracked_object_in_pan_stays_sharp() {
 
 #[test]
 fn prev_and_next_are_never_read() {
-    let dir = tempfile::tempdir().unwrap();
-    let options = shutter::truth::write::SceneOptions {
-        width: 48,
-        height: 27,
-        samples: 2,
-        ..Default::default()
-    };
-    shutter::truth::write::write_scene("crossing", dir.path(), &options, &mut |_, _| {}).unwrap();
+    let dir = small_scene("crossing", 48, 27, 1, 2);
     let broken = dir.path().join("broken.exr");
     std::fs::write(&broken, b"not an exr").unwrap();
     let p = |role: &str| s(&dir.path().join(format!("{role}.0001.exr")));

@@ -49,16 +49,8 @@ fn every_scene_builds_and_writes_byte_identical_files_twice() {
 
 #[test]
 fn shutter_blur_reads_a_scene_with_nothing_but_the_pass_paths() {
-    let dir = tempfile::tempdir().unwrap();
-    let options = SceneOptions {
-        width: 32,
-        height: 18,
-        frames: 2,
-        samples: 4,
-        ..SceneOptions::default()
-    };
-    write_scene("rotor", dir.path(), &options, &mut |_, _| {}).unwrap();
-    let p = |role: &str| format!("{}/{role}.####.exr", dir.path().display());
+    let dir = small_scene("rotor", 32, 18, 2, 4);
+    let p = |role: &str| role_pattern(dir.path(), role);
     let o = shutter(&[
         "blur",
         "--color",

@@ -189,3 +189,28 @@ pub fn write_canonical_frame(
     );
     rgba
 }
+
+/// Writes a small truth scene into a fresh folder.
+pub fn small_scene(
+    name: &str,
+    width: usize,
+    height: usize,
+    frames: usize,
+    samples: usize,
+) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let options = shutter::truth::write::SceneOptions {
+        width,
+        height,
+        frames,
+        samples,
+        ..Default::default()
+    };
+    shutter::truth::write::write_scene(name, dir.path(), &options, &mut |_, _| {}).unwrap();
+    dir
+}
+
+/// The sequence pattern of one role (`color`, `depth`, ...) in a scene folder.
+pub fn role_pattern(dir: &Path, role: &str) -> String {
+    format!("{}/{role}.####.exr", dir.display())
+}
