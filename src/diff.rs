@@ -7,8 +7,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::error::{Error, Problem, ProblemKind, Result};
-use crate::frame::{Color, Passes};
-use crate::io::passes::{plan_frame, read_frame, Inputs, PlanOptions};
+use crate::frame::Frame;
+use crate::io::passes::read_color;
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::metrics::{self, Metric, Rgb, Scores};
@@ -57,29 +57,8 @@ pub struct DiffReport {
     pub failed: bool,
 }
 
-fn read_color(
-    pattern: &PathPattern,
-    frame: Option<i64>,
-    preset: &Preset,
-) -> std::result::Result<(usize, usize, Color), Problem> {
-    let inputs = Inputs::color_only(pattern.clone());
-    let options = PlanOptions {
-        preset,
-        layer: None,
-        needs: Passes::COLOR,
-    };
-    let plan = plan_frame(&inputs, frame, &options).map_err(|mut problems| problems.remove(0))?;
-    let read = read_frame(&plan)?;
-    let color = read.color.expect("colour was planned");
-    Ok((read.width, read.height, color))
-}
-
-fn rgb(color: &Color, width: usize, height: usize) -> Rgb<'_> {
-    Rgb {
-        width,
-        height,
-        planes: [&color.r, &color.g, &color.b],
-    }
+fn read(pattern: &PathPattern, frame: Option<i64>, preset: &Preset) -> Result<Frame, Problem> {
+    read_color(pattern, frame, preset).map_err(|mut problems| problems.remove(0))
 }
 
 /// The per-pixel error map of the gating metric, in [0, 1] for the heatmap, and the value
@@ -143,8 +122,9 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
         .frames
         .par_iter()
         .map(|&frame| {
-            let (wa, ha, a) = read_color(&job.a, frame, &preset)?;
-            let (wb, hb, b) = read_color(&job.b, frame, &preset)?;
+            let a = read(&job.a, frame, &preset)?;
+            let b = read(&job.b, frame, &preset)?;
+            let (wa, ha, wb, hb) = (a.width, a.height, b.width, b.height);
             if (wa, ha) != (wb, hb) {
                 return Err(Problem::new(
                     ProblemKind::SizeMismatch,
@@ -153,11 +133,15 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
                 )
                 .frame(frame));
             }
-            let (ra, rb) = (rgb(&a, wa, ha), rgb(&b, wb, hb));
+            let (ra, rb) = (
+                Rgb::of(&a).expect("colour read"),
+                Rgb::of(&b).expect("colour read"),
+            );
             let whole = metrics::compare(&ra, &rb, None);
             let region = match &job.sharp {
                 Some(sharp) => {
-                    let (ws, hs, s) = read_color(sharp, frame, &preset)?;
+                    let s = read(sharp, frame, &preset)?;
+                    let (ws, hs) = (s.width, s.height);
                     if (ws, hs) != (wa, ha) {
                         return Err(Problem::new(
                             ProblemKind::SizeMismatch,
@@ -166,7 +150,8 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
                         )
                         .frame(frame));
                     }
-                    let mask = metrics::changed_region(&rgb(&s, ws, hs), &ra, 1e-3);
+                    let mask =
+                        metrics::changed_region(&Rgb::of(&s).expect("colour read"), &ra, 1e-3);
                     Some(metrics::compare(&ra, &rb, Some(&mask)))
                 }
                 None => None,

@@ -11,8 +11,8 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::error::{Error, Problem, ProblemKind, Result};
-use crate::frame::{Frame, Passes};
-use crate::io::passes::{plan_frame, read_frame, Inputs, PlanOptions};
+use crate::frame::Frame;
+use crate::io::passes::{plan_frame, read_color, read_frame, Inputs, PlanOptions};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::metrics::{self, Rgb, Scores};
@@ -171,24 +171,12 @@ fn scene_inputs(dir: &Path) -> Inputs {
 }
 
 fn read_rgb(path: &Path) -> Result<Frame> {
-    let inputs = Inputs::color_only(PathPattern::parse(&path.display().to_string())?);
-    let preset = Preset::builtin("shutter")?;
-    let options = PlanOptions {
-        preset: &preset,
-        layer: None,
-        needs: Passes::COLOR,
-    };
-    let plan = plan_frame(&inputs, None, &options).map_err(Error::Files)?;
-    Ok(read_frame(&plan)?)
+    let pattern = PathPattern::parse(&path.display().to_string())?;
+    read_color(&pattern, None, &Preset::builtin("shutter")?).map_err(Error::Files)
 }
 
 fn rgb(frame: &Frame) -> Rgb<'_> {
-    let color = frame.color.as_ref().expect("colour read");
-    Rgb {
-        width: frame.width,
-        height: frame.height,
-        planes: [&color.r, &color.g, &color.b],
-    }
+    Rgb::of(frame).expect("colour read")
 }
 
 /// Runs the whole bench; `progress` gets a line per step.

@@ -741,6 +741,22 @@ impl Motion {
     }
 }
 
+/// Reads the colour of one file (or one frame of a pattern) alone: the other passes are not
+/// planned. Used by `diff` and `bench` to load images to compare.
+pub fn read_color(
+    pattern: &PathPattern,
+    frame: Option<i64>,
+    preset: &Preset,
+) -> Result<Frame, Vec<Problem>> {
+    let options = PlanOptions {
+        preset,
+        layer: None,
+        needs: Passes::COLOR,
+    };
+    let plan = plan_frame(&Inputs::color_only(pattern.clone()), frame, &options)?;
+    read_frame(&plan).map_err(|problem| vec![problem])
+}
+
 /// The passes a preset finds in one file on its own (for `shutter info`): colour first, then
 /// the other passes among the channels colour did not take.
 pub fn passes_found(info: &FileInfo, preset: &Preset) -> Vec<&'static str> {

@@ -21,6 +21,18 @@ pub struct Rgb<'a> {
     pub planes: [&'a [f32]; 3],
 }
 
+impl<'a> Rgb<'a> {
+    /// The RGB of a frame's colour pass, if it has one.
+    pub fn of(frame: &'a crate::frame::Frame) -> Option<Rgb<'a>> {
+        let color = frame.color.as_ref()?;
+        Some(Rgb {
+            width: frame.width,
+            height: frame.height,
+            planes: [&color.r, &color.g, &color.b],
+        })
+    }
+}
+
 /// The metrics of one comparison.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Scores {
@@ -121,8 +133,12 @@ pub fn squared_error_map(a: &Rgb, b: &Rgb) -> (Vec<f64>, usize) {
 
 /// RMSE over the three channels of the pixels in `mask` (all when `None`).
 pub fn rmse(a: &Rgb, b: &Rgb, mask: Option<&[bool]>) -> f64 {
-    let (map, _) = squared_error_map(a, b);
-    let (sum, count) = masked_sum(&map, mask);
+    rmse_of_map(&squared_error_map(a, b).0, mask)
+}
+
+/// RMSE from a per-pixel squared-error map summed over three channels.
+fn rmse_of_map(squared: &[f64], mask: Option<&[bool]>) -> f64 {
+    let (sum, count) = masked_sum(squared, mask);
     if count == 0 {
         0.0
     } else {
@@ -215,12 +231,8 @@ pub fn masked_mean(map: &[f32], mask: Option<&[bool]>) -> f64 {
 /// Every metric of `test` against `reference` over `mask` (all pixels when `None`).
 pub fn compare(reference: &Rgb, test: &Rgb, mask: Option<&[bool]>) -> Scores {
     let (squared, non_finite) = squared_error_map(reference, test);
-    let (sum, pixels) = masked_sum(&squared, mask);
-    let rmse = if pixels == 0 {
-        0.0
-    } else {
-        (sum / (3 * pixels) as f64).sqrt()
-    };
+    let pixels = mask.map_or(squared.len(), |m| m.iter().filter(|&&v| v).count());
+    let rmse = rmse_of_map(&squared, mask);
     let ssim_map = ssim::ssim_map(
         &display_luma(reference),
         &display_luma(test),

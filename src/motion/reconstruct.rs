@@ -133,26 +133,26 @@ fn spread_length(vx: f32, vy: f32, shutter: f32, k: f32) -> f32 {
     HALF_PIXEL.max(length.min(k)) * length / (length + EPSILON)
 }
 
-/// `cone(X, Y, v)`: is X within Y's point-spread function (distance along the filter line).
-/// (The gather inlines it with a precomputed 1 / |v|.)
-#[cfg(test)]
-fn cone(distance: f32, length: f32) -> f32 {
-    (1.0 - distance / length).clamp(0.0, 1.0)
+/// `cone(X, Y, v) = clamp(1 − |X − Y| / |v|, 0, 1)`: is X within Y's point-spread function?
+/// Takes the distance already divided by |v| (the gather keeps 1/|v| per pixel).
+#[inline]
+fn cone(scaled_distance: f32) -> f32 {
+    (1.0 - scaled_distance).clamp(0.0, 1.0)
 }
 
-/// `cylinder(X, Y, v) = 1 − smoothstep(0.95|v|, 1.05|v|, |X − Y|)`.
-#[cfg(test)]
-fn cylinder(distance: f32, length: f32) -> f32 {
-    let (a, b) = (0.95 * length, 1.05 * length);
-    let t = ((distance - a) / (b - a)).clamp(0.0, 1.0);
+/// `cylinder(X, Y, v) = 1 − smoothstep(0.95|v|, 1.05|v|, |X − Y|)`, with the distance
+/// already divided by |v|.
+#[inline]
+fn cylinder(scaled_distance: f32) -> f32 {
+    let t = ((scaled_distance - 0.95) * 10.0).clamp(0.0, 1.0);
     1.0 - t * t * (3.0 - 2.0 * t)
 }
 
-/// `softDepthCompare(za, zb)` for positive depth: 1 when zb is in front of za. (The gather
-/// inlines it with a precomputed 1 / extent.)
-#[cfg(test)]
-fn soft_depth_compare(za: f32, zb: f32, extent: f32) -> f32 {
-    (1.0 - (zb - za) / extent).clamp(0.0, 1.0)
+/// `softDepthCompare(za, zb)` for positive depth: 1 when zb is in front of za; takes
+/// 1 / SOFT_Z_EXTENT.
+#[inline]
+fn soft_depth_compare(za: f32, zb: f32, inverse_extent: f32) -> f32 {
+    (1.0 - (zb - za) * inverse_extent).clamp(0.0, 1.0)
 }
 
 /// One pixel's data for the gather, packed so a tap reads one cache line:
@@ -303,14 +303,12 @@ pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, s
             for l in 0..LANES {
                 let distance = t[l].abs() * length[l];
                 let z = sample[l][Z];
-                let front = (1.0 - (z - centre[Z]) * inv_soft_z).clamp(0.0, 1.0);
-                let back = (1.0 - (centre[Z] - z) * inv_soft_z).clamp(0.0, 1.0);
+                let front = soft_depth_compare(centre[Z], z, inv_soft_z);
+                let back = soft_depth_compare(z, centre[Z], inv_soft_z);
                 let ds = distance * sample[l][INV_LENGTH];
                 let dc = distance * centre[INV_LENGTH];
                 alpha[l] = live[l]
-                    * (front * (1.0 - ds).clamp(0.0, 1.0)
-                        + back * (1.0 - dc).clamp(0.0, 1.0)
-                        + cylinder_scaled(ds) * cylinder_scaled(dc) * 2.0);
+                    * (front * cone(ds) + back * cone(dc) + cylinder(ds) * cylinder(dc) * 2.0);
             }
             for l in 0..LANES {
                 weight += alpha[l];
@@ -369,14 +367,6 @@ pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, s
     frame
 }
 
-/// `cylinder` with the distance already divided by the length:
-/// `1 − smoothstep(0.95, 1.05, d/|v|)`.
-#[inline]
-fn cylinder_scaled(d: f32) -> f32 {
-    let t = ((d - 0.95) * 10.0).clamp(0.0, 1.0);
-    1.0 - t * t * (3.0 - 2.0 * t)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -401,18 +391,19 @@ mod tests {
 
     #[test]
     fn classification_filters_of_figure_4() {
-        assert_eq!(cone(0.0, 4.0), 1.0);
-        assert_eq!(cone(2.0, 4.0), 0.5);
-        assert_eq!(cone(5.0, 4.0), 0.0);
-        assert_eq!(cylinder(0.9, 1.0), 1.0);
-        assert!((cylinder(1.0, 1.0) - 0.5).abs() < 1e-6);
-        assert_eq!(cylinder(1.1, 1.0), 0.0);
-        // zb = 1 in front of za = 2: 1; behind: 0; within the soft extent: between.
-        assert_eq!(soft_depth_compare(2.0, 1.0, 0.1), 1.0);
-        assert_eq!(soft_depth_compare(1.0, 2.0, 0.1), 0.0);
-        assert!((soft_depth_compare(1.0, 1.05, 0.1) - 0.5).abs() < 1e-5);
-        for d in [0.0, 0.5, 0.97, 1.0, 1.02, 2.0] {
-            assert!((cylinder_scaled(d / 4.0) - cylinder(d, 4.0)).abs() < 1e-6);
-        }
+        // Distances in units of |v|.
+        assert_eq!(cone(0.0), 1.0);
+        assert_eq!(cone(0.5), 0.5);
+        assert_eq!(cone(1.25), 0.0);
+        assert_eq!(cylinder(0.9), 1.0);
+        assert!((cylinder(1.0) - 0.5).abs() < 1e-6);
+        assert_eq!(cylinder(1.1), 0.0);
+        // zb = 1 in front of za = 2: 1; behind: 0; within the soft extent (0.1): between.
+        assert_eq!(soft_depth_compare(2.0, 1.0, 10.0), 1.0);
+        assert_eq!(soft_depth_compare(1.0, 2.0, 10.0), 0.0);
+        assert!((soft_depth_compare(1.0, 1.05, 10.0) - 0.5).abs() < 1e-5);
+        // A still pixel (1/|v| = ∞) spreads nowhere, without NaN.
+        assert_eq!(cone(0.3 * f32::INFINITY), 0.0);
+        assert_eq!(cylinder(0.3 * f32::INFINITY), 0.0);
     }
 }
