@@ -7,7 +7,8 @@
 //! - **moving**: every pixel moves (a rotating velocity field, 10–40 px per frame, two depth
 //!   layers), k = 20, S = 15, shutter 0.5;
 //! - **static**: nothing moves (the early-out);
-//! - **sparse**: one moving square covering a given share of the tiles.
+//! - **sparse**: one moving square covering a given share of the tiles;
+//! - the moving frame again at S = 1, 7 and 31, to separate fixed costs from per-tap costs.
 //!
 //! Median of 9 runs after one warm-up run.
 
@@ -57,7 +58,11 @@ fn frame(moving: impl Fn(usize, usize) -> Option<(f32, f32)>) -> Frame {
 }
 
 fn median_ms(f: &Frame, runs: usize) -> f64 {
-    let params = BlurParams::default();
+    median_ms_with(f, runs, &BlurParams::default())
+}
+
+fn median_ms_with(f: &Frame, runs: usize, params: &BlurParams) -> f64 {
+    let params = *params;
     let _ = apply(Algorithm::Reconstruct, &params, f.clone(), 1);
     let mut times: Vec<f64> = (0..runs)
         .map(|_| {
@@ -84,6 +89,16 @@ fn main() {
         "1920x1080 every pixel moving, k=20 S=15: {:.1} ms",
         median_ms(&moving, 9)
     );
+    // The profile: cost against taps. S = 1 takes no taps (TileMax, NeighborMax, texel
+    // packing and per-pixel set-up only); the slope is the cost per tap.
+    for taps in [1, 7, 31] {
+        let mut params = BlurParams::default();
+        params.reconstruct.taps = taps;
+        println!(
+            "1920x1080 every pixel moving, k=20 S={taps}: {:.1} ms",
+            median_ms_with(&moving, 5, &params)
+        );
+    }
     let still = frame(|_, _| None);
     println!("1920x1080 static: {:.2} ms", median_ms(&still, 9));
     for share in [0.01f32, 0.05, 0.25] {
