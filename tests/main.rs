@@ -10,4 +10,5 @@ mod io;
 mod metrics;
 mod presets;
 mod reconstruct;
+mod scatter;
 mod truth;

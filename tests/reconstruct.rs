@@ -49,6 +49,7 @@ fn variants() -> Vec<BlurParams> {
                 variant,
                 ..ReconstructParams::default()
             },
+            ..BlurParams::default()
         });
     }
     all

@@ -16,7 +16,10 @@ use crate::io::passes::{plan_frame, read_color, read_frame, Inputs, PlanOptions}
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::metrics::{self, Rgb, Scores};
-use crate::motion::{apply, Algorithm, BlurParams, ReconstructParams, Variant};
+use crate::motion::{
+    apply, Algorithm, BlurParams, CurveKind, Normalize, ReconstructParams, ScatterParams, Variant,
+    Weight,
+};
 use crate::truth::scenes::SCENES;
 use crate::truth::write::{write_scene, SceneOptions};
 
@@ -73,7 +76,105 @@ pub fn sweep() -> Vec<Setting> {
         settings.push(reconstruct(15, max_blur, Variant::Paper));
     }
     settings.push(reconstruct(15, 20, Variant::Dual));
+    settings.extend(scatter_sweep());
     settings
+}
+
+/// scatter's settings: the paper's defaults, then one change at a time.
+fn scatter_sweep() -> Vec<Setting> {
+    let paper = ScatterParams {
+        normalize: Normalize::Paper,
+        weight: Weight::Gaussian,
+        curve: CurveKind::Bezier,
+        ..ScatterParams::default()
+    };
+    let exposure = ScatterParams {
+        normalize: Normalize::Exposure,
+        weight: Weight::Box,
+        ..paper
+    };
+    let variants = [
+        paper,
+        ScatterParams {
+            background_weight: 1.0,
+            ..paper
+        },
+        ScatterParams {
+            background_weight: 20.0,
+            ..paper
+        },
+        ScatterParams {
+            curve: CurveKind::Arc,
+            ..paper
+        },
+        exposure,
+        ScatterParams {
+            curve: CurveKind::Arc,
+            ..exposure
+        },
+        ScatterParams {
+            weight: Weight::Gaussian,
+            sigma: 0.25,
+            ..exposure
+        },
+        ScatterParams {
+            segments: 4,
+            ..exposure
+        },
+        ScatterParams {
+            flatness: 0.0,
+            segments: 20,
+            ..exposure
+        },
+    ];
+    variants.into_iter().map(scatter_setting).collect()
+}
+
+fn scatter_setting(p: ScatterParams) -> Setting {
+    let normalize = match p.normalize {
+        Normalize::Paper => "paper",
+        Normalize::Exposure => "exposure",
+    };
+    let weight = match p.weight {
+        Weight::Gaussian => "gaussian",
+        Weight::Box => "box",
+    };
+    let curve = match p.curve {
+        CurveKind::Bezier => "bezier",
+        CurveKind::Arc => "arc",
+    };
+    let mut label = format!("scatter {normalize} {curve} {weight}");
+    if p.weight == Weight::Gaussian {
+        label += &format!(" σ{}", p.sigma);
+    }
+    if p.normalize == Normalize::Paper {
+        label += &format!(" wb{}", p.background_weight);
+    }
+    label += &format!(" Δ{}", p.segments);
+    if p.flatness == 0.0 {
+        label += " fixed";
+    }
+    let flags = [
+        ("--normalize", normalize.to_string()),
+        ("--curve", curve.to_string()),
+        ("--weight", weight.to_string()),
+        ("--sigma", p.sigma.to_string()),
+        ("--background-weight", p.background_weight.to_string()),
+        ("--segments", p.segments.to_string()),
+        ("--flatness", p.flatness.to_string()),
+    ];
+    Setting {
+        label,
+        algorithm: Algorithm::Scatter,
+        params: BlurParams {
+            scatter: p,
+            ..BlurParams::default()
+        },
+        flags: flags
+            .into_iter()
+            .flat_map(|(f, v)| [f.to_string(), v])
+            .collect(),
+    }
 }
 
 /// What to run.

@@ -79,8 +79,8 @@ pub struct BlurArgs {
     #[arg(long, value_name = "F")]
     pub shutter: Option<f32>,
 
-    /// reconstruct: largest blur radius k in pixels, also the tile size [default: preset,
-    /// else 20].
+    /// Largest blur radius in pixels. reconstruct: k, also the tile size [default: preset,
+    /// else 20]; scatter: a curve is at most twice this long [default: preset, else 128].
     #[arg(long, value_name = "PX")]
     pub max_blur: Option<usize>,
 
@@ -100,6 +100,44 @@ pub struct BlurArgs {
     /// other tap along the pixel's own) [default: preset, else paper].
     #[arg(long, value_name = "V")]
     pub variant: Option<String>,
+
+    /// scatter: line segments per curve, at most (the paper's Δ = 11 points is 10)
+    /// [default: preset, else 10].
+    #[arg(long, value_name = "N")]
+    pub segments: Option<usize>,
+
+    /// scatter: σ of the Gaussian weight along the curve, in units of s (0..1 over the frame
+    /// interval) [default: preset, else 2].
+    #[arg(long, value_name = "S")]
+    pub sigma: Option<f32>,
+
+    /// scatter: weight along the curve, gaussian (the paper) or box (the ideal shutter)
+    /// [default: preset, else gaussian].
+    #[arg(long, value_name = "W")]
+    pub weight: Option<String>,
+
+    /// scatter: background weight w_b of the paper's normalisation [default: preset, else 5].
+    #[arg(long, value_name = "WB")]
+    pub background_weight: Option<f32>,
+
+    /// scatter: paper (eq. 4 with w_b) or exposure (deposits as shares of the exposure, the
+    /// rest filled with what lies behind) [default: preset, else paper].
+    #[arg(long, value_name = "N")]
+    pub normalize: Option<String>,
+
+    /// scatter: bezier (the paper's quadratic) or arc (circular where the motion turns)
+    /// [default: preset, else bezier].
+    #[arg(long, value_name = "C")]
+    pub curve: Option<String>,
+
+    /// scatter: cut a curve into fewer segments where they stray at most this many pixels
+    /// from it; 0 always uses --segments [default: preset, else 0.1].
+    #[arg(long, value_name = "PX")]
+    pub flatness: Option<f32>,
+
+    /// scatter: relative depth tolerance of the depth test [default: preset, else 0.02].
+    #[arg(long, value_name = "F")]
+    pub depth_tolerance: Option<f32>,
 
     /// Frames to process: 1001-1100, 1-99x2, 1,5,9-12 [default: every frame found on disk
     /// for the colour pattern].

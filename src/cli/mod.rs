@@ -14,7 +14,10 @@ use crate::io::output::{OutputFormat, OutputOptions};
 use crate::io::passes::{passes_found, Inputs};
 use crate::io::preset::{Preset, Transfer, BUILTIN};
 use crate::io::sequence::{parse_frames, PathPattern};
-use crate::motion::{Algorithm, BlurParams, ReconstructParams, Variant};
+use crate::motion::{
+    scatter, Algorithm, BlurParams, CurveKind, Normalize, ReconstructParams, ScatterParams,
+    Variant, Weight,
+};
 use crate::pipeline::{run, Event, Job};
 
 use args::{
@@ -174,6 +177,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         )));
     }
     let reconstruct = reconstruct_params(args, &preset)?;
+    let scatter = scatter_params(args, &preset)?;
     let mut preset = preset;
     if args.linear {
         preset.color.transfer = Transfer::Linear;
@@ -197,6 +201,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         params: BlurParams {
             shutter,
             reconstruct,
+            scatter,
         },
         output_options,
         skip_existing: args.skip_existing,
@@ -244,6 +249,103 @@ fn reconstruct_params(args: &BlurArgs, preset: &Preset) -> Result<ReconstructPar
         soft_z,
         jitter: !args.no_jitter && blur.jitter.unwrap_or(defaults.jitter),
         variant,
+    })
+}
+
+/// One of `choices` (name, value) by name, or a usage error naming the flag.
+fn choose<T: Copy>(flag: &str, name: &str, choices: &[(&str, T)]) -> Result<T> {
+    choices
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, v)| *v)
+        .ok_or_else(|| {
+            let names: Vec<&str> = choices.iter().map(|(n, _)| *n).collect();
+            Error::usage(format!("--{flag} {name}: use {}", names.join(" or ")))
+        })
+}
+
+fn scatter_params(args: &BlurArgs, preset: &Preset) -> Result<ScatterParams> {
+    let defaults = ScatterParams::default();
+    let blur = &preset.blur;
+    let max_blur = args
+        .max_blur
+        .or(blur.max_blur)
+        .map_or(defaults.max_blur, |m| m as f32);
+    let segments = args.segments.or(blur.segments).unwrap_or(defaults.segments);
+    if !(1..=scatter::MOST_SEGMENTS).contains(&segments) {
+        return Err(Error::usage(format!(
+            "--segments {segments}: use 1 to {}",
+            scatter::MOST_SEGMENTS
+        )));
+    }
+    let sigma = args.sigma.or(blur.sigma).unwrap_or(defaults.sigma);
+    if !(sigma.is_finite() && sigma >= 0.01) {
+        return Err(Error::usage(format!(
+            "--sigma {sigma}: use at least 0.01 (units of the frame interval, 0..1)"
+        )));
+    }
+    let background_weight = args
+        .background_weight
+        .or(blur.background_weight)
+        .unwrap_or(defaults.background_weight);
+    if !(background_weight.is_finite() && background_weight >= 0.0) {
+        return Err(Error::usage(format!(
+            "--background-weight {background_weight}: use a finite weight of 0 or more"
+        )));
+    }
+    let flatness = args.flatness.or(blur.flatness).unwrap_or(defaults.flatness);
+    if !(flatness.is_finite() && flatness >= 0.0) {
+        return Err(Error::usage(format!(
+            "--flatness {flatness}: use 0 or more pixels"
+        )));
+    }
+    let depth_tolerance = args
+        .depth_tolerance
+        .or(blur.depth_tolerance)
+        .unwrap_or(defaults.depth_tolerance);
+    if !(depth_tolerance.is_finite() && depth_tolerance >= 0.0) {
+        return Err(Error::usage(format!(
+            "--depth-tolerance {depth_tolerance}: use 0 or more (relative)"
+        )));
+    }
+    let pick = |arg: &Option<String>, key: &Option<String>| arg.clone().or_else(|| key.clone());
+    let weight = match pick(&args.weight, &blur.weight) {
+        Some(name) => choose(
+            "weight",
+            &name,
+            &[("gaussian", Weight::Gaussian), ("box", Weight::Box)],
+        )?,
+        None => defaults.weight,
+    };
+    let normalize = match pick(&args.normalize, &blur.normalize) {
+        Some(name) => choose(
+            "normalize",
+            &name,
+            &[
+                ("paper", Normalize::Paper),
+                ("exposure", Normalize::Exposure),
+            ],
+        )?,
+        None => defaults.normalize,
+    };
+    let curve = match pick(&args.curve, &blur.curve) {
+        Some(name) => choose(
+            "curve",
+            &name,
+            &[("bezier", CurveKind::Bezier), ("arc", CurveKind::Arc)],
+        )?,
+        None => defaults.curve,
+    };
+    Ok(ScatterParams {
+        segments,
+        sigma,
+        weight,
+        background_weight,
+        normalize,
+        curve,
+        max_blur,
+        flatness,
+        depth_tolerance,
     })
 }
 

@@ -130,7 +130,8 @@ pub struct BlurSettings {
     /// Fraction of the frame interval the shutter is open (0.5 = 180°).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shutter: Option<f32>,
-    /// reconstruct: largest blur radius k (px), also the tile size.
+    /// Largest blur radius (px): reconstruct's k (also the tile size); half scatter's
+    /// longest curve.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_blur: Option<usize>,
     /// reconstruct: filter taps S (odd).
@@ -145,6 +146,30 @@ pub struct BlurSettings {
     /// reconstruct: "paper" or "dual".
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub variant: Option<String>,
+    /// scatter: line segments per curve (at most).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub segments: Option<usize>,
+    /// scatter: σ of the Gaussian weight, in units of s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma: Option<f32>,
+    /// scatter: "gaussian" or "box".
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weight: Option<String>,
+    /// scatter: background weight w_b (paper normalisation).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub background_weight: Option<f32>,
+    /// scatter: "paper" or "exposure".
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normalize: Option<String>,
+    /// scatter: "bezier" or "arc".
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub curve: Option<String>,
+    /// scatter: flatness tolerance (px) for fewer segments; 0 = always `segments`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flatness: Option<f32>,
+    /// scatter: relative depth tolerance of the depth test.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth_tolerance: Option<f32>,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]

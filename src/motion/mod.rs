@@ -1,14 +1,19 @@
 //! Motion-blur algorithms. Each takes a canonical [`Frame`] holding the passes it declared in
 //! [`Algorithm::needs`] and returns the blurred colour: `reconstruct` (McGuire 2012: the
-//! `tile_max`, `neighbor_max` and `reconstruct` passes); later issues add `scatter`
-//! (Guertin & Nowrouzezahrai) and `stretch` (Wloka) here.
+//! `tile_max`, `neighbor_max` and `reconstruct` passes) and `scatter` (Guertin &
+//! Nowrouzezahrai: the `curve`, `line` and `scatter` modules); a later issue adds `stretch`
+//! (Wloka) here.
 
+pub mod curve;
+pub mod line;
 pub mod neighbor_max;
 pub mod reconstruct;
+pub mod scatter;
 pub mod tile_max;
 
 use crate::frame::{Frame, Passes};
 pub use reconstruct::{ReconstructParams, Variant};
+pub use scatter::{CurveKind, Normalize, ScatterParams, Weight};
 
 /// The blur algorithms shutter knows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -17,6 +22,8 @@ pub enum Algorithm {
     None,
     /// McGuire et al. 2012's reconstruction filter (gather along the dominant velocity).
     Reconstruct,
+    /// Guertin & Nowrouzezahrai's curve scatter (non-linear motion from prev/next positions).
+    Scatter,
 }
 
 impl Algorithm {
@@ -24,6 +31,7 @@ impl Algorithm {
     pub const ALL: &'static [(&'static str, Algorithm)] = &[
         ("none", Algorithm::None),
         ("reconstruct", Algorithm::Reconstruct),
+        ("scatter", Algorithm::Scatter),
     ];
 
     pub fn parse(name: &str) -> Option<Algorithm> {
@@ -51,6 +59,13 @@ impl Algorithm {
                 prev: false,
                 next: false,
             },
+            Algorithm::Scatter => Passes {
+                color: true,
+                depth: true,
+                velocity: false,
+                prev: true,
+                next: true,
+            },
         }
     }
 }
@@ -61,6 +76,7 @@ pub struct BlurParams {
     /// Fraction of the frame interval the shutter is open (0.5 = 180°), centred on the frame.
     pub shutter: f32,
     pub reconstruct: ReconstructParams,
+    pub scatter: ScatterParams,
 }
 
 impl Default for BlurParams {
@@ -68,6 +84,7 @@ impl Default for BlurParams {
         BlurParams {
             shutter: 0.5,
             reconstruct: ReconstructParams::default(),
+            scatter: ScatterParams::default(),
         }
     }
 }
@@ -83,6 +100,7 @@ pub fn apply(algorithm: Algorithm, params: &BlurParams, frame: Frame, frame_numb
             params.shutter,
             frame_number as u64,
         ),
+        Algorithm::Scatter => scatter::scatter(frame, &params.scatter, params.shutter),
         Algorithm::None => Frame {
             depth: None,
             velocity: None,
