@@ -76,7 +76,12 @@ impl Bezier {
         if tolerance <= 0.0 {
             return most.max(1);
         }
-        let needed = (span * (self.bend() / (8.0 * tolerance)).sqrt()).ceil();
+        // Compared squared first: most curves need one segment, and then no root is taken.
+        let squared = span * span * self.bend() / (8.0 * tolerance);
+        if squared <= 1.0 {
+            return 1;
+        }
+        let needed = -crate::motion::line::floor(-squared.sqrt());
         if needed.is_finite() {
             (needed as usize).clamp(1, most.max(1))
         } else {

@@ -23,10 +23,14 @@
 //! (μ = ½, σ) and the box (every instant of the exposure counts the same: the ideal shutter).
 //! Weights are linear between segment ends.
 //!
-//! Determinism: output pixels are accumulated tile by tile; each tile visits the curves that
-//! reach it in pixel order, in f64. Curves are binned to tiles by fixed bands of rows, never by
-//! thread, so the sums run in the same order for any thread count. f64 also keeps a million
-//! overlapping deposits of one colour at that colour (f32 would drift by ~1e-4).
+//! Determinism and work: output pixels are accumulated tile by tile, in f64. A first pass
+//! records, per 16×16 block of pixels, how far its curves can reach (a cheap bound, no curve
+//! is built); each tile then visits the blocks that can reach it, and in them the pixels
+//! whose own bound reaches it, always in the same order, and draws only those curves, clipped
+//! to the tile. So the sums run in the same order for any thread count, no list of curves is
+//! stored, and a curve is built about 1.4 times on average (30 px streaks, 256×128 tiles).
+//! f64 also keeps a million overlapping deposits of one colour at that colour (f32 would drift
+//! by ~1e-4).
 //!
 //! Numerics: NaN colour reads as 0 and colour is clamped to ±[`HUGE`]; NaN positions make a
 //! pixel still, infinite ones are clamped to ±[`FAR`] px; NaN or negative depth is far or 0; a
@@ -37,7 +41,7 @@
 use rayon::prelude::*;
 
 use super::curve::{length, Arc, Bezier, Point};
-use super::line::{draw, Clip};
+use super::line::{draw, floor, Clip};
 use crate::frame::{Color, Frame, Positions};
 
 /// Colour magnitudes beyond this are clamped.
@@ -50,10 +54,11 @@ pub const FAR: f64 = 1e12;
 pub const STILL: f64 = 0.25;
 /// The most segments a curve is cut into.
 pub const MOST_SEGMENTS: usize = 64;
-/// Output tiles are this many pixels square.
-const TILE: usize = 64;
-/// Curves are binned by bands of this many rows.
-const BAND: usize = 16;
+/// Output tiles are this many pixels wide and high.
+const TILE_W: usize = 256;
+const TILE_H: usize = 128;
+/// Reach is kept per block of this many pixels square.
+const BLOCK: usize = 16;
 /// Below this uncovered share an exposure-normalised pixel needs no background estimate.
 const COVERED: f64 = 1e-3;
 
@@ -142,6 +147,15 @@ fn position(v: f32) -> Option<f64> {
     (!v.is_nan()).then(|| (v as f64).clamp(-FAR, FAR))
 }
 
+/// A moving pixel's three positions, and how far from p(0) its curve can deposit.
+#[derive(Clone, Copy)]
+struct Motion {
+    prev: Point,
+    now: Point,
+    next: Point,
+    reach: f64,
+}
+
 /// One curve, cut into segments, ready to draw.
 struct Path {
     segments: usize,
@@ -151,7 +165,22 @@ struct Path {
     weights: [f64; MOST_SEGMENTS + 1],
     /// The curve's depth at each point.
     depths: [f32; MOST_SEGMENTS + 1],
+    /// Segment lengths before scaling to `max_blur`.
+    lengths: [f64; MOST_SEGMENTS],
     color: [f64; 4],
+}
+
+impl Path {
+    fn new() -> Self {
+        Path {
+            segments: 0,
+            points: [[0.0; 2]; MOST_SEGMENTS + 1],
+            weights: [0.0; MOST_SEGMENTS + 1],
+            depths: [0.0; MOST_SEGMENTS + 1],
+            lengths: [0.0; MOST_SEGMENTS],
+            color: [0.0; 4],
+        }
+    }
 }
 
 struct Scatter<'a> {
@@ -159,6 +188,9 @@ struct Scatter<'a> {
     height: usize,
     color: &'a Color,
     depth: &'a [f32],
+    /// Per pixel, the deepest a curve may be and still pass: depth × (1 + tolerance), with
+    /// NaN depth as far and negative as 0.
+    limit: Vec<f32>,
     prev: &'a Positions,
     next: &'a Positions,
     params: ScatterParams,
@@ -176,13 +208,20 @@ impl Scatter<'_> {
         ]
     }
 
-    /// p(-1), p(0), p(+1) of a moving pixel; `None` where it is still (or its positions are
-    /// NaN).
-    fn motion(&self, i: usize) -> Option<(Point, Point, Point)> {
+    /// The motion of a moving pixel; `None` where it is still (or its positions are NaN).
+    #[inline]
+    fn motion(&self, i: usize) -> Option<Motion> {
         let now = [(i % self.width) as f64 + 0.5, (i / self.width) as f64 + 0.5];
         let prev = [position(self.prev.x[i])?, position(self.prev.y[i])?];
         let next = [position(self.next.x[i])?, position(self.next.y[i])?];
-        (self.extent(prev, now, next) >= STILL).then_some((prev, now, next))
+        let extent = self.extent(prev, now, next);
+        (extent >= STILL).then_some(Motion {
+            prev,
+            now,
+            next,
+            // What the scaling to max_blur leaves, and the pixel a segment reaches beside it.
+            reach: extent.min(2.0 * self.params.max_blur as f64) + 1.0,
+        })
     }
 
     /// A bound on how far the curve strays from p(0) during the exposure: with
@@ -207,9 +246,11 @@ impl Scatter<'_> {
         }
     }
 
-    /// The curve of pixel `i` inside the shutter, or `None` if it is still.
-    fn path(&self, i: usize) -> Option<Path> {
-        let (prev, now, next) = self.motion(i)?;
+    /// The curve of moving pixel `i` inside the shutter, into `path`; false if it has none.
+    fn path(&self, i: usize, motion: &Motion, path: &mut Path) -> bool {
+        let Motion {
+            prev, now, next, ..
+        } = *motion;
         let p = &self.params;
         let (t0, t1) = (-self.half, self.half);
         let most = p.segments.clamp(1, MOST_SEGMENTS);
@@ -223,13 +264,8 @@ impl Scatter<'_> {
             Some(arc) => arc.segments(t0, t1, tolerance, most),
             None => bezier.segments(0.5 * (t1 - t0), tolerance, most),
         };
-        let mut path = Path {
-            segments,
-            points: [[0.0; 2]; MOST_SEGMENTS + 1],
-            weights: [0.0; MOST_SEGMENTS + 1],
-            depths: [0.0; MOST_SEGMENTS + 1],
-            color: self.color(i).map(f64::from),
-        };
+        path.segments = segments;
+        path.color = self.color(i).map(f64::from);
         let z0 = sanitize_depth(self.depth[i]);
         let depth_at = match (&self.prev.z, &self.next.z) {
             (Some(zp), Some(zn)) if zp[i].is_finite() && zn[i].is_finite() && z0.is_finite() => {
@@ -242,8 +278,9 @@ impl Scatter<'_> {
             _ => None,
         };
         let mut total = 0.0;
+        let step = (t1 - t0) / segments as f64;
         for k in 0..=segments {
-            let t = t0 + (t1 - t0) * k as f64 / segments as f64;
+            let t = t0 + step * k as f64;
             path.points[k] = match &arc {
                 Some(arc) => arc.at_time(t),
                 None => bezier.at(0.5 * (t + 1.0)),
@@ -251,20 +288,24 @@ impl Scatter<'_> {
             path.weights[k] = self.weight(t);
             path.depths[k] = depth_at.map_or(z0, |f| f(t));
             if k > 0 {
-                total += length([
-                    path.points[k][0] - path.points[k - 1][0],
-                    path.points[k][1] - path.points[k - 1][1],
-                ]);
+                let (a, b) = (path.points[k - 1], path.points[k]);
+                path.lengths[k - 1] = length([b[0] - a[0], b[1] - a[1]]);
+                total += path.lengths[k - 1];
             }
         }
         if total.is_nan() || total <= 1e-9 {
-            return None;
+            return false;
         }
         let longest = 2.0 * p.max_blur.max(0.5) as f64;
+        let mut scale = 1.0;
         if total > longest {
-            let f = longest / total;
+            // Scaled about p(0): a similarity, so every length scales the same.
+            scale = longest / total;
             for q in &mut path.points[..=segments] {
-                *q = [now[0] + f * (q[0] - now[0]), now[1] + f * (q[1] - now[1])];
+                *q = [
+                    now[0] + scale * (q[0] - now[0]),
+                    now[1] + scale * (q[1] - now[1]),
+                ];
             }
         }
         if p.normalize == Normalize::Exposure {
@@ -272,42 +313,28 @@ impl Scatter<'_> {
             // are linear along a segment): divide so they add up to 1.
             let mut sum = 0.0;
             for k in 0..segments {
-                let (a, b) = (path.points[k], path.points[k + 1]);
-                let l = length([b[0] - a[0], b[1] - a[1]]);
-                sum += l * 0.5 * (path.weights[k] + path.weights[k + 1]);
+                sum += path.lengths[k] * 0.5 * (path.weights[k] + path.weights[k + 1]);
             }
+            sum *= scale;
             if !(sum > 0.0 && sum.is_finite()) {
-                return None;
+                return false;
             }
+            let inverse = 1.0 / sum;
             for w in &mut path.weights[..=segments] {
-                *w /= sum;
+                *w *= inverse;
             }
         }
-        Some(path)
-    }
-
-    /// Pixels the path can deposit into (inclusive), clamped to the image; `None` if none.
-    fn reach(&self, path: &Path) -> Option<[usize; 4]> {
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for q in &path.points[..=path.segments] {
-            for d in 0..2 {
-                lo[d] = lo[d].min(q[d]);
-                hi[d] = hi[d].max(q[d]);
-            }
-        }
-        // A segment deposits at most one pixel beside itself.
-        let x0 = (lo[0].floor() - 1.0).max(0.0);
-        let y0 = (lo[1].floor() - 1.0).max(0.0);
-        let x1 = (hi[0].floor() + 1.0).min((self.width - 1) as f64);
-        let y1 = (hi[1].floor() + 1.0).min((self.height - 1) as f64);
-        (x0 <= x1 && y0 <= y1).then_some([x0 as usize, y0 as usize, x1 as usize, y1 as usize])
+        true
     }
 
     /// The colour behind moving pixel `i`: the nearest farther surface along its motion
     /// (either way; the average if both), else its own colour.
-    fn behind(&self, i: usize) -> [f32; 4] {
+    fn behind(&self, i: usize, reach: &Reach) -> [f32; 4] {
         let own = self.color(i);
-        let Some((prev, now, next)) = self.motion(i) else {
+        let Some(Motion {
+            prev, now, next, ..
+        }) = self.motion(i)
+        else {
             return own;
         };
         let v = [next[0] - prev[0], next[1] - prev[1]];
@@ -322,6 +349,18 @@ impl Scatter<'_> {
             .min(2.0 * self.params.max_blur as f64)
             + 2.0)
             .ceil() as usize;
+        // Nothing farther within the search: its blocks' deepest depth tells without a walk.
+        let (x, y) = (now[0] as usize, now[1] as usize);
+        let (bx0, by0) = (
+            x.saturating_sub(steps) / BLOCK,
+            y.saturating_sub(steps) / BLOCK,
+        );
+        let bx1 = ((x + steps) / BLOCK).min(reach.across - 1);
+        let by1 = ((y + steps) / BLOCK).min(reach.down - 1);
+        let deepest = |bx: usize, by: usize| reach.deepest[by * reach.across + bx];
+        if (by0..=by1).all(|by| (bx0..=bx1).all(|bx| deepest(bx, by) <= limit)) {
+            return own;
+        }
         let mut sum = [0.0f64; 4];
         let mut found = 0;
         for side in [1.0, -1.0] {
@@ -349,16 +388,61 @@ impl Scatter<'_> {
     }
 }
 
-/// Curves binned to tiles for one band of rows: emitter indices sorted by tile (in pixel
-/// order within a tile), and where each tile's run starts.
-struct Bins {
-    emitters: Vec<u32>,
-    starts: Vec<u32>,
+/// For each BLOCK×BLOCK block of pixels, how far from its pixels their curves can deposit
+/// (0 where none moves): lets a tile find the pixels whose curves can reach it.
+struct Reach {
+    across: usize,
+    down: usize,
+    block: Vec<f32>,
+    most: f32,
+    /// The deepest (sanitised) depth in each block.
+    deepest: Vec<f32>,
 }
 
-impl Bins {
-    fn of(&self, tile: usize) -> &[u32] {
-        &self.emitters[self.starts[tile] as usize..self.starts[tile + 1] as usize]
+impl Reach {
+    fn of(job: &Scatter) -> Reach {
+        let (across, down) = (job.width.div_ceil(BLOCK), job.height.div_ceil(BLOCK));
+        let block: Vec<f32> = (0..across * down)
+            .into_par_iter()
+            .map(|b| {
+                let (bx, by) = (b % across * BLOCK, b / across * BLOCK);
+                let mut most = 0.0f64;
+                for y in by..(by + BLOCK).min(job.height) {
+                    for x in bx..(bx + BLOCK).min(job.width) {
+                        if let Some(m) = job.motion(y * job.width + x) {
+                            most = most.max(m.reach);
+                        }
+                    }
+                }
+                // Rounded up, so the f32 never falls short of the f64.
+                -(floor(-most) as f32)
+            })
+            .collect();
+        let most = block.iter().copied().fold(0.0, f32::max);
+        let deepest = if most > 0.0 {
+            (0..across * down)
+                .into_par_iter()
+                .map(|b| {
+                    let (bx, by) = (b % across * BLOCK, b / across * BLOCK);
+                    let mut deepest = 0.0f32;
+                    for y in by..(by + BLOCK).min(job.height) {
+                        for x in bx..(bx + BLOCK).min(job.width) {
+                            deepest = deepest.max(sanitize_depth(job.depth[y * job.width + x]));
+                        }
+                    }
+                    deepest
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        Reach {
+            across,
+            down,
+            block,
+            most,
+            deepest,
+        }
     }
 }
 
@@ -380,75 +464,67 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
     } else {
         0.0
     };
-    let job = Scatter {
+    let mut job = Scatter {
         width,
         height,
         color: &color,
         depth: &depth,
+        limit: Vec::new(),
         prev: &prev,
         next: &next,
         params: *params,
         half: 0.5 * shutter as f64,
     };
     let n = width * height;
-    let columns = width.div_ceil(TILE);
-    let tiles = columns * height.div_ceil(TILE);
+    let columns = width.div_ceil(TILE_W);
 
-    // Bin every moving pixel's curve to the tiles it reaches, band by band.
-    let bins: Vec<Bins> = (0..height.div_ceil(BAND))
-        .into_par_iter()
-        .map(|band| {
-            let mut pairs: Vec<(u32, u32)> = Vec::new();
-            for i in band * BAND * width..((band + 1) * BAND).min(height) * width {
-                let Some(path) = job.path(i) else { continue };
-                let Some([x0, y0, x1, y1]) = job.reach(&path) else {
-                    continue;
-                };
-                for row in y0 / TILE..=y1 / TILE {
-                    for column in x0 / TILE..=x1 / TILE {
-                        pairs.push(((row * columns + column) as u32, i as u32));
-                    }
-                }
-            }
-            pairs.sort_by_key(|&(tile, _)| tile); // stable: pixel order within a tile
-            let mut starts = vec![0u32; tiles + 1];
-            for &(tile, _) in &pairs {
-                starts[tile as usize + 1] += 1;
-            }
-            for t in 0..tiles {
-                starts[t + 1] += starts[t];
-            }
-            Bins {
-                emitters: pairs.into_iter().map(|(_, i)| i).collect(),
-                starts,
-            }
-        })
-        .collect();
-    if bins.iter().all(|b| b.emitters.is_empty()) || n == 0 {
+    // How far each block's curves reach; nothing to do if nothing moves.
+    let reach = Reach::of(&job);
+    if reach.most == 0.0 || n == 0 {
         frame.color = Some(color);
         frame.depth = Some(depth);
         frame.prev = Some(prev);
         frame.next = Some(next);
         return frame;
     }
+    let tolerance = 1.0 + params.depth_tolerance;
+    job.limit = depth
+        .par_iter()
+        .map(|&z| sanitize_depth(z) * tolerance)
+        .collect();
+    let job = job;
 
     // Accumulate and normalise tile by tile, into fresh planes.
     let has_alpha = color.a.is_some();
     let mut out: [Vec<f32>; 4] = std::array::from_fn(|_| vec![0.0f32; n]);
     let [r, g, b, a] = &mut out;
-    let strip = TILE * width;
+    let strip = TILE_H * width;
     r.par_chunks_mut(strip)
         .zip(g.par_chunks_mut(strip))
         .zip(b.par_chunks_mut(strip))
         .zip(a.par_chunks_mut(strip))
         .enumerate()
         .for_each(|(tile_row, (((r, g), b), a))| {
+            let ty0 = tile_row * TILE_H;
+            let ty1 = (ty0 + TILE_H).min(height);
+            // Tiles of the strip in parallel too (a 1080p frame has only 9 strips).
+            let tiles: Vec<Vec<[f32; 4]>> = (0..columns)
+                .into_par_iter()
+                .map(|column| {
+                    let tx0 = column * TILE_W;
+                    job.tile(&reach, [tx0, ty0, (tx0 + TILE_W).min(width), ty1])
+                })
+                .collect();
             let mut planes = [r, g, b, a];
-            for column in 0..columns {
-                let tile = tile_row * columns + column;
-                let (tx0, ty0) = (column * TILE, tile_row * TILE);
-                let (tx1, ty1) = ((tx0 + TILE).min(width), (ty0 + TILE).min(height));
-                job.tile(&bins, tile, [tx0, ty0, tx1, ty1], &mut planes);
+            for (column, values) in tiles.iter().enumerate() {
+                let (tx0, tw) = (column * TILE_W, TILE_W.min(width - column * TILE_W));
+                for (k, value) in values.iter().enumerate() {
+                    // The strip starts at the tile's first row.
+                    let o = (k / tw) * width + tx0 + k % tw;
+                    for (plane, v) in planes.iter_mut().zip(value) {
+                        plane[o] = *v;
+                    }
+                }
             }
         });
     let [r, g, b, a] = out;
@@ -464,7 +540,7 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
 impl Scatter<'_> {
     /// Accumulates the curves reaching one tile and writes its normalised pixels into
     /// `planes` (the tile's strip of rows).
-    fn tile(&self, bins: &[Bins], tile: usize, rect: [usize; 4], planes: &mut [&mut [f32]; 4]) {
+    fn tile(&self, reach: &Reach, rect: [usize; 4]) -> Vec<[f32; 4]> {
         let [tx0, ty0, tx1, ty1] = rect;
         let tw = tx1 - tx0;
         let width = self.width;
@@ -475,42 +551,69 @@ impl Scatter<'_> {
             x1: tx1 as i64,
             y1: ty1 as i64,
         };
-        let tolerance = 1.0 + self.params.depth_tolerance;
-        for band in bins {
-            for &e in band.of(tile) {
-                let Some(path) = self.path(e as usize) else {
+        let mut path = Path::new();
+        // Blocks near enough for their largest reach to touch the tile, in a fixed order (so
+        // every sum runs in the same order); in them, pixels whose own reach touches it.
+        let touches = |x: f64, y: f64, r: f64| {
+            x + r >= tx0 as f64 && x - r < tx1 as f64 && y + r >= ty0 as f64 && y - r < ty1 as f64
+        };
+        let most = reach.most as usize + BLOCK;
+        let (bx0, by0) = (
+            tx0.saturating_sub(most) / BLOCK,
+            ty0.saturating_sub(most) / BLOCK,
+        );
+        let bx1 = ((tx1 + most) / BLOCK + 1).min(reach.across);
+        let by1 = ((ty1 + most) / BLOCK + 1).min(reach.down);
+        for by in by0..by1 {
+            for bx in bx0..bx1 {
+                let r = reach.block[by * reach.across + bx] as f64;
+                let (x0, y0) = ((bx * BLOCK) as f64, (by * BLOCK) as f64);
+                let side = BLOCK as f64;
+                if r == 0.0 || !touches(x0 + 0.5 * side, y0 + 0.5 * side, r + 0.5 * side) {
                     continue;
-                };
-                for k in 0..path.segments {
-                    let (w0, w1) = (path.weights[k], path.weights[k + 1]);
-                    let (z0, z1) = (path.depths[k], path.depths[k + 1]);
-                    draw(path.points[k], path.points[k + 1], clip, |x, y, c, u| {
-                        let (x, y) = (x as usize, y as usize);
-                        let z = z0 + (z1 - z0) * u as f32;
-                        if z > sanitize_depth(self.depth[y * width + x]) * tolerance {
-                            return;
+                }
+                for y in by * BLOCK..((by + 1) * BLOCK).min(self.height) {
+                    for x in bx * BLOCK..((bx + 1) * BLOCK).min(width) {
+                        let e = y * width + x;
+                        let Some(motion) = self.motion(e) else {
+                            continue;
+                        };
+                        if !touches(motion.now[0], motion.now[1], motion.reach)
+                            || !self.path(e, &motion, &mut path)
+                        {
+                            continue;
                         }
-                        let w = c * (w0 + (w1 - w0) * u);
-                        add(&mut acc[(y - ty0) * tw + (x - tx0)], w, &path.color);
-                    });
+                        for k in 0..path.segments {
+                            let (w0, w1) = (path.weights[k], path.weights[k + 1]);
+                            let (z0, z1) = (path.depths[k], path.depths[k + 1]);
+                            draw(
+                                path.points[k],
+                                path.points[k + 1],
+                                clip,
+                                #[inline(always)]
+                                |x, y, c, u| {
+                                    let (x, y) = (x as usize, y as usize);
+                                    let z = z0 + (z1 - z0) * u as f32;
+                                    if z > self.limit[y * width + x] {
+                                        return;
+                                    }
+                                    let w = c * (w0 + (w1 - w0) * u);
+                                    add(&mut acc[(y - ty0) * tw + (x - tx0)], w, &path.color);
+                                },
+                            );
+                        }
+                    }
                 }
             }
         }
-        for y in ty0..ty1 {
-            for x in tx0..tx1 {
-                let i = y * width + x;
-                let value = self.resolve(&acc[(y - ty0) * tw + (x - tx0)], i);
-                // The strip starts at the tile's first row.
-                let o = (y - ty0) * width + x;
-                for (plane, v) in planes.iter_mut().zip(value) {
-                    plane[o] = v;
-                }
-            }
-        }
+        acc.iter()
+            .enumerate()
+            .map(|(k, cell)| self.resolve(cell, (ty0 + k / tw) * width + tx0 + k % tw, reach))
+            .collect()
     }
 
     /// The output of pixel `i` from its accumulated `cell`.
-    fn resolve(&self, cell: &[f64; 5], i: usize) -> [f32; 4] {
+    fn resolve(&self, cell: &[f64; 5], i: usize, reach: &Reach) -> [f32; 4] {
         let own = self.color(i);
         let total = cell[4];
         if total.is_nan() || total <= 0.0 {
@@ -523,7 +626,11 @@ impl Scatter<'_> {
             }
             Normalize::Exposure if total < 1.0 => {
                 let rest = 1.0 - total;
-                let behind = if rest > COVERED { self.behind(i) } else { own };
+                let behind = if rest > COVERED {
+                    self.behind(i, reach)
+                } else {
+                    own
+                };
                 std::array::from_fn(|ch| (cell[ch] + rest * behind[ch] as f64) as f32)
             }
             Normalize::Exposure => std::array::from_fn(|ch| (cell[ch] / total) as f32),
@@ -581,6 +688,7 @@ mod tests {
                 height: 3,
                 color,
                 depth,
+                limit: depth.clone(),
                 prev: f.prev.as_ref().unwrap(),
                 next: f.next.as_ref().unwrap(),
                 params: ScatterParams {
@@ -611,7 +719,7 @@ mod tests {
                 crossings += crossed as usize;
             }
             assert!(crossings >= 900_000, "{crossings}");
-            let got = job.resolve(&cell, 4);
+            let got = job.resolve(&cell, 4, &Reach::of(&job));
             for ch in 0..4 {
                 let want = own[ch] as f32;
                 assert!(
