@@ -31,6 +31,10 @@ pub fn floor(v: f64) -> f64 {
     }
 }
 
+/// Added before truncating a row coordinate so truncation is a floor (rows of any image are
+/// far inside ±2³¹).
+const ROW_SHIFT: f64 = 2147483648.0;
+
 /// The pixels that may receive coverage: columns `x0..x1`, rows `y0..y1`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Clip {
@@ -40,12 +44,22 @@ pub struct Clip {
     pub y1: i64,
 }
 
+/// One column (or row) of a segment: pixel `first` gets coverage `c0` and `second` gets
+/// `c1` (a coverage is 0 where its pixel is outside the clip, and then the pixel may be too);
+/// `u` is where along the segment (0 at `a`, 1 at `b`) they were measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Span {
+    pub first: (i64, i64),
+    pub second: (i64, i64),
+    pub c0: f64,
+    pub c1: f64,
+    pub u: f64,
+}
+
 /// Draws the segment from `a` to `b` (pixel coordinates: pixel (i, j) covers
-/// [i, i+1) × [j, j+1)). `deposit(x, y, coverage, u)` receives each covered pixel in `clip`,
-/// its coverage in pixels of length, and where along the segment (0 at `a`, 1 at `b`) the
-/// coverage was measured.
+/// [i, i+1) × [j, j+1)), one [`Span`] per column (row) it crosses near `clip`.
 #[inline(always)]
-pub fn draw(a: [f64; 2], b: [f64; 2], clip: Clip, mut deposit: impl FnMut(i64, i64, f64, f64)) {
+pub fn draw_spans(a: [f64; 2], b: [f64; 2], clip: Clip, mut span: impl FnMut(Span)) {
     if !(a.iter().chain(&b).all(|v| v.is_finite())) {
         return;
     }
@@ -54,7 +68,7 @@ pub fn draw(a: [f64; 2], b: [f64; 2], clip: Clip, mut deposit: impl FnMut(i64, i
         return;
     }
     if dx.abs() >= dy.abs() {
-        draw_major(a, b, (clip.x0, clip.x1), (clip.y0, clip.y1), deposit);
+        draw_major(a, b, (clip.x0, clip.x1), (clip.y0, clip.y1), span);
     } else {
         // The same walk with the axes swapped.
         draw_major(
@@ -62,9 +76,29 @@ pub fn draw(a: [f64; 2], b: [f64; 2], clip: Clip, mut deposit: impl FnMut(i64, i
             [b[1], b[0]],
             (clip.y0, clip.y1),
             (clip.x0, clip.x1),
-            |y, x, c, u| deposit(x, y, c, u),
+            |s: Span| {
+                span(Span {
+                    first: (s.first.1, s.first.0),
+                    second: (s.second.1, s.second.0),
+                    ..s
+                })
+            },
         );
     }
+}
+
+/// [`draw_spans`] one pixel at a time: `deposit(x, y, coverage, u)` for each pixel in `clip`
+/// with coverage.
+#[inline(always)]
+pub fn draw(a: [f64; 2], b: [f64; 2], clip: Clip, mut deposit: impl FnMut(i64, i64, f64, f64)) {
+    draw_spans(a, b, clip, |s| {
+        if s.c0 > 0.0 {
+            deposit(s.first.0, s.first.1, s.c0, s.u);
+        }
+        if s.c1 > 0.0 {
+            deposit(s.second.0, s.second.1, s.c1, s.u);
+        }
+    });
 }
 
 /// The walk along x (|dx| ≥ |dy| > 0 or dx ≠ 0).
@@ -74,7 +108,7 @@ fn draw_major(
     b: [f64; 2],
     (x0, x1): (i64, i64),
     (y0, y1): (i64, i64),
-    mut deposit: impl FnMut(i64, i64, f64, f64),
+    mut span: impl FnMut(Span),
 ) {
     if x0 >= x1 || y0 >= y1 {
         return;
@@ -103,27 +137,52 @@ fn draw_major(
         return;
     }
     let (first, last) = (first as i64, last as i64);
-    for column in first..=last {
-        let left = lo.max(column as f64);
-        let right = hi.min(column as f64 + 1.0);
-        if right <= left {
-            continue;
-        }
+    // One column: the segment's piece in it is [left, right] along x.
+    let mut column_span = |column: i64, left: f64, right: f64| {
         let middle = 0.5 * (left + right);
         let along = middle - a[0];
         let u = along * inverse;
         let y = a[1] + slope * along;
         let coverage = (right - left) * stretch;
-        // Split between the two rows whose centres bracket y.
-        let v = y - 0.5;
-        let row = floor(v);
-        let f = v - row;
-        let row = row as i64;
-        if (y0..y1).contains(&row) {
-            deposit(column, row, coverage * (1.0 - f), u);
+        // Split between the two rows whose centres bracket y. Within the walked columns
+        // y is near the clip, so shifting by 2³¹ makes truncation a floor.
+        let v = y - 0.5 + ROW_SHIFT;
+        let shifted = v as i64;
+        let f = v - shifted as f64;
+        let row = shifted - ROW_SHIFT as i64;
+        let c0 = if (y0..y1).contains(&row) {
+            coverage * (1.0 - f)
+        } else {
+            0.0
+        };
+        let c1 = if (y0..y1).contains(&(row + 1)) {
+            coverage * f
+        } else {
+            0.0
+        };
+        if c0 > 0.0 || c1 > 0.0 {
+            span(Span {
+                first: (column, row),
+                second: (column, row + 1),
+                c0,
+                c1,
+                u,
+            });
         }
-        if (y0..y1).contains(&(row + 1)) && f > 0.0 {
-            deposit(column, row + 1, coverage * f, u);
+    };
+    // Columns the segment crosses whole are [inner_first, inner_last]; the end columns hold
+    // its fractional end points.
+    let inner_first = (-floor(-lo)) as i64;
+    let inner_last = floor(hi) as i64 - 1;
+    for column in first..=last {
+        let c = column as f64;
+        if column >= inner_first && column <= inner_last {
+            column_span(column, c, c + 1.0);
+        } else {
+            let (left, right) = (lo.max(c), hi.min(c + 1.0));
+            if right > left {
+                column_span(column, left, right);
+            }
         }
     }
 }

@@ -41,7 +41,7 @@
 use rayon::prelude::*;
 
 use super::curve::{length, Arc, Bezier, Point};
-use super::line::{draw, floor, Clip};
+use super::line::{draw_spans, floor, Clip};
 use crate::frame::{Color, Frame, Positions};
 
 /// Colour magnitudes beyond this are clamped.
@@ -586,21 +586,21 @@ impl Scatter<'_> {
                         for k in 0..path.segments {
                             let (w0, w1) = (path.weights[k], path.weights[k + 1]);
                             let (z0, z1) = (path.depths[k], path.depths[k + 1]);
-                            draw(
-                                path.points[k],
-                                path.points[k + 1],
-                                clip,
-                                #[inline(always)]
-                                |x, y, c, u| {
+                            let (dz, dw) = (z1 - z0, w1 - w0);
+                            draw_spans(path.points[k], path.points[k + 1], clip, |s| {
+                                let z = z0 + dz * s.u as f32;
+                                let w = w0 + dw * s.u;
+                                for ((x, y), c) in [(s.first, s.c0), (s.second, s.c1)] {
                                     let (x, y) = (x as usize, y as usize);
-                                    let z = z0 + (z1 - z0) * u as f32;
-                                    if z > self.limit[y * width + x] {
-                                        return;
+                                    if c > 0.0 && z <= self.limit[y * width + x] {
+                                        add(
+                                            &mut acc[(y - ty0) * tw + (x - tx0)],
+                                            c * w,
+                                            &path.color,
+                                        );
                                     }
-                                    let w = c * (w0 + (w1 - w0) * u);
-                                    add(&mut acc[(y - ty0) * tw + (x - tx0)], w, &path.color);
-                                },
-                            );
+                                }
+                            });
                         }
                     }
                 }
@@ -650,6 +650,7 @@ fn add(cell: &mut [f64; 5], w: f64, color: &[f64; 4]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::motion::line::draw;
 
     fn still_frame(w: usize, h: usize) -> Frame {
         let n = w * h;
