@@ -34,9 +34,11 @@ fn bench_runs_end_to_end_and_writes_its_reports() {
         assert!(out.join(file).metadata().unwrap().len() > 100, "{file}");
     }
     let sheet = image::open(out.join("contact/sparse.png")).unwrap();
-    // sharp | each setting | reference, 4 px apart, under a label strip.
-    assert_eq!(sheet.width(), (settings as u32 + 2) * (64 + 4));
-    assert!(sheet.height() > 36);
+    // sharp, each setting, reference: a grid of panels 4 px apart, each under a label strip.
+    let columns = shutter::bench::plot::SHEET_COLUMNS as u32;
+    let rows = (settings as u32 + 2).div_ceil(columns);
+    assert_eq!(sheet.width(), columns * (64 + 4));
+    assert!(sheet.height() > rows * 36 && sheet.height().is_multiple_of(rows));
     let svg = std::fs::read_to_string(out.join("pareto.svg")).unwrap();
     assert!(svg.contains("sparse") && svg.contains("RMSE"));
 }

@@ -127,20 +127,23 @@ pub fn pareto_png(report: &BenchReport) -> (usize, usize, Vec<u8>) {
     (w as usize, h as usize, pixels)
 }
 
-/// Frames side by side, each under its label, tone mapped as the perceptual metrics see them.
+/// Panels per row of a contact sheet.
+pub const SHEET_COLUMNS: usize = 5;
+
+/// Frames in a grid, [`SHEET_COLUMNS`] to a row, each under its label, tone mapped as the
+/// perceptual metrics see them.
 pub fn contact_sheet(panels: &[(&str, &Frame)]) -> (usize, usize, Vec<u8>) {
     ensure_font();
     let gap = 4;
-    let height = panels.iter().map(|(_, f)| f.height).max().unwrap_or(0) + LABEL_HEIGHT;
-    let width = panels
-        .iter()
-        .map(|(_, f)| f.width + gap)
-        .sum::<usize>()
-        .max(1);
+    let cell_w = panels.iter().map(|(_, f)| f.width).max().unwrap_or(0) + gap;
+    let cell_h = panels.iter().map(|(_, f)| f.height).max().unwrap_or(0) + LABEL_HEIGHT + gap;
+    let columns = panels.len().clamp(1, SHEET_COLUMNS);
+    let rows = panels.len().div_ceil(columns).max(1);
+    let (width, height) = ((columns * cell_w).max(1), rows * cell_h);
     let mut pixels = vec![32u8; width * height * 3];
-    let mut x0 = 0;
     let mut labels = Vec::new();
-    for (label, frame) in panels {
+    for (k, (label, frame)) in panels.iter().enumerate() {
+        let (x0, y0) = ((k % columns) * cell_w, (k / columns) * cell_h);
         if let Some(color) = &frame.color {
             let rgb = display_rgb8(&Rgb {
                 width: frame.width,
@@ -149,20 +152,19 @@ pub fn contact_sheet(panels: &[(&str, &Frame)]) -> (usize, usize, Vec<u8>) {
             });
             for j in 0..frame.height {
                 let src = &rgb[j * frame.width * 3..(j + 1) * frame.width * 3];
-                let start = ((j + LABEL_HEIGHT) * width + x0) * 3;
+                let start = ((y0 + j + LABEL_HEIGHT) * width + x0) * 3;
                 pixels[start..start + src.len()].copy_from_slice(src);
             }
         }
-        labels.push((label.to_string(), x0));
-        x0 += frame.width + gap;
+        labels.push((label.to_string(), x0, y0));
     }
     {
         let root = BitMapBackend::with_buffer(&mut pixels, (width as u32, height as u32))
             .into_drawing_area();
-        for (label, x) in labels {
+        for (label, x, y) in labels {
             let _ = root.draw(&Text::new(
                 label,
-                (x as i32 + 4, 4),
+                (x as i32 + 4, y as i32 + 4),
                 ("sans-serif", 14).into_font().color(&WHITE),
             ));
         }

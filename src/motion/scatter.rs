@@ -494,9 +494,17 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
         .collect();
     let job = job;
 
-    // Accumulate and normalise tile by tile, into fresh planes.
+    // Accumulate and normalise tile by tile, into a copy of the input (curves read the input
+    // colours while tiles are written); tiles no curve reaches keep it.
     let has_alpha = color.a.is_some();
-    let mut out: [Vec<f32>; 4] = std::array::from_fn(|_| vec![0.0f32; n]);
+    let copy =
+        |plane: &[f32]| -> Vec<f32> { plane.par_iter().map(|&v| sanitize_color(v)).collect() };
+    let mut out: [Vec<f32>; 4] = [
+        copy(&color.r),
+        copy(&color.g),
+        copy(&color.b),
+        color.a.as_deref().map_or_else(|| vec![1.0; n], copy),
+    ];
     let [r, g, b, a] = &mut out;
     let strip = TILE_H * width;
     r.par_chunks_mut(strip)
@@ -508,7 +516,7 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
             let ty0 = tile_row * TILE_H;
             let ty1 = (ty0 + TILE_H).min(height);
             // Tiles of the strip in parallel too (a 1080p frame has only 9 strips).
-            let tiles: Vec<Vec<[f32; 4]>> = (0..columns)
+            let tiles: Vec<Option<Vec<[f32; 4]>>> = (0..columns)
                 .into_par_iter()
                 .map(|column| {
                     let tx0 = column * TILE_W;
@@ -517,6 +525,7 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
                 .collect();
             let mut planes = [r, g, b, a];
             for (column, values) in tiles.iter().enumerate() {
+                let Some(values) = values else { continue };
                 let (tx0, tw) = (column * TILE_W, TILE_W.min(width - column * TILE_W));
                 for (k, value) in values.iter().enumerate() {
                     // The strip starts at the tile's first row.
@@ -540,7 +549,8 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
 impl Scatter<'_> {
     /// Accumulates the curves reaching one tile and writes its normalised pixels into
     /// `planes` (the tile's strip of rows).
-    fn tile(&self, reach: &Reach, rect: [usize; 4]) -> Vec<[f32; 4]> {
+    /// `None` where no curve reaches the tile.
+    fn tile(&self, reach: &Reach, rect: [usize; 4]) -> Option<Vec<[f32; 4]>> {
         let [tx0, ty0, tx1, ty1] = rect;
         let tw = tx1 - tx0;
         let width = self.width;
@@ -552,6 +562,7 @@ impl Scatter<'_> {
             y1: ty1 as i64,
         };
         let mut path = Path::new();
+        let mut reached = false;
         // Blocks near enough for their largest reach to touch the tile, in a fixed order (so
         // every sum runs in the same order); in them, pixels whose own reach touches it.
         let touches = |x: f64, y: f64, r: f64| {
@@ -583,6 +594,7 @@ impl Scatter<'_> {
                         {
                             continue;
                         }
+                        reached = true;
                         for k in 0..path.segments {
                             let (w0, w1) = (path.weights[k], path.weights[k + 1]);
                             let (z0, z1) = (path.depths[k], path.depths[k + 1]);
@@ -606,10 +618,12 @@ impl Scatter<'_> {
                 }
             }
         }
-        acc.iter()
-            .enumerate()
-            .map(|(k, cell)| self.resolve(cell, (ty0 + k / tw) * width + tx0 + k % tw, reach))
-            .collect()
+        reached.then(|| {
+            acc.iter()
+                .enumerate()
+                .map(|(k, cell)| self.resolve(cell, (ty0 + k / tw) * width + tx0 + k % tw, reach))
+                .collect()
+        })
     }
 
     /// The output of pixel `i` from its accumulated `cell`.
