@@ -41,7 +41,7 @@
 use rayon::prelude::*;
 
 use super::curve::{length, Arc, Bezier, Point};
-use super::line::{draw_spans, floor, Clip};
+use super::line::{draw_spans, Clip};
 use crate::frame::{Color, Frame, Positions};
 
 /// Colour magnitudes beyond this are clamped.
@@ -393,6 +393,8 @@ impl Scatter<'_> {
 struct Reach {
     across: usize,
     down: usize,
+    /// Per pixel (0 where still), so tiles test it without rebuilding the motion.
+    pixel: Vec<f32>,
     block: Vec<f32>,
     most: f32,
     /// The deepest (sanitised) depth in each block.
@@ -402,20 +404,22 @@ struct Reach {
 impl Reach {
     fn of(job: &Scatter) -> Reach {
         let (across, down) = (job.width.div_ceil(BLOCK), job.height.div_ceil(BLOCK));
+        // Rounded up with a margin, so the f32 never falls short of the f64.
+        let pixel: Vec<f32> = (0..job.width * job.height)
+            .into_par_iter()
+            .map(|i| job.motion(i).map_or(0.0, |m| (m.reach + 0.01) as f32))
+            .collect();
         let block: Vec<f32> = (0..across * down)
             .into_par_iter()
             .map(|b| {
                 let (bx, by) = (b % across * BLOCK, b / across * BLOCK);
-                let mut most = 0.0f64;
+                let mut most = 0.0f32;
                 for y in by..(by + BLOCK).min(job.height) {
                     for x in bx..(bx + BLOCK).min(job.width) {
-                        if let Some(m) = job.motion(y * job.width + x) {
-                            most = most.max(m.reach);
-                        }
+                        most = most.max(pixel[y * job.width + x]);
                     }
                 }
-                // Rounded up, so the f32 never falls short of the f64.
-                -(floor(-most) as f32)
+                most
             })
             .collect();
         let most = block.iter().copied().fold(0.0, f32::max);
@@ -439,6 +443,7 @@ impl Reach {
         Reach {
             across,
             down,
+            pixel,
             block,
             most,
             deepest,
@@ -586,12 +591,14 @@ impl Scatter<'_> {
                 for y in by * BLOCK..((by + 1) * BLOCK).min(self.height) {
                     for x in bx * BLOCK..((bx + 1) * BLOCK).min(width) {
                         let e = y * width + x;
+                        let r = reach.pixel[e] as f64;
+                        if r == 0.0 || !touches(x as f64 + 0.5, y as f64 + 0.5, r) {
+                            continue;
+                        }
                         let Some(motion) = self.motion(e) else {
                             continue;
                         };
-                        if !touches(motion.now[0], motion.now[1], motion.reach)
-                            || !self.path(e, &motion, &mut path)
-                        {
+                        if !self.path(e, &motion, &mut path) {
                             continue;
                         }
                         reached = true;
