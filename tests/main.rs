@@ -11,4 +11,5 @@ mod metrics;
 mod presets;
 mod reconstruct;
 mod scatter;
+mod stretch;
 mod truth;

@@ -17,8 +17,8 @@ use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::metrics::{self, Rgb, Scores};
 use crate::motion::{
-    apply, Algorithm, BlurParams, CurveKind, Normalize, ReconstructParams, ScatterParams, Variant,
-    Weight,
+    apply, Algorithm, Anchor, BlurParams, CurveKind, Normalize, ReconstructParams, ScatterParams,
+    StretchParams, Variant, Weight,
 };
 use crate::truth::scenes::SCENES;
 use crate::truth::write::{write_scene, SceneOptions};
@@ -77,7 +77,65 @@ pub fn sweep() -> Vec<Setting> {
     }
     settings.push(reconstruct(15, 20, Variant::Dual));
     settings.extend(scatter_sweep());
+    settings.extend(stretch_sweep());
     settings
+}
+
+/// stretch's settings: the default (centred, texture pre-blur), then one change at a time.
+fn stretch_sweep() -> Vec<Setting> {
+    let default = StretchParams::default();
+    [
+        default,
+        StretchParams {
+            anchor: Anchor::Rear,
+            ..default
+        },
+        StretchParams {
+            texture_blur: false,
+            ..default
+        },
+        StretchParams {
+            anchor: Anchor::Rear,
+            texture_blur: false,
+            ..default
+        },
+        StretchParams {
+            extent: 8.0,
+            ..default
+        },
+        StretchParams {
+            extent: 32.0,
+            ..default
+        },
+    ]
+    .into_iter()
+    .map(|p| {
+        let anchor = match p.anchor {
+            Anchor::Centre => "centre",
+            Anchor::Rear => "rear",
+        };
+        let mut label = format!("stretch {anchor} extent{}", p.extent);
+        let mut flags = vec![
+            "--anchor".to_string(),
+            anchor.to_string(),
+            "--extent".to_string(),
+            p.extent.to_string(),
+        ];
+        if !p.texture_blur {
+            label += " plain";
+            flags.push("--no-texture-blur".into());
+        }
+        Setting {
+            label,
+            algorithm: Algorithm::Stretch,
+            params: BlurParams {
+                stretch: p,
+                ..BlurParams::default()
+            },
+            flags,
+        }
+    })
+    .collect()
 }
 
 /// scatter's settings: the paper's defaults, then one change at a time.

@@ -135,9 +135,33 @@ pub struct BlurArgs {
     #[arg(long, value_name = "PX")]
     pub flatness: Option<f32>,
 
-    /// scatter: relative depth tolerance of the depth test [default: preset, else 0.02].
+    /// scatter, stretch: relative depth tolerance of the depth test [default: preset, else
+    /// 0.02].
     #[arg(long, value_name = "F")]
     pub depth_tolerance: Option<f32>,
+
+    /// stretch: `extent` of alpha = max(min_alpha, 1 − |M|/extent), pixels [default: preset,
+    /// else 2].
+    #[arg(long, value_name = "PX")]
+    pub extent: Option<f32>,
+
+    /// stretch: the alpha floor of moved vertices [default: preset, else 0.1].
+    #[arg(long, value_name = "A")]
+    pub min_alpha: Option<f32>,
+
+    /// stretch: relative depth step that tears the mesh [default: preset, else 0.05].
+    #[arg(long, value_name = "F")]
+    pub tear: Option<f32>,
+
+    /// stretch: centre (trailing vertices back and leading ones forward by half the
+    /// exposure) or rear (the talk's rear curtain) [default: preset, else centre].
+    #[arg(long, value_name = "A")]
+    pub anchor: Option<String>,
+
+    /// stretch: no averaging of moving pixels along their motion before stretching (the
+    /// talk's plain form: only silhouettes blur).
+    #[arg(long)]
+    pub no_texture_blur: bool,
 
     /// Frames to process: 1001-1100, 1-99x2, 1,5,9-12 [default: every frame found on disk
     /// for the colour pattern].

@@ -15,8 +15,8 @@ use crate::io::passes::{passes_found, Inputs};
 use crate::io::preset::{Preset, Transfer, BUILTIN};
 use crate::io::sequence::{parse_frames, PathPattern};
 use crate::motion::{
-    scatter, Algorithm, BlurParams, CurveKind, Normalize, ReconstructParams, ScatterParams,
-    Variant, Weight,
+    scatter, Algorithm, Anchor, BlurParams, CurveKind, Normalize, ReconstructParams, ScatterParams,
+    StretchParams, Variant, Weight,
 };
 use crate::pipeline::{run, Event, Job};
 
@@ -178,6 +178,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
     }
     let reconstruct = reconstruct_params(args, &preset)?;
     let scatter = scatter_params(args, &preset)?;
+    let stretch = stretch_params(args, &preset, scatter.depth_tolerance)?;
     let mut preset = preset;
     if args.linear {
         preset.color.transfer = Transfer::Linear;
@@ -202,6 +203,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
             shutter,
             reconstruct,
             scatter,
+            stretch,
         },
         output_options,
         skip_existing: args.skip_existing,
@@ -345,6 +347,46 @@ fn scatter_params(args: &BlurArgs, preset: &Preset) -> Result<ScatterParams> {
         curve,
         max_blur,
         flatness,
+        depth_tolerance,
+    })
+}
+
+fn stretch_params(args: &BlurArgs, preset: &Preset, depth_tolerance: f32) -> Result<StretchParams> {
+    let defaults = StretchParams::default();
+    let blur = &preset.blur;
+    let extent = args.extent.or(blur.extent).unwrap_or(defaults.extent);
+    if !(extent.is_finite() && extent > 0.0) {
+        return Err(Error::usage(format!(
+            "--extent {extent}: use a positive length in pixels"
+        )));
+    }
+    let min_alpha = args
+        .min_alpha
+        .or(blur.min_alpha)
+        .unwrap_or(defaults.min_alpha);
+    if !(0.0..=1.0).contains(&min_alpha) {
+        return Err(Error::usage(format!("--min-alpha {min_alpha}: use 0 to 1")));
+    }
+    let tear = args.tear.or(blur.tear).unwrap_or(defaults.tear);
+    if !(tear.is_finite() && tear >= 0.0) {
+        return Err(Error::usage(format!(
+            "--tear {tear}: use 0 or more (relative depth step)"
+        )));
+    }
+    let anchor = match args.anchor.clone().or_else(|| blur.anchor.clone()) {
+        Some(name) => choose(
+            "anchor",
+            &name,
+            &[("centre", Anchor::Centre), ("rear", Anchor::Rear)],
+        )?,
+        None => defaults.anchor,
+    };
+    Ok(StretchParams {
+        extent,
+        min_alpha,
+        tear,
+        anchor,
+        texture_blur: !args.no_texture_blur && blur.texture_blur.unwrap_or(defaults.texture_blur),
         depth_tolerance,
     })
 }

@@ -167,9 +167,24 @@ pub struct BlurSettings {
     /// scatter: flatness tolerance (px) for fewer segments; 0 = always `segments`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flatness: Option<f32>,
-    /// scatter: relative depth tolerance of the depth test.
+    /// scatter, stretch: relative depth tolerance of the depth test.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub depth_tolerance: Option<f32>,
+    /// stretch: alpha extent (px).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extent: Option<f32>,
+    /// stretch: alpha floor.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_alpha: Option<f32>,
+    /// stretch: relative depth step that tears the mesh.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tear: Option<f32>,
+    /// stretch: "centre" or "rear".
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub anchor: Option<String>,
+    /// stretch: average moving pixels along their motion first.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub texture_blur: Option<bool>,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]

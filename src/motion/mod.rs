@@ -1,19 +1,22 @@
 //! Motion-blur algorithms. Each takes a canonical [`Frame`] holding the passes it declared in
 //! [`Algorithm::needs`] and returns the blurred colour: `reconstruct` (McGuire 2012: the
 //! `tile_max`, `neighbor_max` and `reconstruct` passes) and `scatter` (Guertin &
-//! Nowrouzezahrai: the `curve`, `line` and `scatter` modules); a later issue adds `stretch`
-//! (Wloka) here.
+//! Nowrouzezahrai: the `curve`, `line` and `scatter` modules) and `stretch` (Wloka: the
+//! `triangle` and `stretch` modules).
 
 pub mod curve;
 pub mod line;
 pub mod neighbor_max;
 pub mod reconstruct;
 pub mod scatter;
+pub mod stretch;
 pub mod tile_max;
+pub mod triangle;
 
 use crate::frame::{Frame, Passes};
 pub use reconstruct::{ReconstructParams, Variant};
 pub use scatter::{CurveKind, Normalize, ScatterParams, Weight};
+pub use stretch::{Anchor, StretchParams};
 
 /// The blur algorithms shutter knows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -24,6 +27,8 @@ pub enum Algorithm {
     Reconstruct,
     /// Guertin & Nowrouzezahrai's curve scatter (non-linear motion from prev/next positions).
     Scatter,
+    /// Wloka & Zeleznik's vertex stretch (the image as a mesh, silhouettes stretched).
+    Stretch,
 }
 
 impl Algorithm {
@@ -32,6 +37,7 @@ impl Algorithm {
         ("none", Algorithm::None),
         ("reconstruct", Algorithm::Reconstruct),
         ("scatter", Algorithm::Scatter),
+        ("stretch", Algorithm::Stretch),
     ];
 
     pub fn parse(name: &str) -> Option<Algorithm> {
@@ -59,6 +65,13 @@ impl Algorithm {
                 prev: false,
                 next: false,
             },
+            Algorithm::Stretch => Passes {
+                color: true,
+                depth: true,
+                velocity: true,
+                prev: false,
+                next: false,
+            },
             Algorithm::Scatter => Passes {
                 color: true,
                 depth: true,
@@ -77,6 +90,7 @@ pub struct BlurParams {
     pub shutter: f32,
     pub reconstruct: ReconstructParams,
     pub scatter: ScatterParams,
+    pub stretch: StretchParams,
 }
 
 impl Default for BlurParams {
@@ -85,6 +99,7 @@ impl Default for BlurParams {
             shutter: 0.5,
             reconstruct: ReconstructParams::default(),
             scatter: ScatterParams::default(),
+            stretch: StretchParams::default(),
         }
     }
 }
@@ -101,6 +116,7 @@ pub fn apply(algorithm: Algorithm, params: &BlurParams, frame: Frame, frame_numb
             frame_number as u64,
         ),
         Algorithm::Scatter => scatter::scatter(frame, &params.scatter, params.shutter),
+        Algorithm::Stretch => stretch::stretch(frame, &params.stretch, params.shutter),
         Algorithm::None => Frame {
             depth: None,
             velocity: None,

@@ -1,0 +1,400 @@
+//! stretch — the vertex-stretch motion blur of Wloka & Zeleznik as presented by Arce & Wloka
+//! (*In-Game Special Effects and Lighting*, "Motion Blur: The Technique"), brought from
+//! meshes to images (DESIGN.md "stretch").
+//!
+//! The image becomes a mesh: a vertex at every pixel centre carrying its colour, depth and
+//! velocity; two triangles per 2×2 quad of centres; no triangle where the depths of its
+//! vertices differ by more than the tear ratio (`depth_max > depth_min · (1 + tear)`), so a
+//! moving object tears away from its background instead of dragging it like a rubber sheet.
+//!
+//! Per vertex, the screen-space normal N points out of the nearer surface: the sum of the
+//! directions to those of its four neighbours that lie beyond the tear ratio (so only
+//! silhouette vertices of the nearer side have one). With motion M = v (px per frame):
+//! - [`Anchor::Rear`] (the talk's version, rear-curtain: the object sharp at the end of the
+//!   exposure): where M·N < 0 the vertex moves back to the start of the exposure, by −v·φ, and
+//!   becomes translucent, `alpha = max(min_alpha, 1 − |v·φ|/extent)`; other vertices stay.
+//! - [`Anchor::Centre`] (for shutter centred on the frame, DESIGN.md): trailing vertices
+//!   move back by v·φ/2, leading ones (M·N > 0) forward by v·φ/2, both translucent by the
+//!   same formula with that displacement.
+//!
+//! The sharp frame is drawn first, then every triangle with a moved vertex, back to front
+//! (farthest vertex first), alpha blended, each fragment depth-tested against the frame
+//! (`z ≤ depth · (1 + depth_tolerance)`) so nearer still surfaces stay in front.
+//!
+//! Beyond the talk, and from its own list of cons ("per-vertex operation: no texture
+//! blurring … pre-process textures in motion-directions"): with `texture_blur`, each moving
+//! pixel's colour is first averaged along its own motion over the exposure (bilinear
+//! samples), leaving out samples of nearer surfaces: a moving surface smears over itself and
+//! reveals what lies behind it, but never pulls a nearer surface over itself. Without it, a
+//! textured surface moving as a whole (a camera pan) is not blurred at all, only silhouettes
+//! are.
+//!
+//! Numerics: NaN colour reads as 0, colour is clamped to ±[`HUGE`]; NaN velocity is still,
+//! velocity is clamped to ±[`VELOCITY_LIMIT`]; NaN depth is far, negative depth 0. Every
+//! output value is a convex combination of input colours, clamped against rounding (to the
+//! frame's range for the pre-blur, to what it combines for interpolation and blending), so
+//! it is finite and within the input range; a uniform colour stays exactly uniform
+//! (averages, interpolation and blending all work on differences).
+//!
+//! Determinism: triangles are ordered by depth with their index as the tie-break, and drawn
+//! into fixed bands of rows, each band taking every triangle that reaches it in that order.
+
+use rayon::prelude::*;
+
+use super::triangle::{draw, Rect};
+use crate::frame::{Color, Frame};
+
+/// Colour magnitudes beyond this are clamped.
+pub const HUGE: f32 = 1e30;
+/// Velocities beyond this many pixels per frame are clamped.
+pub const VELOCITY_LIMIT: f32 = 1e7;
+/// A pixel whose streak over the exposure is shorter than this many pixels is still.
+pub const STILL: f32 = 0.5;
+/// Rows per drawing band.
+const BAND: usize = 32;
+/// At most this many samples along a pixel's motion in the texture pre-blur.
+const MOST_SAMPLES: usize = 64;
+
+/// Where the sharp object sits within its streak.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Anchor {
+    /// At the end of the exposure (the talk's rear-curtain form): trailing vertices move
+    /// back by the whole exposure.
+    Rear,
+    /// In the middle (our shutter is centred on the frame): trailing vertices back, leading
+    /// ones forward, by half the exposure each.
+    Centre,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StretchParams {
+    /// `extent` of `alpha = max(min_alpha, 1 − |M|/extent)`, pixels. Default 2, chosen on the
+    /// bench: larger extents leave the smears too opaque (BENCHMARKS.md).
+    pub extent: f32,
+    /// The alpha floor (the talk's 0.1).
+    pub min_alpha: f32,
+    /// Relative depth step that tears the mesh.
+    pub tear: f32,
+    pub anchor: Anchor,
+    /// Average each moving pixel's colour along its own motion first.
+    pub texture_blur: bool,
+    /// A fragment is drawn over a pixel whose depth is at least its own / (1 + this).
+    pub depth_tolerance: f32,
+}
+
+impl Default for StretchParams {
+    fn default() -> Self {
+        StretchParams {
+            extent: 2.0,
+            min_alpha: 0.1,
+            tear: 0.05,
+            anchor: Anchor::Centre,
+            texture_blur: true,
+            depth_tolerance: 0.02,
+        }
+    }
+}
+
+fn sanitize_color(v: f32) -> f32 {
+    if v.is_nan() {
+        0.0
+    } else {
+        v.clamp(-HUGE, HUGE)
+    }
+}
+
+fn sanitize_depth(z: f32) -> f32 {
+    if z.is_nan() {
+        f32::INFINITY
+    } else {
+        z.max(0.0)
+    }
+}
+
+fn sanitize_velocity(v: f32) -> f32 {
+    if v.is_nan() {
+        0.0
+    } else {
+        v.clamp(-VELOCITY_LIMIT, VELOCITY_LIMIT)
+    }
+}
+
+/// `a + t·(b − a)`, kept between a and b.
+fn mix(a: f32, b: f32, t: f32) -> f32 {
+    (a + t * (b - a)).clamp(a.min(b), a.max(b))
+}
+
+/// Applies the filter. The frame must hold colour, depth and velocity (prev/next are
+/// dropped). A frame in which nothing moves is returned untouched.
+pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame {
+    let (width, height) = (frame.width, frame.height);
+    frame.prev = None;
+    frame.next = None;
+    let (Some(color), Some(depth), Some(velocity)) = (
+        frame.color.take(),
+        frame.depth.take(),
+        frame.velocity.take(),
+    ) else {
+        return frame;
+    };
+    let n = width * height;
+    let shutter = if shutter.is_finite() {
+        shutter.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let v: Vec<[f32; 2]> = velocity
+        .x
+        .par_iter()
+        .zip(&velocity.y)
+        .map(|(&x, &y)| [sanitize_velocity(x), sanitize_velocity(y)])
+        .collect();
+    let moving = |i: usize| {
+        let [x, y] = v[i];
+        (x * x + y * y).sqrt() * shutter >= STILL
+    };
+    if n == 0 || !(0..n).into_par_iter().any(moving) {
+        frame.color = Some(color);
+        frame.depth = Some(depth);
+        frame.velocity = Some(velocity);
+        return frame;
+    }
+    drop(velocity);
+    let z: Vec<f32> = depth.par_iter().map(|&d| sanitize_depth(d)).collect();
+    drop(depth);
+    let has_alpha = color.a.is_some();
+    let planes: [Vec<f32>; 4] = [
+        color.r.par_iter().map(|&c| sanitize_color(c)).collect(),
+        color.g.par_iter().map(|&c| sanitize_color(c)).collect(),
+        color.b.par_iter().map(|&c| sanitize_color(c)).collect(),
+        color.a.as_ref().map_or_else(
+            || vec![1.0; n],
+            |a| a.par_iter().map(|&c| sanitize_color(c)).collect(),
+        ),
+    ];
+    drop(color);
+    let tear = 1.0 + params.tear.max(0.0);
+    let torn = |a: f32, b: f32| a.max(b) > a.min(b) * tear;
+    // The exposure, in frames relative to the frame's own time.
+    let (t0, t1) = match params.anchor {
+        Anchor::Rear => (-shutter, 0.0),
+        Anchor::Centre => (-0.5 * shutter, 0.5 * shutter),
+    };
+
+    // The sharp frame to draw first: pre-blurred along each pixel's motion if asked.
+    let mut out: [Vec<f32>; 4] = if params.texture_blur {
+        // Colour and depth together, so a tap reads one cache line.
+        let texels: Vec<[f32; 5]> = (0..n)
+            .into_par_iter()
+            .map(|i| [planes[0][i], planes[1][i], planes[2][i], planes[3][i], z[i]])
+            .collect();
+        // The frame's range per channel: averages are clamped to it against rounding.
+        let range: [(f32, f32); 4] = std::array::from_fn(|c| {
+            planes[c]
+                .par_iter()
+                .fold(
+                    || (f32::INFINITY, f32::NEG_INFINITY),
+                    |(lo, hi), &v| (lo.min(v), hi.max(v)),
+                )
+                .reduce(
+                    || (f32::INFINITY, f32::NEG_INFINITY),
+                    |a, b| (a.0.min(b.0), a.1.max(b.1)),
+                )
+        });
+        let mut blurred = planes.clone();
+        let [r, g, b, a] = &mut blurred;
+        r.par_chunks_mut(width)
+            .zip(g.par_chunks_mut(width))
+            .zip(b.par_chunks_mut(width))
+            .zip(a.par_chunks_mut(width))
+            .enumerate()
+            .for_each(|(y, (((r, g), b), a))| {
+                let rows = [r, g, b, a];
+                #[allow(clippy::needless_range_loop)] // x indexes four rows and the frame
+                for x in 0..width {
+                    let i = y * width + x;
+                    if !moving(i) {
+                        continue;
+                    }
+                    let [vx, vy] = v[i];
+                    let length = (vx * vx + vy * vy).sqrt() * (t1 - t0);
+                    let samples = (length.ceil() as usize + 1).clamp(2, MOST_SAMPLES);
+                    // Sample points are pixel-centre coordinates: pixel (x, y) sits at (x, y).
+                    let own: [f32; 4] = std::array::from_fn(|c| planes[c][i]);
+                    let mut sum = [0.0f32; 4];
+                    let mut total = 0.0f32;
+                    for k in 0..samples {
+                        let t = t0 + (t1 - t0) * (k as f32 + 0.5) / samples as f32;
+                        // Bilinear between the four nearest centres, over those of the same
+                        // surface (so a sub-pixel streak still blurs).
+                        let (px, py) = (x as f32 + vx * t, y as f32 + vy * t);
+                        let (fx, fy) = (px.floor(), py.floor());
+                        let (ax, ay) = (px - fx, py - fy);
+                        for (dx, dy, w) in [
+                            (0, 0, (1.0 - ax) * (1.0 - ay)),
+                            (1, 0, ax * (1.0 - ay)),
+                            (0, 1, (1.0 - ax) * ay),
+                            (1, 1, ax * ay),
+                        ] {
+                            let (sx, sy) = (fx + dx as f32, fy + dy as f32);
+                            if !(w > 0.0
+                                && sx >= 0.0
+                                && sy >= 0.0
+                                && sx < width as f32
+                                && sy < height as f32)
+                            {
+                                continue;
+                            }
+                            let texel = &texels[sy as usize * width + sx as usize];
+                            if texel[4] * tear < z[i] {
+                                continue;
+                            }
+                            for c in 0..4 {
+                                sum[c] += w * (texel[c] - own[c]);
+                            }
+                            total += w;
+                        }
+                    }
+                    if total > 0.0 {
+                        for c in 0..4 {
+                            let value = own[c] + sum[c] / total;
+                            rows[c][x] = value.clamp(range[c].0, range[c].1);
+                        }
+                    }
+                }
+            });
+        blurred
+    } else {
+        planes.clone()
+    };
+
+    // Per vertex: how it moves, and its alpha.
+    let move_of = |i: usize| -> ([f32; 2], f32) {
+        let [vx, vy] = v[i];
+        if !moving(i) {
+            return ([0.0; 2], 1.0);
+        }
+        let (x, y) = (i % width, i / width);
+        let mut normal = [0.0f32; 2];
+        for (dx, dy) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
+            let (nx, ny) = (x as i64 + dx, y as i64 + dy);
+            if nx < 0 || ny < 0 || nx >= width as i64 || ny >= height as i64 {
+                continue;
+            }
+            let j = ny as usize * width + nx as usize;
+            if z[j] > z[i] * tear {
+                normal[0] += dx as f32;
+                normal[1] += dy as f32;
+            }
+        }
+        let facing = vx * normal[0] + vy * normal[1];
+        let t = if facing < 0.0 {
+            t0
+        } else if facing > 0.0 {
+            t1
+        } else {
+            0.0
+        };
+        if t == 0.0 {
+            return ([0.0; 2], 1.0);
+        }
+        let shift = [vx * t, vy * t];
+        let length = (shift[0] * shift[0] + shift[1] * shift[1]).sqrt();
+        let alpha = (1.0 - length / params.extent.max(1e-6)).max(params.min_alpha.clamp(0.0, 1.0));
+        (shift, alpha.min(1.0))
+    };
+    let vertices: Vec<([f32; 2], f32)> = (0..n).into_par_iter().map(move_of).collect();
+
+    // Triangles with a moved vertex, farthest first.
+    let quads_across = width.saturating_sub(1);
+    let mut triangles: Vec<(f32, u32)> = (0..quads_across * height.saturating_sub(1) * 2)
+        .into_par_iter()
+        .filter_map(|t| {
+            let corners = triangle_corners(t, quads_across, width);
+            let moved = corners.iter().any(|&i| vertices[i].0 != [0.0; 2]);
+            let zs = corners.map(|i| z[i]);
+            let (lo, hi) = (
+                zs.iter().copied().fold(f32::INFINITY, f32::min),
+                zs.iter().copied().fold(0.0, f32::max),
+            );
+            (moved && !torn(lo, hi)).then_some((hi, t as u32))
+        })
+        .collect();
+    triangles.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+
+    let position = |i: usize| {
+        let (shift, _) = vertices[i];
+        [
+            (i % width) as f64 + 0.5 + shift[0] as f64,
+            (i / width) as f64 + 0.5 + shift[1] as f64,
+        ]
+    };
+    let limit_tolerance = 1.0 + params.depth_tolerance.max(0.0);
+    let [r, g, b, a] = &mut out;
+    let strip = BAND * width;
+    r.par_chunks_mut(strip)
+        .zip(g.par_chunks_mut(strip))
+        .zip(b.par_chunks_mut(strip))
+        .zip(a.par_chunks_mut(strip))
+        .enumerate()
+        .for_each(|(band, (((r, g), b), a))| {
+            let mut rows = [r, g, b, a];
+            let rect = Rect {
+                x0: 0,
+                y0: band * BAND,
+                x1: width,
+                y1: ((band + 1) * BAND).min(height),
+            };
+            for &(_, t) in &triangles {
+                let corners = triangle_corners(t as usize, quads_across, width);
+                let p = corners.map(position);
+                let lo = p.iter().map(|q| q[1]).fold(f64::INFINITY, f64::min);
+                let hi = p.iter().map(|q| q[1]).fold(f64::NEG_INFINITY, f64::max);
+                if hi < rect.y0 as f64 - 0.5 || lo > rect.y1 as f64 + 0.5 {
+                    continue;
+                }
+                draw(p, rect, |x, y, w| {
+                    let i = y * width + x;
+                    let (w1, w2) = (w[1] as f32, w[2] as f32);
+                    let interpolate = |values: [f32; 3]| {
+                        let v =
+                            values[0] + w1 * (values[1] - values[0]) + w2 * (values[2] - values[0]);
+                        let lo = values.iter().copied().fold(f32::INFINITY, f32::min);
+                        let hi = values.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+                        v.clamp(lo, hi)
+                    };
+                    let depth = interpolate(corners.map(|k| z[k]));
+                    if depth > z[i] * limit_tolerance {
+                        return;
+                    }
+                    let alpha = interpolate(corners.map(|k| vertices[k].1));
+                    let o = i - band * strip;
+                    for c in 0..4 {
+                        let source = interpolate(corners.map(|k| planes[c][k]));
+                        rows[c][o] = mix(rows[c][o], source, alpha);
+                    }
+                });
+            }
+        });
+    let [r, g, b, a] = out;
+    frame.color = Some(Color {
+        r,
+        g,
+        b,
+        a: has_alpha.then_some(a),
+    });
+    frame
+}
+
+/// The pixel indices of triangle `t`: quad (qx, qy) has corners 00, 10, 01, 11 (pixel
+/// centres); its first triangle is 00-10-11, its second 00-11-01.
+fn triangle_corners(t: usize, quads_across: usize, width: usize) -> [usize; 3] {
+    let quad = t / 2;
+    let (qx, qy) = (quad % quads_across, quad / quads_across);
+    let i = qy * width + qx;
+    if t.is_multiple_of(2) {
+        [i, i + 1, i + width + 1]
+    } else {
+        [i, i + width + 1, i + width]
+    }
+}
