@@ -12,70 +12,17 @@
 //!
 //! Median of 9 runs after one warm-up run.
 
-use std::time::Instant;
+mod common;
 
-use shutter::frame::{Color, Frame, Velocity};
-use shutter::motion::{apply, Algorithm, BlurParams};
+use common::{frame, H, W};
+use shutter::motion::{Algorithm, BlurParams};
 
-const W: usize = 1920;
-const H: usize = 1080;
-
-fn frame(moving: impl Fn(usize, usize) -> Option<(f32, f32)>) -> Frame {
-    let n = W * H;
-    let mut f = Frame::new(W, H);
-    let mut r = vec![0.0; n];
-    let mut g = vec![0.0; n];
-    let mut b = vec![0.0; n];
-    let mut depth = vec![0.0; n];
-    let mut vx = vec![0.0; n];
-    let mut vy = vec![0.0; n];
-    for y in 0..H {
-        for x in 0..W {
-            let i = y * W + x;
-            r[i] = ((x / 16 + y / 16) % 2) as f32;
-            g[i] = x as f32 / W as f32;
-            b[i] = y as f32 / H as f32;
-            depth[i] = if (x / 200 + y / 150) % 3 == 0 {
-                2.0
-            } else {
-                10.0
-            };
-            if let Some((u, v)) = moving(x, y) {
-                vx[i] = u;
-                vy[i] = v;
-            }
-        }
-    }
-    f.color = Some(Color {
-        r,
-        g,
-        b,
-        a: Some(vec![1.0; n]),
-    });
-    f.depth = Some(depth);
-    f.velocity = Some(Velocity { x: vx, y: vy });
-    f
+fn median_ms(f: &shutter::frame::Frame, runs: usize) -> f64 {
+    common::median_ms(Algorithm::Reconstruct, f, &BlurParams::default(), runs)
 }
 
-fn median_ms(f: &Frame, runs: usize) -> f64 {
-    median_ms_with(f, runs, &BlurParams::default())
-}
-
-fn median_ms_with(f: &Frame, runs: usize, params: &BlurParams) -> f64 {
-    let params = *params;
-    let _ = apply(Algorithm::Reconstruct, &params, f.clone(), 1);
-    let mut times: Vec<f64> = (0..runs)
-        .map(|_| {
-            let input = f.clone();
-            let t = Instant::now();
-            let out = apply(Algorithm::Reconstruct, &params, input, 1);
-            let ms = t.elapsed().as_secs_f64() * 1e3;
-            drop(out);
-            ms
-        })
-        .collect();
-    times.sort_by(f64::total_cmp);
-    times[runs / 2]
+fn median_ms_with(f: &shutter::frame::Frame, runs: usize, params: &BlurParams) -> f64 {
+    common::median_ms(Algorithm::Reconstruct, f, params, runs)
 }
 
 fn main() {

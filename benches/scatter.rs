@@ -15,13 +15,11 @@
 //!
 //! Median of 5 runs after one warm-up run.
 
-use std::time::Instant;
+mod common;
 
+use common::{H, W};
 use shutter::frame::{Color, Frame, Positions};
-use shutter::motion::{apply, Algorithm, BlurParams, CurveKind, Normalize, ScatterParams, Weight};
-
-const W: usize = 1920;
-const H: usize = 1080;
+use shutter::motion::{Algorithm, BlurParams, CurveKind, Normalize, ScatterParams, Weight};
 
 /// `moving(x, y)` gives (velocity, bend) in px per frame: p(t) = p0 + t·v + t²·a.
 fn frame(moving: impl Fn(usize, usize) -> Option<([f32; 2], [f32; 2])>) -> Frame {
@@ -68,19 +66,7 @@ fn frame(moving: impl Fn(usize, usize) -> Option<([f32; 2], [f32; 2])>) -> Frame
 }
 
 fn median_ms(f: &Frame, params: &BlurParams, runs: usize) -> f64 {
-    let _ = apply(Algorithm::Scatter, params, f.clone(), 1);
-    let mut times: Vec<f64> = (0..runs)
-        .map(|_| {
-            let input = f.clone();
-            let t = Instant::now();
-            let out = apply(Algorithm::Scatter, params, input, 1);
-            let ms = t.elapsed().as_secs_f64() * 1e3;
-            drop(out);
-            ms
-        })
-        .collect();
-    times.sort_by(f64::total_cmp);
-    times[runs / 2]
+    common::median_ms(Algorithm::Scatter, f, params, runs)
 }
 
 fn main() {

@@ -55,96 +55,34 @@ fn variants() -> Vec<BlurParams> {
     all
 }
 
-fn planes(f: &Frame) -> [&[f32]; 4] {
-    let c = f.color.as_ref().unwrap();
-    [&c.r, &c.g, &c.b, c.a.as_deref().unwrap()]
-}
-
 #[test]
 fn zero_motion_returns_the_input_unchanged() {
     let mut f = frame(57, 31, 1, 0.0);
     // Sub-half-pixel motion is no motion too.
     f.velocity.as_mut().unwrap().x[7] = 0.9;
-    for params in variants() {
-        let out = apply(Algorithm::Reconstruct, &params, f.clone(), 3);
-        for (a, b) in planes(&out).iter().zip(planes(&f)) {
-            assert_exact(a, b, "zero motion");
-        }
-    }
+    invariants::zero_motion_is_identity(Algorithm::Reconstruct, &f, &variants());
 }
 
 #[test]
 fn a_uniform_colour_stays_uniform_under_any_motion() {
-    let mut f = frame(61, 37, 2, 60.0);
-    let n = 61 * 37;
-    f.color = Some(Color {
-        r: vec![0.7; n],
-        g: vec![3.5; n],
-        b: vec![0.0; n],
-        a: Some(vec![1.0; n]),
-    });
-    for params in variants() {
-        let out = apply(Algorithm::Reconstruct, &params, f.clone(), 1);
-        let c = out.color.unwrap();
-        assert_exact(&c.r, &vec![0.7; n], "r");
-        assert_exact(&c.g, &vec![3.5; n], "g");
-        assert_exact(&c.b, &vec![0.0; n], "b");
-    }
+    invariants::uniform_stays_uniform(Algorithm::Reconstruct, frame, &variants());
 }
 
 #[test]
 fn output_stays_within_the_input_range_per_channel() {
-    for seed in [3, 30, 300] {
-        let f = frame(64, 48, seed, 40.0);
-        for params in variants() {
-            let out = apply(Algorithm::Reconstruct, &params, f.clone(), seed as i64);
-            for (o, i) in planes(&out).iter().zip(planes(&f)) {
-                let lo = i.iter().copied().fold(f32::INFINITY, f32::min);
-                let hi = i.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-                let slack = 1e-6 * hi.abs().max(lo.abs()).max(1.0);
-                assert!(
-                    o.iter().all(|v| *v >= lo - slack && *v <= hi + slack),
-                    "out of [{lo}, {hi}]"
-                );
-            }
-            assert!(
-                planes(&out)[0] != planes(&f)[0],
-                "motion must change something"
-            );
-        }
-    }
+    invariants::within_input_range(Algorithm::Reconstruct, frame, &variants(), 1e-6);
 }
 
 #[test]
 fn nan_inf_and_huge_inputs_give_finite_output() {
     let mut f = frame(50, 40, 4, 30.0);
-    {
-        let c = f.color.as_mut().unwrap();
-        c.r[0] = f32::NAN;
-        c.g[100] = f32::INFINITY;
-        c.b[200] = f32::NEG_INFINITY;
-        c.r[300] = 3e38;
-    }
-    {
-        let v = f.velocity.as_mut().unwrap();
-        v.x[10] = f32::NAN;
-        v.y[20] = f32::INFINITY;
-        v.x[30] = -1e38;
-        v.y[40] = 1e20;
-    }
-    {
-        let d = f.depth.as_mut().unwrap();
-        d[50] = f32::NAN;
-        d[60] = f32::INFINITY;
-        d[70] = -5.0;
-        d[80] = 1e38;
-    }
-    for params in variants() {
-        let out = apply(Algorithm::Reconstruct, &params, f.clone(), 9);
-        for plane in planes(&out) {
-            assert!(plane.iter().all(|v| v.is_finite()), "non-finite output");
-        }
-    }
+    invariants::poison_color_and_depth(&mut f);
+    let v = f.velocity.as_mut().unwrap();
+    v.x[10] = f32::NAN;
+    v.y[20] = f32::INFINITY;
+    v.x[30] = -1e38;
+    v.y[40] = 1e20;
+    invariants::finite_output(Algorithm::Reconstruct, &f, &variants());
 }
 
 #[test]
@@ -169,31 +107,12 @@ fn tile_grid_that_does_not_divide_the_image() {
 
 #[test]
 fn output_is_identical_for_one_and_two_threads() {
-    let dir = small_scene("gears", 96, 54, 1, 4);
-    let p = |role: &str| role_pattern(dir.path(), role);
-    let mut outputs = Vec::new();
-    for threads in ["1", "2"] {
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"))
-            .env("RAYON_NUM_THREADS", threads)
-            .args([
-                "blur",
-                "--algorithm",
-                "reconstruct",
-                "--color",
-                &p("color"),
-                "--depth",
-                &p("depth"),
-                "--velocity",
-                &p("velocity"),
-                "-o",
-                &format!("{}/t{threads}.####.exr", dir.path().display()),
-            ])
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        outputs.push(std::fs::read(dir.path().join(format!("t{threads}.0001.exr"))).unwrap());
-    }
-    assert_eq!(outputs[0], outputs[1]);
+    invariants::same_bytes_for_any_thread_count(
+        "reconstruct",
+        "gears",
+        &["color", "depth", "velocity"],
+        &[],
+    );
 }
 
 fn rgb(planes: &[Vec<f32>; 3], w: usize, h: usize) -> Rgb<'_> {

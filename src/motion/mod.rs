@@ -14,6 +14,30 @@ pub mod tile_max;
 pub mod triangle;
 
 use crate::frame::{Frame, Passes};
+
+/// Colour (and reconstruct's depth) magnitudes beyond this are clamped: far above any
+/// radiance, and small enough that sums of many stay finite in f32.
+pub const HUGE: f32 = 1e30;
+
+/// Colour made finite: NaN reads as 0, magnitudes are clamped to [`HUGE`].
+#[inline]
+pub(crate) fn sanitize_color(v: f32) -> f32 {
+    if v.is_nan() {
+        0.0
+    } else {
+        v.clamp(-HUGE, HUGE)
+    }
+}
+
+/// Depth made comparable: NaN is far (+∞), negative is 0.
+#[inline]
+pub(crate) fn sanitize_depth_far(z: f32) -> f32 {
+    if z.is_nan() {
+        f32::INFINITY
+    } else {
+        z.max(0.0)
+    }
+}
 pub use reconstruct::{ReconstructParams, Variant};
 pub use scatter::{CurveKind, Normalize, ScatterParams, Weight};
 pub use stretch::{Anchor, StretchParams};

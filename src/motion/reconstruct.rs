@@ -29,6 +29,7 @@ use rayon::prelude::*;
 
 use super::neighbor_max::neighbor_max;
 use super::tile_max::tile_max;
+use super::{sanitize_color, HUGE};
 use crate::frame::Frame;
 use crate::truth::sample::hash01;
 
@@ -36,9 +37,6 @@ use crate::truth::sample::hash01;
 pub const HALF_PIXEL: f32 = 0.5;
 /// The paper's ε: guards `|q| + ε` and the early-out test.
 pub const EPSILON: f32 = 0.01;
-/// Magnitudes beyond this are clamped: far above any radiance or depth, and small enough
-/// that S·2·HUGE stays finite in f32.
-pub const HUGE: f32 = 1e30;
 /// Velocities beyond this many pixels per frame are clamped (they blur by k anyway): small
 /// enough that |q|² stays finite in f32, so no `hypot` is needed.
 pub const VELOCITY_LIMIT: f32 = 1e15;
@@ -77,14 +75,6 @@ impl Default for ReconstructParams {
             jitter: true,
             variant: Variant::Paper,
         }
-    }
-}
-
-fn sanitize_color(v: f32) -> f32 {
-    if v.is_nan() {
-        0.0
-    } else {
-        v.clamp(-HUGE, HUGE)
     }
 }
 

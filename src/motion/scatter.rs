@@ -32,7 +32,7 @@
 //! f64 also keeps a million overlapping deposits of one colour at that colour (f32 would drift
 //! by ~1e-4).
 //!
-//! Numerics: NaN colour reads as 0 and colour is clamped to ±[`HUGE`]; NaN positions make a
+//! Numerics: NaN colour reads as 0 and colour is clamped to ±[`HUGE`](super::HUGE); NaN positions make a
 //! pixel still, infinite ones are clamped to ±[`FAR`] px; NaN or negative depth is far or 0; a
 //! curve longer than 2·`max_blur` px is scaled about p(0) to that length, which bounds the
 //! work per curve. Output is finite and, as a weighted average with non-negative weights,
@@ -40,12 +40,12 @@
 
 use rayon::prelude::*;
 
+use super::{sanitize_color, sanitize_depth_far};
+
 use super::curve::{length, Arc, Bezier, Point};
 use super::line::{draw_spans, Clip};
 use crate::frame::{Color, Frame, Positions};
 
-/// Colour magnitudes beyond this are clamped.
-pub const HUGE: f32 = 1e30;
 /// Positions beyond this many pixels are clamped (still far beyond any image, and well inside
 /// f64's exact integers).
 pub const FAR: f64 = 1e12;
@@ -123,23 +123,6 @@ impl Default for ScatterParams {
             flatness: 0.1,
             depth_tolerance: 0.02,
         }
-    }
-}
-
-fn sanitize_color(v: f32) -> f32 {
-    if v.is_nan() {
-        0.0
-    } else {
-        v.clamp(-HUGE, HUGE)
-    }
-}
-
-/// Depth as a comparable value: NaN is far, negative is 0.
-fn sanitize_depth(z: f32) -> f32 {
-    if z.is_nan() {
-        f32::INFINITY
-    } else {
-        z.max(0.0)
     }
 }
 
@@ -266,7 +249,7 @@ impl Scatter<'_> {
         };
         path.segments = segments;
         path.color = self.color(i).map(f64::from);
-        let z0 = sanitize_depth(self.depth[i]);
+        let z0 = sanitize_depth_far(self.depth[i]);
         let depth_at = match (&self.prev.z, &self.next.z) {
             (Some(zp), Some(zn)) if zp[i].is_finite() && zn[i].is_finite() && z0.is_finite() => {
                 let (zp, zn) = (zp[i] as f64, zn[i] as f64);
@@ -343,7 +326,7 @@ impl Scatter<'_> {
             return own;
         }
         let dir = [v[0] / l, v[1] / l];
-        let limit = sanitize_depth(self.depth[i]) * (1.0 + self.params.depth_tolerance);
+        let limit = sanitize_depth_far(self.depth[i]) * (1.0 + self.params.depth_tolerance);
         let steps = (self
             .extent(prev, now, next)
             .min(2.0 * self.params.max_blur as f64)
@@ -371,7 +354,7 @@ impl Scatter<'_> {
                     break;
                 }
                 let j = y as usize * self.width + x as usize;
-                if sanitize_depth(self.depth[j]) > limit {
+                if sanitize_depth_far(self.depth[j]) > limit {
                     for (s, c) in sum.iter_mut().zip(self.color(j)) {
                         *s += c as f64;
                     }
@@ -431,7 +414,7 @@ impl Reach {
                     let mut deepest = 0.0f32;
                     for y in by..(by + BLOCK).min(job.height) {
                         for x in bx..(bx + BLOCK).min(job.width) {
-                            deepest = deepest.max(sanitize_depth(job.depth[y * job.width + x]));
+                            deepest = deepest.max(sanitize_depth_far(job.depth[y * job.width + x]));
                         }
                     }
                     deepest
@@ -495,7 +478,7 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
     let tolerance = 1.0 + params.depth_tolerance;
     job.limit = depth
         .par_iter()
-        .map(|&z| sanitize_depth(z) * tolerance)
+        .map(|&z| sanitize_depth_far(z) * tolerance)
         .collect();
     let job = job;
 

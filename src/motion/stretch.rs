@@ -29,7 +29,7 @@
 //! textured surface moving as a whole (a camera pan) is not blurred at all, only silhouettes
 //! are.
 //!
-//! Numerics: NaN colour reads as 0, colour is clamped to ±[`HUGE`]; NaN velocity is still,
+//! Numerics: NaN colour reads as 0, colour is clamped to ±[`HUGE`](super::HUGE); NaN velocity is still,
 //! velocity is clamped to ±[`VELOCITY_LIMIT`]; NaN depth is far, negative depth 0. Every
 //! output value is a convex combination of input colours, clamped against rounding (to the
 //! frame's range for the pre-blur, to what it combines for interpolation and blending), so
@@ -41,11 +41,11 @@
 
 use rayon::prelude::*;
 
+use super::{sanitize_color, sanitize_depth_far};
+
 use super::triangle::{draw, Rect};
 use crate::frame::{Color, Frame};
 
-/// Colour magnitudes beyond this are clamped.
-pub const HUGE: f32 = 1e30;
 /// Velocities beyond this many pixels per frame are clamped.
 pub const VELOCITY_LIMIT: f32 = 1e7;
 /// A pixel whose streak over the exposure is shorter than this many pixels is still.
@@ -92,22 +92,6 @@ impl Default for StretchParams {
             texture_blur: true,
             depth_tolerance: 0.02,
         }
-    }
-}
-
-fn sanitize_color(v: f32) -> f32 {
-    if v.is_nan() {
-        0.0
-    } else {
-        v.clamp(-HUGE, HUGE)
-    }
-}
-
-fn sanitize_depth(z: f32) -> f32 {
-    if z.is_nan() {
-        f32::INFINITY
-    } else {
-        z.max(0.0)
     }
 }
 
@@ -160,7 +144,7 @@ pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame 
         return frame;
     }
     drop(velocity);
-    let z: Vec<f32> = depth.par_iter().map(|&d| sanitize_depth(d)).collect();
+    let z: Vec<f32> = depth.par_iter().map(|&d| sanitize_depth_far(d)).collect();
     drop(depth);
     let has_alpha = color.a.is_some();
     let planes: [Vec<f32>; 4] = [

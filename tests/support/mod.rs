@@ -214,3 +214,134 @@ pub fn small_scene(
 pub fn role_pattern(dir: &Path, role: &str) -> String {
     format!("{}/{role}.####.exr", dir.display())
 }
+
+/// Premultiplied R, G, B, A of a frame with alpha.
+pub fn planes(f: &shutter::frame::Frame) -> [&[f32]; 4] {
+    let c = f.color.as_ref().unwrap();
+    [&c.r, &c.g, &c.b, c.a.as_deref().unwrap()]
+}
+
+/// The invariants every motion-blur algorithm keeps (DESIGN.md "Algorithms"), checked on
+/// frames from `frame(width, height, seed, speed)` under each of `variants`.
+pub mod invariants {
+    use shutter::frame::{Color, Frame};
+    use shutter::motion::{apply, Algorithm, BlurParams};
+
+    use super::{assert_exact, planes};
+
+    pub type Make = fn(usize, usize, u32, f32) -> Frame;
+
+    /// A frame that does not move comes back unchanged (`still` is a frame whose motion is
+    /// below the algorithm's threshold).
+    pub fn zero_motion_is_identity(algorithm: Algorithm, still: &Frame, variants: &[BlurParams]) {
+        for params in variants {
+            let out = apply(algorithm, params, still.clone(), 3);
+            for (a, b) in planes(&out).iter().zip(planes(still)) {
+                assert_exact(a, b, "zero motion");
+            }
+        }
+    }
+
+    pub fn uniform_stays_uniform(algorithm: Algorithm, make: Make, variants: &[BlurParams]) {
+        let (w, h) = (61, 37);
+        let n = w * h;
+        let mut f = make(w, h, 2, 30.0);
+        f.color = Some(Color {
+            r: vec![0.7; n],
+            g: vec![3.5; n],
+            b: vec![0.0; n],
+            a: Some(vec![1.0; n]),
+        });
+        for params in variants {
+            let out = apply(algorithm, params, f.clone(), 1);
+            let c = out.color.unwrap();
+            assert_exact(&c.r, &vec![0.7; n], "r");
+            assert_exact(&c.g, &vec![3.5; n], "g");
+            assert_exact(&c.b, &vec![0.0; n], "b");
+        }
+    }
+
+    /// Every output channel within the input's [min, max] (up to `slack` relative), and the
+    /// motion changes something.
+    pub fn within_input_range(
+        algorithm: Algorithm,
+        make: Make,
+        variants: &[BlurParams],
+        slack: f32,
+    ) {
+        for seed in [3, 30, 300] {
+            let f = make(64, 48, seed, 20.0);
+            for params in variants {
+                let out = apply(algorithm, params, f.clone(), seed as i64);
+                for (o, i) in planes(&out).iter().zip(planes(&f)) {
+                    let lo = i.iter().copied().fold(f32::INFINITY, f32::min);
+                    let hi = i.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+                    let slack = slack * hi.abs().max(lo.abs()).max(1.0);
+                    assert!(
+                        o.iter().all(|v| *v >= lo - slack && *v <= hi + slack),
+                        "out of [{lo}, {hi}]"
+                    );
+                }
+                assert!(
+                    planes(&out)[0] != planes(&f)[0],
+                    "motion must change something"
+                );
+            }
+        }
+    }
+
+    /// Finite output for a frame `f` poisoned with NaN, infinite and huge values.
+    pub fn finite_output(algorithm: Algorithm, f: &Frame, variants: &[BlurParams]) {
+        for params in variants {
+            let out = apply(algorithm, params, f.clone(), 9);
+            for plane in planes(&out) {
+                assert!(plane.iter().all(|v| v.is_finite()), "non-finite output");
+            }
+        }
+    }
+
+    /// Poisons colour and depth with NaN, infinite, huge, negative and zero values.
+    pub fn poison_color_and_depth(f: &mut Frame) {
+        let c = f.color.as_mut().unwrap();
+        c.r[0] = f32::NAN;
+        c.g[100] = f32::INFINITY;
+        c.b[200] = f32::NEG_INFINITY;
+        c.r[300] = 3e38;
+        let d = f.depth.as_mut().unwrap();
+        d[50] = f32::NAN;
+        d[60] = f32::INFINITY;
+        d[70] = -5.0;
+        d[80] = 1e38;
+        d[81] = 0.0;
+    }
+
+    /// `shutter blur --algorithm NAME` on a small truth scene gives the same bytes with 1
+    /// and 2 threads. `passes` are the scene roles to pass (`color` first).
+    pub fn same_bytes_for_any_thread_count(
+        name: &str,
+        scene: &str,
+        passes: &[&str],
+        extra: &[&str],
+    ) {
+        let dir = super::small_scene(scene, 96, 54, 1, 4);
+        let mut outputs = Vec::new();
+        for threads in ["1", "2"] {
+            let mut args = vec!["blur".to_string(), "--algorithm".into(), name.into()];
+            for role in passes {
+                args.push(format!("--{role}"));
+                args.push(super::role_pattern(dir.path(), role));
+            }
+            args.extend(extra.iter().map(|s| s.to_string()));
+            args.push("-o".into());
+            args.push(format!("{}/t{threads}.####.exr", dir.path().display()));
+            let o = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"))
+                .env("RAYON_NUM_THREADS", threads)
+                .args(&args)
+                .output()
+                .unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            outputs.push(std::fs::read(dir.path().join(format!("t{threads}.0001.exr"))).unwrap());
+        }
+        assert_eq!(outputs[0], outputs[1]);
+    }
+}
