@@ -10,6 +10,7 @@
 pub mod bench;
 pub mod cli;
 pub mod diff;
+pub mod dof;
 pub mod error;
 pub mod frame;
 pub mod io;

@@ -310,9 +310,16 @@ impl Lens {
         l * (0.5 * aperture * image_distance * (inverse - 1.0 / self.focus) * pixels_per_metre)
     }
 
-    /// Circle of confusion diameter in pixels at `depth` (DESIGN.md's formula).
+    /// Circle of confusion diameter in pixels at `depth` (DESIGN.md's formula, computed by
+    /// the compositor's own [`crate::dof::coc::Lens`]).
     pub fn coc(&self, depth: f64, width: f64) -> f64 {
-        2.0 * self.offset(DVec2::X, depth, width).length()
+        crate::dof::coc::Lens {
+            focal_mm: self.focal_mm,
+            f_number: self.f_number,
+            focus: self.focus,
+            sensor_mm: self.sensor_mm,
+        }
+        .coc(depth, width)
     }
 }
 
@@ -564,6 +571,15 @@ mod tests {
         let expected = coc_sensor * width / 0.036;
         assert!((lens.coc(d, width) - expected).abs() < 1e-9 * expected);
         assert!(lens.coc(p, width) < 1e-9, "in focus at P");
+        // The renderer's aperture offsets trace the compositor's circle of confusion.
+        for depth in [0.5, 2.0, 10.0, f64::INFINITY] {
+            let rendered = 2.0 * lens.offset(DVec2::X, depth, width).length();
+            let coc = lens.coc(depth, width);
+            assert!(
+                (rendered - coc).abs() <= 1e-9 * coc.max(1.0),
+                "{depth}: {rendered} vs {coc}"
+            );
+        }
     }
 
     #[test]

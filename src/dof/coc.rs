@@ -1,0 +1,176 @@
+//! The circle of confusion of a thin lens, in pixels (DESIGN.md "dof blend").
+//!
+//! For focal length F, f-number N (aperture diameter A = F/N), focus distance P and a point
+//! at depth D, the blur circle on the sensor has diameter
+//! `|A·F·(P − D) / (D·(P − F))|` (Sousa's simplification of Potmesil & Chakravarty 1981).
+//! Wloka's talk writes the same thing as `|(P/D − 1)·F² / (N·(P − F))|`; the tests show the
+//! three forms agree. It is converted to pixels with the sensor width: an image `width`
+//! pixels wide spans `sensor_mm` of sensor.
+//!
+//! The signed form is positive behind the focus plane (the far field) and negative in front
+//! of it (the near field), as the near/far split of the gather needs.
+
+/// A thin lens. Distances in scene units (metres unless the scene says otherwise).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lens {
+    /// Focal length F, mm.
+    pub focal_mm: f64,
+    /// f-number N.
+    pub f_number: f64,
+    /// Focus distance P, scene units.
+    pub focus: f64,
+    /// Sensor (film) width, mm (36 for full frame).
+    pub sensor_mm: f64,
+}
+
+/// Circles of confusion larger than this many pixels are clamped (a point at depth 0).
+pub const LARGEST: f64 = 1e6;
+
+impl Lens {
+    /// Why these settings cannot describe a lens, if they cannot.
+    pub fn check(&self) -> Result<(), String> {
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        if !positive(self.focal_mm) {
+            return Err(format!(
+                "focal length {} mm: use a positive length",
+                self.focal_mm
+            ));
+        }
+        if !positive(self.f_number) {
+            return Err(format!("f-stop {}: use a positive f-number", self.f_number));
+        }
+        if !positive(self.sensor_mm) {
+            return Err(format!(
+                "sensor width {} mm: use a positive width",
+                self.sensor_mm
+            ));
+        }
+        if !(self.focus.is_finite() && self.focus > self.focal_mm / 1000.0) {
+            return Err(format!(
+                "focus distance {}: use a distance beyond the focal length ({} m)",
+                self.focus,
+                self.focal_mm / 1000.0
+            ));
+        }
+        Ok(())
+    }
+
+    /// Signed circle-of-confusion diameter in pixels at `depth`, for an image `width` pixels
+    /// wide: positive behind the focus plane, negative in front. Infinite depth gives the
+    /// far limit `A·F / (P − F)`; NaN depth counts as infinite; depth 0 or less gives
+    /// −[`LARGEST`].
+    pub fn signed_coc(&self, depth: f64, width: f64) -> f64 {
+        let f = self.focal_mm / 1000.0;
+        let aperture = f / self.f_number;
+        let p = self.focus;
+        // (P − D)/D, written so D = ∞ is exact: P/D − 1.
+        let depth = if depth.is_nan() { f64::INFINITY } else { depth };
+        if depth <= 0.0 {
+            return -LARGEST;
+        }
+        let on_sensor = -aperture * f * (p / depth - 1.0) / (p - f);
+        (on_sensor * width / (self.sensor_mm / 1000.0)).clamp(-LARGEST, LARGEST)
+    }
+
+    /// Circle-of-confusion diameter in pixels (the magnitude of [`Lens::signed_coc`]).
+    pub fn coc(&self, depth: f64, width: f64) -> f64 {
+        self.signed_coc(depth, width).abs()
+    }
+}
+
+/// Wloka's form, on the sensor in metres: `|(P/D − 1)·F² / (N·(P − F))|`.
+pub fn coc_wloka(depth: f64, focus: f64, focal: f64, f_number: f64) -> f64 {
+    ((focus / depth - 1.0) * focal * focal / (f_number * (focus - focal))).abs()
+}
+
+/// Potmesil's unsimplified form as Sousa's slides give it, on the sensor in metres:
+/// `|F·D/(D − F) − F·P/(P − F)| · (D − F)/(N·D)`.
+pub fn coc_potmesil(depth: f64, focus: f64, focal: f64, f_number: f64) -> f64 {
+    (focal * depth / (depth - focal) - focal * focus / (focus - focal)).abs() * (depth - focal)
+        / (f_number * depth)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const LENS: Lens = Lens {
+        focal_mm: 50.0,
+        f_number: 2.0,
+        focus: 2.0,
+        sensor_mm: 36.0,
+    };
+
+    #[test]
+    fn hand_computed_values() {
+        // F = 0.05 m, A = 0.025 m, P = 2 m, 1920 px over 36 mm (53.33 px per mm).
+        // D = 4 m: 0.025·0.05·(2 − 4)/(4·1.95) = −3.2051e-4 m = 0.32051 mm → 17.094 px.
+        let far = LENS.signed_coc(4.0, 1920.0);
+        assert!((far - 17.094).abs() < 1e-3, "{far}");
+        // D = 1 m: 0.025·0.05·1/(1·1.95) = 6.4103e-4 m → 34.188 px, in front.
+        let near = LENS.signed_coc(1.0, 1920.0);
+        assert!((near + 34.188).abs() < 1e-3, "{near}");
+        // D = ∞: A·F/(P − F) = 0.00125/1.95 m → 34.188 px, behind.
+        assert!((LENS.signed_coc(f64::INFINITY, 1920.0) - 34.188).abs() < 1e-3);
+        assert!((LENS.signed_coc(f64::NAN, 1920.0) - 34.188).abs() < 1e-3);
+        // In focus at P; degenerate depths are clamped, never NaN.
+        assert!(LENS.coc(2.0, 1920.0) < 1e-12);
+        assert_eq!(LENS.signed_coc(0.0, 1920.0), -LARGEST);
+        assert_eq!(LENS.signed_coc(-3.0, 1920.0), -LARGEST);
+        assert!(LENS.signed_coc(1e-300, 1920.0).is_finite());
+    }
+
+    #[test]
+    fn the_seeds_formulas_agree() {
+        for (d, p, f, n) in [
+            (4.0, 2.0, 0.05, 2.0),
+            (1.0, 2.0, 0.05, 2.0),
+            (0.7, 3.0, 0.085, 1.4),
+            (30.0, 5.0, 0.024, 8.0),
+        ] {
+            let sousa = (f / n) * f * (p - d) / (d * (p - f));
+            let lens = Lens {
+                focal_mm: f * 1000.0,
+                f_number: n,
+                focus: p,
+                sensor_mm: 36.0,
+            };
+            let ours = lens.coc(d, 36.0) / 1000.0; // 36 px over 36 mm: px = mm
+            for other in [coc_wloka(d, p, f, n), coc_potmesil(d, p, f, n), ours] {
+                assert!(
+                    (other - sousa.abs()).abs() <= 1e-12 + 1e-9 * sousa.abs(),
+                    "D={d}: {other} vs {sousa}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn settings_are_checked() {
+        assert!(LENS.check().is_ok());
+        assert!(Lens {
+            f_number: 0.0,
+            ..LENS
+        }
+        .check()
+        .is_err());
+        assert!(Lens {
+            focus: 0.04,
+            ..LENS
+        }
+        .check()
+        .is_err());
+        assert!(Lens {
+            focal_mm: f64::NAN,
+            ..LENS
+        }
+        .check()
+        .is_err());
+        assert!(Lens {
+            sensor_mm: -1.0,
+            ..LENS
+        }
+        .check()
+        .is_err());
+    }
+}
