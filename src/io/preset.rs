@@ -375,9 +375,9 @@ mod tests {
     fn settings_presets_merge_over_a_renderer_preset() {
         let preset = Preset::load(&["blender".into(), "final".into()]).unwrap();
         assert_eq!(preset.velocity.meaning, Meaning::ToPrev);
-        assert_eq!(preset.blur.algorithm.as_deref(), Some("reconstruct"));
-        assert_eq!(preset.blur.samples, Some(25));
-        assert_eq!(preset.blur.variant.as_deref(), Some("dual"));
+        assert_eq!(preset.blur.algorithm.as_deref(), Some("scatter"));
+        assert_eq!(preset.blur.segments, Some(20));
+        assert_eq!(preset.blur.normalize.as_deref(), Some("exposure"));
     }
 
     #[test]
