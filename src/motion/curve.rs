@@ -63,10 +63,16 @@ impl Bezier {
 
     /// |B''| = 2·|B0 − 2·B1 + B2|: how fast the curve leaves its chord.
     pub fn bend(&self) -> f64 {
-        2.0 * length([
+        self.bend_squared().sqrt()
+    }
+
+    /// |B''|², without a root.
+    pub fn bend_squared(&self) -> f64 {
+        let (x, y) = (
             self.b0[0] - 2.0 * self.b1[0] + self.b2[0],
             self.b0[1] - 2.0 * self.b1[1] + self.b2[1],
-        ])
+        );
+        4.0 * (x * x + y * y)
     }
 
     /// Segments needed over a span of `span` in s so no chord strays more than `tolerance`
@@ -76,12 +82,14 @@ impl Bezier {
         if tolerance <= 0.0 {
             return most.max(1);
         }
-        // Compared squared first: most curves need one segment, and then no root is taken.
-        let squared = span * span * self.bend() / (8.0 * tolerance);
-        if squared <= 1.0 {
+        // needed² = span²·|B''| / (8·tolerance), compared squared again first: most curves need
+        // one segment, and then no root is taken.
+        let limit = 8.0 * tolerance;
+        let fourth = span * span * span * span * self.bend_squared();
+        if fourth <= limit * limit {
             return 1;
         }
-        let needed = -crate::motion::line::floor(-squared.sqrt());
+        let needed = -crate::motion::line::floor(-(span * (self.bend() / limit).sqrt()));
         if needed.is_finite() {
             (needed as usize).clamp(1, most.max(1))
         } else {

@@ -114,8 +114,8 @@ fn draw_major(
         return;
     }
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let slope = dy / dx;
     let inverse = 1.0 / dx;
+    let slope = dy * inverse;
     let stretch = (1.0 + slope * slope).sqrt();
     let (lo, hi) = (a[0].min(b[0]), a[0].max(b[0]));
     // Columns the segment covers, inside the clip.
@@ -126,8 +126,9 @@ fn draw_major(
     // of a column each side, so the clip never changes a column's own coverage.
     if slope != 0.0 {
         let (ylo, yhi) = (y0 as f64 - 0.5, y1 as f64 + 0.5);
-        let xa = a[0] + (ylo - a[1]) / slope;
-        let xb = a[0] + (yhi - a[1]) / slope;
+        let run = dx / dy;
+        let xa = a[0] + (ylo - a[1]) * run;
+        let xb = a[0] + (yhi - a[1]) * run;
         first = first.max(floor(xa.min(xb)) - 1.0);
         last = last.min(-floor(-xa.max(xb)) + 1.0);
     } else if a[1] < y0 as f64 - 0.5 || a[1] > y1 as f64 + 0.5 {

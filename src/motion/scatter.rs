@@ -207,6 +207,19 @@ impl Scatter<'_> {
         })
     }
 
+    /// The positions of a pixel known to move, with its reach `r` from the reach pass
+    /// (skips [`Scatter::motion`]'s bound).
+    #[inline]
+    fn positions(&self, i: usize, reach: f64) -> Motion {
+        let at = |v: f32| position(v).unwrap_or(0.0);
+        Motion {
+            prev: [at(self.prev.x[i]), at(self.prev.y[i])],
+            now: [(i % self.width) as f64 + 0.5, (i / self.width) as f64 + 0.5],
+            next: [at(self.next.x[i]), at(self.next.y[i])],
+            reach,
+        }
+    }
+
     /// A bound on how far the curve strays from p(0) during the exposure: with
     /// p(t) = p0 + t·v + t²·a, at most h·|v| + h²·|a| for |t| ≤ h.
     fn extent(&self, prev: Point, now: Point, next: Point) -> f64 {
@@ -578,9 +591,8 @@ impl Scatter<'_> {
                         if r == 0.0 || !touches(x as f64 + 0.5, y as f64 + 0.5, r) {
                             continue;
                         }
-                        let Some(motion) = self.motion(e) else {
-                            continue;
-                        };
+                        // Moving (its reach is not 0), so its positions are not NaN.
+                        let motion = self.positions(e, r);
                         if !self.path(e, &motion, &mut path) {
                             continue;
                         }
