@@ -1,34 +1,16 @@
 //! reconstruct: the invariants of DESIGN.md, numerics, determinism, and accuracy on the truth
 //! scenes.
 
-use shutter::frame::{Color, Frame, Velocity};
-use shutter::metrics::{changed_region, rmse, Rgb};
+use shutter::frame::{Frame, Velocity};
 use shutter::motion::{apply, Algorithm, BlurParams, ReconstructParams, Variant};
-use shutter::truth::render::{render_passes, render_reference, Reference, RenderSettings};
-use shutter::truth::scenes::build;
 
 use crate::support::*;
 
 fn frame(w: usize, h: usize, seed: u32, speed: f32) -> Frame {
-    let n = w * h;
-    let mut f = Frame::new(w, h);
-    f.color = Some(Color {
-        r: noise(n, seed, 0.0, 4.0),
-        g: noise(n, seed + 1, 0.0, 1.0),
-        b: noise(n, seed + 2, -0.5, 1.0),
-        a: Some(noise(n, seed + 3, 0.0, 1.0)),
-    });
-    // Two depth layers with blocky motion, so tiles see many cases.
-    let layer = noise(n, seed + 4, 0.0, 1.0);
-    f.depth = Some(
-        layer
-            .iter()
-            .map(|&v| if v < 0.5 { 2.0 } else { 9.0 })
-            .collect(),
-    );
+    let mut f = noise_frame(w, h, seed);
     f.velocity = Some(Velocity {
-        x: noise(n, seed + 5, -speed, speed),
-        y: noise(n, seed + 6, -speed, speed),
+        x: noise(w * h, seed + 5, -speed, speed),
+        y: noise(w * h, seed + 6, -speed, speed),
     });
     f
 }
@@ -115,43 +97,11 @@ fn output_is_identical_for_one_and_two_threads() {
     );
 }
 
-fn rgb(planes: &[Vec<f32>; 3], w: usize, h: usize) -> Rgb<'_> {
-    Rgb {
-        width: w,
-        height: h,
-        planes: [&planes[0], &planes[1], &planes[2]],
-    }
-}
-
 /// Region errors of `none` and `reconstruct` against the reference, at 160×90.
 fn scene_errors(name: &str) -> (f64, f64, Frame, Frame) {
-    let (w, h) = (160, 90);
-    let scene = build(name, w, h, 1).unwrap();
-    let passes = render_passes(&scene, 0.0, 256, 1);
-    let settings = RenderSettings {
-        samples: 256,
-        shutter: 0.5,
-        seed: 1,
-    };
-    let reference = render_reference(&scene, 0.0, Reference::MotionBlur, &settings);
-    let sharp_color = passes.color.clone().unwrap();
-    let sharp = [
-        sharp_color.r.clone(),
-        sharp_color.g.clone(),
-        sharp_color.b.clone(),
-    ];
-    let out = apply(
-        Algorithm::Reconstruct,
-        &BlurParams::default(),
-        passes.clone(),
-        1,
-    );
-    let c = out.color.clone().unwrap();
-    let blurred = [c.r, c.g, c.b];
-    let region = changed_region(&rgb(&sharp, w, h), &rgb(&reference, w, h), 1e-3);
-    let none = rmse(&rgb(&sharp, w, h), &rgb(&reference, w, h), Some(&region));
-    let ours = rmse(&rgb(&blurred, w, h), &rgb(&reference, w, h), Some(&region));
-    (none, ours, passes, out)
+    let runs = [(Algorithm::Reconstruct, BlurParams::default())];
+    let (none, errors, passes, mut outputs) = crate::support::scene_errors(name, (160, 90), &runs);
+    (none, errors[0], passes, outputs.remove(0))
 }
 
 #[test]
@@ -168,20 +118,7 @@ fn beats_the_unblurred_frame_on_rotor_and_pan() {
 #[test]
 fn the_tracked_object_in_pan_stays_sharp() {
     let (_, _, passes, out) = scene_errors("pan");
-    let (w, h) = (160, 90);
-    // The tracked disc: radius 60 px at 640×360 → 15 px here, centred; its inner part.
-    let before = passes.color.unwrap();
-    let after = out.color.unwrap();
-    let mut worst = 0.0f32;
-    for y in 0..h {
-        for x in 0..w {
-            let (dx, dy) = (x as f32 + 0.5 - 80.0, y as f32 + 0.5 - 45.0);
-            if dx * dx + dy * dy < 10.0 * 10.0 {
-                let i = y * w + x;
-                worst = worst.max((before.r[i] - after.r[i]).abs());
-            }
-        }
-    }
+    let worst = tracked_disc_change(&passes, &out);
     assert!(worst < 1e-4, "tracked object changed by {worst}");
 }
 

@@ -1,11 +1,8 @@
 //! scatter: the invariants of DESIGN.md, numerics, determinism, and accuracy on the truth
 //! scenes against reconstruct.
 
-use shutter::frame::{Color, Frame, Positions};
-use shutter::metrics::{changed_region, rmse, Rgb};
+use shutter::frame::{Frame, Positions};
 use shutter::motion::{apply, Algorithm, BlurParams, CurveKind, Normalize, ScatterParams, Weight};
-use shutter::truth::render::{render_passes, render_reference, Reference, RenderSettings};
-use shutter::truth::scenes::build;
 
 use crate::support::*;
 
@@ -13,20 +10,7 @@ use crate::support::*;
 /// acceleration drawn per pixel, up to `speed` px per frame).
 fn frame(w: usize, h: usize, seed: u32, speed: f32) -> Frame {
     let n = w * h;
-    let mut f = Frame::new(w, h);
-    f.color = Some(Color {
-        r: noise(n, seed, 0.0, 4.0),
-        g: noise(n, seed + 1, 0.0, 1.0),
-        b: noise(n, seed + 2, -0.5, 1.0),
-        a: Some(noise(n, seed + 3, 0.0, 1.0)),
-    });
-    let layer = noise(n, seed + 4, 0.0, 1.0);
-    f.depth = Some(
-        layer
-            .iter()
-            .map(|&v| if v < 0.5 { 2.0 } else { 9.0 })
-            .collect(),
-    );
+    let mut f = noise_frame(w, h, seed);
     let (vx, vy) = (
         noise(n, seed + 5, -speed, speed),
         noise(n, seed + 6, -speed, speed),
@@ -210,47 +194,6 @@ fn velocity_is_never_read() {
         .contains("--velocity is not read"));
 }
 
-fn rgb(planes: &[Vec<f32>; 3], w: usize, h: usize) -> Rgb<'_> {
-    Rgb {
-        width: w,
-        height: h,
-        planes: [&planes[0], &planes[1], &planes[2]],
-    }
-}
-
-/// Region RMSE against the reference at `w`×`h` of each algorithm and parameters given.
-fn scene_errors(
-    name: &str,
-    (w, h): (usize, usize),
-    runs: &[(Algorithm, BlurParams)],
-) -> (Vec<f64>, Frame, Vec<Frame>) {
-    let scene = build(name, w, h, 1).unwrap();
-    let passes = render_passes(&scene, 0.0, 256, 1);
-    let settings = RenderSettings {
-        samples: 256,
-        shutter: 0.5,
-        seed: 1,
-    };
-    let reference = render_reference(&scene, 0.0, Reference::MotionBlur, &settings);
-    let c = passes.color.clone().unwrap();
-    let sharp = [c.r, c.g, c.b];
-    let region = changed_region(&rgb(&sharp, w, h), &rgb(&reference, w, h), 1e-3);
-    let mut errors = Vec::new();
-    let mut outputs = Vec::new();
-    for (algorithm, params) in runs {
-        let out = apply(*algorithm, params, passes.clone(), 1);
-        let c = out.color.clone().unwrap();
-        let blurred = [c.r, c.g, c.b];
-        errors.push(rmse(
-            &rgb(&blurred, w, h),
-            &rgb(&reference, w, h),
-            Some(&region),
-        ));
-        outputs.push(out);
-    }
-    (errors, passes, outputs)
-}
-
 #[test]
 fn beats_reconstruct_on_rotor_and_gears() {
     let runs = [
@@ -260,7 +203,7 @@ fn beats_reconstruct_on_rotor_and_gears() {
     ];
     // The gears turn slowly: at 160×90 their teeth move under a pixel.
     for (name, size) in [("rotor", (160, 90)), ("gears", (320, 180))] {
-        let (e, _, _) = scene_errors(name, size, &runs);
+        let (_, e, _, _) = scene_errors(name, size, &runs);
         assert!(
             e[2] < 0.8 * e[1] && e[2] < e[0],
             "{name}: scatter {} vs reconstruct {} vs none {}",
@@ -273,23 +216,11 @@ fn beats_reconstruct_on_rotor_and_gears() {
 
 #[test]
 fn the_tracked_object_in_pan_stays_sharp() {
-    let (_, passes, outputs) = scene_errors(
+    let (_, _, passes, outputs) = scene_errors(
         "pan",
         (160, 90),
         &[(Algorithm::Scatter, BlurParams::default())],
     );
-    let (w, h) = (160, 90);
-    let before = passes.color.unwrap();
-    let after = outputs[0].color.clone().unwrap();
-    let mut worst = 0.0f32;
-    for y in 0..h {
-        for x in 0..w {
-            let (dx, dy) = (x as f32 + 0.5 - 80.0, y as f32 + 0.5 - 45.0);
-            if dx * dx + dy * dy < 10.0 * 10.0 {
-                let i = y * w + x;
-                worst = worst.max((before.r[i] - after.r[i]).abs());
-            }
-        }
-    }
+    let worst = tracked_disc_change(&passes, &outputs[0]);
     assert!(worst < 1e-4, "tracked object changed by {worst}");
 }

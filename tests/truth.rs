@@ -1,19 +1,11 @@
 //! The truth scenes: deterministic files, exact motion, converged references.
 
-use shutter::metrics::{changed_region, rmse, Rgb};
+use shutter::metrics::{changed_region, rmse};
 use shutter::truth::render::{render_passes, render_reference, Reference, RenderSettings};
 use shutter::truth::scenes::{build, SCENES};
 use shutter::truth::write::{write_scene, SceneOptions, DEFAULT_SAMPLES};
 
 use crate::support::*;
-
-fn rgb(planes: &[Vec<f32>; 3], w: usize, h: usize) -> Rgb<'_> {
-    Rgb {
-        width: w,
-        height: h,
-        planes: [&planes[0], &planes[1], &planes[2]],
-    }
-}
 
 #[test]
 fn every_scene_builds_and_writes_byte_identical_files_twice() {

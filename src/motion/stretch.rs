@@ -291,7 +291,16 @@ pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame 
 
     // Triangles with a moved vertex, farthest first.
     let quads_across = width.saturating_sub(1);
-    let mut triangles: Vec<(f32, u32)> = (0..quads_across * height.saturating_sub(1) * 2)
+    let position = |i: usize| {
+        let (shift, _) = vertices[i];
+        [
+            (i % width) as f64 + 0.5 + shift[0] as f64,
+            (i / width) as f64 + 0.5 + shift[1] as f64,
+        ]
+    };
+    // Each with its depth key and its rows on screen (so a band skips it without
+    // rebuilding it).
+    let mut triangles: Vec<(f32, u32, [f64; 2])> = (0..quads_across * height.saturating_sub(1) * 2)
         .into_par_iter()
         .filter_map(|t| {
             let corners = triangle_corners(t, quads_across, width);
@@ -301,18 +310,19 @@ pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame 
                 zs.iter().copied().fold(f32::INFINITY, f32::min),
                 zs.iter().copied().fold(0.0, f32::max),
             );
-            (moved && !torn(lo, hi)).then_some((hi, t as u32))
+            if !moved || torn(lo, hi) {
+                return None;
+            }
+            let ys = corners.map(|i| position(i)[1]);
+            let rows = [
+                ys.iter().copied().fold(f64::INFINITY, f64::min),
+                ys.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            ];
+            Some((hi, t as u32, rows))
         })
         .collect();
     triangles.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
 
-    let position = |i: usize| {
-        let (shift, _) = vertices[i];
-        [
-            (i % width) as f64 + 0.5 + shift[0] as f64,
-            (i / width) as f64 + 0.5 + shift[1] as f64,
-        ]
-    };
     let limit_tolerance = 1.0 + params.depth_tolerance.max(0.0);
     let [r, g, b, a] = &mut out;
     let strip = BAND * width;
@@ -329,14 +339,12 @@ pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame 
                 x1: width,
                 y1: ((band + 1) * BAND).min(height),
             };
-            for &(_, t) in &triangles {
-                let corners = triangle_corners(t as usize, quads_across, width);
-                let p = corners.map(position);
-                let lo = p.iter().map(|q| q[1]).fold(f64::INFINITY, f64::min);
-                let hi = p.iter().map(|q| q[1]).fold(f64::NEG_INFINITY, f64::max);
+            for &(_, t, [lo, hi]) in &triangles {
                 if hi < rect.y0 as f64 - 0.5 || lo > rect.y1 as f64 + 0.5 {
                     continue;
                 }
+                let corners = triangle_corners(t as usize, quads_across, width);
+                let p = corners.map(position);
                 draw(p, rect, |x, y, w| {
                     let i = y * width + x;
                     let (w1, w2) = (w[1] as f32, w[2] as f32);

@@ -283,18 +283,10 @@ impl Camera {
     }
 }
 
-/// A thin lens. Scene units are metres.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Lens {
-    /// Focal length, mm.
-    pub focal_mm: f64,
-    /// f-number N (aperture diameter = F / N).
-    pub f_number: f64,
-    /// Focus distance, scene units (m).
-    pub focus: f64,
-    /// Sensor (film) width, mm.
-    pub sensor_mm: f64,
-}
+/// The scene's thin lens is the compositor's own ([`crate::dof::coc::Lens`]: its circle of
+/// confusion is the one the DoF algorithms use); the renderer adds where a point lands
+/// through a given aperture point.
+pub use crate::dof::coc::Lens;
 
 impl Lens {
     /// Screen offset in pixels, for an image `width` pixels wide, of the point at depth
@@ -308,18 +300,6 @@ impl Lens {
         let pixels_per_metre = width / (self.sensor_mm / 1000.0);
         let inverse = if depth.is_finite() { 1.0 / depth } else { 0.0 };
         l * (0.5 * aperture * image_distance * (inverse - 1.0 / self.focus) * pixels_per_metre)
-    }
-
-    /// Circle of confusion diameter in pixels at `depth` (DESIGN.md's formula, computed by
-    /// the compositor's own [`crate::dof::coc::Lens`]).
-    pub fn coc(&self, depth: f64, width: f64) -> f64 {
-        crate::dof::coc::Lens {
-            focal_mm: self.focal_mm,
-            f_number: self.f_number,
-            focus: self.focus,
-            sensor_mm: self.sensor_mm,
-        }
-        .coc(depth, width)
     }
 }
 
