@@ -43,6 +43,17 @@ impl Passes {
         next: true,
     };
 
+    /// The passes either needs.
+    pub fn union(self, other: Passes) -> Passes {
+        Passes {
+            color: self.color || other.color,
+            depth: self.depth || other.depth,
+            velocity: self.velocity || other.velocity,
+            prev: self.prev || other.prev,
+            next: self.next || other.next,
+        }
+    }
+
     /// The names of the passes that are set, in canonical order.
     pub fn names(self) -> Vec<&'static str> {
         let mut names = Vec::new();

@@ -92,7 +92,7 @@ pub fn preflight(job: &Job, frames: &[Option<i64>]) -> Result<Vec<FramePlan>> {
     let options = PlanOptions {
         preset: &job.preset,
         layer: job.layer.as_deref(),
-        needs: job.algorithm.needs(),
+        needs: crate::motion::needs(job.algorithm, &job.params),
     };
     let results: Vec<std::result::Result<FramePlan, Vec<Problem>>> = frames
         .par_iter()

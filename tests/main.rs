@@ -6,6 +6,7 @@ mod support;
 mod bench;
 mod cli;
 mod diff;
+mod dof;
 mod io;
 mod metrics;
 mod presets;

@@ -22,8 +22,12 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Blur frames: read passes, apply an algorithm, write colour.
+    /// Blur frames: read passes, apply an algorithm, write colour. Lens flags (or a preset's
+    /// [dof] section) add depth of field before the motion blur.
     Blur(Box<BlurArgs>),
+    /// Depth of field from colour and depth (or a painted CoC map): the lens flags, or
+    /// --coc-map. Takes every `blur` flag too: with --algorithm, motion blur runs after it.
+    Dof(Box<BlurArgs>),
     /// Print what is in image files: size, windows, channels, compression, matching presets.
     Info(InfoArgs),
     /// List the built-in presets, or show one.
@@ -163,6 +167,9 @@ pub struct BlurArgs {
     #[arg(long)]
     pub no_texture_blur: bool,
 
+    #[command(flatten)]
+    pub dof: DofArgs,
+
     /// Frames to process: 1001-1100, 1-99x2, 1,5,9-12 [default: every frame found on disk
     /// for the colour pattern].
     #[arg(long, value_name = "SPEC")]
@@ -204,6 +211,67 @@ pub struct BlurArgs {
     /// Worker threads [default: RAYON_NUM_THREADS, else one per core].
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
+}
+
+/// Depth-of-field flags, shared by `shutter dof` and `shutter blur`.
+#[derive(Debug, Args, Default)]
+pub struct DofArgs {
+    /// Depth of field: gather (bokeh gather with near and far fields) or blend (Wloka's
+    /// blurriness blend) [default: preset, else gather].
+    #[arg(long, value_name = "M", help_heading = "Depth of field")]
+    pub method: Option<String>,
+
+    /// Lens focal length in mm.
+    #[arg(long, value_name = "MM", help_heading = "Depth of field")]
+    pub focal_length: Option<f64>,
+
+    /// Lens f-number (aperture = focal length / f-stop).
+    #[arg(long, value_name = "N", help_heading = "Depth of field")]
+    pub f_stop: Option<f64>,
+
+    /// Focus distance, in the depth pass's units (metres by default).
+    #[arg(long, value_name = "D", help_heading = "Depth of field")]
+    pub focus_distance: Option<f64>,
+
+    /// Sensor (film) width in mm: the image's width spans it [default: preset, else 36].
+    #[arg(long, value_name = "MM", help_heading = "Depth of field")]
+    pub sensor_width: Option<f64>,
+
+    /// A painted blurriness map (grey image or one-channel EXR, a file or pattern) instead of
+    /// a lens and depth: CoC diameter = value × --coc-scale. Read in place of depth.
+    #[arg(long, value_name = "PATH", help_heading = "Depth of field")]
+    pub coc_map: Option<String>,
+
+    /// CoC diameter in pixels of a map value of 1 (white) [default: preset, else 32].
+    #[arg(long, value_name = "PX", help_heading = "Depth of field")]
+    pub coc_scale: Option<f32>,
+
+    /// ε: circles of confusion smaller than this diameter (px) are in focus [default:
+    /// preset, else 1].
+    #[arg(long, value_name = "PX", help_heading = "Depth of field")]
+    pub epsilon: Option<f32>,
+
+    /// Largest CoC diameter (px); larger ones are clamped. blend: E, the CoC of its most
+    /// blurred copy [default: preset, else 48].
+    #[arg(long, value_name = "PX", help_heading = "Depth of field")]
+    pub max_coc: Option<f32>,
+
+    /// gather: diaphragm blades, 0 for a round aperture [default: preset, else 0].
+    #[arg(long, value_name = "N", help_heading = "Depth of field")]
+    pub blades: Option<u32>,
+
+    /// gather: diaphragm rotation in degrees [default: preset, else 0].
+    #[arg(long, value_name = "DEG", help_heading = "Depth of field")]
+    pub blade_rotation: Option<f32>,
+
+    /// gather: rings of taps; ring k has 8k taps (4 rings: 81 taps) [default: preset, else 4].
+    #[arg(long, value_name = "N", help_heading = "Depth of field")]
+    pub rings: Option<usize>,
+
+    /// blend: passes n of the 3×3 filter for the first blurred copy (the second has 2n)
+    /// [default: preset, else chosen so the 2n copy looks like --max-coc].
+    #[arg(long, value_name = "N", help_heading = "Depth of field")]
+    pub passes: Option<usize>,
 }
 
 #[derive(Debug, Args)]

@@ -7,6 +7,7 @@ use std::io::IsTerminal;
 
 use clap::Parser;
 
+use crate::dof::{CocSource, DofParams, Lens, Method};
 use crate::error::{Error, Result};
 use crate::io::exr::{parse_compression, ExrOptions, WRITABLE_COMPRESSIONS};
 use crate::io::file::{FileInfo, FileKind};
@@ -21,7 +22,8 @@ use crate::motion::{
 use crate::pipeline::{run, Event, Job};
 
 use args::{
-    BenchArgs, BlurArgs, Cli, Command, DiffArgs, InfoArgs, PresetsArgs, PresetsCommand, SceneArgs,
+    BenchArgs, BlurArgs, Cli, Command, DiffArgs, DofArgs, InfoArgs, PresetsArgs, PresetsCommand,
+    SceneArgs,
 };
 
 /// Parses the command line, runs it and returns the process exit code.
@@ -34,7 +36,8 @@ pub fn main() -> i32 {
         }
     };
     let result = match cli.command {
-        Command::Blur(args) => blur(*args),
+        Command::Blur(args) => blur(*args, false),
+        Command::Dof(args) => blur(*args, true),
         Command::Info(args) => info(args),
         Command::Presets(args) => presets(args),
         Command::Scene(args) => scene(args),
@@ -87,7 +90,8 @@ fn print_error(error: &Error) {
 
 /// Turns the blur arguments into a job: the second phase of argument handling.
 pub fn resolve(args: &BlurArgs) -> Result<Job> {
-    let preset = Preset::load(&args.preset)?;
+    let mut preset = Preset::load(&args.preset)?;
+    let dof = dof_params(&args.dof, &mut preset)?;
     let algorithm_name = args
         .algorithm
         .clone()
@@ -108,9 +112,14 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
     }
 
     let pattern = |p: &Option<String>| p.as_deref().map(PathPattern::parse).transpose();
+    if args.dof.coc_map.is_some() && args.depth.is_some() {
+        return Err(Error::usage(
+            "--coc-map is read in place of depth: give --coc-map or --depth, not both",
+        ));
+    }
     let inputs = Inputs {
         color: PathPattern::parse(&args.color)?,
-        depth: pattern(&args.depth)?,
+        depth: pattern(&args.depth.clone().or_else(|| args.dof.coc_map.clone()))?,
         velocity: pattern(&args.velocity)?,
         prev: pattern(&args.prev)?,
         next: pattern(&args.next)?,
@@ -179,7 +188,6 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
     let reconstruct = reconstruct_params(args, &preset)?;
     let scatter = scatter_params(args, &preset)?;
     let stretch = stretch_params(args, &preset, scatter.depth_tolerance)?;
-    let mut preset = preset;
     if args.linear {
         preset.color.transfer = Transfer::Linear;
     }
@@ -204,6 +212,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
             reconstruct,
             scatter,
             stretch,
+            dof,
         },
         output_options,
         skip_existing: args.skip_existing,
@@ -391,7 +400,71 @@ fn stretch_params(args: &BlurArgs, preset: &Preset, depth_tolerance: f32) -> Res
     })
 }
 
-fn blur(args: BlurArgs) -> Result<()> {
+/// Depth of field from the flags over the preset's [dof] section: `None` when neither a lens
+/// nor a CoC map is given. A CoC map is read through the depth pass with its stored values
+/// kept as they are.
+fn dof_params(args: &DofArgs, preset: &mut Preset) -> Result<Option<DofParams>> {
+    let settings = preset.dof.clone();
+    let focal = args.focal_length.or(settings.focal_length);
+    let f_stop = args.f_stop.or(settings.f_stop);
+    let focus = args.focus_distance.or(settings.focus_distance);
+    let source =
+        if args.coc_map.is_some() {
+            let scale = args.coc_scale.or(settings.coc_scale).unwrap_or(32.0);
+            preset.depth.near = Some(0.0);
+            preset.depth.far = Some(1.0);
+            preset.depth.scale = 1.0;
+            for name in ["Y", "R", "Z"] {
+                if !preset.depth.channels.iter().any(|c| c == name) {
+                    preset.depth.channels.push(name.into());
+                }
+            }
+            CocSource::Map { scale }
+        } else {
+            match (focal, f_stop, focus) {
+                (None, None, None) => return Ok(None),
+                (Some(focal_mm), Some(f_number), Some(focus)) => CocSource::Lens(Lens {
+                    focal_mm,
+                    f_number,
+                    focus,
+                    sensor_mm: args.sensor_width.or(settings.sensor_width).unwrap_or(36.0),
+                }),
+                _ => return Err(Error::usage(
+                    "depth of field needs all of --focal-length, --f-stop and --focus-distance \
+                     (or --coc-map)",
+                )),
+            }
+        };
+    let defaults = DofParams::new(source);
+    let method_name = args.method.clone().or(settings.method);
+    let method = match method_name {
+        Some(name) => choose("--method", &name, Method::ALL)?,
+        None => defaults.method,
+    };
+    let params = DofParams {
+        method,
+        source,
+        epsilon: args
+            .epsilon
+            .or(settings.epsilon)
+            .unwrap_or(defaults.epsilon),
+        max_coc: args
+            .max_coc
+            .or(settings.max_coc)
+            .unwrap_or(defaults.max_coc),
+        blades: args.blades.or(settings.blades).unwrap_or(defaults.blades),
+        blade_rotation: args
+            .blade_rotation
+            .or(settings.blade_rotation)
+            .unwrap_or(defaults.blade_rotation),
+        rings: args.rings.or(settings.rings).unwrap_or(defaults.rings),
+        passes: args.passes.or(settings.passes),
+    };
+    params.check().map_err(Error::usage)?;
+    Ok(Some(params))
+}
+
+fn blur(args: BlurArgs, dof: bool) -> Result<()> {
     if let Some(threads) = args.threads {
         if threads == 0 {
             return Err(Error::usage("--threads must be at least 1"));
@@ -405,6 +478,12 @@ fn blur(args: BlurArgs) -> Result<()> {
             .build_global();
     }
     let job = resolve(&args)?;
+    if dof && job.params.dof.is_none() {
+        return Err(Error::usage(
+            "shutter dof needs a lens (--focal-length, --f-stop and --focus-distance) or a \
+             painted map (--coc-map PATH)",
+        ));
+    }
     let terminal = std::io::stderr().is_terminal();
     let verbose = args.verbose;
     let mut bar: Option<indicatif::ProgressBar> = None;

@@ -1,4 +1,189 @@
-//! Depth of field (issue 7, in progress): the circle of confusion so far; the blurriness
-//! blend and the bokeh gather build on it.
+//! Depth of field from colour and depth (or a painted circle-of-confusion map).
+//!
+//! - [`coc`]: the thin lens's signed circle of confusion in pixels;
+//! - [`blend`]: Wloka's blurriness blend (sharp frame and two progressively blurred copies,
+//!   mixed by the blurriness interpolator T);
+//! - [`bokeh`]: the gather's tap pattern and the n-blade diaphragm shape;
+//! - [`gather`]: a flat-kernel bokeh gather in the spirit of Sousa's CryENGINE 3 filter, with
+//!   near and far fields and tile min/max CoC.
+//!
+//! Both methods read colour and depth only (never velocity or positions), and both work on
+//! the signed CoC plane that [`coc_plane`] makes: negative in front of the focus plane, positive
+//! behind it, and monotone in depth, so ordering by signed CoC is ordering by depth. A painted
+//! CoC map is a plane of that kind with no near field.
 
+pub mod blend;
+pub mod bokeh;
 pub mod coc;
+pub mod gather;
+
+use crate::frame::{Frame, Passes};
+pub use coc::Lens;
+
+/// Which depth-of-field method runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// Wloka's blurriness blend.
+    Blend,
+    /// The bokeh gather with near and far fields.
+    Gather,
+}
+
+impl Method {
+    pub const ALL: &'static [(&'static str, Method)] =
+        &[("blend", Method::Blend), ("gather", Method::Gather)];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Blend => "blend",
+            Method::Gather => "gather",
+        }
+    }
+}
+
+/// Where each pixel's circle of confusion comes from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CocSource {
+    /// The thin lens and the depth pass.
+    Lens(Lens),
+    /// A painted map read in place of depth: CoC diameter (px) = stored value × `scale`.
+    /// Every pixel counts as behind the focus plane (a map carries no near/far sign).
+    Map { scale: f32 },
+}
+
+/// Depth-of-field parameters. Lengths in pixels of the output image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DofParams {
+    pub method: Method,
+    pub source: CocSource,
+    /// ε: circles of confusion below this diameter are in focus (px). Default 1.
+    pub epsilon: f32,
+    /// The largest CoC diameter (px): larger ones are clamped. blend: E, the CoC its most
+    /// blurred copy stands for. Default 48.
+    pub max_coc: f32,
+    /// gather: diaphragm blades; 0 is a round aperture. Default 0.
+    pub blades: u32,
+    /// gather: rotation of the diaphragm, degrees. Default 0.
+    pub blade_rotation: f32,
+    /// gather: rings of taps (ring k has 8k taps). Default 4 (81 taps).
+    pub rings: usize,
+    /// blend: passes n of the 3×3 filter for the first copy (the second has 2n); `None`
+    /// chooses n so the 2n copy has the blur of a CoC of `max_coc`.
+    pub passes: Option<usize>,
+}
+
+impl DofParams {
+    /// The defaults for a source.
+    pub fn new(source: CocSource) -> Self {
+        DofParams {
+            method: Method::Gather,
+            source,
+            epsilon: 1.0,
+            max_coc: 48.0,
+            blades: 0,
+            blade_rotation: 0.0,
+            rings: 4,
+            passes: None,
+        }
+    }
+
+    /// Why these parameters cannot run, if they cannot.
+    pub fn check(&self) -> Result<(), String> {
+        if let CocSource::Lens(lens) = &self.source {
+            lens.check()?;
+        }
+        if let CocSource::Map { scale } = self.source {
+            if !(scale.is_finite() && scale >= 0.0) {
+                return Err(format!(
+                    "--coc-scale {scale}: use a positive number of pixels"
+                ));
+            }
+        }
+        if !(self.epsilon.is_finite() && self.epsilon >= 0.0) {
+            return Err(format!("--epsilon {}: use 0 or more pixels", self.epsilon));
+        }
+        if !(self.max_coc.is_finite() && self.max_coc > self.epsilon && self.max_coc <= 512.0) {
+            return Err(format!(
+                "--max-coc {}: use a diameter above --epsilon ({}) and at most 512 px",
+                self.max_coc, self.epsilon
+            ));
+        }
+        if self.blades == 1 || self.blades == 2 || self.blades > 32 {
+            return Err(format!(
+                "--blades {}: use 0 (round) or 3 to 32",
+                self.blades
+            ));
+        }
+        if !self.blade_rotation.is_finite() {
+            return Err("--blade-rotation must be a finite angle in degrees".into());
+        }
+        if !(1..=16).contains(&self.rings) {
+            return Err(format!("--rings {}: use 1 to 16", self.rings));
+        }
+        if self.passes == Some(0) {
+            return Err("--passes must be at least 1".into());
+        }
+        Ok(())
+    }
+
+    /// The passes depth of field reads: colour and depth (a CoC map is read as depth).
+    pub fn needs(&self) -> Passes {
+        Passes {
+            color: true,
+            depth: true,
+            velocity: false,
+            prev: false,
+            next: false,
+        }
+    }
+}
+
+/// The signed CoC diameter of every pixel, in pixels, clamped to ±`max_coc`; NaN never comes
+/// out (NaN depth is far; zero and negative depth are nearest).
+pub fn coc_plane(frame: &Frame, params: &DofParams) -> Vec<f32> {
+    let limit = params.max_coc;
+    let n = frame.pixel_count();
+    let Some(depth) = frame.depth.as_ref() else {
+        return vec![0.0; n];
+    };
+    match params.source {
+        CocSource::Lens(lens) => {
+            let width = frame.width as f64;
+            depth
+                .iter()
+                .map(|&d| (lens.signed_coc(d as f64, width) as f32).clamp(-limit, limit))
+                .collect()
+        }
+        CocSource::Map { scale } => depth
+            .iter()
+            .map(|&v| {
+                let c = v * scale;
+                if c.is_nan() {
+                    0.0
+                } else {
+                    c.clamp(0.0, limit)
+                }
+            })
+            .collect(),
+    }
+}
+
+/// Applies depth of field: the output holds the new colour and keeps every other pass, so
+/// motion blur can run after it ("DoF before MB", Sousa).
+pub fn apply(frame: Frame, params: &DofParams) -> Frame {
+    let coc = coc_plane(&frame, params);
+    let largest = coc.iter().fold(0.0f32, |m, c| m.max(c.abs()));
+    if largest < params.epsilon || frame.color.is_none() {
+        // The whole frame is in focus: nothing to do.
+        return frame;
+    }
+    let color = frame.color.as_ref().expect("checked");
+    let out = match params.method {
+        Method::Blend => blend::blend(color, &coc, frame.width, frame.height, params),
+        Method::Gather => gather::gather(color, &coc, frame.width, frame.height, params),
+    };
+    Frame {
+        color: Some(out),
+        ..frame
+    }
+}

@@ -118,6 +118,10 @@ pub struct VectorSpec {
     pub y_up: bool,
 }
 
+fn is_default<T: Default + PartialEq>(value: &T) -> bool {
+    *value == T::default()
+}
+
 fn one() -> f32 {
     1.0
 }
@@ -187,6 +191,49 @@ pub struct BlurSettings {
     pub texture_blur: Option<bool>,
 }
 
+/// Depth of field, run before the motion blur. A lens (focal_length, f_stop, focus_distance)
+/// turns it on; each key is the `shutter dof` flag of the same name.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DofSettings {
+    /// "gather" or "blend".
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub method: Option<String>,
+    /// Focal length, mm.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focal_length: Option<f64>,
+    /// f-number.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub f_stop: Option<f64>,
+    /// Focus distance, scene units.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focus_distance: Option<f64>,
+    /// Sensor width, mm.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sensor_width: Option<f64>,
+    /// CoC diameter (px) of a stored value of 1 in a painted CoC map.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coc_scale: Option<f32>,
+    /// In-focus CoC diameter ε, px.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub epsilon: Option<f32>,
+    /// Largest CoC diameter, px (blend: E).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_coc: Option<f32>,
+    /// gather: diaphragm blades (0 = round).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blades: Option<u32>,
+    /// gather: diaphragm rotation, degrees.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blade_rotation: Option<f32>,
+    /// gather: rings of taps.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rings: Option<usize>,
+    /// blend: passes n of the first copy.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub passes: Option<usize>,
+}
+
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputSettings {
@@ -214,6 +261,8 @@ pub struct Preset {
     pub next: VectorSpec,
     #[serde(default)]
     pub blur: BlurSettings,
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub dof: DofSettings,
     #[serde(default)]
     pub output: OutputSettings,
     /// The names (or paths) this preset was built from, for messages.

@@ -115,6 +115,8 @@ pub struct BlurParams {
     pub reconstruct: ReconstructParams,
     pub scatter: ScatterParams,
     pub stretch: StretchParams,
+    /// Depth of field, run before the motion blur when set ("DoF before MB", Sousa).
+    pub dof: Option<crate::dof::DofParams>,
 }
 
 impl Default for BlurParams {
@@ -124,14 +126,28 @@ impl Default for BlurParams {
             reconstruct: ReconstructParams::default(),
             scatter: ScatterParams::default(),
             stretch: StretchParams::default(),
+            dof: None,
         }
     }
 }
 
-/// Applies the algorithm to frame number `frame_number` (it seeds the per-pixel jitter, so
+/// The passes a job reads: the algorithm's, and colour and depth for depth of field.
+pub fn needs(algorithm: Algorithm, params: &BlurParams) -> Passes {
+    let mut passes = algorithm.needs();
+    if let Some(dof) = &params.dof {
+        passes = passes.union(dof.needs());
+    }
+    passes
+}
+
+/// Applies depth of field when asked for, then the algorithm, to frame number `frame_number` (it seeds the per-pixel jitter, so
 /// the output depends on nothing else). The output frame holds the blurred colour (other
 /// passes are dropped: only colour is written).
 pub fn apply(algorithm: Algorithm, params: &BlurParams, frame: Frame, frame_number: i64) -> Frame {
+    let frame = match &params.dof {
+        Some(dof) => crate::dof::apply(frame, dof),
+        None => frame,
+    };
     match algorithm {
         Algorithm::Reconstruct => reconstruct::reconstruct(
             frame,

@@ -382,7 +382,27 @@ pub fn noise_frame(w: usize, h: usize, seed: u32) -> shutter::frame::Frame {
 /// changes. Returns the unblurred frame's error, each run's error, the passes and outputs.
 pub fn scene_errors(
     name: &str,
+    size: (usize, usize),
+    runs: &[(shutter::motion::Algorithm, shutter::motion::BlurParams)],
+) -> (
+    f64,
+    Vec<f64>,
+    shutter::frame::Frame,
+    Vec<shutter::frame::Frame>,
+) {
+    scene_errors_against(
+        name,
+        size,
+        shutter::truth::render::Reference::MotionBlur,
+        runs,
+    )
+}
+
+/// [`scene_errors`] against the reference of `kind` (motion blur, the lens, or both).
+pub fn scene_errors_against(
+    name: &str,
     (w, h): (usize, usize),
+    kind: shutter::truth::render::Reference,
     runs: &[(shutter::motion::Algorithm, shutter::motion::BlurParams)],
 ) -> (
     f64,
@@ -391,7 +411,7 @@ pub fn scene_errors(
     Vec<shutter::frame::Frame>,
 ) {
     use shutter::metrics::{changed_region, rmse};
-    use shutter::truth::render::{render_passes, render_reference, Reference, RenderSettings};
+    use shutter::truth::render::{render_passes, render_reference, RenderSettings};
     let scene = shutter::truth::scenes::build(name, w, h, 1).unwrap();
     let passes = render_passes(&scene, 0.0, 256, 1);
     let settings = RenderSettings {
@@ -399,7 +419,7 @@ pub fn scene_errors(
         shutter: 0.5,
         seed: 1,
     };
-    let reference = render_reference(&scene, 0.0, Reference::MotionBlur, &settings);
+    let reference = render_reference(&scene, 0.0, kind, &settings);
     let c = passes.color.clone().unwrap();
     let sharp = [c.r, c.g, c.b];
     let region = changed_region(&rgb(&sharp, w, h), &rgb(&reference, w, h), 1e-3);

@@ -1,0 +1,518 @@
+//! Depth of field: the invariants, near and far fields, bokeh energy and shape, determinism,
+//! the CLI, and accuracy on `layers` against the lens reference.
+
+use shutter::dof::{CocSource, DofParams, Lens, Method};
+use shutter::frame::{Color, Frame};
+use shutter::motion::{apply, Algorithm, BlurParams};
+use shutter::truth::render::Reference;
+
+use crate::support::*;
+
+/// f/1.4 50 mm focused at 3 m on a 36 mm sensor (the `layers` lens).
+const LENS: Lens = Lens {
+    focal_mm: 50.0,
+    f_number: 1.4,
+    focus: 3.0,
+    sensor_mm: 36.0,
+};
+
+fn params(method: Method) -> DofParams {
+    DofParams {
+        method,
+        ..DofParams::new(CocSource::Lens(LENS))
+    }
+}
+
+fn with(dof: DofParams) -> BlurParams {
+    BlurParams {
+        dof: Some(dof),
+        ..BlurParams::default()
+    }
+}
+
+/// A lens with CoCs of 10–13 px on the 64 px wide noise frames (100 mm f/1.4 on an 8 mm
+/// sensor, focused at 3 m: depth 2 is in front, depth 9 behind).
+const STRONG: Lens = Lens {
+    focal_mm: 100.0,
+    f_number: 1.4,
+    focus: 3.0,
+    sensor_mm: 8.0,
+};
+
+/// Both methods, with non-default settings too.
+fn variants() -> Vec<BlurParams> {
+    let strong = |method| DofParams {
+        method,
+        ..DofParams::new(CocSource::Lens(STRONG))
+    };
+    vec![
+        with(strong(Method::Gather)),
+        with(DofParams {
+            blades: 5,
+            blade_rotation: 20.0,
+            rings: 2,
+            ..strong(Method::Gather)
+        }),
+        with(DofParams {
+            max_coc: 6.0,
+            ..strong(Method::Gather)
+        }),
+        with(strong(Method::Blend)),
+        with(DofParams {
+            passes: Some(3),
+            epsilon: 2.0,
+            ..strong(Method::Blend)
+        }),
+    ]
+}
+
+/// Noise colour over depths 2 and 9 (both out of focus for [`LENS`], on either side of it).
+fn frame(w: usize, h: usize, seed: u32, _speed: f32) -> Frame {
+    noise_frame(w, h, seed)
+}
+
+/// The frame the `split` tests use: left half colour `left` at depth `left_depth`, right half
+/// `right` at `right_depth`.
+fn split(
+    w: usize,
+    h: usize,
+    left: [f32; 3],
+    left_depth: f32,
+    right: [f32; 3],
+    right_depth: f32,
+) -> Frame {
+    let n = w * h;
+    let mut f = Frame::new(w, h);
+    let pick = |i: usize, k: usize| if i % w < w / 2 { left[k] } else { right[k] };
+    f.color = Some(Color {
+        r: (0..n).map(|i| pick(i, 0)).collect(),
+        g: (0..n).map(|i| pick(i, 1)).collect(),
+        b: (0..n).map(|i| pick(i, 2)).collect(),
+        a: None,
+    });
+    f.depth = Some(
+        (0..n)
+            .map(|i| {
+                if i % w < w / 2 {
+                    left_depth
+                } else {
+                    right_depth
+                }
+            })
+            .collect(),
+    );
+    f
+}
+
+fn run(frame: &Frame, dof: DofParams) -> Color {
+    apply(Algorithm::None, &with(dof), frame.clone(), 1)
+        .color
+        .unwrap()
+}
+
+#[test]
+fn a_frame_in_focus_comes_out_identical() {
+    let mut f = frame(57, 31, 1, 0.0);
+    // Depth at the focus distance, give or take less than ε of blur.
+    let depth = f.depth.as_mut().unwrap();
+    for (i, d) in depth.iter_mut().enumerate() {
+        *d = 3.0 + 0.001 * (i % 7) as f32;
+    }
+    invariants::zero_motion_is_identity(Algorithm::None, &f, &variants());
+}
+
+#[test]
+fn a_uniform_colour_stays_uniform_at_any_depth() {
+    invariants::uniform_stays_uniform(Algorithm::None, frame, &variants());
+}
+
+#[test]
+fn output_stays_within_the_input_range_per_channel() {
+    invariants::within_input_range(Algorithm::None, frame, &variants(), 1e-6);
+}
+
+#[test]
+fn nan_infinite_zero_and_negative_depth_and_colour_give_finite_output() {
+    let mut f = frame(64, 48, 5, 0.0);
+    invariants::poison_color_and_depth(&mut f);
+    invariants::finite_output(Algorithm::None, &f, &variants());
+    // A painted map poisoned the same way.
+    let map = with(DofParams::new(CocSource::Map { scale: 40.0 }));
+    invariants::finite_output(Algorithm::None, &f, &[map]);
+}
+
+#[test]
+fn gather_spreads_a_blurred_foreground_over_the_sharp_background() {
+    // Red foreground at 1.2 m (CoC −8.07 px at 320 px wide), blue background in focus.
+    let f = split(320, 40, [1.0, 0.0, 0.0], 1.2, [0.0, 0.0, 1.0], 3.0);
+    let coc = LENS.coc(1.2, 320.0);
+    assert!((coc - 8.07).abs() < 0.01, "{coc}");
+    for method in [Method::Gather, Method::Blend] {
+        let out = run(&f, params(method));
+        let row = 20 * 320;
+        // Just right of the edge the foreground covers part of the background…
+        let edge = out.r[row + 161];
+        assert!(edge > 0.15 && edge < 0.85, "{method:?}: {edge}");
+        // …and farther than its bokeh radius it does not (the blend's Gaussian-like copies
+        // have longer tails).
+        let beyond = out.r[row + 160 + 8];
+        match method {
+            Method::Gather => assert_eq!(beyond, 0.0),
+            Method::Blend => assert!(beyond < 0.02, "{beyond}"),
+        }
+    }
+}
+
+#[test]
+fn an_in_focus_subject_does_not_bleed_onto_the_blurred_background() {
+    // Red subject in focus, blue background at 40 m (CoC 5 px at 320 wide) behind it.
+    let f = split(320, 40, [1.0, 0.0, 0.0], 3.0, [0.0, 0.0, 1.0], 40.0);
+    let gather = run(&f, params(Method::Gather));
+    for x in 160..320 {
+        assert_eq!(
+            gather.r[20 * 320 + x],
+            0.0,
+            "red on the background at x = {x}"
+        );
+    }
+    // The subject stays sharp: nothing behind it shows through.
+    for x in 0..160 {
+        assert_eq!(
+            gather.b[20 * 320 + x],
+            0.0,
+            "blue on the subject at x = {x}"
+        );
+    }
+    // The blend's weighting keeps the ghost small (it would be ~50% next to the edge
+    // without it).
+    let blend = run(&f, params(Method::Blend));
+    let ghost = blend.r[20 * 320 + 160];
+    assert!(ghost < 0.05, "{ghost}");
+}
+
+#[test]
+fn a_bright_highlight_keeps_its_energy_and_takes_the_aperture_shape() {
+    // One pixel of 1000 in the middle of a black plane at 40 m: its CoC is
+    // 0.0357·0.05·37/(40·2.95) m = 0.560 mm on the sensor, 15.93 px on a 1024 px wide image.
+    let (w, h) = (1024, 64);
+    let n = w * h;
+    let centre = 32 * w + 512;
+    let mut f = Frame::new(w, h);
+    let mut r = vec![0.0; n];
+    r[centre] = 1000.0;
+    f.color = Some(Color {
+        r,
+        g: vec![0.0; n],
+        b: vec![0.0; n],
+        a: None,
+    });
+    f.depth = Some(vec![40.0; n]);
+    let radius = 0.5 * LENS.coc(40.0, w as f64) as f32;
+    assert!((radius - 7.96).abs() < 0.01, "{radius}");
+    let hexagon = shutter::dof::bokeh::Aperture::new(6, 0.0);
+    let mut outside_hexagon = [0usize; 2];
+    for (k, blades) in [0u32, 6].into_iter().enumerate() {
+        let out = run(
+            &f,
+            DofParams {
+                blades,
+                ..params(Method::Gather)
+            },
+        );
+        let total: f32 = out.r.iter().sum();
+        assert!(
+            (total - 1000.0).abs() < 20.0,
+            "{blades} blades: energy {total}"
+        );
+        for (i, &v) in out.r.iter().enumerate() {
+            if v > 0.0 {
+                let dx = (i % w) as f32 - 512.0;
+                let dy = (i / w) as f32 - 32.0;
+                assert!(
+                    (dx * dx + dy * dy).sqrt() <= radius + 1.5,
+                    "lit at ({dx}, {dy})"
+                );
+                if hexagon.norm(dx, dy) > radius + 1.0 {
+                    outside_hexagon[k] += 1;
+                }
+            }
+        }
+    }
+    assert!(
+        outside_hexagon[0] > 0,
+        "a round bokeh reaches past the hexagon"
+    );
+    assert_eq!(outside_hexagon[1], 0, "a six-blade bokeh stays inside it");
+}
+
+#[test]
+fn same_bytes_for_one_and_two_threads() {
+    for method in ["gather", "blend"] {
+        invariants::same_bytes_for_any_thread_count(
+            "none",
+            "layers",
+            &["color", "depth"],
+            &[
+                "--focal-length",
+                "50",
+                "--f-stop",
+                "1.4",
+                "--focus-distance",
+                "3",
+                "--method",
+                method,
+            ],
+        );
+    }
+}
+
+#[test]
+fn both_methods_beat_the_sharp_frame_on_layers_and_gather_beats_blend() {
+    let (none, errors, _, _) = scene_errors_against(
+        "layers",
+        (240, 135),
+        Reference::DepthOfField,
+        &[
+            (Algorithm::None, with(params(Method::Gather))),
+            (Algorithm::None, with(params(Method::Blend))),
+        ],
+    );
+    let (gather, blend) = (errors[0], errors[1]);
+    assert!(gather < 0.4 * none, "gather {gather} vs none {none}");
+    assert!(blend < 0.5 * none, "blend {blend} vs none {none}");
+    assert!(gather < blend, "gather {gather} vs blend {blend}");
+}
+
+#[test]
+fn depth_of_field_then_motion_blur_beats_either_alone_on_layers() {
+    let dof = with(params(Method::Gather));
+    let scatter = BlurParams::default();
+    let (none, errors, _, _) = scene_errors_against(
+        "layers",
+        (240, 135),
+        Reference::Both,
+        &[
+            (Algorithm::Scatter, dof),
+            (Algorithm::None, dof),
+            (Algorithm::Scatter, scatter),
+        ],
+    );
+    let (both, dof_only, motion_only) = (errors[0], errors[1], errors[2]);
+    assert!(
+        both < dof_only,
+        "both {both} vs depth of field only {dof_only}"
+    );
+    assert!(
+        both < motion_only,
+        "both {both} vs motion blur only {motion_only}"
+    );
+    assert!(both < 0.5 * none, "both {both} vs none {none}");
+}
+
+fn lens_flags() -> Vec<&'static str> {
+    vec![
+        "--focal-length",
+        "50",
+        "--f-stop",
+        "1.4",
+        "--focus-distance",
+        "3",
+    ]
+}
+
+#[test]
+fn dof_needs_a_lens_or_a_map_and_says_so() {
+    let dir = small_scene("layers", 32, 18, 1, 4);
+    let color = role_pattern(dir.path(), "color");
+    let depth = role_pattern(dir.path(), "depth");
+    let out = format!("{}/o.####.exr", dir.path().display());
+    let o = shutter(&["dof", "--color", &color, "--depth", &depth, "-o", &out]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--focal-length"), "{}", stderr(&o));
+    // Half a lens is an error too, naming what is missing.
+    let o = shutter(&[
+        "dof", "--color", &color, "--depth", &depth, "--f-stop", "2", "-o", &out,
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--focus-distance"), "{}", stderr(&o));
+    // A focus distance inside the focal length cannot be focused.
+    let mut args = vec!["dof", "--color", &color, "--depth", &depth, "-o", &out];
+    args.extend([
+        "--focal-length",
+        "50",
+        "--f-stop",
+        "2",
+        "--focus-distance",
+        "0.01",
+    ]);
+    let o = shutter(&args);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("focus distance"), "{}", stderr(&o));
+    assert!(!dir.path().join("o.0001.exr").exists());
+}
+
+#[test]
+fn dof_reads_colour_and_depth_only() {
+    let dir = small_scene("layers", 32, 18, 1, 4);
+    let broken = dir.path().join("broken.exr");
+    std::fs::write(&broken, b"not an exr at all").unwrap();
+    let out = format!("{}/o.####.exr", dir.path().display());
+    let color = role_pattern(dir.path(), "color");
+    let depth = role_pattern(dir.path(), "depth");
+    let mut args = vec![
+        "dof",
+        "--color",
+        &color,
+        "--depth",
+        &depth,
+        "--velocity",
+        broken.to_str().unwrap(),
+        "-o",
+        &out,
+        "--verbose",
+    ];
+    args.extend(lens_flags());
+    let o = shutter(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--velocity is not read"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn a_preset_with_a_dof_section_blurs_the_lens_before_the_motion() {
+    let dir = small_scene("layers", 64, 36, 1, 4);
+    let preset = dir.path().join("both.toml");
+    std::fs::write(
+        &preset,
+        "[blur]\nalgorithm = \"scatter\"\n\n[dof]\nmethod = \"blend\"\nfocal_length = 50\n\
+         f_stop = 1.4\nfocus_distance = 3\n",
+    )
+    .unwrap();
+    let color = role_pattern(dir.path(), "color");
+    let depth = role_pattern(dir.path(), "depth");
+    let prev = role_pattern(dir.path(), "prev");
+    let next = role_pattern(dir.path(), "next");
+    let run_with = |extra: &[&str], name: &str| {
+        let out = format!("{}/{name}.####.exr", dir.path().display());
+        let mut args = vec![
+            "blur", "--color", &color, "--depth", &depth, "--prev", &prev, "--next", &next, "-o",
+            &out,
+        ];
+        args.extend(extra);
+        let o = shutter(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        read_exr_reference(&dir.path().join(format!("{name}.0001.exr")))
+    };
+    let from_preset = run_with(&["--preset", preset.to_str().unwrap()], "preset");
+    let mut flags = vec!["--algorithm", "scatter", "--method", "blend"];
+    flags.extend(lens_flags());
+    let from_flags = run_with(&flags, "flags");
+    let motion_only = run_with(&["--algorithm", "scatter"], "motion");
+    for name in ["R", "G", "B"] {
+        assert_exact(
+            channel(&from_preset, name),
+            channel(&from_flags, name),
+            name,
+        );
+    }
+    assert_ne!(channel(&from_preset, "R"), channel(&motion_only, "R"));
+}
+
+/// The README's photo walk-through, command for command.
+#[test]
+fn the_photo_walkthrough_runs_as_written() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let dir = tempfile::tempdir().unwrap();
+    let photo = format!("{root}/fixtures/photo/photo.jpg");
+    let painted = dir.path().join("photo-dof.jpg");
+    let o = shutter(&[
+        "dof",
+        "--preset",
+        "painted",
+        "--color",
+        &photo,
+        "--depth",
+        &format!("{root}/fixtures/photo/depth.png"),
+        "--focal-length",
+        "85",
+        "--f-stop",
+        "1.8",
+        "--focus-distance",
+        "3",
+        "-o",
+        &s(&painted),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let from_map = dir.path().join("photo-coc.png");
+    let o = shutter(&[
+        "dof",
+        "--color",
+        &photo,
+        "--coc-map",
+        &format!("{root}/fixtures/photo/coc.png"),
+        "--coc-scale",
+        "24",
+        "--blades",
+        "6",
+        "-o",
+        &s(&from_map),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // The subject (the post, in focus in both) stays as it was; the wall behind it blurs.
+    let read = |p: &std::path::Path| image::open(p).unwrap().to_rgb8();
+    let input = read(std::path::Path::new(&photo));
+    for out in [read(&painted), read(&from_map)] {
+        assert_eq!(out.dimensions(), input.dimensions());
+        let near = |a: u8, b: u8| (a as i32 - b as i32).abs() <= 12;
+        // Inside the post (x 150–190), away from its edges: unchanged but for JPEG noise.
+        for (x, y) in [(170, 120), (165, 150), (175, 90)] {
+            let (a, b) = (input.get_pixel(x, y), out.get_pixel(x, y));
+            assert!(
+                (0..3).all(|k| near(a[k], b[k])),
+                "post at ({x}, {y}): {a:?} vs {b:?}"
+            );
+        }
+        // The wall's mortar lines wash out: the summed step between vertical neighbours down
+        // a column of wall drops by a third or more (JPEG noise keeps some).
+        let contrast = |img: &image::RgbImage| {
+            (0..60)
+                .map(|y| {
+                    (img.get_pixel(260, y + 1)[0] as i32 - img.get_pixel(260, y)[0] as i32).abs()
+                })
+                .sum::<i32>()
+        };
+        assert!(
+            3 * contrast(&out) <= 2 * contrast(&input),
+            "{} vs {}",
+            contrast(&out),
+            contrast(&input)
+        );
+    }
+}
+
+#[test]
+fn help_documents_every_dof_flag() {
+    for command in ["dof", "blur"] {
+        let text = stdout(&shutter(&[command, "--help"]));
+        for flag in [
+            "--method",
+            "--focal-length",
+            "--f-stop",
+            "--focus-distance",
+            "--sensor-width",
+            "--coc-map",
+            "--coc-scale",
+            "--epsilon",
+            "--max-coc",
+            "--blades",
+            "--blade-rotation",
+            "--rings",
+            "--passes",
+        ] {
+            assert!(text.contains(flag), "{flag} missing from {command} --help");
+        }
+    }
+}
