@@ -10,6 +10,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::dof::{CocSource, DofParams, Lens, Method};
 use crate::error::{Error, Problem, ProblemKind, Result};
 use crate::frame::Frame;
 use crate::io::passes::{plan_frame, read_color, read_frame, Inputs, PlanOptions};
@@ -235,6 +236,153 @@ fn scatter_setting(p: ScatterParams) -> Setting {
     }
 }
 
+/// What a scene is scored on: one of its references and the settings scored against it.
+#[derive(Clone, Debug)]
+pub struct Target {
+    /// The scene's name in the rows, plots and contact sheets ("layers", "layers dof").
+    pub label: String,
+    /// The reference file's role: reference, reference_dof or reference_both.
+    pub reference: &'static str,
+    pub settings: Vec<Setting>,
+}
+
+/// A scene's targets: the motion-blur sweep against its motion reference and, for a scene
+/// with a lens, the depth-of-field sweep against the lens reference and depth of field with
+/// motion blur against the reference with both.
+pub fn targets(name: &str, lens: Option<Lens>) -> Vec<Target> {
+    let mut targets = vec![Target {
+        label: name.to_string(),
+        reference: "reference",
+        settings: sweep(),
+    }];
+    if let Some(lens) = lens {
+        targets.push(Target {
+            label: format!("{name} dof"),
+            reference: "reference_dof",
+            settings: dof_sweep(lens),
+        });
+        targets.push(Target {
+            label: format!("{name} dof+motion"),
+            reference: "reference_both",
+            settings: combined_sweep(lens),
+        });
+    }
+    targets
+}
+
+/// A depth-of-field setting (with a motion-blur algorithm after it, or none).
+fn dof_setting(label: String, algorithm: Algorithm, dof: DofParams) -> Setting {
+    let CocSource::Lens(lens) = dof.source else {
+        unreachable!("the bench scenes have lenses")
+    };
+    let mut flags: Vec<String> = vec![
+        "--focal-length".into(),
+        lens.focal_mm.to_string(),
+        "--f-stop".into(),
+        lens.f_number.to_string(),
+        "--focus-distance".into(),
+        lens.focus.to_string(),
+        "--sensor-width".into(),
+        lens.sensor_mm.to_string(),
+        "--method".into(),
+        dof.method.name().into(),
+        "--max-coc".into(),
+        dof.max_coc.to_string(),
+        "--epsilon".into(),
+        dof.epsilon.to_string(),
+    ];
+    match dof.method {
+        Method::Gather => flags.extend([
+            "--rings".into(),
+            dof.rings.to_string(),
+            "--blades".into(),
+            dof.blades.to_string(),
+        ]),
+        Method::Blend => {
+            if let Some(n) = dof.passes {
+                flags.extend(["--passes".into(), n.to_string()]);
+            }
+        }
+    }
+    Setting {
+        label,
+        algorithm,
+        params: BlurParams {
+            dof: Some(dof),
+            ..BlurParams::default()
+        },
+        flags,
+    }
+}
+
+/// Depth of field alone: the sharp frame, then gather and blend with their quality settings.
+fn dof_sweep(lens: Lens) -> Vec<Setting> {
+    let gather = DofParams::new(CocSource::Lens(lens));
+    let blend = DofParams {
+        method: Method::Blend,
+        ..gather
+    };
+    let mut settings = vec![Setting {
+        label: "none".into(),
+        algorithm: Algorithm::None,
+        params: BlurParams::default(),
+        flags: Vec::new(),
+    }];
+    for rings in [1, 2, 4, 6] {
+        let p = DofParams { rings, ..gather };
+        settings.push(dof_setting(format!("gather R{rings}"), Algorithm::None, p));
+    }
+    let hexagon = DofParams {
+        blades: 6,
+        ..gather
+    };
+    settings.push(dof_setting(
+        "gather R4 6 blades".into(),
+        Algorithm::None,
+        hexagon,
+    ));
+    settings.push(dof_setting("blend".into(), Algorithm::None, blend));
+    // The talk's example n = 5 passes, whatever E.
+    let talk = DofParams {
+        passes: Some(5),
+        ..blend
+    };
+    settings.push(dof_setting("blend n5".into(), Algorithm::None, talk));
+    let wide = DofParams {
+        epsilon: 3.0,
+        ..blend
+    };
+    settings.push(dof_setting("blend eps3".into(), Algorithm::None, wide));
+    settings
+}
+
+/// Depth of field then motion blur, against the reference with both; each alone too.
+fn combined_sweep(lens: Lens) -> Vec<Setting> {
+    let gather = DofParams::new(CocSource::Lens(lens));
+    let blend = DofParams {
+        method: Method::Blend,
+        ..gather
+    };
+    let motion = |label: &str, algorithm: Algorithm| Setting {
+        label: label.into(),
+        algorithm,
+        params: BlurParams::default(),
+        flags: Vec::new(),
+    };
+    vec![
+        motion("none", Algorithm::None),
+        motion("scatter", Algorithm::Scatter),
+        dof_setting("gather".into(), Algorithm::None, gather),
+        dof_setting("gather + scatter".into(), Algorithm::Scatter, gather),
+        dof_setting(
+            "gather + reconstruct".into(),
+            Algorithm::Reconstruct,
+            gather,
+        ),
+        dof_setting("blend + scatter".into(), Algorithm::Scatter, blend),
+    ]
+}
+
 /// What to run.
 #[derive(Clone, Debug)]
 pub struct BenchOptions {
@@ -353,104 +501,108 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
         }
     }
     let preset = Preset::builtin("shutter")?;
-    let settings = sweep();
     let mut rows = Vec::new();
     let mut sheets = Vec::new();
-    for name in &options.scenes {
-        let dir = options.out.join("scenes").join(name);
+    for scene_name in &options.scenes {
+        let dir = options.out.join("scenes").join(scene_name);
         let started = Instant::now();
-        ensure_scene(name, &dir, options)?;
+        ensure_scene(scene_name, &dir, options)?;
         progress(format!(
-            "{name}: scene ready ({:.1} s)",
+            "{scene_name}: scene ready ({:.1} s)",
             started.elapsed().as_secs_f64()
         ));
         let inputs = scene_inputs(&dir);
         let sharp = read_rgb(&dir.join("color.0001.exr"))?;
-        let reference = read_rgb(&dir.join("reference.0001.exr"))?;
-        let region = metrics::changed_region(&rgb(&sharp), &rgb(&reference), 1e-3);
-        let mut outputs = Vec::new();
-        for setting in &settings {
-            // Compute only: the algorithm on decoded passes, median of `runs`.
-            let plan_options = PlanOptions {
-                preset: &preset,
-                layer: None,
-                needs: setting.algorithm.needs(),
-            };
-            let plan = plan_frame(&inputs, Some(1), &plan_options).map_err(Error::Files)?;
-            let frame = read_frame(&plan)?;
-            let mut times = Vec::with_capacity(options.runs);
-            for _ in 0..options.runs {
-                let input = frame.clone();
-                let t = Instant::now();
-                let out = apply(setting.algorithm, &setting.params, input, 1);
-                times.push(t.elapsed().as_secs_f64() * 1e3);
-                drop(out);
-            }
-            let compute_ms = median(times);
+        let lens = crate::truth::scenes::build(scene_name, options.width, options.height, 1)
+            .and_then(|scene| scene.lens);
+        for target in targets(scene_name, lens) {
+            let name = &target.label;
+            let reference = read_rgb(&dir.join(format!("{}.0001.exr", target.reference)))?;
+            let region = metrics::changed_region(&rgb(&sharp), &rgb(&reference), 1e-3);
+            let mut outputs = Vec::new();
+            for setting in &target.settings {
+                // Compute only: the algorithm on decoded passes, median of `runs`.
+                let plan_options = PlanOptions {
+                    preset: &preset,
+                    layer: None,
+                    needs: crate::motion::needs(setting.algorithm, &setting.params),
+                };
+                let plan = plan_frame(&inputs, Some(1), &plan_options).map_err(Error::Files)?;
+                let frame = read_frame(&plan)?;
+                let mut times = Vec::with_capacity(options.runs);
+                for _ in 0..options.runs {
+                    let input = frame.clone();
+                    let t = Instant::now();
+                    let out = apply(setting.algorithm, &setting.params, input, 1);
+                    times.push(t.elapsed().as_secs_f64() * 1e3);
+                    drop(out);
+                }
+                let compute_ms = median(times);
 
-            // End to end: the shutter binary on the frame, median of `runs`.
-            let out_dir = options.out.join("runs").join(name);
-            let file_stem = setting.label.replace(' ', "_");
-            let output = out_dir.join(format!("{file_stem}.0001.exr"));
-            let mut walls = Vec::with_capacity(options.runs);
-            let mut peak: Option<f64> = None;
-            for _ in 0..options.runs {
-                let mut command = std::process::Command::new(&options.binary);
-                command.args(["blur", "--algorithm", setting.algorithm.name()]);
-                command.args(&setting.flags);
-                for (flag, pattern) in inputs.all() {
-                    command.arg(format!("--{flag}")).arg(&pattern.raw);
+                // End to end: the shutter binary on the frame, median of `runs`.
+                let out_dir = options.out.join("runs").join(name.replace(' ', "_"));
+                let file_stem = setting.label.replace(' ', "_");
+                let output = out_dir.join(format!("{file_stem}.0001.exr"));
+                let mut walls = Vec::with_capacity(options.runs);
+                let mut peak: Option<f64> = None;
+                for _ in 0..options.runs {
+                    let mut command = std::process::Command::new(&options.binary);
+                    command.args(["blur", "--algorithm", setting.algorithm.name()]);
+                    command.args(&setting.flags);
+                    for (flag, pattern) in inputs.all() {
+                        command.arg(format!("--{flag}")).arg(&pattern.raw);
+                    }
+                    command
+                        .args(["--frames", "1", "--json", "-o"])
+                        .arg(out_dir.join(format!("{file_stem}.####.exr")));
+                    let t = Instant::now();
+                    let result = command.output().map_err(|e| {
+                        Problem::new(
+                            ProblemKind::MissingFile,
+                            &options.binary,
+                            format!("cannot run the shutter binary: {e}"),
+                        )
+                    })?;
+                    walls.push(t.elapsed().as_secs_f64() * 1e3);
+                    if !result.status.success() {
+                        return Err(Problem::new(
+                            ProblemKind::Output,
+                            &output,
+                            format!(
+                                "shutter blur failed: {}",
+                                String::from_utf8_lossy(&result.stderr).trim()
+                            ),
+                        )
+                        .into());
+                    }
+                    let report: serde_json::Value =
+                        serde_json::from_slice(&result.stdout).unwrap_or_default();
+                    if let Some(rss) = report["peak_rss_mib"].as_f64() {
+                        peak = Some(peak.map_or(rss, |p: f64| p.max(rss)));
+                    }
                 }
-                command
-                    .args(["--frames", "1", "--json", "-o"])
-                    .arg(out_dir.join(format!("{file_stem}.####.exr")));
-                let t = Instant::now();
-                let result = command.output().map_err(|e| {
-                    Problem::new(
-                        ProblemKind::MissingFile,
-                        &options.binary,
-                        format!("cannot run the shutter binary: {e}"),
-                    )
-                })?;
-                walls.push(t.elapsed().as_secs_f64() * 1e3);
-                if !result.status.success() {
-                    return Err(Problem::new(
-                        ProblemKind::Output,
-                        &output,
-                        format!(
-                            "shutter blur failed: {}",
-                            String::from_utf8_lossy(&result.stderr).trim()
-                        ),
-                    )
-                    .into());
-                }
-                let report: serde_json::Value =
-                    serde_json::from_slice(&result.stdout).unwrap_or_default();
-                if let Some(rss) = report["peak_rss_mib"].as_f64() {
-                    peak = Some(peak.map_or(rss, |p: f64| p.max(rss)));
-                }
+                let blurred = read_rgb(&output)?;
+                let whole = metrics::compare(&rgb(&reference), &rgb(&blurred), None);
+                let scored = metrics::compare(&rgb(&reference), &rgb(&blurred), Some(&region));
+                progress(format!(
+                    "{name}: {} compute {compute_ms:.2} ms, end to end {:.1} ms, region RMSE {:.5}",
+                    setting.label,
+                    median(walls.clone()),
+                    scored.rmse
+                ));
+                rows.push(Row {
+                    scene: name.clone(),
+                    setting: setting.label.clone(),
+                    compute_ms,
+                    end_to_end_ms: median(walls),
+                    peak_rss_mib: peak,
+                    whole,
+                    region: scored,
+                });
+                outputs.push((setting.label.clone(), blurred));
             }
-            let blurred = read_rgb(&output)?;
-            let whole = metrics::compare(&rgb(&reference), &rgb(&blurred), None);
-            let scored = metrics::compare(&rgb(&reference), &rgb(&blurred), Some(&region));
-            progress(format!(
-                "{name}: {} compute {compute_ms:.2} ms, end to end {:.1} ms, region RMSE {:.5}",
-                setting.label,
-                median(walls.clone()),
-                scored.rmse
-            ));
-            rows.push(Row {
-                scene: name.clone(),
-                setting: setting.label.clone(),
-                compute_ms,
-                end_to_end_ms: median(walls),
-                peak_rss_mib: peak,
-                whole,
-                region: scored,
-            });
-            outputs.push((setting.label.clone(), blurred));
+            sheets.push((name.clone(), sharp.clone(), outputs, reference));
         }
-        sheets.push((name.clone(), sharp, outputs, reference));
     }
     let report = BenchReport {
         width: options.width,
@@ -498,7 +650,8 @@ fn write_outputs(options: &BenchOptions, report: &BenchReport, sheets: &[Sheet])
         panels.push(("reference", reference));
         let (w, h, pixels) = plot::contact_sheet(&panels);
         plot::write_png(
-            &out.join("contact").join(format!("{name}.png")),
+            &out.join("contact")
+                .join(format!("{}.png", name.replace([' ', '+'], "-"))),
             w,
             h,
             &pixels,

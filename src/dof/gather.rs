@@ -47,6 +47,118 @@ const LAYER: f32 = 1.0;
 /// Smallest bokeh radius a weight divides by (px): a pixel's own footprint.
 const SMALLEST_RADIUS: f32 = 0.5;
 
+/// One tap of a tile's pattern: a whole-pixel offset (as an index step in the padded
+/// planes), the aperture norms of the offset, and the area it stands for (px²).
+#[derive(Clone, Copy, Debug)]
+struct PixelTap {
+    step: isize,
+    norm_far: f32,
+    norm_near: f32,
+    area: f32,
+}
+
+/// The taps of a tile whose gather radius is `radius`: the whole-pixel neighbourhood when the
+/// radius is at most `rings` px, else the rings scaled to the radius and snapped to whole
+/// pixels, taps landing on the same pixel merged (their areas summed). Norms are those of the
+/// whole-pixel offset, so distances are exact. The centre is left out (p counts itself).
+fn tile_taps(
+    radius: f32,
+    grids: &[Vec<Tap>],
+    rings: &[Tap],
+    aperture: &Aperture,
+    stride: isize,
+) -> Vec<PixelTap> {
+    let whole = radius.ceil() as usize;
+    let mut offsets: Vec<((isize, isize), f32)> = Vec::new();
+    if whole < grids.len() {
+        for tap in &grids[whole][1..] {
+            offsets.push(((tap.dx as isize, tap.dy as isize), tap.area));
+        }
+    } else {
+        for tap in &rings[1..] {
+            let key = (
+                (tap.dx * radius + 0.5).floor() as isize,
+                (tap.dy * radius + 0.5).floor() as isize,
+            );
+            let area = tap.area * radius * radius;
+            match offsets.iter_mut().find(|(k, _)| *k == key) {
+                Some((_, a)) => *a += area,
+                None => offsets.push((key, area)),
+            }
+        }
+    }
+    offsets
+        .into_iter()
+        .filter(|((dx, dy), _)| (*dx, *dy) != (0, 0))
+        .map(|((dx, dy), area)| PixelTap {
+            step: dy * stride + dx,
+            norm_far: aperture.norm(-dx as f32, -dy as f32),
+            norm_near: aperture.norm(dx as f32, dy as f32),
+            area,
+        })
+        .collect()
+}
+
+/// The planes the gather reads, padded by `pad` pixels on every side (and a tile more on the
+/// right) with copies of the edge (clamp to edge), so taps never need bounds checks.
+struct Padded {
+    stride: usize,
+    pad: usize,
+    /// r, g, b, a (zero without alpha), signed bokeh radius, 1 / bokeh area.
+    planes: [Vec<f32>; 6],
+}
+
+impl Padded {
+    fn new(
+        color: &Color,
+        coc: &[f32],
+        width: usize,
+        height: usize,
+        pad: usize,
+        unit_area: f32,
+    ) -> Self {
+        // A tile's last run reads a whole TILE of lanes: room for that on the right.
+        let stride = width + 2 * pad + TILE;
+        let rows = height + 2 * pad;
+        let source = |plane: usize, x: usize, y: usize| -> f32 {
+            let i = y * width + x;
+            match plane {
+                0 => sanitize_color(color.r[i]),
+                1 => sanitize_color(color.g[i]),
+                2 => sanitize_color(color.b[i]),
+                3 => color.a.as_ref().map_or(0.0, |a| sanitize_color(a[i])),
+                4 => 0.5 * coc[i],
+                _ => {
+                    let r = (0.5 * coc[i]).abs().max(SMALLEST_RADIUS);
+                    1.0 / (unit_area * r * r)
+                }
+            }
+        };
+        let planes = [0, 1, 2, 3, 4, 5].map(|plane| {
+            let mut out = vec![0.0f32; stride * rows];
+            out.par_chunks_mut(stride)
+                .enumerate()
+                .for_each(|(py, row)| {
+                    let y = py.saturating_sub(pad).min(height - 1);
+                    for (px, v) in row.iter_mut().enumerate() {
+                        let x = px.saturating_sub(pad).min(width - 1);
+                        *v = source(plane, x, y);
+                    }
+                });
+            out
+        });
+        Padded {
+            stride,
+            pad,
+            planes,
+        }
+    }
+
+    fn index(&self, x: usize, y: usize) -> usize {
+        (y + self.pad) * self.stride + x + self.pad
+    }
+}
+
 /// Depth of field by gathering; `coc` is the signed CoC plane (px, diameter).
 pub fn gather(
     color: &Color,
@@ -63,123 +175,134 @@ pub fn gather(
     let rings = taps(params.rings, &aperture);
     let unit_area = aperture.unit_area();
     let has_alpha = color.a.is_some();
-    // Texels: r, g, b, signed CoC radius; alpha beside when present.
-    let texels: Vec<[f32; 4]> = (0..width * height)
-        .into_par_iter()
-        .map(|i| {
-            [
-                sanitize_color(color.r[i]),
-                sanitize_color(color.g[i]),
-                sanitize_color(color.b[i]),
-                0.5 * coc[i],
-            ]
-        })
-        .collect();
-    let alpha: Vec<f32> = match &color.a {
-        Some(a) => a.iter().map(|&v| sanitize_color(v)).collect(),
-        None => Vec::new(),
-    };
     let reach = reach(coc, width, height, params.epsilon);
+    let largest = reach.iter().fold(0.0f32, |m, &r| m.max(r));
+    let pad = largest.ceil() as usize + 2;
+    let padded = Padded::new(color, coc, width, height, pad, unit_area);
     let tiles_x = width.div_ceil(TILE);
+    let half_focus = (0.5 * params.epsilon).max(SMALLEST_RADIUS);
 
-    let mut out = vec![[0.0f32; 4]; width * height];
-    // Alpha rows go along even without alpha (unused then), so rows zip one to one.
-    let mut out_alpha = vec![0.0f32; width * height];
-    let half_focus = 0.5 * params.epsilon;
-    out.par_chunks_mut(width)
-        .zip(out_alpha.par_chunks_mut(width))
+    // Output planes r, g, b, a, filled a band of tile rows at a time.
+    let mut out = [0, 1, 2, 3].map(|_| vec![0.0f32; width * height]);
+    let [out_r, out_g, out_b, out_a] = &mut out;
+    out_r
+        .par_chunks_mut(TILE * width)
+        .zip(out_g.par_chunks_mut(TILE * width))
+        .zip(out_b.par_chunks_mut(TILE * width))
+        .zip(out_a.par_chunks_mut(TILE * width))
         .enumerate()
-        .for_each(|(y, (row, row_alpha))| {
-            for (x, px) in row.iter_mut().enumerate() {
-                let i = y * width + x;
-                let radius = reach[(y / TILE) * tiles_x + x / TILE];
-                let centre = texels[i];
-                if radius < half_focus.max(SMALLEST_RADIUS) {
-                    *px = centre;
-                    if has_alpha {
-                        row_alpha[x] = alpha[i];
+        .for_each(|(ty, (((band_r, band_g), band_b), band_a))| {
+            let mut bands = [band_r, band_g, band_b, band_a];
+            for tx in 0..tiles_x {
+                let radius = reach[ty * tiles_x + tx];
+                let x0 = tx * TILE;
+                let span = TILE.min(width - x0);
+                let rows = bands[0].len() / width;
+                if radius < half_focus {
+                    for row in 0..rows {
+                        let start = padded.index(x0, ty * TILE + row);
+                        for (k, band) in bands.iter_mut().enumerate() {
+                            band[row * width + x0..row * width + x0 + span]
+                                .copy_from_slice(&padded.planes[k][start..start + span]);
+                        }
                     }
                     continue;
                 }
-                let whole = radius.ceil() as usize;
-                let (pattern, scale) = if whole <= params.rings {
-                    (&grids[whole], 1.0)
-                } else {
-                    (&rings, radius)
-                };
-                let r_p = centre[3].abs();
-                let c_p = centre[3];
-                let own = 1.0 / (unit_area * r_p.max(SMALLEST_RADIUS).powi(2));
-                let centre_alpha = if has_alpha { alpha[i] } else { 0.0 };
-                // Sums of weight × (sample − centre): a uniform frame stays exact.
-                let mut far = [0.0f32; 4];
-                let mut far_weight = own;
-                let mut near = [0.0f32; 4];
-                let mut opacity = 0.0f32;
-                let area_scale = scale * scale;
-                for tap in &pattern[1..] {
-                    let sx = (x as f32 + 0.5 + tap.dx * scale).floor();
-                    let sy = (y as f32 + 0.5 + tap.dy * scale).floor();
-                    let sx = (sx.max(0.0) as usize).min(width - 1);
-                    let sy = (sy.max(0.0) as usize).min(height - 1);
-                    let s = sy * width + sx;
-                    let t = texels[s];
-                    let r_s = t[3].abs();
-                    let inverse_area = 1.0 / (unit_area * r_s.max(SMALLEST_RADIUS).powi(2));
-                    let a = if has_alpha { alpha[s] } else { 0.0 };
-                    let d = [
-                        t[0] - centre[0],
-                        t[1] - centre[1],
-                        t[2] - centre[2],
-                        a - centre_alpha,
-                    ];
-                    let (sum, total, w) = if t[3] > c_p - 0.5 * LAYER {
-                        let distance = tap.norm_far * scale;
-                        let cover = (r_s.min(r_p) - distance + 0.5).clamp(0.0, 1.0);
-                        (&mut far, &mut far_weight, cover * inverse_area)
-                    } else {
-                        let distance = tap.norm_near * scale;
-                        let cover = (r_s - distance + 0.5).clamp(0.0, 1.0);
-                        (
-                            &mut near,
-                            &mut opacity,
-                            cover * tap.area * area_scale * inverse_area,
-                        )
-                    };
-                    if w > 0.0 {
-                        for k in 0..4 {
-                            sum[k] += w * d[k];
-                        }
-                        *total += w;
+                let taps = tile_taps(radius, &grids, &rings, &aperture, padded.stride as isize);
+                for row in 0..rows {
+                    let start = padded.index(x0, ty * TILE + row);
+                    let mut result = [[0.0f32; TILE]; 4];
+                    gather_run(&padded, start, span, &taps, &mut result);
+                    for (k, band) in bands.iter_mut().enumerate() {
+                        band[row * width + x0..row * width + x0 + span]
+                            .copy_from_slice(&result[k][..span]);
                     }
-                }
-                let (near_scale, rest) = if opacity > 1.0 {
-                    (1.0 / opacity, 0.0)
-                } else {
-                    (1.0, 1.0 - opacity)
-                };
-                let far_scale = rest / far_weight;
-                let base = [centre[0], centre[1], centre[2], centre_alpha];
-                let mix = |k: usize| base[k] + near[k] * near_scale + far[k] * far_scale;
-                *px = [mix(0), mix(1), mix(2), 0.0];
-                if has_alpha {
-                    row_alpha[x] = mix(3);
                 }
             }
         });
-    let mut r = Vec::with_capacity(width * height);
-    let mut g = Vec::with_capacity(width * height);
-    let mut b = Vec::with_capacity(width * height);
-    for t in &out {
-        r.push(t[0]);
-        g.push(t[1]);
-        b.push(t[2]);
-    }
+    let [r, g, b, a] = out;
     Color {
         r,
         g,
         b,
-        a: has_alpha.then_some(out_alpha),
+        a: has_alpha.then_some(a),
+    }
+}
+
+/// Gathers `span` (≤ [`TILE`]) consecutive pixels starting at padded index `start` over one
+/// tile's taps: taps outside, pixels inside, so the inner loop runs along memory.
+fn gather_run(
+    padded: &Padded,
+    start: usize,
+    span: usize,
+    taps: &[PixelTap],
+    out: &mut [[f32; TILE]; 4],
+) {
+    let [pr, pg, pb, pa, pc, pia] = &padded.planes;
+    let centre = |plane: &[f32]| -> [f32; TILE] {
+        let mut v = [0.0f32; TILE];
+        v[..span].copy_from_slice(&plane[start..start + span]);
+        v
+    };
+    let (cr, cg, cb, ca, cc, cia) = (
+        centre(pr),
+        centre(pg),
+        centre(pb),
+        centre(pa),
+        centre(pc),
+        centre(pia),
+    );
+    let mut rp = [0.0f32; TILE];
+    let mut split = [0.0f32; TILE];
+    for x in 0..TILE {
+        rp[x] = cc[x].abs();
+        split[x] = cc[x] - 0.5 * LAYER;
+    }
+    // Sums of weight × (sample − centre), so a uniform frame stays exact. p's own weight
+    // starts the far sum.
+    let mut far = [[0.0f32; TILE]; 4];
+    let mut far_weight = cia;
+    let mut near = [[0.0f32; TILE]; 4];
+    let mut opacity = [0.0f32; TILE];
+    for tap in taps {
+        let base = (start as isize + tap.step) as usize;
+        let sr = &pr[base..base + TILE];
+        let sg = &pg[base..base + TILE];
+        let sb = &pb[base..base + TILE];
+        let sa = &pa[base..base + TILE];
+        let sc = &pc[base..base + TILE];
+        let sia = &pia[base..base + TILE];
+        for x in 0..TILE {
+            let rs = sc[x].abs();
+            let is_far = sc[x] > split[x];
+            let cover_far = (rs.min(rp[x]) - tap.norm_far + 0.5).clamp(0.0, 1.0);
+            let cover_near = (rs - tap.norm_near + 0.5).clamp(0.0, 1.0);
+            let wf = if is_far { cover_far * sia[x] } else { 0.0 };
+            let wn = if is_far {
+                0.0
+            } else {
+                cover_near * tap.area * sia[x]
+            };
+            let d = [sr[x] - cr[x], sg[x] - cg[x], sb[x] - cb[x], sa[x] - ca[x]];
+            for k in 0..4 {
+                far[k][x] += wf * d[k];
+                near[k][x] += wn * d[k];
+            }
+            far_weight[x] += wf;
+            opacity[x] += wn;
+        }
+    }
+    let base = [cr, cg, cb, ca];
+    for x in 0..span {
+        let (near_scale, rest) = if opacity[x] > 1.0 {
+            (1.0 / opacity[x], 0.0)
+        } else {
+            (1.0, 1.0 - opacity[x])
+        };
+        let far_scale = rest / far_weight[x];
+        for k in 0..4 {
+            out[k][x] = base[k][x] + near[k][x] * near_scale + far[k][x] * far_scale;
+        }
     }
 }
 
