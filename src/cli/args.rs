@@ -264,7 +264,7 @@ pub struct DofArgs {
     #[arg(long, value_name = "DEG", help_heading = "Depth of field")]
     pub blade_rotation: Option<f32>,
 
-    /// gather: rings of taps; ring k has 8k taps (4 rings: 81 taps) [default: preset, else 4].
+    /// gather: rings of taps; ring k has 8k taps (6 rings: 169 taps) [default: preset, else 6].
     #[arg(long, value_name = "N", help_heading = "Depth of field")]
     pub rings: Option<usize>,
 

@@ -11,9 +11,13 @@
 //! 1. **Reach.** Tiles of 16×16 keep their largest |CoC|; a tile gathers over the largest
 //!    radius of any tile whose bokeh can reach it (the near field's tile max of Sousa). A
 //!    tile nothing out of focus can reach is copied.
-//! 2. **Taps.** The [`super::bokeh`] rings, scaled to that radius R (fewer rings when R is
-//!    small), read the nearest pixel s. The tap's distance is the aperture's norm, so an
-//!    n-blade diaphragm shapes the bokeh.
+//! 2. **Taps.** For R up to `rings` px, every pixel of the neighbourhood; beyond, the
+//!    [`super::bokeh`] rings scaled to R and snapped to whole pixels (merged where two land
+//!    on one). A tap's distance is the aperture's norm of its whole-pixel offset, so an
+//!    n-blade diaphragm shapes the bokeh. A tile's taps are the same for all its pixels, so
+//!    the loop runs taps outside and the tile's 16 pixels of a row inside, on padded planes
+//!    (structure of arrays, no bounds checks): one AVX-512 vector per tap where the CPU has
+//!    it.
 //! 3. **Far field** (s no nearer than p, within 1 px of CoC): s counts where its bokeh and
 //!    p's both cover the tap, `min(r_s, r_p)` — so an in-focus pixel takes nothing from the
 //!    blurred background behind it, and a blurred background takes nothing from an in-focus
@@ -231,6 +235,12 @@ pub fn gather(
 
 /// Gathers `span` (≤ [`TILE`]) consecutive pixels starting at padded index `start` over one
 /// tile's taps: taps outside, pixels inside, so the inner loop runs along memory.
+///
+/// Compiled twice, chosen at run time by `multiversion`: with AVX-512 a tile row of 16 pixels
+/// is one vector (2.6× faster at 1080p on the dev machine; AVX2 alone gave nothing). Only
+/// lanes change, never the order of operations, and nothing is fused, so both versions give
+/// the same bits.
+#[multiversion::multiversion(targets("x86_64+avx512f+avx512vl"))]
 fn gather_run(
     padded: &Padded,
     start: usize,
