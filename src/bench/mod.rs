@@ -337,7 +337,7 @@ fn dof_sweep(lens: Lens) -> Vec<Setting> {
         ..gather
     };
     settings.push(dof_setting(
-        "gather R4 6 blades".into(),
+        "gather R6 6 blades".into(),
         Algorithm::None,
         hexagon,
     ));
