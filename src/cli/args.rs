@@ -251,8 +251,8 @@ pub struct DofArgs {
     #[arg(long, value_name = "PX", help_heading = "Depth of field")]
     pub epsilon: Option<f32>,
 
-    /// Largest CoC diameter (px); larger ones are clamped. blend: E, the CoC of its most
-    /// blurred copy [default: preset, else 48].
+    /// Largest CoC diameter (px); larger ones are clamped. blend: E (the CoC its most blurred
+    /// copy stands for) is the frame's largest CoC, at most this [default: preset, else 48].
     #[arg(long, value_name = "PX", help_heading = "Depth of field")]
     pub max_coc: Option<f32>,
 
@@ -269,7 +269,7 @@ pub struct DofArgs {
     pub rings: Option<usize>,
 
     /// blend: passes n of the 3×3 filter for the first blurred copy (the second has 2n)
-    /// [default: preset, else chosen so the 2n copy looks like --max-coc].
+    /// [default: preset, else chosen so the 2n copy looks like E].
     #[arg(long, value_name = "N", help_heading = "Depth of field")]
     pub passes: Option<usize>,
 }

@@ -61,7 +61,7 @@ pub struct DofParams {
     /// ε: circles of confusion below this diameter are in focus (px). Default 1.
     pub epsilon: f32,
     /// The largest CoC diameter (px): larger ones are clamped. blend: E, the CoC its most
-    /// blurred copy stands for. Default 48.
+    /// blurred copy stands for, is the frame's largest CoC (so at most this). Default 48.
     pub max_coc: f32,
     /// gather: diaphragm blades; 0 is a round aperture. Default 0.
     pub blades: u32,
@@ -71,7 +71,7 @@ pub struct DofParams {
     /// `layers` 6 rings err 20 % less than 4 (BENCHMARKS.md).
     pub rings: usize,
     /// blend: passes n of the 3×3 filter for the first copy (the second has 2n); `None`
-    /// chooses n so the 2n copy has the blur of a CoC of `max_coc`.
+    /// chooses n so the 2n copy has the blur of a CoC of E.
     pub passes: Option<usize>,
 }
 
