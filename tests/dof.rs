@@ -248,21 +248,9 @@ fn a_bright_highlight_keeps_its_energy_and_takes_the_aperture_shape() {
 #[test]
 fn same_bytes_for_one_and_two_threads() {
     for method in ["gather", "blend"] {
-        invariants::same_bytes_for_any_thread_count(
-            "none",
-            "layers",
-            &["color", "depth"],
-            &[
-                "--focal-length",
-                "50",
-                "--f-stop",
-                "1.4",
-                "--focus-distance",
-                "3",
-                "--method",
-                method,
-            ],
-        );
+        let mut flags = lens_flags();
+        flags.extend(["--method", method]);
+        invariants::same_bytes_for_any_thread_count("none", "layers", &["color", "depth"], &flags);
     }
 }
 

@@ -377,6 +377,14 @@ pub fn noise_frame(w: usize, h: usize, seed: u32) -> shutter::frame::Frame {
     f
 }
 
+/// `none`'s region RMSE, each run's, the scene's passes and each run's output.
+pub type SceneErrors = (
+    f64,
+    Vec<f64>,
+    shutter::frame::Frame,
+    Vec<shutter::frame::Frame>,
+);
+
 /// Renders truth scene `name` at `w`×`h` (256 samples, shutter 0.5) and scores each
 /// algorithm with its parameters against the motion-blur reference over the region blur
 /// changes. Returns the unblurred frame's error, each run's error, the passes and outputs.
@@ -384,12 +392,7 @@ pub fn scene_errors(
     name: &str,
     size: (usize, usize),
     runs: &[(shutter::motion::Algorithm, shutter::motion::BlurParams)],
-) -> (
-    f64,
-    Vec<f64>,
-    shutter::frame::Frame,
-    Vec<shutter::frame::Frame>,
-) {
+) -> SceneErrors {
     scene_errors_against(
         name,
         size,
@@ -404,12 +407,7 @@ pub fn scene_errors_against(
     (w, h): (usize, usize),
     kind: shutter::truth::render::Reference,
     runs: &[(shutter::motion::Algorithm, shutter::motion::BlurParams)],
-) -> (
-    f64,
-    Vec<f64>,
-    shutter::frame::Frame,
-    Vec<shutter::frame::Frame>,
-) {
+) -> SceneErrors {
     use shutter::metrics::{changed_region, rmse};
     use shutter::truth::render::{render_passes, render_reference, RenderSettings};
     let scene = shutter::truth::scenes::build(name, w, h, 1).unwrap();
