@@ -151,7 +151,9 @@ pub fn coc_plane(frame: &Frame, params: &DofParams) -> Vec<f32> {
     };
     match params.source {
         CocSource::Lens(lens) => {
-            let width = frame.width as f64;
+            // The sensor spans the display window (the picture), not an overscan data window.
+            let display = frame.windows.display.2;
+            let width = if display > 0 { display } else { frame.width } as f64;
             depth
                 .par_iter()
                 .map(|&d| (lens.signed_coc(d as f64, width) as f32).clamp(-limit, limit))
@@ -188,5 +190,28 @@ pub fn apply(frame: Frame, params: &DofParams) -> Frame {
     Frame {
         color: Some(out),
         ..frame
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_sensor_spans_the_display_window_not_the_overscan() {
+        let lens = Lens {
+            focal_mm: 50.0,
+            f_number: 2.0,
+            focus: 2.0,
+            sensor_mm: 36.0,
+        };
+        let params = DofParams::new(CocSource::Lens(lens));
+        // A 1920-wide picture rendered with 40 px of overscan each side.
+        let mut frame = Frame::new(2000, 4);
+        frame.windows.display = (0, 0, 1920, 4);
+        frame.depth = Some(vec![4.0; 8000]);
+        // 17.094 px at 1920 wide (coc.rs's hand-computed value), not 17.806 at 2000.
+        let coc = coc_plane(&frame, &params);
+        assert!((coc[0] - 17.094).abs() < 1e-3, "{}", coc[0]);
     }
 }
