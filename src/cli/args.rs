@@ -229,7 +229,8 @@ pub struct DofArgs {
     #[arg(long, value_name = "N", help_heading = "Depth of field")]
     pub f_stop: Option<f64>,
 
-    /// Focus distance, in the depth pass's units (metres by default).
+    /// Focus distance in metres. Depth is read as metres too: a depth pass in other units
+    /// needs a preset's [depth] scale (0.01 for centimetres).
     #[arg(long, value_name = "D", help_heading = "Depth of field")]
     pub focus_distance: Option<f64>,
 

@@ -10,14 +10,15 @@
 //! The signed form is positive behind the focus plane (the far field) and negative in front
 //! of it (the near field), as the near/far split of the gather needs.
 
-/// A thin lens. Distances in scene units (metres unless the scene says otherwise).
+/// A thin lens. Distances (focus and depth) in metres, the focal length's unit once it is
+/// out of millimetres: depth in other units is scaled on read (a preset's `[depth] scale`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lens {
     /// Focal length F, mm.
     pub focal_mm: f64,
     /// f-number N.
     pub f_number: f64,
-    /// Focus distance P, scene units.
+    /// Focus distance P, metres.
     pub focus: f64,
     /// Sensor (film) width, mm (36 for full frame).
     pub sensor_mm: f64,

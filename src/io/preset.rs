@@ -205,7 +205,7 @@ pub struct DofSettings {
     /// f-number.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub f_stop: Option<f64>,
-    /// Focus distance, scene units.
+    /// Focus distance, metres (depth is read as metres: see `[depth] scale`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub focus_distance: Option<f64>,
     /// Sensor width, mm.
