@@ -676,3 +676,31 @@ fn output_is_bit_identical_for_any_thread_count() {
     }
     assert!(outputs.windows(2).all(|w| w[0] == w[1]), "outputs differ");
 }
+
+#[test]
+fn a_sequence_warns_once_about_derived_motion() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = env!("CARGO_MANIFEST_DIR");
+    let o = shutter(&[
+        "blur",
+        "--algorithm",
+        "scatter",
+        "--color",
+        &format!("{root}/fixtures/canonical/color.####.exr"),
+        "--depth",
+        &format!("{root}/fixtures/canonical/depth.####.exr"),
+        "--velocity",
+        &format!("{root}/fixtures/canonical/velocity.####.exr"),
+        "-o",
+        &format!("{}/o.####.exr", dir.path().display()),
+        "--verbose",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Three frames, next derived from velocity in each: one warning.
+    assert_eq!(
+        stderr(&o).matches("assuming linear motion").count(),
+        1,
+        "{}",
+        stderr(&o)
+    );
+}

@@ -289,11 +289,10 @@ pub fn plan_frame(
                     let backward = spec.meaning.is_backward();
                     let extrapolated = (target == 2 && backward) || (target != 2 && !backward);
                     if extrapolated {
+                        // Without the frame's file name, so a sequence warns once.
                         plan.warnings.push(format!(
-                            "{target_name} pass derived from {} ({:?}) assuming linear motion: {}",
-                            name,
-                            spec.meaning,
-                            info.path.display()
+                            "{target_name} pass derived from {} ({:?}) assuming linear motion",
+                            name, spec.meaning,
                         ));
                     }
                     break;
