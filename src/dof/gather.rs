@@ -8,9 +8,11 @@
 //! aperture's shape at the pixel's CoC — so a point of radiance L with bokeh area a gives
 //! L/a to each pixel it covers, and nearer surfaces hide farther ones. Per output pixel p:
 //!
-//! 1. **Reach.** Tiles of 16×16 keep their largest |CoC|; a tile gathers over the largest
-//!    radius of any tile whose bokeh can reach it (the near field's tile max of Sousa). A
-//!    tile nothing out of focus can reach is copied.
+//! 1. **Tiles.** Tiles of 16×16 keep their largest |CoC| and their smallest and largest
+//!    signed CoC. A tile gathers over the largest radius of any tile whose bokeh can reach it
+//!    (the near field's tile max of Sousa); a tile nothing out of focus can reach is copied;
+//!    a tile whose neighbourhood's min is not a layer below its own max has no near field
+//!    and skips that half of the work.
 //! 2. **Taps.** For R up to `rings` px, every pixel of the neighbourhood; beyond, the
 //!    [`super::bokeh`] rings scaled to R and snapped to whole pixels (merged where two land
 //!    on one). A tap's distance is the aperture's norm of its whole-pixel offset, so an
@@ -179,7 +181,8 @@ pub fn gather(
     let rings = taps(params.rings, &aperture);
     let unit_area = aperture.unit_area();
     let has_alpha = color.a.is_some();
-    let reach = reach(coc, width, height, params.epsilon);
+    let tiles = tiles(coc, width, height, params.epsilon);
+    let reach = &tiles.reach;
     let largest = reach.iter().fold(0.0f32, |m, &r| m.max(r));
     let pad = largest.ceil() as usize + 2;
     let padded = Padded::new(color, coc, width, height, pad, unit_area);
@@ -216,7 +219,8 @@ pub fn gather(
                 for row in 0..rows {
                     let start = padded.index(x0, ty * TILE + row);
                     let mut result = [[0.0f32; TILE]; 4];
-                    gather_run(&padded, start, span, &taps, &mut result);
+                    let near = !tiles.far_only[ty * tiles_x + tx];
+                    gather_run(&padded, start, span, &taps, near, &mut result);
                     for (k, band) in bands.iter_mut().enumerate() {
                         band[row * width + x0..row * width + x0 + span]
                             .copy_from_slice(&result[k][..span]);
@@ -246,6 +250,7 @@ fn gather_run(
     start: usize,
     span: usize,
     taps: &[PixelTap],
+    near_field: bool,
     out: &mut [[f32; TILE]; 4],
 ) {
     let [pr, pg, pb, pa, pc, pia] = &padded.planes;
@@ -274,32 +279,57 @@ fn gather_run(
     let mut far_weight = cia;
     let mut near = [[0.0f32; TILE]; 4];
     let mut opacity = [0.0f32; TILE];
-    for tap in taps {
-        let base = (start as isize + tap.step) as usize;
-        let sr = &pr[base..base + TILE];
-        let sg = &pg[base..base + TILE];
-        let sb = &pb[base..base + TILE];
-        let sa = &pa[base..base + TILE];
-        let sc = &pc[base..base + TILE];
-        let sia = &pia[base..base + TILE];
-        for x in 0..TILE {
-            let rs = sc[x].abs();
-            let is_far = sc[x] > split[x];
-            let cover_far = (rs.min(rp[x]) - tap.norm_far + 0.5).clamp(0.0, 1.0);
-            let cover_near = (rs - tap.norm_near + 0.5).clamp(0.0, 1.0);
-            let wf = if is_far { cover_far * sia[x] } else { 0.0 };
-            let wn = if is_far {
-                0.0
-            } else {
-                cover_near * tap.area * sia[x]
-            };
-            let d = [sr[x] - cr[x], sg[x] - cg[x], sb[x] - cb[x], sa[x] - ca[x]];
-            for k in 0..4 {
-                far[k][x] += wf * d[k];
-                near[k][x] += wn * d[k];
+    if !near_field {
+        // No sample is near: the far half of the loop below, alone (same bits: there every
+        // near weight would be 0).
+        for tap in taps {
+            let base = (start as isize + tap.step) as usize;
+            let sr = &pr[base..base + TILE];
+            let sg = &pg[base..base + TILE];
+            let sb = &pb[base..base + TILE];
+            let sa = &pa[base..base + TILE];
+            let sc = &pc[base..base + TILE];
+            let sia = &pia[base..base + TILE];
+            for x in 0..TILE {
+                let rs = sc[x].abs();
+                let cover_far = (rs.min(rp[x]) - tap.norm_far + 0.5).clamp(0.0, 1.0);
+                let wf = cover_far * sia[x];
+                let d = [sr[x] - cr[x], sg[x] - cg[x], sb[x] - cb[x], sa[x] - ca[x]];
+                for k in 0..4 {
+                    far[k][x] += wf * d[k];
+                }
+                far_weight[x] += wf;
             }
-            far_weight[x] += wf;
-            opacity[x] += wn;
+        }
+    }
+    if near_field {
+        for tap in taps {
+            let base = (start as isize + tap.step) as usize;
+            let sr = &pr[base..base + TILE];
+            let sg = &pg[base..base + TILE];
+            let sb = &pb[base..base + TILE];
+            let sa = &pa[base..base + TILE];
+            let sc = &pc[base..base + TILE];
+            let sia = &pia[base..base + TILE];
+            for x in 0..TILE {
+                let rs = sc[x].abs();
+                let is_far = sc[x] > split[x];
+                let cover_far = (rs.min(rp[x]) - tap.norm_far + 0.5).clamp(0.0, 1.0);
+                let cover_near = (rs - tap.norm_near + 0.5).clamp(0.0, 1.0);
+                let wf = if is_far { cover_far * sia[x] } else { 0.0 };
+                let wn = if is_far {
+                    0.0
+                } else {
+                    cover_near * tap.area * sia[x]
+                };
+                let d = [sr[x] - cr[x], sg[x] - cg[x], sb[x] - cb[x], sa[x] - ca[x]];
+                for k in 0..4 {
+                    far[k][x] += wf * d[k];
+                    near[k][x] += wn * d[k];
+                }
+                far_weight[x] += wf;
+                opacity[x] += wn;
+            }
         }
     }
     let base = [cr, cg, cb, ca];
@@ -316,30 +346,52 @@ fn gather_run(
     }
 }
 
-/// Per tile, the gather radius (px): the largest bokeh radius of any tile whose bokeh can
-/// reach it (0 where none out of focus can). Radii below ε/2 count as in focus.
-pub fn reach(coc: &[f32], width: usize, height: usize, epsilon: f32) -> Vec<f32> {
+/// What the gather needs to know per tile (Sousa's tile min/max CoC).
+pub struct Tiles {
+    /// The gather radius (px): the largest bokeh radius of any tile whose bokeh can reach
+    /// this one (0 where none out of focus can). Radii below ε/2 count as in focus.
+    pub reach: Vec<f32>,
+    /// True where no sample the tile can read is nearer than its own nearest-to-far pixel
+    /// by a layer: the tile min of the neighbourhood against the tile's own max. Such a tile
+    /// has no near field and skips that half of the work (with the same result: its near
+    /// weights would all be 0).
+    pub far_only: Vec<bool>,
+}
+
+/// Tile max |CoC| (the reach) and tile min/max signed CoC (the far-only tiles).
+pub fn tiles(coc: &[f32], width: usize, height: usize, epsilon: f32) -> Tiles {
     let tiles_x = width.div_ceil(TILE);
     let tiles_y = height.div_ceil(TILE);
-    let mut largest = vec![0.0f32; tiles_x * tiles_y];
+    let count = tiles_x * tiles_y;
+    let mut largest = vec![0.0f32; count];
+    // Signed radii, as the gather compares them.
+    let mut lowest = vec![f32::INFINITY; count];
+    let mut highest = vec![f32::NEG_INFINITY; count];
     for (y, row) in coc.chunks(width).enumerate() {
         for (x, &c) in row.iter().enumerate() {
-            let t = &mut largest[(y / TILE) * tiles_x + x / TILE];
+            let t = (y / TILE) * tiles_x + x / TILE;
             let r = 0.5 * c.abs();
-            if r >= 0.5 * epsilon && r > *t {
-                *t = r;
+            if r >= 0.5 * epsilon && r > largest[t] {
+                largest[t] = r;
             }
+            lowest[t] = lowest[t].min(0.5 * c);
+            highest[t] = highest[t].max(0.5 * c);
         }
     }
     let overall = largest.iter().fold(0.0f32, |m, &r| m.max(r));
     let span = ((overall + 1.0) / TILE as f32).ceil() as isize;
-    let mut reach = vec![0.0f32; tiles_x * tiles_y];
+    let mut reach = vec![0.0f32; count];
+    let mut far_only = vec![false; count];
     for ty in 0..tiles_y as isize {
         for tx in 0..tiles_x as isize {
             let mut best = 0.0f32;
+            // The taps of this tile stay within `span` tiles (its radius + 1 px).
+            let mut nearest = f32::INFINITY;
             for oy in (ty - span).max(0)..=(ty + span).min(tiles_y as isize - 1) {
                 for ox in (tx - span).max(0)..=(tx + span).min(tiles_x as isize - 1) {
-                    let r = largest[oy as usize * tiles_x + ox as usize];
+                    let other = oy as usize * tiles_x + ox as usize;
+                    nearest = nearest.min(lowest[other]);
+                    let r = largest[other];
                     if r <= best {
                         continue;
                     }
@@ -351,8 +403,11 @@ pub fn reach(coc: &[f32], width: usize, height: usize, epsilon: f32) -> Vec<f32>
                     }
                 }
             }
-            reach[ty as usize * tiles_x + tx as usize] = best;
+            let t = ty as usize * tiles_x + tx as usize;
+            reach[t] = best;
+            // The gather's test: a sample is far when its radius > the pixel's − LAYER/2.
+            far_only[t] = nearest > highest[t] - 0.5 * LAYER;
         }
     }
-    reach
+    Tiles { reach, far_only }
 }
