@@ -411,3 +411,29 @@ pub fn tiles(coc: &[f32], width: usize, height: usize, epsilon: f32) -> Tiles {
     }
     Tiles { reach, far_only }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tiles_know_their_reach_and_whether_a_near_field_can_reach_them() {
+        // 64×16: four tiles in a row. CoC (diameter) 10 behind everywhere, but −20 (in
+        // front) in the first tile.
+        let (w, h) = (64, 16);
+        let coc: Vec<f32> = (0..w * h)
+            .map(|i| if i % w < 16 { -20.0 } else { 10.0 })
+            .collect();
+        let t = tiles(&coc, w, h, 1.0);
+        // Radius 10 reaches the second tile from the first; the others see radius 5.
+        assert_eq!(t.reach, vec![10.0, 10.0, 5.0, 5.0]);
+        // Neighbourhoods span ceil((10 + 1) / 16) = 1 tile each way. The front tile has
+        // nothing nearer than itself; the second has the front tile beside it; the third
+        // and fourth see only radius 5.
+        assert_eq!(t.far_only, vec![true, false, true, true]);
+        // All in focus: nothing to gather, nothing near.
+        let t = tiles(&vec![0.2; w * h], w, h, 1.0);
+        assert_eq!(t.reach, vec![0.0; 4]);
+        assert_eq!(t.far_only, vec![true; 4]);
+    }
+}
