@@ -81,15 +81,25 @@ fn tile_taps(
             offsets.push(((tap.dx as isize, tap.dy as isize), tap.area));
         }
     } else {
+        // Which entry of `offsets` each whole-pixel offset went to, on a square a pixel wider
+        // than the radius each way (a lookup instead of a search; the same entries in the
+        // same order, their areas summed in tap order).
+        let half = whole as isize + 1;
+        let side = (2 * half + 1) as usize;
+        let mut entry = vec![usize::MAX; side * side];
         for tap in &rings[1..] {
             let key = (
                 (tap.dx * radius + 0.5).floor() as isize,
                 (tap.dy * radius + 0.5).floor() as isize,
             );
             let area = tap.area * radius * radius;
-            match offsets.iter_mut().find(|(k, _)| *k == key) {
+            let slot = &mut entry[((key.1 + half) as usize) * side + (key.0 + half) as usize];
+            match offsets.get_mut(*slot) {
                 Some((_, a)) => *a += area,
-                None => offsets.push((key, area)),
+                None => {
+                    *slot = offsets.len();
+                    offsets.push((key, area));
+                }
             }
         }
     }
