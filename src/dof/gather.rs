@@ -291,7 +291,9 @@ fn gather_run(
     let mut opacity = [0.0f32; TILE];
     if !near_field {
         // No sample is near: the far half of the loop below, alone (same bits: there every
-        // near weight would be 0).
+        // near weight would be 0). The six lane slices are spelt out in both loops: taking
+        // them through one helper (an array `map`) lost the vectorisation (699 ms against
+        // ~250 at 1080p).
         for tap in taps {
             let base = (start as isize + tap.step) as usize;
             let sr = &pr[base..base + TILE];
