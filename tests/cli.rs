@@ -70,22 +70,29 @@ fn blender_multilayer_frame_with_preset_copies_rgb_exactly() {
     assert_exact(channel(&written, "B"), &b, "B");
 }
 
+/// `--color`, `--depth` and `--velocity` of the shipped 3-frame canonical fixture.
+fn canonical_fixture_passes() -> Vec<String> {
+    let root = env!("CARGO_MANIFEST_DIR");
+    ["color", "depth", "velocity"]
+        .iter()
+        .flat_map(|pass| {
+            [
+                format!("--{pass}"),
+                format!("{root}/fixtures/canonical/{pass}.####.exr"),
+            ]
+        })
+        .collect()
+}
+
 #[test]
 fn shipped_fixtures_run_as_in_the_readme() {
     let dir = tempfile::tempdir().unwrap();
     let root = env!("CARGO_MANIFEST_DIR");
     let out = format!("{}/blur.####.exr", dir.path().display());
-    let o = shutter(&[
-        "blur",
-        "--color",
-        &format!("{root}/fixtures/canonical/color.####.exr"),
-        "--depth",
-        &format!("{root}/fixtures/canonical/depth.####.exr"),
-        "--velocity",
-        &format!("{root}/fixtures/canonical/velocity.####.exr"),
-        "-o",
-        &out,
-    ]);
+    let mut args = vec!["blur".to_string()];
+    args.extend(canonical_fixture_passes());
+    args.extend(["-o".to_string(), out]);
+    let o = shutter(&args.iter().map(String::as_str).collect::<Vec<_>>());
     assert!(o.status.success(), "{}", stderr(&o));
     for frame in 1..=3 {
         let input = read_exr_reference(std::path::Path::new(&format!(
@@ -680,21 +687,14 @@ fn output_is_bit_identical_for_any_thread_count() {
 #[test]
 fn a_sequence_warns_once_about_derived_motion() {
     let dir = tempfile::tempdir().unwrap();
-    let root = env!("CARGO_MANIFEST_DIR");
-    let o = shutter(&[
-        "blur",
-        "--algorithm",
-        "scatter",
-        "--color",
-        &format!("{root}/fixtures/canonical/color.####.exr"),
-        "--depth",
-        &format!("{root}/fixtures/canonical/depth.####.exr"),
-        "--velocity",
-        &format!("{root}/fixtures/canonical/velocity.####.exr"),
-        "-o",
-        &format!("{}/o.####.exr", dir.path().display()),
-        "--verbose",
+    let mut args = vec!["blur".to_string(), "--algorithm".into(), "scatter".into()];
+    args.extend(canonical_fixture_passes());
+    args.extend([
+        "-o".to_string(),
+        format!("{}/o.####.exr", dir.path().display()),
+        "--verbose".into(),
     ]);
+    let o = shutter(&args.iter().map(String::as_str).collect::<Vec<_>>());
     assert!(o.status.success(), "{}", stderr(&o));
     // Three frames, next derived from velocity in each: one warning.
     assert_eq!(

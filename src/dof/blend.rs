@@ -137,13 +137,16 @@ pub fn blend(color: &Color, coc: &[f32], width: usize, height: usize, params: &D
     let interpolator = |c: f32| ((c.abs() - epsilon) / (largest - epsilon)).clamp(0.0, 1.0);
 
     // Sanitised input, offset by one reference colour so a uniform frame stays exact.
-    let mut inputs: Vec<Vec<f32>> = vec![color.r.clone(), color.g.clone(), color.b.clone()];
-    if let Some(a) = &color.a {
-        inputs.push(a.clone());
-    }
-    for plane in &mut inputs {
-        plane.iter_mut().for_each(|v| *v = sanitize_color(*v));
-    }
+    let inputs: Vec<Vec<f32>> = [
+        Some(&color.r),
+        Some(&color.g),
+        Some(&color.b),
+        color.a.as_ref(),
+    ]
+    .into_iter()
+    .flatten()
+    .map(|plane| plane.iter().map(|&v| sanitize_color(v)).collect())
+    .collect();
     let reference: Vec<f32> = inputs.iter().map(|p| p[0]).collect();
     let channels = inputs.len();
 
@@ -160,9 +163,8 @@ pub fn blend(color: &Color, coc: &[f32], width: usize, height: usize, params: &D
             y1 = y1.max(y);
         }
     }
-    let mut out: Vec<Vec<f32>> = inputs.clone();
     if x0 > x1 {
-        return to_color(out, color.a.is_some());
+        return to_color(inputs, color.a.is_some());
     }
     let grow = 2 * reach;
     let (bx0, by0) = (x0.saturating_sub(grow), y0.saturating_sub(grow));
@@ -227,6 +229,8 @@ pub fn blend(color: &Color, coc: &[f32], width: usize, height: usize, params: &D
             (y, row)
         })
         .collect();
+    // The rows are made: the input planes become the output.
+    let mut out = inputs;
     for (y, row) in rows {
         for (k, values) in row.into_iter().enumerate() {
             let start = (by0 + y) * width + bx0;

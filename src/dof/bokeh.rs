@@ -11,7 +11,8 @@
 //! morph `r_ngon = r·cos(π/n) / cos(θ − (2π/n)·floor((n·θ + π)/(2π)))` (his f = 1: a fully
 //! polygonal aperture), and the area a tap stands for grows with the square of that factor.
 //! The same polygon gives the "norm" used for coverage: a point o lies inside the n-gon of
-//! circumradius r when `norm(o) ≤ r`.
+//! circumradius r when `norm(o) ≤ r`. The gather takes it of each tap's whole-pixel offset
+//! (of o for the near field, where the image is turned over, and of −o for the far field).
 
 use std::f32::consts::PI;
 
@@ -75,10 +76,6 @@ pub struct Tap {
     /// The area this tap stands for, in units of radius²; the taps' areas sum to the
     /// shape's area (out to the outer ring's half step).
     pub area: f32,
-    /// The shape's norm of the offset (for a source behind the focus plane, whose bokeh is
-    /// the aperture) and of the negated offset (in front, where the image is turned over).
-    pub norm_far: f32,
-    pub norm_near: f32,
 }
 
 /// The taps of `rings` rings for the aperture, the centre first.
@@ -89,8 +86,6 @@ pub fn taps(rings: usize, aperture: &Aperture) -> Vec<Tap> {
         dx: 0.0,
         dy: 0.0,
         area: PI * (0.5 * step) * (0.5 * step),
-        norm_far: 0.0,
-        norm_near: 0.0,
     }];
     for k in 1..=rings {
         let count = 8 * k;
@@ -105,8 +100,6 @@ pub fn taps(rings: usize, aperture: &Aperture) -> Vec<Tap> {
                 dx,
                 dy,
                 area: area * scale * scale,
-                norm_far: aperture.norm(-dx, -dy),
-                norm_near: aperture.norm(dx, dy),
             });
         }
     }
@@ -122,21 +115,12 @@ pub fn grid(radius: usize, aperture: &Aperture) -> Vec<Tap> {
         dx: 0.0,
         dy: 0.0,
         area: 1.0,
-        norm_far: 0.0,
-        norm_near: 0.0,
     }];
     for oy in -r..=r {
         for ox in -r..=r {
             let (dx, dy) = (ox as f32, oy as f32);
-            let near = aperture.norm(dx, dy);
-            if (ox, oy) != (0, 0) && near <= radius as f32 + 0.5 {
-                taps.push(Tap {
-                    dx,
-                    dy,
-                    area: 1.0,
-                    norm_far: aperture.norm(-dx, -dy),
-                    norm_near: near,
-                });
+            if (ox, oy) != (0, 0) && aperture.norm(dx, dy) <= radius as f32 + 0.5 {
+                taps.push(Tap { dx, dy, area: 1.0 });
             }
         }
     }
@@ -159,7 +143,8 @@ mod tests {
             assert!((sum - PI * outer * outer).abs() < 1e-4, "{rings}: {sum}");
             for tap in &t {
                 let r = (tap.dx * tap.dx + tap.dy * tap.dy).sqrt();
-                assert!((tap.norm_far - r).abs() < 1e-5 && (tap.norm_near - r).abs() < 1e-5);
+                let (far, near) = (round.norm(-tap.dx, -tap.dy), round.norm(tap.dx, tap.dy));
+                assert!((far - r).abs() < 1e-5 && (near - r).abs() < 1e-5);
             }
         }
     }
@@ -192,7 +177,7 @@ mod tests {
         // A pentagon is not symmetric: the near field sees it turned over.
         let pentagon = Aperture::new(5, 0.0);
         let tap = taps(2, &pentagon)[3];
-        assert!((tap.norm_far - tap.norm_near).abs() > 1e-3);
+        assert!((pentagon.norm(-tap.dx, -tap.dy) - pentagon.norm(tap.dx, tap.dy)).abs() > 1e-3);
         // Rotating the blades turns the shape.
         let turned = Aperture::new(6, 30.0);
         assert!((turned.extent(PI / 6.0) - (PI / 6.0).cos()).abs() < 1e-5);

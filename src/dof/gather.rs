@@ -63,55 +63,59 @@ struct PixelTap {
     area: f32,
 }
 
-/// The taps of a tile whose gather radius is `radius`: the whole-pixel neighbourhood when the
-/// radius is at most `rings` px, else the rings scaled to the radius and snapped to whole
-/// pixels, taps landing on the same pixel merged (their areas summed). Norms are those of the
-/// whole-pixel offset, so distances are exact. The centre is left out (p counts itself).
-fn tile_taps(
-    radius: f32,
-    grids: &[Vec<Tap>],
-    rings: &[Tap],
-    aperture: &Aperture,
-    stride: isize,
-) -> Vec<PixelTap> {
+/// A whole-pixel offset with the area it stands for, as a tap of a tile's pattern: its index
+/// step in the padded planes and the aperture norms of the offset (of −offset for the far
+/// field, whose bokeh is the aperture; of the offset for the near field, turned over).
+fn pixel_tap((dx, dy): (isize, isize), area: f32, aperture: &Aperture, stride: isize) -> PixelTap {
+    PixelTap {
+        step: dy * stride + dx,
+        norm_far: aperture.norm(-dx as f32, -dy as f32),
+        norm_near: aperture.norm(dx as f32, dy as f32),
+        area,
+    }
+}
+
+/// The whole-pixel neighbourhood of radius `radius` px as taps, the centre left out (p counts
+/// itself). The same for every tile with that whole radius, so made once per radius.
+fn grid_taps(radius: usize, aperture: &Aperture, stride: isize) -> Vec<PixelTap> {
+    grid(radius, aperture)[1..]
+        .iter()
+        .map(|t| pixel_tap((t.dx as isize, t.dy as isize), t.area, aperture, stride))
+        .collect()
+}
+
+/// The taps of a tile whose gather radius is `radius`, larger than the grids go: the rings
+/// scaled to the radius and snapped to whole pixels, taps landing on the same pixel merged
+/// (their areas summed). Norms are those of the whole-pixel offset, so distances are exact.
+/// The centre is left out (p counts itself).
+fn ring_taps(radius: f32, rings: &[Tap], aperture: &Aperture, stride: isize) -> Vec<PixelTap> {
     let whole = radius.ceil() as usize;
     let mut offsets: Vec<((isize, isize), f32)> = Vec::new();
-    if whole < grids.len() {
-        for tap in &grids[whole][1..] {
-            offsets.push(((tap.dx as isize, tap.dy as isize), tap.area));
-        }
-    } else {
-        // Which entry of `offsets` each whole-pixel offset went to, on a square a pixel wider
-        // than the radius each way (a lookup instead of a search; the same entries in the
-        // same order, their areas summed in tap order).
-        let half = whole as isize + 1;
-        let side = (2 * half + 1) as usize;
-        let mut entry = vec![usize::MAX; side * side];
-        for tap in &rings[1..] {
-            let key = (
-                (tap.dx * radius + 0.5).floor() as isize,
-                (tap.dy * radius + 0.5).floor() as isize,
-            );
-            let area = tap.area * radius * radius;
-            let slot = &mut entry[((key.1 + half) as usize) * side + (key.0 + half) as usize];
-            match offsets.get_mut(*slot) {
-                Some((_, a)) => *a += area,
-                None => {
-                    *slot = offsets.len();
-                    offsets.push((key, area));
-                }
+    // Which entry of `offsets` each whole-pixel offset went to, on a square a pixel wider
+    // than the radius each way (a lookup instead of a search; the same entries in the same
+    // order, their areas summed in tap order).
+    let half = whole as isize + 1;
+    let side = (2 * half + 1) as usize;
+    let mut entry = vec![usize::MAX; side * side];
+    for tap in &rings[1..] {
+        let key = (
+            (tap.dx * radius + 0.5).floor() as isize,
+            (tap.dy * radius + 0.5).floor() as isize,
+        );
+        let area = tap.area * radius * radius;
+        let slot = &mut entry[((key.1 + half) as usize) * side + (key.0 + half) as usize];
+        match offsets.get_mut(*slot) {
+            Some((_, a)) => *a += area,
+            None => {
+                *slot = offsets.len();
+                offsets.push((key, area));
             }
         }
     }
     offsets
         .into_iter()
-        .filter(|((dx, dy), _)| (*dx, *dy) != (0, 0))
-        .map(|((dx, dy), area)| PixelTap {
-            step: dy * stride + dx,
-            norm_far: aperture.norm(-dx as f32, -dy as f32),
-            norm_near: aperture.norm(dx as f32, dy as f32),
-            area,
-        })
+        .filter(|(key, _)| *key != (0, 0))
+        .map(|(key, area)| pixel_tap(key, area, aperture, stride))
         .collect()
 }
 
@@ -187,7 +191,6 @@ pub fn gather(
     // Bokeh radii up to `rings` px gather every pixel of their neighbourhood (`grid`, in
     // pixels); larger ones the rings (in units of the radius), which are then at least a
     // pixel apart.
-    let grids: Vec<Vec<Tap>> = (0..=params.rings).map(|r| grid(r, &aperture)).collect();
     let rings = taps(params.rings, &aperture);
     let unit_area = aperture.unit_area();
     let has_alpha = color.a.is_some();
@@ -196,6 +199,10 @@ pub fn gather(
     let largest = reach.iter().fold(0.0f32, |m, &r| m.max(r));
     let pad = largest.ceil() as usize + 2;
     let padded = Padded::new(color, coc, width, height, pad, unit_area);
+    let stride = padded.stride as isize;
+    let grids: Vec<Vec<PixelTap>> = (0..=params.rings)
+        .map(|r| grid_taps(r, &aperture, stride))
+        .collect();
     let tiles_x = width.div_ceil(TILE);
     let half_focus = (0.5 * params.epsilon).max(SMALLEST_RADIUS);
 
@@ -225,12 +232,20 @@ pub fn gather(
                     }
                     continue;
                 }
-                let taps = tile_taps(radius, &grids, &rings, &aperture, padded.stride as isize);
+                let whole = radius.ceil() as usize;
+                let made;
+                let taps = match grids.get(whole) {
+                    Some(grid) => grid,
+                    None => {
+                        made = ring_taps(radius, &rings, &aperture, stride);
+                        &made
+                    }
+                };
                 for row in 0..rows {
                     let start = padded.index(x0, ty * TILE + row);
                     let mut result = [[0.0f32; TILE]; 4];
                     let near = !tiles.far_only[ty * tiles_x + tx];
-                    gather_run(&padded, start, span, &taps, near, &mut result);
+                    gather_run(&padded, start, span, taps, near, &mut result);
                     for (k, band) in bands.iter_mut().enumerate() {
                         band[row * width + x0..row * width + x0 + span]
                             .copy_from_slice(&result[k][..span]);
