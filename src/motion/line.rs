@@ -60,30 +60,33 @@ pub struct Span {
 /// [i, i+1) × [j, j+1)), one [`Span`] per column (row) it crosses near `clip`.
 #[inline(always)]
 pub fn draw_spans(a: [f64; 2], b: [f64; 2], clip: Clip, mut span: impl FnMut(Span)) {
-    if !(a.iter().chain(&b).all(|v| v.is_finite())) {
+    let Some(walk) = Walk::new(a, b, clip) else {
         return;
-    }
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    if dx == 0.0 && dy == 0.0 {
-        return;
-    }
-    if dx.abs() >= dy.abs() {
-        draw_major(a, b, (clip.x0, clip.x1), (clip.y0, clip.y1), span);
-    } else {
-        // The same walk with the axes swapped.
-        draw_major(
-            [a[1], a[0]],
-            [b[1], b[0]],
-            (clip.y0, clip.y1),
-            (clip.x0, clip.x1),
-            |s: Span| {
-                span(Span {
-                    first: (s.first.1, s.first.0),
-                    second: (s.second.1, s.second.0),
-                    ..s
-                })
-            },
-        );
+    };
+    let (rows, pixel) = (walk.rows.0..walk.rows.1, |major: i64, minor: i64| {
+        if walk.swapped {
+            (minor, major)
+        } else {
+            (major, minor)
+        }
+    });
+    for column in walk.first..=walk.last {
+        let c = walk.column(column);
+        let c0 = if rows.contains(&c.row) { c.c0 } else { 0.0 };
+        let c1 = if rows.contains(&(c.row + 1)) {
+            c.c1
+        } else {
+            0.0
+        };
+        if c0 > 0.0 || c1 > 0.0 {
+            span(Span {
+                first: pixel(column, c.row),
+                second: pixel(column, c.row + 1),
+                c0,
+                c1,
+                u: c.u,
+            });
+        }
     }
 }
 
@@ -101,89 +104,202 @@ pub fn draw(a: [f64; 2], b: [f64; 2], clip: Clip, mut deposit: impl FnMut(i64, i
     });
 }
 
-/// The walk along x (|dx| ≥ |dy| > 0 or dx ≠ 0).
-#[inline(always)]
-fn draw_major(
+/// How far outside a clip's rows (columns, for a walk along y) a [`Walk`]'s rows can fall:
+/// row and row + 1 of every walked column lie in `y0 − OVERHANG .. y1 + OVERHANG`.
+pub const OVERHANG: i64 = 4;
+
+/// A segment's walk along its major axis, for callers that deposit coverage themselves (the
+/// hot loop of `scatter`): columns `first..=last` (rows where `swapped`, the walk along y),
+/// each split by [`Walk::column`] between two rows. Unlike [`draw_spans`] it leaves the
+/// minor axis unclipped: rows may overhang the clip by up to [`OVERHANG`] pixels.
+#[derive(Clone, Copy, Debug)]
+pub struct Walk {
+    /// The walk runs along y: a column is a pixel row and its "rows" are pixel columns.
+    pub swapped: bool,
+    pub first: i64,
+    pub last: i64,
+    /// The clip along the minor axis: rows `rows.0..rows.1`.
+    pub rows: (i64, i64),
     a: [f64; 2],
-    b: [f64; 2],
-    (x0, x1): (i64, i64),
-    (y0, y1): (i64, i64),
-    mut span: impl FnMut(Span),
-) {
-    if x0 >= x1 || y0 >= y1 {
-        return;
+    lo: f64,
+    hi: f64,
+    inverse: f64,
+    slope: f64,
+    stretch: f64,
+}
+
+/// The columns a [`Walk`] crosses whole, `first..=last` (empty where `last < first`), with
+/// the walk's rows in fixed point, so stepping a column costs a few integer operations: at
+/// column `first + k`, the segment is at row coordinate `(y + k·step) / 2³²` (the rows'
+/// centres at integers) and at `u + k·du` along it, and the column's coverage is `coverage`.
+/// `first` is in `walk.first..=walk.last + 1` and `last` in `first − 1..=walk.last`, so the
+/// walk's other columns are `walk.first..first` and `last + 1..=walk.last`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Whole {
+    pub first: i64,
+    pub last: i64,
+    pub y: i64,
+    pub step: i64,
+    pub u: f64,
+    pub du: f64,
+    pub coverage: f64,
+}
+
+/// One in 2³² of a pixel: the resolution of [`Whole`]'s fixed point.
+pub const FIXED: f64 = 4294967296.0;
+
+impl Whole {
+    /// The column `k` steps after `first`, as [`Walk::column`] gives it (to fixed-point
+    /// rounding).
+    #[inline(always)]
+    pub fn column(&self, k: i64) -> Column {
+        let y = self.y.wrapping_add(self.step.wrapping_mul(k));
+        let f = (y as u32) as f64 * (1.0 / FIXED);
+        Column {
+            row: y >> 32,
+            c0: self.coverage * (1.0 - f),
+            c1: self.coverage * f,
+            u: self.u + k as f64 * self.du,
+        }
     }
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let inverse = 1.0 / dx;
-    let slope = dy * inverse;
-    let stretch = (1.0 + slope * slope).sqrt();
-    let (lo, hi) = (a[0].min(b[0]), a[0].max(b[0]));
-    // Columns the segment covers, inside the clip.
-    let mut first = floor(lo).max(x0 as f64);
-    let mut last = (-floor(-hi) - 1.0).min((x1 - 1) as f64);
-    // Columns where the segment is within reach of the clip's rows: a row j receives
-    // coverage only while the segment is within one pixel of its centre j + ½. With a margin
-    // of a column each side, so the clip never changes a column's own coverage.
-    if slope != 0.0 {
+}
+
+/// One column of a [`Walk`]: rows `row` and `row + 1` get coverages `c0` and `c1` (neither
+/// negative), measured at `u` along the segment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Column {
+    pub row: i64,
+    pub c0: f64,
+    pub c1: f64,
+    pub u: f64,
+}
+
+impl Walk {
+    /// The walk of the segment from `a` to `b` over the columns near `clip`; `None` where it
+    /// covers nothing there (or is degenerate or not finite).
+    #[inline(always)]
+    pub fn new(a: [f64; 2], b: [f64; 2], clip: Clip) -> Option<Walk> {
+        if !(a.iter().chain(&b).all(|v| v.is_finite())) {
+            return None;
+        }
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        if dx == 0.0 && dy == 0.0 {
+            return None;
+        }
+        if dx.abs() >= dy.abs() {
+            Walk::major(a, b, (clip.x0, clip.x1), (clip.y0, clip.y1), false)
+        } else {
+            // The same walk with the axes swapped.
+            Walk::major(
+                [a[1], a[0]],
+                [b[1], b[0]],
+                (clip.y0, clip.y1),
+                (clip.x0, clip.x1),
+                true,
+            )
+        }
+    }
+
+    /// The walk along x (|dx| ≥ |dy| > 0 or dx ≠ 0).
+    #[inline(always)]
+    fn major(
+        a: [f64; 2],
+        b: [f64; 2],
+        (x0, x1): (i64, i64),
+        (y0, y1): (i64, i64),
+        swapped: bool,
+    ) -> Option<Walk> {
+        if x0 >= x1 || y0 >= y1 {
+            return None;
+        }
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let inverse = 1.0 / dx;
+        let slope = dy * inverse;
+        let stretch = (1.0 + slope * slope).sqrt();
+        let (lo, hi) = (a[0].min(b[0]), a[0].max(b[0]));
+        // Columns the segment covers, inside the clip.
+        let mut first = floor(lo).max(x0 as f64);
+        let mut last = (-floor(-hi) - 1.0).min((x1 - 1) as f64);
+        // Columns where the segment is within reach of the clip's rows: a row j receives
+        // coverage only while the segment is within one pixel of its centre j + ½. With a
+        // margin of a column each side, so the clip never changes a column's own coverage.
+        // (In those columns the middle of the segment's piece is within 2.5 columns, so, as
+        // |slope| ≤ 1, 2.5 rows, of [y0 − ½, y1 + ½]: rows y0 − 3 to y1 + 3 at most.)
         let (ylo, yhi) = (y0 as f64 - 0.5, y1 as f64 + 0.5);
-        let run = dx / dy;
-        let xa = a[0] + (ylo - a[1]) * run;
-        let xb = a[0] + (yhi - a[1]) * run;
-        first = first.max(floor(xa.min(xb)) - 1.0);
-        last = last.min(-floor(-xa.max(xb)) + 1.0);
-    } else if a[1] < y0 as f64 - 0.5 || a[1] > y1 as f64 + 0.5 {
-        return;
+        let inside = a[1].min(b[1]) >= ylo && a[1].max(b[1]) <= yhi;
+        // A segment inside that band is within reach of the rows all along: nothing to cut.
+        if slope != 0.0 && !inside {
+            let run = dx / dy;
+            let xa = a[0] + (ylo - a[1]) * run;
+            let xb = a[0] + (yhi - a[1]) * run;
+            first = first.max(floor(xa.min(xb)) - 1.0);
+            last = last.min(-floor(-xa.max(xb)) + 1.0);
+        } else if slope == 0.0 && !inside {
+            return None;
+        }
+        if first.is_nan() || last.is_nan() || first > last {
+            return None;
+        }
+        Some(Walk {
+            swapped,
+            first: first as i64,
+            last: last as i64,
+            rows: (y0, y1),
+            a,
+            lo,
+            hi,
+            inverse,
+            slope,
+            stretch,
+        })
     }
-    if first.is_nan() || last.is_nan() || first > last {
-        return;
+
+    /// The columns in `first..=last` that the segment crosses whole.
+    #[inline(always)]
+    pub fn whole(&self) -> Whole {
+        let (first, last) = (self.first as f64, self.last as f64);
+        // ⌈lo⌉ and ⌊hi⌋ − 1, clamped first (they may be far off-screen).
+        let start = (-floor(-self.lo)).clamp(first, last + 1.0);
+        let end = (floor(self.hi) - 1.0).clamp(start - 1.0, last);
+        let along = start + 0.5 - self.a[0];
+        // Row coordinate of the segment at the column's middle, rows' centres at integers;
+        // near the clip, so far inside the fixed point's ±2³¹ pixels.
+        let y = self.a[1] + self.slope * along - 0.5;
+        Whole {
+            first: start as i64,
+            last: end as i64,
+            y: (y * FIXED) as i64,
+            step: (self.slope * FIXED) as i64,
+            u: along * self.inverse,
+            du: self.inverse,
+            coverage: self.stretch,
+        }
     }
-    let (first, last) = (first as i64, last as i64);
-    // One column: the segment's piece in it is [left, right] along x.
-    let mut column_span = |column: i64, left: f64, right: f64| {
+
+    /// Column `column` (in `first..=last`): the exact length of the segment inside it, split
+    /// between the two rows whose centres bracket the segment at the middle of that piece.
+    #[inline(always)]
+    pub fn column(&self, column: i64) -> Column {
+        let c = column as f64;
+        // The segment's piece in the column, [left, right] along x: the whole column inside
+        // the segment, else clipped at its fractional end points (never empty in
+        // first..=last, where lo < c + 1 and c < hi).
+        let (left, right) = (self.lo.max(c), self.hi.min(c + 1.0));
         let middle = 0.5 * (left + right);
-        let along = middle - a[0];
-        let u = along * inverse;
-        let y = a[1] + slope * along;
-        let coverage = (right - left) * stretch;
+        let along = middle - self.a[0];
+        let u = along * self.inverse;
+        let y = self.a[1] + self.slope * along;
+        let coverage = (right - left) * self.stretch;
         // Split between the two rows whose centres bracket y. Within the walked columns
         // y is near the clip, so shifting by 2³¹ makes truncation a floor.
         let v = y - 0.5 + ROW_SHIFT;
         let shifted = v as i64;
         let f = v - shifted as f64;
-        let row = shifted - ROW_SHIFT as i64;
-        let c0 = if (y0..y1).contains(&row) {
-            coverage * (1.0 - f)
-        } else {
-            0.0
-        };
-        let c1 = if (y0..y1).contains(&(row + 1)) {
-            coverage * f
-        } else {
-            0.0
-        };
-        if c0 > 0.0 || c1 > 0.0 {
-            span(Span {
-                first: (column, row),
-                second: (column, row + 1),
-                c0,
-                c1,
-                u,
-            });
-        }
-    };
-    // Columns the segment crosses whole are [inner_first, inner_last]; the end columns hold
-    // its fractional end points.
-    let inner_first = (-floor(-lo)) as i64;
-    let inner_last = floor(hi) as i64 - 1;
-    for column in first..=last {
-        let c = column as f64;
-        if column >= inner_first && column <= inner_last {
-            column_span(column, c, c + 1.0);
-        } else {
-            let (left, right) = (lo.max(c), hi.min(c + 1.0));
-            if right > left {
-                column_span(column, left, right);
-            }
+        Column {
+            row: shifted - ROW_SHIFT as i64,
+            c0: coverage * (1.0 - f),
+            c1: coverage * f,
+            u,
         }
     }
 }
@@ -286,6 +402,73 @@ mod tests {
         // Entirely outside: nothing, quickly.
         assert_eq!(total([-1e9, -5e8], [1e9, -4e8], clip).1, 0);
         assert_eq!(total([1e12, 3.0], [1e12 + 5.0, 3.0], clip).1, 0);
+    }
+
+    #[test]
+    fn a_walk_overhangs_its_clip_by_at_most_overhang() {
+        let clip = Clip {
+            x0: 10,
+            y0: 20,
+            x1: 30,
+            y1: 25,
+        };
+        let mut columns = 0;
+        for k in 0..20_000u64 {
+            let r = |i: u64| hash01(10, k, i, 0) * 60.0 - 10.0;
+            let Some(walk) = Walk::new([r(0), r(1)], [r(2), r(3)], clip) else {
+                continue;
+            };
+            let (major, minor) = if walk.swapped {
+                ((clip.y0, clip.y1), (clip.x0, clip.x1))
+            } else {
+                ((clip.x0, clip.x1), (clip.y0, clip.y1))
+            };
+            assert_eq!(walk.rows, minor);
+            assert!(walk.first >= major.0 && walk.last < major.1);
+            for column in walk.first..=walk.last {
+                let c = walk.column(column);
+                assert!(c.row >= minor.0 - OVERHANG && c.row + 1 < minor.1 + OVERHANG);
+                assert!(c.c0 >= 0.0 && c.c1 >= 0.0);
+                columns += 1;
+            }
+        }
+        assert!(columns > 10_000, "{columns}");
+    }
+
+    #[test]
+    fn whole_columns_step_like_the_walk() {
+        let clip = Clip {
+            x0: -5,
+            y0: 3,
+            x1: 70,
+            y1: 50,
+        };
+        let mut whole_columns = 0;
+        for k in 0..5_000u64 {
+            let r = |i: u64| hash01(11, k, i, 0) * 100.0 - 20.0;
+            let Some(walk) = Walk::new([r(0), r(1)], [r(2), r(3)], clip) else {
+                continue;
+            };
+            let whole = walk.whole();
+            assert!((walk.first..=walk.last + 1).contains(&whole.first));
+            assert!((whole.first - 1..=walk.last).contains(&whole.last));
+            for column in walk.first..=walk.last {
+                let exact = walk.column(column);
+                let is_whole = (whole.first..=whole.last).contains(&column);
+                // A column is whole exactly where its coverage is the full stretch.
+                let full = (exact.c0 + exact.c1 - walk.stretch).abs() < 1e-12;
+                assert_eq!(is_whole, full, "{k}: column {column}");
+                if is_whole {
+                    let stepped = whole.column(column - whole.first);
+                    let at = |c: &Column| c.row as f64 + c.c1 / (c.c0 + c.c1);
+                    assert!((at(&stepped) - at(&exact)).abs() < 1e-6, "{k}: {column}");
+                    assert!((stepped.c0 + stepped.c1 - walk.stretch).abs() < 1e-12);
+                    assert!((stepped.u - exact.u).abs() < 1e-9);
+                    whole_columns += 1;
+                }
+            }
+        }
+        assert!(whole_columns > 20_000, "{whole_columns}");
     }
 
     #[test]

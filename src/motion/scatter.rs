@@ -43,7 +43,7 @@ use rayon::prelude::*;
 use super::{sanitize_color, sanitize_depth_far};
 
 use super::curve::{length, Arc, Bezier, Point};
-use super::line::{draw_spans, Clip};
+use super::line::{Clip, Column, Walk, Whole, FIXED, OVERHANG};
 use crate::frame::{Color, Frame, Positions};
 
 /// Positions beyond this many pixels are clamped (still far beyond any image, and well inside
@@ -498,6 +498,11 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
     // Accumulate and normalise tile by tile, into a copy of the input (curves read the input
     // colours while tiles are written); tiles no curve reaches keep it.
     let has_alpha = color.a.is_some();
+    // Where every pixel is opaque, alpha sums equal weight sums: cells then hold four sums.
+    let opaque = color
+        .a
+        .as_ref()
+        .is_none_or(|a| a.par_iter().all(|&v| sanitize_color(v) == 1.0));
     let copy =
         |plane: &[f32]| -> Vec<f32> { plane.par_iter().map(|&v| sanitize_color(v)).collect() };
     let mut out: [Vec<f32>; 4] = [
@@ -521,7 +526,12 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
                 .into_par_iter()
                 .map(|column| {
                     let tx0 = column * TILE_W;
-                    job.tile(&reach, [tx0, ty0, (tx0 + TILE_W).min(width), ty1])
+                    let rect = [tx0, ty0, (tx0 + TILE_W).min(width), ty1];
+                    if opaque {
+                        job.tile::<4>(&reach, rect)
+                    } else {
+                        job.tile::<5>(&reach, rect)
+                    }
                 })
                 .collect();
             let mut planes = [r, g, b, a];
@@ -551,11 +561,22 @@ impl Scatter<'_> {
     /// Accumulates the curves reaching one tile and writes its normalised pixels into
     /// `planes` (the tile's strip of rows).
     /// `None` where no curve reaches the tile.
-    fn tile(&self, reach: &Reach, rect: [usize; 4]) -> Option<Vec<[f32; 4]>> {
+    fn tile<const N: usize>(&self, reach: &Reach, rect: [usize; 4]) -> Option<Vec<[f32; 4]>> {
         let [tx0, ty0, tx1, ty1] = rect;
-        let tw = tx1 - tx0;
+        let (tw, th) = (tx1 - tx0, ty1 - ty0);
         let width = self.width;
-        let mut acc = vec![[0.0f64; 5]; tw * (ty1 - ty0)];
+        // The tile's cells with a border of OVERHANG on every side, where a walk's rows may
+        // land. The border's limit is −∞, so nothing is ever deposited there.
+        let pad = OVERHANG as usize;
+        let pw = tw + 2 * pad;
+        let mut acc = vec![[0.0f64; N]; pw * (th + 2 * pad)];
+        let mut limit = vec![f32::NEG_INFINITY; acc.len()];
+        for y in ty0..ty1 {
+            let o = (y - ty0 + pad) * pw + pad;
+            limit[o..o + tw].copy_from_slice(&self.limit[y * width + tx0..y * width + tx1]);
+        }
+        // Cell of pixel (x, y): origin + x + y·pw.
+        let origin = (pad * pw + pad) as i64 - (ty0 * pw + tx0) as i64;
         let clip = Clip {
             x0: tx0 as i64,
             y0: ty0 as i64,
@@ -597,33 +618,59 @@ impl Scatter<'_> {
                             continue;
                         }
                         reached = true;
+                        // Colour (alpha too unless opaque) and 1 for the weight.
+                        let color: [f64; N] =
+                            std::array::from_fn(|k| if k == N - 1 { 1.0 } else { path.color[k] });
                         for k in 0..path.segments {
+                            let Some(walk) = Walk::new(path.points[k], path.points[k + 1], clip)
+                            else {
+                                continue;
+                            };
                             let (w0, w1) = (path.weights[k], path.weights[k + 1]);
                             let (z0, z1) = (path.depths[k], path.depths[k + 1]);
                             let (dz, dw) = (z1 - z0, w1 - w0);
-                            draw_spans(path.points[k], path.points[k + 1], clip, |s| {
-                                let z = z0 + dz * s.u as f32;
-                                let w = w0 + dw * s.u;
-                                for ((x, y), c) in [(s.first, s.c0), (s.second, s.c1)] {
-                                    let (x, y) = (x as usize, y as usize);
-                                    if c > 0.0 && z <= self.limit[y * width + x] {
-                                        add(
-                                            &mut acc[(y - ty0) * tw + (x - tx0)],
-                                            c * w,
-                                            &path.color,
-                                        );
-                                    }
-                                }
-                            });
+                            // Steps in the cells along the walk's columns and rows.
+                            let (along, across) = if walk.swapped {
+                                (pw as i64, 1)
+                            } else {
+                                (1, pw as i64)
+                            };
+                            let mut segment = Segment {
+                                acc: &mut acc,
+                                limit: &limit,
+                                color: &color,
+                                origin,
+                                along,
+                                across,
+                                z0,
+                                dz,
+                                w0,
+                                dw,
+                            };
+                            // The columns crossed whole step in fixed point; the segment's
+                            // ends (at most one column each side) take the exact walk.
+                            let whole = walk.whole();
+                            for column in walk.first..whole.first {
+                                segment.put(column, walk.column(column));
+                            }
+                            segment.whole(&whole);
+                            for column in whole.last + 1..=walk.last {
+                                segment.put(column, walk.column(column));
+                            }
                         }
                     }
                 }
             }
         }
         reached.then(|| {
-            acc.iter()
-                .enumerate()
-                .map(|(k, cell)| self.resolve(cell, (ty0 + k / tw) * width + tx0 + k % tw, reach))
+            (ty0..ty1)
+                .flat_map(|y| (tx0..tx1).map(move |x| (x, y)))
+                .map(|(x, y)| {
+                    let cell = &acc[(origin + (x + y * pw) as i64) as usize];
+                    // An opaque frame's alpha sums are its weight sums.
+                    let cell = std::array::from_fn(|k| cell[k.min(N - 1)]);
+                    self.resolve(&cell, y * width + x, reach)
+                })
                 .collect()
         })
     }
@@ -654,13 +701,87 @@ impl Scatter<'_> {
     }
 }
 
-/// Adds a deposit of weight `w` and colour `color` to an accumulation cell.
-#[inline]
-fn add(cell: &mut [f64; 5], w: f64, color: &[f64; 4]) {
-    for ch in 0..4 {
-        cell[ch] += w * color[ch];
+/// One segment of a curve being drawn into a tile's cells.
+struct Segment<'a, const N: usize> {
+    acc: &'a mut [[f64; N]],
+    limit: &'a [f32],
+    color: &'a [f64; N],
+    /// Cell of (column, row): origin + column·along + row·across.
+    origin: i64,
+    along: i64,
+    across: i64,
+    /// Depth and weight at the segment's start, and their change along it.
+    z0: f32,
+    dz: f32,
+    w0: f64,
+    dw: f64,
+}
+
+impl<const N: usize> Segment<'_, N> {
+    /// Deposits column `column`'s coverage where the depth test passes.
+    #[inline(always)]
+    fn put(&mut self, column: i64, c: Column) {
+        let z = self.z0 + self.dz * c.u as f32;
+        let w = self.w0 + self.dw * c.u;
+        let i = (self.origin + column * self.along + c.row * self.across) as usize;
+        let j = i + self.across as usize;
+        if z <= self.limit[i] {
+            add(&mut self.acc[i], c.c0 * w, self.color);
+        }
+        if z <= self.limit[j] {
+            add(&mut self.acc[j], c.c1 * w, self.color);
+        }
     }
-    cell[4] += w;
+}
+
+impl<const N: usize> Segment<'_, N> {
+    /// Deposits the columns the segment crosses whole, as [`Segment::put`] would from
+    /// [`Whole::column`], with the steps hoisted: where depth and weight are constant along
+    /// the segment (the box weight and no depth motion), nothing depends on where along it a
+    /// column is.
+    #[inline(always)]
+    fn whole(&mut self, whole: &Whole) {
+        if self.dz == 0.0 && self.dw == 0.0 {
+            self.whole_steps::<false>(whole);
+        } else {
+            self.whole_steps::<true>(whole);
+        }
+    }
+
+    #[inline(always)]
+    fn whole_steps<const VARYING: bool>(&mut self, whole: &Whole) {
+        let (mut y, mut base) = (whole.y, self.origin + whole.first * self.along);
+        let across = self.across;
+        for k in 0..=whole.last - whole.first {
+            let f = (y as u32) as f64 * (1.0 / FIXED);
+            let (c0, c1) = (whole.coverage * (1.0 - f), whole.coverage * f);
+            let (z, w) = if VARYING {
+                let u = whole.u + k as f64 * whole.du;
+                (self.z0 + self.dz * u as f32, self.w0 + self.dw * u)
+            } else {
+                (self.z0, self.w0)
+            };
+            let i = (base + (y >> 32) * across) as usize;
+            let j = i + across as usize;
+            if z <= self.limit[i] {
+                add(&mut self.acc[i], c0 * w, self.color);
+            }
+            if z <= self.limit[j] {
+                add(&mut self.acc[j], c1 * w, self.color);
+            }
+            y = y.wrapping_add(whole.step);
+            base += self.along;
+        }
+    }
+}
+
+/// Adds a deposit of weight `w` and colour `color` to an accumulation cell (the colour's
+/// last channel is 1: the cell's last is the weight).
+#[inline(always)]
+fn add<const N: usize>(cell: &mut [f64; N], w: f64, color: &[f64; N]) {
+    for (sum, c) in cell.iter_mut().zip(color) {
+        *sum += w * c;
+    }
 }
 
 #[cfg(test)]
@@ -690,6 +811,59 @@ mod tests {
         });
         f.next = f.prev.clone();
         f
+    }
+
+    #[test]
+    fn opaque_cells_of_four_sums_give_the_same_bits_as_five() {
+        // A curving, shearing motion over two depth layers, opaque: the four-sum cells (alpha
+        // sums taken from weight sums) against the five-sum cells, tile by tile.
+        let (w, h) = (300, 150);
+        let mut f = still_frame(w, h);
+        let color = f.color.as_mut().unwrap();
+        for i in 0..w * h {
+            let (x, y) = ((i % w) as f32, (i / w) as f32);
+            color.r[i] = (x * 0.37).sin() + 1.0;
+            color.g[i] = (y * 0.21).cos();
+            color.b[i] = ((x + y) * 0.05).fract();
+        }
+        color.a = Some(vec![1.0; w * h]);
+        f.depth = Some(
+            (0..w * h)
+                .map(|i| if i % 7 < 3 { 2.0 } else { 8.0 })
+                .collect(),
+        );
+        let (prev, next) = (f.prev.as_mut().unwrap(), f.next.as_mut().unwrap());
+        for i in 0..w * h {
+            let (x, y) = ((i % w) as f32, (i / w) as f32);
+            prev.x[i] -= 9.0 + y * 0.05;
+            prev.y[i] += 3.0;
+            next.x[i] += 7.0;
+            next.y[i] += 2.0 + x * 0.02;
+        }
+        let color = f.color.as_ref().unwrap();
+        let depth = f.depth.as_ref().unwrap();
+        let mut job = Scatter {
+            width: w,
+            height: h,
+            color,
+            depth,
+            limit: depth.iter().map(|&z| z * 1.02).collect(),
+            prev: f.prev.as_ref().unwrap(),
+            next: f.next.as_ref().unwrap(),
+            params: ScatterParams::default(),
+            half: 0.5,
+        };
+        let reach = Reach::of(&job);
+        let mut drawn = 0;
+        for normalize in [Normalize::Exposure, Normalize::Paper] {
+            job.params.normalize = normalize;
+            for rect in [[0, 0, 256, 128], [256, 0, 300, 128], [0, 128, 256, 150]] {
+                let four = job.tile::<4>(&reach, rect);
+                assert_eq!(four, job.tile::<5>(&reach, rect), "{normalize:?} {rect:?}");
+                drawn += four.is_some() as usize;
+            }
+        }
+        assert_eq!(drawn, 6);
     }
 
     #[test]
@@ -730,7 +904,11 @@ mod tests {
                 let weight = 0.01 + r(4);
                 let mut crossed = false;
                 draw(a, b, clip, |_, _, c, _| {
-                    add(&mut cell, c * weight, &own);
+                    add(
+                        &mut cell,
+                        c * weight,
+                        &[own[0], own[1], own[2], own[3], 1.0],
+                    );
                     crossed = true;
                 });
                 crossings += crossed as usize;
