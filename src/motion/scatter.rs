@@ -171,9 +171,6 @@ struct Scatter<'a> {
     height: usize,
     color: &'a Color,
     depth: &'a [f32],
-    /// Per pixel, the deepest a curve may be and still pass: depth × (1 + tolerance), with
-    /// NaN depth as far and negative as 0.
-    limit: Vec<f32>,
     prev: &'a Positions,
     next: &'a Positions,
     params: ScatterParams,
@@ -399,43 +396,36 @@ struct Reach {
 
 impl Reach {
     fn of(job: &Scatter) -> Reach {
-        let (across, down) = (job.width.div_ceil(BLOCK), job.height.div_ceil(BLOCK));
-        // Rounded up with a margin, so the f32 never falls short of the f64.
-        let pixel: Vec<f32> = (0..job.width * job.height)
-            .into_par_iter()
-            .map(|i| job.motion(i).map_or(0.0, |m| (m.reach + 0.01) as f32))
-            .collect();
-        let block: Vec<f32> = (0..across * down)
-            .into_par_iter()
-            .map(|b| {
-                let (bx, by) = (b % across * BLOCK, b / across * BLOCK);
-                let mut most = 0.0f32;
-                for y in by..(by + BLOCK).min(job.height) {
-                    for x in bx..(bx + BLOCK).min(job.width) {
-                        most = most.max(pixel[y * job.width + x]);
+        let (width, height) = (job.width, job.height);
+        let (across, down) = (width.div_ceil(BLOCK), height.div_ceil(BLOCK));
+        let mut pixel = vec![0.0f32; width * height];
+        let mut block = vec![0.0f32; across * down];
+        let mut deepest = vec![0.0f32; across * down];
+        // One row of blocks at a time: its pixels' reach (rounded up with a margin, so the f32
+        // never falls short of the f64), then its blocks' largest reach and deepest depth.
+        pixel
+            .par_chunks_mut(BLOCK * width.max(1))
+            .zip(block.par_chunks_mut(across.max(1)))
+            .zip(deepest.par_chunks_mut(across.max(1)))
+            .enumerate()
+            .for_each(|(by, ((pixel, block), deepest))| {
+                let y0 = by * BLOCK;
+                for (k, r) in pixel.iter_mut().enumerate() {
+                    let i = y0 * width + k;
+                    *r = job.motion(i).map_or(0.0, |m| (m.reach + 0.01) as f32);
+                }
+                for (bx, (most, deepest)) in block.iter_mut().zip(deepest).enumerate() {
+                    for y in 0..BLOCK.min(height - y0) {
+                        let row = y * width + bx * BLOCK..y * width + ((bx + 1) * BLOCK).min(width);
+                        *most = pixel[row.clone()].iter().fold(*most, |m, &r| m.max(r));
+                        let depth = &job.depth[y0 * width + row.start..y0 * width + row.end];
+                        *deepest = depth
+                            .iter()
+                            .fold(*deepest, |d, &z| d.max(sanitize_depth_far(z)));
                     }
                 }
-                most
-            })
-            .collect();
+            });
         let most = block.iter().copied().fold(0.0, f32::max);
-        let deepest = if most > 0.0 {
-            (0..across * down)
-                .into_par_iter()
-                .map(|b| {
-                    let (bx, by) = (b % across * BLOCK, b / across * BLOCK);
-                    let mut deepest = 0.0f32;
-                    for y in by..(by + BLOCK).min(job.height) {
-                        for x in bx..(bx + BLOCK).min(job.width) {
-                            deepest = deepest.max(sanitize_depth_far(job.depth[y * job.width + x]));
-                        }
-                    }
-                    deepest
-                })
-                .collect()
-        } else {
-            Vec::new()
-        };
         Reach {
             across,
             down,
@@ -465,12 +455,11 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
     } else {
         0.0
     };
-    let mut job = Scatter {
+    let job = Scatter {
         width,
         height,
         color: &color,
         depth: &depth,
-        limit: Vec::new(),
         prev: &prev,
         next: &next,
         params: *params,
@@ -488,13 +477,6 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
         frame.next = Some(next);
         return frame;
     }
-    let tolerance = 1.0 + params.depth_tolerance;
-    job.limit = depth
-        .par_iter()
-        .map(|&z| sanitize_depth_far(z) * tolerance)
-        .collect();
-    let job = job;
-
     // Accumulate and normalise tile by tile, into a copy of the input (curves read the input
     // colours while tiles are written); tiles no curve reaches keep it.
     let has_alpha = color.a.is_some();
@@ -521,31 +503,37 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
         .for_each(|(tile_row, (((r, g), b), a))| {
             let ty0 = tile_row * TILE_H;
             let ty1 = (ty0 + TILE_H).min(height);
+            // Each tile's pieces of the strip's rows, R, G, B and A.
+            let mut tiles: Vec<Vec<[&mut [f32]; 4]>> =
+                (0..columns).map(|_| Vec::with_capacity(TILE_H)).collect();
+            let rows = r
+                .chunks_mut(width)
+                .zip(g.chunks_mut(width))
+                .zip(b.chunks_mut(width))
+                .zip(a.chunks_mut(width));
+            for (((r, g), b), a) in rows {
+                let pieces = r
+                    .chunks_mut(TILE_W)
+                    .zip(g.chunks_mut(TILE_W))
+                    .zip(b.chunks_mut(TILE_W))
+                    .zip(a.chunks_mut(TILE_W));
+                for (tile, (((r, g), b), a)) in tiles.iter_mut().zip(pieces) {
+                    tile.push([r, g, b, a]);
+                }
+            }
             // Tiles of the strip in parallel too (a 1080p frame has only 9 strips).
-            let tiles: Vec<Option<Vec<[f32; 4]>>> = (0..columns)
+            tiles
                 .into_par_iter()
-                .map(|column| {
+                .enumerate()
+                .for_each(|(column, mut rows)| {
                     let tx0 = column * TILE_W;
                     let rect = [tx0, ty0, (tx0 + TILE_W).min(width), ty1];
                     if opaque {
-                        job.tile::<4>(&reach, rect)
+                        job.tile::<4>(&reach, rect, &mut rows);
                     } else {
-                        job.tile::<5>(&reach, rect)
+                        job.tile::<5>(&reach, rect, &mut rows);
                     }
-                })
-                .collect();
-            let mut planes = [r, g, b, a];
-            for (column, values) in tiles.iter().enumerate() {
-                let Some(values) = values else { continue };
-                let (tx0, tw) = (column * TILE_W, TILE_W.min(width - column * TILE_W));
-                for (k, value) in values.iter().enumerate() {
-                    // The strip starts at the tile's first row.
-                    let o = (k / tw) * width + tx0 + k % tw;
-                    for (plane, v) in planes.iter_mut().zip(value) {
-                        plane[o] = *v;
-                    }
-                }
-            }
+                });
         });
     let [r, g, b, a] = out;
     frame.color = Some(Color {
@@ -558,23 +546,45 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
 }
 
 impl Scatter<'_> {
-    /// Accumulates the curves reaching one tile and writes its normalised pixels into
-    /// `planes` (the tile's strip of rows).
-    /// `None` where no curve reaches the tile.
-    fn tile<const N: usize>(&self, reach: &Reach, rect: [usize; 4]) -> Option<Vec<[f32; 4]>> {
+    /// Accumulates the curves reaching one tile and writes its normalised pixels into `rows`
+    /// (the tile's pieces of its rows of R, G, B and A), which are left alone where no curve
+    /// reaches the tile.
+    fn tile<const N: usize>(&self, reach: &Reach, rect: [usize; 4], rows: &mut [[&mut [f32]; 4]]) {
+        SCRATCH.with_borrow_mut(|scratch| self.tile_in::<N>(reach, rect, rows, scratch));
+    }
+
+    fn tile_in<const N: usize>(
+        &self,
+        reach: &Reach,
+        rect: [usize; 4],
+        rows: &mut [[&mut [f32]; 4]],
+        scratch: &mut Scratch,
+    ) {
         let [tx0, ty0, tx1, ty1] = rect;
         let (tw, th) = (tx1 - tx0, ty1 - ty0);
         let width = self.width;
         // The tile's cells with a border of OVERHANG on every side, where a walk's rows may
-        // land. The border's limit is −∞, so nothing is ever deposited there.
+        // land, and per cell the deepest a curve may be and still pass: depth × (1 +
+        // tolerance), with NaN depth as far and negative as 0. The border's is −∞, so nothing
+        // is ever deposited there.
         let pad = OVERHANG as usize;
         let pw = tw + 2 * pad;
-        let mut acc = vec![[0.0f64; N]; pw * (th + 2 * pad)];
-        let mut limit = vec![f32::NEG_INFINITY; acc.len()];
+        let cells = pw * (th + 2 * pad);
+        scratch.sums.clear();
+        scratch.sums.resize(cells * N, 0.0);
+        let (acc, _) = scratch.sums.as_chunks_mut::<N>();
+        let limit = &mut scratch.limit;
+        limit.clear();
+        limit.resize(cells, f32::NEG_INFINITY);
+        let tolerance = 1.0 + self.params.depth_tolerance;
         for y in ty0..ty1 {
             let o = (y - ty0 + pad) * pw + pad;
-            limit[o..o + tw].copy_from_slice(&self.limit[y * width + tx0..y * width + tx1]);
+            let depth = &self.depth[y * width + tx0..y * width + tx1];
+            for (l, &z) in limit[o..o + tw].iter_mut().zip(depth) {
+                *l = sanitize_depth_far(z) * tolerance;
+            }
         }
+        let limit = &*limit;
         // Cell of pixel (x, y): origin + x + y·pw.
         let origin = (pad * pw + pad) as i64 - (ty0 * pw + tx0) as i64;
         let clip = Clip {
@@ -636,8 +646,8 @@ impl Scatter<'_> {
                                 (1, pw as i64)
                             };
                             let mut segment = Segment {
-                                acc: &mut acc,
-                                limit: &limit,
+                                acc: &mut *acc,
+                                limit,
                                 color: &color,
                                 origin,
                                 along,
@@ -662,17 +672,20 @@ impl Scatter<'_> {
                 }
             }
         }
-        reached.then(|| {
-            (ty0..ty1)
-                .flat_map(|y| (tx0..tx1).map(move |x| (x, y)))
-                .map(|(x, y)| {
-                    let cell = &acc[(origin + (x + y * pw) as i64) as usize];
-                    // An opaque frame's alpha sums are its weight sums.
-                    let cell = std::array::from_fn(|k| cell[k.min(N - 1)]);
-                    self.resolve(&cell, y * width + x, reach)
-                })
-                .collect()
-        })
+        if !reached {
+            return;
+        }
+        for (y, row) in (ty0..ty1).zip(rows) {
+            for x in tx0..tx1 {
+                let cell = &acc[(origin + (x + y * pw) as i64) as usize];
+                // An opaque frame's alpha sums are its weight sums.
+                let cell = std::array::from_fn(|k| cell[k.min(N - 1)]);
+                let value = self.resolve(&cell, y * width + x, reach);
+                for (plane, v) in row.iter_mut().zip(value) {
+                    plane[x - tx0] = v;
+                }
+            }
+        }
     }
 
     /// The output of pixel `i` from its accumulated `cell`.
@@ -699,6 +712,18 @@ impl Scatter<'_> {
             Normalize::Exposure => std::array::from_fn(|ch| (cell[ch] / total) as f32),
         }
     }
+}
+
+/// A thread's tile buffers, kept from tile to tile (allocating them afresh for every tile
+/// costs a page fault per 4 KiB).
+#[derive(Default)]
+struct Scratch {
+    sums: Vec<f64>,
+    limit: Vec<f32>,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::default();
 }
 
 /// One segment of a curve being drawn into a tile's cells.
@@ -847,23 +872,45 @@ mod tests {
             height: h,
             color,
             depth,
-            limit: depth.iter().map(|&z| z * 1.02).collect(),
             prev: f.prev.as_ref().unwrap(),
             next: f.next.as_ref().unwrap(),
             params: ScatterParams::default(),
             half: 0.5,
         };
         let reach = Reach::of(&job);
-        let mut drawn = 0;
+        // A tile's output bits (NaN where it writes nothing).
+        fn bits<const N: usize>(job: &Scatter, reach: &Reach, rect: [usize; 4]) -> Vec<u32> {
+            let [x0, y0, x1, y1] = rect;
+            let mut planes = vec![[vec![f32::NAN; x1 - x0], vec![], vec![], vec![]]; y1 - y0];
+            for row in &mut planes {
+                for k in 1..4 {
+                    row[k] = row[0].clone();
+                }
+            }
+            let mut rows: Vec<[&mut [f32]; 4]> = planes
+                .iter_mut()
+                .map(|[r, g, b, a]| [&mut r[..], &mut g[..], &mut b[..], &mut a[..]])
+                .collect();
+            job.tile::<N>(reach, rect, &mut rows);
+            planes
+                .iter()
+                .flatten()
+                .flatten()
+                .map(|v| v.to_bits())
+                .collect()
+        }
         for normalize in [Normalize::Exposure, Normalize::Paper] {
             job.params.normalize = normalize;
             for rect in [[0, 0, 256, 128], [256, 0, 300, 128], [0, 128, 256, 150]] {
-                let four = job.tile::<4>(&reach, rect);
-                assert_eq!(four, job.tile::<5>(&reach, rect), "{normalize:?} {rect:?}");
-                drawn += four.is_some() as usize;
+                let four = bits::<4>(&job, &reach, rect);
+                assert!(four.iter().all(|&v| !f32::from_bits(v).is_nan()));
+                assert_eq!(
+                    four,
+                    bits::<5>(&job, &reach, rect),
+                    "{normalize:?} {rect:?}"
+                );
             }
         }
-        assert_eq!(drawn, 6);
     }
 
     #[test]
@@ -879,7 +926,6 @@ mod tests {
                 height: 3,
                 color,
                 depth,
-                limit: depth.clone(),
                 prev: f.prev.as_ref().unwrap(),
                 next: f.next.as_ref().unwrap(),
                 params: ScatterParams {
