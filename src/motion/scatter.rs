@@ -271,9 +271,10 @@ impl Scatter<'_> {
             _ => None,
         };
         let mut total = 0.0;
-        let step = (t1 - t0) / segments as f64;
+        // (Counts convert to f64 through u32: one instruction instead of usize's several.)
+        let step = (t1 - t0) / (segments as u32) as f64;
         for k in 0..=segments {
-            let t = t0 + step * k as f64;
+            let t = t0 + step * (k as u32) as f64;
             path.points[k] = match &arc {
                 Some(arc) => arc.at_time(t),
                 None => bezier.at(0.5 * (t + 1.0)),
@@ -304,10 +305,16 @@ impl Scatter<'_> {
         if p.normalize == Normalize::Exposure {
             // The curve's deposits add up to Σ length × mean weight of each segment (weights
             // are linear along a segment): divide so they add up to 1.
-            let mut sum = 0.0;
-            for k in 0..segments {
-                sum += path.lengths[k] * 0.5 * (path.weights[k] + path.weights[k + 1]);
-            }
+            // (With the box weight every mean is 1 and the sum is the total length, bit for bit.)
+            let mut sum = if p.weight == Weight::Box {
+                total
+            } else {
+                let mut sum = 0.0;
+                for k in 0..segments {
+                    sum += path.lengths[k] * 0.5 * (path.weights[k] + path.weights[k + 1]);
+                }
+                sum
+            };
             sum *= scale;
             if !(sum > 0.0 && sum.is_finite()) {
                 return false;
@@ -485,14 +492,8 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
         .a
         .as_ref()
         .is_none_or(|a| a.par_iter().all(|&v| sanitize_color(v) == 1.0));
-    let copy =
-        |plane: &[f32]| -> Vec<f32> { plane.par_iter().map(|&v| sanitize_color(v)).collect() };
-    let mut out: [Vec<f32>; 4] = [
-        copy(&color.r),
-        copy(&color.g),
-        copy(&color.b),
-        color.a.as_deref().map_or_else(|| vec![1.0; n], copy),
-    ];
+    // Every tile writes all its pixels: those no curve reaches get the (sanitised) input.
+    let mut out: [Vec<f32>; 4] = std::array::from_fn(|_| vec![0.0; n]);
     let [r, g, b, a] = &mut out;
     let strip = TILE_H * width;
     r.par_chunks_mut(strip)
@@ -547,8 +548,8 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
 
 impl Scatter<'_> {
     /// Accumulates the curves reaching one tile and writes its normalised pixels into `rows`
-    /// (the tile's pieces of its rows of R, G, B and A), which are left alone where no curve
-    /// reaches the tile.
+    /// (the tile's pieces of its rows of R, G, B and A), or where no curve reaches the tile,
+    /// its input pixels.
     fn tile<const N: usize>(&self, reach: &Reach, rect: [usize; 4], rows: &mut [[&mut [f32]; 4]]) {
         SCRATCH.with_borrow_mut(|scratch| self.tile_in::<N>(reach, rect, rows, scratch));
     }
@@ -673,6 +674,13 @@ impl Scatter<'_> {
             }
         }
         if !reached {
+            for (y, row) in (ty0..ty1).zip(rows) {
+                for x in tx0..tx1 {
+                    for (plane, v) in row.iter_mut().zip(self.color(y * width + x)) {
+                        plane[x - tx0] = v;
+                    }
+                }
+            }
             return;
         }
         for (y, row) in (ty0..ty1).zip(rows) {
