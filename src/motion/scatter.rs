@@ -190,8 +190,9 @@ impl Scatter<'_> {
 
     /// The motion of a moving pixel; `None` where it is still (or its positions are NaN).
     #[inline]
-    fn motion(&self, i: usize) -> Option<Motion> {
-        let now = [(i % self.width) as f64 + 0.5, (i / self.width) as f64 + 0.5];
+    fn motion(&self, x: usize, y: usize) -> Option<Motion> {
+        let i = y * self.width + x;
+        let now = [x as f64 + 0.5, y as f64 + 0.5];
         let prev = [position(self.prev.x[i])?, position(self.prev.y[i])?];
         let next = [position(self.next.x[i])?, position(self.next.y[i])?];
         let extent = self.extent(prev, now, next);
@@ -207,11 +208,12 @@ impl Scatter<'_> {
     /// The positions of a pixel known to move, with its reach `r` from the reach pass
     /// (skips [`Scatter::motion`]'s bound).
     #[inline]
-    fn positions(&self, i: usize, reach: f64) -> Motion {
+    fn positions(&self, x: usize, y: usize, reach: f64) -> Motion {
+        let i = y * self.width + x;
         let at = |v: f32| position(v).unwrap_or(0.0);
         Motion {
             prev: [at(self.prev.x[i]), at(self.prev.y[i])],
-            now: [(i % self.width) as f64 + 0.5, (i / self.width) as f64 + 0.5],
+            now: [x as f64 + 0.5, y as f64 + 0.5],
             next: [at(self.next.x[i]), at(self.next.y[i])],
             reach,
         }
@@ -329,11 +331,12 @@ impl Scatter<'_> {
 
     /// The colour behind moving pixel `i`: the nearest farther surface along its motion
     /// (either way; the average if both), else its own colour.
-    fn behind(&self, i: usize, reach: &Reach) -> [f32; 4] {
+    fn behind(&self, x: usize, y: usize, reach: &Reach) -> [f32; 4] {
+        let i = y * self.width + x;
         let own = self.color(i);
         let Some(Motion {
             prev, now, next, ..
-        }) = self.motion(i)
+        }) = self.motion(x, y)
         else {
             return own;
         };
@@ -417,9 +420,10 @@ impl Reach {
             .enumerate()
             .for_each(|(by, ((pixel, block), deepest))| {
                 let y0 = by * BLOCK;
-                for (k, r) in pixel.iter_mut().enumerate() {
-                    let i = y0 * width + k;
-                    *r = job.motion(i).map_or(0.0, |m| (m.reach + 0.01) as f32);
+                for (y, row) in (y0..).zip(pixel.chunks_mut(width)) {
+                    for (x, r) in row.iter_mut().enumerate() {
+                        *r = job.motion(x, y).map_or(0.0, |m| (m.reach + 0.01) as f32);
+                    }
                 }
                 for (bx, (most, deepest)) in block.iter_mut().zip(deepest).enumerate() {
                     for y in 0..BLOCK.min(height - y0) {
@@ -624,7 +628,7 @@ impl Scatter<'_> {
                             continue;
                         }
                         // Moving (its reach is not 0), so its positions are not NaN.
-                        let motion = self.positions(e, r);
+                        let motion = self.positions(x, y, r);
                         if !self.path(e, &motion, &mut path) {
                             continue;
                         }
@@ -674,11 +678,22 @@ impl Scatter<'_> {
             }
         }
         if !reached {
+            let color = self.color;
             for (y, row) in (ty0..ty1).zip(rows) {
-                for x in tx0..tx1 {
-                    for (plane, v) in row.iter_mut().zip(self.color(y * width + x)) {
-                        plane[x - tx0] = v;
+                let span = y * width + tx0..y * width + tx1;
+                let [r, g, b, a] = row;
+                for (to, from) in [(r, &color.r), (g, &color.g), (b, &color.b)] {
+                    for (t, &f) in to.iter_mut().zip(&from[span.clone()]) {
+                        *t = sanitize_color(f);
                     }
+                }
+                match &color.a {
+                    Some(alpha) => {
+                        for (t, &f) in a.iter_mut().zip(&alpha[span]) {
+                            *t = sanitize_color(f);
+                        }
+                    }
+                    None => a.fill(1.0),
                 }
             }
             return;
@@ -688,7 +703,7 @@ impl Scatter<'_> {
                 let cell = &acc[(origin + (x + y * pw) as i64) as usize];
                 // An opaque frame's alpha sums are its weight sums.
                 let cell = std::array::from_fn(|k| cell[k.min(N - 1)]);
-                let value = self.resolve(&cell, y * width + x, reach);
+                let value = self.resolve(&cell, x, y, reach);
                 for (plane, v) in row.iter_mut().zip(value) {
                     plane[x - tx0] = v;
                 }
@@ -697,7 +712,8 @@ impl Scatter<'_> {
     }
 
     /// The output of pixel `i` from its accumulated `cell`.
-    fn resolve(&self, cell: &[f64; 5], i: usize, reach: &Reach) -> [f32; 4] {
+    fn resolve(&self, cell: &[f64; 5], x: usize, y: usize, reach: &Reach) -> [f32; 4] {
+        let i = y * self.width + x;
         let own = self.color(i);
         let total = cell[4];
         if total.is_nan() || total <= 0.0 {
@@ -711,7 +727,7 @@ impl Scatter<'_> {
             Normalize::Exposure if total < 1.0 => {
                 let rest = 1.0 - total;
                 let behind = if rest > COVERED {
-                    self.behind(i, reach)
+                    self.behind(x, y, reach)
                 } else {
                     own
                 };
@@ -968,7 +984,7 @@ mod tests {
                 crossings += crossed as usize;
             }
             assert!(crossings >= 900_000, "{crossings}");
-            let got = job.resolve(&cell, 4, &Reach::of(&job));
+            let got = job.resolve(&cell, 1, 1, &Reach::of(&job));
             for ch in 0..4 {
                 let want = own[ch] as f32;
                 assert!(
