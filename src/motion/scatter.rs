@@ -275,7 +275,7 @@ impl Scatter<'_> {
         let mut total = 0.0;
         // (Counts convert to f64 through u32: one instruction instead of usize's several.)
         let step = (t1 - t0) / (segments as u32) as f64;
-        for k in 0..=segments {
+        for k in 0..segments + 1 {
             let t = t0 + step * (k as u32) as f64;
             path.points[k] = match &arc {
                 Some(arc) => arc.at_time(t),
@@ -367,7 +367,7 @@ impl Scatter<'_> {
         let mut sum = [0.0f64; 4];
         let mut found = 0;
         for side in [1.0, -1.0] {
-            for k in 1..=steps {
+            for k in 1..steps + 1 {
                 let x = now[0] + side * k as f64 * dir[0];
                 let y = now[1] + side * k as f64 * dir[1];
                 if !(x >= 0.0 && y >= 0.0 && x < self.width as f64 && y < self.height as f64) {
@@ -669,7 +669,7 @@ impl Scatter<'_> {
                                 segment.put(column, walk.column(column));
                             }
                             segment.whole(&whole);
-                            for column in whole.last + 1..=walk.last {
+                            for column in whole.last + 1..walk.last + 1 {
                                 segment.put(column, walk.column(column));
                             }
                         }
@@ -801,7 +801,8 @@ impl<const N: usize> Segment<'_, N> {
     fn whole_steps<const VARYING: bool>(&mut self, whole: &Whole) {
         let (mut y, mut base) = (whole.y, self.origin + whole.first * self.along);
         let across = self.across;
-        for k in 0..=whole.last - whole.first {
+        // (Exclusive ranges: an inclusive one costs a flag per step.)
+        for k in 0..whole.last - whole.first + 1 {
             let f = (y as u32) as f64 * (1.0 / FIXED);
             let (c0, c1) = (whole.coverage * (1.0 - f), whole.coverage * f);
             let (z, w) = if VARYING {
