@@ -14,6 +14,13 @@
 //! columns it crosses inside the rectangle. Each column's coverage is computed from the whole
 //! segment, never from a clipped copy, so drawing a segment into two adjacent rectangles gives
 //! exactly the coverages of drawing it into their union. Non-finite end points draw nothing.
+//!
+//! [`draw_spans`] hands each column to a callback; `scatter`'s hot loop instead takes the
+//! [`Walk`] itself: it computes the end columns (the segment's fractional end points) exactly
+//! and steps the columns crossed whole in 32-bit fixed point ([`Whole`]: a row and its split
+//! from an integer add, a shift and a mask, to 2⁻³² px), and leaves the rows unclipped (they
+//! overhang the clip by at most [`OVERHANG`]), so the caller pads its cells instead of testing
+//! every row.
 
 /// `v.floor()` without the library call (baseline x86-64 has no rounding instruction):
 /// truncation corrected for negatives; values this large are integers already.

@@ -30,7 +30,9 @@
 //! to the tile. So the sums run in the same order for any thread count, no list of curves is
 //! stored, and a curve is built about 1.4 times on average (30 px streaks, 256×128 tiles).
 //! f64 also keeps a million overlapping deposits of one colour at that colour (f32 would drift
-//! by ~1e-4).
+//! by ~1e-4). A tile's cells (four sums where the frame is opaque, five with alpha) carry a
+//! border where a walk's unclipped rows land, with a depth limit of −∞ there, and live in a
+//! per-thread scratch reused from tile to tile.
 //!
 //! Numerics: NaN colour reads as 0 and colour is clamped to ±[`HUGE`](super::HUGE); NaN positions make a
 //! pixel still, infinite ones are clamped to ±[`FAR`] px; NaN or negative depth is far or 0; a
