@@ -411,6 +411,17 @@ mod tests {
         assert_eq!(total([1e12, 3.0], [1e12 + 5.0, 3.0], clip).1, 0);
     }
 
+    /// The walks over `clip` of `count` random segments with end points in
+    /// [lo, lo + span)² (those that cover anything there).
+    fn random_walks(seed: u64, count: u64, lo: f64, span: f64, clip: Clip) -> Vec<Walk> {
+        (0..count)
+            .filter_map(|k| {
+                let r = |i: u64| lo + hash01(seed, k, i, 0) * span;
+                Walk::new([r(0), r(1)], [r(2), r(3)], clip)
+            })
+            .collect()
+    }
+
     #[test]
     fn a_walk_overhangs_its_clip_by_at_most_overhang() {
         let clip = Clip {
@@ -420,11 +431,7 @@ mod tests {
             y1: 25,
         };
         let mut columns = 0;
-        for k in 0..20_000u64 {
-            let r = |i: u64| hash01(10, k, i, 0) * 60.0 - 10.0;
-            let Some(walk) = Walk::new([r(0), r(1)], [r(2), r(3)], clip) else {
-                continue;
-            };
+        for walk in random_walks(10, 20_000, -10.0, 60.0, clip) {
             let (major, minor) = if walk.swapped {
                 ((clip.y0, clip.y1), (clip.x0, clip.x1))
             } else {
@@ -451,11 +458,10 @@ mod tests {
             y1: 50,
         };
         let mut whole_columns = 0;
-        for k in 0..5_000u64 {
-            let r = |i: u64| hash01(11, k, i, 0) * 100.0 - 20.0;
-            let Some(walk) = Walk::new([r(0), r(1)], [r(2), r(3)], clip) else {
-                continue;
-            };
+        for (k, walk) in random_walks(11, 5_000, -20.0, 100.0, clip)
+            .iter()
+            .enumerate()
+        {
             let whole = walk.whole();
             assert!((walk.first..=walk.last + 1).contains(&whole.first));
             assert!((whole.first - 1..=walk.last).contains(&whole.last));
