@@ -490,8 +490,8 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
         frame.next = Some(next);
         return frame;
     }
-    // Accumulate and normalise tile by tile, into a copy of the input (curves read the input
-    // colours while tiles are written); tiles no curve reaches keep it.
+    // Accumulate and normalise tile by tile, into new planes (curves read the input colours
+    // while tiles are written).
     let has_alpha = color.a.is_some();
     // Where every pixel is opaque, alpha sums equal weight sums: cells then hold four sums.
     let opaque = color
