@@ -153,7 +153,7 @@ pub struct Whole {
 }
 
 /// One in 2³² of a pixel: the resolution of [`Whole`]'s fixed point.
-pub const FIXED: f64 = 4294967296.0;
+const FIXED: f64 = 4294967296.0;
 
 impl Whole {
     /// The column `k` steps after `first`, as [`Walk::column`] gives it (to fixed-point
@@ -235,14 +235,15 @@ impl Walk {
         let (ylo, yhi) = (y0 as f64 - 0.5, y1 as f64 + 0.5);
         let inside = a[1].min(b[1]) >= ylo && a[1].max(b[1]) <= yhi;
         // A segment inside that band is within reach of the rows all along: nothing to cut.
-        if slope != 0.0 && !inside {
+        if !inside {
+            if slope == 0.0 {
+                return None;
+            }
             let run = dx / dy;
             let xa = a[0] + (ylo - a[1]) * run;
             let xb = a[0] + (yhi - a[1]) * run;
             first = first.max(floor(xa.min(xb)) - 1.0);
             last = last.min(-floor(-xa.max(xb)) + 1.0);
-        } else if slope == 0.0 && !inside {
-            return None;
         }
         if first.is_nan() || last.is_nan() || first > last {
             return None;

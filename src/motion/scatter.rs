@@ -45,7 +45,7 @@ use rayon::prelude::*;
 use super::{sanitize_color, sanitize_depth_far};
 
 use super::curve::{length, Arc, Bezier, Point};
-use super::line::{Clip, Column, Walk, Whole, FIXED, OVERHANG};
+use super::line::{Clip, Column, Walk, Whole, OVERHANG};
 use crate::frame::{Color, Frame, Positions};
 
 /// Positions beyond this many pixels are clamped (still far beyond any image, and well inside
@@ -769,27 +769,22 @@ struct Segment<'a, const N: usize> {
 }
 
 impl<const N: usize> Segment<'_, N> {
+    /// Depth and weight `u` along the segment.
+    #[inline(always)]
+    fn at(&self, u: f64) -> (f32, f64) {
+        (self.z0 + self.dz * u as f32, self.w0 + self.dw * u)
+    }
+
     /// Deposits column `column`'s coverage where the depth test passes.
     #[inline(always)]
     fn put(&mut self, column: i64, c: Column) {
-        let z = self.z0 + self.dz * c.u as f32;
-        let w = self.w0 + self.dw * c.u;
-        let i = (self.origin + column * self.along + c.row * self.across) as usize;
-        let j = i + self.across as usize;
-        if z <= self.limit[i] {
-            add(&mut self.acc[i], c.c0 * w, self.color);
-        }
-        if z <= self.limit[j] {
-            add(&mut self.acc[j], c.c1 * w, self.color);
-        }
+        let (z, w) = self.at(c.u);
+        self.deposit(column, c, z, w);
     }
-}
 
-impl<const N: usize> Segment<'_, N> {
-    /// Deposits the columns the segment crosses whole, as [`Segment::put`] would from
-    /// [`Whole::column`], with the steps hoisted: where depth and weight are constant along
-    /// the segment (the box weight and no depth motion), nothing depends on where along it a
-    /// column is.
+    /// Deposits the columns the segment crosses whole, as [`Segment::put`] does, with the
+    /// depth and weight hoisted where they are constant along the segment (the box weight and
+    /// no depth motion): nothing then depends on where along it a column is.
     #[inline(always)]
     fn whole(&mut self, whole: &Whole) {
         if self.dz == 0.0 && self.dw == 0.0 {
@@ -801,28 +796,27 @@ impl<const N: usize> Segment<'_, N> {
 
     #[inline(always)]
     fn whole_steps<const VARYING: bool>(&mut self, whole: &Whole) {
-        let (mut y, mut base) = (whole.y, self.origin + whole.first * self.along);
-        let across = self.across;
         // (Exclusive ranges: an inclusive one costs a flag per step.)
         for k in 0..whole.last - whole.first + 1 {
-            let f = (y as u32) as f64 * (1.0 / FIXED);
-            let (c0, c1) = (whole.coverage * (1.0 - f), whole.coverage * f);
+            let c = whole.column(k);
             let (z, w) = if VARYING {
-                let u = whole.u + k as f64 * whole.du;
-                (self.z0 + self.dz * u as f32, self.w0 + self.dw * u)
+                self.at(c.u)
             } else {
                 (self.z0, self.w0)
             };
-            let i = (base + (y >> 32) * across) as usize;
-            let j = i + across as usize;
-            if z <= self.limit[i] {
-                add(&mut self.acc[i], c0 * w, self.color);
-            }
-            if z <= self.limit[j] {
-                add(&mut self.acc[j], c1 * w, self.color);
-            }
-            y = y.wrapping_add(whole.step);
-            base += self.along;
+            self.deposit(whole.first + k, c, z, w);
+        }
+    }
+
+    #[inline(always)]
+    fn deposit(&mut self, column: i64, c: Column, z: f32, w: f64) {
+        let i = (self.origin + column * self.along + c.row * self.across) as usize;
+        let j = i + self.across as usize;
+        if z <= self.limit[i] {
+            add(&mut self.acc[i], c.c0 * w, self.color);
+        }
+        if z <= self.limit[j] {
+            add(&mut self.acc[j], c.c1 * w, self.color);
         }
     }
 }
