@@ -18,7 +18,8 @@ use std::time::Instant;
 
 use common::{frame, H, W};
 use shutter::dof::{CocSource, DofParams, Lens, Method};
-use shutter::motion::{Algorithm, BlurParams};
+use shutter::motion::Algorithm;
+use shutter::process::Params;
 
 const LENS: Lens = Lens {
     focal_mm: 50.0,
@@ -28,9 +29,9 @@ const LENS: Lens = Lens {
 };
 
 fn median_ms(f: &shutter::frame::Frame, dof: DofParams) -> f64 {
-    let params = BlurParams {
+    let params = Params {
         dof: Some(dof),
-        ..BlurParams::default()
+        ..Params::default()
     };
     common::median_ms(Algorithm::None, f, &params, 5)
 }

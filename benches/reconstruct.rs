@@ -15,13 +15,14 @@
 mod common;
 
 use common::{frame, H, W};
-use shutter::motion::{Algorithm, BlurParams};
+use shutter::motion::Algorithm;
+use shutter::process::Params;
 
 fn median_ms(f: &shutter::frame::Frame, runs: usize) -> f64 {
-    common::median_ms(Algorithm::Reconstruct, f, &BlurParams::default(), runs)
+    common::median_ms(Algorithm::Reconstruct, f, &Params::default(), runs)
 }
 
-fn median_ms_with(f: &shutter::frame::Frame, runs: usize, params: &BlurParams) -> f64 {
+fn median_ms_with(f: &shutter::frame::Frame, runs: usize, params: &Params) -> f64 {
     common::median_ms(Algorithm::Reconstruct, f, params, runs)
 }
 
@@ -39,7 +40,7 @@ fn main() {
     // The profile: cost against taps. S = 1 takes no taps (TileMax, NeighborMax, texel
     // packing and per-pixel set-up only); the slope is the cost per tap.
     for taps in [1, 7, 31] {
-        let mut params = BlurParams::default();
+        let mut params = Params::default();
         params.reconstruct.taps = taps;
         println!(
             "1920x1080 every pixel moving, k=20 S={taps}: {:.1} ms",

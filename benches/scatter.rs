@@ -19,7 +19,8 @@ mod common;
 
 use common::{H, W};
 use shutter::frame::{Color, Frame, Positions};
-use shutter::motion::{Algorithm, BlurParams, CurveKind, Normalize, ScatterParams, Weight};
+use shutter::motion::{Algorithm, CurveKind, Normalize, ScatterParams, Weight};
+use shutter::process::Params;
 
 /// `moving(x, y)` gives (velocity, bend) in px per frame: p(t) = p0 + t·v + t²·a.
 fn frame(moving: impl Fn(usize, usize) -> Option<([f32; 2], [f32; 2])>) -> Frame {
@@ -65,16 +66,16 @@ fn frame(moving: impl Fn(usize, usize) -> Option<([f32; 2], [f32; 2])>) -> Frame
     f
 }
 
-fn median_ms(f: &Frame, params: &BlurParams, runs: usize) -> f64 {
+fn median_ms(f: &Frame, params: &Params, runs: usize) -> f64 {
     common::median_ms(Algorithm::Scatter, f, params, runs)
 }
 
 fn main() {
     println!("threads: {}", rayon::current_num_threads());
-    let with = |scatter: ScatterParams| BlurParams {
+    let with = |scatter: ScatterParams| Params {
         shutter: 1.0,
         scatter,
-        ..BlurParams::default()
+        ..Params::default()
     };
     let default = ScatterParams::default();
     let moving = frame(|x, y| {
@@ -113,7 +114,7 @@ fn main() {
         );
     }
     // The same motion under the default 180° shutter: 15 px streaks.
-    let half = BlurParams {
+    let half = Params {
         shutter: 0.5,
         ..with(default)
     };
@@ -121,7 +122,7 @@ fn main() {
         "1920x1080 every pixel moving 30 px, default settings, shutter 0.5 (15 px streaks): {:.1} ms",
         median_ms(&moving, &half, 5)
     );
-    let fixed = BlurParams {
+    let fixed = Params {
         shutter: 0.5,
         ..with(ScatterParams {
             flatness: 0.0,

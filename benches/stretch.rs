@@ -15,16 +15,17 @@
 mod common;
 
 use common::{frame, H, W};
-use shutter::motion::{Algorithm, BlurParams, StretchParams};
+use shutter::motion::{Algorithm, StretchParams};
+use shutter::process::Params;
 
-fn median_ms(f: &shutter::frame::Frame, params: &BlurParams, runs: usize) -> f64 {
+fn median_ms(f: &shutter::frame::Frame, params: &Params, runs: usize) -> f64 {
     common::median_ms(Algorithm::Stretch, f, params, runs)
 }
 
 fn main() {
     println!("threads: {}", rayon::current_num_threads());
-    let default = BlurParams::default();
-    let plain = BlurParams {
+    let default = Params::default();
+    let plain = Params {
         stretch: StretchParams {
             texture_blur: false,
             ..StretchParams::default()

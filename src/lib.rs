@@ -3,8 +3,11 @@
 //!
 //! - [`frame`]: the planar passes of one frame, canonical convention.
 //! - [`io`]: EXR and 8/16-bit images, pass files and presets, sequences, atomic output.
-//! - [`motion`]: the blur algorithms.
+//! - [`numeric`]: what non-finite and extreme values become, and the jitter hash.
+//! - [`process`]: one frame: the numeric policy, depth of field, then motion blur.
+//! - [`dof`], [`motion`]: the effects, siblings that never import each other.
 //! - [`pipeline`]: preflight, then read → process → write overlapped.
+//! - [`settings`]: every setting defined once (flag, preset key, range, default, help).
 //! - [`cli`]: the command line (the only part that prints).
 
 pub mod bench;
@@ -16,7 +19,10 @@ pub mod frame;
 pub mod io;
 pub mod metrics;
 pub mod motion;
+pub mod numeric;
 pub mod pipeline;
+pub mod process;
+pub mod settings;
 pub mod truth;
 
 pub use error::{Error, Problem, ProblemKind, Result};

@@ -17,7 +17,9 @@ use crate::io::output::{write_frame, OutputOptions};
 use crate::io::passes::{plan_frame, read_frame, FramePlan, Inputs, PlanOptions};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
-use crate::motion::{apply, Algorithm, BlurParams};
+use crate::motion::Algorithm;
+use crate::numeric::Replaced;
+use crate::process::{process, Params};
 
 /// A blur job, fully resolved (preset merged, flags applied, frames listed).
 #[derive(Clone, Debug)]
@@ -29,9 +31,11 @@ pub struct Job {
     pub preset: Preset,
     pub layer: Option<String>,
     pub algorithm: Algorithm,
-    pub params: BlurParams,
+    pub params: Params,
     pub output_options: OutputOptions,
     pub skip_existing: bool,
+    /// Warnings found while resolving the job (flags that do not apply), reported by [`run`].
+    pub warnings: Vec<String>,
 }
 
 /// What the pipeline tells its caller while it runs.
@@ -64,6 +68,9 @@ pub struct Report {
     /// Peak resident memory of the process, in MiB, where the OS reports it.
     pub peak_rss_mib: Option<f64>,
     pub warnings: Vec<String>,
+    /// Input values the numeric policy replaced (NaN, infinite or out of range), per pass,
+    /// summed over frames.
+    pub replaced: Replaced,
 }
 
 /// The most warnings a report keeps (the same warning on every frame is kept once).
@@ -73,6 +80,51 @@ fn warn(report: &mut Report, on_event: &mut dyn FnMut(Event), message: String) {
     if report.warnings.len() < MAX_WARNINGS && !report.warnings.contains(&message) {
         report.warnings.push(message.clone());
         on_event(Event::Warning(message));
+    }
+}
+
+/// Warns, the first time each pass has values replaced by the numeric policy, what they became.
+fn warn_replaced(
+    report: &mut Report,
+    on_event: &mut dyn FnMut(Event),
+    replaced: &Replaced,
+    frame: Option<i64>,
+) {
+    let seen = report.replaced;
+    let at = frame.map_or(String::new(), |f| format!(" (first in frame {f})"));
+    use crate::numeric::{HUGE, POSITION_LIMIT, VELOCITY_LIMIT};
+    let cases = [
+        (
+            replaced.color,
+            seen.color,
+            format!("colour values NaN or beyond ±{HUGE:e} read as 0 or clamped"),
+        ),
+        (
+            replaced.depth,
+            seen.depth,
+            "depth values NaN or negative read as far or 0".to_string(),
+        ),
+        (
+            replaced.velocity,
+            seen.velocity,
+            format!(
+                "velocity values NaN or beyond ±{VELOCITY_LIMIT:e} px read as still or clamped"
+            ),
+        ),
+        (
+            replaced.positions,
+            seen.positions,
+            format!("positions NaN or beyond ±{POSITION_LIMIT:e} px read as still or clamped"),
+        ),
+    ];
+    for (now, before, what) in cases {
+        if now > 0 && before == 0 {
+            warn(
+                report,
+                on_event,
+                format!("{what}{at}; the JSON summary counts them"),
+            );
+        }
     }
 }
 
@@ -92,7 +144,7 @@ pub fn preflight(job: &Job, frames: &[Option<i64>]) -> Result<Vec<FramePlan>> {
     let options = PlanOptions {
         preset: &job.preset,
         layer: job.layer.as_deref(),
-        needs: crate::motion::needs(job.algorithm, &job.params),
+        needs: crate::process::needs(job.algorithm, &job.params),
     };
     let results: Vec<std::result::Result<FramePlan, Vec<Problem>>> = frames
         .par_iter()
@@ -181,6 +233,9 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             }
         }
     }
+    for warning in &job.warnings {
+        warn(&mut report, on_event, warning.clone());
+    }
     for plan in &plans {
         for warning in &plan.warnings {
             warn(&mut report, on_event, warning.clone());
@@ -192,8 +247,8 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     });
     let (read_seconds, process_seconds) = std::thread::scope(|scope| -> Result<(f64, f64)> {
         let (read_tx, read_rx) = mpsc::sync_channel::<std::result::Result<Frame, Problem>>(0);
-        let (done_tx, done_rx) =
-            mpsc::sync_channel::<std::result::Result<(Option<i64>, Frame), Problem>>(0);
+        type Done = (Option<i64>, Frame, Replaced);
+        let (done_tx, done_rx) = mpsc::sync_channel::<std::result::Result<Done, Problem>>(0);
 
         let reader = scope.spawn(move || {
             let mut seconds = 0.0;
@@ -216,10 +271,10 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                 let message = match frame {
                     Ok(frame) => {
                         let t = Instant::now();
-                        let out =
-                            apply(job.algorithm, &job.params, frame, frame_number.unwrap_or(0));
+                        let (out, replaced) =
+                            process(job.algorithm, &job.params, frame, frame_number.unwrap_or(0));
                         seconds += t.elapsed().as_secs_f64();
-                        Ok((frame_number, out))
+                        Ok((frame_number, out, replaced))
                     }
                     Err(problem) => Err(problem),
                 };
@@ -234,7 +289,9 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         let mut failure = None;
         for message in done_rx {
             match message {
-                Ok((frame, out)) => {
+                Ok((frame, out, replaced)) => {
+                    warn_replaced(&mut report, on_event, &replaced, frame);
+                    report.replaced.add(replaced);
                     let path = job.output.path(frame);
                     let t = Instant::now();
                     // Folders are made only when a frame is ready to go in them, so a run

@@ -3,7 +3,8 @@
 
 use shutter::dof::{CocSource, DofParams, Lens, Method};
 use shutter::frame::{Color, Frame};
-use shutter::motion::{apply, Algorithm, BlurParams};
+use shutter::motion::Algorithm;
+use shutter::process::{apply, Params};
 use shutter::truth::render::Reference;
 
 use crate::support::*;
@@ -23,10 +24,10 @@ fn params(method: Method) -> DofParams {
     }
 }
 
-fn with(dof: DofParams) -> BlurParams {
-    BlurParams {
+fn with(dof: DofParams) -> Params {
+    Params {
         dof: Some(dof),
-        ..BlurParams::default()
+        ..Params::default()
     }
 }
 
@@ -40,7 +41,7 @@ const STRONG: Lens = Lens {
 };
 
 /// Both methods, with non-default settings too.
-fn variants() -> Vec<BlurParams> {
+fn variants() -> Vec<Params> {
     let strong = |method| DofParams {
         method,
         ..DofParams::new(CocSource::Lens(STRONG))
@@ -274,7 +275,7 @@ fn both_methods_beat_the_sharp_frame_on_layers_and_gather_beats_blend() {
 #[test]
 fn depth_of_field_then_motion_blur_beats_either_alone_on_layers() {
     let dof = with(params(Method::Gather));
-    let scatter = BlurParams::default();
+    let scatter = Params::default();
     let (none, errors, _, _) = scene_errors_against(
         "layers",
         (240, 135),

@@ -12,5 +12,7 @@ mod metrics;
 mod presets;
 mod reconstruct;
 mod scatter;
+mod settings;
 mod stretch;
+mod structure;
 mod truth;

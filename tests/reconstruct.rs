@@ -2,7 +2,8 @@
 //! scenes.
 
 use shutter::frame::{Frame, Velocity};
-use shutter::motion::{apply, Algorithm, BlurParams, ReconstructParams, Variant};
+use shutter::motion::{Algorithm, ReconstructParams, Variant};
+use shutter::process::{apply, Params};
 
 use crate::support::*;
 
@@ -15,14 +16,14 @@ fn frame(w: usize, h: usize, seed: u32, speed: f32) -> Frame {
     f
 }
 
-fn variants() -> Vec<BlurParams> {
+fn variants() -> Vec<Params> {
     let mut all = Vec::new();
     for (taps, max_blur, jitter, variant) in [
         (15, 20, true, Variant::Paper),
         (5, 7, false, Variant::Paper),
         (9, 13, true, Variant::Dual),
     ] {
-        all.push(BlurParams {
+        all.push(Params {
             shutter: 0.75,
             reconstruct: ReconstructParams {
                 max_blur,
@@ -31,7 +32,7 @@ fn variants() -> Vec<BlurParams> {
                 variant,
                 ..ReconstructParams::default()
             },
-            ..BlurParams::default()
+            ..Params::default()
         });
     }
     all
@@ -74,7 +75,7 @@ fn zero_velocity_pixel_inside_a_moving_neighbourhood() {
     let v = f.velocity.as_mut().unwrap();
     v.x[20 * 40 + 20] = 0.0;
     v.y[20 * 40 + 20] = 0.0;
-    let out = apply(Algorithm::Reconstruct, &BlurParams::default(), f, 1);
+    let out = apply(Algorithm::Reconstruct, &Params::default(), f, 1);
     assert!(planes(&out).iter().all(|p| p.iter().all(|v| v.is_finite())));
 }
 
@@ -82,7 +83,7 @@ fn zero_velocity_pixel_inside_a_moving_neighbourhood() {
 fn tile_grid_that_does_not_divide_the_image() {
     // 23×17 with k = 20: one full-width partial tile row and column.
     let f = frame(23, 17, 6, 30.0);
-    let out = apply(Algorithm::Reconstruct, &BlurParams::default(), f.clone(), 1);
+    let out = apply(Algorithm::Reconstruct, &Params::default(), f.clone(), 1);
     assert_eq!(planes(&out)[0].len(), 23 * 17);
     assert!(planes(&out)[0] != planes(&f)[0]);
 }
@@ -99,7 +100,7 @@ fn output_is_identical_for_one_and_two_threads() {
 
 /// Region errors of `none` and `reconstruct` against the reference, at 160×90.
 fn scene_errors(name: &str) -> (f64, f64, Frame, Frame) {
-    let runs = [(Algorithm::Reconstruct, BlurParams::default())];
+    let runs = [(Algorithm::Reconstruct, Params::default())];
     let (none, errors, passes, mut outputs) = crate::support::scene_errors(name, (160, 90), &runs);
     (none, errors[0], passes, outputs.remove(0))
 }

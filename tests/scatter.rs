@@ -2,7 +2,8 @@
 //! scenes against reconstruct.
 
 use shutter::frame::{Frame, Positions};
-use shutter::motion::{apply, Algorithm, BlurParams, CurveKind, Normalize, ScatterParams, Weight};
+use shutter::motion::{Algorithm, CurveKind, Normalize, ScatterParams, Weight};
+use shutter::process::{apply, Params};
 
 use crate::support::*;
 
@@ -38,7 +39,7 @@ fn frame(w: usize, h: usize, seed: u32, speed: f32) -> Frame {
     f
 }
 
-fn variants() -> Vec<BlurParams> {
+fn variants() -> Vec<Params> {
     let paper = ScatterParams {
         normalize: Normalize::Paper,
         weight: Weight::Gaussian,
@@ -58,15 +59,15 @@ fn variants() -> Vec<BlurParams> {
             sigma: 0.3,
             segments: 3,
             flatness: 0.0,
-            max_blur: 9.0,
+            max_curve: 18.0,
             ..paper
         },
     ]
     .into_iter()
-    .map(|scatter| BlurParams {
+    .map(|scatter| Params {
         shutter: 0.75,
         scatter,
-        ..BlurParams::default()
+        ..Params::default()
     })
     .collect()
 }
@@ -135,13 +136,13 @@ fn curves_pass_behind_nearer_surfaces() {
     p.x[2 * w + 5] -= 40.0;
     q.x[2 * w + 5] += 40.0;
     for normalize in [Normalize::Paper, Normalize::Exposure] {
-        let params = BlurParams {
+        let params = Params {
             shutter: 1.0,
             scatter: ScatterParams {
                 normalize,
                 ..ScatterParams::default()
             },
-            ..BlurParams::default()
+            ..Params::default()
         };
         let out = apply(Algorithm::Scatter, &params, f.clone(), 1);
         let r = &out.color.as_ref().unwrap().r;
@@ -197,9 +198,9 @@ fn velocity_is_never_read() {
 #[test]
 fn beats_reconstruct_on_rotor_and_gears() {
     let runs = [
-        (Algorithm::None, BlurParams::default()),
-        (Algorithm::Reconstruct, BlurParams::default()),
-        (Algorithm::Scatter, BlurParams::default()),
+        (Algorithm::None, Params::default()),
+        (Algorithm::Reconstruct, Params::default()),
+        (Algorithm::Scatter, Params::default()),
     ];
     // The gears turn slowly: at 160×90 their teeth move under a pixel.
     for (name, size) in [("rotor", (160, 90)), ("gears", (320, 180))] {
@@ -216,11 +217,8 @@ fn beats_reconstruct_on_rotor_and_gears() {
 
 #[test]
 fn the_tracked_object_in_pan_stays_sharp() {
-    let (_, _, passes, outputs) = scene_errors(
-        "pan",
-        (160, 90),
-        &[(Algorithm::Scatter, BlurParams::default())],
-    );
+    let (_, _, passes, outputs) =
+        scene_errors("pan", (160, 90), &[(Algorithm::Scatter, Params::default())]);
     let worst = tracked_disc_change(&passes, &outputs[0]);
     assert!(worst < 1e-4, "tracked object changed by {worst}");
 }

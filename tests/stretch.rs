@@ -2,7 +2,8 @@
 //! scenes.
 
 use shutter::frame::{Frame, Velocity};
-use shutter::motion::{Algorithm, Anchor, BlurParams, StretchParams};
+use shutter::motion::{Algorithm, Anchor, StretchParams};
+use shutter::process::Params;
 
 use crate::support::*;
 
@@ -17,7 +18,7 @@ fn frame(w: usize, h: usize, seed: u32, speed: f32) -> Frame {
     f
 }
 
-fn variants() -> Vec<BlurParams> {
+fn variants() -> Vec<Params> {
     let default = StretchParams::default();
     [
         default,
@@ -34,10 +35,10 @@ fn variants() -> Vec<BlurParams> {
         },
     ]
     .into_iter()
-    .map(|stretch| BlurParams {
+    .map(|stretch| Params {
         shutter: 0.75,
         stretch,
-        ..BlurParams::default()
+        ..Params::default()
     })
     .collect()
 }
@@ -114,7 +115,7 @@ fn prev_and_next_are_never_read() {
 #[test]
 fn beats_the_unblurred_frame_on_crossing_and_pan() {
     for name in ["crossing", "pan"] {
-        let runs = [(Algorithm::Stretch, BlurParams::default())];
+        let runs = [(Algorithm::Stretch, Params::default())];
         let (none, errors, _, _) = scene_errors(name, (320, 180), &runs);
         let ours = errors[0];
         assert!(ours < 0.9 * none, "{name}: stretch {ours} vs none {none}");

@@ -6,7 +6,8 @@
 use std::time::Instant;
 
 use shutter::frame::{Color, Frame, Velocity};
-use shutter::motion::{apply, Algorithm, BlurParams};
+use shutter::motion::Algorithm;
+use shutter::process::{apply, Params};
 
 pub const W: usize = 1920;
 pub const H: usize = 1080;
@@ -51,7 +52,7 @@ pub fn frame(moving: impl Fn(usize, usize) -> Option<(f32, f32)>) -> Frame {
 }
 
 /// Median processing time (ms) of `runs` runs of `algorithm` on `f`, after a warm-up run.
-pub fn median_ms(algorithm: Algorithm, f: &Frame, params: &BlurParams, runs: usize) -> f64 {
+pub fn median_ms(algorithm: Algorithm, f: &Frame, params: &Params, runs: usize) -> f64 {
     let _ = apply(algorithm, params, f.clone(), 1);
     let mut times: Vec<f64> = (0..runs)
         .map(|_| {

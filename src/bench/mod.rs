@@ -18,20 +18,28 @@ use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::metrics::{self, Rgb, Scores};
 use crate::motion::{
-    apply, Algorithm, Anchor, BlurParams, CurveKind, Normalize, ReconstructParams, ScatterParams,
-    StretchParams, Variant, Weight,
+    Algorithm, Anchor, CurveKind, Normalize, ReconstructParams, ScatterParams, StretchParams,
+    Variant, Weight,
 };
+use crate::process::{apply, Params};
+use crate::settings;
 use crate::truth::scenes::SCENES;
 use crate::truth::write::{write_scene, SceneOptions};
 
-/// One point of the sweep: an algorithm with its parameters and the flags that set them.
+/// One point of the sweep: an algorithm with its parameters. The flags that run it come from
+/// the settings' definitions ([`settings::flags`]).
 #[derive(Clone, Debug)]
 pub struct Setting {
     pub label: String,
     pub algorithm: Algorithm,
-    pub params: BlurParams,
-    /// The `shutter blur` flags for this setting (after `--algorithm`).
-    pub flags: Vec<String>,
+    pub params: Params,
+}
+
+impl Setting {
+    /// The `shutter blur` flags that run this setting.
+    pub fn flags(&self) -> Vec<String> {
+        settings::flags(&settings::Settings::of(self.algorithm, &self.params))
+    }
 }
 
 /// The sweep: every algorithm that exists, with its settings. Later issues add theirs here.
@@ -39,8 +47,7 @@ pub fn sweep() -> Vec<Setting> {
     let mut settings = vec![Setting {
         label: "none".into(),
         algorithm: Algorithm::None,
-        params: BlurParams::default(),
-        flags: Vec::new(),
+        params: Params::default(),
     }];
     let reconstruct = |taps: usize, max_blur: usize, variant: Variant| {
         let name = if variant == Variant::Dual {
@@ -51,23 +58,15 @@ pub fn sweep() -> Vec<Setting> {
         Setting {
             label: format!("reconstruct {name} S{taps} k{max_blur}"),
             algorithm: Algorithm::Reconstruct,
-            params: BlurParams {
+            params: Params {
                 reconstruct: ReconstructParams {
                     taps,
                     max_blur,
                     variant,
                     ..ReconstructParams::default()
                 },
-                ..BlurParams::default()
+                ..Params::default()
             },
-            flags: vec![
-                "--samples".into(),
-                taps.to_string(),
-                "--max-blur".into(),
-                max_blur.to_string(),
-                "--variant".into(),
-                name.into(),
-            ],
         }
     };
     for taps in [5, 9, 15, 25] {
@@ -116,24 +115,16 @@ fn stretch_sweep() -> Vec<Setting> {
             Anchor::Rear => "rear",
         };
         let mut label = format!("stretch {anchor} extent{}", p.extent);
-        let mut flags = vec![
-            "--anchor".to_string(),
-            anchor.to_string(),
-            "--extent".to_string(),
-            p.extent.to_string(),
-        ];
         if !p.texture_blur {
             label += " plain";
-            flags.push("--no-texture-blur".into());
         }
         Setting {
             label,
             algorithm: Algorithm::Stretch,
-            params: BlurParams {
+            params: Params {
                 stretch: p,
-                ..BlurParams::default()
+                ..Params::default()
             },
-            flags,
         }
     })
     .collect()
@@ -213,26 +204,13 @@ fn scatter_setting(p: ScatterParams) -> Setting {
     if p.flatness == 0.0 {
         label += " fixed";
     }
-    let flags = [
-        ("--normalize", normalize.to_string()),
-        ("--curve", curve.to_string()),
-        ("--weight", weight.to_string()),
-        ("--sigma", p.sigma.to_string()),
-        ("--background-weight", p.background_weight.to_string()),
-        ("--segments", p.segments.to_string()),
-        ("--flatness", p.flatness.to_string()),
-    ];
     Setting {
         label,
         algorithm: Algorithm::Scatter,
-        params: BlurParams {
+        params: Params {
             scatter: p,
-            ..BlurParams::default()
+            ..Params::default()
         },
-        flags: flags
-            .into_iter()
-            .flat_map(|(f, v)| [f.to_string(), v])
-            .collect(),
     }
 }
 
@@ -272,46 +250,13 @@ pub fn targets(name: &str, lens: Option<Lens>) -> Vec<Target> {
 
 /// A depth-of-field setting (with a motion-blur algorithm after it, or none).
 fn dof_setting(label: String, algorithm: Algorithm, dof: DofParams) -> Setting {
-    let CocSource::Lens(lens) = dof.source else {
-        unreachable!("the bench scenes have lenses")
-    };
-    let mut flags: Vec<String> = vec![
-        "--focal-length".into(),
-        lens.focal_mm.to_string(),
-        "--f-stop".into(),
-        lens.f_number.to_string(),
-        "--focus-distance".into(),
-        lens.focus.to_string(),
-        "--sensor-width".into(),
-        lens.sensor_mm.to_string(),
-        "--method".into(),
-        dof.method.name().into(),
-        "--max-coc".into(),
-        dof.max_coc.to_string(),
-        "--epsilon".into(),
-        dof.epsilon.to_string(),
-    ];
-    match dof.method {
-        Method::Gather => flags.extend([
-            "--rings".into(),
-            dof.rings.to_string(),
-            "--blades".into(),
-            dof.blades.to_string(),
-        ]),
-        Method::Blend => {
-            if let Some(n) = dof.passes {
-                flags.extend(["--passes".into(), n.to_string()]);
-            }
-        }
-    }
     Setting {
         label,
         algorithm,
-        params: BlurParams {
+        params: Params {
             dof: Some(dof),
-            ..BlurParams::default()
+            ..Params::default()
         },
-        flags,
     }
 }
 
@@ -325,8 +270,7 @@ fn dof_sweep(lens: Lens) -> Vec<Setting> {
     let mut settings = vec![Setting {
         label: "none".into(),
         algorithm: Algorithm::None,
-        params: BlurParams::default(),
-        flags: Vec::new(),
+        params: Params::default(),
     }];
     for rings in [1, 2, 4, 6] {
         let p = DofParams { rings, ..gather };
@@ -366,8 +310,7 @@ fn combined_sweep(lens: Lens) -> Vec<Setting> {
     let motion = |label: &str, algorithm: Algorithm| Setting {
         label: label.into(),
         algorithm,
-        params: BlurParams::default(),
-        flags: Vec::new(),
+        params: Params::default(),
     };
     vec![
         motion("none", Algorithm::None),
@@ -525,7 +468,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                 let plan_options = PlanOptions {
                     preset: &preset,
                     layer: None,
-                    needs: crate::motion::needs(setting.algorithm, &setting.params),
+                    needs: crate::process::needs(setting.algorithm, &setting.params),
                 };
                 let plan = plan_frame(&inputs, Some(1), &plan_options).map_err(Error::Files)?;
                 let frame = read_frame(&plan)?;
@@ -547,8 +490,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                 let mut peak: Option<f64> = None;
                 for _ in 0..options.runs {
                     let mut command = std::process::Command::new(&options.binary);
-                    command.args(["blur", "--algorithm", setting.algorithm.name()]);
-                    command.args(&setting.flags);
+                    command.arg("blur").args(setting.flags());
                     for (flag, pattern) in inputs.all() {
                         command.arg(format!("--{flag}")).arg(&pattern.raw);
                     }

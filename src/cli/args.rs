@@ -3,7 +3,9 @@
 
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Arg, ArgAction, ArgMatches, Args, FromArgMatches, Parser, Subcommand};
+
+use crate::settings::{Def, Given, Kind, Section, Value, DEFS};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -49,10 +51,6 @@ pub struct BlurArgs {
     #[arg(long, value_name = "P")]
     pub preset: Vec<String>,
 
-    /// Blur algorithm [default: from the preset, else none]. none copies colour through.
-    #[arg(long, value_name = "NAME")]
-    pub algorithm: Option<String>,
-
     /// Colour pass: a file, or a sequence pattern with #### or %04d. With a multi-layer EXR
     /// the preset finds the other passes in it.
     #[arg(long, value_name = "PATH")]
@@ -78,97 +76,13 @@ pub struct BlurArgs {
     #[arg(long, value_name = "NAME")]
     pub layer: Option<String>,
 
-    /// Fraction of the frame interval the shutter is open, centred on the frame (0.5 = 180°)
-    /// [default: from the preset, else 0.5].
-    #[arg(long, value_name = "F")]
-    pub shutter: Option<f32>,
-
-    /// Largest blur radius in pixels. reconstruct: k, also the tile size [default: preset,
-    /// else 20]; scatter: a curve is at most twice this long [default: preset, else 128].
-    #[arg(long, value_name = "PX")]
-    pub max_blur: Option<usize>,
-
-    /// reconstruct: filter taps S, odd [default: preset, else 15].
-    #[arg(long, value_name = "S")]
-    pub samples: Option<usize>,
-
-    /// reconstruct: soft depth extent in scene units [default: preset, else 0.1].
-    #[arg(long, value_name = "Z")]
-    pub soft_z: Option<f32>,
-
-    /// reconstruct: no per-pixel jitter of the taps (ghosting instead of noise).
-    #[arg(long)]
-    pub no_jitter: bool,
-
-    /// reconstruct: paper (every tap along the neighbourhood's velocity) or dual (every
-    /// other tap along the pixel's own) [default: preset, else paper].
-    #[arg(long, value_name = "V")]
-    pub variant: Option<String>,
-
-    /// scatter: line segments per curve, at most (the paper's Δ = 11 points is 10)
-    /// [default: preset, else 10].
-    #[arg(long, value_name = "N")]
-    pub segments: Option<usize>,
-
-    /// scatter: σ of the Gaussian weight along the curve, in units of s (0..1 over the frame
-    /// interval) [default: preset, else 2].
-    #[arg(long, value_name = "S")]
-    pub sigma: Option<f32>,
-
-    /// scatter: weight along the curve, gaussian (the paper) or box (the ideal shutter)
-    /// [default: preset, else gaussian].
-    #[arg(long, value_name = "W")]
-    pub weight: Option<String>,
-
-    /// scatter: background weight w_b of the paper's normalisation [default: preset, else 5].
-    #[arg(long, value_name = "WB")]
-    pub background_weight: Option<f32>,
-
-    /// scatter: paper (eq. 4 with w_b) or exposure (deposits as shares of the exposure, the
-    /// rest filled with what lies behind) [default: preset, else paper].
-    #[arg(long, value_name = "N")]
-    pub normalize: Option<String>,
-
-    /// scatter: bezier (the paper's quadratic) or arc (circular where the motion turns)
-    /// [default: preset, else bezier].
-    #[arg(long, value_name = "C")]
-    pub curve: Option<String>,
-
-    /// scatter: cut a curve into fewer segments where they stray at most this many pixels
-    /// from it; 0 always uses --segments [default: preset, else 0.1].
-    #[arg(long, value_name = "PX")]
-    pub flatness: Option<f32>,
-
-    /// scatter, stretch: relative depth tolerance of the depth test [default: preset, else
-    /// 0.02].
-    #[arg(long, value_name = "F")]
-    pub depth_tolerance: Option<f32>,
-
-    /// stretch: `extent` of alpha = max(min_alpha, 1 − |M|/extent), pixels [default: preset,
-    /// else 2].
-    #[arg(long, value_name = "PX")]
-    pub extent: Option<f32>,
-
-    /// stretch: the alpha floor of moved vertices [default: preset, else 0.1].
-    #[arg(long, value_name = "A")]
-    pub min_alpha: Option<f32>,
-
-    /// stretch: relative depth step that tears the mesh [default: preset, else 0.05].
-    #[arg(long, value_name = "F")]
-    pub tear: Option<f32>,
-
-    /// stretch: centre (trailing vertices back and leading ones forward by half the
-    /// exposure) or rear (the talk's rear curtain) [default: preset, else centre].
-    #[arg(long, value_name = "A")]
-    pub anchor: Option<String>,
-
-    /// stretch: no averaging of moving pixels along their motion before stretching (the
-    /// talk's plain form: only silhouettes blur).
-    #[arg(long)]
-    pub no_texture_blur: bool,
-
     #[command(flatten)]
-    pub dof: DofArgs,
+    pub settings: SettingArgs,
+
+    /// A painted blurriness map (grey image or one-channel EXR, a file or pattern) instead of
+    /// a lens and depth: CoC diameter = value × --coc-scale. Read in place of depth.
+    #[arg(long, value_name = "PATH", help_heading = "Depth of field")]
+    pub coc_map: Option<String>,
 
     /// Frames to process: 1001-1100, 1-99x2, 1,5,9-12 [default: every frame found on disk
     /// for the colour pattern].
@@ -178,19 +92,6 @@ pub struct BlurArgs {
     /// Output file or pattern (.exr, .png, .tif, .tiff, .jpg, .jpeg).
     #[arg(short, long, value_name = "PATH")]
     pub output: String,
-
-    /// Write EXR as 16-bit half floats (default: 32-bit float).
-    #[arg(long)]
-    pub half: bool,
-
-    /// EXR compression: none, rle, zips, zip, piz, pxr24, b44, b44a, dwaa, dwab
-    /// [default: from the preset, else zip].
-    #[arg(long, value_name = "NAME")]
-    pub compression: Option<String>,
-
-    /// Bits per channel of PNG and TIFF output: 8 or 16 [default: from the preset, else 8].
-    #[arg(long, value_name = "BITS")]
-    pub bit_depth: Option<u8>,
 
     /// Integer images (8/16-bit input colour and output) hold linear values, not sRGB.
     #[arg(long)]
@@ -213,66 +114,79 @@ pub struct BlurArgs {
     pub threads: Option<usize>,
 }
 
-/// Depth-of-field flags, shared by `shutter dof` and `shutter blur`.
-#[derive(Debug, Args, Default)]
-pub struct DofArgs {
-    /// Depth of field: gather (bokeh gather with near and far fields) or blend (Wloka's
-    /// blurriness blend) [default: preset, else gather].
-    #[arg(long, value_name = "M", help_heading = "Depth of field")]
-    pub method: Option<String>,
+/// The settings of [`crate::settings::DEFS`] as flags: one argument per definition, its help
+/// text, default and preset key generated from it.
+#[derive(Clone, Debug, Default)]
+pub struct SettingArgs(pub Given);
 
-    /// Lens focal length in mm.
-    #[arg(long, value_name = "MM", help_heading = "Depth of field")]
-    pub focal_length: Option<f64>,
+impl FromArgMatches for SettingArgs {
+    fn from_arg_matches(matches: &ArgMatches) -> Result<Self, clap::Error> {
+        let mut given = Given::default();
+        for def in DEFS {
+            let value = match def.kind {
+                Kind::Switch => matches.get_flag(def.name).then(|| "true".to_string()),
+                _ => matches.get_one::<String>(def.name).cloned(),
+            };
+            if let Some(value) = value {
+                given.values.push((def.name, value));
+            }
+        }
+        Ok(SettingArgs(given))
+    }
 
-    /// Lens f-number (aperture = focal length / f-stop).
-    #[arg(long, value_name = "N", help_heading = "Depth of field")]
-    pub f_stop: Option<f64>,
+    fn update_from_arg_matches(&mut self, matches: &ArgMatches) -> Result<(), clap::Error> {
+        *self = SettingArgs::from_arg_matches(matches)?;
+        Ok(())
+    }
+}
 
-    /// Focus distance in metres. Depth is read as metres too: a depth pass in other units
-    /// needs a preset's [depth] scale (0.01 for centimetres).
-    #[arg(long, value_name = "D", help_heading = "Depth of field")]
-    pub focus_distance: Option<f64>,
+impl Args for SettingArgs {
+    fn augment_args(command: clap::Command) -> clap::Command {
+        DEFS.iter()
+            .fold(command, |command, def| command.arg(setting_arg(def)))
+    }
 
-    /// Sensor (film) width in mm: the image's width spans it [default: preset, else 36].
-    #[arg(long, value_name = "MM", help_heading = "Depth of field")]
-    pub sensor_width: Option<f64>,
+    fn augment_args_for_update(command: clap::Command) -> clap::Command {
+        SettingArgs::augment_args(command)
+    }
+}
 
-    /// A painted blurriness map (grey image or one-channel EXR, a file or pattern) instead of
-    /// a lens and depth: CoC diameter = value × --coc-scale. Read in place of depth.
-    #[arg(long, value_name = "PATH", help_heading = "Depth of field")]
-    pub coc_map: Option<String>,
-
-    /// CoC diameter in pixels of a map value of 1 (white) [default: preset, else 32].
-    #[arg(long, value_name = "PX", help_heading = "Depth of field")]
-    pub coc_scale: Option<f32>,
-
-    /// ε: circles of confusion smaller than this diameter (px) are in focus [default:
-    /// preset, else 1].
-    #[arg(long, value_name = "PX", help_heading = "Depth of field")]
-    pub epsilon: Option<f32>,
-
-    /// Largest CoC diameter (px); larger ones are clamped. blend: E (the CoC its most blurred
-    /// copy stands for) is the frame's largest CoC, at most this [default: preset, else 48].
-    #[arg(long, value_name = "PX", help_heading = "Depth of field")]
-    pub max_coc: Option<f32>,
-
-    /// gather: diaphragm blades, 0 for a round aperture [default: preset, else 0].
-    #[arg(long, value_name = "N", help_heading = "Depth of field")]
-    pub blades: Option<u32>,
-
-    /// gather: diaphragm rotation in degrees [default: preset, else 0].
-    #[arg(long, value_name = "DEG", help_heading = "Depth of field")]
-    pub blade_rotation: Option<f32>,
-
-    /// gather: rings of taps; ring k has 8k taps (6 rings: 169 taps) [default: preset, else 6].
-    #[arg(long, value_name = "N", help_heading = "Depth of field")]
-    pub rings: Option<usize>,
-
-    /// blend: passes n of the 3×3 filter for the first blurred copy (the second has 2n)
-    /// [default: preset, else chosen so the 2n copy looks like E].
-    #[arg(long, value_name = "N", help_heading = "Depth of field")]
-    pub passes: Option<usize>,
+/// The clap argument of one setting.
+fn setting_arg(def: &'static Def) -> Arg {
+    let heading = match def.section {
+        Section::Blur => "Motion blur",
+        Section::Dof => "Depth of field",
+        Section::Output => "Output",
+    };
+    let key = format!("{}.{}", def.section.table(), def.key());
+    let describe = def.describe();
+    // Help lines start with a capital, as clap's own do.
+    let mut chars = describe.chars();
+    let describe: String = chars
+        .next()
+        .map(|c| c.to_uppercase().chain(chars).collect())
+        .unwrap_or_default();
+    let arg = Arg::new(def.name).long(def.flag()).help_heading(heading);
+    match def.kind {
+        Kind::Switch => {
+            let turns = if def.default_value() == Value::Switch(true) {
+                "off"
+            } else {
+                "on"
+            };
+            arg.action(ArgAction::SetTrue).help(format!(
+                "{describe}; this flag turns it {turns} [default: {}; preset key {key}]",
+                def.default_text()
+            ))
+        }
+        _ => arg
+            .value_name(def.value_name)
+            .allow_negative_numbers(true)
+            .help(format!(
+                "{describe} [default: {}; preset key {key}]",
+                def.default_text()
+            )),
+    }
 }
 
 #[derive(Debug, Args)]
@@ -299,6 +213,9 @@ pub enum PresetsCommand {
         /// Preset name or .toml path.
         name: String,
     },
+    /// List every settings key a preset may set ([blur], [dof], [output]): its flag, default,
+    /// and what it does.
+    Keys,
 }
 
 #[derive(Debug, Args)]

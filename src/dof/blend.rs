@@ -35,7 +35,6 @@ use rayon::prelude::*;
 
 use super::DofParams;
 use crate::frame::Color;
-use crate::motion::sanitize_color;
 
 /// Weight of an in-focus pixel in the copies (relative to 1 for a fully blurred one).
 const IN_FOCUS_WEIGHT: f32 = 1.0 / 64.0;
@@ -136,7 +135,7 @@ pub fn blend(color: &Color, coc: &[f32], width: usize, height: usize, params: &D
     let (coc_1, coc_2) = (equivalent_coc(passes), equivalent_coc(2 * passes));
     let interpolator = |c: f32| ((c.abs() - epsilon) / (largest - epsilon)).clamp(0.0, 1.0);
 
-    // Sanitised input, offset by one reference colour so a uniform frame stays exact.
+    // The input, offset by one reference colour so a uniform frame stays exact.
     let inputs: Vec<Vec<f32>> = [
         Some(&color.r),
         Some(&color.g),
@@ -145,7 +144,7 @@ pub fn blend(color: &Color, coc: &[f32], width: usize, height: usize, params: &D
     ]
     .into_iter()
     .flatten()
-    .map(|plane| plane.iter().map(|&v| sanitize_color(v)).collect())
+    .map(|plane| plane.to_vec())
     .collect();
     let reference: Vec<f32> = inputs.iter().map(|p| p[0]).collect();
     let channels = inputs.len();

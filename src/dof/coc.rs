@@ -28,6 +28,9 @@ pub struct Lens {
 pub const LARGEST: f64 = 1e6;
 
 impl Lens {
+    /// A full-frame (35 mm) sensor's width: the default.
+    pub const DEFAULT_SENSOR_MM: f64 = 36.0;
+
     /// Why these settings cannot describe a lens, if they cannot.
     pub fn check(&self) -> Result<(), String> {
         let positive = |v: f64| v.is_finite() && v > 0.0;

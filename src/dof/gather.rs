@@ -42,7 +42,6 @@ use rayon::prelude::*;
 use super::bokeh::{grid, taps, Aperture, Tap};
 use super::DofParams;
 use crate::frame::Color;
-use crate::motion::sanitize_color;
 
 /// Tile edge (px) of the reach pass.
 pub const TILE: usize = 16;
@@ -143,10 +142,10 @@ impl Padded {
         let source = |plane: usize, x: usize, y: usize| -> f32 {
             let i = y * width + x;
             match plane {
-                0 => sanitize_color(color.r[i]),
-                1 => sanitize_color(color.g[i]),
-                2 => sanitize_color(color.b[i]),
-                3 => color.a.as_ref().map_or(0.0, |a| sanitize_color(a[i])),
+                0 => color.r[i],
+                1 => color.g[i],
+                2 => color.b[i],
+                3 => color.a.as_ref().map_or(0.0, |a| a[i]),
                 4 => 0.5 * coc[i],
                 _ => {
                     let r = (0.5 * coc[i]).abs().max(SMALLEST_RADIUS);

@@ -75,6 +75,18 @@ pub struct DofParams {
     pub passes: Option<usize>,
 }
 
+/// CoC diameter in pixels of a painted map's value 1 (white): the default.
+pub const DEFAULT_COC_SCALE: f32 = 32.0;
+
+impl Default for DofParams {
+    /// The defaults, for a painted map of [`DEFAULT_COC_SCALE`].
+    fn default() -> Self {
+        DofParams::new(CocSource::Map {
+            scale: DEFAULT_COC_SCALE,
+        })
+    }
+}
+
 impl DofParams {
     /// The defaults for a source.
     pub fn new(source: CocSource) -> Self {
@@ -90,41 +102,17 @@ impl DofParams {
         }
     }
 
-    /// Why these parameters cannot run, if they cannot.
+    /// Why these parameters cannot run together, if they cannot (each value's own range is
+    /// checked where it is read: `crate::settings`).
     pub fn check(&self) -> Result<(), String> {
         if let CocSource::Lens(lens) = &self.source {
             lens.check()?;
         }
-        if let CocSource::Map { scale } = self.source {
-            if !(scale.is_finite() && scale >= 0.0) {
-                return Err(format!(
-                    "--coc-scale {scale}: use a positive number of pixels"
-                ));
-            }
-        }
-        if !(self.epsilon.is_finite() && self.epsilon >= 0.0) {
-            return Err(format!("--epsilon {}: use 0 or more pixels", self.epsilon));
-        }
-        if !(self.max_coc.is_finite() && self.max_coc > self.epsilon && self.max_coc <= 512.0) {
+        if self.max_coc.partial_cmp(&self.epsilon) != Some(std::cmp::Ordering::Greater) {
             return Err(format!(
-                "--max-coc {}: use a diameter above --epsilon ({}) and at most 512 px",
+                "max-coc {} must be above epsilon {} (px)",
                 self.max_coc, self.epsilon
             ));
-        }
-        if self.blades == 1 || self.blades == 2 || self.blades > 32 {
-            return Err(format!(
-                "--blades {}: use 0 (round) or 3 to 32",
-                self.blades
-            ));
-        }
-        if !self.blade_rotation.is_finite() {
-            return Err("--blade-rotation must be a finite angle in degrees".into());
-        }
-        if !(1..=16).contains(&self.rings) {
-            return Err(format!("--rings {}: use 1 to 16", self.rings));
-        }
-        if self.passes == Some(0) {
-            return Err("--passes must be at least 1".into());
         }
         Ok(())
     }

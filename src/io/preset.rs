@@ -118,134 +118,8 @@ pub struct VectorSpec {
     pub y_up: bool,
 }
 
-fn is_default<T: Default + PartialEq>(value: &T) -> bool {
-    *value == T::default()
-}
-
 fn one() -> f32 {
     1.0
-}
-
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct BlurSettings {
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub algorithm: Option<String>,
-    /// Fraction of the frame interval the shutter is open (0.5 = 180°).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub shutter: Option<f32>,
-    /// Largest blur radius (px): reconstruct's k (also the tile size); half scatter's
-    /// longest curve.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub max_blur: Option<usize>,
-    /// reconstruct: filter taps S (odd).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub samples: Option<usize>,
-    /// reconstruct: soft depth extent, scene units.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub soft_z: Option<f32>,
-    /// reconstruct: jitter the taps per pixel.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub jitter: Option<bool>,
-    /// reconstruct: "paper" or "dual".
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub variant: Option<String>,
-    /// scatter: line segments per curve (at most).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub segments: Option<usize>,
-    /// scatter: σ of the Gaussian weight, in units of s.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sigma: Option<f32>,
-    /// scatter: "gaussian" or "box".
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub weight: Option<String>,
-    /// scatter: background weight w_b (paper normalisation).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub background_weight: Option<f32>,
-    /// scatter: "paper" or "exposure".
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub normalize: Option<String>,
-    /// scatter: "bezier" or "arc".
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub curve: Option<String>,
-    /// scatter: flatness tolerance (px) for fewer segments; 0 = always `segments`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub flatness: Option<f32>,
-    /// scatter, stretch: relative depth tolerance of the depth test.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub depth_tolerance: Option<f32>,
-    /// stretch: alpha extent (px).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub extent: Option<f32>,
-    /// stretch: alpha floor.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub min_alpha: Option<f32>,
-    /// stretch: relative depth step that tears the mesh.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub tear: Option<f32>,
-    /// stretch: "centre" or "rear".
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub anchor: Option<String>,
-    /// stretch: average moving pixels along their motion first.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub texture_blur: Option<bool>,
-}
-
-/// Depth of field, run before the motion blur. A lens (focal_length, f_stop, focus_distance)
-/// turns it on; each key is the `shutter dof` flag of the same name.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DofSettings {
-    /// "gather" or "blend".
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub method: Option<String>,
-    /// Focal length, mm.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub focal_length: Option<f64>,
-    /// f-number.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub f_stop: Option<f64>,
-    /// Focus distance, metres (depth is read as metres: see `[depth] scale`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub focus_distance: Option<f64>,
-    /// Sensor width, mm.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sensor_width: Option<f64>,
-    /// CoC diameter (px) of a stored value of 1 in a painted CoC map.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub coc_scale: Option<f32>,
-    /// In-focus CoC diameter ε, px.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub epsilon: Option<f32>,
-    /// Largest CoC diameter, px (blend: E).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub max_coc: Option<f32>,
-    /// gather: diaphragm blades (0 = round).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub blades: Option<u32>,
-    /// gather: diaphragm rotation, degrees.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub blade_rotation: Option<f32>,
-    /// gather: rings of taps.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub rings: Option<usize>,
-    /// blend: passes n of the first copy.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub passes: Option<usize>,
-}
-
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct OutputSettings {
-    /// EXR compression name (see `shutter blur --help`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub compression: Option<String>,
-    /// Write EXR as 16-bit half floats.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub half: Option<bool>,
-    /// Bits per channel of PNG/TIFF output: 8 or 16.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub bit_depth: Option<u8>,
 }
 
 /// A resolved preset: every pass described.
@@ -259,15 +133,20 @@ pub struct Preset {
     pub velocity: VectorSpec,
     pub prev: VectorSpec,
     pub next: VectorSpec,
-    #[serde(default)]
-    pub blur: BlurSettings,
-    #[serde(default, skip_serializing_if = "is_default")]
-    pub dof: DofSettings,
-    #[serde(default)]
-    pub output: OutputSettings,
+    /// Settings of the motion blur, depth of field and output: keys are checked against their
+    /// one definition in [`crate::settings`] when a job is resolved.
+    #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
+    pub blur: toml::Table,
+    #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
+    pub dof: toml::Table,
+    #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
+    pub output: toml::Table,
     /// The names (or paths) this preset was built from, for messages.
     #[serde(skip)]
     pub name: String,
+    /// Which of those set each settings key ("blur.max_blur" → "final"), for messages.
+    #[serde(skip)]
+    pub origins: std::collections::BTreeMap<String, String>,
 }
 
 /// True when the built-in preset describes how passes are stored (it has a colour, depth or
@@ -315,6 +194,21 @@ fn load_table(name_or_path: &str) -> Result<toml::Table> {
     )))
 }
 
+/// Records `name` as the origin of every settings key in `table`.
+fn note_origins(
+    table: &toml::Table,
+    name: &str,
+    origins: &mut std::collections::BTreeMap<String, String>,
+) {
+    for section in ["blur", "dof", "output"] {
+        if let Some(toml::Value::Table(keys)) = table.get(section) {
+            for key in keys.keys() {
+                origins.insert(format!("{section}.{key}"), name.to_string());
+            }
+        }
+    }
+}
+
 /// Merges `over` into `base`: tables merge key by key, everything else is replaced.
 fn merge(base: &mut toml::Table, over: toml::Table) {
     for (key, value) in over {
@@ -333,9 +227,13 @@ impl Preset {
     /// Builds the preset from `shutter` with the named presets merged over it in order.
     pub fn load(names: &[String]) -> Result<Preset> {
         let mut table = parse_table(builtin_text("shutter").unwrap_or_default(), "shutter")?;
+        let mut origins = std::collections::BTreeMap::new();
+        note_origins(&table, "shutter", &mut origins);
         for name in names {
             if name != "shutter" {
-                merge(&mut table, load_table(name)?);
+                let over = load_table(name)?;
+                note_origins(&over, name, &mut origins);
+                merge(&mut table, over);
             }
         }
         let mut preset: Preset = table.try_into().map_err(|e: toml::de::Error| {
@@ -346,6 +244,7 @@ impl Preset {
         } else {
             names.join("+")
         };
+        preset.origins = origins;
         preset.validate()?;
         Ok(preset)
     }
@@ -353,6 +252,24 @@ impl Preset {
     /// The built-in preset of that name.
     pub fn builtin(name: &str) -> Result<Preset> {
         Preset::load(&[name.to_string()])
+    }
+
+    /// A settings table by name: "blur", "dof" or "output" (empty for any other).
+    pub fn settings(&self, table: &str) -> &toml::Table {
+        static EMPTY: std::sync::OnceLock<toml::Table> = std::sync::OnceLock::new();
+        match table {
+            "blur" => &self.blur,
+            "dof" => &self.dof,
+            "output" => &self.output,
+            _ => EMPTY.get_or_init(toml::Table::new),
+        }
+    }
+
+    /// The preset (name or path) that set a settings key of a table.
+    pub fn origin(&self, table: &str, key: &str) -> &str {
+        self.origins
+            .get(&format!("{table}.{key}"))
+            .map_or(self.name.as_str(), String::as_str)
     }
 
     fn validate(&self) -> Result<()> {
@@ -384,11 +301,6 @@ impl Preset {
                 return bad("depth near and far must be finite".into());
             }
         }
-        if let Some(shutter) = self.blur.shutter {
-            if !(0.0..=1.0).contains(&shutter) {
-                return bad(format!("blur.shutter {shutter} is outside 0..1"));
-            }
-        }
         Ok(())
     }
 
@@ -416,17 +328,16 @@ mod tests {
         assert_eq!(preset.velocity.meaning, Meaning::ToPrev);
         assert!(preset.velocity.y_up);
         // Not set by blender: kept from shutter.
-        assert_eq!(preset.blur.shutter, Some(0.5));
-        assert_eq!(preset.output.compression.as_deref(), Some("zip"));
+        assert_eq!(preset.color.transfer, Transfer::Srgb);
     }
 
     #[test]
     fn settings_presets_merge_over_a_renderer_preset() {
         let preset = Preset::load(&["blender".into(), "final".into()]).unwrap();
         assert_eq!(preset.velocity.meaning, Meaning::ToPrev);
-        assert_eq!(preset.blur.algorithm.as_deref(), Some("scatter"));
-        assert_eq!(preset.blur.segments, Some(20));
-        assert_eq!(preset.blur.normalize.as_deref(), Some("exposure"));
+        assert_eq!(preset.blur["algorithm"].as_str(), Some("scatter"));
+        assert_eq!(preset.blur["segments"].as_integer(), Some(20));
+        assert_eq!(preset.origin("blur", "segments"), "final");
     }
 
     #[test]

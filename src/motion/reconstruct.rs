@@ -15,10 +15,11 @@
 //!   `max(|V|, 0.5 px)` (the paper's clamp), while its cones and cylinders use the true
 //!   |V| = 0 and so vanish at any distance: it stays sharp unless something in front blurs
 //!   over it (1/0 is +∞ there, and every distance is positive, so no NaN arises);
-//! - velocities far above k are clamped to k (direction kept; inputs beyond
-//!   [`VELOCITY_LIMIT`] first, so |q|² cannot overflow);
-//! - NaN velocity reads as still; ±Inf as ±[`HUGE`]; NaN depth as far, depth clamped to
-//!   [0, `HUGE`]; NaN colour as 0 and colour clamped to ±[`HUGE`] — output is always finite;
+//! - velocities far above k are clamped to k (direction kept; the numeric policy bounds the
+//!   inputs by [`VELOCITY_LIMIT`](crate::numeric::VELOCITY_LIMIT) first, so |q|² cannot overflow);
+//! - inputs obey the numeric policy ([`crate::numeric`]: finite colour and velocity, depth
+//!   in [0, +∞]); far depth (+∞) is packed as [`HUGE`] so depth differences stay finite —
+//!   output is always finite;
 //! - taps outside the image are clamped to the border; tiles at the right and bottom edges
 //!   may be partial.
 //!
@@ -29,17 +30,13 @@ use rayon::prelude::*;
 
 use super::neighbor_max::neighbor_max;
 use super::tile_max::tile_max;
-use super::{sanitize_color, HUGE};
 use crate::frame::Frame;
-use crate::truth::sample::hash01;
+use crate::numeric::{unit, HUGE};
 
 /// Half a pixel: velocities at or below it do not blur (the paper's 0.5 px).
 pub const HALF_PIXEL: f32 = 0.5;
 /// The paper's ε: guards `|q| + ε` and the early-out test.
 pub const EPSILON: f32 = 0.01;
-/// Velocities beyond this many pixels per frame are clamped (they blur by k anyway): small
-/// enough that |q|² stays finite in f32, so no `hypot` is needed.
-pub const VELOCITY_LIMIT: f32 = 1e15;
 
 /// Which taps the gather takes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -50,6 +47,12 @@ pub enum Variant {
     /// Jimenez 2014 sample both directions), so a pixel moving across its neighbourhood's
     /// dominant motion still blurs along its own.
     Dual,
+}
+
+impl Variant {
+    /// Every choice, by the name flags and presets use.
+    pub const ALL: &'static [(&'static str, Variant)] =
+        &[("paper", Variant::Paper), ("dual", Variant::Dual)];
 }
 
 /// Parameters, with the paper's defaults.
@@ -78,29 +81,16 @@ impl Default for ReconstructParams {
     }
 }
 
-fn sanitize_depth(z: f32) -> f32 {
-    if z.is_nan() {
-        HUGE
-    } else {
-        z.clamp(0.0, HUGE)
-    }
-}
-
-fn sanitize_velocity(v: f32) -> f32 {
-    if v.is_nan() {
-        0.0
-    } else {
-        v.clamp(-VELOCITY_LIMIT, VELOCITY_LIMIT)
-    }
+/// Far depth (+∞ under the numeric policy) as a finite number, so that the soft depth
+/// comparison's differences stay finite.
+fn finite_depth(z: f32) -> f32 {
+    z.min(HUGE)
 }
 
 /// The clamped half-spread velocity of the paper: `V = q·max(0.5, min(|q|, k)) / (|q| + ε)`
 /// with `q = ½·v·φ`.
 pub fn half_spread(vx: f32, vy: f32, shutter: f32, k: f32) -> (f32, f32) {
-    let (qx, qy) = (
-        0.5 * sanitize_velocity(vx) * shutter,
-        0.5 * sanitize_velocity(vy) * shutter,
-    );
+    let (qx, qy) = (0.5 * vx * shutter, 0.5 * vy * shutter);
     let length = (qx * qx + qy * qy).sqrt();
     if length == 0.0 {
         return (0.0, 0.0);
@@ -112,10 +102,7 @@ pub fn half_spread(vx: f32, vy: f32, shutter: f32, k: f32) -> (f32, f32) {
 /// |V| of [`half_spread`] without forming V.
 #[inline]
 fn spread_length(vx: f32, vy: f32, shutter: f32, k: f32) -> f32 {
-    let (qx, qy) = (
-        0.5 * sanitize_velocity(vx) * shutter,
-        0.5 * sanitize_velocity(vy) * shutter,
-    );
+    let (qx, qy) = (0.5 * vx * shutter, 0.5 * vy * shutter);
     let length = (qx * qx + qy * qy).sqrt();
     if length == 0.0 {
         return 0.0;
@@ -159,7 +146,7 @@ const MOVING_SQUARED: f32 = (HALF_PIXEL + EPSILON) * (HALF_PIXEL + EPSILON);
 /// Applies the filter. The frame must hold colour, depth and velocity (others are dropped).
 /// A frame in which nothing moves more than half a pixel is returned untouched; otherwise
 /// every output sample is finite.
-pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, seed: u64) -> Frame {
+pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, seed: u32) -> Frame {
     let (width, height) = (frame.width, frame.height);
     let (Some(mut color), Some(depth), Some(velocity)) = (
         frame.color.take(),
@@ -173,11 +160,6 @@ pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, s
     let n = width * height;
     let k = params.max_blur.max(1) as f32;
     let size = params.max_blur.max(1);
-    let shutter = if shutter.is_finite() {
-        shutter.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
     let spread = |i: usize| half_spread(velocity.x[i], velocity.y[i], shutter, k);
 
     // TileMax of the input velocity, then V of each tile's dominant vector: V is monotonic
@@ -219,11 +201,11 @@ pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, s
                         let i = y * width + x;
                         let length = spread_length(velocity.x[i], velocity.y[i], shutter, k);
                         chunk[local_y * width + x] = [
-                            sanitize_color(color.r[i]),
-                            sanitize_color(color.g[i]),
-                            sanitize_color(color.b[i]),
-                            color.a.as_ref().map_or(1.0, |a| sanitize_color(a[i])),
-                            sanitize_depth(depth[i]),
+                            color.r[i],
+                            color.g[i],
+                            color.b[i],
+                            color.a.as_ref().map_or(1.0, |a| a[i]),
+                            finite_depth(depth[i]),
                             // 1/|V|: infinite for a still pixel, whose cones and
                             // cylinders are then 0 at any distance (it spreads nowhere).
                             1.0 / length,
@@ -246,7 +228,7 @@ pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, s
         let own = spread(i);
         let own_length = (own.0 * own.0 + own.1 * own.1).sqrt();
         let j = if params.jitter {
-            hash01(seed, 0x5245_434f, i as u64, 0) as f32 - 0.5
+            unit(seed, 0x5245_434f, i as u32) - 0.5
         } else {
             0.0
         };
@@ -317,8 +299,7 @@ pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, s
         ]
     };
 
-    // Output in place: pixels of blurring tiles are gathered, the others keep their colour
-    // (made finite).
+    // Output in place: pixels of blurring tiles are gathered, the others keep their colour.
     let has_alpha = color.a.is_some();
     let mut alpha = color.a.take().unwrap_or_else(|| vec![0.0; n]);
     color
@@ -341,12 +322,6 @@ pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, s
                             g[o] = cg;
                             b[o] = cb;
                             a[o] = ca;
-                        } else {
-                            for v in [&mut r[o], &mut g[o], &mut b[o], &mut a[o]] {
-                                if !(v.is_finite() && v.abs() <= HUGE) {
-                                    *v = sanitize_color(*v);
-                                }
-                            }
                         }
                     }
                 }
@@ -373,9 +348,10 @@ mod tests {
         let (x, _) = half_spread(0.1, 0.0, 0.5, 20.0);
         assert!((x - 0.5 * 0.025 / 0.035).abs() < 1e-6);
         assert_eq!(half_spread(0.0, 0.0, 0.5, 20.0), (0.0, 0.0));
-        // NaN is still, infinity is clamped.
-        assert_eq!(half_spread(f32::NAN, 0.0, 0.5, 20.0), (0.0, 0.0));
-        let (x, _) = half_spread(f32::INFINITY, 0.0, 0.5, 20.0);
+        // Through the numeric policy, NaN is still and infinity is clamped to k.
+        let v = crate::numeric::velocity;
+        assert_eq!(half_spread(v(f32::NAN), 0.0, 0.5, 20.0), (0.0, 0.0));
+        let (x, _) = half_spread(v(f32::INFINITY), 0.0, 0.5, 20.0);
         assert!((x - 20.0).abs() < 1e-3);
     }
 

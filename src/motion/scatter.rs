@@ -34,23 +34,19 @@
 //! border where a walk's unclipped rows land, with a depth limit of −∞ there, and live in a
 //! per-thread scratch reused from tile to tile.
 //!
-//! Numerics: NaN colour reads as 0 and colour is clamped to ±[`HUGE`](super::HUGE); NaN positions make a
-//! pixel still, infinite ones are clamped to ±[`FAR`] px; NaN or negative depth is far or 0; a
-//! curve longer than 2·`max_blur` px is scaled about p(0) to that length, which bounds the
+//! Numerics: inputs obey the numeric policy ([`crate::numeric`]: finite colour, positions
+//! within ±[`POSITION_LIMIT`](crate::numeric::POSITION_LIMIT) px and a pixel with a NaN
+//! position still, depth in [0, +∞]); a
+//! curve longer than `max_curve` px is scaled about p(0) to that length, which bounds the
 //! work per curve. Output is finite and, as a weighted average with non-negative weights,
 //! within the per-channel range of the input colours.
 
 use rayon::prelude::*;
 
-use super::{sanitize_color, sanitize_depth_far};
-
 use super::curve::{length, Arc, Bezier, Point};
 use super::line::{Clip, Column, Walk, Whole, OVERHANG};
 use crate::frame::{Color, Frame, Positions};
 
-/// Positions beyond this many pixels are clamped (still far beyond any image, and well inside
-/// f64's exact integers).
-pub const FAR: f64 = 1e12;
 /// A pixel whose curve stays within this many pixels of p(0) over the shutter is still: its
 /// streak would be under half a pixel.
 pub const STILL: f64 = 0.25;
@@ -73,6 +69,12 @@ pub enum Weight {
     Box,
 }
 
+impl Weight {
+    /// Every choice, by the name flags and presets use.
+    pub const ALL: &'static [(&'static str, Weight)] =
+        &[("box", Weight::Box), ("gaussian", Weight::Gaussian)];
+}
+
 /// How accumulated curves and the pixel's own colour combine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Normalize {
@@ -82,6 +84,14 @@ pub enum Normalize {
     Exposure,
 }
 
+impl Normalize {
+    /// Every choice, by the name flags and presets use.
+    pub const ALL: &'static [(&'static str, Normalize)] = &[
+        ("exposure", Normalize::Exposure),
+        ("paper", Normalize::Paper),
+    ];
+}
+
 /// The curve through the three positions.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CurveKind {
@@ -89,6 +99,12 @@ pub enum CurveKind {
     Bezier,
     /// A circular arc where the points turn, else the Bézier.
     Arc,
+}
+
+impl CurveKind {
+    /// Every choice, by the name flags and presets use.
+    pub const ALL: &'static [(&'static str, CurveKind)] =
+        &[("bezier", CurveKind::Bezier), ("arc", CurveKind::Arc)];
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -103,8 +119,9 @@ pub struct ScatterParams {
     pub background_weight: f32,
     pub normalize: Normalize,
     pub curve: CurveKind,
-    /// Largest blur radius in pixels: a curve is at most twice this long.
-    pub max_blur: f32,
+    /// The longest a curve may be, in pixels: longer ones are scaled about p(0) to this length
+    /// (which bounds the work per curve).
+    pub max_curve: f32,
     /// Fewer segments where they stray no more than this many pixels from the curve (0: always
     /// `segments`). Short, straight motion then costs one segment.
     pub flatness: f32,
@@ -121,15 +138,11 @@ impl Default for ScatterParams {
             background_weight: 5.0,
             normalize: Normalize::Exposure,
             curve: CurveKind::Bezier,
-            max_blur: 128.0,
+            max_curve: 256.0,
             flatness: 0.1,
             depth_tolerance: 0.02,
         }
     }
-}
-
-fn position(v: f32) -> Option<f64> {
-    (!v.is_nan()).then(|| (v as f64).clamp(-FAR, FAR))
 }
 
 /// A moving pixel's three positions, and how far from p(0) its curve can deposit.
@@ -150,7 +163,7 @@ struct Path {
     weights: [f64; MOST_SEGMENTS + 1],
     /// The curve's depth at each point.
     depths: [f32; MOST_SEGMENTS + 1],
-    /// Segment lengths before scaling to `max_blur`.
+    /// Segment lengths before scaling to `max_curve`.
     lengths: [f64; MOST_SEGMENTS],
     color: [f64; 4],
 }
@@ -183,27 +196,27 @@ struct Scatter<'a> {
 impl Scatter<'_> {
     fn color(&self, i: usize) -> [f32; 4] {
         [
-            sanitize_color(self.color.r[i]),
-            sanitize_color(self.color.g[i]),
-            sanitize_color(self.color.b[i]),
-            self.color.a.as_ref().map_or(1.0, |a| sanitize_color(a[i])),
+            self.color.r[i],
+            self.color.g[i],
+            self.color.b[i],
+            self.color.a.as_ref().map_or(1.0, |a| a[i]),
         ]
     }
 
-    /// The motion of a moving pixel; `None` where it is still (or its positions are NaN).
+    /// The motion of a moving pixel; `None` where it is still.
     #[inline]
     fn motion(&self, x: usize, y: usize) -> Option<Motion> {
         let i = y * self.width + x;
         let now = [x as f64 + 0.5, y as f64 + 0.5];
-        let prev = [position(self.prev.x[i])?, position(self.prev.y[i])?];
-        let next = [position(self.next.x[i])?, position(self.next.y[i])?];
+        let prev = [self.prev.x[i] as f64, self.prev.y[i] as f64];
+        let next = [self.next.x[i] as f64, self.next.y[i] as f64];
         let extent = self.extent(prev, now, next);
         (extent >= STILL).then_some(Motion {
             prev,
             now,
             next,
-            // What the scaling to max_blur leaves, and the pixel a segment reaches beside it.
-            reach: extent.min(2.0 * self.params.max_blur as f64) + 1.0,
+            // What the scaling to max_curve leaves, and the pixel a segment reaches beside it.
+            reach: extent.min(self.params.max_curve as f64) + 1.0,
         })
     }
 
@@ -212,11 +225,10 @@ impl Scatter<'_> {
     #[inline]
     fn positions(&self, x: usize, y: usize, reach: f64) -> Motion {
         let i = y * self.width + x;
-        let at = |v: f32| position(v).unwrap_or(0.0);
         Motion {
-            prev: [at(self.prev.x[i]), at(self.prev.y[i])],
+            prev: [self.prev.x[i] as f64, self.prev.y[i] as f64],
             now: [x as f64 + 0.5, y as f64 + 0.5],
-            next: [at(self.next.x[i]), at(self.next.y[i])],
+            next: [self.next.x[i] as f64, self.next.y[i] as f64],
             reach,
         }
     }
@@ -263,7 +275,7 @@ impl Scatter<'_> {
         };
         path.segments = segments;
         path.color = self.color(i).map(f64::from);
-        let z0 = sanitize_depth_far(self.depth[i]);
+        let z0 = self.depth[i];
         let depth_at = match (&self.prev.z, &self.next.z) {
             (Some(zp), Some(zn)) if zp[i].is_finite() && zn[i].is_finite() && z0.is_finite() => {
                 let (zp, zn) = (zp[i] as f64, zn[i] as f64);
@@ -294,7 +306,7 @@ impl Scatter<'_> {
         if total.is_nan() || total <= 1e-9 {
             return false;
         }
-        let longest = 2.0 * p.max_blur.max(0.5) as f64;
+        let longest = p.max_curve.max(1.0) as f64;
         let mut scale = 1.0;
         if total > longest {
             // Scaled about p(0): a similarity, so every length scales the same.
@@ -348,10 +360,10 @@ impl Scatter<'_> {
             return own;
         }
         let dir = [v[0] / l, v[1] / l];
-        let limit = sanitize_depth_far(self.depth[i]) * (1.0 + self.params.depth_tolerance);
+        let limit = self.depth[i] * (1.0 + self.params.depth_tolerance);
         let steps = (self
             .extent(prev, now, next)
-            .min(2.0 * self.params.max_blur as f64)
+            .min(self.params.max_curve as f64)
             + 2.0)
             .ceil() as usize;
         // Nothing farther within the search: its blocks' deepest depth tells without a walk.
@@ -376,7 +388,7 @@ impl Scatter<'_> {
                     break;
                 }
                 let j = y as usize * self.width + x as usize;
-                if sanitize_depth_far(self.depth[j]) > limit {
+                if self.depth[j] > limit {
                     for (s, c) in sum.iter_mut().zip(self.color(j)) {
                         *s += c as f64;
                     }
@@ -432,9 +444,7 @@ impl Reach {
                         let row = y * width + bx * BLOCK..y * width + ((bx + 1) * BLOCK).min(width);
                         *most = pixel[row.clone()].iter().fold(*most, |m, &r| m.max(r));
                         let depth = &job.depth[y0 * width + row.start..y0 * width + row.end];
-                        *deepest = depth
-                            .iter()
-                            .fold(*deepest, |d, &z| d.max(sanitize_depth_far(z)));
+                        *deepest = depth.iter().fold(*deepest, |d, &z| d.max(z));
                     }
                 }
             });
@@ -462,11 +472,6 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
         frame.next.take(),
     ) else {
         return frame;
-    };
-    let shutter = if shutter.is_finite() {
-        shutter.clamp(0.0, 1.0)
-    } else {
-        0.0
     };
     let job = Scatter {
         width,
@@ -497,7 +502,7 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
     let opaque = color
         .a
         .as_ref()
-        .is_none_or(|a| a.par_iter().all(|&v| sanitize_color(v) == 1.0));
+        .is_none_or(|a| a.par_iter().all(|&v| v == 1.0));
     // Every tile writes all its pixels: those no curve reaches get the (sanitised) input.
     let mut out: [Vec<f32>; 4] = std::array::from_fn(|_| vec![0.0; n]);
     let [r, g, b, a] = &mut out;
@@ -588,7 +593,7 @@ impl Scatter<'_> {
             let o = (y - ty0 + pad) * pw + pad;
             let depth = &self.depth[y * width + tx0..y * width + tx1];
             for (l, &z) in limit[o..o + tw].iter_mut().zip(depth) {
-                *l = sanitize_depth_far(z) * tolerance;
+                *l = z * tolerance;
             }
         }
         let limit = &*limit;
@@ -685,16 +690,10 @@ impl Scatter<'_> {
                 let span = y * width + tx0..y * width + tx1;
                 let [r, g, b, a] = row;
                 for (to, from) in [(r, &color.r), (g, &color.g), (b, &color.b)] {
-                    for (t, &f) in to.iter_mut().zip(&from[span.clone()]) {
-                        *t = sanitize_color(f);
-                    }
+                    to.copy_from_slice(&from[span.clone()]);
                 }
                 match &color.a {
-                    Some(alpha) => {
-                        for (t, &f) in a.iter_mut().zip(&alpha[span]) {
-                            *t = sanitize_color(f);
-                        }
-                    }
+                    Some(alpha) => a.copy_from_slice(&alpha[span]),
                     None => a.fill(1.0),
                 }
             }

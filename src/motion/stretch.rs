@@ -29,8 +29,8 @@
 //! textured surface moving as a whole (a camera pan) is not blurred at all, only silhouettes
 //! are.
 //!
-//! Numerics: NaN colour reads as 0, colour is clamped to ±[`HUGE`](super::HUGE); NaN velocity is still,
-//! velocity is clamped to ±[`VELOCITY_LIMIT`]; NaN depth is far, negative depth 0. Every
+//! Numerics: inputs obey the numeric policy ([`crate::numeric`]: finite colour, velocity
+//! within ±[`VELOCITY_LIMIT`](crate::numeric::VELOCITY_LIMIT), depth in [0, +∞]). Every
 //! output value is a convex combination of input colours, clamped against rounding (to the
 //! frame's range for the pre-blur, to what it combines for interpolation and blending), so
 //! it is finite and within the input range; a uniform colour stays exactly uniform
@@ -41,13 +41,9 @@
 
 use rayon::prelude::*;
 
-use super::{sanitize_color, sanitize_depth_far};
-
 use super::triangle::{draw, Rect};
 use crate::frame::{Color, Frame};
 
-/// Velocities beyond this many pixels per frame are clamped.
-pub const VELOCITY_LIMIT: f32 = 1e7;
 /// A pixel whose streak over the exposure is shorter than this many pixels is still.
 pub const STILL: f32 = 0.5;
 /// Rows per drawing band.
@@ -64,6 +60,12 @@ pub enum Anchor {
     /// In the middle (our shutter is centred on the frame): trailing vertices back, leading
     /// ones forward, by half the exposure each.
     Centre,
+}
+
+impl Anchor {
+    /// Every choice, by the name flags and presets use.
+    pub const ALL: &'static [(&'static str, Anchor)] =
+        &[("centre", Anchor::Centre), ("rear", Anchor::Rear)];
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -95,14 +97,6 @@ impl Default for StretchParams {
     }
 }
 
-fn sanitize_velocity(v: f32) -> f32 {
-    if v.is_nan() {
-        0.0
-    } else {
-        v.clamp(-VELOCITY_LIMIT, VELOCITY_LIMIT)
-    }
-}
-
 /// `a + t·(b − a)`, kept between a and b.
 fn mix(a: f32, b: f32, t: f32) -> f32 {
     (a + t * (b - a)).clamp(a.min(b), a.max(b))
@@ -122,16 +116,11 @@ pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame 
         return frame;
     };
     let n = width * height;
-    let shutter = if shutter.is_finite() {
-        shutter.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
     let v: Vec<[f32; 2]> = velocity
         .x
         .par_iter()
         .zip(&velocity.y)
-        .map(|(&x, &y)| [sanitize_velocity(x), sanitize_velocity(y)])
+        .map(|(&x, &y)| [x, y])
         .collect();
     let moving = |i: usize| {
         let [x, y] = v[i];
@@ -144,19 +133,14 @@ pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame 
         return frame;
     }
     drop(velocity);
-    let z: Vec<f32> = depth.par_iter().map(|&d| sanitize_depth_far(d)).collect();
-    drop(depth);
+    let z = depth;
     let has_alpha = color.a.is_some();
     let planes: [Vec<f32>; 4] = [
-        color.r.par_iter().map(|&c| sanitize_color(c)).collect(),
-        color.g.par_iter().map(|&c| sanitize_color(c)).collect(),
-        color.b.par_iter().map(|&c| sanitize_color(c)).collect(),
-        color.a.as_ref().map_or_else(
-            || vec![1.0; n],
-            |a| a.par_iter().map(|&c| sanitize_color(c)).collect(),
-        ),
+        color.r,
+        color.g,
+        color.b,
+        color.a.unwrap_or_else(|| vec![1.0; n]),
     ];
-    drop(color);
     let tear = 1.0 + params.tear.max(0.0);
     let torn = |a: f32, b: f32| a.max(b) > a.min(b) * tear;
     // The exposure, in frames relative to the frame's own time.

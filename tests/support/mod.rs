@@ -225,7 +225,8 @@ pub fn planes(f: &shutter::frame::Frame) -> [&[f32]; 4] {
 /// frames from `frame(width, height, seed, speed)` under each of `variants`.
 pub mod invariants {
     use shutter::frame::{Color, Frame};
-    use shutter::motion::{apply, Algorithm, BlurParams};
+    use shutter::motion::Algorithm;
+    use shutter::process::{apply, Params};
 
     use super::{assert_exact, planes};
 
@@ -233,7 +234,7 @@ pub mod invariants {
 
     /// A frame that does not move comes back unchanged (`still` is a frame whose motion is
     /// below the algorithm's threshold).
-    pub fn zero_motion_is_identity(algorithm: Algorithm, still: &Frame, variants: &[BlurParams]) {
+    pub fn zero_motion_is_identity(algorithm: Algorithm, still: &Frame, variants: &[Params]) {
         for params in variants {
             let out = apply(algorithm, params, still.clone(), 3);
             for (a, b) in planes(&out).iter().zip(planes(still)) {
@@ -242,7 +243,7 @@ pub mod invariants {
         }
     }
 
-    pub fn uniform_stays_uniform(algorithm: Algorithm, make: Make, variants: &[BlurParams]) {
+    pub fn uniform_stays_uniform(algorithm: Algorithm, make: Make, variants: &[Params]) {
         let (w, h) = (61, 37);
         let n = w * h;
         let mut f = make(w, h, 2, 30.0);
@@ -263,12 +264,7 @@ pub mod invariants {
 
     /// Every output channel within the input's [min, max] (up to `slack` relative), and the
     /// motion changes something.
-    pub fn within_input_range(
-        algorithm: Algorithm,
-        make: Make,
-        variants: &[BlurParams],
-        slack: f32,
-    ) {
+    pub fn within_input_range(algorithm: Algorithm, make: Make, variants: &[Params], slack: f32) {
         for seed in [3, 30, 300] {
             let f = make(64, 48, seed, 20.0);
             for params in variants {
@@ -291,7 +287,7 @@ pub mod invariants {
     }
 
     /// Finite output for a frame `f` poisoned with NaN, infinite and huge values.
-    pub fn finite_output(algorithm: Algorithm, f: &Frame, variants: &[BlurParams]) {
+    pub fn finite_output(algorithm: Algorithm, f: &Frame, variants: &[Params]) {
         for params in variants {
             let out = apply(algorithm, params, f.clone(), 9);
             for plane in planes(&out) {
@@ -391,7 +387,7 @@ pub type SceneErrors = (
 pub fn scene_errors(
     name: &str,
     size: (usize, usize),
-    runs: &[(shutter::motion::Algorithm, shutter::motion::BlurParams)],
+    runs: &[(shutter::motion::Algorithm, shutter::process::Params)],
 ) -> SceneErrors {
     scene_errors_against(
         name,
@@ -406,7 +402,7 @@ pub fn scene_errors_against(
     name: &str,
     (w, h): (usize, usize),
     kind: shutter::truth::render::Reference,
-    runs: &[(shutter::motion::Algorithm, shutter::motion::BlurParams)],
+    runs: &[(shutter::motion::Algorithm, shutter::process::Params)],
 ) -> SceneErrors {
     use shutter::metrics::{changed_region, rmse};
     use shutter::truth::render::{render_passes, render_reference, RenderSettings};
@@ -425,7 +421,7 @@ pub fn scene_errors_against(
     let mut errors = Vec::new();
     let mut outputs = Vec::new();
     for (algorithm, params) in runs {
-        let out = shutter::motion::apply(*algorithm, params, passes.clone(), 1);
+        let out = shutter::process::apply(*algorithm, params, passes.clone(), 1);
         let c = out.color.clone().unwrap();
         let blurred = [c.r, c.g, c.b];
         errors.push(rmse(

@@ -1,97 +1,44 @@
-//! From pass files to a canonical [`Frame`]: which channels of which file each pass reads
-//! (planned from headers, so preflight can check every frame before anything is decoded),
-//! then the decode and the conversion from the preset's convention to the canonical one.
-//!
-//! Motion can come from any of the three motion sections of a preset (velocity, prev, next),
-//! whatever each stores; a needed pass is taken from its own section first, then from the
-//! others, converting between them:
-//!
-//! | needed   | from a backward source (`p(-1)`) | from a forward source (`p(+1)`)      |
-//! |----------|----------------------------------|--------------------------------------|
-//! | velocity | `p0 - p(-1)`                     | `p(+1) - p0` (linear, warned)        |
-//! | prev     | `p(-1)`                          | `2·p0 - p(+1)` (linear, warned)      |
-//! | next     | `2·p0 - p(-1)` (linear, warned)  | `p(+1)`                              |
+//! Planning one frame's reads from the file headers: which file and channel each pass takes,
+//! every problem found named by file, frame and channel.
 
 use std::path::{Path, PathBuf};
 
 use crate::error::{Problem, ProblemKind};
-use crate::frame::{pixel_centre, Color, Frame, Passes, Plane, Positions, Velocity};
+use crate::frame::Passes;
 use crate::io::file::FileInfo;
-use crate::io::image::srgb_to_linear;
-use crate::io::preset::{Meaning, Preset, Transfer, Units, VectorSpec};
+use crate::io::preset::{Preset, Transfer, VectorSpec};
 use crate::io::sequence::PathPattern;
 
-/// The pass files given by the user (patterns or plain paths).
-#[derive(Clone, Debug)]
-pub struct Inputs {
-    pub color: PathPattern,
-    pub depth: Option<PathPattern>,
-    pub velocity: Option<PathPattern>,
-    pub prev: Option<PathPattern>,
-    pub next: Option<PathPattern>,
-}
-
-impl Inputs {
-    /// Colour only (other passes, if any, are looked up in the colour file).
-    pub fn color_only(color: PathPattern) -> Inputs {
-        Inputs {
-            color,
-            depth: None,
-            velocity: None,
-            prev: None,
-            next: None,
-        }
-    }
-
-    /// Every pattern given, with the pass it was given for.
-    pub fn all(&self) -> Vec<(&'static str, &PathPattern)> {
-        let mut all = vec![("color", &self.color)];
-        for (name, pattern) in [
-            ("depth", &self.depth),
-            ("velocity", &self.velocity),
-            ("prev", &self.prev),
-            ("next", &self.next),
-        ] {
-            if let Some(pattern) = pattern {
-                all.push((name, pattern));
-            }
-        }
-        all
-    }
-
-    pub fn is_sequence(&self) -> bool {
-        self.all().iter().any(|(_, p)| p.is_sequence())
-    }
-}
+use super::Inputs;
 
 /// A channel to read: which planned file, which entry of that file's read list.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Slot {
-    file: usize,
-    entry: usize,
+pub(super) struct Slot {
+    pub(super) file: usize,
+    pub(super) entry: usize,
 }
 
 #[derive(Clone, Debug)]
-struct PlannedFile {
-    info: FileInfo,
+pub(super) struct PlannedFile {
+    pub(super) info: FileInfo,
     /// Indices into `info.channels`, distinct.
-    channels: Vec<usize>,
+    pub(super) channels: Vec<usize>,
 }
 
 #[derive(Clone, Debug)]
-struct ColorPlan {
-    rgb: [Slot; 3],
-    a: Option<Slot>,
-    decode_srgb: bool,
-    premultiply: bool,
+pub(super) struct ColorPlan {
+    pub(super) rgb: [Slot; 3],
+    pub(super) a: Option<Slot>,
+    pub(super) decode_srgb: bool,
+    pub(super) premultiply: bool,
 }
 
 #[derive(Clone, Debug)]
-struct VectorPlan {
-    x: Slot,
-    y: Slot,
-    z: Option<Slot>,
-    spec: VectorSpec,
+pub(super) struct VectorPlan {
+    pub(super) x: Slot,
+    pub(super) y: Slot,
+    pub(super) z: Option<Slot>,
+    pub(super) spec: VectorSpec,
 }
 
 /// Which channels of which files one frame reads, and how they become canonical passes.
@@ -100,12 +47,12 @@ pub struct FramePlan {
     pub frame: Option<i64>,
     pub width: usize,
     pub height: usize,
-    files: Vec<PlannedFile>,
-    color: Option<ColorPlan>,
-    depth: Option<(Slot, crate::io::preset::DepthSpec)>,
-    velocity: Option<VectorPlan>,
-    prev: Option<VectorPlan>,
-    next: Option<VectorPlan>,
+    pub(super) files: Vec<PlannedFile>,
+    pub(super) color: Option<ColorPlan>,
+    pub(super) depth: Option<(Slot, crate::io::preset::DepthSpec)>,
+    pub(super) velocity: Option<VectorPlan>,
+    pub(super) prev: Option<VectorPlan>,
+    pub(super) next: Option<VectorPlan>,
     /// Conversions that are approximations (e.g. next positions extrapolated).
     pub warnings: Vec<String>,
 }
@@ -161,7 +108,7 @@ pub fn plan_frame(
     // passes looked up in the same file never take R, G, B for vectors.
     let mut claimed: Vec<usize> = Vec::new();
     if let Some(info) = &color_info {
-        match resolve(info, &preset.color.channels, 3, &[], options.layer) {
+        match find_channels(info, &preset.color.channels, 3, &[], options.layer) {
             Ok(Some(found)) => {
                 claimed = found.iter().flatten().copied().collect();
                 if needs.color {
@@ -209,7 +156,7 @@ pub fn plan_frame(
                 .map(|c| vec![c.clone()])
                 .collect();
             let skip = if own.is_some() { &[][..] } else { &claimed[..] };
-            match resolve(&info, &alts, 1, skip, options.layer) {
+            match find_channels(&info, &alts, 1, skip, options.layer) {
                 Ok(Some(found)) => {
                     let file = planner.add_file(info.clone());
                     let slot = planner.slot(file, found[0].expect("required"));
@@ -261,7 +208,7 @@ pub fn plan_frame(
                 continue;
             };
             let skip = if own.is_some() { &[][..] } else { &claimed[..] };
-            match resolve(&info, &spec.channels, 2, skip, options.layer) {
+            match find_channels(&info, &spec.channels, 2, skip, options.layer) {
                 Ok(Some(found)) => {
                     if !planner.check_size(&info, plan.width, plan.height, name) {
                         fatal = true;
@@ -449,7 +396,7 @@ fn alternatives(alts: &[Vec<String>]) -> String {
 /// of them in `skip`). Returns, per name of the alternative, the channel index if present.
 /// `{layer}` in names stands for a view layer found in the file (or `layer` when given);
 /// several candidate layers are an error naming them.
-fn resolve(
+fn find_channels(
     info: &FileInfo,
     alternatives: &[Vec<String>],
     required: usize,
@@ -519,249 +466,12 @@ fn find_layers(info: &FileInfo, template: &str) -> Vec<String> {
     layers
 }
 
-/// Decodes the planned files and converts them to canonical passes.
-pub fn read_frame(plan: &FramePlan) -> Result<Frame, Problem> {
-    let mut decoded: Vec<Vec<Plane>> = Vec::with_capacity(plan.files.len());
-    for file in &plan.files {
-        let planes = file
-            .info
-            .read(&file.channels)
-            .map_err(|p| p.frame(plan.frame))?;
-        decoded.push(planes);
-    }
-    let (width, height) = (plan.width, plan.height);
-    let mut frame = Frame::new(width, height);
-    if let Some(first) = plan.files.first() {
-        frame.windows = first.info.windows;
-    }
-    // Takes a plane out of `decoded` (cloning when a channel serves two passes).
-    let mut uses = vec![Vec::new(); decoded.len()];
-    for slot in plan_slots(plan) {
-        uses[slot.file].push(slot.entry);
-    }
-    let mut take = |slot: Slot, decoded: &mut Vec<Vec<Plane>>| -> Plane {
-        let remaining = &mut uses[slot.file];
-        let position = remaining.iter().position(|&e| e == slot.entry);
-        if let Some(position) = position {
-            remaining.swap_remove(position);
-        }
-        if remaining.contains(&slot.entry) {
-            decoded[slot.file][slot.entry].clone()
-        } else {
-            std::mem::take(&mut decoded[slot.file][slot.entry])
-        }
-    };
-
-    if let Some(plan_color) = &plan.color {
-        let mut r = take(plan_color.rgb[0], &mut decoded);
-        let mut g = take(plan_color.rgb[1], &mut decoded);
-        let mut b = take(plan_color.rgb[2], &mut decoded);
-        let a = plan_color.a.map(|slot| take(slot, &mut decoded));
-        if plan_color.decode_srgb {
-            for plane in [&mut r, &mut g, &mut b] {
-                plane.iter_mut().for_each(|v| *v = srgb_to_linear(*v));
-            }
-        }
-        if let (true, Some(a)) = (plan_color.premultiply, &a) {
-            for plane in [&mut r, &mut g, &mut b] {
-                plane.iter_mut().zip(a).for_each(|(v, a)| *v *= a);
-            }
-        }
-        frame.color = Some(Color { r, g, b, a });
-    }
-    if let Some((slot, spec)) = &plan.depth {
-        let mut depth = take(*slot, &mut decoded);
-        if let (Some(near), Some(far)) = (spec.near, spec.far) {
-            depth.iter_mut().for_each(|d| *d = near + *d * (far - near));
-        }
-        if spec.scale != 1.0 {
-            depth.iter_mut().for_each(|d| *d *= spec.scale);
-        }
-        frame.depth = Some(depth);
-    }
-    for target in 0..3 {
-        let source = match target {
-            0 => &plan.velocity,
-            1 => &plan.prev,
-            _ => &plan.next,
-        };
-        let Some(source) = source else { continue };
-        let x = take(source.x, &mut decoded);
-        let y = take(source.y, &mut decoded);
-        let z = source.z.map(|slot| take(slot, &mut decoded));
-        let motion = Motion::decode(&source.spec, x, y, z, width, height);
-        match target {
-            0 => frame.velocity = Some(motion.velocity(width)),
-            1 => frame.prev = Some(motion.position(width, true)),
-            _ => frame.next = Some(motion.position(width, false)),
-        }
-    }
-    Ok(frame)
-}
-
-fn plan_slots(plan: &FramePlan) -> Vec<Slot> {
-    let mut slots = Vec::new();
-    if let Some(c) = &plan.color {
-        slots.extend(c.rgb);
-        slots.extend(c.a);
-    }
-    if let Some((slot, _)) = &plan.depth {
-        slots.push(*slot);
-    }
-    for v in [&plan.velocity, &plan.prev, &plan.next]
-        .into_iter()
-        .flatten()
-    {
-        slots.push(v.x);
-        slots.push(v.y);
-        slots.extend(v.z);
-    }
-    slots
-}
-
-/// A decoded motion source in canonical units (pixels, y down): either offsets from the pixel
-/// centre or absolute positions, pointing backward (to p(-1)) or forward (to p(+1)).
-struct Motion {
-    x: Plane,
-    y: Plane,
-    z: Option<Plane>,
-    absolute: bool,
-    backward: bool,
-}
-
-impl Motion {
-    fn decode(
-        spec: &VectorSpec,
-        mut x: Plane,
-        mut y: Plane,
-        z: Option<Plane>,
-        width: usize,
-        height: usize,
-    ) -> Motion {
-        let absolute = spec.meaning.is_position();
-        let (sx, sy) = match spec.units {
-            Units::Pixels => (spec.scale, spec.scale),
-            Units::Normalized => (spec.scale * width as f32, spec.scale * height as f32),
-        };
-        // Canonical offsets point to the *other* time; velocity and from_next point back to
-        // the current frame, so they change sign.
-        let sign = match spec.meaning {
-            Meaning::Velocity | Meaning::FromNext => -1.0,
-            _ => 1.0,
-        };
-        let map = |v: f32, s: f32| {
-            let d = v - spec.zero;
-            if d.abs() <= spec.dead_zone {
-                0.0
-            } else {
-                d * s * sign
-            }
-        };
-        x.iter_mut().for_each(|v| *v = map(*v, sx));
-        y.iter_mut().for_each(|v| *v = map(*v, sy));
-        if spec.y_up {
-            if absolute {
-                let h = height as f32;
-                y.iter_mut().for_each(|v| *v = h - *v);
-            } else {
-                y.iter_mut().for_each(|v| *v = -*v);
-            }
-        }
-        Motion {
-            x,
-            y,
-            z,
-            absolute,
-            backward: spec.meaning.is_backward(),
-        }
-    }
-
-    /// Canonical velocity p(0) - p(-1).
-    fn velocity(self, width: usize) -> Velocity {
-        let Motion {
-            mut x,
-            mut y,
-            absolute,
-            backward,
-            ..
-        } = self;
-        for (i, (vx, vy)) in x.iter_mut().zip(y.iter_mut()).enumerate() {
-            let (cx, cy) = pixel_centre(i, width);
-            let (dx, dy) = if absolute {
-                (*vx - cx, *vy - cy)
-            } else {
-                (*vx, *vy)
-            };
-            // Backward offset d = p(-1) - p0, velocity -d; forward offset approximates it.
-            if backward {
-                *vx = -dx;
-                *vy = -dy;
-            } else {
-                *vx = dx;
-                *vy = dy;
-            }
-        }
-        Velocity { x, y }
-    }
-
-    /// Absolute p(-1) (`want_prev`) or p(+1).
-    fn position(self, width: usize, want_prev: bool) -> Positions {
-        let Motion {
-            mut x,
-            mut y,
-            z,
-            absolute,
-            backward,
-        } = self;
-        let same_direction = backward == want_prev;
-        for (i, (px, py)) in x.iter_mut().zip(y.iter_mut()).enumerate() {
-            let (cx, cy) = pixel_centre(i, width);
-            match (absolute, same_direction) {
-                (true, true) => {}
-                (true, false) => {
-                    *px = 2.0 * cx - *px;
-                    *py = 2.0 * cy - *py;
-                }
-                (false, true) => {
-                    *px += cx;
-                    *py += cy;
-                }
-                (false, false) => {
-                    *px = cx - *px;
-                    *py = cy - *py;
-                }
-            }
-        }
-        Positions {
-            x,
-            y,
-            z: if same_direction { z } else { None },
-        }
-    }
-}
-
-/// Reads the colour of one file (or one frame of a pattern) alone: the other passes are not
-/// planned. Used by `diff` and `bench` to load images to compare.
-pub fn read_color(
-    pattern: &PathPattern,
-    frame: Option<i64>,
-    preset: &Preset,
-) -> Result<Frame, Vec<Problem>> {
-    let options = PlanOptions {
-        preset,
-        layer: None,
-        needs: Passes::COLOR,
-    };
-    let plan = plan_frame(&Inputs::color_only(pattern.clone()), frame, &options)?;
-    read_frame(&plan).map_err(|problem| vec![problem])
-}
-
 /// The passes a preset finds in one file on its own (for `shutter info`): colour first, then
 /// the other passes among the channels colour did not take.
 pub fn passes_found(info: &FileInfo, preset: &Preset) -> Vec<&'static str> {
     let mut found = Vec::new();
     let mut claimed = Vec::new();
-    if let Ok(Some(color)) = resolve(info, &preset.color.channels, 3, &[], None) {
+    if let Ok(Some(color)) = find_channels(info, &preset.color.channels, 3, &[], None) {
         claimed = color.iter().flatten().copied().collect();
         found.push("color");
     }
@@ -771,7 +481,7 @@ pub fn passes_found(info: &FileInfo, preset: &Preset) -> Vec<&'static str> {
         .iter()
         .map(|c| vec![c.clone()])
         .collect();
-    if let Ok(Some(_)) = resolve(info, &depth, 1, &claimed, None) {
+    if let Ok(Some(_)) = find_channels(info, &depth, 1, &claimed, None) {
         found.push("depth");
     }
     for (name, spec) in [
@@ -779,7 +489,7 @@ pub fn passes_found(info: &FileInfo, preset: &Preset) -> Vec<&'static str> {
         ("prev", &preset.prev),
         ("next", &preset.next),
     ] {
-        if let Ok(Some(_)) = resolve(info, &spec.channels, 2, &claimed, None) {
+        if let Ok(Some(_)) = find_channels(info, &spec.channels, 2, &claimed, None) {
             found.push(name);
         }
     }

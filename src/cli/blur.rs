@@ -1,0 +1,92 @@
+//! `shutter blur` and `shutter dof`: resolve the job, run the pipeline with a progress bar
+//! or per-frame lines, print the summary.
+
+use std::io::IsTerminal;
+
+use crate::error::{Error, Result};
+use crate::pipeline::{run, Event};
+
+use super::args::BlurArgs;
+use super::resolve;
+
+pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
+    if let Some(threads) = args.threads {
+        if threads == 0 {
+            return Err(Error::usage("--threads must be at least 1"));
+        }
+        // The exr crate builds its own pool for each parallel write and sizes it from this
+        // variable: set it so --threads bounds every pool. Nothing else runs yet.
+        std::env::set_var("RAYON_NUM_THREADS", threads.to_string());
+        // Fails only if the pool was already built, which cannot happen this early.
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build_global();
+    }
+    let job = resolve(&args)?;
+    if dof && job.params.dof.is_none() {
+        return Err(Error::usage(
+            "shutter dof needs a lens (--focal-length, --f-stop and --focus-distance) or a \
+             painted map (--coc-map PATH)",
+        ));
+    }
+    let terminal = std::io::stderr().is_terminal();
+    let verbose = args.verbose;
+    let mut bar: Option<indicatif::ProgressBar> = None;
+    let mut on_event = |event: Event| match event {
+        Event::Started { frames } => {
+            if terminal && !verbose {
+                let b = indicatif::ProgressBar::new(frames as u64);
+                b.set_style(
+                    indicatif::ProgressStyle::with_template(
+                        "{bar:40} {pos}/{len} frames  {msg}  eta {eta}",
+                    )
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+                );
+                bar = Some(b);
+            } else if verbose {
+                eprintln!("shutter: {frames} frames to write");
+            }
+        }
+        Event::Written { path, .. } => match &bar {
+            Some(b) => {
+                b.inc(1);
+                let seconds = b.elapsed().as_secs_f64().max(1e-9);
+                b.set_message(format!("{:.2} frames/s", b.position() as f64 / seconds));
+            }
+            None if verbose => eprintln!("shutter: wrote {}", path.display()),
+            None => {}
+        },
+        Event::Skipped { path, .. } => {
+            if verbose || terminal {
+                eprintln!("shutter: skipped {} (exists)", path.display());
+            }
+        }
+        Event::Warning(message) => match &bar {
+            Some(b) => b.println(format!("shutter: warning: {message}")),
+            None if verbose || terminal => eprintln!("shutter: warning: {message}"),
+            None => {}
+        },
+    };
+    let result = run(&job, &mut on_event);
+    if let Some(b) = bar.take() {
+        b.finish_and_clear();
+    }
+    let report = result?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).unwrap_or_default()
+        );
+    } else if verbose || terminal {
+        eprintln!(
+            "shutter: {} frames written, {} skipped in {:.2} s (read {:.2} s, process {:.2} s, write {:.2} s)",
+            report.frames_written,
+            report.frames_skipped,
+            report.wall_seconds,
+            report.read_seconds,
+            report.process_seconds,
+            report.write_seconds
+        );
+    }
+    Ok(())
+}

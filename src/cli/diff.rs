@@ -1,0 +1,133 @@
+//! `shutter diff`: compare images or sequences, gate CI on a metric.
+
+use crate::error::{Error, Result};
+use crate::io::preset::Preset;
+use crate::io::sequence::{parse_frames, PathPattern};
+
+use super::args::DiffArgs;
+
+/// Frames for a pair of patterns: `--frames`, else those on disk for the first.
+fn frames_for(
+    first: &PathPattern,
+    others: &[&PathPattern],
+    spec: Option<&str>,
+) -> Result<Vec<Option<i64>>> {
+    let sequence = first.is_sequence();
+    if others.iter().any(|p| p.is_sequence() != sequence) {
+        return Err(Error::usage(
+            "give all paths as patterns (#### or %04d) or all as single files",
+        ));
+    }
+    match (spec, sequence) {
+        (Some(_), false) => Err(Error::usage("--frames needs patterns with #### or %04d")),
+        (Some(spec), true) => Ok(parse_frames(spec)?.into_iter().map(Some).collect()),
+        (None, true) => {
+            let found = first.discover()?;
+            if found.is_empty() {
+                return Err(Error::usage(format!(
+                    "no files match '{}'; check the pattern or pass --frames",
+                    first.raw
+                )));
+            }
+            Ok(found.into_iter().map(Some).collect())
+        }
+        (None, false) => Ok(vec![None]),
+    }
+}
+
+fn format_scores(s: &crate::metrics::Scores) -> String {
+    format!(
+        "rmse {:.6}  psnr {:.2} dB  ssim {:.5}  flip {:.5}  ({} px{})",
+        s.rmse,
+        s.psnr,
+        s.ssim,
+        s.flip,
+        s.pixels,
+        if s.non_finite > 0 {
+            format!(", {} non-finite samples", s.non_finite)
+        } else {
+            String::new()
+        }
+    )
+}
+
+pub fn diff(args: DiffArgs) -> Result<i32> {
+    let metric = crate::metrics::Metric::parse(&args.metric).ok_or_else(|| {
+        Error::usage(format!(
+            "unknown metric '{}'; use rmse, psnr, ssim or flip",
+            args.metric
+        ))
+    })?;
+    for (flag, value) in [("--warn", args.warn), ("--fail", args.fail)] {
+        if value.is_some_and(|v| !v.is_finite()) {
+            return Err(Error::usage(format!("{flag} must be a finite number")));
+        }
+    }
+    let a = PathPattern::parse(&args.a)?;
+    let b = PathPattern::parse(&args.b)?;
+    let sharp = args.sharp.as_deref().map(PathPattern::parse).transpose()?;
+    let heatmap = args
+        .heatmap
+        .as_deref()
+        .map(PathPattern::parse)
+        .transpose()?;
+    let mut others = vec![&b];
+    others.extend(sharp.as_ref());
+    let frames = frames_for(&a, &others, args.frames.as_deref())?;
+    if let Some(heatmap) = &heatmap {
+        if frames.len() > 1 && !heatmap.is_sequence() {
+            return Err(Error::usage(
+                "--heatmap must be a pattern with #### or %04d when comparing sequences",
+            ));
+        }
+    }
+    let job = crate::diff::DiffJob {
+        a,
+        b,
+        sharp,
+        frames,
+        metric,
+        warn: args.warn,
+        fail: args.fail,
+        heatmap,
+        preset: Preset::load(&args.preset)?,
+        linear: args.linear,
+    };
+    let report = crate::diff::run(&job)?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).unwrap_or_default()
+        );
+    } else {
+        for f in &report.frames {
+            let label = f.frame.map_or(String::new(), |n| format!("frame {n}: "));
+            println!("{label}{}", format_scores(&f.whole));
+            if let Some(region) = &f.region {
+                println!("{label}changed region: {}", format_scores(region));
+            }
+        }
+        if report.frames.len() > 1 {
+            println!(
+                "worst {}: {:.6} over {} frames",
+                report.metric,
+                report.worst,
+                report.frames.len()
+            );
+        }
+    }
+    for warning in &report.warnings {
+        eprintln!("shutter: warning: {warning}");
+    }
+    if report.failed {
+        let failed = report.frames.iter().filter(|f| f.failed).count();
+        eprintln!(
+            "shutter: FAIL: {failed} of {} frames have {} worse than --fail {}",
+            report.frames.len(),
+            report.metric,
+            args.fail.unwrap_or_default()
+        );
+        return Ok(1);
+    }
+    Ok(0)
+}

@@ -1,0 +1,113 @@
+//! The second phase of argument handling: what the user typed (clap's `BlurArgs`) and the
+//! presets it names, resolved into a [`Job`] (settings through `crate::settings`, the
+//! inputs, output and frames listed).
+
+use crate::error::{Error, Result};
+use crate::io::output::{OutputFormat, OutputOptions};
+use crate::io::passes::Inputs;
+use crate::io::preset::{Preset, Transfer};
+use crate::io::sequence::{parse_frames, PathPattern};
+use crate::pipeline::Job;
+use crate::process::Params;
+use crate::settings::{self};
+
+use super::args::BlurArgs;
+
+/// Turns the blur arguments into a job: the second phase of argument handling.
+pub fn resolve(args: &BlurArgs) -> Result<Job> {
+    let mut preset = Preset::load(&args.preset)?;
+    let (settings, warnings) = settings::resolve(&args.settings.0, &preset)?;
+    let dof = settings::dof_params(&settings, args.coc_map.is_some())?;
+    if args.coc_map.is_some() {
+        // A CoC map is read through the depth pass with its stored values kept as they are.
+        preset.depth.near = Some(0.0);
+        preset.depth.far = Some(1.0);
+        preset.depth.scale = 1.0;
+        for name in ["Y", "R", "Z"] {
+            if !preset.depth.channels.iter().any(|c| c == name) {
+                preset.depth.channels.push(name.into());
+            }
+        }
+    }
+
+    let pattern = |p: &Option<String>| p.as_deref().map(PathPattern::parse).transpose();
+    if args.coc_map.is_some() && args.depth.is_some() {
+        return Err(Error::usage(
+            "--coc-map is read in place of depth: give --coc-map or --depth, not both",
+        ));
+    }
+    let inputs = Inputs {
+        color: PathPattern::parse(&args.color)?,
+        depth: pattern(&args.depth.clone().or_else(|| args.coc_map.clone()))?,
+        velocity: pattern(&args.velocity)?,
+        prev: pattern(&args.prev)?,
+        next: pattern(&args.next)?,
+    };
+    let output = PathPattern::parse(&args.output)?;
+    if OutputFormat::from_path(&output.path(None)).is_none() {
+        return Err(Error::usage(format!(
+            "-o {}: unknown output format; use .exr, .png, .tif, .tiff, .jpg or .jpeg",
+            args.output
+        )));
+    }
+
+    let frames: Vec<Option<i64>> = match (&args.frames, inputs.is_sequence()) {
+        (Some(_), false) => {
+            return Err(Error::usage(
+                "--frames needs a sequence: give the inputs as patterns with #### or %04d",
+            ))
+        }
+        (Some(spec), true) => parse_frames(spec)?.into_iter().map(Some).collect(),
+        (None, true) => {
+            let source = inputs
+                .all()
+                .into_iter()
+                .map(|(_, p)| p)
+                .find(|p| p.is_sequence())
+                .expect("is_sequence");
+            let found = source.discover()?;
+            if found.is_empty() {
+                return Err(Error::usage(format!(
+                    "no files match '{}'; check the pattern or pass --frames",
+                    source.raw
+                )));
+            }
+            found.into_iter().map(Some).collect()
+        }
+        (None, false) => vec![None],
+    };
+    if inputs.is_sequence() && !output.is_sequence() {
+        return Err(Error::usage(
+            "-o must be a pattern with #### or %04d when the inputs are a sequence",
+        ));
+    }
+    if !inputs.is_sequence() && output.is_sequence() {
+        return Err(Error::usage(
+            "-o is a frame pattern but the inputs are single files; give input patterns and --frames",
+        ));
+    }
+
+    if args.linear {
+        preset.color.transfer = Transfer::Linear;
+    }
+    let output_options = OutputOptions {
+        srgb: preset.color.transfer == Transfer::Srgb,
+        ..settings.output
+    };
+
+    Ok(Job {
+        inputs,
+        output,
+        frames,
+        preset,
+        layer: args.layer.clone(),
+        algorithm: settings.algorithm,
+        params: Params {
+            dof,
+            ..settings.params
+        },
+        output_options,
+        skip_existing: args.skip_existing,
+        warnings,
+    })
+}

@@ -1,0 +1,39 @@
+//! `shutter scene`: write a truth scene's passes and references.
+
+use std::io::IsTerminal;
+
+use crate::error::Result;
+
+use super::args::SceneArgs;
+use super::parse_size;
+
+pub fn scene(args: SceneArgs) -> Result<()> {
+    let (width, height) = match &args.size {
+        Some(size) => parse_size(size)?,
+        None => crate::truth::write::DEFAULT_SIZE,
+    };
+    let options = crate::truth::write::SceneOptions {
+        width,
+        height,
+        frames: args.frames,
+        samples: args.samples,
+        shutter: args.shutter,
+        seed: args.seed,
+    };
+    let verbose = std::io::stderr().is_terminal();
+    let description =
+        crate::truth::write::write_scene(&args.name, &args.output, &options, &mut |frame, _| {
+            if verbose {
+                eprintln!("shutter: scene {} frame {frame} written", args.name);
+            }
+        })?;
+    if verbose {
+        eprintln!(
+            "shutter: {} frames of {} in {}",
+            description.frames,
+            description.scene,
+            args.output.display()
+        );
+    }
+    Ok(())
+}

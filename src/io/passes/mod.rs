@@ -1,0 +1,70 @@
+//! From pass files to a canonical [`Frame`]: which channels of which file each pass reads
+//! (planned from headers, so preflight can check every frame before anything is decoded),
+//! then the decode and the conversion from the preset's convention to the canonical one.
+//!
+//! Motion can come from any of the three motion sections of a preset (velocity, prev, next),
+//! whatever each stores; a needed pass is taken from its own section first, then from the
+//! others, converting between them:
+//!
+//! | needed   | from a backward source (`p(-1)`) | from a forward source (`p(+1)`)      |
+//! |----------|----------------------------------|--------------------------------------|
+//! | velocity | `p0 - p(-1)`                     | `p(+1) - p0` (linear, warned)        |
+//! | prev     | `p(-1)`                          | `2·p0 - p(+1)` (linear, warned)      |
+//! | next     | `2·p0 - p(-1)` (linear, warned)  | `p(+1)`                              |
+//!
+//! - [`plan`]: which channels of which files, from headers alone (preflight plans every
+//!   frame before anything is decoded);
+//! - [`read`]: the decode, colour and depth conversions;
+//! - [`convert`]: motion from any of the preset's motion sections to the pass needed.
+
+mod convert;
+mod plan;
+mod read;
+
+pub use plan::{passes_found, plan_frame, FramePlan, PlanOptions};
+pub use read::{read_color, read_frame};
+
+use crate::io::sequence::PathPattern;
+
+/// The pass files given by the user (patterns or plain paths).
+#[derive(Clone, Debug)]
+pub struct Inputs {
+    pub color: PathPattern,
+    pub depth: Option<PathPattern>,
+    pub velocity: Option<PathPattern>,
+    pub prev: Option<PathPattern>,
+    pub next: Option<PathPattern>,
+}
+
+impl Inputs {
+    /// Colour only (other passes, if any, are looked up in the colour file).
+    pub fn color_only(color: PathPattern) -> Inputs {
+        Inputs {
+            color,
+            depth: None,
+            velocity: None,
+            prev: None,
+            next: None,
+        }
+    }
+
+    /// Every pattern given, with the pass it was given for.
+    pub fn all(&self) -> Vec<(&'static str, &PathPattern)> {
+        let mut all = vec![("color", &self.color)];
+        for (name, pattern) in [
+            ("depth", &self.depth),
+            ("velocity", &self.velocity),
+            ("prev", &self.prev),
+            ("next", &self.next),
+        ] {
+            if let Some(pattern) = pattern {
+                all.push((name, pattern));
+            }
+        }
+        all
+    }
+
+    pub fn is_sequence(&self) -> bool {
+        self.all().iter().any(|(_, p)| p.is_sequence())
+    }
+}

@@ -1,0 +1,127 @@
+//! Decoding a planned frame and converting its passes to the canonical convention.
+
+use crate::error::Problem;
+use crate::frame::{Color, Frame, Passes, Plane};
+use crate::io::image::srgb_to_linear;
+use crate::io::preset::Preset;
+use crate::io::sequence::PathPattern;
+
+use super::convert::MotionSource;
+use super::plan::{plan_frame, FramePlan, PlanOptions, Slot};
+use super::Inputs;
+
+/// Decodes the planned files and converts them to canonical passes.
+pub fn read_frame(plan: &FramePlan) -> Result<Frame, Problem> {
+    let mut decoded: Vec<Vec<Plane>> = Vec::with_capacity(plan.files.len());
+    for file in &plan.files {
+        let planes = file
+            .info
+            .read(&file.channels)
+            .map_err(|p| p.frame(plan.frame))?;
+        decoded.push(planes);
+    }
+    let (width, height) = (plan.width, plan.height);
+    let mut frame = Frame::new(width, height);
+    if let Some(first) = plan.files.first() {
+        frame.windows = first.info.windows;
+    }
+    // Takes a plane out of `decoded` (cloning when a channel serves two passes).
+    let mut uses = vec![Vec::new(); decoded.len()];
+    for slot in plan_slots(plan) {
+        uses[slot.file].push(slot.entry);
+    }
+    let mut take = |slot: Slot, decoded: &mut Vec<Vec<Plane>>| -> Plane {
+        let remaining = &mut uses[slot.file];
+        let position = remaining.iter().position(|&e| e == slot.entry);
+        if let Some(position) = position {
+            remaining.swap_remove(position);
+        }
+        if remaining.contains(&slot.entry) {
+            decoded[slot.file][slot.entry].clone()
+        } else {
+            std::mem::take(&mut decoded[slot.file][slot.entry])
+        }
+    };
+
+    if let Some(plan_color) = &plan.color {
+        let mut r = take(plan_color.rgb[0], &mut decoded);
+        let mut g = take(plan_color.rgb[1], &mut decoded);
+        let mut b = take(plan_color.rgb[2], &mut decoded);
+        let a = plan_color.a.map(|slot| take(slot, &mut decoded));
+        if plan_color.decode_srgb {
+            for plane in [&mut r, &mut g, &mut b] {
+                plane.iter_mut().for_each(|v| *v = srgb_to_linear(*v));
+            }
+        }
+        if let (true, Some(a)) = (plan_color.premultiply, &a) {
+            for plane in [&mut r, &mut g, &mut b] {
+                plane.iter_mut().zip(a).for_each(|(v, a)| *v *= a);
+            }
+        }
+        frame.color = Some(Color { r, g, b, a });
+    }
+    if let Some((slot, spec)) = &plan.depth {
+        let mut depth = take(*slot, &mut decoded);
+        if let (Some(near), Some(far)) = (spec.near, spec.far) {
+            depth.iter_mut().for_each(|d| *d = near + *d * (far - near));
+        }
+        if spec.scale != 1.0 {
+            depth.iter_mut().for_each(|d| *d *= spec.scale);
+        }
+        frame.depth = Some(depth);
+    }
+    for target in 0..3 {
+        let source = match target {
+            0 => &plan.velocity,
+            1 => &plan.prev,
+            _ => &plan.next,
+        };
+        let Some(source) = source else { continue };
+        let x = take(source.x, &mut decoded);
+        let y = take(source.y, &mut decoded);
+        let z = source.z.map(|slot| take(slot, &mut decoded));
+        let motion = MotionSource::decode(&source.spec, x, y, z, width, height);
+        match target {
+            0 => frame.velocity = Some(motion.velocity(width)),
+            1 => frame.prev = Some(motion.position(width, true)),
+            _ => frame.next = Some(motion.position(width, false)),
+        }
+    }
+    Ok(frame)
+}
+
+fn plan_slots(plan: &FramePlan) -> Vec<Slot> {
+    let mut slots = Vec::new();
+    if let Some(c) = &plan.color {
+        slots.extend(c.rgb);
+        slots.extend(c.a);
+    }
+    if let Some((slot, _)) = &plan.depth {
+        slots.push(*slot);
+    }
+    for v in [&plan.velocity, &plan.prev, &plan.next]
+        .into_iter()
+        .flatten()
+    {
+        slots.push(v.x);
+        slots.push(v.y);
+        slots.extend(v.z);
+    }
+    slots
+}
+
+/// Reads the colour of one file (or one frame of a pattern) alone: the other passes are not
+/// planned. Used by `diff` and `bench` to load images to compare.
+pub fn read_color(
+    pattern: &PathPattern,
+    frame: Option<i64>,
+    preset: &Preset,
+) -> Result<Frame, Vec<Problem>> {
+    let options = PlanOptions {
+        preset,
+        layer: None,
+        needs: Passes::COLOR,
+    };
+    let plan = plan_frame(&Inputs::color_only(pattern.clone()), frame, &options)?;
+    read_frame(&plan).map_err(|problem| vec![problem])
+}

@@ -1,0 +1,351 @@
+//! The numeric policy: what every non-finite or extreme input value becomes, written down once
+//! and applied once, where a frame enters processing ([`sanitize`], called by
+//! [`crate::process`]). Every pass after it may assume its inputs obey these rules, so no
+//! kernel (and no GPU twin) carries sanitising of its own, every written frame is finite, and
+//! every pass's work stays bounded by the frame size whatever comes in. Replaced values are
+//! counted ([`Replaced`]) so the caller can report them; nothing is hidden.
+//!
+//! The rules, per pass, with their reasons:
+//!
+//! | pass | NaN | ±Inf and huge | negative |
+//! |---|---|---|---|
+//! | colour (R, G, B, A) | 0: no light, and transparent | clamped to ±[`HUGE`] | kept (HDR composites carry negative lobes) |
+//! | depth | +∞: far, so it hides nothing | +∞ kept (far); −∞ is negative | 0: at the camera |
+//! | CoC map (read as depth) | 0: in focus | clamped by depth of field to its largest CoC | 0 |
+//! | velocity (x, y) | 0: still | clamped to ±[`VELOCITY_LIMIT`] | kept (a direction) |
+//! | positions p(−1), p(+1) (x, y) | the pixel is still: both become its centre | clamped to ±[`POSITION_LIMIT`] | kept (off-screen) |
+//! | positions' depth (z) | as depth | as depth | as depth |
+//! | shutter φ | 0 (no exposure) | clamped to [0, 1] | 0 |
+//!
+//! The jitter of every pass comes from one 32-bit hash, [`hash`] (WGSL has no 64-bit
+//! integers, so the GPU twins compute the same numbers).
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::frame::{Frame, Plane};
+
+/// Colour magnitudes beyond this are clamped: far above any radiance, and small enough that
+/// sums of many stay finite in f32 (1e30 · 1e8 taps < 3.4e38).
+pub const HUGE: f32 = 1e30;
+
+/// Velocity components beyond this many pixels per frame are clamped: 5000 times the width of
+/// an 8K frame, so a clamped pixel still blurs by every pass's largest blur, and small enough
+/// that |v|² (1e14) and sums of it stay finite in f32 without `hypot`.
+pub const VELOCITY_LIMIT: f32 = 1e7;
+
+/// Position coordinates beyond this many pixels are clamped: far beyond any image, so the
+/// motion keeps its direction and is cut to the largest blur by the pass, and well inside
+/// f64's exact integers for the curve arithmetic.
+pub const POSITION_LIMIT: f32 = 1e12;
+
+/// Colour made finite: NaN reads as 0, magnitudes are clamped to [`HUGE`].
+#[inline]
+pub fn color(v: f32) -> f32 {
+    if v.is_nan() {
+        0.0
+    } else {
+        v.clamp(-HUGE, HUGE)
+    }
+}
+
+/// Depth made comparable: NaN is far (+∞), negative is 0.
+#[inline]
+pub fn depth(z: f32) -> f32 {
+    if z.is_nan() {
+        f32::INFINITY
+    } else {
+        z.max(0.0)
+    }
+}
+
+/// A painted CoC map value made usable: NaN is in focus (0), negative is 0. (Depth of field
+/// clamps large values to its largest CoC.)
+#[inline]
+pub fn coc_map(v: f32) -> f32 {
+    if v.is_nan() {
+        0.0
+    } else {
+        v.max(0.0)
+    }
+}
+
+/// A velocity component made finite: NaN is still, magnitudes are clamped to
+/// [`VELOCITY_LIMIT`].
+#[inline]
+pub fn velocity(v: f32) -> f32 {
+    if v.is_nan() {
+        0.0
+    } else {
+        v.clamp(-VELOCITY_LIMIT, VELOCITY_LIMIT)
+    }
+}
+
+/// A position coordinate made finite (NaN is handled per pixel by [`sanitize`]).
+#[inline]
+pub fn position(v: f32) -> f32 {
+    v.clamp(-POSITION_LIMIT, POSITION_LIMIT)
+}
+
+/// The shutter fraction made usable: NaN is 0 (no exposure), the rest clamped to [0, 1].
+#[inline]
+pub fn shutter(phi: f32) -> f32 {
+    if phi.is_nan() {
+        0.0
+    } else {
+        phi.clamp(0.0, 1.0)
+    }
+}
+
+/// How many values of each pass [`sanitize`] replaced.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct Replaced {
+    pub color: usize,
+    pub depth: usize,
+    pub velocity: usize,
+    /// Pixels whose p(−1) or p(+1) had a NaN coordinate, plus clamped coordinates and depths.
+    pub positions: usize,
+}
+
+impl Replaced {
+    pub fn any(&self) -> bool {
+        *self != Replaced::default()
+    }
+
+    pub fn add(&mut self, other: Replaced) {
+        self.color += other.color;
+        self.depth += other.depth;
+        self.velocity += other.velocity;
+        self.positions += other.positions;
+    }
+}
+
+/// What the depth plane holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthKind {
+    /// Distance along the view axis.
+    Depth,
+    /// A painted circle-of-confusion map read in place of depth.
+    CocMap,
+}
+
+/// Rows of pixels handed to one task: enough work per task, and a fixed split so nothing
+/// depends on the thread count (each value is replaced on its own anyway).
+const CHUNK: usize = 1 << 14;
+
+/// Applies `rule` to every value of `plane`, returning how many it changed.
+fn apply(plane: &mut Plane, rule: fn(f32) -> f32) -> usize {
+    plane
+        .par_chunks_mut(CHUNK)
+        .map(|chunk| {
+            let mut changed = 0;
+            for v in chunk {
+                let clean = rule(*v);
+                changed += (clean.to_bits() != v.to_bits()) as usize;
+                *v = clean;
+            }
+            changed
+        })
+        .sum()
+}
+
+/// Applies the policy to every pass the frame holds, in place.
+pub fn sanitize(frame: &mut Frame, depth_kind: DepthKind) -> Replaced {
+    let mut replaced = Replaced::default();
+    if let Some(color) = frame.color.as_mut() {
+        for plane in [&mut color.r, &mut color.g, &mut color.b] {
+            replaced.color += apply(plane, self::color);
+        }
+        if let Some(a) = color.a.as_mut() {
+            replaced.color += apply(a, self::color);
+        }
+    }
+    if let Some(plane) = frame.depth.as_mut() {
+        replaced.depth += match depth_kind {
+            DepthKind::Depth => apply(plane, self::depth),
+            DepthKind::CocMap => apply(plane, coc_map),
+        };
+    }
+    if let Some(v) = frame.velocity.as_mut() {
+        replaced.velocity += apply(&mut v.x, velocity) + apply(&mut v.y, velocity);
+    }
+    let width = frame.width;
+    for positions in [frame.prev.as_mut(), frame.next.as_mut()]
+        .into_iter()
+        .flatten()
+    {
+        replaced.positions += apply(&mut positions.x, position) + apply(&mut positions.y, position);
+        if let Some(z) = positions.z.as_mut() {
+            replaced.positions += apply(z, self::depth);
+        }
+    }
+    // A NaN coordinate in either position makes the pixel still: both become its centre.
+    if let (Some(prev), Some(next)) = (frame.prev.as_mut(), frame.next.as_mut()) {
+        replaced.positions += prev
+            .x
+            .par_chunks_mut(CHUNK)
+            .zip(prev.y.par_chunks_mut(CHUNK))
+            .zip(next.x.par_chunks_mut(CHUNK))
+            .zip(next.y.par_chunks_mut(CHUNK))
+            .enumerate()
+            .map(|(c, (((px, py), nx), ny))| {
+                let mut changed = 0;
+                for k in 0..px.len() {
+                    if px[k].is_nan() || py[k].is_nan() || nx[k].is_nan() || ny[k].is_nan() {
+                        let (x, y) = crate::frame::pixel_centre(c * CHUNK + k, width);
+                        (px[k], py[k], nx[k], ny[k]) = (x, y, x, y);
+                        changed += 1;
+                    }
+                }
+                changed
+            })
+            .sum::<usize>();
+    }
+    replaced
+}
+
+/// PCG's output permutation (Jarzynski & Olano 2020, *Hash Functions for GPU Rendering*:
+/// the best quality per cost of the 32-bit hashes they measured).
+#[inline]
+fn pcg(v: u32) -> u32 {
+    let state = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
+    (word >> 22) ^ word
+}
+
+/// The one hash of every jitter: a well-mixed 32-bit value of (seed, stream, index), each
+/// 32 bits (frame numbers and pixel indices wrap), computed the same in WGSL.
+#[inline]
+pub fn hash(seed: u32, stream: u32, index: u32) -> u32 {
+    pcg(index ^ pcg(stream ^ pcg(seed)))
+}
+
+/// A uniform number in [0, 1) from [`hash`]: its top 24 bits, exact in f32.
+#[inline]
+pub fn unit(seed: u32, stream: u32, index: u32) -> f32 {
+    (hash(seed, stream, index) >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::{Color, Positions, Velocity};
+
+    #[test]
+    fn every_rule_gives_finite_or_far_values() {
+        for v in [
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            1e38,
+            -1e38,
+            -1.0,
+            0.5,
+        ] {
+            assert!(color(v).is_finite());
+            assert!(velocity(v).is_finite());
+            // (NaN positions are made still per pixel by `sanitize`.)
+            assert!(position(v).is_finite() || v.is_nan());
+            assert!(coc_map(v).is_finite() || v == f32::INFINITY);
+            assert!(depth(v) >= 0.0, "{v}");
+            assert!((0.0..=1.0).contains(&shutter(v)));
+        }
+        assert_eq!(color(f32::NAN), 0.0);
+        assert_eq!(depth(f32::NAN), f32::INFINITY);
+        assert_eq!(depth(-3.0), 0.0);
+        assert_eq!(coc_map(f32::NAN), 0.0);
+        assert_eq!(velocity(f32::INFINITY), VELOCITY_LIMIT);
+        assert_eq!(shutter(f32::NAN), 0.0);
+        // (VELOCITY_LIMIT·√2)² stays finite in f32.
+        let v = VELOCITY_LIMIT;
+        assert!((v * v + v * v).is_finite());
+    }
+
+    #[test]
+    fn sanitize_counts_what_it_replaced_and_stills_nan_positions() {
+        let mut f = Frame::new(3, 1);
+        f.color = Some(Color {
+            r: vec![f32::NAN, 1.0, 2.0],
+            g: vec![0.0, f32::INFINITY, 0.0],
+            b: vec![0.0; 3],
+            a: None,
+        });
+        f.depth = Some(vec![-1.0, f32::NAN, 4.0]);
+        f.velocity = Some(Velocity {
+            x: vec![f32::NAN, 1.0, 0.0],
+            y: vec![0.0; 3],
+        });
+        let at = |x: Vec<f32>| Positions {
+            x,
+            y: vec![0.5; 3],
+            z: None,
+        };
+        f.prev = Some(at(vec![0.5, f32::NAN, 2.0]));
+        f.next = Some(at(vec![0.5, 1.5, f32::INFINITY]));
+        let replaced = sanitize(&mut f, DepthKind::Depth);
+        assert_eq!(
+            replaced,
+            Replaced {
+                color: 2,
+                depth: 2,
+                velocity: 1,
+                // The infinite next x, and the pixel with a NaN prev x.
+                positions: 2,
+            }
+        );
+        let color = f.color.as_ref().unwrap();
+        assert_eq!(color.r[0], 0.0);
+        assert_eq!(color.g[1], HUGE);
+        assert_eq!(f.depth.as_ref().unwrap(), &vec![0.0, f32::INFINITY, 4.0]);
+        // Pixel 1 is still: both positions are its centre (1.5, 0.5).
+        let (prev, next) = (f.prev.as_ref().unwrap(), f.next.as_ref().unwrap());
+        assert_eq!(
+            (prev.x[1], prev.y[1], next.x[1], next.y[1]),
+            (1.5, 0.5, 1.5, 0.5)
+        );
+        assert_eq!(next.x[2], POSITION_LIMIT);
+        // A second pass replaces nothing.
+        assert!(!sanitize(&mut f, DepthKind::Depth).any());
+    }
+
+    #[test]
+    fn a_coc_map_reads_nan_as_in_focus() {
+        let mut f = Frame::new(2, 1);
+        f.depth = Some(vec![f32::NAN, -2.0]);
+        sanitize(&mut f, DepthKind::CocMap);
+        assert_eq!(f.depth.unwrap(), vec![0.0, 0.0]);
+    }
+
+    #[test]
+    fn the_hash_matches_pcg_and_spreads_evenly() {
+        // PCG's permutation of 0, worked by hand: state = 2891336453 = 0xAC564B05;
+        // state >> 28 = 10, so word = ((state >> 14) ^ state) · 277803737 mod 2³².
+        let state: u32 = 2_891_336_453;
+        let word = ((state >> 14) ^ state).wrapping_mul(277_803_737);
+        assert_eq!(pcg(0), (word >> 22) ^ word);
+        // Uniform in [0, 1): 64k draws into 16 bins pass a χ² test (15 degrees of freedom:
+        // 37.7 is the 99.9 % quantile; a constant or a 4-valued hash scores in the thousands).
+        let mut bins = [0usize; 16];
+        let n = 1 << 16;
+        for i in 0..n {
+            let u = unit(7, 1, i);
+            assert!((0.0..1.0).contains(&u));
+            bins[(u * 16.0) as usize] += 1;
+        }
+        let expected = (n / 16) as f64;
+        let chi2: f64 = bins
+            .iter()
+            .map(|&c| (c as f64 - expected).powi(2) / expected)
+            .sum();
+        assert!(chi2 < 37.7, "{chi2} {bins:?}");
+        // Neighbouring seeds and pixels are uncorrelated: half the bits differ on average.
+        let flips: u32 = (0..1000u32)
+            .map(|i| {
+                (hash(1, 0, i) ^ hash(2, 0, i)).count_ones()
+                    + (hash(1, 0, i) ^ hash(1, 0, i + 1)).count_ones()
+            })
+            .sum();
+        let mean = flips as f64 / 2000.0;
+        assert!((mean - 16.0).abs() < 0.5, "{mean}");
+    }
+}

@@ -1,0 +1,93 @@
+//! One frame's processing, above the effects: the numeric policy ([`crate::numeric`]) applied
+//! once as the frame enters, then depth of field ([`crate::dof`]), then motion blur
+//! ([`crate::motion`]) — "DoF before MB" (Sousa). `dof` and `motion` are siblings that never
+//! import each other; this module is where they meet (and where the backend will be chosen).
+
+use crate::dof::{CocSource, DofParams};
+use crate::frame::{Frame, Passes};
+use crate::motion::{reconstruct, scatter, stretch, Algorithm};
+use crate::motion::{ReconstructParams, ScatterParams, StretchParams};
+use crate::numeric::{self, DepthKind, Replaced};
+
+/// The default shutter: 0.5 of the frame interval (180°), centred on the frame.
+pub const DEFAULT_SHUTTER: f32 = 0.5;
+
+/// Everything one frame's processing reads besides the frame: the motion blur's parameters
+/// for each algorithm, and the lens when depth of field runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Params {
+    /// Fraction of the frame interval the shutter is open (0.5 = 180°), centred on the frame.
+    pub shutter: f32,
+    pub reconstruct: ReconstructParams,
+    pub scatter: ScatterParams,
+    pub stretch: StretchParams,
+    /// Depth of field, run before the motion blur when set ("DoF before MB", Sousa).
+    pub dof: Option<DofParams>,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params {
+            shutter: DEFAULT_SHUTTER,
+            reconstruct: ReconstructParams::default(),
+            scatter: ScatterParams::default(),
+            stretch: StretchParams::default(),
+            dof: None,
+        }
+    }
+}
+
+/// The passes a job reads: the algorithm's, and colour and depth for depth of field.
+pub fn needs(algorithm: Algorithm, params: &Params) -> Passes {
+    let mut passes = algorithm.needs();
+    if let Some(dof) = &params.dof {
+        passes = passes.union(dof.needs());
+    }
+    passes
+}
+
+/// Processes frame number `frame_number` (it seeds the per-pixel jitter, so the output depends
+/// on nothing else): the numeric policy, depth of field when asked for, then the algorithm.
+/// Returns the output frame, which holds the new colour (other passes are dropped: only colour
+/// is written), and what the policy replaced.
+pub fn process(
+    algorithm: Algorithm,
+    params: &Params,
+    mut frame: Frame,
+    frame_number: i64,
+) -> (Frame, Replaced) {
+    let depth_kind = match params.dof.map(|d| d.source) {
+        Some(CocSource::Map { .. }) => DepthKind::CocMap,
+        _ => DepthKind::Depth,
+    };
+    let replaced = numeric::sanitize(&mut frame, depth_kind);
+    let frame = match &params.dof {
+        Some(dof) => crate::dof::apply(frame, dof),
+        None => frame,
+    };
+    let shutter = numeric::shutter(params.shutter);
+    let out = match algorithm {
+        Algorithm::Reconstruct => reconstruct::reconstruct(
+            frame,
+            &params.reconstruct,
+            shutter,
+            // Frame numbers seed the jitter modulo 2³² (the hash is 32-bit).
+            frame_number as u32,
+        ),
+        Algorithm::Scatter => scatter::scatter(frame, &params.scatter, shutter),
+        Algorithm::Stretch => stretch::stretch(frame, &params.stretch, shutter),
+        Algorithm::None => Frame {
+            depth: None,
+            velocity: None,
+            prev: None,
+            next: None,
+            ..frame
+        },
+    };
+    (out, replaced)
+}
+
+/// [`process`] without the count of replaced values.
+pub fn apply(algorithm: Algorithm, params: &Params, frame: Frame, frame_number: i64) -> Frame {
+    process(algorithm, params, frame, frame_number).0
+}

@@ -1,0 +1,195 @@
+//! Every setting's one definition (`shutter::settings::DEFS`) against what users read: the
+//! help text, `shutter presets keys`, the built-in defaults preset and the README; and where an
+//! invalid value is reported from.
+
+use shutter::settings::{Section, Value, DEFS};
+
+use crate::support::*;
+
+#[test]
+fn blur_help_states_every_default_and_preset_key_from_the_definitions() {
+    for command in ["blur", "dof"] {
+        let help = stdout(&shutter(&[command, "--help"]));
+        for def in DEFS {
+            let line = help
+                .lines()
+                .find(|l| l.trim_start().starts_with(&format!("--{} ", def.flag())))
+                .unwrap_or_else(|| panic!("no --{} in `{command} --help`", def.flag()));
+            let stated = format!(
+                "[default: {}; preset key {}.{}]",
+                def.default_text(),
+                def.section.table(),
+                def.key()
+            );
+            assert!(line.ends_with(&stated), "{line}\nshould end with {stated}");
+        }
+        // The scatter defaults the help once got wrong.
+        for (flag, default) in [("weight", "box"), ("normalize", "exposure")] {
+            let line = help
+                .lines()
+                .find(|l| l.trim_start().starts_with(&format!("--{flag} ")))
+                .unwrap();
+            assert!(line.contains(&format!("[default: {default};")), "{line}");
+        }
+    }
+}
+
+#[test]
+fn presets_keys_lists_every_key_with_its_default() {
+    let o = shutter(&["presets", "keys"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    for def in DEFS {
+        let line = text
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(def.key().as_str()))
+            .unwrap_or_else(|| panic!("no {} in `presets keys`", def.key()));
+        let words: Vec<&str> = line.split_whitespace().collect();
+        assert_eq!(words[1], format!("--{}", def.flag()), "{line}");
+        assert_eq!(
+            words[2..4],
+            ["default", def.default_text().split(' ').next().unwrap()]
+        );
+    }
+}
+
+#[test]
+fn the_defaults_preset_sets_no_setting_of_its_own() {
+    // Defaults live in the parameter structs; a copy in presets/shutter.toml could drift.
+    let preset = shutter::io::preset::Preset::builtin("shutter").unwrap();
+    for section in [Section::Blur, Section::Dof, Section::Output] {
+        assert!(preset.settings(section.table()).is_empty(), "{section:?}");
+    }
+}
+
+#[test]
+fn readme_settings_tables_match_the_definitions() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let expected = shutter::settings::readme_with_tables(&text).expect("README has the markers");
+    if std::env::var_os("SHUTTER_BLESS").is_some() {
+        std::fs::write(&path, &expected).unwrap();
+        return;
+    }
+    assert!(
+        text == expected,
+        "README.md's settings tables differ from src/settings.rs: run \
+         `SHUTTER_BLESS=1 cargo test readme` and review the diff"
+    );
+    // Every setting has its row.
+    for def in DEFS {
+        assert!(
+            text.contains(&format!("| `{}` |", def.key())),
+            "{}",
+            def.key()
+        );
+    }
+}
+
+#[test]
+fn an_invalid_value_names_the_flag_or_the_preset_key_it_came_from() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 8, 6);
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "blur",
+            "--color",
+            "C.exr",
+            "--depth",
+            "Z.exr",
+            "--velocity",
+            "V.exr",
+            "-o",
+            "out.exr",
+        ];
+        args.extend_from_slice(extra);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"))
+            .current_dir(dir.path())
+            .args(&args)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(!dir.path().join("out.exr").exists());
+        stderr(&o)
+    };
+    for (flag, value, expect) in [
+        ("--method", "foo", "--method foo: use blend or gather"),
+        ("--weight", "foo", "--weight foo: use box or gaussian"),
+        (
+            "--algorithm",
+            "foo",
+            "--algorithm foo: use none, reconstruct, scatter or stretch",
+        ),
+        (
+            "--samples",
+            "16",
+            "--samples 16: use an odd whole number from 1 to 255",
+        ),
+        ("--shutter", "2", "--shutter 2: use a number from 0 to 1"),
+        ("--blades", "2", "--blades 2: use 0 (round) or 3 to 32"),
+    ] {
+        let message = run(&[flag, value]);
+        assert!(message.contains(expect), "{message}");
+        assert!(!message.contains("----"), "{message}");
+    }
+    std::fs::write(dir.path().join("mine.toml"), "[blur]\nsamples = 4\n").unwrap();
+    let message = run(&["--preset", "mine.toml"]);
+    assert!(
+        message.contains("preset mine.toml: [blur] samples = 4: use an odd whole number"),
+        "{message}"
+    );
+    assert!(!message.contains("--samples"), "{message}");
+    // Merged presets: the message names the one that set the key.
+    let message = run(&["--preset", "final", "--preset", "mine.toml"]);
+    assert!(
+        message.contains("preset mine.toml: [blur] samples"),
+        "{message}"
+    );
+    std::fs::write(dir.path().join("typo.toml"), "[blur]\nsampels = 5\n").unwrap();
+    let message = run(&["--preset", "typo.toml"]);
+    assert!(
+        message.contains("unknown key [blur] sampels") && message.contains("samples"),
+        "{message}"
+    );
+}
+
+#[test]
+fn a_flag_for_another_algorithm_is_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 8, 6);
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"))
+        .current_dir(dir.path())
+        .args([
+            "blur",
+            "--color",
+            "C.exr",
+            "--depth",
+            "Z.exr",
+            "--velocity",
+            "V.exr",
+            "-o",
+            "out.exr",
+            "--algorithm",
+            "reconstruct",
+            "--segments",
+            "4",
+            "--verbose",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--segments applies to scatter, not reconstruct"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn switches_turn_their_default_over() {
+    let jitter = shutter::settings::def("jitter").unwrap();
+    assert_eq!(jitter.flag(), "no-jitter");
+    assert_eq!(jitter.default_value(), Value::Switch(true));
+    let half = shutter::settings::def("half").unwrap();
+    assert_eq!(half.default_value(), Value::Switch(false));
+}
