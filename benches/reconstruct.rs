@@ -47,6 +47,10 @@ fn main() {
             median_ms_with(&moving, 5, &params)
         );
     }
+    println!(
+        "1920x1080 numeric policy scan of the moving frame (read stage): {:.2} ms",
+        common::median_policy_ms(&moving, 9)
+    );
     let still = frame(|_, _| None);
     println!("1920x1080 static: {:.2} ms", median_ms(&still, 9));
     for share in [0.01f32, 0.05, 0.25] {

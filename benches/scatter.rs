@@ -17,54 +17,10 @@
 
 mod common;
 
-use common::{H, W};
-use shutter::frame::{Color, Frame, Positions};
+use common::{positions_frame as frame, H, W};
+use shutter::frame::Frame;
 use shutter::motion::{Algorithm, CurveKind, Normalize, ScatterParams, Weight};
 use shutter::process::Params;
-
-/// `moving(x, y)` gives (velocity, bend) in px per frame: p(t) = p0 + t·v + t²·a.
-fn frame(moving: impl Fn(usize, usize) -> Option<([f32; 2], [f32; 2])>) -> Frame {
-    let n = W * H;
-    let mut f = Frame::new(W, H);
-    let mut c = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
-    let mut depth = vec![0.0; n];
-    let mut prev = Positions {
-        x: vec![0.0; n],
-        y: vec![0.0; n],
-        z: None,
-    };
-    let mut next = prev.clone();
-    for y in 0..H {
-        for x in 0..W {
-            let i = y * W + x;
-            c[0][i] = ((x / 16 + y / 16) % 2) as f32;
-            c[1][i] = x as f32 / W as f32;
-            c[2][i] = y as f32 / H as f32;
-            depth[i] = if (x / 200 + y / 150) % 3 == 0 {
-                2.0
-            } else {
-                10.0
-            };
-            let (v, a) = moving(x, y).unwrap_or(([0.0; 2], [0.0; 2]));
-            let p0 = [x as f32 + 0.5, y as f32 + 0.5];
-            prev.x[i] = p0[0] - v[0] + a[0];
-            prev.y[i] = p0[1] - v[1] + a[1];
-            next.x[i] = p0[0] + v[0] + a[0];
-            next.y[i] = p0[1] + v[1] + a[1];
-        }
-    }
-    let [r, g, b] = c;
-    f.color = Some(Color {
-        r,
-        g,
-        b,
-        a: Some(vec![1.0; n]),
-    });
-    f.depth = Some(depth);
-    f.prev = Some(prev);
-    f.next = Some(next);
-    f
-}
 
 fn median_ms(f: &Frame, params: &Params, runs: usize) -> f64 {
     common::median_ms(Algorithm::Scatter, f, params, runs)

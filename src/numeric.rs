@@ -23,7 +23,7 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::frame::{Frame, Plane};
+use crate::frame::{Frame, Plane, Positions};
 
 /// Colour magnitudes beyond this are clamped: far above any radiance, and small enough that
 /// sums of many stay finite in f32 (1e30 · 1e8 taps < 3.4e38).
@@ -129,18 +129,57 @@ pub enum DepthKind {
     CocMap,
 }
 
-/// Rows of pixels handed to one task: enough work per task, and a fixed split so nothing
-/// depends on the thread count (each value is replaced on its own anyway).
+/// Values handed to one task: enough work per task, and a fixed split so nothing depends on
+/// the thread count (each value is replaced on its own anyway).
 const CHUNK: usize = 1 << 14;
 
-/// Applies `rule` to every value of `plane`, returning how many it changed.
-fn apply(plane: &mut Plane, rule: fn(f32) -> f32) -> usize {
+/// One pass's rule: `clean(v)` is true where `v` needs no change (a test that compiles to a
+/// compare per value, so clean frames cost one read-only pass), `rule` makes any value clean.
+struct Rule {
+    clean: fn(f32) -> bool,
+    rule: fn(f32) -> f32,
+}
+
+const COLOR: Rule = Rule {
+    clean: |v| v.abs() <= HUGE,
+    rule: color,
+};
+const DEPTH: Rule = Rule {
+    // +∞ is clean (far); NaN and negatives are not (−0.0 compares equal to 0 and is kept).
+    clean: |z| z >= 0.0,
+    rule: depth,
+};
+const COC_MAP: Rule = Rule {
+    clean: |v| v >= 0.0,
+    rule: coc_map,
+};
+const VELOCITY: Rule = Rule {
+    clean: |v| v.abs() <= VELOCITY_LIMIT,
+    rule: velocity,
+};
+const POSITION: Rule = Rule {
+    clean: |v| v.abs() <= POSITION_LIMIT,
+    rule: position,
+};
+
+/// Whether every value of `chunk` is clean (branch-free, so it vectorises).
+#[inline]
+fn all_clean(chunk: &[f32], clean: fn(f32) -> bool) -> bool {
+    chunk.iter().fold(true, |ok, &v| ok & clean(v))
+}
+
+/// Applies `rule` to every value of `plane`, returning how many it changed. Chunks that are
+/// clean are only read.
+fn apply(plane: &mut Plane, rule: &Rule) -> usize {
     plane
         .par_chunks_mut(CHUNK)
         .map(|chunk| {
+            if all_clean(chunk, rule.clean) {
+                return 0;
+            }
             let mut changed = 0;
             for v in chunk {
-                let clean = rule(*v);
+                let clean = (rule.rule)(*v);
                 changed += (clean.to_bits() != v.to_bits()) as usize;
                 *v = clean;
             }
@@ -154,54 +193,76 @@ pub fn sanitize(frame: &mut Frame, depth_kind: DepthKind) -> Replaced {
     let mut replaced = Replaced::default();
     if let Some(color) = frame.color.as_mut() {
         for plane in [&mut color.r, &mut color.g, &mut color.b] {
-            replaced.color += apply(plane, self::color);
+            replaced.color += apply(plane, &COLOR);
         }
         if let Some(a) = color.a.as_mut() {
-            replaced.color += apply(a, self::color);
+            replaced.color += apply(a, &COLOR);
         }
     }
     if let Some(plane) = frame.depth.as_mut() {
         replaced.depth += match depth_kind {
-            DepthKind::Depth => apply(plane, self::depth),
-            DepthKind::CocMap => apply(plane, coc_map),
+            DepthKind::Depth => apply(plane, &DEPTH),
+            DepthKind::CocMap => apply(plane, &COC_MAP),
         };
     }
     if let Some(v) = frame.velocity.as_mut() {
-        replaced.velocity += apply(&mut v.x, velocity) + apply(&mut v.y, velocity);
+        replaced.velocity += apply(&mut v.x, &VELOCITY) + apply(&mut v.y, &VELOCITY);
     }
     let width = frame.width;
     for positions in [frame.prev.as_mut(), frame.next.as_mut()]
         .into_iter()
         .flatten()
     {
-        replaced.positions += apply(&mut positions.x, position) + apply(&mut positions.y, position);
         if let Some(z) = positions.z.as_mut() {
-            replaced.positions += apply(z, self::depth);
+            replaced.positions += apply(z, &DEPTH);
         }
     }
-    // A NaN coordinate in either position makes the pixel still: both become its centre.
-    if let (Some(prev), Some(next)) = (frame.prev.as_mut(), frame.next.as_mut()) {
-        replaced.positions += prev
-            .x
-            .par_chunks_mut(CHUNK)
-            .zip(prev.y.par_chunks_mut(CHUNK))
-            .zip(next.x.par_chunks_mut(CHUNK))
-            .zip(next.y.par_chunks_mut(CHUNK))
-            .enumerate()
-            .map(|(c, (((px, py), nx), ny))| {
-                let mut changed = 0;
-                for k in 0..px.len() {
-                    if px[k].is_nan() || py[k].is_nan() || nx[k].is_nan() || ny[k].is_nan() {
-                        let (x, y) = crate::frame::pixel_centre(c * CHUNK + k, width);
-                        (px[k], py[k], nx[k], ny[k]) = (x, y, x, y);
-                        changed += 1;
-                    }
-                }
-                changed
-            })
-            .sum::<usize>();
+    // Coordinates: clean frames are only read. Otherwise a NaN coordinate in either position
+    // makes the pixel still (both become its centre), and the rest are clamped.
+    let planes_clean = |p: &Positions| {
+        p.x.par_chunks(CHUNK)
+            .chain(p.y.par_chunks(CHUNK))
+            .all(|c| all_clean(c, POSITION.clean))
+    };
+    let (prev, next) = (frame.prev.as_mut(), frame.next.as_mut());
+    if prev.as_deref().is_some_and(|p| !planes_clean(p))
+        || next.as_deref().is_some_and(|p| !planes_clean(p))
+    {
+        replaced.positions += still_where_nan(prev, next, width);
     }
     replaced
+}
+
+/// Makes pixels with a NaN coordinate in p(−1) or p(+1) still (both positions at the pixel's
+/// centre), then clamps every coordinate; returns the pixels made still plus the
+/// coordinates clamped.
+fn still_where_nan(
+    mut prev: Option<&mut Positions>,
+    mut next: Option<&mut Positions>,
+    width: usize,
+) -> usize {
+    let nan_at = |p: &Option<&mut Positions>, i: usize| {
+        p.as_ref()
+            .is_some_and(|p| p.x[i].is_nan() || p.y[i].is_nan())
+    };
+    let n = prev.as_ref().or(next.as_ref()).map_or(0, |p| p.x.len());
+    let still: Vec<usize> = (0..n)
+        .filter(|&i| nan_at(&prev, i) || nan_at(&next, i))
+        .collect();
+    for p in [prev.as_deref_mut(), next.as_deref_mut()]
+        .into_iter()
+        .flatten()
+    {
+        for &i in &still {
+            let (x, y) = crate::frame::pixel_centre(i, width);
+            (p.x[i], p.y[i]) = (x, y);
+        }
+    }
+    let mut changed = still.len();
+    for p in [prev, next].into_iter().flatten() {
+        changed += apply(&mut p.x, &POSITION) + apply(&mut p.y, &POSITION);
+    }
+    changed
 }
 
 /// PCG's output permutation (Jarzynski & Olano 2020, *Hash Functions for GPU Rendering*:
@@ -229,7 +290,7 @@ pub fn unit(seed: u32, stream: u32, index: u32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frame::{Color, Positions, Velocity};
+    use crate::frame::{Color, Velocity};
 
     #[test]
     fn every_rule_gives_finite_or_far_values() {

@@ -19,7 +19,7 @@ use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::motion::Algorithm;
 use crate::numeric::Replaced;
-use crate::process::{process, Params};
+use crate::process::{depth_kind, process_clean, Params};
 
 /// A blur job, fully resolved (preset merged, flags applied, frames listed).
 #[derive(Clone, Debug)]
@@ -246,7 +246,9 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         frames: plans.len(),
     });
     let (read_seconds, process_seconds) = std::thread::scope(|scope| -> Result<(f64, f64)> {
-        let (read_tx, read_rx) = mpsc::sync_channel::<std::result::Result<Frame, Problem>>(0);
+        // The read stage applies the numeric policy, so its scan overlaps processing.
+        type Read = (Frame, Replaced);
+        let (read_tx, read_rx) = mpsc::sync_channel::<std::result::Result<Read, Problem>>(0);
         type Done = (Option<i64>, Frame, Replaced);
         let (done_tx, done_rx) = mpsc::sync_channel::<std::result::Result<Done, Problem>>(0);
 
@@ -254,7 +256,10 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             let mut seconds = 0.0;
             for plan in &plans {
                 let t = Instant::now();
-                let frame = read_frame(plan);
+                let frame = read_frame(plan).map(|mut frame| {
+                    let replaced = crate::numeric::sanitize(&mut frame, depth_kind(&job.params));
+                    (frame, replaced)
+                });
                 seconds += t.elapsed().as_secs_f64();
                 let failed = frame.is_err();
                 if read_tx.send(frame).is_err() || failed {
@@ -269,10 +274,14 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             let mut seconds = 0.0;
             for (frame_number, frame) in frames.into_iter().zip(read_rx) {
                 let message = match frame {
-                    Ok(frame) => {
+                    Ok((frame, replaced)) => {
                         let t = Instant::now();
-                        let (out, replaced) =
-                            process(job.algorithm, &job.params, frame, frame_number.unwrap_or(0));
+                        let out = process_clean(
+                            job.algorithm,
+                            &job.params,
+                            frame,
+                            frame_number.unwrap_or(0),
+                        );
                         seconds += t.elapsed().as_secs_f64();
                         Ok((frame_number, out, replaced))
                     }

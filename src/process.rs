@@ -1,5 +1,5 @@
 //! One frame's processing, above the effects: the numeric policy ([`crate::numeric`]) applied
-//! once as the frame enters, then depth of field ([`crate::dof`]), then motion blur
+//! once as the frame enters (by the pipeline's read stage, or by [`process`]), then depth of field ([`crate::dof`]), then motion blur
 //! ([`crate::motion`]) — "DoF before MB" (Sousa). `dof` and `motion` are siblings that never
 //! import each other; this module is where they meet (and where the backend will be chosen).
 
@@ -46,27 +46,46 @@ pub fn needs(algorithm: Algorithm, params: &Params) -> Passes {
     passes
 }
 
+/// What the depth plane holds under these parameters (a painted CoC map is read as depth).
+pub fn depth_kind(params: &Params) -> DepthKind {
+    match params.dof.map(|d| d.source) {
+        Some(CocSource::Map { .. }) => DepthKind::CocMap,
+        _ => DepthKind::Depth,
+    }
+}
+
 /// Processes frame number `frame_number` (it seeds the per-pixel jitter, so the output depends
-/// on nothing else): the numeric policy, depth of field when asked for, then the algorithm.
-/// Returns the output frame, which holds the new colour (other passes are dropped: only colour
-/// is written), and what the policy replaced.
+/// on nothing else): the numeric policy, then [`process_clean`]. Returns the output frame,
+/// which holds the new colour (other passes are dropped: only colour is written), and what
+/// the policy replaced.
 pub fn process(
     algorithm: Algorithm,
     params: &Params,
     mut frame: Frame,
     frame_number: i64,
 ) -> (Frame, Replaced) {
-    let depth_kind = match params.dof.map(|d| d.source) {
-        Some(CocSource::Map { .. }) => DepthKind::CocMap,
-        _ => DepthKind::Depth,
-    };
-    let replaced = numeric::sanitize(&mut frame, depth_kind);
+    let replaced = numeric::sanitize(&mut frame, depth_kind(params));
+    (
+        process_clean(algorithm, params, frame, frame_number),
+        replaced,
+    )
+}
+
+/// Processes a frame that already obeys the numeric policy (the pipeline applies it in its
+/// read stage, so the scan overlaps the processing of the frame before): depth of field when
+/// asked for, then the algorithm.
+pub fn process_clean(
+    algorithm: Algorithm,
+    params: &Params,
+    frame: Frame,
+    frame_number: i64,
+) -> Frame {
     let frame = match &params.dof {
         Some(dof) => crate::dof::apply(frame, dof),
         None => frame,
     };
     let shutter = numeric::shutter(params.shutter);
-    let out = match algorithm {
+    match algorithm {
         Algorithm::Reconstruct => reconstruct::reconstruct(
             frame,
             &params.reconstruct,
@@ -83,8 +102,7 @@ pub fn process(
             next: None,
             ..frame
         },
-    };
-    (out, replaced)
+    }
 }
 
 /// [`process`] without the count of replaced values.

@@ -7,6 +7,7 @@ mod bench;
 mod cli;
 mod diff;
 mod dof;
+mod golden;
 mod io;
 mod metrics;
 mod presets;

@@ -5,9 +5,10 @@
 
 use std::time::Instant;
 
-use shutter::frame::{Color, Frame, Velocity};
+use shutter::frame::{Color, Frame, Positions, Velocity};
 use shutter::motion::Algorithm;
-use shutter::process::{apply, Params};
+use shutter::numeric;
+use shutter::process::{self, process_clean, Params};
 
 pub const W: usize = 1920;
 pub const H: usize = 1080;
@@ -51,19 +52,83 @@ pub fn frame(moving: impl Fn(usize, usize) -> Option<(f32, f32)>) -> Frame {
     f
 }
 
-/// Median processing time (ms) of `runs` runs of `algorithm` on `f`, after a warm-up run.
+/// The same checker, gradients and depths with prev/next positions instead of velocity (the
+/// scatter bench's frame): `moving(x, y)` gives (velocity, bend) in px per frame, p(t) = p0 +
+/// t·v + t²·a.
+pub fn positions_frame(moving: impl Fn(usize, usize) -> Option<([f32; 2], [f32; 2])>) -> Frame {
+    let n = W * H;
+    let mut f = Frame::new(W, H);
+    let mut c = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+    let mut depth = vec![0.0; n];
+    let mut prev = Positions {
+        x: vec![0.0; n],
+        y: vec![0.0; n],
+        z: None,
+    };
+    let mut next = prev.clone();
+    for y in 0..H {
+        for x in 0..W {
+            let i = y * W + x;
+            c[0][i] = ((x / 16 + y / 16) % 2) as f32;
+            c[1][i] = x as f32 / W as f32;
+            c[2][i] = y as f32 / H as f32;
+            depth[i] = if (x / 200 + y / 150) % 3 == 0 {
+                2.0
+            } else {
+                10.0
+            };
+            let (v, a) = moving(x, y).unwrap_or(([0.0; 2], [0.0; 2]));
+            let p0 = [x as f32 + 0.5, y as f32 + 0.5];
+            prev.x[i] = p0[0] - v[0] + a[0];
+            prev.y[i] = p0[1] - v[1] + a[1];
+            next.x[i] = p0[0] + v[0] + a[0];
+            next.y[i] = p0[1] + v[1] + a[1];
+        }
+    }
+    let [r, g, b] = c;
+    f.color = Some(Color {
+        r,
+        g,
+        b,
+        a: Some(vec![1.0; n]),
+    });
+    f.depth = Some(depth);
+    f.prev = Some(prev);
+    f.next = Some(next);
+    f
+}
+
+/// Median processing time (ms) of `runs` runs of `algorithm` on `f`, after a warm-up run:
+/// the pipeline's processing stage. The numeric policy's scan runs in the read stage; it is
+/// timed on its own by [`median_policy_ms`].
 pub fn median_ms(algorithm: Algorithm, f: &Frame, params: &Params, runs: usize) -> f64 {
-    let _ = apply(algorithm, params, f.clone(), 1);
-    let mut times: Vec<f64> = (0..runs)
-        .map(|_| {
-            let input = f.clone();
-            let t = Instant::now();
-            let out = apply(algorithm, params, input, 1);
-            let ms = t.elapsed().as_secs_f64() * 1e3;
-            drop(out);
-            ms
-        })
-        .collect();
+    let mut clean = f.clone();
+    let _ = numeric::sanitize(&mut clean, process::depth_kind(params));
+    let _ = process_clean(algorithm, params, clean.clone(), 1);
+    median(runs, || {
+        let input = clean.clone();
+        let t = Instant::now();
+        let out = process_clean(algorithm, params, input, 1);
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        drop(out);
+        ms
+    })
+}
+
+/// Median time (ms) of the numeric policy's scan of `f` (the read stage's share).
+pub fn median_policy_ms(f: &Frame, runs: usize) -> f64 {
+    median(runs, || {
+        let mut input = f.clone();
+        let t = Instant::now();
+        let replaced = numeric::sanitize(&mut input, numeric::DepthKind::Depth);
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        assert!(!replaced.any());
+        ms
+    })
+}
+
+fn median(runs: usize, mut time: impl FnMut() -> f64) -> f64 {
+    let mut times: Vec<f64> = (0..runs).map(|_| time()).collect();
     times.sort_by(f64::total_cmp);
     times[runs / 2]
 }

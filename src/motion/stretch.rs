@@ -97,13 +97,72 @@ impl Default for StretchParams {
     }
 }
 
+/// Everything stretch's stages read besides their buffers, as plain numbers: the shape of
+/// the uniform its GPU twin will take (keep the two in sync).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct StretchConfig {
+    /// Frame size, pixels.
+    pub width: u32,
+    pub height: u32,
+    /// Fraction of the frame interval the shutter is open.
+    pub shutter: f32,
+    /// The exposure, in frames relative to the frame's own time: [t0, t1].
+    pub t0: f32,
+    pub t1: f32,
+    /// 1 + the tear ratio: neighbours whose depths differ by more are not joined.
+    pub tear: f32,
+    /// `extent` of a moved vertex's alpha, pixels (at least 1e-6).
+    pub extent: f32,
+    /// The alpha floor, in [0, 1].
+    pub min_alpha: f32,
+    /// 1 + the depth tolerance: a fragment is drawn where its depth ≤ the pixel's × this.
+    pub depth_limit: f32,
+    /// 1 where colour is averaged along the motion first ([`texture_blur`]), else 0.
+    pub texture_blur: u32,
+}
+
+impl StretchConfig {
+    pub fn new(width: usize, height: usize, params: &StretchParams, shutter: f32) -> Self {
+        let (t0, t1) = match params.anchor {
+            Anchor::Rear => (-shutter, 0.0),
+            Anchor::Centre => (-0.5 * shutter, 0.5 * shutter),
+        };
+        StretchConfig {
+            width: width as u32,
+            height: height as u32,
+            shutter,
+            t0,
+            t1,
+            tear: 1.0 + params.tear.max(0.0),
+            extent: params.extent.max(1e-6),
+            min_alpha: params.min_alpha.clamp(0.0, 1.0),
+            depth_limit: 1.0 + params.depth_tolerance.max(0.0),
+            texture_blur: params.texture_blur as u32,
+        }
+    }
+
+    /// Whether a pixel of velocity `v` streaks far enough over the exposure to move.
+    #[inline]
+    fn moving(&self, [x, y]: [f32; 2]) -> bool {
+        (x * x + y * y).sqrt() * self.shutter >= STILL
+    }
+
+    /// Whether two depths lie on different surfaces.
+    #[inline]
+    fn torn(&self, a: f32, b: f32) -> bool {
+        a.max(b) > a.min(b) * self.tear
+    }
+}
+
 /// `a + t·(b − a)`, kept between a and b.
 fn mix(a: f32, b: f32, t: f32) -> f32 {
     (a + t * (b - a)).clamp(a.min(b), a.max(b))
 }
 
-/// Applies the filter. The frame must hold colour, depth and velocity (prev/next are
-/// dropped). A frame in which nothing moves is returned untouched.
+/// Applies the filter: [`texture_blur`] → [`move_vertices`] → [`rasterise`]. The frame must
+/// hold colour, depth and velocity (prev/next are dropped). A frame in which nothing moves
+/// is returned untouched.
 pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame {
     let (width, height) = (frame.width, frame.height);
     frame.prev = None;
@@ -115,6 +174,7 @@ pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame 
     ) else {
         return frame;
     };
+    let config = StretchConfig::new(width, height, params, shutter);
     let n = width * height;
     let v: Vec<[f32; 2]> = velocity
         .x
@@ -122,11 +182,7 @@ pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame 
         .zip(&velocity.y)
         .map(|(&x, &y)| [x, y])
         .collect();
-    let moving = |i: usize| {
-        let [x, y] = v[i];
-        (x * x + y * y).sqrt() * shutter >= STILL
-    };
-    if n == 0 || !(0..n).into_par_iter().any(moving) {
+    if n == 0 || !v.par_iter().any(|&v| config.moving(v)) {
         frame.color = Some(color);
         frame.depth = Some(depth);
         frame.velocity = Some(velocity);
@@ -141,105 +197,128 @@ pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame 
         color.b,
         color.a.unwrap_or_else(|| vec![1.0; n]),
     ];
-    let tear = 1.0 + params.tear.max(0.0);
-    let torn = |a: f32, b: f32| a.max(b) > a.min(b) * tear;
-    // The exposure, in frames relative to the frame's own time.
-    let (t0, t1) = match params.anchor {
-        Anchor::Rear => (-shutter, 0.0),
-        Anchor::Centre => (-0.5 * shutter, 0.5 * shutter),
-    };
-
     // The sharp frame to draw first: pre-blurred along each pixel's motion if asked.
-    let mut out: [Vec<f32>; 4] = if params.texture_blur {
-        // Colour and depth together, so a tap reads one cache line.
-        let texels: Vec<[f32; 5]> = (0..n)
-            .into_par_iter()
-            .map(|i| [planes[0][i], planes[1][i], planes[2][i], planes[3][i], z[i]])
-            .collect();
-        // The frame's range per channel: averages are clamped to it against rounding.
-        let range: [(f32, f32); 4] = std::array::from_fn(|c| {
-            planes[c]
-                .par_iter()
-                .fold(
-                    || (f32::INFINITY, f32::NEG_INFINITY),
-                    |(lo, hi), &v| (lo.min(v), hi.max(v)),
-                )
-                .reduce(
-                    || (f32::INFINITY, f32::NEG_INFINITY),
-                    |a, b| (a.0.min(b.0), a.1.max(b.1)),
-                )
-        });
-        let mut blurred = planes.clone();
-        let [r, g, b, a] = &mut blurred;
-        r.par_chunks_mut(width)
-            .zip(g.par_chunks_mut(width))
-            .zip(b.par_chunks_mut(width))
-            .zip(a.par_chunks_mut(width))
-            .enumerate()
-            .for_each(|(y, (((r, g), b), a))| {
-                let rows = [r, g, b, a];
-                #[allow(clippy::needless_range_loop)] // x indexes four rows and the frame
-                for x in 0..width {
-                    let i = y * width + x;
-                    if !moving(i) {
-                        continue;
-                    }
-                    let [vx, vy] = v[i];
-                    let length = (vx * vx + vy * vy).sqrt() * (t1 - t0);
-                    let samples = (length.ceil() as usize + 1).clamp(2, MOST_SAMPLES);
-                    // Sample points are pixel-centre coordinates: pixel (x, y) sits at (x, y).
-                    let own: [f32; 4] = std::array::from_fn(|c| planes[c][i]);
-                    let mut sum = [0.0f32; 4];
-                    let mut total = 0.0f32;
-                    for k in 0..samples {
-                        let t = t0 + (t1 - t0) * (k as f32 + 0.5) / samples as f32;
-                        // Bilinear between the four nearest centres, over those of the same
-                        // surface (so a sub-pixel streak still blurs).
-                        let (px, py) = (x as f32 + vx * t, y as f32 + vy * t);
-                        let (fx, fy) = (px.floor(), py.floor());
-                        let (ax, ay) = (px - fx, py - fy);
-                        for (dx, dy, w) in [
-                            (0, 0, (1.0 - ax) * (1.0 - ay)),
-                            (1, 0, ax * (1.0 - ay)),
-                            (0, 1, (1.0 - ax) * ay),
-                            (1, 1, ax * ay),
-                        ] {
-                            let (sx, sy) = (fx + dx as f32, fy + dy as f32);
-                            if !(w > 0.0
-                                && sx >= 0.0
-                                && sy >= 0.0
-                                && sx < width as f32
-                                && sy < height as f32)
-                            {
-                                continue;
-                            }
-                            let texel = &texels[sy as usize * width + sx as usize];
-                            if texel[4] * tear < z[i] {
-                                continue;
-                            }
-                            for c in 0..4 {
-                                sum[c] += w * (texel[c] - own[c]);
-                            }
-                            total += w;
-                        }
-                    }
-                    if total > 0.0 {
-                        for c in 0..4 {
-                            let value = own[c] + sum[c] / total;
-                            rows[c][x] = value.clamp(range[c].0, range[c].1);
-                        }
-                    }
-                }
-            });
-        blurred
+    let mut out = if config.texture_blur != 0 {
+        texture_blur(&config, &planes, &z, &v)
     } else {
         planes.clone()
     };
+    let vertices = move_vertices(&config, &z, &v);
+    rasterise(&config, &planes, &z, &vertices, &mut out);
+    let [r, g, b, a] = out;
+    frame.color = Some(Color {
+        r,
+        g,
+        b,
+        a: has_alpha.then_some(a),
+    });
+    frame
+}
 
-    // Per vertex: how it moves, and its alpha.
+/// Stage 1: each moving pixel's colour averaged along its own motion over the exposure
+/// (bilinear samples, leaving out nearer surfaces), clamped to the frame's range per channel;
+/// still pixels keep theirs. Returns the frame to draw first.
+pub fn texture_blur(
+    config: &StretchConfig,
+    planes: &[Vec<f32>; 4],
+    z: &[f32],
+    v: &[[f32; 2]],
+) -> [Vec<f32>; 4] {
+    let (width, height) = (config.width as usize, config.height as usize);
+    let n = width * height;
+    let (t0, t1) = (config.t0, config.t1);
+    // Colour and depth together, so a tap reads one cache line.
+    let texels: Vec<[f32; 5]> = (0..n)
+        .into_par_iter()
+        .map(|i| [planes[0][i], planes[1][i], planes[2][i], planes[3][i], z[i]])
+        .collect();
+    // The frame's range per channel: averages are clamped to it against rounding.
+    let range: [(f32, f32); 4] = std::array::from_fn(|c| {
+        planes[c]
+            .par_iter()
+            .fold(
+                || (f32::INFINITY, f32::NEG_INFINITY),
+                |(lo, hi), &v| (lo.min(v), hi.max(v)),
+            )
+            .reduce(
+                || (f32::INFINITY, f32::NEG_INFINITY),
+                |a, b| (a.0.min(b.0), a.1.max(b.1)),
+            )
+    });
+    let mut blurred = planes.clone();
+    let [r, g, b, a] = &mut blurred;
+    r.par_chunks_mut(width)
+        .zip(g.par_chunks_mut(width))
+        .zip(b.par_chunks_mut(width))
+        .zip(a.par_chunks_mut(width))
+        .enumerate()
+        .for_each(|(y, (((r, g), b), a))| {
+            let rows = [r, g, b, a];
+            #[allow(clippy::needless_range_loop)] // x indexes four rows and the frame
+            for x in 0..width {
+                let i = y * width + x;
+                if !config.moving(v[i]) {
+                    continue;
+                }
+                let [vx, vy] = v[i];
+                let length = (vx * vx + vy * vy).sqrt() * (t1 - t0);
+                let samples = (length.ceil() as usize + 1).clamp(2, MOST_SAMPLES);
+                // Sample points are pixel-centre coordinates: pixel (x, y) sits at (x, y).
+                let own: [f32; 4] = std::array::from_fn(|c| planes[c][i]);
+                let mut sum = [0.0f32; 4];
+                let mut total = 0.0f32;
+                for k in 0..samples {
+                    let t = t0 + (t1 - t0) * (k as f32 + 0.5) / samples as f32;
+                    // Bilinear between the four nearest centres, over those of the same
+                    // surface (so a sub-pixel streak still blurs).
+                    let (px, py) = (x as f32 + vx * t, y as f32 + vy * t);
+                    let (fx, fy) = (px.floor(), py.floor());
+                    let (ax, ay) = (px - fx, py - fy);
+                    for (dx, dy, w) in [
+                        (0, 0, (1.0 - ax) * (1.0 - ay)),
+                        (1, 0, ax * (1.0 - ay)),
+                        (0, 1, (1.0 - ax) * ay),
+                        (1, 1, ax * ay),
+                    ] {
+                        let (sx, sy) = (fx + dx as f32, fy + dy as f32);
+                        if !(w > 0.0
+                            && sx >= 0.0
+                            && sy >= 0.0
+                            && sx < width as f32
+                            && sy < height as f32)
+                        {
+                            continue;
+                        }
+                        let texel = &texels[sy as usize * width + sx as usize];
+                        if texel[4] * config.tear < z[i] {
+                            continue;
+                        }
+                        for c in 0..4 {
+                            sum[c] += w * (texel[c] - own[c]);
+                        }
+                        total += w;
+                    }
+                }
+                if total > 0.0 {
+                    for c in 0..4 {
+                        let value = own[c] + sum[c] / total;
+                        rows[c][x] = value.clamp(range[c].0, range[c].1);
+                    }
+                }
+            }
+        });
+    blurred
+}
+
+/// Stage 2: per vertex (pixel centre), its move over the exposure and its alpha. A moving
+/// silhouette vertex (one with a farther neighbour beyond the tear ratio) moves to t0 where
+/// its motion faces away from the nearer surface's normal, to t1 where it faces along it;
+/// the others stay, opaque.
+pub fn move_vertices(config: &StretchConfig, z: &[f32], v: &[[f32; 2]]) -> Vec<([f32; 2], f32)> {
+    let (width, height) = (config.width as usize, config.height as usize);
     let move_of = |i: usize| -> ([f32; 2], f32) {
         let [vx, vy] = v[i];
-        if !moving(i) {
+        if !config.moving(v[i]) {
             return ([0.0; 2], 1.0);
         }
         let (x, y) = (i % width, i / width);
@@ -250,16 +329,16 @@ pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame 
                 continue;
             }
             let j = ny as usize * width + nx as usize;
-            if z[j] > z[i] * tear {
+            if z[j] > z[i] * config.tear {
                 normal[0] += dx as f32;
                 normal[1] += dy as f32;
             }
         }
         let facing = vx * normal[0] + vy * normal[1];
         let t = if facing < 0.0 {
-            t0
+            config.t0
         } else if facing > 0.0 {
-            t1
+            config.t1
         } else {
             0.0
         };
@@ -268,11 +347,22 @@ pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame 
         }
         let shift = [vx * t, vy * t];
         let length = (shift[0] * shift[0] + shift[1] * shift[1]).sqrt();
-        let alpha = (1.0 - length / params.extent.max(1e-6)).max(params.min_alpha.clamp(0.0, 1.0));
+        let alpha = (1.0 - length / config.extent).max(config.min_alpha);
         (shift, alpha.min(1.0))
     };
-    let vertices: Vec<([f32; 2], f32)> = (0..n).into_par_iter().map(move_of).collect();
+    (0..width * height).into_par_iter().map(move_of).collect()
+}
 
+/// Stage 3: every untorn triangle with a moved vertex drawn over `out`, farthest first, alpha
+/// blended, each fragment depth-tested against the frame.
+pub fn rasterise(
+    config: &StretchConfig,
+    planes: &[Vec<f32>; 4],
+    z: &[f32],
+    vertices: &[([f32; 2], f32)],
+    out: &mut [Vec<f32>; 4],
+) {
+    let (width, height) = (config.width as usize, config.height as usize);
     // Triangles with a moved vertex, farthest first.
     let quads_across = width.saturating_sub(1);
     let position = |i: usize| {
@@ -294,7 +384,7 @@ pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame 
                 zs.iter().copied().fold(f32::INFINITY, f32::min),
                 zs.iter().copied().fold(0.0, f32::max),
             );
-            if !moved || torn(lo, hi) {
+            if !moved || config.torn(lo, hi) {
                 return None;
             }
             let ys = corners.map(|i| position(i)[1]);
@@ -307,8 +397,7 @@ pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame 
         .collect();
     triangles.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
 
-    let limit_tolerance = 1.0 + params.depth_tolerance.max(0.0);
-    let [r, g, b, a] = &mut out;
+    let [r, g, b, a] = out;
     let strip = BAND * width;
     r.par_chunks_mut(strip)
         .zip(g.par_chunks_mut(strip))
@@ -340,7 +429,7 @@ pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame 
                         v.clamp(lo, hi)
                     };
                     let depth = interpolate(corners.map(|k| z[k]));
-                    if depth > z[i] * limit_tolerance {
+                    if depth > z[i] * config.depth_limit {
                         return;
                     }
                     let alpha = interpolate(corners.map(|k| vertices[k].1));
@@ -352,14 +441,6 @@ pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame 
                 });
             }
         });
-    let [r, g, b, a] = out;
-    frame.color = Some(Color {
-        r,
-        g,
-        b,
-        a: has_alpha.then_some(a),
-    });
-    frame
 }
 
 /// The pixel indices of triangle `t`: quad (qx, qy) has corners 00, 10, 01, 11 (pixel
@@ -372,5 +453,25 @@ fn triangle_corners(t: usize, quads_across: usize, width: usize) -> [usize; 3] {
         [i, i + 1, i + width + 1]
     } else {
         [i, i + width + 1, i + width]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_config_is_ten_plain_words() {
+        // Uploaded as one uniform by the GPU twin: ten 4-byte fields, no padding.
+        assert_eq!(std::mem::size_of::<StretchConfig>(), 40);
+        let c = StretchConfig::new(4, 3, &StretchParams::default(), 0.5);
+        // The centred anchor splits the exposure about the frame.
+        assert_eq!((c.t0, c.t1), (-0.25, 0.25));
+        let rear = StretchParams {
+            anchor: Anchor::Rear,
+            ..StretchParams::default()
+        };
+        let c = StretchConfig::new(4, 3, &rear, 0.5);
+        assert_eq!((c.t0, c.t1), (-0.5, 0.0));
     }
 }

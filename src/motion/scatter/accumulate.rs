@@ -1,0 +1,378 @@
+//! Stage 2, `accumulate`: tile by tile, the curves of the pixels whose reach touches the tile
+//! are built ([`Scatter::path`]: cut into segments, weighted along the shutter, scaled to
+//! `max_curve`) and drawn as line segments with sub-pixel coverage into f64 cells, depth-tested
+//! against the frame; each pixel of the tile is then resolved ([`super::resolve`]).
+
+use crate::motion::curve::{length, Arc, Bezier, Point};
+use crate::motion::line::{Clip, Column, Walk, Whole, OVERHANG};
+
+use super::reach::Reach;
+use super::{CurveKind, Moving, Normalize, Scatter, Weight, BLOCK, MOST_SEGMENTS};
+
+/// One curve, cut into segments, ready to draw.
+pub(super) struct Path {
+    pub(super) segments: usize,
+    pub(super) points: [Point; MOST_SEGMENTS + 1],
+    /// Weight along the curve at each point, already divided by the curve's total in exposure
+    /// normalisation.
+    pub(super) weights: [f64; MOST_SEGMENTS + 1],
+    /// The curve's depth at each point.
+    pub(super) depths: [f32; MOST_SEGMENTS + 1],
+    /// Segment lengths before scaling to `max_curve`.
+    pub(super) lengths: [f64; MOST_SEGMENTS],
+    pub(super) color: [f64; 4],
+}
+
+impl Path {
+    pub(super) fn new() -> Self {
+        Path {
+            segments: 0,
+            points: [[0.0; 2]; MOST_SEGMENTS + 1],
+            weights: [0.0; MOST_SEGMENTS + 1],
+            depths: [0.0; MOST_SEGMENTS + 1],
+            lengths: [0.0; MOST_SEGMENTS],
+            color: [0.0; 4],
+        }
+    }
+}
+
+impl Scatter<'_> {
+    /// The curve of moving pixel `i` inside the shutter, into `path`; false if it has none.
+    pub(super) fn path(&self, i: usize, motion: &Moving, path: &mut Path) -> bool {
+        let Moving {
+            prev, now, next, ..
+        } = *motion;
+        let p = &self.params;
+        let (t0, t1) = (-self.half, self.half);
+        let most = p.segments.clamp(1, MOST_SEGMENTS);
+        let tolerance = p.flatness as f64;
+        let arc = match p.curve {
+            CurveKind::Arc => Arc::fit(prev, now, next),
+            CurveKind::Bezier => None,
+        };
+        let bezier = Bezier::through(prev, now, next);
+        let segments = match &arc {
+            Some(arc) => arc.segments(t0, t1, tolerance, most),
+            None => bezier.segments(0.5 * (t1 - t0), tolerance, most),
+        };
+        path.segments = segments;
+        path.color = self.color(i).map(f64::from);
+        let z0 = self.depth[i];
+        let depth_at = match (&self.prev.z, &self.next.z) {
+            (Some(zp), Some(zn)) if zp[i].is_finite() && zn[i].is_finite() && z0.is_finite() => {
+                let (zp, zn) = (zp[i] as f64, zn[i] as f64);
+                let z0 = z0 as f64;
+                Some(move |t: f64| {
+                    (z0 + t * 0.5 * (zn - zp) + t * t * (0.5 * (zn + zp) - z0)).max(0.0) as f32
+                })
+            }
+            _ => None,
+        };
+        let mut total = 0.0;
+        // (Counts convert to f64 through u32: one instruction instead of usize's several.)
+        let step = (t1 - t0) / (segments as u32) as f64;
+        for k in 0..segments + 1 {
+            let t = t0 + step * (k as u32) as f64;
+            path.points[k] = match &arc {
+                Some(arc) => arc.at_time(t),
+                None => bezier.at(0.5 * (t + 1.0)),
+            };
+            path.weights[k] = self.weight(t);
+            path.depths[k] = depth_at.map_or(z0, |f| f(t));
+            if k > 0 {
+                let (a, b) = (path.points[k - 1], path.points[k]);
+                path.lengths[k - 1] = length([b[0] - a[0], b[1] - a[1]]);
+                total += path.lengths[k - 1];
+            }
+        }
+        if total.is_nan() || total <= 1e-9 {
+            return false;
+        }
+        let longest = p.max_curve.max(1.0) as f64;
+        let mut scale = 1.0;
+        if total > longest {
+            // Scaled about p(0): a similarity, so every length scales the same.
+            scale = longest / total;
+            for q in &mut path.points[..=segments] {
+                *q = [
+                    now[0] + scale * (q[0] - now[0]),
+                    now[1] + scale * (q[1] - now[1]),
+                ];
+            }
+        }
+        if p.normalize == Normalize::Exposure {
+            // The curve's deposits add up to Σ length × mean weight of each segment (weights
+            // are linear along a segment): divide so they add up to 1.
+            // (With the box weight every mean is 1 and the sum is the total length, bit for bit.)
+            let mut sum = if p.weight == Weight::Box {
+                total
+            } else {
+                let mut sum = 0.0;
+                for k in 0..segments {
+                    sum += path.lengths[k] * 0.5 * (path.weights[k] + path.weights[k + 1]);
+                }
+                sum
+            };
+            sum *= scale;
+            if !(sum > 0.0 && sum.is_finite()) {
+                return false;
+            }
+            let inverse = 1.0 / sum;
+            for w in &mut path.weights[..=segments] {
+                *w *= inverse;
+            }
+        }
+        true
+    }
+}
+
+impl Scatter<'_> {
+    /// Accumulates the curves reaching one tile and writes its normalised pixels into `rows`
+    /// (the tile's pieces of its rows of R, G, B and A), or where no curve reaches the tile,
+    /// its input pixels.
+    pub(super) fn tile<const N: usize>(
+        &self,
+        reach: &Reach,
+        rect: [usize; 4],
+        rows: &mut [[&mut [f32]; 4]],
+    ) {
+        SCRATCH.with_borrow_mut(|scratch| self.tile_in::<N>(reach, rect, rows, scratch));
+    }
+
+    fn tile_in<const N: usize>(
+        &self,
+        reach: &Reach,
+        rect: [usize; 4],
+        rows: &mut [[&mut [f32]; 4]],
+        scratch: &mut Scratch,
+    ) {
+        let [tx0, ty0, tx1, ty1] = rect;
+        let (tw, th) = (tx1 - tx0, ty1 - ty0);
+        let width = self.width;
+        // The tile's cells with a border of OVERHANG on every side, where a walk's rows may
+        // land, and per cell the deepest a curve may be and still pass: depth × (1 +
+        // tolerance), with NaN depth as far and negative as 0. The border's is −∞, so nothing
+        // is ever deposited there.
+        let pad = OVERHANG as usize;
+        let pw = tw + 2 * pad;
+        let cells = pw * (th + 2 * pad);
+        scratch.sums.clear();
+        scratch.sums.resize(cells * N, 0.0);
+        let (acc, _) = scratch.sums.as_chunks_mut::<N>();
+        let limit = &mut scratch.limit;
+        limit.clear();
+        limit.resize(cells, f32::NEG_INFINITY);
+        let tolerance = 1.0 + self.params.depth_tolerance;
+        for y in ty0..ty1 {
+            let o = (y - ty0 + pad) * pw + pad;
+            let depth = &self.depth[y * width + tx0..y * width + tx1];
+            for (l, &z) in limit[o..o + tw].iter_mut().zip(depth) {
+                *l = z * tolerance;
+            }
+        }
+        let limit = &*limit;
+        // Cell of pixel (x, y): origin + x + y·pw.
+        let origin = (pad * pw + pad) as i64 - (ty0 * pw + tx0) as i64;
+        let clip = Clip {
+            x0: tx0 as i64,
+            y0: ty0 as i64,
+            x1: tx1 as i64,
+            y1: ty1 as i64,
+        };
+        let mut path = Path::new();
+        let mut reached = false;
+        // Blocks near enough for their largest reach to touch the tile, in a fixed order (so
+        // every sum runs in the same order); in them, pixels whose own reach touches it.
+        let touches = |x: f64, y: f64, r: f64| {
+            x + r >= tx0 as f64 && x - r < tx1 as f64 && y + r >= ty0 as f64 && y - r < ty1 as f64
+        };
+        let most = reach.most as usize + BLOCK;
+        let (bx0, by0) = (
+            tx0.saturating_sub(most) / BLOCK,
+            ty0.saturating_sub(most) / BLOCK,
+        );
+        let bx1 = ((tx1 + most) / BLOCK + 1).min(reach.across);
+        let by1 = ((ty1 + most) / BLOCK + 1).min(reach.down);
+        for by in by0..by1 {
+            for bx in bx0..bx1 {
+                let r = reach.block[by * reach.across + bx] as f64;
+                let (x0, y0) = ((bx * BLOCK) as f64, (by * BLOCK) as f64);
+                let side = BLOCK as f64;
+                if r == 0.0 || !touches(x0 + 0.5 * side, y0 + 0.5 * side, r + 0.5 * side) {
+                    continue;
+                }
+                for y in by * BLOCK..((by + 1) * BLOCK).min(self.height) {
+                    for x in bx * BLOCK..((bx + 1) * BLOCK).min(width) {
+                        let e = y * width + x;
+                        let r = reach.pixel[e] as f64;
+                        if r == 0.0 || !touches(x as f64 + 0.5, y as f64 + 0.5, r) {
+                            continue;
+                        }
+                        // Moving (its reach is not 0), so its positions are not NaN.
+                        let motion = self.positions(x, y, r);
+                        if !self.path(e, &motion, &mut path) {
+                            continue;
+                        }
+                        reached = true;
+                        // Colour (alpha too unless opaque) and 1 for the weight.
+                        let color: [f64; N] =
+                            std::array::from_fn(|k| if k == N - 1 { 1.0 } else { path.color[k] });
+                        for k in 0..path.segments {
+                            let Some(walk) = Walk::new(path.points[k], path.points[k + 1], clip)
+                            else {
+                                continue;
+                            };
+                            let (w0, w1) = (path.weights[k], path.weights[k + 1]);
+                            let (z0, z1) = (path.depths[k], path.depths[k + 1]);
+                            let (dz, dw) = (z1 - z0, w1 - w0);
+                            // Steps in the cells along the walk's columns and rows.
+                            let (along, across) = if walk.swapped {
+                                (pw as i64, 1)
+                            } else {
+                                (1, pw as i64)
+                            };
+                            let mut segment = Segment {
+                                acc: &mut *acc,
+                                limit,
+                                color: &color,
+                                origin,
+                                along,
+                                across,
+                                z0,
+                                dz,
+                                w0,
+                                dw,
+                            };
+                            // The columns crossed whole step in fixed point; the segment's
+                            // ends (at most one column each side) take the exact walk.
+                            let whole = walk.whole();
+                            for column in walk.first..whole.first {
+                                segment.put(column, walk.column(column));
+                            }
+                            segment.whole(&whole);
+                            for column in whole.last + 1..walk.last + 1 {
+                                segment.put(column, walk.column(column));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        if !reached {
+            let color = self.color;
+            for (y, row) in (ty0..ty1).zip(rows) {
+                let span = y * width + tx0..y * width + tx1;
+                let [r, g, b, a] = row;
+                for (to, from) in [(r, &color.r), (g, &color.g), (b, &color.b)] {
+                    to.copy_from_slice(&from[span.clone()]);
+                }
+                match &color.a {
+                    Some(alpha) => a.copy_from_slice(&alpha[span]),
+                    None => a.fill(1.0),
+                }
+            }
+            return;
+        }
+        for (y, row) in (ty0..ty1).zip(rows) {
+            for x in tx0..tx1 {
+                let cell = &acc[(origin + (x + y * pw) as i64) as usize];
+                // An opaque frame's alpha sums are its weight sums.
+                let cell = std::array::from_fn(|k| cell[k.min(N - 1)]);
+                let value = self.resolve(&cell, x, y, reach);
+                for (plane, v) in row.iter_mut().zip(value) {
+                    plane[x - tx0] = v;
+                }
+            }
+        }
+    }
+}
+
+/// A thread's tile buffers, kept from tile to tile (allocating them afresh for every tile
+/// costs a page fault per 4 KiB).
+#[derive(Default)]
+struct Scratch {
+    sums: Vec<f64>,
+    limit: Vec<f32>,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::default();
+}
+
+/// One segment of a curve being drawn into a tile's cells.
+struct Segment<'a, const N: usize> {
+    acc: &'a mut [[f64; N]],
+    limit: &'a [f32],
+    color: &'a [f64; N],
+    /// Cell of (column, row): origin + column·along + row·across.
+    origin: i64,
+    along: i64,
+    across: i64,
+    /// Depth and weight at the segment's start, and their change along it.
+    z0: f32,
+    dz: f32,
+    w0: f64,
+    dw: f64,
+}
+
+impl<const N: usize> Segment<'_, N> {
+    /// Depth and weight `u` along the segment.
+    #[inline(always)]
+    fn at(&self, u: f64) -> (f32, f64) {
+        (self.z0 + self.dz * u as f32, self.w0 + self.dw * u)
+    }
+
+    /// Deposits column `column`'s coverage where the depth test passes.
+    #[inline(always)]
+    fn put(&mut self, column: i64, c: Column) {
+        let (z, w) = self.at(c.u);
+        self.deposit(column, c, z, w);
+    }
+
+    /// Deposits the columns the segment crosses whole, as [`Segment::put`] does, with the
+    /// depth and weight hoisted where they are constant along the segment (the box weight and
+    /// no depth motion): nothing then depends on where along it a column is.
+    #[inline(always)]
+    fn whole(&mut self, whole: &Whole) {
+        if self.dz == 0.0 && self.dw == 0.0 {
+            self.whole_steps::<false>(whole);
+        } else {
+            self.whole_steps::<true>(whole);
+        }
+    }
+
+    #[inline(always)]
+    fn whole_steps<const VARYING: bool>(&mut self, whole: &Whole) {
+        // (Exclusive ranges: an inclusive one costs a flag per step.)
+        for k in 0..whole.last - whole.first + 1 {
+            let c = whole.column(k);
+            let (z, w) = if VARYING {
+                self.at(c.u)
+            } else {
+                (self.z0, self.w0)
+            };
+            self.deposit(whole.first + k, c, z, w);
+        }
+    }
+
+    #[inline(always)]
+    fn deposit(&mut self, column: i64, c: Column, z: f32, w: f64) {
+        let i = (self.origin + column * self.along + c.row * self.across) as usize;
+        let j = i + self.across as usize;
+        if z <= self.limit[i] {
+            add(&mut self.acc[i], c.c0 * w, self.color);
+        }
+        if z <= self.limit[j] {
+            add(&mut self.acc[j], c.c1 * w, self.color);
+        }
+    }
+}
+
+/// Adds a deposit of weight `w` and colour `color` to an accumulation cell (the colour's
+/// last channel is 1: the cell's last is the weight).
+#[inline(always)]
+pub(super) fn add<const N: usize>(cell: &mut [f64; N], w: f64, color: &[f64; N]) {
+    for (sum, c) in cell.iter_mut().zip(color) {
+        *sum += w * c;
+    }
+}

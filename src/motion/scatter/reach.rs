@@ -1,0 +1,63 @@
+//! Stage 1, `reach`: for each block of pixels, how far its curves can deposit (a cheap bound
+//! from the three positions; no curve is built), each pixel's own bound, and each block's
+//! deepest depth (so `resolve` can skip a search behind a pixel). A frame whose `most` is 0
+//! does not move.
+
+use rayon::prelude::*;
+
+use super::{Scatter, BLOCK};
+
+/// For each BLOCK×BLOCK block of pixels, how far from its pixels their curves can deposit
+/// (0 where none moves): lets a tile find the pixels whose curves can reach it.
+pub(super) struct Reach {
+    pub(super) across: usize,
+    pub(super) down: usize,
+    /// Per pixel (0 where still), so tiles test it without rebuilding the motion.
+    pub(super) pixel: Vec<f32>,
+    pub(super) block: Vec<f32>,
+    pub(super) most: f32,
+    /// The deepest (sanitised) depth in each block.
+    pub(super) deepest: Vec<f32>,
+}
+
+impl Reach {
+    pub(super) fn of(job: &Scatter) -> Reach {
+        let (width, height) = (job.width, job.height);
+        let (across, down) = (width.div_ceil(BLOCK), height.div_ceil(BLOCK));
+        let mut pixel = vec![0.0f32; width * height];
+        let mut block = vec![0.0f32; across * down];
+        let mut deepest = vec![0.0f32; across * down];
+        // One row of blocks at a time: its pixels' reach (rounded up with a margin, so the f32
+        // never falls short of the f64), then its blocks' largest reach and deepest depth.
+        pixel
+            .par_chunks_mut(BLOCK * width.max(1))
+            .zip(block.par_chunks_mut(across.max(1)))
+            .zip(deepest.par_chunks_mut(across.max(1)))
+            .enumerate()
+            .for_each(|(by, ((pixel, block), deepest))| {
+                let y0 = by * BLOCK;
+                for (y, row) in (y0..).zip(pixel.chunks_mut(width)) {
+                    for (x, r) in row.iter_mut().enumerate() {
+                        *r = job.motion(x, y).map_or(0.0, |m| (m.reach + 0.01) as f32);
+                    }
+                }
+                for (bx, (most, deepest)) in block.iter_mut().zip(deepest).enumerate() {
+                    for y in 0..BLOCK.min(height - y0) {
+                        let row = y * width + bx * BLOCK..y * width + ((bx + 1) * BLOCK).min(width);
+                        *most = pixel[row.clone()].iter().fold(*most, |m, &r| m.max(r));
+                        let depth = &job.depth[y0 * width + row.start..y0 * width + row.end];
+                        *deepest = depth.iter().fold(*deepest, |d, &z| d.max(z));
+                    }
+                }
+            });
+        let most = block.iter().copied().fold(0.0, f32::max);
+        Reach {
+            across,
+            down,
+            pixel,
+            block,
+            most,
+            deepest,
+        }
+    }
+}
