@@ -103,15 +103,39 @@ pub struct Velocity {
 pub struct Windows {
     /// Top-left corner of the data window.
     pub data_origin: (i32, i32),
-    /// Display window: (x min, y min, width, height).
-    pub display: (i32, i32, usize, usize),
+    /// The display window: the picture, in the file's coordinates.
+    pub display: Window,
+}
+
+/// A rectangle of the file's pixel coordinates: its top-left corner and its size.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Window {
+    pub x: i32,
+    pub y: i32,
+    pub width: usize,
+    pub height: usize,
+}
+
+impl Window {
+    /// The last pixel's coordinates (inclusive), as EXR headers and `shutter info` give them.
+    pub fn max(&self) -> (i32, i32) {
+        (
+            self.x + self.width as i32 - 1,
+            self.y + self.height as i32 - 1,
+        )
+    }
 }
 
 impl Windows {
     pub fn full(width: usize, height: usize) -> Self {
         Windows {
             data_origin: (0, 0),
-            display: (0, 0, width, height),
+            display: Window {
+                x: 0,
+                y: 0,
+                width,
+                height,
+            },
         }
     }
 }

@@ -41,7 +41,7 @@ const STRONG: Lens = Lens {
 };
 
 /// Both methods, with non-default settings too.
-fn variants() -> Vec<Params> {
+pub fn variants() -> Vec<Params> {
     let strong = |method| DofParams {
         method,
         ..DofParams::new(CocSource::Lens(STRONG))
@@ -68,7 +68,7 @@ fn variants() -> Vec<Params> {
 }
 
 /// Noise colour over depths 2 and 9 (both out of focus for [`LENS`], on either side of it).
-fn frame(w: usize, h: usize, seed: u32, _speed: f32) -> Frame {
+pub fn frame(w: usize, h: usize, seed: u32, _speed: f32) -> Frame {
     noise_frame(w, h, seed)
 }
 
@@ -111,35 +111,29 @@ fn run(frame: &Frame, dof: DofParams) -> Color {
         .unwrap()
 }
 
-#[test]
-fn a_frame_in_focus_comes_out_identical() {
+/// A frame the pass must leave unchanged (the invariants table, tests/invariants.rs).
+pub fn still() -> Frame {
     let mut f = frame(57, 31, 1, 0.0);
     // Depth at the focus distance, give or take less than ε of blur.
     let depth = f.depth.as_mut().unwrap();
     for (i, d) in depth.iter_mut().enumerate() {
         *d = 3.0 + 0.001 * (i % 7) as f32;
     }
-    invariants::zero_motion_is_identity(Algorithm::None, &f, &variants());
+    f
 }
 
-#[test]
-fn a_uniform_colour_stays_uniform_at_any_depth() {
-    invariants::uniform_stays_uniform(Algorithm::None, frame, &variants());
-}
-
-#[test]
-fn output_stays_within_the_input_range_per_channel() {
-    invariants::within_input_range(Algorithm::None, frame, &variants(), 1e-6);
-}
-
-#[test]
-fn nan_infinite_zero_and_negative_depth_and_colour_give_finite_output() {
+/// A frame poisoned with NaN, infinite, huge and degenerate values in every pass the pass
+/// reads (the invariants table, tests/invariants.rs).
+pub fn poisoned() -> Frame {
     let mut f = frame(64, 48, 5, 0.0);
     invariants::poison_color_and_depth(&mut f);
-    invariants::finite_output(Algorithm::None, &f, &variants());
-    // A painted map poisoned the same way.
+    f
+}
+
+#[test]
+fn a_poisoned_painted_map_gives_finite_output() {
     let map = with(DofParams::new(CocSource::Map { scale: 40.0 }));
-    invariants::finite_output(Algorithm::None, &f, &[map]);
+    invariants::finite_output(Algorithm::None, &poisoned(), &[map]);
 }
 
 #[test]

@@ -8,6 +8,7 @@ mod cli;
 mod diff;
 mod dof;
 mod golden;
+mod invariants;
 mod io;
 mod metrics;
 mod presets;

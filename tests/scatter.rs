@@ -9,7 +9,7 @@ use crate::support::*;
 
 /// Noise colour over two depth layers; each pixel moves on a curve (velocity and
 /// acceleration drawn per pixel, up to `speed` px per frame).
-fn frame(w: usize, h: usize, seed: u32, speed: f32) -> Frame {
+pub fn frame(w: usize, h: usize, seed: u32, speed: f32) -> Frame {
     let n = w * h;
     let mut f = noise_frame(w, h, seed);
     let (vx, vy) = (
@@ -39,7 +39,7 @@ fn frame(w: usize, h: usize, seed: u32, speed: f32) -> Frame {
     f
 }
 
-fn variants() -> Vec<Params> {
+pub fn variants() -> Vec<Params> {
     let paper = ScatterParams {
         normalize: Normalize::Paper,
         weight: Weight::Gaussian,
@@ -72,27 +72,18 @@ fn variants() -> Vec<Params> {
     .collect()
 }
 
-#[test]
-fn zero_motion_returns_the_input_unchanged() {
+/// A frame the pass must leave unchanged (the invariants table, tests/invariants.rs).
+pub fn still() -> Frame {
     let mut f = frame(57, 31, 1, 0.0);
     // A streak under half a pixel is no motion too (0.4 px per frame, shutter 0.75).
     f.next.as_mut().unwrap().x[7] += 0.2;
     f.prev.as_mut().unwrap().x[7] -= 0.2;
-    invariants::zero_motion_is_identity(Algorithm::Scatter, &f, &variants());
+    f
 }
 
-#[test]
-fn a_uniform_colour_stays_uniform_under_any_motion() {
-    invariants::uniform_stays_uniform(Algorithm::Scatter, frame, &variants());
-}
-
-#[test]
-fn output_stays_within_the_input_range_per_channel() {
-    invariants::within_input_range(Algorithm::Scatter, frame, &variants(), 0.0);
-}
-
-#[test]
-fn nan_inf_and_huge_inputs_give_finite_output() {
+/// A frame poisoned with NaN, infinite, huge and degenerate values in every pass the pass
+/// reads (the invariants table, tests/invariants.rs).
+pub fn poisoned() -> Frame {
     let mut f = frame(50, 40, 4, 15.0);
     invariants::poison_color_and_depth(&mut f);
     let (p, q) = (f.prev.as_mut().unwrap(), f.next.as_mut().unwrap());
@@ -106,7 +97,7 @@ fn nan_inf_and_huge_inputs_give_finite_output() {
     // Coincident ends (a pixel that returns to where it was): a pure curve.
     p.x[42] = q.x[42];
     p.y[42] = q.y[42];
-    invariants::finite_output(Algorithm::Scatter, &f, &variants());
+    f
 }
 
 #[test]

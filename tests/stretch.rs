@@ -8,7 +8,7 @@ use shutter::process::Params;
 use crate::support::*;
 
 /// Noise colour over two depth layers (so silhouettes are everywhere) with noise velocity.
-fn frame(w: usize, h: usize, seed: u32, speed: f32) -> Frame {
+pub fn frame(w: usize, h: usize, seed: u32, speed: f32) -> Frame {
     let n = w * h;
     let mut f = noise_frame(w, h, seed);
     f.velocity = Some(Velocity {
@@ -18,7 +18,7 @@ fn frame(w: usize, h: usize, seed: u32, speed: f32) -> Frame {
     f
 }
 
-fn variants() -> Vec<Params> {
+pub fn variants() -> Vec<Params> {
     let default = StretchParams::default();
     [
         default,
@@ -43,26 +43,17 @@ fn variants() -> Vec<Params> {
     .collect()
 }
 
-#[test]
-fn zero_motion_returns_the_input_unchanged() {
+/// A frame the pass must leave unchanged (the invariants table, tests/invariants.rs).
+pub fn still() -> Frame {
     let mut f = frame(57, 31, 1, 0.0);
     // A streak under half a pixel is no motion too (0.6 px per frame, shutter 0.75).
     f.velocity.as_mut().unwrap().x[7] = 0.6;
-    invariants::zero_motion_is_identity(Algorithm::Stretch, &f, &variants());
+    f
 }
 
-#[test]
-fn a_uniform_colour_stays_uniform_under_any_motion() {
-    invariants::uniform_stays_uniform(Algorithm::Stretch, frame, &variants());
-}
-
-#[test]
-fn output_stays_within_the_input_range_per_channel() {
-    invariants::within_input_range(Algorithm::Stretch, frame, &variants(), 0.0);
-}
-
-#[test]
-fn nan_inf_and_huge_inputs_give_finite_output() {
+/// A frame poisoned with NaN, infinite, huge and degenerate values in every pass the pass
+/// reads (the invariants table, tests/invariants.rs).
+pub fn poisoned() -> Frame {
     let mut f = frame(50, 40, 4, 15.0);
     invariants::poison_color_and_depth(&mut f);
     let v = f.velocity.as_mut().unwrap();
@@ -70,7 +61,7 @@ fn nan_inf_and_huge_inputs_give_finite_output() {
     v.y[20] = f32::INFINITY;
     v.x[30] = -1e38;
     v.y[40] = 1e20;
-    invariants::finite_output(Algorithm::Stretch, &f, &variants());
+    f
 }
 
 #[test]

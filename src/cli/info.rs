@@ -98,10 +98,10 @@ fn info_text(info: &FileInfo, matches: &[(String, Vec<&'static str>)]) -> String
     ));
     text.push_str(&format!(
         "  display window: ({}, {}) - ({}, {})\n",
-        w.display.0,
-        w.display.1,
-        w.display.0 + w.display.2 as i32 - 1,
-        w.display.1 + w.display.3 as i32 - 1
+        w.display.x,
+        w.display.y,
+        w.display.max().0,
+        w.display.max().1
     ));
     text.push_str("  channels:\n");
     for c in &info.channels {
@@ -128,8 +128,7 @@ fn info_json(info: &FileInfo, matches: &[(String, Vec<&'static str>)]) -> serde_
         "height": info.height,
         "data_window": [w.data_origin.0, w.data_origin.1,
             w.data_origin.0 + info.width as i32 - 1, w.data_origin.1 + info.height as i32 - 1],
-        "display_window": [w.display.0, w.display.1,
-            w.display.0 + w.display.2 as i32 - 1, w.display.1 + w.display.3 as i32 - 1],
+        "display_window": [w.display.x, w.display.y, w.display.max().0, w.display.max().1],
         "compression": match &info.kind { FileKind::Exr { compression, .. } => compression.clone(), _ => vec![] },
         "channels": info.channels.iter().map(|c| serde_json::json!({
             "name": c.alias.clone().unwrap_or_else(|| c.name.clone()),

@@ -140,7 +140,7 @@ pub fn coc_plane(frame: &Frame, params: &DofParams) -> Vec<f32> {
     match params.source {
         CocSource::Lens(lens) => {
             // The sensor spans the display window (the picture), not an overscan data window.
-            let display = frame.windows.display.2;
+            let display = frame.windows.display.width;
             let width = if display > 0 { display } else { frame.width } as f64;
             depth
                 .par_iter()
@@ -196,7 +196,12 @@ mod tests {
         let params = DofParams::new(CocSource::Lens(lens));
         // A 1920-wide picture rendered with 40 px of overscan each side.
         let mut frame = Frame::new(2000, 4);
-        frame.windows.display = (0, 0, 1920, 4);
+        frame.windows.display = crate::frame::Window {
+            x: 0,
+            y: 0,
+            width: 1920,
+            height: 4,
+        };
         frame.depth = Some(vec![4.0; 8000]);
         // 17.094 px at 1920 wide (coc.rs's hand-computed value), not 17.806 at 2000.
         let coc = coc_plane(&frame, &params);

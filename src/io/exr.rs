@@ -190,12 +190,12 @@ pub fn windows_of(header: &Header) -> Windows {
             header.own_attributes.layer_position.0,
             header.own_attributes.layer_position.1,
         ),
-        display: (
-            display.position.0,
-            display.position.1,
-            display.size.0,
-            display.size.1,
-        ),
+        display: crate::frame::Window {
+            x: display.position.0,
+            y: display.position.1,
+            width: display.size.0,
+            height: display.size.1,
+        },
     }
 }
 
@@ -420,8 +420,8 @@ pub fn write_channels(
     );
     let image = Image {
         attributes: ImageAttributes::new(IntegerBounds::new(
-            (windows.display.0, windows.display.1),
-            (windows.display.2, windows.display.3),
+            (windows.display.x, windows.display.y),
+            (windows.display.width, windows.display.height),
         )),
         layer_data: layer,
     };

@@ -2,7 +2,7 @@
 //! Reconstruction Filter for Plausible Motion Blur* (Listing 1, Fig. 4).
 //!
 //! Pipeline: half-spread velocity V (clamped to [0.5, k] px) → [`super::tile_max`] →
-//! [`super::neighbor_max`] → this gather. Inputs: colour (RGBA, premultiplied), depth,
+//! [`super::neighbor_max`] → [`pack`] (texels) → [`gather`]. Inputs: colour (RGBA, premultiplied), depth,
 //! velocity; prev/next are never read. Each output pixel is a weighted average of input
 //! colours with non-negative weights (the centre's weight is at least 1/k), so it lies in the
 //! per-channel range of the inputs and a uniform colour stays uniform.
@@ -29,8 +29,8 @@
 use rayon::prelude::*;
 
 use super::neighbor_max::neighbor_max;
-use super::tile_max::tile_max;
-use crate::frame::Frame;
+use super::tile_max::{tile_max, TileGrid};
+use crate::frame::{Color, Frame, Velocity};
 use crate::numeric::{unit, HUGE};
 
 /// Half a pixel: velocities at or below it do not blur (the paper's 0.5 px).
@@ -143,9 +143,59 @@ const LANES: usize = 8;
 /// |V|² above which a pixel blurs: (0.5 px + ε)².
 const MOVING_SQUARED: f32 = (HALF_PIXEL + EPSILON) * (HALF_PIXEL + EPSILON);
 
-/// Applies the filter. The frame must hold colour, depth and velocity (others are dropped).
-/// A frame in which nothing moves more than half a pixel is returned untouched; otherwise
-/// every output sample is finite.
+/// Everything reconstruct's stages read besides their buffers, as plain numbers: the shape of
+/// the uniform its GPU twin will take (keep the two in sync).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct ReconstructConfig {
+    /// Frame size, pixels.
+    pub width: u32,
+    pub height: u32,
+    /// k: the tile size, pixels (the paper's tiles are k×k).
+    pub tile: u32,
+    /// k as the largest half-spread, pixels.
+    pub k: f32,
+    /// Fraction of the frame interval the shutter is open.
+    pub shutter: f32,
+    /// S: taps per pixel, odd.
+    pub taps: u32,
+    /// 1 / SOFT_Z_EXTENT, per scene unit.
+    pub inv_soft_z: f32,
+    /// 1 to jitter the taps per pixel, else 0.
+    pub jitter: u32,
+    /// 1 for the dual variant (every other tap along the pixel's own velocity), else 0.
+    pub dual: u32,
+    /// The jitter's seed: the frame number modulo 2³².
+    pub seed: u32,
+}
+
+impl ReconstructConfig {
+    pub fn new(
+        width: usize,
+        height: usize,
+        params: &ReconstructParams,
+        shutter: f32,
+        seed: u32,
+    ) -> Self {
+        let size = params.max_blur.max(1);
+        ReconstructConfig {
+            width: width as u32,
+            height: height as u32,
+            tile: size as u32,
+            k: size as f32,
+            shutter,
+            taps: (params.taps.max(1) | 1) as u32,
+            inv_soft_z: 1.0 / params.soft_z.max(1e-6),
+            jitter: params.jitter as u32,
+            dual: (params.variant == Variant::Dual) as u32,
+            seed,
+        }
+    }
+}
+
+/// Applies the filter: [`tile_max`] (mapped to V) → [`neighbor_max`] → [`pack`] → [`gather`].
+/// The frame must hold colour, depth and velocity; the output holds colour alone. A frame in
+/// which nothing moves more than half a pixel keeps its colour untouched.
 pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, seed: u32) -> Frame {
     let (width, height) = (frame.width, frame.height);
     let (Some(mut color), Some(depth), Some(velocity)) = (
@@ -157,41 +207,59 @@ pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, s
     };
     frame.prev = None;
     frame.next = None;
-    let n = width * height;
-    let k = params.max_blur.max(1) as f32;
-    let size = params.max_blur.max(1);
-    let spread = |i: usize| half_spread(velocity.x[i], velocity.y[i], shutter, k);
+    let config = ReconstructConfig::new(width, height, params, shutter, seed);
+    let size = config.tile as usize;
 
     // TileMax of the input velocity, then V of each tile's dominant vector: V is monotonic
     // in |v|, so this equals TileMax of V without storing a full-size V plane.
-    let columns = width.div_ceil(size);
-    let band = size * width;
     let mut tiles = tile_max(&velocity.x, &velocity.y, width, height, size);
     for (x, y) in tiles.x.iter_mut().zip(tiles.y.iter_mut()) {
-        (*x, *y) = half_spread(*x, *y, shutter, k);
+        (*x, *y) = half_spread(*x, *y, config.shutter, config.k);
     }
-    let moving_tile = |c: usize, r: usize| {
-        let (x, y) = tiles.get(c, r);
-        x * x + y * y > MOVING_SQUARED
-    };
-    if n == 0 || !(0..tiles.rows).any(|r| (0..columns).any(|c| moving_tile(c, r))) {
+    let moving = |v: (f32, f32)| v.0 * v.0 + v.1 * v.1 > MOVING_SQUARED;
+    if width * height == 0
+        || !(0..tiles.rows).any(|r| (0..tiles.columns).any(|c| moving(tiles.get(c, r))))
+    {
         frame.color = Some(color);
         return frame;
     }
     let neighbors = neighbor_max(&tiles);
-    let blurs = |c: usize, r: usize| {
-        let (x, y) = neighbors.get(c, r);
-        x * x + y * y > MOVING_SQUARED
-    };
-    // Texels are needed in blurring tiles and the tiles next to them (taps reach at most
-    // k px, one tile). The buffer is zero-allocated, so untouched pages cost nothing.
+    let texels = pack(&config, &color, &depth, &velocity, &neighbors);
+    drop(depth);
+    gather(&config, &texels, &velocity, &neighbors, &mut color);
+    frame.color = Some(color);
+    frame
+}
+
+/// Whether a tile's NeighborMax blurs: |V|² above (0.5 px + ε)².
+#[inline]
+fn blurs(neighbors: &TileGrid, c: usize, r: usize) -> bool {
+    let (x, y) = neighbors.get(c, r);
+    x * x + y * y > MOVING_SQUARED
+}
+
+/// Stage 3: each pixel of the tiles that blur and their neighbours (taps reach at most k px,
+/// one tile) packed as a [`Texel`]: colour, depth made finite, and 1/|V|. The buffer is
+/// zero-allocated, so untouched pages cost nothing.
+pub fn pack(
+    config: &ReconstructConfig,
+    color: &Color,
+    depth: &[f32],
+    velocity: &Velocity,
+    neighbors: &TileGrid,
+) -> Vec<Texel> {
+    let (width, height) = (config.width as usize, config.height as usize);
+    let size = config.tile as usize;
+    let columns = neighbors.columns;
+    let n = width * height;
     let needed = |c: usize, r: usize| {
-        (r.saturating_sub(1)..(r + 2).min(tiles.rows))
-            .any(|rr| (c.saturating_sub(1)..(c + 2).min(columns)).any(|cc| blurs(cc, rr)))
+        (r.saturating_sub(1)..(r + 2).min(neighbors.rows)).any(|rr| {
+            (c.saturating_sub(1)..(c + 2).min(columns)).any(|cc| blurs(neighbors, cc, rr))
+        })
     };
     let mut texels: Vec<Texel> = vec![[0.0; 6]; n];
     texels
-        .par_chunks_mut(band)
+        .par_chunks_mut(size * width)
         .enumerate()
         .for_each(|(row, chunk)| {
             for c in (0..columns).filter(|&c| needed(c, row)) {
@@ -199,7 +267,8 @@ pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, s
                     let y = row * size + local_y;
                     for x in c * size..((c + 1) * size).min(width) {
                         let i = y * width + x;
-                        let length = spread_length(velocity.x[i], velocity.y[i], shutter, k);
+                        let length =
+                            spread_length(velocity.x[i], velocity.y[i], config.shutter, config.k);
                         chunk[local_y * width + x] = [
                             color.r[i],
                             color.g[i],
@@ -214,94 +283,24 @@ pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, s
                 }
             }
         });
-    drop(depth);
+    texels
+}
 
-    let taps = params.taps.max(1) | 1; // odd
-    let inv_soft_z = 1.0 / params.soft_z.max(1e-6);
-    let centre_tap = (taps - 1) / 2;
-    let texels = &texels;
-    // The gather of one pixel; returns premultiplied RGBA.
-    let gather = |x: usize, y: usize, (nx, ny): (f32, f32)| -> [f32; 4] {
-        let i = y * width + x;
-        let centre = texels[i];
-        let n_length = (nx * nx + ny * ny).sqrt();
-        let own = spread(i);
-        let own_length = (own.0 * own.0 + own.1 * own.1).sqrt();
-        let j = if params.jitter {
-            unit(seed, 0x5245_434f, i as u32) - 0.5
-        } else {
-            0.0
-        };
-        // The average is accumulated as the centre colour plus weighted differences from
-        // it: the same value, but a uniform neighbourhood gives back its colour exactly and
-        // HDR values lose no precision to cancellation.
-        // The paper's centre weight 1/|V[X]|, with |V| at least half a pixel as its clamp of
-        // V intends, so a still pixel does not get an infinite weight.
-        let mut weight = centre[INV_LENGTH].min(1.0 / HALF_PIXEL);
-        let mut sum = [0.0f32; 4];
-        let step = 2.0 / (taps as f32 + 1.0);
-        let dual = params.variant == Variant::Dual && own_length > HALF_PIXEL + EPSILON;
-        // Taps four at a time, so the classification arithmetic runs on four lanes
-        // (lanes past the last tap get zero weight).
-        let mut tap = 0;
-        while tap < taps - 1 {
-            // Dead lanes get a finite dummy distance (1 px) and zero weight.
-            let mut t = [1.0f32; LANES];
-            let mut length = [1.0f32; LANES];
-            let mut live = [0.0f32; LANES];
-            let mut sample = [centre; LANES];
-            for l in 0..LANES {
-                let mut index = tap + l;
-                if index >= centre_tap {
-                    index += 1; // skip the centre tap
-                }
-                if index >= taps {
-                    continue;
-                }
-                t[l] = -1.0 + (index as f32 + j + 1.0) * step;
-                let (dx, dy, len) = if dual && index % 2 == 1 {
-                    (own.0, own.1, own_length)
-                } else {
-                    (nx, ny, n_length)
-                };
-                // Clamped at 0 first, so truncation is floor (and needs no libm call).
-                let px = (x as f32 + 0.5 + dx * t[l]).max(0.0) as usize;
-                let py = (y as f32 + 0.5 + dy * t[l]).max(0.0) as usize;
-                sample[l] = texels[py.min(height - 1) * width + px.min(width - 1)];
-                length[l] = len;
-                live[l] = 1.0;
-            }
-            let mut alpha = [0.0f32; LANES];
-            for l in 0..LANES {
-                let distance = t[l].abs() * length[l];
-                let z = sample[l][Z];
-                let front = soft_depth_compare(centre[Z], z, inv_soft_z);
-                let back = soft_depth_compare(z, centre[Z], inv_soft_z);
-                let ds = distance * sample[l][INV_LENGTH];
-                let dc = distance * centre[INV_LENGTH];
-                alpha[l] = live[l]
-                    * (front * cone(ds) + back * cone(dc) + cylinder(ds) * cylinder(dc) * 2.0);
-            }
-            for l in 0..LANES {
-                weight += alpha[l];
-                for c in 0..4 {
-                    sum[c] += alpha[l] * (sample[l][c] - centre[c]);
-                }
-            }
-            tap += LANES;
-        }
-        let inverse = 1.0 / weight;
-        [
-            centre[0] + sum[0] * inverse,
-            centre[1] + sum[1] * inverse,
-            centre[2] + sum[2] * inverse,
-            centre[3] + sum[3] * inverse,
-        ]
-    };
-
-    // Output in place: pixels of blurring tiles are gathered, the others keep their colour.
+/// Stage 4: the gather, in place: pixels of blurring tiles get their filtered colour, the
+/// others keep theirs.
+pub fn gather(
+    config: &ReconstructConfig,
+    texels: &[Texel],
+    velocity: &Velocity,
+    neighbors: &TileGrid,
+    color: &mut Color,
+) {
+    let width = config.width as usize;
+    let size = config.tile as usize;
+    let n = width * config.height as usize;
     let has_alpha = color.a.is_some();
     let mut alpha = color.a.take().unwrap_or_else(|| vec![0.0; n]);
+    let band = size * width;
     color
         .r
         .par_chunks_mut(band)
@@ -310,26 +309,125 @@ pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, s
         .zip(alpha.par_chunks_mut(band))
         .enumerate()
         .for_each(|(row, (((r, g), b), a))| {
-            for c in 0..columns {
-                let blurring = blurs(c, row);
+            for c in 0..neighbors.columns {
+                if !blurs(neighbors, c, row) {
+                    continue;
+                }
                 let dominant = neighbors.get(c, row);
                 for local_y in 0..r.len() / width {
+                    let y = row * size + local_y;
                     for x in c * size..((c + 1) * size).min(width) {
                         let o = local_y * width + x;
-                        if blurring {
-                            let [cr, cg, cb, ca] = gather(x, row * size + local_y, dominant);
-                            r[o] = cr;
-                            g[o] = cg;
-                            b[o] = cb;
-                            a[o] = ca;
-                        }
+                        let i = y * width + x;
+                        let [cr, cg, cb, ca] = gather_pixel(
+                            config,
+                            texels,
+                            (velocity.x[i], velocity.y[i]),
+                            x,
+                            y,
+                            dominant,
+                        );
+                        r[o] = cr;
+                        g[o] = cg;
+                        b[o] = cb;
+                        a[o] = ca;
                     }
                 }
             }
         });
     color.a = has_alpha.then_some(alpha);
-    frame.color = Some(color);
-    frame
+}
+
+/// The gather of pixel (x, y) with velocity (vx, vy) along its tile's NeighborMax (nx, ny):
+/// S taps weighted by the paper's three cases; returns premultiplied RGBA.
+#[inline(always)]
+fn gather_pixel(
+    config: &ReconstructConfig,
+    texels: &[Texel],
+    (vx, vy): (f32, f32),
+    x: usize,
+    y: usize,
+    (nx, ny): (f32, f32),
+) -> [f32; 4] {
+    let (width, height) = (config.width as usize, config.height as usize);
+    let taps = config.taps as usize;
+    let centre_tap = (taps - 1) / 2;
+    let inv_soft_z = config.inv_soft_z;
+    let i = y * width + x;
+    let centre = texels[i];
+    let n_length = (nx * nx + ny * ny).sqrt();
+    let own = half_spread(vx, vy, config.shutter, config.k);
+    let own_length = (own.0 * own.0 + own.1 * own.1).sqrt();
+    let j = if config.jitter != 0 {
+        unit(config.seed, 0x5245_434f, i as u32) - 0.5
+    } else {
+        0.0
+    };
+    // The average is accumulated as the centre colour plus weighted differences from
+    // it: the same value, but a uniform neighbourhood gives back its colour exactly and
+    // HDR values lose no precision to cancellation.
+    // The paper's centre weight 1/|V[X]|, with |V| at least half a pixel as its clamp of
+    // V intends, so a still pixel does not get an infinite weight.
+    let mut weight = centre[INV_LENGTH].min(1.0 / HALF_PIXEL);
+    let mut sum = [0.0f32; 4];
+    let step = 2.0 / (config.taps as f32 + 1.0);
+    let dual = config.dual != 0 && own_length > HALF_PIXEL + EPSILON;
+    // Taps four at a time, so the classification arithmetic runs on four lanes
+    // (lanes past the last tap get zero weight).
+    let mut tap = 0;
+    while tap < taps - 1 {
+        // Dead lanes get a finite dummy distance (1 px) and zero weight.
+        let mut t = [1.0f32; LANES];
+        let mut length = [1.0f32; LANES];
+        let mut live = [0.0f32; LANES];
+        let mut sample = [centre; LANES];
+        for l in 0..LANES {
+            let mut index = tap + l;
+            if index >= centre_tap {
+                index += 1; // skip the centre tap
+            }
+            if index >= taps {
+                continue;
+            }
+            t[l] = -1.0 + (index as f32 + j + 1.0) * step;
+            let (dx, dy, len) = if dual && index % 2 == 1 {
+                (own.0, own.1, own_length)
+            } else {
+                (nx, ny, n_length)
+            };
+            // Clamped at 0 first, so truncation is floor (and needs no libm call).
+            let px = (x as f32 + 0.5 + dx * t[l]).max(0.0) as usize;
+            let py = (y as f32 + 0.5 + dy * t[l]).max(0.0) as usize;
+            sample[l] = texels[py.min(height - 1) * width + px.min(width - 1)];
+            length[l] = len;
+            live[l] = 1.0;
+        }
+        let mut alpha = [0.0f32; LANES];
+        for l in 0..LANES {
+            let distance = t[l].abs() * length[l];
+            let z = sample[l][Z];
+            let front = soft_depth_compare(centre[Z], z, inv_soft_z);
+            let back = soft_depth_compare(z, centre[Z], inv_soft_z);
+            let ds = distance * sample[l][INV_LENGTH];
+            let dc = distance * centre[INV_LENGTH];
+            alpha[l] =
+                live[l] * (front * cone(ds) + back * cone(dc) + cylinder(ds) * cylinder(dc) * 2.0);
+        }
+        for l in 0..LANES {
+            weight += alpha[l];
+            for c in 0..4 {
+                sum[c] += alpha[l] * (sample[l][c] - centre[c]);
+            }
+        }
+        tap += LANES;
+    }
+    let inverse = 1.0 / weight;
+    [
+        centre[0] + sum[0] * inverse,
+        centre[1] + sum[1] * inverse,
+        centre[2] + sum[2] * inverse,
+        centre[3] + sum[3] * inverse,
+    ]
 }
 
 #[cfg(test)]
@@ -353,6 +451,18 @@ mod tests {
         assert_eq!(half_spread(v(f32::NAN), 0.0, 0.5, 20.0), (0.0, 0.0));
         let (x, _) = half_spread(v(f32::INFINITY), 0.0, 0.5, 20.0);
         assert!((x - 20.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn the_config_is_ten_plain_words() {
+        // Uploaded as one uniform by the GPU twin: ten 4-byte fields, no padding.
+        assert_eq!(std::mem::size_of::<ReconstructConfig>(), 40);
+        let even = ReconstructParams {
+            taps: 14,
+            ..ReconstructParams::default()
+        };
+        // S is made odd (the centre tap is the pixel itself).
+        assert_eq!(ReconstructConfig::new(8, 8, &even, 0.5, 1).taps, 15);
     }
 
     #[test]

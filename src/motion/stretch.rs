@@ -161,8 +161,8 @@ fn mix(a: f32, b: f32, t: f32) -> f32 {
 }
 
 /// Applies the filter: [`texture_blur`] → [`move_vertices`] → [`rasterise`]. The frame must
-/// hold colour, depth and velocity (prev/next are dropped). A frame in which nothing moves
-/// is returned untouched.
+/// hold colour, depth and velocity; the output holds colour alone. A frame in which nothing
+/// moves keeps its colour untouched.
 pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame {
     let (width, height) = (frame.width, frame.height);
     frame.prev = None;
@@ -183,9 +183,8 @@ pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame 
         .map(|(&x, &y)| [x, y])
         .collect();
     if n == 0 || !v.par_iter().any(|&v| config.moving(v)) {
+        // Colour alone, as on every path.
         frame.color = Some(color);
-        frame.depth = Some(depth);
-        frame.velocity = Some(velocity);
         return frame;
     }
     drop(velocity);

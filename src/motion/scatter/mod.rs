@@ -240,8 +240,9 @@ impl Scatter<'_> {
     }
 }
 
-/// Applies the filter. The frame must hold colour, depth, prev and next (velocity is
-/// dropped). A frame in which nothing moves is returned untouched.
+/// Applies the filter: [`reach`] → [`accumulate`] → [`resolve`]. The frame must hold colour,
+/// depth, prev and next; the output holds colour alone. A frame in which nothing moves keeps
+/// its colour untouched.
 pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame {
     let (width, height) = (frame.width, frame.height);
     frame.velocity = None;
@@ -269,10 +270,8 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
     // How far each block's curves reach; nothing to do if nothing moves.
     let reach = Reach::of(&job);
     if reach.most == 0.0 || n == 0 {
+        // Colour alone, as on every path.
         frame.color = Some(color);
-        frame.depth = Some(depth);
-        frame.prev = Some(prev);
-        frame.next = Some(next);
         return frame;
     }
     // Accumulate and normalise tile by tile, into new planes (curves read the input colours
