@@ -33,7 +33,7 @@
 
 use rayon::prelude::*;
 
-use super::DofParams;
+use super::DofConfig;
 use crate::frame::Color;
 
 /// Weight of an in-focus pixel in the copies (relative to 1 for a fully blurred one).
@@ -122,15 +122,19 @@ fn convolve(planes: &Planes, kernel: &[f32]) -> Planes {
 }
 
 /// Depth of field by blending blurred copies; `coc` is the signed CoC plane (px, diameter).
-pub fn blend(color: &Color, coc: &[f32], width: usize, height: usize, params: &DofParams) -> Color {
-    let epsilon = params.epsilon;
+pub fn blend(config: &DofConfig, color: &Color, coc: &[f32]) -> Color {
+    let (width, height) = (config.width as usize, config.height as usize);
+    let epsilon = config.epsilon;
     // E: the frame's largest CoC (the plane is already clamped to --max-coc), so the copies
     // are spent on blur the frame has.
     let largest = coc
         .iter()
         .fold(0.0f32, |m, c| m.max(c.abs()))
         .max(epsilon + 1.0);
-    let passes = params.passes.unwrap_or_else(|| default_passes(largest));
+    let passes = match config.passes {
+        0 => default_passes(largest),
+        n => n as usize,
+    };
     let kernel = binomial(passes);
     let (coc_1, coc_2) = (equivalent_coc(passes), equivalent_coc(2 * passes));
     let interpolator = |c: f32| ((c.abs() - epsilon) / (largest - epsilon)).clamp(0.0, 1.0);

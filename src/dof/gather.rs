@@ -40,7 +40,7 @@
 use rayon::prelude::*;
 
 use super::bokeh::{grid, taps, Aperture, Tap};
-use super::DofParams;
+use super::DofConfig;
 use crate::frame::Color;
 
 /// Tile edge (px) of the reach pass.
@@ -178,32 +178,28 @@ impl Padded {
     }
 }
 
-/// Depth of field by gathering; `coc` is the signed CoC plane (px, diameter).
-pub fn gather(
-    color: &Color,
-    coc: &[f32],
-    width: usize,
-    height: usize,
-    params: &DofParams,
-) -> Color {
-    let aperture = Aperture::new(params.blades, params.blade_rotation);
+/// Depth of field by gathering; `coc` is the signed CoC plane (px, diameter), `tiles` its
+/// tile min/max ([`tiles`]).
+pub fn gather(config: &DofConfig, color: &Color, coc: &[f32], tiles: &Tiles) -> Color {
+    let (width, height) = (config.width as usize, config.height as usize);
+    let rings_count = config.rings as usize;
+    let aperture = Aperture::new(config.blades, config.blade_rotation);
     // Bokeh radii up to `rings` px gather every pixel of their neighbourhood (`grid`, in
     // pixels); larger ones the rings (in units of the radius), which are then at least a
     // pixel apart.
-    let rings = taps(params.rings, &aperture);
+    let rings = taps(rings_count, &aperture);
     let unit_area = aperture.unit_area();
     let has_alpha = color.a.is_some();
-    let tiles = tiles(coc, width, height, params.epsilon);
     let reach = &tiles.reach;
     let largest = reach.iter().fold(0.0f32, |m, &r| m.max(r));
     let pad = largest.ceil() as usize + 2;
     let padded = Padded::new(color, coc, width, height, pad, unit_area);
     let stride = padded.stride as isize;
-    let grids: Vec<Vec<PixelTap>> = (0..=params.rings)
+    let grids: Vec<Vec<PixelTap>> = (0..=rings_count)
         .map(|r| grid_taps(r, &aperture, stride))
         .collect();
     let tiles_x = width.div_ceil(TILE);
-    let half_focus = (0.5 * params.epsilon).max(SMALLEST_RADIUS);
+    let half_focus = (0.5 * config.epsilon).max(SMALLEST_RADIUS);
 
     // Output planes r, g, b, a, filled a band of tile rows at a time.
     let mut out = [0, 1, 2, 3].map(|_| vec![0.0f32; width * height]);

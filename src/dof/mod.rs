@@ -129,6 +129,43 @@ impl DofParams {
     }
 }
 
+/// Everything the stages after `coc` read besides their buffers, as plain numbers: the shape
+/// of the uniform their GPU twins will take (keep the two in sync). Lengths in pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct DofConfig {
+    /// Frame size.
+    pub width: u32,
+    pub height: u32,
+    /// ε: CoC diameters below this are in focus.
+    pub epsilon: f32,
+    /// The largest CoC diameter (the `coc` stage clamps to it).
+    pub max_coc: f32,
+    /// gather: diaphragm blades, 0 for round.
+    pub blades: u32,
+    /// gather: diaphragm rotation, degrees.
+    pub blade_rotation: f32,
+    /// gather: rings of taps.
+    pub rings: u32,
+    /// blend: passes n of the first copy; 0 chooses n from the frame's largest CoC.
+    pub passes: u32,
+}
+
+impl DofConfig {
+    pub fn new(width: usize, height: usize, params: &DofParams) -> Self {
+        DofConfig {
+            width: width as u32,
+            height: height as u32,
+            epsilon: params.epsilon,
+            max_coc: params.max_coc,
+            blades: params.blades,
+            blade_rotation: params.blade_rotation,
+            rings: params.rings as u32,
+            passes: params.passes.map_or(0, |n| n as u32),
+        }
+    }
+}
+
 /// The signed CoC diameter of every pixel, in pixels, clamped to ±`max_coc`; NaN never comes
 /// out (NaN depth is far; zero and negative depth are nearest).
 pub fn coc_plane(frame: &Frame, params: &DofParams) -> Vec<f32> {
@@ -161,8 +198,10 @@ pub fn coc_plane(frame: &Frame, params: &DofParams) -> Vec<f32> {
     }
 }
 
-/// Applies depth of field: the output holds the new colour and keeps every other pass, so
-/// motion blur can run after it ("DoF before MB", Sousa).
+/// Applies depth of field, stage by stage: `coc` ([`coc_plane`]) → tile min/max
+/// ([`gather::tiles`]) → [`gather::gather`], or `coc` → [`blend::blend`]. The output holds
+/// the new colour and keeps every other pass, so motion blur can run after it ("DoF before
+/// MB", Sousa).
 pub fn apply(frame: Frame, params: &DofParams) -> Frame {
     let coc = coc_plane(&frame, params);
     let largest = coc.par_iter().map(|c| c.abs()).reduce(|| 0.0, f32::max);
@@ -170,10 +209,14 @@ pub fn apply(frame: Frame, params: &DofParams) -> Frame {
         // The whole frame is in focus: nothing to do.
         return frame;
     }
+    let config = DofConfig::new(frame.width, frame.height, params);
     let color = frame.color.as_ref().expect("checked");
     let out = match params.method {
-        Method::Blend => blend::blend(color, &coc, frame.width, frame.height, params),
-        Method::Gather => gather::gather(color, &coc, frame.width, frame.height, params),
+        Method::Blend => blend::blend(&config, color, &coc),
+        Method::Gather => {
+            let tiles = gather::tiles(&coc, frame.width, frame.height, config.epsilon);
+            gather::gather(&config, color, &coc, &tiles)
+        }
     };
     Frame {
         color: Some(out),
@@ -184,6 +227,14 @@ pub fn apply(frame: Frame, params: &DofParams) -> Frame {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_config_is_eight_plain_words() {
+        // Uploaded as one uniform by the GPU twins: eight 4-byte fields, no padding.
+        assert_eq!(std::mem::size_of::<DofConfig>(), 32);
+        let auto = DofConfig::new(4, 3, &DofParams::default());
+        assert_eq!((auto.passes, auto.rings), (0, 6));
+    }
 
     #[test]
     fn the_sensor_spans_the_display_window_not_the_overscan() {

@@ -7,7 +7,7 @@ use crate::motion::curve::{length, Arc, Bezier, Point};
 use crate::motion::line::{Clip, Column, Walk, Whole, OVERHANG};
 
 use super::reach::Reach;
-use super::{CurveKind, Moving, Normalize, Scatter, Weight, BLOCK, MOST_SEGMENTS};
+use super::{Moving, Scatter, BLOCK, MOST_SEGMENTS};
 
 /// One curve, cut into segments, ready to draw.
 pub(super) struct Path {
@@ -42,13 +42,14 @@ impl Scatter<'_> {
         let Moving {
             prev, now, next, ..
         } = *motion;
-        let p = &self.params;
+        let p = &self.config;
         let (t0, t1) = (-self.half, self.half);
-        let most = p.segments.clamp(1, MOST_SEGMENTS);
+        let most = p.segments as usize;
         let tolerance = p.flatness as f64;
-        let arc = match p.curve {
-            CurveKind::Arc => Arc::fit(prev, now, next),
-            CurveKind::Bezier => None,
+        let arc = if p.arc != 0 {
+            Arc::fit(prev, now, next)
+        } else {
+            None
         };
         let bezier = Bezier::through(prev, now, next);
         let segments = match &arc {
@@ -100,11 +101,11 @@ impl Scatter<'_> {
                 ];
             }
         }
-        if p.normalize == Normalize::Exposure {
+        if p.exposure != 0 {
             // The curve's deposits add up to Σ length × mean weight of each segment (weights
             // are linear along a segment): divide so they add up to 1.
             // (With the box weight every mean is 1 and the sum is the total length, bit for bit.)
-            let mut sum = if p.weight == Weight::Box {
+            let mut sum = if p.gaussian == 0 {
                 total
             } else {
                 let mut sum = 0.0;
@@ -162,7 +163,7 @@ impl Scatter<'_> {
         let limit = &mut scratch.limit;
         limit.clear();
         limit.resize(cells, f32::NEG_INFINITY);
-        let tolerance = 1.0 + self.params.depth_tolerance;
+        let tolerance = 1.0 + self.config.depth_tolerance;
         for y in ty0..ty1 {
             let o = (y - ty0 + pad) * pw + pad;
             let depth = &self.depth[y * width + tx0..y * width + tx1];

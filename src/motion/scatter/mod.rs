@@ -162,6 +162,56 @@ struct Moving {
     reach: f64,
 }
 
+/// Everything scatter's stages read besides their buffers, as plain numbers: the shape of the
+/// uniform its GPU twin will take (keep the two in sync).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct ScatterConfig {
+    /// Frame size, pixels.
+    pub width: u32,
+    pub height: u32,
+    /// Fraction of the frame interval the shutter is open.
+    pub shutter: f32,
+    /// Line segments per curve, at most, in 1..=[`MOST_SEGMENTS`].
+    pub segments: u32,
+    /// σ of the Gaussian weight, in units of s.
+    pub sigma: f32,
+    /// 1 for the paper's Gaussian weight along the curve, 0 for the box.
+    pub gaussian: u32,
+    /// w_b of the paper's normalisation.
+    pub background_weight: f32,
+    /// 1 for the exposure normalisation, 0 for the paper's eq. 4.
+    pub exposure: u32,
+    /// 1 for circular arcs where the motion turns, 0 for the paper's Bézier.
+    pub arc: u32,
+    /// The longest a curve may be, pixels.
+    pub max_curve: f32,
+    /// Fewer segments where they stray at most this far from the curve, pixels.
+    pub flatness: f32,
+    /// A curve passes a pixel whose depth is at least its own / (1 + this).
+    pub depth_tolerance: f32,
+}
+
+impl ScatterConfig {
+    pub fn new(width: usize, height: usize, params: &ScatterParams, shutter: f32) -> Self {
+        ScatterConfig {
+            width: width as u32,
+            height: height as u32,
+            shutter,
+            segments: params.segments.clamp(1, MOST_SEGMENTS) as u32,
+            sigma: params.sigma,
+            gaussian: (params.weight == Weight::Gaussian) as u32,
+            background_weight: params.background_weight.max(0.0),
+            exposure: (params.normalize == Normalize::Exposure) as u32,
+            arc: (params.curve == CurveKind::Arc) as u32,
+            max_curve: params.max_curve,
+            flatness: params.flatness,
+            depth_tolerance: params.depth_tolerance,
+        }
+    }
+}
+
+/// One frame's scatter: its input buffers and config.
 struct Scatter<'a> {
     width: usize,
     height: usize,
@@ -169,9 +219,30 @@ struct Scatter<'a> {
     depth: &'a [f32],
     prev: &'a Positions,
     next: &'a Positions,
-    params: ScatterParams,
+    config: ScatterConfig,
     /// Half the shutter: the exposure is t ∈ [−half, half].
     half: f64,
+}
+
+impl<'a> Scatter<'a> {
+    fn new(
+        config: ScatterConfig,
+        color: &'a Color,
+        depth: &'a [f32],
+        prev: &'a Positions,
+        next: &'a Positions,
+    ) -> Self {
+        Scatter {
+            width: config.width as usize,
+            height: config.height as usize,
+            color,
+            depth,
+            prev,
+            next,
+            config,
+            half: 0.5 * config.shutter as f64,
+        }
+    }
 }
 
 impl Scatter<'_> {
@@ -198,7 +269,7 @@ impl Scatter<'_> {
             now,
             next,
             // What the scaling to max_curve leaves, and the pixel a segment reaches beside it.
-            reach: extent.min(self.params.max_curve as f64) + 1.0,
+            reach: extent.min(self.config.max_curve as f64) + 1.0,
         })
     }
 
@@ -229,13 +300,12 @@ impl Scatter<'_> {
 
     #[inline]
     fn weight(&self, t: f64) -> f64 {
-        match self.params.weight {
-            Weight::Box => 1.0,
-            Weight::Gaussian => {
-                let d = 0.5 * t; // s − ½
-                let sigma = self.params.sigma as f64;
-                (-d * d / (2.0 * sigma * sigma)).exp()
-            }
+        if self.config.gaussian == 0 {
+            1.0
+        } else {
+            let d = 0.5 * t; // s − ½
+            let sigma = self.config.sigma as f64;
+            (-d * d / (2.0 * sigma * sigma)).exp()
         }
     }
 }
@@ -254,16 +324,8 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
     ) else {
         return frame;
     };
-    let job = Scatter {
-        width,
-        height,
-        color: &color,
-        depth: &depth,
-        prev: &prev,
-        next: &next,
-        params: *params,
-        half: 0.5 * shutter as f64,
-    };
+    let config = ScatterConfig::new(width, height, params, shutter);
+    let job = Scatter::new(config, &color, &depth, &prev, &next);
     let n = width * height;
     let columns = width.div_ceil(TILE_W);
 
@@ -367,6 +429,24 @@ mod tests {
     }
 
     #[test]
+    fn the_config_is_twelve_plain_words() {
+        // Uploaded as one uniform by the GPU twin: twelve 4-byte fields, no padding.
+        assert_eq!(std::mem::size_of::<ScatterConfig>(), 48);
+        let many = ScatterParams {
+            segments: 1000,
+            background_weight: -1.0,
+            ..ScatterParams::default()
+        };
+        let c = ScatterConfig::new(4, 3, &many, 0.5);
+        assert_eq!(
+            (c.segments, c.background_weight),
+            (MOST_SEGMENTS as u32, 0.0)
+        );
+        // The defaults: exposure, box, Bézier.
+        assert_eq!((c.exposure, c.gaussian, c.arc), (1, 0, 0));
+    }
+
+    #[test]
     fn opaque_cells_of_four_sums_give_the_same_bits_as_five() {
         // A curving, shearing motion over two depth layers, opaque: the four-sum cells (alpha
         // sums taken from weight sums) against the five-sum cells, tile by tile.
@@ -395,16 +475,9 @@ mod tests {
         }
         let color = f.color.as_ref().unwrap();
         let depth = f.depth.as_ref().unwrap();
-        let mut job = Scatter {
-            width: w,
-            height: h,
-            color,
-            depth,
-            prev: f.prev.as_ref().unwrap(),
-            next: f.next.as_ref().unwrap(),
-            params: ScatterParams::default(),
-            half: 0.5,
-        };
+        let config = ScatterConfig::new(w, h, &ScatterParams::default(), 1.0);
+        let (prev, next) = (f.prev.as_ref().unwrap(), f.next.as_ref().unwrap());
+        let mut job = Scatter::new(config, color, depth, prev, next);
         let reach = Reach::of(&job);
         // A tile's output bits (NaN where it writes nothing).
         fn bits<const N: usize>(job: &Scatter, reach: &Reach, rect: [usize; 4]) -> Vec<u32> {
@@ -428,7 +501,7 @@ mod tests {
                 .collect()
         }
         for normalize in [Normalize::Exposure, Normalize::Paper] {
-            job.params.normalize = normalize;
+            job.config.exposure = (normalize == Normalize::Exposure) as u32;
             for rect in [[0, 0, 256, 128], [256, 0, 300, 128], [0, 128, 256, 150]] {
                 let four = bits::<4>(&job, &reach, rect);
                 assert!(four.iter().all(|&v| !f32::from_bits(v).is_nan()));
@@ -449,19 +522,13 @@ mod tests {
         let own = [0.25f64, 0.5, 1.0, 1.0];
         let (color, depth) = (f.color.as_ref().unwrap(), f.depth.as_ref().unwrap());
         for normalize in [Normalize::Paper, Normalize::Exposure] {
-            let job = Scatter {
-                width: 3,
-                height: 3,
-                color,
-                depth,
-                prev: f.prev.as_ref().unwrap(),
-                next: f.next.as_ref().unwrap(),
-                params: ScatterParams {
-                    normalize,
-                    ..ScatterParams::default()
-                },
-                half: 0.25,
+            let params = ScatterParams {
+                normalize,
+                ..ScatterParams::default()
             };
+            let config = ScatterConfig::new(3, 3, &params, 0.5);
+            let (prev, next) = (f.prev.as_ref().unwrap(), f.next.as_ref().unwrap());
+            let job = Scatter::new(config, color, depth, prev, next);
             let mut cell = [0.0f64; 5];
             let mut crossings = 0;
             for k in 0..1_000_000u64 {

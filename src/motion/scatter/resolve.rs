@@ -4,7 +4,7 @@
 use crate::motion::curve::length;
 
 use super::reach::Reach;
-use super::{Moving, Normalize, Scatter, BLOCK, COVERED};
+use super::{Moving, Scatter, BLOCK, COVERED};
 
 impl Scatter<'_> {
     /// The output of pixel `i` from its accumulated `cell`.
@@ -15,21 +15,20 @@ impl Scatter<'_> {
         if total.is_nan() || total <= 0.0 {
             return own;
         }
-        match self.params.normalize {
-            Normalize::Paper => {
-                let wb = self.params.background_weight.max(0.0) as f64;
-                std::array::from_fn(|ch| ((cell[ch] + wb * own[ch] as f64) / (total + wb)) as f32)
-            }
-            Normalize::Exposure if total < 1.0 => {
-                let rest = 1.0 - total;
-                let behind = if rest > COVERED {
-                    self.behind(x, y, reach)
-                } else {
-                    own
-                };
-                std::array::from_fn(|ch| (cell[ch] + rest * behind[ch] as f64) as f32)
-            }
-            Normalize::Exposure => std::array::from_fn(|ch| (cell[ch] / total) as f32),
+        if self.config.exposure == 0 {
+            // The paper's eq. 4 (w_b is at least 0).
+            let wb = self.config.background_weight as f64;
+            std::array::from_fn(|ch| ((cell[ch] + wb * own[ch] as f64) / (total + wb)) as f32)
+        } else if total < 1.0 {
+            let rest = 1.0 - total;
+            let behind = if rest > COVERED {
+                self.behind(x, y, reach)
+            } else {
+                own
+            };
+            std::array::from_fn(|ch| (cell[ch] + rest * behind[ch] as f64) as f32)
+        } else {
+            std::array::from_fn(|ch| (cell[ch] / total) as f32)
         }
     }
 
@@ -50,10 +49,10 @@ impl Scatter<'_> {
             return own;
         }
         let dir = [v[0] / l, v[1] / l];
-        let limit = self.depth[i] * (1.0 + self.params.depth_tolerance);
+        let limit = self.depth[i] * (1.0 + self.config.depth_tolerance);
         let steps = (self
             .extent(prev, now, next)
-            .min(self.params.max_curve as f64)
+            .min(self.config.max_curve as f64)
             + 2.0)
             .ceil() as usize;
         // Nothing farther within the search: its blocks' deepest depth tells without a walk.
