@@ -193,3 +193,18 @@ fn switches_turn_their_default_over() {
     let half = shutter::settings::def("half").unwrap();
     assert_eq!(half.default_value(), Value::Switch(false));
 }
+
+#[test]
+fn presets_keys_into_a_closed_pipe_does_not_panic() {
+    // `shutter presets keys | head -1`: the reader is gone before the listing is written.
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"))
+        .args(["presets", "keys"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let o = child.wait_with_output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+}

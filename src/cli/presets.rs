@@ -6,18 +6,26 @@ use crate::settings::{self, Section};
 
 use super::args::{PresetsArgs, PresetsCommand};
 
+/// Writes `text` to stdout; a reader that closed the pipe early (`| head`) is not an error.
+fn out(text: &str) {
+    use std::io::Write;
+    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+}
+
 pub fn presets(args: PresetsArgs) -> Result<()> {
     match args.command {
         None => {
+            let mut text = String::new();
             for (name, _) in BUILTIN {
                 let preset = Preset::builtin(name)?;
-                println!("{name:<10} {}", preset.description);
+                text += &format!("{name:<10} {}\n", preset.description);
             }
+            out(&text);
             Ok(())
         }
         Some(PresetsCommand::Show { name }) => {
             if let Some((_, text)) = BUILTIN.iter().find(|(n, _)| *n == name) {
-                print!("{text}");
+                out(text);
                 return Ok(());
             }
             // A file: check it loads and its settings are valid, then print it as written.
@@ -25,7 +33,7 @@ pub fn presets(args: PresetsArgs) -> Result<()> {
             settings::resolve(&settings::Given::default(), &preset)?;
             let text = std::fs::read_to_string(&name)
                 .map_err(|e| Error::usage(format!("cannot read {name}: {e}")))?;
-            print!("{text}");
+            out(&text);
             Ok(())
         }
         Some(PresetsCommand::Keys) => {
@@ -34,17 +42,17 @@ pub fn presets(args: PresetsArgs) -> Result<()> {
                 (Section::Dof, "depth of field"),
                 (Section::Output, "output"),
             ] {
-                println!("[{}]  {what}", section.table());
+                let mut text = format!("[{}]  {what}\n", section.table());
                 for def in settings::DEFS.iter().filter(|d| d.section == section) {
-                    println!(
-                        "  {:<18} --{:<18} default {:<8} {}",
+                    text += &format!(
+                        "  {:<18} --{:<18} default {:<8} {}\n",
                         def.key(),
                         def.flag(),
                         def.default_text(),
                         def.describe()
                     );
                 }
-                println!();
+                out(&(text + "\n"));
             }
             Ok(())
         }
