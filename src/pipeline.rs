@@ -8,13 +8,12 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::Instant;
 
-use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::error::{Error, Problem, ProblemKind, Result};
+use crate::error::{Problem, ProblemKind, Result};
 use crate::frame::Frame;
 use crate::io::output::{write_frame, OutputOptions};
-use crate::io::passes::{plan_frame, read_frame, FramePlan, Inputs, PlanOptions};
+use crate::io::passes::{preflight, read_frame, Inputs, PlanOptions};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::motion::Algorithm;
@@ -128,71 +127,6 @@ fn warn_replaced(
     }
 }
 
-/// True when two paths name the same file (or would, once the output exists).
-fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => {
-            let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-            absolute(a) == absolute(b)
-        }
-    }
-}
-
-/// Checks every input of every frame from headers alone; returns the plans or all problems.
-pub fn preflight(job: &Job, frames: &[Option<i64>]) -> Result<Vec<FramePlan>> {
-    let options = PlanOptions {
-        preset: &job.preset,
-        layer: job.layer.as_deref(),
-        needs: crate::process::needs(job.algorithm, &job.params),
-    };
-    let results: Vec<std::result::Result<FramePlan, Vec<Problem>>> = frames
-        .par_iter()
-        .map(|&frame| {
-            let mut plan = plan_frame(&job.inputs, frame, &options);
-            let output = job.output.path(frame);
-            let clash = job
-                .inputs
-                .all()
-                .into_iter()
-                .map(|(_, p)| p.path(frame))
-                .find(|input| same_file(input, &output));
-            if let Some(input) = clash {
-                let problem = Problem::new(
-                    ProblemKind::Output,
-                    &output,
-                    format!(
-                        "the output would overwrite the input {}; choose another -o",
-                        input.display()
-                    ),
-                )
-                .frame(frame);
-                plan = match plan {
-                    Ok(_) => Err(vec![problem]),
-                    Err(mut problems) => {
-                        problems.push(problem);
-                        Err(problems)
-                    }
-                };
-            }
-            plan
-        })
-        .collect();
-    let mut plans = Vec::with_capacity(results.len());
-    let mut problems = Vec::new();
-    for result in results {
-        match result {
-            Ok(plan) => plans.push(plan),
-            Err(found) => problems.extend(found),
-        }
-    }
-    if problems.is_empty() {
-        Ok(plans)
-    } else {
-        Err(Error::Files(problems))
-    }
-}
-
 /// Runs the job: preflight, then every frame through read → process → write.
 pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     let start = Instant::now();
@@ -214,7 +148,12 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     }
 
     let preflight_start = Instant::now();
-    let plans = preflight(job, &todo)?;
+    let options = PlanOptions {
+        preset: &job.preset,
+        layer: job.layer.as_deref(),
+        needs: crate::process::needs(job.algorithm, &job.params),
+    };
+    let plans = preflight(&job.inputs, &job.output, &todo, &options)?;
     report.preflight_seconds = preflight_start.elapsed().as_secs_f64();
     // Pass files given but not read (the algorithm does not need them, or the pass came
     // from another file): say so.

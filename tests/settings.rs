@@ -208,3 +208,43 @@ fn presets_keys_into_a_closed_pipe_does_not_panic() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
 }
+
+#[test]
+fn every_bench_setting_round_trips_through_its_flags() {
+    // The bench runs `shutter blur` with the flags the definitions make for each setting of
+    // the sweep: read back through the same definitions, they give the same settings.
+    use shutter::settings::{resolve, Given, Kind, Settings, DEFS};
+    let lens = shutter::dof::Lens {
+        focal_mm: 50.0,
+        f_number: 1.4,
+        focus: 3.0,
+        sensor_mm: 36.0,
+    };
+    let preset = shutter::io::preset::Preset::builtin("shutter").unwrap();
+    for target in shutter::bench::targets("layers", Some(lens)) {
+        for setting in target.settings {
+            let flags = setting.flags();
+            let mut given = Given::default();
+            let mut words = flags.iter();
+            while let Some(flag) = words.next() {
+                let name = flag.trim_start_matches("--");
+                let d = DEFS
+                    .iter()
+                    .find(|d| d.flag() == name)
+                    .unwrap_or_else(|| panic!("{}: {flag} is no setting", setting.label));
+                let value = match d.kind {
+                    Kind::Switch => "true".to_string(),
+                    _ => words.next().unwrap().clone(),
+                };
+                given.values.push((d.name, value));
+            }
+            let (read, _) = resolve(&given, &preset).unwrap();
+            assert_eq!(
+                read,
+                Settings::of(setting.algorithm, &setting.params),
+                "{} {flags:?}",
+                setting.label
+            );
+        }
+    }
+}

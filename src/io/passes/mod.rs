@@ -14,14 +14,18 @@
 //!
 //! - [`plan`]: which channels of which files, from headers alone (preflight plans every
 //!   frame before anything is decoded);
+//! - [`preflight`]: every frame planned, and outputs checked against inputs, before anything
+//!   is read or written;
 //! - [`read`]: the decode, colour and depth conversions;
 //! - [`convert`]: motion from any of the preset's motion sections to the pass needed.
 
 mod convert;
 mod plan;
+mod preflight;
 mod read;
 
 pub use plan::{passes_found, plan_frame, FramePlan, PlanOptions};
+pub use preflight::preflight;
 pub use read::{read_color, read_frame};
 
 use crate::io::sequence::PathPattern;
