@@ -16,7 +16,7 @@ mod common;
 
 use std::time::Instant;
 
-use common::{frame, H, W};
+use common::{H, W};
 use shutter::dof::{CocSource, DofParams, Lens, Method};
 use shutter::motion::Algorithm;
 use shutter::process::Params;
@@ -38,14 +38,7 @@ fn median_ms(f: &shutter::frame::Frame, dof: DofParams) -> f64 {
 
 fn main() {
     println!("threads: {}", rayon::current_num_threads());
-    let mut f = frame(|_, _| None);
-    f.velocity = None;
-    let depths = [1.5f32, 3.0, 6.0, f32::INFINITY];
-    f.depth = Some(
-        (0..W * H)
-            .map(|i| depths[(i % W / 200 + i / W / 150) % 4])
-            .collect(),
-    );
+    let f = common::lens_frame();
     let gather = DofParams {
         max_coc: 32.0,
         ..DofParams::new(CocSource::Lens(LENS))

@@ -28,11 +28,7 @@ fn median_ms_with(f: &shutter::frame::Frame, runs: usize, params: &Params) -> f6
 
 fn main() {
     println!("threads: {}", rayon::current_num_threads());
-    let moving = frame(|x, y| {
-        let a = (x as f32 * 0.002) + (y as f32 * 0.003);
-        let speed = 10.0 + 30.0 * ((x + y) % 97) as f32 / 96.0;
-        Some((a.cos() * speed, a.sin() * speed))
-    });
+    let moving = frame(common::rotating);
     println!(
         "1920x1080 every pixel moving, k=20 S=15: {:.1} ms",
         median_ms(&moving, 9)

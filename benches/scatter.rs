@@ -34,11 +34,7 @@ fn main() {
         ..Params::default()
     };
     let default = ScatterParams::default();
-    let moving = frame(|x, y| {
-        let a = (x as f32 * 0.002) + (y as f32 * 0.003);
-        let (c, s) = (a.cos(), a.sin());
-        Some(([30.0 * c, 30.0 * s], [-3.0 * s, 3.0 * c]))
-    });
+    let moving = frame(common::curving);
     for (label, params) in [
         ("default (exposure, box, bezier, ≤10 segments)", default),
         (

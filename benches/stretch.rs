@@ -32,11 +32,7 @@ fn main() {
         },
         ..default
     };
-    let moving = frame(|x, y| {
-        let a = (x as f32 * 0.002) + (y as f32 * 0.003);
-        let speed = 10.0 + 30.0 * ((x + y) % 97) as f32 / 96.0;
-        Some((a.cos() * speed, a.sin() * speed))
-    });
+    let moving = frame(common::rotating);
     for (label, params) in [("default", &default), ("plain (no texture blur)", &plain)] {
         println!(
             "1920x1080 every pixel moving, {label}: {:.1} ms",

@@ -24,52 +24,13 @@ mod common;
 use std::path::Path;
 
 use common::{H, W};
-use shutter::frame::{Frame, Windows};
-use shutter::io::exr::ExrOptions;
-use shutter::io::output::write_exr_atomic;
-
-fn write(path: &Path, channels: Vec<(&str, Vec<f32>)>) {
-    let channels = channels
-        .into_iter()
-        .map(|(n, p)| (n.to_string(), p))
-        .collect();
-    write_exr_atomic(
-        path,
-        W,
-        H,
-        Windows::full(W, H),
-        channels,
-        ExrOptions::default(),
-    )
-    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-}
+use shutter::frame::Frame;
+use shutter::io::output::write_passes;
 
 /// Writes every pass `f` holds into `dir` as `ROLE.0001.exr`.
 fn write_frame(dir: &Path, f: Frame) {
     std::fs::create_dir_all(dir).expect("create the folder");
-    let file = |role: &str| dir.join(format!("{role}.0001.exr"));
-    if let Some(c) = f.color {
-        let a = c.a.expect("alpha");
-        write(
-            &file("color"),
-            vec![("R", c.r), ("G", c.g), ("B", c.b), ("A", a)],
-        );
-    }
-    if let Some(z) = f.depth {
-        write(&file("depth"), vec![("Z", z)]);
-    }
-    if let Some(v) = f.velocity {
-        write(&file("velocity"), vec![("X", v.x), ("Y", v.y)]);
-    }
-    for (role, p) in [("prev", f.prev), ("next", f.next)] {
-        if let Some(p) = p {
-            let mut channels = vec![("X", p.x), ("Y", p.y)];
-            if let Some(z) = p.z {
-                channels.push(("Z", z));
-            }
-            write(&file(role), channels);
-        }
-    }
+    write_passes(f, |role| dir.join(format!("{role}.0001.exr"))).unwrap_or_else(|p| panic!("{p}"));
     println!("{}", dir.display());
 }
 
@@ -94,22 +55,12 @@ fn main() {
     let root = Path::new(&root);
 
     // reconstruct.rs / stretch.rs: every pixel moving.
-    let moving = |x: usize, y: usize| {
-        let a = (x as f32 * 0.002) + (y as f32 * 0.003);
-        let speed = 10.0 + 30.0 * ((x + y) % 97) as f32 / 96.0;
-        Some((a.cos() * speed, a.sin() * speed))
-    };
-    write_frame(&root.join("moving"), common::frame(moving));
+    write_frame(&root.join("moving"), common::frame(common::rotating));
 
     // scatter.rs: every pixel moving 30 px on a gently curved path.
-    let scatter_moving = |x: usize, y: usize| {
-        let a = (x as f32 * 0.002) + (y as f32 * 0.003);
-        let (c, s) = (a.cos(), a.sin());
-        Some(([30.0 * c, 30.0 * s], [-3.0 * s, 3.0 * c]))
-    };
     write_frame(
         &root.join("scatter_moving"),
-        common::positions_frame(scatter_moving),
+        common::positions_frame(common::curving),
     );
 
     // static (all three benches).
@@ -126,15 +77,8 @@ fn main() {
     );
 
     // dof.rs: blocks at 1.5 m, 3 m (in focus), 6 m and infinity; lens 50 mm f/1.4 at 3 m.
-    let mut f = common::frame(|_, _| None);
-    f.velocity = None;
-    let depths = [1.5f32, 3.0, 6.0, f32::INFINITY];
-    f.depth = Some(
-        (0..W * H)
-            .map(|i| depths[(i % W / 200 + i / W / 150) % 4])
-            .collect(),
-    );
-    let s = common::positions_frame(scatter_moving);
+    let mut f = common::lens_frame();
+    let s = common::positions_frame(common::curving);
     f.prev = s.prev;
     f.next = s.next;
     write_frame(&root.join("dof"), f);

@@ -18,23 +18,7 @@ use crate::io::preset::Preset;
 use crate::motion::{scatter, Algorithm, Anchor, CurveKind, Normalize, Variant, Weight};
 use crate::process::Params;
 
-/// The preset table a setting's key sits in.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Section {
-    Blur,
-    Dof,
-    Output,
-}
-
-impl Section {
-    pub fn table(self) -> &'static str {
-        match self {
-            Section::Blur => "blur",
-            Section::Dof => "dof",
-            Section::Output => "output",
-        }
-    }
-}
+pub use crate::io::preset::Section;
 
 /// A rule of a number setting's own, and the words that say what it allows.
 pub type Rule = (fn(f64) -> bool, &'static str);
@@ -927,13 +911,13 @@ pub fn resolve(given: &Given, preset: &Preset) -> Result<(Settings, Vec<String>)
 /// A preset's value of the setting, checked; `None` when the preset does not set it.
 fn preset_value(def: &Def, preset: &Preset) -> Result<Option<Value>> {
     let key = def.key();
-    let Some(raw) = preset.settings(def.section.table()).get(&key) else {
+    let Some(raw) = preset.settings(def.section).get(&key) else {
         return Ok(None);
     };
     def.read_toml(raw).map(Some).map_err(|expect| {
         Error::usage(format!(
             "preset {}: [{}] {key} = {raw}: use {expect}",
-            preset.origin(def.section.table(), &key),
+            preset.origin(def.section, &key),
             def.section.table()
         ))
     })
@@ -941,8 +925,8 @@ fn preset_value(def: &Def, preset: &Preset) -> Result<Option<Value>> {
 
 /// Refuses keys that name no setting, listing the section's keys.
 pub fn check_preset(preset: &Preset) -> Result<()> {
-    for section in [Section::Blur, Section::Dof, Section::Output] {
-        for key in preset.settings(section.table()).keys() {
+    for section in Section::ALL {
+        for key in preset.settings(section).keys() {
             let known = DEFS.iter().any(|d| d.section == section && d.key() == *key);
             if !known {
                 let keys: Vec<String> = DEFS
@@ -952,7 +936,7 @@ pub fn check_preset(preset: &Preset) -> Result<()> {
                     .collect();
                 return Err(Error::usage(format!(
                     "preset {}: unknown key [{}] {key}; the keys are {}",
-                    preset.origin(section.table(), key),
+                    preset.origin(section, key),
                     section.table(),
                     keys.join(", ")
                 )));
@@ -1011,7 +995,7 @@ pub fn markdown_table(section: Section) -> String {
 /// section's markers are missing.
 pub fn readme_with_tables(readme: &str) -> Option<String> {
     let mut text = readme.to_string();
-    for section in [Section::Blur, Section::Dof, Section::Output] {
+    for section in Section::ALL {
         let open = format!("<!-- settings:{} -->\n", section.table());
         let start = text.find(&open)? + open.len();
         let end = start + text[start..].find("<!-- end settings -->")?;
@@ -1040,7 +1024,8 @@ pub fn dof_params(settings: &Settings, coc_map: bool) -> Result<Option<DofParams
             _ => {
                 return Err(Error::usage(
                     "depth of field needs all of --focal-length, --f-stop and \
-                     --focus-distance (or --coc-map)",
+                     --focus-distance (or the [dof] keys focal_length, f_stop and \
+                     focus_distance), or --coc-map",
                 ))
             }
         }

@@ -80,8 +80,7 @@ fn check(name: &str, out: Frame) {
             worst = worst.max(d);
             sum += d as f64;
             count += 1;
-            // (NaN differences count as off.)
-            if d.is_nan() || d > 1e-5 * e.abs().max(1.0) {
+            if !close(g, e, 1e-5 * e.abs().max(1.0)) {
                 off += 1;
             }
             heat[i] = heat[i].max((d * 1e3).min(1.0));

@@ -57,8 +57,8 @@ fn presets_keys_lists_every_key_with_its_default() {
 fn the_defaults_preset_sets_no_setting_of_its_own() {
     // Defaults live in the parameter structs; a copy in presets/shutter.toml could drift.
     let preset = shutter::io::preset::Preset::builtin("shutter").unwrap();
-    for section in [Section::Blur, Section::Dof, Section::Output] {
-        assert!(preset.settings(section.table()).is_empty(), "{section:?}");
+    for section in Section::ALL {
+        assert!(preset.settings(section).is_empty(), "{section:?}");
     }
 }
 
@@ -86,28 +86,33 @@ fn readme_settings_tables_match_the_definitions() {
     }
 }
 
+/// `shutter blur` on the canonical frame written in `dir` (as `write_canonical_frame` names
+/// its files), run from `dir`, writing `out.exr`, with `extra` flags.
+fn blur_canonical_frame(dir: &std::path::Path, extra: &[&str]) -> std::process::Output {
+    let passes = [
+        "--color",
+        "C.exr",
+        "--depth",
+        "Z.exr",
+        "--velocity",
+        "V.exr",
+    ];
+    std::process::Command::new(env!("CARGO_BIN_EXE_shutter"))
+        .current_dir(dir)
+        .arg("blur")
+        .args(passes)
+        .args(["-o", "out.exr"])
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn an_invalid_value_names_the_flag_or_the_preset_key_it_came_from() {
     let dir = tempfile::tempdir().unwrap();
     write_canonical_frame(dir.path(), None, 8, 6);
     let run = |extra: &[&str]| {
-        let mut args = vec![
-            "blur",
-            "--color",
-            "C.exr",
-            "--depth",
-            "Z.exr",
-            "--velocity",
-            "V.exr",
-            "-o",
-            "out.exr",
-        ];
-        args.extend_from_slice(extra);
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"))
-            .current_dir(dir.path())
-            .args(&args)
-            .output()
-            .unwrap();
+        let o = blur_canonical_frame(dir.path(), extra);
         assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
         assert!(!dir.path().join("out.exr").exists());
         stderr(&o)
@@ -157,26 +162,10 @@ fn an_invalid_value_names_the_flag_or_the_preset_key_it_came_from() {
 fn a_flag_for_another_algorithm_is_warned_about() {
     let dir = tempfile::tempdir().unwrap();
     write_canonical_frame(dir.path(), None, 8, 6);
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"))
-        .current_dir(dir.path())
-        .args([
-            "blur",
-            "--color",
-            "C.exr",
-            "--depth",
-            "Z.exr",
-            "--velocity",
-            "V.exr",
-            "-o",
-            "out.exr",
-            "--algorithm",
-            "reconstruct",
-            "--segments",
-            "4",
-            "--verbose",
-        ])
-        .output()
-        .unwrap();
+    let o = blur_canonical_frame(
+        dir.path(),
+        &["--algorithm", "reconstruct", "--segments", "4", "--verbose"],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stderr(&o).contains("--segments applies to scatter, not reconstruct"),
@@ -195,18 +184,24 @@ fn switches_turn_their_default_over() {
 }
 
 #[test]
-fn presets_keys_into_a_closed_pipe_does_not_panic() {
+fn listings_into_a_closed_pipe_do_not_panic() {
     // `shutter presets keys | head -1`: the reader is gone before the listing is written.
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"))
-        .args(["presets", "keys"])
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    drop(child.stdout.take());
-    let o = child.wait_with_output().unwrap();
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+    let fixture = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/fixtures/canonical/color.0001.exr"
+    );
+    for args in [vec!["presets", "keys"], vec!["info", fixture]] {
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"))
+            .args(&args)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        let o = child.wait_with_output().unwrap();
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        assert!(!stderr(&o).contains("panicked"), "{args:?}: {}", stderr(&o));
+    }
 }
 
 #[test]

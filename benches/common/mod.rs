@@ -98,6 +98,36 @@ pub fn positions_frame(moving: impl Fn(usize, usize) -> Option<([f32; 2], [f32; 
     f
 }
 
+/// The "every pixel moving" field of the reconstruct and stretch benches: 10–40 px per frame
+/// in directions that rotate across the frame.
+pub fn rotating(x: usize, y: usize) -> Option<(f32, f32)> {
+    let a = (x as f32 * 0.002) + (y as f32 * 0.003);
+    let speed = 10.0 + 30.0 * ((x + y) % 97) as f32 / 96.0;
+    Some((a.cos() * speed, a.sin() * speed))
+}
+
+/// The scatter bench's motion: 30 px per frame along the same rotating directions, bent by
+/// 3 px (velocity, bend) for [`positions_frame`].
+pub fn curving(x: usize, y: usize) -> Option<([f32; 2], [f32; 2])> {
+    let a = (x as f32 * 0.002) + (y as f32 * 0.003);
+    let (c, s) = (a.cos(), a.sin());
+    Some(([30.0 * c, 30.0 * s], [-3.0 * s, 3.0 * c]))
+}
+
+/// The depth-of-field bench's frame: the checker in blocks at 1.5 m, 3 m, 6 m and infinity,
+/// no motion passes.
+pub fn lens_frame() -> Frame {
+    let mut f = frame(|_, _| None);
+    f.velocity = None;
+    let depths = [1.5f32, 3.0, 6.0, f32::INFINITY];
+    f.depth = Some(
+        (0..W * H)
+            .map(|i| depths[(i % W / 200 + i / W / 150) % 4])
+            .collect(),
+    );
+    f
+}
+
 /// Median processing time (ms) of `runs` runs of `algorithm` on `f`, after a warm-up run:
 /// the pipeline's processing stage. The numeric policy's scan runs in the read stage; it is
 /// timed on its own by [`median_policy_ms`].

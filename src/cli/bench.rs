@@ -3,6 +3,7 @@
 use crate::error::{Error, Result};
 
 use super::args::BenchArgs;
+use super::out;
 use super::parse_size;
 
 pub fn bench(args: BenchArgs) -> Result<()> {
@@ -30,7 +31,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     };
     let started = std::time::Instant::now();
     let report = crate::bench::run(&options, &mut |line| eprintln!("shutter: bench: {line}"))?;
-    print!("{}", crate::bench::markdown(&report));
+    out(&crate::bench::markdown(&report));
     eprintln!(
         "shutter: bench: {} rows in {:.1} s; wrote {}/bench.json, bench.md, pareto.svg, pareto.png, contact/",
         report.rows.len(),

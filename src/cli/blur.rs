@@ -7,6 +7,7 @@ use crate::error::{Error, Result};
 use crate::pipeline::{run, Event};
 
 use super::args::BlurArgs;
+use super::out;
 use super::resolve;
 
 pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
@@ -73,10 +74,7 @@ pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
     }
     let report = result?;
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report).unwrap_or_default()
-        );
+        out(&(serde_json::to_string_pretty(&report).unwrap_or_default() + "\n"));
     } else if verbose || terminal {
         eprintln!(
             "shutter: {} frames written, {} skipped in {:.2} s (read {:.2} s, process {:.2} s, write {:.2} s)",

@@ -5,6 +5,7 @@ use crate::io::preset::Preset;
 use crate::io::sequence::{parse_frames, PathPattern};
 
 use super::args::DiffArgs;
+use super::out;
 
 /// Frames for a pair of patterns: `--frames`, else those on disk for the first.
 fn frames_for(
@@ -95,26 +96,25 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
     };
     let report = crate::diff::run(&job)?;
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report).unwrap_or_default()
-        );
+        out(&(serde_json::to_string_pretty(&report).unwrap_or_default() + "\n"));
     } else {
+        let mut text = String::new();
         for f in &report.frames {
             let label = f.frame.map_or(String::new(), |n| format!("frame {n}: "));
-            println!("{label}{}", format_scores(&f.whole));
+            text += &format!("{label}{}\n", format_scores(&f.whole));
             if let Some(region) = &f.region {
-                println!("{label}changed region: {}", format_scores(region));
+                text += &format!("{label}changed region: {}\n", format_scores(region));
             }
         }
         if report.frames.len() > 1 {
-            println!(
-                "worst {}: {:.6} over {} frames",
+            text += &format!(
+                "worst {}: {:.6} over {} frames\n",
                 report.metric,
                 report.worst,
                 report.frames.len()
             );
         }
+        out(&text);
     }
     for warning in &report.warnings {
         eprintln!("shutter: warning: {warning}");

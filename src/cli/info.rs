@@ -6,6 +6,7 @@ use crate::io::passes::passes_found;
 use crate::io::preset::{Preset, BUILTIN};
 
 use super::args::InfoArgs;
+use super::out;
 
 pub fn info(args: InfoArgs) -> Result<()> {
     let presets: Vec<Preset> = BUILTIN
@@ -33,14 +34,11 @@ pub fn info(args: InfoArgs) -> Result<()> {
         if args.json {
             documents.push(info_json(&info, &matches));
         } else {
-            print!("{}", info_text(&info, &matches));
+            out(&info_text(&info, &matches));
         }
     }
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&documents).unwrap_or_default()
-        );
+        out(&(serde_json::to_string_pretty(&documents).unwrap_or_default() + "\n"));
     }
     if problems.is_empty() {
         Ok(())

@@ -55,6 +55,13 @@ pub fn main() -> i32 {
     }
 }
 
+/// Writes `text` to stdout, the one way every command prints its results. A reader that
+/// closed the pipe early (`| head`) is not an error, so nothing panics.
+fn out(text: &str) {
+    use std::io::Write;
+    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+}
+
 /// The most problems printed one by one; the rest are counted.
 const MAX_PRINTED_PROBLEMS: usize = 20;
 

@@ -5,12 +5,7 @@ use crate::io::preset::{Preset, BUILTIN};
 use crate::settings::{self, Section};
 
 use super::args::{PresetsArgs, PresetsCommand};
-
-/// Writes `text` to stdout; a reader that closed the pipe early (`| head`) is not an error.
-fn out(text: &str) {
-    use std::io::Write;
-    let _ = std::io::stdout().lock().write_all(text.as_bytes());
-}
+use super::out;
 
 pub fn presets(args: PresetsArgs) -> Result<()> {
     match args.command {

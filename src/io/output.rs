@@ -83,6 +83,50 @@ pub fn write_atomic(
     })
 }
 
+/// Writes every pass `frame` holds as a canonical pass file (the `shutter` preset's channel
+/// names, f32, the default compression), atomically: colour as R, G, B, A (A = 1 where the
+/// frame has no alpha), depth as Z, velocity as X, Y and positions as X, Y (, Z), each to
+/// `path(role)` with role `color`, `depth`, `velocity`, `prev` or `next`.
+pub fn write_passes(frame: Frame, path: impl Fn(&str) -> PathBuf) -> Result<(), Problem> {
+    let (width, height, windows) = (frame.width, frame.height, frame.windows);
+    let write = |role: &str, channels: Vec<(&str, Plane)>| {
+        let path = path(role);
+        let channels = channels
+            .into_iter()
+            .map(|(n, p)| (n.to_string(), p))
+            .collect();
+        write_exr_atomic(
+            &path,
+            width,
+            height,
+            windows,
+            channels,
+            ExrOptions::default(),
+        )
+        .map_err(|detail| Problem::new(ProblemKind::Output, &path, detail))
+    };
+    if let Some(c) = frame.color {
+        let a = c.a.unwrap_or_else(|| vec![1.0; width * height]);
+        write("color", vec![("R", c.r), ("G", c.g), ("B", c.b), ("A", a)])?;
+    }
+    if let Some(z) = frame.depth {
+        write("depth", vec![("Z", z)])?;
+    }
+    if let Some(v) = frame.velocity {
+        write("velocity", vec![("X", v.x), ("Y", v.y)])?;
+    }
+    for (role, positions) in [("prev", frame.prev), ("next", frame.next)] {
+        if let Some(p) = positions {
+            let mut channels = vec![("X", p.x), ("Y", p.y)];
+            if let Some(z) = p.z {
+                channels.push(("Z", z));
+            }
+            write(role, channels)?;
+        }
+    }
+    Ok(())
+}
+
 /// Writes named planes as an EXR, atomically.
 pub fn write_exr_atomic(
     path: &Path,

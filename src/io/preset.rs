@@ -20,6 +20,28 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("final", include_str!("../../presets/final.toml")),
 ];
 
+/// The tables of settings a preset may carry ([blur], [dof], [output]); their keys are defined
+/// in [`crate::settings`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Section {
+    Blur,
+    Dof,
+    Output,
+}
+
+impl Section {
+    pub const ALL: [Section; 3] = [Section::Blur, Section::Dof, Section::Output];
+
+    /// The table's name in TOML.
+    pub fn table(self) -> &'static str {
+        match self {
+            Section::Blur => "blur",
+            Section::Dof => "dof",
+            Section::Output => "output",
+        }
+    }
+}
+
 /// How 8/16-bit colour values are encoded.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
@@ -200,10 +222,10 @@ fn note_origins(
     name: &str,
     origins: &mut std::collections::BTreeMap<String, String>,
 ) {
-    for section in ["blur", "dof", "output"] {
-        if let Some(toml::Value::Table(keys)) = table.get(section) {
+    for section in Section::ALL {
+        if let Some(toml::Value::Table(keys)) = table.get(section.table()) {
             for key in keys.keys() {
-                origins.insert(format!("{section}.{key}"), name.to_string());
+                origins.insert(format!("{}.{key}", section.table()), name.to_string());
             }
         }
     }
@@ -254,21 +276,19 @@ impl Preset {
         Preset::load(&[name.to_string()])
     }
 
-    /// A settings table by name: "blur", "dof" or "output" (empty for any other).
-    pub fn settings(&self, table: &str) -> &toml::Table {
-        static EMPTY: std::sync::OnceLock<toml::Table> = std::sync::OnceLock::new();
-        match table {
-            "blur" => &self.blur,
-            "dof" => &self.dof,
-            "output" => &self.output,
-            _ => EMPTY.get_or_init(toml::Table::new),
+    /// The settings table of a section.
+    pub fn settings(&self, section: Section) -> &toml::Table {
+        match section {
+            Section::Blur => &self.blur,
+            Section::Dof => &self.dof,
+            Section::Output => &self.output,
         }
     }
 
-    /// The preset (name or path) that set a settings key of a table.
-    pub fn origin(&self, table: &str, key: &str) -> &str {
+    /// The preset (name or path) that set a settings key of a section.
+    pub fn origin(&self, section: Section, key: &str) -> &str {
         self.origins
-            .get(&format!("{table}.{key}"))
+            .get(&format!("{}.{key}", section.table()))
             .map_or(self.name.as_str(), String::as_str)
     }
 
@@ -337,7 +357,7 @@ mod tests {
         assert_eq!(preset.velocity.meaning, Meaning::ToPrev);
         assert_eq!(preset.blur["algorithm"].as_str(), Some("scatter"));
         assert_eq!(preset.blur["segments"].as_integer(), Some(20));
-        assert_eq!(preset.origin("blur", "segments"), "final");
+        assert_eq!(preset.origin(Section::Blur, "segments"), "final");
     }
 
     #[test]

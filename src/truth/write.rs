@@ -11,7 +11,7 @@ use super::scenes::build;
 use crate::error::{Error, Problem, ProblemKind, Result};
 use crate::frame::{Plane, Windows};
 use crate::io::exr::ExrOptions;
-use crate::io::output::write_exr_atomic;
+use crate::io::output::{write_exr_atomic, write_passes};
 
 /// Default reference samples per pixel: enough for the convergence test (`tests/truth.rs`).
 pub const DEFAULT_SAMPLES: usize = 1024;
@@ -133,38 +133,9 @@ pub fn write_scene(
     let file = |role: &str, frame: usize| -> PathBuf { dir.join(format!("{role}.{frame:04}.exr")) };
     for frame in 1..=options.frames {
         let t = (frame - 1) as f64;
-        let passes = render_passes(&scene, t, options.samples, options.seed);
-        let color = passes.color.expect("rendered");
         let n = scene.width * scene.height;
-        write(
-            &file("color", frame),
-            &scene,
-            vec![
-                ("R", color.r),
-                ("G", color.g),
-                ("B", color.b),
-                ("A", vec![1.0; n]),
-            ],
-        )?;
-        write(
-            &file("depth", frame),
-            &scene,
-            vec![("Z", passes.depth.expect("rendered"))],
-        )?;
-        let velocity = passes.velocity.expect("rendered");
-        write(
-            &file("velocity", frame),
-            &scene,
-            vec![("X", velocity.x), ("Y", velocity.y)],
-        )?;
-        for (role, positions) in [("prev", passes.prev), ("next", passes.next)] {
-            let positions = positions.expect("rendered");
-            let mut channels = vec![("X", positions.x), ("Y", positions.y)];
-            if let Some(z) = positions.z {
-                channels.push(("Z", z));
-            }
-            write(&file(role, frame), &scene, channels)?;
-        }
+        let passes = render_passes(&scene, t, options.samples, options.seed);
+        write_passes(passes, |role| file(role, frame))?;
         let mut kinds = vec![("reference", Reference::MotionBlur)];
         if scene.lens.is_some() {
             kinds.push(("reference_dof", Reference::DepthOfField));

@@ -81,20 +81,24 @@ pub fn channel<'a>(channels: &'a [(String, Vec<f32>)], name: &str) -> &'a [f32] 
         .1
 }
 
-/// The one approximate comparison: |a - b| <= tolerance, NaN equal only to NaN, infinities
-/// equal only to themselves. Panics naming the first differing index.
+/// The one approximate comparison: |a - e| <= tolerance, NaN equal only to NaN, infinities
+/// equal only to themselves.
+pub fn close(a: f32, e: f32, tolerance: f32) -> bool {
+    if a.is_nan() || e.is_nan() {
+        a.is_nan() && e.is_nan()
+    } else if a.is_infinite() || e.is_infinite() {
+        a == e
+    } else {
+        (a - e).abs() <= tolerance
+    }
+}
+
+/// [`close`] for every sample; panics naming the first differing index.
 pub fn assert_close(actual: &[f32], expected: &[f32], tolerance: f32, what: &str) {
     assert_eq!(actual.len(), expected.len(), "{what}: lengths differ");
-    for (i, (a, e)) in actual.iter().zip(expected).enumerate() {
-        let ok = if a.is_nan() || e.is_nan() {
-            a.is_nan() && e.is_nan()
-        } else if a.is_infinite() || e.is_infinite() {
-            a == e
-        } else {
-            (a - e).abs() <= tolerance
-        };
+    for (i, (&a, &e)) in actual.iter().zip(expected).enumerate() {
         assert!(
-            ok,
+            close(a, e, tolerance),
             "{what}: index {i}: got {a}, expected {e} (tolerance {tolerance})"
         );
     }

@@ -344,7 +344,7 @@ pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame 
         .a
         .as_ref()
         .is_none_or(|a| a.par_iter().all(|&v| v == 1.0));
-    // Every tile writes all its pixels: those no curve reaches get the (sanitised) input.
+    // Every tile writes all its pixels: those no curve reaches get their input.
     let mut out: [Vec<f32>; 4] = std::array::from_fn(|_| vec![0.0; n]);
     let [r, g, b, a] = &mut out;
     let strip = TILE_H * width;

@@ -16,7 +16,7 @@ pub(super) struct Reach {
     pub(super) pixel: Vec<f32>,
     pub(super) block: Vec<f32>,
     pub(super) most: f32,
-    /// The deepest (sanitised) depth in each block.
+    /// The deepest depth in each block.
     pub(super) deepest: Vec<f32>,
 }
 
