@@ -1,8 +1,12 @@
 //! `shutter bench`: every scene × algorithm × setting of the sweep, timed (compute only, and
 //! end to end through the `shutter blur` binary with its I/O) and scored against the scene's
 //! brute-force reference; written as bench.json, bench.md, pareto.svg/.png and one contact
-//! sheet per scene.
+//! sheet per scene. Each reference is rendered a second time with other samples, so that each
+//! error also comes corrected for the reference's own noise ([`noise`]); other programs'
+//! outputs on the same scene files are scored beside shutter's ([`peers`]).
 
+pub mod noise;
+pub mod peers;
 pub mod plot;
 
 use std::path::{Path, PathBuf};
@@ -24,7 +28,7 @@ use crate::motion::{
 use crate::process::{apply, Params};
 use crate::settings;
 use crate::truth::scenes::SCENES;
-use crate::truth::write::{write_scene, SceneOptions};
+use crate::truth::write::{resampled_role, write_resampled_references, write_scene, SceneOptions};
 
 /// One point of the sweep: an algorithm with its parameters. The flags that run it come from
 /// the settings' definitions ([`settings::flags`]).
@@ -339,6 +343,8 @@ pub struct BenchOptions {
     pub runs: usize,
     /// The shutter binary for the end-to-end runs.
     pub binary: PathBuf,
+    /// A folder with a peers.json ([`peers`]) whose outputs are scored too.
+    pub peers: Option<PathBuf>,
 }
 
 /// One row of the results.
@@ -346,16 +352,38 @@ pub struct BenchOptions {
 pub struct Row {
     pub scene: String,
     pub setting: String,
+    /// The program that made the output, for a peer's row ("blender 5.2.3"); none for
+    /// shutter's own.
+    pub peer: Option<String>,
+    /// The settings a peer reports it ran with (null for shutter's rows: the label says).
+    #[serde(skip_serializing_if = "serde_json::Value::is_null")]
+    pub peer_settings: serde_json::Value,
     /// Median processing time, ms (the algorithm on decoded passes, no I/O).
     pub compute_ms: f64,
-    /// Median wall time of `shutter blur` on the frame, ms (process start, read, write).
-    pub end_to_end_ms: f64,
+    /// Median wall time of `shutter blur` on the frame, ms (process start, read, write); for a
+    /// peer, what it measured (null when nothing).
+    pub end_to_end_ms: Option<f64>,
     /// Peak resident memory of that process, MiB.
     pub peak_rss_mib: Option<f64>,
     /// Errors against the reference over the whole frame.
     pub whole: Scores,
     /// Errors over the region blur changes (reference differs from the sharp frame).
     pub region: Scores,
+    /// The region RMSE against the converged reference, estimated by taking out the
+    /// reference's noise: sqrt(max(0, region RMSE² − noise variance)) ([`noise`]).
+    pub region_rmse_corrected: f64,
+}
+
+/// A target's reference noise over its region, from two renders with different sampling seeds.
+#[derive(Clone, Debug, Serialize)]
+pub struct NoiseFloor {
+    pub scene: String,
+    /// The sampling seeds of the two renders (the scene's layout is the same).
+    pub seeds: [u64; 2],
+    /// Pixels of the region.
+    pub pixels: usize,
+    /// The RMS noise of one reference over the region: sqrt(mean((r1 − r2)²) / 2).
+    pub noise_rmse: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -366,6 +394,8 @@ pub struct BenchReport {
     pub runs: usize,
     pub threads: usize,
     pub rows: Vec<Row>,
+    /// Each target's reference noise.
+    pub noise: Vec<NoiseFloor>,
 }
 
 fn median(mut values: Vec<f64>) -> f64 {
@@ -407,6 +437,36 @@ fn ensure_scene(name: &str, dir: &Path, options: &BenchOptions) -> Result<()> {
     Ok(())
 }
 
+/// Renders (or reuses, when its record matches) the scene's references again with the next
+/// sampling seed and the same layout; returns that seed.
+fn ensure_resampled(name: &str, dir: &Path, options: &BenchOptions) -> Result<u64> {
+    let scene_options = SceneOptions {
+        width: options.width,
+        height: options.height,
+        frames: 1,
+        samples: options.samples,
+        ..SceneOptions::default()
+    };
+    let sampling_seed = scene_options.seed + 1;
+    let wanted = serde_json::json!({
+        "scene": name, "width": options.width, "height": options.height,
+        "samples": options.samples, "shutter": scene_options.shutter,
+        "seed": scene_options.seed, "sampling_seed": sampling_seed,
+    });
+    let record = dir.join("resampled.json");
+    if let Ok(text) = std::fs::read_to_string(&record) {
+        if serde_json::from_str::<serde_json::Value>(&text).ok() == Some(wanted.clone()) {
+            return Ok(sampling_seed);
+        }
+    }
+    write_resampled_references(name, dir, &scene_options, sampling_seed)?;
+    write_text(
+        &record,
+        &serde_json::to_string_pretty(&wanted).unwrap_or_default(),
+    )?;
+    Ok(sampling_seed)
+}
+
 fn scene_inputs(dir: &Path) -> Inputs {
     let pattern = |role: &str| {
         PathPattern::parse(&format!("{}/{role}.####.exr", dir.display())).expect("valid pattern")
@@ -443,13 +503,19 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
             )));
         }
     }
+    let peers = match &options.peers {
+        Some(dir) => peers::read(dir)?,
+        None => Vec::new(),
+    };
     let preset = Preset::builtin("shutter")?;
     let mut rows = Vec::new();
+    let mut noise_floors = Vec::new();
     let mut sheets = Vec::new();
     for scene_name in &options.scenes {
         let dir = options.out.join("scenes").join(scene_name);
         let started = Instant::now();
         ensure_scene(scene_name, &dir, options)?;
+        let sampling_seed = ensure_resampled(scene_name, &dir, options)?;
         progress(format!(
             "{scene_name}: scene ready ({:.1} s)",
             started.elapsed().as_secs_f64()
@@ -462,6 +528,18 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
             let name = &target.label;
             let reference = read_rgb(&dir.join(format!("{}.0001.exr", target.reference)))?;
             let region = metrics::changed_region(&rgb(&sharp), &rgb(&reference), 1e-3);
+            let resampled = read_rgb(&dir.join(format!(
+                "{}.0001.exr",
+                resampled_role(target.reference, sampling_seed)
+            )))?;
+            let noise_variance =
+                noise::noise_variance(&rgb(&reference), &rgb(&resampled), Some(&region));
+            noise_floors.push(NoiseFloor {
+                scene: name.clone(),
+                seeds: [SceneOptions::default().seed, sampling_seed],
+                pixels: region.iter().filter(|&&r| r).count(),
+                noise_rmse: noise_variance.sqrt(),
+            });
             let mut outputs = Vec::new();
             for setting in &target.settings {
                 // Compute only: the algorithm on decoded passes, median of `runs`.
@@ -535,13 +613,52 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                 rows.push(Row {
                     scene: name.clone(),
                     setting: setting.label.clone(),
+                    peer: None,
+                    peer_settings: serde_json::Value::Null,
                     compute_ms,
-                    end_to_end_ms: median(walls),
+                    end_to_end_ms: Some(median(walls)),
                     peak_rss_mib: peak,
                     whole,
                     region: scored,
+                    region_rmse_corrected: noise::corrected_rmse(scored.rmse, noise_variance),
                 });
                 outputs.push((setting.label.clone(), blurred));
+            }
+            for peer in peers
+                .iter()
+                .filter(|p| &p.scene == scene_name && &p.target == name)
+            {
+                let output = read_rgb(&peer.output)?;
+                if (output.width, output.height) != (sharp.width, sharp.height) {
+                    return Err(Problem::new(
+                        ProblemKind::SizeMismatch,
+                        &peer.output,
+                        format!(
+                            "the peer's output is {}x{}, the scene {}x{}",
+                            output.width, output.height, sharp.width, sharp.height
+                        ),
+                    )
+                    .into());
+                }
+                let whole = metrics::compare(&rgb(&reference), &rgb(&output), None);
+                let scored = metrics::compare(&rgb(&reference), &rgb(&output), Some(&region));
+                progress(format!(
+                    "{name}: peer {} compute {:.2} ms, region RMSE {:.5}",
+                    peer.label, peer.compute_ms, scored.rmse
+                ));
+                rows.push(Row {
+                    scene: name.clone(),
+                    setting: peer.label.clone(),
+                    peer: Some(peer.peer.clone()),
+                    peer_settings: peer.settings.clone(),
+                    compute_ms: peer.compute_ms,
+                    end_to_end_ms: peer.end_to_end_ms,
+                    peak_rss_mib: None,
+                    whole,
+                    region: scored,
+                    region_rmse_corrected: noise::corrected_rmse(scored.rmse, noise_variance),
+                });
+                outputs.push((peer.label.clone(), output));
             }
             sheets.push((name.clone(), sharp.clone(), outputs, reference));
         }
@@ -553,6 +670,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
         runs: options.runs,
         threads: rayon::current_num_threads(),
         rows,
+        noise: noise_floors,
     };
     write_outputs(options, &report, &sheets)?;
     Ok(report)
@@ -608,24 +726,39 @@ pub fn markdown(report: &BenchReport) -> String {
         "{}×{}, reference {} samples per pixel, median of {} runs, {} threads.\n\n\
          Errors against the brute-force reference over the region blur changes (RMSE, PSNR \
          on linear values; SSIM, FLIP on the sRGB display image) and RMSE over the whole \
-         frame.\n\n",
+         frame. RMSE corr. is the region RMSE with the reference's own noise taken out, \
+         sqrt(max(0, RMSE² − noise²)); rows with a peer are another program's output on the \
+         same files, with the time it measured.\n\n",
         report.width, report.height, report.samples, report.runs, report.threads
     );
     text.push_str(
-        "| scene | setting | compute ms | end-to-end ms | peak RSS MiB | region px | RMSE | PSNR dB | SSIM | FLIP | RMSE whole |\n\
-         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        "Reference noise over each target's region (RMS, from a second render with other \
+         samples):\n\n| scene | region px | noise RMSE |\n|---|---:|---:|\n",
+    );
+    for floor in &report.noise {
+        text.push_str(&format!(
+            "| {} | {} | {:.5} |\n",
+            floor.scene, floor.pixels, floor.noise_rmse
+        ));
+    }
+    text.push_str(
+        "\n| scene | setting | peer | compute ms | end-to-end ms | peak RSS MiB | region px | RMSE | RMSE corr. | PSNR dB | SSIM | FLIP | RMSE whole |\n\
+         |---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for row in &report.rows {
         text.push_str(&format!(
-            "| {} | {} | {:.2} | {:.1} | {} | {} | {:.5} | {:.2} | {:.4} | {:.4} | {:.5} |\n",
+            "| {} | {} | {} | {:.2} | {} | {} | {} | {:.5} | {:.5} | {:.2} | {:.4} | {:.4} | {:.5} |\n",
             row.scene,
             row.setting,
+            row.peer.as_deref().unwrap_or("-"),
             row.compute_ms,
-            row.end_to_end_ms,
+            row.end_to_end_ms
+                .map_or("-".to_string(), |m| format!("{m:.1}")),
             row.peak_rss_mib
                 .map_or("-".to_string(), |m| format!("{m:.0}")),
             row.region.pixels,
             row.region.rmse,
+            row.region_rmse_corrected,
             row.region.psnr,
             row.region.ssim,
             row.region.flip,

@@ -316,4 +316,9 @@ pub struct BenchArgs {
     /// Timed runs per measurement (median kept), at least 5.
     #[arg(long, value_name = "N", default_value_t = 5)]
     pub runs: usize,
+
+    /// A folder with a peers.json (scripts/peers/run.sh writes one): other programs' outputs
+    /// on the bench's scene files, scored beside shutter's settings.
+    #[arg(long, value_name = "DIR")]
+    pub peers: Option<PathBuf>,
 }

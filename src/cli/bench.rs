@@ -28,6 +28,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         samples: args.samples,
         runs: args.runs,
         binary,
+        peers: args.peers.clone(),
     };
     let started = std::time::Instant::now();
     let report = crate::bench::run(&options, &mut |line| eprintln!("shutter: bench: {line}"))?;

@@ -97,6 +97,66 @@ fn write(path: &Path, scene: &Scene, channels: Vec<(&str, Plane)>) -> Result<()>
     .map_err(|detail| Problem::new(ProblemKind::Output, path, detail).into())
 }
 
+/// The references a scene has: its role (file name stem) and what it renders.
+fn reference_kinds(scene: &Scene) -> Vec<(&'static str, Reference)> {
+    let mut kinds = vec![("reference", Reference::MotionBlur)];
+    if scene.lens.is_some() {
+        kinds.push(("reference_dof", Reference::DepthOfField));
+        kinds.push(("reference_both", Reference::Both));
+    }
+    kinds
+}
+
+/// Renders and writes every reference of frame time `t`, each to `file(role)`.
+fn write_frame_references(
+    scene: &Scene,
+    t: f64,
+    settings: &RenderSettings,
+    file: &mut dyn FnMut(&str) -> PathBuf,
+) -> Result<Vec<PathBuf>> {
+    let n = scene.width * scene.height;
+    let mut written = Vec::new();
+    for (role, kind) in reference_kinds(scene) {
+        let [r, g, b] = render_reference(scene, t, kind, settings);
+        let path = file(role);
+        write(
+            &path,
+            scene,
+            vec![("R", r), ("G", g), ("B", b), ("A", vec![1.0; n])],
+        )?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
+/// The role of a reference rendered again with sampling seed `sampling_seed`
+/// ([`write_resampled_references`]): `reference_seed2` for `reference` and seed 2.
+pub fn resampled_role(role: &str, sampling_seed: u64) -> String {
+    format!("{role}_seed{sampling_seed}")
+}
+
+/// Renders frame 1's references again into `dir`, with the scene laid out by `options.seed`
+/// as [`write_scene`] lays it out but sampled with `sampling_seed` (sub-pixel, time and
+/// aperture samples), as `ROLE_seedS.0001.exr` ([`resampled_role`]). Two renders that differ
+/// only in their samples measure the references' Monte Carlo noise (the bench's noise floor).
+/// Returns the files written, in the order of the references.
+pub fn write_resampled_references(
+    name: &str,
+    dir: &Path,
+    options: &SceneOptions,
+    sampling_seed: u64,
+) -> Result<Vec<PathBuf>> {
+    let scene = scene_by_name(name, options)?;
+    let settings = RenderSettings {
+        samples: options.samples.max(1),
+        shutter: options.shutter,
+        seed: sampling_seed,
+    };
+    write_frame_references(&scene, 0.0, &settings, &mut |role| {
+        dir.join(format!("{}.0001.exr", resampled_role(role, sampling_seed)))
+    })
+}
+
 /// Writes every frame of the scene into `dir`; calls `on_frame` after each.
 pub fn write_scene(
     name: &str,
@@ -133,22 +193,9 @@ pub fn write_scene(
     let file = |role: &str, frame: usize| -> PathBuf { dir.join(format!("{role}.{frame:04}.exr")) };
     for frame in 1..=options.frames {
         let t = (frame - 1) as f64;
-        let n = scene.width * scene.height;
         let passes = render_passes(&scene, t, options.samples, options.seed);
         write_passes(passes, |role| file(role, frame))?;
-        let mut kinds = vec![("reference", Reference::MotionBlur)];
-        if scene.lens.is_some() {
-            kinds.push(("reference_dof", Reference::DepthOfField));
-            kinds.push(("reference_both", Reference::Both));
-        }
-        for (role, kind) in kinds {
-            let [r, g, b] = render_reference(&scene, t, kind, &settings);
-            write(
-                &file(role, frame),
-                &scene,
-                vec![("R", r), ("G", g), ("B", b), ("A", vec![1.0; n])],
-            )?;
-        }
+        write_frame_references(&scene, t, &settings, &mut |role| file(role, frame))?;
         on_frame(frame, &file("color", frame));
     }
     let description = SceneDescription {
