@@ -8,14 +8,15 @@
 //!   layers), k = 20, S = 15, shutter 0.5;
 //! - **static**: nothing moves (the early-out);
 //! - **sparse**: one moving square covering a given share of the tiles;
-//! - the moving frame again at S = 1, 7 and 31, to separate fixed costs from per-tap costs.
+//! - the moving frame again at S = 1, 7 and 31, to separate fixed costs from per-tap costs;
+//! - the moving frame through each variant, and the 2014 filters at more taps and larger k.
 //!
 //! Median of 9 runs after one warm-up run.
 
 mod common;
 
 use common::{frame, H, W};
-use shutter::motion::Algorithm;
+use shutter::motion::{Algorithm, Variant};
 use shutter::process::Params;
 
 fn median_ms(f: &shutter::frame::Frame, runs: usize) -> f64 {
@@ -40,6 +41,28 @@ fn main() {
         params.reconstruct.taps = taps;
         println!(
             "1920x1080 every pixel moving, k=20 S={taps}: {:.1} ms",
+            median_ms_with(&moving, 5, &params)
+        );
+    }
+    // The variants side by side (paper is the default above), and the 2014 filters' time
+    // against taps and k: BENCHMARKS.md sets these against their errors.
+    for (variant, taps, max_blur) in [
+        (Variant::Paper, 15, 20),
+        (Variant::Stable, 15, 20),
+        (Variant::Exposure, 15, 20),
+        (Variant::Stable, 15, 128),
+        (Variant::Exposure, 15, 128),
+        (Variant::Exposure, 31, 128),
+        (Variant::Exposure, 63, 128),
+        (Variant::Paper, 15, 20),
+    ] {
+        let mut params = Params::default();
+        params.reconstruct.variant = variant;
+        params.reconstruct.taps = taps;
+        params.reconstruct.max_blur = max_blur;
+        let name = Variant::ALL.iter().find(|(_, v)| *v == variant).unwrap().0;
+        println!(
+            "1920x1080 every pixel moving, {name} k={max_blur} S={taps}: {:.1} ms",
             median_ms_with(&moving, 5, &params)
         );
     }

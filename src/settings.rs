@@ -391,7 +391,8 @@ pub const DEFS: &[Def] = &[
         section: Section::Blur,
         applies: RECONSTRUCT,
         value_name: "PX",
-        help: "k, the largest blur radius in pixels, also the tile size",
+        help: "k, the largest blur radius in pixels (paper, dual: also the tile size; the \
+               paper used 20)",
         kind: whole(1.0, 512.0),
         unset: "",
         get: |s| Value::Number(s.params.reconstruct.max_blur as f64),
@@ -403,7 +404,8 @@ pub const DEFS: &[Def] = &[
         section: Section::Blur,
         applies: RECONSTRUCT,
         value_name: "S",
-        help: "filter taps S, odd",
+        help: "filter taps S, odd (paper, dual: along the line; 2014, exposure: S + 1 in \
+               all, a quarter on each side along the tile's and the pixel's own motion)",
         kind: Kind::Number {
             min: 1.0,
             max: 255.0,
@@ -445,8 +447,9 @@ pub const DEFS: &[Def] = &[
         section: Section::Blur,
         applies: RECONSTRUCT,
         value_name: "V",
-        help: "paper: every tap along the neighbourhood's velocity; dual: every other tap \
-               along the pixel's own",
+        help: "paper: McGuire 2012, every tap along the neighbourhood's velocity; dual: \
+               every other tap along the pixel's own; 2014: Guertin 2014 as Blender's Vector \
+               Blur runs it (Jimenez's form); exposure: 2014 with the box shutter's weights",
         kind: Kind::Choice(|| names(Variant::ALL)),
         unset: "",
         get: |s| name_of(Variant::ALL, s.params.reconstruct.variant),

@@ -143,3 +143,160 @@ fn prev_and_next_are_never_read() {
     let warnings = report["warnings"].to_string();
     assert!(warnings.contains("--prev is not read") && warnings.contains("--next is not read"));
 }
+
+/// A grey frame from `paint(x, y)` with depth `depth(x, y)` and velocity `velocity(x, y)`.
+fn synthetic(
+    (w, h): (usize, usize),
+    paint: impl Fn(usize, usize) -> [f32; 3],
+    depth: impl Fn(usize, usize) -> f32,
+    velocity: impl Fn(usize, usize) -> (f32, f32),
+) -> Frame {
+    let mut f = Frame::new(w, h);
+    let at = |g: &dyn Fn(usize, usize) -> f32| -> Vec<f32> {
+        (0..w * h).map(|i| g(i % w, i / w)).collect()
+    };
+    f.color = Some(shutter::frame::Color {
+        r: at(&|x, y| paint(x, y)[0]),
+        g: at(&|x, y| paint(x, y)[1]),
+        b: at(&|x, y| paint(x, y)[2]),
+        a: None,
+    });
+    f.depth = Some(at(&depth));
+    f.velocity = Some(Velocity {
+        x: at(&|x, y| velocity(x, y).0),
+        y: at(&|x, y| velocity(x, y).1),
+    });
+    f
+}
+
+fn reconstruct_with(variant: Variant, taps: usize, jitter: bool) -> Params {
+    Params {
+        shutter: 0.5,
+        reconstruct: ReconstructParams {
+            taps,
+            jitter,
+            variant,
+            ..ReconstructParams::default()
+        },
+        ..Params::default()
+    }
+}
+
+/// The largest difference, over a row, between the filter's output and the box-shutter ramp
+/// of a step edge at x = 80 moving 40 px per frame with a 180° shutter: each pixel centre X
+/// sees the image over [X − 10, X + 10], so the exact value is clamp((X + 10 − 80)/20, 0, 1).
+fn step_edge_error(params: &Params, bright_in_front: bool) -> f32 {
+    let (w, h) = (160, 24);
+    let f = synthetic(
+        (w, h),
+        |x, _| if x >= 80 { [1.0; 3] } else { [0.0; 3] },
+        |x, _| match (x >= 80, bright_in_front) {
+            (true, true) | (false, false) => 1.0,
+            _ => 2.0,
+        },
+        |_, _| (40.0, 0.0),
+    );
+    let out = apply(Algorithm::Reconstruct, params, f, 1);
+    let r = &out.color.as_ref().unwrap().r;
+    let y = h / 2;
+    (40..120)
+        .map(|x| {
+            let exact = ((x as f32 + 0.5 + 10.0 - 80.0) / 20.0).clamp(0.0, 1.0);
+            (r[y * w + x] - exact).abs()
+        })
+        .fold(0.0, f32::max)
+}
+
+#[test]
+fn a_moving_step_edge_gets_the_box_shutter_ramp() {
+    // The 2014 filters' taps sit one in each of 2K equal cells over [−q, q] (K = ⌈S/4⌉ per
+    // side and direction), so the cell the step cuts is off by at most half its weight,
+    // 1/(4K), at the cells' centres (no jitter) and at most its whole weight, 1/(2K),
+    // anywhere in them (jitter). Blender's form also gives the centre a slot of its own,
+    // filled with the background's average: up to 1/(4K + 1) more. Ours tapers the
+    // background's weight over the last half pixel of the centre's streak (q = 10 px here)
+    // and fills the rest with what lies behind: up to a quarter pixel of the 2q streak,
+    // 1/(8q), more.
+    let q = 10.0;
+    for bright_in_front in [true, false] {
+        for (jitter, k) in [(false, 16.0), (true, 16.0), (false, 4.0)] {
+            let taps = 4 * k as usize - 1;
+            let cells = if jitter { 0.5 / k } else { 0.25 / k };
+            for (variant, bound) in [
+                (Variant::Exposure, cells + 1.0 / (8.0 * q)),
+                (Variant::Stable, cells + 1.0 / (4.0 * k + 1.0)),
+            ] {
+                let error =
+                    step_edge_error(&reconstruct_with(variant, taps, jitter), bright_in_front);
+                assert!(
+                    error <= bound + 1e-4,
+                    "{variant:?} S {taps}, jitter {jitter}, bright in front {bright_in_front}: \
+                     {error} > {bound}"
+                );
+            }
+        }
+    }
+    // The 2012 filter's cones widen the kernel past the box: its ramp is off by far more.
+    let paper = step_edge_error(&reconstruct_with(Variant::Paper, 63, false), false);
+    assert!(paper > 0.05, "paper {paper}");
+}
+
+#[test]
+fn a_still_subject_stays_sharp_while_the_background_streaks_up_to_it() {
+    // Green stripes of period 4 far behind, moving 32 px per frame (a 16 px streak at 180°,
+    // four periods: every streak averages to 0.5); a red square in front, still.
+    let (w, h) = (192, 64);
+    let subject = |x: usize, y: usize| (96..128).contains(&x) && (16..48).contains(&y);
+    let f = synthetic(
+        (w, h),
+        |x, y| {
+            if subject(x, y) {
+                [1.0, 0.0, 0.0]
+            } else {
+                [0.0, if x % 4 < 2 { 1.0 } else { 0.0 }, 0.0]
+            }
+        },
+        |x, y| if subject(x, y) { 1.0 } else { 10.0 },
+        |x, y| {
+            if subject(x, y) {
+                (0.0, 0.0)
+            } else {
+                (32.0, 0.0)
+            }
+        },
+    );
+    for jitter in [false, true] {
+        let out = apply(
+            Algorithm::Reconstruct,
+            &reconstruct_with(Variant::Exposure, 15, jitter),
+            f.clone(),
+            1,
+        );
+        let c = out.color.as_ref().unwrap();
+        for y in 0..h {
+            for x in 0..w {
+                let i = y * w + x;
+                if subject(x, y) {
+                    let off = (c.r[i] - 1.0).abs().max(c.g[i].abs());
+                    assert!(
+                        off < 0.02,
+                        "jitter {jitter}: subject ({x}, {y}) blurred by {off}"
+                    );
+                } else if (16..48).contains(&y) && (x + 8 >= 96 && x < 128 + 8) && x > 20 {
+                    // Background beside the silhouette: streaked (the stripes average out)
+                    // and never tinted by the subject.
+                    assert!(
+                        c.r[i] < 0.02,
+                        "jitter {jitter}: red bled to ({x}, {y}): {}",
+                        c.r[i]
+                    );
+                    assert!(
+                        (c.g[i] - 0.5).abs() < 0.2,
+                        "jitter {jitter}: background at ({x}, {y}) not streaked: {}",
+                        c.g[i]
+                    );
+                }
+            }
+        }
+    }
+}

@@ -54,11 +54,10 @@ pub fn sweep() -> Vec<Setting> {
         params: Params::default(),
     }];
     let reconstruct = |taps: usize, max_blur: usize, variant: Variant| {
-        let name = if variant == Variant::Dual {
-            "dual"
-        } else {
-            "paper"
-        };
+        let name = Variant::ALL
+            .iter()
+            .find(|(_, v)| *v == variant)
+            .map_or("?", |(n, _)| n);
         Setting {
             label: format!("reconstruct {name} S{taps} k{max_blur}"),
             algorithm: Algorithm::Reconstruct,
@@ -80,6 +79,12 @@ pub fn sweep() -> Vec<Setting> {
         settings.push(reconstruct(15, max_blur, Variant::Paper));
     }
     settings.push(reconstruct(15, 20, Variant::Dual));
+    // The 2014 filter as Blender runs it, and ours (the default: S 31, k 128) against taps
+    // and k.
+    settings.push(reconstruct(31, 128, Variant::Stable));
+    for (taps, max_blur) in [(15, 128), (31, 128), (63, 128), (31, 20)] {
+        settings.push(reconstruct(taps, max_blur, Variant::Exposure));
+    }
     settings.extend(scatter_sweep());
     settings.extend(stretch_sweep());
     settings

@@ -6,6 +6,7 @@
 //! `triangle` and `stretch` modules).
 
 pub mod curve;
+pub mod dilate;
 pub mod line;
 pub mod neighbor_max;
 pub mod reconstruct;

@@ -28,6 +28,7 @@
 
 use rayon::prelude::*;
 
+use super::dilate::dilate;
 use super::neighbor_max::neighbor_max;
 use super::tile_max::{tile_max, TileGrid};
 use crate::frame::{Color, Frame, Velocity};
@@ -47,20 +48,56 @@ pub enum Variant {
     /// Jimenez 2014 sample both directions), so a pixel moving across its neighbourhood's
     /// dominant motion still blurs along its own.
     Dual,
+    /// Guertin, McGuire & Nowrouzezahrai 2014 with Jimenez 2014's changes, as Blender's EEVEE
+    /// and compositor Vector Blur run it: tiles dilated along their motion ([`dilate`]), taps
+    /// along both the tile's and the pixel's own vector on each side, foreground and
+    /// background accumulated apart (see [`gather_pixel_2014`]).
+    Stable,
+    /// The 2014 filter with the box shutter's weights (ours, measured in BENCHMARKS.md): a
+    /// tap reaches the centre within half a pixel of its spread (not a whole one), the tap
+    /// count alone normalises (the centre holds no slot of its own), a tap counts whichever
+    /// way it moves along its line (the shutter is centred: a tap moving against the line
+    /// reaches the centre in the other half), and what the taps leave uncovered is filled
+    /// with the centre's own surface for the share of the shutter it covers the pixel
+    /// (1/(2|V|)) and the background behind it for the rest.
+    Exposure,
 }
 
 impl Variant {
     /// Every choice, by the name flags and presets use.
-    pub const ALL: &'static [(&'static str, Variant)] =
-        &[("paper", Variant::Paper), ("dual", Variant::Dual)];
+    pub const ALL: &'static [(&'static str, Variant)] = &[
+        ("paper", Variant::Paper),
+        ("dual", Variant::Dual),
+        ("2014", Variant::Stable),
+        ("exposure", Variant::Exposure),
+    ];
+
+    /// The number the config carries.
+    pub fn code(self) -> u32 {
+        match self {
+            Variant::Paper => 0,
+            Variant::Dual => 1,
+            Variant::Stable => 2,
+            Variant::Exposure => 3,
+        }
+    }
+
+    /// Whether this variant is the 2014 filter's (dilated tiles, split accumulation).
+    pub fn is_2014(self) -> bool {
+        matches!(self, Variant::Stable | Variant::Exposure)
+    }
 }
 
-/// Parameters, with the paper's defaults.
+/// Parameters. The defaults are the exposure variant's, the lowest error of the variants on
+/// every truth scene (BENCHMARKS.md); the paper's were k 20, S 15.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReconstructParams {
-    /// k: the largest blur radius in pixels, also the tile size. Paper: 20.
+    /// k: the largest blur radius in pixels. paper and dual: also the tile size (paper: 20);
+    /// the 2014 variants' tiles stay at 8 px and their dilation carries longer vectors.
     pub max_blur: usize,
-    /// S: filter taps, odd. Paper: 15.
+    /// S: filter taps, odd. paper and dual: taps along the line; the 2014 variants: ⌈S/4⌉ per
+    /// side of the centre along each of the tile's and the pixel's own vector (S + 1 in all
+    /// when the pixel moves).
     pub taps: usize,
     /// SOFT_Z_EXTENT in scene units (the paper used 1 mm to 10 cm).
     pub soft_z: f32,
@@ -72,11 +109,11 @@ pub struct ReconstructParams {
 impl Default for ReconstructParams {
     fn default() -> Self {
         ReconstructParams {
-            max_blur: 20,
-            taps: 15,
+            max_blur: 128,
+            taps: 31,
             soft_z: 0.1,
             jitter: true,
-            variant: Variant::Paper,
+            variant: Variant::Exposure,
         }
     }
 }
@@ -137,6 +174,12 @@ fn soft_depth_compare(za: f32, zb: f32, inverse_extent: f32) -> f32 {
 type Texel = [f32; 6];
 const Z: usize = 4;
 const INV_LENGTH: usize = 5;
+/// The 2014 filters' tile size at most (px), whatever k: the dilation carries longer vectors
+/// across as many tiles as they reach. Smaller tiles keep the dominant vector local: on the
+/// truth scenes at k 128, S 31, tiles of 8 px err 5–13 % less than 20 px on rotor, orbit,
+/// figure and gears (BENCHMARKS.md), at no cost worth measuring.
+const TILE_2014: usize = 8;
+
 /// Taps evaluated together in the gather.
 const LANES: usize = 8;
 
@@ -163,8 +206,9 @@ pub struct ReconstructConfig {
     pub inv_soft_z: f32,
     /// 1 to jitter the taps per pixel, else 0.
     pub jitter: u32,
-    /// 1 for the dual variant (every other tap along the pixel's own velocity), else 0.
-    pub dual: u32,
+    /// The variant: 0 paper, 1 dual (every other tap along the pixel's own velocity), 2 the
+    /// 2014 filter, 3 the 2014 filter with exposure weights ([`Variant::code`]).
+    pub variant: u32,
     /// The jitter's seed: the frame number modulo 2³².
     pub seed: u32,
 }
@@ -181,13 +225,19 @@ impl ReconstructConfig {
         ReconstructConfig {
             width: width as u32,
             height: height as u32,
-            tile: size as u32,
+            // The 2014 filter's tiles stay at most 32 px (Blender's size) whatever k: its
+            // dilation carries longer vectors across as many tiles as they reach.
+            tile: if params.variant.is_2014() {
+                size.min(TILE_2014)
+            } else {
+                size
+            } as u32,
             k: size as f32,
             shutter,
             taps: (params.taps.max(1) | 1) as u32,
             inv_soft_z: 1.0 / params.soft_z.max(1e-6),
             jitter: params.jitter as u32,
-            dual: (params.variant == Variant::Dual) as u32,
+            variant: params.variant.code(),
             seed,
         }
     }
@@ -213,8 +263,13 @@ pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, s
     // TileMax of the input velocity, then V of each tile's dominant vector: V is monotonic
     // in |v|, so this equals TileMax of V without storing a full-size V plane.
     let mut tiles = tile_max(&velocity.x, &velocity.y, width, height, size);
+    let stable = config.variant >= Variant::Stable.code();
     for (x, y) in tiles.x.iter_mut().zip(tiles.y.iter_mut()) {
-        (*x, *y) = half_spread(*x, *y, config.shutter, config.k);
+        (*x, *y) = if stable {
+            spread_2014(*x, *y, &config)
+        } else {
+            half_spread(*x, *y, config.shutter, config.k)
+        };
     }
     let moving = |v: (f32, f32)| v.0 * v.0 + v.1 * v.1 > MOVING_SQUARED;
     if width * height == 0
@@ -223,12 +278,299 @@ pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, s
         frame.color = Some(color);
         return frame;
     }
-    let neighbors = neighbor_max(&tiles);
-    let texels = pack(&config, &color, &depth, &velocity, &neighbors);
-    drop(depth);
-    gather(&config, &texels, &velocity, &neighbors, &mut color);
+    if stable {
+        let dilated = dilate(&tiles);
+        let texels = pack_2014(&config, &color, &depth, &velocity, &dilated);
+        drop(depth);
+        gather_2014(&config, &texels, &dilated, &mut color);
+    } else {
+        let neighbors = neighbor_max(&tiles);
+        let texels = pack(&config, &color, &depth, &velocity, &neighbors);
+        drop(depth);
+        gather(&config, &texels, &velocity, &neighbors, &mut color);
+    }
     frame.color = Some(color);
     frame
+}
+
+/// Whether any tile within `radius` tiles of (c, r) blurs.
+fn near_blur(tiles: &TileGrid, c: usize, r: usize, radius: usize) -> bool {
+    (r.saturating_sub(radius)..(r + radius + 1).min(tiles.rows)).any(|rr| {
+        (c.saturating_sub(radius)..(c + radius + 1).min(tiles.columns))
+            .any(|cc| blurs(tiles, cc, rr))
+    })
+}
+
+/// One pixel's data for the 2014 gather: premultiplied R, G, B, A, depth, the half-spread
+/// vector V (clamped to k, not raised to half a pixel) and |V|.
+type Texel2014 = [f32; 8];
+const VX: usize = 5;
+const VY: usize = 6;
+const LENGTH: usize = 7;
+
+/// The 2014 filter's pack: pixels within two tiles of a blurring tile (a pixel gathers when
+/// a tile of its 3×3 neighbourhood blurs, since its tile lookup is jittered by up to a
+/// quarter tile; its taps reach at most k = one tile further).
+pub fn pack_2014(
+    config: &ReconstructConfig,
+    color: &Color,
+    depth: &[f32],
+    velocity: &Velocity,
+    tiles: &TileGrid,
+) -> Vec<Texel2014> {
+    let width = config.width as usize;
+    let size = config.tile as usize;
+    let n = width * config.height as usize;
+    // Taps reach k px: this many tiles beyond the tile a pixel looks up.
+    let reach = (config.k / config.tile as f32).ceil() as usize;
+    let mut texels: Vec<Texel2014> = vec![[0.0; 8]; n];
+    texels
+        .par_chunks_mut(size * width)
+        .enumerate()
+        .for_each(|(row, chunk)| {
+            for c in (0..tiles.columns).filter(|&c| near_blur(tiles, c, row, reach + 1)) {
+                for local_y in 0..chunk.len() / width {
+                    let y = row * size + local_y;
+                    for x in c * size..((c + 1) * size).min(width) {
+                        let i = y * width + x;
+                        let v = spread_2014(velocity.x[i], velocity.y[i], config);
+                        chunk[local_y * width + x] = [
+                            color.r[i],
+                            color.g[i],
+                            color.b[i],
+                            color.a.as_ref().map_or(1.0, |a| a[i]),
+                            finite_depth(depth[i]),
+                            v.0,
+                            v.1,
+                            (v.0 * v.0 + v.1 * v.1).sqrt(),
+                        ];
+                    }
+                }
+            }
+        });
+    texels
+}
+
+/// The 2014 filter's half-spread: `q = ½·v·φ`, its length clamped to k (not raised to half a
+/// pixel: the filter treats vectors under half a pixel as still).
+#[inline]
+pub fn spread_2014(vx: f32, vy: f32, config: &ReconstructConfig) -> (f32, f32) {
+    let (qx, qy) = (0.5 * vx * config.shutter, 0.5 * vy * config.shutter);
+    let length = (qx * qx + qy * qy).sqrt();
+    if length > config.k {
+        let scale = config.k / length;
+        (qx * scale, qy * scale)
+    } else {
+        (qx, qy)
+    }
+}
+
+/// The 2014 filter's gather, in place, over the tiles within one tile of a blurring one.
+pub fn gather_2014(
+    config: &ReconstructConfig,
+    texels: &[Texel2014],
+    tiles: &TileGrid,
+    color: &mut Color,
+) {
+    let width = config.width as usize;
+    let size = config.tile as usize;
+    let n = width * config.height as usize;
+    let has_alpha = color.a.is_some();
+    let mut alpha = color.a.take().unwrap_or_else(|| vec![0.0; n]);
+    let band = size * width;
+    color
+        .r
+        .par_chunks_mut(band)
+        .zip(color.g.par_chunks_mut(band))
+        .zip(color.b.par_chunks_mut(band))
+        .zip(alpha.par_chunks_mut(band))
+        .enumerate()
+        .for_each(|(row, (((r, g), b), a))| {
+            for c in (0..tiles.columns).filter(|&c| near_blur(tiles, c, row, 1)) {
+                for local_y in 0..r.len() / width {
+                    let y = row * size + local_y;
+                    for x in c * size..((c + 1) * size).min(width) {
+                        let o = local_y * width + x;
+                        let [cr, cg, cb, ca] = gather_pixel_2014(config, texels, tiles, x, y);
+                        r[o] = cr;
+                        g[o] = cg;
+                        b[o] = cb;
+                        a[o] = ca;
+                    }
+                }
+            }
+        });
+    color.a = has_alpha.then_some(alpha);
+}
+
+/// Jitter salts of the 2014 gather: the tile lookup and the taps' offset.
+const SALT_TILE: u32 = 0x5449_4c45;
+const SALT_TAPS: u32 = 0x5441_5053;
+
+/// The 2014 filter at pixel (x, y), as Blender's compositor runs it (Jimenez's version of
+/// Guertin et al.):
+///
+/// - the tile's dilated vector M is looked up with the tile boundary jittered by up to a
+///   quarter tile (diagonally), and replaced by the pixel's own V when that is longer;
+/// - each half of the shutter is gathered apart: taps at `X + M·t` for the half before the
+///   frame's time and `X − M·t` for the half after, t = (i + ξ)/K for i < K, then as many
+///   along the pixel's own V when it moves;
+/// - a tap counts (its direction weight) unless it moves, by more than half a pixel, against
+///   the vector it was taken along; of those, its background weight is
+///   `clamp(½ + s·(z_tap − z), 0, 1)·clamp(|V| − d + 1, 0, 1)` (behind the centre and within
+///   the centre's own spread) and its foreground weight
+///   `clamp(½ − s·(z_tap − z), 0, 1)·clamp(|V_tap| − d + 1, 0, 1)` (in front and reaching
+///   the centre), d the tap's distance, s = 1 / SOFT_Z_EXTENT;
+/// - the result is the sum of both accumulations over the tap count (the centre counts
+///   once), plus the background's average in place of whatever weight the taps failed to
+///   give: what a missing foreground leaves visible is background, not the centre pixel.
+///
+/// Returns premultiplied RGBA, a convex mix of taps and centre.
+#[inline(always)]
+fn gather_pixel_2014(
+    config: &ReconstructConfig,
+    texels: &[Texel2014],
+    tiles: &TileGrid,
+    x: usize,
+    y: usize,
+) -> [f32; 4] {
+    let (width, height) = (config.width as usize, config.height as usize);
+    let size = config.tile as f32;
+    let i = y * width + x;
+    let centre = texels[i];
+    let (tile_shift, offset) = if config.jitter != 0 {
+        (
+            (unit(config.seed, SALT_TILE, i as u32) * 2.0 - 1.0) * 0.25 * size,
+            unit(config.seed, SALT_TAPS, i as u32),
+        )
+    } else {
+        (0.0, 0.5)
+    };
+    let column =
+        ((x as f32 + tile_shift).max(0.0) as usize / config.tile as usize).min(tiles.columns - 1);
+    let row =
+        ((y as f32 + tile_shift).max(0.0) as usize / config.tile as usize).min(tiles.rows - 1);
+    let mut m = tiles.get(column, row);
+    let mut m_length = (m.0 * m.0 + m.1 * m.1).sqrt();
+    let own = (centre[VX], centre[VY]);
+    let own_length = centre[LENGTH];
+    if m_length < own_length {
+        m = own;
+        m_length = own_length;
+    }
+    if m_length < HALF_PIXEL {
+        return [centre[0], centre[1], centre[2], centre[3]];
+    }
+    let k = config.taps.div_ceil(4).max(1) as usize;
+    let step = 1.0 / k as f32;
+    let scale = config.inv_soft_z;
+    let exposure = config.variant == Variant::Exposure.code();
+    // How far past the centre's own spread a background tap still counts: a whole pixel in
+    // Blender's form, half a pixel (the centre pixel's half-width) in ours, so that a still
+    // pixel takes nothing from its neighbours behind it.
+    let edge = if exposure { 0.5 } else { 1.0 };
+    // How far past its own spread a foreground tap reaches: a whole pixel (Blender's), but
+    // in ours half a pixel for a still tap, which does not spread at all.
+    let reach = |length: f32| {
+        if exposure && length < HALF_PIXEL {
+            0.5
+        } else {
+            1.0
+        }
+    };
+    let mut fg = [0.0f32; 4];
+    let mut bg = [0.0f32; 4];
+    let (mut w_fg, mut w_bg) = (0.0f32, 0.0f32);
+    // The centre holds one slot of the count in Blender's form.
+    let mut count = if exposure { 0.0f32 } else { 1.0 };
+    let directions = if own_length < HALF_PIXEL { 1 } else { 2 };
+    let centre_z = centre[Z];
+    for side in [1.0f32, -1.0] {
+        for d in 0..directions {
+            let (dx, dy, length) = if d == 0 {
+                (m.0, m.1, m_length)
+            } else {
+                (own.0, own.1, own_length)
+            };
+            let (sx, sy) = (side * dx, side * dy);
+            // Taps eight at a time, so the weights' arithmetic runs on eight lanes (lanes
+            // past the last tap are dead: zero weight, no count).
+            let mut first = 0;
+            while first < k {
+                let mut t = [0.0f32; LANES];
+                let mut live = [0.0f32; LANES];
+                let mut sample = [[0.0f32; 8]; LANES];
+                for l in 0..LANES.min(k - first) {
+                    t[l] = ((first + l) as f32 + offset) * step;
+                    let px = (x as f32 + 0.5 + sx * t[l]).max(0.0) as usize;
+                    let py = (y as f32 + 0.5 + sy * t[l]).max(0.0) as usize;
+                    sample[l] = texels[py.min(height - 1) * width + px.min(width - 1)];
+                    live[l] = 1.0;
+                }
+                let mut f = [0.0f32; LANES];
+                let mut b = [0.0f32; LANES];
+                for l in 0..LANES {
+                    let distance = length * t[l];
+                    // Blender's form: the tap must move along the vector it was taken along
+                    // (each half of the shutter is gathered on its own side). Ours: the
+                    // shutter is centred, so a tap moving against the line reaches the centre
+                    // in the other half; it counts either way.
+                    let along = dx * sample[l][VX] + dy * sample[l][VY] > 0.0;
+                    let counts = exposure || sample[l][LENGTH] < HALF_PIXEL || along;
+                    let direction = if counts { live[l] } else { 0.0 };
+                    let dz = sample[l][Z] - centre_z;
+                    let behind = (0.5 + scale * dz).clamp(0.0, 1.0);
+                    let front = (0.5 - scale * dz).clamp(0.0, 1.0);
+                    b[l] = direction * behind * (own_length - distance + edge).clamp(0.0, 1.0);
+                    f[l] = direction
+                        * front
+                        * (sample[l][LENGTH] - distance + reach(sample[l][LENGTH])).clamp(0.0, 1.0);
+                    count += direction;
+                }
+                for l in 0..LANES {
+                    for ch in 0..4 {
+                        fg[ch] += f[l] * sample[l][ch];
+                        bg[ch] += b[l] * sample[l][ch];
+                    }
+                    w_fg += f[l];
+                    w_bg += b[l];
+                }
+                first += LANES;
+            }
+        }
+    }
+    let mut out = [0.0f32; 4];
+    if exposure {
+        // What the taps leave uncovered shows the centre's own surface for the share of the
+        // shutter it spends over the pixel, 1/(2|V|), and what lies behind it (the
+        // background taps) for the rest; with no tap behind, the centre alone.
+        let cover = (0.5 / own_length).min(1.0);
+        let missing = if count > 0.0 {
+            (1.0 - (w_fg + w_bg) / count).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        let inverse = if count > 0.0 { 1.0 / count } else { 0.0 };
+        for ch in 0..4 {
+            let background = if w_bg > 0.0 {
+                cover * centre[ch] + (1.0 - cover) * bg[ch] / w_bg
+            } else {
+                centre[ch]
+            };
+            out[ch] = (fg[ch] + bg[ch]) * inverse + background * missing;
+        }
+        return out;
+    }
+    // Blender's own addition: a little of the centre in the background, so that its
+    // average exists when no tap is behind.
+    let w = 1.0 / (50.0 * (4 * k) as f32);
+    let w_bg = w_bg + w;
+    let missing = (1.0 - (w_fg + w_bg) / count).clamp(0.0, 1.0);
+    for ch in 0..4 {
+        let background = (bg[ch] + w * centre[ch]) / w_bg;
+        out[ch] = (fg[ch] + bg[ch] + w * centre[ch]) / count + background * missing;
+    }
+    out
 }
 
 /// Whether a tile's NeighborMax blurs: |V|² above (0.5 px + ε)².
@@ -371,7 +713,7 @@ fn gather_pixel(
     let mut weight = centre[INV_LENGTH].min(1.0 / HALF_PIXEL);
     let mut sum = [0.0f32; 4];
     let step = 2.0 / (config.taps as f32 + 1.0);
-    let dual = config.dual != 0 && own_length > HALF_PIXEL + EPSILON;
+    let dual = config.variant == Variant::Dual.code() && own_length > HALF_PIXEL + EPSILON;
     // Taps four at a time, so the classification arithmetic runs on four lanes
     // (lanes past the last tap get zero weight).
     let mut tap = 0;

@@ -1,0 +1,140 @@
+//! `dilate`: the tile stage of the 2014 filter (Guertin, McGuire & Nowrouzezahrai 2014, with
+//! Jimenez 2014's dilation as Blender's EEVEE and compositor run it): each tile's dominant
+//! half-spread vector M is spread to the tiles its motion line crosses, forwards and
+//! backwards (the shutter is open on both sides of the frame's time), and each tile keeps the
+//! longest vector that reaches it.
+//!
+//! Unlike [`super::neighbor_max`], which hands every tile the largest vector of its 3×3
+//! neighbourhood whichever way it points, a vector here reaches only the tiles along its own
+//! line: a fast object beside a slow one no longer makes the slow one's tiles sample along the
+//! fast direction.
+//!
+//! A tile is on a line when its centre is within √2 tiles of it (the tile's and the line's
+//! bounding circles, as conservative as Jimenez's rasterisation); a vector of length |M|
+//! reaches ⌈|M|/tile⌉ tiles each way. The scan is a gather over the tiles that can reach a
+//! tile, in a fixed order, so ties (equal lengths) go to the first in row-major order and the
+//! result does not depend on thread count.
+
+use super::tile_max::TileGrid;
+
+/// Distance (in tiles) from a motion line within which a tile counts as crossed.
+const REACH: f32 = std::f32::consts::SQRT_2;
+
+/// Whether the vector `m` of the tile at `from` reaches the tile at `to` (both in tiles).
+#[inline]
+fn reaches(from: (isize, isize), m: (f32, f32), to: (isize, isize), size: f32) -> bool {
+    let length = (m.0 * m.0 + m.1 * m.1).sqrt();
+    if length == 0.0 {
+        return from == to;
+    }
+    let (dx, dy) = ((to.0 - from.0) as f32, (to.1 - from.1) as f32);
+    // Within the rectangle ⌈|M_x|/tile⌉ × ⌈|M_y|/tile⌉ tiles either way of the source...
+    let span = |c: f32| (c.abs() / size).ceil();
+    if dx.abs() > span(m.0) || dy.abs() > span(m.1) {
+        return false;
+    }
+    // ...and near the line through the source along M.
+    let (nx, ny) = (-m.1 / length, m.0 / length);
+    (nx * dx + ny * dy).abs() < REACH
+}
+
+/// Spreads each tile's vector along its own line (both ways) and keeps, per tile, the
+/// longest that reaches it (a tile's own vector wins ties, then the first source in row-major
+/// order). `tiles` holds half-spread vectors in pixels.
+///
+/// A scatter: each source visits only the tiles of the rectangle its vector spans, so the
+/// cost grows with the vectors' lengths in tiles, not with the square of the largest one.
+/// It runs in row-major order on one thread (a few million steps at most at 1080p), which
+/// makes the tie rule, and so the result, independent of thread count.
+pub fn dilate(tiles: &TileGrid) -> TileGrid {
+    let (columns, rows) = (tiles.columns, tiles.rows);
+    let size = tiles.size.max(1) as f32;
+    let mut out = tiles.clone();
+    let mut best: Vec<f32> = tiles
+        .x
+        .iter()
+        .zip(&tiles.y)
+        .map(|(x, y)| x * x + y * y)
+        .collect();
+    for r in 0..rows {
+        for c in 0..columns {
+            let m = tiles.get(c, r);
+            let length = m.0 * m.0 + m.1 * m.1;
+            if length == 0.0 {
+                continue;
+            }
+            let span = |v: f32| (v.abs() / size).ceil() as usize;
+            let (sx, sy) = (span(m.0), span(m.1));
+            for tr in r.saturating_sub(sy)..(r + sy + 1).min(rows) {
+                for tc in c.saturating_sub(sx)..(c + sx + 1).min(columns) {
+                    let i = tr * columns + tc;
+                    let to = (tc as isize, tr as isize);
+                    if length > best[i] && reaches((c as isize, r as isize), m, to, size) {
+                        best[i] = length;
+                        out.x[i] = m.0;
+                        out.y[i] = m.1;
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(columns: usize, rows: usize, size: usize) -> TileGrid {
+        TileGrid {
+            columns,
+            rows,
+            size,
+            x: vec![0.0; columns * rows],
+            y: vec![0.0; columns * rows],
+        }
+    }
+
+    #[test]
+    fn a_vector_reaches_the_tiles_along_its_line_only() {
+        // 5×5 tiles of 10 px; the centre tile moves 10 px to the right.
+        let mut tiles = grid(5, 5, 10);
+        tiles.x[2 * 5 + 2] = 10.0;
+        let out = dilate(&tiles);
+        // Left and right neighbours get it (both ways: the shutter is centred)...
+        assert_eq!(out.get(1, 2), (10.0, 0.0));
+        assert_eq!(out.get(3, 2), (10.0, 0.0));
+        assert_eq!(out.get(2, 2), (10.0, 0.0));
+        // ...but not tiles beyond its reach along the line, nor the rows above and below: a
+        // horizontal vector spans no tile vertically.
+        assert_eq!(out.get(0, 2), (0.0, 0.0));
+        assert_eq!(out.get(2, 1), (0.0, 0.0));
+        assert_eq!(out.get(1, 3), (0.0, 0.0));
+    }
+
+    #[test]
+    fn a_diagonal_vector_misses_the_off_diagonal_corner_tiles() {
+        // 20 px down-right in 10 px tiles: reaches two tiles each way along the diagonal.
+        let mut tiles = grid(5, 5, 10);
+        tiles.x[2 * 5 + 2] = 14.0;
+        tiles.y[2 * 5 + 2] = 14.0;
+        let out = dilate(&tiles);
+        assert_eq!(out.get(4, 4), (14.0, 14.0));
+        assert_eq!(out.get(0, 0), (14.0, 14.0));
+        // (4, 0) is 2·√2 tiles from the line: not crossed.
+        assert_eq!(out.get(4, 0), (0.0, 0.0));
+        assert_eq!(out.get(0, 4), (0.0, 0.0));
+    }
+
+    #[test]
+    fn the_longest_vector_wins_and_a_tile_keeps_its_own_when_longer() {
+        let mut tiles = grid(3, 1, 10);
+        tiles.x[0] = 8.0;
+        tiles.x[1] = 3.0;
+        tiles.x[2] = -9.0;
+        let out = dilate(&tiles);
+        assert_eq!(out.get(1, 0), (-9.0, 0.0));
+        assert_eq!(out.get(0, 0), (8.0, 0.0));
+        assert_eq!(out.get(2, 0), (-9.0, 0.0));
+    }
+}
