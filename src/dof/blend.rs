@@ -499,7 +499,7 @@ struct Scratch {
 fn compose_row(
     source: &Source,
     samplers: &[Sampler],
-    ladder: &Ladder,
+    ladders: &[Ladder; 2],
     near: Option<(usize, f32)>,
     y: usize,
     scratch: &mut Scratch,
@@ -539,7 +539,10 @@ fn compose_row(
                 samplers[k - 1].near_at(&made[k - 1], x)
             };
             let spread = lower + f * (upper.near_at(&made[k], x) - lower);
-            *t = t.max(spread);
+            // Negative where the near field's spread sets the blur.
+            if spread > *t {
+                *t = -spread;
+            }
         }
     }
 
@@ -547,6 +550,7 @@ fn compose_row(
     // and all between.
     let (mut least, mut most) = (f32::INFINITY, 0.0f32);
     for &t in blur.iter() {
+        let t = t.abs();
         if t > 0.0 {
             least = least.min(t);
             most = most.max(t);
@@ -554,38 +558,19 @@ fn compose_row(
     }
     let (epsilon, largest) = (source.epsilon, source.largest);
     let to_coc = |t: f32| epsilon + t * (largest - epsilon);
-    let first = ladder.first;
+    // Image k of the ladder without the half step is level k, and either ladder brackets a
+    // CoC between the same levels from level 1 up.
+    let [ladder, plain] = ladders;
     if most > 0.0 {
-        let (lo, _) = ladder.bracket(to_coc(least));
-        let (hi, _) = ladder.bracket(to_coc(most));
-        for j in lo.max(first)..=hi + 1 {
-            make(j + 1 - first, made);
+        let (lo, _) = plain.bracket(to_coc(least));
+        let (hi, _) = plain.bracket(to_coc(most));
+        for l in lo.max(1)..=hi + 1 {
+            make(l, made);
         }
     }
 
     let mut reference = ZERO;
     reference[..4].copy_from_slice(&source.reference);
-    // The half step at pixel x: the 3×3 filter over the premultiplied neighbourhood.
-    let half = |x: usize| -> Texel {
-        const TAPS: [f32; 3] = [0.25, 0.5, 0.25];
-        let ys = [y.saturating_sub(1), y, (y + 1).min(height - 1)];
-        let xs = [x.saturating_sub(1), x, (x + 1).min(width - 1)];
-        let (mut sum, mut weights) = (ZERO, 0.0f32);
-        for (ky, &sy) in TAPS.iter().zip(&ys) {
-            for (kx, &sx) in TAPS.iter().zip(&xs) {
-                let i = sy * width + sx;
-                let w = ky * kx * source.interpolator(source.coc[i]).max(IN_FOCUS_WEIGHT);
-                for ((v, plane), r) in sum.iter_mut().zip(&source.planes).zip(&reference) {
-                    *v += w * (plane[i] - r);
-                }
-                weights += w;
-            }
-        }
-        for v in sum.iter_mut() {
-            *v /= weights;
-        }
-        sum
-    };
     mixed.clear();
     mixed.resize(width, ZERO);
     for (x, (m, &t)) in mixed.iter_mut().zip(blur.iter()).enumerate() {
@@ -594,26 +579,32 @@ fn compose_row(
         for (v, plane) in sharp.iter_mut().zip(&source.planes) {
             *v = plane[i];
         }
-        if t <= 0.0 {
+        if t == 0.0 {
             *m = sharp;
             continue;
         }
-        let (k, f) = ladder.bracket(to_coc(t));
-        // Image j: the sharp frame (offset), the half step, or a level's row.
-        let image = |j: usize| -> Texel {
-            if j == 0 {
+        // A pixel blurred by the near field's spread mixes levels only: the half step shows
+        // its own neighbourhood, which the near field's blur reaches farther than.
+        let ladder = if t < 0.0 { plain } else { ladder };
+        let first = ladder.first;
+        let (k, f) = ladder.bracket(to_coc(t.abs()));
+        // Image j: the sharp frame (offset), the half step, or a level's row (no closure:
+        // `multiversion` would leave it compiled for the baseline CPU, out of line).
+        let mut pair = [ZERO; 2];
+        for (p, j) in pair.iter_mut().zip([k, k + 1]) {
+            *p = if j == 0 {
                 let mut offset = ZERO;
                 for lane in 0..8 {
                     offset[lane] = sharp[lane] - reference[lane];
                 }
                 offset
             } else if j < first {
-                half(x)
+                half(source, &reference, width, height, x, y)
             } else {
                 samplers[j - first].at(&made[j - first], x)
-            }
-        };
-        let (lower, upper) = (image(k), image(k + 1));
+            };
+        }
+        let [lower, upper] = pair;
         for lane in 0..8 {
             m[lane] = reference[lane] + (lower[lane] + f * (upper[lane] - lower[lane]));
         }
@@ -623,6 +614,37 @@ fn compose_row(
             *o = m[ch];
         }
     }
+}
+
+/// The half step at pixel (x, y): the 3×3 filter over the premultiplied neighbourhood,
+/// normalised (colour offset by the reference).
+#[inline(always)]
+fn half(
+    source: &Source,
+    reference: &Texel,
+    width: usize,
+    height: usize,
+    x: usize,
+    y: usize,
+) -> Texel {
+    const TAPS: [f32; 3] = [0.25, 0.5, 0.25];
+    let ys = [y.saturating_sub(1), y, (y + 1).min(height - 1)];
+    let xs = [x.saturating_sub(1), x, (x + 1).min(width - 1)];
+    let (mut sum, mut weights) = (ZERO, 0.0f32);
+    for (ky, &sy) in TAPS.iter().zip(&ys) {
+        for (kx, &sx) in TAPS.iter().zip(&xs) {
+            let i = sy * width + sx;
+            let w = ky * kx * source.interpolator(source.coc[i]).max(IN_FOCUS_WEIGHT);
+            for ((v, plane), r) in sum.iter_mut().zip(&source.planes).zip(reference) {
+                *v += w * (plane[i] - r);
+            }
+            weights += w;
+        }
+    }
+    for v in sum.iter_mut() {
+        *v /= weights;
+    }
+    sum
 }
 
 /// The pyramid form: the blurred images are the levels of a binomial pyramid, and each
@@ -663,7 +685,7 @@ pub fn pyramid(config: &DofConfig, color: &Color, coc: &[f32]) -> Color {
     while count < MAX_LEVELS && level_coc(count) < largest {
         count += 1;
     }
-    let ladder = Ladder::new(count, true);
+    let ladders = [Ladder::new(count, true), Ladder::new(count, false)];
     let levels = build(&source, width, height, count);
     let samplers: Vec<Sampler> = levels
         .iter()
@@ -674,7 +696,7 @@ pub fn pyramid(config: &DofConfig, color: &Color, coc: &[f32]) -> Color {
     let near = coc
         .iter()
         .any(|&c| c < 0.0 && source.interpolator(c) > 0.0)
-        .then(|| Ladder::new(count, false).bracket(largest));
+        .then(|| ladders[1].bracket(largest));
 
     let channels = source.planes.len();
     let mut out: Vec<Vec<f32>> = (0..channels).map(|_| vec![0.0; width * height]).collect();
@@ -690,7 +712,7 @@ pub fn pyramid(config: &DofConfig, color: &Color, coc: &[f32]) -> Color {
     rows.into_par_iter()
         .enumerate()
         .for_each_init(Scratch::default, |scratch, (y, mut row)| {
-            compose_row(&source, &samplers, &ladder, near, y, scratch, &mut row)
+            compose_row(&source, &samplers, &ladders, near, y, scratch, &mut row)
         });
     to_color(out, color.a.is_some())
 }
