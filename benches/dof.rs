@@ -7,17 +7,19 @@
 //! - **out of focus**: 50 mm f/1.4 focused at 3 m on a 36 mm sensor; the frame's 200×150
 //!   blocks sit at 1.5 m (CoC −32 px), 3 m (in focus), 6 m (+16 px) and far (+32 px), so the
 //!   largest CoC is 32 px and three quarters of the frame is blurred; gather at its
-//!   defaults (6 rings) and with 2 and 4 rings and six blades, then blend;
+//!   defaults (6 rings) and with 2 and 4 rings and six blades, then blend (the pyramid, its
+//!   default, and the talk's two copies);
 //! - **in focus**: every pixel at 3 m, beside the time of copying the frame.
 //!
-//! Median of 5 runs after one warm-up run.
+//! Median of 5 runs after one warm-up run. Words after `--` keep only the rows whose label
+//! contains one of them (`cargo bench --bench dof -- blend round`).
 
 mod common;
 
 use std::time::Instant;
 
 use common::{H, W};
-use shutter::dof::{CocSource, DofParams, Lens, Method};
+use shutter::dof::{BlendForm, CocSource, DofParams, Lens, Method};
 use shutter::motion::Algorithm;
 use shutter::process::Params;
 
@@ -37,6 +39,12 @@ fn median_ms(f: &shutter::frame::Frame, dof: DofParams) -> f64 {
 }
 
 fn main() {
+    // `cargo bench` passes `--bench`; other words choose rows.
+    let words: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with('-'))
+        .collect();
+    let chosen = |label: &str| words.is_empty() || words.iter().any(|w| label.contains(w.as_str()));
     println!("threads: {}", rayon::current_num_threads());
     let f = common::lens_frame();
     let gather = DofParams {
@@ -59,17 +67,31 @@ fn main() {
             },
         ),
         (
-            "blend",
+            "blend (pyramid)",
             DofParams {
                 method: Method::Blend,
                 ..gather
             },
         ),
+        (
+            "blend, the talk's form",
+            DofParams {
+                method: Method::Blend,
+                blend_form: BlendForm::Talk,
+                ..gather
+            },
+        ),
     ] {
+        if !chosen(label) {
+            continue;
+        }
         println!(
             "1920x1080 out of focus, {label}: {:.1} ms",
             median_ms(&f, dof)
         );
+    }
+    if !chosen("in focus") {
+        return;
     }
     let mut sharp = f.clone();
     sharp.depth = Some(vec![3.0; W * H]);

@@ -10,7 +10,7 @@
 
 use std::fmt;
 
-use crate::dof::{DofParams, Lens, Method};
+use crate::dof::{BlendForm, DofParams, Lens, Method};
 use crate::error::{Error, Result};
 use crate::io::exr::{compression_name, parse_compression, WRITABLE_COMPRESSIONS};
 use crate::io::output::OutputOptions;
@@ -786,7 +786,8 @@ pub const DEFS: &[Def] = &[
         section: Section::Dof,
         applies: BLEND,
         value_name: "N",
-        help: "passes n of the 3×3 filter for the first blurred copy (the second has 2n)",
+        help: "the talk's form: passes n of the 3×3 filter for the first blurred copy (the \
+               second has 2n)",
         kind: whole(1.0, 4096.0),
         unset: "chosen so the 2n copy looks like E",
         get: |s| {
@@ -795,6 +796,19 @@ pub const DEFS: &[Def] = &[
                 .map_or(Value::Unset, |n| Value::Number(n as f64))
         },
         set: |s, v| s.dof.passes = Some(v.number() as usize),
+    },
+    Def {
+        name: "blend-form",
+        flag: None,
+        section: Section::Dof,
+        applies: BLEND,
+        value_name: "F",
+        help: "the blurred images: a binomial pyramid mixed continuously by CoC, or the \
+               talk's two copies (n and 2n passes) mixed by T",
+        kind: Kind::Choice(|| names(BlendForm::ALL)),
+        unset: "",
+        get: |s| name_of(BlendForm::ALL, s.dof.blend_form),
+        set: |s, v| s.dof.blend_form = pick(BlendForm::ALL, v.name()),
     },
     Def {
         name: "compression",

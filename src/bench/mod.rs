@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::dof::{CocSource, DofParams, Lens, Method};
+use crate::dof::{BlendForm, CocSource, DofParams, Lens, Method};
 use crate::error::{Error, Problem, ProblemKind, Result};
 use crate::frame::Frame;
 use crate::io::passes::{plan_frame, read_color, read_frame, Inputs, PlanOptions};
@@ -295,12 +295,21 @@ fn dof_sweep(lens: Lens) -> Vec<Setting> {
         hexagon,
     ));
     settings.push(dof_setting("blend".into(), Algorithm::None, blend));
-    // The talk's example n = 5 passes, whatever E.
+    // The talk's form: two copies, the 2n one at E; and the talk's example n = 5 passes.
     let talk = DofParams {
-        passes: Some(5),
+        blend_form: BlendForm::Talk,
         ..blend
     };
-    settings.push(dof_setting("blend n5".into(), Algorithm::None, talk));
+    settings.push(dof_setting("blend talk".into(), Algorithm::None, talk));
+    let example = DofParams {
+        passes: Some(5),
+        ..talk
+    };
+    settings.push(dof_setting(
+        "blend talk n5".into(),
+        Algorithm::None,
+        example,
+    ));
     let wide = DofParams {
         epsilon: 3.0,
         ..blend

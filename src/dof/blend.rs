@@ -42,6 +42,684 @@ const IN_FOCUS_WEIGHT: f32 = 1.0 / 64.0;
 /// Binomial weights below this fraction of the centre weight are cut.
 const CUT: f64 = 1e-7;
 
+/// Depth of field by blending progressively blurred images of the frame; `coc` is the signed
+/// CoC plane (px, diameter). The form (`config.blend_form`): 0 the pyramid, 1 the talk's two
+/// copies.
+pub fn blend(config: &DofConfig, color: &Color, coc: &[f32]) -> Color {
+    match config.blend_form {
+        1 => talk(config, color, coc),
+        _ => pyramid(config, color, coc),
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The pyramid.
+
+/// One texel of a pyramid level: the colour offset by the reference and premultiplied by w
+/// (r, g, b, a; a is 0 without alpha), w, T_near, and two lanes of padding, so that a texel is
+/// one 8-lane vector and every sum over texels runs on all lanes at once.
+type Texel = [f32; 8];
+
+/// The lane of w in a [`Texel`].
+const W: usize = 4;
+/// The lane of T_near in a [`Texel`].
+const NEAR: usize = 5;
+
+const ZERO: Texel = [0.0; 8];
+
+/// The most levels a pyramid gets (level 12 stands for a CoC of about 12 000 px).
+const MAX_LEVELS: usize = 12;
+
+/// Output rows of a level made by one task: its input rows are made once for the band, and
+/// only the two rows at each end of a band twice.
+const BAND: usize = 16;
+
+/// One level of the pyramid: level L has a texel per 2^L × 2^L pixels of the frame.
+struct Level {
+    width: usize,
+    height: usize,
+    texels: Vec<Texel>,
+}
+
+/// Per-axis variance (px²) of the blur a pixel of the frame sees when it samples level L
+/// bilinearly, averaged over the pixel's position in the level's grid.
+///
+/// Each halving filters with [1 3 3 1]/8 (variance 3/4 in the texels it reads, each of which
+/// carries the variance of its own level, centred), so level L's texels have
+/// Σ_{j<L} ¾·4ʲ = (4ᴸ − 1)/4. Bilinear sampling at offset φ from a texel (spacing s = 2ᴸ)
+/// adds φ(1 − φ)·s²; the frame's pixel centres sit at φ = (k + ½)/2ᴸ, whose mean of
+/// φ(1 − φ) is 1/6 + 1/(12·4ᴸ). Level 0 is the sharp frame. The tests blur an impulse
+/// through the pyramid and check its second moment against this.
+pub fn level_variance(level: usize) -> f64 {
+    if level == 0 {
+        return 0.0;
+    }
+    let s2 = 4f64.powi(level as i32);
+    (s2 - 1.0) / 4.0 + s2 / 6.0 + 1.0 / 12.0
+}
+
+/// The CoC diameter (px) of a disc that blurs like a Gaussian of standard deviation σ (px):
+/// `COC_PER_SIGMA · σ`. A disc of diameter C has variance C²/16 per axis, so matching the
+/// variance would give 4σ; but the variance only fixes the lowest frequencies, and a disc's
+/// response falls faster than a Gaussian's through the middle ones (the textures a viewer
+/// sees blur). Here the two responses are equal where they have fallen to a quarter:
+/// 2·J₁(πρC)/(πρC) = ¼ at πρC = 2.9268 and exp(−2π²σ²ρ²) = ¼ at 2πρσ = √(2 ln 4) = 1.6651,
+/// so C = 2 · 2.9268 / 1.6651 · σ. Measured on `layers` at 640×360 (region RMSE, levels
+/// mixed linearly in CoC): 0.0404 with 4σ, 0.0333 with this, 0.0335 with 3.33σ, 0.0350 with
+/// 3.2σ (BENCHMARKS.md).
+pub const COC_PER_SIGMA: f64 = 2.0 * 2.926_846 / 1.665_109;
+
+/// Per-axis variance (px²) of the half step between the sharp frame and level 1: one pass of
+/// the 3×3 filter, [1 2 1]/4 across and down, at full resolution. Level 1 stands for a CoC of
+/// 4.3 px; without this step a pixel of CoC 2 would mix the sharp frame with it, and at
+/// 240×135 on `layers` (CoCs up to 6 px) the pyramid erred more than the talk's copies.
+const HALF_VARIANCE: f64 = 0.5;
+
+/// The CoC diameter (px) that level L stands for (level 0, the sharp frame, for 0).
+pub fn level_coc(level: usize) -> f32 {
+    (COC_PER_SIGMA * level_variance(level).sqrt()) as f32
+}
+
+/// The CoC each blurred image stands for, and where a CoC sits between them. Image 0 is the
+/// sharp frame (CoC 0); with `half`, image 1 is the frame under one pass of the 3×3 filter
+/// (made where a pixel asks for it) and image j ≥ 2 is level j − 1; without, image j is
+/// level j.
+struct Ladder {
+    cocs: Vec<f32>,
+    /// 1 / (CoC of image k + 1 − CoC of image k).
+    inverse_gaps: Vec<f32>,
+    /// The image that is level 1.
+    first: usize,
+}
+
+impl Ladder {
+    /// The sharp frame, the half step if asked for, and levels 1 ..= `top`.
+    fn new(top: usize, half: bool) -> Self {
+        let mut cocs = vec![0.0];
+        if half {
+            cocs.push((COC_PER_SIGMA * HALF_VARIANCE.sqrt()) as f32);
+        }
+        cocs.extend((1..=top).map(level_coc));
+        let inverse_gaps = cocs.windows(2).map(|c| 1.0 / (c[1] - c[0])).collect();
+        Ladder {
+            cocs,
+            inverse_gaps,
+            first: if half { 2 } else { 1 },
+        }
+    }
+
+    /// (k, f): level k mixed with level k + 1 by f, linearly in CoC between the CoCs the
+    /// two stand for (clamped to the top level).
+    #[inline(always)]
+    fn bracket(&self, c: f32) -> (usize, f32) {
+        let top = self.cocs.len() - 1;
+        let mut k = 0;
+        while k + 1 < top && c >= self.cocs[k + 1] {
+            k += 1;
+        }
+        let f = ((c - self.cocs[k]) * self.inverse_gaps[k]).clamp(0.0, 1.0);
+        (k, f)
+    }
+}
+
+/// Halves one row: texel i of the result is [1 3 3 1]/8 over texels 2i − 1 ..= 2i + 2 of
+/// `row`, clamped to its ends.
+#[inline(always)]
+fn halve_row(row: &[Texel], out: &mut [Texel]) {
+    let last = row.len() - 1;
+    for (i, o) in out.iter_mut().enumerate() {
+        let c = 2 * i;
+        let (a, b) = (&row[c.saturating_sub(1)], &row[c.min(last)]);
+        let (d, e) = (&row[(c + 1).min(last)], &row[(c + 2).min(last)]);
+        for k in 0..8 {
+            o[k] = 0.125 * (a[k] + e[k]) + 0.375 * (b[k] + d[k]);
+        }
+    }
+}
+
+/// Halves four rows down into one: [1 3 3 1]/8 over `rows`, texel by texel.
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn halve_down(rows: [&[Texel]; 4], out: &mut [Texel]) {
+    let [a, b, d, e] = rows;
+    for (i, t) in out.iter_mut().enumerate() {
+        for k in 0..8 {
+            t[k] = 0.125 * (a[i][k] + e[i][k]) + 0.375 * (b[i][k] + d[i][k]);
+        }
+    }
+}
+
+/// [`halve_row`] compiled for the CPU at hand.
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn halve_across(row: &[Texel], out: &mut [Texel]) {
+    halve_row(row, out)
+}
+
+/// The next level down from rows of `width` × `height`: `across(y, out, scratch)` writes row
+/// y halved across into `out` (`scratch` is the task's own buffer); the rows are then halved
+/// down with the same filter, a band of output rows per task. Each texel is the same sum in
+/// the same order whatever the bands and threads.
+fn halve<F>(width: usize, height: usize, across: F) -> Level
+where
+    F: Fn(usize, &mut [Texel], &mut Vec<Texel>) + Sync,
+{
+    let (w2, h2) = (width.div_ceil(2), height.div_ceil(2));
+    let last = height as isize - 1;
+    let mut texels = vec![ZERO; w2 * h2];
+    texels.par_chunks_mut(w2 * BAND).enumerate().for_each_init(
+        || (Vec::new(), Vec::new()),
+        |(rows, scratch): &mut (Vec<Texel>, Vec<Texel>), (band, out)| {
+            let count = out.len() / w2;
+            // Input rows 2j − 1 ..= 2j + 2 for the band's output rows j.
+            let first = (2 * band * BAND) as isize - 1;
+            let needed = 2 * count + 2;
+            rows.resize(needed * w2, ZERO);
+            for (r, row) in rows.chunks_mut(w2).enumerate() {
+                let y = (first + r as isize).clamp(0, last) as usize;
+                across(y, row, scratch);
+            }
+            for (j, o) in out.chunks_mut(w2).enumerate() {
+                let r = |k: usize| &rows[(2 * j + k) * w2..(2 * j + k + 1) * w2];
+                let (a, b, d, e) = (r(0), r(1), r(2), r(3));
+                for (i, t) in o.iter_mut().enumerate() {
+                    for k in 0..8 {
+                        t[k] = 0.125 * (a[i][k] + e[i][k]) + 0.375 * (b[i][k] + d[i][k]);
+                    }
+                }
+            }
+        },
+    );
+    Level {
+        width: w2,
+        height: h2,
+        texels,
+    }
+}
+
+/// What turns a frame pixel into a level-0 texel, and what the compose stage reads of the
+/// frame: the colour planes, the signed CoC, and the blurriness interpolator's constants.
+struct Source<'a> {
+    planes: Vec<&'a [f32]>,
+    coc: &'a [f32],
+    /// The reference colour the texels are offset by (a uniform frame stays exact).
+    reference: [f32; 4],
+    epsilon: f32,
+    /// E, the frame's largest CoC.
+    largest: f32,
+    /// 1 / (E − ε).
+    inverse_span: f32,
+}
+
+impl Source<'_> {
+    /// The blurriness interpolator T = clamp((|CoC| − ε)/(E − ε), 0, 1).
+    #[inline(always)]
+    fn interpolator(&self, c: f32) -> f32 {
+        ((c.abs() - self.epsilon) * self.inverse_span).clamp(0.0, 1.0)
+    }
+}
+
+/// Lanes of a texel that carry something: colour (4), w, T_near.
+const LANES: usize = 6;
+
+/// Halves a plane's row across, [1 3 3 1]/8 over 2i − 1 ..= 2i + 2, clamped to its ends (the
+/// planar twin of [`halve_row`], the same sums in the same order).
+#[inline(always)]
+fn halve_plane_row(row: &[f32], out: &mut [f32]) {
+    let last = row.len() - 1;
+    let tap = |i: usize| {
+        let c = 2 * i;
+        0.125 * (row[c.saturating_sub(1)] + row[(c + 2).min(last)])
+            + 0.375 * (row[c.min(last)] + row[(c + 1).min(last)])
+    };
+    let n = out.len();
+    // Texels 1 .. inner read 2i − 1 ..= 2i + 2 inside the row; the others clamp.
+    let inner = ((row.len() - 1) / 2).clamp(1, n);
+    out[0] = tap(0);
+    for (i, o) in out.iter_mut().enumerate().take(inner).skip(1) {
+        let c = 2 * i;
+        let q = &row[c - 1..c + 3];
+        *o = 0.125 * (q[0] + q[3]) + 0.375 * (q[1] + q[2]);
+    }
+    for (i, o) in out.iter_mut().enumerate().skip(inner) {
+        *o = tap(i);
+    }
+}
+
+/// A level-1 task's buffers: w and T_near of a frame row, one premultiplied channel of it,
+/// and the band's rows halved across, lane by lane.
+#[derive(Default)]
+struct FirstScratch {
+    w: Vec<f32>,
+    near: Vec<f32>,
+    channel: Vec<f32>,
+    rows: Vec<f32>,
+    down: Vec<f32>,
+}
+
+/// Frame row y halved across, as `LANES` planes of `out.len() / LANES` texels.
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn first_row(source: &Source, width: usize, y: usize, out: &mut [f32], s: &mut FirstScratch) {
+    let w2 = out.len() / LANES;
+    let span = y * width..(y + 1) * width;
+    let coc = &source.coc[span.clone()];
+    s.w.clear();
+    s.near.clear();
+    for &c in coc {
+        let t = source.interpolator(c);
+        s.w.push(t.max(IN_FOCUS_WEIGHT));
+        s.near.push(if c < 0.0 { t } else { 0.0 });
+    }
+    let mut lanes = out.chunks_mut(w2);
+    for ch in 0..4 {
+        let lane = lanes.next().expect("a lane per channel");
+        match source.planes.get(ch) {
+            Some(plane) => {
+                let reference = source.reference[ch];
+                s.channel.clear();
+                s.channel.extend(
+                    plane[span.clone()]
+                        .iter()
+                        .zip(&s.w)
+                        .map(|(v, w)| (v - reference) * w),
+                );
+                halve_plane_row(&s.channel, lane);
+            }
+            None => lane.fill(0.0),
+        }
+    }
+    halve_plane_row(&s.w, lanes.next().expect("the w lane"));
+    halve_plane_row(&s.near, lanes.next().expect("the T_near lane"));
+}
+
+/// Level 1 from the frame: rows halved across as planes (a lane at a time, so the sums run
+/// along memory), halved down, then gathered into texels. The same sums in the same order as
+/// [`halve`] over texels would make.
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn first_level_band(
+    source: &Source,
+    width: usize,
+    height: usize,
+    band: usize,
+    out: &mut [Texel],
+    s: &mut FirstScratch,
+) {
+    let w2 = width.div_ceil(2);
+    let count = out.len() / w2;
+    let last = height as isize - 1;
+    let first = (2 * band * BAND) as isize - 1;
+    let needed = 2 * count + 2;
+    let stride = LANES * w2;
+    let mut rows = std::mem::take(&mut s.rows);
+    rows.resize(needed * stride, 0.0);
+    for (r, row) in rows.chunks_mut(stride).enumerate() {
+        let y = (first + r as isize).clamp(0, last) as usize;
+        first_row(source, width, y, row, s);
+    }
+    s.down.resize(stride, 0.0);
+    for (j, o) in out.chunks_mut(w2).enumerate() {
+        let r = |k: usize, lane: usize| {
+            let start = (2 * j + k) * stride + lane * w2;
+            &rows[start..start + w2]
+        };
+        for lane in 0..LANES {
+            let (a, b, d, e) = (r(0, lane), r(1, lane), r(2, lane), r(3, lane));
+            let down = &mut s.down[lane * w2..(lane + 1) * w2];
+            for i in 0..w2 {
+                down[i] = 0.125 * (a[i] + e[i]) + 0.375 * (b[i] + d[i]);
+            }
+        }
+        for (i, t) in o.iter_mut().enumerate() {
+            for (lane, v) in t.iter_mut().enumerate().take(LANES) {
+                *v = s.down[lane * w2 + i];
+            }
+        }
+    }
+    s.rows = rows;
+}
+
+/// Levels 1 ..= `count` of the pyramid over the frame, each halved from the one above.
+fn build(source: &Source, width: usize, height: usize, count: usize) -> Vec<Level> {
+    let mut levels: Vec<Level> = Vec::with_capacity(count);
+    let (w2, h2) = (width.div_ceil(2), height.div_ceil(2));
+    let mut texels = vec![ZERO; w2 * h2];
+    texels
+        .par_chunks_mut(w2 * BAND)
+        .enumerate()
+        .for_each_init(FirstScratch::default, |s, (band, out)| {
+            first_level_band(source, width, height, band, out, s)
+        });
+    levels.push(Level {
+        width: w2,
+        height: h2,
+        texels,
+    });
+    while levels.len() < count {
+        let above = levels.last().expect("level 1 is made first");
+        let next = halve(above.width, above.height, |y, out, _| {
+            halve_across(&above.texels[y * above.width..(y + 1) * above.width], out)
+        });
+        levels.push(next);
+    }
+    levels
+}
+
+/// Where pixel centres of a frame axis of `size` land in a level 2^L times smaller: for each
+/// pixel, the texel before it and the one after (clamped to the level) and the weight of the
+/// one after.
+fn axis_taps(size: usize, level: usize, texels: usize) -> Vec<(u32, u32, f32)> {
+    let scale = 0.5f64.powi(level as i32);
+    let last = texels as isize - 1;
+    (0..size)
+        .map(|x| {
+            let p = (x as f64 + 0.5) * scale - 0.5;
+            let before = p.floor();
+            let f = (p - before) as f32;
+            let i0 = (before as isize).clamp(0, last) as u32;
+            let i1 = (before as isize + 1).clamp(0, last) as u32;
+            (i0, i1, f)
+        })
+        .collect()
+}
+
+#[inline(always)]
+fn lerp(a: &Texel, b: &Texel, f: f32) -> Texel {
+    let mut o = ZERO;
+    for k in 0..8 {
+        o[k] = a[k] + f * (b[k] - a[k]);
+    }
+    o
+}
+
+/// A level sampled bilinearly at the frame's pixel centres, a row at a time: the row
+/// between the two texel rows that bracket a frame row is made once, and each pixel of the
+/// frame row interpolates across it.
+struct Sampler<'a> {
+    level: &'a Level,
+    across: Vec<(u32, u32, f32)>,
+    down: Vec<(u32, u32, f32)>,
+}
+
+impl<'a> Sampler<'a> {
+    fn new(level: &'a Level, number: usize, width: usize, height: usize) -> Self {
+        Sampler {
+            level,
+            across: axis_taps(width, number, level.width),
+            down: axis_taps(height, number, level.height),
+        }
+    }
+
+    /// Fills `row` with this level interpolated down to frame row y, its colour then divided
+    /// by its w: so the weights count across texel rows and within texels, and pixels
+    /// interpolate the normalised colour across (one division per texel of the row, not two
+    /// per pixel; on `layers` at 640×360 it errs a little less, 0.0476 against 0.0478).
+    fn row(&self, y: usize, row: &mut Vec<Texel>) {
+        let (r0, r1, f) = self.down[y];
+        let w = self.level.width;
+        let a = &self.level.texels[r0 as usize * w..(r0 as usize + 1) * w];
+        let b = &self.level.texels[r1 as usize * w..(r1 as usize + 1) * w];
+        row.clear();
+        row.extend(a.iter().zip(b).map(|(a, b)| {
+            let mut t = lerp(a, b, f);
+            let w = t[W].max(f32::MIN_POSITIVE);
+            for lane in t.iter_mut().take(W) {
+                *lane /= w;
+            }
+            t
+        }));
+    }
+
+    /// The level at frame pixel x, from the row [`Sampler::row`] made.
+    #[inline(always)]
+    fn at(&self, row: &[Texel], x: usize) -> Texel {
+        let (c0, c1, f) = self.across[x];
+        lerp(&row[c0 as usize], &row[c1 as usize], f)
+    }
+
+    /// T_near alone at frame pixel x, from the row [`Sampler::row`] made.
+    #[inline(always)]
+    fn near_at(&self, row: &[Texel], x: usize) -> f32 {
+        let (c0, c1, f) = self.across[x];
+        let (a, b) = (row[c0 as usize][NEAR], row[c1 as usize][NEAR]);
+        a + f * (b - a)
+    }
+}
+
+/// A compose task's own buffers: each level's row for the current frame row, and per pixel
+/// its blurriness and its output texel.
+#[derive(Default)]
+struct Scratch {
+    made: Vec<Vec<Texel>>,
+    blur: Vec<f32>,
+    mixed: Vec<Texel>,
+}
+
+/// The compose stage for frame row y: each pixel's blurriness, the levels the row needs,
+/// then each pixel mixed from the two levels that bracket its CoC (the sharp pixel as level
+/// 0). `out` holds the row of each output plane.
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn compose_row(
+    source: &Source,
+    samplers: &[Sampler],
+    ladders: &[Ladder; 2],
+    near: Option<(usize, f32)>,
+    y: usize,
+    scratch: &mut Scratch,
+    out: &mut [&mut [f32]],
+) {
+    let width = out[0].len();
+    let row = y * width;
+    let coc = &source.coc[row..row + width];
+    let height = source.coc.len() / width;
+    let Scratch { made, blur, mixed } = scratch;
+    made.resize(samplers.len(), Vec::new());
+    let mut ready = [false; MAX_LEVELS + 1];
+    // Makes level l's row (l ≥ 1) once.
+    let mut make = |l: usize, made: &mut Vec<Vec<Texel>>| {
+        if l > 0 && !ready[l] {
+            samplers[l - 1].row(y, &mut made[l - 1]);
+            ready[l] = true;
+        }
+    };
+
+    // Blurriness: the pixel's own T, or the near field's blurred T_near if larger (`near`
+    // counts in levels, without the half step).
+    blur.clear();
+    blur.extend(coc.iter().map(|&c| source.interpolator(c)));
+    if let Some((k, f)) = near {
+        make(k, made);
+        make(k + 1, made);
+        let upper = &samplers[k];
+        for (x, (t, &c)) in blur.iter_mut().zip(coc).enumerate() {
+            let lower = if k == 0 {
+                if c < 0.0 {
+                    *t
+                } else {
+                    0.0
+                }
+            } else {
+                samplers[k - 1].near_at(&made[k - 1], x)
+            };
+            let spread = lower + f * (upper.near_at(&made[k], x) - lower);
+            // Negative where the near field's spread sets the blur.
+            if spread > *t {
+                *t = -spread;
+            }
+        }
+    }
+
+    // The levels the row needs: those that bracket its least and its most blurred pixel,
+    // and all between.
+    let (mut least, mut most) = (f32::INFINITY, 0.0f32);
+    for &t in blur.iter() {
+        let t = t.abs();
+        if t > 0.0 {
+            least = least.min(t);
+            most = most.max(t);
+        }
+    }
+    let (epsilon, largest) = (source.epsilon, source.largest);
+    let to_coc = |t: f32| epsilon + t * (largest - epsilon);
+    // Image k of the ladder without the half step is level k, and either ladder brackets a
+    // CoC between the same levels from level 1 up.
+    let [ladder, plain] = ladders;
+    if most > 0.0 {
+        let (lo, _) = plain.bracket(to_coc(least));
+        let (hi, _) = plain.bracket(to_coc(most));
+        for l in lo.max(1)..=hi + 1 {
+            make(l, made);
+        }
+    }
+
+    let mut reference = ZERO;
+    reference[..4].copy_from_slice(&source.reference);
+    mixed.clear();
+    mixed.resize(width, ZERO);
+    for (x, (m, &t)) in mixed.iter_mut().zip(blur.iter()).enumerate() {
+        let i = row + x;
+        let mut sharp = ZERO;
+        for (v, plane) in sharp.iter_mut().zip(&source.planes) {
+            *v = plane[i];
+        }
+        if t == 0.0 {
+            *m = sharp;
+            continue;
+        }
+        // A pixel blurred by the near field's spread mixes levels only: the half step shows
+        // its own neighbourhood, which the near field's blur reaches farther than.
+        let ladder = if t < 0.0 { plain } else { ladder };
+        let first = ladder.first;
+        let (k, f) = ladder.bracket(to_coc(t.abs()));
+        // Image j: the sharp frame (offset), the half step, or a level's row (no closure:
+        // `multiversion` would leave it compiled for the baseline CPU, out of line).
+        let mut pair = [ZERO; 2];
+        for (p, j) in pair.iter_mut().zip([k, k + 1]) {
+            *p = if j == 0 {
+                let mut offset = ZERO;
+                for lane in 0..8 {
+                    offset[lane] = sharp[lane] - reference[lane];
+                }
+                offset
+            } else if j < first {
+                half(source, &reference, width, height, x, y)
+            } else {
+                samplers[j - first].at(&made[j - first], x)
+            };
+        }
+        let [lower, upper] = pair;
+        for lane in 0..8 {
+            m[lane] = reference[lane] + (lower[lane] + f * (upper[lane] - lower[lane]));
+        }
+    }
+    for (ch, o) in out.iter_mut().enumerate() {
+        for (o, m) in o.iter_mut().zip(mixed.iter()) {
+            *o = m[ch];
+        }
+    }
+}
+
+/// The half step at pixel (x, y): the 3×3 filter over the premultiplied neighbourhood,
+/// normalised (colour offset by the reference).
+#[inline(always)]
+fn half(
+    source: &Source,
+    reference: &Texel,
+    width: usize,
+    height: usize,
+    x: usize,
+    y: usize,
+) -> Texel {
+    const TAPS: [f32; 3] = [0.25, 0.5, 0.25];
+    let ys = [y.saturating_sub(1), y, (y + 1).min(height - 1)];
+    let xs = [x.saturating_sub(1), x, (x + 1).min(width - 1)];
+    let (mut sum, mut weights) = (ZERO, 0.0f32);
+    for (ky, &sy) in TAPS.iter().zip(&ys) {
+        for (kx, &sx) in TAPS.iter().zip(&xs) {
+            let i = sy * width + sx;
+            let w = ky * kx * source.interpolator(source.coc[i]).max(IN_FOCUS_WEIGHT);
+            for ((v, plane), r) in sum.iter_mut().zip(&source.planes).zip(reference) {
+                *v += w * (plane[i] - r);
+            }
+            weights += w;
+        }
+    }
+    for v in sum.iter_mut() {
+        *v /= weights;
+    }
+    sum
+}
+
+/// The pyramid form: the blurred images are the levels of a binomial pyramid, and each
+/// pixel mixes the two whose blur brackets its CoC.
+pub fn pyramid(config: &DofConfig, color: &Color, coc: &[f32]) -> Color {
+    let (width, height) = (config.width as usize, config.height as usize);
+    let epsilon = config.epsilon;
+    let largest = coc
+        .iter()
+        .fold(0.0f32, |m, c| m.max(c.abs()))
+        .max(epsilon + 1.0);
+    let planes: Vec<&[f32]> = [
+        Some(&color.r),
+        Some(&color.g),
+        Some(&color.b),
+        color.a.as_ref(),
+    ]
+    .into_iter()
+    .flatten()
+    .map(|p| p.as_slice())
+    .collect();
+    let mut reference = [0.0; 4];
+    for (r, p) in reference.iter_mut().zip(&planes) {
+        *r = p[0];
+    }
+    let source = Source {
+        planes,
+        coc,
+        reference,
+        epsilon,
+        largest,
+        inverse_span: 1.0 / (largest - epsilon),
+    };
+
+    // Enough levels that the last one is at least as blurred as E, so every CoC (and
+    // T_near, spread at E) is bracketed.
+    let mut count = 1;
+    while count < MAX_LEVELS && level_coc(count) < largest {
+        count += 1;
+    }
+    let ladders = [Ladder::new(count, true), Ladder::new(count, false)];
+    let levels = build(&source, width, height, count);
+    let samplers: Vec<Sampler> = levels
+        .iter()
+        .enumerate()
+        .map(|(l, level)| Sampler::new(level, l + 1, width, height))
+        .collect();
+    // T_near is read at the blur of E, where any pixel is in front of the focus plane.
+    let near = coc
+        .iter()
+        .any(|&c| c < 0.0 && source.interpolator(c) > 0.0)
+        .then(|| ladders[1].bracket(largest));
+
+    let channels = source.planes.len();
+    let mut out: Vec<Vec<f32>> = (0..channels).map(|_| vec![0.0; width * height]).collect();
+    let mut chunks: Vec<_> = out.iter_mut().map(|p| p.chunks_mut(width)).collect();
+    let rows: Vec<Vec<&mut [f32]>> = (0..height)
+        .map(|_| {
+            chunks
+                .iter_mut()
+                .map(|c| c.next().expect("a row per plane"))
+                .collect()
+        })
+        .collect();
+    rows.into_par_iter()
+        .enumerate()
+        .for_each_init(Scratch::default, |scratch, (y, mut row)| {
+            compose_row(&source, &samplers, &ladders, near, y, scratch, &mut row)
+        });
+    to_color(out, color.a.is_some())
+}
+
+// ---------------------------------------------------------------------------------------
+// The talk's form.
+
 /// The kernel of n passes of [1 2 1]/4: C(2n, n + j)/4ⁿ for j = −h..=h, renormalised.
 pub fn binomial(passes: usize) -> Vec<f32> {
     let n = passes as f64;
@@ -121,8 +799,9 @@ fn convolve(planes: &Planes, kernel: &[f32]) -> Planes {
     }
 }
 
-/// Depth of field by blending blurred copies; `coc` is the signed CoC plane (px, diameter).
-pub fn blend(config: &DofConfig, color: &Color, coc: &[f32]) -> Color {
+/// The talk's form: the sharp frame and two blurred copies (n and 2n passes), blended by T;
+/// `coc` is the signed CoC plane (px, diameter).
+pub fn talk(config: &DofConfig, color: &Color, coc: &[f32]) -> Color {
     let (width, height) = (config.width as usize, config.height as usize);
     let epsilon = config.epsilon;
     // E: the frame's largest CoC (the plane is already clamped to --max-coc), so the copies
@@ -254,6 +933,96 @@ fn to_color(mut planes: Vec<Vec<f32>>, alpha: bool) -> Color {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The pyramid over a frame of `width` × `height` whose red is 1 at pixel (x0, y0) and 0
+    /// elsewhere, every pixel fully blurred (T = 1, so w = 1): level L's red sampled at every
+    /// pixel's centre, as the compose stage reads it.
+    fn impulse_response(width: usize, height: usize, x0: usize, y0: usize, l: usize) -> Vec<f32> {
+        let mut r = vec![0.0; width * height];
+        r[y0 * width + x0] = 1.0;
+        let zero = vec![0.0; width * height];
+        let coc = vec![8.0; width * height];
+        let source = Source {
+            planes: vec![&r, &zero, &zero],
+            coc: &coc,
+            reference: [0.0; 4],
+            epsilon: 1.0,
+            largest: 8.0,
+            inverse_span: 1.0 / 7.0,
+        };
+        let levels = build(&source, width, height, l);
+        let sampler = Sampler::new(&levels[l - 1], l, width, height);
+        let mut out = Vec::new();
+        let mut row = Vec::new();
+        for y in 0..height {
+            sampler.row(y, &mut row);
+            out.extend((0..width).map(|x| sampler.at(&row, x)[0]));
+        }
+        out
+    }
+
+    #[test]
+    fn each_level_blurs_an_impulse_by_its_stated_variance() {
+        // The second moment across of an impulse's response, averaged over the impulse's
+        // position in the level's grid, is `level_variance` (the tests of the maths behind
+        // `level_coc`); the response keeps its mass (1 on average) and its centre.
+        let (width, height) = (256, 128);
+        for l in 1..=4 {
+            let phases = 1 << l;
+            let mut variance = 0.0;
+            for phase in 0..phases {
+                let x0 = 96 + phase;
+                let response = impulse_response(width, height, x0, 64, l);
+                let (mut mass, mut first, mut second) = (0.0f64, 0.0f64, 0.0f64);
+                for (i, &v) in response.iter().enumerate() {
+                    let d = (i % width) as f64 - x0 as f64;
+                    mass += v as f64;
+                    first += v as f64 * d;
+                    second += v as f64 * d * d;
+                }
+                assert!(
+                    (mass - 1.0).abs() < 0.02,
+                    "level {l} phase {phase}: mass {mass}"
+                );
+                assert!(
+                    (first / mass).abs() < 0.5,
+                    "level {l} phase {phase}: centre {first}"
+                );
+                variance += second / mass / phases as f64;
+            }
+            let stated = level_variance(l);
+            assert!(
+                (variance - stated).abs() < 0.01 * stated,
+                "level {l}: measured {variance}, stated {stated}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_ladder_mixes_continuously_between_levels() {
+        let ladder = Ladder::new(5, false);
+        // Level CoCs grow about twofold a level (3.5155 σ; level 1: σ² = 3/4 + 2/3 + 1/12).
+        assert!((level_coc(1) - 4.305).abs() < 0.01, "{}", level_coc(1));
+        for l in 1..5 {
+            let ratio = level_coc(l + 1) / level_coc(l);
+            assert!((1.9..2.1).contains(&ratio), "{l}: {ratio}");
+        }
+        // Continuous in CoC: as c crosses a level's CoC, (k, f) goes from (k − 1, 1) to
+        // (k, 0), the same image; and f grows linearly between.
+        let mix = |c: f32| {
+            let (k, f) = ladder.bracket(c);
+            k as f32 + f
+        };
+        let mut last = mix(0.0);
+        assert_eq!(last, 0.0);
+        for step in 1..=4000 {
+            let c = step as f32 * 0.02;
+            let m = mix(c);
+            assert!(m >= last && m - last < 0.02, "at {c}: {last} → {m}");
+            last = m;
+        }
+        assert_eq!(ladder.bracket(1e9), (4, 1.0));
+    }
 
     #[test]
     fn binomial_is_repeated_talk_filter() {

@@ -1,8 +1,8 @@
 //! Depth of field from colour and depth (or a painted circle-of-confusion map).
 //!
 //! - [`coc`]: the thin lens's signed circle of confusion in pixels;
-//! - [`blend`]: Wloka's blurriness blend (sharp frame and two progressively blurred copies,
-//!   mixed by the blurriness interpolator T);
+//! - [`blend`]: Wloka's blurriness blend (the sharp frame and progressively blurred images,
+//!   mixed by the blurriness interpolator T: a binomial pyramid, or the talk's two copies);
 //! - [`bokeh`]: the gather's tap pattern and the n-blade diaphragm shape;
 //! - [`gather`]: a flat-kernel bokeh gather in the spirit of Sousa's CryENGINE 3 filter, with
 //!   near and far fields and tile min/max CoC.
@@ -43,6 +43,21 @@ impl Method {
     }
 }
 
+/// blend: how the blurred images are made and mixed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BlendForm {
+    /// A binomial pyramid (each level half the size of the last), each pixel mixing the two
+    /// levels whose blur brackets its CoC.
+    Pyramid,
+    /// The talk's form: the sharp frame and two blurred copies (n and 2n passes).
+    Talk,
+}
+
+impl BlendForm {
+    pub const ALL: &'static [(&'static str, BlendForm)] =
+        &[("pyramid", BlendForm::Pyramid), ("talk", BlendForm::Talk)];
+}
+
 /// Where each pixel's circle of confusion comes from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum CocSource {
@@ -70,9 +85,11 @@ pub struct DofParams {
     /// gather: rings of taps (ring k has 8k taps). Default 6 (169 taps): at 640×360 on
     /// `layers` 6 rings err 20 % less than 4 (BENCHMARKS.md).
     pub rings: usize,
-    /// blend: passes n of the 3×3 filter for the first copy (the second has 2n); `None`
-    /// chooses n so the 2n copy has the blur of a CoC of E.
+    /// blend, the talk's form: passes n of the 3×3 filter for the first copy (the second has
+    /// 2n); `None` chooses n so the 2n copy has the blur of a CoC of E.
     pub passes: Option<usize>,
+    /// blend: the pyramid (default) or the talk's two copies.
+    pub blend_form: BlendForm,
 }
 
 /// CoC diameter in pixels of a painted map's value 1 (white): the default.
@@ -99,6 +116,7 @@ impl DofParams {
             blade_rotation: 0.0,
             rings: 6,
             passes: None,
+            blend_form: BlendForm::Pyramid,
         }
     }
 
@@ -147,8 +165,11 @@ pub struct DofConfig {
     pub blade_rotation: f32,
     /// gather: rings of taps.
     pub rings: u32,
-    /// blend: passes n of the first copy; 0 chooses n from the frame's largest CoC.
+    /// blend, the talk's form: passes n of the first copy; 0 chooses n from the frame's
+    /// largest CoC.
     pub passes: u32,
+    /// blend: 0 the pyramid, 1 the talk's two copies.
+    pub blend_form: u32,
 }
 
 impl DofConfig {
@@ -162,6 +183,10 @@ impl DofConfig {
             blade_rotation: params.blade_rotation,
             rings: params.rings as u32,
             passes: params.passes.map_or(0, |n| n as u32),
+            blend_form: match params.blend_form {
+                BlendForm::Pyramid => 0,
+                BlendForm::Talk => 1,
+            },
         }
     }
 }
@@ -229,9 +254,9 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_config_is_eight_plain_words() {
-        // Uploaded as one uniform by the GPU twins: eight 4-byte fields, no padding.
-        assert_eq!(std::mem::size_of::<DofConfig>(), 32);
+    fn the_config_is_nine_plain_words() {
+        // Uploaded as one uniform by the GPU twins: nine 4-byte fields, no padding.
+        assert_eq!(std::mem::size_of::<DofConfig>(), 36);
         let auto = DofConfig::new(4, 3, &DofParams::default());
         assert_eq!((auto.passes, auto.rings), (0, 6));
     }
