@@ -406,7 +406,7 @@ pub const DEFS: &[Def] = &[
         value_name: "S",
         help: "filter taps S, odd (paper, dual: along the line; 2014, exposure: S + 1 in \
                all, a quarter on each side along the tile's and the pixel's own motion; \
-               exposure: at least one per pixel of the streak, up to 64 a side)",
+               exposure: at least one per 2 px of the streak, up to 64 a side)",
         kind: Kind::Number {
             min: 1.0,
             max: 255.0,
