@@ -81,6 +81,17 @@ pub struct Color {
     pub a: Option<Plane>,
 }
 
+impl Color {
+    /// The planes present: R, G, B, then alpha where there is one.
+    pub fn planes(&self) -> Vec<&[f32]> {
+        [Some(&self.r), Some(&self.g), Some(&self.b), self.a.as_ref()]
+            .into_iter()
+            .flatten()
+            .map(|p| p.as_slice())
+            .collect()
+    }
+}
+
 /// Absolute screen positions of the surface seen at each pixel, in pixels; `z` is its depth
 /// at that time when the renderer gives one.
 #[derive(Clone, Debug, PartialEq)]

@@ -424,28 +424,40 @@ fn median(mut values: Vec<f64>) -> f64 {
     }
 }
 
-/// Makes (or reuses, when its scene.json matches) a scene's files.
-fn ensure_scene(name: &str, dir: &Path, options: &BenchOptions) -> Result<()> {
-    let scene_options = SceneOptions {
+/// The one-frame scene the bench makes at its size and sample count.
+fn scene_options(options: &BenchOptions) -> SceneOptions {
+    SceneOptions {
         width: options.width,
         height: options.height,
         frames: 1,
         samples: options.samples,
         ..SceneOptions::default()
+    }
+}
+
+/// Whether the JSON record at `path` holds every key of `wanted` with its value (a cached
+/// scene or resampled reference made with these settings).
+fn recorded(path: &Path, wanted: &serde_json::Value) -> bool {
+    let Ok(text) = std::fs::read_to_string(path) else {
+        return false;
     };
+    let Ok(found) = serde_json::from_str::<serde_json::Value>(&text) else {
+        return false;
+    };
+    wanted
+        .as_object()
+        .is_some_and(|w| w.iter().all(|(k, v)| found.get(k) == Some(v)))
+}
+
+/// Makes (or reuses, when its scene.json matches) a scene's files.
+fn ensure_scene(name: &str, dir: &Path, options: &BenchOptions) -> Result<()> {
+    let scene_options = scene_options(options);
     let wanted = serde_json::json!({
         "scene": name, "width": options.width, "height": options.height,
         "samples": options.samples, "shutter": scene_options.shutter, "seed": scene_options.seed,
     });
-    if let Ok(text) = std::fs::read_to_string(dir.join("scene.json")) {
-        if let Ok(found) = serde_json::from_str::<serde_json::Value>(&text) {
-            let same = wanted
-                .as_object()
-                .is_some_and(|w| w.iter().all(|(k, v)| found.get(k) == Some(v)));
-            if same {
-                return Ok(());
-            }
-        }
+    if recorded(&dir.join("scene.json"), &wanted) {
+        return Ok(());
     }
     write_scene(name, dir, &scene_options, &mut |_, _| {})?;
     Ok(())
@@ -454,13 +466,7 @@ fn ensure_scene(name: &str, dir: &Path, options: &BenchOptions) -> Result<()> {
 /// Renders (or reuses, when its record matches) the scene's references again with the next
 /// sampling seed and the same layout; returns that seed.
 fn ensure_resampled(name: &str, dir: &Path, options: &BenchOptions) -> Result<u64> {
-    let scene_options = SceneOptions {
-        width: options.width,
-        height: options.height,
-        frames: 1,
-        samples: options.samples,
-        ..SceneOptions::default()
-    };
+    let scene_options = scene_options(options);
     let sampling_seed = scene_options.seed + 1;
     let wanted = serde_json::json!({
         "scene": name, "width": options.width, "height": options.height,
@@ -468,10 +474,8 @@ fn ensure_resampled(name: &str, dir: &Path, options: &BenchOptions) -> Result<u6
         "seed": scene_options.seed, "sampling_seed": sampling_seed,
     });
     let record = dir.join("resampled.json");
-    if let Ok(text) = std::fs::read_to_string(&record) {
-        if serde_json::from_str::<serde_json::Value>(&text).ok() == Some(wanted.clone()) {
-            return Ok(sampling_seed);
-        }
+    if recorded(&record, &wanted) {
+        return Ok(sampling_seed);
     }
     write_resampled_references(name, dir, &scene_options, sampling_seed)?;
     write_text(

@@ -46,14 +46,6 @@ mod tests {
     use super::*;
     use crate::metrics::rmse;
 
-    fn image(planes: &[Vec<f32>; 3], w: usize, h: usize) -> Rgb<'_> {
-        Rgb {
-            width: w,
-            height: h,
-            planes: [&planes[0], &planes[1], &planes[2]],
-        }
-    }
-
     /// Walsh functions of index `k` over `n` samples: ±1, mutually orthogonal over any
     /// multiple of 2^(bits) samples, so sums of their products vanish exactly.
     fn walsh(k: usize, n: usize) -> Vec<f32> {
@@ -86,10 +78,10 @@ mod tests {
         let first = plus(&walsh(2, n), sigma);
         let second = plus(&walsh(4, n), sigma);
         let (output, first, second, converged) = (
-            image(&output, w, h),
-            image(&first, w, h),
-            image(&second, w, h),
-            image(&converged, w, h),
+            Rgb::new(&output, w, h),
+            Rgb::new(&first, w, h),
+            Rgb::new(&second, w, h),
+            Rgb::new(&converged, w, h),
         );
         let truth = rmse(&converged, &output, None);
         assert!((truth - delta as f64).abs() < 1e-6, "{truth}");
@@ -105,7 +97,7 @@ mod tests {
     fn the_noise_variance_is_taken_over_the_region_only() {
         let first = [vec![0.0, 0.0], vec![0.0, 0.0], vec![0.0, 0.0]];
         let second = [vec![0.2, 5.0], vec![0.2, 5.0], vec![0.2, 5.0]];
-        let (a, b) = (image(&first, 2, 1), image(&second, 2, 1));
+        let (a, b) = (Rgb::new(&first, 2, 1), Rgb::new(&second, 2, 1));
         let v = noise_variance(&a, &b, Some(&[true, false]));
         assert!((v - 0.02).abs() < 1e-9, "{v}");
         assert_eq!(noise_variance(&a, &b, Some(&[false, false])), 0.0);
@@ -146,9 +138,9 @@ mod tests {
         let second = [add(&c, &n4), add(&c, &n5), add(&c, &n6)];
         let output = [out.clone(), out.clone(), out];
         let converged = [c.clone(), c.clone(), c];
-        let truth = rmse(&image(&converged, w, h), &image(&output, w, h), None);
-        let raw = rmse(&image(&first, w, h), &image(&output, w, h), None);
-        let variance = noise_variance(&image(&first, w, h), &image(&second, w, h), None);
+        let truth = rmse(&Rgb::new(&converged, w, h), &Rgb::new(&output, w, h), None);
+        let raw = rmse(&Rgb::new(&first, w, h), &Rgb::new(&output, w, h), None);
+        let variance = noise_variance(&Rgb::new(&first, w, h), &Rgb::new(&second, w, h), None);
         assert!((variance - s * s / 3.0).abs() < 0.02 * s * s, "{variance}");
         let corrected = corrected_rmse(raw, variance);
         assert!(

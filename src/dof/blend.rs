@@ -656,16 +656,7 @@ pub fn pyramid(config: &DofConfig, color: &Color, coc: &[f32]) -> Color {
         .iter()
         .fold(0.0f32, |m, c| m.max(c.abs()))
         .max(epsilon + 1.0);
-    let planes: Vec<&[f32]> = [
-        Some(&color.r),
-        Some(&color.g),
-        Some(&color.b),
-        color.a.as_ref(),
-    ]
-    .into_iter()
-    .flatten()
-    .map(|p| p.as_slice())
-    .collect();
+    let planes = color.planes();
     let mut reference = [0.0; 4];
     for (r, p) in reference.iter_mut().zip(&planes) {
         *r = p[0];
@@ -819,16 +810,7 @@ pub fn talk(config: &DofConfig, color: &Color, coc: &[f32]) -> Color {
     let interpolator = |c: f32| ((c.abs() - epsilon) / (largest - epsilon)).clamp(0.0, 1.0);
 
     // The input, offset by one reference colour so a uniform frame stays exact.
-    let inputs: Vec<Vec<f32>> = [
-        Some(&color.r),
-        Some(&color.g),
-        Some(&color.b),
-        color.a.as_ref(),
-    ]
-    .into_iter()
-    .flatten()
-    .map(|plane| plane.to_vec())
-    .collect();
+    let inputs: Vec<Vec<f32>> = color.planes().into_iter().map(<[f32]>::to_vec).collect();
     let reference: Vec<f32> = inputs.iter().map(|p| p[0]).collect();
     let channels = inputs.len();
 

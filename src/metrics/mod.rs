@@ -22,6 +22,15 @@ pub struct Rgb<'a> {
 }
 
 impl<'a> Rgb<'a> {
+    /// Three colour planes of `width` × `height` pixels.
+    pub fn new(planes: &'a [Vec<f32>; 3], width: usize, height: usize) -> Rgb<'a> {
+        Rgb {
+            width,
+            height,
+            planes: [&planes[0], &planes[1], &planes[2]],
+        }
+    }
+
     /// The RGB of a frame's colour pass, if it has one.
     pub fn of(frame: &'a crate::frame::Frame) -> Option<Rgb<'a>> {
         let color = frame.color.as_ref()?;
@@ -267,23 +276,15 @@ pub fn changed_region(sharp: &Rgb, reference: &Rgb, threshold: f32) -> Vec<bool>
 mod tests {
     use super::*;
 
-    fn image(planes: &[Vec<f32>; 3], w: usize, h: usize) -> Rgb<'_> {
-        Rgb {
-            width: w,
-            height: h,
-            planes: [&planes[0], &planes[1], &planes[2]],
-        }
-    }
-
     #[test]
     fn rmse_by_hand() {
         // Differences 0.1, 0.2, 0.3 and three zeros over two pixels: sqrt(0.14 / 6).
         let a = [vec![0.0, 0.0], vec![0.0, 0.0], vec![0.0, 0.0]];
         let b = [vec![0.1, 0.0], vec![0.2, 0.0], vec![0.3, 0.0]];
-        let r = rmse(&image(&a, 2, 1), &image(&b, 2, 1), None);
+        let r = rmse(&Rgb::new(&a, 2, 1), &Rgb::new(&b, 2, 1), None);
         assert!((r - (0.14f64 / 6.0).sqrt()).abs() < 1e-7, "{r}");
         let only_first = [true, false];
-        let r = rmse(&image(&a, 2, 1), &image(&b, 2, 1), Some(&only_first));
+        let r = rmse(&Rgb::new(&a, 2, 1), &Rgb::new(&b, 2, 1), Some(&only_first));
         assert!((r - (0.14f64 / 3.0).sqrt()).abs() < 1e-7, "{r}");
         assert_eq!(psnr_from_rmse(0.1), 20.0);
     }
@@ -291,7 +292,7 @@ mod tests {
     #[test]
     fn identical_images_score_perfectly() {
         let a = [vec![0.3; 64], vec![0.5; 64], vec![2.0; 64]];
-        let s = compare(&image(&a, 8, 8), &image(&a, 8, 8), None);
+        let s = compare(&Rgb::new(&a, 8, 8), &Rgb::new(&a, 8, 8), None);
         assert_eq!(s.rmse, 0.0);
         assert!(s.psnr.is_infinite());
         assert!((s.ssim - 1.0).abs() < 1e-6);
@@ -302,7 +303,7 @@ mod tests {
     fn non_finite_samples_are_counted_not_propagated() {
         let a = [vec![f32::NAN, 0.0], vec![0.0; 2], vec![f32::INFINITY, 0.0]];
         let b = [vec![0.0; 2], vec![0.0; 2], vec![0.0; 2]];
-        let s = compare(&image(&a, 2, 1), &image(&b, 2, 1), None);
+        let s = compare(&Rgb::new(&a, 2, 1), &Rgb::new(&b, 2, 1), None);
         assert_eq!(s.non_finite, 2);
         assert!(s.rmse.is_finite() && s.ssim.is_finite() && s.flip.is_finite());
     }

@@ -318,37 +318,27 @@ pub fn pack_2014(
     velocity: &Velocity,
     tiles: &TileGrid,
 ) -> Vec<Texel2014> {
-    let width = config.width as usize;
-    let size = config.tile as usize;
-    let n = width * config.height as usize;
     // Taps reach k px: this many tiles beyond the tile a pixel looks up.
     let reach = (config.k / config.tile as f32).ceil() as usize;
-    let mut texels: Vec<Texel2014> = vec![[0.0; 8]; n];
-    texels
-        .par_chunks_mut(size * width)
-        .enumerate()
-        .for_each(|(row, chunk)| {
-            for c in (0..tiles.columns).filter(|&c| near_blur(tiles, c, row, reach + 1)) {
-                for local_y in 0..chunk.len() / width {
-                    let y = row * size + local_y;
-                    for x in c * size..((c + 1) * size).min(width) {
-                        let i = y * width + x;
-                        let v = spread_2014(velocity.x[i], velocity.y[i], config);
-                        chunk[local_y * width + x] = [
-                            color.r[i],
-                            color.g[i],
-                            color.b[i],
-                            color.a.as_ref().map_or(1.0, |a| a[i]),
-                            finite_depth(depth[i]),
-                            v.0,
-                            v.1,
-                            (v.0 * v.0 + v.1 * v.1).sqrt(),
-                        ];
-                    }
-                }
-            }
-        });
-    texels
+    pack_tiles(
+        config,
+        tiles.columns,
+        [0.0; 8],
+        |c, row| near_blur(tiles, c, row, reach + 1),
+        |i| {
+            let v = spread_2014(velocity.x[i], velocity.y[i], config);
+            [
+                color.r[i],
+                color.g[i],
+                color.b[i],
+                color.a.as_ref().map_or(1.0, |a| a[i]),
+                finite_depth(depth[i]),
+                v.0,
+                v.1,
+                (v.0 * v.0 + v.1 * v.1).sqrt(),
+            ]
+        },
+    )
 }
 
 /// The 2014 filter's half-spread: `q = ½·v·φ`, its length clamped to k (not raised to half a
@@ -372,35 +362,13 @@ pub fn gather_2014(
     tiles: &TileGrid,
     color: &mut Color,
 ) {
-    let width = config.width as usize;
-    let size = config.tile as usize;
-    let n = width * config.height as usize;
-    let has_alpha = color.a.is_some();
-    let mut alpha = color.a.take().unwrap_or_else(|| vec![0.0; n]);
-    let band = size * width;
-    color
-        .r
-        .par_chunks_mut(band)
-        .zip(color.g.par_chunks_mut(band))
-        .zip(color.b.par_chunks_mut(band))
-        .zip(alpha.par_chunks_mut(band))
-        .enumerate()
-        .for_each(|(row, (((r, g), b), a))| {
-            for c in (0..tiles.columns).filter(|&c| near_blur(tiles, c, row, 1)) {
-                for local_y in 0..r.len() / width {
-                    let y = row * size + local_y;
-                    for x in c * size..((c + 1) * size).min(width) {
-                        let o = local_y * width + x;
-                        let [cr, cg, cb, ca] = gather_pixel_2014(config, texels, tiles, x, y);
-                        r[o] = cr;
-                        g[o] = cg;
-                        b[o] = cb;
-                        a[o] = ca;
-                    }
-                }
-            }
-        });
-    color.a = has_alpha.then_some(alpha);
+    gather_tiles(
+        config,
+        tiles.columns,
+        color,
+        |c, row| near_blur(tiles, c, row, 1),
+        |_, x, y| gather_pixel_2014(config, texels, tiles, x, y),
+    );
 }
 
 /// The most taps the exposure variant takes per side and direction however long the streak.
@@ -411,6 +379,55 @@ const TAP_SPACING: f32 = 2.0;
 /// Jitter salts of the 2014 gather: the tile lookup and the taps' offset.
 const SALT_TILE: u32 = 0x5449_4c45;
 const SALT_TAPS: u32 = 0x5441_5053;
+
+/// The colour of `nearest` (the texel nearest to pixel (x, y) + `offset`, a moving one)
+/// read bilinearly at that point, over the four texels around it that move or share its
+/// surface (within the soft depth extent, `scale` = 1 / SOFT_Z_EXTENT), so a tap never takes
+/// colour across a silhouette from a still surface. Depth and motion stay the nearest's.
+#[inline(always)]
+fn bilinear(
+    texels: &[Texel2014],
+    (width, height): (usize, usize),
+    mut nearest: Texel2014,
+    scale: f32,
+    x: usize,
+    y: usize,
+    offset: (f32, f32),
+) -> Texel2014 {
+    let fx = (x as f32 + offset.0).max(0.0);
+    let fy = (y as f32 + offset.1).max(0.0);
+    let (x0, y0) = (fx as usize, fy as usize);
+    let (wx, wy) = (fx - x0 as f32, fy - y0 as f32);
+    let (x0, x1) = (x0.min(width - 1), (x0 + 1).min(width - 1));
+    let (y0, y1) = (y0.min(height - 1), (y0 + 1).min(height - 1));
+    let corners = [
+        texels[y0 * width + x0],
+        texels[y0 * width + x1],
+        texels[y1 * width + x0],
+        texels[y1 * width + x1],
+    ];
+    let z = nearest[Z];
+    let mixes =
+        |t: &Texel2014| ((t[Z] - z).abs() * scale < 1.0 || t[LENGTH] >= HALF_PIXEL) as u32 as f32;
+    let w = [
+        (1.0 - wx) * (1.0 - wy) * mixes(&corners[0]),
+        wx * (1.0 - wy) * mixes(&corners[1]),
+        (1.0 - wx) * wy * mixes(&corners[2]),
+        wx * wy * mixes(&corners[3]),
+    ];
+    let total = w[0] + w[1] + w[2] + w[3];
+    if total > 0.0 {
+        let inverse = 1.0 / total;
+        for ch in 0..4 {
+            nearest[ch] = (w[0] * corners[0][ch]
+                + w[1] * corners[1][ch]
+                + w[2] * corners[2][ch]
+                + w[3] * corners[3][ch])
+                * inverse;
+        }
+    }
+    nearest
+}
 
 /// The 2014 filter at pixel (x, y), as Blender's compositor runs it (Jimenez's version of
 /// Guertin et al.):
@@ -522,40 +539,17 @@ fn gather_pixel_2014(
                     // read, which Blender's runs), depth and motion at the nearest: a streak
                     // of a pixel or two is then a box of its true length, not a few whole
                     // pixels (on `sparse` at 320×180 this halved the error, 0.042 → 0.021).
-                    {
-                        let fx = (x as f32 + sx * t[l]).max(0.0);
-                        let fy = (y as f32 + sy * t[l]).max(0.0);
-                        let (x0, y0) = (fx as usize, fy as usize);
-                        let (wx, wy) = (fx - x0 as f32, fy - y0 as f32);
-                        let (x0, x1) = (x0.min(width - 1), (x0 + 1).min(width - 1));
-                        let (y0, y1) = (y0.min(height - 1), (y0 + 1).min(height - 1));
-                        let a = texels[y0 * width + x0];
-                        let b = texels[y0 * width + x1];
-                        let c = texels[y1 * width + x0];
-                        let d = texels[y1 * width + x1];
-                        // Only texels of the nearest texel's surface (within the soft depth
-                        // extent) mix in, so a tap never takes colour across a silhouette.
-                        let z = sample[l][Z];
-                        let moving = sample[l][LENGTH] >= HALF_PIXEL;
-                        let same = |t: &Texel2014| {
-                            (moving && ((t[Z] - z).abs() * scale < 1.0 || t[LENGTH] >= HALF_PIXEL))
-                                as u32 as f32
-                        };
-                        let w = [
-                            (1.0 - wx) * (1.0 - wy) * same(&a),
-                            wx * (1.0 - wy) * same(&b),
-                            (1.0 - wx) * wy * same(&c),
-                            wx * wy * same(&d),
-                        ];
-                        let total = w[0] + w[1] + w[2] + w[3];
-                        if total > 0.0 {
-                            let inverse = 1.0 / total;
-                            for ch in 0..4 {
-                                sample[l][ch] =
-                                    (w[0] * a[ch] + w[1] * b[ch] + w[2] * c[ch] + w[3] * d[ch])
-                                        * inverse;
-                            }
-                        }
+                    // A still surface is read at the nearest texel alone: it does not blur.
+                    if sample[l][LENGTH] >= HALF_PIXEL {
+                        sample[l] = bilinear(
+                            texels,
+                            (width, height),
+                            sample[l],
+                            scale,
+                            x,
+                            y,
+                            (sx * t[l], sy * t[l]),
+                        );
                     }
                     live[l] = 1.0;
                 }
@@ -642,37 +636,48 @@ pub fn pack(
     velocity: &Velocity,
     neighbors: &TileGrid,
 ) -> Vec<Texel> {
-    let (width, height) = (config.width as usize, config.height as usize);
+    pack_tiles(
+        config,
+        neighbors.columns,
+        [0.0; 6],
+        |c, row| near_blur(neighbors, c, row, 1),
+        |i| {
+            let length = spread_length(velocity.x[i], velocity.y[i], config.shutter, config.k);
+            [
+                color.r[i],
+                color.g[i],
+                color.b[i],
+                color.a.as_ref().map_or(1.0, |a| a[i]),
+                finite_depth(depth[i]),
+                // 1/|V|: infinite for a still pixel, whose cones and cylinders are then 0 at
+                // any distance (it spreads nowhere).
+                1.0 / length,
+            ]
+        },
+    )
+}
+
+/// The texel `texel(i)` of every pixel of the tiles `selected(column, row)` picks, in a
+/// buffer of `zero`s elsewhere; zero-allocated, so untouched pages cost nothing.
+fn pack_tiles<T: Copy + Send + Sync>(
+    config: &ReconstructConfig,
+    columns: usize,
+    zero: T,
+    selected: impl Fn(usize, usize) -> bool + Sync,
+    texel: impl Fn(usize) -> T + Sync,
+) -> Vec<T> {
+    let width = config.width as usize;
     let size = config.tile as usize;
-    let columns = neighbors.columns;
-    let n = width * height;
-    let needed = |c: usize, r: usize| {
-        (r.saturating_sub(1)..(r + 2).min(neighbors.rows)).any(|rr| {
-            (c.saturating_sub(1)..(c + 2).min(columns)).any(|cc| blurs(neighbors, cc, rr))
-        })
-    };
-    let mut texels: Vec<Texel> = vec![[0.0; 6]; n];
+    let mut texels = vec![zero; width * config.height as usize];
     texels
         .par_chunks_mut(size * width)
         .enumerate()
         .for_each(|(row, chunk)| {
-            for c in (0..columns).filter(|&c| needed(c, row)) {
+            for c in (0..columns).filter(|&c| selected(c, row)) {
                 for local_y in 0..chunk.len() / width {
                     let y = row * size + local_y;
                     for x in c * size..((c + 1) * size).min(width) {
-                        let i = y * width + x;
-                        let length =
-                            spread_length(velocity.x[i], velocity.y[i], config.shutter, config.k);
-                        chunk[local_y * width + x] = [
-                            color.r[i],
-                            color.g[i],
-                            color.b[i],
-                            color.a.as_ref().map_or(1.0, |a| a[i]),
-                            finite_depth(depth[i]),
-                            // 1/|V|: infinite for a still pixel, whose cones and
-                            // cylinders are then 0 at any distance (it spreads nowhere).
-                            1.0 / length,
-                        ];
+                        chunk[local_y * width + x] = texel(y * width + x);
                     }
                 }
             }
@@ -680,14 +685,15 @@ pub fn pack(
     texels
 }
 
-/// Stage 4: the gather, in place: pixels of blurring tiles get their filtered colour, the
-/// others keep theirs.
-pub fn gather(
+/// Runs `pixel((column, row), x, y)` over every pixel of the tiles `selected(column, row)`
+/// picks, a band of tile rows per task, and writes its premultiplied RGBA in place; other
+/// pixels keep their colour.
+fn gather_tiles(
     config: &ReconstructConfig,
-    texels: &[Texel],
-    velocity: &Velocity,
-    neighbors: &TileGrid,
+    columns: usize,
     color: &mut Color,
+    selected: impl Fn(usize, usize) -> bool + Sync,
+    pixel: impl Fn((usize, usize), usize, usize) -> [f32; 4] + Sync,
 ) {
     let width = config.width as usize;
     let size = config.tile as usize;
@@ -703,33 +709,40 @@ pub fn gather(
         .zip(alpha.par_chunks_mut(band))
         .enumerate()
         .for_each(|(row, (((r, g), b), a))| {
-            for c in 0..neighbors.columns {
-                if !blurs(neighbors, c, row) {
-                    continue;
-                }
-                let dominant = neighbors.get(c, row);
+            for c in (0..columns).filter(|&c| selected(c, row)) {
                 for local_y in 0..r.len() / width {
                     let y = row * size + local_y;
                     for x in c * size..((c + 1) * size).min(width) {
                         let o = local_y * width + x;
-                        let i = y * width + x;
-                        let [cr, cg, cb, ca] = gather_pixel(
-                            config,
-                            texels,
-                            (velocity.x[i], velocity.y[i]),
-                            x,
-                            y,
-                            dominant,
-                        );
-                        r[o] = cr;
-                        g[o] = cg;
-                        b[o] = cb;
-                        a[o] = ca;
+                        [r[o], g[o], b[o], a[o]] = pixel((c, row), x, y);
                     }
                 }
             }
         });
     color.a = has_alpha.then_some(alpha);
+}
+
+/// Stage 4: the gather, in place: pixels of blurring tiles get their filtered colour, the
+/// others keep theirs.
+pub fn gather(
+    config: &ReconstructConfig,
+    texels: &[Texel],
+    velocity: &Velocity,
+    neighbors: &TileGrid,
+    color: &mut Color,
+) {
+    let width = config.width as usize;
+    gather_tiles(
+        config,
+        neighbors.columns,
+        color,
+        |c, row| blurs(neighbors, c, row),
+        |(c, row), x, y| {
+            let i = y * width + x;
+            let v = (velocity.x[i], velocity.y[i]);
+            gather_pixel(config, texels, v, x, y, neighbors.get(c, row))
+        },
+    );
 }
 
 /// The gather of pixel (x, y) with velocity (vx, vy) along its tile's NeighborMax (nx, ny):

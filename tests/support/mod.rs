@@ -348,11 +348,7 @@ pub mod invariants {
 
 /// Three colour planes as a metrics image.
 pub fn rgb(planes: &[Vec<f32>; 3], w: usize, h: usize) -> shutter::metrics::Rgb<'_> {
-    shutter::metrics::Rgb {
-        width: w,
-        height: h,
-        planes: [&planes[0], &planes[1], &planes[2]],
-    }
+    shutter::metrics::Rgb::new(planes, w, h)
 }
 
 /// Noise colour (RGBA, HDR red, negative blue) over two depth layers (2 and 9) scattered
