@@ -647,15 +647,20 @@ fn half(
     sum
 }
 
+/// E: the frame's largest CoC (the plane is already clamped to --max-coc), at least a pixel
+/// above ε, so the blur is spent on what the frame has.
+fn largest_coc(coc: &[f32], epsilon: f32) -> f32 {
+    coc.iter()
+        .fold(0.0f32, |m, c| m.max(c.abs()))
+        .max(epsilon + 1.0)
+}
+
 /// The pyramid form: the blurred images are the levels of a binomial pyramid, and each
 /// pixel mixes the two whose blur brackets its CoC.
 pub fn pyramid(config: &DofConfig, color: &Color, coc: &[f32]) -> Color {
     let (width, height) = (config.width as usize, config.height as usize);
     let epsilon = config.epsilon;
-    let largest = coc
-        .iter()
-        .fold(0.0f32, |m, c| m.max(c.abs()))
-        .max(epsilon + 1.0);
+    let largest = largest_coc(coc, epsilon);
     let planes = color.planes();
     let mut reference = [0.0; 4];
     for (r, p) in reference.iter_mut().zip(&planes) {
@@ -795,12 +800,7 @@ fn convolve(planes: &Planes, kernel: &[f32]) -> Planes {
 pub fn talk(config: &DofConfig, color: &Color, coc: &[f32]) -> Color {
     let (width, height) = (config.width as usize, config.height as usize);
     let epsilon = config.epsilon;
-    // E: the frame's largest CoC (the plane is already clamped to --max-coc), so the copies
-    // are spent on blur the frame has.
-    let largest = coc
-        .iter()
-        .fold(0.0f32, |m, c| m.max(c.abs()))
-        .max(epsilon + 1.0);
+    let largest = largest_coc(coc, epsilon);
     let passes = match config.passes {
         0 => default_passes(largest),
         n => n as usize,
