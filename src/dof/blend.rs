@@ -45,9 +45,9 @@ const CUT: f64 = 1e-7;
 /// Depth of field by blending progressively blurred images of the frame; `coc` is the signed
 /// CoC plane (px, diameter). The form (`config.blend_form`): 0 the pyramid, 1 the talk's two
 /// copies.
-pub fn blend(config: &DofConfig, color: &Color, coc: &[f32]) -> Color {
+pub fn blend(config: &DofConfig, color: Color, coc: &[f32]) -> Color {
     match config.blend_form {
-        1 => talk(config, color, coc),
+        1 => talk(config, &color, coc),
         _ => pyramid(config, color, coc),
     }
 }
@@ -484,32 +484,37 @@ impl<'a> Sampler<'a> {
 }
 
 /// A compose task's own buffers: each level's row for the current frame row, and per pixel
-/// its blurriness and its output texel.
+/// its blurriness.
 #[derive(Default)]
 struct Scratch {
     made: Vec<Vec<Texel>>,
     blur: Vec<f32>,
-    mixed: Vec<Texel>,
 }
 
 /// The compose stage for frame row y: each pixel's blurriness, the levels the row needs,
 /// then each pixel mixed from the two levels that bracket its CoC (the sharp pixel as level
-/// 0). `out` holds the row of each output plane.
+/// 0). `out` holds the row of each plane, sharp, and is written in place; `window` holds
+/// copies of the rows around it as they were.
 #[multiversion::multiversion(targets("x86_64+avx2"))]
 fn compose_row(
-    source: &Source,
-    samplers: &[Sampler],
-    ladders: &[Ladder; 2],
-    near: Option<(usize, f32)>,
+    pyramid: &Pyramid,
     y: usize,
+    window: &Window,
     scratch: &mut Scratch,
     out: &mut [&mut [f32]],
 ) {
+    let Pyramid {
+        source,
+        samplers,
+        ladders,
+        near,
+    } = pyramid;
+    let near = *near;
     let width = out[0].len();
     let row = y * width;
     let coc = &source.coc[row..row + width];
     let height = source.coc.len() / width;
-    let Scratch { made, blur, mixed } = scratch;
+    let Scratch { made, blur } = scratch;
     made.resize(samplers.len(), Vec::new());
     let mut ready = [false; MAX_LEVELS + 1];
     // Makes level l's row (l ≥ 1) once.
@@ -571,17 +576,15 @@ fn compose_row(
 
     let mut reference = ZERO;
     reference[..4].copy_from_slice(&source.reference);
-    mixed.clear();
-    mixed.resize(width, ZERO);
-    for (x, (m, &t)) in mixed.iter_mut().zip(blur.iter()).enumerate() {
-        let i = row + x;
-        let mut sharp = ZERO;
-        for (v, plane) in sharp.iter_mut().zip(&source.planes) {
-            *v = plane[i];
-        }
+    // `out` holds the sharp row: pixels left sharp are not touched.
+    let channels = out.len();
+    let mut sharp = ZERO;
+    for (x, &t) in blur.iter().enumerate() {
         if t == 0.0 {
-            *m = sharp;
             continue;
+        }
+        for (v, rows) in sharp.iter_mut().zip(window.iter().take(channels)) {
+            *v = rows[1][x];
         }
         // A pixel blurred by the near field's spread mixes levels only: the half step shows
         // its own neighbourhood, which the near field's blur reaches farther than.
@@ -599,28 +602,40 @@ fn compose_row(
                 }
                 offset
             } else if j < first {
-                half(source, &reference, width, height, x, y)
+                half(source, window, channels, &reference, width, height, x, y)
             } else {
                 samplers[j - first].at(&made[j - first], x)
             };
         }
         let [lower, upper] = pair;
-        for lane in 0..8 {
-            m[lane] = reference[lane] + (lower[lane] + f * (upper[lane] - lower[lane]));
-        }
-    }
-    for (ch, o) in out.iter_mut().enumerate() {
-        for (o, m) in o.iter_mut().zip(mixed.iter()) {
-            *o = m[ch];
+        for (ch, o) in out.iter_mut().enumerate() {
+            o[x] = reference[ch] + (lower[ch] + f * (upper[ch] - lower[ch]));
         }
     }
 }
 
+/// What every compose task reads: the frame's constants and CoC, the levels' samplers, the
+/// two ladders (with and without the half step), and where T_near is read (in levels, if any
+/// pixel is in front of the focus plane).
+struct Pyramid<'a> {
+    source: &'a Source<'a>,
+    samplers: &'a [Sampler<'a>],
+    ladders: &'a [Ladder; 2],
+    near: Option<(usize, f32)>,
+}
+
+/// Frame rows y − 1, y and y + 1 (clamped to the frame) of each colour plane, as they were
+/// before the compose stage wrote any of them: the compose stage writes in place.
+type Window<'a> = [[&'a [f32]; 3]; 4];
+
 /// The half step at pixel (x, y): the 3×3 filter over the premultiplied neighbourhood,
 /// normalised (colour offset by the reference).
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn half(
     source: &Source,
+    window: &Window,
+    channels: usize,
     reference: &Texel,
     width: usize,
     height: usize,
@@ -631,12 +646,12 @@ fn half(
     let ys = [y.saturating_sub(1), y, (y + 1).min(height - 1)];
     let xs = [x.saturating_sub(1), x, (x + 1).min(width - 1)];
     let (mut sum, mut weights) = (ZERO, 0.0f32);
-    for (ky, &sy) in TAPS.iter().zip(&ys) {
+    for (r, (ky, &sy)) in TAPS.iter().zip(&ys).enumerate() {
         for (kx, &sx) in TAPS.iter().zip(&xs) {
             let i = sy * width + sx;
             let w = ky * kx * source.interpolator(source.coc[i]).max(IN_FOCUS_WEIGHT);
-            for ((v, plane), r) in sum.iter_mut().zip(&source.planes).zip(reference) {
-                *v += w * (plane[i] - r);
+            for ((v, rows), reference) in sum.iter_mut().zip(window).zip(reference).take(channels) {
+                *v += w * (rows[r][sx] - reference);
             }
             weights += w;
         }
@@ -650,14 +665,15 @@ fn half(
 /// E: the frame's largest CoC (the plane is already clamped to --max-coc), at least a pixel
 /// above ε, so the blur is spent on what the frame has.
 fn largest_coc(coc: &[f32], epsilon: f32) -> f32 {
-    coc.iter()
-        .fold(0.0f32, |m, c| m.max(c.abs()))
+    coc.par_iter()
+        .map(|c| c.abs())
+        .reduce(|| 0.0, f32::max)
         .max(epsilon + 1.0)
 }
 
 /// The pyramid form: the blurred images are the levels of a binomial pyramid, and each
 /// pixel mixes the two whose blur brackets its CoC.
-pub fn pyramid(config: &DofConfig, color: &Color, coc: &[f32]) -> Color {
+pub fn pyramid(config: &DofConfig, mut color: Color, coc: &[f32]) -> Color {
     let (width, height) = (config.width as usize, config.height as usize);
     let epsilon = config.epsilon;
     let largest = largest_coc(coc, epsilon);
@@ -690,27 +706,116 @@ pub fn pyramid(config: &DofConfig, color: &Color, coc: &[f32]) -> Color {
         .collect();
     // T_near is read at the blur of E, where any pixel is in front of the focus plane.
     let near = coc
-        .iter()
+        .par_iter()
         .any(|&c| c < 0.0 && source.interpolator(c) > 0.0)
         .then(|| ladders[1].bracket(largest));
 
-    let channels = source.planes.len();
-    let mut out: Vec<Vec<f32>> = (0..channels).map(|_| vec![0.0; width * height]).collect();
-    let mut chunks: Vec<_> = out.iter_mut().map(|p| p.chunks_mut(width)).collect();
-    let rows: Vec<Vec<&mut [f32]>> = (0..height)
+    // The compose stage writes the frame in place, a band of rows per task. The half step
+    // reads a pixel's neighbours as they were: each task keeps copies of the rows around the
+    // one it writes, and the rows just outside each band are copied before any task starts.
+    let bands = height.div_ceil(BAND);
+    let copy = |y: usize| -> Vec<f32> {
+        source
+            .planes
+            .iter()
+            .flat_map(|p| &p[y * width..(y + 1) * width])
+            .copied()
+            .collect()
+    };
+    // The row above and the row below each band (clamped to the frame).
+    let edges: Vec<[Vec<f32>; 2]> = (0..bands)
+        .map(|b| {
+            let above = (b * BAND).saturating_sub(1);
+            let below = ((b + 1) * BAND).min(height - 1);
+            [copy(above), copy(below)]
+        })
+        .collect();
+    let source = Source {
+        planes: Vec::new(),
+        coc,
+        reference,
+        epsilon,
+        largest,
+        inverse_span: source.inverse_span,
+    };
+    let mut chunks: Vec<_> = [
+        Some(&mut color.r),
+        Some(&mut color.g),
+        Some(&mut color.b),
+        color.a.as_mut(),
+    ]
+    .into_iter()
+    .flatten()
+    .map(|p| p.chunks_mut(width * BAND))
+    .collect();
+    let band_planes: Vec<Vec<&mut [f32]>> = (0..bands)
         .map(|_| {
             chunks
                 .iter_mut()
-                .map(|c| c.next().expect("a row per plane"))
+                .map(|c| c.next().expect("a band per plane"))
                 .collect()
         })
         .collect();
-    rows.into_par_iter()
+    let pyramid = Pyramid {
+        source: &source,
+        samplers: &samplers,
+        ladders: &ladders,
+        near,
+    };
+    band_planes
+        .into_par_iter()
+        .zip(edges.par_iter())
         .enumerate()
-        .for_each_init(Scratch::default, |scratch, (y, mut row)| {
-            compose_row(&source, &samplers, &ladders, near, y, scratch, &mut row)
-        });
-    to_color(out, color.a.is_some())
+        .for_each_init(
+            || (Scratch::default(), [Vec::new(), Vec::new(), Vec::new()]),
+            |(scratch, ring), (band, (mut planes, edge))| {
+                let rows = planes[0].len() / width;
+                // ring[0], ring[1], ring[2]: copies of rows j − 1, j and j + 1 of the band.
+                let load = |buffer: &mut Vec<f32>, planes: &[&mut [f32]], j: usize| {
+                    buffer.clear();
+                    for p in planes {
+                        buffer.extend_from_slice(&p[j * width..(j + 1) * width]);
+                    }
+                };
+                load(&mut ring[1], &planes, 0);
+                for j in 0..rows {
+                    let y = band * BAND + j;
+                    if j + 1 < rows {
+                        load(&mut ring[2], &planes, j + 1);
+                    }
+                    let above: &[f32] = match (j, y) {
+                        (_, 0) => &ring[1],
+                        (0, _) => &edge[0],
+                        _ => &ring[0],
+                    };
+                    let below: &[f32] = if y + 1 == height {
+                        &ring[1]
+                    } else if j + 1 == rows {
+                        &edge[1]
+                    } else {
+                        &ring[2]
+                    };
+                    // Channel ch of a copied row (empty past the frame's channels).
+                    fn plane(rows: &[f32], ch: usize, width: usize) -> &[f32] {
+                        rows.get(ch * width..(ch + 1) * width).unwrap_or(&[])
+                    }
+                    let window: Window = std::array::from_fn(|ch| {
+                        [
+                            plane(above, ch, width),
+                            plane(&ring[1], ch, width),
+                            plane(below, ch, width),
+                        ]
+                    });
+                    let mut out: Vec<&mut [f32]> = planes
+                        .iter_mut()
+                        .map(|p| &mut p[j * width..(j + 1) * width])
+                        .collect();
+                    compose_row(&pyramid, y, &window, scratch, &mut out);
+                    ring.rotate_left(1);
+                }
+            },
+        );
+    color
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1004,6 +1109,52 @@ mod tests {
             last = m;
         }
         assert_eq!(ladder.bracket(1e9), (4, 1.0));
+    }
+
+    #[test]
+    fn the_half_step_reads_the_frame_as_it_was_across_bands() {
+        // Every pixel at CoC 2 (E = 2, so T = 1 and w = 1 everywhere): each output is the
+        // sharp pixel mixed with the 3×3 filter [1 2 1]/4 × [1 2 1]/4 of the input (clamped
+        // to the frame) by f = 2 / (the half step's CoC). The frame is taller than two bands,
+        // so rows next to a band's edge read rows another task writes in place.
+        let (width, height) = (7, 2 * BAND + 5);
+        let n = width * height;
+        let value = |i: usize, k: usize| ((i * 7919 + k * 104_729) % 1000) as f32 / 1000.0;
+        let planes: Vec<Vec<f32>> = (0..4)
+            .map(|k| (0..n).map(|i| value(i, k)).collect())
+            .collect();
+        let color = Color {
+            r: planes[0].clone(),
+            g: planes[1].clone(),
+            b: planes[2].clone(),
+            a: Some(planes[3].clone()),
+        };
+        let coc = vec![2.0f32; n];
+        let config = DofConfig::new(width, height, &crate::dof::DofParams::default());
+        let out = pyramid(&config, color, &coc);
+        let f = 2.0 / (COC_PER_SIGMA * HALF_VARIANCE.sqrt());
+        let taps = [0.25, 0.5, 0.25];
+        for (k, got) in out.planes().iter().enumerate() {
+            for y in 0..height {
+                for x in 0..width {
+                    let mut filtered = 0.0f64;
+                    for (dy, ky) in taps.iter().enumerate() {
+                        for (dx, kx) in taps.iter().enumerate() {
+                            let sy = (y + dy).saturating_sub(1).min(height - 1);
+                            let sx = (x + dx).saturating_sub(1).min(width - 1);
+                            filtered += ky * kx * planes[k][sy * width + sx] as f64;
+                        }
+                    }
+                    let sharp = planes[k][y * width + x] as f64;
+                    let expected = sharp + f * (filtered - sharp);
+                    let got = got[y * width + x] as f64;
+                    assert!(
+                        (got - expected).abs() < 1e-5,
+                        "plane {k} ({x}, {y}): {got} against {expected}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

@@ -24,6 +24,28 @@ pub struct Lens {
     pub sensor_mm: f64,
 }
 
+/// A [`Lens`] for one image width: [`PixelCoc::signed`] is [`Lens::signed_coc`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelCoc {
+    /// Focus distance P, metres.
+    focus: f64,
+    /// The CoC in pixels per unit of (P/D − 1).
+    scale: f64,
+}
+
+impl PixelCoc {
+    /// Signed CoC diameter in pixels at `depth` (see [`Lens::signed_coc`]): (P − D)/D is
+    /// written P/D − 1, so D = ∞ is exact.
+    #[inline]
+    pub fn signed(&self, depth: f64) -> f64 {
+        let depth = if depth.is_nan() { f64::INFINITY } else { depth };
+        if depth <= 0.0 {
+            return -LARGEST;
+        }
+        (self.scale * (self.focus / depth - 1.0)).clamp(-LARGEST, LARGEST)
+    }
+}
+
 /// Circles of confusion larger than this many pixels are clamped (a point at depth 0).
 pub const LARGEST: f64 = 1e6;
 
@@ -64,16 +86,21 @@ impl Lens {
     /// far limit `A·F / (P − F)`; NaN depth counts as infinite; depth 0 or less gives
     /// −[`LARGEST`].
     pub fn signed_coc(&self, depth: f64, width: f64) -> f64 {
+        self.in_pixels(width).signed(depth)
+    }
+
+    /// The lens for an image `width` pixels wide, with what does not depend on depth worked
+    /// out once (the CoC plane evaluates it at every pixel).
+    pub fn in_pixels(&self, width: f64) -> PixelCoc {
         let f = self.focal_mm / 1000.0;
         let aperture = f / self.f_number;
         let p = self.focus;
-        // (P − D)/D, written so D = ∞ is exact: P/D − 1.
-        let depth = if depth.is_nan() { f64::INFINITY } else { depth };
-        if depth <= 0.0 {
-            return -LARGEST;
+        PixelCoc {
+            focus: p,
+            // On the sensor the diameter is −A·F·(P/D − 1)/(P − F); in pixels, times
+            // width / sensor width.
+            scale: -aperture * f / (p - f) * width / (self.sensor_mm / 1000.0),
         }
-        let on_sensor = -aperture * f * (p / depth - 1.0) / (p - f);
-        (on_sensor * width / (self.sensor_mm / 1000.0)).clamp(-LARGEST, LARGEST)
     }
 
     /// Circle-of-confusion diameter in pixels (the magnitude of [`Lens::signed_coc`]).

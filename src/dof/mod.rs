@@ -204,9 +204,10 @@ pub fn coc_plane(frame: &Frame, params: &DofParams) -> Vec<f32> {
             // The sensor spans the display window (the picture), not an overscan data window.
             let display = frame.windows.display.width;
             let width = if display > 0 { display } else { frame.width } as f64;
+            let lens = lens.in_pixels(width);
             depth
                 .par_iter()
-                .map(|&d| (lens.signed_coc(d as f64, width) as f32).clamp(-limit, limit))
+                .map(|&d| (lens.signed(d as f64) as f32).clamp(-limit, limit))
                 .collect()
         }
         CocSource::Map { scale } => depth
@@ -235,12 +236,14 @@ pub fn apply(frame: Frame, params: &DofParams) -> Frame {
         return frame;
     }
     let config = DofConfig::new(frame.width, frame.height, params);
-    let color = frame.color.as_ref().expect("checked");
+    let mut frame = frame;
+    let color = frame.color.take().expect("checked");
     let out = match params.method {
+        // blend writes the colour in place.
         Method::Blend => blend::blend(&config, color, &coc),
         Method::Gather => {
             let tiles = gather::tiles(&coc, frame.width, frame.height, config.epsilon);
-            gather::gather(&config, color, &coc, &tiles)
+            gather::gather(&config, &color, &coc, &tiles)
         }
     };
     Frame {
