@@ -99,6 +99,10 @@ pub enum Error {
     /// One or more problems with input or output files, all found before anything was
     /// written (preflight) or while a frame was processed: exit 1.
     Files(Vec<Problem>),
+    /// The requested backend cannot run here (no suitable GPU adapter, or a build without
+    /// the GPU backend), found before anything was read or written: exit 1. One line that
+    /// says what is missing and what to install or use instead.
+    Device(String),
 }
 
 impl Error {
@@ -110,14 +114,14 @@ impl Error {
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Usage(_) => 2,
-            Error::Files(_) => 1,
+            Error::Files(_) | Error::Device(_) => 1,
         }
     }
 
     /// The problems, if this is a file error.
     pub fn problems(&self) -> &[Problem] {
         match self {
-            Error::Usage(_) => &[],
+            Error::Usage(_) | Error::Device(_) => &[],
             Error::Files(problems) => problems,
         }
     }
@@ -132,7 +136,7 @@ impl From<Problem> for Error {
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Error::Usage(message) => write!(f, "{message}"),
+            Error::Usage(message) | Error::Device(message) => write!(f, "{message}"),
             Error::Files(problems) => {
                 for (i, problem) in problems.iter().enumerate() {
                     if i > 0 {

@@ -6,6 +6,7 @@
 //! - [`numeric`]: what non-finite and extreme values become, and the jitter hash.
 //! - [`process`]: one frame: the numeric policy, depth of field, then motion blur.
 //! - [`dof`], [`motion`]: the effects, siblings that never import each other.
+//! - [`gpu`]: the wgpu backend: the GPU context and the WGSL twins of the CPU stages.
 //! - [`pipeline`]: preflight, then read → process → write overlapped.
 //! - [`settings`]: every setting defined once (flag, preset key, range, default, help).
 //! - [`cli`]: the command line (the only part that prints).
@@ -16,6 +17,7 @@ pub mod diff;
 pub mod dof;
 pub mod error;
 pub mod frame;
+pub mod gpu;
 pub mod io;
 pub mod metrics;
 pub mod motion;

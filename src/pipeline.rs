@@ -12,13 +12,14 @@ use serde::Serialize;
 
 use crate::error::{Problem, ProblemKind, Result};
 use crate::frame::Frame;
+use crate::gpu::{Backend, BackendReport};
 use crate::io::output::{write_frame, OutputOptions};
 use crate::io::passes::{preflight, read_frame, Inputs, PlanOptions};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::motion::Algorithm;
 use crate::numeric::Replaced;
-use crate::process::{depth_kind, process_clean, Params};
+use crate::process::{depth_kind, process_on, Params};
 
 /// A blur job, fully resolved (preset merged, flags applied, frames listed).
 #[derive(Clone, Debug)]
@@ -33,6 +34,8 @@ pub struct Job {
     pub params: Params,
     pub output_options: OutputOptions,
     pub skip_existing: bool,
+    /// Where the stages that have a GPU twin run (`--backend`).
+    pub backend: Backend,
     /// Warnings found while resolving the job (flags that do not apply), reported by [`run`].
     pub warnings: Vec<String>,
 }
@@ -67,6 +70,8 @@ pub struct Report {
     /// Peak resident memory of the process, in MiB, where the OS reports it.
     pub peak_rss_mib: Option<f64>,
     pub warnings: Vec<String>,
+    /// The backend asked for and the one used (and why `auto` fell back to the CPU).
+    pub backend: BackendReport,
     /// Input values the numeric policy replaced (NaN, infinite or out of range), per pass,
     /// summed over frames.
     pub replaced: Replaced,
@@ -155,6 +160,18 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     };
     let plans = preflight(&job.inputs, &job.output, &todo, &options)?;
     report.preflight_seconds = preflight_start.elapsed().as_secs_f64();
+    // The GPU context, once per run, before any output is touched: `--backend wgpu` with no
+    // suitable adapter stops here with one line.
+    let (gpu, backend) = crate::gpu::open(job.backend).map_err(crate::Error::Device)?;
+    report.backend = backend;
+    if let Some(reason) = report.backend.fallback.clone() {
+        warn(
+            &mut report,
+            on_event,
+            format!("--backend auto runs on the CPU: {reason}"),
+        );
+    }
+    let gpu = gpu.as_ref();
     // Pass files given but not read (the algorithm does not need them, or the pass came
     // from another file): say so.
     if let Some(plan) = plans.first() {
@@ -215,11 +232,12 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                 let message = match frame {
                     Ok((frame, replaced)) => {
                         let t = Instant::now();
-                        let out = process_clean(
+                        let out = process_on(
                             job.algorithm,
                             &job.params,
                             frame,
                             frame_number.unwrap_or(0),
+                            gpu,
                         );
                         seconds += t.elapsed().as_secs_f64();
                         Ok((frame_number, out, replaced))
@@ -274,6 +292,10 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     })?;
     report.read_seconds = read_seconds;
     report.process_seconds = process_seconds;
+    #[cfg(feature = "gpu")]
+    if let Some(gpu) = gpu {
+        report.backend.stages_on_cpu = gpu.stages_on_cpu();
+    }
     report.wall_seconds = start.elapsed().as_secs_f64();
     report.peak_rss_mib = peak_rss_mib();
     Ok(report)

@@ -1,10 +1,11 @@
 //! One frame's processing, above the effects: the numeric policy ([`crate::numeric`]) applied
 //! once as the frame enters (by the pipeline's read stage, or by [`process`]), then depth of field ([`crate::dof`]), then motion blur
 //! ([`crate::motion`]) — "DoF before MB" (Sousa). `dof` and `motion` are siblings that never
-//! import each other; this module is where they meet (and where the backend will be chosen).
+//! import each other; this module is where they meet, and where each stage's backend is chosen.
 
 use crate::dof::{CocSource, DofParams};
 use crate::frame::{Frame, Passes};
+use crate::gpu::Gpu;
 use crate::motion::{reconstruct, scatter, stretch, Algorithm};
 use crate::motion::{ReconstructParams, ScatterParams, StretchParams};
 use crate::numeric::{self, DepthKind, Replaced};
@@ -80,9 +81,25 @@ pub fn process_clean(
     frame: Frame,
     frame_number: i64,
 ) -> Frame {
-    let frame = match &params.dof {
-        Some(dof) => crate::dof::apply(frame, dof),
-        None => frame,
+    process_on(algorithm, params, frame, frame_number, None)
+}
+
+/// [`process_clean`] on a backend: the stages that have a GPU twin run on `gpu` when it is
+/// given (today depth of field's `coc`), every other stage on the CPU in the same run.
+pub fn process_on(
+    algorithm: Algorithm,
+    params: &Params,
+    frame: Frame,
+    frame_number: i64,
+    gpu: Option<&Gpu>,
+) -> Frame {
+    let frame = match (&params.dof, gpu) {
+        (Some(dof), None) => crate::dof::apply(frame, dof),
+        #[cfg(feature = "gpu")]
+        (Some(dof), Some(gpu)) => crate::dof::apply_with(frame, dof, |f, p| gpu.coc_plane(f, p)),
+        #[cfg(not(feature = "gpu"))]
+        (Some(_), Some(gpu)) => match *gpu {},
+        (None, _) => frame,
     };
     let shutter = numeric::shutter(params.shutter);
     match algorithm {

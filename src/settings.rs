@@ -12,6 +12,7 @@ use std::fmt;
 
 use crate::dof::{BlendForm, DofParams, Lens, Method};
 use crate::error::{Error, Result};
+use crate::gpu::Backend;
 use crate::io::exr::{compression_name, parse_compression, WRITABLE_COMPRESSIONS};
 use crate::io::output::OutputOptions;
 use crate::io::preset::Preset;
@@ -127,6 +128,8 @@ pub struct Settings {
     pub dof: DofParams,
     pub lens: LensSettings,
     pub output: OutputOptions,
+    /// Where the stages that have a GPU twin run.
+    pub backend: Backend,
 }
 
 /// The lens as settings: the three that turn depth of field on have no default.
@@ -154,6 +157,7 @@ impl Default for Settings {
                 coc_scale: crate::dof::DEFAULT_COC_SCALE,
             },
             output: OutputOptions::default(),
+            backend: Backend::default(),
         }
     }
 }
@@ -371,6 +375,21 @@ pub const DEFS: &[Def] = &[
         unset: "",
         get: |s| Value::Name(s.algorithm.name()),
         set: |s, v| s.algorithm = pick(Algorithm::ALL, v.name()),
+    },
+    Def {
+        name: "backend",
+        flag: None,
+        section: Section::Blur,
+        applies: &[],
+        value_name: "B",
+        help: "where the passes run: cpu (the reference, the default for now), wgpu (any \
+               Vulkan, Metal or DX12 adapter, software ones included; an error if none) or \
+               auto (a hardware GPU, else the CPU); stages without a GPU twin (all but depth \
+               of field's coc, so far) run on the CPU",
+        kind: Kind::Choice(|| names(Backend::ALL)),
+        unset: "",
+        get: |s| Value::Name(s.backend.name()),
+        set: |s, v| s.backend = pick(Backend::ALL, v.name()),
     },
     Def {
         name: "shutter",

@@ -8,6 +8,7 @@ mod cli;
 mod diff;
 mod dof;
 mod golden;
+mod gpu;
 mod invariants;
 mod io;
 mod metrics;

@@ -15,7 +15,7 @@ use crate::settings::{Def, Given, Kind, Section, Value, DEFS};
     long_about = "Adds the camera effects a renderer left out - motion blur and depth of field - \
 to rendered frame sequences, reading colour, depth, velocity and previous/next position passes \
 from OpenEXR or 8/16-bit images.\n\nExit codes: 0 success, 1 a problem with input or output \
-files, 2 a usage error."
+files (or no GPU adapter for --backend wgpu), 2 a usage error."
 )]
 pub struct Cli {
     #[command(subcommand)]

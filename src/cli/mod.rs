@@ -67,7 +67,7 @@ const MAX_PRINTED_PROBLEMS: usize = 20;
 
 fn print_error(error: &Error) {
     match error {
-        Error::Usage(message) => eprintln!("shutter: error: {message}"),
+        Error::Usage(message) | Error::Device(message) => eprintln!("shutter: error: {message}"),
         Error::Files(problems) => {
             for problem in problems.iter().take(MAX_PRINTED_PROBLEMS) {
                 eprintln!("shutter: error: {problem}");

@@ -108,6 +108,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         },
         output_options,
         skip_existing: args.skip_existing,
+        backend: settings.backend,
         warnings,
     })
 }

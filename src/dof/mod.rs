@@ -229,7 +229,17 @@ pub fn coc_plane(frame: &Frame, params: &DofParams) -> Vec<f32> {
 /// the new colour and keeps every other pass, so motion blur can run after it ("DoF before
 /// MB", Sousa).
 pub fn apply(frame: Frame, params: &DofParams) -> Frame {
-    let coc = coc_plane(&frame, params);
+    apply_with(frame, params, coc_plane)
+}
+
+/// [`apply`] with the `coc` stage given by the caller: the dispatch hook of a backend whose
+/// twin of [`coc_plane`] runs elsewhere (the GPU); it must return what [`coc_plane`] does.
+pub fn apply_with(
+    frame: Frame,
+    params: &DofParams,
+    coc_stage: impl FnOnce(&Frame, &DofParams) -> Vec<f32>,
+) -> Frame {
+    let coc = coc_stage(&frame, params);
     let largest = coc.par_iter().map(|c| c.abs()).reduce(|| 0.0, f32::max);
     if largest < params.epsilon || frame.color.is_none() {
         // The whole frame is in focus: nothing to do.

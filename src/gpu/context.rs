@@ -1,0 +1,202 @@
+//! The GPU context of a run: instance, adapter, device and queue, the compiled stages, and
+//! their buffers, created once and reused by every frame.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use wgpu::{Backends, DeviceType};
+
+use super::coc::CocPass;
+
+/// The backends with what the passes need: compute, float storage and (for the scatter
+/// passes to come) atomics and float render targets. Never GL (see the module doc).
+const BACKENDS: Backends = Backends::VULKAN
+    .union(Backends::METAL)
+    .union(Backends::DX12);
+
+/// Which adapters a run accepts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Need {
+    /// Any suitable adapter, a software driver included (`--backend wgpu`).
+    Any,
+    /// A hardware adapter (`--backend auto`): never a software driver (device type CPU).
+    Hardware,
+}
+
+/// The GPU context: created once per run ([`Gpu::new`]), used by every frame.
+pub struct Gpu {
+    pub(crate) device: wgpu::Device,
+    pub(crate) queue: wgpu::Queue,
+    info: wgpu::AdapterInfo,
+    pub(crate) coc: CocPass,
+    /// Stages with a twin that ran on the CPU for a frame (see [`Gpu::note_cpu_stage`]).
+    stages_on_cpu: AtomicU64,
+}
+
+impl std::fmt::Debug for Gpu {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Gpu").field("adapter", &self.info).finish()
+    }
+}
+
+/// What the driver says of the missing API, per platform, and what to install.
+fn missing_driver() -> &'static str {
+    if cfg!(target_os = "macos") || cfg!(target_os = "ios") {
+        "no Metal adapter found: use a Mac with Metal support or use --backend cpu"
+    } else if cfg!(windows) {
+        "no DirectX 12 or Vulkan adapter found: install or update the graphics driver, or use \
+         --backend cpu"
+    } else {
+        "no Vulkan adapter found: install a Vulkan driver (Debian/Ubuntu: mesa-vulkan-drivers) \
+         or use --backend cpu"
+    }
+}
+
+/// Preference among suitable adapters: hardware first, discrete before integrated.
+fn rank(device_type: DeviceType) -> u8 {
+    match device_type {
+        DeviceType::DiscreteGpu => 0,
+        DeviceType::IntegratedGpu => 1,
+        DeviceType::VirtualGpu => 2,
+        DeviceType::Other => 3,
+        DeviceType::Cpu => 4,
+    }
+}
+
+/// The features the stages use, requested explicitly: none yet (the `coc` stage is plain
+/// compute on storage buffers). The scatter twins will add atomics here.
+fn required_features() -> wgpu::Features {
+    wgpu::Features::empty()
+}
+
+/// The limits requested: WebGPU's defaults, with the adapter's own largest storage binding
+/// and buffer, so a frame plane as large as the device allows fits.
+fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
+    wgpu::Limits {
+        max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
+        max_buffer_size: adapter.max_buffer_size,
+        ..wgpu::Limits::default()
+    }
+}
+
+impl Gpu {
+    /// Creates the context on the best adapter that `need` accepts. `Err` is one line saying
+    /// what is missing and what to install or use instead.
+    pub fn new(need: Need) -> Result<Gpu, String> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends: BACKENDS,
+            flags: wgpu::InstanceFlags::from_build_config().with_env(),
+            ..wgpu::InstanceDescriptor::new_without_display_handle()
+        });
+        let adapters = pollster::block_on(instance.enumerate_adapters(BACKENDS));
+        if adapters.is_empty() {
+            return Err(missing_driver().to_string());
+        }
+        let mut suitable: Vec<(wgpu::Adapter, wgpu::AdapterInfo)> = Vec::new();
+        let mut lacking = Vec::new();
+        for adapter in adapters {
+            let info = adapter.get_info();
+            let limits = required_limits(&adapter.limits());
+            let missing_features = required_features() - adapter.features();
+            if !missing_features.is_empty() {
+                lacking.push(format!("{} lacks {missing_features:?}", info.name));
+            } else if let Some(name) = {
+                let mut failed = None;
+                limits.check_limits_with_fail_fn(&adapter.limits(), true, |name, _, _| {
+                    failed = Some(name)
+                });
+                failed
+            } {
+                lacking.push(format!("{} has too low a limit {name}", info.name));
+            } else {
+                suitable.push((adapter, info));
+            }
+        }
+        suitable.sort_by_key(|(_, info)| rank(info.device_type));
+        let chosen = match need {
+            Need::Any => suitable.into_iter().next(),
+            Need::Hardware => suitable
+                .into_iter()
+                .find(|(_, info)| info.device_type != DeviceType::Cpu),
+        };
+        let Some((adapter, info)) = chosen else {
+            return Err(match (need, lacking.is_empty()) {
+                (Need::Hardware, true) => {
+                    "no hardware GPU adapter (software drivers are for --backend wgpu only)"
+                        .to_string()
+                }
+                (_, false) => format!(
+                    "no suitable GPU adapter ({}): update the graphics driver or use \
+                     --backend cpu",
+                    lacking.join("; ")
+                ),
+                (Need::Any, true) => missing_driver().to_string(),
+            });
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("shutter"),
+            required_features: required_features(),
+            required_limits: required_limits(&adapter.limits()),
+            ..wgpu::DeviceDescriptor::default()
+        }))
+        .map_err(|e| {
+            format!(
+                "cannot open GPU adapter {}: {e}; use --backend cpu",
+                info.name
+            )
+            .replace('\n', " ")
+        })?;
+        let coc = CocPass::new(&device);
+        Ok(Gpu {
+            device,
+            queue,
+            info,
+            coc,
+            stages_on_cpu: AtomicU64::new(0),
+        })
+    }
+
+    /// The adapter in words: name, wgpu backend, device type, driver.
+    pub fn adapter(&self) -> String {
+        let info = &self.info;
+        let driver = [info.driver.as_str(), info.driver_info.as_str()]
+            .iter()
+            .filter(|s| !s.is_empty())
+            .copied()
+            .collect::<Vec<_>>()
+            .join(" ");
+        format!(
+            "{} ({:?}, {:?}{})",
+            info.name,
+            info.backend,
+            info.device_type,
+            if driver.is_empty() {
+                String::new()
+            } else {
+                format!(", {driver}")
+            }
+        )
+    }
+
+    /// Whether the adapter is a software driver (lavapipe, WARP, SwiftShader).
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == DeviceType::Cpu
+    }
+
+    /// Records that a stage with a GPU twin ran on the CPU for one frame.
+    pub(crate) fn note_cpu_stage(&self) {
+        self.stages_on_cpu.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Stages with a twin that ran on the CPU so far, counted over frames.
+    pub fn stages_on_cpu(&self) -> u64 {
+        self.stages_on_cpu.load(Ordering::Relaxed)
+    }
+
+    /// The largest plane (bytes) one storage binding can hold on this device.
+    pub(crate) fn max_binding(&self) -> u64 {
+        let limits = self.device.limits();
+        limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
+    }
+}

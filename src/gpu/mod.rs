@@ -1,0 +1,140 @@
+//! The wgpu backend (DESIGN.md "wgpu backend"): the GPU context, created once per run and
+//! reused across frames, and one module per pass stage beside its `.wgsl` twin, under the CPU
+//! stage's name (vello's `cpu/` and `shader/` pairing):
+//!
+//! - [`coc`] + `coc.wgsl`: depth of field's `coc` stage, twin of [`crate::dof::coc_plane`].
+//!
+//! The CPU passes are the reference; each twin has a parity test against them
+//! (tests/gpu.rs) with its tolerance stated and justified beside it. Stages without a twin
+//! yet run on the CPU in the same run (this slice of issue 15: only `coc` runs on the GPU).
+//!
+//! The backend is a run's choice ([`Backend`], `--backend cpu|wgpu|auto`):
+//! - `cpu` never touches wgpu;
+//! - `wgpu` takes the best suitable adapter, a software driver (Mesa's lavapipe) included, and
+//!   fails before any output is touched when there is none ([`open`]);
+//! - `auto` takes a hardware adapter when there is one and the CPU otherwise: a software
+//!   driver is for testing and never chosen by `auto`.
+//!
+//! The instance is restricted to Vulkan, Metal and DX12: wgpu's GL backend (its silent
+//! fallback when no Vulkan driver is installed) lacks what the passes need (renderable
+//! `Rgba32Float`, buffer atomics; CRATES.md).
+//!
+//! Built without the `gpu` feature (`cargo build --no-default-features`) this module keeps
+//! only [`Backend`], [`BackendReport`] and [`open`], which refuses `wgpu` and runs `auto` on
+//! the CPU; [`Gpu`] is then a type with no values.
+
+use serde::Serialize;
+
+#[cfg(feature = "gpu")]
+pub mod coc;
+#[cfg(feature = "gpu")]
+mod context;
+
+#[cfg(feature = "gpu")]
+pub use context::{Gpu, Need};
+
+/// Without the `gpu` feature there is no context: a type with no values, so code that takes
+/// an `Option<&Gpu>` compiles the same way in both builds.
+#[cfg(not(feature = "gpu"))]
+#[derive(Debug)]
+pub enum Gpu {}
+
+/// Where the passes run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Backend {
+    /// The CPU (rayon): the reference. The default for now.
+    #[default]
+    Cpu,
+    /// wgpu on any suitable adapter, a software driver included; an error when there is none.
+    Wgpu,
+    /// wgpu on a hardware GPU when there is one, else the CPU.
+    Auto,
+}
+
+impl Backend {
+    pub const ALL: &'static [(&'static str, Backend)] = &[
+        ("cpu", Backend::Cpu),
+        ("wgpu", Backend::Wgpu),
+        ("auto", Backend::Auto),
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Cpu => "cpu",
+            Backend::Wgpu => "wgpu",
+            Backend::Auto => "auto",
+        }
+    }
+}
+
+/// What a run asked for and what it got, for the `--json` summary.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct BackendReport {
+    /// `--backend` as resolved: cpu, wgpu or auto.
+    pub requested: String,
+    /// Where the GPU-capable stages ran: cpu or wgpu.
+    pub used: String,
+    /// The adapter: name, wgpu backend, device type and driver; `None` on the CPU.
+    pub adapter: Option<String>,
+    /// Why `auto` runs on the CPU (no hardware adapter, a build without the GPU backend).
+    pub fallback: Option<String>,
+    /// Seconds spent looking for an adapter and creating the context (instance, adapter,
+    /// device, pipelines).
+    pub context_seconds: f64,
+    /// Stages that have a GPU twin but ran on the CPU for a frame (e.g. a frame larger than
+    /// the device's buffer limit), counted over frames.
+    pub stages_on_cpu: u64,
+}
+
+/// Opens the backend a run asked for: the GPU context when it runs on wgpu, and the report.
+/// `Err` holds the one line to print for `--backend wgpu` with no suitable adapter.
+pub fn open(backend: Backend) -> Result<(Option<Gpu>, BackendReport), String> {
+    let mut report = BackendReport {
+        requested: backend.name().to_string(),
+        used: "cpu".to_string(),
+        ..BackendReport::default()
+    };
+    match backend {
+        Backend::Cpu => Ok((None, report)),
+        #[cfg(feature = "gpu")]
+        Backend::Wgpu | Backend::Auto => {
+            let need = if backend == Backend::Wgpu {
+                Need::Any
+            } else {
+                Need::Hardware
+            };
+            let start = std::time::Instant::now();
+            let opened = Gpu::new(need);
+            report.context_seconds = start.elapsed().as_secs_f64();
+            match opened {
+                Ok(gpu) => {
+                    report.used = "wgpu".to_string();
+                    report.adapter = Some(gpu.adapter().to_string());
+                    Ok((Some(gpu), report))
+                }
+                Err(missing) if backend == Backend::Auto => {
+                    report.fallback = Some(missing);
+                    Ok((None, report))
+                }
+                Err(missing) => Err(missing),
+            }
+        }
+        #[cfg(not(feature = "gpu"))]
+        Backend::Wgpu => Err(NO_GPU_FEATURE.to_string()),
+        #[cfg(not(feature = "gpu"))]
+        Backend::Auto => {
+            report.fallback = Some(NO_GPU_FEATURE.to_string());
+            Ok((None, report))
+        }
+    }
+}
+
+#[cfg(not(feature = "gpu"))]
+const NO_GPU_FEATURE: &str = "this shutter was built without the GPU backend \
+    (cargo build --no-default-features): rebuild with the default features or use --backend cpu";
+
+/// Whether a GPU twin must run: `SHUTTER_REQUIRE_GPU=1` (CI sets it) turns a missing adapter
+/// into a test failure instead of a skip.
+pub fn required() -> bool {
+    std::env::var("SHUTTER_REQUIRE_GPU").is_ok_and(|v| !v.is_empty() && v != "0")
+}
