@@ -388,18 +388,20 @@ mod with_gpu {
         assert!(gpu.coc_plane(&Frame::new(0, 0), &params).is_empty());
     }
 
+    /// A 50 mm f/2 lens focused at 2 m on a full-frame sensor.
+    const LENS: Lens = Lens {
+        focal_mm: 50.0,
+        f_number: 2.0,
+        focus: 2.0,
+        sensor_mm: 36.0,
+    };
+
     /// Buffers are kept per size and reused: a second frame of one size, then a third of
     /// another, then the first size again, all match the CPU.
     #[test]
     fn coc_reuses_its_buffers_across_frames_and_sizes() {
         let Some(gpu) = gpu() else { return };
-        let lens = Lens {
-            focal_mm: 50.0,
-            f_number: 2.0,
-            focus: 2.0,
-            sensor_mm: 36.0,
-        };
-        let params = DofParams::new(CocSource::Lens(lens));
+        let params = DofParams::new(CocSource::Lens(LENS));
         for (seed, (w, h)) in [(1, (33, 17)), (2, (33, 17)), (3, (20, 20)), (4, (33, 17))] {
             let frame = depth_frame(w, h, seed, 2.0);
             let cpu = coc_plane(&frame, &params);
@@ -412,13 +414,7 @@ mod with_gpu {
     #[test]
     fn coc_at_1080p_prints_its_time() {
         let Some(gpu) = gpu() else { return };
-        let lens = Lens {
-            focal_mm: 50.0,
-            f_number: 2.0,
-            focus: 2.0,
-            sensor_mm: 36.0,
-        };
-        let params = DofParams::new(CocSource::Lens(lens));
+        let params = DofParams::new(CocSource::Lens(LENS));
         let frame = depth_frame(1920, 1080, 5, 2.0);
         let _ = gpu.coc_plane(&frame, &params); // buffers made here
         let runs = 5;

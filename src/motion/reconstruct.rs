@@ -382,6 +382,30 @@ const TAP_SPACING: f32 = 2.0;
 const SALT_TILE: u32 = 0x5449_4c45;
 const SALT_TAPS: u32 = 0x5441_5053;
 
+/// The four texels around pixel (x, y) + `offset` (clamped to the frame), each with its
+/// bilinear weight: [`bilinear`] and [`split`] read a tap through this.
+#[inline(always)]
+fn around(
+    texels: &[Texel2014],
+    (width, height): (usize, usize),
+    x: usize,
+    y: usize,
+    offset: (f32, f32),
+) -> [(&Texel2014, f32); 4] {
+    let fx = (x as f32 + offset.0).max(0.0);
+    let fy = (y as f32 + offset.1).max(0.0);
+    let (x0, y0) = (fx as usize, fy as usize);
+    let (wx, wy) = (fx - x0 as f32, fy - y0 as f32);
+    let (x0, x1) = (x0.min(width - 1), (x0 + 1).min(width - 1));
+    let (y0, y1) = (y0.min(height - 1), (y0 + 1).min(height - 1));
+    [
+        (&texels[y0 * width + x0], (1.0 - wx) * (1.0 - wy)),
+        (&texels[y0 * width + x1], wx * (1.0 - wy)),
+        (&texels[y1 * width + x0], (1.0 - wx) * wy),
+        (&texels[y1 * width + x1], wx * wy),
+    ]
+}
+
 /// The colour of `nearest` (the texel nearest to pixel (x, y) + `offset`, a moving one)
 /// read bilinearly at that point, over the four texels around it that move or share its
 /// surface (within the soft depth extent, `scale` = 1 / SOFT_Z_EXTENT), so a tap never takes
@@ -396,26 +420,16 @@ fn bilinear(
     y: usize,
     offset: (f32, f32),
 ) -> Texel2014 {
-    let fx = (x as f32 + offset.0).max(0.0);
-    let fy = (y as f32 + offset.1).max(0.0);
-    let (x0, y0) = (fx as usize, fy as usize);
-    let (wx, wy) = (fx - x0 as f32, fy - y0 as f32);
-    let (x0, x1) = (x0.min(width - 1), (x0 + 1).min(width - 1));
-    let (y0, y1) = (y0.min(height - 1), (y0 + 1).min(height - 1));
-    let corners = [
-        texels[y0 * width + x0],
-        texels[y0 * width + x1],
-        texels[y1 * width + x0],
-        texels[y1 * width + x1],
-    ];
+    let [c0, c1, c2, c3] = around(texels, (width, height), x, y, offset);
+    let corners = [c0.0, c1.0, c2.0, c3.0];
     let z = nearest[Z];
     let mixes =
         |t: &Texel2014| ((t[Z] - z).abs() * scale < 1.0 || t[LENGTH] >= HALF_PIXEL) as u32 as f32;
     let w = [
-        (1.0 - wx) * (1.0 - wy) * mixes(&corners[0]),
-        wx * (1.0 - wy) * mixes(&corners[1]),
-        (1.0 - wx) * wy * mixes(&corners[2]),
-        wx * wy * mixes(&corners[3]),
+        c0.1 * mixes(corners[0]),
+        c1.1 * mixes(corners[1]),
+        c2.1 * mixes(corners[2]),
+        c3.1 * mixes(corners[3]),
     ];
     let total = w[0] + w[1] + w[2] + w[3];
     if total > 0.0 {
@@ -461,18 +475,7 @@ fn split(
     y: usize,
     offset: (f32, f32),
 ) -> (Texel2014, f32, Texel2014, f32) {
-    let fx = (x as f32 + offset.0).max(0.0);
-    let fy = (y as f32 + offset.1).max(0.0);
-    let (x0, y0) = (fx as usize, fy as usize);
-    let (wx, wy) = (fx - x0 as f32, fy - y0 as f32);
-    let (x0, x1) = (x0.min(width - 1), (x0 + 1).min(width - 1));
-    let (y0, y1) = (y0.min(height - 1), (y0 + 1).min(height - 1));
-    let corners = [
-        (&texels[y0 * width + x0], (1.0 - wx) * (1.0 - wy)),
-        (&texels[y0 * width + x1], wx * (1.0 - wy)),
-        (&texels[y1 * width + x0], (1.0 - wx) * wy),
-        (&texels[y1 * width + x1], wx * wy),
-    ];
+    let corners = around(texels, (width, height), x, y, offset);
     let moves = nearest[LENGTH] >= HALF_PIXEL;
     let mut a = *nearest;
     let mut b = [0.0f32; 8];
