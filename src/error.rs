@@ -20,6 +20,8 @@ pub enum ProblemKind {
     Unsupported,
     /// An output cannot be written, or would overwrite an input.
     Output,
+    /// The header declares more pixels than the limit (`max-pixels`) allows.
+    TooLarge,
 }
 
 /// One problem with one file of one frame.
@@ -74,6 +76,7 @@ impl fmt::Display for Problem {
             ProblemKind::Corrupt => "corrupt file",
             ProblemKind::Unsupported => "not supported",
             ProblemKind::Output => "cannot write",
+            ProblemKind::TooLarge => "too large",
         };
         write!(f, "{what}: {}", self.path.display())?;
         if let Some(frame) = self.frame {

@@ -36,6 +36,8 @@ pub struct Job {
     pub skip_existing: bool,
     /// Where the stages that have a GPU twin run (`--backend`).
     pub backend: Backend,
+    /// The largest input frame in pixels (setting `max-pixels`).
+    pub max_pixels: usize,
     /// Warnings found while resolving the job (flags that do not apply), reported by [`run`].
     pub warnings: Vec<String>,
 }
@@ -157,6 +159,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         preset: &job.preset,
         layer: job.layer.as_deref(),
         needs: crate::process::needs(job.algorithm, &job.params),
+        max_pixels: job.max_pixels,
     };
     let plans = preflight(&job.inputs, &job.output, &todo, &options)?;
     report.preflight_seconds = preflight_start.elapsed().as_secs_f64();

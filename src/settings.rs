@@ -130,6 +130,8 @@ pub struct Settings {
     pub output: OutputOptions,
     /// Where the stages that have a GPU twin run.
     pub backend: Backend,
+    /// The largest input frame, in pixels, checked from each file's header.
+    pub max_pixels: usize,
 }
 
 /// The lens as settings: the three that turn depth of field on have no default.
@@ -158,6 +160,7 @@ impl Default for Settings {
             },
             output: OutputOptions::default(),
             backend: Backend::default(),
+            max_pixels: crate::io::file::DEFAULT_MAX_PIXELS,
         }
     }
 }
@@ -390,6 +393,20 @@ pub const DEFS: &[Def] = &[
         unset: "",
         get: |s| Value::Name(s.backend.name()),
         set: |s, v| s.backend = pick(Backend::ALL, v.name()),
+    },
+    Def {
+        name: "max-pixels",
+        flag: None,
+        section: Section::Blur,
+        applies: &[],
+        value_name: "N",
+        help: "the largest input frame in pixels (width × height), checked from each file's \
+               header before anything is decoded; the default, 16384 × 16384, admits 16K \
+               frames",
+        kind: whole(1.0, 4_294_967_296.0),
+        unset: "",
+        get: |s| Value::Number(s.max_pixels as f64),
+        set: |s, v| s.max_pixels = v.number() as usize,
     },
     Def {
         name: "shutter",

@@ -336,6 +336,7 @@ fn size_mismatch_between_passes_is_an_error() {
         preset: &preset,
         layer: None,
         needs: shutter::Passes::ALL,
+        max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };
     let problems = plan_frame(&inputs, None, &options).unwrap_err();
     assert!(problems

@@ -50,6 +50,7 @@ fn scene_passes(name: &str) -> Frame {
         preset: &preset,
         layer: None,
         needs: shutter::frame::Passes::ALL,
+        max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };
     read_frame(&plan_frame(&inputs, Some(1), &options).unwrap()).unwrap()
 }

@@ -20,6 +20,7 @@ fn read_color(path: &Path) -> shutter::frame::Color {
         preset: &preset,
         layer: None,
         needs: Passes::COLOR,
+        max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };
     let plan = plan_frame(&inputs, None, &options).unwrap();
     read_frame(&plan).unwrap().color.unwrap()
@@ -168,6 +169,7 @@ fn multi_part_files_find_channels_by_part_name() {
             next: true,
             ..Passes::default()
         },
+        max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };
     let plan = plan_frame(&inputs, None, &options).unwrap();
     let frame = read_frame(&plan).unwrap();
@@ -408,6 +410,7 @@ fn parts_without_wanted_channels_are_never_decompressed() {
         preset: &preset,
         layer: None,
         needs: Passes::COLOR,
+        max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };
     let frame = read_frame(&plan_frame(&inputs, None, &needs_color).unwrap()).unwrap();
     assert_exact(&frame.color.unwrap().r, &smooth, "R");

@@ -9,6 +9,7 @@ mod diff;
 mod dof;
 mod golden;
 mod gpu;
+mod hostile;
 mod invariants;
 mod io;
 mod metrics;

@@ -121,6 +121,7 @@ fn read_all(preset: &Preset, inputs: &Inputs) -> Frame {
         preset,
         layer: None,
         needs: Passes::ALL,
+        max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };
     let plan = plan_frame(inputs, None, &options).unwrap_or_else(|p| panic!("{p:?}"));
     read_frame(&plan).unwrap()
@@ -288,6 +289,7 @@ fn blender_preset_with_two_view_layers_asks_for_one() {
         preset: &preset,
         layer: None,
         needs: Passes::COLOR,
+        max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };
     let problems = plan_frame(&inputs(&path), None, &options).unwrap_err();
     assert!(problems[0]
@@ -392,6 +394,7 @@ fn painted_preset() {
             next: false,
             ..Passes::ALL
         },
+        max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };
     let plan = plan_frame(&i, None, &options).unwrap();
     let frame = read_frame(&plan).unwrap();
@@ -447,6 +450,7 @@ fn painted_mid_grey_is_exactly_still_at_8_bits() {
             velocity: true,
             ..Passes::default()
         },
+        max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };
     let frame = read_frame(&plan_frame(&i, None, &options).unwrap()).unwrap();
     let v = frame.velocity.unwrap();
@@ -508,6 +512,7 @@ y_up = true
             velocity: true,
             ..Passes::default()
         },
+        max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };
     let plan = plan_frame(&inputs(&path), None, &options).unwrap();
     assert!(

@@ -565,6 +565,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                     preset: &preset,
                     layer: None,
                     needs: crate::process::needs(setting.algorithm, &setting.params),
+                    max_pixels: crate::io::file::DEFAULT_MAX_PIXELS,
                 };
                 let plan = plan_frame(&inputs, Some(1), &plan_options).map_err(Error::Files)?;
                 let frame = read_frame(&plan)?;

@@ -14,6 +14,38 @@ use crate::settings::{self};
 use super::args::BlurArgs;
 
 /// Turns the blur arguments into a job: the second phase of argument handling.
+/// Warnings for output flags the chosen format cannot use (given on the command line; a
+/// preset's output section serves every format, so its keys are not warned about).
+fn output_warnings(given: &settings::Given, format: OutputFormat) -> Vec<String> {
+    use crate::io::image::ImageFormat;
+    let typed = |name: &str| given.get(name).is_some();
+    let mut warnings = Vec::new();
+    let exr = format == OutputFormat::Exr;
+    for flag in ["half", "compression"] {
+        if typed(flag) && !exr {
+            warnings.push(format!(
+                "--{flag} applies to EXR output, not this -o: it has no effect"
+            ));
+        }
+    }
+    if typed("bit-depth") {
+        match format {
+            OutputFormat::Exr => warnings.push(
+                "--bit-depth applies to PNG and TIFF output, not EXR (use --half): it has no \
+                 effect"
+                    .into(),
+            ),
+            OutputFormat::Image(ImageFormat::Jpeg) => warnings.push(
+                "--bit-depth applies to PNG and TIFF output; JPEG is always 8-bit: it has no \
+                 effect"
+                    .into(),
+            ),
+            OutputFormat::Image(_) => {}
+        }
+    }
+    warnings
+}
+
 pub fn resolve(args: &BlurArgs) -> Result<Job> {
     let mut preset = Preset::load(&args.preset)?;
     let (settings, warnings) = settings::resolve(&args.settings.0, &preset)?;
@@ -44,11 +76,31 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         next: pattern(&args.next)?,
     };
     let output = PathPattern::parse(&args.output)?;
-    if OutputFormat::from_path(&output.path(None)).is_none() {
+    let Some(format) = OutputFormat::from_path(&output.path(None)) else {
         return Err(Error::usage(format!(
             "-o {}: unknown output format; use .exr, .png, .tif, .tiff, .jpg or .jpeg",
             args.output
         )));
+    };
+    let mut warnings = warnings;
+    warnings.extend(output_warnings(&args.settings.0, format));
+    if let Some(layer) = &args.layer {
+        let names = preset
+            .color
+            .channels
+            .iter()
+            .chain(&preset.velocity.channels)
+            .chain(&preset.prev.channels)
+            .chain(&preset.next.channels)
+            .flatten()
+            .chain(&preset.depth.channels);
+        if !names.into_iter().any(|n| n.contains("{layer}")) {
+            warnings.push(format!(
+                "--layer {layer}: preset {} names no channel by view layer, so it has no \
+                 effect (the blender preset does)",
+                preset.name
+            ));
+        }
     }
 
     let frames: Vec<Option<i64>> = match (&args.frames, inputs.is_sequence()) {
@@ -109,6 +161,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         output_options,
         skip_existing: args.skip_existing,
         backend: settings.backend,
+        max_pixels: settings.max_pixels,
         warnings,
     })
 }

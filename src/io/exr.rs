@@ -109,8 +109,11 @@ pub fn unsupported_reason(header: &Header) -> Option<String> {
     None
 }
 
-/// Checks, without decompressing anything, that every chunk the offset tables point at lies
-/// inside the file: catches truncated and half-copied files before any output is written.
+/// Checks, without decompressing anything, that the offset tables describe the image: every
+/// chunk lies inside the file, no two chunks share bytes, and each part's chunks name each
+/// of its blocks (scan-line blocks or tiles of its levels) exactly once. Catches truncated
+/// and half-copied files, and tables that point several entries at one chunk, which a
+/// decoder would otherwise turn into a frame with black lines, before any output is written.
 pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<(), String> {
     let mut file = File::open(path).map_err(|e| e.to_string())?;
     let file_len = file.metadata().map_err(|e| e.to_string())?.len();
@@ -120,43 +123,141 @@ pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<(), String> {
     };
     MetaData::read_from_buffered(&mut counting, false).map_err(|e| e.to_string())?;
     let multipart = meta.requirements.has_multiple_layers;
+    // The table is read first: its length is bounded by the file's, so what follows is too.
     let mut offsets = Vec::new();
-    for header in &meta.headers {
-        let tiled = matches!(header.blocks, BlockDescription::Tiles(_));
+    for (part, header) in meta.headers.iter().enumerate() {
         for _ in 0..header.chunk_count {
             let mut bytes = [0u8; 8];
             counting
                 .read_exact(&mut bytes)
                 .map_err(|_| "the chunk offset table is cut short".to_string())?;
-            offsets.push((u64::from_le_bytes(bytes), tiled));
+            offsets.push((u64::from_le_bytes(bytes), part));
         }
     }
     drop(counting);
-    for (offset, tiled) in offsets {
+    // Each part's blocks, as (tile x, tile y, level x, level y); a scan-line block is tile
+    // (0, k) of level (0, 0).
+    let mut blocks: Vec<std::collections::HashMap<[usize; 4], bool>> = meta
+        .headers
+        .iter()
+        .map(|header| {
+            header
+                .blocks_increasing_y_order()
+                .map(|b| {
+                    let (t, l) = (b.location.tile_index, b.location.level_index);
+                    ([t.0, t.1, l.0, l.1], false)
+                })
+                .collect()
+        })
+        .collect();
+    let mut spans = Vec::with_capacity(offsets.len());
+    for (offset, part) in offsets {
+        let header = &meta.headers[part];
+        let tiled = matches!(header.blocks, BlockDescription::Tiles(_));
         // Chunk layout: [part number: i32 when multi-part] then the block coordinates (y for
         // scan lines, four i32 for tiles), then the data size as i32, then the data.
-        let skip = if multipart { 4 } else { 0 } + if tiled { 16 } else { 4 };
+        let coordinates = if tiled { 16 } else { 4 };
+        let skip = if multipart { 4 } else { 0 } + coordinates;
         let size_at = offset.checked_add(skip).ok_or("chunk offset overflows")?;
         if size_at + 4 > file_len {
             return Err(format!(
                 "the file is truncated: a chunk starts at byte {offset} of {file_len}"
             ));
         }
-        file.seek(SeekFrom::Start(size_at))
+        file.seek(SeekFrom::Start(offset))
             .map_err(|e| e.to_string())?;
-        let mut bytes = [0u8; 4];
+        let mut bytes = vec![0u8; skip as usize + 4];
         file.read_exact(&mut bytes).map_err(|e| e.to_string())?;
-        let size = i32::from_le_bytes(bytes);
+        let words: Vec<i32> = bytes
+            .chunks_exact(4)
+            .map(|w| i32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+            .collect();
+        let (words, size) = words.split_at(words.len() - 1);
+        let size = size[0];
         if size < 0 {
             return Err(format!(
                 "a chunk at byte {offset} has an invalid size ({size}); the file is damaged"
             ));
         }
-        if size_at + 4 + size as u64 > file_len {
+        let end = size_at + 4 + size as u64;
+        if end > file_len {
             return Err(format!(
                 "the file is truncated: a chunk at byte {offset} needs {size} bytes, the file has {file_len}"
             ));
         }
+        let words = if multipart {
+            if words[0] as i64 != part as i64 {
+                return Err(format!(
+                    "the chunk at byte {offset} belongs to part {}, but part {part}'s table points at it; the file is damaged",
+                    words[0]
+                ));
+            }
+            &words[1..]
+        } else {
+            words
+        };
+        let key = if tiled {
+            let mut key = [0usize; 4];
+            for (k, &w) in key.iter_mut().zip(words) {
+                *k = usize::try_from(w).unwrap_or(usize::MAX);
+            }
+            key
+        } else {
+            let lines = header.compression.scan_lines_per_block() as i64;
+            let from_top = words[0] as i64 - header.own_attributes.layer_position.1 as i64;
+            let index = if from_top < 0 || from_top % lines != 0 {
+                usize::MAX
+            } else {
+                usize::try_from(from_top / lines).unwrap_or(usize::MAX)
+            };
+            [0, index, 0, 0]
+        };
+        match blocks[part].get_mut(&key) {
+            None => {
+                return Err(if tiled {
+                    format!(
+                        "the chunk at byte {offset} names tile {:?}, which the image does not have; the file is damaged",
+                        words
+                    )
+                } else {
+                    format!(
+                        "the chunk at byte {offset} names line {}, outside the data window or off a block start; the file is damaged",
+                        words[0]
+                    )
+                })
+            }
+            Some(seen) if *seen => {
+                return Err(format!(
+                    "the chunk at byte {offset} names a block another chunk already holds; the file is damaged"
+                ))
+            }
+            Some(seen) => *seen = true,
+        }
+        spans.push((offset, end));
+    }
+    for (part, blocks) in blocks.iter().enumerate() {
+        if let Some((key, _)) = blocks.iter().find(|(_, seen)| !**seen) {
+            let what = if matches!(meta.headers[part].blocks, BlockDescription::Tiles(_)) {
+                format!("tile {:?}", key)
+            } else {
+                format!("scan-line block {}", key[1])
+            };
+            return Err(format!(
+                "no chunk holds {what}{}; the file is damaged",
+                if multipart {
+                    format!(" of part {part}")
+                } else {
+                    String::new()
+                }
+            ));
+        }
+    }
+    spans.sort_unstable();
+    if let Some(w) = spans.windows(2).find(|w| w[1].0 < w[0].1) {
+        return Err(format!(
+            "the chunks at bytes {} and {} overlap; the file is damaged",
+            w[0].0, w[1].0
+        ));
     }
     Ok(())
 }

@@ -12,6 +12,34 @@ use crate::io::{exr as exr_io, image as image_io};
 /// The EXR magic number.
 const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 
+/// The default largest frame, in pixels (setting `max-pixels`): 16384 × 16384, which admits
+/// a 16K frame (15360 × 8640) and any square up to 16384 a side. A file whose header
+/// declares more is refused from its header, before anything is allocated for it: a few
+/// hundred bytes can declare billions of pixels, and decoders then invent the ones the file
+/// does not hold. At the limit a frame of four f32 planes takes 4 GiB.
+pub const DEFAULT_MAX_PIXELS: usize = 16384 * 16384;
+
+/// `width × height` when it is within `max_pixels`, else the problem that names both.
+pub fn check_size(
+    path: &Path,
+    width: usize,
+    height: usize,
+    max_pixels: usize,
+) -> Result<(), Problem> {
+    match width.checked_mul(height) {
+        Some(pixels) if pixels <= max_pixels => Ok(()),
+        pixels => Err(Problem::new(
+            ProblemKind::TooLarge,
+            path,
+            format!(
+                "the header declares {width}x{height}{}, above the limit of {max_pixels} \
+                 pixels; raise max-pixels if the file is real",
+                pixels.map_or(String::new(), |p| format!(" ({p} pixels)"))
+            ),
+        )),
+    }
+}
+
 /// The kind of file.
 #[derive(Clone, Debug, PartialEq)]
 pub enum FileKind {
@@ -56,9 +84,16 @@ pub struct FileInfo {
 }
 
 impl FileInfo {
-    /// Reads the header of an EXR, PNG, JPEG or TIFF file, and checks (without decoding
-    /// pixels) that the file can be read: supported features, chunks inside the file.
+    /// [`FileInfo::probe_within`] the default limit, [`DEFAULT_MAX_PIXELS`].
     pub fn probe(path: &Path) -> Result<FileInfo, Problem> {
+        Self::probe_within(path, DEFAULT_MAX_PIXELS)
+    }
+
+    /// Reads the header of an EXR, PNG, JPEG or TIFF file, and checks (without decoding
+    /// pixels) that the file can be read: a declared size within `max_pixels`, supported
+    /// features, a chunk table that covers the image once and lies inside the file (EXR),
+    /// a complete stream (JPEG).
+    pub fn probe_within(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
         let mut magic = [0u8; 4];
         let opened = std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut magic));
         if let Err(e) = opened {
@@ -76,7 +111,7 @@ impl FileInfo {
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
         if magic == EXR_MAGIC {
-            probe_exr(path)
+            probe_exr(path, max_pixels)
         } else if is_exr_name {
             Err(Problem::new(
                 ProblemKind::Corrupt,
@@ -84,7 +119,7 @@ impl FileInfo {
                 "not an OpenEXR file (bad magic number)",
             ))
         } else {
-            probe_image(path)
+            probe_image(path, max_pixels)
         }
     }
 
@@ -149,7 +184,8 @@ impl FileInfo {
             }
             FileKind::Image { .. } => {
                 let (width, height, mut planes) =
-                    image_io::read_planes(&self.path).map_err(corrupt)?;
+                    image_io::read_planes(&self.path, (self.width, self.height))
+                        .map_err(corrupt)?;
                 if (width, height) != (self.width, self.height) {
                     return Err(Problem::new(
                         ProblemKind::SizeMismatch,
@@ -179,7 +215,7 @@ impl FileInfo {
     }
 }
 
-fn probe_exr(path: &Path) -> Result<FileInfo, Problem> {
+fn probe_exr(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
     let meta = exr_io::read_meta(path).map_err(|e| match e {
         exr::error::Error::NotSupported(what) => {
             Problem::new(ProblemKind::Unsupported, path, what.to_string())
@@ -193,6 +229,9 @@ fn probe_exr(path: &Path) -> Result<FileInfo, Problem> {
     let Some(first) = meta.headers.first() else {
         return Err(Problem::new(ProblemKind::Corrupt, path, "no parts"));
     };
+    for header in &meta.headers {
+        check_size(path, header.layer_size.0, header.layer_size.1, max_pixels)?;
+    }
     for header in &meta.headers {
         if let Some(reason) = exr_io::unsupported_reason(header) {
             return Err(Problem::new(ProblemKind::Unsupported, path, reason));
@@ -250,8 +289,8 @@ fn probe_exr(path: &Path) -> Result<FileInfo, Problem> {
     })
 }
 
-fn probe_image(path: &Path) -> Result<FileInfo, Problem> {
-    let header = image_io::probe(path).map_err(|detail| {
+fn probe_image(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
+    let header = image_io::probe(path, max_pixels).map_err(|detail| {
         let kind = if detail.starts_with("not a ") {
             ProblemKind::Unsupported
         } else {
@@ -259,6 +298,11 @@ fn probe_image(path: &Path) -> Result<FileInfo, Problem> {
         };
         Problem::new(kind, path, detail)
     })?;
+    check_size(path, header.width, header.height, max_pixels)?;
+    if header.format == "jpeg" {
+        image_io::check_jpeg(path, header.width, header.height)
+            .map_err(|detail| Problem::new(ProblemKind::Corrupt, path, detail))?;
+    }
     let sample_type = match (header.float, header.bits) {
         (true, _) => "f32",
         (false, 16) => "u16",

@@ -10,7 +10,7 @@ use std::io::{Seek, Write};
 use std::path::Path;
 use std::sync::OnceLock;
 
-use image::{ColorType, DynamicImage, ImageDecoder, ImageEncoder, ImageReader};
+use image::{ColorType, DynamicImage, ImageDecoder, ImageEncoder, ImageReader, Limits};
 
 use crate::frame::Plane;
 
@@ -38,12 +38,18 @@ fn channel_names(color: ColorType) -> Vec<(&'static str, usize)> {
     }
 }
 
-/// Reads the header only.
-pub fn probe(path: &Path) -> Result<ImageHeader, String> {
-    let reader = ImageReader::open(path)
+/// Reads the header only. The decoder is told the pixel limit as a width and a height of
+/// `max_pixels` each (the image crate's limits are per axis); the caller checks the product.
+pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
+    let mut reader = ImageReader::open(path)
         .map_err(|e| e.to_string())?
         .with_guessed_format()
         .map_err(|e| e.to_string())?;
+    let mut limits = Limits::default();
+    let side = u32::try_from(max_pixels).unwrap_or(u32::MAX);
+    limits.max_image_width = Some(side);
+    limits.max_image_height = Some(side);
+    reader.limits(limits);
     let format = match reader.format() {
         Some(image::ImageFormat::Png) => "png",
         Some(image::ImageFormat::Jpeg) => "jpeg",
@@ -65,15 +71,36 @@ pub fn probe(path: &Path) -> Result<ImageHeader, String> {
     })
 }
 
+/// Room the decoders get for their own buffers beyond the decoded image.
+const DECODER_ROOM: u64 = 64 << 20;
+
+/// The largest decoded pixel the image crate makes (RGBA, f32), in bytes.
+const LARGEST_PIXEL: u64 = 16;
+
 /// The decoded planes of an image (indexed as in [`ImageHeader::channels`]), integer
-/// samples normalised to [0, 1], no transfer function applied.
-pub fn read_planes(path: &Path) -> Result<(usize, usize, Vec<Plane>), String> {
-    let image = ImageReader::open(path)
+/// samples normalised to [0, 1], no transfer function applied. `declared` is the size the
+/// header gave when it was checked: the decoder may not decode another size, nor allocate
+/// more than that size needs (in place of the image crate's fixed 512 MiB, which refused
+/// large 16-bit images the pixel limit admits).
+pub fn read_planes(
+    path: &Path,
+    declared: (usize, usize),
+) -> Result<(usize, usize, Vec<Plane>), String> {
+    let mut reader = ImageReader::open(path)
         .map_err(|e| e.to_string())?
         .with_guessed_format()
-        .map_err(|e| e.to_string())?
-        .decode()
         .map_err(|e| e.to_string())?;
+    let mut limits = Limits::default();
+    limits.max_image_width = Some(u32::try_from(declared.0).unwrap_or(u32::MAX));
+    limits.max_image_height = Some(u32::try_from(declared.1).unwrap_or(u32::MAX));
+    limits.max_alloc = Some(
+        (declared.0 as u64)
+            .saturating_mul(declared.1 as u64)
+            .saturating_mul(LARGEST_PIXEL)
+            .saturating_add(DECODER_ROOM),
+    );
+    reader.limits(limits);
+    let image = reader.decode().map_err(|e| e.to_string())?;
     let (width, height) = (image.width() as usize, image.height() as usize);
     let count = image.color().channel_count() as usize;
     let n = width * height;
@@ -113,6 +140,71 @@ pub fn read_planes(path: &Path) -> Result<(usize, usize, Vec<Plane>), String> {
         }
     }
     Ok((width, height, planes))
+}
+
+/// Checks a JPEG's stream from its markers, without decoding: the image data must end with
+/// the end-of-image marker, and must be long enough for the `width × height` its header
+/// declares. A JPEG decoder fills whatever a stream lacks with invented pixels (a 634-byte
+/// file declaring 12000×12000 decoded to 4 GB of them with no error), so a cut stream would
+/// otherwise pass as a frame.
+///
+/// The length bound: a Huffman-coded frame (SOF0, SOF1, SOF2) codes every 8×8 block of its
+/// full-resolution component, and every block's DC difference takes a code of at least one
+/// bit (progressive AC scans can skip runs of blocks; DC scans cannot), so the entropy-coded
+/// data holds at least ⌈w/8⌉·⌈h/8⌉ bits.
+pub fn check_jpeg(path: &Path, width: usize, height: usize) -> Result<(), String> {
+    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    check_jpeg_bytes(&bytes, width, height)
+}
+
+fn check_jpeg_bytes(bytes: &[u8], width: usize, height: usize) -> Result<(), String> {
+    let cut = "the JPEG stream is cut short (no end-of-image marker after its image data); \
+               the file is truncated or damaged";
+    // Walk the marker segments up to the first scan.
+    let mut at = 2;
+    let mut huffman = false;
+    loop {
+        // Markers may be preceded by any number of 0xFF fill bytes.
+        while bytes.get(at) == Some(&0xFF) && bytes.get(at + 1) == Some(&0xFF) {
+            at += 1;
+        }
+        let (Some(&0xFF), Some(&marker)) = (bytes.get(at), bytes.get(at + 1)) else {
+            return Err(cut.into());
+        };
+        at += 2;
+        match marker {
+            0xD9 => return Err("the JPEG stream ends before its image data".into()),
+            0x01 | 0xD0..=0xD7 => continue,
+            _ => {}
+        }
+        let (Some(&high), Some(&low)) = (bytes.get(at), bytes.get(at + 1)) else {
+            return Err(cut.into());
+        };
+        let length = u16::from_be_bytes([high, low]) as usize;
+        if matches!(marker, 0xC0..=0xC2) {
+            huffman = true;
+        }
+        at += length;
+        if marker == 0xDA {
+            break;
+        }
+    }
+    // Entropy-coded data escapes 0xFF as 0xFF 0x00, so 0xFF 0xD9 after the first scan's
+    // header can only be the end-of-image marker.
+    let data = bytes.get(at..).unwrap_or(&[]);
+    let end = data
+        .windows(2)
+        .rposition(|w| w == [0xFF, 0xD9])
+        .ok_or(cut)?;
+    let blocks = (width.div_ceil(8) as u64) * (height.div_ceil(8) as u64);
+    if huffman && (end as u64) * 8 < blocks {
+        return Err(format!(
+            "the JPEG declares {width}x{height} but holds {end} bytes of image data, fewer \
+             than the {} its {blocks} blocks need at the least; the file is damaged",
+            blocks.div_ceil(8)
+        ));
+    }
+    Ok(())
 }
 
 /// sRGB electro-optical transfer: encoded [0, 1] to linear.

@@ -294,6 +294,25 @@ impl Preset {
 
     fn validate(&self) -> Result<()> {
         let bad = |what: String| Err(Error::usage(format!("preset {}: {what}", self.name)));
+        if self.color.channels.is_empty() {
+            return bad(
+                "[color] channels is empty: give at least one alternative, e.g. \
+                 channels = [[\"R\", \"G\", \"B\"]]"
+                    .into(),
+            );
+        }
+        let names = self
+            .color
+            .channels
+            .iter()
+            .chain(&self.velocity.channels)
+            .chain(&self.prev.channels)
+            .chain(&self.next.channels)
+            .flatten()
+            .chain(&self.depth.channels);
+        if names.into_iter().any(|n| n.trim().is_empty()) {
+            return bad("a channel name is empty".into());
+        }
         if self
             .color
             .channels

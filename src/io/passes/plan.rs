@@ -71,6 +71,8 @@ pub struct PlanOptions<'a> {
     /// The view layer substituted for `{layer}` in channel names; found when `None`.
     pub layer: Option<&'a str>,
     pub needs: Passes,
+    /// The largest frame a file's header may declare, in pixels.
+    pub max_pixels: usize,
 }
 
 /// Plans the reads of one frame from the file headers. Returns every problem found (missing
@@ -302,7 +304,7 @@ impl Planner<'_> {
         if let Some((_, info)) = self.probed.iter().find(|(p, _)| p == path) {
             return info.clone();
         }
-        let info = match FileInfo::probe(path) {
+        let info = match FileInfo::probe_within(path, self.options.max_pixels) {
             Ok(info) => Some(info),
             Err(problem) => {
                 self.problem(problem.pass(pass));

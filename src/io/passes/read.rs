@@ -121,6 +121,7 @@ pub fn read_color(
         preset,
         layer: None,
         needs: Passes::COLOR,
+        max_pixels: crate::io::file::DEFAULT_MAX_PIXELS,
     };
     let plan = plan_frame(&Inputs::color_only(pattern.clone()), frame, &options)?;
     read_frame(&plan).map_err(|problem| vec![problem])

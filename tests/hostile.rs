@@ -1,0 +1,353 @@
+//! Hostile input (issue 17): files whose headers lie about their size, streams cut short,
+//! chunk tables that point several entries at one chunk, and runaway requests. Each test
+//! is named after what it guards; each failed on the code before its fix.
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use shutter::error::ProblemKind;
+use shutter::io::exr::ExrOptions;
+use shutter::io::file::FileInfo;
+use shutter::io::image::{write_color, ImageFormat};
+
+use crate::support::*;
+
+/// Frames 1..=3 of a small colour sequence `C.####.exr` in `dir`.
+fn colour_sequence(dir: &Path, w: usize, h: usize, options: ExrOptions) {
+    for frame in 1..=3 {
+        let n = w * h;
+        write_exr_with(
+            &dir.join(format!("C.{frame:04}.exr")),
+            w,
+            h,
+            vec![
+                ("R", noise(n, frame, 0.0, 1.0)),
+                ("G", noise(n, frame + 7, 0.0, 1.0)),
+                ("B", noise(n, frame + 9, 0.0, 1.0)),
+            ],
+            options,
+        );
+    }
+}
+
+/// Runs `shutter blur --algorithm none` from `input` to `dir/out/o[.####].EXT` with `extra`
+/// flags; returns the output and whether anything was written.
+fn copy_through(
+    dir: &Path,
+    input: &str,
+    ext: &str,
+    extra: &[&str],
+) -> (std::process::Output, bool) {
+    let out = dir.join("out");
+    // A sequence in, a sequence out; a single file in, a single file out.
+    let frames = if input.contains('#') { ".####" } else { "" };
+    let pattern = format!("{}/o{frames}.{ext}", out.display());
+    let mut args = vec![
+        "blur",
+        "--algorithm",
+        "none",
+        "--color",
+        input,
+        "-o",
+        &pattern,
+    ];
+    args.extend_from_slice(extra);
+    let o = shutter(&args);
+    let wrote = std::fs::read_dir(&out).is_ok_and(|mut d| d.next().is_some());
+    (o, wrote)
+}
+
+/// A PNG, JPEG or TIFF of noise, through the writer shutter itself uses.
+fn write_image(path: &Path, format: ImageFormat, w: usize, h: usize) {
+    let n = w * h;
+    let (r, g, b) = (
+        noise(n, 1, 0.0, 1.0),
+        noise(n, 2, 0.0, 1.0),
+        noise(n, 3, 0.0, 1.0),
+    );
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    write_color(&mut bytes, format, w, h, [&r, &g, &b], None, false, true).unwrap();
+    std::fs::write(path, bytes.into_inner()).unwrap();
+}
+
+/// CRC-32 (ISO-HDLC, as PNG uses), bit by bit: small and independent of any crate.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= b as u32;
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
+
+#[test]
+fn threads_above_the_limit_fail_at_once() {
+    // Before: --threads 5000 (or RAYON_NUM_THREADS=100000) started thousands of threads per
+    // pool and a 3-frame 64×36 job did not finish in a minute.
+    let dir = tempfile::tempdir().unwrap();
+    colour_sequence(dir.path(), 16, 8, ExrOptions::default());
+    let input = format!("{}/C.####.exr", dir.path().display());
+    let start = Instant::now();
+    let (o, wrote) = copy_through(dir.path(), &input, "exr", &["--threads", "100000"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("above the limit"), "{}", stderr(&o));
+    assert!(!wrote);
+
+    let pattern = format!("{}/out/o.####.exr", dir.path().display());
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"))
+        .args([
+            "blur",
+            "--algorithm",
+            "none",
+            "--color",
+            &input,
+            "-o",
+            &pattern,
+        ])
+        .env("RAYON_NUM_THREADS", "100000")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("RAYON_NUM_THREADS"), "{}", stderr(&o));
+    // Refused before any pool starts: well under the minute the old code took. (Not a
+    // timing claim: a bound on a hang.)
+    assert!(start.elapsed() < Duration::from_secs(30));
+
+    // At the floor of the limit, a run still goes through.
+    let (o, wrote) = copy_through(dir.path(), &input, "exr", &["--threads", "4"]);
+    assert!(o.status.success() && wrote, "{}", stderr(&o));
+}
+
+#[test]
+fn a_frame_above_max_pixels_fails_in_preflight() {
+    let dir = tempfile::tempdir().unwrap();
+    colour_sequence(dir.path(), 64, 36, ExrOptions::default());
+    let input = format!("{}/C.####.exr", dir.path().display());
+    // 64 × 36 = 2304 pixels: over a limit of 2000, within one of 2304.
+    let (o, wrote) = copy_through(dir.path(), &input, "exr", &["--max-pixels", "2000"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("too large") && err.contains("64x36") && err.contains("2000"),
+        "{err}"
+    );
+    // Every frame is named, before anything is written.
+    assert!(err.contains("frame 1") && err.contains("frame 3"), "{err}");
+    assert!(!wrote);
+    let (o, wrote) = copy_through(dir.path(), &input, "exr", &["--max-pixels", "2304"]);
+    assert!(o.status.success() && wrote, "{}", stderr(&o));
+}
+
+#[test]
+fn a_png_declaring_400_million_pixels_is_refused_from_its_header() {
+    // A 64×36 PNG whose IHDR (CRC fixed) claims 20000×20000: over the default limit, so it
+    // is refused without decoding.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("big.png");
+    write_image(&path, ImageFormat::Png, 64, 36);
+    let mut bytes = std::fs::read(&path).unwrap();
+    // Signature (8), length (4), "IHDR" (4), width (4), height (4), ... CRC after 13 bytes.
+    assert_eq!(&bytes[12..16], b"IHDR");
+    bytes[16..20].copy_from_slice(&20000u32.to_be_bytes());
+    bytes[20..24].copy_from_slice(&20000u32.to_be_bytes());
+    let crc = crc32(&bytes[12..29]);
+    bytes[29..33].copy_from_slice(&crc.to_be_bytes());
+    std::fs::write(&path, &bytes).unwrap();
+    let problem = FileInfo::probe(&path).unwrap_err();
+    assert_eq!(problem.kind, ProblemKind::TooLarge, "{problem}");
+    assert!(problem.detail.contains("20000x20000"), "{problem}");
+    let (o, wrote) = copy_through(dir.path(), &s(&path), "png", &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(!wrote);
+}
+
+#[test]
+fn a_jpeg_declaring_more_than_it_holds_is_an_error_not_invented_pixels() {
+    // Before: a 776-byte JPEG whose frame header claimed 12000×12000 decoded to 144 million
+    // invented pixels (4 GB, exit 0).
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("big.jpg");
+    write_image(&path, ImageFormat::Jpeg, 64, 48);
+    let mut bytes = std::fs::read(&path).unwrap();
+    let sof = bytes
+        .windows(2)
+        .position(|w| w[0] == 0xFF && (0xC0..=0xC2).contains(&w[1]))
+        .unwrap();
+    // FF Cn, length (2), precision (1), height (2), width (2).
+    bytes[sof + 5..sof + 7].copy_from_slice(&12000u16.to_be_bytes());
+    bytes[sof + 7..sof + 9].copy_from_slice(&12000u16.to_be_bytes());
+    std::fs::write(&path, &bytes).unwrap();
+    let problem = FileInfo::probe(&path).unwrap_err();
+    assert_eq!(problem.kind, ProblemKind::Corrupt, "{problem}");
+    assert!(problem.detail.contains("12000x12000"), "{problem}");
+    let (o, wrote) = copy_through(dir.path(), &s(&path), "png", &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(!wrote);
+}
+
+#[test]
+fn a_cut_jpeg_stream_is_an_error_not_a_padded_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let whole = dir.path().join("whole.jpg");
+    write_image(&whole, ImageFormat::Jpeg, 64, 48);
+    // The whole file reads.
+    let info = FileInfo::probe(&whole).unwrap();
+    assert_eq!((info.width, info.height), (64, 48));
+    let bytes = std::fs::read(&whole).unwrap();
+    let cut = dir.path().join("cut.jpg");
+    std::fs::write(&cut, &bytes[..bytes.len() * 2 / 3]).unwrap();
+    let problem = FileInfo::probe(&cut).unwrap_err();
+    assert_eq!(problem.kind, ProblemKind::Corrupt, "{problem}");
+    assert!(problem.detail.contains("cut short"), "{problem}");
+}
+
+/// The byte position of an uncompressed single-part EXR's offset table with `chunks`
+/// entries: the first entry points just past the table.
+fn offset_table(bytes: &[u8], chunks: usize) -> usize {
+    (8..bytes.len() - 8)
+        .find(|&p| {
+            u64::from_le_bytes(bytes[p..p + 8].try_into().unwrap()) == (p + 8 * chunks) as u64
+        })
+        .expect("an offset table")
+}
+
+#[test]
+fn an_offset_table_pointing_every_line_at_one_chunk_is_an_error_not_black_lines() {
+    // Before: every entry of the table pointing at the first chunk read as a frame whose
+    // other lines were black, with exit 0.
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16, 12);
+    let uncompressed = ExrOptions {
+        compression: exr::compression::Compression::Uncompressed,
+        half: false,
+    };
+    colour_sequence(dir.path(), w, h, uncompressed);
+    let path = dir.path().join("C.0002.exr");
+    let mut bytes = std::fs::read(&path).unwrap();
+    // One scan line per chunk without compression.
+    let table = offset_table(&bytes, h);
+    let first: [u8; 8] = bytes[table..table + 8].try_into().unwrap();
+    for k in 1..h {
+        bytes[table + 8 * k..table + 8 * k + 8].copy_from_slice(&first);
+    }
+    std::fs::write(&path, &bytes).unwrap();
+    let problem = FileInfo::probe(&path).unwrap_err();
+    assert_eq!(problem.kind, ProblemKind::Corrupt, "{problem}");
+    assert!(problem.detail.contains("already holds"), "{problem}");
+    // The run stops in preflight, naming frame 2, before frame 1 is written.
+    let (o, wrote) = copy_through(
+        dir.path(),
+        &format!("{}/C.####.exr", dir.path().display()),
+        "exr",
+        &[],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("frame 2"), "{}", stderr(&o));
+    assert!(!wrote);
+}
+
+#[test]
+fn a_chunk_outside_the_data_window_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16, 12);
+    let uncompressed = ExrOptions {
+        compression: exr::compression::Compression::Uncompressed,
+        half: false,
+    };
+    colour_sequence(dir.path(), w, h, uncompressed);
+    let path = dir.path().join("C.0001.exr");
+    let mut bytes = std::fs::read(&path).unwrap();
+    let table = offset_table(&bytes, h);
+    // The last chunk: its first 4 bytes are its line's y; move it far below the window.
+    let last = u64::from_le_bytes(
+        bytes[table + 8 * (h - 1)..table + 8 * h]
+            .try_into()
+            .unwrap(),
+    ) as usize;
+    bytes[last..last + 4].copy_from_slice(&1000i32.to_le_bytes());
+    std::fs::write(&path, &bytes).unwrap();
+    let problem = FileInfo::probe(&path).unwrap_err();
+    assert_eq!(problem.kind, ProblemKind::Corrupt, "{problem}");
+    assert!(problem.detail.contains("line 1000"), "{problem}");
+    // Untouched files of every layout still pass: the check has no false alarms there.
+    for frame in [2, 3] {
+        FileInfo::probe(&dir.path().join(format!("C.{frame:04}.exr"))).unwrap();
+    }
+}
+
+/// The warnings of a run's JSON summary.
+fn json_warnings(o: &std::process::Output) -> Vec<String> {
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).expect("a JSON summary");
+    report["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w.as_str().unwrap().to_string())
+        .collect()
+}
+
+#[test]
+fn flags_the_output_format_cannot_use_are_warned_about() {
+    // Before: --bit-depth 16 with a .jpg, --half with a .png and --layer matching nothing
+    // were dropped in silence.
+    let dir = tempfile::tempdir().unwrap();
+    colour_sequence(dir.path(), 16, 8, ExrOptions::default());
+    let input = format!("{}/C.####.exr", dir.path().display());
+    let cases: [(&str, &[&str], &str); 4] = [
+        ("jpg", &["--bit-depth", "16"], "JPEG is always 8-bit"),
+        ("png", &["--half"], "--half applies to EXR output"),
+        (
+            "tif",
+            &["--compression", "piz"],
+            "--compression applies to EXR output",
+        ),
+        (
+            "exr",
+            &["--layer", "nothing"],
+            "--layer nothing: preset shutter names no channel",
+        ),
+    ];
+    for (ext, flags, expected) in cases {
+        let mut extra = flags.to_vec();
+        extra.push("--json");
+        let (o, wrote) = copy_through(dir.path(), &input, ext, &extra);
+        assert!(o.status.success() && wrote, "{}", stderr(&o));
+        let warnings = json_warnings(&o);
+        assert!(
+            warnings.iter().any(|w| w.contains(expected)),
+            "{ext} {flags:?}: {warnings:?}"
+        );
+    }
+    // The same flags where they apply: no warning.
+    let (o, _) = copy_through(dir.path(), &input, "png", &["--bit-depth", "16", "--json"]);
+    assert!(json_warnings(&o).is_empty(), "{:?}", json_warnings(&o));
+}
+
+#[test]
+fn a_preset_without_colour_channels_is_a_preset_error() {
+    // Before: `[color] channels = []` failed per frame as "channel : not in the file".
+    let dir = tempfile::tempdir().unwrap();
+    colour_sequence(dir.path(), 16, 8, ExrOptions::default());
+    let preset = dir.path().join("empty.toml");
+    std::fs::write(
+        &preset,
+        "[color]\nchannels = []\n[depth]\nchannels = [\"Z\"]\n\
+         [velocity]\nchannels = []\nmeaning = \"velocity\"\n\
+         [prev]\nchannels = []\nmeaning = \"prev_position\"\n\
+         [next]\nchannels = []\nmeaning = \"next_position\"\n",
+    )
+    .unwrap();
+    let input = format!("{}/C.####.exr", dir.path().display());
+    let (o, wrote) = copy_through(dir.path(), &input, "exr", &["--preset", &s(&preset)]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("[color] channels is empty"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(!wrote);
+}
