@@ -134,6 +134,22 @@ fn warn_replaced(
     }
 }
 
+/// A painted CoC map is read through the depth pass: its problems name it as the user gave
+/// it (`coc-map`), not as `depth`.
+fn name_pass(job: &Job, error: crate::Error) -> crate::Error {
+    match (error, depth_kind(&job.params)) {
+        (crate::Error::Files(mut problems), crate::numeric::DepthKind::CocMap) => {
+            for problem in &mut problems {
+                if problem.pass == Some("depth") {
+                    problem.pass = Some("coc-map");
+                }
+            }
+            crate::Error::Files(problems)
+        }
+        (error, _) => error,
+    }
+}
+
 /// Runs the job: preflight, then every frame through read → process → write.
 pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     let start = Instant::now();
@@ -161,7 +177,8 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         needs: crate::process::needs(job.algorithm, &job.params),
         max_pixels: job.max_pixels,
     };
-    let plans = preflight(&job.inputs, &job.output, &todo, &options)?;
+    let plans =
+        preflight(&job.inputs, &job.output, &todo, &options).map_err(|e| name_pass(job, e))?;
     report.preflight_seconds = preflight_start.elapsed().as_secs_f64();
     // The GPU context, once per run, before any output is touched: `--backend wgpu` with no
     // suitable adapter stops here with one line.
@@ -289,7 +306,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         let read_seconds = reader.join().unwrap_or(0.0);
         let process_seconds = processor.join().unwrap_or(0.0);
         match failure {
-            Some(problem) => Err(problem.into()),
+            Some(problem) => Err(name_pass(job, problem.into())),
             None => Ok((read_seconds, process_seconds)),
         }
     })?;

@@ -351,3 +351,147 @@ fn a_preset_without_colour_channels_is_a_preset_error() {
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(!wrote);
 }
+
+/// The position of attribute `name`'s value in an EXR header (after its name, type name and
+/// size).
+fn attribute_value(bytes: &[u8], name: &str, kind: &str) -> usize {
+    let key = [name.as_bytes(), b"\0", kind.as_bytes(), b"\0"].concat();
+    let at = bytes
+        .windows(key.len())
+        .position(|w| w == key.as_slice())
+        .unwrap_or_else(|| panic!("no {name} attribute"));
+    at + key.len() + 4
+}
+
+/// Frames 1..=3 of `C.####.exr` with R, G, B, A.
+fn rgba_sequence(dir: &Path) {
+    for frame in 1..=3u32 {
+        let n = 16 * 8;
+        write_exr(
+            &dir.join(format!("C.{frame:04}.exr")),
+            16,
+            8,
+            vec![
+                ("R", noise(n, frame, 0.0, 1.0)),
+                ("G", noise(n, frame + 1, 0.0, 1.0)),
+                ("B", noise(n, frame + 2, 0.0, 1.0)),
+                ("A", vec![1.0; n]),
+            ],
+        );
+    }
+}
+
+#[test]
+fn headers_decoding_would_refuse_stop_the_run_before_any_frame_is_written() {
+    // Before: preflight read attributes leniently and did not validate, so frame 1 was
+    // written and the run failed at frame 2's decoding.
+    let dir = tempfile::tempdir().unwrap();
+    rgba_sequence(dir.path());
+    // Frame 2: a line order out of range.
+    let two = dir.path().join("C.0002.exr");
+    let mut bytes = std::fs::read(&two).unwrap();
+    let at = attribute_value(&bytes, "lineOrder", "lineOrder");
+    bytes[at] = 7;
+    std::fs::write(&two, &bytes).unwrap();
+    // Frame 3: channels A, B, G, R listed as R, B, G, A (all there, not sorted).
+    let three = dir.path().join("C.0003.exr");
+    let mut bytes = std::fs::read(&three).unwrap();
+    let list = attribute_value(&bytes, "channels", "chlist");
+    // Each entry: name, NUL, 16 bytes; the names are one letter each.
+    assert_eq!((bytes[list], bytes[list + 18 * 3]), (b'A', b'R'));
+    bytes.swap(list, list + 18 * 3);
+    std::fs::write(&three, &bytes).unwrap();
+
+    let (o, wrote) = copy_through(
+        dir.path(),
+        &format!("{}/C.####.exr", dir.path().display()),
+        "exr",
+        &[],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("frame 2") && err.contains("line order"),
+        "{err}"
+    );
+    assert!(
+        err.contains("frame 3") && err.contains("not sorted"),
+        "{err}"
+    );
+    assert!(
+        !wrote,
+        "frame 1 was written before the bad frames were found"
+    );
+
+    // `shutter info` reports the same problems, with exit 1.
+    for path in [&two, &three] {
+        let o = shutter(&["info", &s(path)]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    }
+    let o = shutter(&["info", &s(&dir.path().join("C.0001.exr"))]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn an_inverted_data_window_is_an_error_not_a_size() {
+    // Before: `shutter info` printed an inverted data window as if it were valid.
+    let dir = tempfile::tempdir().unwrap();
+    rgba_sequence(dir.path());
+    let path = dir.path().join("C.0001.exr");
+    let mut bytes = std::fs::read(&path).unwrap();
+    let at = attribute_value(&bytes, "dataWindow", "box2i");
+    // xMin, yMin, xMax, yMax: make xMin larger than xMax.
+    bytes[at..at + 4].copy_from_slice(&100i32.to_le_bytes());
+    std::fs::write(&path, &bytes).unwrap();
+    let o = shutter(&["info", &s(&path)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(!stdout(&o).contains("size:"), "{}", stdout(&o));
+}
+
+#[test]
+fn a_colour_problem_is_reported_once_not_as_size_mismatches() {
+    // Before: a colour header problem also gave "size mismatch … color pass is 0x0" for
+    // every other pass.
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 16, 8);
+    std::fs::write(dir.path().join("C.exr"), b"not an image at all").unwrap();
+    let o = shutter(&[
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &s(&dir.path().join("C.exr")),
+        "--depth",
+        &s(&dir.path().join("Z.exr")),
+        "--velocity",
+        &s(&dir.path().join("V.exr")),
+        "-o",
+        &s(&dir.path().join("out/o.exr")),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(!err.contains("size mismatch"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+}
+
+#[test]
+fn coc_map_problems_name_the_coc_map() {
+    // Before: a missing or broken --coc-map was reported as the "depth pass".
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 16, 8);
+    let o = shutter(&[
+        "dof",
+        "--color",
+        &s(&dir.path().join("C.exr")),
+        "--coc-map",
+        &s(&dir.path().join("missing.exr")),
+        "-o",
+        &s(&dir.path().join("out/o.exr")),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("coc-map pass") && !err.contains("depth pass"),
+        "{err}"
+    );
+}

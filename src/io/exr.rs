@@ -36,9 +36,19 @@ pub struct ChannelRef {
     pub index: usize,
 }
 
-/// Reads the headers only.
+/// Reads the headers only, as the exr crate's reader does when it decodes: every attribute
+/// must parse (a line order out of range, a chunk count that does not match the data
+/// window, are errors there). [`validate`] then checks them as decoding does, so preflight
+/// refuses exactly the headers decoding would.
 pub fn read_meta(path: &Path) -> exr::error::Result<MetaData> {
-    MetaData::read_from_file(path, false)
+    // The exr crate's decoding reader reads attributes with its `pedantic` turned over.
+    MetaData::read_from_file(path, true)
+}
+
+/// Checks headers as the exr crate's decoding reader does (non-strictly): windows not
+/// inverted, channels present, sorted and sampled at 1×1, and the rest.
+pub fn validate(meta: &MetaData) -> exr::error::Result<()> {
+    MetaData::validate(&meta.headers, false).map(|_| ())
 }
 
 /// The name of a compression method as users write it on the command line.
@@ -122,6 +132,7 @@ pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<(), String> {
         count: 0,
     };
     MetaData::read_from_buffered(&mut counting, false).map_err(|e| e.to_string())?;
+    let header_len = counting.count;
     let multipart = meta.requirements.has_multiple_layers;
     // The table is read first: its length is bounded by the file's, so what follows is too.
     let mut offsets = Vec::new();
@@ -135,6 +146,10 @@ pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<(), String> {
         }
     }
     drop(counting);
+    let mut header = vec![0u8; header_len as usize];
+    file.seek(SeekFrom::Start(0)).map_err(|e| e.to_string())?;
+    file.read_exact(&mut header).map_err(|e| e.to_string())?;
+    check_windows(&header)?;
     // Each part's blocks, as (tile x, tile y, level x, level y); a scan-line block is tile
     // (0, k) of level (0, 0).
     let mut blocks: Vec<std::collections::HashMap<[usize; 4], bool>> = meta
@@ -258,6 +273,55 @@ pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<(), String> {
             "the chunks at bytes {} and {} overlap; the file is damaged",
             w[0].0, w[1].0
         ));
+    }
+    Ok(())
+}
+
+/// Checks the windows as stored: the exr crate reads a box whose minimum lies beyond its
+/// maximum as the box between the two, so an inverted data window would read as a frame of
+/// another size whose chunks then fail to decode. `header` is the file up to its offset
+/// tables: magic, version, then each part's attributes (name, type, size, value), each part
+/// ended by an empty name.
+fn check_windows(header: &[u8]) -> Result<(), String> {
+    let mut at = 8;
+    let text = |at: &mut usize| -> Option<&[u8]> {
+        let rest = header.get(*at..)?;
+        let end = rest.iter().position(|&b| b == 0)?;
+        *at += end + 1;
+        Some(&rest[..end])
+    };
+    while at < header.len() {
+        let Some(name) = text(&mut at) else { break };
+        if name.is_empty() {
+            // The end of a part's header (or of the list of parts).
+            continue;
+        }
+        let Some(kind) = text(&mut at) else { break };
+        let Some(size) = header.get(at..at + 4) else {
+            break;
+        };
+        let size = i32::from_le_bytes([size[0], size[1], size[2], size[3]]).max(0) as usize;
+        at += 4;
+        let value = header.get(at..at + size).unwrap_or(&[]);
+        at += size;
+        if kind == b"box2i" && (name == b"dataWindow" || name == b"displayWindow") {
+            let v: Vec<i32> = value
+                .chunks_exact(4)
+                .map(|w| i32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+                .collect();
+            if let [x_min, y_min, x_max, y_max] = v[..] {
+                if x_min > x_max || y_min > y_max {
+                    return Err(format!(
+                        "the {} is inverted: ({x_min}, {y_min}) - ({x_max}, {y_max}); the file is damaged",
+                        if name == b"dataWindow" {
+                            "data window"
+                        } else {
+                            "display window"
+                        }
+                    ));
+                }
+            }
+        }
     }
     Ok(())
 }

@@ -237,6 +237,13 @@ fn probe_exr(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
             return Err(Problem::new(ProblemKind::Unsupported, path, reason));
         }
     }
+    exr_io::validate(&meta).map_err(|e| {
+        Problem::new(
+            ProblemKind::Corrupt,
+            path,
+            format!("the EXR header is invalid: {e}"),
+        )
+    })?;
     exr_io::check_chunk_table(path, &meta)
         .map_err(|detail| Problem::new(ProblemKind::Corrupt, path, detail))?;
     let multipart = meta.headers.len() > 1;

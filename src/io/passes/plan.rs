@@ -88,9 +88,11 @@ pub fn plan_frame(
         files: Vec::new(),
         problems: Vec::new(),
         probed: Vec::new(),
+        color_size: None,
     };
     let color_path = inputs.color.path(frame);
     let color_info = planner.probe(&color_path, "color");
+    planner.color_size = color_info.as_ref().map(|i| (i.width, i.height));
     let mut plan = FramePlan {
         frame,
         width: color_info.as_ref().map_or(0, |i| i.width),
@@ -150,7 +152,7 @@ pub fn plan_frame(
             None => color_info.clone(),
         };
         if let Some(info) = info {
-            planner.check_size(&info, plan.width, plan.height, "depth");
+            planner.check_size(&info, "depth");
             let alts: Vec<Vec<String>> = preset
                 .depth
                 .channels
@@ -212,7 +214,7 @@ pub fn plan_frame(
             let skip = if own.is_some() { &[][..] } else { &claimed[..] };
             match find_channels(&info, &spec.channels, 2, skip, options.layer) {
                 Ok(Some(found)) => {
-                    if !planner.check_size(&info, plan.width, plan.height, name) {
+                    if !planner.check_size(&info, name) {
                         fatal = true;
                         break;
                     }
@@ -297,6 +299,8 @@ struct Planner<'a> {
     problems: Vec<Problem>,
     /// Files already probed in this frame (a path is probed once).
     probed: Vec<(PathBuf, Option<FileInfo>)>,
+    /// The colour file's size, once its header has been read.
+    color_size: Option<(usize, usize)>,
 }
 
 impl Planner<'_> {
@@ -338,14 +342,13 @@ impl Planner<'_> {
         self.problem(problem);
     }
 
-    /// Reports a size different from the colour's; returns whether sizes agree.
-    fn check_size(
-        &mut self,
-        info: &FileInfo,
-        width: usize,
-        height: usize,
-        pass: &'static str,
-    ) -> bool {
+    /// Reports a size different from the colour's; returns whether sizes agree. When the
+    /// colour file could not be read, its problem is the one reported, not a mismatch with
+    /// a size nobody knows.
+    fn check_size(&mut self, info: &FileInfo, pass: &'static str) -> bool {
+        let Some((width, height)) = self.color_size else {
+            return true;
+        };
         if (info.width, info.height) != (width, height) {
             self.problem(
                 Problem::new(
