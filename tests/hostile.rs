@@ -8,8 +8,9 @@ use std::time::{Duration, Instant};
 use shutter::error::ProblemKind;
 use shutter::io::exr::ExrOptions;
 use shutter::io::file::FileInfo;
-use shutter::io::image::{write_color, ImageFormat};
+use shutter::io::image::ImageFormat;
 
+use crate::support::malformed::{self, attribute_value, offset_table};
 use crate::support::*;
 
 /// Frames 1..=3 of a small colour sequence `C.####.exr` in `dir`.
@@ -55,35 +56,6 @@ fn copy_through(
     let o = shutter(&args);
     let wrote = std::fs::read_dir(&out).is_ok_and(|mut d| d.next().is_some());
     (o, wrote)
-}
-
-/// A PNG, JPEG or TIFF of noise, through the writer shutter itself uses.
-fn write_image(path: &Path, format: ImageFormat, w: usize, h: usize) {
-    let n = w * h;
-    let (r, g, b) = (
-        noise(n, 1, 0.0, 1.0),
-        noise(n, 2, 0.0, 1.0),
-        noise(n, 3, 0.0, 1.0),
-    );
-    let mut bytes = std::io::Cursor::new(Vec::new());
-    write_color(&mut bytes, format, w, h, [&r, &g, &b], None, false, true).unwrap();
-    std::fs::write(path, bytes.into_inner()).unwrap();
-}
-
-/// CRC-32 (ISO-HDLC, as PNG uses), bit by bit: small and independent of any crate.
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &b in bytes {
-        crc ^= b as u32;
-        for _ in 0..8 {
-            crc = if crc & 1 != 0 {
-                (crc >> 1) ^ 0xEDB8_8320
-            } else {
-                crc >> 1
-            };
-        }
-    }
-    !crc
 }
 
 #[test]
@@ -150,15 +122,7 @@ fn a_png_declaring_400_million_pixels_is_refused_from_its_header() {
     // is refused without decoding.
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("big.png");
-    write_image(&path, ImageFormat::Png, 64, 36);
-    let mut bytes = std::fs::read(&path).unwrap();
-    // Signature (8), length (4), "IHDR" (4), width (4), height (4), ... CRC after 13 bytes.
-    assert_eq!(&bytes[12..16], b"IHDR");
-    bytes[16..20].copy_from_slice(&20000u32.to_be_bytes());
-    bytes[20..24].copy_from_slice(&20000u32.to_be_bytes());
-    let crc = crc32(&bytes[12..29]);
-    bytes[29..33].copy_from_slice(&crc.to_be_bytes());
-    std::fs::write(&path, &bytes).unwrap();
+    std::fs::write(&path, malformed::png_declaring(20000)).unwrap();
     let problem = FileInfo::probe(&path).unwrap_err();
     assert_eq!(problem.kind, ProblemKind::TooLarge, "{problem}");
     assert!(problem.detail.contains("20000x20000"), "{problem}");
@@ -173,16 +137,7 @@ fn a_jpeg_declaring_more_than_it_holds_is_an_error_not_invented_pixels() {
     // invented pixels (4 GB, exit 0).
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("big.jpg");
-    write_image(&path, ImageFormat::Jpeg, 64, 48);
-    let mut bytes = std::fs::read(&path).unwrap();
-    let sof = bytes
-        .windows(2)
-        .position(|w| w[0] == 0xFF && (0xC0..=0xC2).contains(&w[1]))
-        .unwrap();
-    // FF Cn, length (2), precision (1), height (2), width (2).
-    bytes[sof + 5..sof + 7].copy_from_slice(&12000u16.to_be_bytes());
-    bytes[sof + 7..sof + 9].copy_from_slice(&12000u16.to_be_bytes());
-    std::fs::write(&path, &bytes).unwrap();
+    std::fs::write(&path, malformed::jpeg_declaring(12000)).unwrap();
     let problem = FileInfo::probe(&path).unwrap_err();
     assert_eq!(problem.kind, ProblemKind::Corrupt, "{problem}");
     assert!(problem.detail.contains("12000x12000"), "{problem}");
@@ -195,26 +150,16 @@ fn a_jpeg_declaring_more_than_it_holds_is_an_error_not_invented_pixels() {
 fn a_cut_jpeg_stream_is_an_error_not_a_padded_frame() {
     let dir = tempfile::tempdir().unwrap();
     let whole = dir.path().join("whole.jpg");
-    write_image(&whole, ImageFormat::Jpeg, 64, 48);
+    std::fs::write(&whole, malformed::image(ImageFormat::Jpeg)).unwrap();
     // The whole file reads.
     let info = FileInfo::probe(&whole).unwrap();
-    assert_eq!((info.width, info.height), (64, 48));
+    assert_eq!((info.width, info.height), (16, 12));
     let bytes = std::fs::read(&whole).unwrap();
     let cut = dir.path().join("cut.jpg");
     std::fs::write(&cut, &bytes[..bytes.len() * 2 / 3]).unwrap();
     let problem = FileInfo::probe(&cut).unwrap_err();
     assert_eq!(problem.kind, ProblemKind::Corrupt, "{problem}");
     assert!(problem.detail.contains("cut short"), "{problem}");
-}
-
-/// The byte position of an uncompressed single-part EXR's offset table with `chunks`
-/// entries: the first entry points just past the table.
-fn offset_table(bytes: &[u8], chunks: usize) -> usize {
-    (8..bytes.len() - 8)
-        .find(|&p| {
-            u64::from_le_bytes(bytes[p..p + 8].try_into().unwrap()) == (p + 8 * chunks) as u64
-        })
-        .expect("an offset table")
 }
 
 #[test]
@@ -352,17 +297,6 @@ fn a_preset_without_colour_channels_is_a_preset_error() {
     assert!(!wrote);
 }
 
-/// The position of attribute `name`'s value in an EXR header (after its name, type name and
-/// size).
-fn attribute_value(bytes: &[u8], name: &str, kind: &str) -> usize {
-    let key = [name.as_bytes(), b"\0", kind.as_bytes(), b"\0"].concat();
-    let at = bytes
-        .windows(key.len())
-        .position(|w| w == key.as_slice())
-        .unwrap_or_else(|| panic!("no {name} attribute"));
-    at + key.len() + 4
-}
-
 /// Frames 1..=3 of `C.####.exr` with R, G, B, A.
 fn rgba_sequence(dir: &Path) {
     for frame in 1..=3u32 {
@@ -494,4 +428,54 @@ fn coc_map_problems_name_the_coc_map() {
         err.contains("coc-map pass") && !err.contains("depth pass"),
         "{err}"
     );
+}
+
+#[test]
+fn every_malformed_file_fails_with_a_message_and_writes_nothing() {
+    // The corpus in fixtures/malformed: each file named after its one defect. Its only
+    // promise: never a panic, never a frame written (partial or whole), exit 1 and one
+    // message naming the file.
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/malformed");
+    let corpus = malformed::corpus();
+    if std::env::var_os("SHUTTER_BLESS").is_some() {
+        std::fs::create_dir_all(&folder).unwrap();
+        for (name, bytes) in &corpus {
+            std::fs::write(folder.join(name), bytes).unwrap();
+        }
+    }
+    let mut files: Vec<_> = std::fs::read_dir(&folder)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    // Every defect made has its file.
+    for (name, _) in &corpus {
+        assert!(
+            folder.join(name).exists(),
+            "{name} missing: SHUTTER_BLESS=1"
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for file in files {
+        let name = file.file_name().unwrap().to_string_lossy().into_owned();
+        let out = dir.path().join(&name);
+        let o = shutter(&[
+            "blur",
+            "--algorithm",
+            "none",
+            "--color",
+            &s(&file),
+            "-o",
+            &s(&out.join("o.exr")),
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{name}: {err}");
+        assert!(!err.contains("panicked"), "{name}: {err}");
+        let first = err.lines().next().unwrap_or("");
+        assert!(
+            first.starts_with("shutter: error: ") && first.contains(&name),
+            "{name}: {err}"
+        );
+        assert!(!out.exists(), "{name}: something was written");
+    }
 }

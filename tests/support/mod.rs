@@ -8,6 +8,8 @@ use std::process::{Command, Output};
 use shutter::frame::Windows;
 use shutter::io::exr::{write_channels, ExrOptions};
 
+pub mod malformed;
+
 /// Writes a single-part scan-line EXR with the given f32 channels (ZIP).
 pub fn write_exr(path: &Path, width: usize, height: usize, channels: Vec<(&str, Vec<f32>)>) {
     write_exr_with(path, width, height, channels, ExrOptions::default());
