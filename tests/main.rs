@@ -14,6 +14,7 @@ mod invariants;
 mod io;
 mod metrics;
 mod presets;
+mod properties;
 mod reconstruct;
 mod scatter;
 mod settings;
