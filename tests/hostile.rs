@@ -479,3 +479,68 @@ fn every_malformed_file_fails_with_a_message_and_writes_nothing() {
         assert!(!out.exists(), "{name}: something was written");
     }
 }
+
+#[test]
+fn none_and_in_focus_depth_of_field_write_finite_frames_and_count_what_they_replaced() {
+    // The probe found NaN and ±Inf written unchanged by `--algorithm none` and by depth of
+    // field on a frame that is all in focus: one policy now covers every written frame.
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16, 8);
+    let n = w * h;
+    let mut r = noise(n, 1, 0.0, 1.0);
+    r[3] = f32::NAN;
+    r[4] = f32::INFINITY;
+    r[5] = f32::NEG_INFINITY;
+    write_exr(
+        &dir.path().join("C.exr"),
+        w,
+        h,
+        vec![("R", r), ("G", vec![0.5; n]), ("B", vec![0.5; n])],
+    );
+    // Everything at the focus distance: the frame is in focus, depth of field returns it.
+    write_exr(&dir.path().join("Z.exr"), w, h, vec![("Z", vec![3.0; n])]);
+    let colour = s(&dir.path().join("C.exr"));
+    let depth = s(&dir.path().join("Z.exr"));
+    let runs: [(&str, Vec<&str>); 2] = [
+        (
+            "none",
+            vec!["blur", "--algorithm", "none", "--color", &colour],
+        ),
+        (
+            "in focus",
+            vec![
+                "dof",
+                "--color",
+                &colour,
+                "--depth",
+                &depth,
+                "--focal-length",
+                "50",
+                "--f-stop",
+                "2",
+                "--focus-distance",
+                "3",
+            ],
+        ),
+    ];
+    for (what, mut args) in runs {
+        let out = dir.path().join(format!("{}.exr", what.replace(' ', "-")));
+        let out = s(&out);
+        args.extend(["-o", &out, "--json"]);
+        let o = shutter(&args);
+        assert!(o.status.success(), "{what}: {}", stderr(&o));
+        let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(report["replaced"]["color"], 3, "{what}: {report}");
+        assert!(
+            json_warnings(&o)
+                .iter()
+                .any(|w| w.contains("colour values NaN")),
+            "{what}: {report}"
+        );
+        let written = read_exr_reference(Path::new(&out));
+        let red = channel(&written, "R");
+        assert!(red.iter().all(|v| v.is_finite()), "{what}: {:?}", &red[..8]);
+        // NaN reads as 0; infinities are clamped to ±1e30.
+        assert_eq!((red[3], red[4], red[5]), (0.0, 1e30, -1e30), "{what}");
+    }
+}
