@@ -11,6 +11,7 @@ mod golden;
 mod gpu;
 mod invariants;
 mod io;
+mod lost;
 mod metrics;
 mod presets;
 mod reconstruct;
