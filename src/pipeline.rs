@@ -17,7 +17,7 @@ use crate::io::lock::OutputLock;
 use crate::io::output::{
     existing_frame_problem, remove_stale_temporaries, write_frame, OutputOptions,
 };
-use crate::io::passes::{preflight, read_frame, Inputs, PlanOptions};
+use crate::io::passes::{output_folder_problems, preflight, read_frame, Inputs, PlanOptions};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::motion::Algorithm;
@@ -170,6 +170,12 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         );
     }
 
+    // Output folders no file can be created in, tried with a probe file now that nothing
+    // else can fail first (the probe changes the folder's modification time).
+    let unwritable = output_folder_problems(&job.output, &job.frames, true);
+    if !unwritable.is_empty() {
+        return Err(crate::Error::Files(unwritable));
+    }
     // The first thing written: the lock on this job's frames (another job on any of them
     // stops here), released when `_lock` drops, whatever way the run ends.
     let _lock = OutputLock::acquire(&job.output, &job.frames)?;

@@ -246,7 +246,7 @@ fn a_folder_named_like_an_output_fails_in_preflight() {
 }
 
 #[test]
-fn an_output_folder_that_cannot_be_written_fails_in_preflight() {
+fn an_output_folder_that_cannot_be_written_fails_before_any_frame() {
     let dir = tempfile::tempdir().unwrap();
     let color = sequence(dir.path(), 2, 6, 4);
     // A file where the output folder would have to be made.

@@ -50,10 +50,17 @@ fn output_in_the_way(output: &Path, frame: Option<i64>) -> Option<Problem> {
 }
 
 /// The output folders (one check each, naming the first frame that goes there) that cannot
-/// be written: a file where a folder must be, or a folder where no file can be created. The
-/// nearest existing folder is tried by creating and removing a hidden probe file, which
-/// answers for permissions, read-only mounts and ACLs alike; nothing is left behind.
-fn unwritable_folders(output: &PathPattern, frames: &[Option<i64>]) -> Vec<Problem> {
+/// be written: a file where a folder must be (read only, part of [`preflight`]), and with
+/// `probe`, a folder where no file can be created. That is tried by creating and removing a
+/// hidden probe file in the nearest existing folder, which answers for permissions,
+/// read-only mounts and ACLs alike and leaves nothing behind but the folder's modification
+/// time: so the pipeline probes after the preflight and the device check, as the last step
+/// before it takes the output lock.
+pub fn output_folder_problems(
+    output: &PathPattern,
+    frames: &[Option<i64>],
+    probe: bool,
+) -> Vec<Problem> {
     let mut seen = std::collections::HashSet::new();
     let mut problems = Vec::new();
     for &frame in frames {
@@ -83,7 +90,7 @@ fn unwritable_folders(output: &PathPattern, frames: &[Option<i64>]) -> Vec<Probl
                 "the output folder cannot be made: {} is a file, not a folder; choose another -o",
                 existing.display()
             ))),
-            Ok(_) => {
+            Ok(_) if probe => {
                 if let Err(e) = probe_writable(existing) {
                     problems.push(problem(format!(
                         "the folder {} is not writable ({e}); change its permissions or write \
@@ -92,6 +99,7 @@ fn unwritable_folders(output: &PathPattern, frames: &[Option<i64>]) -> Vec<Probl
                     )));
                 }
             }
+            Ok(_) => {}
             Err(e) => problems.push(problem(format!("the output folder cannot be checked: {e}"))),
         }
     }
@@ -165,7 +173,7 @@ pub fn preflight(
             Err(found) => problems.extend(found),
         }
     }
-    problems.extend(unwritable_folders(output, frames));
+    problems.extend(output_folder_problems(output, frames, false));
     if problems.is_empty() {
         Ok(plans)
     } else {
