@@ -13,8 +13,11 @@ use serde::Serialize;
 use crate::error::{Problem, ProblemKind, Result};
 use crate::frame::Frame;
 use crate::gpu::{Backend, BackendReport};
-use crate::io::output::{write_frame, OutputOptions};
-use crate::io::passes::{preflight, read_frame, Inputs, PlanOptions};
+use crate::io::lock::OutputLock;
+use crate::io::output::{
+    existing_frame_problem, remove_stale_temporaries, write_frame, OutputOptions,
+};
+use crate::io::passes::{output_folder_problems, preflight, read_frame, Inputs, PlanOptions};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::motion::Algorithm;
@@ -49,7 +52,8 @@ pub enum Event {
     Started { frames: usize },
     /// A frame was written.
     Written { frame: Option<i64>, path: PathBuf },
-    /// A frame was skipped because its output exists (`--skip-existing`).
+    /// A frame was skipped because its output exists and is a finished frame of the right
+    /// size and format (`--skip-existing`).
     Skipped { frame: Option<i64>, path: PathBuf },
     /// Something the user should know; the job goes on.
     Warning(String),
@@ -150,7 +154,10 @@ fn name_pass(job: &Job, error: crate::Error) -> crate::Error {
     }
 }
 
-/// Runs the job: preflight, then every frame through read → process → write.
+/// Runs the job: preflight (every input header, every output place), the output lock and
+/// the removal of temporary files dead runs left, `--skip-existing`'s checks, then every
+/// frame through read → process → write. The lock is released and the lock file removed
+/// however the run ends.
 pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     let start = Instant::now();
     let mut report = Report {
@@ -159,17 +166,8 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         ..Report::default()
     };
 
-    let mut todo = Vec::with_capacity(job.frames.len());
-    for &frame in &job.frames {
-        let path = job.output.path(frame);
-        if job.skip_existing && path.exists() {
-            report.frames_skipped += 1;
-            on_event(Event::Skipped { frame, path });
-        } else {
-            todo.push(frame);
-        }
-    }
-
+    // Every frame is planned, those --skip-existing may skip included: the plan gives the
+    // size their output must have.
     let preflight_start = Instant::now();
     let options = PlanOptions {
         preset: &job.preset,
@@ -177,8 +175,8 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         needs: crate::process::needs(job.algorithm, &job.params),
         max_pixels: job.max_pixels,
     };
-    let plans =
-        preflight(&job.inputs, &job.output, &todo, &options).map_err(|e| name_pass(job, e))?;
+    let plans = preflight(&job.inputs, &job.output, &job.frames, &options)
+        .map_err(|e| name_pass(job, e))?;
     report.preflight_seconds = preflight_start.elapsed().as_secs_f64();
     // The GPU context, once per run, before any output is touched: `--backend wgpu` with no
     // suitable adapter stops here with one line.
@@ -191,6 +189,55 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             format!("--backend auto runs on the CPU: {reason}"),
         );
     }
+
+    // Output folders no file can be created in, tried with a probe file now that nothing
+    // else can fail first (the probe changes the folder's modification time).
+    let unwritable = output_folder_problems(&job.output, &job.frames, true);
+    if !unwritable.is_empty() {
+        return Err(crate::Error::Files(unwritable));
+    }
+    // The first thing written: the lock on this job's frames (another job on any of them
+    // stops here), released when `_lock` drops, whatever way the run ends.
+    let _lock = OutputLock::acquire(&job.output, &job.frames)?;
+    let outputs: Vec<PathBuf> = job.frames.iter().map(|&f| job.output.path(f)).collect();
+    let stale = remove_stale_temporaries(&outputs);
+    if !stale.is_empty() {
+        warn(
+            &mut report,
+            on_event,
+            format!(
+                "removed {} temporary file{} that a stopped run left beside the outputs \
+                 (first: {})",
+                stale.len(),
+                if stale.len() == 1 { "" } else { "s" },
+                stale[0].display()
+            ),
+        );
+    }
+    let mut todo = Vec::with_capacity(plans.len());
+    for plan in plans {
+        let (frame, path) = (plan.frame, job.output.path(plan.frame));
+        if job.skip_existing && std::fs::symlink_metadata(&path).is_ok() {
+            match existing_frame_problem(&path, plan.width, plan.height) {
+                None => {
+                    report.frames_skipped += 1;
+                    on_event(Event::Skipped { frame, path });
+                    continue;
+                }
+                Some(why) => {
+                    let at = frame.map_or(String::new(), |f| format!(", frame {f}"));
+                    warn(
+                        &mut report,
+                        on_event,
+                        format!("{}{at} exists but is written again: {why}", path.display()),
+                    );
+                }
+            }
+        }
+        todo.push(plan);
+    }
+    let plans = todo;
+    let todo: Vec<Option<i64>> = plans.iter().map(|p| p.frame).collect();
     let gpu = gpu.as_ref();
     // Pass files given but not read (the algorithm does not need them, or the pass came
     // from another file): say so.

@@ -12,6 +12,7 @@ mod gpu;
 mod hostile;
 mod invariants;
 mod io;
+mod lost;
 mod metrics;
 mod presets;
 mod properties;

@@ -97,7 +97,8 @@ pub struct BlurArgs {
     #[arg(long)]
     pub linear: bool,
 
-    /// Skip frames whose output already exists, so a rerun resumes.
+    /// Skip frames whose output already exists as a whole frame of the right size and
+    /// format, so a rerun resumes; anything else is written again, with a warning.
     #[arg(long)]
     pub skip_existing: bool,
 

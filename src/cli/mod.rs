@@ -32,6 +32,7 @@ pub fn main() -> i32 {
         print_error(&error);
         return error.exit_code();
     }
+    stop_cleanly_on_signals();
     let result = match cli.command {
         Command::Blur(args) => blur::blur(*args, false),
         Command::Dof(args) => blur::blur(*args, true),
@@ -89,6 +90,41 @@ fn check_thread_variable() -> Result<()> {
         _ => Ok(()),
     }
 }
+
+/// On SIGINT or SIGTERM: stop writing, remove the temporary files of frames in flight,
+/// release the output locks (the library's registries, [`crate::io::abandon`]), say so in one
+/// line and exit 130 or 143 (128 + the signal, as a shell reports it). Frames already renamed
+/// into place are whole; `--skip-existing` finishes the run. A thread of its own waits for
+/// the signal (signal-hook), so the cleanup is ordinary code, not a signal handler's.
+#[cfg(unix)]
+fn stop_cleanly_on_signals() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+        // Without the handler the default applies: the process dies, and the next run over
+        // the same outputs removes what it left.
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            let (name, code) = if signal == SIGINT {
+                ("SIGINT", 130)
+            } else {
+                ("SIGTERM", 143)
+            };
+            let abandoned = crate::io::abandon();
+            eprintln!(
+                "shutter: stopped by {name}: {} unfinished temporary file{} removed, frames \
+                 written before are whole; rerun with --skip-existing to finish",
+                abandoned.temporaries,
+                if abandoned.temporaries == 1 { "" } else { "s" }
+            );
+            std::process::exit(code);
+        }
+    });
+}
+
+#[cfg(not(unix))]
+fn stop_cleanly_on_signals() {}
 
 /// Writes `text` to stdout, the one way every command prints its results. A reader that
 /// closed the pipe early (`| head`) is not an error, so nothing panics.

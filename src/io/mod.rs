@@ -4,7 +4,26 @@
 pub mod exr;
 pub mod file;
 pub mod image;
+pub mod lock;
 pub mod output;
 pub mod passes;
 pub mod preset;
 pub mod sequence;
+
+/// What [`abandon`] cleaned up.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Abandoned {
+    /// Temporary files of frames being written, removed.
+    pub temporaries: usize,
+    /// Output locks released.
+    pub locks: usize,
+}
+
+/// Stops writing and cleans up, for a signal handler before the process exits: removes the
+/// temporary files being written (later writes fail without creating anything), then
+/// releases the output locks. Frames already renamed into place stay.
+pub fn abandon() -> Abandoned {
+    let temporaries = output::abandon_temporaries();
+    let locks = lock::abandon_locks();
+    Abandoned { temporaries, locks }
+}

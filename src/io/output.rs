@@ -1,15 +1,21 @@
 //! Writing frames: EXR (f32 or half, any compression exr writes), PNG/TIFF (8/16-bit) and
 //! JPEG, sRGB-encoded unless told linear. Every file is written to a temporary file in the
 //! destination folder and renamed into place, so an interrupted run never leaves a partial
-//! frame under the final name.
+//! frame under the final name. The temporary files in flight are registered, so that a
+//! signal handler can remove them ([`abandon_temporaries`]), and a later run removes those a
+//! killed process left ([`remove_stale_temporaries`]). [`existing_frame_problem`] says
+//! whether an existing output is a finished frame (`--skip-existing`).
 
+use std::collections::{BTreeMap, HashSet};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use crate::error::{Problem, ProblemKind};
 use crate::frame::{Frame, Plane, Windows};
 use crate::io::exr::{self as exr_io, ExrOptions};
+use crate::io::file::{FileInfo, FileKind};
 use crate::io::image::{self as image_io, ImageFormat};
 
 /// Output format, from the file extension.
@@ -51,8 +57,10 @@ impl Default for OutputOptions {
     }
 }
 
-/// The temporary name a frame is written under before it is renamed into place. Starts with
-/// a dot so that sequence discovery and `####` patterns never mistake it for a frame.
+/// The temporary name a frame is written under before it is renamed into place:
+/// `.NAME.PID.tmp`. Starts with a dot so that sequence discovery and `####` patterns never
+/// mistake it for a frame; carries the writer's process id so that a later run can tell a
+/// dead process's leftovers ([`remove_stale_temporaries`]) from a live one's.
 pub fn temporary_path(path: &Path) -> PathBuf {
     let name = path
         .file_name()
@@ -61,26 +69,214 @@ pub fn temporary_path(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
+/// The temporary files this process is writing now, and whether it is stopping: what a
+/// signal handler removes ([`abandon_temporaries`]) before the process exits.
+struct InFlight {
+    stopping: bool,
+    temporaries: Vec<PathBuf>,
+}
+
+static IN_FLIGHT: Mutex<InFlight> = Mutex::new(InFlight {
+    stopping: false,
+    temporaries: Vec::new(),
+});
+
+fn in_flight() -> MutexGuard<'static, InFlight> {
+    IN_FLIGHT.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// A temporary file being written: registered in [`IN_FLIGHT`] while it exists, removed on
+/// drop (an error, or a panic while writing) unless it was renamed into place.
+struct Temporary {
+    path: PathBuf,
+    renamed: bool,
+}
+
+impl Temporary {
+    /// Creates the file. It is created while the registry is held, so a signal handler sees
+    /// every temporary file that exists, and none is created once it has run.
+    fn create(path: PathBuf) -> Result<(Temporary, File), String> {
+        let mut in_flight = in_flight();
+        if in_flight.stopping {
+            return Err("the run is stopping (interrupted); nothing more is written".into());
+        }
+        let file = File::create(&path).map_err(|e| e.to_string())?;
+        in_flight.temporaries.push(path.clone());
+        Ok((
+            Temporary {
+                path,
+                renamed: false,
+            },
+            file,
+        ))
+    }
+
+    fn rename_to(mut self, path: &Path) -> Result<(), String> {
+        std::fs::rename(&self.path, path).map_err(|e| e.to_string())?;
+        self.renamed = true;
+        Ok(())
+    }
+}
+
+impl Drop for Temporary {
+    fn drop(&mut self) {
+        if !self.renamed {
+            let _ = std::fs::remove_file(&self.path);
+        }
+        in_flight().temporaries.retain(|p| *p != self.path);
+    }
+}
+
+/// Stops all writing (for a signal handler, before the process exits): removes the
+/// temporary files being written, and makes every later [`write_atomic`] fail without
+/// creating anything. A write already under way goes on into a file that no longer has a
+/// name, and its rename fails. Returns how many files were removed.
+pub fn abandon_temporaries() -> usize {
+    let mut in_flight = in_flight();
+    in_flight.stopping = true;
+    let removed = in_flight.temporaries.drain(..);
+    removed
+        .filter(|path| std::fs::remove_file(path).is_ok())
+        .count()
+}
+
 /// Writes a file atomically: `write` fills a buffered temporary file beside `path`, which is
-/// flushed and renamed into place; on any failure the temporary file is removed and `path`
-/// is untouched. The folder must exist.
+/// flushed and renamed into place; on any failure (or a panic inside `write`) the temporary
+/// file is removed and `path` is untouched. The folder must exist.
 pub fn write_atomic(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> Result<(), String>,
 ) -> Result<(), String> {
-    let temporary = temporary_path(path);
-    let file = File::create(&temporary).map_err(|e| e.to_string())?;
+    let (temporary, file) = Temporary::create(temporary_path(path))?;
     let mut writer = BufWriter::new(file);
-    let result = write(&mut writer).and_then(|()| writer.flush().map_err(|e| e.to_string()));
+    write(&mut writer).and_then(|()| writer.flush().map_err(|e| e.to_string()))?;
     drop(writer);
-    if let Err(detail) = result {
-        let _ = std::fs::remove_file(&temporary);
-        return Err(detail);
+    temporary.rename_to(path)
+}
+
+/// Whether a process with this id is running. Unix: `kill(pid, 0)` (a process of another
+/// user counts as running); elsewhere every process counts as running, so nothing is
+/// removed.
+fn process_is_running(pid: u32) -> bool {
+    #[cfg(unix)]
+    {
+        let Ok(pid) = i32::try_from(pid) else {
+            return true;
+        };
+        if pid <= 0 {
+            return true;
+        }
+        !matches!(
+            nix::sys::signal::kill(nix::unistd::Pid::from_raw(pid), None),
+            Err(nix::errno::Errno::ESRCH)
+        )
     }
-    std::fs::rename(&temporary, path).map_err(|e| {
-        let _ = std::fs::remove_file(&temporary);
-        e.to_string()
-    })
+    #[cfg(not(unix))]
+    {
+        let _ = pid;
+        true
+    }
+}
+
+/// Removes the temporary files that processes no longer running left beside `outputs`
+/// (`.NAME.PID.tmp` for an output named NAME, a SIGKILL or a power cut being what leaves
+/// them); a running process's are kept, whatever it is. Each folder is listed once. Returns
+/// the files removed.
+pub fn remove_stale_temporaries(outputs: &[PathBuf]) -> Vec<PathBuf> {
+    let mut by_folder: BTreeMap<PathBuf, HashSet<String>> = BTreeMap::new();
+    for path in outputs {
+        let (Some(folder), Some(name)) = (path.parent(), path.file_name()) else {
+            continue;
+        };
+        by_folder
+            .entry(folder.to_path_buf())
+            .or_default()
+            .insert(name.to_string_lossy().into_owned());
+    }
+    let mut removed = Vec::new();
+    for (folder, names) in by_folder {
+        let listed = if folder.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            folder.as_path()
+        };
+        let Ok(entries) = std::fs::read_dir(listed) else {
+            continue;
+        };
+        for entry in entries.flatten() {
+            let file_name = entry.file_name().to_string_lossy().into_owned();
+            let Some((name, pid)) = file_name
+                .strip_prefix('.')
+                .and_then(|n| n.strip_suffix(".tmp"))
+                .and_then(|n| n.rsplit_once('.'))
+            else {
+                continue;
+            };
+            let Ok(pid) = pid.parse::<u32>() else {
+                continue;
+            };
+            if names.contains(name)
+                && !process_is_running(pid)
+                && std::fs::remove_file(entry.path()).is_ok()
+            {
+                removed.push(folder.join(&file_name));
+            }
+        }
+    }
+    removed
+}
+
+/// Why an existing output cannot stand for a finished frame of `width` × `height` in the
+/// format its name says (`--skip-existing`); `None` when it can. EXR: the header and the
+/// chunk table (every chunk inside the file, as preflight checks inputs); PNG, TIFF, JPEG:
+/// the header and a full decode (they have no chunk table to check).
+pub fn existing_frame_problem(path: &Path, width: usize, height: usize) -> Option<String> {
+    let meta = match std::fs::metadata(path) {
+        Ok(meta) => meta,
+        Err(e) => return Some(format!("it cannot be read: {e}")),
+    };
+    if !meta.is_file() {
+        return Some("it is not a file".into());
+    }
+    if meta.len() == 0 {
+        return Some("it is empty".into());
+    }
+    let expected = OutputFormat::from_path(path)?;
+    // The header checks preflight makes of inputs (for EXR the chunk table too, for JPEG the
+    // stream), with the frame's own size as the pixel limit.
+    let info = match FileInfo::probe_within(path, width.saturating_mul(height).max(1)) {
+        Ok(info) => info,
+        Err(problem) => return Some(problem.detail),
+    };
+    let format = match (&info.kind, expected) {
+        (FileKind::Exr { .. }, OutputFormat::Exr) => None,
+        (FileKind::Image { format, .. }, OutputFormat::Image(expected)) => {
+            let name = match expected {
+                ImageFormat::Png => "png",
+                ImageFormat::Tiff => "tiff",
+                ImageFormat::Jpeg => "jpeg",
+            };
+            (*format != name).then(|| format!("it is a {format} file, not {name}"))
+        }
+        (FileKind::Exr { .. }, _) => Some("it is an EXR file".to_string()),
+        (FileKind::Image { format, .. }, _) => Some(format!("it is a {format} file, not EXR")),
+    };
+    if format.is_some() {
+        return format;
+    }
+    if (info.width, info.height) != (width, height) {
+        return Some(format!(
+            "it is {}x{}, the frame is {width}x{height}",
+            info.width, info.height
+        ));
+    }
+    // PNG and TIFF have no chunk table to check: decode them whole.
+    match info.kind {
+        FileKind::Image { .. } => image_io::read_planes(path, (width, height))
+            .err()
+            .map(|e| format!("it cannot be decoded (cut short?): {e}")),
+        FileKind::Exr { .. } => None,
+    }
 }
 
 /// Writes every pass `frame` holds as a canonical pass file (the `shutter` preset's channel

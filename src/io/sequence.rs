@@ -55,6 +55,15 @@ impl PathPattern {
         }
     }
 
+    /// The pattern with its placeholder written as `#`s, one per digit (`%04d` → `####`):
+    /// two spellings of one sequence give the same text.
+    pub fn with_hashes(&self) -> String {
+        match &self.placeholder {
+            Some((before, after, width)) => format!("{before}{}{after}", "#".repeat(*width)),
+            None => self.raw.clone(),
+        }
+    }
+
     /// The frame numbers of the files on disk that match this pattern, sorted.
     pub fn discover(&self) -> Result<Vec<i64>> {
         let Some((before, after, width)) = &self.placeholder else {
@@ -256,6 +265,9 @@ mod tests {
             "a.0002.png",
             "b.0004.exr",
             "a.01.exr",
+            // What a run leaves while it writes: never frames.
+            ".a.0005.exr.1234.tmp",
+            ".a.####.exr.lock",
         ] {
             std::fs::write(dir.path().join(name), b"").unwrap();
         }

@@ -25,7 +25,7 @@ mod preflight;
 mod read;
 
 pub use plan::{passes_found, plan_frame, FramePlan, PlanOptions};
-pub use preflight::preflight;
+pub use preflight::{output_folder_problems, preflight};
 pub use read::{read_color, read_frame};
 
 use crate::io::sequence::PathPattern;

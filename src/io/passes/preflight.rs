@@ -1,6 +1,7 @@
 //! Preflight: every input of every frame checked from its headers before anything is decoded
-//! or written (files, channels, sizes, compression, layout, and outputs that would overwrite
-//! an input); every problem found is returned, each naming its file and frame.
+//! or written (files, channels, sizes, compression, layout; outputs that would overwrite an
+//! input, folders in the way of outputs, output folders that cannot be made or written);
+//! every problem found is returned, each naming its file and frame.
 
 use std::path::Path;
 
@@ -23,8 +24,101 @@ fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
-/// Plans every frame of `frames` and checks that no output would overwrite an input; returns
-/// the plans, or all the problems found.
+/// A folder (or anything but a file) where a frame's output would go: it cannot be
+/// replaced, so the run would stop at that frame.
+fn output_in_the_way(output: &Path, frame: Option<i64>) -> Option<Problem> {
+    let meta = std::fs::symlink_metadata(output).ok()?;
+    if meta.is_file() || meta.file_type().is_symlink() {
+        return None;
+    }
+    let what = if meta.is_dir() {
+        "a folder"
+    } else {
+        "something that is not a file"
+    };
+    Some(
+        Problem::new(
+            ProblemKind::Output,
+            output,
+            format!(
+                "{what} is in the way of this frame's output and cannot be replaced; move it \
+                 away, or write elsewhere with -o"
+            ),
+        )
+        .frame(frame),
+    )
+}
+
+/// The output folders (one check each, naming the first frame that goes there) that cannot
+/// be written: a file where a folder must be (read only, part of [`preflight`]), and with
+/// `probe`, a folder where no file can be created. That is tried by creating and removing a
+/// hidden probe file in the nearest existing folder, which answers for permissions,
+/// read-only mounts and ACLs alike and leaves nothing behind but the folder's modification
+/// time: so the pipeline probes after the preflight and the device check, as the last step
+/// before it takes the output lock.
+pub fn output_folder_problems(
+    output: &PathPattern,
+    frames: &[Option<i64>],
+    probe: bool,
+) -> Vec<Problem> {
+    let mut seen = std::collections::HashSet::new();
+    let mut problems = Vec::new();
+    for &frame in frames {
+        let path = output.path(frame);
+        let folder = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => std::path::PathBuf::from("."),
+        };
+        if !seen.insert(folder.clone()) {
+            continue;
+        }
+        let problem =
+            |detail: String| Problem::new(ProblemKind::Output, &path, detail).frame(frame);
+        // The nearest part of the folder's path that exists.
+        let mut existing = folder.as_path();
+        while std::fs::metadata(existing).is_err() {
+            match existing.parent() {
+                Some(p) if !p.as_os_str().is_empty() => existing = p,
+                _ => {
+                    existing = Path::new(".");
+                    break;
+                }
+            }
+        }
+        match std::fs::metadata(existing) {
+            Ok(meta) if !meta.is_dir() => problems.push(problem(format!(
+                "the output folder cannot be made: {} is a file, not a folder; choose another -o",
+                existing.display()
+            ))),
+            Ok(_) if probe => {
+                if let Err(e) = probe_writable(existing) {
+                    problems.push(problem(format!(
+                        "the folder {} is not writable ({e}); change its permissions or write \
+                         elsewhere with -o",
+                        existing.display()
+                    )));
+                }
+            }
+            Ok(_) => {}
+            Err(e) => problems.push(problem(format!("the output folder cannot be checked: {e}"))),
+        }
+    }
+    problems
+}
+
+/// Creates and removes a hidden file in `folder`.
+fn probe_writable(folder: &Path) -> std::io::Result<()> {
+    let probe = folder.join(format!(".shutter-probe.{}.tmp", std::process::id()));
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(true)
+        .open(&probe)?;
+    std::fs::remove_file(&probe)
+}
+
+/// Plans every frame of `frames` and checks that each output can be written without
+/// overwriting an input; returns the plans, or all the problems found.
 pub fn preflight(
     inputs: &Inputs,
     output: &PathPattern,
@@ -41,6 +135,15 @@ pub fn preflight(
                 .into_iter()
                 .map(|(_, p)| p.path(frame))
                 .find(|input| same_file(input, &output));
+            if let Some(problem) = output_in_the_way(&output, frame) {
+                plan = match plan {
+                    Ok(_) => Err(vec![problem]),
+                    Err(mut problems) => {
+                        problems.push(problem);
+                        Err(problems)
+                    }
+                };
+            }
             if let Some(input) = clash {
                 let problem = Problem::new(
                     ProblemKind::Output,
@@ -70,6 +173,7 @@ pub fn preflight(
             Err(found) => problems.extend(found),
         }
     }
+    problems.extend(output_folder_problems(output, frames, false));
     if problems.is_empty() {
         Ok(plans)
     } else {

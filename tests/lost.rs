@@ -1,0 +1,412 @@
+//! Nothing lost (README): runs stopped by a signal or killed, resumed with --skip-existing,
+//! two jobs on the same outputs, outputs that cannot be written, each checked on the binary
+//! as a user or a farm runs it. Unix: the tests send signals with `kill`.
+#![cfg(unix)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use crate::support::*;
+
+/// Writes frames `1..=frames` of a canonical sequence (`C.####.exr`, ...) into `dir`;
+/// returns the colour pattern.
+fn sequence(dir: &Path, frames: i64, width: usize, height: usize) -> String {
+    for frame in 1..=frames {
+        write_canonical_frame(dir, Some(frame), width, height);
+    }
+    format!("{}/C.####.exr", dir.display())
+}
+
+fn spawn(args: &[&str]) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_shutter"))
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start shutter")
+}
+
+fn signal(child: &Child, name: &str) {
+    let status = Command::new("kill")
+        .args(["-s", name, &child.id().to_string()])
+        .status()
+        .expect("run kill");
+    assert!(status.success(), "kill -s {name} failed");
+}
+
+/// The names in a folder, sorted (none if it does not exist).
+fn names(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .map(|d| {
+            d.map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect()
+        })
+        .unwrap_or_default();
+    names.sort();
+    names
+}
+
+/// Polls `dir` (every 0.2 ms, for up to a minute) until a name satisfies `found`, or the
+/// child exits; true if found while it runs.
+fn wait_for_name(child: &mut Child, dir: &Path, found: impl Fn(&str) -> bool) -> bool {
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(60) {
+        if names(dir).iter().any(|n| found(n)) {
+            return true;
+        }
+        if child.try_wait().unwrap().is_some() {
+            return false;
+        }
+        std::thread::sleep(Duration::from_micros(200));
+    }
+    false
+}
+
+/// A process id that is no longer running: a child that has exited and been reaped.
+fn dead_pid() -> u32 {
+    let mut child = Command::new("true").spawn().unwrap();
+    let pid = child.id();
+    child.wait().unwrap();
+    pid
+}
+
+/// Stops a run by `name` while a frame's temporary file exists and checks what it left:
+/// exit code, one line, no temporary file, no lock, whole frames only.
+fn a_signal_removes_the_temporary_file(name: &str, code: i32) {
+    let dir = tempfile::tempdir().unwrap();
+    // Frames big enough that writing (ZIP) takes most of the run, many of them.
+    let color = sequence(dir.path(), 12, 320, 240);
+    let out_dir = dir.path().join("out");
+    let out = format!("{}/o.####.exr", out_dir.display());
+    let mut child = spawn(&["blur", "--color", &color, "-o", &out, "--threads", "1"]);
+    assert!(
+        wait_for_name(&mut child, &out_dir, |n| n.ends_with(".tmp")),
+        "the run ended before a temporary file was seen"
+    );
+    signal(&child, name);
+    let o = child.wait_with_output().unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(code), "{:?}: {err}", o.status);
+    assert!(err.contains(&format!("stopped by SIG{name}")), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    let left = names(&out_dir);
+    assert!(left.iter().all(|n| !n.starts_with('.')), "{left:?}");
+    for n in &left {
+        assert_eq!(read_exr_reference(&out_dir.join(n)).len(), 4, "{n}");
+    }
+    assert!(
+        left.len() < 12,
+        "the run finished before the signal: {left:?}"
+    );
+}
+
+#[test]
+fn sigterm_removes_the_temporary_file() {
+    a_signal_removes_the_temporary_file("TERM", 143);
+}
+
+#[test]
+fn sigint_removes_the_temporary_file() {
+    a_signal_removes_the_temporary_file("INT", 130);
+}
+
+#[test]
+fn stale_temporary_files_of_a_dead_process_are_removed() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = sequence(dir.path(), 2, 6, 4);
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    let (dead, live) = (dead_pid(), std::process::id());
+    let stale = [
+        format!(".o.0001.exr.{dead}.tmp"),
+        format!(".o.0002.exr.{dead}.tmp"),
+    ];
+    // A running process's temporary file, and a dead one's beside another output: kept.
+    let kept = [
+        format!(".o.0001.exr.{live}.tmp"),
+        format!(".other.exr.{dead}.tmp"),
+    ];
+    for name in stale.iter().chain(&kept) {
+        std::fs::write(out_dir.join(name), b"half a frame").unwrap();
+    }
+    let out = format!("{}/o.####.exr", out_dir.display());
+    let o = shutter(&["blur", "--color", &color, "-o", &out, "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let warnings = report["warnings"].to_string();
+    assert!(warnings.contains("removed 2 temporary files"), "{warnings}");
+    let mut expected = vec!["o.0001.exr".to_string(), "o.0002.exr".to_string()];
+    expected.extend(kept.iter().cloned());
+    expected.sort();
+    assert_eq!(names(&out_dir), expected);
+}
+
+#[test]
+fn skip_existing_redoes_an_empty_or_truncated_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = sequence(dir.path(), 5, 24, 16);
+    let reference = dir.path().join("reference");
+    let run = |out: &Path, extra: &[&str]| {
+        let mut args = vec!["blur", "--color", &color];
+        let out = s(out);
+        args.extend(["-o", &out]);
+        args.extend(extra);
+        shutter(&args)
+    };
+    let o = run(&reference.join("o.####.exr"), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let still = dir.path().join("C.0001.exr");
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &s(&still),
+        "-o",
+        &s(&reference.join("o.png")),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bytes = |name: &str| std::fs::read(reference.join(name)).unwrap();
+
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    let two = bytes("o.0002.exr");
+    std::fs::write(out_dir.join("o.0001.exr"), b"").unwrap();
+    std::fs::write(out_dir.join("o.0002.exr"), &two[..two.len() * 2 / 3]).unwrap();
+    std::fs::write(out_dir.join("o.0003.exr"), bytes("o.0003.exr")).unwrap();
+    write_exr(
+        &out_dir.join("o.0004.exr"),
+        4,
+        4,
+        vec![("R", vec![0.0; 16])],
+    );
+    let o = run(&out_dir.join("o.####.exr"), &["--skip-existing", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(report["frames_skipped"], 1, "{report}");
+    assert_eq!(report["frames_written"], 4, "{report}");
+    let warnings = report["warnings"].to_string();
+    for needle in [
+        "o.0001.exr, frame 1 exists but is written again: it is empty",
+        "o.0002.exr, frame 2 exists but is written again: the file is truncated",
+        "o.0004.exr, frame 4 exists but is written again: it is 4x4, the frame is 24x16",
+    ] {
+        assert!(warnings.contains(needle), "'{needle}' not in {warnings}");
+    }
+    for frame in 1..=5 {
+        let name = format!("o.{frame:04}.exr");
+        assert!(
+            std::fs::read(out_dir.join(&name)).unwrap() == bytes(&name),
+            "{name} differs from an uninterrupted run's"
+        );
+    }
+
+    // A PNG cut short (its header intact) is written again too.
+    let png = bytes("o.png");
+    std::fs::write(out_dir.join("o.png"), &png[..png.len() / 2]).unwrap();
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &s(&still),
+        "-o",
+        &s(&out_dir.join("o.png")),
+        "--skip-existing",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(report["frames_written"], 1, "{report}");
+    assert!(std::fs::read(out_dir.join("o.png")).unwrap() == png);
+}
+
+#[test]
+fn a_folder_named_like_an_output_fails_in_preflight() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = sequence(dir.path(), 4, 6, 4);
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir_all(out_dir.join("o.0003.exr")).unwrap();
+    let out = format!("{}/o.####.exr", out_dir.display());
+    for extra in [None, Some("--skip-existing")] {
+        let before = snapshot(&out_dir);
+        let mut args = vec!["blur", "--color", &color, "-o", &out];
+        args.extend(extra);
+        let o = shutter(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(
+            err.contains("o.0003.exr, frame 3") && err.contains("a folder is in the way"),
+            "{err}"
+        );
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert_eq!(
+            snapshot(&out_dir),
+            before,
+            "{extra:?}: the output folder changed"
+        );
+    }
+}
+
+#[test]
+fn an_output_folder_that_cannot_be_written_fails_before_any_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = sequence(dir.path(), 2, 6, 4);
+    // A file where the output folder would have to be made.
+    let blocker = dir.path().join("blocker");
+    std::fs::write(&blocker, b"a file").unwrap();
+    let out = format!("{}/sub/o.####.exr", blocker.display());
+    let o = shutter(&["blur", "--color", &color, "-o", &out]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("frame 1") && err.contains(&format!("{} is a file", s(&blocker))),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "one line for the folder: {err}");
+
+    // A folder no file can be created in. Root ignores permissions, so a privileged run
+    // tries /sys, where nobody can create files.
+    let read_only = dir.path().join("read-only");
+    std::fs::create_dir_all(&read_only).unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&read_only, std::fs::Permissions::from_mode(0o555)).unwrap();
+    let privileged = std::fs::write(read_only.join("x"), b"").is_ok();
+    let _ = std::fs::remove_file(read_only.join("x"));
+    let folder = if privileged {
+        PathBuf::from("/sys")
+    } else {
+        read_only.clone()
+    };
+    let out = format!("{}/o.####.exr", folder.display());
+    let o = shutter(&["blur", "--color", &color, "-o", &out]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("frame 1")
+            && err.contains(&format!("the folder {} is not writable", folder.display())),
+        "{err}"
+    );
+    assert!(names(&read_only).is_empty());
+    std::fs::set_permissions(&read_only, std::fs::Permissions::from_mode(0o755)).unwrap();
+}
+
+#[test]
+fn a_second_job_on_the_same_outputs_fails_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = sequence(dir.path(), 8, 320, 240);
+    let out_dir = dir.path().join("out");
+    let out = format!("{}/o.####.exr", out_dir.display());
+    let job = |frames: &str| {
+        vec![
+            "blur".to_string(),
+            "--color".into(),
+            color.clone(),
+            "-o".into(),
+            out.clone(),
+            "--frames".into(),
+            frames.into(),
+            "--threads".into(),
+            "1".into(),
+        ]
+    };
+    let first = job("1-5");
+    let mut first = spawn(&first.iter().map(String::as_str).collect::<Vec<_>>());
+    // Once the first job writes a frame (a temporary file or a frame: the lock file shows
+    // before it is locked), hold it there.
+    assert!(
+        wait_for_name(&mut first, &out_dir, |n| n.ends_with(".tmp")
+            || n.starts_with("o.")),
+        "the first job ended before it wrote anything"
+    );
+    signal(&first, "STOP");
+    assert!(first.try_wait().unwrap().is_none(), "the first job ended");
+    let before = names(&out_dir);
+
+    // Frames 4-8 overlap: refused at once, naming the first job; nothing written.
+    let second = job("4-8");
+    let o = shutter(&second.iter().map(String::as_str).collect::<Vec<_>>());
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(&format!("(pid {})", first.id())) && err.contains("o.0004.exr, frame 4"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert_eq!(names(&out_dir), before, "the second job wrote something");
+
+    // Frames 6-8 are another chunk of the same sequence: it runs alongside.
+    let third = job("6-8");
+    let o = shutter(&third.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", stderr(&o));
+
+    signal(&first, "CONT");
+    let o = first.wait_with_output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let expected: Vec<String> = (1..=8).map(|f| format!("o.{f:04}.exr")).collect();
+    assert_eq!(
+        names(&out_dir),
+        expected,
+        "no lock or temporary file is left"
+    );
+}
+
+/// A seeded fraction in [0, 1) for iteration `i` (splitmix64).
+fn fraction(i: u64) -> f64 {
+    let mut z = i.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+}
+
+#[test]
+fn killed_runs_resume_to_identical_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let frames = 6;
+    let color = sequence(dir.path(), frames, 128, 96);
+    let run = |out_dir: &Path, extra: &[&str]| {
+        let out = format!("{}/o.####.exr", out_dir.display());
+        let mut args = vec!["blur", "--color", &color, "-o", &out, "--threads", "1"];
+        args.extend(extra);
+        args.iter().map(|a| a.to_string()).collect::<Vec<_>>()
+    };
+    let reference = dir.path().join("reference");
+    let start = Instant::now();
+    let o = shutter(
+        &run(&reference, &[])
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
+    // The kill moments are seeded fractions of how long an uninterrupted run takes here.
+    let whole = start.elapsed();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let expected = names(&reference);
+    assert_eq!(expected.len(), frames as usize);
+
+    let mut left_behind = 0;
+    for i in 0..20 {
+        let out_dir = dir.path().join(format!("run{i}"));
+        let args = run(&out_dir, &[]);
+        let mut child = spawn(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        std::thread::sleep(whole.mul_f64(fraction(i)));
+        child.kill().unwrap(); // SIGKILL
+        child.wait().unwrap(); // reaped: its pid is no longer a running process
+        if names(&out_dir).iter().any(|n| n.starts_with('.')) {
+            left_behind += 1;
+        }
+        let args = run(&out_dir, &["--skip-existing"]);
+        let o = shutter(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(o.status.success(), "kill {i}: {}", stderr(&o));
+        assert_eq!(
+            names(&out_dir),
+            expected,
+            "kill {i}: stray or missing files"
+        );
+        for name in &expected {
+            assert!(
+                std::fs::read(out_dir.join(name)).unwrap()
+                    == std::fs::read(reference.join(name)).unwrap(),
+                "kill {i}: {name} differs from the uninterrupted run's"
+            );
+        }
+    }
+    eprintln!("{left_behind} of 20 kills left a temporary or lock file to clean up");
+}
