@@ -7,6 +7,7 @@ mod bench;
 mod cli;
 mod diff;
 mod dof;
+mod farm;
 mod golden;
 mod gpu;
 mod hostile;

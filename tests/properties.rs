@@ -170,3 +170,66 @@ proptest! {
         }
     }
 }
+
+/// One item of a frame spec and the frames it stands for, built independently of the parser:
+/// a single frame, or a range from `first` by `step` over `count` frames, written `A-B:S`
+/// (or `A-B` for a step of 1) with a last frame `B` up to a step past the last one reached.
+fn spec_item() -> impl Strategy<Value = (String, Vec<i64>)> {
+    prop_oneof![
+        (-300i64..300).prop_map(|f| (f.to_string(), vec![f])),
+        (-300i64..300, 1usize..40, -7i64..8, 0i64..7).prop_filter_map(
+            "a step of 0",
+            |(first, count, step, over)| {
+                if step == 0 {
+                    return None;
+                }
+                let frames: Vec<i64> = (0..count as i64).map(|k| first + k * step).collect();
+                let last = frames[count - 1];
+                // Any end between the last frame and the next one reaches the same frames.
+                let end = last + step.signum() * over.min(step.abs() - 1);
+                let text = if step == 1 {
+                    format!("{first}-{end}")
+                } else {
+                    format!("{first}-{end}:{step}")
+                };
+                Some((text, frames))
+            }
+        ),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    #[test]
+    fn chunks_of_any_spec_hold_every_frame_once_and_write_back_exactly(
+        items in vec(spec_item(), 1..6),
+        size in 1usize..30,
+    ) {
+        use shutter::io::sequence::{chunks, format_frames, parse_frames};
+        let spec: Vec<&str> = items.iter().map(|(text, _)| text.as_str()).collect();
+        let spec = spec.join(",");
+        // The frames the items stand for, in order, each once.
+        let mut expected = Vec::new();
+        for (_, frames) in &items {
+            for &f in frames {
+                if !expected.contains(&f) {
+                    expected.push(f);
+                }
+            }
+        }
+        let frames = parse_frames(&spec).unwrap();
+        prop_assert_eq!(&frames, &expected, "{}", spec);
+        let parts = chunks(&frames, size);
+        // Every chunk but the last is full; together they are the frames, in order, once.
+        for part in &parts[..parts.len() - 1] {
+            prop_assert_eq!(part.len(), size);
+        }
+        prop_assert_eq!(parts.concat(), frames.clone());
+        // Each chunk as a spec (what a farm task is given) parses back to itself.
+        for part in &parts {
+            let text = format_frames(part);
+            prop_assert_eq!(parse_frames(&text).unwrap(), part.to_vec(), "{}", text);
+        }
+    }
+}

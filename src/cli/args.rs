@@ -42,6 +42,28 @@ pub enum Command {
     /// Time and score every algorithm setting on the truth scenes: bench.json, bench.md,
     /// pareto.svg/.png and contact sheets.
     Bench(BenchArgs),
+    /// Expand a frame spec and cut it into chunks, as a farm task runs them: prints each
+    /// chunk's frames as a spec for --frames, one line per chunk (or chunk K alone).
+    Frames(FramesArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct FramesArgs {
+    /// A frame spec, as --frames takes it: 1001-1100, 1-100:5 (a step), 1,3,7-20:2, -10--1.
+    #[arg(value_name = "SPEC", allow_hyphen_values = true)]
+    pub spec: String,
+
+    /// Frames per chunk [default: all in one].
+    #[arg(long, value_name = "N")]
+    pub chunk_size: Option<usize>,
+
+    /// Print chunk K alone (counted from 0, as a Slurm array's task ids can be).
+    #[arg(long, value_name = "K")]
+    pub chunk: Option<usize>,
+
+    /// Print the number of chunks instead (an array's size).
+    #[arg(long, conflicts_with = "chunk")]
+    pub count: bool,
 }
 
 #[derive(Debug, Args)]
@@ -84,9 +106,10 @@ pub struct BlurArgs {
     #[arg(long, value_name = "PATH", help_heading = "Depth of field")]
     pub coc_map: Option<String>,
 
-    /// Frames to process: 1001-1100, 1-99x2, 1,5,9-12 [default: every frame found on disk
-    /// for the colour pattern].
-    #[arg(long, value_name = "SPEC")]
+    /// Frames to process: 1001-1100, 1-100:5 (a step), 1,5,9-12, -10--1 (Open Job
+    /// Description's range expressions; 1-99x2 too) [default: every frame found on disk for
+    /// the colour pattern].
+    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
     pub frames: Option<String>,
 
     /// Output file or pattern (.exr, .png, .tif, .tiff, .jpg, .jpeg).
@@ -110,7 +133,8 @@ pub struct BlurArgs {
     #[arg(short, long)]
     pub verbose: bool,
 
-    /// Worker threads [default: RAYON_NUM_THREADS, else one per core].
+    /// Worker threads, at most the larger of 256 and the cores [default: RAYON_NUM_THREADS,
+    /// else one per core].
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
 }
@@ -279,8 +303,8 @@ pub struct DiffArgs {
     #[arg(long, value_name = "PATH")]
     pub sharp: Option<String>,
 
-    /// Frames to compare [default: every frame found on disk for A].
-    #[arg(long, value_name = "SPEC")]
+    /// Frames to compare (as blur's --frames) [default: every frame found on disk for A].
+    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
     pub frames: Option<String>,
 
     /// Preset for finding colour channels (see shutter presets).

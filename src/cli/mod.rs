@@ -40,6 +40,7 @@ pub fn main() -> i32 {
         Command::Presets(args) => presets::presets(args),
         Command::Scene(args) => scene::scene(args),
         Command::Bench(args) => bench::bench(args),
+        Command::Frames(args) => frames(args),
         Command::Diff(args) => {
             return match diff::diff(args) {
                 Ok(code) => code,
@@ -125,6 +126,39 @@ fn stop_cleanly_on_signals() {
 
 #[cfg(not(unix))]
 fn stop_cleanly_on_signals() {}
+
+/// `shutter frames`: a frame spec expanded and cut into chunks, each printed as a spec.
+fn frames(args: args::FramesArgs) -> Result<()> {
+    use crate::io::sequence::{chunks, format_frames, parse_frames};
+    let frames = parse_frames(&args.spec)?;
+    let size = match args.chunk_size {
+        Some(0) => return Err(Error::usage("--chunk-size must be at least 1")),
+        Some(size) => size,
+        None => frames.len(),
+    };
+    let chunks = chunks(&frames, size);
+    if args.count {
+        out(&format!("{}\n", chunks.len()));
+        return Ok(());
+    }
+    match args.chunk {
+        Some(k) => match chunks.get(k) {
+            Some(chunk) => out(&format!("{}\n", format_frames(chunk))),
+            None => {
+                return Err(Error::usage(format!(
+                    "--chunk {k}: the spec makes {} chunks of {size} (0 to {})",
+                    chunks.len(),
+                    chunks.len().saturating_sub(1)
+                )))
+            }
+        },
+        None => {
+            let text: String = chunks.iter().map(|c| format_frames(c) + "\n").collect();
+            out(&text);
+        }
+    }
+    Ok(())
+}
 
 /// Writes `text` to stdout, the one way every command prints its results. A reader that
 /// closed the pipe early (`| head`) is not an error, so nothing panics.

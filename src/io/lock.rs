@@ -5,7 +5,7 @@
 //! farm's chunks) run side by side. The kernel releases a dead holder's locks, so a lock file
 //! a killed run left behind is simply taken over.
 //!
-//! On Unix these are `fcntl` byte-range locks, byte `frame + 1` for a frame and byte 0 for a
+//! On Unix these are `fcntl` byte-range locks, byte `frame + 1e9` for a frame and byte 0 for a
 //! single still: `F_GETLK` names the conflicting process and its frame. Whole-file locks
 //! (`flock`, std's `File::lock`, fs4) were the simpler choice, rejected because they make
 //! chunks of one sequence refuse each other. Elsewhere the whole file is locked (std).
@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use crate::error::{Problem, ProblemKind};
-use crate::io::sequence::PathPattern;
+use crate::io::sequence::{PathPattern, MAX_FRAME_NUMBER};
 
 /// The lock file of an output sequence: hidden, in the output folder (the deepest folder
 /// above any frame placeholder), named after the pattern with `####` for the frame number,
@@ -178,13 +178,10 @@ fn release(held: Held) {
     remove_empty(&held.created);
 }
 
-/// Byte ranges `(start, length)` to lock for `frames`: byte 0 for a still, `frame + 1` for a
+/// Byte ranges `(start, length)` to lock for `frames`: byte 0 for a still, `frame + 1e9` for a
 /// frame, runs of consecutive frames merged.
 fn byte_ranges(frames: &[Option<i64>]) -> Vec<(u64, u64)> {
-    let mut bytes: Vec<u64> = frames
-        .iter()
-        .map(|f| f.map_or(0, |f| f.max(0) as u64 + 1))
-        .collect();
+    let mut bytes: Vec<u64> = frames.iter().map(|f| f.map_or(0, frame_byte)).collect();
     bytes.sort_unstable();
     bytes.dedup();
     let mut ranges: Vec<(u64, u64)> = Vec::new();
@@ -197,8 +194,14 @@ fn byte_ranges(frames: &[Option<i64>]) -> Vec<(u64, u64)> {
     ranges
 }
 
+/// Frame numbers lie within ±[`MAX_FRAME_NUMBER`]: shifted by it (and one, byte 0 being a
+/// still's), each has a byte of its own at a plain, positive offset.
+fn frame_byte(frame: i64) -> u64 {
+    (frame.clamp(-MAX_FRAME_NUMBER, MAX_FRAME_NUMBER) + MAX_FRAME_NUMBER) as u64 + 1
+}
+
 fn frame_of(byte: u64) -> Option<i64> {
-    byte.checked_sub(1).map(|f| f as i64)
+    byte.checked_sub(1).map(|b| b as i64 - MAX_FRAME_NUMBER)
 }
 
 /// Makes `folder` and any missing folder above it; returns those it made, deepest first.
@@ -328,8 +331,14 @@ mod tests {
     #[test]
     fn frames_become_merged_byte_ranges() {
         let frames = [Some(3), Some(1), Some(2), Some(7), Some(2)];
-        assert_eq!(byte_ranges(&frames), [(2, 3), (8, 1)]);
+        let base = MAX_FRAME_NUMBER as u64 + 1;
+        assert_eq!(byte_ranges(&frames), [(base + 1, 3), (base + 7, 1)]);
         assert_eq!(byte_ranges(&[None]), [(0, 1)]);
+        // Negative frames have bytes of their own, and come back as themselves.
+        let ranges = byte_ranges(&[Some(-2), Some(-1), Some(0)]);
+        assert_eq!(ranges, [(base - 2, 3)]);
+        assert_eq!(frame_of(base - 2), Some(-2));
+        assert_eq!(frame_of(0), None);
     }
 
     #[test]

@@ -148,68 +148,161 @@ fn find_printf(raw: &str) -> Option<(usize, usize, usize)> {
     None
 }
 
-/// Parses a frame spec: comma-separated items, each `N`, `A-B` or `A-BxS` (every S-th frame
-/// from A to B inclusive). Frames come out in the order given, duplicates removed.
+/// Frame numbers beyond ±this are refused: far beyond any shot's numbering, and small
+/// enough that a frame's byte in the output lock ([`crate::io::lock`]) stays a plain offset.
+pub const MAX_FRAME_NUMBER: i64 = 999_999_999;
+
+/// Parses a frame spec: comma-separated items, each `N`, `A-B`, or a range with a step,
+/// `A-B:S` (Open Job Description's range expressions, as farms write them: `1-100:5`,
+/// `1,3,7-20:2`, negative frames `-10--1`, a descending range with a negative step
+/// `10-1:-1`) or `A-BxS` (every S-th frame from A, S positive). Spaces around numbers and
+/// dashes are allowed. Frames come out in the order given (a range in its own direction),
+/// each once.
 pub fn parse_frames(spec: &str) -> Result<Vec<i64>> {
-    let bad = |why: &str| {
+    let bad = |why: String| {
         Error::usage(format!(
-            "bad --frames '{spec}': {why} (examples: 1001-1100, 1-99x2, 1,5,9-12)"
+            "bad --frames '{spec}': {why} (examples: 1001-1100, 1-99:2, 1,5,9-12, -10--1)"
         ))
     };
     let mut frames = Vec::new();
     let mut seen = BTreeSet::new();
     for item in spec.split(',') {
-        let item = item.trim();
-        if item.is_empty() {
-            return Err(bad("empty item"));
+        let (first, last, step) = parse_item(item).map_err(|why| bad(why.to_string()))?;
+        let count = (last as i128 - first as i128) / step as i128 + 1;
+        if count > MAX_FRAMES as i128 {
+            return Err(bad("too many frames".into()));
         }
-        let (range, step) = match item.split_once('x') {
-            Some((range, step)) => {
-                let step: i64 = step
-                    .trim()
-                    .parse()
-                    .map_err(|_| bad("step is not a number"))?;
-                if step < 1 {
-                    return Err(bad("step must be at least 1"));
-                }
-                (range, step)
-            }
-            None => (item, 1),
-        };
-        let (first, last) = match range.split_once('-') {
-            Some((a, b)) => (
-                a.trim().parse::<i64>().map_err(|_| bad("not a number"))?,
-                b.trim().parse::<i64>().map_err(|_| bad("not a number"))?,
-            ),
-            None => {
-                let n = range
-                    .trim()
-                    .parse::<i64>()
-                    .map_err(|_| bad("not a number"))?;
-                (n, n)
-            }
-        };
-        if first < 0 || last < 0 {
-            return Err(bad("frames are not negative"));
-        }
-        if last < first {
-            return Err(bad("a range must not run backwards"));
-        }
-        if ((last - first) / step) as usize >= MAX_FRAMES {
-            return Err(bad("too many frames"));
-        }
-        let mut frame = first;
-        while frame <= last {
+        for k in 0..count as i64 {
+            let frame = first + k * step;
             if seen.insert(frame) {
                 frames.push(frame);
                 if frames.len() > MAX_FRAMES {
-                    return Err(bad("too many frames"));
+                    return Err(bad("too many frames".into()));
                 }
             }
-            frame += step;
         }
     }
     Ok(frames)
+}
+
+/// One item of a frame spec as (first, last, step), `last` reached from `first` by whole
+/// steps (the last frame of `1-10:4` is 9).
+fn parse_item(item: &str) -> std::result::Result<(i64, i64, i64), &'static str> {
+    let item = item.trim();
+    if item.is_empty() {
+        return Err("empty item");
+    }
+    let (range, step) = match item.split_once(':') {
+        Some((range, step)) => {
+            let (step, rest) = take_int(step.trim())?;
+            if !rest.trim().is_empty() {
+                return Err("the step is not a number");
+            }
+            (range, Some(step))
+        }
+        None => match item.split_once('x') {
+            Some((range, step)) => {
+                let (step, rest) = take_int(step.trim())?;
+                if !rest.trim().is_empty() || step < 1 {
+                    return Err("the step after x is a whole number of at least 1");
+                }
+                (range, Some(step))
+            }
+            None => (item, None),
+        },
+    };
+    let (first, rest) = take_int(range.trim())?;
+    let rest = rest.trim_start();
+    let last = if rest.is_empty() {
+        if step.is_some() {
+            return Err("a step needs a range (A-B:S)");
+        }
+        first
+    } else {
+        let rest = rest
+            .strip_prefix('-')
+            .ok_or("expected '-' between two frames")?;
+        let (last, rest) = take_int(rest.trim_start())?;
+        if !rest.trim().is_empty() {
+            return Err("unexpected text after a range");
+        }
+        last
+    };
+    let step = match step {
+        Some(0) => return Err("the step must not be 0"),
+        Some(step) if (step > 0) != (last >= first) && first != last => {
+            return Err("a range runs the way its step does: 1-10:2, or 10-1:-1")
+        }
+        Some(step) => step,
+        None if last < first => {
+            return Err("a range must not run backwards without a negative step (10-1:-1)")
+        }
+        None => 1,
+    };
+    // The last frame whole steps reach.
+    let last = first + (last - first) / step * step;
+    Ok((first, last, step))
+}
+
+/// A whole number (optionally negative) at the start of `text`, within
+/// ±[`MAX_FRAME_NUMBER`], and the text after it.
+fn take_int(text: &str) -> std::result::Result<(i64, &str), &'static str> {
+    let (negative, digits) = match text.strip_prefix('-') {
+        Some(rest) => (true, rest.trim_start()),
+        None => (false, text),
+    };
+    let end = digits
+        .bytes()
+        .position(|b| !b.is_ascii_digit())
+        .unwrap_or(digits.len());
+    if end == 0 {
+        return Err("not a number");
+    }
+    let value: i64 = digits[..end]
+        .parse()
+        .ok()
+        .filter(|v: &i64| *v <= MAX_FRAME_NUMBER)
+        .ok_or("a frame number beyond ±999999999")?;
+    Ok((if negative { -value } else { value }, &digits[end..]))
+}
+
+/// `frames` cut, in order, into chunks of `size` frames (the last may be shorter): every
+/// frame lands in exactly one chunk, whatever the spec, its steps and the size (the chunks
+/// of a farm task each, OpenCue's lost last frames being the cautionary tale).
+pub fn chunks(frames: &[i64], size: usize) -> Vec<&[i64]> {
+    frames.chunks(size.max(1)).collect()
+}
+
+/// `frames` written back as a frame spec in Open Job Description's syntax, runs of a constant
+/// step as `A-B` or `A-B:S`: parsing it gives `frames` again, in the same order.
+pub fn format_frames(frames: &[i64]) -> String {
+    let mut items = Vec::new();
+    let mut i = 0;
+    while i < frames.len() {
+        let first = frames[i];
+        // The longest run of one step from here (at least three frames to be worth a range).
+        let step = frames.get(i + 1).map(|next| next - first);
+        let mut j = i + 1;
+        if let Some(step) = step.filter(|s| *s != 0) {
+            while j < frames.len() && frames[j] - frames[j - 1] == step {
+                j += 1;
+            }
+        }
+        if j - i >= 3 {
+            let last = frames[j - 1];
+            let step = frames[i + 1] - first;
+            items.push(if step == 1 {
+                format!("{first}-{last}")
+            } else {
+                format!("{first}-{last}:{step}")
+            });
+            i = j;
+        } else {
+            items.push(first.to_string());
+            i += 1;
+        }
+    }
+    items.join(",")
 }
 
 #[cfg(test)]
@@ -251,8 +344,50 @@ mod tests {
         assert_eq!(parse_frames("1-10x4").unwrap(), [1, 5, 9]);
         assert_eq!(parse_frames("1,5,9-12").unwrap(), [1, 5, 9, 10, 11, 12]);
         assert_eq!(parse_frames("3,3,2-4").unwrap(), [3, 2, 4]);
-        for bad in ["", "a", "5-1", "1-5x0", "1,,2", "-3", "0-99999999999"] {
+        for bad in [
+            "",
+            "a",
+            "5-1",
+            "1-5x0",
+            "1,,2",
+            "0-99999999999",
+            "1-9:0",
+            "9-1:2",
+            "1-9:-1",
+            "4:2",
+            "1-2-3",
+        ] {
             assert!(parse_frames(bad).is_err(), "{bad} should be refused");
+        }
+    }
+
+    #[test]
+    fn open_job_description_range_expressions() {
+        // The forms of the Open Job Description specification's range expressions.
+        assert_eq!(parse_frames("1-10:4").unwrap(), [1, 5, 9]);
+        assert_eq!(parse_frames("1,3,7-12:2").unwrap(), [1, 3, 7, 9, 11]);
+        assert_eq!(parse_frames("-3").unwrap(), [-3]);
+        assert_eq!(parse_frames("-3-1").unwrap(), [-3, -2, -1, 0, 1]);
+        assert_eq!(parse_frames("-10--8").unwrap(), [-10, -9, -8]);
+        assert_eq!(parse_frames("5-1:-2").unwrap(), [5, 3, 1]);
+        assert_eq!(parse_frames(" 1 - 3 , 7 ").unwrap(), [1, 2, 3, 7]);
+        assert_eq!(parse_frames("4-4:3").unwrap(), [4]);
+    }
+
+    #[test]
+    fn frames_format_back_to_a_spec_that_parses_to_them() {
+        for (frames, spec) in [
+            (vec![1, 2, 3, 4], "1-4"),
+            (vec![1, 5, 9], "1-9:4"),
+            (vec![1, 2, 7], "1,2,7"),
+            (vec![-3, -2, -1, 5], "-3--1,5"),
+            (vec![9, 7, 5, 4], "9-5:-2,4"),
+            (vec![], ""),
+        ] {
+            assert_eq!(format_frames(&frames), spec);
+            if !frames.is_empty() {
+                assert_eq!(parse_frames(spec).unwrap(), frames);
+            }
         }
     }
 

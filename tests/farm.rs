@@ -1,0 +1,64 @@
+//! On a farm (issue 18): frame ranges as farms write them, and chunks of them.
+
+use shutter::io::sequence::{parse_frames, PathPattern};
+
+use crate::support::*;
+
+#[test]
+fn shutter_frames_cuts_a_spec_into_chunks_for_a_farm() {
+    let o = shutter(&["frames", "1-100:5", "--chunk-size", "7"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let lines: Vec<String> = stdout(&o).lines().map(String::from).collect();
+    assert_eq!(lines, ["1-31:5", "36-66:5", "71-96:5"]);
+    let mut all = Vec::new();
+    for line in &lines {
+        all.extend(parse_frames(line).unwrap());
+    }
+    assert_eq!(all, (1..=100).step_by(5).collect::<Vec<i64>>());
+    let o = shutter(&["frames", "1-100:5", "--chunk-size", "7", "--count"]);
+    assert_eq!(stdout(&o).trim(), "3");
+    let o = shutter(&["frames", "-10--1", "--chunk-size", "4", "--chunk", "2"]);
+    assert_eq!(stdout(&o).trim(), "-2,-1");
+    // A chunk past the end is a usage error naming how many there are.
+    let o = shutter(&["frames", "1-10", "--chunk-size", "5", "--chunk", "2"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("2 chunks"), "{}", stderr(&o));
+}
+
+#[test]
+fn stepped_and_negative_frames_run_end_to_end() {
+    let dir = tempfile::tempdir().unwrap();
+    let colour = PathPattern::parse(&format!("{}/C.####.exr", dir.path().display())).unwrap();
+    let (w, h) = (8, 4);
+    for frame in -3..=3 {
+        let value = vec![frame as f32; w * h];
+        write_exr(
+            &colour.path(Some(frame)),
+            w,
+            h,
+            vec![("R", value.clone()), ("G", value.clone()), ("B", value)],
+        );
+    }
+    let out = PathPattern::parse(&format!("{}/out/o.####.exr", dir.path().display())).unwrap();
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &colour.raw,
+        "--frames",
+        "-3-3:3",
+        "-o",
+        &out.raw,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut written: Vec<String> = std::fs::read_dir(dir.path().join("out"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    written.sort();
+    assert_eq!(written, ["o.-003.exr", "o.0000.exr", "o.0003.exr"]);
+    // Each output holds its own frame's colour.
+    for frame in [-3i64, 0, 3] {
+        let channels = read_exr_reference(&out.path(Some(frame)));
+        assert!(channel(&channels, "R").iter().all(|&v| v == frame as f32));
+    }
+}
