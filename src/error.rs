@@ -22,6 +22,18 @@ pub enum ProblemKind {
     Output,
     /// The header declares more pixels than the limit (`max-pixels`) allows.
     TooLarge,
+    /// Another job holds the output lock on a frame: worth retrying later (exit 75).
+    Busy,
+    /// Writing a frame failed after the preflight passed (a full disk, an I/O error): worth
+    /// retrying (exit 75).
+    WriteFailed,
+}
+
+impl ProblemKind {
+    /// Whether a retry may succeed with the same inputs: the job was not wrong, the moment was.
+    pub fn is_transient(self) -> bool {
+        matches!(self, ProblemKind::Busy | ProblemKind::WriteFailed)
+    }
 }
 
 /// One problem with one file of one frame.
@@ -77,6 +89,8 @@ impl fmt::Display for Problem {
             ProblemKind::Unsupported => "not supported",
             ProblemKind::Output => "cannot write",
             ProblemKind::TooLarge => "too large",
+            ProblemKind::Busy => "busy",
+            ProblemKind::WriteFailed => "cannot write",
         };
         write!(f, "{what}: {}", self.path.display())?;
         if let Some(frame) = self.frame {
@@ -93,6 +107,11 @@ impl fmt::Display for Problem {
         write!(f, ": {detail}")
     }
 }
+
+/// The exit code of a failure a retry may cure (another job holds the frames, a write
+/// failed after the preflight): sysexits' EX_TEMPFAIL, which schedulers and wrappers read
+/// as "try again later".
+pub const TRANSIENT_EXIT: i32 = 75;
 
 /// Everything the library can fail with.
 #[derive(Debug)]
@@ -117,6 +136,11 @@ impl Error {
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Usage(_) => 2,
+            Error::Files(problems)
+                if !problems.is_empty() && problems.iter().all(|p| p.kind.is_transient()) =>
+            {
+                TRANSIENT_EXIT
+            }
             Error::Files(_) | Error::Device(_) => 1,
         }
     }

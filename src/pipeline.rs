@@ -41,6 +41,8 @@ pub struct Job {
     pub backend: Backend,
     /// The largest input frame in pixels (setting `max-pixels`).
     pub max_pixels: usize,
+    /// Preflight only: report what each frame would do, read no pixels, write nothing.
+    pub dry_run: bool,
     /// Warnings found while resolving the job (flags that do not apply), reported by [`run`].
     pub warnings: Vec<String>,
 }
@@ -81,6 +83,24 @@ pub struct Report {
     /// Input values the numeric policy replaced (NaN, infinite or out of range), per pass,
     /// summed over frames.
     pub replaced: Replaced,
+    /// With `--dry-run`: what the run would do for each frame (nothing is read beyond the
+    /// headers, nothing written).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub planned: Vec<Planned>,
+}
+
+/// One frame of a dry run: its output and what a run would do with it.
+#[derive(Clone, Debug, Serialize)]
+pub struct Planned {
+    pub frame: Option<i64>,
+    pub output: PathBuf,
+    /// `write`, `overwrite`, `skip` (with --skip-existing, a whole frame exists) or `redo`
+    /// (one exists but is not whole: `why` says what is wrong with it).
+    pub action: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub why: Option<String>,
+    /// The input files the frame reads.
+    pub inputs: Vec<PathBuf>,
 }
 
 /// The most warnings a report keeps (the same warning on every frame is kept once).
@@ -178,6 +198,33 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     let plans = preflight(&job.inputs, &job.output, &job.frames, &options)
         .map_err(|e| name_pass(job, e))?;
     report.preflight_seconds = preflight_start.elapsed().as_secs_f64();
+    if job.dry_run {
+        for plan in &plans {
+            let (frame, output) = (plan.frame, job.output.path(plan.frame));
+            let exists = std::fs::symlink_metadata(&output).is_ok();
+            let (action, why) = match (exists, job.skip_existing) {
+                (false, _) => ("write", None),
+                (true, false) => ("overwrite", None),
+                (true, true) => match existing_frame_problem(&output, plan.width, plan.height) {
+                    None => ("skip", None),
+                    Some(why) => ("redo", Some(why)),
+                },
+            };
+            let inputs = plan.paths().into_iter().map(Path::to_path_buf).collect();
+            report.planned.push(Planned {
+                frame,
+                output,
+                action,
+                why,
+                inputs,
+            });
+        }
+        for warning in &job.warnings {
+            warn(&mut report, on_event, warning.clone());
+        }
+        report.wall_seconds = start.elapsed().as_secs_f64();
+        return Ok(report);
+    }
     // The GPU context, once per run, before any output is touched: `--backend wgpu` with no
     // suitable adapter stops here with one line.
     let (gpu, backend) = crate::gpu::open(job.backend).map_err(crate::Error::Device)?;

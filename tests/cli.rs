@@ -576,6 +576,7 @@ fn help_documents_every_blur_flag() {
         "--layer",
         "--linear",
         "--threads",
+        "--dry-run",
     ] {
         assert!(text.contains(flag), "{flag} missing from help");
     }

@@ -62,3 +62,67 @@ fn stepped_and_negative_frames_run_end_to_end() {
         assert!(channel(&channels, "R").iter().all(|&v| v == frame as f32));
     }
 }
+
+#[test]
+fn dry_run_lists_what_each_frame_would_do_and_touches_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    for frame in 1..=3 {
+        write_canonical_frame(dir.path(), Some(frame), 16, 8);
+    }
+    let out = dir.path().join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    // Frame 2 done (a whole frame), frame 3 cut short (empty).
+    let done = shutter(&[
+        "blur",
+        "--color",
+        &s(&dir.path().join("C.0002.exr")),
+        "-o",
+        &s(&out.join("o.0002.exr")),
+    ]);
+    assert!(done.status.success(), "{}", stderr(&done));
+    std::fs::write(out.join("o.0003.exr"), b"").unwrap();
+    let before = snapshot(dir.path());
+    let colour = format!("{}/C.####.exr", dir.path().display());
+    let pattern = format!("{}/o.####.exr", out.display());
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &colour,
+        "-o",
+        &pattern,
+        "--skip-existing",
+        "--dry-run",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let lines: Vec<String> = stdout(&o).lines().map(String::from).collect();
+    let at = |f: u32| out.join(format!("o.{f:04}.exr")).display().to_string();
+    assert_eq!(
+        lines,
+        [
+            format!("frame 1: write {}", at(1)),
+            format!("frame 2: skip {}", at(2)),
+            format!("frame 3: redo {} (it is empty)", at(3)),
+        ]
+    );
+    // The JSON form names each frame's inputs.
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &colour,
+        "-o",
+        &pattern,
+        "--dry-run",
+        "--json",
+    ]);
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let planned = report["planned"].as_array().unwrap();
+    assert_eq!(planned.len(), 3);
+    assert_eq!(planned[1]["action"], "overwrite");
+    assert_eq!(
+        planned[0]["inputs"][0],
+        dir.path().join("C.0001.exr").display().to_string()
+    );
+    assert_eq!(report["frames_written"], 0);
+    // Nothing was written, locked or removed.
+    assert_eq!(snapshot(dir.path()), before);
+}

@@ -320,11 +320,13 @@ fn a_second_job_on_the_same_outputs_fails_at_once() {
     assert!(first.try_wait().unwrap().is_none(), "the first job ended");
     let before = names(&out_dir);
 
-    // Frames 4-8 overlap: refused at once, naming the first job; nothing written.
+    // Frames 4-8 overlap: refused at once, naming the first job; nothing written. The exit
+    // code says a retry may succeed (75, EX_TEMPFAIL): a scheduler requeues it.
     let second = job("4-8");
     let o = shutter(&second.iter().map(String::as_str).collect::<Vec<_>>());
     let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(o.status.code(), Some(75), "{err}");
+    assert!(err.starts_with("shutter: error: busy: "), "{err}");
     assert!(
         err.contains(&format!("(pid {})", first.id())) && err.contains("o.0004.exr, frame 4"),
         "{err}"

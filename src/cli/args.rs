@@ -125,6 +125,11 @@ pub struct BlurArgs {
     #[arg(long)]
     pub skip_existing: bool,
 
+    /// Check every input's header and list what each frame would do (write, overwrite, skip,
+    /// redo) and read; read no pixels, write nothing, take no lock.
+    #[arg(long)]
+    pub dry_run: bool,
+
     /// Print a JSON summary on stdout (frames, per-stage seconds, warnings).
     #[arg(long)]
     pub json: bool,

@@ -84,6 +84,20 @@ pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
     let report = result?;
     if args.json {
         out(&(serde_json::to_string_pretty(&report).unwrap_or_default() + "\n"));
+    } else if args.dry_run {
+        // One line a frame: what it would do, its output, and why a redo.
+        let text: String = report
+            .planned
+            .iter()
+            .map(|p| {
+                let frame = p
+                    .frame
+                    .map_or("still".to_string(), |f| format!("frame {f}"));
+                let why = p.why.as_ref().map_or(String::new(), |w| format!(" ({w})"));
+                format!("{frame}: {} {}{why}\n", p.action, p.output.display())
+            })
+            .collect();
+        out(&text);
     } else if verbose || terminal {
         eprintln!(
             "shutter: {} frames written, {} skipped in {:.2} s (read {:.2} s, process {:.2} s, write {:.2} s)",

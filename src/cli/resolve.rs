@@ -160,6 +160,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         },
         output_options,
         skip_existing: args.skip_existing,
+        dry_run: args.dry_run,
         backend: settings.backend,
         max_pixels: settings.max_pixels,
         warnings,

@@ -100,7 +100,7 @@ impl OutputLock {
                                 None => "another process".to_string(),
                             };
                             return Err(Problem::new(
-                                ProblemKind::Output,
+                                ProblemKind::Busy,
                                 output.path(frame),
                                 format!(
                                     "{who} is writing this frame of {} (lock {}); wait for it \

@@ -384,5 +384,7 @@ pub fn write_frame(
             )
         }),
     }
-    .map_err(fail)
+    // The preflight found the place writable: a failure now (a full disk, an I/O error) is
+    // the moment's, and a retry may succeed.
+    .map_err(|detail| Problem::new(ProblemKind::WriteFailed, path, detail).frame(frame_number))
 }
