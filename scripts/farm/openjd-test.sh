@@ -14,6 +14,7 @@
 # must again equal the local run's. Exit 0 when everything holds; the time each step took is
 # printed.
 set -euo pipefail
+trap 'echo "openjd-test: FAIL: line $LINENO: $BASH_COMMAND exited $?" >&2' ERR
 
 root=$(cd "$(dirname "$0")/../.." && pwd)
 cd "$root"
