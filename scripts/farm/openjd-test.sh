@@ -5,14 +5,15 @@
 #
 #   scripts/farm/openjd-test.sh
 #
-# Steps: openjd-cli from PyPI into target/farm/venv (OPENJD_CLI, default 0.8.0: the first with
-# TASK_CHUNKING); shutter built in release; a generated sequence (`shutter scene pan`, FRAMES
-# frames, default 7); `openjd check`; `openjd run` over every frame in chunks of CHUNK (default
-# 3, which does not divide 7); one local `shutter blur` over the same frames; cmp of every
-# output and no stray files (temporary files, locks). Then a retry: one output removed and
-# another cut short, the chunks holding them run again through the template; the outputs
-# must again equal the local run's. Exit 0 when everything holds; the time each step took is
-# printed.
+# Steps: openjd-cli from PyPI into target/farm/venv (OPENJD_CLI, default 0.8.0, the newest in
+# 2026-12, which runs TASK_CHUNKING); shutter built in release; a generated sequence
+# (`shutter scene rotor`, 96x54, FRAMES frames, default 7); `openjd check`; `openjd run` over
+# every frame in chunks of CHUNK (default 3, which does not divide 7); one local
+# `shutter blur` over the same frames (which must change them: a comparison of unblurred
+# copies would prove little); cmp of every output and no stray files (temporary files,
+# locks). Then a retry: one output removed and another cut short, the chunks holding them run
+# again through the template; exactly those two must be rewritten and all outputs must again
+# equal the local run's. Exit 0 when everything holds; each step's time is printed.
 set -euo pipefail
 trap 'echo "openjd-test: FAIL: line $LINENO: $BASH_COMMAND exited $?" >&2' ERR
 
@@ -48,8 +49,8 @@ shutter=$root/target/release/shutter
 rm -rf "$work"
 mkdir -p "$work"
 seq=$work/seq
-step "generating a sequence: pan, 96x54, $FRAMES frames"
-"$shutter" scene pan -o "$seq" --size 96x54 --frames "$FRAMES" --samples 4 >/dev/null
+step "generating a sequence: rotor, 96x54, $FRAMES frames"
+"$shutter" scene rotor -o "$seq" --size 96x54 --frames "$FRAMES" --samples 4 >/dev/null
 
 step "openjd check"
 "$openjd" check "$template"
@@ -74,6 +75,12 @@ echo "openjd-test: chunks run: $(grep -o 'Frame(CHUNK\[INT\]) = .*' "$work/run.l
 step "one local shutter blur over the same frames"
 "$shutter" blur --frames "1-$FRAMES" --color "$seq/color.####.exr" --depth "$seq/depth.####.exr" \
   --velocity "$seq/velocity.####.exr" --algorithm "$ALGORITHM" -o "$work/local/blur.####.exr"
+
+# The comparison proves something only if the blur changes the frames.
+"$shutter" blur --frames 2 --color "$seq/color.####.exr" --algorithm none -o "$work/none/none.####.exr"
+if cmp -s "$work/none/none.0002.exr" "$work/local/blur.0002.exr"; then
+  fail "--algorithm $ALGORITHM left frame 2 as it was: the comparison would prove little"
+fi
 
 # The farm's folder holds exactly the local run's files (no temporary file, lock or probe
 # left), each the same bytes.

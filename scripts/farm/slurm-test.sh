@@ -75,6 +75,12 @@ step "one local shutter blur over frames 1-$FRAMES"
 "$shutter" blur --frames "1-$FRAMES" --color "$seq/color.####.exr" --depth "$seq/depth.####.exr" \
   --velocity "$seq/velocity.####.exr" --algorithm "$ALGORITHM" -o "$work/local/blur.####.exr"
 
+# The comparison proves something only if the blur changes the frames.
+"$shutter" blur --frames 2 --color "$seq/color.####.exr" --algorithm none -o "$work/none/none.####.exr"
+if cmp -s "$work/none/none.0002.exr" "$work/local/blur.0002.exr"; then
+  fail "--algorithm $ALGORITHM left frame 2 as it was: the comparison would prove little"
+fi
+
 # --- the cluster -------------------------------------------------------------------------
 host=$(hostname -s)
 cpus=$(nproc)
