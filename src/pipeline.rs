@@ -158,6 +158,32 @@ fn warn_replaced(
     }
 }
 
+/// What is at a frame's output before the run writes it.
+enum Existing {
+    /// Nothing.
+    None,
+    /// Something, and no --skip-existing: it is overwritten.
+    Kept,
+    /// With --skip-existing, a whole frame of the plan's size and the output's format: skipped.
+    Whole,
+    /// With --skip-existing, something else (empty, cut short, another size): written again.
+    Broken(String),
+}
+
+/// The one judgement of an existing output, for the run and for --dry-run alike.
+fn existing_output(job: &Job, plan: &crate::io::passes::FramePlan, output: &Path) -> Existing {
+    if std::fs::symlink_metadata(output).is_err() {
+        return Existing::None;
+    }
+    if !job.skip_existing {
+        return Existing::Kept;
+    }
+    match existing_frame_problem(output, plan.width, plan.height) {
+        None => Existing::Whole,
+        Some(why) => Existing::Broken(why),
+    }
+}
+
 /// A painted CoC map is read through the depth pass: its problems name it as the user gave
 /// it (`coc-map`), not as `depth`.
 fn name_pass(job: &Job, error: crate::Error) -> crate::Error {
@@ -201,14 +227,11 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     if job.dry_run {
         for plan in &plans {
             let (frame, output) = (plan.frame, job.output.path(plan.frame));
-            let exists = std::fs::symlink_metadata(&output).is_ok();
-            let (action, why) = match (exists, job.skip_existing) {
-                (false, _) => ("write", None),
-                (true, false) => ("overwrite", None),
-                (true, true) => match existing_frame_problem(&output, plan.width, plan.height) {
-                    None => ("skip", None),
-                    Some(why) => ("redo", Some(why)),
-                },
+            let (action, why) = match existing_output(job, plan, &output) {
+                Existing::None => ("write", None),
+                Existing::Kept => ("overwrite", None),
+                Existing::Whole => ("skip", None),
+                Existing::Broken(why) => ("redo", Some(why)),
             };
             let inputs = plan.paths().into_iter().map(Path::to_path_buf).collect();
             report.planned.push(Planned {
@@ -264,22 +287,21 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     let mut todo = Vec::with_capacity(plans.len());
     for plan in plans {
         let (frame, path) = (plan.frame, job.output.path(plan.frame));
-        if job.skip_existing && std::fs::symlink_metadata(&path).is_ok() {
-            match existing_frame_problem(&path, plan.width, plan.height) {
-                None => {
-                    report.frames_skipped += 1;
-                    on_event(Event::Skipped { frame, path });
-                    continue;
-                }
-                Some(why) => {
-                    let at = frame.map_or(String::new(), |f| format!(", frame {f}"));
-                    warn(
-                        &mut report,
-                        on_event,
-                        format!("{}{at} exists but is written again: {why}", path.display()),
-                    );
-                }
+        match existing_output(job, &plan, &path) {
+            Existing::Whole => {
+                report.frames_skipped += 1;
+                on_event(Event::Skipped { frame, path });
+                continue;
             }
+            Existing::Broken(why) => {
+                let at = frame.map_or(String::new(), |f| format!(", frame {f}"));
+                warn(
+                    &mut report,
+                    on_event,
+                    format!("{}{at} exists but is written again: {why}", path.display()),
+                );
+            }
+            Existing::None | Existing::Kept => {}
         }
         todo.push(plan);
     }

@@ -84,16 +84,20 @@ fn dry_run_lists_what_each_frame_would_do_and_touches_nothing() {
     let before = snapshot(dir.path());
     let colour = format!("{}/C.####.exr", dir.path().display());
     let pattern = format!("{}/o.####.exr", out.display());
-    let o = shutter(&[
-        "blur",
-        "--color",
-        &colour,
-        "-o",
-        &pattern,
-        "--skip-existing",
-        "--dry-run",
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let dry_run = |extra: &str| {
+        let o = shutter(&[
+            "blur",
+            "--color",
+            &colour,
+            "-o",
+            &pattern,
+            "--dry-run",
+            extra,
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        o
+    };
+    let o = dry_run("--skip-existing");
     let lines: Vec<String> = stdout(&o).lines().map(String::from).collect();
     let at = |f: u32| out.join(format!("o.{f:04}.exr")).display().to_string();
     assert_eq!(
@@ -105,15 +109,7 @@ fn dry_run_lists_what_each_frame_would_do_and_touches_nothing() {
         ]
     );
     // The JSON form names each frame's inputs.
-    let o = shutter(&[
-        "blur",
-        "--color",
-        &colour,
-        "-o",
-        &pattern,
-        "--dry-run",
-        "--json",
-    ]);
+    let o = dry_run("--json");
     let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let planned = report["planned"].as_array().unwrap();
     assert_eq!(planned.len(), 3);

@@ -13,7 +13,7 @@ use shutter::io::image::ImageFormat;
 use crate::support::malformed::{self, attribute_value, offset_table};
 use crate::support::*;
 
-/// Frames 1..=3 of a small colour sequence `C.####.exr` in `dir`.
+/// Frames 1..=3 of a small colour sequence `C.####.exr` in `dir`: R, G, B of noise, A = 1.
 fn colour_sequence(dir: &Path, w: usize, h: usize, options: ExrOptions) {
     for frame in 1..=3 {
         let n = w * h;
@@ -25,6 +25,7 @@ fn colour_sequence(dir: &Path, w: usize, h: usize, options: ExrOptions) {
                 ("R", noise(n, frame, 0.0, 1.0)),
                 ("G", noise(n, frame + 7, 0.0, 1.0)),
                 ("B", noise(n, frame + 9, 0.0, 1.0)),
+                ("A", vec![1.0; n]),
             ],
             options,
         );
@@ -116,34 +117,34 @@ fn a_frame_above_max_pixels_fails_in_preflight() {
     assert!(o.status.success() && wrote, "{}", stderr(&o));
 }
 
-#[test]
-fn a_png_declaring_400_million_pixels_is_refused_from_its_header() {
-    // A 64×36 PNG whose IHDR (CRC fixed) claims 20000×20000: over the default limit, so it
-    // is refused without decoding.
+/// `bytes`, saved as `name`, are refused from their header as `kind` with a detail holding
+/// `size`, and a run over them exits 1 having written nothing.
+fn refused_from_header(name: &str, bytes: Vec<u8>, kind: ProblemKind, size: &str) {
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("big.png");
-    std::fs::write(&path, malformed::png_declaring(20000)).unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, bytes).unwrap();
     let problem = FileInfo::probe(&path).unwrap_err();
-    assert_eq!(problem.kind, ProblemKind::TooLarge, "{problem}");
-    assert!(problem.detail.contains("20000x20000"), "{problem}");
+    assert_eq!(problem.kind, kind, "{problem}");
+    assert!(problem.detail.contains(size), "{problem}");
     let (o, wrote) = copy_through(dir.path(), &s(&path), "png", &[]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(!wrote);
 }
 
 #[test]
+fn a_png_declaring_400_million_pixels_is_refused_from_its_header() {
+    // A small PNG whose IHDR (CRC fixed) claims 20000×20000: over the default limit, so it
+    // is refused without decoding.
+    let png = malformed::png_declaring(20000);
+    refused_from_header("big.png", png, ProblemKind::TooLarge, "20000x20000");
+}
+
+#[test]
 fn a_jpeg_declaring_more_than_it_holds_is_an_error_not_invented_pixels() {
     // Before: a 776-byte JPEG whose frame header claimed 12000×12000 decoded to 144 million
     // invented pixels (4 GB, exit 0).
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("big.jpg");
-    std::fs::write(&path, malformed::jpeg_declaring(12000)).unwrap();
-    let problem = FileInfo::probe(&path).unwrap_err();
-    assert_eq!(problem.kind, ProblemKind::Corrupt, "{problem}");
-    assert!(problem.detail.contains("12000x12000"), "{problem}");
-    let (o, wrote) = copy_through(dir.path(), &s(&path), "png", &[]);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(!wrote);
+    let jpeg = malformed::jpeg_declaring(12000);
+    refused_from_header("big.jpg", jpeg, ProblemKind::Corrupt, "12000x12000");
 }
 
 #[test]
@@ -297,30 +298,12 @@ fn a_preset_without_colour_channels_is_a_preset_error() {
     assert!(!wrote);
 }
 
-/// Frames 1..=3 of `C.####.exr` with R, G, B, A.
-fn rgba_sequence(dir: &Path) {
-    for frame in 1..=3u32 {
-        let n = 16 * 8;
-        write_exr(
-            &dir.join(format!("C.{frame:04}.exr")),
-            16,
-            8,
-            vec![
-                ("R", noise(n, frame, 0.0, 1.0)),
-                ("G", noise(n, frame + 1, 0.0, 1.0)),
-                ("B", noise(n, frame + 2, 0.0, 1.0)),
-                ("A", vec![1.0; n]),
-            ],
-        );
-    }
-}
-
 #[test]
 fn headers_decoding_would_refuse_stop_the_run_before_any_frame_is_written() {
     // Before: preflight read attributes leniently and did not validate, so frame 1 was
     // written and the run failed at frame 2's decoding.
     let dir = tempfile::tempdir().unwrap();
-    rgba_sequence(dir.path());
+    colour_sequence(dir.path(), 16, 8, ExrOptions::default());
     // Frame 2: a line order out of range.
     let two = dir.path().join("C.0002.exr");
     let mut bytes = std::fs::read(&two).unwrap();
@@ -370,7 +353,7 @@ fn headers_decoding_would_refuse_stop_the_run_before_any_frame_is_written() {
 fn an_inverted_data_window_is_an_error_not_a_size() {
     // Before: `shutter info` printed an inverted data window as if it were valid.
     let dir = tempfile::tempdir().unwrap();
-    rgba_sequence(dir.path());
+    colour_sequence(dir.path(), 16, 8, ExrOptions::default());
     let path = dir.path().join("C.0001.exr");
     let mut bytes = std::fs::read(&path).unwrap();
     let at = attribute_value(&bytes, "dataWindow", "box2i");

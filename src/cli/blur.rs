@@ -15,15 +15,7 @@ pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
         if threads == 0 {
             return Err(Error::usage("--threads must be at least 1"));
         }
-        let limit = super::thread_limit();
-        if threads > limit {
-            return Err(Error::usage(format!(
-                "--threads {threads} is above the limit of {limit} (the larger of {} and this \
-                 machine's cores): more threads than cores only add start-up time, and the \
-                 output is the same for any count",
-                super::MIN_THREAD_LIMIT
-            )));
-        }
+        super::check_threads(threads, "--threads ")?;
         // The exr crate builds its own pool for each parallel write and sizes it from this
         // variable: set it so --threads bounds every pool. Nothing else runs yet.
         std::env::set_var("RAYON_NUM_THREADS", threads.to_string());

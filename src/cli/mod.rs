@@ -66,14 +66,27 @@ pub fn main() -> i32 {
 /// and one per EXR file read or written by the exr crate, sized from RAYON_NUM_THREADS), so a
 /// count far above the cores is pure start-up cost: 1024 threads took 6.6 s for three 64×36
 /// frames on 2 cores, and 5000 did not finish in a minute (issue 17).
-pub const MIN_THREAD_LIMIT: usize = 256;
+const MIN_THREAD_LIMIT: usize = 256;
 
 /// The most worker threads a run may ask for: the larger of [`MIN_THREAD_LIMIT`] and the
 /// cores this machine has. Output does not depend on the count, so the limit changes only
 /// the time a run takes.
-pub fn thread_limit() -> usize {
+fn thread_limit() -> usize {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     MIN_THREAD_LIMIT.max(cores)
+}
+
+/// A thread count, as given (`--threads ` or `RAYON_NUM_THREADS=`), within [`thread_limit`].
+fn check_threads(threads: usize, given_as: &str) -> Result<()> {
+    let limit = thread_limit();
+    if threads > limit {
+        return Err(Error::usage(format!(
+            "{given_as}{threads} is above the limit of {limit} threads (the larger of \
+             {MIN_THREAD_LIMIT} and this machine's cores): more threads than cores only add \
+             start-up time, and the output is the same for any count"
+        )));
+    }
+    Ok(())
 }
 
 /// RAYON_NUM_THREADS above [`thread_limit`] is refused, as `--threads` is: it sizes every
@@ -82,13 +95,9 @@ fn check_thread_variable() -> Result<()> {
     let Ok(value) = std::env::var("RAYON_NUM_THREADS") else {
         return Ok(());
     };
-    let limit = thread_limit();
     match value.trim().parse::<usize>() {
-        Ok(threads) if threads > limit => Err(Error::usage(format!(
-            "RAYON_NUM_THREADS={threads} is above the limit of {limit} threads (the larger of \
-             {MIN_THREAD_LIMIT} and this machine's cores): unset it or lower it"
-        ))),
-        _ => Ok(()),
+        Ok(threads) => check_threads(threads, "RAYON_NUM_THREADS="),
+        Err(_) => Ok(()),
     }
 }
 

@@ -85,16 +85,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
     let mut warnings = warnings;
     warnings.extend(output_warnings(&args.settings.0, format));
     if let Some(layer) = &args.layer {
-        let names = preset
-            .color
-            .channels
-            .iter()
-            .chain(&preset.velocity.channels)
-            .chain(&preset.prev.channels)
-            .chain(&preset.next.channels)
-            .flatten()
-            .chain(&preset.depth.channels);
-        if !names.into_iter().any(|n| n.contains("{layer}")) {
+        if !preset.channel_names().any(|n| n.contains("{layer}")) {
             warnings.push(format!(
                 "--layer {layer}: preset {} names no channel by view layer, so it has no \
                  effect (the blender preset does)",

@@ -292,6 +292,18 @@ impl Preset {
             .map_or(self.name.as_str(), String::as_str)
     }
 
+    /// Every channel name the preset's passes list, alternatives included.
+    pub fn channel_names(&self) -> impl Iterator<Item = &String> {
+        self.color
+            .channels
+            .iter()
+            .chain(&self.velocity.channels)
+            .chain(&self.prev.channels)
+            .chain(&self.next.channels)
+            .flatten()
+            .chain(&self.depth.channels)
+    }
+
     fn validate(&self) -> Result<()> {
         let bad = |what: String| Err(Error::usage(format!("preset {}: {what}", self.name)));
         if self.color.channels.is_empty() {
@@ -301,16 +313,7 @@ impl Preset {
                     .into(),
             );
         }
-        let names = self
-            .color
-            .channels
-            .iter()
-            .chain(&self.velocity.channels)
-            .chain(&self.prev.channels)
-            .chain(&self.next.channels)
-            .flatten()
-            .chain(&self.depth.channels);
-        if names.into_iter().any(|n| n.trim().is_empty()) {
+        if self.channel_names().any(|n| n.trim().is_empty()) {
             return bad("a channel name is empty".into());
         }
         if self
