@@ -529,3 +529,66 @@ y_up = true
     let expected: Vec<f32> = (0..n).map(|k| t.next[0][k] - c[0][k]).collect();
     assert_close(&velocity.x, &expected, 1e-5, "velocity x");
 }
+
+/// A luminance-only EXR (OpenEXR's `Y`, with `A`) reads as grey under any preset, with a
+/// note; one with chroma (`RY`, `BY`) is not grey and is not read as if it were.
+#[test]
+fn a_luminance_only_exr_reads_as_grey_with_a_note() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = W * H;
+    let y: Vec<f32> = (0..n).map(|k| k as f32 * 0.25 - 3.0).collect();
+    let a: Vec<f32> = (0..n).map(|k| (k % 5) as f32 * 0.25).collect();
+    let path = dir.path().join("grey.exr");
+    write_exr(&path, W, H, vec![("A", a.clone()), ("Y", y.clone())]);
+    for name in ["shutter", "blender", "nuke"] {
+        let preset = Preset::builtin(name).unwrap();
+        let options = PlanOptions {
+            preset: &preset,
+            layer: None,
+            needs: Passes::COLOR,
+            max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
+        };
+        let plan = plan_frame(&inputs(&path), None, &options).unwrap_or_else(|p| panic!("{p:?}"));
+        assert!(
+            plan.warnings
+                .iter()
+                .any(|w| w.contains("luminance channel Y as grey")),
+            "{name}: {:?}",
+            plan.warnings
+        );
+        let color = read_frame(&plan).unwrap().color.unwrap();
+        assert_eq!(color.r, y, "{name}");
+        assert_eq!(color.g, y, "{name}");
+        assert_eq!(color.b, y, "{name}");
+        assert_eq!(color.a.as_deref(), Some(&a[..]), "{name}");
+    }
+
+    // Through the CLI: the note among the run's warnings, and R = G = B = Y in the output.
+    let out = dir.path().join("out.exr");
+    let o = shutter(&["blur", "--color", &s(&path), "-o", &s(&out), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert!(
+        report["warnings"].to_string().contains("as grey"),
+        "{}",
+        stdout(&o)
+    );
+    let written = read_exr_reference(&out);
+    for ch in ["R", "G", "B"] {
+        let plane = &written.iter().find(|(n, _)| n == ch).unwrap().1;
+        assert_eq!(plane, &y, "{ch}");
+    }
+
+    // Luminance with chroma is refused, not read as grey.
+    let chroma = dir.path().join("yc.exr");
+    let zero = vec![0.0; n];
+    write_exr(
+        &chroma,
+        W,
+        H,
+        vec![("BY", zero.clone()), ("RY", zero), ("Y", y.clone())],
+    );
+    let o = shutter(&["blur", "--color", &s(&chroma), "-o", &s(&out)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("as grey"), "{}", stderr(&o));
+}

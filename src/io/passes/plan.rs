@@ -112,7 +112,18 @@ pub fn plan_frame(
     // passes looked up in the same file never take R, G, B for vectors.
     let mut claimed: Vec<usize> = Vec::new();
     if let Some(info) = &color_info {
-        match find_channels(info, &preset.color.channels, 3, &[], options.layer) {
+        let mut found = find_channels(info, &preset.color.channels, 3, &[], options.layer);
+        if let Ok(None) = found {
+            if let Some(grey) = luminance(info) {
+                plan.warnings.push(format!(
+                    "colour read from the luminance channel {} as grey (R = G = B = Y): \
+                     the file holds no colour channels the preset names",
+                    info.channels[grey[0].expect("required")].name
+                ));
+                found = Ok(Some(grey));
+            }
+        }
+        match found {
             Ok(Some(found)) => {
                 claimed = found.iter().flatten().copied().collect();
                 if needs.color {
@@ -452,6 +463,18 @@ fn find_channels(
     Ok(None)
 }
 
+/// A luminance-only image's channels as colour (OpenEXR's `Y`, with `A` if present): Y for
+/// each of R, G and B, so it reads as grey. Only for a file with no chroma: a luminance and
+/// chroma image (`Y`, `RY`, `BY`) is not grey, and its subsampled chroma is refused when the
+/// file is probed.
+fn luminance(info: &FileInfo) -> Option<Vec<Option<usize>>> {
+    if info.find("RY").is_some() || info.find("BY").is_some() {
+        return None;
+    }
+    let y = info.find("Y")?;
+    Some(vec![Some(y), Some(y), Some(y), info.find("A")])
+}
+
 /// The values `{layer}` can take in `template` for the channels of this file.
 fn find_layers(info: &FileInfo, template: &str) -> Vec<String> {
     let Some((prefix, suffix)) = template.split_once("{layer}") else {
@@ -476,7 +499,11 @@ fn find_layers(info: &FileInfo, template: &str) -> Vec<String> {
 pub fn passes_found(info: &FileInfo, preset: &Preset) -> Vec<&'static str> {
     let mut found = Vec::new();
     let mut claimed = Vec::new();
-    if let Ok(Some(color)) = find_channels(info, &preset.color.channels, 3, &[], None) {
+    let color = match find_channels(info, &preset.color.channels, 3, &[], None) {
+        Ok(None) => luminance(info),
+        color => color.ok().flatten(),
+    };
+    if let Some(color) = color {
         claimed = color.iter().flatten().copied().collect();
         found.push("color");
     }
