@@ -85,7 +85,8 @@ pub fn process_clean(
 }
 
 /// [`process_clean`] on a backend: the stages that have a GPU twin run on `gpu` when it is
-/// given (today depth of field's `coc`), every other stage on the CPU in the same run.
+/// given (today depth of field's `coc` and tile min/max), every other stage on the CPU in the
+/// same run.
 pub fn process_on(
     algorithm: Algorithm,
     params: &Params,
@@ -96,7 +97,7 @@ pub fn process_on(
     let frame = match (&params.dof, gpu) {
         (Some(dof), None) => crate::dof::apply(frame, dof),
         #[cfg(feature = "gpu")]
-        (Some(dof), Some(gpu)) => crate::dof::apply_with(frame, dof, |f, p| gpu.coc_plane(f, p)),
+        (Some(dof), Some(gpu)) => crate::dof::apply_with(frame, dof, gpu),
         #[cfg(not(feature = "gpu"))]
         (Some(_), Some(gpu)) => match *gpu {},
         (None, _) => frame,

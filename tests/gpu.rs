@@ -190,9 +190,10 @@ mod with_gpu {
             .unwrap_or_else(|e| panic!("{}: {e:?}", path.display()));
             found += 1;
         }
-        assert!(found >= 1, "no .wgsl under {}", dir.display());
+        assert!(found >= 2, "{found} .wgsl under {}", dir.display());
         // What the context compiles is the file on disk.
         assert!(coc::SHADER.contains("fn lens_coc"));
+        assert!(shutter::gpu::tiles::SHADER.contains("fn tile_reach"));
     }
 
     /// Depth values that stress the stage: non-finite, huge, tiny, subnormal, zero, negative,
@@ -439,9 +440,10 @@ mod with_gpu {
         assert!(d.max <= (34.2 + 48.0) * 2f32.powi(-20));
     }
 
-    /// `--backend wgpu` through the CLI gives the CPU's output within the tolerance: only
-    /// the `coc` stage runs on the GPU, the rest on the CPU in the same run. Its CoC differs
-    /// by at most ~1e-4 px (above), which moves a gather weight by as little; a pixel can
+    /// `--backend wgpu` through the CLI gives the CPU's output within the tolerance: the `coc`
+    /// and tile min/max stages run on the GPU, the rest on the CPU in the same run. The tiles
+    /// are exact for a given CoC plane (above); the CoC differs by at most ~1e-4 px (above),
+    /// which moves a gather weight by as little; a pixel can
     /// differ more only where a CoC sits on a threshold (in focus at ε, a tile's reach, the
     /// near/far layer test), which the smooth depths of `layers` make rare. Bound: colour
     /// differences ≤ 1e-3 of the frame's range at every pixel, both methods.
@@ -489,6 +491,185 @@ mod with_gpu {
                 );
             }
         }
+    }
+
+    // ---- The tile stages: max/min reductions, exact ----
+
+    /// Where two planes differ bit for bit (−0 and +0 differ; NaN equals a NaN of the same
+    /// bits).
+    fn differing(gpu: &[f32], cpu: &[f32]) -> Vec<usize> {
+        assert_eq!(gpu.len(), cpu.len());
+        (0..gpu.len())
+            .filter(|&i| gpu[i].to_bits() != cpu[i].to_bits())
+            .collect()
+    }
+
+    /// Depth of field's tile min/max twin against `tiles`: on the CoC planes of the stress
+    /// depth frames under several lenses, on signed noise (near and far fields meeting), on
+    /// planes with NaN and subnormal values, on uniform and in-focus planes, with ε from 0 to
+    /// 4 px.
+    ///
+    /// Tolerance: none — every tile's reach, own radius and far-only flag equal the CPU's bit
+    /// for bit. Each is a max, a min or a comparison of input values halved (exact) or plus
+    /// one (correctly rounded in WGSL), and the distances between tiles come from the CPU's
+    /// own `gap_distance`. The one case a GPU may differ (a CoC below 2⁻¹²⁵ px, whose half a
+    /// GPU may flush to zero) matters only with ε = 0, so the planes with subnormal values run
+    /// with ε > 0.
+    #[test]
+    fn dof_tiles_match_the_cpu_exactly_on_lenses_stress_and_noise() {
+        let Some(gpu) = gpu() else { return };
+        use shutter::dof::gather::tiles;
+        let mut planes: Vec<(String, usize, usize, Vec<f32>, f32)> = Vec::new();
+        let lenses = [
+            (50.0, 2.0, 2.0, 48.0),
+            (85.0, 1.4, 3.0, 200.0),
+            (35.0, 1.2, 0.5, 512.0),
+        ];
+        for (k, &(w, h)) in [(37, 23), (64, 48), (101, 7), (250, 130)]
+            .iter()
+            .enumerate()
+        {
+            for (j, &(focal_mm, f_number, focus, max_coc)) in lenses.iter().enumerate() {
+                let lens = Lens {
+                    focal_mm,
+                    f_number,
+                    focus,
+                    sensor_mm: 36.0,
+                };
+                let params = DofParams {
+                    max_coc,
+                    ..DofParams::new(CocSource::Lens(lens))
+                };
+                let frame = depth_frame(w, h, 70 + k as u32, focus as f32);
+                let coc = coc_plane(&frame, &params);
+                let epsilon = [1.0, 0.0, 4.0][j];
+                planes.push((format!("lens {j} {w}x{h}"), w, h, coc, epsilon));
+            }
+            // Signed noise: near and far fields side by side, with NaN, subnormals, signed
+            // zeros, exact layer boundaries, and radii whose reach (r + 1 px) is exactly a
+            // whole gap between tiles (15 + 1 = 16, 31 + 1 = 32).
+            let mut coc = noise(w * h, 80 + k as u32, -60.0, 60.0);
+            let specials = [
+                f32::NAN,
+                -f32::NAN,
+                1e-40,
+                -1e-40,
+                0.0,
+                -0.0,
+                1.0,
+                -1.0,
+                2.0,
+                30.0,
+                -30.0,
+                62.0,
+                60.0,
+                -60.0,
+            ];
+            for (i, v) in specials.iter().cycle().take(w * h / 9).enumerate() {
+                coc[(i * 9 + k) % (w * h)] = *v;
+            }
+            planes.push((format!("noise {w}x{h}"), w, h, coc, 1.0));
+            // Mostly in focus, with a few out-of-focus islands.
+            let coc: Vec<f32> = noise(w * h, 90 + k as u32, -1.0, 1.0)
+                .into_iter()
+                .enumerate()
+                .map(|(i, v)| if i % 97 == 0 { v * 90.0 } else { v * 0.4 })
+                .collect();
+            planes.push((format!("islands {w}x{h}"), w, h, coc, 1.0));
+            // In focus but for single pixels whose reach is exactly a whole gap between tiles
+            // (radius 15 reaches 16 px, two tiles away; 31 reaches 32 px, three away), sparse
+            // enough that these thresholds decide the reach of the tiles around them.
+            let columns = w.div_ceil(16);
+            let mut coc = vec![0.2; w * h];
+            for (i, v) in coc.iter_mut().enumerate() {
+                let (x, y) = (i % w, i / w);
+                let (tx, ty) = (x / 16, y / 16);
+                if x % 16 == 0 && y % 16 == 0 && (tx + 3 * ty) % 7 == 0 {
+                    *v = [30.0, -30.0, 62.0, -62.0][(ty * columns + tx) % 4];
+                }
+            }
+            planes.push((format!("thresholds {w}x{h}"), w, h, coc, 1.0));
+            planes.push((format!("uniform {w}x{h}"), w, h, vec![12.0; w * h], 1.0));
+            planes.push((format!("in focus {w}x{h}"), w, h, vec![0.2; w * h], 1.0));
+            // A tile of nothing but NaN (the CPU's +∞/−∞ starts).
+            let mut coc = noise(w * h, 95, -8.0, 8.0);
+            for y in 0..h.min(16) {
+                for x in 0..w.min(16) {
+                    coc[y * w + x] = f32::NAN;
+                }
+            }
+            planes.push((format!("NaN tile {w}x{h}"), w, h, coc, 1.0));
+        }
+        let (mut count, mut far, mut near, mut reached) = (0, 0, 0, 0);
+        for (what, w, h, coc, epsilon) in &planes {
+            let cpu = tiles(coc, *w, *h, *epsilon);
+            let got = gpu
+                .try_tiles(coc, *w, *h, *epsilon)
+                .expect("the GPU stage runs");
+            for (name, g, c) in [
+                ("reach", &got.reach, &cpu.reach),
+                ("own", &got.own, &cpu.own),
+            ] {
+                let d = differing(g, c);
+                assert!(
+                    d.is_empty(),
+                    "{what} ε {epsilon}: {name} differs at {} tiles, first {}: GPU {} CPU {}",
+                    d.len(),
+                    d[0],
+                    g[d[0]],
+                    c[d[0]]
+                );
+            }
+            let d: Vec<usize> = (0..cpu.far_only.len())
+                .filter(|&t| got.far_only[t] != cpu.far_only[t])
+                .collect();
+            assert!(
+                d.is_empty(),
+                "{what} ε {epsilon}: far_only differs at {d:?}"
+            );
+            count += cpu.reach.len();
+            far += cpu.far_only.iter().filter(|&&f| f).count();
+            near += cpu.far_only.iter().filter(|&&f| !f).count();
+            reached += (0..cpu.reach.len())
+                .filter(|&t| cpu.reach[t] > cpu.own[t])
+                .count();
+        }
+        // The planes exercise both answers of the flag and reaches beyond a tile's own.
+        assert!(
+            far > 100 && near > 100 && reached > 100,
+            "{far} {near} {reached}"
+        );
+        let _ = writeln!(
+            std::io::stderr(),
+            "gpu: dof tiles: {count} tiles over {} planes, bit for bit",
+            planes.len()
+        );
+    }
+
+    /// Depth of field's tile min/max at 1920×1080 with CoC up to 48 px, printed (benchmarks
+    /// measure, tests assert).
+    #[test]
+    fn dof_tiles_at_1080p_print_their_time() {
+        let Some(gpu) = gpu() else { return };
+        use shutter::dof::gather::tiles;
+        let (w, h) = (1920, 1080);
+        let coc = noise(w * h, 4, -48.0, 48.0);
+        let mut got = None;
+        let gpu_ms = milliseconds(&mut || got = Some(gpu.tiles(&coc, w, h, 1.0)));
+        let cpu_ms = milliseconds(&mut || drop(tiles(&coc, w, h, 1.0)));
+        let _ = writeln!(
+            std::io::stderr(),
+            "gpu: dof tiles 1920x1080 upload+dispatch+readback {gpu_ms:.2} ms (cpu {cpu_ms:.2} ms)"
+        );
+        assert_eq!(got.unwrap(), tiles(&coc, w, h, 1.0));
+    }
+
+    /// The time of a second call of `f` (the first makes the buffers), in milliseconds.
+    fn milliseconds(f: &mut dyn FnMut()) -> f64 {
+        f();
+        let start = std::time::Instant::now();
+        f();
+        start.elapsed().as_secs_f64() * 1e3
     }
 
     /// `auto` never takes a software driver: with only lavapipe it runs on the CPU.

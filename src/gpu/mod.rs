@@ -2,11 +2,15 @@
 //! reused across frames, and one module per pass stage beside its `.wgsl` twin, under the CPU
 //! stage's name (vello's `cpu/` and `shader/` pairing):
 //!
-//! - [`coc`] + `coc.wgsl`: depth of field's `coc` stage, twin of [`crate::dof::coc_plane`].
+//! - [`coc`] + `coc.wgsl`: depth of field's `coc` stage, twin of [`crate::dof::coc_plane`];
+//! - [`tiles`] + `tiles.wgsl`: depth of field's tile min/max, twin of
+//!   [`crate::dof::gather::tiles`];
+//! - `stage`: what they share (bindings config → inputs → outputs, buffers kept per size).
 //!
 //! The CPU passes are the reference; each twin has a parity test against them
 //! (tests/gpu.rs) with its tolerance stated and justified beside it. Stages without a twin
-//! yet run on the CPU in the same run (this slice of issue 15: only `coc` runs on the GPU).
+//! yet run on the CPU in the same run. Depth of field's `coc` and tile min/max run on the GPU
+//! under `--backend wgpu` ([`crate::dof::Stages`]).
 //!
 //! The backend is a run's choice ([`Backend`], `--backend cpu|wgpu|auto`):
 //! - `cpu` never touches wgpu;
@@ -29,6 +33,13 @@ use serde::Serialize;
 pub mod coc;
 #[cfg(feature = "gpu")]
 mod context;
+#[cfg(feature = "gpu")]
+mod stage;
+#[cfg(feature = "gpu")]
+pub mod tiles;
+
+#[cfg(feature = "gpu")]
+pub use stage::StageError;
 
 #[cfg(feature = "gpu")]
 pub use context::{Gpu, Need};
