@@ -30,6 +30,9 @@ pub struct Gpu {
     /// The compiled stages, one per WGSL twin, each with its buffers by size.
     pub(crate) coc: Stage,
     pub(crate) tiles: Stage,
+    pub(crate) tile_max: Stage,
+    pub(crate) neighbor_max: Stage,
+    pub(crate) dilate: Stage,
     /// Stages with a twin that ran on the CPU for a frame (see [`Gpu::note_cpu_stage`]).
     stages_on_cpu: AtomicU64,
 }
@@ -151,6 +154,9 @@ impl Gpu {
         Ok(Gpu {
             coc: super::coc::stage(&device),
             tiles: super::tiles::stage(&device),
+            tile_max: super::tile_max::stage(&device),
+            neighbor_max: super::neighbor_max::stage(&device),
+            dilate: super::dilate::stage(&device),
             device,
             queue,
             info,
@@ -219,5 +225,34 @@ impl crate::dof::Stages for Gpu {
         epsilon: f32,
     ) -> crate::dof::gather::Tiles {
         Gpu::tiles(self, coc, width, height, epsilon)
+    }
+}
+
+/// Reconstruct's tile stages run here (each falls back to the CPU stage, counted, where the
+/// GPU cannot run it).
+impl crate::motion::TileStages for Gpu {
+    fn tile_max(
+        &self,
+        vx: &[f32],
+        vy: &[f32],
+        width: usize,
+        height: usize,
+        size: usize,
+    ) -> crate::motion::tile_max::TileGrid {
+        Gpu::tile_max(self, vx, vy, width, height, size)
+    }
+
+    fn neighbor_max(
+        &self,
+        tiles: &crate::motion::tile_max::TileGrid,
+    ) -> crate::motion::tile_max::TileGrid {
+        Gpu::neighbor_max(self, tiles)
+    }
+
+    fn dilate(
+        &self,
+        tiles: &crate::motion::tile_max::TileGrid,
+    ) -> crate::motion::tile_max::TileGrid {
+        Gpu::dilate(self, tiles)
     }
 }
