@@ -104,13 +104,22 @@ pub fn process_on(
     };
     let shutter = numeric::shutter(params.shutter);
     match algorithm {
-        Algorithm::Reconstruct => reconstruct::reconstruct(
-            frame,
-            &params.reconstruct,
-            shutter,
-            // Frame numbers seed the jitter modulo 2³² (the hash is 32-bit).
-            frame_number as u32,
-        ),
+        // Frame numbers seed the jitter modulo 2³² (the hash is 32-bit).
+        Algorithm::Reconstruct => match gpu {
+            None => {
+                reconstruct::reconstruct(frame, &params.reconstruct, shutter, frame_number as u32)
+            }
+            #[cfg(feature = "gpu")]
+            Some(gpu) => reconstruct::reconstruct_with(
+                frame,
+                &params.reconstruct,
+                shutter,
+                frame_number as u32,
+                gpu,
+            ),
+            #[cfg(not(feature = "gpu"))]
+            Some(gpu) => match *gpu {},
+        },
         Algorithm::Scatter => scatter::scatter(frame, &params.scatter, shutter),
         Algorithm::Stretch => stretch::stretch(frame, &params.stretch, shutter),
         Algorithm::None => Frame {

@@ -1108,6 +1108,51 @@ mod with_gpu {
         assert_eq!(neighbors.unwrap(), neighbor_max(&grid));
     }
 
+    /// `blur --algorithm reconstruct --backend wgpu` writes the CPU's bytes: its tile stages
+    /// run on the GPU and are exact (above), every other stage runs on the CPU, so the output
+    /// cannot differ. Every variant: paper and dual take neighbor_max, 2014 and exposure take
+    /// dilate.
+    #[test]
+    fn reconstruct_on_wgpu_writes_the_cpu_s_bytes() {
+        let Some(_gpu) = gpu() else { return };
+        let dir = small_scene("rotor", 96, 54, 1, 1);
+        let pattern = |role: &str| role_pattern(dir.path(), role);
+        for variant in ["paper", "dual", "2014", "exposure"] {
+            let mut bytes = Vec::new();
+            for backend in ["cpu", "wgpu"] {
+                let out = dir.path().join(format!("{variant}-{backend}.####.exr"));
+                let o = shutter(&[
+                    "blur",
+                    "--algorithm",
+                    "reconstruct",
+                    "--variant",
+                    variant,
+                    "--color",
+                    &pattern("color"),
+                    "--depth",
+                    &pattern("depth"),
+                    "--velocity",
+                    &pattern("velocity"),
+                    "-o",
+                    &s(&out),
+                    "--backend",
+                    backend,
+                    "--json",
+                ]);
+                assert!(o.status.success(), "{variant} {backend}: {}", stderr(&o));
+                let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+                assert_eq!(json["backend"]["used"], backend, "{json}");
+                assert_eq!(json["backend"]["stages_on_cpu"], 0, "{json}");
+                let written = dir.path().join(format!("{variant}-{backend}.0001.exr"));
+                bytes.push(std::fs::read(written).unwrap());
+            }
+            assert!(
+                bytes[0] == bytes[1],
+                "{variant}: the GPU run wrote other bytes"
+            );
+        }
+    }
+
     /// `auto` never takes a software driver: with only lavapipe it runs on the CPU.
     #[test]
     fn auto_never_takes_a_software_driver() {
