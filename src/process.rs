@@ -85,7 +85,8 @@ pub fn process_clean(
 }
 
 /// [`process_clean`] on a backend: the stages that have a GPU twin run on `gpu` when it is
-/// given (today depth of field's `coc`), every other stage on the CPU in the same run.
+/// given (today depth of field's `coc` and tile min/max), every other stage on the CPU in the
+/// same run.
 pub fn process_on(
     algorithm: Algorithm,
     params: &Params,
@@ -96,20 +97,29 @@ pub fn process_on(
     let frame = match (&params.dof, gpu) {
         (Some(dof), None) => crate::dof::apply(frame, dof),
         #[cfg(feature = "gpu")]
-        (Some(dof), Some(gpu)) => crate::dof::apply_with(frame, dof, |f, p| gpu.coc_plane(f, p)),
+        (Some(dof), Some(gpu)) => crate::dof::apply_with(frame, dof, gpu),
         #[cfg(not(feature = "gpu"))]
         (Some(_), Some(gpu)) => match *gpu {},
         (None, _) => frame,
     };
     let shutter = numeric::shutter(params.shutter);
     match algorithm {
-        Algorithm::Reconstruct => reconstruct::reconstruct(
-            frame,
-            &params.reconstruct,
-            shutter,
-            // Frame numbers seed the jitter modulo 2³² (the hash is 32-bit).
-            frame_number as u32,
-        ),
+        // Frame numbers seed the jitter modulo 2³² (the hash is 32-bit).
+        Algorithm::Reconstruct => match gpu {
+            None => {
+                reconstruct::reconstruct(frame, &params.reconstruct, shutter, frame_number as u32)
+            }
+            #[cfg(feature = "gpu")]
+            Some(gpu) => reconstruct::reconstruct_with(
+                frame,
+                &params.reconstruct,
+                shutter,
+                frame_number as u32,
+                gpu,
+            ),
+            #[cfg(not(feature = "gpu"))]
+            Some(gpu) => match *gpu {},
+        },
         Algorithm::Scatter => scatter::scatter(frame, &params.scatter, shutter),
         Algorithm::Stretch => stretch::stretch(frame, &params.stretch, shutter),
         Algorithm::None => Frame {

@@ -131,6 +131,8 @@ mod with_gpu {
     use shutter::dof::{coc_plane, CocSource, DofParams, Lens};
     use shutter::frame::Frame;
     use shutter::gpu::{Gpu, Need};
+    use shutter::motion::neighbor_max::neighbor_max;
+    use shutter::motion::tile_max::{tile_max, TileGrid};
     use std::io::Write;
     use std::sync::OnceLock;
 
@@ -190,9 +192,13 @@ mod with_gpu {
             .unwrap_or_else(|e| panic!("{}: {e:?}", path.display()));
             found += 1;
         }
-        assert!(found >= 1, "no .wgsl under {}", dir.display());
+        assert!(found >= 5, "{found} .wgsl under {}", dir.display());
         // What the context compiles is the file on disk.
         assert!(coc::SHADER.contains("fn lens_coc"));
+        assert!(shutter::gpu::tiles::SHADER.contains("fn tile_reach"));
+        assert!(shutter::gpu::tile_max::SHADER.contains("struct TileMaxConfig"));
+        assert!(shutter::gpu::neighbor_max::SHADER.contains("struct NeighborMaxConfig"));
+        assert!(shutter::gpu::dilate::SHADER.contains("struct SourceTile"));
     }
 
     /// Depth values that stress the stage: non-finite, huge, tiny, subnormal, zero, negative,
@@ -439,9 +445,10 @@ mod with_gpu {
         assert!(d.max <= (34.2 + 48.0) * 2f32.powi(-20));
     }
 
-    /// `--backend wgpu` through the CLI gives the CPU's output within the tolerance: only
-    /// the `coc` stage runs on the GPU, the rest on the CPU in the same run. Its CoC differs
-    /// by at most ~1e-4 px (above), which moves a gather weight by as little; a pixel can
+    /// `--backend wgpu` through the CLI gives the CPU's output within the tolerance: the `coc`
+    /// and tile min/max stages run on the GPU, the rest on the CPU in the same run. The tiles
+    /// are exact for a given CoC plane (above); the CoC differs by at most ~1e-4 px (above),
+    /// which moves a gather weight by as little; a pixel can
     /// differ more only where a CoC sits on a threshold (in focus at ε, a tile's reach, the
     /// near/far layer test), which the smooth depths of `layers` make rare. Bound: colour
     /// differences ≤ 1e-3 of the frame's range at every pixel, both methods.
@@ -488,6 +495,661 @@ mod with_gpu {
                     hi - lo
                 );
             }
+        }
+    }
+
+    // ---- The tile stages: max/min reductions, exact or nearly ----
+
+    /// Where two planes differ bit for bit (−0 and +0 differ; NaN equals a NaN of the same
+    /// bits).
+    fn differing(gpu: &[f32], cpu: &[f32]) -> Vec<usize> {
+        assert_eq!(gpu.len(), cpu.len());
+        (0..gpu.len())
+            .filter(|&i| gpu[i].to_bits() != cpu[i].to_bits())
+            .collect()
+    }
+
+    /// Depth of field's tile min/max twin against `tiles`: on the CoC planes of the stress
+    /// depth frames under several lenses, on signed noise (near and far fields meeting), on
+    /// planes with NaN and subnormal values, on uniform and in-focus planes, with ε from 0 to
+    /// 4 px.
+    ///
+    /// Tolerance: none — every tile's reach, own radius and far-only flag equal the CPU's bit
+    /// for bit. Each is a max, a min or a comparison of input values halved (exact) or plus
+    /// one (correctly rounded in WGSL), and the distances between tiles come from the CPU's
+    /// own `gap_distance`. The one case a GPU may differ (a CoC below 2⁻¹²⁵ px, whose half a
+    /// GPU may flush to zero) matters only with ε = 0, so the planes with subnormal values run
+    /// with ε > 0.
+    #[test]
+    fn dof_tiles_match_the_cpu_exactly_on_lenses_stress_and_noise() {
+        let Some(gpu) = gpu() else { return };
+        use shutter::dof::gather::tiles;
+        let mut planes: Vec<(String, usize, usize, Vec<f32>, f32)> = Vec::new();
+        let lenses = [
+            (50.0, 2.0, 2.0, 48.0),
+            (85.0, 1.4, 3.0, 200.0),
+            (35.0, 1.2, 0.5, 512.0),
+        ];
+        for (k, &(w, h)) in [(37, 23), (64, 48), (101, 7), (250, 130)]
+            .iter()
+            .enumerate()
+        {
+            for (j, &(focal_mm, f_number, focus, max_coc)) in lenses.iter().enumerate() {
+                let lens = Lens {
+                    focal_mm,
+                    f_number,
+                    focus,
+                    sensor_mm: 36.0,
+                };
+                let params = DofParams {
+                    max_coc,
+                    ..DofParams::new(CocSource::Lens(lens))
+                };
+                let frame = depth_frame(w, h, 70 + k as u32, focus as f32);
+                let coc = coc_plane(&frame, &params);
+                let epsilon = [1.0, 0.0, 4.0][j];
+                planes.push((format!("lens {j} {w}x{h}"), w, h, coc, epsilon));
+            }
+            // Signed noise: near and far fields side by side, with NaN, subnormals, signed
+            // zeros, exact layer boundaries, and radii whose reach (r + 1 px) is exactly a
+            // whole gap between tiles (15 + 1 = 16, 31 + 1 = 32).
+            let mut coc = noise(w * h, 80 + k as u32, -60.0, 60.0);
+            let specials = [
+                f32::NAN,
+                -f32::NAN,
+                1e-40,
+                -1e-40,
+                0.0,
+                -0.0,
+                1.0,
+                -1.0,
+                2.0,
+                30.0,
+                -30.0,
+                62.0,
+                60.0,
+                -60.0,
+            ];
+            for (i, v) in specials.iter().cycle().take(w * h / 9).enumerate() {
+                coc[(i * 9 + k) % (w * h)] = *v;
+            }
+            planes.push((format!("noise {w}x{h}"), w, h, coc, 1.0));
+            // Mostly in focus, with a few out-of-focus islands.
+            let coc: Vec<f32> = noise(w * h, 90 + k as u32, -1.0, 1.0)
+                .into_iter()
+                .enumerate()
+                .map(|(i, v)| if i % 97 == 0 { v * 90.0 } else { v * 0.4 })
+                .collect();
+            planes.push((format!("islands {w}x{h}"), w, h, coc, 1.0));
+            // In focus but for single pixels whose reach is exactly a whole gap between tiles
+            // (radius 15 reaches 16 px, two tiles away; 31 reaches 32 px, three away), sparse
+            // enough that these thresholds decide the reach of the tiles around them.
+            let columns = w.div_ceil(16);
+            let mut coc = vec![0.2; w * h];
+            for (i, v) in coc.iter_mut().enumerate() {
+                let (x, y) = (i % w, i / w);
+                let (tx, ty) = (x / 16, y / 16);
+                if x % 16 == 0 && y % 16 == 0 && (tx + 3 * ty) % 7 == 0 {
+                    *v = [30.0, -30.0, 62.0, -62.0][(ty * columns + tx) % 4];
+                }
+            }
+            planes.push((format!("thresholds {w}x{h}"), w, h, coc, 1.0));
+            planes.push((format!("uniform {w}x{h}"), w, h, vec![12.0; w * h], 1.0));
+            planes.push((format!("in focus {w}x{h}"), w, h, vec![0.2; w * h], 1.0));
+            // A tile of nothing but NaN (the CPU's +∞/−∞ starts).
+            let mut coc = noise(w * h, 95, -8.0, 8.0);
+            for y in 0..h.min(16) {
+                for x in 0..w.min(16) {
+                    coc[y * w + x] = f32::NAN;
+                }
+            }
+            planes.push((format!("NaN tile {w}x{h}"), w, h, coc, 1.0));
+        }
+        let (mut count, mut far, mut near, mut reached) = (0, 0, 0, 0);
+        for (what, w, h, coc, epsilon) in &planes {
+            let cpu = tiles(coc, *w, *h, *epsilon);
+            let got = gpu
+                .try_tiles(coc, *w, *h, *epsilon)
+                .expect("the GPU stage runs");
+            for (name, g, c) in [
+                ("reach", &got.reach, &cpu.reach),
+                ("own", &got.own, &cpu.own),
+            ] {
+                let d = differing(g, c);
+                assert!(
+                    d.is_empty(),
+                    "{what} ε {epsilon}: {name} differs at {} tiles, first {}: GPU {} CPU {}",
+                    d.len(),
+                    d[0],
+                    g[d[0]],
+                    c[d[0]]
+                );
+            }
+            let d: Vec<usize> = (0..cpu.far_only.len())
+                .filter(|&t| got.far_only[t] != cpu.far_only[t])
+                .collect();
+            assert!(
+                d.is_empty(),
+                "{what} ε {epsilon}: far_only differs at {d:?}"
+            );
+            count += cpu.reach.len();
+            far += cpu.far_only.iter().filter(|&&f| f).count();
+            near += cpu.far_only.iter().filter(|&&f| !f).count();
+            reached += (0..cpu.reach.len())
+                .filter(|&t| cpu.reach[t] > cpu.own[t])
+                .count();
+        }
+        // The planes exercise both answers of the flag and reaches beyond a tile's own.
+        assert!(
+            far > 100 && near > 100 && reached > 100,
+            "{far} {near} {reached}"
+        );
+        let _ = writeln!(
+            std::io::stderr(),
+            "gpu: dof tiles: {count} tiles over {} planes, bit for bit",
+            planes.len()
+        );
+    }
+
+    /// Depth of field's tile min/max at 1920×1080 with CoC up to 48 px, printed (benchmarks
+    /// measure, tests assert).
+    #[test]
+    fn dof_tiles_at_1080p_print_their_time() {
+        let Some(gpu) = gpu() else { return };
+        use shutter::dof::gather::tiles;
+        let (w, h) = (1920, 1080);
+        let coc = noise(w * h, 4, -48.0, 48.0);
+        let mut got = None;
+        let gpu_ms = milliseconds(&mut || got = Some(gpu.tiles(&coc, w, h, 1.0)));
+        let cpu_ms = milliseconds(&mut || drop(tiles(&coc, w, h, 1.0)));
+        let _ = writeln!(
+            std::io::stderr(),
+            "gpu: dof tiles 1920x1080 upload+dispatch+readback {gpu_ms:.2} ms (cpu {cpu_ms:.2} ms)"
+        );
+        assert_eq!(got.unwrap(), tiles(&coc, w, h, 1.0));
+    }
+
+    /// The time of a second call of `f` (the first makes the buffers), in milliseconds.
+    fn milliseconds(f: &mut dyn FnMut()) -> f64 {
+        f();
+        let start = std::time::Instant::now();
+        f();
+        start.elapsed().as_secs_f64() * 1e3
+    }
+
+    /// |v|² as the CPU computes it (f32), and exactly (f64).
+    fn magnitude(v: (f32, f32)) -> (f32, f64) {
+        let exact = (v.0 as f64).powi(2) + (v.1 as f64).powi(2);
+        (v.0 * v.0 + v.1 * v.1, exact)
+    }
+
+    /// Whether the GPU may have chosen `gpu` where the CPU chose `cpu` among `candidates` (the
+    /// vectors the stage compared) without being wrong, as tile_max.wgsl says: the GPU's
+    /// vector must be one of the candidates (bit for bit), and either
+    /// - both |v|² are below the smallest normal f32 (2⁻¹²⁶ px², |v| < 1.1e-19 px): a GPU may
+    ///   flush them to zero, after which neither wins over a still pixel; or
+    /// - the two |v|² are within a rounding of each other (relative 2⁻²², four times the f32
+    ///   rounding) and a square is inexact in f32: an fma leaves one square unrounded, which
+    ///   moves the sum by at most a rounding. Exact ties of exact squares ((3, 4) and (4, 3))
+    ///   must go to the first, as on the CPU.
+    ///
+    /// `None` when neither holds (a wrong answer), else whether it was the flush.
+    fn near_tie(gpu: (f32, f32), cpu: (f32, f32), candidates: &[(f32, f32)]) -> Option<bool> {
+        let bits = |v: (f32, f32)| (v.0.to_bits(), v.1.to_bits());
+        if !candidates.iter().any(|&c| bits(c) == bits(gpu)) && bits(gpu) != (0, 0) {
+            return None;
+        }
+        let ((g32, g), (c32, c)) = (magnitude(gpu), magnitude(cpu));
+        let tiny = |m: f32| m < f32::MIN_POSITIVE;
+        let inexact = |v: (f32, f32)| {
+            [v.0, v.1]
+                .iter()
+                .any(|&a| (a * a) as f64 != (a as f64) * (a as f64))
+        };
+        if tiny(g32) && tiny(c32) {
+            Some(true)
+        } else if (inexact(gpu) || inexact(cpu)) && (g - c).abs() <= c.max(g) * 2f64.powi(-22) {
+            Some(false)
+        } else {
+            None
+        }
+    }
+
+    /// Velocity components that stress the tile stages: non-finite, huge, the numeric policy's
+    /// limit, subnormal, squares that are subnormal, signed zeros, and vectors of equal
+    /// length (ties, which the first in order wins).
+    fn stress_velocities() -> Vec<(f32, f32)> {
+        vec![
+            (f32::NAN, 0.0),
+            (3.0, -f32::NAN),
+            (f32::INFINITY, 0.0),
+            (0.0, f32::NEG_INFINITY),
+            (f32::INFINITY, f32::INFINITY),
+            (1e30, -1e30),
+            (f32::MAX, 1.0),
+            (f32::MIN, f32::MIN),
+            (1e7, -1e7),
+            (1e-40, 0.0),
+            (0.0, -1e-20),
+            (1e-20, 1e-20),
+            (-0.0, 0.0),
+            (0.0, -0.0),
+            (3.0, 4.0),
+            (4.0, 3.0),
+            (-5.0, 0.0),
+            (0.0, 5.0),
+            (37.0, 0.0),
+            (0.0, -37.0),
+        ]
+    }
+
+    /// A `w`×`h` velocity field: noise in ±`range` px with the stress vectors through it.
+    fn velocity_frame(w: usize, h: usize, seed: u32, range: f32) -> (Vec<f32>, Vec<f32>) {
+        let n = w * h;
+        let mut vx = noise(n, seed, -range, range);
+        let mut vy = noise(n, seed ^ 0x5555, -range, range);
+        for (k, v) in stress_velocities()
+            .into_iter()
+            .cycle()
+            .take(n / 5)
+            .enumerate()
+        {
+            let i = (k * 5 + seed as usize) % n;
+            (vx[i], vy[i]) = v;
+        }
+        (vx, vy)
+    }
+
+    /// The tile grid's vector at tile `t`.
+    fn at(grid: &TileGrid, t: usize) -> (f32, f32) {
+        (grid.x[t], grid.y[t])
+    }
+
+    /// Tiles where a GPU's answer differs from the CPU's without being wrong ([`near_tie`]).
+    #[derive(Default)]
+    struct Ties {
+        /// Both |v|² below 2⁻¹²⁶ px²: flushed.
+        flushed: usize,
+        /// Within a rounding, with an inexact square: an fma.
+        rounding: usize,
+    }
+
+    /// Compares a GPU grid with the CPU's: every tile bit for bit, or a near tie among the
+    /// tile's `candidates(t)`. Adds the near ties to `ties`; panics on anything else.
+    fn compare_grids(
+        what: &str,
+        gpu: &TileGrid,
+        cpu: &TileGrid,
+        candidates: impl Fn(usize) -> Vec<(f32, f32)>,
+        ties: &mut Ties,
+    ) {
+        assert_eq!(
+            (gpu.columns, gpu.rows, gpu.size),
+            (cpu.columns, cpu.rows, cpu.size)
+        );
+        let mut tiles: Vec<usize> = differing(&gpu.x, &cpu.x);
+        tiles.extend(differing(&gpu.y, &cpu.y));
+        tiles.sort_unstable();
+        tiles.dedup();
+        for t in tiles {
+            let (g, c) = (at(gpu, t), at(cpu, t));
+            match near_tie(g, c, &candidates(t)) {
+                Some(true) => ties.flushed += 1,
+                Some(false) => ties.rounding += 1,
+                None => panic!(
+                    "{what}: tile {t} ({}, {}): GPU {g:?}, CPU {c:?}",
+                    t % cpu.columns,
+                    t / cpu.columns
+                ),
+            }
+        }
+    }
+
+    /// The `tile_max` twin against the CPU's, on noise with the stress vectors, raw and
+    /// through the numeric policy (as reconstruct receives them), over sizes off every tile
+    /// grid and tile sizes from 1 px to larger than the frame.
+    ///
+    /// Tolerance: exact. TileMax only selects: each tile's output is one of its input vectors,
+    /// bit for bit, chosen by comparing |v|² = x·x + y·y, which WGSL rounds as Rust does. Two
+    /// things a GPU may do differently, both allowed by WGSL and neither a wrong answer: fuse
+    /// the multiply and add into an fma, and flush subnormals to zero. Each can only swap
+    /// two candidates whose |v|² are within a rounding of each other (or both below 2⁻¹²⁶
+    /// px²), which [`near_tie`] checks for each differing tile. Rounding near ties need two
+    /// candidates within 2⁻²² of each other, which noise makes rare: at most 1 % of tiles.
+    /// Flushed ones are not bounded (with 1-px tiles, 3 % of tiles hold only a stress vector
+    /// whose |v|² is subnormal, which a flushing GPU leaves at (0, 0)). Every other tile must
+    /// be the CPU's, bit for bit. Measured on lavapipe: none differ.
+    #[test]
+    fn tile_max_matches_the_cpu_exactly_on_generated_and_stress_velocities() {
+        let Some(gpu) = gpu() else { return };
+        let mut tiles = 0;
+        let mut ties = Ties::default();
+        for (k, &(w, h)) in [(37, 23), (64, 48), (101, 7), (1, 1), (130, 66)]
+            .iter()
+            .enumerate()
+        {
+            for size in [1, 3, 8, 20, 128] {
+                for sanitised in [false, true] {
+                    let (mut vx, mut vy) = velocity_frame(w, h, 7 + k as u32, 40.0);
+                    if sanitised {
+                        for v in vx.iter_mut().chain(vy.iter_mut()) {
+                            *v = shutter::numeric::velocity(*v);
+                        }
+                    }
+                    let cpu = tile_max(&vx, &vy, w, h, size);
+                    let got = gpu
+                        .try_tile_max(&vx, &vy, w, h, size)
+                        .expect("the GPU stage runs");
+                    let candidates = |t: usize| {
+                        let (c, r) = (t % cpu.columns, t / cpu.columns);
+                        let mut v = Vec::new();
+                        for y in r * size..((r + 1) * size).min(h) {
+                            for x in c * size..((c + 1) * size).min(w) {
+                                v.push((vx[y * w + x], vy[y * w + x]));
+                            }
+                        }
+                        v
+                    };
+                    let what = format!("tile_max {w}x{h} size {size} sanitised {sanitised}");
+                    compare_grids(&what, &got, &cpu, candidates, &mut ties);
+                    tiles += cpu.x.len();
+                }
+            }
+        }
+        let _ = writeln!(
+            std::io::stderr(),
+            "gpu: tile_max: of {tiles} tiles, {} rounding and {} flushed near ties, the rest \
+             bit for bit",
+            ties.rounding,
+            ties.flushed
+        );
+        assert!(ties.rounding * 100 <= tiles, "{} of {tiles}", ties.rounding);
+    }
+
+    /// A grid of `columns`×`rows` tiles of noise in ±`range` px with the stress vectors.
+    fn noise_grid(columns: usize, rows: usize, size: usize, seed: u32, range: f32) -> TileGrid {
+        let (x, y) = velocity_frame(columns, rows, seed, range);
+        TileGrid {
+            columns,
+            rows,
+            size,
+            x,
+            y,
+        }
+    }
+
+    /// The `neighbor_max` twin against the CPU's, on TileMax grids of the velocity frames and
+    /// on noise grids with the stress vectors. Tolerance: exact, as `tile_max` (the same
+    /// selection by |v|² over the 3×3 neighbourhood; the same near-tie rule and bound).
+    #[test]
+    fn neighbor_max_matches_the_cpu_exactly_on_generated_and_stress_grids() {
+        let Some(gpu) = gpu() else { return };
+        let mut grids = Vec::new();
+        for (k, &(w, h, size)) in [(37, 23, 3), (130, 66, 8), (101, 7, 1)].iter().enumerate() {
+            let (vx, vy) = velocity_frame(w, h, 20 + k as u32, 40.0);
+            grids.push(tile_max(&vx, &vy, w, h, size));
+        }
+        for (k, &(columns, rows)) in [(1, 1), (2, 1), (1, 3), (17, 9), (40, 33)]
+            .iter()
+            .enumerate()
+        {
+            grids.push(noise_grid(columns, rows, 8, 30 + k as u32, 60.0));
+        }
+        let (mut tiles, mut ties) = (0, Ties::default());
+        for grid in &grids {
+            let cpu = neighbor_max(grid);
+            let got = gpu.try_neighbor_max(grid).expect("the GPU stage runs");
+            let candidates = |t: usize| {
+                let (c, r) = (t % grid.columns, t / grid.columns);
+                let mut v = Vec::new();
+                for rr in r.saturating_sub(1)..(r + 2).min(grid.rows) {
+                    for cc in c.saturating_sub(1)..(c + 2).min(grid.columns) {
+                        v.push(at(grid, rr * grid.columns + cc));
+                    }
+                }
+                v
+            };
+            let what = format!("neighbor_max {}x{}", grid.columns, grid.rows);
+            compare_grids(&what, &got, &cpu, candidates, &mut ties);
+            tiles += cpu.x.len();
+        }
+        let _ = writeln!(
+            std::io::stderr(),
+            "gpu: neighbor_max: of {tiles} tiles, {} rounding and {} flushed near ties, the \
+             rest bit for bit",
+            ties.rounding,
+            ties.flushed
+        );
+        assert!(ties.rounding * 100 <= tiles, "{} of {tiles}", ties.rounding);
+    }
+
+    /// Half-spread vectors as reconstruct's 2014 variants hand them to `dilate` (k = 128 px
+    /// over tiles of 8 px: spans up to 16 tiles), with what stresses the reach test: diagonal
+    /// and axis-aligned vectors (the test meets its threshold exactly), whole multiples of the
+    /// tile, zeros, NaN, huge (|M|² overflows), subnormal components. Never ±∞ nor |M| above
+    /// ~10¹⁹ px: the CPU's loop bounds overflow there (reconstruct clamps to k first).
+    fn dilate_grid(columns: usize, rows: usize, seed: u32) -> TileGrid {
+        let n = columns * rows;
+        let mut grid = TileGrid {
+            columns,
+            rows,
+            size: 8,
+            x: noise(n, seed, -90.0, 90.0),
+            y: noise(n, seed ^ 0x5555, -90.0, 90.0),
+        };
+        let special = [
+            (40.0, 40.0),
+            (-24.0, 24.0),
+            (16.0, 0.0),
+            (0.0, -8.0),
+            (8.0, 8.0),
+            (0.0, 0.0),
+            (-0.0, 0.0),
+            (f32::NAN, 3.0),
+            (1e19, 0.0),
+            (1e-40, 20.0),
+            (30.0, 1e-40),
+            (127.9, -0.5),
+            (0.3, 0.2),
+        ];
+        for i in 0..n {
+            let h = (i as u32).wrapping_mul(0x9E37_79B9) ^ seed;
+            match h % 4 {
+                0 => (grid.x[i], grid.y[i]) = special[(h as usize / 4) % special.len()],
+                1 => (grid.x[i], grid.y[i]) = (0.0, 0.0), // still: the spread is visible
+                _ => {}
+            }
+        }
+        grid
+    }
+
+    /// Still tiles but for a lattice of lone vectors (diagonal, axis-aligned, whole tiles
+    /// long), so the reach test's threshold decides what the tiles around each receive: a
+    /// tile beside a diagonal line is exactly √2 tiles from it.
+    fn sparse_grid(columns: usize, rows: usize, seed: usize) -> TileGrid {
+        let n = columns * rows;
+        let lone = [
+            (40.0, 40.0),
+            (-24.0, 24.0),
+            (8.0, -8.0),
+            (16.0, 0.0),
+            (0.0, 24.0),
+            (-30.0, 10.0),
+        ];
+        let (mut x, mut y) = (vec![0.0; n], vec![0.0; n]);
+        for i in (seed % 11..n).step_by(11) {
+            (x[i], y[i]) = lone[(i / 11) % lone.len()];
+        }
+        TileGrid {
+            columns,
+            rows,
+            size: 8,
+            x,
+            y,
+        }
+    }
+
+    /// The `dilate` twin against the CPU's, on noise grids with stress vectors and on the
+    /// chain reconstruct runs (tile_max of a velocity field, the 2014 half-spread).
+    ///
+    /// Tolerance: exact. dilate selects, per tile, one of the grid's vectors by the reach
+    /// test and |M|²; |M|², the spans and the line's normal come from the CPU's own
+    /// `Source::new` (the host computes them), and |M|² is compared by bits. What remains on
+    /// the GPU is n·(dx, dy) against √2, two products and a sum: a driver may fuse one product
+    /// into an fma, which changes the sum only where a product is inexact and only by a
+    /// rounding. So a tile may differ only where some source holding the GPU's or the CPU's
+    /// vector has |n·d| within 10⁻⁶ of √2 from that tile with an inexact product (checked
+    /// here: never for diagonal or axis-aligned motion one tile over, whose products are
+    /// exact and whose test meets √2 exactly), and at most 1 % of tiles; every other tile must
+    /// be the CPU's, bit for bit. Measured on lavapipe: none differ.
+    #[test]
+    fn dilate_matches_the_cpu_exactly_on_generated_and_stress_grids() {
+        let Some(gpu) = gpu() else { return };
+        use shutter::motion::dilate::{dilate, Source, REACH};
+        use shutter::motion::reconstruct::{spread_2014, ReconstructConfig, ReconstructParams};
+        let mut grids = Vec::new();
+        for (k, &(columns, rows)) in [(1, 1), (3, 1), (17, 9), (40, 33), (70, 12)]
+            .iter()
+            .enumerate()
+        {
+            grids.push(dilate_grid(columns, rows, 50 + k as u32));
+            grids.push(sparse_grid(columns, rows, k));
+        }
+        // The chain of reconstruct's 2014 variants on a velocity field with the stress vectors
+        // through the numeric policy.
+        let params = ReconstructParams::default();
+        for (k, &(w, h)) in [(130, 66), (203, 97)].iter().enumerate() {
+            let (mut vx, mut vy) = velocity_frame(w, h, 60 + k as u32, 300.0);
+            for v in vx.iter_mut().chain(vy.iter_mut()) {
+                *v = shutter::numeric::velocity(*v);
+            }
+            let config = ReconstructConfig::new(w, h, &params, 0.5, 1);
+            let mut grid = tile_max(&vx, &vy, w, h, config.tile as usize);
+            for t in 0..grid.x.len() {
+                (grid.x[t], grid.y[t]) = spread_2014(grid.x[t], grid.y[t], &config);
+            }
+            grids.push(grid);
+        }
+        let (mut tiles, mut ties) = (0, 0);
+        for grid in &grids {
+            let cpu = dilate(grid);
+            let got = gpu.try_dilate(grid).expect("the GPU stage runs");
+            let size = grid.size as f32;
+            let mut tiles_differing = differing(&got.x, &cpu.x);
+            tiles_differing.extend(differing(&got.y, &cpu.y));
+            tiles_differing.sort_unstable();
+            tiles_differing.dedup();
+            for &t in &tiles_differing {
+                let (c, r) = ((t % grid.columns) as isize, (t / grid.columns) as isize);
+                let (g, want) = (at(&got, t), at(&cpu, t));
+                let bits = |v: (f32, f32)| (v.0.to_bits(), v.1.to_bits());
+                let on_threshold = (0..grid.x.len()).any(|s| {
+                    let m = at(grid, s);
+                    if bits(m) != bits(g) && bits(m) != bits(want) {
+                        return false;
+                    }
+                    let source = Source::new(m, size);
+                    let (sc, sr) = ((s % grid.columns) as isize, (s / grid.columns) as isize);
+                    let (dx, dy) = ((c - sc) as f64, (r - sr) as f64);
+                    let (px, py) = (source.nx as f64 * dx, source.ny as f64 * dy);
+                    // An fma changes the sum only when a product is inexact in f32.
+                    let inexact = |p: f64| p as f32 as f64 != p;
+                    let dot = (px + py).abs();
+                    (inexact(px) || inexact(py)) && (dot - REACH as f64).abs() < 1e-6
+                });
+                assert!(
+                    on_threshold,
+                    "dilate {}x{}: tile ({c}, {r}): GPU {g:?}, CPU {want:?}",
+                    grid.columns, grid.rows
+                );
+                ties += 1;
+            }
+            tiles += cpu.x.len();
+            // The dilation did something: some tile took a vector not its own.
+            if grid.columns * grid.rows > 100 {
+                assert!(differing(&cpu.x, &grid.x).len() > 10);
+            }
+        }
+        let _ = writeln!(
+            std::io::stderr(),
+            "gpu: dilate: {ties} tiles on the reach threshold of {tiles}, the rest bit for bit"
+        );
+        assert!(ties * 100 <= tiles, "{ties} of {tiles} tiles");
+    }
+
+    /// Reconstruct's tile stages at 1920×1080 with its defaults (the 2014 variants' tiles of
+    /// 8 px, k 128), printed (benchmarks measure, tests assert).
+    #[test]
+    fn motion_tile_stages_at_1080p_print_their_time() {
+        let Some(gpu) = gpu() else { return };
+        use shutter::motion::dilate::dilate;
+        let (w, h) = (1920, 1080);
+        let (vx, vy) = velocity_frame(w, h, 3, 250.0);
+        let mut grid = None;
+        let gpu_tile_max = milliseconds(&mut || grid = Some(gpu.tile_max(&vx, &vy, w, h, 8)));
+        let cpu_tile_max = milliseconds(&mut || drop(tile_max(&vx, &vy, w, h, 8)));
+        let mut grid = grid.unwrap();
+        for v in grid.x.iter_mut().chain(grid.y.iter_mut()) {
+            *v = shutter::numeric::velocity(*v).clamp(-128.0, 128.0);
+        }
+        let mut dilated = None;
+        let gpu_dilate = milliseconds(&mut || dilated = Some(gpu.dilate(&grid)));
+        let cpu_dilate = milliseconds(&mut || drop(dilate(&grid)));
+        let mut neighbors = None;
+        let gpu_neighbor_max = milliseconds(&mut || neighbors = Some(gpu.neighbor_max(&grid)));
+        let cpu_neighbor_max = milliseconds(&mut || drop(neighbor_max(&grid)));
+        let _ = writeln!(
+            std::io::stderr(),
+            "gpu: 1920x1080 upload+dispatch+readback (cpu): tile_max {gpu_tile_max:.2} ms \
+             ({cpu_tile_max:.2}), dilate {gpu_dilate:.2} ms ({cpu_dilate:.2}), neighbor_max \
+             {gpu_neighbor_max:.2} ms ({cpu_neighbor_max:.2})"
+        );
+        assert_eq!(dilated.unwrap(), dilate(&grid));
+        assert_eq!(neighbors.unwrap(), neighbor_max(&grid));
+    }
+
+    /// `blur --algorithm reconstruct --backend wgpu` writes the CPU's bytes: its tile stages
+    /// run on the GPU and are exact (above), every other stage runs on the CPU, so the output
+    /// cannot differ. Every variant: paper and dual take neighbor_max, 2014 and exposure take
+    /// dilate.
+    #[test]
+    fn reconstruct_on_wgpu_writes_the_cpu_s_bytes() {
+        let Some(_gpu) = gpu() else { return };
+        let dir = small_scene("rotor", 96, 54, 1, 1);
+        let pattern = |role: &str| role_pattern(dir.path(), role);
+        for variant in ["paper", "dual", "2014", "exposure"] {
+            let mut bytes = Vec::new();
+            for backend in ["cpu", "wgpu"] {
+                let out = dir.path().join(format!("{variant}-{backend}.####.exr"));
+                let o = shutter(&[
+                    "blur",
+                    "--algorithm",
+                    "reconstruct",
+                    "--variant",
+                    variant,
+                    "--color",
+                    &pattern("color"),
+                    "--depth",
+                    &pattern("depth"),
+                    "--velocity",
+                    &pattern("velocity"),
+                    "-o",
+                    &s(&out),
+                    "--backend",
+                    backend,
+                    "--json",
+                ]);
+                assert!(o.status.success(), "{variant} {backend}: {}", stderr(&o));
+                let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+                assert_eq!(json["backend"]["used"], backend, "{json}");
+                assert_eq!(json["backend"]["stages_on_cpu"], 0, "{json}");
+                let written = dir.path().join(format!("{variant}-{backend}.0001.exr"));
+                bytes.push(std::fs::read(written).unwrap());
+            }
+            assert!(
+                bytes[0] == bytes[1],
+                "{variant}: the GPU run wrote other bytes"
+            );
         }
     }
 

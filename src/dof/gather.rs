@@ -52,7 +52,7 @@ use crate::frame::Color;
 pub const TILE: usize = 16;
 
 /// Two pixels whose signed CoC differ by less than this (px) are the same layer.
-const LAYER: f32 = 1.0;
+pub const LAYER: f32 = 1.0;
 
 /// Smallest bokeh radius a weight divides by (px): a pixel's own footprint.
 const SMALLEST_RADIUS: f32 = 0.5;
@@ -463,6 +463,7 @@ fn gather_run(
 }
 
 /// What the gather needs to know per tile (Sousa's tile min/max CoC).
+#[derive(Clone, Debug, PartialEq)]
 pub struct Tiles {
     /// The gather radius (px): the largest bokeh radius of any tile whose bokeh can reach
     /// this one (0 where none out of focus can). Radii below ε/2 count as in focus.
@@ -475,6 +476,16 @@ pub struct Tiles {
     /// has no near field and skips that half of the work (with the same result: its near
     /// weights would all be 0).
     pub far_only: Vec<bool>,
+}
+
+/// The distance (px) between the nearest pixels of two tiles `dx` and `dy` tiles apart: the
+/// gap per axis is the whole tiles between them. The GPU twin (src/gpu/tiles.rs) takes a
+/// table of these from here (WGSL's square root is not correctly rounded, and the reach test
+/// compares it with a radius).
+pub fn gap_distance(dx: usize, dy: usize) -> f32 {
+    let gap = |a: usize| a.saturating_sub(1) as f32 * TILE as f32;
+    let (gx, gy) = (gap(dx), gap(dy));
+    (gx * gx + gy * gy).sqrt()
 }
 
 /// Tile max |CoC| (the reach) and tile min/max signed CoC (the far-only tiles).
@@ -514,10 +525,8 @@ pub fn tiles(coc: &[f32], width: usize, height: usize, epsilon: f32) -> Tiles {
                     if r <= best {
                         continue;
                     }
-                    // Gap in pixels between the two tiles, per axis.
-                    let gap = |a: isize, b: isize| ((a - b).abs() - 1).max(0) as f32 * TILE as f32;
-                    let (gx, gy) = (gap(tx, ox), gap(ty, oy));
-                    if (gx * gx + gy * gy).sqrt() <= r + 1.0 {
+                    let (dx, dy) = ((tx - ox).unsigned_abs(), (ty - oy).unsigned_abs());
+                    if gap_distance(dx, dy) <= r + 1.0 {
                         best = r;
                     }
                 }

@@ -224,22 +224,39 @@ pub fn coc_plane(frame: &Frame, params: &DofParams) -> Vec<f32> {
     }
 }
 
+/// The stages of depth of field a backend may run elsewhere (the GPU): the dispatch hook of
+/// [`apply_with`]. Each must return what the CPU stage it stands for returns (the defaults are
+/// the CPU stages; a GPU twin's parity with them is tested in tests/gpu.rs).
+pub trait Stages {
+    /// [`coc_plane`].
+    fn coc_plane(&self, frame: &Frame, params: &DofParams) -> Vec<f32> {
+        coc_plane(frame, params)
+    }
+
+    /// [`gather::tiles`].
+    fn tiles(&self, coc: &[f32], width: usize, height: usize, epsilon: f32) -> gather::Tiles {
+        gather::tiles(coc, width, height, epsilon)
+    }
+}
+
+/// Every stage on the CPU (rayon): the reference.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Cpu;
+
+impl Stages for Cpu {}
+
 /// Applies depth of field, stage by stage: `coc` ([`coc_plane`]) → tile min/max
 /// ([`gather::tiles`]) → [`gather::gather`], or `coc` → [`blend::blend`]. The output holds
 /// the new colour and keeps every other pass, so motion blur can run after it ("DoF before
 /// MB", Sousa).
 pub fn apply(frame: Frame, params: &DofParams) -> Frame {
-    apply_with(frame, params, coc_plane)
+    apply_with(frame, params, &Cpu)
 }
 
-/// [`apply`] with the `coc` stage given by the caller: the dispatch hook of a backend whose
-/// twin of [`coc_plane`] runs elsewhere (the GPU); it must return what [`coc_plane`] does.
-pub fn apply_with(
-    frame: Frame,
-    params: &DofParams,
-    coc_stage: impl FnOnce(&Frame, &DofParams) -> Vec<f32>,
-) -> Frame {
-    let coc = coc_stage(&frame, params);
+/// [`apply`] with the stages that have a twin elsewhere (`coc`, tile min/max) run by
+/// `stages`; the others run here on the CPU.
+pub fn apply_with(frame: Frame, params: &DofParams, stages: &impl Stages) -> Frame {
+    let coc = stages.coc_plane(&frame, params);
     let largest = coc.par_iter().map(|c| c.abs()).reduce(|| 0.0, f32::max);
     if largest < params.epsilon || frame.color.is_none() {
         // The whole frame is in focus: nothing to do.
@@ -252,7 +269,7 @@ pub fn apply_with(
         // blend writes the colour in place.
         Method::Blend => blend::blend(&config, color, &coc),
         Method::Gather => {
-            let tiles = gather::tiles(&coc, frame.width, frame.height, config.epsilon);
+            let tiles = stages.tiles(&coc, frame.width, frame.height, config.epsilon);
             gather::gather(&config, &color, &coc, &tiles)
         }
     };

@@ -11,14 +11,13 @@
 //!
 //! Buffers are kept per frame size in the context and reused by every frame of that size.
 
-use std::collections::HashMap;
-use std::sync::Mutex;
-
 use bytemuck::{Pod, Zeroable};
 
 use crate::dof::{CocSource, DofParams};
 use crate::frame::Frame;
 
+pub use super::stage::StageError;
+use super::stage::{floats, Dispatch, Stage};
 use super::Gpu;
 
 /// The shader's source.
@@ -91,147 +90,18 @@ impl CocConfig {
     }
 }
 
-/// The buffers of one frame size.
-struct Buffers {
-    config: wgpu::Buffer,
-    depth: wgpu::Buffer,
-    coc: wgpu::Buffer,
-    readback: wgpu::Buffer,
-    bind_group: wgpu::BindGroup,
-}
-
-/// The compiled stage and its buffers, kept in the context.
-pub(crate) struct CocPass {
-    pipeline: wgpu::ComputePipeline,
-    layout: wgpu::BindGroupLayout,
-    /// Buffers by pixel count, reused across frames of one size.
-    buffers: Mutex<HashMap<usize, Buffers>>,
-}
-
-/// Frame sizes whose buffers are kept at once (a sequence has one; more are dropped).
-const KEPT_SIZES: usize = 2;
-
-impl CocPass {
-    pub(crate) fn new(device: &wgpu::Device) -> CocPass {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("coc.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-        });
-        let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("coc"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(
-                            std::mem::size_of::<CocConfig>() as u64
-                        ),
-                    },
-                    count: None,
-                },
-                storage(1, true),
-                storage(2, false),
-            ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("coc"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("coc"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        CocPass {
-            pipeline,
-            layout,
-            buffers: Mutex::new(HashMap::new()),
-        }
-    }
-
-    fn make_buffers(&self, device: &wgpu::Device, pixels: usize) -> Buffers {
-        let bytes = (pixels.max(1) * 4) as u64;
-        let buffer = |label, size, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
-        use wgpu::BufferUsages as U;
-        let config = buffer(
-            "coc config",
-            std::mem::size_of::<CocConfig>() as u64,
-            U::UNIFORM | U::COPY_DST,
-        );
-        let depth = buffer("coc depth", bytes, U::STORAGE | U::COPY_DST);
-        let coc = buffer("coc", bytes, U::STORAGE | U::COPY_SRC);
-        let readback = buffer("coc readback", bytes, U::MAP_READ | U::COPY_DST);
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("coc"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: config.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: depth.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: coc.as_entire_binding(),
-                },
-            ],
-        });
-        Buffers {
-            config,
-            depth,
-            coc,
-            readback,
-            bind_group,
-        }
-    }
-}
-
-/// Why a GPU stage did not run (the caller runs the CPU stage instead).
-#[derive(Debug)]
-pub enum StageError {
-    /// The plane is larger than one storage binding of this device.
-    TooLarge { bytes: u64, limit: u64 },
-    /// The device reported an error (validation, out of memory, lost).
-    Device(String),
-}
-
-impl std::fmt::Display for StageError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            StageError::TooLarge { bytes, limit } => write!(
-                f,
-                "a plane of {bytes} bytes exceeds the device's storage binding limit of {limit}"
-            ),
-            StageError::Device(e) => write!(f, "{e}"),
-        }
-    }
+/// The compiled stage: bindings config, depth, coc.
+pub(crate) fn stage(device: &wgpu::Device) -> Stage {
+    Stage::new(
+        device,
+        "coc",
+        SHADER,
+        &["main"],
+        std::mem::size_of::<CocConfig>(),
+        1,
+        1,
+        0,
+    )
 }
 
 impl Gpu {
@@ -257,84 +127,29 @@ impl Gpu {
             return Ok(Vec::new());
         }
         let bytes = (pixels * 4) as u64;
-        if bytes > self.max_binding() {
-            return Err(StageError::TooLarge {
-                bytes,
-                limit: self.max_binding(),
-            });
-        }
         let config = CocConfig::new(
             frame.width,
             frame.height,
             frame.windows.display.width,
             params,
         );
-        let pass = &self.coc;
-        let mut cache = pass.buffers.lock().unwrap_or_else(|e| e.into_inner());
-        if !cache.contains_key(&pixels) && cache.len() >= KEPT_SIZES {
-            cache.clear();
-        }
-        let buffers = cache
-            .entry(pixels)
-            .or_insert_with(|| pass.make_buffers(&self.device, pixels));
-
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        self.queue
-            .write_buffer(&buffers.config, 0, bytemuck::bytes_of(&config));
-        self.queue
-            .write_buffer(&buffers.depth, 0, bytemuck::cast_slice(depth));
-        let mut encoder = self
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("coc") });
-        {
-            let mut compute = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("coc"),
-                timestamp_writes: None,
-            });
-            compute.set_pipeline(&pass.pipeline);
-            compute.set_bind_group(0, &buffers.bind_group, &[]);
-            compute.dispatch_workgroups(
-                config.width.div_ceil(WORKGROUP),
-                config.height.div_ceil(WORKGROUP),
-                1,
-            );
-        }
-        encoder.copy_buffer_to_buffer(&buffers.coc, 0, &buffers.readback, 0, bytes);
-        self.queue.submit([encoder.finish()]);
-        if let Some(error) = pollster::block_on(scope.pop()) {
-            return Err(StageError::Device(error.to_string()));
-        }
-        read_back(&self.device, &buffers.readback, bytes)
+        let mut out = self.coc.run(
+            self,
+            bytemuck::bytes_of(&config),
+            &[bytemuck::cast_slice(depth)],
+            &[bytes],
+            &[],
+            &[Dispatch {
+                entry: 0,
+                groups: [
+                    config.width.div_ceil(WORKGROUP),
+                    config.height.div_ceil(WORKGROUP),
+                    1,
+                ],
+            }],
+        )?;
+        Ok(floats(out.remove(0)))
     }
-}
-
-/// Maps `buffer`'s first `bytes`, copies them out as f32 and unmaps it.
-fn read_back(
-    device: &wgpu::Device,
-    buffer: &wgpu::Buffer,
-    bytes: u64,
-) -> Result<Vec<f32>, StageError> {
-    let slice = buffer.slice(..bytes);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |result| {
-        let _ = tx.send(result);
-    });
-    device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| StageError::Device(e.to_string()))?;
-    match rx.recv() {
-        Ok(Ok(())) => {}
-        Ok(Err(e)) => return Err(StageError::Device(e.to_string())),
-        Err(_) => return Err(StageError::Device("the readback was dropped".into())),
-    }
-    let out = {
-        let view = slice
-            .get_mapped_range()
-            .map_err(|e| StageError::Device(e.to_string()))?;
-        bytemuck::cast_slice::<u8, f32>(&view).to_vec()
-    };
-    buffer.unmap();
-    Ok(out)
 }
 
 #[cfg(test)]

@@ -5,7 +5,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use wgpu::{Backends, DeviceType};
 
-use super::coc::CocPass;
+use super::stage::Stage;
 
 /// The backends with what the passes need: compute, float storage and (for the scatter
 /// passes to come) atomics and float render targets. Never GL (see the module doc).
@@ -27,7 +27,12 @@ pub struct Gpu {
     pub(crate) device: wgpu::Device,
     pub(crate) queue: wgpu::Queue,
     info: wgpu::AdapterInfo,
-    pub(crate) coc: CocPass,
+    /// The compiled stages, one per WGSL twin, each with its buffers by size.
+    pub(crate) coc: Stage,
+    pub(crate) tiles: Stage,
+    pub(crate) tile_max: Stage,
+    pub(crate) neighbor_max: Stage,
+    pub(crate) dilate: Stage,
     /// Stages with a twin that ran on the CPU for a frame (see [`Gpu::note_cpu_stage`]).
     stages_on_cpu: AtomicU64,
 }
@@ -62,8 +67,9 @@ fn rank(device_type: DeviceType) -> u8 {
     }
 }
 
-/// The features the stages use, requested explicitly: none yet (the `coc` stage is plain
-/// compute on storage buffers). The scatter twins will add atomics here.
+/// The features the stages use, requested explicitly: none yet (the stages are plain compute
+/// on storage buffers; `tiles` uses a u32 atomic, which WGSL has without a feature). The
+/// scatter twins will add float atomics here.
 fn required_features() -> wgpu::Features {
     wgpu::Features::empty()
 }
@@ -145,12 +151,15 @@ impl Gpu {
             )
             .replace('\n', " ")
         })?;
-        let coc = CocPass::new(&device);
         Ok(Gpu {
+            coc: super::coc::stage(&device),
+            tiles: super::tiles::stage(&device),
+            tile_max: super::tile_max::stage(&device),
+            neighbor_max: super::neighbor_max::stage(&device),
+            dilate: super::dilate::stage(&device),
             device,
             queue,
             info,
-            coc,
             stages_on_cpu: AtomicU64::new(0),
         })
     }
@@ -192,11 +201,58 @@ impl Gpu {
         self.stages_on_cpu.load(Ordering::Relaxed)
     }
 
-    /// The largest plane (bytes) one storage binding can hold on this device.
+    /// The largest buffer (bytes) one storage binding can hold on this device.
     pub(crate) fn max_binding(&self) -> u64 {
         let limits = self.device.limits();
         limits
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size)
+    }
+}
+
+/// Depth of field's stages with a twin run here: `coc` and tile min/max (each falls back to
+/// the CPU stage, counted, where the GPU cannot run it).
+impl crate::dof::Stages for Gpu {
+    fn coc_plane(&self, frame: &crate::frame::Frame, params: &crate::dof::DofParams) -> Vec<f32> {
+        Gpu::coc_plane(self, frame, params)
+    }
+
+    fn tiles(
+        &self,
+        coc: &[f32],
+        width: usize,
+        height: usize,
+        epsilon: f32,
+    ) -> crate::dof::gather::Tiles {
+        Gpu::tiles(self, coc, width, height, epsilon)
+    }
+}
+
+/// Reconstruct's tile stages run here (each falls back to the CPU stage, counted, where the
+/// GPU cannot run it).
+impl crate::motion::TileStages for Gpu {
+    fn tile_max(
+        &self,
+        vx: &[f32],
+        vy: &[f32],
+        width: usize,
+        height: usize,
+        size: usize,
+    ) -> crate::motion::tile_max::TileGrid {
+        Gpu::tile_max(self, vx, vy, width, height, size)
+    }
+
+    fn neighbor_max(
+        &self,
+        tiles: &crate::motion::tile_max::TileGrid,
+    ) -> crate::motion::tile_max::TileGrid {
+        Gpu::neighbor_max(self, tiles)
+    }
+
+    fn dilate(
+        &self,
+        tiles: &crate::motion::tile_max::TileGrid,
+    ) -> crate::motion::tile_max::TileGrid {
+        Gpu::dilate(self, tiles)
     }
 }

@@ -2,11 +2,20 @@
 //! reused across frames, and one module per pass stage beside its `.wgsl` twin, under the CPU
 //! stage's name (vello's `cpu/` and `shader/` pairing):
 //!
-//! - [`coc`] + `coc.wgsl`: depth of field's `coc` stage, twin of [`crate::dof::coc_plane`].
+//! - [`coc`] + `coc.wgsl`: depth of field's `coc` stage, twin of [`crate::dof::coc_plane`];
+//! - [`tiles`] + `tiles.wgsl`: depth of field's tile min/max, twin of
+//!   [`crate::dof::gather::tiles`];
+//! - [`tile_max`] + `tile_max.wgsl`, [`neighbor_max`] + `neighbor_max.wgsl`, [`dilate`] +
+//!   `dilate.wgsl`: reconstruct's tile stages, twins of [`crate::motion::tile_max`],
+//!   [`crate::motion::neighbor_max`] and [`crate::motion::dilate`];
+//! - `stage`: what they share (bindings config → inputs → outputs, buffers kept per size).
 //!
 //! The CPU passes are the reference; each twin has a parity test against them
 //! (tests/gpu.rs) with its tolerance stated and justified beside it. Stages without a twin
-//! yet run on the CPU in the same run (this slice of issue 15: only `coc` runs on the GPU).
+//! yet run on the CPU in the same run. Depth of field's `coc` and tile min/max run on the GPU
+//! under `--backend wgpu` ([`crate::dof::Stages`]). The motion tile stages implement
+//! [`crate::motion::TileStages`], the hook reconstruct is to take them through; reconstruct
+//! does not call it yet, so under `--backend wgpu` they still run on the CPU.
 //!
 //! The backend is a run's choice ([`Backend`], `--backend cpu|wgpu|auto`):
 //! - `cpu` never touches wgpu;
@@ -29,6 +38,19 @@ use serde::Serialize;
 pub mod coc;
 #[cfg(feature = "gpu")]
 mod context;
+#[cfg(feature = "gpu")]
+pub mod dilate;
+#[cfg(feature = "gpu")]
+pub mod neighbor_max;
+#[cfg(feature = "gpu")]
+mod stage;
+#[cfg(feature = "gpu")]
+pub mod tile_max;
+#[cfg(feature = "gpu")]
+pub mod tiles;
+
+#[cfg(feature = "gpu")]
+pub use stage::StageError;
 
 #[cfg(feature = "gpu")]
 pub use context::{Gpu, Need};

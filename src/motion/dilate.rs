@@ -18,24 +18,52 @@
 use super::tile_max::TileGrid;
 
 /// Distance (in tiles) from a motion line within which a tile counts as crossed.
-const REACH: f32 = std::f32::consts::SQRT_2;
+pub const REACH: f32 = std::f32::consts::SQRT_2;
 
-/// Whether the vector `m` of the tile at `from` reaches the tile at `to` (both in tiles).
-#[inline]
-fn reaches(from: (isize, isize), m: (f32, f32), to: (isize, isize), size: f32) -> bool {
-    let length = (m.0 * m.0 + m.1 * m.1).sqrt();
-    if length == 0.0 {
-        return from == to;
+/// What the reach test needs of a source tile's vector M, worked out once per tile: |M|², the
+/// tiles it spans each way along x and y (⌈|M_x|/tile⌉, ⌈|M_y|/tile⌉) and the unit normal of
+/// its line. The GPU twin (src/gpu/dilate.rs) takes these numbers from here too: WGSL's square
+/// root and division are not correctly rounded, and for diagonal motion the reach test sits
+/// exactly on its threshold (a tile beside the diagonal is √2 tiles from it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Source {
+    /// |M|², px².
+    pub length2: f32,
+    /// ⌈|M_x|/tile⌉ and ⌈|M_y|/tile⌉, tiles.
+    pub span_x: f32,
+    pub span_y: f32,
+    /// The unit normal of M's line, (−M_y, M_x)/|M|.
+    pub nx: f32,
+    pub ny: f32,
+}
+
+impl Source {
+    /// The source data of vector `m` with tiles of `size` px.
+    #[inline]
+    pub fn new(m: (f32, f32), size: f32) -> Source {
+        let length2 = m.0 * m.0 + m.1 * m.1;
+        let length = length2.sqrt();
+        let span = |c: f32| (c.abs() / size).ceil();
+        Source {
+            length2,
+            span_x: span(m.0),
+            span_y: span(m.1),
+            nx: -m.1 / length,
+            ny: m.0 / length,
+        }
     }
-    let (dx, dy) = ((to.0 - from.0) as f32, (to.1 - from.1) as f32);
-    // Within the rectangle ⌈|M_x|/tile⌉ × ⌈|M_y|/tile⌉ tiles either way of the source...
-    let span = |c: f32| (c.abs() / size).ceil();
-    if dx.abs() > span(m.0) || dy.abs() > span(m.1) {
-        return false;
+
+    /// Whether this source, `(dx, dy)` tiles from a tile, reaches it: within the rectangle
+    /// of tiles it spans either way, and within [`REACH`] tiles of its line. (A source of
+    /// zero length reaches nothing: [`dilate`] skips it.)
+    #[inline]
+    pub fn reaches(&self, dx: isize, dy: isize) -> bool {
+        let (dx, dy) = (dx as f32, dy as f32);
+        if dx.abs() > self.span_x || dy.abs() > self.span_y {
+            return false;
+        }
+        (self.nx * dx + self.ny * dy).abs() < REACH
     }
-    // ...and near the line through the source along M.
-    let (nx, ny) = (-m.1 / length, m.0 / length);
-    (nx * dx + ny * dy).abs() < REACH
 }
 
 /// Spreads each tile's vector along its own line (both ways) and keeps, per tile, the
@@ -59,17 +87,17 @@ pub fn dilate(tiles: &TileGrid) -> TileGrid {
     for r in 0..rows {
         for c in 0..columns {
             let m = tiles.get(c, r);
-            let length = m.0 * m.0 + m.1 * m.1;
+            let source = Source::new(m, size);
+            let length = source.length2;
             if length == 0.0 {
                 continue;
             }
-            let span = |v: f32| (v.abs() / size).ceil() as usize;
-            let (sx, sy) = (span(m.0), span(m.1));
+            let (sx, sy) = (source.span_x as usize, source.span_y as usize);
             for tr in r.saturating_sub(sy)..(r + sy + 1).min(rows) {
                 for tc in c.saturating_sub(sx)..(c + sx + 1).min(columns) {
                     let i = tr * columns + tc;
-                    let to = (tc as isize, tr as isize);
-                    if length > best[i] && reaches((c as isize, r as isize), m, to, size) {
+                    let (dx, dy) = (tc as isize - c as isize, tr as isize - r as isize);
+                    if length > best[i] && source.reaches(dx, dy) {
                         best[i] = length;
                         out.x[i] = m.0;
                         out.y[i] = m.1;

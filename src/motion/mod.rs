@@ -19,6 +19,7 @@ use crate::frame::Passes;
 pub use reconstruct::{ReconstructParams, Variant};
 pub use scatter::{CurveKind, Normalize, ScatterParams, Weight};
 pub use stretch::{Anchor, StretchParams};
+use tile_max::TileGrid;
 
 /// The blur algorithms shutter knows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -84,3 +85,37 @@ impl Algorithm {
         }
     }
 }
+
+/// Reconstruct's tile stages, which a backend may run elsewhere (the GPU): `tile_max`, then
+/// `neighbor_max` (paper, dual) or `dilate` (the 2014 variants). Each must return what the CPU
+/// stage it stands for returns (the defaults are the CPU stages; a GPU twin's parity with
+/// them is tested in tests/gpu.rs).
+pub trait TileStages {
+    /// [`tile_max::tile_max`].
+    fn tile_max(
+        &self,
+        vx: &[f32],
+        vy: &[f32],
+        width: usize,
+        height: usize,
+        size: usize,
+    ) -> TileGrid {
+        tile_max::tile_max(vx, vy, width, height, size)
+    }
+
+    /// [`neighbor_max::neighbor_max`].
+    fn neighbor_max(&self, tiles: &TileGrid) -> TileGrid {
+        neighbor_max::neighbor_max(tiles)
+    }
+
+    /// [`dilate::dilate`].
+    fn dilate(&self, tiles: &TileGrid) -> TileGrid {
+        dilate::dilate(tiles)
+    }
+}
+
+/// Every tile stage on the CPU: the reference.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Cpu;
+
+impl TileStages for Cpu {}

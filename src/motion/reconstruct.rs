@@ -28,9 +28,7 @@
 
 use rayon::prelude::*;
 
-use super::dilate::dilate;
-use super::neighbor_max::neighbor_max;
-use super::tile_max::{tile_max, TileGrid};
+use super::tile_max::TileGrid;
 use crate::frame::{Color, Frame, Velocity};
 use crate::numeric::{unit, HUGE};
 
@@ -248,7 +246,19 @@ impl ReconstructConfig {
 /// Applies the filter: [`tile_max`] (mapped to V) → [`neighbor_max`] → [`pack`] → [`gather`].
 /// The frame must hold colour, depth and velocity; the output holds colour alone. A frame in
 /// which nothing moves more than half a pixel keeps its colour untouched.
-pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, seed: u32) -> Frame {
+pub fn reconstruct(frame: Frame, params: &ReconstructParams, shutter: f32, seed: u32) -> Frame {
+    reconstruct_with(frame, params, shutter, seed, &super::Cpu)
+}
+
+/// [`reconstruct`] with the tile stages (`tile_max`, `neighbor_max`, `dilate`) run by
+/// `stages` (the GPU under `--backend wgpu`); the others run here on the CPU.
+pub fn reconstruct_with(
+    mut frame: Frame,
+    params: &ReconstructParams,
+    shutter: f32,
+    seed: u32,
+    stages: &impl super::TileStages,
+) -> Frame {
     let (width, height) = (frame.width, frame.height);
     let (Some(mut color), Some(depth), Some(velocity)) = (
         frame.color.take(),
@@ -264,7 +274,7 @@ pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, s
 
     // TileMax of the input velocity, then V of each tile's dominant vector: V is monotonic
     // in |v|, so this equals TileMax of V without storing a full-size V plane.
-    let mut tiles = tile_max(&velocity.x, &velocity.y, width, height, size);
+    let mut tiles = stages.tile_max(&velocity.x, &velocity.y, width, height, size);
     let stable = config.variant >= Variant::Stable.code();
     for (x, y) in tiles.x.iter_mut().zip(tiles.y.iter_mut()) {
         (*x, *y) = if stable {
@@ -281,12 +291,12 @@ pub fn reconstruct(mut frame: Frame, params: &ReconstructParams, shutter: f32, s
         return frame;
     }
     if stable {
-        let dilated = dilate(&tiles);
+        let dilated = stages.dilate(&tiles);
         let texels = pack_2014(&config, &color, &depth, &velocity, &dilated);
         drop(depth);
         gather_2014(&config, &texels, &dilated, &mut color);
     } else {
-        let neighbors = neighbor_max(&tiles);
+        let neighbors = stages.neighbor_max(&tiles);
         let texels = pack(&config, &color, &depth, &velocity, &neighbors);
         drop(depth);
         gather(&config, &texels, &velocity, &neighbors, &mut color);

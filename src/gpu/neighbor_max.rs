@@ -1,0 +1,113 @@
+//! Motion blur's `neighbor_max` stage on the GPU (`neighbor_max.wgsl`): the twin of
+//! [`crate::motion::neighbor_max::neighbor_max`], reconstruct's second stage for the paper and
+//! dual variants (McGuire et al. 2012, eq. 2).
+//!
+//! In: TileMax's [`TileGrid`]. Out: the grid of the same size holding each tile's dominant
+//! vector of its 3×3 neighbourhood. Bindings, in order: the [`NeighborMaxConfig`] uniform,
+//! the grid's x and y, then the result's x and y.
+//!
+//! NaN and infinity as on the CPU; agreement stated and tested in tests/gpu.rs. Buffers are
+//! kept per grid size and reused.
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::motion::tile_max::TileGrid;
+
+use super::stage::{floats, Dispatch, Stage, StageError};
+use super::Gpu;
+
+/// The shader's source.
+pub const SHADER: &str = include_str!("neighbor_max.wgsl");
+
+/// Tiles per workgroup side (`@workgroup_size(8, 8)` in neighbor_max.wgsl).
+const WORKGROUP: u32 = 8;
+
+/// The stage's uniform. Keep in sync with `NeighborMaxConfig` in neighbor_max.wgsl (the size
+/// test guards the layout: four 4-byte fields, 16 bytes as uniforms need).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct NeighborMaxConfig {
+    /// The grid, tiles.
+    pub columns: u32,
+    pub rows: u32,
+    pub _pad: [u32; 2],
+}
+
+/// The compiled stage: bindings config, tiles x, tiles y, x, y.
+pub(crate) fn stage(device: &wgpu::Device) -> Stage {
+    Stage::new(
+        device,
+        "neighbor_max",
+        SHADER,
+        &["main"],
+        std::mem::size_of::<NeighborMaxConfig>(),
+        2,
+        2,
+        0,
+    )
+}
+
+impl Gpu {
+    /// [`crate::motion::neighbor_max::neighbor_max`] on the GPU; the CPU stage where the GPU
+    /// cannot run it, counted in [`Gpu::stages_on_cpu`].
+    pub fn neighbor_max(&self, tiles: &TileGrid) -> TileGrid {
+        self.try_neighbor_max(tiles).unwrap_or_else(|_| {
+            self.note_cpu_stage();
+            crate::motion::neighbor_max::neighbor_max(tiles)
+        })
+    }
+
+    /// [`crate::motion::neighbor_max::neighbor_max`] on the GPU, or why it could not run.
+    pub fn try_neighbor_max(&self, tiles: &TileGrid) -> Result<TileGrid, StageError> {
+        let (columns, rows) = (tiles.columns, tiles.rows);
+        let n = columns * rows;
+        if n == 0 {
+            return Ok(tiles.clone());
+        }
+        let config = NeighborMaxConfig {
+            columns: columns as u32,
+            rows: rows as u32,
+            _pad: [0; 2],
+        };
+        let bytes = (n * 4) as u64;
+        let mut out = self.neighbor_max.run(
+            self,
+            bytemuck::bytes_of(&config),
+            &[
+                bytemuck::cast_slice(&tiles.x[..n]),
+                bytemuck::cast_slice(&tiles.y[..n]),
+            ],
+            &[bytes, bytes],
+            &[],
+            &[Dispatch {
+                entry: 0,
+                groups: [
+                    config.columns.div_ceil(WORKGROUP),
+                    config.rows.div_ceil(WORKGROUP),
+                    1,
+                ],
+            }],
+        )?;
+        let y = floats(out.pop().expect("two outputs"));
+        let x = floats(out.pop().expect("two outputs"));
+        Ok(TileGrid {
+            columns,
+            rows,
+            size: tiles.size,
+            x,
+            y,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_config_is_four_plain_words() {
+        // Keep in sync with neighbor_max.wgsl: four 4-byte fields, 16 bytes.
+        assert_eq!(std::mem::size_of::<NeighborMaxConfig>(), 16);
+        assert_eq!(std::mem::align_of::<NeighborMaxConfig>(), 4);
+    }
+}

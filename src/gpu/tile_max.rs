@@ -1,0 +1,153 @@
+//! Motion blur's `tile_max` stage on the GPU (`tile_max.wgsl`): the twin of
+//! [`crate::motion::tile_max::tile_max`], the first stage of reconstruct (McGuire et al. 2012,
+//! eq. 1).
+//!
+//! In: the velocity planes (px per frame). Out: the [`TileGrid`] of each k×k tile's dominant
+//! vector (largest |v|², the first in row-major order on ties). Bindings, in order: the
+//! [`TileMaxConfig`] uniform, vx, vy, then the grid's x and y — the CPU function's arguments
+//! and result.
+//!
+//! The CPU's treatment of non-finite input (a NaN |v|² never wins, +∞ always does) is the
+//! shader's, by comparing |v|² by its bits. Its agreement with the CPU (exact but for
+//! near-ties a driver may resolve through an fma, and subnormal |v|²) is stated and tested
+//! in tests/gpu.rs.
+//!
+//! Buffers are kept per frame size in the context and reused by every frame of that size.
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::motion::tile_max::TileGrid;
+
+use super::stage::{floats, Dispatch, Stage, StageError};
+use super::Gpu;
+
+/// The shader's source.
+pub const SHADER: &str = include_str!("tile_max.wgsl");
+
+/// The stage's uniform. Keep in sync with `TileMaxConfig` in tile_max.wgsl (the size test
+/// guards the layout: eight 4-byte fields, a multiple of 16 bytes as uniforms need).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct TileMaxConfig {
+    /// Frame size, pixels.
+    pub width: u32,
+    pub height: u32,
+    /// Tile edge k, pixels.
+    pub size: u32,
+    /// The grid: ⌈width/size⌉ × ⌈height/size⌉ tiles.
+    pub columns: u32,
+    pub rows: u32,
+    pub _pad: [u32; 3],
+}
+
+impl TileMaxConfig {
+    /// The uniform for `tile_max(vx, vy, width, height, size)` (a size of 0 is 1, as there).
+    pub fn new(width: usize, height: usize, size: usize) -> Self {
+        let size = size.max(1);
+        TileMaxConfig {
+            width: width as u32,
+            height: height as u32,
+            size: size as u32,
+            columns: width.div_ceil(size) as u32,
+            rows: height.div_ceil(size) as u32,
+            _pad: [0; 3],
+        }
+    }
+}
+
+/// The compiled stage: bindings config, vx, vy, x, y.
+pub(crate) fn stage(device: &wgpu::Device) -> Stage {
+    Stage::new(
+        device,
+        "tile_max",
+        SHADER,
+        &["main"],
+        std::mem::size_of::<TileMaxConfig>(),
+        2,
+        2,
+        0,
+    )
+}
+
+impl Gpu {
+    /// [`crate::motion::tile_max::tile_max`] on the GPU; the CPU stage where the GPU cannot
+    /// run it (a frame over the device's limits), counted in [`Gpu::stages_on_cpu`].
+    pub fn tile_max(
+        &self,
+        vx: &[f32],
+        vy: &[f32],
+        width: usize,
+        height: usize,
+        size: usize,
+    ) -> TileGrid {
+        self.try_tile_max(vx, vy, width, height, size)
+            .unwrap_or_else(|_| {
+                self.note_cpu_stage();
+                crate::motion::tile_max::tile_max(vx, vy, width, height, size)
+            })
+    }
+
+    /// [`crate::motion::tile_max::tile_max`] on the GPU, or why it could not run.
+    pub fn try_tile_max(
+        &self,
+        vx: &[f32],
+        vy: &[f32],
+        width: usize,
+        height: usize,
+        size: usize,
+    ) -> Result<TileGrid, StageError> {
+        let config = TileMaxConfig::new(width, height, size);
+        let (columns, rows) = (config.columns as usize, config.rows as usize);
+        let tiles = columns * rows;
+        if tiles == 0 {
+            return Ok(TileGrid {
+                columns,
+                rows,
+                size: config.size as usize,
+                x: Vec::new(),
+                y: Vec::new(),
+            });
+        }
+        let n = width * height;
+        let bytes = (tiles * 4) as u64;
+        let mut out = self.tile_max.run(
+            self,
+            bytemuck::bytes_of(&config),
+            &[
+                bytemuck::cast_slice(&vx[..n]),
+                bytemuck::cast_slice(&vy[..n]),
+            ],
+            &[bytes, bytes],
+            &[],
+            &[Dispatch {
+                entry: 0,
+                groups: [config.columns, config.rows, 1],
+            }],
+        )?;
+        let y = floats(out.pop().expect("two outputs"));
+        let x = floats(out.pop().expect("two outputs"));
+        Ok(TileGrid {
+            columns,
+            rows,
+            size: config.size as usize,
+            x,
+            y,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_config_is_eight_plain_words() {
+        // Keep in sync with tile_max.wgsl: eight 4-byte fields, no padding, a multiple of 16.
+        assert_eq!(std::mem::size_of::<TileMaxConfig>(), 32);
+        assert_eq!(std::mem::align_of::<TileMaxConfig>(), 4);
+        // Partial tiles at the right and bottom count; a size of 0 is 1.
+        let c = TileMaxConfig::new(17, 9, 8);
+        assert_eq!((c.columns, c.rows), (3, 2));
+        assert_eq!(TileMaxConfig::new(3, 2, 0).size, 1);
+    }
+}
