@@ -192,13 +192,14 @@ mod with_gpu {
             .unwrap_or_else(|e| panic!("{}: {e:?}", path.display()));
             found += 1;
         }
-        assert!(found >= 5, "{found} .wgsl under {}", dir.display());
+        assert!(found >= 6, "{found} .wgsl under {}", dir.display());
         // What the context compiles is the file on disk.
         assert!(coc::SHADER.contains("fn lens_coc"));
         assert!(shutter::gpu::tiles::SHADER.contains("fn tile_reach"));
         assert!(shutter::gpu::tile_max::SHADER.contains("struct TileMaxConfig"));
         assert!(shutter::gpu::neighbor_max::SHADER.contains("struct NeighborMaxConfig"));
         assert!(shutter::gpu::dilate::SHADER.contains("struct SourceTile"));
+        assert!(shutter::gpu::gather::SHADER.contains("struct GatherConfig"));
     }
 
     /// Depth values that stress the stage: non-finite, huge, tiny, subnormal, zero, negative,
@@ -496,6 +497,108 @@ mod with_gpu {
                 );
             }
         }
+    }
+
+    /// Depth of field's bokeh gather twin against `gather`, on the stress depth frames under
+    /// three lenses (CoC up to 48, 200 and 512 px: grid taps, ring taps and near fields
+    /// reaching over far ones, so every tile mode), round and five-bladed (the near field sees
+    /// the pentagon turned over), 2 and 6 rings, with
+    /// and without alpha, over a colour of fine noise (under one lens with stress values, NaN,
+    /// ±Inf, ±1e30, which the numeric policy makes finite first, as the pipeline does).
+    ///
+    /// Tolerance: the twin runs the CPU's plan (the same taps in the same order) on the
+    /// CPU's bokeh areas, so what differs is rounding: the composite's two divisions (WGSL
+    /// allows 2.5 ULP) and products a driver may fuse into the sums (a rounding fewer per
+    /// tap, up to 2 × 169 sums). Relative to the frame's range r that is a few times
+    /// 2⁻²⁴·r per pixel (≈ 1e-6 r), where the weights and offsets are O(1) and O(r). Bound:
+    /// max difference ≤ 1e-5·r (ten times that), mean ≤ 1e-7·r; every pixel finite.
+    #[test]
+    fn dof_gather_matches_the_cpu_within_rounding() {
+        let Some(gpu) = gpu() else { return };
+        use shutter::dof::gather::{gather, tiles};
+        use shutter::dof::DofConfig;
+        use shutter::numeric::{sanitize, DepthKind};
+        let lenses = [
+            (50.0, 2.0, 2.0, 48.0),
+            (85.0, 1.4, 3.0, 200.0),
+            (35.0, 1.2, 0.5, 512.0),
+        ];
+        let (mut cases, mut worst) = (0, 0.0f32);
+        for (k, &(w, h)) in [(37, 23), (160, 90), (64, 211)].iter().enumerate() {
+            for (j, &(focal_mm, f_number, focus, max_coc)) in lenses.iter().enumerate() {
+                let lens = Lens {
+                    focal_mm,
+                    f_number,
+                    focus,
+                    sensor_mm: 36.0,
+                };
+                let mut frame = depth_frame(w, h, 90 + k as u32, focus as f32);
+                let n = w * h;
+                let mut color = shutter::frame::Color {
+                    r: noise(n, 3 + k as u32, 0.0, 4.0),
+                    g: noise(n, 5 + k as u32, -1.0, 1.0),
+                    b: noise(n, 7 + k as u32, 0.0, 0.01),
+                    a: (j != 1).then(|| noise(n, 11 + k as u32, 0.0, 1.0)),
+                };
+                // Stress colour under the third lens only: its ±1e30 set the range there, which
+                // would make the bound loose for the others.
+                if j == 2 {
+                    let stress = stress_values(focus as f32);
+                    for (i, v) in stress.iter().enumerate() {
+                        color.r[(i * 13 + 5) % n] = *v;
+                        color.g[(i * 17 + 3) % n] = *v;
+                    }
+                }
+                frame.color = Some(color);
+                let _ = sanitize(&mut frame, DepthKind::Depth);
+                for (blades, rings) in [(0, 6), (5, 2)] {
+                    let params = DofParams {
+                        max_coc,
+                        blades,
+                        rings,
+                        ..DofParams::new(CocSource::Lens(lens))
+                    };
+                    let coc = coc_plane(&frame, &params);
+                    let config = DofConfig::new(w, h, &params);
+                    let t = tiles(&coc, w, h, config.epsilon);
+                    let color = frame.color.as_ref().unwrap();
+                    let cpu = gather(&config, color, &coc, &t);
+                    let got = gpu
+                        .try_gather(&config, color, &coc, &t)
+                        .unwrap_or_else(|e| panic!("{e}"));
+                    assert_eq!(got.a.is_some(), cpu.a.is_some());
+                    let planes = [
+                        ("r", &got.r, &cpu.r),
+                        ("g", &got.g, &cpu.g),
+                        ("b", &got.b, &cpu.b),
+                    ];
+                    let alpha = got.a.as_ref().zip(cpu.a.as_ref()).map(|(g, c)| ("a", g, c));
+                    for (name, got, cpu) in planes.into_iter().chain(alpha) {
+                        let (lo, hi) = cpu
+                            .iter()
+                            .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+                        let range = (hi - lo).max(f32::MIN_POSITIVE);
+                        let d = diff(got, cpu);
+                        let what = format!("lens {j} {w}x{h} blades {blades} rings {rings} {name}");
+                        assert!(
+                            d.max <= 1e-5 * range,
+                            "{what}: max {} > 1e-5 of {range} at {} (GPU {} CPU {})",
+                            d.max,
+                            d.worst,
+                            got[d.worst],
+                            cpu[d.worst]
+                        );
+                        assert!(d.mean <= 1e-7 * range as f64, "{what}: mean {}", d.mean);
+                        worst = worst.max(d.max / range);
+                        cases += 1;
+                    }
+                }
+            }
+        }
+        let _ = writeln!(
+            std::io::stderr(),
+            "gpu: dof gather: {cases} planes, largest difference {worst:e} of the range"
+        );
     }
 
     // ---- The tile stages: max/min reductions, exact or nearly ----

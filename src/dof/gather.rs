@@ -65,6 +65,8 @@ struct PixelTap {
     norm_far: f32,
     norm_near: f32,
     area: f32,
+    /// The offset itself (the GPU twin reads the frame by it, not by a padded index).
+    offset: [i32; 2],
 }
 
 /// A whole-pixel offset with the area it stands for, as a tap of a tile's pattern: its index
@@ -76,6 +78,7 @@ fn pixel_tap((dx, dy): (isize, isize), area: f32, aperture: &Aperture, stride: i
         norm_far: aperture.norm(-dx as f32, -dy as f32),
         norm_near: aperture.norm(dx as f32, dy as f32),
         area,
+        offset: [dx as i32, dy as i32],
     }
 }
 
@@ -168,10 +171,7 @@ impl Padded {
                 2 => color.b[i],
                 3 => color.a.as_ref().map_or(0.0, |a| a[i]),
                 4 => 0.5 * coc[i],
-                _ => {
-                    let r = (0.5 * coc[i]).abs().max(SMALLEST_RADIUS);
-                    1.0 / (unit_area * r * r)
-                }
+                _ => inverse_area(coc[i], unit_area),
             }
         };
         let planes = [0, 1, 2, 3, 4, 5].map(|plane| {
@@ -215,6 +215,141 @@ fn taps_for<'a>(
             made
         }
     }
+}
+
+/// What a tile that gathers gathers: its fields, the radius of its taps, and the radius of
+/// its far field's own taps where they differ (0: none, the tile's own pixels are in focus).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Choice {
+    fields: Fields,
+    radius: f32,
+    far_radius: Option<f32>,
+}
+
+/// How a tile with gather radius `reach`, own largest radius `own` and no near field
+/// (`far_only`) gathers; `None` where nothing out of focus reaches it (it is copied).
+fn choose(reach: f32, own: f32, far_only: bool, half_focus: f32) -> Option<Choice> {
+    if reach < half_focus {
+        return None;
+    }
+    let near = !far_only;
+    // Where the tile's radius is set by a larger bokeh than its own (a near field reaching
+    // over it), the far field is gathered apart at the tile's own radius: the large radius's
+    // rings are too sparse for a small far bokeh, which would keep only the few taps inside
+    // it (a grid of marks on a fine far texture).
+    let split = near && own.ceil() < reach.ceil();
+    let far_radius = split.then_some(if own < half_focus { 0.0 } else { own });
+    let fields = match (near, split) {
+        (false, _) => Fields::Far,
+        (true, false) => Fields::Both,
+        (true, true) => Fields::Apart,
+    };
+    Some(Choice {
+        fields,
+        radius: reach,
+        far_radius,
+    })
+}
+
+/// One tap as the GPU twin of [`gather`] reads it: a whole-pixel offset, the aperture norms
+/// of it for the far and the near field, and the area it stands for (px²).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OffsetTap {
+    pub offset: [i32; 2],
+    pub norm_far: f32,
+    pub norm_near: f32,
+    pub area: f32,
+}
+
+/// How one tile gathers, for the GPU twin: `fields` 0 copy, 1 the far field alone, 2 both
+/// fields over the same taps, 3 the far field over its own taps then the near field; the
+/// taps (start and count in [`TilePlan::taps`]) and the far field's own taps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TileTaps {
+    pub fields: u32,
+    pub taps: [u32; 2],
+    pub far: [u32; 2],
+}
+
+/// What [`gather`] decides per tile, as the GPU twin reads it: every tile's choice and the
+/// tap lists they point into (each list once, shared by the tiles of one radius).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TilePlan {
+    pub taps: Vec<OffsetTap>,
+    pub tiles: Vec<TileTaps>,
+}
+
+/// The plan [`gather`] follows for `tiles`: the same choices and the same taps, in order.
+pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
+    let rings_count = config.rings as usize;
+    let aperture = Aperture::new(config.blades, config.blade_rotation);
+    let rings = taps(rings_count, &aperture);
+    let grids: Vec<Vec<PixelTap>> = (0..=rings_count)
+        .map(|r| grid_taps(r, &aperture, 0))
+        .collect();
+    let half_focus = (0.5 * config.epsilon).max(SMALLEST_RADIUS);
+    let mut plan = TilePlan {
+        taps: Vec::new(),
+        tiles: Vec::with_capacity(tiles.reach.len()),
+    };
+    // Tap lists already in `plan.taps`, by the radius that made them (a grid's whole radius,
+    // or a ring radius's bits).
+    let mut lists: std::collections::HashMap<(bool, u32), [u32; 2]> = Default::default();
+    let mut list = |radius: f32, plan: &mut TilePlan| -> [u32; 2] {
+        let key = match grids.get(radius.ceil() as usize) {
+            Some(_) => (true, radius.ceil() as u32),
+            None => (false, radius.to_bits()),
+        };
+        *lists.entry(key).or_insert_with(|| {
+            let mut made = Vec::new();
+            let found = taps_for(radius, &grids, &rings, &aperture, 0, &mut made);
+            let start = plan.taps.len() as u32;
+            plan.taps.extend(found.iter().map(|t| OffsetTap {
+                offset: t.offset,
+                norm_far: t.norm_far,
+                norm_near: t.norm_near,
+                area: t.area,
+            }));
+            [start, found.len() as u32]
+        })
+    };
+    for t in 0..tiles.reach.len() {
+        let tile = match choose(tiles.reach[t], tiles.own[t], tiles.far_only[t], half_focus) {
+            None => TileTaps {
+                fields: 0,
+                taps: [0, 0],
+                far: [0, 0],
+            },
+            Some(choice) => {
+                let main = list(choice.radius, &mut plan);
+                let far = match choice.far_radius {
+                    None => main,
+                    Some(0.0) => [0, 0],
+                    Some(own) => list(own, &mut plan),
+                };
+                let fields = match choice.fields {
+                    Fields::Far => 1,
+                    Fields::Both => 2,
+                    Fields::Apart => 3,
+                };
+                TileTaps {
+                    fields,
+                    taps: main,
+                    far,
+                }
+            }
+        };
+        plan.tiles.push(tile);
+    }
+    plan
+}
+
+/// 1 / bokeh area (px⁻²) of a pixel of signed CoC `coc` (diameter, px): the weight of its
+/// light per pixel it covers.
+#[inline(always)]
+pub fn inverse_area(coc: f32, unit_area: f32) -> f32 {
+    let r = (0.5 * coc).abs().max(SMALLEST_RADIUS);
+    1.0 / (unit_area * r * r)
 }
 
 /// Which fields a tile row gathers, and over which taps.
@@ -263,11 +398,12 @@ pub fn gather(config: &DofConfig, color: &Color, coc: &[f32], tiles: &Tiles) -> 
         .for_each(|(ty, (((band_r, band_g), band_b), band_a))| {
             let mut bands = [band_r, band_g, band_b, band_a];
             for tx in 0..tiles_x {
-                let radius = reach[ty * tiles_x + tx];
+                let t = ty * tiles_x + tx;
                 let x0 = tx * TILE;
                 let span = TILE.min(width - x0);
                 let rows = bands[0].len() / width;
-                if radius < half_focus {
+                let Some(choice) = choose(reach[t], tiles.own[t], tiles.far_only[t], half_focus)
+                else {
                     for row in 0..rows {
                         let start = padded.index(x0, ty * TILE + row);
                         for (k, band) in bands.iter_mut().enumerate() {
@@ -276,32 +412,16 @@ pub fn gather(config: &DofConfig, color: &Color, coc: &[f32], tiles: &Tiles) -> 
                         }
                     }
                     continue;
-                }
+                };
                 let mut made = Vec::new();
-                let taps = taps_for(radius, &grids, &rings, &aperture, stride, &mut made);
-                let near = !tiles.far_only[ty * tiles_x + tx];
-                // Where the tile's radius is set by a larger bokeh than its own (a near field
-                // reaching over it), the far field is gathered apart at the tile's own
-                // radius: the large radius's rings are too sparse for a small far bokeh,
-                // which would keep only the few taps inside it (a grid of marks on a fine
-                // far texture).
-                let own = tiles.own[ty * tiles_x + tx];
+                let taps = taps_for(choice.radius, &grids, &rings, &aperture, stride, &mut made);
                 let mut made_far = Vec::new();
-                let split = near && own.ceil() < radius.ceil();
-                let far_taps = if split {
-                    if own < half_focus {
-                        &[][..]
-                    } else {
-                        taps_for(own, &grids, &rings, &aperture, stride, &mut made_far)
-                    }
-                } else {
-                    taps
+                let far_taps = match choice.far_radius {
+                    None => taps,
+                    Some(0.0) => &[][..],
+                    Some(own) => taps_for(own, &grids, &rings, &aperture, stride, &mut made_far),
                 };
-                let mode = match (near, split) {
-                    (false, _) => Fields::Far,
-                    (true, false) => Fields::Both,
-                    (true, true) => Fields::Apart,
-                };
+                let mode = choice.fields;
                 for row in 0..rows {
                     let start = padded.index(x0, ty * TILE + row);
                     let mut result = [[0.0f32; TILE]; 4];

@@ -19,7 +19,7 @@ pub mod gather;
 
 use rayon::prelude::*;
 
-use crate::frame::{Frame, Passes};
+use crate::frame::{Color, Frame, Passes};
 pub use coc::Lens;
 
 /// Which depth-of-field method runs.
@@ -237,6 +237,17 @@ pub trait Stages {
     fn tiles(&self, coc: &[f32], width: usize, height: usize, epsilon: f32) -> gather::Tiles {
         gather::tiles(coc, width, height, epsilon)
     }
+
+    /// [`gather::gather`].
+    fn gather(
+        &self,
+        config: &DofConfig,
+        color: &Color,
+        coc: &[f32],
+        tiles: &gather::Tiles,
+    ) -> Color {
+        gather::gather(config, color, coc, tiles)
+    }
 }
 
 /// Every stage on the CPU (rayon): the reference.
@@ -253,7 +264,7 @@ pub fn apply(frame: Frame, params: &DofParams) -> Frame {
     apply_with(frame, params, &Cpu)
 }
 
-/// [`apply`] with the stages that have a twin elsewhere (`coc`, tile min/max) run by
+/// [`apply`] with the stages that have a twin elsewhere (`coc`, tile min/max, the gather) run by
 /// `stages`; the others run here on the CPU.
 pub fn apply_with(frame: Frame, params: &DofParams, stages: &impl Stages) -> Frame {
     let coc = stages.coc_plane(&frame, params);
@@ -270,7 +281,7 @@ pub fn apply_with(frame: Frame, params: &DofParams, stages: &impl Stages) -> Fra
         Method::Blend => blend::blend(&config, color, &coc),
         Method::Gather => {
             let tiles = stages.tiles(&coc, frame.width, frame.height, config.epsilon);
-            gather::gather(&config, &color, &coc, &tiles)
+            stages.gather(&config, &color, &coc, &tiles)
         }
     };
     Frame {

@@ -33,6 +33,7 @@ pub struct Gpu {
     pub(crate) tile_max: Stage,
     pub(crate) neighbor_max: Stage,
     pub(crate) dilate: Stage,
+    pub(crate) gather: Stage,
     /// Stages with a twin that ran on the CPU for a frame (see [`Gpu::note_cpu_stage`]).
     stages_on_cpu: AtomicU64,
 }
@@ -157,6 +158,7 @@ impl Gpu {
             tile_max: super::tile_max::stage(&device),
             neighbor_max: super::neighbor_max::stage(&device),
             dilate: super::dilate::stage(&device),
+            gather: super::gather::stage(&device),
             device,
             queue,
             info,
@@ -225,6 +227,16 @@ impl crate::dof::Stages for Gpu {
         epsilon: f32,
     ) -> crate::dof::gather::Tiles {
         Gpu::tiles(self, coc, width, height, epsilon)
+    }
+
+    fn gather(
+        &self,
+        config: &crate::dof::DofConfig,
+        color: &crate::frame::Color,
+        coc: &[f32],
+        tiles: &crate::dof::gather::Tiles,
+    ) -> crate::frame::Color {
+        Gpu::gather(self, config, color, coc, tiles)
     }
 }
 

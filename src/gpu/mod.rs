@@ -5,6 +5,8 @@
 //! - [`coc`] + `coc.wgsl`: depth of field's `coc` stage, twin of [`crate::dof::coc_plane`];
 //! - [`tiles`] + `tiles.wgsl`: depth of field's tile min/max, twin of
 //!   [`crate::dof::gather::tiles`];
+//! - [`gather`] + `gather.wgsl`: depth of field's bokeh gather, twin of
+//!   [`crate::dof::gather::gather`];
 //! - [`tile_max`] + `tile_max.wgsl`, [`neighbor_max`] + `neighbor_max.wgsl`, [`dilate`] +
 //!   `dilate.wgsl`: reconstruct's tile stages, twins of [`crate::motion::tile_max`],
 //!   [`crate::motion::neighbor_max`] and [`crate::motion::dilate`];
@@ -40,6 +42,8 @@ pub mod coc;
 mod context;
 #[cfg(feature = "gpu")]
 pub mod dilate;
+#[cfg(feature = "gpu")]
+pub mod gather;
 #[cfg(feature = "gpu")]
 pub mod neighbor_max;
 #[cfg(feature = "gpu")]

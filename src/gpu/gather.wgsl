@@ -1,0 +1,174 @@
+// Depth of field's bokeh gather: the twin of `gather` (src/dof/gather.rs), one workgroup per
+// 16×16 tile, one invocation per pixel. Keep in sync with `gather_run` there: the same taps
+// in the same order, the same weights, the same sums (offset by the centre) and the same
+// composite. The tile plan (which fields, which taps) is the CPU's own (`dof::gather::plan`).
+
+// Keep in sync with `GatherConfig` in src/gpu/gather.rs.
+struct GatherConfig {
+    width: u32,
+    height: u32,
+    // Tiles per row.
+    columns: u32,
+    // 1 where the frame has alpha.
+    has_alpha: u32,
+    // gather::LAYER.
+    layer: f32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// Keep in sync with `GpuTap` in src/gpu/gather.rs.
+struct Tap {
+    dx: i32,
+    dy: i32,
+    norm_far: f32,
+    norm_near: f32,
+    area: f32,
+}
+
+// Keep in sync with `GpuTile` in src/gpu/gather.rs: fields 0 copy, 1 far, 2 both, 3 apart.
+struct Tile {
+    fields: u32,
+    taps_start: u32,
+    taps_count: u32,
+    far_start: u32,
+    far_count: u32,
+}
+
+@group(0) @binding(0) var<uniform> config: GatherConfig;
+// r, g, b, a planes one after the other (a zero without alpha).
+@group(0) @binding(1) var<storage, read> color: array<f32>;
+// The signed CoC plane (diameter, px), then 1 / bokeh area per pixel (the CPU's
+// `inverse_area`: WGSL's division is not correctly rounded).
+@group(0) @binding(2) var<storage, read> coc: array<f32>;
+@group(0) @binding(3) var<storage, read> taps: array<Tap>;
+@group(0) @binding(4) var<storage, read> tiles: array<Tile>;
+// r, g, b, a planes one after the other.
+@group(0) @binding(5) var<storage, read_write> out: array<f32>;
+
+const TILE: u32 = 16u;
+
+// Index i of a row or column of n pixels reflected into it about its edges, the edge pixel
+// repeated (`mirror` in gather.rs).
+fn mirror(i: i32, n: u32) -> u32 {
+    let period = 2 * i32(n);
+    var m = i % period;
+    if (m < 0) {
+        m += period;
+    }
+    if (m >= i32(n)) {
+        return u32(period - 1 - m);
+    }
+    return u32(m);
+}
+
+struct Sample {
+    d: vec4<f32>,
+    c: f32,
+    ia: f32,
+}
+
+// The sample at offset (dx, dy) from pixel (x, y): its colour minus the centre's, its signed
+// radius and 1 / bokeh area.
+fn sample(x: u32, y: u32, dx: i32, dy: i32, centre: vec4<f32>) -> Sample {
+    let n = config.width * config.height;
+    let sx = mirror(i32(x) + dx, config.width);
+    let sy = mirror(i32(y) + dy, config.height);
+    let i = sy * config.width + sx;
+    var s: Sample;
+    s.d = vec4<f32>(color[i], color[n + i], color[2u * n + i], color[3u * n + i]) - centre;
+    s.c = 0.5 * coc[i];
+    s.ia = coc[n + i];
+    return s;
+}
+
+@compute @workgroup_size(16, 16)
+fn gather(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    let x = group.x * TILE + local.x;
+    let y = group.y * TILE + local.y;
+    if (x >= config.width || y >= config.height) {
+        return;
+    }
+    let n = config.width * config.height;
+    let p = y * config.width + x;
+    let tile = tiles[group.y * config.columns + group.x];
+    let centre = vec4<f32>(color[p], color[n + p], color[2u * n + p], color[3u * n + p]);
+    if (tile.fields == 0u) {
+        out[p] = centre.x;
+        out[n + p] = centre.y;
+        out[2u * n + p] = centre.z;
+        out[3u * n + p] = centre.w;
+        return;
+    }
+    let cc = 0.5 * coc[p];
+    let rp = abs(cc);
+    let split = cc - 0.5 * config.layer;
+    // Sums of weight × (sample − centre); p's own weight starts the far sum.
+    var far = vec4<f32>(0.0);
+    var far_weight = coc[n + p];
+    var near = vec4<f32>(0.0);
+    var opacity = 0.0;
+    if (tile.fields == 1u || tile.fields == 3u) {
+        for (var k = 0u; k < tile.far_count; k++) {
+            let tap = taps[tile.far_start + k];
+            let s = sample(x, y, tap.dx, tap.dy, centre);
+            let rs = abs(s.c);
+            let is_far = tile.fields == 1u || s.c > split;
+            let cover_far = clamp(min(rs, rp) - tap.norm_far + 0.5, 0.0, 1.0);
+            var wf = 0.0;
+            if (is_far) {
+                wf = cover_far * s.ia;
+            }
+            far += wf * s.d;
+            far_weight += wf;
+        }
+    }
+    if (tile.fields == 3u) {
+        for (var k = 0u; k < tile.taps_count; k++) {
+            let tap = taps[tile.taps_start + k];
+            let s = sample(x, y, tap.dx, tap.dy, centre);
+            let rs = abs(s.c);
+            let cover_near = clamp(rs - tap.norm_near + 0.5, 0.0, 1.0);
+            var wn = 0.0;
+            if (!(s.c > split)) {
+                wn = cover_near * tap.area * s.ia;
+            }
+            near += wn * s.d;
+            opacity += wn;
+        }
+    }
+    if (tile.fields == 2u) {
+        for (var k = 0u; k < tile.taps_count; k++) {
+            let tap = taps[tile.taps_start + k];
+            let s = sample(x, y, tap.dx, tap.dy, centre);
+            let rs = abs(s.c);
+            let is_far = s.c > split;
+            let cover_far = clamp(min(rs, rp) - tap.norm_far + 0.5, 0.0, 1.0);
+            let cover_near = clamp(rs - tap.norm_near + 0.5, 0.0, 1.0);
+            var wf = 0.0;
+            var wn = 0.0;
+            if (is_far) {
+                wf = cover_far * s.ia;
+            } else {
+                wn = cover_near * tap.area * s.ia;
+            }
+            far += wf * s.d;
+            near += wn * s.d;
+            far_weight += wf;
+            opacity += wn;
+        }
+    }
+    var near_scale = 1.0;
+    var rest = 1.0 - opacity;
+    if (opacity > 1.0) {
+        near_scale = 1.0 / opacity;
+        rest = 0.0;
+    }
+    let far_scale = rest / far_weight;
+    let o = centre + near * near_scale + far * far_scale;
+    out[p] = o.x;
+    out[n + p] = o.y;
+    out[2u * n + p] = o.z;
+    out[3u * n + p] = o.w;
+}
