@@ -21,7 +21,8 @@ fn bench_runs_end_to_end_and_writes_its_reports() {
     assert!(stdout(&o).contains("| sparse | none |"), "{}", stdout(&o));
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
-    let rows = report["rows"].as_array().unwrap();
+    let all = report["rows"].as_array().unwrap();
+    let rows: Vec<&serde_json::Value> = all.iter().filter(|r| r["backend"] == "cpu").collect();
     let settings = shutter::bench::sweep().len();
     assert_eq!(rows.len(), 2 * settings);
     // Static: nothing to blur, so every setting is exact; sparse: `none` misses the blur.
@@ -30,13 +31,45 @@ fn bench_runs_end_to_end_and_writes_its_reports() {
         .all(|r| r["region"]["pixels"] == 0 && r["region"]["rmse"] == 0.0));
     assert_eq!(rows[settings]["setting"], "none");
     assert!(rows[settings]["region"]["rmse"].as_f64().unwrap() > 0.01);
+    // With an adapter (CI has Mesa's software driver), every reconstruct setting also runs on
+    // wgpu, in a row beside the CPU's, with its GPU stages timed apart and its error within
+    // 1 % of the CPU's (the backends agree to rounding, so the errors do too).
+    let gpu: Vec<&serde_json::Value> = all.iter().filter(|r| r["backend"] == "wgpu").collect();
+    let reconstruct = shutter::bench::sweep()
+        .iter()
+        .filter(|s| s.algorithm == shutter::motion::Algorithm::Reconstruct)
+        .count();
+    if shutter::gpu::open(shutter::gpu::Backend::Wgpu).is_ok() {
+        assert_eq!(gpu.len(), 2 * reconstruct, "{all:?}");
+        for row in &gpu {
+            let label = row["setting"].as_str().unwrap();
+            let cpu_label = label.strip_suffix(" [wgpu]").expect("labelled");
+            let cpu = rows
+                .iter()
+                .find(|r| r["scene"] == row["scene"] && r["setting"] == cpu_label)
+                .expect("a CPU row");
+            let (e_gpu, e_cpu) = (
+                row["region"]["rmse"].as_f64().unwrap(),
+                cpu["region"]["rmse"].as_f64().unwrap(),
+            );
+            assert!(
+                (e_gpu - e_cpu).abs() <= 0.01 * e_cpu,
+                "{label}: {e_gpu} against {e_cpu}"
+            );
+            assert!(row["gpu_stages"]["compute_ms"].as_f64().unwrap() > 0.0, "{row}");
+        }
+        assert!(stdout(&o).contains("GPU stages of the [wgpu] rows"));
+    } else {
+        assert!(gpu.is_empty());
+    }
     for file in ["bench.md", "pareto.svg", "pareto.png"] {
         assert!(out.join(file).metadata().unwrap().len() > 100, "{file}");
     }
     let sheet = image::open(out.join("contact/sparse.png")).unwrap();
     // sharp, each setting, reference: a grid of panels 4 px apart, each under a label strip.
     let columns = shutter::bench::plot::SHEET_COLUMNS as u32;
-    let rows = (settings as u32 + 2).div_ceil(columns);
+    let per_scene = all.iter().filter(|r| r["scene"] == "sparse").count();
+    let rows = (per_scene as u32 + 2).div_ceil(columns);
     assert_eq!(sheet.width(), columns * (64 + 4));
     assert!(sheet.height() > rows * 36 && sheet.height().is_multiple_of(rows));
     let svg = std::fs::read_to_string(out.join("pareto.svg")).unwrap();

@@ -17,6 +17,7 @@ use serde::Serialize;
 use crate::dof::{BlendForm, CocSource, DofParams, Lens, Method};
 use crate::error::{Error, Problem, ProblemKind, Result};
 use crate::frame::Frame;
+use crate::gpu::{Backend, GpuTimes};
 use crate::io::passes::{plan_frame, read_color, read_frame, Inputs, PlanOptions};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
@@ -25,7 +26,8 @@ use crate::motion::{
     Algorithm, Anchor, CurveKind, Normalize, ReconstructParams, ScatterParams, StretchParams,
     Variant, Weight,
 };
-use crate::process::{apply, Params};
+use crate::numeric;
+use crate::process::{self, apply, Params};
 use crate::settings;
 use crate::truth::scenes::SCENES;
 use crate::truth::write::{resampled_role, write_resampled_references, write_scene, SceneOptions};
@@ -366,6 +368,13 @@ pub struct BenchOptions {
 pub struct Row {
     pub scene: String,
     pub setting: String,
+    /// Where shutter's stages ran: cpu, or wgpu (the stages with a GPU twin on the GPU, the
+    /// rest on the CPU; the setting's label ends in "[wgpu]"); empty for a peer's row.
+    pub backend: String,
+    /// On wgpu, the GPU stages' upload, dispatch and readback per run, ms (measured apart
+    /// with the queue drained between them, see [`crate::gpu::Gpu::set_profiling`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gpu_stages: Option<GpuTimes>,
     /// The program that made the output, for a peer's row ("blender 5.2.3"); none for
     /// shutter's own.
     pub peer: Option<String>,
@@ -526,6 +535,14 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
         None => Vec::new(),
     };
     let preset = Preset::builtin("shutter")?;
+    // GPU rows beside the CPU's wherever an adapter is present (a software driver included:
+    // its figures are for the record, not for speed).
+    let gpu = crate::gpu::open(Backend::Wgpu)
+        .ok()
+        .and_then(|(gpu, _)| gpu);
+    if let Some(gpu) = &gpu {
+        progress(format!("GPU rows on {}", gpu.adapter()));
+    }
     let mut rows = Vec::new();
     let mut noise_floors = Vec::new();
     let mut sheets = Vec::new();
@@ -559,7 +576,15 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                 noise_rmse: noise_variance.sqrt(),
             });
             let mut outputs = Vec::new();
-            for setting in &target.settings {
+            let runs = target.settings.iter().flat_map(|setting| {
+                let gpu = gpu.as_ref().filter(|_| has_twin(setting));
+                std::iter::once((setting, None)).chain(gpu.map(|g| (setting, Some(g))))
+            });
+            for (setting, on_gpu) in runs {
+                let label = match on_gpu {
+                    Some(_) => format!("{} [wgpu]", setting.label),
+                    None => setting.label.clone(),
+                };
                 // Compute only: the algorithm on decoded passes, median of `runs`.
                 let plan_options = PlanOptions {
                     preset: &preset,
@@ -570,24 +595,49 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                 let plan = plan_frame(&inputs, Some(1), &plan_options).map_err(Error::Files)?;
                 let frame = read_frame(&plan)?;
                 let mut times = Vec::with_capacity(options.runs);
+                if let Some(gpu) = on_gpu {
+                    gpu.take_times();
+                    gpu.set_profiling(true);
+                }
                 for _ in 0..options.runs {
-                    let input = frame.clone();
+                    let mut input = frame.clone();
                     let t = Instant::now();
-                    let out = apply(setting.algorithm, &setting.params, input, 1);
+                    let out = match on_gpu {
+                        None => apply(setting.algorithm, &setting.params, input, 1),
+                        Some(gpu) => {
+                            let params = &setting.params;
+                            let _ = numeric::sanitize(&mut input, process::depth_kind(params));
+                            process::process_on(setting.algorithm, params, input, 1, Some(gpu))
+                        }
+                    };
                     times.push(t.elapsed().as_secs_f64() * 1e3);
                     drop(out);
                 }
                 let compute_ms = median(times);
+                // The GPU stages' split, per run (a mean: the parts are summed over runs).
+                let gpu_stages = on_gpu.map(|gpu| {
+                    gpu.set_profiling(false);
+                    let t = gpu.take_times();
+                    let n = options.runs as f64;
+                    GpuTimes {
+                        upload_ms: t.upload_ms / n,
+                        compute_ms: t.compute_ms / n,
+                        readback_ms: t.readback_ms / n,
+                    }
+                });
 
                 // End to end: the shutter binary on the frame, median of `runs`.
                 let out_dir = options.out.join("runs").join(name.replace(' ', "_"));
-                let file_stem = setting.label.replace(' ', "_");
+                let file_stem = label.replace(' ', "_");
                 let output = out_dir.join(format!("{file_stem}.0001.exr"));
                 let mut walls = Vec::with_capacity(options.runs);
                 let mut peak: Option<f64> = None;
                 for _ in 0..options.runs {
                     let mut command = std::process::Command::new(&options.binary);
                     command.arg("blur").args(setting.flags());
+                    if on_gpu.is_some() {
+                        command.args(["--backend", "wgpu"]);
+                    }
                     for (flag, pattern) in inputs.all() {
                         command.arg(format!("--{flag}")).arg(&pattern.raw);
                     }
@@ -624,14 +674,16 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                 let whole = metrics::compare(&rgb(&reference), &rgb(&blurred), None);
                 let scored = metrics::compare(&rgb(&reference), &rgb(&blurred), Some(&region));
                 progress(format!(
-                    "{name}: {} compute {compute_ms:.2} ms, end to end {:.1} ms, region RMSE {:.5}",
-                    setting.label,
+                    "{name}: {label} compute {compute_ms:.2} ms, end to end {:.1} ms, region RMSE \
+                     {:.5}",
                     median(walls.clone()),
                     scored.rmse
                 ));
                 rows.push(Row {
                     scene: name.clone(),
-                    setting: setting.label.clone(),
+                    setting: label.clone(),
+                    backend: if on_gpu.is_some() { "wgpu" } else { "cpu" }.to_string(),
+                    gpu_stages,
                     peer: None,
                     peer_settings: serde_json::Value::Null,
                     compute_ms,
@@ -641,7 +693,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                     region: scored,
                     region_rmse_corrected: noise::corrected_rmse(scored.rmse, noise_variance),
                 });
-                outputs.push((setting.label.clone(), blurred));
+                outputs.push((label, blurred));
             }
             for peer in peers
                 .iter()
@@ -668,6 +720,8 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                 rows.push(Row {
                     scene: name.clone(),
                     setting: peer.label.clone(),
+                    backend: String::new(),
+                    gpu_stages: None,
                     peer: Some(peer.peer.clone()),
                     peer_settings: peer.settings.clone(),
                     compute_ms: peer.compute_ms,
@@ -696,6 +750,11 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
 }
 
 type Sheet = (String, Frame, Vec<(String, Frame)>, Frame);
+
+/// Whether a setting runs any stage that has a GPU twin: depth of field's, reconstruct's.
+fn has_twin(setting: &Setting) -> bool {
+    setting.params.dof.is_some() || setting.algorithm == Algorithm::Reconstruct
+}
 
 fn output_problem(path: &Path, detail: String) -> Error {
     Problem::new(ProblemKind::Output, path, detail).into()
@@ -783,6 +842,25 @@ pub fn markdown(report: &BenchReport) -> String {
             row.region.flip,
             row.whole.rmse,
         ));
+    }
+    let gpu_rows: Vec<&Row> = report
+        .rows
+        .iter()
+        .filter(|r| r.gpu_stages.is_some())
+        .collect();
+    if !gpu_rows.is_empty() {
+        text.push_str(
+            "\nGPU stages of the [wgpu] rows per run (ms; measured apart, the queue drained \
+             between them; the rest of compute ms is the stages on the CPU and the host's \
+             packing):\n\n| scene | setting | upload | compute | readback |\n|---|---|---:|---:|---:|\n",
+        );
+        for row in gpu_rows {
+            let t = row.gpu_stages.expect("filtered");
+            text.push_str(&format!(
+                "| {} | {} | {:.2} | {:.2} | {:.2} |\n",
+                row.scene, row.setting, t.upload_ms, t.compute_ms, t.readback_ms
+            ));
+        }
     }
     text
 }

@@ -1,11 +1,13 @@
 //! The GPU context of a run: instance, adapter, device and queue, the compiled stages, and
 //! their buffers, created once and reused by every frame.
 
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::Mutex;
 
 use wgpu::{Backends, DeviceType};
 
 use super::stage::Stage;
+use super::GpuTimes;
 
 /// The backends with what the passes need: compute, float storage and (for the scatter
 /// passes to come) atomics and float render targets. Never GL (see the module doc).
@@ -36,6 +38,10 @@ pub struct Gpu {
     pub(crate) gather: Stage,
     /// Stages with a twin that ran on the CPU for a frame (see [`Gpu::note_cpu_stage`]).
     stages_on_cpu: AtomicU64,
+    /// Whether stages time their upload, compute and readback apart ([`Gpu::set_profiling`]).
+    pub(crate) profiling: AtomicBool,
+    /// What they measured since [`Gpu::take_times`] last took it.
+    pub(crate) times: Mutex<GpuTimes>,
 }
 
 impl std::fmt::Debug for Gpu {
@@ -163,6 +169,8 @@ impl Gpu {
             queue,
             info,
             stages_on_cpu: AtomicU64::new(0),
+            profiling: AtomicBool::new(false),
+            times: Mutex::new(GpuTimes::default()),
         })
     }
 
@@ -196,6 +204,18 @@ impl Gpu {
     /// Records that a stage with a GPU twin ran on the CPU for one frame.
     pub(crate) fn note_cpu_stage(&self) {
         self.stages_on_cpu.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Times each stage's upload, compute and readback apart from now on (`true`), or not.
+    /// Timing drains the queue between the three, which a run does not otherwise do: for
+    /// `shutter bench`'s GPU rows, not for production runs.
+    pub fn set_profiling(&self, on: bool) {
+        self.profiling.store(on, Ordering::Relaxed);
+    }
+
+    /// The times measured since the last call (zero unless profiling).
+    pub fn take_times(&self) -> GpuTimes {
+        std::mem::take(&mut *self.times.lock().unwrap_or_else(|e| e.into_inner()))
     }
 
     /// Stages with a twin that ran on the CPU so far, counted over frames.

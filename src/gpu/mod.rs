@@ -65,6 +65,31 @@ pub use context::{Gpu, Need};
 #[derive(Debug)]
 pub enum Gpu {}
 
+#[cfg(not(feature = "gpu"))]
+impl Gpu {
+    pub fn adapter(&self) -> String {
+        match *self {}
+    }
+
+    pub fn set_profiling(&self, _on: bool) {
+        match *self {}
+    }
+
+    pub fn take_times(&self) -> GpuTimes {
+        match *self {}
+    }
+}
+
+/// Where a GPU stage's time went, ms, summed over the stages that ran: writing its inputs
+/// into device memory, its dispatches, and copying its outputs back. Measured on the host,
+/// with the queue drained between the three (see `Gpu::set_profiling`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct GpuTimes {
+    pub upload_ms: f64,
+    pub compute_ms: f64,
+    pub readback_ms: f64,
+}
+
 /// Where the passes run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Backend {

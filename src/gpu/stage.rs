@@ -10,8 +10,9 @@
 
 use std::collections::HashMap;
 use std::sync::Mutex;
+use std::time::Instant;
 
-use super::Gpu;
+use super::{Gpu, GpuTimes};
 
 /// Sets of sizes whose buffers are kept at once per stage (a sequence has one; more are
 /// dropped).
@@ -232,6 +233,21 @@ impl Stage {
             .entry(sizes.clone())
             .or_insert_with(|| self.make_buffers(&gpu.device, &sizes));
 
+        let profiling = gpu.profiling.load(std::sync::atomic::Ordering::Relaxed);
+        let mut clock = Instant::now();
+        // With profiling, the queue is drained after each part and the time since the last
+        // mark added to `part`.
+        let mut mark = |part: fn(&mut GpuTimes) -> &mut f64| -> Result<(), StageError> {
+            if profiling {
+                gpu.device
+                    .poll(wgpu::PollType::wait_indefinitely())
+                    .map_err(|e| StageError::Device(e.to_string()))?;
+                let mut times = gpu.times.lock().unwrap_or_else(|e| e.into_inner());
+                *part(&mut times) += clock.elapsed().as_secs_f64() * 1e3;
+                clock = Instant::now();
+            }
+            Ok(())
+        };
         let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
         gpu.queue.write_buffer(&buffers.config, 0, config);
         for (buffer, data) in buffers.inputs.iter().zip(inputs) {
@@ -239,6 +255,10 @@ impl Stage {
                 gpu.queue.write_buffer(buffer, 0, data);
             }
         }
+        if profiling {
+            gpu.queue.submit([]);
+        }
+        mark(|t| &mut t.upload_ms)?;
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -261,6 +281,15 @@ impl Stage {
                 }
             }
         }
+        if profiling {
+            gpu.queue.submit([encoder.finish()]);
+            mark(|t| &mut t.compute_ms)?;
+            encoder = gpu
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some(self.label),
+                });
+        }
         let mut offset = 0;
         let mut ranges = Vec::new();
         let read = self.outputs - self.scratch;
@@ -277,6 +306,7 @@ impl Stage {
             return Err(StageError::Device(error.to_string()));
         }
         let words = read_back(&gpu.device, &buffers.readback, offset)?;
+        mark(|t| &mut t.readback_ms)?;
         Ok(ranges
             .into_iter()
             .map(|r| words[r.start / 4..r.end / 4].to_vec())
