@@ -85,7 +85,8 @@ pub fn process_clean(
 }
 
 /// [`process_clean`] on a backend: the stages that have a GPU twin run on `gpu` when it is
-/// given (today depth of field's `coc`), every other stage on the CPU in the same run.
+/// given (today depth of field's `coc` and reconstruct's gather), every other stage on the
+/// CPU in the same run.
 pub fn process_on(
     algorithm: Algorithm,
     params: &Params,
@@ -103,13 +104,16 @@ pub fn process_on(
     };
     let shutter = numeric::shutter(params.shutter);
     match algorithm {
-        Algorithm::Reconstruct => reconstruct::reconstruct(
-            frame,
-            &params.reconstruct,
-            shutter,
+        Algorithm::Reconstruct => {
+            let params = &params.reconstruct;
             // Frame numbers seed the jitter modulo 2³² (the hash is 32-bit).
-            frame_number as u32,
-        ),
+            let seed = frame_number as u32;
+            match gpu {
+                #[cfg(feature = "gpu")]
+                Some(gpu) => gpu.reconstruct(frame, params, shutter, seed),
+                _ => reconstruct::reconstruct(frame, params, shutter, seed),
+            }
+        }
         Algorithm::Scatter => scatter::scatter(frame, &params.scatter, shutter),
         Algorithm::Stretch => stretch::stretch(frame, &params.stretch, shutter),
         Algorithm::None => Frame {

@@ -126,7 +126,7 @@ fn auto_without_a_vulkan_driver_runs_on_the_cpu_and_says_so() {
 }
 
 #[cfg(feature = "gpu")]
-mod with_gpu {
+pub(crate) mod with_gpu {
     use super::*;
     use shutter::dof::{coc_plane, CocSource, DofParams, Lens};
     use shutter::frame::Frame;
@@ -136,7 +136,7 @@ mod with_gpu {
 
     /// The test binary's one GPU context (created once, as a run creates it once); `None`
     /// with a visible line when there is no adapter, a failure under SHUTTER_REQUIRE_GPU=1.
-    fn gpu() -> Option<&'static Gpu> {
+    pub(crate) fn gpu() -> Option<&'static Gpu> {
         static GPU: OnceLock<Result<Gpu, String>> = OnceLock::new();
         let gpu = GPU.get_or_init(|| {
             let start = std::time::Instant::now();

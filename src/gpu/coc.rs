@@ -309,7 +309,7 @@ impl Gpu {
 }
 
 /// Maps `buffer`'s first `bytes`, copies them out as f32 and unmaps it.
-fn read_back(
+pub(super) fn read_back(
     device: &wgpu::Device,
     buffer: &wgpu::Buffer,
     bytes: u64,

@@ -2,10 +2,12 @@
 //! their buffers, created once and reused by every frame.
 
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::OnceLock;
 
 use wgpu::{Backends, DeviceType};
 
 use super::coc::CocPass;
+use super::reconstruct::ReconstructPass;
 
 /// The backends with what the passes need: compute, float storage and (for the scatter
 /// passes to come) atomics and float render targets. Never GL (see the module doc).
@@ -28,6 +30,8 @@ pub struct Gpu {
     pub(crate) queue: wgpu::Queue,
     info: wgpu::AdapterInfo,
     pub(crate) coc: CocPass,
+    /// reconstruct's gather, compiled on first use (a run without motion blur never needs it).
+    pub(crate) reconstruct: OnceLock<ReconstructPass>,
     /// Stages with a twin that ran on the CPU for a frame (see [`Gpu::note_cpu_stage`]).
     stages_on_cpu: AtomicU64,
 }
@@ -151,6 +155,7 @@ impl Gpu {
             queue,
             info,
             coc,
+            reconstruct: OnceLock::new(),
             stages_on_cpu: AtomicU64::new(0),
         })
     }

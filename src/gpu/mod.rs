@@ -3,10 +3,14 @@
 //! stage's name (vello's `cpu/` and `shader/` pairing):
 //!
 //! - [`coc`] + `coc.wgsl`: depth of field's `coc` stage, twin of [`crate::dof::coc_plane`].
+//! - [`reconstruct`] + `reconstruct.wgsl`: motion blur's `gather` stage, twin of
+//!   [`crate::motion::reconstruct::gather`] and [`crate::motion::reconstruct::gather_2014`]
+//!   (every variant).
 //!
 //! The CPU passes are the reference; each twin has a parity test against them
 //! (tests/gpu.rs) with its tolerance stated and justified beside it. Stages without a twin
-//! yet run on the CPU in the same run (this slice of issue 15: only `coc` runs on the GPU).
+//! yet run on the CPU in the same run (this slice of issue 15: `coc` and reconstruct's gather
+//! run on the GPU).
 //!
 //! The backend is a run's choice ([`Backend`], `--backend cpu|wgpu|auto`):
 //! - `cpu` never touches wgpu;
@@ -29,6 +33,8 @@ use serde::Serialize;
 pub mod coc;
 #[cfg(feature = "gpu")]
 mod context;
+#[cfg(feature = "gpu")]
+pub mod reconstruct;
 
 #[cfg(feature = "gpu")]
 pub use context::{Gpu, Need};
