@@ -410,3 +410,42 @@ fn blur_on_wgpu_equals_the_cpu_within_the_tolerance() {
         );
     }
 }
+
+/// A frame without alpha: the gather's alpha is dropped, as on the CPU.
+#[test]
+fn reconstruct_gather_matches_the_cpu_without_alpha() {
+    let mut f = stripes(45, 29, 9.0);
+    f.color.as_mut().unwrap().a = None;
+    for params in variants() {
+        compare("stripes without alpha", &f, &params, 0.5, 7);
+    }
+}
+
+/// The cost of the pass with the gather on the GPU at 960×540 (a still subject over a moving
+/// background, the default variant), printed beside the CPU's (benchmarks measure, tests
+/// assert; a quarter of 1080p keeps the test short on a software driver).
+#[test]
+fn reconstruct_at_540p_prints_its_time() {
+    let Some(gpu) = gpu() else { return };
+    let frame = still_subject(960, 540, 12.0);
+    let params = ReconstructParams::default();
+    let _ = gpu.reconstruct(frame.clone(), &params, 0.5, 1); // compiled and buffers made here
+    let start = std::time::Instant::now();
+    let got = gpu.reconstruct(frame.clone(), &params, 0.5, 1);
+    let seconds = start.elapsed().as_secs_f64();
+    let start = std::time::Instant::now();
+    let cpu = reconstruct(frame, &params, 0.5, 1);
+    let cpu_seconds = start.elapsed().as_secs_f64();
+    assert_eq!(gpu.stages_on_cpu(), 0, "the GPU gather ran");
+    let p = parity(&got.color.unwrap().r, &cpu.color.unwrap().r);
+    let _ = writeln!(
+        std::io::stderr(),
+        "gpu: reconstruct 960x540 exposure, gather on the GPU (tiles and pack on the CPU, \
+         upload, dispatch, readback) {:.1} ms (cpu {:.1} ms); R max {:e} mean {:e}",
+        seconds * 1e3,
+        cpu_seconds * 1e3,
+        p.max,
+        p.mean
+    );
+    assert!(p.max <= MAX && p.mean <= MEAN && p.outside <= FLIPS);
+}
