@@ -85,8 +85,8 @@ pub fn process_clean(
 }
 
 /// [`process_clean`] on a backend: the stages that have a GPU twin run on `gpu` when it is
-/// given (today depth of field's `coc` and tile min/max), every other stage on the CPU in the
-/// same run.
+/// given (depth of field's `coc`, tile min/max and gather; reconstruct's tile stages and
+/// gather), every other stage on the CPU in the same run.
 pub fn process_on(
     algorithm: Algorithm,
     params: &Params,
@@ -104,22 +104,16 @@ pub fn process_on(
     };
     let shutter = numeric::shutter(params.shutter);
     match algorithm {
-        // Frame numbers seed the jitter modulo 2³² (the hash is 32-bit).
-        Algorithm::Reconstruct => match gpu {
-            None => {
-                reconstruct::reconstruct(frame, &params.reconstruct, shutter, frame_number as u32)
+        Algorithm::Reconstruct => {
+            let params = &params.reconstruct;
+            // Frame numbers seed the jitter modulo 2³² (the hash is 32-bit).
+            let seed = frame_number as u32;
+            match gpu {
+                #[cfg(feature = "gpu")]
+                Some(gpu) => gpu.reconstruct(frame, params, shutter, seed),
+                _ => reconstruct::reconstruct(frame, params, shutter, seed),
             }
-            #[cfg(feature = "gpu")]
-            Some(gpu) => reconstruct::reconstruct_with(
-                frame,
-                &params.reconstruct,
-                shutter,
-                frame_number as u32,
-                gpu,
-            ),
-            #[cfg(not(feature = "gpu"))]
-            Some(gpu) => match *gpu {},
-        },
+        }
         Algorithm::Scatter => scatter::scatter(frame, &params.scatter, shutter),
         Algorithm::Stretch => stretch::stretch(frame, &params.stretch, shutter),
         Algorithm::None => Frame {

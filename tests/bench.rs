@@ -56,7 +56,10 @@ fn bench_runs_end_to_end_and_writes_its_reports() {
                 (e_gpu - e_cpu).abs() <= 0.01 * e_cpu,
                 "{label}: {e_gpu} against {e_cpu}"
             );
-            assert!(row["gpu_stages"]["compute_ms"].as_f64().unwrap() > 0.0, "{row}");
+            assert!(
+                row["gpu_stages"]["compute_ms"].as_f64().unwrap() > 0.0,
+                "{row}"
+            );
         }
         assert!(stdout(&o).contains("GPU stages of the [wgpu] rows"));
     } else {

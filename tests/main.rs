@@ -10,6 +10,7 @@ mod dof;
 mod farm;
 mod golden;
 mod gpu;
+mod gpu_reconstruct;
 mod hostile;
 mod invariants;
 mod io;

@@ -2,10 +2,11 @@
 //! their buffers, created once and reused by every frame.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::Mutex;
+use std::sync::{Mutex, OnceLock};
 
 use wgpu::{Backends, DeviceType};
 
+use super::reconstruct::ReconstructPass;
 use super::stage::Stage;
 use super::GpuTimes;
 
@@ -36,6 +37,8 @@ pub struct Gpu {
     pub(crate) neighbor_max: Stage,
     pub(crate) dilate: Stage,
     pub(crate) gather: Stage,
+    /// reconstruct's gather, compiled on first use (a run without motion blur never needs it).
+    pub(crate) reconstruct: OnceLock<ReconstructPass>,
     /// Stages with a twin that ran on the CPU for a frame (see [`Gpu::note_cpu_stage`]).
     stages_on_cpu: AtomicU64,
     /// Whether stages time their upload, compute and readback apart ([`Gpu::set_profiling`]).
@@ -168,6 +171,7 @@ impl Gpu {
             device,
             queue,
             info,
+            reconstruct: OnceLock::new(),
             stages_on_cpu: AtomicU64::new(0),
             profiling: AtomicBool::new(false),
             times: Mutex::new(GpuTimes::default()),
@@ -256,7 +260,7 @@ impl crate::dof::Stages for Gpu {
         coc: &[f32],
         tiles: &crate::dof::gather::Tiles,
     ) -> crate::frame::Color {
-        Gpu::gather(self, config, color, coc, tiles)
+        Gpu::dof_gather(self, config, color, coc, tiles)
     }
 }
 

@@ -82,8 +82,14 @@ pub(crate) fn stage(device: &wgpu::Device) -> Stage {
 impl Gpu {
     /// [`crate::dof::gather::gather`] on the GPU; the CPU stage where the GPU cannot run it,
     /// counted in [`Gpu::stages_on_cpu`].
-    pub fn gather(&self, config: &DofConfig, color: &Color, coc: &[f32], tiles: &Tiles) -> Color {
-        self.try_gather(config, color, coc, tiles)
+    pub fn dof_gather(
+        &self,
+        config: &DofConfig,
+        color: &Color,
+        coc: &[f32],
+        tiles: &Tiles,
+    ) -> Color {
+        self.try_dof_gather(config, color, coc, tiles)
             .unwrap_or_else(|_| {
                 self.note_cpu_stage();
                 crate::dof::gather::gather(config, color, coc, tiles)
@@ -91,7 +97,7 @@ impl Gpu {
     }
 
     /// [`crate::dof::gather::gather`] on the GPU, or why it could not run.
-    pub fn try_gather(
+    pub fn try_dof_gather(
         &self,
         config: &DofConfig,
         color: &Color,

@@ -10,14 +10,18 @@
 //! - [`tile_max`] + `tile_max.wgsl`, [`neighbor_max`] + `neighbor_max.wgsl`, [`dilate`] +
 //!   `dilate.wgsl`: reconstruct's tile stages, twins of [`crate::motion::tile_max`],
 //!   [`crate::motion::neighbor_max`] and [`crate::motion::dilate`];
-//! - `stage`: what they share (bindings config → inputs → outputs, buffers kept per size).
+//! - [`reconstruct`] + `reconstruct.wgsl`: reconstruct's `gather` stage, twin of
+//!   [`crate::motion::reconstruct::gather`] and [`crate::motion::reconstruct::gather_2014`]
+//!   (every variant);
+//! - `stage`: what most of them share (bindings config → inputs → outputs, buffers kept per
+//!   size).
 //!
 //! The CPU passes are the reference; each twin has a parity test against them
-//! (tests/gpu.rs) with its tolerance stated and justified beside it. Stages without a twin
-//! yet run on the CPU in the same run. Depth of field's `coc` and tile min/max run on the GPU
-//! under `--backend wgpu` ([`crate::dof::Stages`]). The motion tile stages implement
-//! [`crate::motion::TileStages`], the hook reconstruct is to take them through; reconstruct
-//! does not call it yet, so under `--backend wgpu` they still run on the CPU.
+//! (tests/gpu.rs, tests/gpu_reconstruct.rs) with its tolerance stated and justified beside
+//! it. Under `--backend wgpu` depth of field's stages run on the GPU through
+//! [`crate::dof::Stages`] and reconstruct's through [`crate::motion::TileStages`] and its
+//! gather hook; stages without a twin yet (blend, scatter, stretch, reconstruct's pack) run on
+//! the CPU in the same run.
 //!
 //! The backend is a run's choice ([`Backend`], `--backend cpu|wgpu|auto`):
 //! - `cpu` never touches wgpu;
@@ -53,6 +57,8 @@ pub mod tile_max;
 #[cfg(feature = "gpu")]
 pub mod tiles;
 
+#[cfg(feature = "gpu")]
+pub mod reconstruct;
 #[cfg(feature = "gpu")]
 pub use stage::StageError;
 

@@ -315,7 +315,7 @@ impl Stage {
 }
 
 /// Maps `buffer`'s first `bytes`, copies them out as 32-bit words and unmaps it.
-fn read_back(
+pub(crate) fn read_back(
     device: &wgpu::Device,
     buffer: &wgpu::Buffer,
     bytes: u64,

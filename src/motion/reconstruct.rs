@@ -171,7 +171,7 @@ fn soft_depth_compare(za: f32, zb: f32, inverse_extent: f32) -> f32 {
 
 /// One pixel's data for the gather, packed so a tap reads one cache line:
 /// premultiplied R, G, B, A, depth, and 1 / |V| (infinite where still).
-type Texel = [f32; 6];
+pub type Texel = [f32; 6];
 const Z: usize = 4;
 const INV_LENGTH: usize = 5;
 /// The 2014 filters' tile size at most (px), whatever k: the dilation carries longer vectors
@@ -184,11 +184,13 @@ const TILE_2014: usize = 8;
 const LANES: usize = 8;
 
 /// |V|² above which a pixel blurs: (0.5 px + ε)².
-const MOVING_SQUARED: f32 = (HALF_PIXEL + EPSILON) * (HALF_PIXEL + EPSILON);
+pub(crate) const MOVING_SQUARED: f32 = (HALF_PIXEL + EPSILON) * (HALF_PIXEL + EPSILON);
 
-/// Everything reconstruct's stages read besides their buffers, as plain numbers: the shape of
-/// the uniform its GPU twin will take (keep the two in sync).
+/// Everything reconstruct's stages read besides their buffers, as plain numbers: the uniform
+/// of its GPU twin, `ReconstructConfig` in src/gpu/reconstruct.wgsl (keep the two in sync; the
+/// size test below guards the layout).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]
 #[repr(C)]
 pub struct ReconstructConfig {
     /// Frame size, pixels.
@@ -247,17 +249,57 @@ impl ReconstructConfig {
 /// The frame must hold colour, depth and velocity; the output holds colour alone. A frame in
 /// which nothing moves more than half a pixel keeps its colour untouched.
 pub fn reconstruct(frame: Frame, params: &ReconstructParams, shutter: f32, seed: u32) -> Frame {
-    reconstruct_with(frame, params, shutter, seed, &super::Cpu)
+    reconstruct_with(
+        frame,
+        params,
+        shutter,
+        seed,
+        &super::Cpu,
+        |config, inputs, color| inputs.gather(config, color),
+    )
+}
+
+/// What the gather stage reads besides the config and the colour it writes in place, as
+/// [`reconstruct_with`] hands it over: [`gather`]'s arguments or [`gather_2014`]'s.
+pub enum GatherInputs<'a> {
+    /// paper and dual.
+    Paper {
+        texels: &'a [Texel],
+        velocity: &'a Velocity,
+        neighbors: &'a TileGrid,
+    },
+    /// 2014 and exposure: the dilated tiles.
+    Stable {
+        texels: &'a [Texel2014],
+        tiles: &'a TileGrid,
+    },
+}
+
+impl GatherInputs<'_> {
+    /// The CPU gather of these inputs: [`gather`] or [`gather_2014`].
+    pub fn gather(&self, config: &ReconstructConfig, color: &mut Color) {
+        match *self {
+            GatherInputs::Paper {
+                texels,
+                velocity,
+                neighbors,
+            } => gather(config, texels, velocity, neighbors, color),
+            GatherInputs::Stable { texels, tiles } => gather_2014(config, texels, tiles, color),
+        }
+    }
 }
 
 /// [`reconstruct`] with the tile stages (`tile_max`, `neighbor_max`, `dilate`) run by
-/// `stages` (the GPU under `--backend wgpu`); the others run here on the CPU.
+/// `stages` and the gather stage given by the caller: the dispatch hooks of a backend whose
+/// twins run elsewhere (the GPU). `gather_stage` must write into the colour what
+/// [`GatherInputs::gather`] does; it runs only when something moves.
 pub fn reconstruct_with(
     mut frame: Frame,
     params: &ReconstructParams,
     shutter: f32,
     seed: u32,
     stages: &impl super::TileStages,
+    gather_stage: impl FnOnce(&ReconstructConfig, GatherInputs<'_>, &mut Color),
 ) -> Frame {
     let (width, height) = (frame.width, frame.height);
     let (Some(mut color), Some(depth), Some(velocity)) = (
@@ -294,12 +336,21 @@ pub fn reconstruct_with(
         let dilated = stages.dilate(&tiles);
         let texels = pack_2014(&config, &color, &depth, &velocity, &dilated);
         drop(depth);
-        gather_2014(&config, &texels, &dilated, &mut color);
+        let inputs = GatherInputs::Stable {
+            texels: &texels,
+            tiles: &dilated,
+        };
+        gather_stage(&config, inputs, &mut color);
     } else {
         let neighbors = stages.neighbor_max(&tiles);
         let texels = pack(&config, &color, &depth, &velocity, &neighbors);
         drop(depth);
-        gather(&config, &texels, &velocity, &neighbors, &mut color);
+        let inputs = GatherInputs::Paper {
+            texels: &texels,
+            velocity: &velocity,
+            neighbors: &neighbors,
+        };
+        gather_stage(&config, inputs, &mut color);
     }
     frame.color = Some(color);
     frame
@@ -315,7 +366,7 @@ fn near_blur(tiles: &TileGrid, c: usize, r: usize, radius: usize) -> bool {
 
 /// One pixel's data for the 2014 gather: premultiplied R, G, B, A, depth, the half-spread
 /// vector V (clamped to k, not raised to half a pixel) and |V|.
-type Texel2014 = [f32; 8];
+pub type Texel2014 = [f32; 8];
 const VX: usize = 5;
 const VY: usize = 6;
 const LENGTH: usize = 7;
@@ -384,13 +435,15 @@ pub fn gather_2014(
 }
 
 /// The most taps the exposure variant takes per side and direction however long the streak.
-const MAX_TAPS_PER_SIDE: usize = 64;
+pub(crate) const MAX_TAPS_PER_SIDE: usize = 64;
 /// The exposure variant's widest spacing of taps along a streak (px).
-const TAP_SPACING: f32 = 2.0;
+pub(crate) const TAP_SPACING: f32 = 2.0;
 
 /// Jitter salts of the 2014 gather: the tile lookup and the taps' offset.
-const SALT_TILE: u32 = 0x5449_4c45;
-const SALT_TAPS: u32 = 0x5441_5053;
+pub(crate) const SALT_TILE: u32 = 0x5449_4c45;
+pub(crate) const SALT_TAPS: u32 = 0x5441_5053;
+/// Jitter salt of the paper and dual gather's taps.
+pub(crate) const SALT_PAPER: u32 = 0x5245_434f;
 
 /// The four texels around pixel (x, y) + `offset` (clamped to the frame), each with its
 /// bilinear weight: [`bilinear`] and [`split`] read a tap through this.
@@ -893,7 +946,7 @@ fn gather_pixel(
     let own = half_spread(vx, vy, config.shutter, config.k);
     let own_length = (own.0 * own.0 + own.1 * own.1).sqrt();
     let j = if config.jitter != 0 {
-        unit(config.seed, 0x5245_434f, i as u32) - 0.5
+        unit(config.seed, SALT_PAPER, i as u32) - 0.5
     } else {
         0.0
     };

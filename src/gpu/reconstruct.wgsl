@@ -1,0 +1,534 @@
+// reconstruct's `gather` stage on the GPU: the twin of `gather` / `gather_pixel` (paper and
+// dual) and `gather_2014` / `gather_pixel_2014` with `around`, `bilinear` and `split` (2014
+// and exposure) in src/motion/reconstruct.rs, the CPU reference. Read the two side by side:
+// the names, the order of the operations and the order of the sums are the CPU's. One
+// invocation per pixel; a pixel outside the tiles the CPU gathers is left as it came.
+//
+// In (built on the CPU: tile_max → neighbor_max or dilate → pack): the packed texels, the
+// pixel velocity (paper and dual only), the tile grid (NeighborMax, or the dilated tiles of
+// the 2014 filter). In and out: the premultiplied colour, written in place.
+//
+// Bindings, in the CPU functions' argument order: 0 the config, 1 texels, 2 velocity, 3
+// tiles, 4 colour. Planar buffers hold their planes one after the other, as the CPU's
+// structs do: velocity x then y, tiles x then y, colour r, g, b, a.
+//
+// Numerics: the inputs obey the numeric policy (finite colour and velocity, packed depth at
+// most 1e30), so everything but one quantity stays finite. That one is the paper texel's
+// 1/|V|, +∞ for a still pixel, on which the CPU relies (∞·d is ∞, and its cone and cylinder
+// are 0). WGSL lets an implementation assume that no infinity occurs, so the shader does not
+// compute with it: `scaled` recognises a huge 1/|V| by its bits and gives a distance past
+// every filter's support, which is what the CPU's arithmetic gives.
+
+// Keep in sync with `ReconstructConfig` in src/motion/reconstruct.rs (a size test guards
+// the layout: ten 4-byte fields).
+struct ReconstructConfig {
+    // Frame size, pixels.
+    width: u32,
+    height: u32,
+    // The tile size, pixels.
+    tile: u32,
+    // k as the largest half-spread, pixels.
+    k: f32,
+    // Fraction of the frame interval the shutter is open.
+    shutter: f32,
+    // S: taps per pixel, odd.
+    taps: u32,
+    // 1 / SOFT_Z_EXTENT, per scene unit.
+    inv_soft_z: f32,
+    // 1 to jitter the taps per pixel, else 0.
+    jitter: u32,
+    // 0 paper, 1 dual, 2 the 2014 filter, 3 exposure.
+    variant: u32,
+    // The jitter's seed: the frame number modulo 2³².
+    seed: u32,
+}
+
+@group(0) @binding(0) var<uniform> config: ReconstructConfig;
+// paper and dual: 6 floats per pixel (`Texel`); 2014 and exposure: 8 (`Texel2014`).
+@group(0) @binding(1) var<storage, read> texels: array<f32>;
+@group(0) @binding(2) var<storage, read> velocity: array<f32>;
+@group(0) @binding(3) var<storage, read> tiles: array<f32>;
+@group(0) @binding(4) var<storage, read_write> color: array<f32>;
+
+// The CPU's constants (src/motion/reconstruct.rs); a unit test in src/gpu/reconstruct.rs
+// checks each against the Rust value.
+const HALF_PIXEL: f32 = 0.5;
+const EPSILON: f32 = 0.01;
+// (HALF_PIXEL + EPSILON)², as the CPU rounds it, by its bits.
+const MOVING_SQUARED_BITS: u32 = 0x3e852bd3u;
+const MAX_TAPS_PER_SIDE: u32 = 64u;
+const TAP_SPACING: f32 = 2.0;
+const SALT_TILE: u32 = 0x54494c45u;
+const SALT_TAPS: u32 = 0x54415053u;
+const SALT_PAPER: u32 = 0x5245434fu;
+const PAPER: u32 = 0u;
+const DUAL: u32 = 1u;
+const EXPOSURE: u32 = 3u;
+
+// The hash of every jitter: `pcg` and `hash` and `unit` in src/numeric.rs, bit for bit (u32
+// arithmetic wraps in WGSL as `wrapping_*` does in Rust).
+fn pcg(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+fn hash(seed: u32, stream: u32, index: u32) -> u32 {
+    return pcg(index ^ pcg(stream ^ pcg(seed)));
+}
+
+// A uniform number in [0, 1): the hash's top 24 bits, exact in f32.
+fn unit(seed: u32, stream: u32, index: u32) -> f32 {
+    return f32(hash(seed, stream, index) >> 8u) * (1.0 / 16777216.0);
+}
+
+fn columns() -> u32 {
+    return (config.width + config.tile - 1u) / config.tile;
+}
+
+fn rows() -> u32 {
+    return (config.height + config.tile - 1u) / config.tile;
+}
+
+// The vector of tile (c, r).
+fn tile_at(c: u32, r: u32) -> vec2<f32> {
+    let n = columns() * rows();
+    let i = r * columns() + c;
+    return vec2<f32>(tiles[i], tiles[n + i]);
+}
+
+// Whether a tile blurs: |V|² above (0.5 px + ε)².
+fn blurs(c: u32, r: u32) -> bool {
+    let v = tile_at(c, r);
+    return v.x * v.x + v.y * v.y > bitcast<f32>(MOVING_SQUARED_BITS);
+}
+
+// Whether any tile within `radius` tiles of (c, r) blurs.
+fn near_blur(c: u32, r: u32, radius: u32) -> bool {
+    let r_end = min(r + radius + 1u, rows());
+    let c_end = min(c + radius + 1u, columns());
+    for (var rr = select(r - radius, 0u, r < radius); rr < r_end; rr++) {
+        for (var cc = select(c - radius, 0u, c < radius); cc < c_end; cc++) {
+            if blurs(cc, rr) {
+                return true;
+            }
+        }
+    }
+    return false;
+}
+
+fn write_color(i: u32, out: vec4<f32>) {
+    let n = config.width * config.height;
+    color[i] = out.x;
+    color[n + i] = out.y;
+    color[2u * n + i] = out.z;
+    color[3u * n + i] = out.w;
+}
+
+// ---- paper and dual ----
+
+// `Texel`: premultiplied RGBA, depth, 1/|V| (+∞ where still).
+struct Texel {
+    color: vec4<f32>,
+    z: f32,
+    inv_length: f32,
+}
+
+fn texel6(i: u32) -> Texel {
+    let o = 6u * i;
+    return Texel(
+        vec4<f32>(texels[o], texels[o + 1u], texels[o + 2u], texels[o + 3u]),
+        texels[o + 4u],
+        texels[o + 5u],
+    );
+}
+
+// A 1/|V| of 1e30 or more (+∞ included, recognised by its bits): any distance it scales
+// lies past the support of `cone` and `cylinder` (taps are at least a quarter step from the
+// centre, so the CPU's product is ≥ 1e29 or ∞).
+fn huge(inv_length: f32) -> bool {
+    return (bitcast<u32>(inv_length) & 0x7fffffffu) >= bitcast<u32>(1e30f);
+}
+
+// distance / |V|: the CPU's `distance * inv_length`, without computing with ∞.
+fn scaled(distance: f32, inv_length: f32) -> f32 {
+    if huge(inv_length) {
+        return 2.0;
+    }
+    return distance * inv_length;
+}
+
+fn half_spread(vx: f32, vy: f32) -> vec2<f32> {
+    let qx = 0.5 * vx * config.shutter;
+    let qy = 0.5 * vy * config.shutter;
+    let length = sqrt(qx * qx + qy * qy);
+    if length == 0.0 {
+        return vec2<f32>(0.0, 0.0);
+    }
+    let scale = max(HALF_PIXEL, min(length, config.k)) / (length + EPSILON);
+    return vec2<f32>(qx * scale, qy * scale);
+}
+
+fn cone(scaled_distance: f32) -> f32 {
+    return clamp(1.0 - scaled_distance, 0.0, 1.0);
+}
+
+fn cylinder(scaled_distance: f32) -> f32 {
+    let t = clamp((scaled_distance - 0.95) * 10.0, 0.0, 1.0);
+    return 1.0 - t * t * (3.0 - 2.0 * t);
+}
+
+fn soft_depth_compare(za: f32, zb: f32, inverse_extent: f32) -> f32 {
+    return clamp(1.0 - (zb - za) * inverse_extent, 0.0, 1.0);
+}
+
+fn gather_pixel(x: u32, y: u32, v: vec2<f32>, n: vec2<f32>) -> vec4<f32> {
+    let width = config.width;
+    let height = config.height;
+    let taps = config.taps;
+    let centre_tap = (taps - 1u) / 2u;
+    let inv_soft_z = config.inv_soft_z;
+    let i = y * width + x;
+    let centre = texel6(i);
+    let n_length = sqrt(n.x * n.x + n.y * n.y);
+    let own = half_spread(v.x, v.y);
+    let own_length = sqrt(own.x * own.x + own.y * own.y);
+    var j = 0.0;
+    if config.jitter != 0u {
+        j = unit(config.seed, SALT_PAPER, i) - 0.5;
+    }
+    var weight = 1.0 / HALF_PIXEL;
+    if !huge(centre.inv_length) {
+        weight = min(centre.inv_length, 1.0 / HALF_PIXEL);
+    }
+    var sum = vec4<f32>(0.0);
+    let step = 2.0 / (f32(config.taps) + 1.0);
+    let dual = config.variant == DUAL && own_length > HALF_PIXEL + EPSILON;
+    for (var index = 0u; index < taps; index++) {
+        if index == centre_tap {
+            continue;
+        }
+        let t = -1.0 + (f32(index) + j + 1.0) * step;
+        var d = n;
+        var len = n_length;
+        if dual && index % 2u == 1u {
+            d = own;
+            len = own_length;
+        }
+        let px = u32(max(f32(x) + 0.5 + d.x * t, 0.0));
+        let py = u32(max(f32(y) + 0.5 + d.y * t, 0.0));
+        let sample = texel6(min(py, height - 1u) * width + min(px, width - 1u));
+        let distance = abs(t) * len;
+        let z = sample.z;
+        let front = soft_depth_compare(centre.z, z, inv_soft_z);
+        let back = soft_depth_compare(z, centre.z, inv_soft_z);
+        let ds = scaled(distance, sample.inv_length);
+        let dc = scaled(distance, centre.inv_length);
+        let alpha = front * cone(ds) + back * cone(dc) + cylinder(ds) * cylinder(dc) * 2.0;
+        weight += alpha;
+        sum += alpha * (sample.color - centre.color);
+    }
+    let inverse = 1.0 / weight;
+    return centre.color + sum * inverse;
+}
+
+// Paper and dual: pixels of the tiles whose NeighborMax blurs.
+@compute @workgroup_size(8, 8)
+fn gather(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= config.width || id.y >= config.height {
+        return;
+    }
+    let c = id.x / config.tile;
+    let r = id.y / config.tile;
+    if !blurs(c, r) {
+        return;
+    }
+    let n = config.width * config.height;
+    let i = id.y * config.width + id.x;
+    let v = vec2<f32>(velocity[i], velocity[n + i]);
+    write_color(i, gather_pixel(id.x, id.y, v, tile_at(c, r)));
+}
+
+// ---- 2014 and exposure ----
+
+// `Texel2014`: premultiplied RGBA, depth, the half-spread V and |V|.
+struct Texel2014 {
+    color: vec4<f32>,
+    z: f32,
+    vx: f32,
+    vy: f32,
+    length: f32,
+}
+
+fn texel8(i: u32) -> Texel2014 {
+    let o = 8u * i;
+    return Texel2014(
+        vec4<f32>(texels[o], texels[o + 1u], texels[o + 2u], texels[o + 3u]),
+        texels[o + 4u],
+        texels[o + 5u],
+        texels[o + 6u],
+        texels[o + 7u],
+    );
+}
+
+// `around`: the indices of the four texels around pixel (x, y) + offset (clamped to the
+// frame) and their bilinear weights.
+struct Around {
+    index: array<u32, 4>,
+    weight: array<f32, 4>,
+}
+
+fn around(x: u32, y: u32, offset: vec2<f32>) -> Around {
+    let width = config.width;
+    let height = config.height;
+    let fx = max(f32(x) + offset.x, 0.0);
+    let fy = max(f32(y) + offset.y, 0.0);
+    let x0u = u32(fx);
+    let y0u = u32(fy);
+    let wx = fx - f32(x0u);
+    let wy = fy - f32(y0u);
+    let x0 = min(x0u, width - 1u);
+    let x1 = min(x0u + 1u, width - 1u);
+    let y0 = min(y0u, height - 1u);
+    let y1 = min(y0u + 1u, height - 1u);
+    return Around(
+        array<u32, 4>(y0 * width + x0, y0 * width + x1, y1 * width + x0, y1 * width + x1),
+        array<f32, 4>((1.0 - wx) * (1.0 - wy), wx * (1.0 - wy), (1.0 - wx) * wy, wx * wy),
+    );
+}
+
+// `bilinear`: the colour of `nearest` read between pixels over the corners that move or
+// share its surface.
+fn bilinear(nearest_in: Texel2014, scale: f32, x: u32, y: u32, offset: vec2<f32>) -> Texel2014 {
+    var nearest = nearest_in;
+    let corners = around(x, y, offset);
+    let z = nearest.z;
+    var c: array<Texel2014, 4>;
+    var w: array<f32, 4>;
+    for (var q = 0u; q < 4u; q++) {
+        c[q] = texel8(corners.index[q]);
+        let mixes = abs(c[q].z - z) * scale < 1.0 || c[q].length >= HALF_PIXEL;
+        w[q] = corners.weight[q] * select(0.0, 1.0, mixes);
+    }
+    let total = w[0] + w[1] + w[2] + w[3];
+    if total > 0.0 {
+        let inverse = 1.0 / total;
+        nearest.color = (w[0] * c[0].color + w[1] * c[1].color + w[2] * c[2].color
+            + w[3] * c[3].color) * inverse;
+    }
+    return nearest;
+}
+
+// `split`'s result: the tap's two surfaces and their shares.
+struct Split {
+    a: Texel2014,
+    share_a: f32,
+    b: Texel2014,
+    share_b: f32,
+}
+
+// `split`: the exposure variant's tap read between pixels and split by surface.
+fn split(nearest: Texel2014, scale: f32, x: u32, y: u32, offset: vec2<f32>) -> Split {
+    let corners = around(x, y, offset);
+    let moves = nearest.length >= HALF_PIXEL;
+    var a = nearest;
+    a.color = vec4<f32>(0.0);
+    var b = Texel2014(vec4<f32>(0.0), 0.0, 0.0, 0.0, 0.0);
+    var share_a = 0.0;
+    var share_b = 0.0;
+    var heaviest = 0.0;
+    var heaviest_color = vec4<f32>(0.0);
+    for (var q = 0u; q < 4u; q++) {
+        let texel = texel8(corners.index[q]);
+        let w = corners.weight[q];
+        let same = abs(texel.z - nearest.z) * scale < 1.0;
+        let texel_moves = texel.length >= HALF_PIXEL;
+        var on_surface = same && !texel_moves;
+        if moves {
+            on_surface = same || texel_moves;
+        }
+        if on_surface {
+            a.color += w * texel.color;
+            share_a += w;
+        } else {
+            b.color += w * texel.color;
+            share_b += w;
+            if w > heaviest {
+                heaviest = w;
+                b.z = texel.z;
+                b.vx = texel.vx;
+                b.vy = texel.vy;
+                b.length = texel.length;
+                heaviest_color = texel.color;
+            }
+        }
+    }
+    if !moves {
+        a.color = share_a * nearest.color;
+    }
+    if b.length < HALF_PIXEL {
+        b.color = share_b * heaviest_color;
+    }
+    return Split(a, share_a, b, share_b);
+}
+
+// A tap surface's foreground (x) and background (y) weights.
+fn weights(
+    texel: Texel2014,
+    distance: f32,
+    direction: f32,
+    centre_z: f32,
+    own_length: f32,
+    scale: f32,
+    edge: f32,
+    exposure: bool,
+) -> vec2<f32> {
+    let dz = texel.z - centre_z;
+    let behind = clamp(0.5 + scale * dz, 0.0, 1.0);
+    let front = clamp(0.5 - scale * dz, 0.0, 1.0);
+    var reach = 1.0;
+    if exposure && texel.length < HALF_PIXEL {
+        reach = 0.5;
+    }
+    return vec2<f32>(
+        direction * front * clamp(texel.length - distance + reach, 0.0, 1.0),
+        direction * behind * clamp(own_length - distance + edge, 0.0, 1.0),
+    );
+}
+
+fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
+    let width = config.width;
+    let height = config.height;
+    let size = f32(config.tile);
+    let i = y * width + x;
+    let centre = texel8(i);
+    var tile_shift = 0.0;
+    var offset = 0.5;
+    if config.jitter != 0u {
+        tile_shift = (unit(config.seed, SALT_TILE, i) * 2.0 - 1.0) * 0.25 * size;
+        offset = unit(config.seed, SALT_TAPS, i);
+    }
+    let column = min(u32(max(f32(x) + tile_shift, 0.0)) / config.tile, columns() - 1u);
+    let row = min(u32(max(f32(y) + tile_shift, 0.0)) / config.tile, rows() - 1u);
+    var m = tile_at(column, row);
+    var m_length = sqrt(m.x * m.x + m.y * m.y);
+    let own = vec2<f32>(centre.vx, centre.vy);
+    let own_length = centre.length;
+    if m_length < own_length {
+        m = own;
+        m_length = own_length;
+    }
+    if m_length < HALF_PIXEL {
+        return centre.color;
+    }
+    let exposure = config.variant == EXPOSURE;
+    var k = max((config.taps + 3u) / 4u, 1u);
+    if exposure {
+        k = max(k, min(u32(ceil(m_length / TAP_SPACING)), MAX_TAPS_PER_SIDE));
+    }
+    let step = 1.0 / f32(k);
+    let scale = config.inv_soft_z;
+    var edge = 1.0;
+    if exposure {
+        edge = 0.5;
+    }
+    var fg = vec4<f32>(0.0);
+    var bg = vec4<f32>(0.0);
+    var w_fg = 0.0;
+    var w_bg = 0.0;
+    var count = 1.0;
+    if exposure {
+        count = 0.0;
+    }
+    var directions = 2u;
+    if own_length < HALF_PIXEL {
+        directions = 1u;
+    }
+    let centre_z = centre.z;
+    for (var s = 0u; s < 2u; s++) {
+        let side = select(1.0, -1.0, s == 1u);
+        for (var d = 0u; d < directions; d++) {
+            var dv = m;
+            var length = m_length;
+            if d == 1u {
+                dv = own;
+                length = own_length;
+            }
+            let sx = side * dv.x;
+            let sy = side * dv.y;
+            var tap_offset = offset;
+            if exposure && d == 1u {
+                tap_offset = fract(offset + 0.5);
+            }
+            for (var tap = 0u; tap < k; tap++) {
+                let t = (f32(tap) + tap_offset) * step;
+                let px = u32(max(f32(x) + 0.5 + sx * t, 0.0));
+                let py = u32(max(f32(y) + 0.5 + sy * t, 0.0));
+                let nearest = texel8(min(py, height - 1u) * width + min(px, width - 1u));
+                let at = vec2<f32>(sx * t, sy * t);
+                var parts: Split;
+                if exposure {
+                    parts = split(nearest, scale, x, y, at);
+                } else {
+                    parts.a = nearest;
+                    if nearest.length >= HALF_PIXEL {
+                        parts.a = bilinear(nearest, scale, x, y, at);
+                    }
+                    parts.share_a = 1.0;
+                    parts.b = Texel2014(vec4<f32>(0.0), 0.0, 0.0, 0.0, 0.0);
+                    parts.share_b = 0.0;
+                }
+                let sample = parts.a;
+                let other = parts.b;
+                let distance = length * t;
+                let along = dv.x * sample.vx + dv.y * sample.vy > 0.0;
+                let counts = exposure || sample.length < HALF_PIXEL || along;
+                let direction = select(0.0, 1.0, counts);
+                let w0 = weights(sample, distance, direction, centre_z, own_length, scale, edge, exposure);
+                let w1 = weights(other, distance, direction, centre_z, own_length, scale, edge, exposure);
+                count += direction;
+                fg += w0.x * sample.color + w1.x * other.color;
+                bg += w0.y * sample.color + w1.y * other.color;
+                w_fg += w0.x * parts.share_a + w1.x * parts.share_b;
+                w_bg += w0.y * parts.share_a + w1.y * parts.share_b;
+            }
+        }
+    }
+    let centre_color = centre.color;
+    if exposure {
+        // 0.5/|V| is at least 1 for |V| ≤ half a pixel (0 included): no division there.
+        var cover = 1.0;
+        if own_length > HALF_PIXEL {
+            cover = min(0.5 / own_length, 1.0);
+        }
+        var missing = 1.0;
+        var inverse = 0.0;
+        if count > 0.0 {
+            missing = clamp(1.0 - (w_fg + w_bg) / count, 0.0, 1.0);
+            inverse = 1.0 / count;
+        }
+        var background = centre_color;
+        if w_bg > 0.0 {
+            background = cover * centre_color + (1.0 - cover) * bg / w_bg;
+        }
+        return (fg + bg) * inverse + background * missing;
+    }
+    // Blender's own addition: a little of the centre in the background.
+    let w = 1.0 / (50.0 * f32(4u * k));
+    let w_bg_all = w_bg + w;
+    let missing = clamp(1.0 - (w_fg + w_bg_all) / count, 0.0, 1.0);
+    let background = (bg + w * centre_color) / w_bg_all;
+    return (fg + bg + w * centre_color) / count + background * missing;
+}
+
+// 2014 and exposure: pixels of the tiles within one tile of a blurring (dilated) tile.
+@compute @workgroup_size(8, 8)
+fn gather_2014(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= config.width || id.y >= config.height {
+        return;
+    }
+    if !near_blur(id.x / config.tile, id.y / config.tile, 1u) {
+        return;
+    }
+    write_color(id.y * config.width + id.x, gather_pixel_2014(id.x, id.y));
+}
