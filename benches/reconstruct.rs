@@ -9,7 +9,8 @@
 //! - **static**: nothing moves (the early-out);
 //! - **sparse**: one moving square covering a given share of the tiles;
 //! - the moving frame again at S = 1, 7 and 31, to separate fixed costs from per-tap costs;
-//! - the moving frame through each variant, and the 2014 filters at more taps and larger k.
+//! - the moving frame through each variant, and the 2014 filters at more taps and larger k;
+//! - the default on the GPU (its tile stages and gather), where an adapter is present.
 //!
 //! Median of 9 runs after one warm-up run.
 
@@ -34,6 +35,23 @@ fn main() {
         "1920x1080 every pixel moving, the default (exposure k=128 S=31): {:.1} ms",
         median_ms(&moving, 9)
     );
+    // The GPU row: the default with its tile stages and gather on the GPU (pack on the CPU),
+    // wherever an adapter is present.
+    match common::gpu() {
+        Some(gpu) => {
+            let (ms, t) =
+                common::median_ms_on(&gpu, Algorithm::Reconstruct, &moving, &Params::default(), 5);
+            println!(
+                "1920x1080 every pixel moving, the default [wgpu on {}]: {ms:.1} ms (GPU stages \
+                 per run: upload {:.1} ms, compute {:.1} ms, readback {:.1} ms)",
+                gpu.adapter(),
+                t.upload_ms,
+                t.compute_ms,
+                t.readback_ms
+            );
+        }
+        None => println!("wgpu row skipped: no GPU adapter"),
+    }
     // The profile: cost against taps. S = 1 takes no taps (TileMax, NeighborMax, texel
     // packing and per-pixel set-up only); the slope is the cost per tap.
     for taps in [1, 7, 31] {

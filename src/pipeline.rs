@@ -431,6 +431,18 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     #[cfg(feature = "gpu")]
     if let Some(gpu) = gpu {
         report.backend.stages_on_cpu = gpu.stages_on_cpu();
+        // A frame over the device's limits runs those stages on the CPU (the same output):
+        // said once, with the first reason.
+        if let Some(why) = gpu.fallback() {
+            warn(
+                &mut report,
+                on_event,
+                format!(
+                    "{} GPU stage runs fell back to the CPU (first, {why})",
+                    gpu.stages_on_cpu()
+                ),
+            );
+        }
     }
     report.wall_seconds = start.elapsed().as_secs_f64();
     report.peak_rss_mib = peak_rss_mib();

@@ -1246,6 +1246,45 @@ pub(crate) mod with_gpu {
         assert_eq!(gpu.stages_on_cpu(), 0);
     }
 
+    /// A frame too large for the device's storage bindings (here made so by lowering the
+    /// limit to 4 KiB with SHUTTER_GPU_MAX_BINDING) runs those stages on the CPU: the CPU's
+    /// bytes, counted in the summary and said in a warning with the reason.
+    #[test]
+    fn a_frame_over_the_device_s_limits_runs_on_the_cpu_and_says_so() {
+        let Some(_gpu) = gpu() else { return };
+        let (dir, color, depth) = layers();
+        let mut bytes = Vec::new();
+        for (backend, limit) in [("cpu", None), ("wgpu", Some("4096"))] {
+            let out = s(&dir.path().join(format!("{backend}.####.exr")));
+            let mut args = dof_args(&color, &depth, &out);
+            args.extend(["--backend", backend]);
+            let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"));
+            command.args(&args);
+            if let Some(limit) = limit {
+                command.env("SHUTTER_GPU_MAX_BINDING", limit);
+            }
+            let o = command.output().unwrap();
+            assert!(o.status.success(), "{}", stderr(&o));
+            let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+            if backend == "wgpu" {
+                assert!(
+                    json["backend"]["stages_on_cpu"].as_u64().unwrap() >= 1,
+                    "{json}"
+                );
+                let warnings = json["warnings"].to_string();
+                assert!(
+                    warnings.contains("fell back to the CPU") && warnings.contains("exceeds"),
+                    "{json}"
+                );
+            }
+            bytes.push(std::fs::read(dir.path().join(format!("{backend}.0001.exr"))).unwrap());
+        }
+        assert!(
+            bytes[0] == bytes[1],
+            "the fallback wrote other bytes than the CPU"
+        );
+    }
+
     /// `auto` never takes a software driver: with only lavapipe it runs on the CPU.
     #[test]
     fn auto_never_takes_a_software_driver() {

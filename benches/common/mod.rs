@@ -145,6 +145,50 @@ pub fn median_ms(algorithm: Algorithm, f: &Frame, params: &Params, runs: usize) 
     })
 }
 
+/// The GPU context for the benches' GPU rows: any adapter, a software driver included (its
+/// figures are for the record, not for speed); `None` without one, or in a build without the
+/// `gpu` feature.
+#[allow(dead_code)]
+pub fn gpu() -> Option<shutter::gpu::Gpu> {
+    shutter::gpu::open(shutter::gpu::Backend::Wgpu)
+        .ok()
+        .and_then(|(gpu, _)| gpu)
+}
+
+/// [`median_ms`] with the stages that have a GPU twin on `gpu`, and the GPU stages' upload,
+/// dispatch and readback per run (timed apart: [`shutter::gpu::Gpu::set_profiling`]).
+#[allow(dead_code)]
+pub fn median_ms_on(
+    gpu: &shutter::gpu::Gpu,
+    algorithm: Algorithm,
+    f: &Frame,
+    params: &Params,
+    runs: usize,
+) -> (f64, shutter::gpu::GpuTimes) {
+    let mut clean = f.clone();
+    let _ = numeric::sanitize(&mut clean, process::depth_kind(params));
+    let _ = process::process_on(algorithm, params, clean.clone(), 1, Some(gpu));
+    gpu.take_times();
+    gpu.set_profiling(true);
+    let ms = median(runs, || {
+        let input = clean.clone();
+        let t = Instant::now();
+        let out = process::process_on(algorithm, params, input, 1, Some(gpu));
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        drop(out);
+        ms
+    });
+    gpu.set_profiling(false);
+    let t = gpu.take_times();
+    let n = runs as f64;
+    let per_run = shutter::gpu::GpuTimes {
+        upload_ms: t.upload_ms / n,
+        compute_ms: t.compute_ms / n,
+        readback_ms: t.readback_ms / n,
+    };
+    (ms, per_run)
+}
+
 /// Median time (ms) of the numeric policy's scan of `f` (the read stage's share).
 pub fn median_policy_ms(f: &Frame, runs: usize) -> f64 {
     median(runs, || {

@@ -110,8 +110,8 @@ impl Gpu {
     pub fn coc_plane(&self, frame: &Frame, params: &DofParams) -> Vec<f32> {
         match self.try_coc_plane(frame, params) {
             Ok(coc) => coc,
-            Err(_) => {
-                self.note_cpu_stage();
+            Err(e) => {
+                self.note_cpu_stage("coc", &e);
                 crate::dof::coc_plane(frame, params)
             }
         }

@@ -41,6 +41,8 @@ pub struct Gpu {
     pub(crate) reconstruct: OnceLock<ReconstructPass>,
     /// Stages with a twin that ran on the CPU for a frame (see [`Gpu::note_cpu_stage`]).
     stages_on_cpu: AtomicU64,
+    /// The first stage that ran on the CPU instead, and why ([`Gpu::note_cpu_stage`]).
+    fallback: Mutex<Option<String>>,
     /// Whether stages time their upload, compute and readback apart ([`Gpu::set_profiling`]).
     pub(crate) profiling: AtomicBool,
     /// What they measured since [`Gpu::take_times`] last took it.
@@ -173,6 +175,7 @@ impl Gpu {
             info,
             reconstruct: OnceLock::new(),
             stages_on_cpu: AtomicU64::new(0),
+            fallback: Mutex::new(None),
             profiling: AtomicBool::new(false),
             times: Mutex::new(GpuTimes::default()),
         })
@@ -205,9 +208,22 @@ impl Gpu {
         self.info.device_type == DeviceType::Cpu
     }
 
-    /// Records that a stage with a GPU twin ran on the CPU for one frame.
-    pub(crate) fn note_cpu_stage(&self) {
+    /// Records that a stage with a GPU twin ran on the CPU for one frame, and why (the first
+    /// reason is kept for the run's warning).
+    pub(crate) fn note_cpu_stage(&self, stage: &str, why: &super::StageError) {
         self.stages_on_cpu.fetch_add(1, Ordering::Relaxed);
+        let mut first = self.fallback.lock().unwrap_or_else(|e| e.into_inner());
+        if first.is_none() {
+            *first = Some(format!("{stage}: {why}"));
+        }
+    }
+
+    /// Why a stage first ran on the CPU instead (`None` if none has).
+    pub fn fallback(&self) -> Option<String> {
+        self.fallback
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone()
     }
 
     /// Times each stage's upload, compute and readback apart from now on (`true`), or not.
@@ -227,12 +243,18 @@ impl Gpu {
         self.stages_on_cpu.load(Ordering::Relaxed)
     }
 
-    /// The largest buffer (bytes) one storage binding can hold on this device.
+    /// The largest buffer (bytes) one storage binding can hold on this device; lowered by
+    /// the environment variable `SHUTTER_GPU_MAX_BINDING` (bytes), which the tests use to
+    /// make a small frame take the path of one too large for the device.
     pub(crate) fn max_binding(&self) -> u64 {
         let limits = self.device.limits();
-        limits
+        let device = limits
             .max_storage_buffer_binding_size
-            .min(limits.max_buffer_size)
+            .min(limits.max_buffer_size);
+        let lowered = std::env::var("SHUTTER_GPU_MAX_BINDING")
+            .ok()
+            .and_then(|v| v.parse::<u64>().ok());
+        lowered.map_or(device, |l| l.min(device))
     }
 }
 

@@ -95,8 +95,8 @@ impl Gpu {
     /// [`crate::motion::dilate::dilate`] on the GPU; the CPU stage where the GPU cannot run
     /// it, counted in [`Gpu::stages_on_cpu`].
     pub fn dilate(&self, tiles: &TileGrid) -> TileGrid {
-        self.try_dilate(tiles).unwrap_or_else(|_| {
-            self.note_cpu_stage();
+        self.try_dilate(tiles).unwrap_or_else(|e| {
+            self.note_cpu_stage("dilate", &e);
             crate::motion::dilate::dilate(tiles)
         })
     }

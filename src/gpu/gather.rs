@@ -90,8 +90,8 @@ impl Gpu {
         tiles: &Tiles,
     ) -> Color {
         self.try_dof_gather(config, color, coc, tiles)
-            .unwrap_or_else(|_| {
-                self.note_cpu_stage();
+            .unwrap_or_else(|e| {
+                self.note_cpu_stage("gather", &e);
                 crate::dof::gather::gather(config, color, coc, tiles)
             })
     }

@@ -51,8 +51,8 @@ impl Gpu {
     /// [`crate::motion::neighbor_max::neighbor_max`] on the GPU; the CPU stage where the GPU
     /// cannot run it, counted in [`Gpu::stages_on_cpu`].
     pub fn neighbor_max(&self, tiles: &TileGrid) -> TileGrid {
-        self.try_neighbor_max(tiles).unwrap_or_else(|_| {
-            self.note_cpu_stage();
+        self.try_neighbor_max(tiles).unwrap_or_else(|e| {
+            self.note_cpu_stage("neighbor_max", &e);
             crate::motion::neighbor_max::neighbor_max(tiles)
         })
     }

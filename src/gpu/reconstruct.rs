@@ -211,8 +211,8 @@ impl Gpu {
             seed,
             self,
             |config, inputs, color| {
-                if self.try_reconstruct_gather(config, &inputs, color).is_err() {
-                    self.note_cpu_stage();
+                if let Err(e) = self.try_reconstruct_gather(config, &inputs, color) {
+                    self.note_cpu_stage("reconstruct gather", &e);
                     inputs.gather(config, color);
                 }
             },

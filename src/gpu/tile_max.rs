@@ -81,8 +81,8 @@ impl Gpu {
         size: usize,
     ) -> TileGrid {
         self.try_tile_max(vx, vy, width, height, size)
-            .unwrap_or_else(|_| {
-                self.note_cpu_stage();
+            .unwrap_or_else(|e| {
+                self.note_cpu_stage("tile_max", &e);
                 crate::motion::tile_max::tile_max(vx, vy, width, height, size)
             })
     }

@@ -91,8 +91,8 @@ impl Gpu {
     /// counted in [`Gpu::stages_on_cpu`].
     pub fn tiles(&self, coc: &[f32], width: usize, height: usize, epsilon: f32) -> Tiles {
         self.try_tiles(coc, width, height, epsilon)
-            .unwrap_or_else(|_| {
-                self.note_cpu_stage();
+            .unwrap_or_else(|e| {
+                self.note_cpu_stage("tiles", &e);
                 crate::dof::gather::tiles(coc, width, height, epsilon)
             })
     }
