@@ -65,8 +65,6 @@ struct PixelTap {
     norm_far: f32,
     norm_near: f32,
     area: f32,
-    /// The offset itself (the GPU twin reads the frame by it, not by a padded index).
-    offset: [i32; 2],
 }
 
 /// A whole-pixel offset with the area it stands for, as a tap of a tile's pattern: its index
@@ -78,7 +76,6 @@ fn pixel_tap((dx, dy): (isize, isize), area: f32, aperture: &Aperture, stride: i
         norm_far: aperture.norm(-dx as f32, -dy as f32),
         norm_near: aperture.norm(dx as f32, dy as f32),
         area,
-        offset: [dx as i32, dy as i32],
     }
 }
 
@@ -284,8 +281,15 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
     let rings_count = config.rings as usize;
     let aperture = Aperture::new(config.blades, config.blade_rotation);
     let rings = taps(rings_count, &aperture);
+    // Taps made on a stride wider than any offset, so that each step holds its offset:
+    // dy = round(step / STRIDE), dx = step − dy·STRIDE.
+    const STRIDE: isize = 1 << 24;
+    let offset = |step: isize| {
+        let dy = (step + STRIDE / 2).div_euclid(STRIDE);
+        [(step - dy * STRIDE) as i32, dy as i32]
+    };
     let grids: Vec<Vec<PixelTap>> = (0..=rings_count)
-        .map(|r| grid_taps(r, &aperture, 0))
+        .map(|r| grid_taps(r, &aperture, STRIDE))
         .collect();
     let half_focus = (0.5 * config.epsilon).max(SMALLEST_RADIUS);
     let mut plan = TilePlan {
@@ -302,10 +306,10 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
         };
         *lists.entry(key).or_insert_with(|| {
             let mut made = Vec::new();
-            let found = taps_for(radius, &grids, &rings, &aperture, 0, &mut made);
+            let found = taps_for(radius, &grids, &rings, &aperture, STRIDE, &mut made);
             let start = plan.taps.len() as u32;
             plan.taps.extend(found.iter().map(|t| OffsetTap {
-                offset: t.offset,
+                offset: offset(t.step),
                 norm_far: t.norm_far,
                 norm_near: t.norm_near,
                 area: t.area,
