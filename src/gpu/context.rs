@@ -233,6 +233,30 @@ impl Gpu {
         self.profiling.store(on, Ordering::Relaxed);
     }
 
+    /// With profiling on, drains the queue and adds the time since `clock` to `part`, then
+    /// restarts `clock`; nothing otherwise. Stages call it after their upload, their
+    /// dispatches and their readback.
+    pub(crate) fn mark(
+        &self,
+        part: fn(&mut GpuTimes) -> &mut f64,
+        clock: &mut std::time::Instant,
+    ) -> Result<(), super::StageError> {
+        if self.profiling.load(Ordering::Relaxed) {
+            self.device
+                .poll(wgpu::PollType::wait_indefinitely())
+                .map_err(|e| super::StageError::Device(e.to_string()))?;
+            let mut times = self.times.lock().unwrap_or_else(|e| e.into_inner());
+            *part(&mut times) += clock.elapsed().as_secs_f64() * 1e3;
+            *clock = std::time::Instant::now();
+        }
+        Ok(())
+    }
+
+    /// Whether stages time their parts apart ([`Gpu::set_profiling`]).
+    pub(crate) fn profiling(&self) -> bool {
+        self.profiling.load(Ordering::Relaxed)
+    }
+
     /// The times measured since the last call (zero unless profiling).
     pub fn take_times(&self) -> GpuTimes {
         std::mem::take(&mut *self.times.lock().unwrap_or_else(|e| e.into_inner()))

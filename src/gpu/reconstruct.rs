@@ -270,6 +270,7 @@ impl Gpu {
             .entry(shape)
             .or_insert_with(|| pass.make_buffers(&self.device, shape));
 
+        let mut clock = std::time::Instant::now();
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let queue = &self.queue;
         let plane = (pixels * 4) as u64;
@@ -298,6 +299,10 @@ impl Gpu {
                 );
             }
         }
+        if self.profiling() {
+            queue.submit([]);
+        }
+        self.mark(|t| &mut t.upload_ms, &mut clock)?;
         let mut encoder = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -320,6 +325,15 @@ impl Gpu {
                 1,
             );
         }
+        if self.profiling() {
+            queue.submit([encoder.finish()]);
+            self.mark(|t| &mut t.compute_ms, &mut clock)?;
+            encoder = self
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("reconstruct"),
+                });
+        }
         let channels = if color.a.is_some() { 4 } else { 3 };
         let bytes = channels * plane;
         encoder.copy_buffer_to_buffer(&buffers.color, 0, &buffers.readback, 0, bytes);
@@ -328,6 +342,7 @@ impl Gpu {
             return Err(StageError::Device(error.to_string()));
         }
         let out = floats(read_back(&self.device, &buffers.readback, bytes)?);
+        self.mark(|t| &mut t.readback_ms, &mut clock)?;
         let mut planes = out.chunks_exact(pixels);
         for channel in [
             Some(&mut color.r),

@@ -233,21 +233,9 @@ impl Stage {
             .entry(sizes.clone())
             .or_insert_with(|| self.make_buffers(&gpu.device, &sizes));
 
-        let profiling = gpu.profiling.load(std::sync::atomic::Ordering::Relaxed);
+        let profiling = gpu.profiling();
         let mut clock = Instant::now();
-        // With profiling, the queue is drained after each part and the time since the last
-        // mark added to `part`.
-        let mut mark = |part: fn(&mut GpuTimes) -> &mut f64| -> Result<(), StageError> {
-            if profiling {
-                gpu.device
-                    .poll(wgpu::PollType::wait_indefinitely())
-                    .map_err(|e| StageError::Device(e.to_string()))?;
-                let mut times = gpu.times.lock().unwrap_or_else(|e| e.into_inner());
-                *part(&mut times) += clock.elapsed().as_secs_f64() * 1e3;
-                clock = Instant::now();
-            }
-            Ok(())
-        };
+        let mut mark = |part: fn(&mut GpuTimes) -> &mut f64| gpu.mark(part, &mut clock);
         let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
         gpu.queue.write_buffer(&buffers.config, 0, config);
         for (buffer, data) in buffers.inputs.iter().zip(inputs) {
