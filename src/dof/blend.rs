@@ -128,12 +128,8 @@ struct Ladder {
     cocs: Vec<f32>,
     /// 1 / (CoC of image k + 1 − CoC of image k).
     inverse_gaps: Vec<f32>,
-    /// Where each image comes from: [`SHARP`], [`HALF`] or its level.
-    sources: Vec<u8>,
-    /// For each whole CoC i, the last image k below the top with CoC ≤ i: where the search
-    /// of [`Ladder::bracket`] starts (the images are more than a pixel apart, so it takes
-    /// at most one more step).
-    starts: Vec<u8>,
+    /// The image that is level 1.
+    first: usize,
 }
 
 impl Ladder {
@@ -145,20 +141,10 @@ impl Ladder {
         }
         cocs.extend((1..=top).map(level_coc));
         let inverse_gaps = cocs.windows(2).map(|c| 1.0 / (c[1] - c[0])).collect();
-        let mut sources = vec![SHARP];
-        if half {
-            sources.push(HALF);
-        }
-        sources.extend((1..=top).map(|l| l as u8));
-        let last = cocs.len() - 1;
-        let starts = (0..=cocs[last].ceil() as usize)
-            .map(|i| (1..last).take_while(|&k| cocs[k] <= i as f32).count() as u8)
-            .collect();
         Ladder {
             cocs,
             inverse_gaps,
-            sources,
-            starts,
+            first: if half { 2 } else { 1 },
         }
     }
 
@@ -167,8 +153,7 @@ impl Ladder {
     #[inline(always)]
     fn bracket(&self, c: f32) -> (usize, f32) {
         let top = self.cocs.len() - 1;
-        // `as` saturates: a negative or NaN CoC starts at 0, a huge one at the table's end.
-        let mut k = self.starts[(c as usize).min(self.starts.len() - 1)] as usize;
+        let mut k = 0;
         while k + 1 < top && c >= self.cocs[k + 1] {
             k += 1;
         }
@@ -444,17 +429,6 @@ fn lerp(a: &Texel, b: &Texel, f: f32) -> Texel {
     o
 }
 
-/// `reference + (lower + f·(upper − lower))`, lane by lane (a function of values, so that it
-/// compiles to 8-lane vector operations).
-#[inline(always)]
-fn mixed(reference: &Texel, lower: &Texel, upper: &Texel, f: f32) -> Texel {
-    let mut o = ZERO;
-    for k in 0..8 {
-        o[k] = reference[k] + (lower[k] + f * (upper[k] - lower[k]));
-    }
-    o
-}
-
 /// A level sampled bilinearly at the frame's pixel centres, a row at a time: the row
 /// between the two texel rows that bracket a frame row is made once, and each pixel of the
 /// frame row interpolates across it.
@@ -485,12 +459,9 @@ impl<'a> Sampler<'a> {
         row.clear();
         row.extend(a.iter().zip(b).map(|(a, b)| {
             let mut t = lerp(a, b, f);
-            // One 8-lane division: the colour lanes by w, the others by 1.
             let w = t[W].max(f32::MIN_POSITIVE);
-            let mut by = [1.0f32; 8];
-            by[..W].fill(w);
-            for (lane, by) in t.iter_mut().zip(by) {
-                *lane /= by;
+            for lane in t.iter_mut().take(W) {
+                *lane /= w;
             }
             t
         }));
@@ -512,11 +483,6 @@ impl<'a> Sampler<'a> {
     }
 }
 
-/// Where a pixel's image comes from in the compose stage: the sharp frame, the half step, or
-/// level L (1 ..= [`MAX_LEVELS`]) as the number L.
-const SHARP: u8 = 0;
-const HALF: u8 = u8::MAX;
-
 /// A compose task's own buffers: each level's row for the current frame row, and per pixel
 /// its blurriness.
 #[derive(Default)]
@@ -526,7 +492,7 @@ struct Scratch {
 }
 
 /// The compose stage for frame row y: each pixel's blurriness, the levels the row needs,
-/// then each pixel mixed from the two images that bracket its CoC (the sharp pixel as level
+/// then each pixel mixed from the two levels that bracket its CoC (the sharp pixel as level
 /// 0). `out` holds the row of each plane, sharp, and is written in place; `window` holds
 /// copies of the rows around it as they were.
 #[multiversion::multiversion(targets("x86_64+avx2"))]
@@ -550,40 +516,37 @@ fn compose_row(
     let height = source.coc.len() / width;
     let Scratch { made, blur } = scratch;
     made.resize(samplers.len(), Vec::new());
-    // Levels whose row for y is made (bit L for level L).
-    let mut ready = 0u32;
+    let mut ready = [false; MAX_LEVELS + 1];
+    // Makes level l's row (l ≥ 1) once.
     let mut make = |l: usize, made: &mut Vec<Vec<Texel>>| {
-        if l > 0 && ready & (1 << l) == 0 {
+        if l > 0 && !ready[l] {
             samplers[l - 1].row(y, &mut made[l - 1]);
-            ready |= 1 << l;
+            ready[l] = true;
         }
     };
 
     // Blurriness: the pixel's own T, or the near field's blurred T_near if larger (`near`
-    // counts in levels, without the half step); negative where the near field sets it.
+    // counts in levels, without the half step).
     blur.clear();
     blur.extend(coc.iter().map(|&c| source.interpolator(c)));
     if let Some((k, f)) = near {
         make(k, made);
         make(k + 1, made);
         let upper = &samplers[k];
-        let upper_row = &made[k];
-        if k == 0 {
-            for (x, (t, &c)) in blur.iter_mut().zip(coc).enumerate() {
-                let lower = if c < 0.0 { *t } else { 0.0 };
-                let spread = lower + f * (upper.near_at(upper_row, x) - lower);
-                if spread > *t {
-                    *t = -spread;
+        for (x, (t, &c)) in blur.iter_mut().zip(coc).enumerate() {
+            let lower = if k == 0 {
+                if c < 0.0 {
+                    *t
+                } else {
+                    0.0
                 }
-            }
-        } else {
-            let (below, below_row) = (&samplers[k - 1], &made[k - 1]);
-            for (x, t) in blur.iter_mut().enumerate() {
-                let lower = below.near_at(below_row, x);
-                let spread = lower + f * (upper.near_at(upper_row, x) - lower);
-                if spread > *t {
-                    *t = -spread;
-                }
+            } else {
+                samplers[k - 1].near_at(&made[k - 1], x)
+            };
+            let spread = lower + f * (upper.near_at(&made[k], x) - lower);
+            // Negative where the near field's spread sets the blur.
+            if spread > *t {
+                *t = -spread;
             }
         }
     }
@@ -615,32 +578,38 @@ fn compose_row(
     reference[..4].copy_from_slice(&source.reference);
     // `out` holds the sharp row: pixels left sharp are not touched.
     let channels = out.len();
+    let mut sharp = ZERO;
     for (x, &t) in blur.iter().enumerate() {
         if t == 0.0 {
             continue;
         }
+        for (v, rows) in sharp.iter_mut().zip(window.iter().take(channels)) {
+            *v = rows[1][x];
+        }
         // A pixel blurred by the near field's spread mixes levels only: the half step shows
         // its own neighbourhood, which the near field's blur reaches farther than.
         let ladder = if t < 0.0 { plain } else { ladder };
+        let first = ladder.first;
         let (k, f) = ladder.bracket(to_coc(t.abs()));
-        // Each image: a level's row, the sharp frame (offset) or the half step (no closure:
+        // Image j: the sharp frame (offset), the half step, or a level's row (no closure:
         // `multiversion` would leave it compiled for the baseline CPU, out of line).
         let mut pair = [ZERO; 2];
-        for (image, &s) in pair.iter_mut().zip(&ladder.sources[k..k + 2]) {
-            if s == SHARP {
-                for (lane, rows) in window.iter().take(channels).enumerate() {
-                    image[lane] = rows[1][x] - reference[lane];
+        for (p, j) in pair.iter_mut().zip([k, k + 1]) {
+            *p = if j == 0 {
+                let mut offset = ZERO;
+                for lane in 0..8 {
+                    offset[lane] = sharp[lane] - reference[lane];
                 }
-            } else if s == HALF {
-                *image = half(source, window, channels, &reference, width, height, x, y);
+                offset
+            } else if j < first {
+                half(source, window, channels, &reference, width, height, x, y)
             } else {
-                let l = s as usize - 1;
-                *image = samplers[l].at(&made[l], x);
-            }
+                samplers[j - first].at(&made[j - first], x)
+            };
         }
         let [lower, upper] = pair;
-        for (o, v) in out.iter_mut().zip(mixed(&reference, &lower, &upper, f)) {
-            o[x] = v;
+        for (ch, o) in out.iter_mut().enumerate() {
+            o[x] = reference[ch] + (lower[ch] + f * (upper[ch] - lower[ch]));
         }
     }
 }
@@ -1140,38 +1109,6 @@ mod tests {
             last = m;
         }
         assert_eq!(ladder.bracket(1e9), (4, 1.0));
-    }
-
-    #[test]
-    fn the_bracket_s_table_finds_what_a_search_from_the_sharp_frame_finds() {
-        // The plain search the table starts: the last image below the top whose CoC is at
-        // most c.
-        for ladder in [
-            Ladder::new(6, true),
-            Ladder::new(3, false),
-            Ladder::new(12, true),
-        ] {
-            let top = ladder.cocs.len() - 1;
-            let search = |c: f32| {
-                let k = (1..top).take_while(|&k| c >= ladder.cocs[k]).count();
-                (
-                    k,
-                    ((c - ladder.cocs[k]) * ladder.inverse_gaps[k]).clamp(0.0, 1.0),
-                )
-            };
-            let mut cs: Vec<f32> = (0..20000).map(|i| i as f32 * 0.013).collect();
-            // Every image's CoC, and the floats either side of it.
-            for &c in &ladder.cocs {
-                cs.extend([c, c.next_down(), c.next_up()]);
-            }
-            cs.extend([-1.0, f32::NAN, 1e9, f32::INFINITY, ladder.cocs[top] + 0.5]);
-            for c in cs {
-                let (k, f) = ladder.bracket(c);
-                let (k2, f2) = search(c);
-                assert_eq!(k, k2, "at {c}");
-                assert!(f == f2 || (f.is_nan() && f2.is_nan()), "at {c}: {f} {f2}");
-            }
-        }
     }
 
     #[test]
