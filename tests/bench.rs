@@ -60,6 +60,7 @@ fn bench_runs_end_to_end_and_writes_its_reports() {
                 row["gpu_stages"]["compute_ms"].as_f64().unwrap() > 0.0,
                 "{row}"
             );
+            assert_eq!(row["stages_on_cpu"], 0, "{row}");
         }
         assert!(stdout(&o).contains("GPU stages of the [wgpu] rows"));
     } else {

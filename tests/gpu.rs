@@ -574,22 +574,35 @@ pub(crate) mod with_gpu {
                     ];
                     let alpha = got.a.as_ref().zip(cpu.a.as_ref()).map(|(g, c)| ("a", g, c));
                     for (name, got, cpu) in planes.into_iter().chain(alpha) {
+                        // The range of the ordinary pixels: the stress values (±1e30) would
+                        // make a bound relative to the whole range vacuous. A pixel whose
+                        // output is itself huge (a stress value's light) is held to 1e-5 of
+                        // its own magnitude instead.
+                        const ORDINARY: f32 = 1e6;
                         let (lo, hi) = cpu
                             .iter()
+                            .filter(|v| v.abs() <= ORDINARY)
                             .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
                         let range = (hi - lo).max(f32::MIN_POSITIVE);
                         let d = diff(got, cpu);
                         let what = format!("lens {j} {w}x{h} blades {blades} rings {rings} {name}");
-                        assert!(
-                            d.max <= 1e-5 * range,
-                            "{what}: max {} > 1e-5 of {range} at {} (GPU {} CPU {})",
-                            d.max,
-                            d.worst,
-                            got[d.worst],
-                            cpu[d.worst]
-                        );
-                        assert!(d.mean <= 1e-7 * range as f64, "{what}: mean {}", d.mean);
-                        worst = worst.max(d.max / range);
+                        let (mut sum, mut ordinary) = (0.0f64, 0usize);
+                        for (i, (&g, &c)) in got.iter().zip(cpu.iter()).enumerate() {
+                            let e = (g - c).abs();
+                            let bound = 1e-5 * range.max(c.abs());
+                            assert!(
+                                e <= bound,
+                                "{what}: {e} > {bound} at {i} (GPU {g} CPU {c}, range {range})"
+                            );
+                            if c.abs() <= ORDINARY {
+                                sum += e as f64;
+                                ordinary += 1;
+                                worst = worst.max(e / range);
+                            }
+                        }
+                        let mean = sum / ordinary.max(1) as f64;
+                        assert!(mean <= 1e-7 * range as f64, "{what}: mean {mean}");
+                        assert!(d.max.is_finite());
                         cases += 1;
                     }
                 }

@@ -375,6 +375,10 @@ pub struct Row {
     /// with the queue drained between them, see [`crate::gpu::Gpu::set_profiling`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gpu_stages: Option<GpuTimes>,
+    /// On wgpu, stage runs with a twin that ran on the CPU instead during the compute runs
+    /// (a frame over the device's limits); 0 when every twin ran on the GPU.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stages_on_cpu: Option<u64>,
     /// The program that made the output, for a peer's row ("blender 5.2.3"); none for
     /// shutter's own.
     pub peer: Option<String>,
@@ -595,6 +599,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                 let plan = plan_frame(&inputs, Some(1), &plan_options).map_err(Error::Files)?;
                 let frame = read_frame(&plan)?;
                 let mut times = Vec::with_capacity(options.runs);
+                let fallbacks_before = on_gpu.map_or(0, |gpu| gpu.stages_on_cpu());
                 if let Some(gpu) = on_gpu {
                     gpu.take_times();
                     gpu.set_profiling(true);
@@ -625,6 +630,9 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                         readback_ms: t.readback_ms / n,
                     }
                 });
+                // Stages with a twin that ran on the CPU instead in those runs (a frame over
+                // the device's limits): the row is then not all GPU.
+                let stages_on_cpu = on_gpu.map(|gpu| gpu.stages_on_cpu() - fallbacks_before);
 
                 // End to end: the shutter binary on the frame, median of `runs`.
                 let out_dir = options.out.join("runs").join(name.replace(' ', "_"));
@@ -684,6 +692,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                     setting: label.clone(),
                     backend: if on_gpu.is_some() { "wgpu" } else { "cpu" }.to_string(),
                     gpu_stages,
+                    stages_on_cpu,
                     peer: None,
                     peer_settings: serde_json::Value::Null,
                     compute_ms,
@@ -722,6 +731,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                     setting: peer.label.clone(),
                     backend: String::new(),
                     gpu_stages: None,
+                    stages_on_cpu: None,
                     peer: Some(peer.peer.clone()),
                     peer_settings: peer.settings.clone(),
                     compute_ms: peer.compute_ms,
@@ -852,13 +862,19 @@ pub fn markdown(report: &BenchReport) -> String {
         text.push_str(
             "\nGPU stages of the [wgpu] rows per run (ms; measured apart, the queue drained \
              between them; the rest of compute ms is the stages on the CPU and the host's \
-             packing):\n\n| scene | setting | upload | compute | readback |\n|---|---|---:|---:|---:|\n",
+             packing; fallbacks: stage runs with a twin that ran on the CPU instead):\n\n\
+             | scene | setting | upload | compute | readback | fallbacks |\n|---|---|---:|---:|---:|---:|\n",
         );
         for row in gpu_rows {
             let t = row.gpu_stages.expect("filtered");
             text.push_str(&format!(
-                "| {} | {} | {:.2} | {:.2} | {:.2} |\n",
-                row.scene, row.setting, t.upload_ms, t.compute_ms, t.readback_ms
+                "| {} | {} | {:.2} | {:.2} | {:.2} | {} |\n",
+                row.scene,
+                row.setting,
+                t.upload_ms,
+                t.compute_ms,
+                t.readback_ms,
+                row.stages_on_cpu.unwrap_or(0)
             ));
         }
     }

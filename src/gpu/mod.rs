@@ -84,6 +84,10 @@ impl Gpu {
     pub fn take_times(&self) -> GpuTimes {
         match *self {}
     }
+
+    pub fn stages_on_cpu(&self) -> u64 {
+        match *self {}
+    }
 }
 
 /// Where a GPU stage's time went, ms, summed over the stages that ran: writing its inputs

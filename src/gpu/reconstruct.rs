@@ -262,6 +262,10 @@ impl Gpu {
         let pass = self
             .reconstruct
             .get_or_init(|| ReconstructPass::new(&self.device));
+        // Errors from here on, the buffers' creation included, come back as a StageError
+        // (the caller runs the CPU gather): out of memory as well as validation.
+        let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut cache = pass.buffers.lock().unwrap_or_else(|e| e.into_inner());
         if !cache.contains_key(&shape) && cache.len() >= KEPT_SHAPES {
             cache.clear();
@@ -271,7 +275,6 @@ impl Gpu {
             .or_insert_with(|| pass.make_buffers(&self.device, shape));
 
         let mut clock = std::time::Instant::now();
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let queue = &self.queue;
         let plane = (pixels * 4) as u64;
         queue.write_buffer(&buffers.config, 0, bytemuck::bytes_of(config));
@@ -338,7 +341,11 @@ impl Gpu {
         let bytes = channels * plane;
         encoder.copy_buffer_to_buffer(&buffers.color, 0, &buffers.readback, 0, bytes);
         queue.submit([encoder.finish()]);
-        if let Some(error) = pollster::block_on(scope.pop()) {
+        let invalid = pollster::block_on(scope.pop());
+        let out_of_memory = pollster::block_on(memory.pop());
+        if let Some(error) = invalid.or(out_of_memory) {
+            // Buffers that failed are not kept for the next frame.
+            cache.remove(&shape);
             return Err(StageError::Device(error.to_string()));
         }
         let out = floats(read_back(&self.device, &buffers.readback, bytes)?);

@@ -225,6 +225,11 @@ impl Stage {
         if let Some(&bytes) = sizes.iter().find(|&&b| b > limit) {
             return Err(StageError::TooLarge { bytes, limit });
         }
+        // Errors from here on, the buffers' creation included, come back as a StageError
+        // (the caller runs the CPU stage) rather than to wgpu's uncaptured-error handler:
+        // out of memory as well as validation.
+        let memory = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut cache = self.buffers.lock().unwrap_or_else(|e| e.into_inner());
         if !cache.contains_key(&sizes) && cache.len() >= KEPT_SIZES {
             cache.clear();
@@ -236,7 +241,6 @@ impl Stage {
         let profiling = gpu.profiling();
         let mut clock = Instant::now();
         let mut mark = |part: fn(&mut GpuTimes) -> &mut f64| gpu.mark(part, &mut clock);
-        let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
         gpu.queue.write_buffer(&buffers.config, 0, config);
         for (buffer, data) in buffers.inputs.iter().zip(inputs) {
             if !data.is_empty() {
@@ -290,7 +294,11 @@ impl Stage {
             offset += padded(bytes);
         }
         gpu.queue.submit([encoder.finish()]);
-        if let Some(error) = pollster::block_on(scope.pop()) {
+        let invalid = pollster::block_on(scope.pop());
+        let out_of_memory = pollster::block_on(memory.pop());
+        if let Some(error) = invalid.or(out_of_memory) {
+            // Buffers that failed are not kept for the next frame.
+            cache.remove(&sizes);
             return Err(StageError::Device(error.to_string()));
         }
         let words = read_back(&gpu.device, &buffers.readback, offset)?;
