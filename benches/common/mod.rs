@@ -179,14 +179,7 @@ pub fn median_ms_on(
         ms
     });
     gpu.set_profiling(false);
-    let t = gpu.take_times();
-    let n = runs as f64;
-    let per_run = shutter::gpu::GpuTimes {
-        upload_ms: t.upload_ms / n,
-        compute_ms: t.compute_ms / n,
-        readback_ms: t.readback_ms / n,
-    };
-    (ms, per_run)
+    (ms, gpu.take_times().per_run(runs))
 }
 
 /// Median time (ms) of the numeric policy's scan of `f` (the read stage's share).

@@ -622,13 +622,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                 // The GPU stages' split, per run (a mean: the parts are summed over runs).
                 let gpu_stages = on_gpu.map(|gpu| {
                     gpu.set_profiling(false);
-                    let t = gpu.take_times();
-                    let n = options.runs as f64;
-                    GpuTimes {
-                        upload_ms: t.upload_ms / n,
-                        compute_ms: t.compute_ms / n,
-                        readback_ms: t.readback_ms / n,
-                    }
+                    gpu.take_times().per_run(options.runs)
                 });
                 // Stages with a twin that ran on the CPU instead in those runs (a frame over
                 // the device's limits): the row is then not all GPU.

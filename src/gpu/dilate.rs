@@ -19,7 +19,7 @@ use bytemuck::{Pod, Zeroable};
 use crate::motion::dilate::Source;
 use crate::motion::tile_max::TileGrid;
 
-use super::stage::{floats, Dispatch, Stage, StageError};
+use super::stage::{tile_grid, Dispatch, Stage, StageError};
 use super::Gpu;
 
 /// The shader's source.
@@ -128,7 +128,7 @@ impl Gpu {
             _pad: 0,
         };
         let bytes = (n * 4) as u64;
-        let mut out = self.dilate.run(
+        let out = self.dilate.run(
             self,
             bytemuck::bytes_of(&config),
             &[
@@ -147,15 +147,7 @@ impl Gpu {
                 ],
             }],
         )?;
-        let y = floats(out.pop().expect("two outputs"));
-        let x = floats(out.pop().expect("two outputs"));
-        Ok(TileGrid {
-            columns,
-            rows,
-            size: tiles.size,
-            x,
-            y,
-        })
+        Ok(tile_grid(out, columns, rows, tiles.size))
     }
 }
 

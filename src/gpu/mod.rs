@@ -100,6 +100,18 @@ pub struct GpuTimes {
     pub readback_ms: f64,
 }
 
+impl GpuTimes {
+    /// These sums over `runs` runs, per run.
+    pub fn per_run(self, runs: usize) -> GpuTimes {
+        let n = runs.max(1) as f64;
+        GpuTimes {
+            upload_ms: self.upload_ms / n,
+            compute_ms: self.compute_ms / n,
+            readback_ms: self.readback_ms / n,
+        }
+    }
+}
+
 /// Where the passes run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Backend {

@@ -343,3 +343,21 @@ pub(crate) fn read_back(
 pub(crate) fn floats(words: Vec<u32>) -> Vec<f32> {
     bytemuck::cast_vec(words)
 }
+
+/// A tile stage's two outputs (x, then y) as the grid they make.
+pub(crate) fn tile_grid(
+    mut out: Vec<Vec<u32>>,
+    columns: usize,
+    rows: usize,
+    size: usize,
+) -> crate::motion::tile_max::TileGrid {
+    let y = floats(out.pop().expect("two outputs"));
+    let x = floats(out.pop().expect("two outputs"));
+    crate::motion::tile_max::TileGrid {
+        columns,
+        rows,
+        size,
+        x,
+        y,
+    }
+}

@@ -18,7 +18,7 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::motion::tile_max::TileGrid;
 
-use super::stage::{floats, Dispatch, Stage, StageError};
+use super::stage::{tile_grid, Dispatch, Stage, StageError};
 use super::Gpu;
 
 /// The shader's source.
@@ -110,7 +110,7 @@ impl Gpu {
         }
         let n = width * height;
         let bytes = (tiles * 4) as u64;
-        let mut out = self.tile_max.run(
+        let out = self.tile_max.run(
             self,
             bytemuck::bytes_of(&config),
             &[
@@ -124,15 +124,7 @@ impl Gpu {
                 groups: [config.columns, config.rows, 1],
             }],
         )?;
-        let y = floats(out.pop().expect("two outputs"));
-        let x = floats(out.pop().expect("two outputs"));
-        Ok(TileGrid {
-            columns,
-            rows,
-            size: config.size as usize,
-            x,
-            y,
-        })
+        Ok(tile_grid(out, columns, rows, config.size as usize))
     }
 }
 
