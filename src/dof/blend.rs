@@ -128,9 +128,16 @@ struct Ladder {
     cocs: Vec<f32>,
     /// 1 / (CoC of image k + 1 − CoC of image k).
     inverse_gaps: Vec<f32>,
+    /// The CoCs of images 1 ..= top − 1 (then +∞): a CoC's image below is the count of
+    /// these it reaches, found without a branch.
+    bounds: [f32; BOUNDS],
     /// The image that is level 1.
     first: usize,
 }
+
+/// Room in [`Ladder::bounds`]: the sharp frame, the half step and every level.
+const BOUNDS: usize = 16;
+const _: () = assert!(MAX_LEVELS <= BOUNDS);
 
 impl Ladder {
     /// The sharp frame, the half step if asked for, and levels 1 ..= `top`.
@@ -141,22 +148,28 @@ impl Ladder {
         }
         cocs.extend((1..=top).map(level_coc));
         let inverse_gaps = cocs.windows(2).map(|c| 1.0 / (c[1] - c[0])).collect();
+        let mut bounds = [f32::INFINITY; BOUNDS];
+        let inner = &cocs[1..cocs.len() - 1];
+        bounds[..inner.len()].copy_from_slice(inner);
         Ladder {
             cocs,
             inverse_gaps,
+            bounds,
             first: if half { 2 } else { 1 },
         }
     }
 
     /// (k, f): level k mixed with level k + 1 by f, linearly in CoC between the CoCs the
-    /// two stand for (clamped to the top level).
+    /// two stand for (clamped to the top level). The CoCs rise, so k, the last image below
+    /// c short of the top, is the number of bounds c reaches.
     #[inline(always)]
     fn bracket(&self, c: f32) -> (usize, f32) {
         let top = self.cocs.len() - 1;
-        let mut k = 0;
-        while k + 1 < top && c >= self.cocs[k + 1] {
-            k += 1;
-        }
+        let reached: u32 = self.bounds[..top - 1]
+            .iter()
+            .map(|&b| u32::from(c >= b))
+            .sum();
+        let k = reached as usize;
         let f = ((c - self.cocs[k]) * self.inverse_gaps[k]).clamp(0.0, 1.0);
         (k, f)
     }
@@ -271,13 +284,13 @@ fn halve_plane_row(row: &[f32], out: &mut [f32]) {
             + 0.375 * (row[c.min(last)] + row[(c + 1).min(last)])
     };
     let n = out.len();
-    // Texels 1 .. inner read 2i − 1 ..= 2i + 2 inside the row; the others clamp.
+    // Texels 1 .. inner read 2i − 1 ..= 2i + 2 inside the row, that is the pairs (2i − 1,
+    // 2i) and (2i + 1, 2i + 2): pairs i − 1 and i of the row from its second sample.
     let inner = ((row.len() - 1) / 2).clamp(1, n);
     out[0] = tap(0);
-    for (i, o) in out.iter_mut().enumerate().take(inner).skip(1) {
-        let c = 2 * i;
-        let q = &row[c - 1..c + 3];
-        *o = 0.125 * (q[0] + q[3]) + 0.375 * (q[1] + q[2]);
+    let (pairs, _) = row[1..].as_chunks::<2>();
+    for ((o, p), q) in out[1..inner].iter_mut().zip(pairs).zip(&pairs[1..]) {
+        *o = 0.125 * (p[0] + q[1]) + 0.375 * (p[1] + q[0]);
     }
     for (i, o) in out.iter_mut().enumerate().skip(inner) {
         *o = tap(i);
@@ -301,12 +314,13 @@ fn first_row(source: &Source, width: usize, y: usize, out: &mut [f32], s: &mut F
     let w2 = out.len() / LANES;
     let span = y * width..(y + 1) * width;
     let coc = &source.coc[span.clone()];
-    s.w.clear();
-    s.near.clear();
-    for &c in coc {
+    s.w.resize(width, 0.0);
+    s.near.resize(width, 0.0);
+    s.channel.resize(width, 0.0);
+    for ((w, near), &c) in s.w.iter_mut().zip(s.near.iter_mut()).zip(coc) {
         let t = source.interpolator(c);
-        s.w.push(t.max(IN_FOCUS_WEIGHT));
-        s.near.push(if c < 0.0 { t } else { 0.0 });
+        *w = t.max(IN_FOCUS_WEIGHT);
+        *near = if c < 0.0 { t } else { 0.0 };
     }
     let mut lanes = out.chunks_mut(w2);
     for ch in 0..4 {
@@ -314,13 +328,9 @@ fn first_row(source: &Source, width: usize, y: usize, out: &mut [f32], s: &mut F
         match source.planes.get(ch) {
             Some(plane) => {
                 let reference = source.reference[ch];
-                s.channel.clear();
-                s.channel.extend(
-                    plane[span.clone()]
-                        .iter()
-                        .zip(&s.w)
-                        .map(|(v, w)| (v - reference) * w),
-                );
+                for ((o, v), w) in s.channel.iter_mut().zip(&plane[span.clone()]).zip(&s.w) {
+                    *o = (v - reference) * w;
+                }
                 halve_plane_row(&s.channel, lane);
             }
             None => lane.fill(0.0),
@@ -429,20 +439,64 @@ fn lerp(a: &Texel, b: &Texel, f: f32) -> Texel {
     o
 }
 
+/// Texel rows `a` and `b` mixed by f into `out`, colour divided by w. The mix runs over the
+/// rows' floats and the division a texel at a time (one 8-lane division by (w, w, w, w, 1,
+/// 1, 1, 1)): written over texels at once, the compiler transposes eight of them.
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn normalised_row(a: &[Texel], b: &[Texel], f: f32, out: &mut [Texel]) {
+    for ((o, a), b) in out
+        .as_flattened_mut()
+        .iter_mut()
+        .zip(a.as_flattened())
+        .zip(b.as_flattened())
+    {
+        *o = a + f * (b - a);
+    }
+    for t in out.iter_mut() {
+        // max(w, MIN_POSITIVE), NaN included, in one comparison.
+        let w = if t[W] > f32::MIN_POSITIVE {
+            t[W]
+        } else {
+            f32::MIN_POSITIVE
+        };
+        let divisor = [w, w, w, w, 1.0, 1.0, 1.0, 1.0];
+        for (v, d) in t.iter_mut().zip(divisor) {
+            *v /= d;
+        }
+    }
+}
+
 /// A level sampled bilinearly at the frame's pixel centres, a row at a time: the row
 /// between the two texel rows that bracket a frame row is made once, and each pixel of the
 /// frame row interpolates across it.
 struct Sampler<'a> {
     level: &'a Level,
     across: Vec<(u32, u32, f32)>,
+    /// `across` as three planes, for loops that read one lane of many pixels.
+    across_planes: AxisPlanes,
     down: Vec<(u32, u32, f32)>,
+}
+
+/// An axis's taps as planes: the texel before each pixel, the one after, the weight of the
+/// one after.
+struct AxisPlanes {
+    before: Vec<u32>,
+    after: Vec<u32>,
+    weight: Vec<f32>,
 }
 
 impl<'a> Sampler<'a> {
     fn new(level: &'a Level, number: usize, width: usize, height: usize) -> Self {
+        let across = axis_taps(width, number, level.width);
+        let across_planes = AxisPlanes {
+            before: across.iter().map(|t| t.0).collect(),
+            after: across.iter().map(|t| t.1).collect(),
+            weight: across.iter().map(|t| t.2).collect(),
+        };
         Sampler {
             level,
-            across: axis_taps(width, number, level.width),
+            across,
+            across_planes,
             down: axis_taps(height, number, level.height),
         }
     }
@@ -456,15 +510,8 @@ impl<'a> Sampler<'a> {
         let w = self.level.width;
         let a = &self.level.texels[r0 as usize * w..(r0 as usize + 1) * w];
         let b = &self.level.texels[r1 as usize * w..(r1 as usize + 1) * w];
-        row.clear();
-        row.extend(a.iter().zip(b).map(|(a, b)| {
-            let mut t = lerp(a, b, f);
-            let w = t[W].max(f32::MIN_POSITIVE);
-            for lane in t.iter_mut().take(W) {
-                *lane /= w;
-            }
-            t
-        }));
+        row.resize(w, ZERO);
+        normalised_row(a, b, f, row);
     }
 
     /// The level at frame pixel x, from the row [`Sampler::row`] made.
@@ -489,6 +536,11 @@ impl<'a> Sampler<'a> {
 struct Scratch {
     made: Vec<Vec<Texel>>,
     blur: Vec<f32>,
+    /// Each blurred pixel's mix of two images, offset by the reference.
+    mixed: Vec<Texel>,
+    /// T_near of the two levels that bracket E, as planes.
+    near_lower: Vec<f32>,
+    near_upper: Vec<f32>,
 }
 
 /// The compose stage for frame row y: each pixel's blurriness, the levels the row needs,
@@ -514,7 +566,13 @@ fn compose_row(
     let row = y * width;
     let coc = &source.coc[row..row + width];
     let height = source.coc.len() / width;
-    let Scratch { made, blur } = scratch;
+    let Scratch {
+        made,
+        blur,
+        mixed,
+        near_lower,
+        near_upper,
+    } = scratch;
     made.resize(samplers.len(), Vec::new());
     let mut ready = [false; MAX_LEVELS + 1];
     // Makes level l's row (l ≥ 1) once.
@@ -527,26 +585,47 @@ fn compose_row(
 
     // Blurriness: the pixel's own T, or the near field's blurred T_near if larger (`near`
     // counts in levels, without the half step).
-    blur.clear();
-    blur.extend(coc.iter().map(|&c| source.interpolator(c)));
+    blur.resize(width, 0.0);
+    for (t, &c) in blur.iter_mut().zip(coc) {
+        *t = source.interpolator(c);
+    }
     if let Some((k, f)) = near {
         make(k, made);
         make(k + 1, made);
-        let upper = &samplers[k];
-        for (x, (t, &c)) in blur.iter_mut().zip(coc).enumerate() {
-            let lower = if k == 0 {
-                if c < 0.0 {
-                    *t
-                } else {
-                    0.0
-                }
-            } else {
-                samplers[k - 1].near_at(&made[k - 1], x)
+        let (upper, upper_row) = (&samplers[k], &made[k]);
+        if k == 0 {
+            for (x, (t, &c)) in blur.iter_mut().zip(coc).enumerate() {
+                let lower = if c < 0.0 { *t } else { 0.0 };
+                spread(t, lower, upper.near_at(upper_row, x), f);
+            }
+        } else {
+            // T_near of the two levels' rows as planes, read with indices clamped to them
+            // (the taps are inside already; the clamp lets the loop run on vectors).
+            near_lane(&made[k - 1], near_lower);
+            near_lane(upper_row, near_upper);
+            let (lower, upper) = (&samplers[k - 1].across_planes, &upper.across_planes);
+            let (near_lower, near_upper) = (&near_lower[..], &near_upper[..]);
+            let (lower_last, upper_last) = (near_lower.len() - 1, near_upper.len() - 1);
+            assert!(lower_last < near_lower.len() && upper_last < near_upper.len());
+            let at = |lane: &[f32], last: usize, before: u32, after: u32, weight: f32| {
+                let a = lane[(before as usize).min(last)];
+                let b = lane[(after as usize).min(last)];
+                a + weight * (b - a)
             };
-            let spread = lower + f * (upper.near_at(&made[k], x) - lower);
-            // Negative where the near field's spread sets the blur.
-            if spread > *t {
-                *t = -spread;
+            for (t, (((b0, a0), w0), ((b1, a1), w1))) in blur.iter_mut().zip(
+                lower
+                    .before
+                    .iter()
+                    .zip(&lower.after)
+                    .zip(&lower.weight)
+                    .zip(upper.before.iter().zip(&upper.after).zip(&upper.weight)),
+            ) {
+                spread(
+                    t,
+                    at(near_lower, lower_last, *b0, *a0, *w0),
+                    at(near_upper, upper_last, *b1, *a1, *w1),
+                    f,
+                );
             }
         }
     }
@@ -578,38 +657,119 @@ fn compose_row(
     reference[..4].copy_from_slice(&source.reference);
     // `out` holds the sharp row: pixels left sharp are not touched.
     let channels = out.len();
-    let mut sharp = ZERO;
-    for (x, &t) in blur.iter().enumerate() {
+    let images = Images {
+        source,
+        window,
+        channels,
+        reference: &reference,
+        width,
+        height,
+        y,
+        samplers,
+        made,
+    };
+    mixed.resize(width, ZERO);
+    for (x, (&t, m)) in blur.iter().zip(mixed.iter_mut()).enumerate() {
         if t == 0.0 {
             continue;
-        }
-        for (v, rows) in sharp.iter_mut().zip(window.iter().take(channels)) {
-            *v = rows[1][x];
         }
         // A pixel blurred by the near field's spread mixes levels only: the half step shows
         // its own neighbourhood, which the near field's blur reaches farther than.
         let ladder = if t < 0.0 { plain } else { ladder };
-        let first = ladder.first;
         let (k, f) = ladder.bracket(to_coc(t.abs()));
-        // Image j: the sharp frame (offset), the half step, or a level's row (no closure:
-        // `multiversion` would leave it compiled for the baseline CPU, out of line).
-        let mut pair = [ZERO; 2];
-        for (p, j) in pair.iter_mut().zip([k, k + 1]) {
-            *p = if j == 0 {
-                let mut offset = ZERO;
-                for lane in 0..8 {
-                    offset[lane] = sharp[lane] - reference[lane];
+        let lower = images.at(k, ladder.first, x);
+        let upper = images.at(k + 1, ladder.first, x);
+        *m = lerp(&lower, &upper, f);
+    }
+    // Then into the planes (the match gives the loop each plane's own iterator, so no
+    // store checks its bounds).
+    let blurred = blur.iter().zip(mixed.iter());
+    match out {
+        [r, g, b, a] => {
+            let planes = r
+                .iter_mut()
+                .zip(g.iter_mut())
+                .zip(b.iter_mut())
+                .zip(a.iter_mut());
+            for ((&t, m), (((r, g), b), a)) in blurred.zip(planes) {
+                if t != 0.0 {
+                    *r = reference[0] + m[0];
+                    *g = reference[1] + m[1];
+                    *b = reference[2] + m[2];
+                    *a = reference[3] + m[3];
                 }
-                offset
-            } else if j < first {
-                half(source, window, channels, &reference, width, height, x, y)
-            } else {
-                samplers[j - first].at(&made[j - first], x)
-            };
+            }
         }
-        let [lower, upper] = pair;
-        for (ch, o) in out.iter_mut().enumerate() {
-            o[x] = reference[ch] + (lower[ch] + f * (upper[ch] - lower[ch]));
+        [r, g, b] => {
+            let planes = r.iter_mut().zip(g.iter_mut()).zip(b.iter_mut());
+            for ((&t, m), ((r, g), b)) in blurred.zip(planes) {
+                if t != 0.0 {
+                    *r = reference[0] + m[0];
+                    *g = reference[1] + m[1];
+                    *b = reference[2] + m[2];
+                }
+            }
+        }
+        _ => unreachable!("colour has three planes or four"),
+    }
+}
+
+/// T_near of a level's row, as a plane.
+#[inline(always)]
+fn near_lane(row: &[Texel], lane: &mut Vec<f32>) {
+    lane.clear();
+    lane.extend(row.iter().map(|t| t[NEAR]));
+}
+
+/// A pixel's blurriness `t` given the near field's T_near read at the two levels that
+/// bracket E, mixed by f: negative where the near field's spread sets the blur.
+#[inline(always)]
+fn spread(t: &mut f32, lower: f32, upper: f32, f: f32) {
+    let spread = lower + f * (upper - lower);
+    if spread > *t {
+        *t = -spread;
+    }
+}
+
+/// What the compose stage mixes for frame row y: the sharp frame (offset by the reference),
+/// the half step, and the levels' rows made for the row.
+struct Images<'a> {
+    source: &'a Source<'a>,
+    window: &'a Window<'a>,
+    channels: usize,
+    reference: &'a Texel,
+    width: usize,
+    height: usize,
+    y: usize,
+    samplers: &'a [Sampler<'a>],
+    made: &'a [Vec<Texel>],
+}
+
+impl Images<'_> {
+    /// Image j of a ladder whose level 1 is image `first`, at frame pixel x (a method, not
+    /// a closure: `multiversion` would leave a closure compiled for the baseline CPU, out
+    /// of line).
+    #[inline(always)]
+    fn at(&self, j: usize, first: usize, x: usize) -> Texel {
+        if j >= first {
+            self.samplers[j - first].at(&self.made[j - first], x)
+        } else if j == 0 {
+            let mut offset = ZERO;
+            for (lane, rows) in self.window.iter().take(self.channels).enumerate() {
+                offset[lane] = rows[1][x] - self.reference[lane];
+            }
+            offset
+        } else {
+            half(
+                self.source,
+                self.window,
+                self.channels,
+                self.reference,
+                self.width,
+                self.height,
+                x,
+                self.y,
+            )
         }
     }
 }
