@@ -17,7 +17,7 @@ use crate::io::lock::OutputLock;
 use crate::io::output::{
     existing_frame_problem, remove_stale_temporaries, write_frame, OutputOptions,
 };
-use crate::io::passes::{output_folder_problems, preflight, read_frame, Inputs, PlanOptions};
+use crate::io::passes::{output_folder_problems, preflight, read_frame_noted, Inputs, PlanOptions};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::motion::Algorithm;
@@ -339,18 +339,19 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     });
     let (read_seconds, process_seconds) = std::thread::scope(|scope| -> Result<(f64, f64)> {
         // The read stage applies the numeric policy, so its scan overlaps processing.
-        type Read = (Frame, Replaced);
+        // A frame, what the numeric policy replaced in it, and the read's notes.
+        type Read = (Frame, Replaced, Vec<String>);
         let (read_tx, read_rx) = mpsc::sync_channel::<std::result::Result<Read, Problem>>(0);
-        type Done = (Option<i64>, Frame, Replaced);
+        type Done = (Option<i64>, Frame, Replaced, Vec<String>);
         let (done_tx, done_rx) = mpsc::sync_channel::<std::result::Result<Done, Problem>>(0);
 
         let reader = scope.spawn(move || {
             let mut seconds = 0.0;
             for plan in &plans {
                 let t = Instant::now();
-                let frame = read_frame(plan).map(|mut frame| {
+                let frame = read_frame_noted(plan).map(|(mut frame, notes)| {
                     let replaced = crate::numeric::sanitize(&mut frame, depth_kind(&job.params));
-                    (frame, replaced)
+                    (frame, replaced, notes)
                 });
                 seconds += t.elapsed().as_secs_f64();
                 let failed = frame.is_err();
@@ -366,7 +367,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             let mut seconds = 0.0;
             for (frame_number, frame) in frames.into_iter().zip(read_rx) {
                 let message = match frame {
-                    Ok((frame, replaced)) => {
+                    Ok((frame, replaced, notes)) => {
                         let t = Instant::now();
                         let out = process_on(
                             job.algorithm,
@@ -376,7 +377,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                             gpu,
                         );
                         seconds += t.elapsed().as_secs_f64();
-                        Ok((frame_number, out, replaced))
+                        Ok((frame_number, out, replaced, notes))
                     }
                     Err(problem) => Err(problem),
                 };
@@ -391,7 +392,10 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         let mut failure = None;
         for message in done_rx {
             match message {
-                Ok((frame, out, replaced)) => {
+                Ok((frame, out, replaced, notes)) => {
+                    for note in notes {
+                        warn(&mut report, on_event, note);
+                    }
                     warn_replaced(&mut report, on_event, &replaced, frame);
                     report.replaced.add(replaced);
                     let path = job.output.path(frame);

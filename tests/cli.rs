@@ -542,9 +542,15 @@ fn presets_list_and_show() {
     let o = shutter(&["presets"]);
     assert!(o.status.success());
     let text = stdout(&o);
-    for name in ["shutter", "blender", "nuke", "painted"] {
+    for name in ["shutter", "blender", "nuke", "painted", "rsmb"] {
         assert!(text.lines().any(|l| l.starts_with(name)), "{name}: {text}");
     }
+    // A renderer preset says what the renderer must be set to.
+    assert!(
+        text.lines()
+            .any(|l| l.contains("expects:") && l.contains("anti-aliasing off")),
+        "{text}"
+    );
     let o = shutter(&["presets", "show", "nuke"]);
     assert!(o.status.success());
     assert!(stdout(&o).contains("forward.u"));

@@ -592,3 +592,338 @@ fn a_luminance_only_exr_reads_as_grey_with_a_note() {
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(!stderr(&o).contains("as grey"), "{}", stderr(&o));
 }
+
+/// RSMB's Max Displace in the tests, pixels: larger than every offset of [`Truth`].
+const MAX_DISPLACE: f32 = 8.0;
+
+/// A preset file giving the Max Displace for every section, as presets/rsmb.toml tells a
+/// user to write; loaded after `rsmb`.
+fn rsmb_preset(dir: &Path) -> Preset {
+    let path = dir.join("max-displace.toml");
+    let text: String = ["velocity", "prev", "next"]
+        .iter()
+        .map(|pass| format!("[{pass}]\nmax_displace = {MAX_DISPLACE:?}\n"))
+        .collect();
+    std::fs::write(&path, text).unwrap();
+    Preset::load(&["rsmb".into(), s(&path)]).unwrap()
+}
+
+/// RE:Vision's encoder, verbatim from its maths page: `fred = ((x/MaxDisplace)+1)*0.5`,
+/// clamped to [0, 1], `red = fred*254.0 + 0.5` (8-bit; `* 65534.0 + 0.5` at 16 bits),
+/// truncated to an integer.
+fn rsmb_code(offset: f32, top: f32) -> u16 {
+    let f = ((offset / MAX_DISPLACE + 1.0) * 0.5).clamp(0.0, 1.0);
+    (f * top + 0.5) as u16
+}
+
+/// Writes RSMB vectors (canonical offsets, y down) as an 8-bit PNG or a 16-bit TIFF, RGBA,
+/// with y up and `alpha` given as codes out of the full scale (255 or 65535).
+fn write_rsmb(path: &Path, bits: u8, dx: &[f32], dy: &[f32], alpha: &[u16]) {
+    let (top, full) = if bits == 8 {
+        (254.0, 255)
+    } else {
+        (65534.0, 65535)
+    };
+    let mut codes = Vec::with_capacity(W * H * 4);
+    for k in 0..W * H {
+        codes.extend([
+            rsmb_code(dx[k], top),
+            rsmb_code(-dy[k], top),
+            full / 2, // blue: ignored
+            alpha[k],
+        ]);
+    }
+    if bits == 8 {
+        let bytes: Vec<u8> = codes.iter().map(|&c| c as u8).collect();
+        image::save_buffer(path, &bytes, W as u32, H as u32, image::ColorType::Rgba8).unwrap();
+    } else {
+        image::ImageBuffer::<image::Rgba<u16>, _>::from_raw(W as u32, H as u32, codes)
+            .unwrap()
+            .save(path)
+            .unwrap();
+    }
+}
+
+/// Offsets of positions from the pixel centres.
+fn offsets(positions: &[Vec<f32>; 2]) -> [Vec<f32>; 2] {
+    let c = pixel_centres();
+    [0, 1].map(|a| (0..W * H).map(|k| positions[a][k] - c[a][k]).collect())
+}
+
+/// Reads colour, velocity, prev and next with the vector files given.
+fn read_rsmb(
+    preset: &Preset,
+    color: &Path,
+    velocity: &Path,
+    prev: &Path,
+    next: &Path,
+) -> (Frame, Vec<String>) {
+    let mut i = inputs(color);
+    i.velocity = Some(PathPattern::parse(&s(velocity)).unwrap());
+    i.prev = Some(PathPattern::parse(&s(prev)).unwrap());
+    i.next = Some(PathPattern::parse(&s(next)).unwrap());
+    let options = PlanOptions {
+        preset,
+        layer: None,
+        needs: Passes {
+            depth: false,
+            ..Passes::ALL
+        },
+        max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
+    };
+    let plan = plan_frame(&i, None, &options).unwrap_or_else(|p| panic!("{p:?}"));
+    shutter::io::passes::read_frame_noted(&plan).unwrap()
+}
+
+/// RSMB's 8- and 16-bit encodings of known backward and forward motion read back as the
+/// canonical p(-1), p(+1) and velocity, to the encoding's precision: the encoder rounds to
+/// the nearest code (`+ 0.5` then truncation), and a code step is 2·MaxDisplace/254 =
+/// MaxDisplace/127 px at 8 bits and MaxDisplace/32767 px at 16 bits, so every read offset
+/// is within half a step of the truth (plus 1e-5 for the f32 sums with the pixel centre).
+/// The still code (127, 32767) reads as exactly 0: a decode with 255 or 65535 in place of
+/// 254 or 65534 fails that, and overshoots the bound near ±MaxDisplace.
+#[test]
+fn rsmb_preset_8_and_16_bit() {
+    let t = Truth::new();
+    let dir = tempfile::tempdir().unwrap();
+    let preset = rsmb_preset(dir.path());
+    let color = dir.path().join("C.exr");
+    write_exr(
+        &color,
+        W,
+        H,
+        vec![
+            ("R", t.rgba[0].clone()),
+            ("G", t.rgba[1].clone()),
+            ("B", t.rgba[2].clone()),
+        ],
+    );
+    let backward = offsets(&t.prev);
+    let forward = offsets(&t.next);
+    for (bits, still, ext) in [(8u8, 127.0f32, "png"), (16, 32767.0, "tif")] {
+        let full = vec![if bits == 8 { 255 } else { 65535 }; W * H];
+        let b = dir.path().join(format!("backward{bits}.{ext}"));
+        let f = dir.path().join(format!("forward{bits}.{ext}"));
+        write_rsmb(&b, bits, &backward[0], &backward[1], &full);
+        write_rsmb(&f, bits, &forward[0], &forward[1], &full);
+        let (frame, notes) = read_rsmb(&preset, &color, &b, &b, &f);
+        assert!(notes.is_empty(), "{bits}-bit: {notes:?}");
+        let bound = 0.5 * MAX_DISPLACE / still + 1e-5;
+        let what = |pass: &str| format!("rsmb {bits}-bit {pass}");
+        let prev = frame.prev.as_ref().unwrap();
+        let next = frame.next.as_ref().unwrap();
+        let velocity = frame.velocity.as_ref().unwrap();
+        let v = t.velocity();
+        assert_close(&prev.x, &t.prev[0], bound, &what("prev x"));
+        assert_close(&prev.y, &t.prev[1], bound, &what("prev y"));
+        assert_close(&next.x, &t.next[0], bound, &what("next x"));
+        assert_close(&next.y, &t.next[1], bound, &what("next y"));
+        assert_close(&velocity.x, &v[0], bound, &what("velocity x"));
+        assert_close(&velocity.y, &v[1], bound, &what("velocity y"));
+        // Still where the truth is still, exactly.
+        for k in 0..W * H {
+            if v[0][k] == 0.0 {
+                assert_eq!(velocity.x[k], 0.0, "{} at {k}", what("still x"));
+            }
+            if v[1][k] == 0.0 {
+                assert_eq!(velocity.y[k], 0.0, "{} at {k}", what("still y"));
+            }
+        }
+        assert!(v[0].contains(&0.0) && v[1].contains(&0.0));
+    }
+}
+
+/// Pixels whose alpha is below full-on (0, or one code short of it) hold garbage vectors
+/// (the most negative code); they read as the motion of the nearest pixel with full-on
+/// alpha, never as their stored value or as zero. Without the preset's validity_alpha the
+/// same file reads the garbage. With no valid pixel the frame reads as still, with a note.
+#[test]
+fn rsmb_invalid_alpha_takes_the_nearest_valid_motion() {
+    let dir = tempfile::tempdir().unwrap();
+    let preset = rsmb_preset(dir.path());
+    let color = dir.path().join("C.exr");
+    let n = W * H;
+    write_exr(
+        &color,
+        W,
+        H,
+        vec![
+            ("R", vec![0.5; n]),
+            ("G", vec![0.5; n]),
+            ("B", vec![0.5; n]),
+            ("Z", vec![10.0; n]),
+        ],
+    );
+    // Backward offsets: columns 0..=3 move by a, columns 6..=10 by b; columns 4 and 5 and
+    // pixel (8, 3) are invalid. Column 4 is nearest to column 3 (a), column 5 to column 6
+    // (b), pixel (8, 3) to its own region's neighbours (b).
+    let (a, b) = ((3.0f32, -2.0f32), (-4.0f32, 1.0f32));
+    let invalid = |k: usize| matches!(k % W, 4 | 5) || k == 3 * W + 8;
+    let mut dx = vec![0.0; n];
+    let mut dy = vec![0.0; n];
+    let mut alpha = vec![255u16; n];
+    let mut expected = [vec![0.0; n], vec![0.0; n]];
+    for k in 0..n {
+        let side = if k % W <= 4 { a } else { b };
+        (expected[0][k], expected[1][k]) = side;
+        if invalid(k) {
+            // Garbage: code 0 in red and green (y is stored up).
+            (dx[k], dy[k]) = (-MAX_DISPLACE, MAX_DISPLACE);
+            alpha[k] = if k % 2 == 0 { 0 } else { 254 };
+        } else {
+            (dx[k], dy[k]) = side;
+        }
+    }
+    let path = dir.path().join("backward.png");
+    write_rsmb(&path, 8, &dx, &dy, &alpha);
+    let bound = 0.5 * MAX_DISPLACE / 127.0 + 1e-5;
+
+    let (frame, notes) = read_rsmb(&preset, &color, &path, &path, &path);
+    assert!(
+        notes.iter().any(|n| n.contains("nearest valid vector")),
+        "{notes:?}"
+    );
+    let read = offsets(&{
+        let prev = frame.prev.as_ref().unwrap();
+        [prev.x.clone(), prev.y.clone()]
+    });
+    assert_close(&read[0], &expected[0], bound, "filled prev x");
+    assert_close(&read[1], &expected[1], bound, "filled prev y");
+    let velocity = frame.velocity.as_ref().unwrap();
+    let minus = |p: &[f32]| p.iter().map(|v| -v).collect::<Vec<f32>>();
+    assert_close(
+        &velocity.x,
+        &minus(&expected[0]),
+        bound,
+        "filled velocity x",
+    );
+    assert_close(
+        &velocity.y,
+        &minus(&expected[1]),
+        bound,
+        "filled velocity y",
+    );
+
+    // Through the CLI: the note is among the run's warnings.
+    let out = dir.path().join("out.exr");
+    let md = dir.path().join("max-displace.toml");
+    let o = shutter(&[
+        "blur",
+        "--preset",
+        "rsmb",
+        "--preset",
+        &s(&md),
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &s(&color),
+        "--velocity",
+        &s(&path),
+        "-o",
+        &s(&out),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("take the motion of the nearest valid vector"),
+        "{}",
+        stdout(&o)
+    );
+
+    // The key is what makes the difference: without it the garbage is read.
+    let mut ignoring = preset.clone();
+    for spec in [
+        &mut ignoring.velocity,
+        &mut ignoring.prev,
+        &mut ignoring.next,
+    ] {
+        spec.validity_alpha.clear();
+    }
+    let (frame, _) = read_rsmb(&ignoring, &color, &path, &path, &path);
+    let prev = frame.prev.as_ref().unwrap();
+    let c = pixel_centres();
+    for k in (0..n).filter(|&k| invalid(k)) {
+        assert_eq!(prev.x[k] - c[0][k], -MAX_DISPLACE, "garbage x at {k}");
+        assert_eq!(prev.y[k] - c[1][k], MAX_DISPLACE, "garbage y at {k}");
+    }
+
+    // Nothing valid: still, and said.
+    write_rsmb(&path, 8, &dx, &dy, &vec![0; n]);
+    let (frame, notes) = read_rsmb(&preset, &color, &path, &path, &path);
+    assert!(
+        notes.iter().any(|n| n.contains("reads as still")),
+        "{notes:?}"
+    );
+    let prev = frame.prev.as_ref().unwrap();
+    assert_eq!(prev.x, c[0]);
+    assert_eq!(prev.y, c[1]);
+    assert!(frame.velocity.as_ref().unwrap().x.iter().all(|&v| v == 0.0));
+}
+
+/// What RE:Vision does not document is refused, not guessed: a float vector file, and a
+/// run without the Max Displace (a usage error before any file is read).
+#[test]
+fn rsmb_refuses_float_files_and_a_missing_max_displace() {
+    let dir = tempfile::tempdir().unwrap();
+    let preset = rsmb_preset(dir.path());
+    let n = W * H;
+    let color = dir.path().join("C.exr");
+    write_exr(
+        &color,
+        W,
+        H,
+        vec![
+            ("R", vec![0.5; n]),
+            ("G", vec![0.5; n]),
+            ("B", vec![0.5; n]),
+        ],
+    );
+    let float = dir.path().join("V.exr");
+    write_exr(
+        &float,
+        W,
+        H,
+        vec![
+            ("R", vec![0.5; n]),
+            ("G", vec![0.5; n]),
+            ("A", vec![1.0; n]),
+        ],
+    );
+    let mut i = inputs(&color);
+    i.velocity = Some(PathPattern::parse(&s(&float)).unwrap());
+    let options = PlanOptions {
+        preset: &preset,
+        layer: None,
+        needs: Passes {
+            velocity: true,
+            ..Passes::COLOR
+        },
+        max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
+    };
+    let problems = plan_frame(&i, None, &options).unwrap_err();
+    assert_eq!(problems.len(), 1, "{problems:?}");
+    assert_eq!(problems[0].kind, shutter::error::ProblemKind::Unsupported);
+    assert!(
+        problems[0].to_string().contains("8- and 16-bit"),
+        "{}",
+        problems[0]
+    );
+
+    let png = dir.path().join("V.png");
+    write_rsmb(&png, 8, &vec![0.0; n], &vec![0.0; n], &vec![255; n]);
+    let out = dir.path().join("out.exr");
+    let o = shutter(&[
+        "blur",
+        "--preset",
+        "rsmb",
+        "--color",
+        &s(&color),
+        "--velocity",
+        &s(&png),
+        "-o",
+        &s(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("max_displace"), "{}", stderr(&o));
+    assert!(!out.exists());
+}

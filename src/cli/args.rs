@@ -68,7 +68,7 @@ pub struct FramesArgs {
 
 #[derive(Debug, Args)]
 pub struct BlurArgs {
-    /// Preset name (shutter, blender, nuke, painted, preview, final) or path to a .toml file;
+    /// Preset name (shutter, blender, nuke, painted, rsmb, preview, final) or path to a .toml file;
     /// repeat to merge several, later ones winning.
     #[arg(long, value_name = "P")]
     pub preset: Vec<String>,

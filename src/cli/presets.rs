@@ -14,6 +14,9 @@ pub fn presets(args: PresetsArgs) -> Result<()> {
             for (name, _) in BUILTIN {
                 let preset = Preset::builtin(name)?;
                 text += &format!("{name:<10} {}\n", preset.description);
+                if !preset.expects.is_empty() {
+                    text += &format!("{:<10} expects: {}\n", "", preset.expects);
+                }
             }
             out(&text);
             Ok(())

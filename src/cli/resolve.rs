@@ -48,6 +48,7 @@ fn output_warnings(given: &settings::Given, format: OutputFormat) -> Vec<String>
 
 pub fn resolve(args: &BlurArgs) -> Result<Job> {
     let mut preset = Preset::load(&args.preset)?;
+    preset.check_complete()?;
     let (settings, warnings) = settings::resolve(&args.settings.0, &preset)?;
     let dof = settings::dof_params(&settings, args.coc_map.is_some())?;
     if args.coc_map.is_some() {

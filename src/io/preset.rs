@@ -16,6 +16,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("blender", include_str!("../../presets/blender.toml")),
     ("nuke", include_str!("../../presets/nuke.toml")),
     ("painted", include_str!("../../presets/painted.toml")),
+    ("rsmb", include_str!("../../presets/rsmb.toml")),
     ("preview", include_str!("../../presets/preview.toml")),
     ("final", include_str!("../../presets/final.toml")),
 ];
@@ -83,6 +84,22 @@ impl Meaning {
     }
 }
 
+/// How stored vector values become offsets (before units, sign and y axis are applied).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Encoding {
+    /// `(stored - zero) * scale`, whatever the file's sample type.
+    #[default]
+    Plain,
+    /// RE:Vision Effects' normalised integer encoding (RSMB), which depends on the file's
+    /// bit depth: an 8-bit code c reads as `(c - 127) / 127 * max_displace`, a 16-bit code
+    /// as `(c - 32767) / 32767 * max_displace` (codes 0..254 and 0..65534 span
+    /// -max_displace..+max_displace;
+    /// <https://revisionfx.com/support/faqs/motion_vector_FAQs/motion_vector_math>).
+    /// Float files are refused: RE:Vision's text on them was not found (presets/rsmb.toml).
+    Rsmb,
+}
+
 /// Units of stored vectors.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
@@ -138,6 +155,39 @@ pub struct VectorSpec {
     /// Stored y grows upward: vectors have their y negated, positions are mirrored.
     #[serde(default)]
     pub y_up: bool,
+    /// How stored values become offsets: `plain` uses `zero` and `scale`; `rsmb` decodes
+    /// RE:Vision's 8/16-bit codes with `max_displace` (and leaves `zero`, `scale` unset).
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub encoding: Encoding,
+    /// RSMB's Max Displace: the motion in pixels that the largest code stands for. The
+    /// renderer's setting, not stored in the file, so the preset must give it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_displace: Option<f32>,
+    /// Alternative names of a channel, in the file the vectors come from, whose value below
+    /// full-on (1.0, the largest code of an integer file) marks the vector at that pixel
+    /// invalid. Invalid vectors take the motion of the nearest valid one
+    /// (`io::passes::validity`); empty: every vector is valid.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub validity_alpha: Vec<String>,
+}
+
+impl VectorSpec {
+    /// What is missing for the section to be read, when something is: a message naming the
+    /// key and what to do.
+    pub fn incomplete(&self, pass: &str) -> Option<String> {
+        match (self.encoding, self.max_displace) {
+            (Encoding::Rsmb, None) => Some(format!(
+                "[{pass}] encoding \"rsmb\" needs max_displace, the Max Displace (pixels) the \
+                 vectors were written with (it is not stored in the file): give it in a preset \
+                 file, e.g. [{pass}] max_displace = 32.0, after --preset rsmb"
+            )),
+            _ => None,
+        }
+    }
+}
+
+fn is_default<T: Default + PartialEq>(value: &T) -> bool {
+    *value == T::default()
 }
 
 fn one() -> f32 {
@@ -150,6 +200,10 @@ fn one() -> f32 {
 pub struct Preset {
     #[serde(default)]
     pub description: String,
+    /// What the renderer must be set to for the preset to read its passes right (one line,
+    /// shown by `shutter presets`).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub expects: String,
     pub color: ColorSpec,
     pub depth: DepthSpec,
     pub velocity: VectorSpec,
@@ -337,10 +391,44 @@ impl Preset {
             if !spec.scale.is_finite() || !spec.zero.is_finite() || spec.dead_zone < 0.0 {
                 return bad(format!("{pass}: scale, zero and dead_zone must be finite"));
             }
+            if let Some(max) = spec.max_displace {
+                if !(max.is_finite() && max > 0.0) {
+                    return bad(format!(
+                        "[{pass}] max_displace must be a positive number of pixels"
+                    ));
+                }
+            }
+            if spec.encoding == Encoding::Rsmb
+                && (spec.zero != 0.0 || spec.scale != 1.0 || spec.dead_zone != 0.0)
+            {
+                return bad(format!(
+                    "[{pass}] zero, scale and dead_zone do not apply to encoding \"rsmb\" \
+                     (its codes fix them; max_displace scales it)"
+                ));
+            }
+            if spec.validity_alpha.iter().any(|n| n.trim().is_empty()) {
+                return bad(format!("[{pass}] a validity_alpha channel name is empty"));
+            }
         }
         if let (Some(near), Some(far)) = (self.depth.near, self.depth.far) {
             if !(near.is_finite() && far.is_finite()) {
                 return bad("depth near and far must be finite".into());
+            }
+        }
+        Ok(())
+    }
+
+    /// Refuses a preset that leaves out a value only the user knows (RSMB's Max Displace),
+    /// before any file is looked at. Loading does not: a built-in preset such as `rsmb` is
+    /// shown and merged without it.
+    pub fn check_complete(&self) -> Result<()> {
+        for (pass, spec) in [
+            ("velocity", &self.velocity),
+            ("prev", &self.prev),
+            ("next", &self.next),
+        ] {
+            if let Some(missing) = spec.incomplete(pass) {
+                return Err(Error::usage(format!("preset {}: {missing}", self.name)));
             }
         }
         Ok(())
@@ -388,7 +476,44 @@ mod tests {
         assert_eq!(err.exit_code(), 2);
         assert!(err
             .to_string()
-            .contains("blender, nuke, painted, preview, final"));
+            .contains("blender, nuke, painted, rsmb, preview, final"));
+    }
+
+    #[test]
+    fn rsmb_loads_but_a_run_needs_its_max_displace() {
+        let preset = Preset::builtin("rsmb").unwrap();
+        assert_eq!(preset.velocity.encoding, Encoding::Rsmb);
+        assert_eq!(preset.next.meaning, Meaning::ToNext);
+        assert_eq!(preset.prev.validity_alpha, ["A"]);
+        assert!(!preset.expects.is_empty());
+        let err = preset.check_complete().unwrap_err();
+        assert_eq!(err.exit_code(), 2);
+        assert!(err.to_string().contains("max_displace"), "{err}");
+
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("md.toml");
+        let text = "[velocity]\nmax_displace = 16.0\n[prev]\nmax_displace = 16.0\n\
+                    [next]\nmax_displace = 16.0\n";
+        std::fs::write(&path, text).unwrap();
+        let preset = Preset::load(&["rsmb".into(), path.display().to_string()]).unwrap();
+        preset.check_complete().unwrap();
+        assert_eq!(preset.next.max_displace, Some(16.0));
+        assert_eq!(preset.next.encoding, Encoding::Rsmb);
+    }
+
+    #[test]
+    fn rsmb_refuses_zero_scale_and_bad_max_displace() {
+        let dir = tempfile::tempdir().unwrap();
+        for (text, wanted) in [
+            ("[velocity]\nscale = 2.0\n", "do not apply"),
+            ("[velocity]\nmax_displace = 0.0\n", "positive"),
+            ("[velocity]\nmax_displace = -3.0\n", "positive"),
+        ] {
+            let path = dir.path().join("bad.toml");
+            std::fs::write(&path, text).unwrap();
+            let err = Preset::load(&["rsmb".into(), path.display().to_string()]).unwrap_err();
+            assert!(err.to_string().contains(wanted), "{text}: {err}");
+        }
     }
 
     #[test]

@@ -17,16 +17,19 @@
 //! - [`preflight`]: every frame planned, and outputs checked against inputs, before anything
 //!   is read or written;
 //! - [`read`]: the decode, colour and depth conversions;
-//! - [`convert`]: motion from any of the preset's motion sections to the pass needed.
+//! - [`convert`]: motion from any of the preset's motion sections to the pass needed;
+//! - [`validity`]: vectors marked invalid (by the vector file's alpha) take the motion of
+//!   the nearest valid one.
 
 mod convert;
 mod plan;
 mod preflight;
 mod read;
+mod validity;
 
 pub use plan::{passes_found, plan_frame, FramePlan, PlanOptions};
 pub use preflight::{output_folder_problems, preflight};
-pub use read::{read_color, read_frame};
+pub use read::{read_color, read_frame, read_frame_noted};
 
 use crate::io::sequence::PathPattern;
 

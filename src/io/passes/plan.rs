@@ -9,6 +9,7 @@ use crate::io::file::FileInfo;
 use crate::io::preset::{Preset, Transfer, VectorSpec};
 use crate::io::sequence::PathPattern;
 
+use super::convert::Decode;
 use super::Inputs;
 
 /// A channel to read: which planned file, which entry of that file's read list.
@@ -38,6 +39,10 @@ pub(super) struct VectorPlan {
     pub(super) x: Slot,
     pub(super) y: Slot,
     pub(super) z: Option<Slot>,
+    /// The channel whose value below full-on marks a vector invalid (`validity_alpha`).
+    pub(super) alpha: Option<Slot>,
+    /// How the stored values decode, for this file's sample type.
+    pub(super) decode: Decode,
     pub(super) spec: VectorSpec,
 }
 
@@ -229,8 +234,22 @@ pub fn plan_frame(
                         fatal = true;
                         break;
                     }
+                    let x_channel = found[0].expect("required");
+                    let decode =
+                        match Decode::resolve(spec, name, info.channels[x_channel].sample_type) {
+                            Ok(decode) => decode,
+                            Err(detail) => {
+                                planner.problem(
+                                    Problem::new(ProblemKind::Unsupported, &info.path, detail)
+                                        .pass(name)
+                                        .channel(info.channels[x_channel].name.clone()),
+                                );
+                                fatal = true;
+                                break;
+                            }
+                        };
                     let file = planner.add_file(info.clone());
-                    let x = planner.slot(file, found[0].expect("required"));
+                    let x = planner.slot(file, x_channel);
                     let y = planner.slot(file, found[1].expect("required"));
                     let z = if spec.meaning.is_position() {
                         found
@@ -241,10 +260,27 @@ pub fn plan_frame(
                     } else {
                         None
                     };
+                    // The validity alpha lives in the vectors' own file, and is never the
+                    // colour's alpha (a multi-layer file's `A` says coverage, not validity).
+                    let alpha_channel = spec
+                        .validity_alpha
+                        .iter()
+                        .filter_map(|n| info.find(n))
+                        .find(|c| !skip.contains(c));
+                    let alpha = alpha_channel.map(|c| planner.slot(file, c));
+                    if !spec.validity_alpha.is_empty() && alpha.is_none() {
+                        plan.warnings.push(format!(
+                            "{name} vectors: the file has no validity alpha ({}), so every \
+                             vector is read as valid",
+                            spec.validity_alpha.join(" or ")
+                        ));
+                    }
                     chosen = Some(VectorPlan {
                         x,
                         y,
                         z,
+                        alpha,
+                        decode,
                         spec: spec.clone(),
                     });
                     let target_name = ["velocity", "prev", "next"][target];

@@ -12,6 +12,14 @@ use super::Inputs;
 
 /// Decodes the planned files and converts them to canonical passes.
 pub fn read_frame(plan: &FramePlan) -> Result<Frame, Problem> {
+    read_frame_noted(plan).map(|(frame, _)| frame)
+}
+
+/// [`read_frame`], with notes on what the read did to this frame's values that the plan
+/// could not foresee (vectors marked invalid, filled or read as still). A note's text does
+/// not name the frame, so a sequence reports each kind once.
+pub fn read_frame_noted(plan: &FramePlan) -> Result<(Frame, Vec<String>), Problem> {
+    let mut notes = Vec::new();
     let mut decoded: Vec<Vec<Plane>> = Vec::with_capacity(plan.files.len());
     for file in &plan.files {
         let planes = file
@@ -80,14 +88,30 @@ pub fn read_frame(plan: &FramePlan) -> Result<Frame, Problem> {
         let x = take(source.x, &mut decoded);
         let y = take(source.y, &mut decoded);
         let z = source.z.map(|slot| take(slot, &mut decoded));
-        let motion = MotionSource::decode(&source.spec, x, y, z, width, height);
+        let alpha = source.alpha.map(|slot| take(slot, &mut decoded));
+        let mut motion = MotionSource::decode(&source.spec, source.decode, x, y, z, width, height);
+        if let Some(alpha) = alpha {
+            let filled = motion.fill_invalid(&alpha, width, height);
+            let pass = ["velocity", "prev", "next"][target];
+            if filled.none_valid {
+                notes.push(format!(
+                    "{pass}: every vector of a frame is marked invalid by its alpha (below \
+                     full-on), so that frame's {pass} reads as still"
+                ));
+            } else if filled.filled > 0 {
+                notes.push(format!(
+                    "{pass}: vectors marked invalid by their alpha (below full-on) take the \
+                     motion of the nearest valid vector"
+                ));
+            }
+        }
         match target {
             0 => frame.velocity = Some(motion.velocity(width)),
             1 => frame.prev = Some(motion.position(width, true)),
             _ => frame.next = Some(motion.position(width, false)),
         }
     }
-    Ok(frame)
+    Ok((frame, notes))
 }
 
 fn plan_slots(plan: &FramePlan) -> Vec<Slot> {
@@ -106,6 +130,7 @@ fn plan_slots(plan: &FramePlan) -> Vec<Slot> {
         slots.push(v.x);
         slots.push(v.y);
         slots.extend(v.z);
+        slots.extend(v.alpha);
     }
     slots
 }
