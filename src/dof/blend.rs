@@ -289,7 +289,11 @@ fn halve_plane_row(row: &[f32], out: &mut [f32]) {
     let inner = ((row.len() - 1) / 2).clamp(1, n);
     out[0] = tap(0);
     let (pairs, _) = row[1..].as_chunks::<2>();
-    for ((o, p), q) in out[1..inner].iter_mut().zip(pairs).zip(&pairs[1..]) {
+    for ((o, p), q) in out[1..inner]
+        .iter_mut()
+        .zip(pairs)
+        .zip(pairs.iter().skip(1))
+    {
         *o = 0.125 * (p[0] + q[1]) + 0.375 * (p[1] + q[0]);
     }
     for (i, o) in out.iter_mut().enumerate().skip(inner) {
