@@ -440,8 +440,10 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
     if exposure {
         count = 0.0;
     }
+    // A still centre: the 2014 form gathers along the tile's vector alone; exposure takes its
+    // second set along the tile's vector too, half a step off (see the CPU twin).
     var directions = 2u;
-    if own_length < HALF_PIXEL {
+    if own_length < HALF_PIXEL && !exposure {
         directions = 1u;
     }
     let centre_z = centre.z;
@@ -450,7 +452,7 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
         for (var d = 0u; d < directions; d++) {
             var dv = m;
             var length = m_length;
-            if d == 1u {
+            if d == 1u && own_length >= HALF_PIXEL {
                 dv = own;
                 length = own_length;
             }

@@ -669,11 +669,20 @@ fn gather_pixel_2014(
     let (mut w_fg, mut w_bg) = (0.0f32, 0.0f32);
     // The centre holds one slot of the count in Blender's form.
     let mut count = if exposure { 0.0f32 } else { 1.0 };
-    let directions = if own_length < HALF_PIXEL { 1 } else { 2 };
+    // A still centre has no vector of its own: Blender's form gathers along the tile's alone,
+    // with half the taps of a moving centre. Ours takes the second set along the tile's vector
+    // too, half a step off the first, so a still pixel that a moving surface crosses samples
+    // its exposure as finely as a moving one (on `sparse` at 320×180, 0.0193 → 0.0189; no
+    // truth scene gets worse). The 1080p moving frame has no still centres: no time cost there.
+    let directions = if exposure || own_length >= HALF_PIXEL {
+        2
+    } else {
+        1
+    };
     let centre_z = centre[Z];
     for side in [1.0f32, -1.0] {
         for d in 0..directions {
-            let (dx, dy, length) = if d == 0 {
+            let (dx, dy, length) = if d == 0 || own_length < HALF_PIXEL {
                 (m.0, m.1, m_length)
             } else {
                 (own.0, own.1, own_length)
