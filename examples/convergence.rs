@@ -38,6 +38,7 @@ fn main() {
             let s = |samples, seed| RenderSettings {
                 samples,
                 shutter: 0.5,
+                shutter_offset: 0.0,
                 seed,
             };
             let a = render_reference(&scene, 0.0, kind, &s(n, 1));

@@ -97,6 +97,16 @@ pub fn shutter(phi: f32) -> f32 {
     }
 }
 
+/// The shutter offset made usable: NaN is 0 (centred), the rest clamped to [−½, ½].
+#[inline]
+pub fn shutter_offset(o: f32) -> f32 {
+    if o.is_nan() {
+        0.0
+    } else {
+        o.clamp(-0.5, 0.5)
+    }
+}
+
 /// How many values of each pass [`sanitize`] replaced.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct Replaced {

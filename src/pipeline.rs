@@ -66,6 +66,11 @@ pub enum Event {
 pub struct Report {
     pub algorithm: String,
     pub preset: String,
+    /// The exposure the motion blur rendered: the fraction of the frame interval the shutter
+    /// is open, and where it sits about the frame in exposures (0 centred, 0.5 opening at the
+    /// frame, −0.5 closing at it; `motion::Shutter`).
+    pub shutter: f32,
+    pub shutter_offset: f32,
     pub frames_written: usize,
     pub frames_skipped: usize,
     /// Seconds spent in each stage, summed over frames (the stages overlap in time).
@@ -209,6 +214,8 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     let mut report = Report {
         algorithm: job.algorithm.name().to_string(),
         preset: job.preset.name.clone(),
+        shutter: crate::numeric::shutter(job.params.shutter),
+        shutter_offset: crate::numeric::shutter_offset(job.params.shutter_offset),
         ..Report::default()
     };
 

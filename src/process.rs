@@ -6,7 +6,7 @@
 use crate::dof::{CocSource, DofParams};
 use crate::frame::{Frame, Passes};
 use crate::gpu::Gpu;
-use crate::motion::{reconstruct, scatter, stretch, Algorithm};
+use crate::motion::{reconstruct, scatter, stretch, Algorithm, Shutter};
 use crate::motion::{ReconstructParams, ScatterParams, StretchParams};
 use crate::numeric::{self, DepthKind, Replaced};
 
@@ -17,8 +17,11 @@ pub const DEFAULT_SHUTTER: f32 = 0.5;
 /// for each algorithm, and the lens when depth of field runs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Params {
-    /// Fraction of the frame interval the shutter is open (0.5 = 180°), centred on the frame.
+    /// Fraction of the frame interval the shutter is open (0.5 = 180°).
     pub shutter: f32,
+    /// Where the exposure sits about the frame, in exposures: 0 centred, +½ opening at the
+    /// frame, −½ closing at it ([`crate::motion::Shutter`]).
+    pub shutter_offset: f32,
     pub reconstruct: ReconstructParams,
     pub scatter: ScatterParams,
     pub stretch: StretchParams,
@@ -30,6 +33,7 @@ impl Default for Params {
     fn default() -> Self {
         Params {
             shutter: DEFAULT_SHUTTER,
+            shutter_offset: 0.0,
             reconstruct: ReconstructParams::default(),
             scatter: ScatterParams::default(),
             stretch: StretchParams::default(),
@@ -102,7 +106,10 @@ pub fn process_on(
         (Some(_), Some(gpu)) => match *gpu {},
         (None, _) => frame,
     };
-    let shutter = numeric::shutter(params.shutter);
+    let shutter = Shutter {
+        open: numeric::shutter(params.shutter),
+        offset: numeric::shutter_offset(params.shutter_offset),
+    };
     match algorithm {
         Algorithm::Reconstruct => {
             let params = &params.reconstruct;

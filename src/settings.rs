@@ -16,7 +16,7 @@ use crate::gpu::Backend;
 use crate::io::exr::{compression_name, parse_compression, WRITABLE_COMPRESSIONS};
 use crate::io::output::OutputOptions;
 use crate::io::preset::Preset;
-use crate::motion::{scatter, Algorithm, Anchor, CurveKind, Normalize, Variant, Weight};
+use crate::motion::{scatter, Algorithm, Anchor, CurveKind, Normalize, Shutter, Variant, Weight};
 use crate::process::Params;
 
 pub use crate::io::preset::Section;
@@ -28,13 +28,15 @@ pub type Rule = (fn(f64) -> bool, &'static str);
 #[derive(Clone, Copy)]
 pub enum Kind {
     /// A number from `min` to `max` (above `min` when `above`); `whole` for integers.
-    /// `valid` adds a rule of its own, and `expect` then says what is allowed.
+    /// `valid` adds a rule of its own, and `expect` then says what is allowed. `names` are
+    /// numbers by name, accepted beside the numbers (`--shutter-offset start`).
     Number {
         min: f64,
         max: f64,
         above: bool,
         whole: bool,
         valid: Option<Rule>,
+        names: &'static [(&'static str, f32)],
     },
     /// One of these names.
     Choice(fn() -> Vec<&'static str>),
@@ -49,6 +51,7 @@ const fn number(min: f64, max: f64) -> Kind {
         above: false,
         whole: false,
         valid: None,
+        names: &[],
     }
 }
 
@@ -59,6 +62,7 @@ const fn above(min: f64) -> Kind {
         above: true,
         whole: false,
         valid: None,
+        names: &[],
     }
 }
 
@@ -69,6 +73,7 @@ const fn whole(min: f64, max: f64) -> Kind {
         above: false,
         whole: true,
         valid: None,
+        names: &[],
     }
 }
 
@@ -251,6 +256,17 @@ impl Def {
 
     /// What values are allowed, for messages.
     pub fn expect(&self) -> String {
+        let text = self.expect_number();
+        match self.kind {
+            Kind::Number { names, .. } if !names.is_empty() => {
+                let names: Vec<&str> = names.iter().map(|(n, _)| *n).collect();
+                format!("{}, or {text}", names.join(", "))
+            }
+            _ => text,
+        }
+    }
+
+    fn expect_number(&self) -> String {
         match self.kind {
             Kind::Number {
                 valid: Some((_, expect)),
@@ -296,10 +312,18 @@ impl Def {
                 .find(|n| n.eq_ignore_ascii_case(raw.trim()))
                 .map(Value::Name)
                 .ok_or_else(|| self.expect()),
-            Kind::Number { .. } => match raw.trim().parse::<f64>() {
-                Ok(v) => self.check(v),
-                Err(_) => Err(self.expect()),
-            },
+            Kind::Number { names, .. } => {
+                if let Some((_, v)) = names
+                    .iter()
+                    .find(|(n, _)| n.eq_ignore_ascii_case(raw.trim()))
+                {
+                    return Ok(Value::Number(*v as f64));
+                }
+                match raw.trim().parse::<f64>() {
+                    Ok(v) => self.check(v),
+                    Err(_) => Err(self.expect()),
+                }
+            }
         }
     }
 
@@ -311,6 +335,7 @@ impl Def {
             above,
             whole,
             valid,
+            ..
         } = self.kind
         else {
             return Err(self.expect());
@@ -334,6 +359,9 @@ impl Def {
             (Kind::Choice(_), toml::Value::String(s)) => self.parse(s),
             (Kind::Number { .. }, toml::Value::Integer(i)) => self.check(*i as f64),
             (Kind::Number { .. }, toml::Value::Float(f)) => self.check(*f),
+            (Kind::Number { names, .. }, toml::Value::String(s)) if !names.is_empty() => {
+                self.parse(s)
+            }
             _ => Err(self.expect()),
         }
     }
@@ -414,12 +442,46 @@ pub const DEFS: &[Def] = &[
         section: Section::Blur,
         applies: &[],
         value_name: "F",
-        help: "fraction of the frame interval the shutter is open, centred on the frame \
-               (0.5 = 180°)",
+        help: "fraction of the frame interval the shutter is open (0.5 = 180°); \
+               --shutter-offset places it",
         kind: number(0.0, 1.0),
         unset: "",
         get: |s| short(s.params.shutter),
         set: |s, v| s.params.shutter = v.number() as f32,
+    },
+    Def {
+        name: "shutter-offset",
+        flag: None,
+        section: Section::Blur,
+        applies: &[],
+        value_name: "O",
+        help: "where the exposure sits about the frame: its middle after the frame's instant, \
+               in exposures, so it spans [(O − 0.5)·φ, (O + 0.5)·φ] frames; centre (0, the \
+               shutter centred on the frame), start (0.5, it opens at the frame), end (−0.5, \
+               it closes at the frame) or a number between (Nuke's custom offset c, the time \
+               it opens, is c/φ + 0.5)",
+        kind: Kind::Number {
+            min: -0.5,
+            max: 0.5,
+            above: false,
+            whole: false,
+            valid: None,
+            names: Shutter::OFFSETS,
+        },
+        unset: "",
+        get: |s| {
+            let o = s.params.shutter_offset;
+            Shutter::OFFSETS
+                .iter()
+                .find(|(_, v)| *v == o)
+                .map_or_else(|| short(o), |(n, _)| Value::Name(n))
+        },
+        set: |s, v| {
+            s.params.shutter_offset = match v {
+                Value::Name(n) => pick(Shutter::OFFSETS, n),
+                v => v.number() as f32,
+            }
+        },
     },
     Def {
         name: "max-blur",
@@ -449,6 +511,7 @@ pub const DEFS: &[Def] = &[
             above: false,
             whole: true,
             valid: Some((|v| v % 2.0 == 1.0, "an odd whole number from 1 to 255")),
+            names: &[],
         },
         unset: "",
         get: |s| Value::Number(s.params.reconstruct.taps as f64),
@@ -770,6 +833,7 @@ pub const DEFS: &[Def] = &[
             above: true,
             whole: false,
             valid: None,
+            names: &[],
         },
         unset: "",
         get: |s| short(s.dof.max_coc),
@@ -788,6 +852,7 @@ pub const DEFS: &[Def] = &[
             above: false,
             whole: true,
             valid: Some((|v| v != 1.0 && v != 2.0, "0 (round) or 3 to 32")),
+            names: &[],
         },
         unset: "",
         get: |s| Value::Number(s.dof.blades as f64),
@@ -888,6 +953,7 @@ pub const DEFS: &[Def] = &[
             above: false,
             whole: true,
             valid: Some((|v| v == 8.0 || v == 16.0, "8 or 16")),
+            names: &[],
         },
         unset: "",
         get: |s| Value::Number(if s.output.sixteen_bit { 16.0 } else { 8.0 }),

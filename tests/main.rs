@@ -16,6 +16,7 @@ mod invariants;
 mod io;
 mod lost;
 mod metrics;
+mod offset;
 mod presets;
 mod properties;
 mod reconstruct;

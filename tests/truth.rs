@@ -129,6 +129,7 @@ fn references_converge_at_the_default_sample_count() {
         let settings = |samples: usize, seed: u64| RenderSettings {
             samples,
             shutter: 0.5,
+            shutter_offset: 0.0,
             seed,
         };
         let n = render_reference(&scene, 0.0, kind, &settings(DEFAULT_SAMPLES, 1));

@@ -357,6 +357,9 @@ pub struct BenchOptions {
     pub samples: usize,
     /// Timed runs per measurement (the median is kept); at least 5.
     pub runs: usize,
+    /// The shutter offset of the references and of every setting run against them
+    /// (`motion::Shutter::offset`; 0 centred).
+    pub shutter_offset: f32,
     /// The shutter binary for the end-to-end runs.
     pub binary: PathBuf,
     /// A folder with a peers.json ([`peers`]) whose outputs are scored too.
@@ -417,6 +420,8 @@ pub struct NoiseFloor {
 pub struct BenchReport {
     pub width: usize,
     pub height: usize,
+    /// The shutter offset of the references and the settings (0 centred).
+    pub shutter_offset: f32,
     pub samples: usize,
     pub runs: usize,
     pub threads: usize,
@@ -444,6 +449,7 @@ fn scene_options(options: &BenchOptions) -> SceneOptions {
         height: options.height,
         frames: 1,
         samples: options.samples,
+        shutter_offset: options.shutter_offset as f64,
         ..SceneOptions::default()
     }
 }
@@ -468,6 +474,7 @@ fn ensure_scene(name: &str, dir: &Path, options: &BenchOptions) -> Result<()> {
     let wanted = serde_json::json!({
         "scene": name, "width": options.width, "height": options.height,
         "samples": options.samples, "shutter": scene_options.shutter, "seed": scene_options.seed,
+        "shutter_offset": scene_options.shutter_offset,
     });
     if recorded(&dir.join("scene.json"), &wanted) {
         return Ok(());
@@ -485,6 +492,7 @@ fn ensure_resampled(name: &str, dir: &Path, options: &BenchOptions) -> Result<u6
         "scene": name, "width": options.width, "height": options.height,
         "samples": options.samples, "shutter": scene_options.shutter,
         "seed": scene_options.seed, "sampling_seed": sampling_seed,
+        "shutter_offset": scene_options.shutter_offset,
     });
     let record = dir.join("resampled.json");
     if recorded(&record, &wanted) {
@@ -563,7 +571,11 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
         let sharp = read_rgb(&dir.join("color.0001.exr"))?;
         let lens = crate::truth::scenes::build(scene_name, options.width, options.height, 1)
             .and_then(|scene| scene.lens);
-        for target in targets(scene_name, lens) {
+        for mut target in targets(scene_name, lens) {
+            // The settings run with the references' shutter offset.
+            for setting in &mut target.settings {
+                setting.params.shutter_offset = options.shutter_offset;
+            }
             let name = &target.label;
             let reference = read_rgb(&dir.join(format!("{}.0001.exr", target.reference)))?;
             let region = metrics::changed_region(&rgb(&sharp), &rgb(&reference), 1e-3);
@@ -743,6 +755,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
     let report = BenchReport {
         width: options.width,
         height: options.height,
+        shutter_offset: options.shutter_offset,
         samples: options.samples,
         runs: options.runs,
         threads: rayon::current_num_threads(),

@@ -275,6 +275,16 @@ pub struct SceneArgs {
     #[arg(long, value_name = "F", default_value_t = 0.5)]
     pub shutter: f64,
 
+    /// Where the references' exposure sits about the frame: centre, start (it opens at the
+    /// frame), end (it closes at it) or a number from -0.5 to 0.5, as blur's --shutter-offset.
+    #[arg(
+        long,
+        value_name = "O",
+        default_value = "centre",
+        allow_negative_numbers = true
+    )]
+    pub shutter_offset: String,
+
     /// Seed of the sample patterns (and of the layout of random scenes).
     #[arg(long, value_name = "S", default_value_t = 1)]
     pub seed: u64,
@@ -342,6 +352,16 @@ pub struct BenchArgs {
     /// Reference samples per pixel.
     #[arg(long, value_name = "N", default_value_t = crate::truth::write::DEFAULT_SAMPLES)]
     pub samples: usize,
+
+    /// The shutter offset of the scenes' references and of every setting run on them
+    /// (centre, start, end or a number from -0.5 to 0.5, as blur's --shutter-offset).
+    #[arg(
+        long,
+        value_name = "O",
+        default_value = "centre",
+        allow_negative_numbers = true
+    )]
+    pub shutter_offset: String,
 
     /// Timed runs per measurement (median kept), at least 5.
     #[arg(long, value_name = "N", default_value_t = 5)]

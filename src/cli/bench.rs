@@ -27,6 +27,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         out: args.out.clone(),
         samples: args.samples,
         runs: args.runs,
+        shutter_offset: super::parse_shutter_offset(&args.shutter_offset)? as f32,
         binary,
         peers: args.peers.clone(),
     };

@@ -213,3 +213,16 @@ pub fn parse_size(text: &str) -> Result<(usize, usize)> {
     }
     Ok((w, h))
 }
+
+/// Parses a shutter offset as blur's `--shutter-offset` takes it: `centre`, `start`, `end` or
+/// a number from −0.5 to 0.5 (`motion::Shutter`).
+pub fn parse_shutter_offset(text: &str) -> Result<f64> {
+    let def = crate::settings::def("shutter-offset").expect("the shutter-offset setting");
+    match def.parse(text) {
+        Ok(crate::settings::Value::Number(v)) => Ok(v),
+        _ => Err(Error::usage(format!(
+            "bad --shutter-offset '{text}': use {}",
+            def.expect()
+        ))),
+    }
+}

@@ -18,6 +18,7 @@ pub fn scene(args: SceneArgs) -> Result<()> {
         frames: args.frames,
         samples: args.samples,
         shutter: args.shutter,
+        shutter_offset: super::parse_shutter_offset(&args.shutter_offset)?,
         seed: args.seed,
     };
     let verbose = std::io::stderr().is_terminal();

@@ -201,7 +201,7 @@ impl Gpu {
         &self,
         frame: crate::frame::Frame,
         params: &ReconstructParams,
-        shutter: f32,
+        shutter: impl Into<crate::motion::Shutter>,
         seed: u32,
     ) -> crate::frame::Frame {
         crate::motion::reconstruct::reconstruct_with(
@@ -372,9 +372,9 @@ mod tests {
     use crate::motion::reconstruct as cpu;
 
     #[test]
-    fn the_config_is_ten_plain_words_in_both_languages() {
-        // Keep in sync with reconstruct.wgsl: ten 4-byte fields, no padding.
-        assert_eq!(std::mem::size_of::<ReconstructConfig>(), 40);
+    fn the_config_is_eleven_plain_words_in_both_languages() {
+        // Keep in sync with reconstruct.wgsl: eleven 4-byte fields, no padding.
+        assert_eq!(std::mem::size_of::<ReconstructConfig>(), 44);
         assert_eq!(std::mem::align_of::<ReconstructConfig>(), 4);
         let fields = [
             "width: u32",
@@ -382,6 +382,7 @@ mod tests {
             "tile: u32",
             "k: f32",
             "shutter: f32",
+            "offset: f32",
             "taps: u32",
             "inv_soft_z: f32",
             "jitter: u32",

@@ -20,7 +20,7 @@
 // every filter's support, which is what the CPU's arithmetic gives.
 
 // Keep in sync with `ReconstructConfig` in src/motion/reconstruct.rs (a size test guards
-// the layout: ten 4-byte fields).
+// the layout: eleven 4-byte fields).
 struct ReconstructConfig {
     // Frame size, pixels.
     width: u32,
@@ -31,6 +31,9 @@ struct ReconstructConfig {
     k: f32,
     // Fraction of the frame interval the shutter is open.
     shutter: f32,
+    // Where the exposure sits about the frame, in exposures: 0 centred, +0.5 opening at the
+    // frame, -0.5 closing at it (a streak is its centred one moved by 2·offset·V).
+    offset: f32,
     // S: taps per pixel, odd.
     taps: u32,
     // 1 / SOFT_Z_EXTENT, per scene unit.
@@ -204,11 +207,18 @@ fn gather_pixel(x: u32, y: u32, v: vec2<f32>, n: vec2<f32>) -> vec4<f32> {
     var sum = vec4<f32>(0.0);
     let step = 2.0 / (f32(config.taps) + 1.0);
     let dual = config.variant == DUAL && own_length > HALF_PIXEL + EPSILON;
+    // The offset exposure (see the CPU twin): the taps' line moved by −2·offset half-spreads,
+    // and a tap's distance divided by its reach towards X, (1 − 2·offset) ahead and
+    // (1 + 2·offset) behind (for its cones and X's alike).
+    let shift = 2.0 * config.offset;
+    let ahead = 1.0 / max(1.0 - shift, 1e-6);
+    let behind = 1.0 / max(1.0 + shift, 1e-6);
     for (var index = 0u; index < taps; index++) {
         if index == centre_tap {
             continue;
         }
-        let t = -1.0 + (f32(index) + j + 1.0) * step;
+        let t = -1.0 + (f32(index) + j + 1.0) * step - shift;
+        let tap_reach = select(behind, ahead, t > 0.0);
         var d = n;
         var len = n_length;
         if dual && index % 2u == 1u {
@@ -218,7 +228,7 @@ fn gather_pixel(x: u32, y: u32, v: vec2<f32>, n: vec2<f32>) -> vec4<f32> {
         let px = u32(max(f32(x) + 0.5 + d.x * t, 0.0));
         let py = u32(max(f32(y) + 0.5 + d.y * t, 0.0));
         let sample = texel6(min(py, height - 1u) * width + min(px, width - 1u));
-        let distance = abs(t) * len;
+        let distance = max(abs(t) * len, 1e-6) * tap_reach;
         let z = sample.z;
         let front = soft_depth_compare(centre.z, z, inv_soft_z);
         let back = soft_depth_compare(z, centre.z, inv_soft_z);
@@ -372,13 +382,16 @@ fn split(nearest: Texel2014, scale: f32, x: u32, y: u32, offset: vec2<f32>) -> S
     return Split(a, share_a, b, share_b);
 }
 
-// A tap surface's foreground (x) and background (y) weights.
+// A tap surface's foreground (x) and background (y) weights; `share`: the tap's reach
+// towards the centre in spreads (1 centred); `window`: the centre's own spread times its
+// side's share of the line (the CPU's `own_length * extent`).
 fn weights(
     texel: Texel2014,
     distance: f32,
     direction: f32,
+    share: f32,
     centre_z: f32,
-    own_length: f32,
+    window: f32,
     scale: f32,
     edge: f32,
     exposure: bool,
@@ -391,8 +404,8 @@ fn weights(
         reach = 0.5;
     }
     return vec2<f32>(
-        direction * front * clamp(texel.length - distance + reach, 0.0, 1.0),
-        direction * behind * clamp(own_length - distance + edge, 0.0, 1.0),
+        direction * front * clamp(texel.length * share - distance + reach, 0.0, 1.0),
+        direction * behind * clamp(window - distance + edge, 0.0, 1.0),
     );
 }
 
@@ -426,8 +439,10 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
     if exposure {
         k = max(k, min(u32(ceil(m_length / TAP_SPACING)), MAX_TAPS_PER_SIDE));
     }
-    let step = 1.0 / f32(k);
     let scale = config.inv_soft_z;
+    // The offset exposure (see the CPU twin): each side covers its share of the line,
+    // (1 − 2·offset) ahead and (1 + 2·offset) behind, at k taps per spread.
+    let shift = 2.0 * config.offset;
     var edge = 1.0;
     if exposure {
         edge = 0.5;
@@ -462,7 +477,10 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
             if exposure && d == 1u {
                 tap_offset = fract(offset + 0.5);
             }
-            for (var tap = 0u; tap < k; tap++) {
+            let extent = 1.0 - shift * side;
+            let k_side = u32(ceil(f32(k) * extent));
+            let step = extent / f32(k_side);
+            for (var tap = 0u; tap < k_side; tap++) {
                 let t = (f32(tap) + tap_offset) * step;
                 let px = u32(max(f32(x) + 0.5 + sx * t, 0.0));
                 let py = u32(max(f32(y) + 0.5 + sy * t, 0.0));
@@ -486,8 +504,12 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
                 let along = dv.x * sample.vx + dv.y * sample.vy > 0.0;
                 let counts = exposure || sample.length < HALF_PIXEL || along;
                 let direction = select(0.0, 1.0, counts);
-                let w0 = weights(sample, distance, direction, centre_z, own_length, scale, edge, exposure);
-                let w1 = weights(other, distance, direction, centre_z, own_length, scale, edge, exposure);
+                // Moving along the line on this side, a tap moves away from the centre.
+                let away0 = select(-side, side, along);
+                let away1 = select(-side, side, dv.x * other.vx + dv.y * other.vy > 0.0);
+                let window = own_length * extent;
+                let w0 = weights(sample, distance, direction, 1.0 - shift * away0, centre_z, window, scale, edge, exposure);
+                let w1 = weights(other, distance, direction, 1.0 - shift * away1, centre_z, window, scale, edge, exposure);
                 count += direction;
                 fg += w0.x * sample.color + w1.x * other.color;
                 bg += w0.y * sample.color + w1.y * other.color;

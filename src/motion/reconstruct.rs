@@ -29,6 +29,7 @@
 use rayon::prelude::*;
 
 use super::tile_max::TileGrid;
+use super::Shutter;
 use crate::frame::{Color, Frame, Velocity};
 use crate::numeric::{unit, HUGE};
 
@@ -202,6 +203,10 @@ pub struct ReconstructConfig {
     pub k: f32,
     /// Fraction of the frame interval the shutter is open.
     pub shutter: f32,
+    /// Where the exposure sits about the frame, in exposures ([`Shutter::offset`]): 0 centred,
+    /// +½ opening at the frame, −½ closing at it. A surface's streak is its centred one
+    /// moved by 2·offset·V along its own half-spread V.
+    pub offset: f32,
     /// S: taps per pixel, odd.
     pub taps: u32,
     /// 1 / SOFT_Z_EXTENT, per scene unit.
@@ -220,9 +225,10 @@ impl ReconstructConfig {
         width: usize,
         height: usize,
         params: &ReconstructParams,
-        shutter: f32,
+        shutter: impl Into<Shutter>,
         seed: u32,
     ) -> Self {
+        let shutter = shutter.into();
         let size = params.max_blur.max(1);
         ReconstructConfig {
             width: width as u32,
@@ -235,7 +241,8 @@ impl ReconstructConfig {
                 size
             } as u32,
             k: size as f32,
-            shutter,
+            shutter: shutter.open,
+            offset: shutter.offset,
             taps: (params.taps.max(1) | 1) as u32,
             inv_soft_z: 1.0 / params.soft_z.max(1e-6),
             jitter: params.jitter as u32,
@@ -248,7 +255,12 @@ impl ReconstructConfig {
 /// Applies the filter: [`tile_max`] (mapped to V) → [`neighbor_max`] → [`pack`] → [`gather`].
 /// The frame must hold colour, depth and velocity; the output holds colour alone. A frame in
 /// which nothing moves more than half a pixel keeps its colour untouched.
-pub fn reconstruct(frame: Frame, params: &ReconstructParams, shutter: f32, seed: u32) -> Frame {
+pub fn reconstruct(
+    frame: Frame,
+    params: &ReconstructParams,
+    shutter: impl Into<Shutter>,
+    seed: u32,
+) -> Frame {
     reconstruct_with(
         frame,
         params,
@@ -296,7 +308,7 @@ impl GatherInputs<'_> {
 pub fn reconstruct_with(
     mut frame: Frame,
     params: &ReconstructParams,
-    shutter: f32,
+    shutter: impl Into<Shutter>,
     seed: u32,
     stages: &impl super::TileStages,
     gather_stage: impl FnOnce(&ReconstructConfig, GatherInputs<'_>, &mut Color),
@@ -332,8 +344,24 @@ pub fn reconstruct_with(
         frame.color = Some(color);
         return frame;
     }
+    // How far a streak reaches from its pixel, in half-spreads: 1 centred, up to 2 when the
+    // exposure is offset (the centred streak ±V moved by 2·offset·V).
+    let reach = reach_factor(&config);
     if stable {
-        let dilated = stages.dilate(&tiles);
+        // An offset streak reaches (1 + 2|offset|)·|V| ahead of its surface (on one side): the
+        // dilation carries the tile vectors that far when given them scaled so (its reach is
+        // ⌈|M|/tile⌉ tiles each way, and scaling keeps the order of lengths it picks by), and
+        // the gather gets them back at their true length. Centred, the factor is 1: nothing
+        // changes, bit for bit.
+        let dilated = if reach != 1.0 {
+            let mut scaled = tiles.clone();
+            scale_tiles(&mut scaled, reach);
+            let mut dilated = stages.dilate(&scaled);
+            scale_tiles(&mut dilated, 1.0 / reach);
+            dilated
+        } else {
+            stages.dilate(&tiles)
+        };
         let texels = pack_2014(&config, &color, &depth, &velocity, &dilated);
         drop(depth);
         let inputs = GatherInputs::Stable {
@@ -342,7 +370,13 @@ pub fn reconstruct_with(
         };
         gather_stage(&config, inputs, &mut color);
     } else {
-        let neighbors = stages.neighbor_max(&tiles);
+        // An offset streak reaches up to 2k, two tiles of k: NeighborMax over 5×5 tiles then
+        // (the 3×3 stage twice).
+        let neighbors = if reach != 1.0 {
+            stages.neighbor_max(&stages.neighbor_max(&tiles))
+        } else {
+            stages.neighbor_max(&tiles)
+        };
         let texels = pack(&config, &color, &depth, &velocity, &neighbors);
         drop(depth);
         let inputs = GatherInputs::Paper {
@@ -354,6 +388,21 @@ pub fn reconstruct_with(
     }
     frame.color = Some(color);
     frame
+}
+
+/// How far a streak reaches from its pixel, in half-spreads |V|: `1 + 2·|offset|` (1 for the
+/// centred shutter, 2 when it opens or closes at the frame).
+#[inline]
+pub fn reach_factor(config: &ReconstructConfig) -> f32 {
+    1.0 + 2.0 * config.offset.abs()
+}
+
+/// Every vector of `tiles` times `factor`.
+fn scale_tiles(tiles: &mut TileGrid, factor: f32) {
+    for (x, y) in tiles.x.iter_mut().zip(tiles.y.iter_mut()) {
+        *x *= factor;
+        *y *= factor;
+    }
 }
 
 /// Whether any tile within `radius` tiles of (c, r) blurs.
@@ -381,8 +430,9 @@ pub fn pack_2014(
     velocity: &Velocity,
     tiles: &TileGrid,
 ) -> Vec<Texel2014> {
-    // Taps reach k px: this many tiles beyond the tile a pixel looks up.
-    let reach = (config.k / config.tile as f32).ceil() as usize;
+    // Taps reach k px (up to 2k when the exposure is offset): this many tiles beyond the tile
+    // a pixel looks up.
+    let reach = (config.k * reach_factor(config) / config.tile as f32).ceil() as usize;
     pack_tiles(
         config,
         tiles.columns,
@@ -648,8 +698,19 @@ fn gather_pixel_2014(
     } else {
         k
     };
-    let step = 1.0 / k as f32;
     let scale = config.inv_soft_z;
+    // The offset exposure: a surface's streak runs over u ∈ [2o − 1, 2o + 1] half-spreads of
+    // its motion, so what reaches X from ahead (along the line, moving away from X) lies
+    // within (1 − 2o) of its spread and what reaches it from behind (moving towards X) within
+    // (1 + 2o). Each side's taps cover that share of the line, at the same spacing (k taps
+    // per spread: 2k in all whatever o), and a tap's reach towards X is its spread times the
+    // share of its direction. The background's window (the centre's own spread) takes the
+    // side's share too, so a tap of the centre's own surface, moving with it, weighs as much
+    // at every distance its streak reaches (half foreground, half background, as centred),
+    // and the background that an exposure opening at the frame uncovers behind a moving
+    // edge (up to 2|V| back) is there to fill it. Centred, every factor is 1 and each side
+    // takes k taps: the same numbers, bit for bit.
+    let shift = 2.0 * config.offset;
     let exposure = config.variant == Variant::Exposure.code();
     // How far past the centre's own spread a background tap still counts: a whole pixel in
     // Blender's form, half a pixel (the centre pixel's half-width) in ours, so that a still
@@ -688,6 +749,13 @@ fn gather_pixel_2014(
                 (own.0, own.1, own_length)
             };
             let (sx, sy) = (side * dx, side * dy);
+            // This side's share of the line: (1 − 2o) ahead, (1 + 2o) behind.
+            let extent = 1.0 - shift * side;
+            let k = (k as f32 * extent).ceil() as usize;
+            if k == 0 {
+                continue;
+            }
+            let step = extent / k as f32;
             // Ours offsets the taps along the pixel's own vector by half a step from those
             // along the tile's: where the two are the same vector (everywhere on a lone moving
             // object) the second set then halves the step instead of repeating the first
@@ -735,15 +803,18 @@ fn gather_pixel_2014(
                     live[l] = 1.0;
                 }
                 // The foreground and background weights of one surface of a tap.
-                let weights = |texel: &Texel2014, distance: f32, direction: f32| {
+                // `share`: the tap's reach towards X in spreads (1 centred).
+                let window = own_length * extent;
+                let weights = |texel: &Texel2014, distance: f32, direction: f32, share: f32| {
                     let dz = texel[Z] - centre_z;
                     let behind = (0.5 + scale * dz).clamp(0.0, 1.0);
                     let front = (0.5 - scale * dz).clamp(0.0, 1.0);
                     (
                         direction
                             * front
-                            * (texel[LENGTH] - distance + reach(texel[LENGTH])).clamp(0.0, 1.0),
-                        direction * behind * (own_length - distance + edge).clamp(0.0, 1.0),
+                            * (texel[LENGTH] * share - distance + reach(texel[LENGTH]))
+                                .clamp(0.0, 1.0),
+                        direction * behind * (window - distance + edge).clamp(0.0, 1.0),
                     )
                 };
                 let mut f = [[0.0f32; 2]; LANES];
@@ -757,8 +828,19 @@ fn gather_pixel_2014(
                     let along = dx * sample[l][VX] + dy * sample[l][VY] > 0.0;
                     let counts = exposure || sample[l][LENGTH] < HALF_PIXEL || along;
                     let direction = if counts { live[l] } else { 0.0 };
-                    (f[l][0], b[l][0]) = weights(&sample[l], distance, direction);
-                    (f[l][1], b[l][1]) = weights(&other[l], distance, direction);
+                    // Moving along the line on this side, a tap moves away from X (+1).
+                    let away = |texel: &Texel2014| {
+                        let along = dx * texel[VX] + dy * texel[VY] > 0.0;
+                        if along {
+                            side
+                        } else {
+                            -side
+                        }
+                    };
+                    let share = |texel: &Texel2014| 1.0 - shift * away(texel);
+                    (f[l][0], b[l][0]) =
+                        weights(&sample[l], distance, direction, share(&sample[l]));
+                    (f[l][1], b[l][1]) = weights(&other[l], distance, direction, share(&other[l]));
                     count += direction;
                 }
                 for l in 0..LANES {
@@ -829,7 +911,7 @@ pub fn pack(
         config,
         neighbors.columns,
         [0.0; 6],
-        |c, row| near_blur(neighbors, c, row, 1),
+        |c, row| near_blur(neighbors, c, row, reach_factor(config).ceil() as usize),
         |i| {
             let length = spread_length(velocity.x[i], velocity.y[i], config.shutter, config.k);
             [
@@ -968,12 +1050,24 @@ fn gather_pixel(
     let mut sum = [0.0f32; 4];
     let step = 2.0 / (config.taps as f32 + 1.0);
     let dual = config.variant == Variant::Dual.code() && own_length > HALF_PIXEL + EPSILON;
+    // The offset exposure: a surface Y's streak is Y + V_Y·u for u ∈ [2o − 1, 2o + 1], so
+    // the surfaces that reach X lie around X − 2o·N: the taps' line is moved there (τ =
+    // t − 2o, in half-spreads along the line), and a tap's own reach towards X is (1 − 2o)
+    // of its spread ahead of X along N (it moves away from X) and (1 + 2o) behind (it moves
+    // towards X): its distance is divided by that before the cones compare it with its
+    // spread, and with X's (so a tap of X's own surface, moving with it, weighs the same at
+    // every distance its streak reaches, as centred). Centred (o = 0) both factors are 1:
+    // the same numbers, bit for bit.
+    let shift = 2.0 * config.offset;
+    let ahead = 1.0 / (1.0 - shift).max(1e-6);
+    let behind = 1.0 / (1.0 + shift).max(1e-6);
     // Taps four at a time, so the classification arithmetic runs on four lanes
     // (lanes past the last tap get zero weight).
     let mut tap = 0;
     while tap < taps - 1 {
         // Dead lanes get a finite dummy distance (1 px) and zero weight.
         let mut t = [1.0f32; LANES];
+        let mut tap_reach = [1.0f32; LANES];
         let mut length = [1.0f32; LANES];
         let mut live = [0.0f32; LANES];
         let mut sample = [centre; LANES];
@@ -985,7 +1079,8 @@ fn gather_pixel(
             if index >= taps {
                 continue;
             }
-            t[l] = -1.0 + (index as f32 + j + 1.0) * step;
+            t[l] = -1.0 + (index as f32 + j + 1.0) * step - shift;
+            tap_reach[l] = if t[l] > 0.0 { ahead } else { behind };
             let (dx, dy, len) = if dual && index % 2 == 1 {
                 (own.0, own.1, own_length)
             } else {
@@ -1000,7 +1095,9 @@ fn gather_pixel(
         }
         let mut alpha = [0.0f32; LANES];
         for l in 0..LANES {
-            let distance = t[l].abs() * length[l];
+            // (At least 1e-6 px: a tap of the offset line may fall on X, where a still
+            // tap's 0·∞ would be NaN; centred taps are never that near.)
+            let distance = (t[l].abs() * length[l]).max(1e-6) * tap_reach[l];
             let z = sample[l][Z];
             let front = soft_depth_compare(centre[Z], z, inv_soft_z);
             let back = soft_depth_compare(z, centre[Z], inv_soft_z);
@@ -1050,9 +1147,9 @@ mod tests {
     }
 
     #[test]
-    fn the_config_is_ten_plain_words() {
-        // Uploaded as one uniform by the GPU twin: ten 4-byte fields, no padding.
-        assert_eq!(std::mem::size_of::<ReconstructConfig>(), 40);
+    fn the_config_is_eleven_plain_words() {
+        // Uploaded as one uniform by the GPU twin: eleven 4-byte fields, no padding.
+        assert_eq!(std::mem::size_of::<ReconstructConfig>(), 44);
         let even = ReconstructParams {
             taps: 14,
             ..ReconstructParams::default()

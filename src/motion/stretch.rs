@@ -131,11 +131,21 @@ pub struct StretchConfig {
 }
 
 impl StretchConfig {
-    pub fn new(width: usize, height: usize, params: &StretchParams, shutter: f32) -> Self {
+    pub fn new(
+        width: usize,
+        height: usize,
+        params: &StretchParams,
+        shutter: impl Into<super::Shutter>,
+    ) -> Self {
+        let shutter = shutter.into();
+        // Rear is the talk's rear curtain: the frame closes the exposure whatever the offset
+        // (it is the centre anchor of `--shutter-offset end`). Centre follows the exposure
+        // wherever the offset puts it.
         let (t0, t1) = match params.anchor {
-            Anchor::Rear => (-shutter, 0.0),
-            Anchor::Centre => (-0.5 * shutter, 0.5 * shutter),
+            Anchor::Rear => (-shutter.open, 0.0),
+            Anchor::Centre => shutter.interval(),
         };
+        let shutter = shutter.open;
         StretchConfig {
             width: width as u32,
             height: height as u32,
@@ -171,7 +181,11 @@ fn mix(a: f32, b: f32, t: f32) -> f32 {
 /// Applies the filter: [`texture_blur`] → [`move_vertices`] → [`rasterise`]. The frame must
 /// hold colour, depth and velocity; the output holds colour alone. A frame in which nothing
 /// moves keeps its colour untouched.
-pub fn stretch(mut frame: Frame, params: &StretchParams, shutter: f32) -> Frame {
+pub fn stretch(
+    mut frame: Frame,
+    params: &StretchParams,
+    shutter: impl Into<super::Shutter>,
+) -> Frame {
     let (width, height) = (frame.width, frame.height);
     frame.prev = None;
     frame.next = None;

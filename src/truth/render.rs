@@ -1,6 +1,7 @@
 //! Rendering a scene: the passes a renderer writes (colour antialiased at the frame time,
 //! and the depth, velocity, previous and next positions of the surface seen at each pixel
-//! centre) and the brute-force references (motion blur: many time samples over the shutter;
+//! centre) and the brute-force references (motion blur: many time samples over the shutter,
+//! [(o − ½)·φ, (o + ½)·φ] about the frame for offset o, `motion::Shutter`;
 //! depth of field: many aperture samples; and both together).
 //!
 //! Reference samples follow a randomly shifted Kronecker sequence in five dimensions
@@ -25,8 +26,11 @@ pub const TIME_STEPS: usize = 4096;
 pub struct RenderSettings {
     /// Reference samples per pixel.
     pub samples: usize,
-    /// Shutter fraction φ, centred on the frame.
+    /// Shutter fraction φ.
     pub shutter: f64,
+    /// Where the exposure sits about the frame, in exposures (`motion::Shutter::offset`):
+    /// the references integrate t ∈ [(o − ½)·φ, (o + ½)·φ] about the frame's time.
+    pub shutter_offset: f64,
     pub seed: u64,
 }
 
@@ -169,7 +173,10 @@ pub fn render_reference(
         .into_par_iter()
         .map(|s| {
             if moving {
-                scene.pose(t + settings.shutter * ((s as f64 + 0.5) / steps as f64 - 0.5))
+                scene.pose(
+                    t + settings.shutter
+                        * ((s as f64 + 0.5) / steps as f64 - 0.5 + settings.shutter_offset),
+                )
             } else {
                 scene.pose(t)
             }

@@ -26,6 +26,9 @@ pub struct SceneOptions {
     pub frames: usize,
     pub samples: usize,
     pub shutter: f64,
+    /// Where the exposure sits about the frame, in exposures (0 centred, +½ opening at the
+    /// frame, −½ closing at it; `motion::Shutter`).
+    pub shutter_offset: f64,
     pub seed: u64,
 }
 
@@ -37,6 +40,7 @@ impl Default for SceneOptions {
             frames: 1,
             samples: DEFAULT_SAMPLES,
             shutter: 0.5,
+            shutter_offset: 0.0,
             seed: 1,
         }
     }
@@ -51,6 +55,8 @@ pub struct SceneDescription {
     pub frames: usize,
     pub samples: usize,
     pub shutter: f64,
+    /// The references' shutter offset, in exposures (0 centred, 0.5 start, −0.5 end).
+    pub shutter_offset: f64,
     pub seed: u64,
     /// Frame f is scene time f − 1 (frames).
     pub first_frame: usize,
@@ -150,6 +156,7 @@ pub fn write_resampled_references(
     let settings = RenderSettings {
         samples: options.samples.max(1),
         shutter: options.shutter,
+        shutter_offset: options.shutter_offset,
         seed: sampling_seed,
     };
     write_frame_references(&scene, 0.0, &settings, &mut |role| {
@@ -170,6 +177,12 @@ pub fn write_scene(
             options.shutter
         )));
     }
+    if !(-0.5..=0.5).contains(&options.shutter_offset) {
+        return Err(Error::usage(format!(
+            "--shutter-offset {} is outside -0.5..0.5 (start 0.5, centre 0, end -0.5)",
+            options.shutter_offset
+        )));
+    }
     if options.frames == 0 || options.samples == 0 {
         return Err(Error::usage("--frames and --samples must be at least 1"));
     }
@@ -184,6 +197,7 @@ pub fn write_scene(
     let settings = RenderSettings {
         samples: options.samples,
         shutter: options.shutter,
+        shutter_offset: options.shutter_offset,
         seed: options.seed,
     };
     let mut roles = vec!["color", "depth", "velocity", "prev", "next", "reference"];
@@ -205,6 +219,7 @@ pub fn write_scene(
         frames: options.frames,
         samples: options.samples,
         shutter: options.shutter,
+        shutter_offset: options.shutter_offset,
         seed: options.seed,
         first_frame: 1,
         files: roles

@@ -413,6 +413,7 @@ pub fn scene_errors_against(
     let settings = RenderSettings {
         samples: 256,
         shutter: 0.5,
+        shutter_offset: 0.0,
         seed: 1,
     };
     let reference = render_reference(&scene, 0.0, kind, &settings);

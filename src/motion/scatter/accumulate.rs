@@ -43,7 +43,7 @@ impl Scatter<'_> {
             prev, now, next, ..
         } = *motion;
         let p = &self.config;
-        let (t0, t1) = (-self.half, self.half);
+        let (t0, t1) = (self.t0, self.t1);
         let most = p.segments as usize;
         let tolerance = p.flatness as f64;
         let arc = if p.arc != 0 {

@@ -172,6 +172,9 @@ pub struct ScatterConfig {
     pub height: u32,
     /// Fraction of the frame interval the shutter is open.
     pub shutter: f32,
+    /// Where the exposure sits about the frame, in exposures ([`super::Shutter::offset`]):
+    /// the curve is kept over t ∈ [(offset − ½)·shutter, (offset + ½)·shutter].
+    pub offset: f32,
     /// Line segments per curve, at most, in 1..=[`MOST_SEGMENTS`].
     pub segments: u32,
     /// σ of the Gaussian weight, in units of s.
@@ -193,11 +196,18 @@ pub struct ScatterConfig {
 }
 
 impl ScatterConfig {
-    pub fn new(width: usize, height: usize, params: &ScatterParams, shutter: f32) -> Self {
+    pub fn new(
+        width: usize,
+        height: usize,
+        params: &ScatterParams,
+        shutter: impl Into<super::Shutter>,
+    ) -> Self {
+        let shutter = shutter.into();
         ScatterConfig {
             width: width as u32,
             height: height as u32,
-            shutter,
+            shutter: shutter.open,
+            offset: shutter.offset,
             segments: params.segments.clamp(1, MOST_SEGMENTS) as u32,
             sigma: params.sigma,
             gaussian: (params.weight == Weight::Gaussian) as u32,
@@ -220,8 +230,14 @@ struct Scatter<'a> {
     prev: &'a Positions,
     next: &'a Positions,
     config: ScatterConfig,
-    /// Half the shutter: the exposure is t ∈ [−half, half].
+    /// The exposure: t ∈ [t0, t1] (frames from the frame's instant).
+    t0: f64,
+    t1: f64,
+    /// The farthest the exposure gets from the frame's instant, max(|t0|, |t1|): half the
+    /// shutter when it is centred.
     half: f64,
+    /// The middle of the exposure, (t0 + t1)/2: where the Gaussian weight peaks.
+    middle: f64,
 }
 
 impl<'a> Scatter<'a> {
@@ -232,6 +248,12 @@ impl<'a> Scatter<'a> {
         prev: &'a Positions,
         next: &'a Positions,
     ) -> Self {
+        let (t0, t1) = super::Shutter {
+            open: config.shutter,
+            offset: config.offset,
+        }
+        .interval();
+        let (t0, t1) = (t0 as f64, t1 as f64);
         Scatter {
             width: config.width as usize,
             height: config.height as usize,
@@ -240,7 +262,10 @@ impl<'a> Scatter<'a> {
             prev,
             next,
             config,
-            half: 0.5 * config.shutter as f64,
+            t0,
+            t1,
+            half: t0.abs().max(t1.abs()),
+            middle: 0.5 * (t0 + t1),
         }
     }
 }
@@ -287,7 +312,8 @@ impl Scatter<'_> {
     }
 
     /// A bound on how far the curve strays from p(0) during the exposure: with
-    /// p(t) = p0 + t·v + t²·a, at most h·|v| + h²·|a| for |t| ≤ h.
+    /// p(t) = p0 + t·v + t²·a, at most h·|v| + h²·|a| for |t| ≤ h (h = `half`, the farthest
+    /// the exposure gets from the frame).
     #[inline]
     fn extent(&self, prev: Point, now: Point, next: Point) -> f64 {
         let v = [0.5 * (next[0] - prev[0]), 0.5 * (next[1] - prev[1])];
@@ -303,7 +329,7 @@ impl Scatter<'_> {
         if self.config.gaussian == 0 {
             1.0
         } else {
-            let d = 0.5 * t; // s − ½
+            let d = 0.5 * (t - self.middle); // s − s(middle), μ at the exposure's middle
             let sigma = self.config.sigma as f64;
             (-d * d / (2.0 * sigma * sigma)).exp()
         }
@@ -313,7 +339,11 @@ impl Scatter<'_> {
 /// Applies the filter: [`reach`] → [`accumulate`] → [`resolve`]. The frame must hold colour,
 /// depth, prev and next; the output holds colour alone. A frame in which nothing moves keeps
 /// its colour untouched.
-pub fn scatter(mut frame: Frame, params: &ScatterParams, shutter: f32) -> Frame {
+pub fn scatter(
+    mut frame: Frame,
+    params: &ScatterParams,
+    shutter: impl Into<super::Shutter>,
+) -> Frame {
     let (width, height) = (frame.width, frame.height);
     frame.velocity = None;
     let (Some(color), Some(depth), Some(prev), Some(next)) = (
@@ -429,9 +459,9 @@ mod tests {
     }
 
     #[test]
-    fn the_config_is_twelve_plain_words() {
-        // Uploaded as one uniform by the GPU twin: twelve 4-byte fields, no padding.
-        assert_eq!(std::mem::size_of::<ScatterConfig>(), 48);
+    fn the_config_is_thirteen_plain_words() {
+        // Uploaded as one uniform by the GPU twin: thirteen 4-byte fields, no padding.
+        assert_eq!(std::mem::size_of::<ScatterConfig>(), 52);
         let many = ScatterParams {
             segments: 1000,
             background_weight: -1.0,
