@@ -425,6 +425,12 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
     let row = min(u32(max(f32(y) + tile_shift, 0.0)) / config.tile, rows() - 1u);
     var m = tile_at(column, row);
     var m_length = sqrt(m.x * m.x + m.y * m.y);
+    // Offset exposures: where the jittered lookup lands on a still tile, the pixel's own
+    // tile instead (see the CPU twin).
+    if config.offset != 0.0 && m_length < HALF_PIXEL {
+        m = tile_at(min(x / config.tile, columns() - 1u), min(y / config.tile, rows() - 1u));
+        m_length = sqrt(m.x * m.x + m.y * m.y);
+    }
     let own = vec2<f32>(centre.vx, centre.vy);
     let own_length = centre.length;
     if m_length < own_length {
