@@ -243,3 +243,46 @@ fn every_bench_setting_round_trips_through_its_flags() {
         }
     }
 }
+
+#[test]
+fn shutter_offset_takes_names_numbers_a_preset_key_and_reports_bad_values() {
+    use shutter::settings::{resolve, Given};
+    let dir = tempfile::tempdir().unwrap();
+    let toml = dir.path().join("opens.toml");
+    std::fs::write(
+        &toml,
+        "description = \"opens at the frame\"\n[blur]\nshutter_offset = \"start\"\n",
+    )
+    .unwrap();
+    let preset = shutter::io::preset::Preset::load(&[s(&toml)]).unwrap();
+    let offset = |given: &[(&'static str, &str)], preset: &shutter::io::preset::Preset| {
+        let mut g = Given::default();
+        for (name, value) in given {
+            g.values.push((name, value.to_string()));
+        }
+        resolve(&g, preset).map(|(s, _)| s.params.shutter_offset)
+    };
+    let plain = shutter::io::preset::Preset::builtin("shutter").unwrap();
+    assert_eq!(offset(&[], &plain).unwrap(), 0.0, "centred by default");
+    assert_eq!(offset(&[], &preset).unwrap(), 0.5, "the preset key");
+    assert_eq!(offset(&[("shutter-offset", "end")], &preset).unwrap(), -0.5);
+    assert_eq!(offset(&[("shutter-offset", "Centre")], &preset).unwrap(), 0.0);
+    assert_eq!(offset(&[("shutter-offset", "-0.25")], &plain).unwrap(), -0.25);
+    for bad in ["0.7", "sideways", "nan"] {
+        let message = format!("{:#}", offset(&[("shutter-offset", bad)], &plain).unwrap_err());
+        assert!(
+            message.contains("--shutter-offset") && message.contains("start"),
+            "{bad}: {message}"
+        );
+    }
+    // The flags the bench passes to `shutter blur` name the offset as it was chosen.
+    let settings = shutter::settings::Settings::of(
+        shutter::motion::Algorithm::Scatter,
+        &shutter::process::Params {
+            shutter_offset: 0.5,
+            ..Default::default()
+        },
+    );
+    let flags = shutter::settings::flags(&settings);
+    assert!(flags.windows(2).any(|w| w == ["--shutter-offset", "start"]), "{flags:?}");
+}
