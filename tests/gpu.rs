@@ -615,6 +615,47 @@ pub(crate) mod with_gpu {
         );
     }
 
+    /// blend on `layers` at 320×180 with ε = 3 px through the CLI, cpu against wgpu: inside
+    /// the blurred foreground the near field's spread equals each pixel's own blur but for
+    /// rounding, where the two ladders once swapped on the last bit (dots up to 0.04 apart
+    /// between the backends; `blend::SPREAD_MARGIN`). Bound as in the parity test below:
+    /// 1e-5 of the range.
+    #[test]
+    fn dof_blend_on_wgpu_keeps_the_cpu_s_ladders_inside_a_foreground() {
+        let Some(_gpu) = gpu() else { return };
+        let dir = small_scene("layers", 320, 180, 1, 4);
+        let (color, depth) = (
+            role_pattern(dir.path(), "color"),
+            role_pattern(dir.path(), "depth"),
+        );
+        let mut outputs = Vec::new();
+        for backend in ["cpu", "wgpu"] {
+            let out = s(&dir.path().join(format!("eps3-{backend}.####.exr")));
+            let mut args = dof_args(&color, &depth, &out);
+            args.extend(["--backend", backend, "--method", "blend", "--epsilon", "3"]);
+            let o = shutter(&args);
+            assert!(o.status.success(), "{backend}: {}", stderr(&o));
+            outputs.push(read_exr_reference(
+                &dir.path().join(format!("eps3-{backend}.0001.exr")),
+            ));
+        }
+        for name in ["R", "G", "B"] {
+            let cpu = channel(&outputs[0], name);
+            let got = channel(&outputs[1], name);
+            let (lo, hi) = cpu
+                .iter()
+                .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+            let d = diff(got, cpu);
+            assert!(
+                d.max <= 1e-5 * (hi - lo),
+                "{name}: {} at {} > 1e-5 of {}",
+                d.max,
+                d.worst,
+                hi - lo
+            );
+        }
+    }
+
     /// Depth of field's blend twin (the pyramid) against `blend`, on the stress depth frames
     /// under the gather test's three lenses (E from 48 to 512 px: from four levels to
     /// eight, the half step, the near field's spread read at levels 0 to 7), with and
@@ -652,6 +693,16 @@ pub(crate) mod with_gpu {
                 };
                 let mut frame = depth_frame(w, h, 90 + k as u32, focus as f32);
                 let n = w * h;
+                if k == 1 {
+                    // Uniform depths in blocks (a foreground at 0.6 of the focus distance,
+                    // the focus plane, a background): inside the foreground the near
+                    // field's spread equals the pixels' own blur but for rounding.
+                    let depth = frame.depth.as_mut().unwrap();
+                    for (i, d) in depth.iter_mut().enumerate() {
+                        let (x, y) = (i % w, i / w);
+                        *d = focus as f32 * [0.6, 1.0, 4.0][(x / 40 + y / 30) % 3];
+                    }
+                }
                 let mut color = shutter::frame::Color {
                     r: noise(n, 3 + k as u32, 0.0, 4.0),
                     g: noise(n, 5 + k as u32, -1.0, 1.0),
@@ -670,6 +721,8 @@ pub(crate) mod with_gpu {
                 let params = DofParams {
                     max_coc,
                     method: shutter::dof::Method::Blend,
+                    // ε above the half step's CoC (2.5 px) under one lens.
+                    epsilon: if j == 1 { 3.0 } else { 1.0 },
                     ..DofParams::new(CocSource::Lens(lens))
                 };
                 let coc = coc_plane(&frame, &params);

@@ -53,6 +53,8 @@ struct BlendConfig {
 
 const IN_FOCUS_WEIGHT: f32 = 0.015625;
 const MIN_POSITIVE: f32 = 1.17549435e-38;
+// blend::SPREAD_MARGIN.
+const SPREAD_MARGIN: f32 = 1e-3;
 
 struct Texel {
     c: vec4<f32>,
@@ -349,7 +351,7 @@ fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
             lower = near_at(k, x, y);
         }
         let spread = lower + config.near_f * (near_at(k + 1u, x, y) - lower);
-        if spread > t {
+        if spread > t + SPREAD_MARGIN {
             t = -spread;
         }
     }
