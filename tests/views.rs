@@ -231,6 +231,20 @@ fn a_multi_part_file_whose_first_part_has_no_view_needs_view() {
     }
     assert_eq!(snapshot(&out), before);
 
+    // info describes the file, and matches presets only once a view is chosen.
+    let o = shutter(&["info", &s(&stereo)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(
+        text.contains("no default view (its first part has no view attribute)"),
+        "{text}"
+    );
+    assert!(text.contains("choose a view with --view"), "{text}");
+    let o = shutter(&["info", "--json", &s(&stereo)]);
+    let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert!(json[0]["suggestion"].is_null());
+    assert!(json[0]["views"]["default"].is_null());
+
     let (_, right) = mono(d);
     let o = blur(&s(&stereo), &out.join("o.exr"), &["--view", "right"]);
     assert!(o.status.success(), "{}", stderr(&o));
