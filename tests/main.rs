@@ -23,4 +23,6 @@ mod scatter;
 mod settings;
 mod stretch;
 mod structure;
+mod suggest;
 mod truth;
+mod views;

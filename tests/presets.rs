@@ -120,6 +120,7 @@ fn read_all(preset: &Preset, inputs: &Inputs) -> Frame {
     let options = PlanOptions {
         preset,
         layer: None,
+        view: None,
         needs: Passes::ALL,
         max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };
@@ -288,6 +289,7 @@ fn blender_preset_with_two_view_layers_asks_for_one() {
     let options = PlanOptions {
         preset: &preset,
         layer: None,
+        view: None,
         needs: Passes::COLOR,
         max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };
@@ -390,6 +392,7 @@ fn painted_preset() {
     let options = PlanOptions {
         preset: &preset,
         layer: None,
+        view: None,
         needs: Passes {
             next: false,
             ..Passes::ALL
@@ -446,6 +449,7 @@ fn painted_mid_grey_is_exactly_still_at_8_bits() {
     let options = PlanOptions {
         preset: &preset,
         layer: None,
+        view: None,
         needs: Passes {
             velocity: true,
             ..Passes::default()
@@ -506,6 +510,7 @@ y_up = true
     let options = PlanOptions {
         preset: &preset,
         layer: None,
+        view: None,
         needs: Passes {
             color: true,
             next: true,
@@ -545,6 +550,7 @@ fn a_luminance_only_exr_reads_as_grey_with_a_note() {
         let options = PlanOptions {
             preset: &preset,
             layer: None,
+            view: None,
             needs: Passes::COLOR,
             max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
         };
@@ -665,6 +671,7 @@ fn read_rsmb(
     let options = PlanOptions {
         preset,
         layer: None,
+        view: None,
         needs: Passes {
             depth: false,
             ..Passes::ALL
@@ -894,6 +901,7 @@ fn rsmb_refuses_float_files_and_a_missing_max_displace() {
     let options = PlanOptions {
         preset: &preset,
         layer: None,
+        view: None,
         needs: Passes {
             velocity: true,
             ..Passes::COLOR

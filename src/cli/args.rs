@@ -98,6 +98,11 @@ pub struct BlurArgs {
     #[arg(long, value_name = "NAME")]
     pub layer: Option<String>,
 
+    /// View of multi-view (stereo) EXRs to read, e.g. right [default: each file's default
+    /// view; a file that names none needs this].
+    #[arg(long, value_name = "NAME")]
+    pub view: Option<String>,
+
     #[command(flatten)]
     pub settings: SettingArgs,
 
@@ -228,6 +233,11 @@ pub struct InfoArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+
+    /// View of multi-view (stereo) EXRs to describe and match presets in [default: each
+    /// file's default view].
+    #[arg(long, value_name = "NAME")]
+    pub view: Option<String>,
 }
 
 #[derive(Debug, Args)]

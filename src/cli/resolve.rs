@@ -145,6 +145,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         frames,
         preset,
         layer: args.layer.clone(),
+        view: args.view.clone(),
         algorithm: settings.algorithm,
         params: Params {
             dof,
