@@ -103,6 +103,11 @@ pub struct BlurArgs {
     #[arg(long, value_name = "NAME")]
     pub view: Option<String>,
 
+    /// Max Displace (px) the vectors were encoded with, for presets that read RE:Vision's
+    /// normalised 8/16-bit vectors (rsmb): sets max_displace on each such section.
+    #[arg(long, value_name = "PX")]
+    pub max_displace: Option<f32>,
+
     #[command(flatten)]
     pub settings: SettingArgs,
 
