@@ -10,9 +10,9 @@
 //!   defaults (6 rings) and with 2 and 4 rings and six blades, then blend (the pyramid, its
 //!   default, and the talk's two copies);
 //! - **in focus**: every pixel at 3 m, beside the time of copying the frame;
-//! - **wgpu**: the gather at its defaults with its stages on the GPU, where an adapter is
-//!   present (Mesa's software driver included: for the record, not for speed), with the GPU
-//!   stages' upload, dispatch and readback timed apart.
+//! - **wgpu**: the gather at its defaults and blend with their stages on the GPU, where an
+//!   adapter is present (Mesa's software driver included: for the record, not for speed),
+//!   with the GPU stages' upload, dispatch and readback timed apart.
 //!
 //! Median of 5 runs after one warm-up run. Words after `--` keep only the rows whose label
 //! contains one of them (`cargo bench --bench dof -- blend round`).
@@ -96,21 +96,30 @@ fn main() {
             median_ms(&f, dof)
         );
     }
-    // The GPU rows: the gather with its stages (coc, tile min/max, the bokeh gather) on
-    // the GPU, wherever an adapter is present.
+    // The GPU rows: the gather with its stages (coc, tile min/max, the bokeh gather) and
+    // blend with its (coc, the pyramid) on the GPU, wherever an adapter is present.
     if chosen("wgpu") {
         match common::gpu() {
             Some(gpu) => {
-                let (ms, t) =
-                    common::median_ms_on(&gpu, Algorithm::None, &f, &dof_params(gather), 5);
-                println!(
-                    "1920x1080 out of focus, gather (6 rings, round) [wgpu on {}]: {ms:.1} ms \
-                     (GPU stages per run: upload {:.1} ms, compute {:.1} ms, readback {:.1} ms)",
-                    gpu.adapter(),
-                    t.upload_ms,
-                    t.compute_ms,
-                    t.readback_ms
-                );
+                let blend = DofParams {
+                    method: Method::Blend,
+                    ..gather
+                };
+                for (label, dof) in [
+                    ("gather (6 rings, round)", gather),
+                    ("blend (pyramid)", blend),
+                ] {
+                    let (ms, t) =
+                        common::median_ms_on(&gpu, Algorithm::None, &f, &dof_params(dof), 5);
+                    println!(
+                        "1920x1080 out of focus, {label} [wgpu on {}]: {ms:.1} ms (GPU stages \
+                         per run: upload {:.1} ms, compute {:.1} ms, readback {:.1} ms)",
+                        gpu.adapter(),
+                        t.upload_ms,
+                        t.compute_ms,
+                        t.readback_ms
+                    );
+                }
             }
             None => println!("wgpu rows skipped: no GPU adapter"),
         }

@@ -22,6 +22,9 @@ pub enum ProblemKind {
     Output,
     /// The header declares more pixels than the limit (`max-pixels`) allows.
     TooLarge,
+    /// A multi-view file does not hold the view asked for, or names no default view when
+    /// none was asked for.
+    View,
     /// Another job holds the output lock on a frame: worth retrying later (exit 75).
     Busy,
     /// Writing a frame failed after the preflight passed (a full disk, an I/O error): worth
@@ -89,6 +92,7 @@ impl fmt::Display for Problem {
             ProblemKind::Unsupported => "not supported",
             ProblemKind::Output => "cannot write",
             ProblemKind::TooLarge => "too large",
+            ProblemKind::View => "which view",
             ProblemKind::Busy => "busy",
             ProblemKind::WriteFailed => "cannot write",
         };

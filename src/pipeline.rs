@@ -33,6 +33,8 @@ pub struct Job {
     pub frames: Vec<Option<i64>>,
     pub preset: Preset,
     pub layer: Option<String>,
+    /// The view of multi-view EXRs to read (`--view`); each file's default when `None`.
+    pub view: Option<String>,
     pub algorithm: Algorithm,
     pub params: Params,
     pub output_options: OutputOptions,
@@ -225,6 +227,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     let options = PlanOptions {
         preset: &job.preset,
         layer: job.layer.as_deref(),
+        view: job.view.as_deref(),
         needs: crate::process::needs(job.algorithm, &job.params),
         max_pixels: job.max_pixels,
     };

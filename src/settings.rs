@@ -415,8 +415,8 @@ pub const DEFS: &[Def] = &[
         value_name: "B",
         help: "where the passes run: cpu (the reference, the default for now), wgpu (any \
                Vulkan, Metal or DX12 adapter, software ones included; an error if none) or \
-               auto (a hardware GPU, else the CPU); stages without a GPU twin yet (blend, \
-               scatter, stretch) run on the CPU",
+               auto (a hardware GPU, else the CPU); stages without a GPU twin yet (blend's \
+               talk form, scatter, stretch) run on the CPU",
         kind: Kind::Choice(|| names(Backend::ALL)),
         unset: "",
         get: |s| Value::Name(s.backend.name()),

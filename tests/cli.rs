@@ -335,6 +335,7 @@ fn size_mismatch_between_passes_is_an_error() {
     let options = PlanOptions {
         preset: &preset,
         layer: None,
+        view: None,
         needs: shutter::Passes::ALL,
         max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };

@@ -49,6 +49,7 @@ fn scene_passes(name: &str) -> Frame {
     let options = PlanOptions {
         preset: &preset,
         layer: None,
+        view: None,
         needs: shutter::frame::Passes::ALL,
         max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };

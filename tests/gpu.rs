@@ -200,6 +200,7 @@ pub(crate) mod with_gpu {
         assert!(shutter::gpu::neighbor_max::SHADER.contains("struct NeighborMaxConfig"));
         assert!(shutter::gpu::dilate::SHADER.contains("struct SourceTile"));
         assert!(shutter::gpu::gather::SHADER.contains("struct GatherConfig"));
+        assert!(shutter::gpu::blend::SHADER.contains("struct BlendConfig"));
     }
 
     /// Depth values that stress the stage: non-finite, huge, tiny, subnormal, zero, negative,
@@ -611,6 +612,174 @@ pub(crate) mod with_gpu {
         let _ = writeln!(
             std::io::stderr(),
             "gpu: dof gather: {cases} planes, largest difference {worst:e} of the range"
+        );
+    }
+
+    /// blend on `layers` at 320×180 with ε = 3 px through the CLI, cpu against wgpu: inside
+    /// the blurred foreground the near field's spread equals each pixel's own blur but for
+    /// rounding, where the two ladders once swapped on the last bit (dots up to 0.04 apart
+    /// between the backends; `blend::SPREAD_MARGIN`). Bound as in the parity test below:
+    /// 1e-5 of the range.
+    #[test]
+    fn dof_blend_on_wgpu_keeps_the_cpu_s_ladders_inside_a_foreground() {
+        let Some(_gpu) = gpu() else { return };
+        let dir = small_scene("layers", 320, 180, 1, 4);
+        let (color, depth) = (
+            role_pattern(dir.path(), "color"),
+            role_pattern(dir.path(), "depth"),
+        );
+        let mut outputs = Vec::new();
+        for backend in ["cpu", "wgpu"] {
+            let out = s(&dir.path().join(format!("eps3-{backend}.####.exr")));
+            let mut args = dof_args(&color, &depth, &out);
+            args.extend(["--backend", backend, "--method", "blend", "--epsilon", "3"]);
+            let o = shutter(&args);
+            assert!(o.status.success(), "{backend}: {}", stderr(&o));
+            outputs.push(read_exr_reference(
+                &dir.path().join(format!("eps3-{backend}.0001.exr")),
+            ));
+        }
+        for name in ["R", "G", "B"] {
+            let cpu = channel(&outputs[0], name);
+            let got = channel(&outputs[1], name);
+            let (lo, hi) = cpu
+                .iter()
+                .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+            let d = diff(got, cpu);
+            assert!(
+                d.max <= 1e-5 * (hi - lo),
+                "{name}: {} at {} > 1e-5 of {}",
+                d.max,
+                d.worst,
+                hi - lo
+            );
+        }
+    }
+
+    /// Depth of field's blend twin (the pyramid) against `blend`, on the stress depth frames
+    /// under the gather test's three lenses (E from 48 to 512 px: from four levels to
+    /// eight, the half step, the near field's spread read at levels 0 to 7), with and
+    /// without alpha, over a colour of fine noise (under one lens with stress values, made
+    /// finite first as the pipeline does), and on frames one and two pixels wide or high.
+    ///
+    /// Tolerance: the twin runs the CPU's plan (E, levels, ladders, where T_near is read) and
+    /// the same sums in the same order, so what differs is rounding: the divisions (a level's
+    /// colour by its w, the half step by its weights; WGSL allows 2.5 ULP) and products a
+    /// driver may fuse into the sums (the lerps, the [1 3 3 1]/8 taps). Each is a few
+    /// 2⁻²⁴ of the values it combines, which are within the frame's range r of the
+    /// reference; the pyramid's levels add a rounding per halving, at most a dozen. Bound: max
+    /// difference ≤ 1e-5·r per pixel (held to 1e-5 of a pixel's own magnitude where a stress
+    /// value's light makes it huge), mean ≤ 1e-7·r; every pixel finite.
+    #[test]
+    fn dof_blend_matches_the_cpu_within_rounding() {
+        let Some(gpu) = gpu() else { return };
+        use shutter::dof::blend::blend;
+        use shutter::dof::DofConfig;
+        use shutter::numeric::{sanitize, DepthKind};
+        let lenses = [
+            (50.0, 2.0, 2.0, 48.0),
+            (85.0, 1.4, 3.0, 200.0),
+            (35.0, 1.2, 0.5, 512.0),
+        ];
+        let sizes = [(37, 23), (160, 90), (64, 211), (1, 9), (2, 2), (13, 1)];
+        let (mut cases, mut worst) = (0, 0.0f32);
+        for (k, &(w, h)) in sizes.iter().enumerate() {
+            for (j, &(focal_mm, f_number, focus, max_coc)) in lenses.iter().enumerate() {
+                let lens = Lens {
+                    focal_mm,
+                    f_number,
+                    focus,
+                    sensor_mm: 36.0,
+                };
+                let mut frame = depth_frame(w, h, 90 + k as u32, focus as f32);
+                let n = w * h;
+                if k == 1 {
+                    // Uniform depths in blocks (a foreground at 0.6 of the focus distance,
+                    // the focus plane, a background): inside the foreground the near
+                    // field's spread equals the pixels' own blur but for rounding.
+                    let depth = frame.depth.as_mut().unwrap();
+                    for (i, d) in depth.iter_mut().enumerate() {
+                        let (x, y) = (i % w, i / w);
+                        *d = focus as f32 * [0.6, 1.0, 4.0][(x / 40 + y / 30) % 3];
+                    }
+                }
+                let mut color = shutter::frame::Color {
+                    r: noise(n, 3 + k as u32, 0.0, 4.0),
+                    g: noise(n, 5 + k as u32, -1.0, 1.0),
+                    b: noise(n, 7 + k as u32, 0.0, 0.01),
+                    a: (j != 1).then(|| noise(n, 11 + k as u32, 0.0, 1.0)),
+                };
+                if j == 2 {
+                    let stress = stress_values(focus as f32);
+                    for (i, v) in stress.iter().enumerate() {
+                        color.r[(i * 13 + 5) % n] = *v;
+                        color.g[(i * 17 + 3) % n] = *v;
+                    }
+                }
+                frame.color = Some(color);
+                let _ = sanitize(&mut frame, DepthKind::Depth);
+                let params = DofParams {
+                    max_coc,
+                    method: shutter::dof::Method::Blend,
+                    // ε above the half step's CoC (2.5 px) under one lens.
+                    epsilon: if j == 1 { 3.0 } else { 1.0 },
+                    ..DofParams::new(CocSource::Lens(lens))
+                };
+                let coc = coc_plane(&frame, &params);
+                let config = DofConfig::new(w, h, &params);
+                let color = frame.color.as_ref().unwrap();
+                let cpu = blend(&config, color.clone(), &coc);
+                let got = gpu
+                    .try_dof_blend(&config, color, &coc)
+                    .unwrap_or_else(|e| panic!("{e}"));
+                assert_eq!(got.a.is_some(), cpu.a.is_some());
+                let planes = [
+                    ("r", &got.r, &cpu.r, &color.r),
+                    ("g", &got.g, &cpu.g, &color.g),
+                    ("b", &got.b, &cpu.b, &color.b),
+                ];
+                let alpha = (got.a.as_ref().zip(cpu.a.as_ref()))
+                    .zip(color.a.as_ref())
+                    .map(|((g, c), i)| ("a", g, c, i));
+                for (name, got, cpu, input) in planes.into_iter().chain(alpha) {
+                    // The range of the values the blur combines: the input plane's ordinary
+                    // pixels (a heavy blur narrows the output's own range).
+                    const ORDINARY: f32 = 1e6;
+                    let (lo, hi) = input
+                        .iter()
+                        .filter(|v| v.abs() <= ORDINARY)
+                        .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+                    let range = (hi - lo).max(f32::MIN_POSITIVE);
+                    // A pixel a stress value's light reaches is a sum of terms as large as
+                    // the largest input (±1e30, which cancel in part): its rounding is
+                    // relative to that.
+                    let largest = input.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+                    let what = format!("lens {j} {w}x{h} {name}");
+                    let (mut sum, mut ordinary) = (0.0f64, 0usize);
+                    for (i, (&g, &c)) in got.iter().zip(cpu.iter()).enumerate() {
+                        assert!(g.is_finite(), "{what}: GPU gave {g} at {i}");
+                        let e = (g - c).abs();
+                        let scale = if c.abs() <= ORDINARY { range } else { largest };
+                        let bound = 1e-5 * scale;
+                        assert!(
+                            e <= bound,
+                            "{what}: {e} > {bound} at {i} (GPU {g} CPU {c}, range {range})"
+                        );
+                        if c.abs() <= ORDINARY {
+                            sum += e as f64;
+                            ordinary += 1;
+                            worst = worst.max(e / range);
+                        }
+                    }
+                    let mean = sum / ordinary.max(1) as f64;
+                    assert!(mean <= 1e-7 * range as f64, "{what}: mean {mean}");
+                    cases += 1;
+                }
+            }
+        }
+        let _ = writeln!(
+            std::io::stderr(),
+            "gpu: dof blend: {cases} planes, largest difference {worst:e} of the range"
         );
     }
 

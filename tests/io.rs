@@ -19,6 +19,7 @@ fn read_color(path: &Path) -> shutter::frame::Color {
     let options = PlanOptions {
         preset: &preset,
         layer: None,
+        view: None,
         needs: Passes::COLOR,
         max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };
@@ -164,6 +165,7 @@ fn multi_part_files_find_channels_by_part_name() {
     let options = PlanOptions {
         preset: &preset,
         layer: None,
+        view: None,
         needs: Passes {
             color: true,
             next: true,
@@ -409,6 +411,7 @@ fn parts_without_wanted_channels_are_never_decompressed() {
     let needs_color = PlanOptions {
         preset: &preset,
         layer: None,
+        view: None,
         needs: Passes::COLOR,
         max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };

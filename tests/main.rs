@@ -24,4 +24,6 @@ mod scatter;
 mod settings;
 mod stretch;
 mod structure;
+mod suggest;
 mod truth;
+mod views;

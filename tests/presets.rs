@@ -120,6 +120,7 @@ fn read_all(preset: &Preset, inputs: &Inputs) -> Frame {
     let options = PlanOptions {
         preset,
         layer: None,
+        view: None,
         needs: Passes::ALL,
         max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };
@@ -288,6 +289,7 @@ fn blender_preset_with_two_view_layers_asks_for_one() {
     let options = PlanOptions {
         preset: &preset,
         layer: None,
+        view: None,
         needs: Passes::COLOR,
         max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
     };
@@ -390,6 +392,7 @@ fn painted_preset() {
     let options = PlanOptions {
         preset: &preset,
         layer: None,
+        view: None,
         needs: Passes {
             next: false,
             ..Passes::ALL
@@ -446,6 +449,7 @@ fn painted_mid_grey_is_exactly_still_at_8_bits() {
     let options = PlanOptions {
         preset: &preset,
         layer: None,
+        view: None,
         needs: Passes {
             velocity: true,
             ..Passes::default()
@@ -506,6 +510,7 @@ y_up = true
     let options = PlanOptions {
         preset: &preset,
         layer: None,
+        view: None,
         needs: Passes {
             color: true,
             next: true,
@@ -545,6 +550,7 @@ fn a_luminance_only_exr_reads_as_grey_with_a_note() {
         let options = PlanOptions {
             preset: &preset,
             layer: None,
+            view: None,
             needs: Passes::COLOR,
             max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
         };
@@ -665,6 +671,7 @@ fn read_rsmb(
     let options = PlanOptions {
         preset,
         layer: None,
+        view: None,
         needs: Passes {
             depth: false,
             ..Passes::ALL
@@ -894,6 +901,7 @@ fn rsmb_refuses_float_files_and_a_missing_max_displace() {
     let options = PlanOptions {
         preset: &preset,
         layer: None,
+        view: None,
         needs: Passes {
             velocity: true,
             ..Passes::COLOR
@@ -926,4 +934,77 @@ fn rsmb_refuses_float_files_and_a_missing_max_displace() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("max_displace"), "{}", stderr(&o));
     assert!(!out.exists());
+}
+
+/// `--max-displace PX` gives an rsmb run its Max Displace: the output is the same bytes as
+/// with the preset file of max_displace keys; 0 or a negative value is a usage error (exit
+/// 2); with a preset that reads no RE:Vision vectors it has no effect and says so.
+#[test]
+fn max_displace_on_the_command_line_equals_the_preset_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let _ = rsmb_preset(dir.path()); // writes max-displace.toml
+    let n = W * H;
+    let color = dir.path().join("C.exr");
+    let shade: Vec<f32> = (0..n).map(|k| (k % 7) as f32 / 7.0).collect();
+    write_exr(
+        &color,
+        W,
+        H,
+        vec![
+            ("R", shade.clone()),
+            ("G", shade.clone()),
+            ("B", shade),
+            ("Z", vec![10.0; n]),
+        ],
+    );
+    let (dx, dy): (Vec<f32>, Vec<f32>) = (0..n)
+        .map(|k| (if k % W < W / 2 { 3.0 } else { -2.0 }, 1.0))
+        .unzip();
+    let vectors = dir.path().join("backward.png");
+    write_rsmb(&vectors, 8, &dx, &dy, &vec![255; n]);
+    let run = |extra: &[&str], out: &str| {
+        let out = dir.path().join(out);
+        let mut args = vec![
+            "blur".to_string(),
+            "--algorithm".into(),
+            "reconstruct".into(),
+            "--color".into(),
+            s(&color),
+            "--velocity".into(),
+            s(&vectors),
+            "-o".into(),
+            s(&out),
+            "--json".into(),
+        ];
+        args.extend(extra.iter().map(|a| a.to_string()));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        (shutter(&args), out)
+    };
+    let md = s(&dir.path().join("max-displace.toml"));
+    let (o, by_file) = run(&["--preset", "rsmb", "--preset", &md], "file.exr");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let flag = format!("{MAX_DISPLACE}");
+    let (o, by_flag) = run(&["--preset", "rsmb", "--max-displace", &flag], "flag.exr");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        std::fs::read(&by_file).unwrap() == std::fs::read(&by_flag).unwrap(),
+        "--max-displace gave other bytes than the preset key"
+    );
+    // Another Max Displace reads other motion: the flag is what set it.
+    let (o, doubled) = run(&["--preset", "rsmb", "--max-displace", "16"], "doubled.exr");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        std::fs::read(&by_flag).unwrap() != std::fs::read(&doubled).unwrap(),
+        "--max-displace 16 read the same motion as 8"
+    );
+    for bad in ["--max-displace=0", "--max-displace=-3"] {
+        let (o, out) = run(&["--preset", "rsmb", bad], "bad.exr");
+        assert_eq!(o.status.code(), Some(2), "{bad}: {}", stderr(&o));
+        assert!(stderr(&o).contains("--max-displace"), "{}", stderr(&o));
+        assert!(!out.exists());
+    }
+    // Without rsmb the flag does nothing, and the run says so.
+    let (o, _) = run(&["--max-displace", "8"], "plain.exr");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("--max-displace 8"), "{}", stdout(&o));
 }

@@ -605,6 +605,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                 let plan_options = PlanOptions {
                     preset: &preset,
                     layer: None,
+                    view: None,
                     needs: crate::process::needs(setting.algorithm, &setting.params),
                     max_pixels: crate::io::file::DEFAULT_MAX_PIXELS,
                 };

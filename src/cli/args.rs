@@ -98,6 +98,16 @@ pub struct BlurArgs {
     #[arg(long, value_name = "NAME")]
     pub layer: Option<String>,
 
+    /// View of multi-view (stereo) EXRs to read, e.g. right [default: each file's default
+    /// view; a file that names none needs this].
+    #[arg(long, value_name = "NAME")]
+    pub view: Option<String>,
+
+    /// Max Displace (px) the vectors were encoded with, for presets that read RE:Vision's
+    /// normalised 8/16-bit vectors (rsmb): sets max_displace on each such section.
+    #[arg(long, value_name = "PX")]
+    pub max_displace: Option<f32>,
+
     #[command(flatten)]
     pub settings: SettingArgs,
 
@@ -228,6 +238,11 @@ pub struct InfoArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+
+    /// View of multi-view (stereo) EXRs to describe and match presets in [default: each
+    /// file's default view].
+    #[arg(long, value_name = "NAME")]
+    pub view: Option<String>,
 }
 
 #[derive(Debug, Args)]

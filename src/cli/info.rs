@@ -1,8 +1,8 @@
 //! `shutter info`: what is in image files, and which presets match them.
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Problem, ProblemKind, Result};
 use crate::io::file::{FileInfo, FileKind};
-use crate::io::passes::passes_found;
+use crate::io::passes::{passes_found, suggest, Suggestion};
 use crate::io::preset::{Preset, BUILTIN};
 
 use super::args::InfoArgs;
@@ -24,17 +24,40 @@ pub fn info(args: InfoArgs) -> Result<()> {
                 continue;
             }
         };
-        let mut matches: Vec<(String, Vec<&'static str>)> = presets
-            .iter()
-            .map(|p| (p.name.clone(), passes_found(&info, p)))
-            .filter(|(_, found)| !found.is_empty())
-            .collect();
-        // Best match first: most passes found; ties keep the built-in order.
-        matches.sort_by_key(|(_, found)| std::cmp::Reverse(found.len()));
+        // Presets are matched in the view a run would read: --view, else the default. A
+        // view the file does not hold is an error; a file that names no default is described,
+        // with no match until a view is chosen.
+        let seen = match info.in_view(args.view.as_deref()) {
+            Ok(seen) => Some(seen),
+            Err(detail) if args.view.is_some() => {
+                problems.push(Problem::new(ProblemKind::View, path, detail));
+                continue;
+            }
+            Err(_) => None,
+        };
+        let (matches, suggestion) = match &seen {
+            Some(seen) => {
+                let mut matches: Vec<(String, Vec<&'static str>)> = presets
+                    .iter()
+                    .map(|p| (p.name.clone(), passes_found(seen, p)))
+                    .filter(|(_, found)| !found.is_empty())
+                    .collect();
+                // Best match first: most passes found; ties keep the built-in order.
+                matches.sort_by_key(|(_, found)| std::cmp::Reverse(found.len()));
+                (matches, Some(suggest(seen, &presets)))
+            }
+            None => (Vec::new(), None),
+        };
+        let shown = Shown {
+            info: &info,
+            view: seen.as_ref().and_then(|s| s.view.as_deref()),
+            matches: &matches,
+            suggestion: suggestion.as_ref(),
+        };
         if args.json {
-            documents.push(info_json(&info, &matches));
+            documents.push(info_json(&shown));
         } else {
-            out(&info_text(&info, &matches));
+            out(&info_text(&shown));
         }
     }
     if args.json {
@@ -45,6 +68,16 @@ pub fn info(args: InfoArgs) -> Result<()> {
     } else {
         Err(Error::Files(problems))
     }
+}
+
+/// What `info` shows of one file.
+struct Shown<'a> {
+    info: &'a FileInfo,
+    /// The view presets were matched in (multi-view files).
+    view: Option<&'a str>,
+    matches: &'a [(String, Vec<&'static str>)],
+    /// `None` for a multi-view file that names no default view, when none was chosen.
+    suggestion: Option<&'a Suggestion>,
 }
 
 fn describe_kind(info: &FileInfo) -> String {
@@ -79,7 +112,13 @@ fn describe_kind(info: &FileInfo) -> String {
     }
 }
 
-fn info_text(info: &FileInfo, matches: &[(String, Vec<&'static str>)]) -> String {
+fn info_text(shown: &Shown) -> String {
+    let Shown {
+        info,
+        view,
+        matches,
+        suggestion,
+    } = *shown;
     let w = &info.windows;
     let mut text = format!("{}\n", info.path.display());
     text.push_str(&format!("  format:         {}\n", describe_kind(info)));
@@ -101,11 +140,30 @@ fn info_text(info: &FileInfo, matches: &[(String, Vec<&'static str>)]) -> String
         w.display.max().0,
         w.display.max().1
     ));
+    if let Some(views) = &info.views {
+        let read = match view {
+            Some(view) => format!("; presets matched in view {view}"),
+            None => format!(
+                "; no default view ({}): choose one with --view",
+                views.no_default.as_deref().unwrap_or("none named")
+            ),
+        };
+        text.push_str(&format!("  views:          {}{read}\n", views.list()));
+    }
     text.push_str("  channels:\n");
     for c in &info.channels {
         let name = c.alias.clone().unwrap_or_else(|| c.name.clone());
-        text.push_str(&format!("    {name:<28} {}\n", c.sample_type));
+        let in_view = match (&info.views, &c.view) {
+            (Some(_), Some(v)) => format!("  view {v}"),
+            (Some(_), None) => "  no view".to_string(),
+            _ => String::new(),
+        };
+        text.push_str(&format!("    {name:<28} {}{in_view}\n", c.sample_type));
     }
+    let Some(suggestion) = suggestion else {
+        text.push_str("  presets:        choose a view with --view to match presets\n");
+        return text;
+    };
     if matches.is_empty() {
         text.push_str("  presets:        none match; write one (see README, Presets)\n");
     } else {
@@ -114,10 +172,33 @@ fn info_text(info: &FileInfo, matches: &[(String, Vec<&'static str>)]) -> String
             text.push_str(&format!("{label:<18}{name} ({})\n", found.join(", ")));
         }
     }
+    text.push_str(&format!(
+        "  suggested:      {}: {}\n",
+        suggestion.preset.as_deref().unwrap_or("none"),
+        suggestion.reason
+    ));
+    for role in ["vectors", "depth"] {
+        let label = format!("  if {role}:");
+        for (i, c) in suggestion
+            .candidates
+            .iter()
+            .filter(|c| c.role == role)
+            .enumerate()
+        {
+            let label = if i == 0 { label.as_str() } else { "" };
+            text.push_str(&format!("{label:<18}{}: {}\n", c.preset, c.reason));
+        }
+    }
     text
 }
 
-fn info_json(info: &FileInfo, matches: &[(String, Vec<&'static str>)]) -> serde_json::Value {
+fn info_json(shown: &Shown) -> serde_json::Value {
+    let Shown {
+        info,
+        view,
+        matches,
+        suggestion,
+    } = *shown;
     let w = &info.windows;
     serde_json::json!({
         "path": info.path.display().to_string(),
@@ -128,13 +209,20 @@ fn info_json(info: &FileInfo, matches: &[(String, Vec<&'static str>)]) -> serde_
             w.data_origin.0 + info.width as i32 - 1, w.data_origin.1 + info.height as i32 - 1],
         "display_window": [w.display.x, w.display.y, w.display.max().0, w.display.max().1],
         "compression": match &info.kind { FileKind::Exr { compression, .. } => compression.clone(), _ => vec![] },
+        "views": info.views.as_ref().map(|v| serde_json::json!({
+            "names": v.names,
+            "default": v.default,
+            "read": view,
+        })),
         "channels": info.channels.iter().map(|c| serde_json::json!({
             "name": c.alias.clone().unwrap_or_else(|| c.name.clone()),
             "type": c.sample_type,
             "part": c.part,
+            "view": c.view,
         })).collect::<Vec<_>>(),
         "presets": matches.iter().map(|(name, found)| serde_json::json!({
             "name": name, "passes": found,
         })).collect::<Vec<_>>(),
+        "suggestion": suggestion,
     })
 }

@@ -5,7 +5,7 @@
 use crate::error::{Error, Result};
 use crate::io::output::{OutputFormat, OutputOptions};
 use crate::io::passes::Inputs;
-use crate::io::preset::{Preset, Transfer};
+use crate::io::preset::{Encoding, Preset, Transfer};
 use crate::io::sequence::{parse_frames, PathPattern};
 use crate::pipeline::Job;
 use crate::process::Params;
@@ -48,6 +48,28 @@ fn output_warnings(given: &settings::Given, format: OutputFormat) -> Vec<String>
 
 pub fn resolve(args: &BlurArgs) -> Result<Job> {
     let mut preset = Preset::load(&args.preset)?;
+    let mut displace_warning = None;
+    if let Some(px) = args.max_displace {
+        if !(px.is_finite() && px > 0.0) {
+            return Err(Error::usage(format!(
+                "--max-displace {px}: must be a positive number of pixels"
+            )));
+        }
+        let mut any = false;
+        for spec in [&mut preset.velocity, &mut preset.prev, &mut preset.next] {
+            if spec.encoding == Encoding::Rsmb {
+                spec.max_displace = Some(px);
+                any = true;
+            }
+        }
+        if !any {
+            displace_warning = Some(format!(
+                "--max-displace {px}: preset {} reads no RE:Vision-encoded vectors, so it has \
+                 no effect (the rsmb preset does)",
+                preset.name
+            ));
+        }
+    }
     preset.check_complete()?;
     let (settings, warnings) = settings::resolve(&args.settings.0, &preset)?;
     let dof = settings::dof_params(&settings, args.coc_map.is_some())?;
@@ -84,6 +106,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         )));
     };
     let mut warnings = warnings;
+    warnings.extend(displace_warning);
     warnings.extend(output_warnings(&args.settings.0, format));
     if let Some(layer) = &args.layer {
         if !preset.channel_names().any(|n| n.contains("{layer}")) {
@@ -145,6 +168,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         frames,
         preset,
         layer: args.layer.clone(),
+        view: args.view.clone(),
         algorithm: settings.algorithm,
         params: Params {
             dof,

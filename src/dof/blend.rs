@@ -24,7 +24,8 @@
 //!      leave a ghost halo on the blurred background around it.
 //!   2. The copies also blur `T_near` (T of pixels in front of the focus plane, 0 behind),
 //!      and a pixel blends with `max(T, blurred T_near)`: a blurred foreground spreads over
-//!      the sharp background behind its edge instead of stopping hard at its silhouette.
+//!      the sharp background behind its edge instead of stopping hard at its silhouette
+//!      (the spread takes over only where it exceeds T by [`SPREAD_MARGIN`]).
 //! - **Skip**: a frame whose CoC stays below ε is returned as it is (see [`super::apply`]);
 //!   the copies are made only over the box around out-of-focus pixels that can reach any
 //!   output, and pixels with T = 0 and no near blur reaching them are copied.
@@ -124,10 +125,10 @@ pub fn level_coc(level: usize) -> f32 {
 /// sharp frame (CoC 0); with `half`, image 1 is the frame under one pass of the 3×3 filter
 /// (made where a pixel asks for it) and image j ≥ 2 is level j − 1; without, image j is
 /// level j.
-struct Ladder {
-    cocs: Vec<f32>,
+pub(crate) struct Ladder {
+    pub cocs: Vec<f32>,
     /// 1 / (CoC of image k + 1 − CoC of image k).
-    inverse_gaps: Vec<f32>,
+    pub inverse_gaps: Vec<f32>,
     /// The CoCs of images 1 ..= top − 1 (then +∞): a CoC's image below is the count of
     /// these it reaches, found without a branch.
     bounds: [f32; BOUNDS],
@@ -725,12 +726,20 @@ fn near_lane(row: &[Texel], lane: &mut Vec<f32>) {
     lane.extend(row.iter().map(|t| t[NEAR]));
 }
 
+/// How far the near field's spread must exceed a pixel's own blurriness (in T) to take
+/// over. Inside a uniformly blurred foreground the spread is the pixel's own T blurred, equal
+/// to it but for rounding, and the two ladders (with and without the half step) give
+/// different mixes there: compared bare, the last bit decided between them pixel by pixel,
+/// a pattern of dots over the foreground (seen between the CPU and the GPU twin on `layers`
+/// with ε = 3 px, up to 0.04 apart). 1e-3 of the blur range is 0.03 px of CoC at E = 32.
+pub(crate) const SPREAD_MARGIN: f32 = 1e-3;
+
 /// A pixel's blurriness `t` given the near field's T_near read at the two levels that
 /// bracket E, mixed by f: negative where the near field's spread sets the blur.
 #[inline(always)]
 fn spread(t: &mut f32, lower: f32, upper: f32, f: f32) {
     let spread = lower + f * (upper - lower);
-    if spread > *t {
+    if spread > *t + SPREAD_MARGIN {
         *t = -spread;
     }
 }
@@ -826,6 +835,55 @@ fn half(
     sum
 }
 
+/// What the pyramid form decides for a frame before it blurs a pixel, the GPU twin's too.
+pub(crate) struct Plan {
+    /// E.
+    pub largest: f32,
+    /// Levels 1 ..= `levels` are made.
+    pub levels: usize,
+    /// The ladder with the half step, and the plain one (the near field's spread).
+    pub ladders: [Ladder; 2],
+    /// Where T_near is read: the plain ladder's bracket of E, if any pixel is in front of
+    /// the focus plane.
+    pub near: Option<(usize, f32)>,
+    /// The colour the texels are offset by: each plane's first sample (0 without alpha).
+    pub reference: [f32; 4],
+    /// 1 / (E − ε).
+    pub inverse_span: f32,
+}
+
+/// The pyramid's [`Plan`] for a frame.
+pub(crate) fn plan(config: &DofConfig, color: &Color, coc: &[f32]) -> Plan {
+    let epsilon = config.epsilon;
+    let largest = largest_coc(coc, epsilon);
+    let mut reference = [0.0; 4];
+    for (r, p) in reference.iter_mut().zip(color.planes()) {
+        *r = p[0];
+    }
+    let inverse_span = 1.0 / (largest - epsilon);
+    // Enough levels that the last one is at least as blurred as E, so every CoC (and
+    // T_near, spread at E) is bracketed.
+    let mut levels = 1;
+    while levels < MAX_LEVELS && level_coc(levels) < largest {
+        levels += 1;
+    }
+    let ladders = [Ladder::new(levels, true), Ladder::new(levels, false)];
+    let interpolator = |c: f32| ((c.abs() - epsilon) * inverse_span).clamp(0.0, 1.0);
+    // T_near is read at the blur of E, where any pixel is in front of the focus plane.
+    let near = coc
+        .par_iter()
+        .any(|&c| c < 0.0 && interpolator(c) > 0.0)
+        .then(|| ladders[1].bracket(largest));
+    Plan {
+        largest,
+        levels,
+        ladders,
+        near,
+        reference,
+        inverse_span,
+    }
+}
+
 /// E: the frame's largest CoC (the plane is already clamped to --max-coc), at least a pixel
 /// above ε, so the blur is spent on what the frame has.
 fn largest_coc(coc: &[f32], epsilon: f32) -> f32 {
@@ -839,40 +897,29 @@ fn largest_coc(coc: &[f32], epsilon: f32) -> f32 {
 /// pixel mixes the two whose blur brackets its CoC.
 pub fn pyramid(config: &DofConfig, mut color: Color, coc: &[f32]) -> Color {
     let (width, height) = (config.width as usize, config.height as usize);
-    let epsilon = config.epsilon;
-    let largest = largest_coc(coc, epsilon);
-    let planes = color.planes();
-    let mut reference = [0.0; 4];
-    for (r, p) in reference.iter_mut().zip(&planes) {
-        *r = p[0];
-    }
+    let Plan {
+        largest,
+        levels: count,
+        ladders,
+        near,
+        reference,
+        inverse_span,
+    } = plan(config, &color, coc);
     let source = Source {
-        planes,
+        planes: color.planes(),
         coc,
         reference,
-        epsilon,
+        epsilon: config.epsilon,
         largest,
-        inverse_span: 1.0 / (largest - epsilon),
+        inverse_span,
     };
-
-    // Enough levels that the last one is at least as blurred as E, so every CoC (and
-    // T_near, spread at E) is bracketed.
-    let mut count = 1;
-    while count < MAX_LEVELS && level_coc(count) < largest {
-        count += 1;
-    }
-    let ladders = [Ladder::new(count, true), Ladder::new(count, false)];
+    let epsilon = config.epsilon;
     let levels = build(&source, width, height, count);
     let samplers: Vec<Sampler> = levels
         .iter()
         .enumerate()
         .map(|(l, level)| Sampler::new(level, l + 1, width, height))
         .collect();
-    // T_near is read at the blur of E, where any pixel is in front of the focus plane.
-    let near = coc
-        .par_iter()
-        .any(|&c| c < 0.0 && source.interpolator(c) > 0.0)
-        .then(|| ladders[1].bracket(largest));
 
     // The compose stage writes the frame in place, a band of rows per task. The half step
     // reads a pixel's neighbours as they were: each task keeps copies of the rows around the

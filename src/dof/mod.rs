@@ -248,6 +248,11 @@ pub trait Stages {
     ) -> Color {
         gather::gather(config, color, coc, tiles)
     }
+
+    /// [`blend::blend`].
+    fn blend(&self, config: &DofConfig, color: Color, coc: &[f32]) -> Color {
+        blend::blend(config, color, coc)
+    }
 }
 
 /// Every stage on the CPU (rayon): the reference.
@@ -264,8 +269,8 @@ pub fn apply(frame: Frame, params: &DofParams) -> Frame {
     apply_with(frame, params, &Cpu)
 }
 
-/// [`apply`] with the stages that have a twin elsewhere (`coc`, tile min/max, the gather) run by
-/// `stages`; the others run here on the CPU.
+/// [`apply`] with the stages that have a twin elsewhere (`coc`, tile min/max, the gather,
+/// blend) run by `stages`; the others run here on the CPU.
 pub fn apply_with(frame: Frame, params: &DofParams, stages: &impl Stages) -> Frame {
     let coc = stages.coc_plane(&frame, params);
     let largest = coc.par_iter().map(|c| c.abs()).reduce(|| 0.0, f32::max);
@@ -278,7 +283,7 @@ pub fn apply_with(frame: Frame, params: &DofParams, stages: &impl Stages) -> Fra
     let color = frame.color.take().expect("checked");
     let out = match params.method {
         // blend writes the colour in place.
-        Method::Blend => blend::blend(&config, color, &coc),
+        Method::Blend => stages.blend(&config, color, &coc),
         Method::Gather => {
             let tiles = stages.tiles(&coc, frame.width, frame.height, config.epsilon);
             stages.gather(&config, &color, &coc, &tiles)

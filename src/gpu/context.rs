@@ -37,6 +37,7 @@ pub struct Gpu {
     pub(crate) neighbor_max: Stage,
     pub(crate) dilate: Stage,
     pub(crate) gather: Stage,
+    pub(crate) blend: Stage,
     /// reconstruct's gather, compiled on first use (a run without motion blur never needs it).
     pub(crate) reconstruct: OnceLock<ReconstructPass>,
     /// Stages with a twin that ran on the CPU for a frame (see [`Gpu::note_cpu_stage`]).
@@ -170,6 +171,7 @@ impl Gpu {
             neighbor_max: super::neighbor_max::stage(&device),
             dilate: super::dilate::stage(&device),
             gather: super::gather::stage(&device),
+            blend: super::blend::stage(&device),
             device,
             queue,
             info,
@@ -307,6 +309,15 @@ impl crate::dof::Stages for Gpu {
         tiles: &crate::dof::gather::Tiles,
     ) -> crate::frame::Color {
         Gpu::dof_gather(self, config, color, coc, tiles)
+    }
+
+    fn blend(
+        &self,
+        config: &crate::dof::DofConfig,
+        color: crate::frame::Color,
+        coc: &[f32],
+    ) -> crate::frame::Color {
+        Gpu::dof_blend(self, config, color, coc)
     }
 }
 

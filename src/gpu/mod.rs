@@ -7,6 +7,8 @@
 //!   [`crate::dof::gather::tiles`];
 //! - [`gather`] + `gather.wgsl`: depth of field's bokeh gather, twin of
 //!   [`crate::dof::gather::gather`];
+//! - [`blend`] + `blend.wgsl`: depth of field's blend (the pyramid), twin of
+//!   [`crate::dof::blend::pyramid`];
 //! - [`tile_max`] + `tile_max.wgsl`, [`neighbor_max`] + `neighbor_max.wgsl`, [`dilate`] +
 //!   `dilate.wgsl`: reconstruct's tile stages, twins of [`crate::motion::tile_max`],
 //!   [`crate::motion::neighbor_max`] and [`crate::motion::dilate`];
@@ -20,8 +22,8 @@
 //! (tests/gpu.rs, tests/gpu_reconstruct.rs) with its tolerance stated and justified beside
 //! it. Under `--backend wgpu` depth of field's stages run on the GPU through
 //! [`crate::dof::Stages`] and reconstruct's through [`crate::motion::TileStages`] and its
-//! gather hook; stages without a twin yet (blend, scatter, stretch, reconstruct's pack) run on
-//! the CPU in the same run.
+//! gather hook; stages without a twin yet (blend's talk form, scatter, stretch, reconstruct's
+//! pack) run on the CPU in the same run.
 //!
 //! The backend is a run's choice ([`Backend`], `--backend cpu|wgpu|auto`):
 //! - `cpu` never touches wgpu;
@@ -40,6 +42,8 @@
 
 use serde::Serialize;
 
+#[cfg(feature = "gpu")]
+pub mod blend;
 #[cfg(feature = "gpu")]
 pub mod coc;
 #[cfg(feature = "gpu")]

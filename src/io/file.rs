@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Problem, ProblemKind};
 use crate::frame::{Plane, Windows};
+use crate::io::view::Views;
 use crate::io::{exr as exr_io, image as image_io};
 
 /// The EXR magic number.
@@ -70,6 +71,9 @@ pub struct ChannelInfo {
     pub index: usize,
     /// `f16`, `f32`, `u32`, `u8`, `u16`.
     pub sample_type: &'static str,
+    /// The view the channel belongs to, in a multi-view file (`None`: no view, or a file of
+    /// no views).
+    pub view: Option<String>,
 }
 
 /// A file's header, as shutter sees it.
@@ -81,6 +85,10 @@ pub struct FileInfo {
     pub height: usize,
     pub windows: Windows,
     pub channels: Vec<ChannelInfo>,
+    /// The views of a multi-view EXR (`io::view`); `None` for a file of no views.
+    pub views: Option<Views>,
+    /// The view `channels` were narrowed to by [`FileInfo::in_view`], if any.
+    pub view: Option<String>,
 }
 
 impl FileInfo {
@@ -133,6 +141,48 @@ impl FileInfo {
                     .iter()
                     .position(|c| c.alias.as_deref() == Some(name))
             })
+    }
+
+    /// The file as one view reads it (`io::view`): `view`, or the file's default view when
+    /// `None`; the channels of that view named without it, and those of no view. A file of
+    /// no views is returned as it is, whatever `view` says. Fails, with a message listing
+    /// the views, for a view the file does not hold, or with no `view` when the file names no
+    /// default.
+    pub fn in_view(&self, view: Option<&str>) -> Result<FileInfo, String> {
+        let Some(views) = &self.views else {
+            return Ok(self.clone());
+        };
+        let chosen = views.choose(view)?;
+        let mut channels: Vec<ChannelInfo> = self
+            .channels
+            .iter()
+            .filter(|c| c.view.as_deref() == Some(chosen.as_str()))
+            .map(|c| ChannelInfo {
+                name: views.strip(&c.name, &chosen),
+                alias: c.alias.as_ref().map(|a| views.strip(a, &chosen)),
+                ..c.clone()
+            })
+            .collect();
+        let taken = |name: &str, channels: &[ChannelInfo]| {
+            channels
+                .iter()
+                .any(|c| c.name == name || c.alias.as_deref() == Some(name))
+        };
+        let shared: Vec<ChannelInfo> = self
+            .channels
+            .iter()
+            .filter(|c| c.view.is_none())
+            .filter(|c| !taken(&c.name, &channels))
+            .cloned()
+            .collect();
+        channels.extend(shared);
+        // In the file's order, as the channels of a file of one view are.
+        channels.sort_by_key(|c| (c.part, c.index));
+        Ok(FileInfo {
+            channels,
+            view: Some(chosen),
+            ..self.clone()
+        })
     }
 
     /// All channel names, for messages.
@@ -247,6 +297,7 @@ fn probe_exr(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
     exr_io::check_chunk_table(path, &meta)
         .map_err(|detail| Problem::new(ProblemKind::Corrupt, path, detail))?;
     let multipart = meta.headers.len() > 1;
+    let views = Views::of(&meta.headers);
     let mut channels = Vec::new();
     for (part, header) in meta.headers.iter().enumerate() {
         let part_name = header
@@ -262,6 +313,7 @@ fn probe_exr(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
                 }
                 _ => None,
             };
+            let view = views.as_ref().and_then(|v| v.view_of(part, &name));
             channels.push(ChannelInfo {
                 name,
                 alias,
@@ -272,6 +324,7 @@ fn probe_exr(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
                     exr::meta::attribute::SampleType::F32 => "f32",
                     exr::meta::attribute::SampleType::U32 => "u32",
                 },
+                view,
             });
         }
     }
@@ -293,6 +346,8 @@ fn probe_exr(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
         height: first.layer_size.1,
         windows: exr_io::windows_of(first),
         channels,
+        views,
+        view: None,
     })
 }
 
@@ -334,7 +389,10 @@ fn probe_image(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
                 part: 0,
                 index,
                 sample_type,
+                view: None,
             })
             .collect(),
+        views: None,
+        view: None,
     })
 }

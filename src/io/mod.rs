@@ -9,6 +9,7 @@ pub mod output;
 pub mod passes;
 pub mod preset;
 pub mod sequence;
+pub mod view;
 
 /// What [`abandon`] cleaned up.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

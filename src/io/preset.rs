@@ -178,8 +178,9 @@ impl VectorSpec {
         match (self.encoding, self.max_displace) {
             (Encoding::Rsmb, None) => Some(format!(
                 "[{pass}] encoding \"rsmb\" needs max_displace, the Max Displace (pixels) the \
-                 vectors were written with (it is not stored in the file): give it in a preset \
-                 file, e.g. [{pass}] max_displace = 32.0, after --preset rsmb"
+                 vectors were written with (it is not stored in the file): give it with \
+                 --max-displace PX, or in a preset file, e.g. [{pass}] max_displace = 32.0, \
+                 after --preset rsmb"
             )),
             _ => None,
         }

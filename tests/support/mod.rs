@@ -41,6 +41,52 @@ pub fn write_exr_with(
     .unwrap();
 }
 
+/// A part of an EXR to write: its name, `view` and `multiView` attributes and channels.
+pub struct Part {
+    pub name: Option<&'static str>,
+    pub view: Option<&'static str>,
+    pub multi_view: Option<&'static [&'static str]>,
+    pub channels: Vec<(String, Vec<f32>)>,
+}
+
+/// Writes the parts as one EXR (several parts make a multi-part file) through the exr
+/// crate, which writes `multiView` and `view` from its layer attributes.
+pub fn write_parts(path: &Path, (w, h): (usize, usize), parts: Vec<Part>) {
+    use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
+    use exr::meta::attribute::{IntegerBounds, Text};
+    use exr::meta::header::{ImageAttributes, LayerAttributes};
+    use exr::prelude::{Blocks, LineOrder, WritableImage};
+    let layers: Vec<_> = parts
+        .into_iter()
+        .map(|part| {
+            let attributes = LayerAttributes {
+                layer_name: part.name.map(Text::from),
+                view_name: part.view.map(Text::from),
+                multi_view_names: part
+                    .multi_view
+                    .map(|views| views.iter().map(|v| Text::from(*v)).collect()),
+                ..LayerAttributes::default()
+            };
+            let channels = part
+                .channels
+                .into_iter()
+                .map(|(name, plane)| AnyChannel::new(name.as_str(), FlatSamples::F32(plane)))
+                .collect();
+            let encoding = Encoding {
+                blocks: Blocks::ScanLines,
+                line_order: LineOrder::Increasing,
+                ..Encoding::default()
+            };
+            Layer::new((w, h), attributes, encoding, AnyChannels::sort(channels))
+        })
+        .collect();
+    let attributes = ImageAttributes::new(IntegerBounds::new((0, 0), (w, h)));
+    Image::from_layers(attributes, layers)
+        .write()
+        .to_file(path)
+        .unwrap();
+}
+
 /// A deterministic pseudo-random plane, values in [lo, hi).
 pub fn noise(n: usize, seed: u32, lo: f32, hi: f32) -> Vec<f32> {
     (0..n as u32)

@@ -18,6 +18,7 @@
 //!   is read or written;
 //! - [`read`]: the decode, colour and depth conversions;
 //! - [`convert`]: motion from any of the preset's motion sections to the pass needed;
+//! - [`suggest`]: the preset a file most likely needs, and why (`shutter info`);
 //! - [`validity`]: vectors marked invalid (by the vector file's alpha) take the motion of
 //!   the nearest valid one.
 
@@ -25,11 +26,13 @@ mod convert;
 mod plan;
 mod preflight;
 mod read;
+mod suggest;
 mod validity;
 
 pub use plan::{passes_found, plan_frame, FramePlan, PlanOptions};
 pub use preflight::{output_folder_problems, preflight};
 pub use read::{read_color, read_frame, read_frame_noted};
+pub use suggest::{suggest, Candidate, Found, Suggestion};
 
 use crate::io::sequence::PathPattern;
 

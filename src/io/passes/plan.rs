@@ -75,6 +75,8 @@ pub struct PlanOptions<'a> {
     pub preset: &'a Preset,
     /// The view layer substituted for `{layer}` in channel names; found when `None`.
     pub layer: Option<&'a str>,
+    /// The view of multi-view EXRs to read (`io::view`); each file's default when `None`.
+    pub view: Option<&'a str>,
     pub needs: Passes,
     /// The largest frame a file's header may declare, in pixels.
     pub max_pixels: usize,
@@ -326,6 +328,20 @@ pub fn plan_frame(
         }
     }
 
+    if let Some(view) = options.view {
+        let any_views = planner
+            .probed
+            .iter()
+            .any(|(_, info)| info.as_ref().is_some_and(|i| i.views.is_some()));
+        if !any_views && planner.problems.is_empty() {
+            // Without the frame's file name, so a sequence warns once.
+            plan.warnings.push(format!(
+                "view {view}: no input file holds views (a multiView attribute or parts \
+                 with a view attribute), so the files are read as they are"
+            ));
+        }
+    }
+
     if planner.problems.is_empty() {
         plan.files = planner.files;
         Ok(plan)
@@ -356,7 +372,13 @@ impl Planner<'_> {
             return info.clone();
         }
         let info = match FileInfo::probe_within(path, self.options.max_pixels) {
-            Ok(info) => Some(info),
+            Ok(info) => match info.in_view(self.options.view) {
+                Ok(info) => Some(info),
+                Err(detail) => {
+                    self.problem(Problem::new(ProblemKind::View, path, detail).pass(pass));
+                    None
+                }
+            },
             Err(problem) => {
                 self.problem(problem.pass(pass));
                 None
@@ -448,7 +470,7 @@ fn alternatives(alts: &[Vec<String>]) -> String {
 /// of them in `skip`). Returns, per name of the alternative, the channel index if present.
 /// `{layer}` in names stands for a view layer found in the file (or `layer` when given);
 /// several candidate layers are an error naming them.
-fn find_channels(
+pub(super) fn find_channels(
     info: &FileInfo,
     alternatives: &[Vec<String>],
     required: usize,
@@ -503,7 +525,7 @@ fn find_channels(
 /// each of R, G and B, so it reads as grey. Only for a file with no chroma: a luminance and
 /// chroma image (`Y`, `RY`, `BY`) is not grey, and its subsampled chroma is refused when the
 /// file is probed.
-fn luminance(info: &FileInfo) -> Option<Vec<Option<usize>>> {
+pub(super) fn luminance(info: &FileInfo) -> Option<Vec<Option<usize>>> {
     if info.find("RY").is_some() || info.find("BY").is_some() {
         return None;
     }
@@ -533,15 +555,61 @@ fn find_layers(info: &FileInfo, template: &str) -> Vec<String> {
 /// The passes a preset finds in one file on its own (for `shutter info`): colour first, then
 /// the other passes among the channels colour did not take.
 pub fn passes_found(info: &FileInfo, preset: &Preset) -> Vec<&'static str> {
+    passes_read(info, preset)
+        .into_iter()
+        .map(|(pass, _)| pass)
+        .collect()
+}
+
+/// Passes found, each with the channels (indices into a file's channels) it reads.
+pub(super) type PassesRead = Vec<(&'static str, Vec<usize>)>;
+
+/// The passes a preset finds in one file on its own, each with the channels (indices into
+/// `info.channels`) it reads: colour first, then depth, velocity, prev and next among the
+/// channels colour did not take. A motion section whose encoding cannot read the file's
+/// sample type (RSMB's codes in a float file) finds nothing.
+///
+/// A file with no colour channel the preset names but a `Y` is read both ways, `Y` as grey
+/// colour and not, and the reading that takes more of the file's channels is kept: a
+/// luminance image is colour, a file of `X`, `Y` vectors is not.
+pub(super) fn passes_read(info: &FileInfo, preset: &Preset) -> PassesRead {
+    match find_channels(info, &preset.color.channels, 3, &[], None) {
+        Ok(None) => {
+            let without = passes_after(info, preset, None);
+            match luminance(info) {
+                Some(grey) => {
+                    let with = passes_after(info, preset, Some(grey));
+                    let count = |read: &[(&str, Vec<usize>)]| {
+                        let mut all: Vec<usize> =
+                            read.iter().flat_map(|(_, c)| c.iter().copied()).collect();
+                        all.sort_unstable();
+                        all.dedup();
+                        all.len()
+                    };
+                    if count(&with) > count(&without) {
+                        with
+                    } else {
+                        without
+                    }
+                }
+                None => without,
+            }
+        }
+        color => passes_after(info, preset, color.ok().flatten()),
+    }
+}
+
+/// The passes a preset finds once colour has taken `color`'s channels (see [`passes_read`]).
+fn passes_after(info: &FileInfo, preset: &Preset, color: Option<Vec<Option<usize>>>) -> PassesRead {
     let mut found = Vec::new();
-    let mut claimed = Vec::new();
-    let color = match find_channels(info, &preset.color.channels, 3, &[], None) {
-        Ok(None) => luminance(info),
-        color => color.ok().flatten(),
-    };
+    let mut claimed: Vec<usize> = Vec::new();
     if let Some(color) = color {
-        claimed = color.iter().flatten().copied().collect();
-        found.push("color");
+        for c in color.into_iter().flatten() {
+            if !claimed.contains(&c) {
+                claimed.push(c);
+            }
+        }
+        found.push(("color", claimed.clone()));
     }
     let depth: Vec<Vec<String>> = preset
         .depth
@@ -549,17 +617,29 @@ pub fn passes_found(info: &FileInfo, preset: &Preset) -> Vec<&'static str> {
         .iter()
         .map(|c| vec![c.clone()])
         .collect();
-    if let Ok(Some(_)) = find_channels(info, &depth, 1, &claimed, None) {
-        found.push("depth");
+    if let Ok(Some(channels)) = find_channels(info, &depth, 1, &claimed, None) {
+        found.push(("depth", channels.into_iter().flatten().collect()));
     }
     for (name, spec) in [
         ("velocity", &preset.velocity),
         ("prev", &preset.prev),
         ("next", &preset.next),
     ] {
-        if let Ok(Some(_)) = find_channels(info, &spec.channels, 2, &claimed, None) {
-            found.push(name);
+        if let Ok(Some(channels)) = find_channels(info, &spec.channels, 2, &claimed, None) {
+            let read = if spec.meaning.is_position() { 3 } else { 2 };
+            let channels: Vec<usize> = channels.into_iter().take(read).flatten().collect();
+            if decodes(spec, name, info.channels[channels[0]].sample_type) {
+                found.push((name, channels));
+            }
         }
     }
     found
+}
+
+/// Whether a motion section's encoding reads samples of this type, whatever the values only
+/// the user knows (RSMB's Max Displace, which a built-in preset leaves out).
+pub(super) fn decodes(spec: &VectorSpec, pass: &str, sample_type: &str) -> bool {
+    let mut spec = spec.clone();
+    spec.max_displace.get_or_insert(1.0);
+    Decode::resolve(&spec, pass, sample_type).is_ok()
 }

@@ -145,6 +145,7 @@ pub fn read_color(
     let options = PlanOptions {
         preset,
         layer: None,
+        view: None,
         needs: Passes::COLOR,
         max_pixels: crate::io::file::DEFAULT_MAX_PIXELS,
     };

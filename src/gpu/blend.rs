@@ -1,0 +1,204 @@
+//! Depth of field's blend on the GPU (`blend.wgsl`): the twin of
+//! [`crate::dof::blend::pyramid`], the binomial pyramid and the blurriness interpolation
+//! between its levels (the talk's two-copy form stays on the CPU).
+//!
+//! In: the colour and the signed CoC plane. Out: the colour with depth of field. Bindings, in
+//! order: the [`BlendConfig`] uniform; the colour planes r, g, b, a one after the other (a
+//! zero without alpha); the CoC plane; each level's geometry (width, height, first texel);
+//! the two ladders' CoCs and inverse gaps; then the output planes and, not read back, every
+//! level's texels.
+//!
+//! What a frame needs decided before any pixel is blurred — E, the number of levels, both
+//! ladders, whether and where T_near is read, the reference colour — is the CPU's own
+//! [`crate::dof::blend::plan`], made on the host. Three entry points run in order in one
+//! compute pass: level 1 from the frame, each further level from the one before, then one
+//! invocation per pixel. What may differ from the CPU is rounding: WGSL's division is not
+//! correctly rounded (a level's colour divided by its w, the half step's normalisation) and
+//! a driver may fuse a product into a sum; the tolerance in tests/gpu.rs says how much.
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::dof::blend::plan;
+use crate::dof::DofConfig;
+use crate::frame::Color;
+
+use super::stage::{floats, Dispatch, Stage, StageError};
+use super::Gpu;
+
+/// The shader's source.
+pub const SHADER: &str = include_str!("blend.wgsl");
+
+/// The stage's uniform. Keep in sync with `BlendConfig` in blend.wgsl (the size test guards
+/// the layout: sixteen 4-byte fields, `reference` on a 16-byte boundary).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct BlendConfig {
+    pub width: u32,
+    pub height: u32,
+    /// Levels 1 ..= `levels` are made.
+    pub levels: u32,
+    /// 1 where the frame has alpha.
+    pub has_alpha: u32,
+    /// The colour the texels are offset by (0 for a missing alpha).
+    pub reference: [f32; 4],
+    pub epsilon: f32,
+    /// 1 / (E − ε).
+    pub inverse_span: f32,
+    /// E.
+    pub largest: f32,
+    /// 1 where T_near is read.
+    pub near: u32,
+    /// T_near is read at levels `near_k` and `near_k` + 1, mixed by `near_f`.
+    pub near_k: u32,
+    pub near_f: f32,
+    pub _pad: [u32; 2],
+}
+
+/// Workgroups are 8 × 8 invocations.
+const GROUP: usize = 8;
+
+/// The compiled stage: bindings config, color, coc, geometry, ladders, then out and the
+/// levels' texels (scratch).
+pub(crate) fn stage(device: &wgpu::Device) -> Stage {
+    Stage::new(
+        device,
+        "blend",
+        SHADER,
+        &["first_level", "halve", "compose"],
+        std::mem::size_of::<BlendConfig>(),
+        4,
+        2,
+        1,
+    )
+}
+
+impl Gpu {
+    /// [`crate::dof::blend::blend`] with its pyramid form on the GPU (the talk's form, and
+    /// any frame the GPU cannot take, on the CPU, counted in [`Gpu::stages_on_cpu`]).
+    pub fn dof_blend(&self, config: &DofConfig, color: Color, coc: &[f32]) -> Color {
+        if config.blend_form != 0 {
+            return crate::dof::blend::blend(config, color, coc);
+        }
+        match self.try_dof_blend(config, &color, coc) {
+            Ok(out) => out,
+            Err(e) => {
+                self.note_cpu_stage("blend", &e);
+                crate::dof::blend::blend(config, color, coc)
+            }
+        }
+    }
+
+    /// [`crate::dof::blend::pyramid`] on the GPU, or why it could not run.
+    pub fn try_dof_blend(
+        &self,
+        config: &DofConfig,
+        color: &Color,
+        coc: &[f32],
+    ) -> Result<Color, StageError> {
+        let (width, height) = (config.width as usize, config.height as usize);
+        let n = width * height;
+        let has_alpha = color.a.is_some();
+        if n == 0 {
+            return Ok(color.clone());
+        }
+        let plan = plan(config, color, coc);
+        // Each level's geometry, and where its texels start.
+        let mut geometry = Vec::with_capacity(3 * plan.levels);
+        let (mut w, mut h, mut first) = (width, height, 0usize);
+        for _ in 0..plan.levels {
+            (w, h) = (w.div_ceil(2), h.div_ceil(2));
+            geometry.extend([w as u32, h as u32, first as u32]);
+            first += w * h;
+        }
+        let texels = first;
+        let [half, plain] = &plan.ladders;
+        let ladders: Vec<f32> = [
+            &half.cocs,
+            &half.inverse_gaps,
+            &plain.cocs,
+            &plain.inverse_gaps,
+        ]
+        .into_iter()
+        .flatten()
+        .copied()
+        .collect();
+        let mut planes = Vec::with_capacity(4 * n);
+        planes.extend_from_slice(&color.r[..n]);
+        planes.extend_from_slice(&color.g[..n]);
+        planes.extend_from_slice(&color.b[..n]);
+        match &color.a {
+            Some(a) => planes.extend_from_slice(&a[..n]),
+            None => planes.resize(4 * n, 0.0),
+        }
+        let (near_k, near_f) = plan.near.unwrap_or((0, 0.0));
+        let uniform = BlendConfig {
+            width: width as u32,
+            height: height as u32,
+            levels: plan.levels as u32,
+            has_alpha: has_alpha as u32,
+            reference: plan.reference,
+            epsilon: config.epsilon,
+            inverse_span: plan.inverse_span,
+            largest: plan.largest,
+            near: plan.near.is_some() as u32,
+            near_k: near_k as u32,
+            near_f,
+            _pad: [0; 2],
+        };
+        let groups = |w: usize, h: usize| [w.div_ceil(GROUP) as u32, h.div_ceil(GROUP) as u32];
+        let mut dispatches = Vec::with_capacity(plan.levels + 1);
+        for (l, g) in geometry.chunks(3).enumerate() {
+            let [x, y] = groups(g[0] as usize, g[1] as usize);
+            // Level l + 1: level 1 from the frame; the others from the level before, the
+            // level number riding in the z count (blend.wgsl, `halve`).
+            dispatches.push(match l {
+                0 => Dispatch {
+                    entry: 0,
+                    groups: [x, y, 1],
+                },
+                _ => Dispatch {
+                    entry: 1,
+                    groups: [x, y, l as u32],
+                },
+            });
+        }
+        let [x, y] = groups(width, height);
+        dispatches.push(Dispatch {
+            entry: 2,
+            groups: [x, y, 1],
+        });
+        let mut out = self.blend.run(
+            self,
+            bytemuck::bytes_of(&uniform),
+            &[
+                bytemuck::cast_slice(&planes),
+                bytemuck::cast_slice(&coc[..n]),
+                bytemuck::cast_slice(&geometry),
+                bytemuck::cast_slice(&ladders),
+            ],
+            &[(4 * n * 4) as u64, (texels * 32) as u64],
+            &[],
+            &dispatches,
+        )?;
+        let mut out = floats(out.swap_remove(0));
+        let a = has_alpha.then(|| out.split_off(3 * n));
+        out.truncate(3 * n);
+        let b = out.split_off(2 * n);
+        let g = out.split_off(n);
+        Ok(Color { r: out, g, b, a })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_config_is_sixteen_plain_words() {
+        // Keep in sync with blend.wgsl: `reference` (a vec4) at byte 16, the whole a
+        // multiple of 16 as uniforms need.
+        assert_eq!(std::mem::size_of::<BlendConfig>(), 64);
+        assert_eq!(std::mem::offset_of!(BlendConfig, reference), 16);
+        assert_eq!(std::mem::offset_of!(BlendConfig, epsilon), 32);
+    }
+}

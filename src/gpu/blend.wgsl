@@ -1,0 +1,383 @@
+// Depth of field's blend, the pyramid form: the twin of `pyramid` (src/dof/blend.rs). Keep
+// in sync with it: the same texels (colour offset by the reference and premultiplied by
+// w = max(T, 1/64), w, T_near), the same [1 3 3 1]/8 halvings (across, then down, the same
+// sums in the same order, indices clamped to the level), the same ladder and bracket, the
+// same bilinear read of a level (down first, colour divided by w, then across) and the same
+// mix. What the host decides is the CPU's own: E, the number of levels, both ladders' CoCs,
+// whether and where T_near is read (`blend::Plan`).
+//
+// Three entry points, dispatched in order over the same bindings:
+// - `first_level`: level 1 from the frame, one invocation per texel;
+// - `halve`: level L from level L − 1, one invocation per texel; L rides in the dispatch's
+//   z count (the host dispatches z = L − 1 groups deep and only the last slice works), since
+//   a stage has one uniform for all its dispatches;
+// - `compose`: one invocation per pixel.
+
+// Keep in sync with `BlendConfig` in src/gpu/blend.rs.
+struct BlendConfig {
+    width: u32,
+    height: u32,
+    // Levels of the pyramid (1 ..= levels).
+    levels: u32,
+    has_alpha: u32,
+    reference: vec4<f32>,
+    epsilon: f32,
+    // 1 / (E − ε).
+    inverse_span: f32,
+    // E.
+    largest: f32,
+    // 1 where T_near is read (some pixel is in front of the focus plane).
+    near: u32,
+    // The plain ladder's bracket of E: T_near is read at levels near_k and near_k + 1,
+    // mixed by near_f.
+    near_k: u32,
+    near_f: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+@group(0) @binding(0) var<uniform> config: BlendConfig;
+// r, g, b, a planes one after the other (a zero without alpha).
+@group(0) @binding(1) var<storage, read> color: array<f32>;
+// The signed CoC plane (diameter, px).
+@group(0) @binding(2) var<storage, read> coc: array<f32>;
+// Per level L = 1 ..= levels: width, height, first texel, at 3 (L − 1).
+@group(0) @binding(3) var<storage, read> geometry: array<u32>;
+// The ladder with the half step: levels + 2 CoCs, then levels + 1 inverse gaps; then the
+// plain ladder: levels + 1 CoCs, then levels inverse gaps.
+@group(0) @binding(4) var<storage, read> ladders: array<f32>;
+// r, g, b, a planes one after the other.
+@group(0) @binding(5) var<storage, read_write> out: array<f32>;
+// Every level's texels, two vec4 each: (r, g, b, a) and (w, T_near, 0, 0).
+@group(0) @binding(6) var<storage, read_write> texels: array<vec4<f32>>;
+
+const IN_FOCUS_WEIGHT: f32 = 0.015625;
+const MIN_POSITIVE: f32 = 1.17549435e-38;
+// blend::SPREAD_MARGIN.
+const SPREAD_MARGIN: f32 = 1e-3;
+
+struct Texel {
+    c: vec4<f32>,
+    e: vec4<f32>,
+}
+
+fn interpolator(c: f32) -> f32 {
+    return clamp((abs(c) - config.epsilon) * config.inverse_span, 0.0, 1.0);
+}
+
+fn plane(ch: u32, i: u32) -> f32 {
+    return color[ch * config.width * config.height + i];
+}
+
+// Frame pixel (x, y) as a texel: colour offset and premultiplied, w, T_near.
+fn frame_texel(x: u32, y: u32) -> Texel {
+    let i = y * config.width + x;
+    let c = coc[i];
+    let t = interpolator(c);
+    let w = max(t, IN_FOCUS_WEIGHT);
+    var near = 0.0;
+    if c < 0.0 {
+        near = t;
+    }
+    var colour = vec4<f32>(plane(0u, i), plane(1u, i), plane(2u, i), 0.0);
+    if config.has_alpha == 1u {
+        colour.w = plane(3u, i);
+    }
+    var t0: Texel;
+    t0.c = (colour - config.reference) * w;
+    if config.has_alpha == 0u {
+        t0.c.w = 0.0;
+    }
+    t0.e = vec4<f32>(w, near, 0.0, 0.0);
+    return t0;
+}
+
+// [1 3 3 1]/8 over four texels, as `halve_row` sums them.
+fn taps4(a: Texel, b: Texel, d: Texel, e: Texel) -> Texel {
+    var o: Texel;
+    o.c = 0.125 * (a.c + e.c) + 0.375 * (b.c + d.c);
+    o.e = 0.125 * (a.e + e.e) + 0.375 * (b.e + d.e);
+    return o;
+}
+
+fn clamped(i: i32, n: u32) -> u32 {
+    return u32(clamp(i, 0, i32(n) - 1));
+}
+
+// Frame row y halved across at texel i.
+fn first_across(i: u32, y: u32) -> Texel {
+    let c = 2 * i32(i);
+    let w = config.width;
+    return taps4(
+        frame_texel(clamped(c - 1, w), y),
+        frame_texel(clamped(c, w), y),
+        frame_texel(clamped(c + 1, w), y),
+        frame_texel(clamped(c + 2, w), y),
+    );
+}
+
+fn store(level_first: u32, index: u32, t: Texel) {
+    texels[2u * (level_first + index)] = t.c;
+    texels[2u * (level_first + index) + 1u] = t.e;
+}
+
+fn load(level_first: u32, index: u32) -> Texel {
+    var t: Texel;
+    t.c = texels[2u * (level_first + index)];
+    t.e = texels[2u * (level_first + index) + 1u];
+    return t;
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn first_level(@builtin(global_invocation_id) id: vec3<u32>) {
+    let w2 = geometry[0];
+    let h2 = geometry[1];
+    if id.x >= w2 || id.y >= h2 {
+        return;
+    }
+    let r = 2 * i32(id.y);
+    let h = config.height;
+    let t = taps4(
+        first_across(id.x, clamped(r - 1, h)),
+        first_across(id.x, clamped(r, h)),
+        first_across(id.x, clamped(r + 1, h)),
+        first_across(id.x, clamped(r + 2, h)),
+    );
+    store(geometry[2], id.y * w2 + id.x, t);
+}
+
+// Texel row y of level `above` halved across at texel i.
+fn level_across(above: u32, i: u32, y: u32) -> Texel {
+    let w = geometry[3u * (above - 1u)];
+    let first = geometry[3u * (above - 1u) + 2u];
+    let c = 2 * i32(i);
+    let row = first + y * w;
+    return taps4(
+        load(row, clamped(c - 1, w)),
+        load(row, clamped(c, w)),
+        load(row, clamped(c + 1, w)),
+        load(row, clamped(c + 2, w)),
+    );
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn halve(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    // Level L = groups.z + 1, made by the last slice only.
+    if group.z + 1u != groups.z {
+        return;
+    }
+    let level = groups.z + 1u;
+    let above = level - 1u;
+    let g = 3u * (level - 1u);
+    let w2 = geometry[g];
+    let h2 = geometry[g + 1u];
+    if id.x >= w2 || id.y >= h2 {
+        return;
+    }
+    let h = geometry[3u * (above - 1u) + 1u];
+    let r = 2 * i32(id.y);
+    let t = taps4(
+        level_across(above, id.x, clamped(r - 1, h)),
+        level_across(above, id.x, clamped(r, h)),
+        level_across(above, id.x, clamped(r + 1, h)),
+        level_across(above, id.x, clamped(r + 2, h)),
+    );
+    store(geometry[g + 2u], id.y * w2 + id.x, t);
+}
+
+// ---------------------------------------------------------------------------------------
+// compose
+
+struct Tap {
+    before: u32,
+    after: u32,
+    f: f32,
+}
+
+// Where pixel centre x of a frame axis lands in level L (`axis_taps`): the texel before it,
+// the one after (clamped to the level's n texels) and the weight of the one after. The
+// products are exact in f32 (a power of two), as the CPU's f64 ones rounded to f32.
+fn axis_tap(x: u32, level: u32, n: u32) -> Tap {
+    let p = ldexp(f32(x) + 0.5, -i32(level)) - 0.5;
+    let before = floor(p);
+    var t: Tap;
+    t.f = p - before;
+    t.before = clamped(i32(before), n);
+    t.after = clamped(i32(before) + 1, n);
+    return t;
+}
+
+fn mix_texel(a: Texel, b: Texel, f: f32) -> Texel {
+    var o: Texel;
+    o.c = a.c + f * (b.c - a.c);
+    o.e = a.e + f * (b.e - a.e);
+    return o;
+}
+
+// Level L at texel column c, mixed down between its rows by `down`, colour divided by w
+// (`normalised_row`).
+fn level_column(first: u32, w: u32, c: u32, down: Tap) -> Texel {
+    var t = mix_texel(load(first, down.before * w + c), load(first, down.after * w + c), down.f);
+    var weight = MIN_POSITIVE;
+    if t.e.x > MIN_POSITIVE {
+        weight = t.e.x;
+    }
+    t.c = t.c / weight;
+    return t;
+}
+
+// Level L at frame pixel (x, y) (`Sampler::row`, then `Sampler::at`).
+fn level_at(level: u32, x: u32, y: u32) -> Texel {
+    let g = 3u * (level - 1u);
+    let w = geometry[g];
+    let h = geometry[g + 1u];
+    let first = geometry[g + 2u];
+    let across = axis_tap(x, level, w);
+    let down = axis_tap(y, level, h);
+    return mix_texel(
+        level_column(first, w, across.before, down),
+        level_column(first, w, across.after, down),
+        across.f,
+    );
+}
+
+// T_near of level L at frame pixel (x, y): mixed down, then across, not divided.
+fn near_at(level: u32, x: u32, y: u32) -> f32 {
+    let g = 3u * (level - 1u);
+    let w = geometry[g];
+    let h = geometry[g + 1u];
+    let first = geometry[g + 2u];
+    let across = axis_tap(x, level, w);
+    let down = axis_tap(y, level, h);
+    let a0 = texels[2u * (first + down.before * w + across.before) + 1u].y;
+    let a1 = texels[2u * (first + down.after * w + across.before) + 1u].y;
+    let b0 = texels[2u * (first + down.before * w + across.after) + 1u].y;
+    let b1 = texels[2u * (first + down.after * w + across.after) + 1u].y;
+    let a = a0 + down.f * (a1 - a0);
+    let b = b0 + down.f * (b1 - b0);
+    return a + across.f * (b - a);
+}
+
+fn sharp(i: u32) -> vec4<f32> {
+    var s = vec4<f32>(plane(0u, i), plane(1u, i), plane(2u, i), 0.0);
+    if config.has_alpha == 1u {
+        s.w = plane(3u, i);
+    }
+    return s;
+}
+
+// The half step at (x, y): the 3×3 filter over the premultiplied neighbourhood, normalised
+// (colour offset by the reference), as `half` sums it.
+fn half_step(x: u32, y: u32) -> vec4<f32> {
+    let taps = array<f32, 3>(0.25, 0.5, 0.25);
+    let xs = array<u32, 3>(u32(max(i32(x) - 1, 0)), x, min(x + 1u, config.width - 1u));
+    let ys = array<u32, 3>(u32(max(i32(y) - 1, 0)), y, min(y + 1u, config.height - 1u));
+    var sum = vec4<f32>(0.0);
+    var weights = 0.0;
+    for (var r = 0u; r < 3u; r++) {
+        for (var c = 0u; c < 3u; c++) {
+            let i = ys[r] * config.width + xs[c];
+            let w = taps[r] * taps[c] * max(interpolator(coc[i]), IN_FOCUS_WEIGHT);
+            var d = sharp(i) - config.reference;
+            if config.has_alpha == 0u {
+                d.w = 0.0;
+            }
+            sum += w * d;
+            weights += w;
+        }
+    }
+    return sum / weights;
+}
+
+struct Bracket {
+    k: u32,
+    f: f32,
+}
+
+// The ladder starting at `base` in `ladders` with `count` CoCs (`Ladder::bracket`): k counts
+// the CoCs of images 1 ..= count − 2 that c reaches.
+fn bracket(base: u32, count: u32, c: f32) -> Bracket {
+    var k = 0u;
+    for (var i = 1u; i + 1u < count; i++) {
+        if c >= ladders[base + i] {
+            k += 1u;
+        }
+    }
+    var b: Bracket;
+    b.k = k;
+    b.f = clamp((c - ladders[base + k]) * ladders[base + count + k], 0.0, 1.0);
+    return b;
+}
+
+// Image j of a ladder whose level 1 is image `first` at pixel (x, y), offset by the
+// reference.
+fn image(j: u32, first: u32, x: u32, y: u32) -> vec4<f32> {
+    if j >= first {
+        return level_at(j - first + 1u, x, y).c;
+    }
+    if j == 0u {
+        var s = sharp(y * config.width + x) - config.reference;
+        if config.has_alpha == 0u {
+            s.w = 0.0;
+        }
+        return s;
+    }
+    return half_step(x, y);
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
+    let x = id.x;
+    let y = id.y;
+    if x >= config.width || y >= config.height {
+        return;
+    }
+    let n = config.width * config.height;
+    let i = y * config.width + x;
+    let c = coc[i];
+    var t = interpolator(c);
+    if config.near == 1u {
+        let k = config.near_k;
+        var lower = 0.0;
+        if k == 0u {
+            if c < 0.0 {
+                lower = t;
+            }
+        } else {
+            lower = near_at(k, x, y);
+        }
+        let spread = lower + config.near_f * (near_at(k + 1u, x, y) - lower);
+        if spread > t + SPREAD_MARGIN {
+            t = -spread;
+        }
+    }
+    if t == 0.0 {
+        out[i] = color[i];
+        out[n + i] = color[n + i];
+        out[2u * n + i] = color[2u * n + i];
+        out[3u * n + i] = color[3u * n + i];
+        return;
+    }
+    let levels = config.levels;
+    // The ladder with the half step, or the plain one for the near field's spread.
+    var base = 0u;
+    var count = levels + 2u;
+    var first = 2u;
+    if t < 0.0 {
+        base = 2u * levels + 3u;
+        count = levels + 1u;
+        first = 1u;
+    }
+    let b = bracket(base, count, config.epsilon + abs(t) * (config.largest - config.epsilon));
+    let lower = image(b.k, first, x, y);
+    let upper = image(b.k + 1u, first, x, y);
+    let mixed = config.reference + (lower + b.f * (upper - lower));
+    out[i] = mixed.x;
+    out[n + i] = mixed.y;
+    out[2u * n + i] = mixed.z;
+    out[3u * n + i] = mixed.w;
+}

@@ -1,0 +1,284 @@
+//! Which preset a file most likely needs, and why (`shutter info`), from its header alone.
+//!
+//! The rule, deterministic:
+//!
+//! 1. Each convention preset (in the fixed order of `io::preset::BUILTIN`: shutter,
+//!    blender, nuke, painted, rsmb) reads what it finds in the file on its own, as
+//!    [`passes_found`](super::passes_found) lists it: colour first, then depth and the motion
+//!    sections among the channels colour did not take; a motion section whose encoding
+//!    cannot read the file's samples (RSMB's codes in a float file) finds nothing.
+//! 2. Its score is the number of the file's stored channels those passes read (a grey
+//!    image's `Y`, `R`, `G`, `B` are one stored channel).
+//! 3. The highest score wins; ties go to the first in the fixed order, and the message
+//!    names the presets it tied with. No score: no preset names the file's channels.
+//!
+//! When the winner reads colour alone, nothing in the header says more, and the suggestion
+//! says so ("colour only") rather than name a renderer. An 8/16-bit integer image is the one
+//! case where the header cannot tell what the file is: an RGB(A) image may be a photo or
+//! motion vectors in R, G, and a grey one a painted depth map. For those, the presets that
+//! could read it as vectors or depth are listed as candidates, each with its reason:
+//! - as vectors: presets whose motion section stores still as a code inside the range
+//!   (painted's `zero = 0.5`, rsmb's 127 / 32767), since unsigned codes with zero at 0 cannot
+//!   hold motion to the left or up, and whose channels the image has (R, G);
+//! - as depth (grey images only, which cannot hold vectors): presets that map grey to depth
+//!   between `near` and `far`.
+//!
+//! Pixels are never read: telling a photo from vectors by their values would be a guess
+//! dressed as a fact.
+
+use serde::Serialize;
+
+use crate::io::file::{FileInfo, FileKind};
+use crate::io::preset::{Encoding, Meaning, Preset, Units, VectorSpec};
+
+use super::plan::{decodes, find_channels, passes_read, PassesRead};
+
+/// A pass a preset finds, and the channels it reads (as `shutter info` names them).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Found {
+    pub pass: &'static str,
+    pub channels: Vec<String>,
+}
+
+/// Another reading of an integer image that its header cannot rule out.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Candidate {
+    pub preset: String,
+    /// `vectors` (given as `--velocity`, `--prev` or `--next`) or `depth` (as `--depth`).
+    pub role: &'static str,
+    pub channels: Vec<String>,
+    pub reason: String,
+}
+
+/// The preset a file most likely needs, and why.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Suggestion {
+    /// The preset; `None` when no preset names any of the file's channels.
+    pub preset: Option<String>,
+    /// What it reads.
+    pub found: Vec<Found>,
+    /// The stored channels it reads, of `channels` in the file.
+    pub matched: usize,
+    pub channels: usize,
+    /// Presets that read as many channels; the fixed order chose `preset` among them.
+    pub tied: Vec<String>,
+    /// One line: the rule's outcome in words.
+    pub reason: String,
+    /// For integer images the header cannot tell apart: other readings, with their reasons.
+    pub candidates: Vec<Candidate>,
+}
+
+/// The name `shutter info` shows for a channel.
+fn shown(info: &FileInfo, channel: usize) -> String {
+    let c = &info.channels[channel];
+    c.alias.clone().unwrap_or_else(|| c.name.clone())
+}
+
+/// Distinct stored channels (part, index) among `channels`.
+fn stored(info: &FileInfo, channels: impl IntoIterator<Item = usize>) -> usize {
+    let mut seen: Vec<(usize, usize)> = channels
+        .into_iter()
+        .map(|c| (info.channels[c].part, info.channels[c].index))
+        .collect();
+    seen.sort_unstable();
+    seen.dedup();
+    seen.len()
+}
+
+/// Suggests one of `presets` (convention presets, in their fixed order) for the file.
+pub fn suggest(info: &FileInfo, presets: &[Preset]) -> Suggestion {
+    let total = stored(info, 0..info.channels.len());
+    let scored: Vec<(usize, PassesRead)> = presets
+        .iter()
+        .map(|p| {
+            let read = passes_read(info, p);
+            let score = stored(info, read.iter().flat_map(|(_, c)| c.iter().copied()));
+            (score, read)
+        })
+        .collect();
+    // The first of the highest scores: ties go to the fixed order.
+    let best = scored
+        .iter()
+        .enumerate()
+        .fold(None, |best: Option<usize>, (i, (score, _))| match best {
+            Some(b) if scored[b].0 >= *score => Some(b),
+            _ if *score > 0 => Some(i),
+            _ => best,
+        });
+    let candidates = candidates(info, presets);
+    let Some(best) = best else {
+        return Suggestion {
+            preset: None,
+            found: Vec::new(),
+            matched: 0,
+            channels: total,
+            tied: Vec::new(),
+            reason: format!(
+                "no preset names any of the file's channels ({}); write one (README, \
+                 Presets)",
+                info.channel_list()
+            ),
+            candidates,
+        };
+    };
+    let (score, read) = &scored[best];
+    let name = presets[best].name.clone();
+    let tied: Vec<String> = scored
+        .iter()
+        .enumerate()
+        .filter(|(i, (s, _))| *i != best && s == score)
+        .map(|(i, _)| presets[i].name.clone())
+        .collect();
+    let found: Vec<Found> = read
+        .iter()
+        .map(|(pass, channels)| Found {
+            pass,
+            channels: channels.iter().map(|&c| shown(info, c)).collect(),
+        })
+        .collect();
+    let colour_only = found.iter().all(|f| f.pass == "color");
+    let mut reason = if colour_only {
+        format!(
+            "colour only ({} as color, alike in every preset that names them): no preset \
+             finds depth or motion channels in this file",
+            found[0].channels.join(", ")
+        )
+    } else {
+        format!(
+            "{}: {score} of the file's {total} channels",
+            describe_found(&found)
+        )
+    };
+    if !tied.is_empty() && !colour_only {
+        let order: Vec<&str> = presets.iter().map(|p| p.name.as_str()).collect();
+        reason.push_str(&format!(
+            "; {} read as many, and ties go to the first of {}",
+            tied.join(", "),
+            order.join(", ")
+        ));
+    }
+    Suggestion {
+        preset: Some(name),
+        found,
+        matched: *score,
+        channels: total,
+        tied,
+        reason,
+        // Other readings only where the winner's reading leaves the question open.
+        candidates: if colour_only { candidates } else { Vec::new() },
+    }
+}
+
+/// `R, G, B as color; backward.u, backward.v as velocity and prev; ...`: passes reading the
+/// same channels are named together.
+fn describe_found(found: &[Found]) -> String {
+    let mut groups: Vec<(&[String], Vec<&str>)> = Vec::new();
+    for f in found {
+        match groups.iter_mut().find(|(c, _)| *c == f.channels.as_slice()) {
+            Some((_, passes)) => passes.push(f.pass),
+            None => groups.push((&f.channels, vec![f.pass])),
+        }
+    }
+    groups
+        .iter()
+        .map(|(channels, passes)| format!("{} as {}", channels.join(", "), passes.join(" and ")))
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// Readings of an 8/16-bit integer image as vectors or a depth map (see the module doc).
+fn candidates(info: &FileInfo, presets: &[Preset]) -> Vec<Candidate> {
+    if !matches!(info.kind, FileKind::Image { float: false, .. }) {
+        return Vec::new();
+    }
+    // Grey: every channel but alpha reads one stored plane (R = G = B = Y), so it cannot
+    // hold two components of motion.
+    let grey = stored(
+        info,
+        (0..info.channels.len()).filter(|&c| info.channels[c].name != "A"),
+    ) == 1;
+    let mut out = Vec::new();
+    for preset in presets.iter().filter(|_| !grey) {
+        for (pass, spec) in [
+            ("velocity", &preset.velocity),
+            ("prev", &preset.prev),
+            ("next", &preset.next),
+        ] {
+            let offset = spec.encoding == Encoding::Rsmb || spec.zero != 0.0;
+            let Ok(Some(channels)) = find_channels(info, &spec.channels, 2, &[], None) else {
+                continue;
+            };
+            let channels: Vec<usize> = channels.into_iter().take(2).flatten().collect();
+            if offset && decodes(spec, pass, info.channels[channels[0]].sample_type) {
+                let names: Vec<String> = channels.iter().map(|&c| shown(info, c)).collect();
+                out.push(Candidate {
+                    preset: preset.name.clone(),
+                    role: "vectors",
+                    reason: vector_reason(info, spec, &names),
+                    channels: names,
+                });
+                break;
+            }
+        }
+    }
+    if grey {
+        for preset in presets {
+            let (Some(near), Some(far)) = (preset.depth.near, preset.depth.far) else {
+                continue;
+            };
+            if let Some(c) = preset.depth.channels.iter().find_map(|n| info.find(n)) {
+                let name = shown(info, c);
+                out.push(Candidate {
+                    preset: preset.name.clone(),
+                    role: "depth",
+                    reason: format!("{name} as depth: grey 0..1 = {near}..{far} scene units"),
+                    channels: vec![name],
+                });
+            }
+        }
+    }
+    out
+}
+
+fn vector_reason(info: &FileInfo, spec: &VectorSpec, names: &[String]) -> String {
+    let meaning = match spec.meaning {
+        Meaning::Velocity => "velocity p(0) - p(-1)",
+        Meaning::ToPrev => "offsets to the previous frame",
+        Meaning::ToNext => "offsets to the next frame",
+        Meaning::FromNext => "p(0) - p(+1)",
+        Meaning::PrevPosition => "previous positions",
+        Meaning::NextPosition => "next positions",
+    };
+    let units = match spec.units {
+        Units::Pixels => "pixels",
+        Units::Normalized => "fractions of the frame",
+    };
+    let y = if spec.y_up { ", y up" } else { "" };
+    let mut reason = match spec.encoding {
+        Encoding::Plain => format!(
+            "{} as {meaning}: (value - {}) x {} {units}{y}, {} is still",
+            names.join(", "),
+            spec.zero,
+            spec.scale,
+            spec.zero
+        ),
+        Encoding::Rsmb => format!(
+            "{} as {meaning} in RE:Vision's codes (127 still at 8 bits, 32767 at 16; the top \
+             code is +Max Displace){y}; needs max_displace, which the file does not store",
+            names.join(", ")
+        ),
+    };
+    if !spec.validity_alpha.is_empty() {
+        match spec.validity_alpha.iter().find_map(|n| info.find(n)) {
+            Some(c) => reason.push_str(&format!(
+                "; {} below full-on marks a vector invalid",
+                shown(info, c)
+            )),
+            None => reason.push_str(&format!(
+                "; no {}, so every vector reads as valid",
+                spec.validity_alpha.join(" or ")
+            )),
+        }
+    }
+    reason
+}

@@ -1,0 +1,341 @@
+//! Multi-view (stereo) EXRs: the default view is read, `--view` reads another, and a view
+//! that cannot be settled stops the run before anything is written, listing the views.
+//! Both of OpenEXR's schemes (MultiViewOpenEXR.html): one part with a `multiView` attribute
+//! and view-named channels, and parts with a `view` attribute each.
+
+use std::path::Path;
+
+use crate::support::{
+    noise, read_exr_reference, s, shutter, snapshot, stderr, stdout, write_exr, write_parts, Part,
+};
+
+const W: usize = 32;
+const H: usize = 24;
+
+/// One view's canonical passes: colour, depth and a velocity that blurs.
+fn view_passes(seed: u32) -> Vec<(&'static str, Vec<f32>)> {
+    let n = W * H;
+    vec![
+        ("R", noise(n, seed, 0.0, 1.0)),
+        ("G", noise(n, seed + 1, 0.0, 1.0)),
+        ("B", noise(n, seed + 2, 0.0, 1.0)),
+        ("A", vec![1.0; n]),
+        ("Z", noise(n, seed + 3, 1.0, 5.0)),
+        ("velocity.X", noise(n, seed + 4, -6.0, 6.0)),
+        ("velocity.Y", noise(n, seed + 5, -3.0, 3.0)),
+    ]
+}
+
+const LEFT: u32 = 10;
+const RIGHT: u32 = 50;
+
+fn named(
+    passes: Vec<(&str, Vec<f32>)>,
+    rename: impl Fn(&str) -> String,
+) -> Vec<(String, Vec<f32>)> {
+    passes.into_iter().map(|(n, p)| (rename(n), p)).collect()
+}
+
+/// `R` → `right.R`, `velocity.X` → `velocity.right.X`: the view as the penultimate component.
+fn in_view(view: &str) -> impl Fn(&str) -> String + '_ {
+    move |name: &str| match name.rsplit_once('.') {
+        Some((layer, channel)) => format!("{layer}.{view}.{channel}"),
+        None => format!("{view}.{name}"),
+    }
+}
+
+/// The single-part scheme: `multiView = [left, right]`, left's channels plain (the default
+/// view), right's named `right.R`, `velocity.right.X`, ...
+fn single_part_stereo(path: &Path) {
+    let mut channels = named(view_passes(LEFT), |n| n.to_string());
+    channels.extend(named(view_passes(RIGHT), in_view("right")));
+    write_parts(
+        path,
+        (W, H),
+        vec![Part {
+            name: None,
+            view: None,
+            multi_view: Some(&["left", "right"]),
+            channels,
+        }],
+    );
+}
+
+/// Each view as a plain file of one view, to compare with.
+fn mono(dir: &Path) -> (String, String) {
+    let left = dir.join("left.exr");
+    let right = dir.join("right.exr");
+    write_exr(&left, W, H, view_passes(LEFT));
+    write_exr(&right, W, H, view_passes(RIGHT));
+    (s(&left), s(&right))
+}
+
+/// Runs `shutter blur` (reconstruct) on `color` with `extra` flags into `out`.
+fn blur(color: &str, out: &Path, extra: &[&str]) -> std::process::Output {
+    let out = s(out);
+    let mut args = vec![
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        color,
+        "-o",
+        &out,
+    ];
+    args.extend(extra);
+    shutter(&args)
+}
+
+fn assert_same_image(a: &Path, b: &Path) {
+    assert_eq!(
+        read_exr_reference(a),
+        read_exr_reference(b),
+        "{a:?} and {b:?} differ"
+    );
+}
+
+fn assert_different_images(a: &Path, b: &Path) {
+    assert_ne!(
+        read_exr_reference(a),
+        read_exr_reference(b),
+        "{a:?} and {b:?} are the same"
+    );
+}
+
+#[test]
+fn single_part_stereo_reads_the_default_view_and_view_right_the_other() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let stereo = d.join("stereo.exr");
+    single_part_stereo(&stereo);
+    let (left, right) = mono(d);
+    for (input, out, extra) in [
+        (s(&stereo), "default.exr", &[][..]),
+        (s(&stereo), "right.exr", &["--view", "right"][..]),
+        (s(&stereo), "left.exr", &["--view", "left"][..]),
+        (left, "mono-left.exr", &[][..]),
+        (right, "mono-right.exr", &[][..]),
+    ] {
+        let o = blur(&input, &d.join("out").join(out), extra);
+        assert!(o.status.success(), "{out}: {}", stderr(&o));
+    }
+    let out = |name: &str| d.join("out").join(name);
+    assert_same_image(&out("default.exr"), &out("mono-left.exr"));
+    assert_same_image(&out("left.exr"), &out("mono-left.exr"));
+    assert_same_image(&out("right.exr"), &out("mono-right.exr"));
+    assert_different_images(&out("right.exr"), &out("left.exr"));
+}
+
+#[test]
+fn multi_part_stereo_reads_the_first_parts_view_and_view_left_the_other() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let stereo = d.join("stereo.exr");
+    // The document's "simple stereo EXR, with default view right": right's part first.
+    write_parts(
+        &stereo,
+        (W, H),
+        vec![
+            Part {
+                name: Some("rgb-right"),
+                view: Some("right"),
+                multi_view: None,
+                channels: named(view_passes(RIGHT), |n| n.to_string()),
+            },
+            Part {
+                name: Some("rgb-left"),
+                view: Some("left"),
+                multi_view: None,
+                channels: named(view_passes(LEFT), |n| n.to_string()),
+            },
+        ],
+    );
+    let (left, right) = mono(d);
+    for (input, out, extra) in [
+        (s(&stereo), "default.exr", &[][..]),
+        (s(&stereo), "left.exr", &["--view", "left"][..]),
+        (left, "mono-left.exr", &[][..]),
+        (right, "mono-right.exr", &[][..]),
+    ] {
+        let o = blur(&input, &d.join("out").join(out), extra);
+        assert!(o.status.success(), "{out}: {}", stderr(&o));
+    }
+    let out = |name: &str| d.join("out").join(name);
+    assert_same_image(&out("default.exr"), &out("mono-right.exr"));
+    assert_same_image(&out("left.exr"), &out("mono-left.exr"));
+    assert_different_images(&out("default.exr"), &out("left.exr"));
+}
+
+#[test]
+fn an_unknown_view_stops_the_run_listing_the_views_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let stereo = d.join("stereo.exr");
+    single_part_stereo(&stereo);
+    let out = d.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("keep.txt"), "already here").unwrap();
+    let before = snapshot(&out);
+    let o = blur(&s(&stereo), &out.join("o.exr"), &["--view", "centre"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    for needle in [
+        s(&stereo).as_str(),
+        "'centre'",
+        "left (default), right",
+        "--view",
+    ] {
+        assert!(err.contains(needle), "'{needle}' not in: {err}");
+    }
+    assert_eq!(snapshot(&out), before);
+}
+
+#[test]
+fn a_multi_part_file_whose_first_part_has_no_view_needs_view() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let stereo = d.join("stereo.exr");
+    // Against the document's advice, a part of no view comes first: no default view.
+    write_parts(
+        &stereo,
+        (W, H),
+        vec![
+            Part {
+                name: Some("notes"),
+                view: None,
+                multi_view: None,
+                channels: vec![("notes.N".to_string(), vec![0.5; W * H])],
+            },
+            Part {
+                name: Some("rgb-left"),
+                view: Some("left"),
+                multi_view: None,
+                channels: named(view_passes(LEFT), |n| n.to_string()),
+            },
+            Part {
+                name: Some("rgb-right"),
+                view: Some("right"),
+                multi_view: None,
+                channels: named(view_passes(RIGHT), |n| n.to_string()),
+            },
+        ],
+    );
+    let out = d.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let before = snapshot(&out);
+    let o = blur(&s(&stereo), &out.join("o.exr"), &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    for needle in [s(&stereo).as_str(), "left, right", "no default", "--view"] {
+        assert!(err.contains(needle), "'{needle}' not in: {err}");
+    }
+    assert_eq!(snapshot(&out), before);
+
+    // info describes the file, and matches presets only once a view is chosen.
+    let o = shutter(&["info", &s(&stereo)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(
+        text.contains("no default view (its first part has no view attribute)"),
+        "{text}"
+    );
+    assert!(text.contains("choose a view with --view"), "{text}");
+    let o = shutter(&["info", "--json", &s(&stereo)]);
+    let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert!(json[0]["suggestion"].is_null());
+    assert!(json[0]["views"]["default"].is_null());
+
+    let (_, right) = mono(d);
+    let o = blur(&s(&stereo), &out.join("o.exr"), &["--view", "right"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = blur(&right, &out.join("mono.exr"), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_same_image(&out.join("o.exr"), &out.join("mono.exr"));
+}
+
+#[test]
+fn dof_reads_the_view_asked_for() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let stereo = d.join("stereo.exr");
+    single_part_stereo(&stereo);
+    let (_, right) = mono(d);
+    let lens = [
+        "--focal-length",
+        "200",
+        "--f-stop",
+        "1",
+        "--focus-distance",
+        "1",
+    ];
+    for (input, out, view) in [(s(&stereo), "right.exr", true), (right, "mono.exr", false)] {
+        let out = s(&d.join("out").join(out));
+        let mut args = vec!["dof", "--color", &input, "-o", &out];
+        args.extend(lens);
+        if view {
+            args.extend(["--view", "right"]);
+        }
+        let o = shutter(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let out = d.join("out");
+    assert_same_image(&out.join("right.exr"), &out.join("mono.exr"));
+    // Depth of field changed the frame: the comparison is not of two copies of the input.
+    assert_ne!(
+        read_exr_reference(&out.join("mono.exr")),
+        read_exr_reference(&d.join("right.exr"))
+            .into_iter()
+            .filter(|(n, _)| ["A", "B", "G", "R"].contains(&n.as_str()))
+            .collect::<Vec<_>>()
+    );
+}
+
+#[test]
+fn view_on_files_without_views_is_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (left, _) = mono(d);
+    let o = blur(&left, &d.join("o.exr"), &["--view", "right", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let warnings = report["warnings"].to_string();
+    assert!(warnings.contains("no input file holds views"), "{warnings}");
+}
+
+#[test]
+fn info_shows_the_views_and_matches_presets_in_the_view_asked_for() {
+    let dir = tempfile::tempdir().unwrap();
+    let stereo = dir.path().join("stereo.exr");
+    single_part_stereo(&stereo);
+    let o = shutter(&["info", &s(&stereo)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    for needle in [
+        "views:          left (default), right; presets matched in view left",
+        "right.R",
+        "view right",
+        "suggested:      shutter",
+    ] {
+        assert!(text.contains(needle), "'{needle}' not in:\n{text}");
+    }
+    let o = shutter(&["info", "--json", "--view", "right", &s(&stereo)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(
+        json[0]["views"]["names"],
+        serde_json::json!(["left", "right"])
+    );
+    assert_eq!(json[0]["views"]["default"], "left");
+    assert_eq!(json[0]["views"]["read"], "right");
+    assert_eq!(json[0]["suggestion"]["preset"], "shutter");
+    // In view right, shutter reads right's colour, depth and velocity: 7 channels.
+    assert_eq!(json[0]["suggestion"]["matched"], 7);
+
+    let o = shutter(&["info", "--view", "centre", &s(&stereo)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("left (default), right"),
+        "{}",
+        stderr(&o)
+    );
+}
