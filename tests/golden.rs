@@ -35,7 +35,7 @@ const LENS: Lens = Lens {
 };
 
 /// A truth scene's passes, read as `shutter blur` reads them.
-fn scene_passes(name: &str) -> Frame {
+pub(crate) fn scene_passes(name: &str) -> Frame {
     let dir = small_scene(name, SIZE.0, SIZE.1, 1, 1);
     let role = |r: &str| Some(PathPattern::parse(&role_pattern(dir.path(), r)).unwrap());
     let inputs = Inputs {

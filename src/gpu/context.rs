@@ -8,6 +8,7 @@ use wgpu::{Backends, DeviceType};
 
 use super::reconstruct::ReconstructPass;
 use super::stage::Stage;
+use super::stretch::StretchPass;
 use super::GpuTimes;
 
 /// The backends with what the passes need: compute, float storage and (for the scatter
@@ -40,6 +41,8 @@ pub struct Gpu {
     pub(crate) blend: Stage,
     /// reconstruct's gather, compiled on first use (a run without motion blur never needs it).
     pub(crate) reconstruct: OnceLock<ReconstructPass>,
+    /// stretch's stages, compiled on first use.
+    pub(crate) stretch: OnceLock<StretchPass>,
     /// Stages with a twin that ran on the CPU for a frame (see [`Gpu::note_cpu_stage`]).
     stages_on_cpu: AtomicU64,
     /// The first stage that ran on the CPU instead, and why ([`Gpu::note_cpu_stage`]).
@@ -85,6 +88,12 @@ fn rank(device_type: DeviceType) -> u8 {
 /// scatter twins will add float atomics here.
 fn required_features() -> wgpu::Features {
     wgpu::Features::empty()
+}
+
+/// Features requested where the adapter has them, whose stages run on the CPU where it has
+/// not: blending `Rgba32Float` targets, for stretch's rasterise.
+fn optional_features() -> wgpu::Features {
+    wgpu::Features::FLOAT32_BLENDABLE
 }
 
 /// The limits requested: WebGPU's defaults, with the adapter's own largest storage binding
@@ -153,7 +162,7 @@ impl Gpu {
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("shutter"),
-            required_features: required_features(),
+            required_features: required_features() | (adapter.features() & optional_features()),
             required_limits: required_limits(&adapter.limits()),
             ..wgpu::DeviceDescriptor::default()
         }))
@@ -176,6 +185,7 @@ impl Gpu {
             queue,
             info,
             reconstruct: OnceLock::new(),
+            stretch: OnceLock::new(),
             stages_on_cpu: AtomicU64::new(0),
             fallback: Mutex::new(None),
             profiling: AtomicBool::new(false),

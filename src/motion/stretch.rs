@@ -49,7 +49,7 @@ pub const STILL: f32 = 0.5;
 /// Rows per drawing band.
 const BAND: usize = 32;
 /// At most this many samples along a pixel's motion in the texture pre-blur.
-const MOST_SAMPLES: usize = 64;
+pub const MOST_SAMPLES: usize = 64;
 /// A vertex moves at most this many pixels over the exposure (its move is cut to this
 /// length, direction kept), as reconstruct's blur radius k is 128 px by default. A triangle's
 /// cost grows with its moved vertex's distance, and velocities up to the numeric policy's
@@ -105,9 +105,11 @@ impl Default for StretchParams {
     }
 }
 
-/// Everything stretch's stages read besides their buffers, as plain numbers: the shape of
-/// the uniform its GPU twin will take (keep the two in sync).
+/// Everything stretch's stages read besides their buffers, as plain numbers: the uniform of
+/// its GPU twin (keep in sync with `struct StretchConfig` in src/gpu/stretch.wgsl; a test
+/// there compares the fields).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]
 #[repr(C)]
 pub struct StretchConfig {
     /// Frame size, pixels.
@@ -162,7 +164,7 @@ impl StretchConfig {
 
     /// Whether a pixel of velocity `v` streaks far enough over the exposure to move.
     #[inline]
-    fn moving(&self, [x, y]: [f32; 2]) -> bool {
+    pub fn moving(&self, [x, y]: [f32; 2]) -> bool {
         (x * x + y * y).sqrt() * self.shutter >= STILL
     }
 
@@ -181,10 +183,37 @@ fn mix(a: f32, b: f32, t: f32) -> f32 {
 /// Applies the filter: [`texture_blur`] → [`move_vertices`] → [`rasterise`]. The frame must
 /// hold colour, depth and velocity; the output holds colour alone. A frame in which nothing
 /// moves keeps its colour untouched.
-pub fn stretch(
+pub fn stretch(frame: Frame, params: &StretchParams, shutter: impl Into<super::Shutter>) -> Frame {
+    stretch_with(frame, params, shutter, stages)
+}
+
+/// The three stages on the CPU: the colour planes (R, G, B, A) drawn over the sharp frame.
+pub fn stages(
+    config: &StretchConfig,
+    planes: &[Vec<f32>; 4],
+    z: &[f32],
+    v: &[[f32; 2]],
+) -> [Vec<f32>; 4] {
+    // The sharp frame to draw first: pre-blurred along each pixel's motion if asked.
+    let mut out = if config.texture_blur != 0 {
+        texture_blur(config, planes, z, v)
+    } else {
+        planes.clone()
+    };
+    let vertices = move_vertices(config, z, v);
+    rasterise(config, planes, z, &vertices, &mut out);
+    out
+}
+
+/// [`stretch`] with its stages run by `run` (the CPU's [`stages`], or the GPU twin's,
+/// `crate::gpu::stretch`), given the config, the colour planes (R, G, B, A: an opaque alpha
+/// where the frame has none), depth and velocity; it returns the four planes. Only frames
+/// in which something moves reach it.
+pub fn stretch_with(
     mut frame: Frame,
     params: &StretchParams,
     shutter: impl Into<super::Shutter>,
+    run: impl FnOnce(&StretchConfig, &[Vec<f32>; 4], &[f32], &[[f32; 2]]) -> [Vec<f32>; 4],
 ) -> Frame {
     let (width, height) = (frame.width, frame.height);
     frame.prev = None;
@@ -218,15 +247,7 @@ pub fn stretch(
         color.b,
         color.a.unwrap_or_else(|| vec![1.0; n]),
     ];
-    // The sharp frame to draw first: pre-blurred along each pixel's motion if asked.
-    let mut out = if config.texture_blur != 0 {
-        texture_blur(&config, &planes, &z, &v)
-    } else {
-        planes.clone()
-    };
-    let vertices = move_vertices(&config, &z, &v);
-    rasterise(&config, &planes, &z, &vertices, &mut out);
-    let [r, g, b, a] = out;
+    let [r, g, b, a] = run(&config, &planes, &z, &v);
     frame.color = Some(Color {
         r,
         g,
@@ -471,7 +492,7 @@ pub fn rasterise(
 
 /// The pixel indices of triangle `t`: quad (qx, qy) has corners 00, 10, 01, 11 (pixel
 /// centres); its first triangle is 00-10-11, its second 00-11-01.
-fn triangle_corners(t: usize, quads_across: usize, width: usize) -> [usize; 3] {
+pub fn triangle_corners(t: usize, quads_across: usize, width: usize) -> [usize; 3] {
     let quad = t / 2;
     let (qx, qy) = (quad % quads_across, quad / quads_across);
     let i = qy * width + qx;

@@ -1,0 +1,465 @@
+// stretch on the GPU: the twin of src/motion/stretch.rs (texture_blur → move_vertices →
+// rasterise), read side by side with it. src/gpu/stretch.rs says how the stages are run and
+// why rasterise is a render pipeline.
+//
+// Compute bindings (group 0), the CPU stages' arguments in order: config, planes (R, G, B, A
+// one after the other), z, v (interleaved x, y: the CPU's [[f32; 2]]), then the outputs:
+// blurred (four planes), vertices (shift x, shift y, alpha per pixel: the CPU's
+// ([f32; 2], f32)), keys (one per triangle) and range (the frame's range per channel).
+// Render bindings (group 0, read-only): config, planes, z, blurred, vertices, order.
+
+// Keep in sync with StretchConfig in src/motion/stretch.rs (ten 4-byte words; a test in
+// src/gpu/stretch.rs compares the fields).
+struct StretchConfig {
+    width: u32,
+    height: u32,
+    shutter: f32,
+    t0: f32,
+    t1: f32,
+    tear: f32,
+    extent: f32,
+    min_alpha: f32,
+    depth_limit: f32,
+    texture_blur: u32,
+}
+
+// The CPU's constants (a test checks they match).
+const STILL: f32 = 0.5;
+const MOST_SAMPLES: u32 = 64u;
+const MAX_SHIFT: f32 = 128.0;
+// A triangle that is not drawn (the ordered form of a NaN no depth can be).
+const NOT_DRAWN: u32 = 0u;
+// +∞ (WGSL has no literal for it).
+fn infinity() -> f32 {
+    return bitcast<f32>(0x7f800000u);
+}
+// Invocations per workgroup of the 1-D stages; rows of 65535 workgroups beyond that.
+const GROUP: u32 = 256u;
+
+// ---- compute stages -------------------------------------------------------------------------
+
+@group(0) @binding(0) var<uniform> config: StretchConfig;
+@group(0) @binding(1) var<storage, read> planes: array<f32>;
+@group(0) @binding(2) var<storage, read> z: array<f32>;
+@group(0) @binding(3) var<storage, read> v: array<vec2<f32>>;
+@group(0) @binding(4) var<storage, read_write> blurred: array<f32>;
+@group(0) @binding(5) var<storage, read_write> vertices: array<f32>;
+@group(0) @binding(6) var<storage, read_write> keys: array<u32>;
+// Per channel c: [2c] the ordered max, [2c + 1] the complement of the ordered min; both taken
+// with atomicMax on a cleared buffer (min and max commute: the result does not depend on the
+// order the invocations run in).
+@group(0) @binding(7) var<storage, read_write> range: array<atomic<u32>, 8>;
+
+fn pixels() -> u32 {
+    return config.width * config.height;
+}
+
+// An f32 as a u32 of the same order (total order: -0 below +0).
+fn ordered(f: f32) -> u32 {
+    let b = bitcast<u32>(f);
+    return select(b | 0x80000000u, ~b, (b & 0x80000000u) != 0u);
+}
+
+fn unordered(u: u32) -> f32 {
+    return bitcast<f32>(select(~u, u & 0x7fffffffu, (u & 0x80000000u) != 0u));
+}
+
+fn moving(w: vec2<f32>) -> bool {
+    return sqrt(w.x * w.x + w.y * w.y) * config.shutter >= STILL;
+}
+
+// The flat index of a 1-D invocation dispatched as rows of workgroups.
+fn flat(id: vec3<u32>, groups: vec3<u32>) -> u32 {
+    return id.x + id.y * groups.x * GROUP;
+}
+
+var<workgroup> lows: array<array<f32, 4>, 256>;
+var<workgroup> highs: array<array<f32, 4>, 256>;
+
+// The frame's range per channel, the CPU's fold in texture_blur: a tree per workgroup, then
+// one atomic per channel and end.
+@compute @workgroup_size(256)
+fn frame_range(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let i = flat(id, groups);
+    let n = pixels();
+    for (var c = 0u; c < 4u; c++) {
+        if i < n {
+            lows[local][c] = planes[c * n + i];
+            highs[local][c] = planes[c * n + i];
+        } else {
+            lows[local][c] = infinity();
+            highs[local][c] = -infinity();
+        }
+    }
+    workgroupBarrier();
+    for (var half = GROUP / 2u; half > 0u; half /= 2u) {
+        if local < half {
+            for (var c = 0u; c < 4u; c++) {
+                lows[local][c] = min(lows[local][c], lows[local + half][c]);
+                highs[local][c] = max(highs[local][c], highs[local + half][c]);
+            }
+        }
+        workgroupBarrier();
+    }
+    if local == 0u {
+        for (var c = 0u; c < 4u; c++) {
+            atomicMax(&range[2u * c], ordered(highs[0][c]));
+            atomicMax(&range[2u * c + 1u], ~ordered(lows[0][c]));
+        }
+    }
+}
+
+// Stage 1: each moving pixel's colour averaged along its own motion over the exposure
+// (bilinear samples, leaving out nearer surfaces), clamped to the frame's range per channel;
+// still pixels keep theirs.
+@compute @workgroup_size(8, 8)
+fn texture_blur(@builtin(global_invocation_id) id: vec3<u32>) {
+    let width = config.width;
+    let height = config.height;
+    if id.x >= width || id.y >= height {
+        return;
+    }
+    let n = pixels();
+    let x = id.x;
+    let y = id.y;
+    let i = y * width + x;
+    var own: array<f32, 4>;
+    for (var c = 0u; c < 4u; c++) {
+        own[c] = planes[c * n + i];
+        blurred[c * n + i] = own[c];
+    }
+    if !moving(v[i]) {
+        return;
+    }
+    let t0 = config.t0;
+    let t1 = config.t1;
+    let vx = v[i].x;
+    let vy = v[i].y;
+    let length = sqrt(vx * vx + vy * vy) * (t1 - t0);
+    let samples = clamp(u32(min(ceil(length), 1.0e6)) + 1u, 2u, MOST_SAMPLES);
+    var sum = array<f32, 4>(0.0, 0.0, 0.0, 0.0);
+    var total = 0.0;
+    for (var k = 0u; k < samples; k++) {
+        let t = t0 + (t1 - t0) * (f32(k) + 0.5) / f32(samples);
+        // Sample points are pixel-centre coordinates: pixel (x, y) sits at (x, y).
+        let px = f32(x) + vx * t;
+        let py = f32(y) + vy * t;
+        let fx = floor(px);
+        let fy = floor(py);
+        let ax = px - fx;
+        let ay = py - fy;
+        for (var corner = 0u; corner < 4u; corner++) {
+            let dx = corner & 1u;
+            let dy = corner >> 1u;
+            let wx = select(1.0 - ax, ax, dx == 1u);
+            let wy = select(1.0 - ay, ay, dy == 1u);
+            let w = wx * wy;
+            let sx = fx + f32(dx);
+            let sy = fy + f32(dy);
+            if !(w > 0.0 && sx >= 0.0 && sy >= 0.0 && sx < f32(width) && sy < f32(height)) {
+                continue;
+            }
+            let j = u32(sy) * width + u32(sx);
+            if z[j] * config.tear < z[i] {
+                continue;
+            }
+            for (var c = 0u; c < 4u; c++) {
+                sum[c] += w * (planes[c * n + j] - own[c]);
+            }
+            total += w;
+        }
+    }
+    if total > 0.0 {
+        for (var c = 0u; c < 4u; c++) {
+            let lo = unordered(~atomicLoad(&range[2u * c + 1u]));
+            let hi = unordered(atomicLoad(&range[2u * c]));
+            blurred[c * n + i] = clamp(own[c] + sum[c] / total, lo, hi);
+        }
+    }
+}
+
+// Stage 2: per vertex (pixel centre), its move over the exposure and its alpha. A moving
+// silhouette vertex (one with a farther neighbour beyond the tear ratio) moves to t0 where
+// its motion faces away from the nearer surface's normal, to t1 where it faces along it;
+// the others stay, opaque.
+@compute @workgroup_size(256)
+fn move_vertices(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let i = flat(id, groups);
+    if i >= pixels() {
+        return;
+    }
+    let width = i32(config.width);
+    let height = i32(config.height);
+    var shift = vec2<f32>(0.0, 0.0);
+    var alpha = 1.0;
+    let w = v[i];
+    if moving(w) {
+        let x = i32(i % config.width);
+        let y = i32(i / config.width);
+        var normal = vec2<f32>(0.0, 0.0);
+        let steps = array<vec2<i32>, 4>(
+            vec2<i32>(-1, 0),
+            vec2<i32>(1, 0),
+            vec2<i32>(0, -1),
+            vec2<i32>(0, 1),
+        );
+        for (var k = 0u; k < 4u; k++) {
+            let nx = x + steps[k].x;
+            let ny = y + steps[k].y;
+            if nx < 0 || ny < 0 || nx >= width || ny >= height {
+                continue;
+            }
+            let j = u32(ny) * config.width + u32(nx);
+            if z[j] > z[i] * config.tear {
+                normal += vec2<f32>(steps[k]);
+            }
+        }
+        let facing = w.x * normal.x + w.y * normal.y;
+        var t = 0.0;
+        if facing < 0.0 {
+            t = config.t0;
+        } else if facing > 0.0 {
+            t = config.t1;
+        }
+        if t != 0.0 {
+            shift = vec2<f32>(w.x * t, w.y * t);
+            var length = sqrt(shift.x * shift.x + shift.y * shift.y);
+            if length > MAX_SHIFT {
+                let cut = MAX_SHIFT / length;
+                shift = vec2<f32>(shift.x * cut, shift.y * cut);
+                length = MAX_SHIFT;
+            }
+            alpha = min(max(1.0 - length / config.extent, config.min_alpha), 1.0);
+        }
+    }
+    vertices[3u * i] = shift.x;
+    vertices[3u * i + 1u] = shift.y;
+    vertices[3u * i + 2u] = alpha;
+}
+
+// The pixel indices of triangle t: quad (qx, qy) has corners 00, 10, 01, 11 (pixel centres);
+// its first triangle is 00-10-11, its second 00-11-01 (triangle_corners on the CPU).
+fn triangle_corners(t: u32) -> vec3<u32> {
+    let across = config.width - 1u;
+    let quad = t / 2u;
+    let i = (quad / across) * config.width + quad % across;
+    if t % 2u == 0u {
+        return vec3<u32>(i, i + 1u, i + config.width + 1u);
+    }
+    return vec3<u32>(i, i + config.width + 1u, i + config.width);
+}
+
+// rasterise's choice of triangles: each untorn triangle with a moved vertex gets the ordered
+// depth of its farthest vertex as its key (the host sorts the drawn ones farthest first,
+// index as the tie-break, as the CPU does); the others NOT_DRAWN.
+@compute @workgroup_size(256)
+fn select_triangles(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let t = flat(id, groups);
+    let count = 2u * (config.width - 1u) * (config.height - 1u);
+    if config.width < 2u || config.height < 2u || t >= count {
+        return;
+    }
+    let corners = triangle_corners(t);
+    var moved = false;
+    var lo = infinity();
+    var hi = 0.0;
+    for (var k = 0u; k < 3u; k++) {
+        let c = corners[k];
+        moved = moved || vertices[3u * c] != 0.0 || vertices[3u * c + 1u] != 0.0;
+        lo = min(lo, z[c]);
+        hi = max(hi, z[c]);
+    }
+    let torn = max(lo, hi) > min(lo, hi) * config.tear;
+    keys[t] = select(NOT_DRAWN, ordered(hi), moved && !torn);
+}
+
+// ---- rasterise: a render pipeline ----------------------------------------------------------
+
+// What the draws read: the compute stages' outputs, read-only, and the order of triangles.
+@group(0) @binding(11) var<storage, read> moves: array<f32>;
+@group(0) @binding(12) var<storage, read> sharp: array<f32>;
+@group(0) @binding(13) var<storage, read> order: array<u32>;
+
+struct Corner {
+    @builtin(position) position: vec4<f32>,
+    @location(0) @interpolate(flat) triangle: u32,
+}
+
+// What a fragment writes: R, G, B with the blend alpha into the first target, the alpha plane
+// with the blend alpha into the second; both blend as `src·α + dst·(1 − α)` (the CPU's `mix`).
+struct Drawn {
+    @location(0) color: vec4<f32>,
+    @location(1) alpha: vec4<f32>,
+}
+
+// A pixel position (pixels, y down) in clip space.
+fn clip(p: vec2<f32>) -> vec4<f32> {
+    return vec4<f32>(p.x / f32(config.width) * 2.0 - 1.0, 1.0 - p.y / f32(config.height) * 2.0, 0.0, 1.0);
+}
+
+// The pixel under a fragment.
+fn pixel(position: vec4<f32>) -> u32 {
+    return u32(position.y) * config.width + u32(position.x);
+}
+
+// The sharp frame first (texture_blur's output, or the colour itself), one triangle over the
+// whole target, no blending.
+@vertex
+fn sharp_vertex(@builtin(vertex_index) k: u32) -> @builtin(position) vec4<f32> {
+    let corner = vec2<f32>(f32((k & 1u) * 2u), f32((k >> 1u) * 2u));
+    return clip(corner * vec2<f32>(f32(config.width), f32(config.height)));
+}
+
+@fragment
+fn sharp_fragment(@builtin(position) position: vec4<f32>) -> Drawn {
+    let i = pixel(position);
+    let n = pixels();
+    var c: array<f32, 4>;
+    for (var k = 0u; k < 4u; k++) {
+        c[k] = select(planes[k * n + i], sharp[k * n + i], config.texture_blur != 0u);
+    }
+    return Drawn(vec4<f32>(c[0], c[1], c[2], 0.0), vec4<f32>(c[3], 0.0, 0.0, 0.0));
+}
+
+// Stage 3: the triangles of `order`, in that order (the API blends in primitive order). Each
+// is drawn as its bounding box (two triangles, six vertices) grown to whole pixels and one
+// more, so the box holds every pixel centre the triangle can own with half a pixel to
+// spare; the fragment shader then decides coverage by the CPU's own rule. The
+// fixed-function rasteriser's sub-pixel snapping and tie rule never decide a pixel: the two
+// halves of a box share a diagonal, and exactly one of them takes a centre on it.
+@vertex
+fn draw_vertex(@builtin(vertex_index) index: u32) -> Corner {
+    let t = order[index / 6u];
+    let corners = triangle_corners(t);
+    var lo = vec2<f32>(infinity(), infinity());
+    var hi = -lo;
+    for (var k = 0u; k < 3u; k++) {
+        let i = corners[k];
+        let p = vec2<f32>(
+            f32(i % config.width) + 0.5 + moves[3u * i],
+            f32(i / config.width) + 0.5 + moves[3u * i + 1u],
+        );
+        lo = min(lo, p);
+        hi = max(hi, p);
+    }
+    lo = floor(lo) - 1.0;
+    hi = ceil(hi) + 1.0;
+    let box = array<u32, 6>(0u, 1u, 2u, 2u, 1u, 3u);
+    let b = box[index % 6u];
+    var out: Corner;
+    out.position = clip(vec2<f32>(select(lo.x, hi.x, (b & 1u) != 0u), select(lo.y, hi.y, (b & 2u) != 0u)));
+    out.triangle = t;
+    return out;
+}
+
+// `values[0] + w1·(values[1] − values[0]) + w2·(values[2] − values[0])`, kept within the
+// three values (the CPU's interpolate).
+fn interpolate(values: vec3<f32>, w1: f32, w2: f32) -> f32 {
+    let v = values.x + w1 * (values.y - values.x) + w2 * (values.z - values.x);
+    return clamp(v, min(values.x, min(values.y, values.z)), max(values.x, max(values.y, values.z)));
+}
+
+// Twice the signed area of (a, b, p) (the CPU rasteriser's `edge`).
+fn edge(a: vec2<f32>, b: vec2<f32>, p: vec2<f32>) -> f32 {
+    return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+}
+
+// Whether a centre exactly on edge a → b of a triangle of positive `edge` orientation
+// belongs to it (the CPU rasteriser's `top_left`).
+fn top_left(a: vec2<f32>, b: vec2<f32>) -> bool {
+    let d = b - a;
+    return (d.y == 0.0 && d.x < 0.0) || d.y > 0.0;
+}
+
+// What of `shift` survives the CPU's f64 sum `pos + shift` (pos = a pixel centre's
+// coordinate, ≥ ½): f64 rounds the sum to its ulp at pos, 2^(e − 52) for pos in [2^e, 2^(e+1)),
+// so a shift below pos·2^−29 is rounded to a multiple of that ulp here (exactly: dividing and
+// multiplying by a power of two, and WGSL's round is half-to-even as f64's sum), and a larger
+// one is kept (f32's 24 bits are exact in f64). Velocities of 1e−30 px next to 1e7 px (the
+// stress frames) make such shifts; the CPU draws them as if unmoved.
+fn absorbed(shift: f32, pos: f32) -> f32 {
+    let e = i32((bitcast<u32>(pos) >> 23u) & 0xffu) - 127;
+    let ulp = bitcast<f32>(u32(e - 52 + 127) << 23u);
+    if abs(shift) < ulp * 8388608.0 {
+        return round(shift / ulp) * ulp;
+    }
+    return shift;
+}
+
+// Corner i of a triangle, relative to the centre of pixel (x, y): the integer offset of the
+// two centres, exact, plus the corner's shift as the CPU's position holds it. Small numbers,
+// so the edge functions below keep nearly all of f32's precision where the CPU computes
+// absolute positions in f64.
+fn corner(i: u32, x: u32, y: u32) -> vec2<f32> {
+    let cx = i % config.width;
+    let cy = i / config.width;
+    let sx = absorbed(moves[3u * i], f32(cx) + 0.5);
+    let sy = absorbed(moves[3u * i + 1u], f32(cy) + 0.5);
+    return vec2<f32>(f32(i32(cx) - i32(x)) + sx, f32(i32(cy) - i32(y)) + sy);
+}
+
+// Each fragment of the box is tested by the CPU's rule (edge functions at the pixel centre,
+// ties to the CPU's top-left edges), which also gives the barycentric weights as the CPU
+// computes them; then it is depth-tested against the frame (`z ≤ depth · (1 + tolerance)`), and its colour and alpha
+// are interpolated from the corners' input colour and alpha.
+@fragment
+fn draw_fragment(in: Corner) -> Drawn {
+    let i = pixel(in.position);
+    let x = i % config.width;
+    let y = i / config.width;
+    let n = pixels();
+    let corners = triangle_corners(in.triangle);
+    var v = array<vec2<f32>, 3>(corner(corners.x, x, y), corner(corners.y, x, y), corner(corners.z, x, y));
+    let p = vec2<f32>(0.0, 0.0);
+    var area = edge(v[0], v[1], v[2]);
+    // Positive orientation, as the CPU swaps corners 1 and 2 (the weights follow).
+    var swapped = false;
+    if area < 0.0 {
+        let t = v[1];
+        v[1] = v[2];
+        v[2] = t;
+        area = -area;
+        swapped = true;
+    }
+    let e = vec3<f32>(edge(v[1], v[2], p), edge(v[2], v[0], p), edge(v[0], v[1], p));
+    let bias = vec3<bool>(top_left(v[1], v[2]), top_left(v[2], v[0]), top_left(v[0], v[1]));
+    let inside = (e > vec3<f32>(0.0)) | ((e == vec3<f32>(0.0)) & bias);
+    if !all(inside) || !(area > 0.0) {
+        discard;
+    }
+    var w1 = e.y / area;
+    var w2 = e.z / area;
+    if swapped {
+        let t = w1;
+        w1 = w2;
+        w2 = t;
+    }
+    let depth = interpolate(vec3<f32>(z[corners.x], z[corners.y], z[corners.z]), w1, w2);
+    if depth > z[i] * config.depth_limit {
+        discard;
+    }
+    let alpha = interpolate(
+        vec3<f32>(moves[3u * corners.x + 2u], moves[3u * corners.y + 2u], moves[3u * corners.z + 2u]),
+        w1,
+        w2,
+    );
+    var c: array<f32, 4>;
+    for (var k = 0u; k < 4u; k++) {
+        c[k] = interpolate(
+            vec3<f32>(planes[k * n + corners.x], planes[k * n + corners.y], planes[k * n + corners.z]),
+            w1,
+            w2,
+        );
+    }
+    return Drawn(vec4<f32>(c[0], c[1], c[2], alpha), vec4<f32>(c[3], 0.0, 0.0, alpha));
+}
