@@ -34,18 +34,20 @@
 //! plus the shifts), so unmoved edges are exact; a shift too small to survive the CPU's f64
 //! sum `x + ½ + shift` (1e-30 px velocities beside 1e7 px ones in the stress frames) is
 //! rounded as that sum rounds it (`absorbed` in stretch.wgsl). With that, the same rasteriser
-//! restated in Rust gave lavapipe's output bit for bit, and the GPU is within 3e-5 of the
-//! range of the CPU on every frame of the parity tests. The cost is the box's area instead of
+//! restated in Rust (a check written while building this, not kept) gave lavapipe's output
+//! bit for bit, and the GPU is within 3e-5 of the range of the CPU on every frame of the
+//! parity tests. The cost is the box's area instead of
 //! the triangle's — what the CPU's loop over the box pays too.
 //!
 //! What the render pipeline cannot do alone is the sort itself. `select_triangles` (compute)
 //! gives every triangle a key — the ordered bits of its farthest corner's depth, or "not
 //! drawn" — and the host sorts the drawn ones (key descending, index ascending: a total
 //! order, so any sort gives the same list) and uploads the list the vertex shader reads.
-//! The drawn triangles touch moving silhouettes only (a few per cent of 2·w·h at most in the
-//! truth scenes), and the host's parallel sort of them took well under the draw's time on
-//! lavapipe; a GPU sort (a bitonic network: log²(n)/2 dispatches) is the way to drop the
-//! round trip if it ever shows on a hardware GPU.
+//! The host's share is one pass over the keys (4 bytes a triangle, read back) and a parallel
+//! sort of the drawn ones, which touch moving silhouettes only; it was not timed apart from
+//! the draw (BENCHMARKS.md has the stage's whole time on lavapipe). A GPU sort (a bitonic
+//! network: log²(n)/2 dispatches) is the way to drop the round trip if it ever shows on a
+//! hardware GPU.
 //!
 //! Blending: the sharp frame is drawn first (one full-screen triangle, no blending), then the
 //! triangles, each fragment writing R, G, B with its alpha into one `Rgba32Float` target and
