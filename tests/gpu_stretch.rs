@@ -472,6 +472,24 @@ fn blur_stretch_on_wgpu_equals_the_cpu_within_the_tolerance() {
     }
 }
 
+/// `blur --algorithm stretch --backend wgpu` writes the same bytes with one and two threads
+/// (the host's share — the keys' sort, the planes' unpacking — is a total order or
+/// per-pixel, and the GPU blends in primitive order), for both anchors.
+#[test]
+fn stretch_on_wgpu_is_identical_for_one_and_two_threads() {
+    if gpu().is_none() {
+        return;
+    }
+    for anchor in ["centre", "rear"] {
+        crate::support::invariants::same_bytes_for_any_thread_count(
+            "stretch",
+            "crossing",
+            &["color", "depth", "velocity"],
+            &["--backend", "wgpu", "--anchor", anchor],
+        );
+    }
+}
+
 /// A frame too large for the device's storage bindings (made so by lowering the limit to
 /// 4 KiB with SHUTTER_GPU_MAX_BINDING) runs stretch's stages on the CPU: the CPU's bytes,
 /// counted in the summary and said in a warning with the reason.
