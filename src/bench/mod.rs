@@ -769,9 +769,14 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
 
 type Sheet = (String, Frame, Vec<(String, Frame)>, Frame);
 
-/// Whether a setting runs any stage that has a GPU twin: depth of field's, reconstruct's.
+/// Whether a setting runs any stage that has a GPU twin: depth of field's, reconstruct's,
+/// scatter's.
 fn has_twin(setting: &Setting) -> bool {
-    setting.params.dof.is_some() || setting.algorithm == Algorithm::Reconstruct
+    setting.params.dof.is_some()
+        || matches!(
+            setting.algorithm,
+            Algorithm::Reconstruct | Algorithm::Scatter
+        )
 }
 
 fn output_problem(path: &Path, detail: String) -> Error {
