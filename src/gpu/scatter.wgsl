@@ -280,18 +280,22 @@ fn arc_fit(p: vec2<f32>, now: vec2<f32>, q: vec2<f32>) -> Arc {
     if !(is_finite(radius) && radius < LARGEST_RADIUS) {
         return arc;
     }
-    // Angles about the centre: of p(0), p(+1) and p(−1), each relative to the centre.
+    // The angle of p(0) about the centre, and the angles from it to p(+1) and p(−1): the
+    // CPU's differences of absolute angles, each taken at once from the two vectors, u from
+    // the centre to p(0) and w to the other point (atan2 of their cross and dot products,
+    // formed without the cancellation of u × w for a radius of up to 10⁷ px).
     let theta = atan2(-offset.y, -offset.x);
-    let to_next = atan2(qr.y - offset.y, qr.x - offset.x);
-    let to_prev = atan2(pr.y - offset.y, pr.x - offset.x);
+    let radius2 = offset.x * offset.x + offset.y * offset.y;
+    let to_next = atan2(cross2(qr, offset), radius2 - dot(offset, qr));
+    let to_prev = atan2(cross2(pr, offset), radius2 - dot(offset, pr));
     var ahead: f32;
     var behind: f32;
     if turn > 0.0 {
-        ahead = rem_euclid(to_next - theta, TAU);
-        behind = -rem_euclid(theta - to_prev, TAU);
+        ahead = rem_euclid(to_next, TAU);
+        behind = -rem_euclid(-to_prev, TAU);
     } else {
-        ahead = -rem_euclid(theta - to_next, TAU);
-        behind = rem_euclid(to_prev - theta, TAU);
+        ahead = -rem_euclid(-to_next, TAU);
+        behind = rem_euclid(to_prev, TAU);
     }
     arc.ok = true;
     arc.centre = offset;
