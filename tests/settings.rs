@@ -266,10 +266,19 @@ fn shutter_offset_takes_names_numbers_a_preset_key_and_reports_bad_values() {
     assert_eq!(offset(&[], &plain).unwrap(), 0.0, "centred by default");
     assert_eq!(offset(&[], &preset).unwrap(), 0.5, "the preset key");
     assert_eq!(offset(&[("shutter-offset", "end")], &preset).unwrap(), -0.5);
-    assert_eq!(offset(&[("shutter-offset", "Centre")], &preset).unwrap(), 0.0);
-    assert_eq!(offset(&[("shutter-offset", "-0.25")], &plain).unwrap(), -0.25);
+    assert_eq!(
+        offset(&[("shutter-offset", "Centre")], &preset).unwrap(),
+        0.0
+    );
+    assert_eq!(
+        offset(&[("shutter-offset", "-0.25")], &plain).unwrap(),
+        -0.25
+    );
     for bad in ["0.7", "sideways", "nan"] {
-        let message = format!("{:#}", offset(&[("shutter-offset", bad)], &plain).unwrap_err());
+        let message = format!(
+            "{:#}",
+            offset(&[("shutter-offset", bad)], &plain).unwrap_err()
+        );
         assert!(
             message.contains("--shutter-offset") && message.contains("start"),
             "{bad}: {message}"
@@ -284,5 +293,8 @@ fn shutter_offset_takes_names_numbers_a_preset_key_and_reports_bad_values() {
         },
     );
     let flags = shutter::settings::flags(&settings);
-    assert!(flags.windows(2).any(|w| w == ["--shutter-offset", "start"]), "{flags:?}");
+    assert!(
+        flags.windows(2).any(|w| w == ["--shutter-offset", "start"]),
+        "{flags:?}"
+    );
 }
