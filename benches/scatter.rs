@@ -11,7 +11,10 @@
 //!   Gaussian, the arc, and a fixed 10 segments (no flatness test); then the default
 //!   settings under the default 180° shutter (15 px streaks), and with a fixed 10 segments;
 //! - **static**: nothing moves;
-//! - **sparse**: one moving square covering a given share of the pixels.
+//! - **sparse**: one moving square covering a given share of the pixels;
+//! - the moving frame (default and paper settings) and the static one on the GPU, where an
+//!   adapter is present (`[wgpu]` rows; on a software driver such as lavapipe, far slower
+//!   than a GPU).
 //!
 //! Median of 5 runs after one warm-up run.
 
@@ -64,6 +67,34 @@ fn main() {
             "1920x1080 every pixel moving 30 px, {label}: {:.1} ms",
             median_ms(&moving, &with(params), 5)
         );
+    }
+    // The GPU rows (reach, accumulate and resolve on the GPU), wherever an adapter is
+    // present: the default and the paper's settings on the same frame, and the still frame.
+    match common::gpu() {
+        Some(gpu) => {
+            let paper = ScatterParams {
+                normalize: Normalize::Paper,
+                weight: Weight::Gaussian,
+                ..default
+            };
+            let still = frame(|_, _| None);
+            for (label, f, params) in [
+                ("every pixel moving 30 px, default", &moving, default),
+                ("every pixel moving 30 px, paper", &moving, paper),
+                ("static, default", &still, default),
+            ] {
+                let (ms, t) = common::median_ms_on(&gpu, Algorithm::Scatter, f, &with(params), 3);
+                println!(
+                    "1920x1080 {label} [wgpu on {}]: {ms:.1} ms (GPU stages per run: upload \
+                     {:.1} ms, compute {:.1} ms, readback {:.1} ms)",
+                    gpu.adapter(),
+                    t.upload_ms,
+                    t.compute_ms,
+                    t.readback_ms
+                );
+            }
+        }
+        None => println!("wgpu rows skipped: no GPU adapter"),
     }
     // The same motion under the default 180° shutter: 15 px streaks.
     let half = Params {

@@ -90,7 +90,8 @@ pub fn process_clean(
 
 /// [`process_clean`] on a backend: the stages that have a GPU twin run on `gpu` when it is
 /// given (depth of field's `coc`, tile min/max and gather; reconstruct's tile stages and
-/// gather; stretch's three stages), every other stage on the CPU in the same run.
+/// gather; scatter's reach, accumulate and resolve; stretch's three stages), every other
+/// stage on the CPU in the same run.
 pub fn process_on(
     algorithm: Algorithm,
     params: &Params,
@@ -121,7 +122,11 @@ pub fn process_on(
                 _ => reconstruct::reconstruct(frame, params, shutter, seed),
             }
         }
-        Algorithm::Scatter => scatter::scatter(frame, &params.scatter, shutter),
+        Algorithm::Scatter => match gpu {
+            #[cfg(feature = "gpu")]
+            Some(gpu) => gpu.scatter(frame, &params.scatter, shutter),
+            _ => scatter::scatter(frame, &params.scatter, shutter),
+        },
         Algorithm::Stretch => match gpu {
             #[cfg(feature = "gpu")]
             Some(gpu) => gpu.stretch(frame, &params.stretch, shutter),

@@ -416,7 +416,7 @@ pub const DEFS: &[Def] = &[
         help: "where the passes run: cpu (the reference, the default for now), wgpu (any \
                Vulkan, Metal or DX12 adapter, software ones included; an error if none) or \
                auto (a hardware GPU, else the CPU); stages without a GPU twin yet (blend's \
-               talk form, scatter) run on the CPU",
+               talk form) run on the CPU",
         kind: Kind::Choice(|| names(Backend::ALL)),
         unset: "",
         get: |s| Value::Name(s.backend.name()),

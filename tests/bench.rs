@@ -31,16 +31,18 @@ fn bench_runs_end_to_end_and_writes_its_reports() {
         .all(|r| r["region"]["pixels"] == 0 && r["region"]["rmse"] == 0.0));
     assert_eq!(rows[settings]["setting"], "none");
     assert!(rows[settings]["region"]["rmse"].as_f64().unwrap() > 0.01);
-    // With an adapter (CI has Mesa's software driver), every reconstruct and stretch setting
-    // also runs on wgpu, in a row beside the CPU's, with its GPU stages timed apart and its
-    // error within 1 % of the CPU's (the backends agree to rounding, so the errors do too).
+    // With an adapter (CI has Mesa's software driver), every reconstruct, scatter and stretch
+    // setting also runs on wgpu, in a row beside the CPU's, with its GPU stages timed apart
+    // and its error within 1 % of the CPU's (the backends agree to rounding, so the errors do
+    // too).
     let gpu: Vec<&serde_json::Value> = all.iter().filter(|r| r["backend"] == "wgpu").collect();
+    use shutter::motion::Algorithm;
     let twins = shutter::bench::sweep()
         .iter()
         .filter(|s| {
             matches!(
                 s.algorithm,
-                shutter::motion::Algorithm::Reconstruct | shutter::motion::Algorithm::Stretch
+                Algorithm::Reconstruct | Algorithm::Scatter | Algorithm::Stretch
             )
         })
         .count();

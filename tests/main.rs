@@ -11,6 +11,7 @@ mod farm;
 mod golden;
 mod gpu;
 mod gpu_reconstruct;
+mod gpu_scatter;
 mod gpu_stretch;
 mod hostile;
 mod invariants;

@@ -770,12 +770,12 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
 type Sheet = (String, Frame, Vec<(String, Frame)>, Frame);
 
 /// Whether a setting runs any stage that has a GPU twin: depth of field's, reconstruct's,
-/// stretch's.
+/// scatter's and stretch's.
 fn has_twin(setting: &Setting) -> bool {
     setting.params.dof.is_some()
         || matches!(
             setting.algorithm,
-            Algorithm::Reconstruct | Algorithm::Stretch
+            Algorithm::Reconstruct | Algorithm::Scatter | Algorithm::Stretch
         )
 }
 

@@ -7,12 +7,13 @@ use std::sync::{Mutex, OnceLock};
 use wgpu::{Backends, DeviceType};
 
 use super::reconstruct::ReconstructPass;
+use super::scatter::ScatterPass;
 use super::stage::Stage;
 use super::stretch::StretchPass;
 use super::GpuTimes;
 
-/// The backends with what the passes need: compute, float storage and (for the scatter
-/// passes to come) atomics and float render targets. Never GL (see the module doc).
+/// The backends with what the passes need: compute, float storage and u32 buffer atomics
+/// (scatter's fixed-point sums). Never GL (see the module doc).
 const BACKENDS: Backends = Backends::VULKAN
     .union(Backends::METAL)
     .union(Backends::DX12);
@@ -41,6 +42,8 @@ pub struct Gpu {
     pub(crate) blend: Stage,
     /// reconstruct's gather, compiled on first use (a run without motion blur never needs it).
     pub(crate) reconstruct: OnceLock<ReconstructPass>,
+    /// scatter's stages, compiled on first use.
+    pub(crate) scatter: OnceLock<ScatterPass>,
     /// stretch's stages, compiled on first use.
     pub(crate) stretch: OnceLock<StretchPass>,
     /// Stages with a twin that ran on the CPU for a frame (see [`Gpu::note_cpu_stage`]).
@@ -83,9 +86,9 @@ fn rank(device_type: DeviceType) -> u8 {
     }
 }
 
-/// The features the stages use, requested explicitly: none yet (the stages are plain compute
-/// on storage buffers; `tiles` uses a u32 atomic, which WGSL has without a feature). The
-/// scatter twins will add float atomics here.
+/// The features the stages use, requested explicitly: none (the stages are plain compute on
+/// storage buffers; `tiles` and scatter use u32 atomics, which WGSL has without a feature,
+/// and scatter's indirect dispatch is core; no float atomics, whose sums depend on order).
 fn required_features() -> wgpu::Features {
     wgpu::Features::empty()
 }
@@ -97,11 +100,13 @@ fn optional_features() -> wgpu::Features {
 }
 
 /// The limits requested: WebGPU's defaults, with the adapter's own largest storage binding
-/// and buffer, so a frame plane as large as the device allows fits.
+/// and buffer, so a frame plane as large as the device allows fits, and its own count of
+/// storage buffers per stage (scatter binds 12; a device with fewer runs it on the CPU).
 fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
     wgpu::Limits {
         max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
         max_buffer_size: adapter.max_buffer_size,
+        max_storage_buffers_per_shader_stage: adapter.max_storage_buffers_per_shader_stage,
         ..wgpu::Limits::default()
     }
 }
@@ -185,6 +190,7 @@ impl Gpu {
             queue,
             info,
             reconstruct: OnceLock::new(),
+            scatter: OnceLock::new(),
             stretch: OnceLock::new(),
             stages_on_cpu: AtomicU64::new(0),
             fallback: Mutex::new(None),

@@ -15,17 +15,20 @@
 //! - [`reconstruct`] + `reconstruct.wgsl`: reconstruct's `gather` stage, twin of
 //!   [`crate::motion::reconstruct::gather`] and [`crate::motion::reconstruct::gather_2014`]
 //!   (every variant);
+//! - [`scatter`] + `scatter.wgsl`: the whole scatter pass (reach → accumulate → resolve), twin
+//!   of [`crate::motion::scatter::scatter`] (every normalisation, curve kind and weight);
 //! - [`stretch`] + `stretch.wgsl`: stretch's texture_blur, move_vertices and rasterise (a
 //!   render pipeline), twins of those of [`crate::motion::stretch`];
 //! - `stage`: what most of them share (bindings config → inputs → outputs, buffers kept per
 //!   size).
 //!
 //! The CPU passes are the reference; each twin has a parity test against them
-//! (tests/gpu.rs, tests/gpu_reconstruct.rs, tests/gpu_stretch.rs) with its tolerance stated
-//! and justified beside it. Under `--backend wgpu` depth of field's stages run on the GPU
-//! through [`crate::dof::Stages`], reconstruct's through [`crate::motion::TileStages`] and its
-//! gather hook, and stretch's through [`Gpu::stretch`]; stages without a twin yet (blend's
-//! talk form, scatter, reconstruct's pack) run on the CPU in the same run.
+//! (tests/gpu.rs, tests/gpu_reconstruct.rs, tests/gpu_scatter.rs, tests/gpu_stretch.rs) with
+//! its tolerance stated and justified beside it. Under `--backend wgpu` depth of field's
+//! stages run on the GPU through [`crate::dof::Stages`], reconstruct's through
+//! [`crate::motion::TileStages`] and its gather hook, scatter's through [`Gpu::scatter`] and
+//! stretch's through [`Gpu::stretch`]; stages without a twin yet (blend's talk form,
+//! reconstruct's pack) run on the CPU in the same run.
 //!
 //! The backend is a run's choice ([`Backend`], `--backend cpu|wgpu|auto`):
 //! - `cpu` never touches wgpu;
@@ -66,6 +69,7 @@ pub mod tiles;
 #[cfg(feature = "gpu")]
 pub mod reconstruct;
 #[cfg(feature = "gpu")]
+pub mod scatter;
 pub mod stretch;
 #[cfg(feature = "gpu")]
 pub use stage::StageError;

@@ -145,9 +145,10 @@ fn texture_blur(@builtin(global_invocation_id) id: vec3<u32>) {
     var total = 0.0;
     for (var k = 0u; k < samples; k++) {
         let t = t0 + (t1 - t0) * (f32(k) + 0.5) / f32(samples);
-        // Sample points are pixel-centre coordinates: pixel (x, y) sits at (x, y).
-        let px = f32(x) + vx * t;
-        let py = f32(y) + vy * t;
+        // Sample points are pixel-centre coordinates: pixel (x, y) sits at (x, y). At time t
+        // the pixel shows what was at x − v·t at the frame (as the CPU reads).
+        let px = f32(x) - vx * t;
+        let py = f32(y) - vy * t;
         let fx = floor(px);
         let fy = floor(py);
         let ax = px - fx;

@@ -110,9 +110,9 @@ pub struct Arc {
 }
 
 /// Below this |sin| of the turn at p(0) the points count as collinear.
-const COLLINEAR: f64 = 1e-4;
+pub(crate) const COLLINEAR: f64 = 1e-4;
 /// Arcs wider than this (pixels) are straight lines for any image.
-const LARGEST_RADIUS: f64 = 1e7;
+pub(crate) const LARGEST_RADIUS: f64 = 1e7;
 
 impl Arc {
     /// The arc from `prev` through `now` to `next`, or `None` where the points are

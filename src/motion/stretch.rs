@@ -260,6 +260,11 @@ pub fn stretch_with(
 /// Stage 1: each moving pixel's colour averaged along its own motion over the exposure
 /// (bilinear samples, leaving out nearer surfaces), clamped to the frame's range per channel;
 /// still pixels keep theirs. Returns the frame to draw first.
+///
+/// At time t the pixel at x shows the point of its surface that was at x − v·t at the frame,
+/// so the samples read x − v·t for t over [t0, t1]. (Centred, [t0, t1] is symmetric and the
+/// sign does not matter; until issue 19 this read x + v·t, which mirrored the streak about
+/// the pixel for the rear anchor and for an offset shutter.)
 pub fn texture_blur(
     config: &StretchConfig,
     planes: &[Vec<f32>; 4],
@@ -313,7 +318,7 @@ pub fn texture_blur(
                     let t = t0 + (t1 - t0) * (k as f32 + 0.5) / samples as f32;
                     // Bilinear between the four nearest centres, over those of the same
                     // surface (so a sub-pixel streak still blurs).
-                    let (px, py) = (x as f32 + vx * t, y as f32 + vy * t);
+                    let (px, py) = (x as f32 - vx * t, y as f32 - vy * t);
                     let (fx, fy) = (px.floor(), py.floor());
                     let (ax, ay) = (px - fx, py - fy);
                     for (dx, dy, w) in [

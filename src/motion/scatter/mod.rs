@@ -66,7 +66,7 @@ const TILE_H: usize = 128;
 /// Reach is kept per block of this many pixels square.
 const BLOCK: usize = 16;
 /// Below this uncovered share an exposure-normalised pixel needs no background estimate.
-const COVERED: f64 = 1e-3;
+pub(crate) const COVERED: f64 = 1e-3;
 
 /// The weight along the curve.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -163,8 +163,10 @@ struct Moving {
 }
 
 /// Everything scatter's stages read besides their buffers, as plain numbers: the shape of the
-/// uniform its GPU twin will take (keep the two in sync).
+/// uniform of its GPU twin, `ScatterConfig` in src/gpu/scatter.wgsl (keep the two in sync;
+/// the size test here and the field test in src/gpu/scatter.rs guard the layout).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]
 #[repr(C)]
 pub struct ScatterConfig {
     /// Frame size, pixels.

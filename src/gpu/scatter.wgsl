@@ -1,0 +1,812 @@
+// Motion blur's `scatter` pass on the GPU: the twin of src/motion/scatter/ (the CPU reference;
+// Guertin & Nowrouzezahrai, *High Performance Non-linear Motion Blur*, §3), stage for stage:
+// `reach` (which pixels move; a list of them) → `prepare` (the accumulate dispatch's size) →
+// `accumulate` (each moving pixel draws its curve into fixed-point sums) → `resolve` (each
+// pixel's output by the normalisation). Why a compute rasteriser with integer atomics, and
+// the f32 form of the geometry: src/gpu/scatter.rs.
+//
+// Bindings, in order: the ScatterConfig uniform; colour (R, G, B, A planes), depth, prev and
+// next (x, y, z planes each) — the CPU's inputs; then `state` (the moving count, the
+// accumulate dispatch, the colour bounds, the host's flags), the list of moving pixels, the
+// five sums (R, G, B, A, weight; two words per pixel) and the output colour (four planes).
+
+// Keep in sync with `ScatterConfig` in src/motion/scatter/mod.rs (its size test and the test
+// in src/gpu/scatter.rs guard the layout: thirteen 4-byte fields).
+struct ScatterConfig {
+    width: u32,
+    height: u32,
+    shutter: f32,
+    offset: f32,
+    segments: u32,
+    sigma: f32,
+    gaussian: u32,
+    background_weight: f32,
+    exposure: u32,
+    arc: u32,
+    max_curve: f32,
+    flatness: f32,
+    depth_tolerance: f32,
+}
+
+@group(0) @binding(0) var<uniform> config: ScatterConfig;
+@group(0) @binding(1) var<storage, read> color: array<f32>;
+@group(0) @binding(2) var<storage, read> depth: array<f32>;
+@group(0) @binding(3) var<storage, read> prev: array<f32>;
+@group(0) @binding(4) var<storage, read> next: array<f32>;
+@group(0) @binding(5) var<storage, read_write> state: array<atomic<u32>>;
+@group(0) @binding(6) var<storage, read_write> moving: array<u32>;
+@group(0) @binding(7) var<storage, read_write> sum_r: array<atomic<u32>>;
+@group(0) @binding(8) var<storage, read_write> sum_g: array<atomic<u32>>;
+@group(0) @binding(9) var<storage, read_write> sum_b: array<atomic<u32>>;
+@group(0) @binding(10) var<storage, read_write> sum_a: array<atomic<u32>>;
+@group(0) @binding(11) var<storage, read_write> sum_w: array<atomic<u32>>;
+@group(0) @binding(12) var<storage, read_write> out: array<f32>;
+
+// Invocations per workgroup of every stage but `prepare`, and whether `accumulate` walks the
+// moving list backwards: test hooks (the output must not depend on either).
+override WORKGROUP: u32 = 64u;
+override REVERSED: bool = false;
+
+// `state`'s words (keep in sync with src/gpu/scatter.rs).
+const COUNT: u32 = 0u;
+const DISPATCH: u32 = 1u;
+const BOUND: u32 = 4u;
+const FLAGS: u32 = 8u;
+// Flags the host sets: every alpha is 1 (alpha sums are the weight sums), and the positions
+// carry depth (z planes).
+const OPAQUE: u32 = 1u;
+const HAS_Z: u32 = 2u;
+
+// The CPU's constants (src/motion/scatter/mod.rs, src/motion/curve.rs; a test compares).
+const STILL: f32 = 0.25;
+const MOST_SEGMENTS: u32 = 64u;
+const COVERED: f32 = 0.001;
+const COLLINEAR: f32 = 0.0001;
+const LARGEST_RADIUS: f32 = 10000000.0;
+const TAU: f32 = 6.2831855;
+const PI: f32 = 3.1415927;
+// Most workgroups along one dispatch dimension (WebGPU's limit); more go to the second.
+const MOST_GROUPS: u32 = 65535u;
+// 2³²: the sums' fixed point has 32 fractional bits.
+const FIXED: f32 = 4294967296.0;
+
+fn pixels() -> u32 {
+    return config.width * config.height;
+}
+
+// The invocation's index in a dispatch of x × y workgroups.
+fn flat(group: vec3<u32>, groups: vec3<u32>, lane: u32) -> u32 {
+    return (group.y * groups.x + group.x) * WORKGROUP + lane;
+}
+
+// NaN and infinity tested on the bits: WGSL lets an implementation assume neither occurs in
+// float arithmetic, so a float comparison with one proves nothing.
+fn is_nan(v: f32) -> bool {
+    return (bitcast<u32>(v) & 0x7fffffffu) > 0x7f800000u;
+}
+
+fn is_finite(v: f32) -> bool {
+    return (bitcast<u32>(v) & 0x7fffffffu) < 0x7f800000u;
+}
+
+// ---- The f32 form of the geometry -------------------------------------------------------
+//
+// Positions are relative to the corner of the moving pixel (x, y): its centre p(0) is
+// (0.5, 0.5), pixel boundaries stay at integers, and after the scaling to `max_curve`
+// every point is within that many pixels of p(0), so f32 keeps ~2⁻¹⁵ px where the CPU's f64
+// keeps its absolute coordinates exactly.
+
+// A moving pixel's p(−1) and p(+1), relative to its corner.
+struct Motion {
+    prev: vec2<f32>,
+    next: vec2<f32>,
+}
+
+fn motion_of(i: u32) -> Motion {
+    let n = pixels();
+    let corner = vec2<f32>(f32(i % config.width), f32(i / config.width));
+    return Motion(
+        vec2<f32>(prev[i], prev[n + i]) - corner,
+        vec2<f32>(next[i], next[n + i]) - corner,
+    );
+}
+
+// The exposure [t0, t1] (`Shutter::interval`).
+fn interval() -> vec2<f32> {
+    return vec2<f32>((config.offset - 0.5) * config.shutter, (config.offset + 0.5) * config.shutter);
+}
+
+// The farthest the exposure gets from the frame's instant.
+fn half() -> f32 {
+    let t = interval();
+    return max(abs(t.x), abs(t.y));
+}
+
+// `Scatter::extent`: a bound on how far the curve strays from p(0) during the exposure.
+fn extent(m: Motion) -> f32 {
+    let now = vec2<f32>(0.5, 0.5);
+    let v = 0.5 * (m.next - m.prev);
+    let a = 0.5 * (m.next + m.prev) - now;
+    let h = half();
+    return h * length2(v) + h * h * length2(a);
+}
+
+// |p| as the CPU computes it (no hypot): sqrt(x² + y²).
+fn length2(p: vec2<f32>) -> f32 {
+    return sqrt(p.x * p.x + p.y * p.y);
+}
+
+fn cross2(a: vec2<f32>, b: vec2<f32>) -> f32 {
+    return a.x * b.y - a.y * b.x;
+}
+
+// The weight along the curve at time t (`Scatter::weight`).
+fn weight(t: f32) -> f32 {
+    if config.gaussian == 0u {
+        return 1.0;
+    }
+    let t01 = interval();
+    let d = 0.5 * (t - 0.5 * (t01.x + t01.y));
+    let sigma = config.sigma;
+    return exp(-d * d / (2.0 * sigma * sigma));
+}
+
+// ---- reach -------------------------------------------------------------------------------
+
+// Stage 1: each pixel's motion test (`Scatter::motion`); a moving pixel joins the list (in
+// whatever order the invocations arrive: the sums are integers, so the order is immaterial)
+// and raises the per-channel bound on |colour| that scales the fixed point.
+@compute @workgroup_size(WORKGROUP)
+fn reach(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let i = flat(group, groups, lane);
+    let n = pixels();
+    if i >= n {
+        return;
+    }
+    if !(extent(motion_of(i)) >= STILL) {
+        return;
+    }
+    let slot = atomicAdd(&state[COUNT], 1u);
+    moving[slot] = i;
+    for (var ch = 0u; ch < 4u; ch++) {
+        // Non-negative floats order as their bits do.
+        atomicMax(&state[BOUND + ch], bitcast<u32>(abs(color[ch * n + i])));
+    }
+}
+
+// Between reach and accumulate: one workgroup of `WORKGROUP` invocations per moving pixel, in
+// rows of at most MOST_GROUPS.
+@compute @workgroup_size(1)
+fn prepare() {
+    let count = atomicLoad(&state[COUNT]);
+    let groups = (count + WORKGROUP - 1u) / WORKGROUP;
+    let x = min(groups, MOST_GROUPS);
+    var y = 0u;
+    if x > 0u {
+        y = (groups + x - 1u) / x;
+    }
+    atomicStore(&state[DISPATCH], x);
+    atomicStore(&state[DISPATCH + 1u], y);
+    atomicStore(&state[DISPATCH + 2u], 1u);
+}
+
+// ---- curves (src/motion/curve.rs) --------------------------------------------------------
+
+struct Bezier {
+    b0: vec2<f32>,
+    b1: vec2<f32>,
+    b2: vec2<f32>,
+}
+
+fn bezier_through(p: vec2<f32>, now: vec2<f32>, q: vec2<f32>) -> Bezier {
+    return Bezier(p, 2.0 * now - 0.5 * (p + q), q);
+}
+
+fn bezier_at(b: Bezier, s: f32) -> vec2<f32> {
+    let u = (1.0 - s) * (1.0 - s);
+    let v = 2.0 * (1.0 - s) * s;
+    let w = s * s;
+    return vec2<f32>(
+        u * b.b0.x + v * b.b1.x + w * b.b2.x,
+        u * b.b0.y + v * b.b1.y + w * b.b2.y,
+    );
+}
+
+fn bend_squared(b: Bezier) -> f32 {
+    let x = b.b0.x - 2.0 * b.b1.x + b.b2.x;
+    let y = b.b0.y - 2.0 * b.b1.y + b.b2.y;
+    return 4.0 * (x * x + y * y);
+}
+
+// `Bezier::segments`.
+fn bezier_segments(b: Bezier, span: f32, tolerance: f32, most: u32) -> u32 {
+    if tolerance <= 0.0 {
+        return max(most, 1u);
+    }
+    let limit = 8.0 * tolerance;
+    let fourth = span * span * span * span * bend_squared(b);
+    if fourth <= limit * limit {
+        return 1u;
+    }
+    let needed = ceil(span * sqrt(sqrt(bend_squared(b)) / limit));
+    if is_finite(needed) {
+        return clamp(u32(needed), 1u, max(most, 1u));
+    }
+    return max(most, 1u);
+}
+
+// The circle through the three positions with the angle quadratic in time (`Arc`). Its
+// points are kept relative to p(0) in chord form (see `arc_at`), so `centre` is relative to
+// p(0) too.
+struct Arc {
+    ok: bool,
+    centre: vec2<f32>,
+    radius: f32,
+    theta: f32,
+    omega: f32,
+    alpha: f32,
+}
+
+fn rem_euclid(x: f32, m: f32) -> f32 {
+    let r = x - m * trunc(x / m);
+    if r < 0.0 {
+        return r + m;
+    }
+    return r;
+}
+
+// `Arc::fit`, with `now` = p(0) and the centre relative to it.
+fn arc_fit(p: vec2<f32>, now: vec2<f32>, q: vec2<f32>) -> Arc {
+    var arc = Arc(false, vec2<f32>(0.0), 0.0, 0.0, 0.0, 0.0);
+    let a = now - p;
+    let b = q - now;
+    let turn = cross2(a, b);
+    let la = length2(a);
+    let lb = length2(b);
+    if !(la > 0.0 && lb > 0.0 && abs(turn) > COLLINEAR * la * lb) {
+        return arc;
+    }
+    let pr = p - now;
+    let qr = q - now;
+    let d = 2.0 * cross2(pr, qr);
+    let pp = pr.x * pr.x + pr.y * pr.y;
+    let qq = qr.x * qr.x + qr.y * qr.y;
+    let offset = vec2<f32>((qr.y * pp - pr.y * qq) / d, (pr.x * qq - qr.x * pp) / d);
+    let radius = length2(offset);
+    if !(is_finite(radius) && radius < LARGEST_RADIUS) {
+        return arc;
+    }
+    // The angle of p(0) about the centre, and the angles from it to p(+1) and p(−1): the
+    // CPU's differences of absolute angles, each taken at once from the two vectors, u from
+    // the centre to p(0) and w to the other point (atan2 of their cross and dot products,
+    // formed without the cancellation of u × w for a radius of up to 10⁷ px).
+    let theta = atan2(-offset.y, -offset.x);
+    let radius2 = offset.x * offset.x + offset.y * offset.y;
+    let to_next = atan2(cross2(qr, offset), radius2 - dot(offset, qr));
+    let to_prev = atan2(cross2(pr, offset), radius2 - dot(offset, pr));
+    var ahead: f32;
+    var behind: f32;
+    if turn > 0.0 {
+        ahead = rem_euclid(to_next, TAU);
+        behind = -rem_euclid(-to_prev, TAU);
+    } else {
+        ahead = -rem_euclid(-to_next, TAU);
+        behind = rem_euclid(to_prev, TAU);
+    }
+    arc.ok = true;
+    arc.centre = offset;
+    arc.radius = radius;
+    arc.theta = theta;
+    arc.omega = 0.5 * (ahead - behind);
+    arc.alpha = 0.5 * (ahead + behind);
+    return arc;
+}
+
+// The angle turned since the frame's instant, t·(ω + t·α) (`Arc::angle` less θ).
+fn arc_turn(arc: Arc, t: f32) -> f32 {
+    return t * (arc.omega + t * arc.alpha);
+}
+
+// `Arc::at_time` less p(0), in chord form: the centre plus r·(cos, sin)(θ + δ) minus p(0)
+// (which is the centre plus r·(cos, sin)θ) is 2r·sin(δ/2)·(−sin, cos)(θ + δ/2). The CPU's
+// form subtracts two numbers of the radius's size (up to 10⁷ px): in f32 that would leave
+// whole pixels of error, the chord form leaves a rounding of the chord.
+fn arc_at(arc: Arc, t: f32) -> vec2<f32> {
+    let delta = arc_turn(arc, t);
+    let chord = 2.0 * arc.radius * sin(0.5 * delta);
+    let middle = arc.theta + 0.5 * delta;
+    return vec2<f32>(-chord * sin(middle), chord * cos(middle));
+}
+
+// `Arc::segments`, on the turn δ (the sweep does not depend on θ).
+fn arc_segments(arc: Arc, t0: f32, t1: f32, tolerance: f32, most: u32) -> u32 {
+    if tolerance <= 0.0 {
+        return max(most, 1u);
+    }
+    var lo = min(arc_turn(arc, t0), arc_turn(arc, t1));
+    var hi = max(arc_turn(arc, t0), arc_turn(arc, t1));
+    if arc.alpha != 0.0 {
+        let vertex = -arc.omega / (2.0 * arc.alpha);
+        if vertex > t0 && vertex < t1 {
+            lo = min(lo, arc_turn(arc, vertex));
+            hi = max(hi, arc_turn(arc, vertex));
+        }
+    }
+    let sweep = min(hi - lo, 2.0 * PI * 4.0);
+    let needed = ceil(sweep * sqrt(arc.radius / (8.0 * tolerance)));
+    if is_finite(needed) {
+        return clamp(u32(needed), 1u, max(most, 1u));
+    }
+    return max(most, 1u);
+}
+
+// ---- accumulate --------------------------------------------------------------------------
+
+// One curve cut into segments (`Path`), points relative to the moving pixel's corner.
+var<private> points: array<vec2<f32>, 65>;
+var<private> weights: array<f32, 65>;
+var<private> depths: array<f32, 65>;
+var<private> lengths: array<f32, 64>;
+
+// `Scatter::path` for moving pixel i: its segment count, 0 if it has no curve.
+fn path(i: u32, m: Motion) -> u32 {
+    let now = vec2<f32>(0.5, 0.5);
+    let t01 = interval();
+    let t0 = t01.x;
+    let t1 = t01.y;
+    let most = config.segments;
+    let tolerance = config.flatness;
+    var arc = Arc(false, vec2<f32>(0.0), 0.0, 0.0, 0.0, 0.0);
+    if config.arc != 0u {
+        arc = arc_fit(m.prev, now, m.next);
+    }
+    let bezier = bezier_through(m.prev, now, m.next);
+    var segments: u32;
+    if arc.ok {
+        segments = arc_segments(arc, t0, t1, tolerance, most);
+    } else {
+        segments = bezier_segments(bezier, 0.5 * (t1 - t0), tolerance, most);
+    }
+    let n = pixels();
+    let z0 = depth[i];
+    let zp = prev[2u * n + i];
+    let zn = next[2u * n + i];
+    let has_z = (atomicLoad(&state[FLAGS]) & HAS_Z) != 0u && is_finite(zp) && is_finite(zn)
+        && is_finite(z0);
+    var total = 0.0;
+    let step = (t1 - t0) / f32(segments);
+    for (var k = 0u; k <= segments; k++) {
+        let t = t0 + step * f32(k);
+        if arc.ok {
+            points[k] = now + arc_at(arc, t);
+        } else {
+            points[k] = bezier_at(bezier, 0.5 * (t + 1.0));
+        }
+        weights[k] = weight(t);
+        if has_z {
+            depths[k] = max(z0 + t * 0.5 * (zn - zp) + t * t * (0.5 * (zn + zp) - z0), 0.0);
+        } else {
+            depths[k] = z0;
+        }
+        if k > 0u {
+            lengths[k - 1u] = length2(points[k] - points[k - 1u]);
+            total += lengths[k - 1u];
+        }
+    }
+    if is_nan(total) || total <= 1e-9 {
+        return 0u;
+    }
+    let longest = max(config.max_curve, 1.0);
+    var scale = 1.0;
+    if total > longest {
+        // Scaled about p(0): a similarity, so every length scales the same.
+        scale = longest / total;
+        for (var k = 0u; k <= segments; k++) {
+            points[k] = now + scale * (points[k] - now);
+        }
+    }
+    if config.exposure != 0u {
+        var sum = total;
+        if config.gaussian != 0u {
+            sum = 0.0;
+            for (var k = 0u; k < segments; k++) {
+                sum += lengths[k] * 0.5 * (weights[k] + weights[k + 1u]);
+            }
+        }
+        sum *= scale;
+        if !(sum > 0.0 && is_finite(sum)) {
+            return 0u;
+        }
+        let inverse = 1.0 / sum;
+        for (var k = 0u; k <= segments; k++) {
+            weights[k] *= inverse;
+        }
+    }
+    return segments;
+}
+
+// v·2³² as a 64-bit two's-complement number (low word, high word): |v| < 2³¹, its fraction
+// rounded to the nearest 2⁻³² (exact where |v| ≥ 2⁻⁹: then the fraction has no finer bits).
+fn fixed(v: f32) -> vec2<u32> {
+    let m = abs(v);
+    let whole = floor(m);
+    var hi = u32(whole);
+    // Exact: m − ⌊m⌋ loses nothing for m ≥ 0, and 2³² is a power of two.
+    let x = (m - whole) * FIXED;
+    var lo: u32;
+    if x < 8388608.0 {
+        lo = u32(x + 0.5);
+    } else {
+        lo = u32(x);
+    }
+    if v < 0.0 {
+        // Negated: −(hi·2³² + lo) = (~hi + [lo = 0])·2³² + (~lo + 1), modulo 2⁶⁴.
+        hi = ~hi + select(0u, 1u, lo == 0u);
+        lo = ~lo + 1u;
+    }
+    return vec2<u32>(lo, hi);
+}
+
+// The low word takes the low part; where it wraps (the value it returns, plus ours, is below
+// it) the high word takes the carry with the high part. Every wrap carries exactly one, so
+// the 64-bit sum is Σ values modulo 2⁶⁴ in any order.
+fn carry(old: u32, lo: u32, hi: u32) -> u32 {
+    return hi + select(0u, 1u, old + lo < old);
+}
+
+// Adds v (in units of the channel's scale) to sum `channel` (0–3 R, G, B, A; 4 the weight)
+// of pixel p.
+fn add(channel: u32, p: u32, v: f32) {
+    let f = fixed(v);
+    if f.x == 0u && f.y == 0u {
+        return;
+    }
+    let low = 2u * p;
+    var high = 0u;
+    switch channel {
+        case 0u: {
+            high = carry(atomicAdd(&sum_r[low], f.x), f.x, f.y);
+            if high != 0u {
+                atomicAdd(&sum_r[low + 1u], high);
+            }
+        }
+        case 1u: {
+            high = carry(atomicAdd(&sum_g[low], f.x), f.x, f.y);
+            if high != 0u {
+                atomicAdd(&sum_g[low + 1u], high);
+            }
+        }
+        case 2u: {
+            high = carry(atomicAdd(&sum_b[low], f.x), f.x, f.y);
+            if high != 0u {
+                atomicAdd(&sum_b[low + 1u], high);
+            }
+        }
+        case 3u: {
+            high = carry(atomicAdd(&sum_a[low], f.x), f.x, f.y);
+            if high != 0u {
+                atomicAdd(&sum_a[low + 1u], high);
+            }
+        }
+        default: {
+            high = carry(atomicAdd(&sum_w[low], f.x), f.x, f.y);
+            if high != 0u {
+                atomicAdd(&sum_w[low + 1u], high);
+            }
+        }
+    }
+}
+
+// The power of two 2^e above every |colour| of a moving pixel in channel `ch` (1 where the
+// channel is all 0): colours times 2^−e lie in (−1, 1), exactly.
+fn scale_exponent(ch: u32) -> i32 {
+    let bits = atomicLoad(&state[BOUND + ch]);
+    if bits == 0u {
+        return 0;
+    }
+    return max(i32(bits >> 23u), 1) - 126;
+}
+
+// The drawing of one curve: its colour (times 2^−e per channel), where its pixel is, and
+// whether alpha sums are kept.
+struct Pen {
+    color: vec4<f32>,
+    corner: vec2<i32>,
+    opaque: bool,
+    tolerance: f32,
+}
+
+// A deposit of weight d (coverage × weight) at pixel (px, py), absolute, inside the frame,
+// where the curve's depth z passes the depth test (`Segment::deposit`).
+fn deposit(pen: Pen, px: i32, py: i32, d: f32, z: f32) {
+    if d == 0.0 {
+        return;
+    }
+    let p = u32(py) * config.width + u32(px);
+    // A curve passes a pixel whose depth is at least its own / (1 + tolerance).
+    let limit = depth[p] * pen.tolerance;
+    if !(z <= limit) {
+        return;
+    }
+    add(0u, p, d * pen.color.x);
+    add(1u, p, d * pen.color.y);
+    add(2u, p, d * pen.color.z);
+    if !pen.opaque {
+        add(3u, p, d * pen.color.w);
+    }
+    add(4u, p, d);
+}
+
+// Draws the segment a → b (relative to the pixel's corner) with weights w0 → w1 and depths
+// z0 → z1: `Walk` over the frame's columns (rows where the walk runs along y), each column's
+// exact length split between the two rows whose centres bracket the segment at its middle.
+fn draw(pen: Pen, a_in: vec2<f32>, b_in: vec2<f32>, w0: f32, w1: f32, z0: f32, z1: f32) {
+    if !(is_finite(a_in.x) && is_finite(a_in.y) && is_finite(b_in.x) && is_finite(b_in.y)) {
+        return;
+    }
+    // A depth that is not finite at either end never passes on the CPU (its change along
+    // the segment is NaN there): nothing to draw.
+    if !(is_finite(z0) && is_finite(z1)) {
+        return;
+    }
+    if a_in.x == b_in.x && a_in.y == b_in.y {
+        return;
+    }
+    let swapped = abs(b_in.x - a_in.x) < abs(b_in.y - a_in.y);
+    var a = a_in;
+    var b = b_in;
+    // The frame, relative to the pixel's corner: columns x0..x1, rows y0..y1.
+    var x0 = -pen.corner.x;
+    var x1 = i32(config.width) - pen.corner.x;
+    var y0 = -pen.corner.y;
+    var y1 = i32(config.height) - pen.corner.y;
+    if swapped {
+        a = a_in.yx;
+        b = b_in.yx;
+        x0 = -pen.corner.y;
+        x1 = i32(config.height) - pen.corner.y;
+        y0 = -pen.corner.x;
+        y1 = i32(config.width) - pen.corner.x;
+    }
+    let dx = b.x - a.x;
+    let dy = b.y - a.y;
+    let inverse = 1.0 / dx;
+    let slope = dy * inverse;
+    let stretch = sqrt(1.0 + slope * slope);
+    let lo = min(a.x, b.x);
+    let hi = max(a.x, b.x);
+    var first = max(floor(lo), f32(x0));
+    var last = min(ceil(hi) - 1.0, f32(x1 - 1));
+    // Only the columns where the segment is within reach of the frame's rows (`Walk::major`).
+    let ylo = f32(y0) - 0.5;
+    let yhi = f32(y1) + 0.5;
+    let inside = min(a.y, b.y) >= ylo && max(a.y, b.y) <= yhi;
+    if !inside {
+        if slope == 0.0 {
+            return;
+        }
+        let run = dx / dy;
+        let xa = a.x + (ylo - a.y) * run;
+        let xb = a.x + (yhi - a.y) * run;
+        first = max(first, floor(min(xa, xb)) - 1.0);
+        last = min(last, ceil(max(xa, xb)) + 1.0);
+    }
+    if !(first <= last) {
+        return;
+    }
+    let dz = z1 - z0;
+    let dw = w1 - w0;
+    for (var column = i32(first); column <= i32(last); column++) {
+        let c = f32(column);
+        // The segment's piece in the column (`Walk::column`).
+        let left = max(lo, c);
+        let right = min(hi, c + 1.0);
+        let middle = 0.5 * (left + right);
+        let along = middle - a.x;
+        let u = along * inverse;
+        let y = a.y + slope * along;
+        let coverage = (right - left) * stretch;
+        let v = y - 0.5;
+        let rowf = floor(v);
+        let f = v - rowf;
+        let row = i32(rowf);
+        let c0 = coverage * (1.0 - f);
+        let c1 = coverage * f;
+        let z = z0 + dz * u;
+        let w = w0 + dw * u;
+        for (var k = 0; k < 2; k++) {
+            let r = row + k;
+            if r < y0 || r >= y1 {
+                continue;
+            }
+            var d = c0;
+            if k == 1 {
+                d = c1;
+            }
+            if swapped {
+                deposit(pen, r + pen.corner.x, column + pen.corner.y, d * w, z);
+            } else {
+                deposit(pen, column + pen.corner.x, r + pen.corner.y, d * w, z);
+            }
+        }
+    }
+}
+
+// Stage 2: one invocation per moving pixel builds its curve and draws it into the sums.
+@compute @workgroup_size(WORKGROUP)
+fn accumulate(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let k = flat(group, groups, lane);
+    let count = atomicLoad(&state[COUNT]);
+    if k >= count {
+        return;
+    }
+    var item = k;
+    if REVERSED {
+        item = count - 1u - k;
+    }
+    let i = moving[item];
+    let segments = path(i, motion_of(i));
+    if segments == 0u {
+        return;
+    }
+    let n = pixels();
+    let opaque = (atomicLoad(&state[FLAGS]) & OPAQUE) != 0u;
+    var c = vec4<f32>(0.0);
+    for (var ch = 0u; ch < 4u; ch++) {
+        c[ch] = ldexp(color[ch * n + i], -scale_exponent(ch));
+    }
+    let pen = Pen(
+        c,
+        vec2<i32>(i32(i % config.width), i32(i / config.width)),
+        opaque,
+        1.0 + config.depth_tolerance,
+    );
+    for (var s = 0u; s < segments; s++) {
+        draw(pen, points[s], points[s + 1u], weights[s], weights[s + 1u], depths[s], depths[s + 1u]);
+    }
+}
+
+// ---- resolve -----------------------------------------------------------------------------
+
+// A sum's value, in units of its channel's scale.
+fn decode(p: u32, channel: u32) -> f32 {
+    var lo: u32;
+    var hi: u32;
+    switch channel {
+        case 0u: {
+            lo = atomicLoad(&sum_r[2u * p]);
+            hi = atomicLoad(&sum_r[2u * p + 1u]);
+        }
+        case 1u: {
+            lo = atomicLoad(&sum_g[2u * p]);
+            hi = atomicLoad(&sum_g[2u * p + 1u]);
+        }
+        case 2u: {
+            lo = atomicLoad(&sum_b[2u * p]);
+            hi = atomicLoad(&sum_b[2u * p + 1u]);
+        }
+        case 3u: {
+            lo = atomicLoad(&sum_a[2u * p]);
+            hi = atomicLoad(&sum_a[2u * p + 1u]);
+        }
+        default: {
+            lo = atomicLoad(&sum_w[2u * p]);
+            hi = atomicLoad(&sum_w[2u * p + 1u]);
+        }
+    }
+    return f32(bitcast<i32>(hi)) + f32(lo) * (1.0 / FIXED);
+}
+
+fn own_color(p: u32) -> vec4<f32> {
+    let n = pixels();
+    return vec4<f32>(color[p], color[n + p], color[2u * n + p], color[3u * n + p]);
+}
+
+// `Scatter::behind`: the nearest farther surface along the pixel's motion (either way; the
+// average if both), else its own colour. (The CPU first asks its blocks' deepest depths
+// whether the walk can find anything; that only skips walks that find nothing.)
+fn behind(p: u32) -> vec4<f32> {
+    let own = own_color(p);
+    let m = motion_of(p);
+    let e = extent(m);
+    if !(e >= STILL) {
+        return own;
+    }
+    let v = m.next - m.prev;
+    let l = length2(v);
+    if is_nan(l) || l <= 0.0 {
+        return own;
+    }
+    let dir = v / l;
+    let limit = depth[p] * (1.0 + config.depth_tolerance);
+    let steps = u32(ceil(min(e, config.max_curve) + 2.0));
+    let now = vec2<f32>(f32(p % config.width) + 0.5, f32(p / config.width) + 0.5);
+    var sum = vec4<f32>(0.0);
+    var found = 0u;
+    for (var s = 0; s < 2; s++) {
+        let side = select(-1.0, 1.0, s == 0);
+        for (var k = 1u; k <= steps; k++) {
+            let x = now.x + side * f32(k) * dir.x;
+            let y = now.y + side * f32(k) * dir.y;
+            if !(x >= 0.0 && y >= 0.0 && x < f32(config.width) && y < f32(config.height)) {
+                break;
+            }
+            let j = u32(y) * config.width + u32(x);
+            if depth[j] > limit {
+                sum += own_color(j);
+                found += 1u;
+                break;
+            }
+        }
+    }
+    if found == 0u {
+        return own;
+    }
+    return sum / f32(found);
+}
+
+// Stage 3: each pixel's output from its sums (`Scatter::resolve`), computed in the channels'
+// scaled units (so no sum of huge colours overflows f32) and scaled back at the end.
+@compute @workgroup_size(WORKGROUP)
+fn resolve(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let p = flat(group, groups, lane);
+    let n = pixels();
+    if p >= n {
+        return;
+    }
+    let own = own_color(p);
+    let total = decode(p, 4u);
+    var result = own;
+    if total > 0.0 {
+        let opaque = (atomicLoad(&state[FLAGS]) & OPAQUE) != 0u;
+        var sums = vec4<f32>(0.0);
+        var e = vec4<i32>(0);
+        for (var ch = 0u; ch < 4u; ch++) {
+            if ch == 3u && opaque {
+                // An opaque frame's alpha sums are its weight sums.
+                sums[ch] = total;
+                e[ch] = 0;
+            } else {
+                sums[ch] = decode(p, ch);
+                e[ch] = scale_exponent(ch);
+            }
+        }
+        if config.exposure == 0u {
+            // The paper's eq. 4 (w_b is at least 0).
+            let wb = config.background_weight;
+            for (var ch = 0u; ch < 4u; ch++) {
+                let scaled = ldexp(own[ch], -e[ch]);
+                result[ch] = ldexp((sums[ch] + wb * scaled) / (total + wb), e[ch]);
+            }
+        } else if total < 1.0 {
+            let rest = 1.0 - total;
+            var back = own;
+            if rest > COVERED {
+                back = behind(p);
+            }
+            for (var ch = 0u; ch < 4u; ch++) {
+                result[ch] = ldexp(sums[ch], e[ch]) + rest * back[ch];
+            }
+        } else {
+            for (var ch = 0u; ch < 4u; ch++) {
+                result[ch] = ldexp(sums[ch] / total, e[ch]);
+            }
+        }
+    }
+    out[p] = result.x;
+    out[n + p] = result.y;
+    out[2u * n + p] = result.z;
+    out[3u * n + p] = result.w;
+}

@@ -1,0 +1,660 @@
+//! scatter on the GPU (src/gpu/scatter.wgsl: reach → accumulate → resolve) against the CPU
+//! reference (src/motion/scatter/), every normalisation × curve kind × weight, with shutter
+//! offsets, on generated frames: a spinning rotor over a panning background, curved motion
+//! over noise with alpha and depth motion, and stress frames (NaN, ±∞ and huge positions,
+//! colours and depths, through the numeric policy as a run applies it); its determinism (two
+//! runs, other workgroup sizes and a reversed moving list give the same bits); and
+//! `blur --algorithm scatter --backend wgpu` through the CLI, with the fallback of a frame
+//! over the device's limits. Skips as tests/gpu.rs says without an adapter (a failure under
+//! `SHUTTER_REQUIRE_GPU=1`).
+
+#![cfg(feature = "gpu")]
+
+use std::io::Write;
+
+use shutter::frame::{Color, Frame, Positions};
+use shutter::gpu::scatter::Order;
+use shutter::motion::scatter::scatter;
+use shutter::motion::{CurveKind, Normalize, ScatterParams, Shutter, Weight};
+use shutter::numeric::{sanitize, DepthKind};
+
+use crate::gpu::with_gpu::gpu;
+use crate::support::*;
+
+/// What the GPU may differ by, relative to the range of the CPU's output channel.
+///
+/// The GPU computes the same curves and the same coverage model in f32, relative to each
+/// moving pixel's corner, where the CPU uses absolute f64; deposits are rounded to 2⁻³² of
+/// the channel's colour bound and summed exactly, where the CPU sums in f64. A pixel whose
+/// deposits come from the same columns with the same decisions agrees to the f32 rounding of
+/// its geometry: ~2⁻¹⁵ px on a coordinate of a few hundred pixels, which moves a coverage by
+/// ~3·10⁻⁵ of a pixel and an output by that share of the colour step, and resolve's division
+/// in f32 (a few ulp). Arcs add the f32 rounding of `atan2`, `sin` and `cos` on angles of a
+/// few radians, scaled by the radius. [`AGREE`] is 10⁻³ of the range: thirty times the worst
+/// of those measured (arcs, below), for drivers whose `sin`, `cos` and `atan2` are coarser
+/// than lavapipe's (WGSL allows them far more error than a correctly rounded f32).
+///
+/// A pixel differs by more where a rounding moves a decision:
+/// - a segment count at the flatness boundary (`ceil` of a value within a rounding of an
+///   integer): that curve's chords move by up to the flatness (0.1 px), which moves its
+///   deposits near the chords by up to ~1 % of the colour step. A rotor is the worst case:
+///   every pixel at one radius has the same bend, so whole rings of curves sit on one
+///   boundary together (measured: 0.36 % of the pixels of `rotor fast`, max 1.0·10⁻²; with a
+///   fixed segment count the same frame has no pixel outside 2·10⁻³).
+/// - a depth test on its threshold, the still test at exactly 0.25 px, a `behind` search
+///   stepping onto a neighbouring pixel, or the exposure's "covered less than 1" with the
+///   share within a rounding of 1 − 10⁻³: one curve's deposit or one pixel's background
+///   estimate, at most the whole colour step, so [`MAX`] is the range.
+///
+/// [`FLIPS`] bounds the share of pixels outside [`AGREE`], and [`MEAN`] the mean over all
+/// pixels, flips included.
+///
+/// Stress frames ([`STRESS`]) carry colours of ±10³⁰ (the numeric policy's clamp), depths up
+/// to 10³⁸ and positions 10¹² px away. There a curve's depth, the quadratic through its three
+/// depths clamped at 0, is a sum of terms of 10³⁰ and more whose f32 and f64 roundings
+/// disagree about its sign wherever it is below ~10²², so whether it is exactly 0 (and passes
+/// a pixel of depth 0, whose limit is 0) is a coin toss: measured, 10 pixels in 2000 (0.5 %)
+/// of `stress 50×40` flip, every one of depth 0, alpha by up to 0.8 of its range. Their share
+/// and mean are bound by [`STRESS`]: 2 % and 5·10⁻³.
+///
+/// Measured on lavapipe (Mesa 22.3, LLVM 15) over every frame and setting here (the
+/// `gpu: scatter` lines the tests print), away from flips: Bézier within 6.3·10⁻⁷ of the
+/// range, arcs within 3.0·10⁻⁵ (1.8·10⁻⁴ before the arc's angles were taken relative to
+/// p(0)'s). With flips: 8.9·10⁻⁴ for arcs at flatness 0.02 (no pixel outside [`AGREE`]),
+/// 1.2·10⁻² and 0.36 % of pixels on `rotor fast`, mean at most 1.5·10⁻⁵; a 960×540 frame of
+/// curved motion has one pixel at 0.2 (a background estimate), mean 3.2·10⁻⁶.
+const AGREE: f32 = 1e-3;
+/// The largest difference at any pixel.
+const MAX: f32 = 1.0;
+/// The share of pixels allowed outside [`AGREE`].
+const FLIPS: f64 = 0.01;
+/// The mean absolute difference, relative to the range.
+const MEAN: f64 = 3e-5;
+/// The share outside [`AGREE`] and the mean on stress frames.
+const STRESS: (f64, f64) = (0.02, 5e-3);
+
+/// Per-channel difference statistics of `got` against `cpu`, relative to the CPU channel's
+/// range.
+struct Parity {
+    max: f32,
+    mean: f64,
+    outside: f64,
+    worst: usize,
+}
+
+fn parity(got: &[f32], cpu: &[f32]) -> Parity {
+    assert_eq!(got.len(), cpu.len());
+    let (lo, hi) = cpu
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+    // A channel constant but for rounding (an alpha of 1 with a few outputs an ulp below)
+    // has no range to be relative to: its differences are taken as they are.
+    let range = if hi - lo > 1e-4 * hi.abs().max(lo.abs()).max(1.0) {
+        hi - lo
+    } else {
+        1.0
+    };
+    let mut p = Parity {
+        max: 0.0,
+        mean: 0.0,
+        outside: 0.0,
+        worst: 0,
+    };
+    for (i, (&g, &c)) in got.iter().zip(cpu).enumerate() {
+        assert!(g.is_finite(), "pixel {i}: GPU gave {g}");
+        let e = (g - c).abs() / range;
+        if e > p.max {
+            p.max = e;
+            p.worst = i;
+        }
+        if e > AGREE {
+            p.outside += 1.0;
+        }
+        p.mean += e as f64;
+    }
+    let n = got.len().max(1) as f64;
+    p.mean /= n;
+    p.outside /= n;
+    p
+}
+
+/// The GPU's output for `frame` (which must run: no fallback).
+fn on_gpu(
+    frame: &Frame,
+    params: &ScatterParams,
+    shutter: impl Into<Shutter>,
+    order: Order,
+) -> Option<Color> {
+    let gpu = gpu()?;
+    let out = gpu
+        .try_scatter(frame, params, shutter, order)
+        .expect("the GPU scatter runs")
+        .expect("the frame has every pass scatter reads");
+    Some(out.color.unwrap())
+}
+
+/// Runs scatter on the CPU and on the GPU and checks the tolerance on every channel; prints
+/// the worst (max, mean, outside) seen. Returns the CPU's and the GPU's colour.
+fn compare(
+    what: &str,
+    frame: &Frame,
+    params: &ScatterParams,
+    shutter: impl Into<Shutter> + Copy + std::fmt::Debug,
+) -> Option<(Color, Color)> {
+    compare_within(what, frame, params, shutter, (FLIPS, MEAN))
+}
+
+/// [`compare`] with the share outside [`AGREE`] and the mean bound by `(flips, mean)`.
+fn compare_within(
+    what: &str,
+    frame: &Frame,
+    params: &ScatterParams,
+    shutter: impl Into<Shutter> + Copy + std::fmt::Debug,
+    (flips, mean): (f64, f64),
+) -> Option<(Color, Color)> {
+    let got = on_gpu(frame, params, shutter, Order::default())?;
+    let cpu = scatter(frame.clone(), params, shutter).color.unwrap();
+    assert_eq!(
+        got.a.is_some(),
+        cpu.a.is_some(),
+        "{what}: alpha kept or dropped alike"
+    );
+    let channels = [
+        ("R", &cpu.r, &got.r),
+        ("G", &cpu.g, &got.g),
+        ("B", &cpu.b, &got.b),
+    ];
+    let mut worst = (0.0f32, 0.0f64, 0.0f64);
+    for (name, c, g) in channels
+        .into_iter()
+        .chain(cpu.a.as_ref().zip(got.a.as_ref()).map(|(c, g)| ("A", c, g)))
+    {
+        let p = parity(g, c);
+        let at = (p.worst % frame.width, p.worst / frame.width);
+        assert!(
+            p.max <= MAX && p.mean <= mean && p.outside <= flips,
+            "{what}, {params:?}, shutter {shutter:?}, {name}: max {:e} at {at:?} (GPU {} CPU {}), \
+             mean {:e}, {:.4}% outside {AGREE:e}",
+            p.max,
+            g[p.worst],
+            c[p.worst],
+            p.mean,
+            p.outside * 100.0
+        );
+        worst = (
+            worst.0.max(p.max),
+            worst.1.max(p.mean),
+            worst.2.max(p.outside),
+        );
+    }
+    let _ = writeln!(
+        std::io::stderr(),
+        "gpu: scatter {what} {:?} {:?} {:?} shutter {shutter:?}: max {:e} mean {:e} outside {:.3}%",
+        params.normalize,
+        params.curve,
+        params.weight,
+        worst.0,
+        worst.1,
+        worst.2 * 100.0
+    );
+    Some((cpu, got))
+}
+
+/// Every normalisation × curve kind × weight, at the defaults otherwise.
+fn settings() -> Vec<ScatterParams> {
+    let mut all = Vec::new();
+    for normalize in [Normalize::Exposure, Normalize::Paper] {
+        for curve in [CurveKind::Bezier, CurveKind::Arc] {
+            for weight in [Weight::Box, Weight::Gaussian] {
+                all.push(ScatterParams {
+                    normalize,
+                    curve,
+                    weight,
+                    ..ScatterParams::default()
+                });
+            }
+        }
+    }
+    all
+}
+
+/// A frame of `w`×`h` from per-pixel colour, depth and (p(−1), p(+1)) (absolute, px).
+fn frame_of(
+    w: usize,
+    h: usize,
+    alpha: bool,
+    pixel: impl Fn(usize, usize) -> ([f32; 4], f32, [f32; 3], [f32; 3]),
+) -> Frame {
+    let n = w * h;
+    let mut c: [Vec<f32>; 4] = std::array::from_fn(|_| vec![0.0; n]);
+    let mut depth = vec![0.0; n];
+    let mut prev = Positions {
+        x: vec![0.0; n],
+        y: vec![0.0; n],
+        z: Some(vec![0.0; n]),
+    };
+    let mut next = prev.clone();
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            let (color, z, p, q) = pixel(x, y);
+            for k in 0..4 {
+                c[k][i] = color[k];
+            }
+            depth[i] = z;
+            (prev.x[i], prev.y[i]) = (p[0], p[1]);
+            (next.x[i], next.y[i]) = (q[0], q[1]);
+            prev.z.as_mut().unwrap()[i] = p[2];
+            next.z.as_mut().unwrap()[i] = q[2];
+        }
+    }
+    let mut f = Frame::new(w, h);
+    let [r, g, b, a] = c;
+    f.color = Some(Color {
+        r,
+        g,
+        b,
+        a: alpha.then_some(a),
+    });
+    f.depth = Some(depth);
+    f.prev = Some(prev);
+    f.next = Some(next);
+    f
+}
+
+/// A striped rotor spinning `turn` radians a frame in front of a checker panning right by
+/// `pan` px a frame (farther), no alpha: curved motion, occlusion and a moving background.
+fn rotor(w: usize, h: usize, turn: f32, pan: f32) -> Frame {
+    let (cx, cy) = (w as f32 * 0.45, h as f32 * 0.5);
+    let radius = h as f32 * 0.4;
+    frame_of(w, h, false, |x, y| {
+        let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
+        let (dx, dy) = (px - cx, py - cy);
+        let r = dx.hypot(dy);
+        let angle = dy.atan2(dx);
+        let blade = r < radius && (angle * 3.0 / std::f32::consts::PI).rem_euclid(2.0) < 0.6;
+        if blade {
+            let at = |t: f32| {
+                let a = angle + t * turn;
+                [cx + r * a.cos(), cy + r * a.sin(), 3.0]
+            };
+            let color = [2.0 + r / radius, 0.3, (angle * 5.0).sin(), 1.0];
+            (color, 3.0, at(-1.0), at(1.0))
+        } else {
+            let on = ((x / 6 + y / 6) % 2) as f32;
+            let color = [0.2 + on, 0.8 * on, 0.1, 1.0];
+            (color, 12.0, [px - pan, py, 12.0], [px + pan, py, 12.0])
+        }
+    })
+}
+
+/// Noise colour with alpha over two depth layers (2 and 9), each pixel moving on a curved
+/// path of up to `speed` px a frame with depth motion; a square in the middle still.
+fn curving(w: usize, h: usize, seed: u32, speed: f32) -> Frame {
+    let mut f = noise_frame(w, h, seed);
+    let n = w * h;
+    let v = [
+        noise(n, seed + 10, -speed, speed),
+        noise(n, seed + 11, -speed, speed),
+    ];
+    let bend = [
+        noise(n, seed + 12, -4.0, 4.0),
+        noise(n, seed + 13, -4.0, 4.0),
+    ];
+    let dz = noise(n, seed + 14, -1.0, 1.0);
+    let depth = f.depth.clone().unwrap();
+    let mut prev = Positions {
+        x: vec![0.0; n],
+        y: vec![0.0; n],
+        z: Some(vec![0.0; n]),
+    };
+    let mut next = prev.clone();
+    for i in 0..n {
+        let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+        let still = (x - w as f32 * 0.5).abs() < 6.0 && (y - h as f32 * 0.5).abs() < 6.0;
+        let (vx, vy, bx, by) = if still {
+            (0.0, 0.0, 0.0, 0.0)
+        } else {
+            (v[0][i], v[1][i], bend[0][i], bend[1][i])
+        };
+        prev.x[i] = x - vx + bx;
+        prev.y[i] = y - vy + by;
+        next.x[i] = x + vx + bx;
+        next.y[i] = y + vy + by;
+        prev.z.as_mut().unwrap()[i] = depth[i] - dz[i];
+        next.z.as_mut().unwrap()[i] = depth[i] + dz[i];
+    }
+    f.prev = Some(prev);
+    f.next = Some(next);
+    f
+}
+
+/// [`curving`] poisoned with NaN, ±∞, huge, tiny and subnormal values in colour, depth and
+/// positions, then put through the numeric policy as a run does before any pass.
+fn stress(w: usize, h: usize, seed: u32) -> Frame {
+    let mut f = curving(w, h, seed, 25.0);
+    let n = w * h;
+    let values = [
+        f32::NAN,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        1e38,
+        -1e38,
+        1e30,
+        1e12,
+        -3e9,
+        1e-30,
+        1e-40,
+        0.0,
+        -0.0,
+    ];
+    let c = f.color.as_mut().unwrap();
+    for (k, &value) in values.iter().cycle().take(n / 5).enumerate() {
+        let i = (k * 5 + 1) % n;
+        [&mut c.r, &mut c.g, &mut c.b][k % 3][i] = value;
+        f.depth.as_mut().unwrap()[(k * 7 + 2) % n] = value;
+        let (prev, next) = (f.prev.as_mut().unwrap(), f.next.as_mut().unwrap());
+        prev.x[(k * 11 + 3) % n] = value;
+        next.y[(k * 13 + 4) % n] = value;
+        prev.z.as_mut().unwrap()[(k * 17 + 5) % n] = value;
+    }
+    sanitize(&mut f, DepthKind::Depth);
+    f
+}
+
+#[test]
+fn scatter_matches_the_cpu_on_a_rotor_over_a_pan() {
+    for params in settings() {
+        compare("rotor", &rotor(96, 64, 0.35, 6.0), &params, 0.5);
+        compare("rotor fast", &rotor(80, 70, 0.9, 15.0), &params, 1.0);
+    }
+}
+
+#[test]
+fn scatter_matches_the_cpu_on_curved_motion_with_alpha_and_depth_motion() {
+    for params in settings() {
+        compare("curving", &curving(61, 47, 3, 12.0), &params, 0.5);
+        // Without the depth planes of the positions.
+        let mut f = curving(50, 41, 5, 20.0);
+        f.prev.as_mut().unwrap().z = None;
+        compare("curving without z", &f, &params, 0.75);
+    }
+}
+
+#[test]
+fn scatter_matches_the_cpu_with_the_shutter_offset() {
+    // Opening at the frame, closing at it, and between (issue 19).
+    for params in settings() {
+        for offset in [0.5, -0.5, 0.2] {
+            compare(
+                "rotor offset",
+                &rotor(72, 56, 0.5, 8.0),
+                &params,
+                Shutter { open: 0.5, offset },
+            );
+            compare(
+                "curving offset",
+                &curving(45, 39, 7, 15.0),
+                &params,
+                Shutter { open: 1.0, offset },
+            );
+        }
+    }
+}
+
+#[test]
+fn scatter_matches_the_cpu_on_stress_frames() {
+    for params in settings() {
+        compare_within("stress", &stress(50, 40, 9), &params, 0.5, STRESS);
+        compare_within("stress", &stress(33, 70, 10), &params, 1.0, STRESS);
+    }
+}
+
+#[test]
+fn scatter_matches_the_cpu_with_other_segments_flatness_and_curve_lengths() {
+    let base = ScatterParams::default();
+    for params in [
+        // The paper's fixed Δ: no flatness test.
+        ScatterParams {
+            flatness: 0.0,
+            ..base
+        },
+        // The most segments, a fine flatness, arcs.
+        ScatterParams {
+            segments: 64,
+            flatness: 0.02,
+            curve: CurveKind::Arc,
+            ..base
+        },
+        // Curves cut short (the scaling about p(0)) and a wide depth tolerance.
+        ScatterParams {
+            max_curve: 9.0,
+            depth_tolerance: 0.5,
+            normalize: Normalize::Paper,
+            background_weight: 0.5,
+            ..base
+        },
+    ] {
+        compare("rotor", &rotor(90, 60, 0.6, 10.0), &params, 1.0);
+        compare("curving", &curving(47, 43, 11, 30.0), &params, 0.5);
+    }
+}
+
+/// A still frame comes back as it went, bit for bit, on both sides.
+#[test]
+fn scatter_of_a_still_frame_on_the_gpu_is_its_input() {
+    let mut f = curving(40, 30, 13, 0.0);
+    let centres = |axis: usize| -> Vec<f32> {
+        (0..40 * 30)
+            .map(|i| [(i % 40) as f32 + 0.5, (i / 40) as f32 + 0.5][axis])
+            .collect()
+    };
+    f.prev = Some(Positions {
+        x: centres(0),
+        y: centres(1),
+        z: None,
+    });
+    f.next = f.prev.clone();
+    for params in settings() {
+        let Some(got) = on_gpu(&f, &params, 1.0, Order::default()) else {
+            return;
+        };
+        assert_eq!(&got, f.color.as_ref().unwrap(), "{params:?}");
+    }
+}
+
+/// The sums are integers: two runs, other workgroup sizes and the moving list walked
+/// backwards give the same bits, on a frame where many curves of signed colours cross each
+/// pixel (and on a stress frame).
+#[test]
+fn scatter_on_the_gpu_is_bit_identical_across_runs_workgroups_and_orders() {
+    if gpu().is_none() {
+        return;
+    }
+    let frames = [
+        ("curving", curving(64, 48, 17, 30.0)),
+        ("stress", stress(40, 32, 19)),
+        ("rotor", rotor(70, 50, 0.8, 12.0)),
+    ];
+    let orders = [
+        Order::default(),
+        Order::default(),
+        Order {
+            workgroup: 256,
+            reversed: false,
+        },
+        Order {
+            workgroup: 32,
+            reversed: true,
+        },
+        Order {
+            workgroup: 1,
+            reversed: true,
+        },
+    ];
+    for (what, frame) in &frames {
+        for params in [settings()[0], settings()[7]] {
+            let bits = |order: Order| -> Vec<u32> {
+                let c = on_gpu(frame, &params, 1.0, order).unwrap();
+                [&c.r, &c.g, &c.b]
+                    .into_iter()
+                    .chain(c.a.as_ref())
+                    .flatten()
+                    .map(|v| v.to_bits())
+                    .collect()
+            };
+            let first = bits(orders[0]);
+            for order in &orders[1..] {
+                assert!(
+                    first == bits(*order),
+                    "{what} {params:?}: {order:?} gave other bits than {:?}",
+                    orders[0]
+                );
+            }
+        }
+    }
+}
+
+/// The tolerance is not vacuous: the CPU's output for another depth tolerance (curves passing
+/// behind nearer surfaces they should not) or another shutter fails it.
+#[test]
+fn scatter_parity_fails_for_other_settings() {
+    let frame = rotor(96, 64, 0.35, 6.0);
+    let params = ScatterParams::default();
+    let Some(got) = on_gpu(&frame, &params, 0.5, Order::default()) else {
+        return;
+    };
+    for (what, other, shutter) in [
+        (
+            "another depth tolerance",
+            ScatterParams {
+                depth_tolerance: 10.0,
+                ..params
+            },
+            0.5,
+        ),
+        ("another shutter", params, 0.45),
+    ] {
+        let cpu = scatter(frame.clone(), &other, shutter).color.unwrap();
+        let p = parity(&got.r, &cpu.r);
+        assert!(
+            p.max > MAX || p.mean > MEAN || p.outside > FLIPS,
+            "{what} passes: max {:e}, mean {:e}, outside {}",
+            p.max,
+            p.mean,
+            p.outside
+        );
+    }
+}
+
+/// `blur --algorithm scatter --backend wgpu` writes the CPU's output within the tolerance
+/// above (nothing ran on the CPU instead), and that output is blurred; with the device's
+/// storage binding limit lowered below the frame, the CPU pass runs, counted and warned
+/// about, and writes the CPU's bytes.
+#[test]
+fn blur_scatter_on_wgpu_equals_the_cpu_and_falls_back_over_the_limits() {
+    if gpu().is_none() {
+        return;
+    }
+    let dir = small_scene("rotor", 96, 54, 1, 4);
+    let mut outputs = Vec::new();
+    for (backend, limit) in [("cpu", None), ("wgpu", None), ("wgpu", Some("4096"))] {
+        let stem = format!("{backend}{}", if limit.is_some() { "-limit" } else { "" });
+        let out = s(&dir.path().join(format!("{stem}.####.exr")));
+        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"));
+        command.args([
+            "blur",
+            "--algorithm",
+            "scatter",
+            "--color",
+            &role_pattern(dir.path(), "color"),
+            "--depth",
+            &role_pattern(dir.path(), "depth"),
+            "--prev",
+            &role_pattern(dir.path(), "prev"),
+            "--next",
+            &role_pattern(dir.path(), "next"),
+            "-o",
+            &out,
+            "--backend",
+            backend,
+            "--json",
+        ]);
+        if let Some(limit) = limit {
+            command.env("SHUTTER_GPU_MAX_BINDING", limit);
+        }
+        let o = command.output().unwrap();
+        assert!(o.status.success(), "{stem}: {}", stderr(&o));
+        let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        assert_eq!(json["backend"]["used"], backend, "{json}");
+        if backend == "wgpu" {
+            let on_cpu = json["backend"]["stages_on_cpu"].as_u64().unwrap();
+            if limit.is_some() {
+                assert!(on_cpu >= 1, "{json}");
+                let warnings = json["warnings"].to_string();
+                assert!(
+                    warnings.contains("fell back to the CPU") && warnings.contains("scatter"),
+                    "{json}"
+                );
+            } else {
+                assert_eq!(on_cpu, 0, "{json}");
+            }
+        }
+        outputs.push(dir.path().join(format!("{stem}.0001.exr")));
+    }
+    let read = |k: usize| read_exr_reference(&outputs[k]);
+    let input = read_exr_reference(&dir.path().join("color.0001.exr"));
+    let (cpu, got) = (read(0), read(1));
+    for name in ["R", "G", "B"] {
+        let (c, g) = (channel(&cpu, name), channel(&got, name));
+        assert_ne!(c, channel(&input, name), "{name}: nothing was blurred");
+        let p = parity(g, c);
+        let _ = writeln!(
+            std::io::stderr(),
+            "gpu: blur scatter rotor {name}: max {:e} mean {:e} outside {:.3}%",
+            p.max,
+            p.mean,
+            p.outside * 100.0
+        );
+        assert!(
+            p.max <= MAX && p.mean <= MEAN && p.outside <= FLIPS,
+            "{name}: max {:e} mean {:e} outside {}",
+            p.max,
+            p.mean,
+            p.outside
+        );
+    }
+    assert!(
+        std::fs::read(&outputs[0]).unwrap() == std::fs::read(&outputs[2]).unwrap(),
+        "the fallback wrote other bytes than the CPU"
+    );
+}
+
+/// The cost of the pass on the GPU at 960×540 (every pixel moving on a curve, the defaults),
+/// printed beside the CPU's (benchmarks measure, tests assert; a quarter of 1080p keeps the
+/// test short on a software driver).
+#[test]
+fn scatter_at_540p_prints_its_time() {
+    let Some(gpu) = gpu() else { return };
+    let frame = curving(960, 540, 23, 15.0);
+    let params = ScatterParams::default();
+    let _ = gpu.scatter(frame.clone(), &params, 0.5); // compiled and buffers made here
+    let start = std::time::Instant::now();
+    let got = gpu.scatter(frame.clone(), &params, 0.5);
+    let seconds = start.elapsed().as_secs_f64();
+    let start = std::time::Instant::now();
+    let cpu = scatter(frame, &params, 0.5);
+    let cpu_seconds = start.elapsed().as_secs_f64();
+    assert_eq!(gpu.stages_on_cpu(), 0, "the GPU scatter ran");
+    let p = parity(&got.color.unwrap().r, &cpu.color.unwrap().r);
+    let _ = writeln!(
+        std::io::stderr(),
+        "gpu: scatter 960x540 default, on the GPU (upload, dispatch, readback) {:.1} ms \
+         (cpu {:.1} ms); R max {:e} mean {:e}",
+        seconds * 1e3,
+        cpu_seconds * 1e3,
+        p.max,
+        p.mean
+    );
+    assert!(p.max <= MAX && p.mean <= MEAN && p.outside <= FLIPS);
+}
