@@ -70,6 +70,7 @@ pub mod tiles;
 pub mod reconstruct;
 #[cfg(feature = "gpu")]
 pub mod scatter;
+#[cfg(feature = "gpu")]
 pub mod stretch;
 #[cfg(feature = "gpu")]
 pub use stage::StageError;
