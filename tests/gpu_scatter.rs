@@ -73,49 +73,9 @@ const MEAN: f64 = 3e-5;
 /// The share outside [`AGREE`] and the mean on stress frames.
 const STRESS: (f64, f64) = (0.02, 5e-3);
 
-/// Per-channel difference statistics of `got` against `cpu`, relative to the CPU channel's
-/// range.
-struct Parity {
-    max: f32,
-    mean: f64,
-    outside: f64,
-    worst: usize,
-}
-
+/// This file's [`parity_within`]: pixels outside [`AGREE`] counted.
 fn parity(got: &[f32], cpu: &[f32]) -> Parity {
-    assert_eq!(got.len(), cpu.len());
-    let (lo, hi) = cpu
-        .iter()
-        .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
-    // A channel constant but for rounding (an alpha of 1 with a few outputs an ulp below)
-    // has no range to be relative to: its differences are taken as they are.
-    let range = if hi - lo > 1e-4 * hi.abs().max(lo.abs()).max(1.0) {
-        hi - lo
-    } else {
-        1.0
-    };
-    let mut p = Parity {
-        max: 0.0,
-        mean: 0.0,
-        outside: 0.0,
-        worst: 0,
-    };
-    for (i, (&g, &c)) in got.iter().zip(cpu).enumerate() {
-        assert!(g.is_finite(), "pixel {i}: GPU gave {g}");
-        let e = (g - c).abs() / range;
-        if e > p.max {
-            p.max = e;
-            p.worst = i;
-        }
-        if e > AGREE {
-            p.outside += 1.0;
-        }
-        p.mean += e as f64;
-    }
-    let n = got.len().max(1) as f64;
-    p.mean /= n;
-    p.outside /= n;
-    p
+    parity_within(got, cpu, AGREE)
 }
 
 /// The GPU's output for `frame` (which must run: no fallback).

@@ -52,64 +52,15 @@ const MEAN: f64 = 1e-5;
 /// The largest difference at any pixel: a flipped fragment can move a pixel across the range.
 const MAX: f32 = 1.0;
 
-/// Per-channel difference statistics of `got` against `cpu`, relative to the CPU channel's
-/// range.
-#[derive(Debug, Default, Clone, Copy)]
-pub(crate) struct Parity {
-    pub max: f32,
-    pub mean: f64,
-    pub outside: f64,
-    pub worst: usize,
-}
-
 impl Parity {
     fn within(&self) -> bool {
         self.max <= MAX && self.mean <= MEAN && self.outside <= FLIPS
     }
-
-    fn worse(self, other: Parity) -> Parity {
-        Parity {
-            max: self.max.max(other.max),
-            mean: self.mean.max(other.mean),
-            outside: self.outside.max(other.outside),
-            worst: if other.max > self.max {
-                other.worst
-            } else {
-                self.worst
-            },
-        }
-    }
 }
 
-pub(crate) fn parity(got: &[f32], cpu: &[f32]) -> Parity {
-    assert_eq!(got.len(), cpu.len());
-    let (lo, hi) = cpu
-        .iter()
-        .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
-    // A channel constant but for rounding (an alpha of 1) has no range to be relative to:
-    // its differences are taken as they are.
-    let range = if hi - lo > 1e-4 * hi.abs().max(lo.abs()).max(1.0) {
-        hi - lo
-    } else {
-        1.0
-    };
-    let mut p = Parity::default();
-    for (i, (&g, &c)) in got.iter().zip(cpu).enumerate() {
-        assert!(g.is_finite(), "pixel {i}: GPU gave {g}");
-        let e = (g - c).abs() / range;
-        if e > p.max {
-            p.max = e;
-            p.worst = i;
-        }
-        if e > AGREE {
-            p.outside += 1.0;
-        }
-        p.mean += e as f64;
-    }
-    let n = got.len().max(1) as f64;
-    p.mean /= n;
-    p.outside /= n;
-    p
+/// This file's [`parity_within`]: pixels outside [`AGREE`] counted.
+fn parity(got: &[f32], cpu: &[f32]) -> Parity {
+    parity_within(got, cpu, AGREE)
 }
 
 /// The worst parity over the channels of two colours.

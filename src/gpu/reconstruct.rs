@@ -28,7 +28,7 @@ use crate::motion::reconstruct::reconstruct_with;
 use crate::motion::reconstruct::{GatherInputs, ReconstructConfig};
 use crate::motion::ReconstructParams;
 
-use super::stage::{floats, read_back, StageError};
+use super::stage::{floats, kept, read_back, Caught, StageError};
 use super::Gpu;
 
 /// The shader's source.
@@ -66,9 +66,6 @@ pub(crate) struct ReconstructPass {
     layout: wgpu::BindGroupLayout,
     buffers: Mutex<HashMap<Shape, Buffers>>,
 }
-
-/// Frame shapes whose buffers are kept at once (a sequence has one; more are dropped).
-const KEPT_SHAPES: usize = 2;
 
 impl ReconstructPass {
     pub(crate) fn new(device: &wgpu::Device) -> ReconstructPass {
@@ -264,15 +261,11 @@ impl Gpu {
             .get_or_init(|| ReconstructPass::new(&self.device));
         // Errors from here on, the buffers' creation included, come back as a StageError
         // (the caller runs the CPU gather): out of memory as well as validation.
-        let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let caught = Caught::push(&self.device);
         let mut cache = pass.buffers.lock().unwrap_or_else(|e| e.into_inner());
-        if !cache.contains_key(&shape) && cache.len() >= KEPT_SHAPES {
-            cache.clear();
-        }
-        let buffers = cache
-            .entry(shape)
-            .or_insert_with(|| pass.make_buffers(&self.device, shape));
+        let buffers = kept(&mut cache, &shape, || {
+            pass.make_buffers(&self.device, shape)
+        });
 
         let mut clock = std::time::Instant::now();
         let queue = &self.queue;
@@ -341,12 +334,10 @@ impl Gpu {
         let bytes = channels * plane;
         encoder.copy_buffer_to_buffer(&buffers.color, 0, &buffers.readback, 0, bytes);
         queue.submit([encoder.finish()]);
-        let invalid = pollster::block_on(scope.pop());
-        let out_of_memory = pollster::block_on(memory.pop());
-        if let Some(error) = invalid.or(out_of_memory) {
+        if let Err(error) = caught.check() {
             // Buffers that failed are not kept for the next frame.
             cache.remove(&shape);
-            return Err(StageError::Device(error.to_string()));
+            return Err(error);
         }
         let out = floats(read_back(&self.device, &buffers.readback, bytes)?);
         self.mark(|t| &mut t.readback_ms, &mut clock)?;
@@ -389,18 +380,10 @@ mod tests {
             "variant: u32",
             "seed: u32",
         ];
-        let body = SHADER
-            .split("struct ReconstructConfig {")
-            .nth(1)
-            .and_then(|s| s.split('}').next())
-            .expect("the struct in reconstruct.wgsl");
-        let declared: Vec<String> = body
-            .lines()
-            .map(str::trim)
-            .filter(|l| !l.is_empty() && !l.starts_with("//"))
-            .map(|l| l.trim_end_matches(',').to_string())
-            .collect();
-        assert_eq!(declared, fields);
+        assert_eq!(
+            super::super::stage::wgsl_fields(SHADER, "ReconstructConfig"),
+            fields
+        );
     }
 
     #[test]

@@ -86,7 +86,7 @@ use crate::motion::Shutter;
 #[cfg(doc)]
 use crate::motion::scatter::STILL;
 
-use super::stage::{floats, read_back, StageError};
+use super::stage::{floats, kept, read_back, Caught, StageError};
 use super::Gpu;
 
 /// The shader's source.
@@ -150,9 +150,6 @@ pub(crate) struct ScatterPass {
     layout: wgpu::BindGroupLayout,
     buffers: Mutex<HashMap<usize, Buffers>>,
 }
-
-/// Frame sizes whose buffers are kept at once (a sequence has one; more are dropped).
-const KEPT_SIZES: usize = 2;
 
 impl ScatterPass {
     pub(crate) fn new(device: &wgpu::Device, order: Order) -> ScatterPass {
@@ -373,8 +370,7 @@ impl Gpu {
         }
         // Errors from here on, the pipelines' and buffers' creation included, come back as a
         // StageError (the caller runs the CPU pass): out of memory as well as validation.
-        let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let caught = Caught::push(&self.device);
         let made;
         let pass = if order == Order::default() {
             self.scatter
@@ -384,12 +380,9 @@ impl Gpu {
             &made
         };
         let mut cache = pass.buffers.lock().unwrap_or_else(|e| e.into_inner());
-        if !cache.contains_key(&pixels) && cache.len() >= KEPT_SIZES {
-            cache.clear();
-        }
-        let buffers = cache
-            .entry(pixels)
-            .or_insert_with(|| pass.make_buffers(&self.device, pixels));
+        let buffers = kept(&mut cache, &pixels, || {
+            pass.make_buffers(&self.device, pixels)
+        });
 
         let mut clock = std::time::Instant::now();
         let queue = &self.queue;
@@ -476,12 +469,10 @@ impl Gpu {
         let bytes = channels * plane;
         encoder.copy_buffer_to_buffer(&buffers.out, 0, &buffers.readback, 0, bytes);
         queue.submit([encoder.finish()]);
-        let invalid = pollster::block_on(scope.pop());
-        let out_of_memory = pollster::block_on(memory.pop());
-        if let Some(error) = invalid.or(out_of_memory) {
+        if let Err(error) = caught.check() {
             // Buffers that failed are not kept for the next frame.
             cache.remove(&pixels);
-            return Err(StageError::Device(error.to_string()));
+            return Err(error);
         }
         let out = floats(read_back(&self.device, &buffers.readback, bytes)?);
         self.mark(|t| &mut t.readback_ms, &mut clock)?;
@@ -521,18 +512,10 @@ mod tests {
             "flatness: f32",
             "depth_tolerance: f32",
         ];
-        let body = SHADER
-            .split("struct ScatterConfig {")
-            .nth(1)
-            .and_then(|s| s.split('}').next())
-            .expect("the struct in scatter.wgsl");
-        let declared: Vec<String> = body
-            .lines()
-            .map(str::trim)
-            .filter(|l| !l.is_empty() && !l.starts_with("//"))
-            .map(|l| l.trim_end_matches(',').to_string())
-            .collect();
-        assert_eq!(declared, fields);
+        assert_eq!(
+            super::super::stage::wgsl_fields(SHADER, "ScatterConfig"),
+            fields
+        );
     }
 
     #[test]

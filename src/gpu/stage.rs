@@ -14,9 +14,49 @@ use std::time::Instant;
 
 use super::{Gpu, GpuTimes};
 
-/// Sets of sizes whose buffers are kept at once per stage (a sequence has one; more are
-/// dropped).
+/// Sets of sizes whose buffers are kept at once per stage or pass (a sequence has one; more
+/// are dropped).
 const KEPT_SIZES: usize = 2;
+
+/// The buffers kept for `key` in `cache`, made with `make` when there are none; the cache
+/// is emptied first when it already holds [`KEPT_SIZES`] other keys.
+pub(crate) fn kept<'a, K: std::hash::Hash + Eq + Clone, B>(
+    cache: &'a mut HashMap<K, B>,
+    key: &K,
+    make: impl FnOnce() -> B,
+) -> &'a mut B {
+    if !cache.contains_key(key) && cache.len() >= KEPT_SIZES {
+        cache.clear();
+    }
+    cache.entry(key.clone()).or_insert_with(make)
+}
+
+/// The device's out-of-memory and validation error scopes, pushed together: errors from here
+/// on (buffers' and pipelines' creation included) come back from [`Caught::check`] as a
+/// [`StageError`], for the caller to run the CPU stage, rather than reaching wgpu's
+/// uncaptured-error handler. (Fields drop in order: validation, pushed last, pops first.)
+pub(crate) struct Caught {
+    validation: wgpu::ErrorScopeGuard,
+    memory: wgpu::ErrorScopeGuard,
+}
+
+impl Caught {
+    pub(crate) fn push(device: &wgpu::Device) -> Caught {
+        let memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        Caught { validation, memory }
+    }
+
+    /// Pops both scopes: the error either caught, if any.
+    pub(crate) fn check(self) -> Result<(), StageError> {
+        let invalid = pollster::block_on(self.validation.pop());
+        let out_of_memory = pollster::block_on(self.memory.pop());
+        match invalid.or(out_of_memory) {
+            Some(error) => Err(StageError::Device(error.to_string())),
+            None => Ok(()),
+        }
+    }
+}
 
 /// Why a GPU stage did not run (the caller runs the CPU stage instead).
 #[derive(Debug)]
@@ -228,15 +268,11 @@ impl Stage {
         // Errors from here on, the buffers' creation included, come back as a StageError
         // (the caller runs the CPU stage) rather than to wgpu's uncaptured-error handler:
         // out of memory as well as validation.
-        let memory = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-        let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let caught = Caught::push(&gpu.device);
         let mut cache = self.buffers.lock().unwrap_or_else(|e| e.into_inner());
-        if !cache.contains_key(&sizes) && cache.len() >= KEPT_SIZES {
-            cache.clear();
-        }
-        let buffers = cache
-            .entry(sizes.clone())
-            .or_insert_with(|| self.make_buffers(&gpu.device, &sizes));
+        let buffers = kept(&mut cache, &sizes, || {
+            self.make_buffers(&gpu.device, &sizes)
+        });
 
         let profiling = gpu.profiling();
         let mut clock = Instant::now();
@@ -294,12 +330,10 @@ impl Stage {
             offset += padded(bytes);
         }
         gpu.queue.submit([encoder.finish()]);
-        let invalid = pollster::block_on(scope.pop());
-        let out_of_memory = pollster::block_on(memory.pop());
-        if let Some(error) = invalid.or(out_of_memory) {
+        if let Err(error) = caught.check() {
             // Buffers that failed are not kept for the next frame.
             cache.remove(&sizes);
-            return Err(StageError::Device(error.to_string()));
+            return Err(error);
         }
         let words = read_back(&gpu.device, &buffers.readback, offset)?;
         mark(|t| &mut t.readback_ms)?;
@@ -337,6 +371,22 @@ pub(crate) fn read_back(
     };
     buffer.unmap();
     Ok(out)
+}
+
+/// The fields of WGSL struct `name` in `shader`, one `name: type` each, for the tests that
+/// hold a config uniform to its CPU struct.
+#[cfg(test)]
+pub(crate) fn wgsl_fields(shader: &str, name: &str) -> Vec<String> {
+    shader
+        .split(&format!("struct {name} {{"))
+        .nth(1)
+        .and_then(|s| s.split('}').next())
+        .unwrap_or_else(|| panic!("no struct {name} in the shader"))
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with("//"))
+        .map(|l| l.trim_end_matches(',').to_string())
+        .collect()
 }
 
 /// 32-bit words read back as f32 (bit for bit).

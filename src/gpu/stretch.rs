@@ -69,7 +69,7 @@ use rayon::prelude::*;
 use crate::frame::Frame;
 use crate::motion::stretch::{stages, stretch_with, StretchConfig, StretchParams};
 
-use super::stage::{floats, read_back, StageError};
+use super::stage::{floats, kept, read_back, Caught, StageError};
 use super::Gpu;
 
 /// The shader's source.
@@ -140,9 +140,6 @@ pub(crate) struct StretchPass {
     render_layout: wgpu::BindGroupLayout,
     buffers: Mutex<HashMap<Shape, Buffers>>,
 }
-
-/// Frame sizes whose buffers are kept at once (a sequence has one; more are dropped).
-const KEPT_SHAPES: usize = 2;
 
 fn entry(
     binding: u32,
@@ -463,22 +460,16 @@ impl Gpu {
         let pass = self.stretch.get_or_init(|| StretchPass::new(&self.device));
         // Errors from here on, the buffers' creation included, come back as a StageError
         // (the caller runs the CPU stages): out of memory as well as validation.
-        let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let caught = Caught::push(&self.device);
         let mut cache = pass.buffers.lock().unwrap_or_else(|e| e.into_inner());
-        if !cache.contains_key(&shape) && cache.len() >= KEPT_SHAPES {
-            cache.clear();
-        }
-        let buffers = cache
-            .entry(shape)
-            .or_insert_with(|| pass.make_buffers(&self.device, shape));
+        let buffers = kept(&mut cache, &shape, || {
+            pass.make_buffers(&self.device, shape)
+        });
         let result = self.run_stretch(pass, buffers, config, planes, z, v);
-        let invalid = pollster::block_on(scope.pop());
-        let out_of_memory = pollster::block_on(memory.pop());
-        if let Some(error) = invalid.or(out_of_memory) {
+        if let Err(error) = caught.check() {
             // Buffers that failed are not kept for the next frame.
             cache.remove(&shape);
-            return Err(StageError::Device(error.to_string()));
+            return Err(error);
         }
         result
     }
@@ -691,18 +682,10 @@ mod tests {
             "depth_limit: f32",
             "texture_blur: u32",
         ];
-        let body = SHADER
-            .split("struct StretchConfig {")
-            .nth(1)
-            .and_then(|s| s.split('}').next())
-            .expect("the struct in stretch.wgsl");
-        let declared: Vec<String> = body
-            .lines()
-            .map(str::trim)
-            .filter(|l| !l.is_empty() && !l.starts_with("//"))
-            .map(|l| l.trim_end_matches(',').to_string())
-            .collect();
-        assert_eq!(declared, fields);
+        assert_eq!(
+            super::super::stage::wgsl_fields(SHADER, "StretchConfig"),
+            fields
+        );
     }
 
     #[test]

@@ -503,3 +503,65 @@ pub fn tracked_disc_change(before: &shutter::frame::Frame, after: &shutter::fram
     }
     worst
 }
+
+/// Per-channel difference statistics of a GPU twin's output against the CPU reference's,
+/// relative to the CPU channel's range ([`parity_within`]).
+#[derive(Debug, Default, Clone, Copy)]
+pub struct Parity {
+    /// The largest difference, and the pixel where it is.
+    pub max: f32,
+    pub worst: usize,
+    /// The mean difference.
+    pub mean: f64,
+    /// The share of pixels whose difference exceeds the tolerance asked for.
+    pub outside: f64,
+}
+
+impl Parity {
+    /// The worse of two, statistic by statistic.
+    pub fn worse(self, other: Parity) -> Parity {
+        Parity {
+            max: self.max.max(other.max),
+            mean: self.mean.max(other.mean),
+            outside: self.outside.max(other.outside),
+            worst: if other.max > self.max {
+                other.worst
+            } else {
+                self.worst
+            },
+        }
+    }
+}
+
+/// The [`Parity`] of channel `got` against `cpu`, counting the pixels that differ by more than
+/// `agree` of the range. A channel constant but for rounding (an alpha of 1 with a few outputs
+/// an ulp below) has no range to be relative to: its differences are taken as they are. Every
+/// value of `got` must be finite.
+pub fn parity_within(got: &[f32], cpu: &[f32], agree: f32) -> Parity {
+    assert_eq!(got.len(), cpu.len());
+    let (lo, hi) = cpu
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+    let range = if hi - lo > 1e-4 * hi.abs().max(lo.abs()).max(1.0) {
+        hi - lo
+    } else {
+        1.0
+    };
+    let mut p = Parity::default();
+    for (i, (&g, &c)) in got.iter().zip(cpu).enumerate() {
+        assert!(g.is_finite(), "pixel {i}: GPU gave {g}");
+        let e = (g - c).abs() / range;
+        if e > p.max {
+            p.max = e;
+            p.worst = i;
+        }
+        if e > agree {
+            p.outside += 1.0;
+        }
+        p.mean += e as f64;
+    }
+    let n = got.len().max(1) as f64;
+    p.mean /= n;
+    p.outside /= n;
+    p
+}
