@@ -425,9 +425,9 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
     let row = min(u32(max(f32(y) + tile_shift, 0.0)) / config.tile, rows() - 1u);
     var m = tile_at(column, row);
     var m_length = sqrt(m.x * m.x + m.y * m.y);
-    // Offset exposures: where the jittered lookup lands on a still tile, the pixel's own
-    // tile instead (see the CPU twin).
-    if config.offset != 0.0 && m_length < HALF_PIXEL {
+    // Where the jittered lookup lands on a still tile, the pixel's own tile instead: always
+    // in the exposure variant, under an offset exposure in the 2014 one (see the CPU twin).
+    if (config.offset != 0.0 || config.variant == 3u) && m_length < HALF_PIXEL {
         m = tile_at(min(x / config.tile, columns() - 1u), min(y / config.tile, rows() - 1u));
         m_length = sqrt(m.x * m.x + m.y * m.y);
     }
