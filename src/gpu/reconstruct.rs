@@ -4,11 +4,12 @@
 //! motion-blur reconstruction.
 //!
 //! In: what [`reconstruct_with`] hands its gather ([`GatherInputs`]): the packed texels, the
-//! pixel velocity (paper and dual) and the tile grid, all built on the CPU (tile_max,
-//! neighbor_max, dilate and pack stay there in this slice). In and out: the premultiplied
-//! colour, written in place where the CPU writes it. Bindings, in order: the
-//! [`ReconstructConfig`] uniform, texels, velocity, tiles, colour — the CPU functions'
-//! arguments; planar structs travel as their planes one after the other.
+//! pixel velocity (paper and dual), the tile grid and the exposure variant's mattes
+//! ([`crate::motion::matte`]), all built on the CPU (tile_max, neighbor_max, dilate, pack and
+//! matte stay there). In and out: the premultiplied colour, written in place where the CPU
+//! writes it. Bindings, in order: the [`ReconstructConfig`] uniform, texels, velocity, tiles,
+//! colour, mattes — the CPU functions' arguments; planar structs travel as their planes one
+//! after the other.
 //!
 //! Both sides compute in f32 with the same operations in the same order and the same hash
 //! ([`crate::numeric::hash`]); what can differ is the rounding of `sqrt` and division (WGSL
@@ -46,6 +47,8 @@ struct Shape {
     texel: usize,
     /// Whether the gather reads the pixel velocity (paper, dual).
     velocity: bool,
+    /// Whether the gather reads the mattes (exposure).
+    mattes: bool,
 }
 
 /// The buffers of one frame shape.
@@ -55,6 +58,7 @@ struct Buffers {
     velocity: wgpu::Buffer,
     tiles: wgpu::Buffer,
     color: wgpu::Buffer,
+    mattes: wgpu::Buffer,
     readback: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
 }
@@ -102,6 +106,7 @@ impl ReconstructPass {
                 storage(2, true),
                 storage(3, true),
                 storage(4, false),
+                storage(5, true),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -164,14 +169,18 @@ impl ReconstructPass {
             color_bytes,
             U::MAP_READ | U::COPY_DST,
         );
-        let entries: Vec<wgpu::BindGroupEntry> = [&config, &texels, &velocity, &tiles, &color]
-            .into_iter()
-            .enumerate()
-            .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                binding: binding as u32,
-                resource: buffer.as_entire_binding(),
-            })
-            .collect();
+        // Other variants do not read it: a word, to fill the binding.
+        let matte_floats = if shape.mattes { 3 * shape.pixels } else { 1 };
+        let mattes = buffer("reconstruct mattes", floats(matte_floats), input);
+        let entries: Vec<wgpu::BindGroupEntry> =
+            [&config, &texels, &velocity, &tiles, &color, &mattes]
+                .into_iter()
+                .enumerate()
+                .map(|(binding, buffer)| wgpu::BindGroupEntry {
+                    binding: binding as u32,
+                    resource: buffer.as_entire_binding(),
+                })
+                .collect();
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("reconstruct"),
             layout: &self.layout,
@@ -183,6 +192,7 @@ impl ReconstructPass {
             velocity,
             tiles,
             color,
+            mattes,
             readback,
             bind_group,
         }
@@ -228,7 +238,7 @@ impl Gpu {
         if pixels == 0 {
             return Ok(());
         }
-        let (texels, velocity, tiles, entry): (&[f32], _, _, _) = match *inputs {
+        let (texels, velocity, tiles, mattes, entry): (&[f32], _, _, &[f32], _) = match *inputs {
             GatherInputs::Paper {
                 texels,
                 velocity,
@@ -237,17 +247,27 @@ impl Gpu {
                 bytemuck::cast_slice(texels),
                 Some(velocity),
                 neighbors,
+                &[],
                 false,
             ),
-            GatherInputs::Stable { texels, tiles } => {
-                (bytemuck::cast_slice(texels), None, tiles, true)
-            }
+            GatherInputs::Stable {
+                texels,
+                mattes,
+                tiles,
+            } => (
+                bytemuck::cast_slice(texels),
+                None,
+                tiles,
+                bytemuck::cast_slice(mattes),
+                true,
+            ),
         };
         let shape = Shape {
             pixels,
             tiles: tiles.x.len(),
             texel: texels.len() / pixels,
             velocity: velocity.is_some(),
+            mattes: !mattes.is_empty(),
         };
         let largest = (texels.len().max(4 * pixels) * 4) as u64;
         if largest > self.max_binding() {
@@ -272,6 +292,9 @@ impl Gpu {
         let plane = (pixels * 4) as u64;
         queue.write_buffer(&buffers.config, 0, bytemuck::bytes_of(config));
         queue.write_buffer(&buffers.texels, 0, bytemuck::cast_slice(texels));
+        if !mattes.is_empty() {
+            queue.write_buffer(&buffers.mattes, 0, bytemuck::cast_slice(mattes));
+        }
         if let Some(velocity) = velocity {
             queue.write_buffer(&buffers.velocity, 0, bytemuck::cast_slice(&velocity.x));
             queue.write_buffer(&buffers.velocity, plane, bytemuck::cast_slice(&velocity.y));

@@ -9,7 +9,8 @@
 // the 2014 filter). In and out: the premultiplied colour, written in place.
 //
 // Bindings, in the CPU functions' argument order: 0 the config, 1 texels, 2 velocity, 3
-// tiles, 4 colour. Planar buffers hold their planes one after the other, as the CPU's
+// tiles, 4 colour, and 5 the exposure variant's mattes (`gather_2014`'s third argument;
+// three words a pixel, src/motion/matte.rs; one unread word otherwise). Planar buffers hold their planes one after the other, as the CPU's
 // structs do: velocity x then y, tiles x then y, colour r, g, b, a.
 //
 // Numerics: the inputs obey the numeric policy (finite colour and velocity, packed depth at
@@ -52,6 +53,9 @@ struct ReconstructConfig {
 @group(0) @binding(2) var<storage, read> velocity: array<f32>;
 @group(0) @binding(3) var<storage, read> tiles: array<f32>;
 @group(0) @binding(4) var<storage, read_write> color: array<f32>;
+// Per pixel: α, then the indices (as the bits of a float) of the pixels whose colours are its
+// moving and still partners (`Matte`).
+@group(0) @binding(5) var<storage, read> mattes: array<f32>;
 
 // The CPU's constants (src/motion/reconstruct.rs); a unit test in src/gpu/reconstruct.rs
 // checks each against the Rust value.
@@ -382,6 +386,139 @@ fn split(nearest: Texel2014, scale: f32, x: u32, y: u32, offset: vec2<f32>) -> S
     return Split(a, share_a, b, share_b);
 }
 
+// `matte::surfaces`: pixel i's coverage by the moving surface, and the colours (RGB) of its
+// moving and still surfaces.
+struct Surfaces {
+    alpha: f32,
+    moving: vec3<f32>,
+    still: vec3<f32>,
+}
+
+fn surfaces(i: u32) -> Surfaces {
+    let alpha = mattes[3u * i];
+    let c = texel8(i);
+    let fi = bitcast<u32>(mattes[3u * i + 1u]);
+    let bi = bitcast<u32>(mattes[3u * i + 2u]);
+    if fi == i && bi == i {
+        // No pair: α is the label, and both surfaces are the colour itself.
+        return Surfaces(alpha, c.color.xyz, c.color.xyz);
+    }
+    let f = texel8(fi).color.xyz;
+    let b = texel8(bi).color.xyz;
+    let low = min(min(c.color.xyz, f), b);
+    let high = max(max(c.color.xyz, f), b);
+    var out: Surfaces;
+    out.alpha = alpha;
+    if c.length >= HALF_PIXEL {
+        out.moving = clamp((c.color.xyz - (1.0 - alpha) * b) / alpha, low, high);
+        out.still = b;
+    } else {
+        out.moving = f;
+        out.still = clamp((c.color.xyz - alpha * f) / (1.0 - alpha), low, high);
+    }
+    return out;
+}
+
+// `split_by_cover`: the exposure variant's tap split by the mattes' coverage; `valid` false
+// where the CPU returns `None` (then `split` reads the tap).
+struct Cover {
+    parts: Split,
+    valid: bool,
+}
+
+fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>) -> Cover {
+    var out: Cover;
+    out.valid = false;
+    let corners = around(x, y, offset);
+    // Away from every silhouette (no pixel of the four has a pair): `split` reads the tap.
+    var plain = true;
+    for (var q = 0u; q < 4u; q++) {
+        let j = corners.index[q];
+        if bitcast<u32>(mattes[3u * j + 1u]) != j || bitcast<u32>(mattes[3u * j + 2u]) != j {
+            plain = false;
+        }
+    }
+    if plain {
+        return out;
+    }
+    let near = texel8(nearest);
+    let moves = near.length >= HALF_PIXEL;
+    var still_z = near.z;
+    var have_still = !moves;
+    for (var q = 0u; q < 4u; q++) {
+        let t = texel8(corners.index[q]);
+        if t.length < HALF_PIXEL {
+            if !have_still {
+                still_z = t.z;
+                have_still = true;
+            } else if abs(t.z - still_z) * scale >= 1.0 {
+                return out;
+            }
+        }
+    }
+    var moving = Texel2014(vec4<f32>(0.0), 0.0, 0.0, 0.0, 0.0);
+    var still = Texel2014(vec4<f32>(0.0), 0.0, 0.0, 0.0, 0.0);
+    var share_m = 0.0;
+    var share_s = 0.0;
+    var heavy_m = 0.0;
+    var heavy_s = -1.0;
+    var still_colour = vec4<f32>(0.0);
+    for (var q = 0u; q < 4u; q++) {
+        let j = corners.index[q];
+        let w = corners.weight[q];
+        let t = texel8(j);
+        let s = surfaces(j);
+        let w_m = w * s.alpha;
+        let w_s = w * (1.0 - s.alpha);
+        moving.color += vec4<f32>(w_m * s.moving, w_m * t.color.w);
+        share_m += w_m;
+        share_s += w_s;
+        let t_moves = t.length >= HALF_PIXEL;
+        var fg_texel = t;
+        var bg_texel = t;
+        if t_moves {
+            bg_texel = texel8(bitcast<u32>(mattes[3u * j + 2u]));
+        } else {
+            fg_texel = texel8(bitcast<u32>(mattes[3u * j + 1u]));
+        }
+        if w_m > heavy_m && fg_texel.length >= HALF_PIXEL {
+            heavy_m = w_m;
+            moving.z = fg_texel.z;
+            moving.vx = fg_texel.vx;
+            moving.vy = fg_texel.vy;
+            moving.length = fg_texel.length;
+        }
+        if w_s > heavy_s {
+            heavy_s = w_s;
+            still.z = bg_texel.z;
+            still.vx = bg_texel.vx;
+            still.vy = bg_texel.vy;
+            still.length = bg_texel.length;
+            still_colour = vec4<f32>(s.still, bg_texel.color.w);
+        }
+    }
+    if heavy_m == 0.0 {
+        share_s += share_m;
+        share_m = 0.0;
+        moving = Texel2014(vec4<f32>(0.0), 0.0, 0.0, 0.0, 0.0);
+    }
+    if !moves {
+        still_colour = vec4<f32>(surfaces(nearest).still, near.color.w);
+        still.z = near.z;
+        still.vx = near.vx;
+        still.vy = near.vy;
+        still.length = near.length;
+    }
+    still.color = share_s * still_colour;
+    out.valid = true;
+    if moves {
+        out.parts = Split(moving, share_m, still, share_s);
+    } else {
+        out.parts = Split(still, share_s, moving, share_m);
+    }
+    return out;
+}
+
 // A tap surface's foreground (x) and background (y) weights; `share`: the tap's reach
 // towards the centre in spreads (1 centred); `window`: the centre's own spread times its
 // side's share of the line (the CPU's `own_length * extent`).
@@ -490,11 +627,17 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
                 let t = (f32(tap) + tap_offset) * step;
                 let px = u32(max(f32(x) + 0.5 + sx * t, 0.0));
                 let py = u32(max(f32(y) + 0.5 + sy * t, 0.0));
-                let nearest = texel8(min(py, height - 1u) * width + min(px, width - 1u));
+                let nearest_index = min(py, height - 1u) * width + min(px, width - 1u);
+                let nearest = texel8(nearest_index);
                 let at = vec2<f32>(sx * t, sy * t);
                 var parts: Split;
                 if exposure {
-                    parts = split(nearest, scale, x, y, at);
+                    let cover = split_by_cover(nearest_index, scale, x, y, at);
+                    if cover.valid {
+                        parts = cover.parts;
+                    } else {
+                        parts = split(nearest, scale, x, y, at);
+                    }
                 } else {
                     parts.a = nearest;
                     if nearest.length >= HALF_PIXEL {
@@ -537,9 +680,14 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
             missing = clamp(1.0 - (w_fg + w_bg) / count, 0.0, 1.0);
             inverse = 1.0 / count;
         }
-        var background = centre_color;
+        // A still centre's own surface: its colour less the moving surface's fringe.
+        var own_colour = centre_color;
+        if own_length < HALF_PIXEL {
+            own_colour = vec4<f32>(surfaces(i).still, centre_color.w);
+        }
+        var background = own_colour;
         if w_bg > 0.0 {
-            background = cover * centre_color + (1.0 - cover) * bg / w_bg;
+            background = cover * own_colour + (1.0 - cover) * bg / w_bg;
         }
         return (fg + bg) * inverse + background * missing;
     }

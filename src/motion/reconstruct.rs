@@ -2,7 +2,9 @@
 //! Reconstruction Filter for Plausible Motion Blur* (Listing 1, Fig. 4).
 //!
 //! Pipeline: half-spread velocity V (clamped to [0.5, k] px) → [`super::tile_max`] →
-//! [`super::neighbor_max`] → [`pack`] (texels) → [`gather`]. Inputs: colour (RGBA, premultiplied), depth,
+//! [`super::neighbor_max`] → [`pack`] (texels) → [`gather`]; the 2014 variants dilate the
+//! tiles instead of NeighborMax ([`super::dilate`]), and the exposure variant mattes the
+//! silhouettes ([`super::matte`]) before its gather. Inputs: colour (RGBA, premultiplied), depth,
 //! velocity; prev/next are never read. Each output pixel is a weighted average of input
 //! colours with non-negative weights (the centre's weight is at least 1/k), so it lies in the
 //! per-channel range of the inputs and a uniform colour stays uniform.
@@ -28,6 +30,7 @@
 
 use rayon::prelude::*;
 
+use super::matte::{self, Matte};
 use super::tile_max::TileGrid;
 use super::Shutter;
 use crate::frame::{Color, Frame, Velocity};
@@ -59,8 +62,9 @@ pub enum Variant {
     /// reaches the centre in the other half), and what the taps leave uncovered is filled
     /// with the centre's own surface for the share of the shutter it covers the pixel
     /// (1/(2|V|)) and the background behind it for the rest. Each tap is read between
-    /// pixels and split by surface ([`split`]), and the taps along the pixel's own vector
-    /// sit half a step from those along the tile's.
+    /// pixels and split by surface ([`split`]), by each pixel's coverage where a moving
+    /// surface's edge crosses it ([`split_by_cover`], [`super::matte`]), and the taps along
+    /// the pixel's own vector sit half a step from those along the tile's.
     Exposure,
 }
 
@@ -280,9 +284,11 @@ pub enum GatherInputs<'a> {
         velocity: &'a Velocity,
         neighbors: &'a TileGrid,
     },
-    /// 2014 and exposure: the dilated tiles.
+    /// 2014 and exposure: the dilated tiles, and the exposure variant's mattes (empty for
+    /// the 2014 filter).
     Stable {
         texels: &'a [Texel2014],
+        mattes: &'a [Matte],
         tiles: &'a TileGrid,
     },
 }
@@ -296,7 +302,11 @@ impl GatherInputs<'_> {
                 velocity,
                 neighbors,
             } => gather(config, texels, velocity, neighbors, color),
-            GatherInputs::Stable { texels, tiles } => gather_2014(config, texels, tiles, color),
+            GatherInputs::Stable {
+                texels,
+                mattes,
+                tiles,
+            } => gather_2014(config, texels, mattes, tiles, color),
         }
     }
 }
@@ -362,10 +372,17 @@ pub fn reconstruct_with(
         } else {
             stages.dilate(&tiles)
         };
-        let texels = pack_2014(&config, &color, &depth, &velocity, &dilated);
+        let packed = packed_2014(&config, &dilated);
+        let texels = pack_2014(&config, &color, &depth, &velocity, &dilated, &packed);
         drop(depth);
+        let mattes = if config.variant == Variant::Exposure.code() {
+            matte::mattes(&config, &texels, |c, row| packed.get(c, row))
+        } else {
+            Vec::new()
+        };
         let inputs = GatherInputs::Stable {
             texels: &texels,
+            mattes: &mattes,
             tiles: &dilated,
         };
         gather_stage(&config, inputs, &mut color);
@@ -429,15 +446,13 @@ pub fn pack_2014(
     depth: &[f32],
     velocity: &Velocity,
     tiles: &TileGrid,
+    packed: &TileMask,
 ) -> Vec<Texel2014> {
-    // Taps reach k px (up to 2k when the exposure is offset): this many tiles beyond the tile
-    // a pixel looks up.
-    let reach = (config.k * reach_factor(config) / config.tile as f32).ceil() as usize;
     pack_tiles(
         config,
         tiles.columns,
         [0.0; 8],
-        |c, row| near_blur(tiles, c, row, reach + 1),
+        |c, row| packed.get(c, row),
         |i| {
             let v = spread_2014(velocity.x[i], velocity.y[i], config);
             [
@@ -452,6 +467,52 @@ pub fn pack_2014(
             ]
         },
     )
+}
+
+/// Which tiles of a grid a stage works on.
+pub struct TileMask {
+    columns: usize,
+    on: Vec<bool>,
+}
+
+impl TileMask {
+    /// Whether tile (column, row) is on.
+    #[inline]
+    pub fn get(&self, column: usize, row: usize) -> bool {
+        self.on[row * self.columns + column]
+    }
+}
+
+/// The tiles [`pack_2014`] packs: those within `reach + 1` tiles (Chebyshev) of a blurring
+/// one, where taps reach k px (up to 2k when the exposure is offset), `reach` tiles beyond
+/// the tile a pixel looks up. [`near_blur`] over every tile, computed as a square dilation in
+/// two passes of running counts, so its cost does not grow with the reach.
+pub fn packed_2014(config: &ReconstructConfig, tiles: &TileGrid) -> TileMask {
+    let reach = (config.k * reach_factor(config) / config.tile as f32).ceil() as usize + 1;
+    let (columns, rows) = (tiles.columns, tiles.rows);
+    // Within `reach` along one axis of a marked cell: a running count over a window.
+    let dilate = |marked: &dyn Fn(usize) -> bool, n: usize| -> Vec<bool> {
+        let mut prefix = vec![0u32; n + 1];
+        for i in 0..n {
+            prefix[i + 1] = prefix[i] + marked(i) as u32;
+        }
+        (0..n)
+            .map(|i| prefix[(i + reach + 1).min(n)] > prefix[i.saturating_sub(reach)])
+            .collect()
+    };
+    let mut across = vec![false; columns * rows];
+    for r in 0..rows {
+        let row = dilate(&|c| blurs(tiles, c, r), columns);
+        across[r * columns..(r + 1) * columns].copy_from_slice(&row);
+    }
+    let mut on = vec![false; columns * rows];
+    for c in 0..columns {
+        let column = dilate(&|r| across[r * columns + c], rows);
+        for (r, v) in column.into_iter().enumerate() {
+            on[r * columns + c] = v;
+        }
+    }
+    TileMask { columns, on }
 }
 
 /// The 2014 filter's half-spread: `q = ½·v·φ`, its length clamped to k (not raised to half a
@@ -472,6 +533,7 @@ pub fn spread_2014(vx: f32, vy: f32, config: &ReconstructConfig) -> (f32, f32) {
 pub fn gather_2014(
     config: &ReconstructConfig,
     texels: &[Texel2014],
+    mattes: &[Matte],
     tiles: &TileGrid,
     color: &mut Color,
 ) {
@@ -480,7 +542,7 @@ pub fn gather_2014(
         tiles.columns,
         color,
         |c, row| near_blur(tiles, c, row, 1),
-        |_, x, y| gather_pixel_2014(config, texels, tiles, x, y),
+        |_, x, y| gather_pixel_2014(config, texels, mattes, tiles, x, y),
     );
 }
 
@@ -505,6 +567,17 @@ fn around(
     y: usize,
     offset: (f32, f32),
 ) -> [(&Texel2014, f32); 4] {
+    around_index((width, height), x, y, offset).map(|(i, w)| (&texels[i], w))
+}
+
+/// [`around`]'s pixels, as indices.
+#[inline(always)]
+fn around_index(
+    (width, height): (usize, usize),
+    x: usize,
+    y: usize,
+    offset: (f32, f32),
+) -> [(usize, f32); 4] {
     let fx = (x as f32 + offset.0).max(0.0);
     let fy = (y as f32 + offset.1).max(0.0);
     let (x0, y0) = (fx as usize, fy as usize);
@@ -512,10 +585,10 @@ fn around(
     let (x0, x1) = (x0.min(width - 1), (x0 + 1).min(width - 1));
     let (y0, y1) = (y0.min(height - 1), (y0 + 1).min(height - 1));
     [
-        (&texels[y0 * width + x0], (1.0 - wx) * (1.0 - wy)),
-        (&texels[y0 * width + x1], wx * (1.0 - wy)),
-        (&texels[y1 * width + x0], (1.0 - wx) * wy),
-        (&texels[y1 * width + x1], wx * wy),
+        (y0 * width + x0, (1.0 - wx) * (1.0 - wy)),
+        (y0 * width + x1, wx * (1.0 - wy)),
+        (y1 * width + x0, (1.0 - wx) * wy),
+        (y1 * width + x1, wx * wy),
     ]
 }
 
@@ -577,7 +650,9 @@ fn bilinear(
 /// moving sideways, the ends of its streak). Split, the coverage ramps over the pixel
 /// between the two texel centres, where the pixel-centre classification of depth and motion
 /// puts the edge. On `sparse` at 320×180 (a disc of 8 px moving 7.4 px a frame) this takes
-/// the default's error from 0.0255 to 0.0206, and no truth scene gets worse.
+/// the default's error from 0.0255 to 0.0206, and no truth scene gets worse. Where any of
+/// the four pixels has a matte, [`split_by_cover`] reads the tap instead, with the edge
+/// where the pixels' colours put it.
 #[inline(always)]
 fn split(
     texels: &[Texel2014],
@@ -635,6 +710,107 @@ fn split(
     (a, share_a, b, share_b)
 }
 
+/// The exposure variant's tap at pixel (x, y) + `offset`, split by coverage ([`super::matte`]):
+/// each of the four pixels around the point gives its bilinear weight times its coverage α to
+/// the moving surface, in that surface's colour, and the rest to the still surface behind;
+/// part A is the surface of the nearest pixel (`nearest`, an index), part B the other, each
+/// with the depth and motion of its heaviest contributor (a still pixel's moving partner for
+/// the moving part). A still part takes one colour, as in [`split`]: the nearest's own still
+/// surface, or its heaviest contributor's. Each part's colour is summed with its share, as in
+/// [`split`]. `None` where the still pixels among the four lie on more than one surface (or
+/// not on the nearest's, when it is still): [`split`] reads the tap then.
+#[inline(always)]
+fn split_by_cover(
+    texels: &[Texel2014],
+    mattes: &[Matte],
+    (width, height): (usize, usize),
+    nearest: usize,
+    scale: f32,
+    (x, y): (usize, usize),
+    offset: (f32, f32),
+) -> Option<(Texel2014, f32, Texel2014, f32)> {
+    if mattes.is_empty() {
+        return None;
+    }
+    let corners = around_index((width, height), x, y, offset);
+    // Away from every silhouette (no pixel of the four has a pair) coverage is the labels':
+    // [`split`] reads the tap.
+    if corners.iter().all(|&(j, _)| {
+        let m = &mattes[j];
+        m[1].to_bits() as usize == j && m[2].to_bits() as usize == j
+    }) {
+        return None;
+    }
+    let near = &texels[nearest];
+    let moves = near[LENGTH] >= HALF_PIXEL;
+    let mut still_z = (!moves).then_some(near[Z]);
+    for (j, _) in corners {
+        let t = &texels[j];
+        if t[LENGTH] < HALF_PIXEL {
+            match still_z {
+                None => still_z = Some(t[Z]),
+                Some(z) if (t[Z] - z).abs() * scale >= 1.0 => return None,
+                Some(_) => {}
+            }
+        }
+    }
+    let mut moving = [0.0f32; 8];
+    let mut still = [0.0f32; 8];
+    let (mut share_m, mut share_s) = (0.0f32, 0.0f32);
+    let (mut heavy_m, mut heavy_s) = (0.0f32, -1.0f32);
+    let mut still_colour = [0.0f32; 4];
+    for (j, w) in corners {
+        let t = &texels[j];
+        let (alpha, fg, bg) = matte::surfaces(texels, mattes, j);
+        let (w_m, w_s) = (w * alpha, w * (1.0 - alpha));
+        for ch in 0..3 {
+            moving[ch] += w_m * fg[ch];
+        }
+        moving[3] += w_m * t[3];
+        share_m += w_m;
+        share_s += w_s;
+        let t_moves = t[LENGTH] >= HALF_PIXEL;
+        let fg_texel = if t_moves {
+            t
+        } else {
+            &texels[mattes[j][1].to_bits() as usize]
+        };
+        let bg_texel = if t_moves {
+            &texels[mattes[j][2].to_bits() as usize]
+        } else {
+            t
+        };
+        if w_m > heavy_m && fg_texel[LENGTH] >= HALF_PIXEL {
+            heavy_m = w_m;
+            moving[4..].copy_from_slice(&fg_texel[4..]);
+        }
+        if w_s > heavy_s {
+            heavy_s = w_s;
+            still[4..].copy_from_slice(&bg_texel[4..]);
+            still_colour = [bg[0], bg[1], bg[2], bg_texel[3]];
+        }
+    }
+    if heavy_m == 0.0 {
+        // No moving surface here after all: all of it is the still one.
+        share_s += share_m;
+        share_m = 0.0;
+        moving = [0.0; 8];
+    }
+    if !moves {
+        let (_, _, bg) = matte::surfaces(texels, mattes, nearest);
+        still_colour = [bg[0], bg[1], bg[2], near[3]];
+        still[4..].copy_from_slice(&near[4..]);
+    }
+    for ch in 0..4 {
+        still[ch] = share_s * still_colour[ch];
+    }
+    Some(if moves {
+        (moving, share_m, still, share_s)
+    } else {
+        (still, share_s, moving, share_m)
+    })
+}
+
 /// The 2014 filter at pixel (x, y), as Blender's compositor runs it (Jimenez's version of
 /// Guertin et al.):
 ///
@@ -658,6 +834,7 @@ fn split(
 fn gather_pixel_2014(
     config: &ReconstructConfig,
     texels: &[Texel2014],
+    mattes: &[Matte],
     tiles: &TileGrid,
     x: usize,
     y: usize,
@@ -797,11 +974,22 @@ fn gather_pixel_2014(
                     t[l] = ((first + l) as f32 + offset) * step;
                     let px = (x as f32 + 0.5 + sx * t[l]).max(0.0) as usize;
                     let py = (y as f32 + 0.5 + sy * t[l]).max(0.0) as usize;
-                    let nearest = texels[py.min(height - 1) * width + px.min(width - 1)];
+                    let nearest_index = py.min(height - 1) * width + px.min(width - 1);
+                    let nearest = texels[nearest_index];
                     let at = (sx * t[l], sy * t[l]);
                     if exposure {
-                        (sample[l], share[l], other[l], other_share[l]) =
-                            split(texels, (width, height), &nearest, scale, x, y, at);
+                        (sample[l], share[l], other[l], other_share[l]) = split_by_cover(
+                            texels,
+                            mattes,
+                            (width, height),
+                            nearest_index,
+                            scale,
+                            (x, y),
+                            at,
+                        )
+                        .unwrap_or_else(|| {
+                            split(texels, (width, height), &nearest, scale, x, y, at)
+                        });
                     } else {
                         // Colour is read between pixels (bilinear, as a GPU's filtered
                         // texture read, which Blender's runs), depth and motion at the
@@ -884,11 +1072,18 @@ fn gather_pixel_2014(
             1.0
         };
         let inverse = if count > 0.0 { 1.0 / count } else { 0.0 };
+        // A still centre's own surface is its colour less the moving surface's fringe in it
+        // (the matte's; the taps bring the moving surface back for as long as it covers).
+        let mut own_colour = [centre[0], centre[1], centre[2], centre[3]];
+        if own_length < HALF_PIXEL && !mattes.is_empty() {
+            let (_, _, still) = matte::surfaces(texels, mattes, i);
+            own_colour[..3].copy_from_slice(&still);
+        }
         for ch in 0..4 {
             let background = if w_bg > 0.0 {
-                cover * centre[ch] + (1.0 - cover) * bg[ch] / w_bg
+                cover * own_colour[ch] + (1.0 - cover) * bg[ch] / w_bg
             } else {
-                centre[ch]
+                own_colour[ch]
             };
             out[ch] = (fg[ch] + bg[ch]) * inverse + background * missing;
         }

@@ -1,0 +1,313 @@
+//! matte — how much of each pixel at a silhouette a moving surface covers, for
+//! [`super::reconstruct`]'s exposure variant.
+//!
+//! A rendered pixel is an area: where a moving surface's edge crosses it, its colour mixes
+//! the surface's and what lies behind, while its depth and motion (sampled at the pixel's
+//! centre) name one surface alone. The gather reads each tap between pixels and splits it by
+//! surface; with the surfaces' shares taken from those point labels, the edge sits halfway
+//! between a moving and a still pixel centre wherever it really is, and a still pixel's own
+//! colour keeps the fringe it had at the frame's time while the taps add the surface again
+//! (on `sparse` at 320×180, still pixels beside a disc moving along its rim came out 0.04–0.1
+//! too bright).
+//!
+//! The matte takes each pixel where moving and still pixels meet, with the moving ones in
+//! front, and finds the pair of colours, one from a moving pixel and one from a still pixel
+//! of its 5×5 neighbourhood (those whose own 3×3 is all of one kind first), whose line passes
+//! nearest to its colour (a local colour-line model, as in matting): its coverage α is where
+//! its colour projects on that line, kept on its own side of one half (a pixel whose centre
+//! the surface covers is at least half covered), and the two colours are remembered by the
+//! pixels they came from. Where no pair explains the colour (the residual over 2 % of the
+//! pair's squared distance, or two colours too alike to tell apart), the pixel keeps its
+//! label: α 1 moving, 0 still. Everywhere else α is the label.
+//!
+//! The gather then splits a tap's four pixels by coverage: each gives α of its weight to the
+//! moving surface, in the surface's colour (a moving pixel's own colour with the still
+//! pair's taken out, a still pixel's moving partner's), and 1 − α to the still one (the
+//! other way round). Measured in BENCHMARKS.md ("the matte").
+
+use rayon::prelude::*;
+
+use super::reconstruct::{ReconstructConfig, Texel2014, HALF_PIXEL};
+
+/// Per pixel: α (the moving surface's coverage), then the pixels the moving and the still
+/// colours of its pair come from, as `f32::from_bits` of their indices (the pixel's own
+/// index where it has no pair). The GPU reads the same three words.
+pub type Matte = [f32; 3];
+
+/// A pair must explain the colour within this share of the pair's squared distance.
+pub const RESIDUAL: f32 = 0.02;
+/// Two colours closer than this (squared distance) do not tell coverage apart.
+pub const DISTINCT: f32 = 1e-4;
+
+/// The most candidates of each kind a pixel's pairs are taken from (so at most 64 pairs a
+/// pixel, whatever the frame: a frame of noise, every pixel a silhouette, costs a bounded
+/// multiple of a clean one).
+pub const CANDIDATES: usize = 8;
+
+/// The 5×5 neighbourhood without its centre, nearest first (the 3×3 ring, then the outer),
+/// each ring in reading order.
+#[rustfmt::skip]
+const NEIGHBOURS: [(i64, i64); 24] = [
+    (-1, -1), (0, -1), (1, -1), (-1, 0), (1, 0), (-1, 1), (0, 1), (1, 1),
+    (-2, -2), (-1, -2), (0, -2), (1, -2), (2, -2), (-2, -1), (2, -1), (-2, 0),
+    (2, 0), (-2, 1), (2, 1), (-2, 2), (-1, 2), (0, 2), (1, 2), (2, 2),
+];
+
+const Z: usize = 4;
+const LENGTH: usize = 7;
+
+#[inline]
+fn moves(t: &Texel2014) -> bool {
+    t[LENGTH] >= HALF_PIXEL
+}
+
+/// The matte of every pixel of the tiles `selected(column, row)` picks (the texels packed
+/// there; a neighbour in a tile not picked is not read); elsewhere the label.
+pub fn mattes(
+    config: &ReconstructConfig,
+    texels: &[Texel2014],
+    selected: impl Fn(usize, usize) -> bool + Sync,
+) -> Vec<Matte> {
+    let (width, height) = (config.width as usize, config.height as usize);
+    let size = config.tile as usize;
+    let mut out = vec![[0.0f32; 3]; width * height];
+    out.par_chunks_mut(width.max(1))
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (x, m) in row.iter_mut().enumerate() {
+                let i = y * width + x;
+                let own = f32::from_bits(i as u32);
+                *m = [moves(&texels[i]) as u32 as f32, own, own];
+                if selected(x / size, y / size) {
+                    if let Some(found) = matte(config, texels, &selected, x, y) {
+                        *m = found;
+                    }
+                }
+            }
+        });
+    out
+}
+
+/// The pixel's matte where it has one (see the module doc), else `None`.
+fn matte(
+    config: &ReconstructConfig,
+    texels: &[Texel2014],
+    selected: &impl Fn(usize, usize) -> bool,
+    x: usize,
+    y: usize,
+) -> Option<Matte> {
+    let (width, height) = (config.width as i64, config.height as i64);
+    let size = config.tile as usize;
+    let at = |x: i64, y: i64| -> Option<&Texel2014> {
+        (x >= 0
+            && y >= 0
+            && x < width
+            && y < height
+            && selected(x as usize / size, y as usize / size))
+        .then(|| &texels[(y * width + x) as usize])
+    };
+    let (x, y) = (x as i64, y as i64);
+    let centre = at(x, y)?;
+    let moving = moves(centre);
+    // A silhouette: moving and still pixels in the 3×3, the moving ones in front.
+    let (mut front, mut back) = (f32::INFINITY, f32::NEG_INFINITY);
+    for dy in -1..=1 {
+        for dx in -1..=1 {
+            if let Some(t) = at(x + dx, y + dy) {
+                if moves(t) {
+                    front = front.min(t[Z]);
+                } else {
+                    back = back.max(t[Z]);
+                }
+            }
+        }
+    }
+    let separated = (back - front) * config.inv_soft_z >= 1.0;
+    if !separated {
+        return None;
+    }
+    // One kind throughout a pixel's 3×3 (the frame's and the tiles' edges leave it out).
+    let pure = |x: i64, y: i64, kind: bool| {
+        (-1..=1).all(|dy| (-1..=1).all(|dx| at(x + dx, y + dy).is_none_or(|t| moves(t) == kind)))
+    };
+    // Candidates of the 5×5, nearest first and at most CANDIDATES of each kind: the pure
+    // ones, or any when either kind has none pure.
+    let mut best: Option<(f32, f32, i64, i64)> = None;
+    for only_pure in [true, false] {
+        let candidates = |kind: bool| {
+            NEIGHBOURS
+                .iter()
+                .map(move |&(dx, dy)| (x + dx, y + dy))
+                .filter(move |&(cx, cy)| {
+                    at(cx, cy).is_some_and(|t| moves(t) == kind)
+                        && (!only_pure || pure(cx, cy, kind))
+                })
+                .take(CANDIDATES)
+        };
+        if only_pure && (candidates(true).next().is_none() || candidates(false).next().is_none()) {
+            continue;
+        }
+        for (fx, fy) in candidates(true) {
+            let f = at(fx, fy).expect("a candidate");
+            for (bx, by) in candidates(false) {
+                let b = at(bx, by).expect("a candidate");
+                let (alpha, residual, spread) = fit(centre, f, b);
+                if spread < DISTINCT || residual.is_nan() || residual > RESIDUAL * spread {
+                    continue;
+                }
+                if best.is_none_or(|(r, ..)| residual < r) {
+                    best = Some((residual, alpha, fy * width + fx, by * width + bx));
+                }
+            }
+        }
+        break;
+    }
+    let (_, alpha, f, b) = best?;
+    let alpha = if moving {
+        alpha.max(0.5)
+    } else {
+        alpha.min(0.5)
+    };
+    Some([alpha, f32::from_bits(f as u32), f32::from_bits(b as u32)])
+}
+
+/// Where colour `c` projects on the line from `b` (α 0) to `f` (α 1), clamped to [0, 1]; the
+/// squared distance from `c` to that point; and the squared distance between `f` and `b`.
+/// Non-finite sums (colours near the numeric policy's bound) give a NaN residual, which no
+/// test passes.
+#[inline]
+pub fn fit(c: &Texel2014, f: &Texel2014, b: &Texel2014) -> (f32, f32, f32) {
+    let d = [f[0] - b[0], f[1] - b[1], f[2] - b[2]];
+    let e = [c[0] - b[0], c[1] - b[1], c[2] - b[2]];
+    let spread = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    let alpha = ((e[0] * d[0] + e[1] * d[1] + e[2] * d[2]) / spread).clamp(0.0, 1.0);
+    let r = [
+        e[0] - alpha * d[0],
+        e[1] - alpha * d[1],
+        e[2] - alpha * d[2],
+    ];
+    (alpha, r[0] * r[0] + r[1] * r[1] + r[2] * r[2], spread)
+}
+
+/// Pixel `i`'s coverage and its two surfaces' colours (RGB): the moving surface's and the
+/// still one's. A moving pixel's own is its colour with the still partner's share taken out,
+/// a still pixel's likewise; the other is its partner's colour. A pixel with no pair gives
+/// its own colour to both.
+#[inline]
+pub fn surfaces(texels: &[Texel2014], mattes: &[Matte], i: usize) -> (f32, [f32; 3], [f32; 3]) {
+    let [alpha, f, b] = mattes[i];
+    let c = &texels[i];
+    if f.to_bits() as usize == i && b.to_bits() as usize == i {
+        // No pair: α is the label (0 or 1), and the formulas below give the colour itself.
+        let own = [c[0], c[1], c[2]];
+        return (alpha, own, own);
+    }
+    let f = &texels[f.to_bits() as usize];
+    let b = &texels[b.to_bits() as usize];
+    let mut moving = [0.0f32; 3];
+    let mut still = [0.0f32; 3];
+    // Unmixing extrapolates from the partner through the pixel's colour (by at most as far
+    // again: α ≥ ½ on a moving pixel, ≤ ½ on a still one, so no division is by less than ½).
+    // A pair explains the colour only within its residual, so the result is kept within the
+    // three colours' range: every output stays within its inputs' range, as the gather's
+    // convex weights promise.
+    for ch in 0..3 {
+        let low = c[ch].min(f[ch]).min(b[ch]);
+        let high = c[ch].max(f[ch]).max(b[ch]);
+        if moves(c) {
+            moving[ch] = ((c[ch] - (1.0 - alpha) * b[ch]) / alpha).clamp(low, high);
+            still[ch] = b[ch];
+        } else {
+            moving[ch] = f[ch];
+            still[ch] = ((c[ch] - alpha * f[ch]) / (1.0 - alpha)).clamp(low, high);
+        }
+    }
+    (alpha, moving, still)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::reconstruct::{ReconstructConfig, ReconstructParams};
+
+    fn texel(rgb: [f32; 3], z: f32, v: f32) -> Texel2014 {
+        [rgb[0], rgb[1], rgb[2], 1.0, z, v, 0.0, v]
+    }
+
+    /// A 12×6 frame: rows 0..3 still background (z 10) of colour `bg`, rows 3..6 a moving
+    /// surface (z 1, 3 px half-spread) of colour `fg`, with row 2 (still) holding `fringe`
+    /// of the surface.
+    fn edge(
+        fg: [f32; 3],
+        bg: [f32; 3],
+        fringe: f32,
+        moving_z: f32,
+    ) -> (ReconstructConfig, Vec<Texel2014>) {
+        let (w, h) = (12usize, 6usize);
+        let config = ReconstructConfig::new(w, h, &ReconstructParams::default(), 0.5, 0);
+        let mix = |a: f32| [0, 1, 2].map(|c| a * fg[c] + (1.0 - a) * bg[c]);
+        let texels = (0..w * h)
+            .map(|i| match i / w {
+                0 | 1 => texel(bg, 10.0, 0.0),
+                2 => texel(mix(fringe), 10.0, 0.0),
+                _ => texel(fg, moving_z, 3.0),
+            })
+            .collect();
+        (config, texels)
+    }
+
+    #[test]
+    fn a_still_pixel_s_fringe_is_its_coverage() {
+        // Checked by hand: 0.3 of (0.9, 0.5, 0.1) over (0.1, 0.2, 0.6) projects back to 0.3.
+        let (config, texels) = edge([0.9, 0.5, 0.1], [0.1, 0.2, 0.6], 0.3, 1.0);
+        let m = mattes(&config, &texels, |_, _| true);
+        let (alpha, moving, still) = surfaces(&texels, &m, 2 * 12 + 5);
+        assert!((alpha - 0.3).abs() < 1e-5, "{alpha}");
+        for (got, want) in moving.iter().zip([0.9, 0.5, 0.1]) {
+            assert!((got - want).abs() < 1e-5, "{moving:?}");
+        }
+        for (got, want) in still.iter().zip([0.1, 0.2, 0.6]) {
+            assert!((got - want).abs() < 1e-5, "{still:?}");
+        }
+        // Away from the edge, and on the moving side, the labels.
+        assert_eq!(m[5][0], 0.0);
+        assert_eq!(m[4 * 12 + 5][0], 1.0);
+        // The moving pixel next to the fringe is pure in colour: fully covered.
+        assert_eq!(m[3 * 12 + 5][0], 1.0);
+    }
+
+    #[test]
+    fn a_still_pixel_is_at_most_half_covered_and_a_moving_one_at_least_half() {
+        let (config, texels) = edge([0.9, 0.5, 0.1], [0.1, 0.2, 0.6], 0.8, 1.0);
+        let m = mattes(&config, &texels, |_, _| true);
+        assert_eq!(m[2 * 12 + 5][0], 0.5);
+    }
+
+    #[test]
+    fn no_matte_where_the_moving_surface_is_behind_or_the_colour_is_unexplained() {
+        // The moving surface behind the still one (z 20 against 10): labels.
+        let (config, texels) = edge([0.9, 0.5, 0.1], [0.1, 0.2, 0.6], 0.3, 20.0);
+        let m = mattes(&config, &texels, |_, _| true);
+        assert_eq!(m[2 * 12 + 5][0], 0.0);
+        // A fringe colour far off the line between the two (pure green): labels.
+        let (config, mut texels) = edge([0.9, 0.5, 0.1], [0.1, 0.2, 0.6], 0.3, 1.0);
+        texels[2 * 12 + 5][..3].copy_from_slice(&[0.0, 1.0, 0.0]);
+        let m = mattes(&config, &texels, |_, _| true);
+        assert_eq!(m[2 * 12 + 5][0], 0.0);
+        let (_, moving, still) = surfaces(&texels, &m, 2 * 12 + 5);
+        assert_eq!(moving, [0.0, 1.0, 0.0]);
+        assert_eq!(still, [0.0, 1.0, 0.0]);
+    }
+
+    #[test]
+    fn huge_colours_give_labels_not_nan() {
+        let (config, texels) = edge([3e38, 0.5, 0.1], [-3e38, 0.2, 0.6], 0.3, 1.0);
+        let m = mattes(&config, &texels, |_, _| true);
+        for (i, matte) in m.iter().enumerate() {
+            assert!(matte[0].is_finite(), "{i}: {matte:?}");
+            let (alpha, moving, still) = surfaces(&texels, &m, i);
+            assert!(alpha.is_finite());
+            assert!(moving.iter().chain(&still).all(|v| !v.is_nan()), "{i}");
+        }
+    }
+}
