@@ -423,6 +423,7 @@ mod tests {
             cpu::MAX_TAPS_PER_SIDE
         ));
         has(format!("const TAP_SPACING: f32 = {:?};", cpu::TAP_SPACING));
+        has(format!("const COVER_SLOPE: f32 = {:?};", cpu::COVER_SLOPE));
         has(format!("const SALT_TILE: u32 = {:#x}u;", cpu::SALT_TILE));
         has(format!("const SALT_TAPS: u32 = {:#x}u;", cpu::SALT_TAPS));
         has(format!("const SALT_PAPER: u32 = {:#x}u;", cpu::SALT_PAPER));

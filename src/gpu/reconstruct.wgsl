@@ -65,6 +65,7 @@ const EPSILON: f32 = 0.01;
 const MOVING_SQUARED_BITS: u32 = 0x3e852bd3u;
 const MAX_TAPS_PER_SIDE: u32 = 64u;
 const TAP_SPACING: f32 = 2.0;
+const COVER_SLOPE: f32 = 1.25;
 const SALT_TILE: u32 = 0x54494c45u;
 const SALT_TAPS: u32 = 0x54415053u;
 const SALT_PAPER: u32 = 0x5245434fu;
@@ -426,7 +427,7 @@ struct Cover {
     valid: bool,
 }
 
-fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>) -> Cover {
+fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>, steepen: bool) -> Cover {
     var out: Cover;
     out.valid = false;
     let corners = around(x, y, offset);
@@ -496,6 +497,16 @@ fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>) -
             still.length = bg_texel.length;
             still_colour = vec4<f32>(s.still, bg_texel.color.w);
         }
+    }
+    // A still centre: the coverage steepened about its half level (see the CPU twin).
+    let total = share_m + share_s;
+    if steepen && share_m > 0.0 && share_s > 0.0 {
+        let cover = share_m / total;
+        let steeper = clamp((cover - 0.5) * COVER_SLOPE + 0.5, 0.0, 1.0);
+        let factor = steeper / cover;
+        moving.color *= factor;
+        share_m = steeper * total;
+        share_s = (1.0 - steeper) * total;
     }
     if heavy_m == 0.0 {
         share_s += share_m;
@@ -632,7 +643,7 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
                 let at = vec2<f32>(sx * t, sy * t);
                 var parts: Split;
                 if exposure {
-                    let cover = split_by_cover(nearest_index, scale, x, y, at);
+                    let cover = split_by_cover(nearest_index, scale, x, y, at, own_length < HALF_PIXEL);
                     if cover.valid {
                         parts = cover.parts;
                     } else {
