@@ -371,34 +371,28 @@ fn blur_on_wgpu_equals_the_cpu_within_the_tolerance() {
         return;
     }
     let dir = small_scene("sparse", 96, 54, 1, 4);
+    let (color, depth, velocity) = (
+        role_pattern(dir.path(), "color"),
+        role_pattern(dir.path(), "depth"),
+        role_pattern(dir.path(), "velocity"),
+    );
+    let args = [
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &color,
+        "--depth",
+        &depth,
+        "--velocity",
+        &velocity,
+    ];
     let mut outputs = Vec::new();
     for backend in ["cpu", "wgpu"] {
-        let out = s(&dir.path().join(format!("{backend}.####.exr")));
-        let o = shutter(&[
-            "blur",
-            "--algorithm",
-            "reconstruct",
-            "--color",
-            &role_pattern(dir.path(), "color"),
-            "--depth",
-            &role_pattern(dir.path(), "depth"),
-            "--velocity",
-            &role_pattern(dir.path(), "velocity"),
-            "-o",
-            &out,
-            "--backend",
-            backend,
-            "--json",
-        ]);
-        assert!(o.status.success(), "{backend}: {}", stderr(&o));
-        let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
-        assert_eq!(json["backend"]["used"], backend, "{json}");
+        let (json, frame) = blur_on(dir.path(), &args, backend, backend, None);
         if backend == "wgpu" {
             assert_eq!(json["backend"]["stages_on_cpu"], 0, "{json}");
         }
-        outputs.push(read_exr_reference(
-            &dir.path().join(format!("{backend}.0001.exr")),
-        ));
+        outputs.push(read_exr_reference(&frame));
     }
     let input = read_exr_reference(&dir.path().join("color.0001.exr"));
     for name in ["R", "G", "B"] {

@@ -517,36 +517,29 @@ fn blur_scatter_on_wgpu_equals_the_cpu_and_falls_back_over_the_limits() {
         return;
     }
     let dir = small_scene("rotor", 96, 54, 1, 4);
+    let (color, depth, prev, next) = (
+        role_pattern(dir.path(), "color"),
+        role_pattern(dir.path(), "depth"),
+        role_pattern(dir.path(), "prev"),
+        role_pattern(dir.path(), "next"),
+    );
+    let args = [
+        "--algorithm",
+        "scatter",
+        "--color",
+        &color,
+        "--depth",
+        &depth,
+        "--prev",
+        &prev,
+        "--next",
+        &next,
+    ];
     let mut outputs = Vec::new();
     for (backend, limit) in [("cpu", None), ("wgpu", None), ("wgpu", Some("4096"))] {
         let stem = format!("{backend}{}", if limit.is_some() { "-limit" } else { "" });
-        let out = s(&dir.path().join(format!("{stem}.####.exr")));
-        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"));
-        command.args([
-            "blur",
-            "--algorithm",
-            "scatter",
-            "--color",
-            &role_pattern(dir.path(), "color"),
-            "--depth",
-            &role_pattern(dir.path(), "depth"),
-            "--prev",
-            &role_pattern(dir.path(), "prev"),
-            "--next",
-            &role_pattern(dir.path(), "next"),
-            "-o",
-            &out,
-            "--backend",
-            backend,
-            "--json",
-        ]);
-        if let Some(limit) = limit {
-            command.env("SHUTTER_GPU_MAX_BINDING", limit);
-        }
-        let o = command.output().unwrap();
-        assert!(o.status.success(), "{stem}: {}", stderr(&o));
-        let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
-        assert_eq!(json["backend"]["used"], backend, "{json}");
+        let env = limit.map(|limit| ("SHUTTER_GPU_MAX_BINDING", limit));
+        let (json, frame) = blur_on(dir.path(), &args, backend, &stem, env);
         if backend == "wgpu" {
             let on_cpu = json["backend"]["stages_on_cpu"].as_u64().unwrap();
             if limit.is_some() {
@@ -560,7 +553,7 @@ fn blur_scatter_on_wgpu_equals_the_cpu_and_falls_back_over_the_limits() {
                 assert_eq!(on_cpu, 0, "{json}");
             }
         }
-        outputs.push(dir.path().join(format!("{stem}.0001.exr")));
+        outputs.push(frame);
     }
     let read = |k: usize| read_exr_reference(&outputs[k]);
     let input = read_exr_reference(&dir.path().join("color.0001.exr"));

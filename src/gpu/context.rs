@@ -270,6 +270,35 @@ impl Gpu {
         Ok(())
     }
 
+    /// The end of a stage's uploads: with profiling on, waits for them and books their time
+    /// as upload ([`Gpu::mark`]).
+    pub(crate) fn uploaded(&self, clock: &mut std::time::Instant) -> Result<(), super::StageError> {
+        if self.profiling() {
+            self.queue.submit([]);
+        }
+        self.mark(|t| &mut t.upload_ms, clock)
+    }
+
+    /// The end of a stage's compute: with profiling on, submits what `encoder` holds, books
+    /// its time as compute, and leaves a fresh encoder (labelled `label`) in its place for the
+    /// readback; without, leaves the encoder as it is.
+    pub(crate) fn computed(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        label: &str,
+        clock: &mut std::time::Instant,
+    ) -> Result<(), super::StageError> {
+        if self.profiling() {
+            let fresh = self
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
+            self.queue
+                .submit([std::mem::replace(encoder, fresh).finish()]);
+            self.mark(|t| &mut t.compute_ms, clock)?;
+        }
+        Ok(())
+    }
+
     /// Whether stages time their parts apart ([`Gpu::set_profiling`]).
     pub(crate) fn profiling(&self) -> bool {
         self.profiling.load(Ordering::Relaxed)

@@ -318,10 +318,7 @@ impl Gpu {
                 );
             }
         }
-        if self.profiling() {
-            queue.submit([]);
-        }
-        self.mark(|t| &mut t.upload_ms, &mut clock)?;
+        self.uploaded(&mut clock)?;
         let mut encoder = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -344,15 +341,7 @@ impl Gpu {
                 1,
             );
         }
-        if self.profiling() {
-            queue.submit([encoder.finish()]);
-            self.mark(|t| &mut t.compute_ms, &mut clock)?;
-            encoder = self
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("reconstruct"),
-                });
-        }
+        self.computed(&mut encoder, "reconstruct", &mut clock)?;
         let channels = if color.a.is_some() { 4 } else { 3 };
         let bytes = channels * plane;
         encoder.copy_buffer_to_buffer(&buffers.color, 0, &buffers.readback, 0, bytes);

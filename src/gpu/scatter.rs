@@ -420,10 +420,7 @@ impl Gpu {
         let mut state = [0u32; STATE_WORDS];
         state[FLAGS] = if opaque { OPAQUE } else { 0 } | if has_z { HAS_Z } else { 0 };
         queue.write_buffer(&buffers.state, 0, bytemuck::cast_slice(&state));
-        if self.profiling() {
-            queue.submit([]);
-        }
-        self.mark(|t| &mut t.upload_ms, &mut clock)?;
+        self.uploaded(&mut clock)?;
         let mut encoder = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -456,15 +453,7 @@ impl Gpu {
             compute.set_pipeline(&pass.resolve);
             compute.dispatch_workgroups(x, y, 1);
         }
-        if self.profiling() {
-            queue.submit([encoder.finish()]);
-            self.mark(|t| &mut t.compute_ms, &mut clock)?;
-            encoder = self
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("scatter"),
-                });
-        }
+        self.computed(&mut encoder, "scatter", &mut clock)?;
         let channels = if color.a.is_some() { 4 } else { 3 };
         let bytes = channels * plane;
         encoder.copy_buffer_to_buffer(&buffers.out, 0, &buffers.readback, 0, bytes);

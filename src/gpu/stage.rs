@@ -12,7 +12,7 @@ use std::collections::HashMap;
 use std::sync::Mutex;
 use std::time::Instant;
 
-use super::{Gpu, GpuTimes};
+use super::Gpu;
 
 /// Sets of sizes whose buffers are kept at once per stage or pass (a sequence has one; more
 /// are dropped).
@@ -274,19 +274,14 @@ impl Stage {
             self.make_buffers(&gpu.device, &sizes)
         });
 
-        let profiling = gpu.profiling();
         let mut clock = Instant::now();
-        let mut mark = |part: fn(&mut GpuTimes) -> &mut f64| gpu.mark(part, &mut clock);
         gpu.queue.write_buffer(&buffers.config, 0, config);
         for (buffer, data) in buffers.inputs.iter().zip(inputs) {
             if !data.is_empty() {
                 gpu.queue.write_buffer(buffer, 0, data);
             }
         }
-        if profiling {
-            gpu.queue.submit([]);
-        }
-        mark(|t| &mut t.upload_ms)?;
+        gpu.uploaded(&mut clock)?;
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -309,15 +304,7 @@ impl Stage {
                 }
             }
         }
-        if profiling {
-            gpu.queue.submit([encoder.finish()]);
-            mark(|t| &mut t.compute_ms)?;
-            encoder = gpu
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some(self.label),
-                });
-        }
+        gpu.computed(&mut encoder, self.label, &mut clock)?;
         let mut offset = 0;
         let mut ranges = Vec::new();
         let read = self.outputs - self.scratch;
@@ -336,7 +323,7 @@ impl Stage {
             return Err(error);
         }
         let words = read_back(&gpu.device, &buffers.readback, offset)?;
-        mark(|t| &mut t.readback_ms)?;
+        gpu.mark(|t| &mut t.readback_ms, &mut clock)?;
         Ok(ranges
             .into_iter()
             .map(|r| words[r.start / 4..r.end / 4].to_vec())

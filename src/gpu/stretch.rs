@@ -500,10 +500,7 @@ impl Gpu {
         }
         queue.write_buffer(&buffers.z, 0, bytemuck::cast_slice(z));
         queue.write_buffer(&buffers.v, 0, bytemuck::cast_slice(v));
-        if self.profiling() {
-            queue.submit([]);
-        }
-        self.mark(|t| &mut t.upload_ms, &mut clock)?;
+        self.uploaded(&mut clock)?;
 
         // texture_blur (after the frame's range) and move_vertices, then the triangles' keys.
         let mut encoder = self
@@ -594,15 +591,7 @@ impl Gpu {
                 render.draw(0..6 * order.len() as u32, 0..1);
             }
         }
-        if self.profiling() {
-            queue.submit([encoder.finish()]);
-            self.mark(|t| &mut t.compute_ms, &mut clock)?;
-            encoder = self
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("stretch readback"),
-                });
-        }
+        self.computed(&mut encoder, "stretch readback", &mut clock)?;
         let row_bytes = shape.row_bytes();
         let target_bytes = row_bytes as u64 * shape.height as u64;
         for (k, target) in buffers.targets.iter().enumerate() {

@@ -565,3 +565,29 @@ pub fn parity_within(got: &[f32], cpu: &[f32], agree: f32) -> Parity {
     p.outside /= n;
     p
 }
+
+/// `shutter blur ARGS --backend BACKEND --json -o DIR/STEM.####.exr` on frame files in `dir`
+/// (with the environment variable `env` set, when given), which must succeed and say it ran
+/// on `backend`: its JSON summary and the path of the frame it wrote.
+pub fn blur_on(
+    dir: &Path,
+    args: &[&str],
+    backend: &str,
+    stem: &str,
+    env: Option<(&str, &str)>,
+) -> (serde_json::Value, PathBuf) {
+    let out = s(&dir.join(format!("{stem}.####.exr")));
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"));
+    command
+        .arg("blur")
+        .args(args)
+        .args(["-o", &out, "--backend", backend, "--json"]);
+    if let Some((name, value)) = env {
+        command.env(name, value);
+    }
+    let o = command.output().unwrap();
+    assert!(o.status.success(), "{stem}: {}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(json["backend"]["used"], backend, "{json}");
+    (json, dir.join(format!("{stem}.0001.exr")))
+}
