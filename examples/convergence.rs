@@ -5,9 +5,9 @@
 //! cargo run --release --example convergence -- 192 108 256
 //! ```
 
-use shutter::metrics::{changed_region, rmse, Rgb};
-use shutter::truth::render::{render_passes, render_reference, Reference, RenderSettings};
-use shutter::truth::scenes::{build, SCENES};
+use shutter::lab::metrics::{changed_region, rmse, Rgb};
+use shutter::lab::truth::render::{render_passes, render_reference, Reference, RenderSettings};
+use shutter::lab::truth::scenes::{build, SCENES};
 
 fn rgb(planes: &[Vec<f32>; 3], w: usize, h: usize) -> Rgb<'_> {
     Rgb {

@@ -14,7 +14,11 @@
 # a lens.args file of `shutter dof` flags).
 #
 # Prints one line per case (same / DIFFERS / FAILED(base rc,new rc)) and a summary; exits 1
-# if anything differs or failed, 2 on a usage error. THREADS (default 2) sets --threads.
+# if anything differs or failed, 2 on a usage error. THREADS (default 2) sets --threads;
+# BACKEND (default cpu) sets --backend (wgpu: the GPU twins, on whatever adapter wgpu finds,
+# lavapipe included); KEEP_BASE=1 reuses the base outputs a previous run left in OUT_DIR
+# (the base binary is then run only for cases it has no output for); ONLY (a regular
+# expression) runs only the cases whose set/name matches it.
 set -u
 
 if [ $# -ne 4 ]; then
@@ -26,6 +30,9 @@ NEW_BIN=$2
 FRAMES=$3
 OUT=$4
 THREADS=${THREADS:-2}
+BACKEND=${BACKEND:-cpu}
+KEEP_BASE=${KEEP_BASE:-0}
+ONLY=${ONLY:-}
 for bin in "$BASE_BIN" "$NEW_BIN"; do
     [ -x "$bin" ] || { echo "not an executable: $bin" >&2; exit 2; }
 done
@@ -41,6 +48,9 @@ start=$SECONDS
 run() {
     local dir=$1 set=$2 name=$3 cmd=$4
     shift 4
+    if [ -n "$ONLY" ] && ! [[ "$set/$name" =~ $ONLY ]]; then
+        return
+    fi
     local passes=(--color "$dir/color.####.exr")
     local role
     for role in depth velocity prev next; do
@@ -53,10 +63,14 @@ run() {
         local bin=$BASE_BIN
         [ $side = new ] && bin=$NEW_BIN
         local out="$OUT/$side/$set/$name"
+        if [ $side = base ] && [ "$KEEP_BASE" = 1 ] && [ -n "$(ls "$out" 2>/dev/null)" ]; then
+            rcs+=(0)
+            continue
+        fi
         rm -rf "$out"
         mkdir -p "$out" "$OUT/logs/$side/$set"
-        "$bin" "$cmd" "${passes[@]}" "$@" --threads "$THREADS" -o "$out/out.####.exr" \
-            >"$OUT/logs/$side/$set/$name.log" 2>&1
+        "$bin" "$cmd" "${passes[@]}" "$@" --backend "$BACKEND" --threads "$THREADS" \
+            -o "$out/out.####.exr" >"$OUT/logs/$side/$set/$name.log" 2>&1
         rcs+=($?)
     done
     local case_name="$set/$name"
@@ -118,14 +132,20 @@ for group in scenes bench; do
             run "$dir" "$set" reconstruct blur --algorithm reconstruct
             run "$dir" "$set" reconstruct-dual blur --algorithm reconstruct --variant dual
             run "$dir" "$set" reconstruct-nojitter blur --algorithm reconstruct --no-jitter
+            run "$dir" "$set" reconstruct-2014 blur --algorithm reconstruct --variant 2014
+            run "$dir" "$set" reconstruct-paper blur --algorithm reconstruct --variant paper
+            run "$dir" "$set" reconstruct-start blur --algorithm reconstruct --shutter-offset start
+            run "$dir" "$set" reconstruct-paper-end blur --algorithm reconstruct --variant paper --shutter-offset end
             run "$dir" "$set" stretch blur --algorithm stretch
             run "$dir" "$set" stretch-rear blur --algorithm stretch --anchor rear
             run "$dir" "$set" stretch-notexture blur --algorithm stretch --no-texture-blur
+            run "$dir" "$set" stretch-start blur --algorithm stretch --shutter-offset start
         fi
         if [ -e "$dir/prev.0001.exr" ] && [ -e "$dir/next.0001.exr" ] && [ -e "$dir/depth.0001.exr" ]; then
             run "$dir" "$set" scatter blur --algorithm scatter
             run "$dir" "$set" scatter-paper-gaussian blur --algorithm scatter --normalize paper --weight gaussian
             run "$dir" "$set" scatter-arc blur --algorithm scatter --curve arc
+            run "$dir" "$set" scatter-end blur --algorithm scatter --shutter-offset end
             if [ "$set" = bench/scatter_moving ]; then
                 # The scatter bench's own shutter (1.0: 30 px streaks).
                 run "$dir" "$set" scatter-shutter1 blur --algorithm scatter --shutter 1
@@ -138,6 +158,10 @@ for group in scenes bench; do
                 run "$dir" "$set" dof-gather dof $lens --method gather
                 run "$dir" "$set" dof-gather-blades6 dof $lens --method gather --blades 6
                 run "$dir" "$set" dof-blend dof $lens --method blend
+                run "$dir" "$set" dof-blend-talk dof $lens --method blend --blend-form talk
+                if [ -e "$dir/velocity.0001.exr" ]; then
+                    run "$dir" "$set" dof-gather+reconstruct dof $lens --method gather --algorithm reconstruct
+                fi
                 if [ -e "$dir/prev.0001.exr" ] && [ -e "$dir/next.0001.exr" ]; then
                     run "$dir" "$set" dof-gather+scatter dof $lens --method gather --algorithm scatter
                 fi

@@ -11,21 +11,18 @@
 //! - [`settings`]: every setting defined once (flag, preset key, range, default, help).
 //! - [`cli`]: the command line (the only part that prints).
 
-pub mod bench;
 pub mod cli;
-pub mod diff;
 pub mod dof;
 pub mod error;
 pub mod frame;
 pub mod gpu;
 pub mod io;
-pub mod metrics;
+pub mod lab;
 pub mod motion;
 pub mod numeric;
 pub mod pipeline;
 pub mod process;
 pub mod settings;
-pub mod truth;
 
 pub use error::{Error, Problem, ProblemKind, Result};
 pub use frame::{Frame, Passes};

@@ -23,7 +23,7 @@ fn bench_runs_end_to_end_and_writes_its_reports() {
         serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
     let all = report["rows"].as_array().unwrap();
     let rows: Vec<&serde_json::Value> = all.iter().filter(|r| r["backend"] == "cpu").collect();
-    let settings = shutter::bench::sweep().len();
+    let settings = shutter::lab::bench::sweep().len();
     assert_eq!(rows.len(), 2 * settings);
     // Static: nothing to blur, so every setting is exact; sparse: `none` misses the blur.
     assert!(rows[..settings]
@@ -37,7 +37,7 @@ fn bench_runs_end_to_end_and_writes_its_reports() {
     // too).
     let gpu: Vec<&serde_json::Value> = all.iter().filter(|r| r["backend"] == "wgpu").collect();
     use shutter::motion::Algorithm;
-    let twins = shutter::bench::sweep()
+    let twins = shutter::lab::bench::sweep()
         .iter()
         .filter(|s| {
             matches!(
@@ -81,7 +81,7 @@ fn bench_runs_end_to_end_and_writes_its_reports() {
     }
     let sheet = image::open(out.join("contact/sparse.png")).unwrap();
     // sharp, each setting, reference: a grid of panels 4 px apart, each under a label strip.
-    let columns = shutter::bench::plot::SHEET_COLUMNS as u32;
+    let columns = shutter::lab::bench::plot::SHEET_COLUMNS as u32;
     let per_scene = all.iter().filter(|r| r["scene"] == "sparse").count();
     let rows = (per_scene as u32 + 2).div_ceil(columns);
     assert_eq!(sheet.width(), columns * (64 + 4));

@@ -3,9 +3,9 @@
 
 use shutter::dof::{BlendForm, CocSource, DofParams, Lens, Method};
 use shutter::frame::{Color, Frame};
+use shutter::lab::truth::render::Reference;
 use shutter::motion::Algorithm;
 use shutter::process::{apply, Params};
-use shutter::truth::render::Reference;
 
 use crate::support::*;
 

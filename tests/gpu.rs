@@ -168,7 +168,7 @@ pub(crate) mod with_gpu {
 
     #[test]
     fn every_wgsl_shader_parses_and_validates_with_naga() {
-        use shutter::gpu::coc;
+        use shutter::gpu::dof::coc;
         use wgpu::naga;
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/gpu");
         let mut found = 0;
@@ -195,12 +195,12 @@ pub(crate) mod with_gpu {
         assert!(found >= 6, "{found} .wgsl under {}", dir.display());
         // What the context compiles is the file on disk.
         assert!(coc::SHADER.contains("fn lens_coc"));
-        assert!(shutter::gpu::tiles::SHADER.contains("fn tile_reach"));
-        assert!(shutter::gpu::tile_max::SHADER.contains("struct TileMaxConfig"));
-        assert!(shutter::gpu::neighbor_max::SHADER.contains("struct NeighborMaxConfig"));
-        assert!(shutter::gpu::dilate::SHADER.contains("struct SourceTile"));
-        assert!(shutter::gpu::gather::SHADER.contains("struct GatherConfig"));
-        assert!(shutter::gpu::blend::SHADER.contains("struct BlendConfig"));
+        assert!(shutter::gpu::dof::tiles::SHADER.contains("fn tile_reach"));
+        assert!(shutter::gpu::motion::tile_max::SHADER.contains("struct TileMaxConfig"));
+        assert!(shutter::gpu::motion::neighbor_max::SHADER.contains("struct NeighborMaxConfig"));
+        assert!(shutter::gpu::motion::dilate::SHADER.contains("struct SourceTile"));
+        assert!(shutter::gpu::dof::gather::SHADER.contains("struct GatherConfig"));
+        assert!(shutter::gpu::dof::blend::SHADER.contains("struct BlendConfig"));
     }
 
     /// Depth values that stress the stage: non-finite, huge, tiny, subnormal, zero, negative,

@@ -13,7 +13,7 @@
 use std::io::Write;
 
 use shutter::frame::{Color, Frame, Positions};
-use shutter::gpu::scatter::Order;
+use shutter::gpu::motion::scatter::Order;
 use shutter::motion::scatter::scatter;
 use shutter::motion::{CurveKind, Normalize, ScatterParams, Shutter, Weight};
 use shutter::numeric::{sanitize, DepthKind};

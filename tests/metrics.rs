@@ -1,7 +1,7 @@
 //! Metrics against independent computations: FLIP against NVIDIA's flip-evaluator (vectors in
 //! fixtures/flip/expected.json, made by scripts/flip_vectors.py).
 
-use shutter::metrics::flip_map_rgb8;
+use shutter::lab::metrics::flip_map_rgb8;
 
 #[test]
 fn flip_matches_nvidia_flip_evaluator() {

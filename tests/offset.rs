@@ -136,10 +136,10 @@ fn an_exposure_opening_at_the_frame_streaks_ahead_only() {
 /// exposure's middle (t = offset·φ) run centred: the same exposure under the centred
 /// shutter. Returns (setting, offset error, centred error on the same exposure).
 fn offset_errors(name: &str, offset: f32) -> Vec<(String, f64, f64)> {
-    use shutter::metrics::rmse;
-    use shutter::truth::render::{render_passes, render_reference, Reference, RenderSettings};
+    use shutter::lab::metrics::rmse;
+    use shutter::lab::truth::render::{render_passes, render_reference, Reference, RenderSettings};
     let (w, h) = (160, 90);
-    let scene = shutter::truth::scenes::build(name, w, h, 1).unwrap();
+    let scene = shutter::lab::truth::scenes::build(name, w, h, 1).unwrap();
     let settings = RenderSettings {
         samples: 256,
         shutter: 0.5,
@@ -287,7 +287,7 @@ fn textured_square(shutter: f32, offset: f32) -> (Frame, [Vec<f32>; 3]) {
 
 #[test]
 fn with_nothing_hidden_an_offset_errs_as_the_centred_shutter() {
-    use shutter::metrics::rmse;
+    use shutter::lab::metrics::rmse;
     // Shutter 0.4 at 10 px a frame: a 4 px streak, moved 2 whole pixels by start or end.
     let score = |offset: f32, algorithm: Algorithm, params: &Params| {
         let (frame, reference) = textured_square(0.4, offset);
@@ -331,7 +331,7 @@ const OFFSET_TOLERANCE: f64 = 1.35;
 
 #[test]
 fn the_exposure_variant_keeps_a_small_fast_squares_corners_centred() {
-    use shutter::metrics::rmse;
+    use shutter::lab::metrics::rmse;
     // Centred, the jittered tile lookup of Blender's form (2014) lands on tiles the dilation
     // left still beside the square's corners and leaves them sharp (measured RMSE 0.0085);
     // the exposure variant looks up the pixel's own tile there (0.0016; 0.0085 before it did).

@@ -318,10 +318,10 @@ fn still_pixels_beside_a_moving_disc_do_not_count_its_fringe_twice() {
     // changed region the RMSE was 0.0400 (measured with the CLI on the same scene, `shutter
     // scene sparse --size 160x90 --samples 256`, and the binary before); with it, 0.0297, and
     // 0.0282 with the coverage steepened at still centres (COVER_SLOPE).
-    use shutter::metrics::changed_region;
-    use shutter::truth::render::{render_passes, render_reference, Reference, RenderSettings};
+    use shutter::lab::metrics::changed_region;
+    use shutter::lab::truth::render::{render_passes, render_reference, Reference, RenderSettings};
     let (w, h) = (160, 90);
-    let scene = shutter::truth::scenes::build("sparse", w, h, 1).unwrap();
+    let scene = shutter::lab::truth::scenes::build("sparse", w, h, 1).unwrap();
     let passes = render_passes(&scene, 0.0, 256, 1);
     let settings = RenderSettings {
         samples: 256,

@@ -216,7 +216,7 @@ fn every_bench_setting_round_trips_through_its_flags() {
         sensor_mm: 36.0,
     };
     let preset = shutter::io::preset::Preset::builtin("shutter").unwrap();
-    for target in shutter::bench::targets("layers", Some(lens)) {
+    for target in shutter::lab::bench::targets("layers", Some(lens)) {
         for setting in target.settings {
             let flags = setting.flags();
             let mut given = Given::default();

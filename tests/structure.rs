@@ -63,11 +63,11 @@ fn dof_and_motion_do_not_import_each_other() {
     let graph = imports();
     assert!(!graph["dof"].contains("motion"), "{:?}", graph["dof"]);
     assert!(!graph["motion"].contains("dof"), "{:?}", graph["motion"]);
-    // The effects stand on frames and the numeric policy alone (truth, the reference
-    // renderer, may use the lens model; the effects never use truth).
+    // The effects stand on frames and the numeric policy alone (the lab's reference
+    // renderer may use the lens model; the effects never use the lab).
     for effect in ["dof", "motion"] {
         assert!(
-            !graph[effect].contains("truth"),
+            !graph[effect].contains("lab"),
             "{effect}: {:?}",
             graph[effect]
         );
@@ -111,7 +111,7 @@ fn no_modules_import_each_other_in_a_circle() {
     }
     // The test sees the modules it guards.
     for module in [
-        "cli", "dof", "io", "motion", "numeric", "process", "settings", "truth",
+        "cli", "dof", "io", "lab", "motion", "numeric", "process", "settings",
     ] {
         assert!(graph.contains_key(module), "{module} not found");
     }

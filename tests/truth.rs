@@ -1,9 +1,9 @@
 //! The truth scenes: deterministic files, exact motion, converged references.
 
-use shutter::metrics::{changed_region, rmse};
-use shutter::truth::render::{render_passes, render_reference, Reference, RenderSettings};
-use shutter::truth::scenes::{build, SCENES};
-use shutter::truth::write::{write_scene, SceneOptions, DEFAULT_SAMPLES};
+use shutter::lab::metrics::{changed_region, rmse};
+use shutter::lab::truth::render::{render_passes, render_reference, Reference, RenderSettings};
+use shutter::lab::truth::scenes::{build, SCENES};
+use shutter::lab::truth::write::{write_scene, SceneOptions, DEFAULT_SAMPLES};
 
 use crate::support::*;
 

@@ -283,7 +283,7 @@ pub struct SceneArgs {
     pub frames: usize,
 
     /// Reference samples per pixel.
-    #[arg(long, value_name = "N", default_value_t = crate::truth::write::DEFAULT_SAMPLES)]
+    #[arg(long, value_name = "N", default_value_t = crate::lab::truth::write::DEFAULT_SAMPLES)]
     pub samples: usize,
 
     /// Shutter fraction of the references (0.5 = 180°).
@@ -365,7 +365,7 @@ pub struct BenchArgs {
     pub out: PathBuf,
 
     /// Reference samples per pixel.
-    #[arg(long, value_name = "N", default_value_t = crate::truth::write::DEFAULT_SAMPLES)]
+    #[arg(long, value_name = "N", default_value_t = crate::lab::truth::write::DEFAULT_SAMPLES)]
     pub samples: usize,
 
     /// The shutter offset of the scenes' references and of every setting run on them

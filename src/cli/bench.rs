@@ -13,14 +13,14 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     };
     let scenes = match &args.scenes {
         Some(list) => list.split(',').map(|s| s.trim().to_string()).collect(),
-        None => crate::truth::scenes::SCENES
+        None => crate::lab::truth::scenes::SCENES
             .iter()
             .map(|(n, _)| n.to_string())
             .collect(),
     };
     let binary = std::env::current_exe()
         .map_err(|e| Error::usage(format!("cannot find the shutter binary: {e}")))?;
-    let options = crate::bench::BenchOptions {
+    let options = crate::lab::bench::BenchOptions {
         scenes,
         width,
         height,
@@ -32,8 +32,8 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         peers: args.peers.clone(),
     };
     let started = std::time::Instant::now();
-    let report = crate::bench::run(&options, &mut |line| eprintln!("shutter: bench: {line}"))?;
-    out(&crate::bench::markdown(&report));
+    let report = crate::lab::bench::run(&options, &mut |line| eprintln!("shutter: bench: {line}"))?;
+    out(&crate::lab::bench::markdown(&report));
     eprintln!(
         "shutter: bench: {} rows in {:.1} s; wrote {}/bench.json, bench.md, pareto.svg, pareto.png, contact/",
         report.rows.len(),

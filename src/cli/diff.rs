@@ -36,7 +36,7 @@ fn frames_for(
     }
 }
 
-fn format_scores(s: &crate::metrics::Scores) -> String {
+fn format_scores(s: &crate::lab::metrics::Scores) -> String {
     format!(
         "rmse {:.6}  psnr {:.2} dB  ssim {:.5}  flip {:.5}  ({} px{})",
         s.rmse,
@@ -53,7 +53,7 @@ fn format_scores(s: &crate::metrics::Scores) -> String {
 }
 
 pub fn diff(args: DiffArgs) -> Result<i32> {
-    let metric = crate::metrics::Metric::parse(&args.metric).ok_or_else(|| {
+    let metric = crate::lab::metrics::Metric::parse(&args.metric).ok_or_else(|| {
         Error::usage(format!(
             "unknown metric '{}'; use rmse, psnr, ssim or flip",
             args.metric
@@ -82,7 +82,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
             ));
         }
     }
-    let job = crate::diff::DiffJob {
+    let job = crate::lab::diff::DiffJob {
         a,
         b,
         sharp,
@@ -94,7 +94,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
         preset: Preset::load(&args.preset)?,
         linear: args.linear,
     };
-    let report = crate::diff::run(&job)?;
+    let report = crate::lab::diff::run(&job)?;
     if args.json {
         out(&(serde_json::to_string_pretty(&report).unwrap_or_default() + "\n"));
     } else {

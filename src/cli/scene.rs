@@ -10,9 +10,9 @@ use super::parse_size;
 pub fn scene(args: SceneArgs) -> Result<()> {
     let (width, height) = match &args.size {
         Some(size) => parse_size(size)?,
-        None => crate::truth::write::DEFAULT_SIZE,
+        None => crate::lab::truth::write::DEFAULT_SIZE,
     };
-    let options = crate::truth::write::SceneOptions {
+    let options = crate::lab::truth::write::SceneOptions {
         width,
         height,
         frames: args.frames,
@@ -22,12 +22,16 @@ pub fn scene(args: SceneArgs) -> Result<()> {
         seed: args.seed,
     };
     let verbose = std::io::stderr().is_terminal();
-    let description =
-        crate::truth::write::write_scene(&args.name, &args.output, &options, &mut |frame, _| {
+    let description = crate::lab::truth::write::write_scene(
+        &args.name,
+        &args.output,
+        &options,
+        &mut |frame, _| {
             if verbose {
                 eprintln!("shutter: scene {} frame {frame} written", args.name);
             }
-        })?;
+        },
+    )?;
     if verbose {
         eprintln!(
             "shutter: {} frames of {} in {}",

@@ -6,10 +6,10 @@ use std::sync::{Mutex, OnceLock};
 
 use wgpu::{Backends, DeviceType};
 
-use super::reconstruct::ReconstructPass;
-use super::scatter::ScatterPass;
+use super::motion::reconstruct::ReconstructPass;
+use super::motion::scatter::ScatterPass;
+use super::motion::stretch::StretchPass;
 use super::stage::Stage;
-use super::stretch::StretchPass;
 use super::GpuTimes;
 
 /// The backends with what the passes need: compute, float storage and u32 buffer atomics
@@ -179,13 +179,13 @@ impl Gpu {
             .replace('\n', " ")
         })?;
         Ok(Gpu {
-            coc: super::coc::stage(&device),
-            tiles: super::tiles::stage(&device),
-            tile_max: super::tile_max::stage(&device),
-            neighbor_max: super::neighbor_max::stage(&device),
-            dilate: super::dilate::stage(&device),
-            gather: super::gather::stage(&device),
-            blend: super::blend::stage(&device),
+            coc: super::dof::coc::stage(&device),
+            tiles: super::dof::tiles::stage(&device),
+            tile_max: super::motion::tile_max::stage(&device),
+            neighbor_max: super::motion::neighbor_max::stage(&device),
+            dilate: super::motion::dilate::stage(&device),
+            gather: super::dof::gather::stage(&device),
+            blend: super::dof::blend::stage(&device),
             device,
             queue,
             info,

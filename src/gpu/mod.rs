@@ -48,30 +48,13 @@
 use serde::Serialize;
 
 #[cfg(feature = "gpu")]
-pub mod blend;
-#[cfg(feature = "gpu")]
-pub mod coc;
-#[cfg(feature = "gpu")]
 mod context;
 #[cfg(feature = "gpu")]
-pub mod dilate;
+pub mod dof;
 #[cfg(feature = "gpu")]
-pub mod gather;
-#[cfg(feature = "gpu")]
-pub mod neighbor_max;
+pub mod motion;
 #[cfg(feature = "gpu")]
 mod stage;
-#[cfg(feature = "gpu")]
-pub mod tile_max;
-#[cfg(feature = "gpu")]
-pub mod tiles;
-
-#[cfg(feature = "gpu")]
-pub mod reconstruct;
-#[cfg(feature = "gpu")]
-pub mod scatter;
-#[cfg(feature = "gpu")]
-pub mod stretch;
 #[cfg(feature = "gpu")]
 pub use stage::StageError;
 

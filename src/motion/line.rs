@@ -315,7 +315,7 @@ impl Walk {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::truth::sample::hash01;
+    use crate::lab::truth::sample::hash01;
 
     const BIG: Clip = Clip {
         x0: -1000,

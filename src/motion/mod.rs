@@ -8,7 +8,7 @@
 pub mod curve;
 pub mod dilate;
 pub mod line;
-pub mod matte;
+
 pub mod neighbor_max;
 pub mod reconstruct;
 pub mod scatter;

@@ -88,7 +88,7 @@ pub fn draw(v: [[f64; 2]; 3], clip: Rect, mut fragment: impl FnMut(usize, usize,
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::truth::sample::hash01;
+    use crate::lab::truth::sample::hash01;
 
     const CLIP: Rect = Rect {
         x0: 0,

@@ -251,14 +251,14 @@ pub fn small_scene(
     samples: usize,
 ) -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
-    let options = shutter::truth::write::SceneOptions {
+    let options = shutter::lab::truth::write::SceneOptions {
         width,
         height,
         frames,
         samples,
         ..Default::default()
     };
-    shutter::truth::write::write_scene(name, dir.path(), &options, &mut |_, _| {}).unwrap();
+    shutter::lab::truth::write::write_scene(name, dir.path(), &options, &mut |_, _| {}).unwrap();
     dir
 }
 
@@ -395,8 +395,8 @@ pub mod invariants {
 }
 
 /// Three colour planes as a metrics image.
-pub fn rgb(planes: &[Vec<f32>; 3], w: usize, h: usize) -> shutter::metrics::Rgb<'_> {
-    shutter::metrics::Rgb::new(planes, w, h)
+pub fn rgb(planes: &[Vec<f32>; 3], w: usize, h: usize) -> shutter::lab::metrics::Rgb<'_> {
+    shutter::lab::metrics::Rgb::new(planes, w, h)
 }
 
 /// Noise colour (RGBA, HDR red, negative blue) over two depth layers (2 and 9) scattered
@@ -440,7 +440,7 @@ pub fn scene_errors(
     scene_errors_against(
         name,
         size,
-        shutter::truth::render::Reference::MotionBlur,
+        shutter::lab::truth::render::Reference::MotionBlur,
         runs,
     )
 }
@@ -449,12 +449,12 @@ pub fn scene_errors(
 pub fn scene_errors_against(
     name: &str,
     (w, h): (usize, usize),
-    kind: shutter::truth::render::Reference,
+    kind: shutter::lab::truth::render::Reference,
     runs: &[(shutter::motion::Algorithm, shutter::process::Params)],
 ) -> SceneErrors {
-    use shutter::metrics::{changed_region, rmse};
-    use shutter::truth::render::{render_passes, render_reference, RenderSettings};
-    let scene = shutter::truth::scenes::build(name, w, h, 1).unwrap();
+    use shutter::lab::metrics::{changed_region, rmse};
+    use shutter::lab::truth::render::{render_passes, render_reference, RenderSettings};
+    let scene = shutter::lab::truth::scenes::build(name, w, h, 1).unwrap();
     let passes = render_passes(&scene, 0.0, 256, 1);
     let settings = RenderSettings {
         samples: 256,

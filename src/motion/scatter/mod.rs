@@ -564,7 +564,7 @@ mod tests {
             let mut cell = [0.0f64; 5];
             let mut crossings = 0;
             for k in 0..1_000_000u64 {
-                let r = |j: u64| crate::truth::sample::hash01(3, k, j, 0);
+                let r = |j: u64| crate::lab::truth::sample::hash01(3, k, j, 0);
                 let a = [1.0 + r(0), 1.0 + r(1)];
                 let b = [a[0] + 3.0 * (r(2) - 0.5), a[1] + 3.0 * (r(3) - 0.5)];
                 let clip = Clip {

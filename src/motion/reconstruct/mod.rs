@@ -1,10 +1,10 @@
 //! reconstruct — the gather filter of McGuire, Hennessy, Bukowski & Osman 2012, *A
 //! Reconstruction Filter for Plausible Motion Blur* (Listing 1, Fig. 4).
 //!
-//! Pipeline: half-spread velocity V (clamped to [0.5, k] px) → [`super::tile_max`] →
-//! [`super::neighbor_max`] → [`pack`] (texels) → [`gather`]; the 2014 variants dilate the
-//! tiles instead of NeighborMax ([`super::dilate`]), and the exposure variant mattes the
-//! silhouettes ([`super::matte`]) before its gather. Inputs: colour (RGBA, premultiplied), depth,
+//! Pipeline: half-spread velocity V (clamped to [0.5, k] px) → [`crate::motion::tile_max`] →
+//! [`crate::motion::neighbor_max`] → [`pack`] (texels) → [`gather`]; the 2014 variants dilate the
+//! tiles instead of NeighborMax ([`crate::motion::dilate`]), and the exposure variant mattes the
+//! silhouettes ([`matte`]) before its gather. Inputs: colour (RGBA, premultiplied), depth,
 //! velocity; prev/next are never read. Each output pixel is a weighted average of input
 //! colours with non-negative weights (the centre's weight is at least 1/k), so it lies in the
 //! per-channel range of the inputs and a uniform colour stays uniform.
@@ -30,11 +30,13 @@
 
 use rayon::prelude::*;
 
-use super::matte::{self, Matte};
-use super::tile_max::TileGrid;
-use super::Shutter;
+pub mod matte;
+
 use crate::frame::{Color, Frame, Velocity};
+use crate::motion::tile_max::TileGrid;
+use crate::motion::Shutter;
 use crate::numeric::{unit, HUGE};
+use matte::Matte;
 
 /// Half a pixel: velocities at or below it do not blur (the paper's 0.5 px).
 pub const HALF_PIXEL: f32 = 0.5;
@@ -63,7 +65,7 @@ pub enum Variant {
     /// with the centre's own surface for the share of the shutter it covers the pixel
     /// (1/(2|V|)) and the background behind it for the rest. Each tap is read between
     /// pixels and split by surface ([`split`]), by each pixel's coverage where a moving
-    /// surface's edge crosses it ([`split_by_cover`], [`super::matte`]), and the taps along
+    /// surface's edge crosses it ([`split_by_cover`], [`matte`]), and the taps along
     /// the pixel's own vector sit half a step from those along the tile's.
     Exposure,
 }
@@ -270,7 +272,7 @@ pub fn reconstruct(
         params,
         shutter,
         seed,
-        &super::Cpu,
+        &crate::motion::Cpu,
         |config, inputs, color| inputs.gather(config, color),
     )
 }
@@ -320,7 +322,7 @@ pub fn reconstruct_with(
     params: &ReconstructParams,
     shutter: impl Into<Shutter>,
     seed: u32,
-    stages: &impl super::TileStages,
+    stages: &impl crate::motion::TileStages,
     gather_stage: impl FnOnce(&ReconstructConfig, GatherInputs<'_>, &mut Color),
 ) -> Frame {
     let (width, height) = (frame.width, frame.height);
@@ -720,7 +722,7 @@ fn split(
     (a, share_a, b, share_b)
 }
 
-/// The exposure variant's tap at pixel (x, y) + `offset`, split by coverage ([`super::matte`]):
+/// The exposure variant's tap at pixel (x, y) + `offset`, split by coverage ([`matte`]):
 /// each of the four pixels around the point gives its bilinear weight times its coverage α to
 /// the moving surface, in that surface's colour, and the rest to the still surface behind;
 /// part A is the surface of the nearest pixel (`nearest`, an index), part B the other, each

@@ -21,7 +21,11 @@ use crate::gpu::{Backend, GpuTimes};
 use crate::io::passes::{plan_frame, read_color, read_frame, Inputs, PlanOptions};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
-use crate::metrics::{self, Rgb, Scores};
+use crate::lab::metrics::{self, Rgb, Scores};
+use crate::lab::truth::scenes::SCENES;
+use crate::lab::truth::write::{
+    resampled_role, write_resampled_references, write_scene, SceneOptions,
+};
 use crate::motion::{
     Algorithm, Anchor, CurveKind, Normalize, ReconstructParams, ScatterParams, StretchParams,
     Variant, Weight,
@@ -29,8 +33,6 @@ use crate::motion::{
 use crate::numeric;
 use crate::process::{self, apply, Params};
 use crate::settings;
-use crate::truth::scenes::SCENES;
-use crate::truth::write::{resampled_role, write_resampled_references, write_scene, SceneOptions};
 
 /// One point of the sweep: an algorithm with its parameters. The flags that run it come from
 /// the settings' definitions ([`settings::flags`]).
@@ -569,7 +571,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
         ));
         let inputs = scene_inputs(&dir);
         let sharp = read_rgb(&dir.join("color.0001.exr"))?;
-        let lens = crate::truth::scenes::build(scene_name, options.width, options.height, 1)
+        let lens = crate::lab::truth::scenes::build(scene_name, options.width, options.height, 1)
             .and_then(|scene| scene.lens);
         for mut target in targets(scene_name, lens) {
             // The settings run with the references' shutter offset.

@@ -10,9 +10,9 @@ use plotters::style::{register_font, FontStyle};
 use super::BenchReport;
 use crate::error::{Problem, ProblemKind, Result};
 use crate::frame::Frame;
-use crate::metrics::{display_rgb8, Rgb};
+use crate::lab::metrics::{display_rgb8, Rgb};
 
-const FONT: &[u8] = include_bytes!("../../assets/DejaVuSansMono.ttf");
+const FONT: &[u8] = include_bytes!("../../../assets/DejaVuSansMono.ttf");
 const PANEL: (u32, u32) = (420, 300);
 const LABEL_HEIGHT: usize = 22;
 

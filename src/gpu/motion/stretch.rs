@@ -69,8 +69,8 @@ use rayon::prelude::*;
 use crate::frame::Frame;
 use crate::motion::stretch::{stages, stretch_with, StretchConfig, StretchParams};
 
-use super::stage::{floats, kept, read_back, Caught, StageError};
-use super::Gpu;
+use crate::gpu::stage::{floats, kept, read_back, Caught, StageError};
+use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = include_str!("stretch.wgsl");
@@ -672,7 +672,7 @@ mod tests {
             "texture_blur: u32",
         ];
         assert_eq!(
-            super::super::stage::wgsl_fields(SHADER, "StretchConfig"),
+            crate::gpu::stage::wgsl_fields(SHADER, "StretchConfig"),
             fields
         );
     }

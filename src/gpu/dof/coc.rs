@@ -16,9 +16,9 @@ use bytemuck::{Pod, Zeroable};
 use crate::dof::{CocSource, DofParams};
 use crate::frame::Frame;
 
-pub use super::stage::StageError;
-use super::stage::{floats, Dispatch, Stage};
-use super::Gpu;
+pub use crate::gpu::stage::StageError;
+use crate::gpu::stage::{floats, Dispatch, Stage};
+use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = include_str!("coc.wgsl");

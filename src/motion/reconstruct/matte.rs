@@ -1,5 +1,5 @@
 //! matte — how much of each pixel at a silhouette a moving surface covers, for
-//! [`super::reconstruct`]'s exposure variant.
+//! [`super`]'s exposure variant.
 //!
 //! A rendered pixel is an area: where a moving surface's edge crosses it, its colour mixes
 //! the surface's and what lies behind, while its depth and motion (sampled at the pixel's
@@ -27,7 +27,7 @@
 
 use rayon::prelude::*;
 
-use super::reconstruct::{ReconstructConfig, Texel2014, HALF_PIXEL};
+use super::{ReconstructConfig, Texel2014, HALF_PIXEL};
 
 /// Per pixel: α (the moving surface's coverage), then the pixels the moving and the still
 /// colours of its pair come from, as `f32::from_bits` of their indices (the pixel's own

@@ -21,8 +21,8 @@ use crate::dof::gather::{inverse_area, plan, Tiles, LAYER, TILE};
 use crate::dof::DofConfig;
 use crate::frame::Color;
 
-use super::stage::{floats, Dispatch, Stage, StageError};
-use super::Gpu;
+use crate::gpu::stage::{floats, Dispatch, Stage, StageError};
+use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = include_str!("gather.wgsl");

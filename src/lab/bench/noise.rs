@@ -16,7 +16,7 @@
 //! leaves them out); in the region, outputs are computed from a frame at one instant and
 //! share no time or aperture samples with it.
 
-use crate::metrics::{squared_error_map, Rgb};
+use crate::lab::metrics::{squared_error_map, Rgb};
 
 /// The per-sample noise variance of a reference estimated from two renders with different
 /// sampling seeds, over the pixels in `mask` (all when `None`) and the three channels:
@@ -44,7 +44,7 @@ pub fn corrected_rmse(rmse: f64, variance: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::metrics::rmse;
+    use crate::lab::metrics::rmse;
 
     /// Walsh functions of index `k` over `n` samples: ±1, mutually orthogonal over any
     /// multiple of 2^(bits) samples, so sums of their products vanish exactly.

@@ -18,8 +18,8 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::dof::gather::{gap_distance, Tiles, LAYER, TILE};
 
-use super::stage::{floats, Dispatch, Stage, StageError};
-use super::Gpu;
+use crate::gpu::stage::{floats, Dispatch, Stage, StageError};
+use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = include_str!("tiles.wgsl");

@@ -13,8 +13,8 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::motion::tile_max::TileGrid;
 
-use super::stage::{tile_grid, Dispatch, Stage, StageError};
-use super::Gpu;
+use crate::gpu::stage::{tile_grid, Dispatch, Stage, StageError};
+use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = include_str!("neighbor_max.wgsl");

@@ -5,7 +5,7 @@
 //!
 //! In: what [`reconstruct_with`] hands its gather ([`GatherInputs`]): the packed texels, the
 //! pixel velocity (paper and dual), the tile grid and the exposure variant's mattes
-//! ([`crate::motion::matte`]), all built on the CPU (tile_max, neighbor_max, dilate, pack and
+//! ([`crate::motion::reconstruct::matte`]), all built on the CPU (tile_max, neighbor_max, dilate, pack and
 //! matte stay there). In and out: the premultiplied colour, written in place where the CPU
 //! writes it. Bindings, in order: the [`ReconstructConfig`] uniform, texels, velocity, tiles,
 //! colour, mattes — the CPU functions' arguments; planar structs travel as their planes one
@@ -29,8 +29,8 @@ use crate::motion::reconstruct::reconstruct_with;
 use crate::motion::reconstruct::{GatherInputs, ReconstructConfig};
 use crate::motion::ReconstructParams;
 
-use super::stage::{floats, kept, read_back, Caught, StageError};
-use super::Gpu;
+use crate::gpu::stage::{floats, kept, read_back, Caught, StageError};
+use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = include_str!("reconstruct.wgsl");
@@ -393,7 +393,7 @@ mod tests {
             "seed: u32",
         ];
         assert_eq!(
-            super::super::stage::wgsl_fields(SHADER, "ReconstructConfig"),
+            crate::gpu::stage::wgsl_fields(SHADER, "ReconstructConfig"),
             fields
         );
     }

@@ -11,7 +11,7 @@ use crate::frame::Frame;
 use crate::io::passes::read_color;
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
-use crate::metrics::{self, Metric, Rgb, Scores};
+use crate::lab::metrics::{self, Metric, Rgb, Scores};
 
 /// A diff job.
 #[derive(Clone, Debug)]

@@ -86,8 +86,8 @@ use crate::motion::Shutter;
 #[cfg(doc)]
 use crate::motion::scatter::STILL;
 
-use super::stage::{floats, kept, read_back, Caught, StageError};
-use super::Gpu;
+use crate::gpu::stage::{floats, kept, read_back, Caught, StageError};
+use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = include_str!("scatter.wgsl");
@@ -502,7 +502,7 @@ mod tests {
             "depth_tolerance: f32",
         ];
         assert_eq!(
-            super::super::stage::wgsl_fields(SHADER, "ScatterConfig"),
+            crate::gpu::stage::wgsl_fields(SHADER, "ScatterConfig"),
             fields
         );
     }

@@ -22,8 +22,8 @@ use crate::dof::blend::plan;
 use crate::dof::DofConfig;
 use crate::frame::Color;
 
-use super::stage::{floats, Dispatch, Stage, StageError};
-use super::Gpu;
+use crate::gpu::stage::{floats, Dispatch, Stage, StageError};
+use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = include_str!("blend.wgsl");
