@@ -10,6 +10,7 @@ mod dof;
 mod farm;
 mod golden;
 mod gpu;
+mod gpu_dof;
 mod gpu_reconstruct;
 mod gpu_scatter;
 mod gpu_stretch;

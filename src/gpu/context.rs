@@ -226,6 +226,23 @@ impl Gpu {
         self.info.device_type == DeviceType::Cpu
     }
 
+    /// The one fallback of every stage with a twin: `gpu`, or where it could not run (a frame
+    /// over the device's limits, a device without a feature the stage needs, an error the
+    /// device reported), `cpu` — the CPU stage it stands for, whose result it must equal
+    /// within the twin's stated tolerance — counted in [`Gpu::stages_on_cpu`] and named in the
+    /// run's warning ([`Gpu::fallback`]).
+    pub(crate) fn or_cpu<T>(
+        &self,
+        stage: &str,
+        gpu: impl FnOnce() -> Result<T, super::StageError>,
+        cpu: impl FnOnce() -> T,
+    ) -> T {
+        gpu().unwrap_or_else(|why| {
+            self.note_cpu_stage(stage, &why);
+            cpu()
+        })
+    }
+
     /// Records that a stage with a GPU twin ran on the CPU for one frame, and why (the first
     /// reason is kept for the run's warning).
     pub(crate) fn note_cpu_stage(&self, stage: &str, why: &super::StageError) {
@@ -326,71 +343,5 @@ impl Gpu {
             .ok()
             .and_then(|v| v.parse::<u64>().ok());
         lowered.map_or(device, |l| l.min(device))
-    }
-}
-
-/// Depth of field's stages with a twin run here: `coc` and tile min/max (each falls back to
-/// the CPU stage, counted, where the GPU cannot run it).
-impl crate::dof::Stages for Gpu {
-    fn coc_plane(&self, frame: &crate::frame::Frame, params: &crate::dof::DofParams) -> Vec<f32> {
-        Gpu::coc_plane(self, frame, params)
-    }
-
-    fn tiles(
-        &self,
-        coc: &[f32],
-        width: usize,
-        height: usize,
-        epsilon: f32,
-    ) -> crate::dof::gather::Tiles {
-        Gpu::tiles(self, coc, width, height, epsilon)
-    }
-
-    fn gather(
-        &self,
-        config: &crate::dof::DofConfig,
-        color: &crate::frame::Color,
-        coc: &[f32],
-        tiles: &crate::dof::gather::Tiles,
-    ) -> crate::frame::Color {
-        Gpu::dof_gather(self, config, color, coc, tiles)
-    }
-
-    fn blend(
-        &self,
-        config: &crate::dof::DofConfig,
-        color: crate::frame::Color,
-        coc: &[f32],
-    ) -> crate::frame::Color {
-        Gpu::dof_blend(self, config, color, coc)
-    }
-}
-
-/// Reconstruct's tile stages run here (each falls back to the CPU stage, counted, where the
-/// GPU cannot run it).
-impl crate::motion::TileStages for Gpu {
-    fn tile_max(
-        &self,
-        vx: &[f32],
-        vy: &[f32],
-        width: usize,
-        height: usize,
-        size: usize,
-    ) -> crate::motion::tile_max::TileGrid {
-        Gpu::tile_max(self, vx, vy, width, height, size)
-    }
-
-    fn neighbor_max(
-        &self,
-        tiles: &crate::motion::tile_max::TileGrid,
-    ) -> crate::motion::tile_max::TileGrid {
-        Gpu::neighbor_max(self, tiles)
-    }
-
-    fn dilate(
-        &self,
-        tiles: &crate::motion::tile_max::TileGrid,
-    ) -> crate::motion::tile_max::TileGrid {
-        Gpu::dilate(self, tiles)
     }
 }

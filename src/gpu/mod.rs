@@ -51,6 +51,8 @@ use serde::Serialize;
 mod context;
 #[cfg(feature = "gpu")]
 pub mod dof;
+#[cfg(all(test, feature = "gpu"))]
+mod layout;
 #[cfg(feature = "gpu")]
 pub mod motion;
 #[cfg(feature = "gpu")]
@@ -206,4 +208,59 @@ const NO_GPU_FEATURE: &str = "this shutter was built without the GPU backend \
 /// into a test failure instead of a skip.
 pub fn required() -> bool {
     std::env::var("SHUTTER_REQUIRE_GPU").is_ok_and(|v| !v.is_empty() && v != "0")
+}
+
+#[cfg(all(test, feature = "gpu"))]
+mod tests {
+    use wgpu::naga;
+
+    /// Every twin's shader, prelude included, as the device compiles it (vello validates its
+    /// shaders at build time; here a unit test does, with no device needed).
+    const SHADERS: &[(&str, &str)] = &[
+        ("coc", dof::coc::SHADER),
+        ("tiles", dof::tiles::SHADER),
+        ("gather", dof::gather::SHADER),
+        ("blend", dof::blend::SHADER),
+        ("tile_max", motion::tile_max::SHADER),
+        ("neighbor_max", motion::neighbor_max::SHADER),
+        ("dilate", motion::dilate::SHADER),
+        ("reconstruct", motion::reconstruct::SHADER),
+        ("scatter", motion::scatter::SHADER),
+        ("stretch", motion::stretch::SHADER),
+    ];
+
+    use super::{dof, motion};
+
+    #[test]
+    fn every_shader_parses_and_validates_without_a_device() {
+        for (name, shader) in SHADERS {
+            let module = naga::front::wgsl::parse_str(shader)
+                .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(shader)));
+            naga::valid::Validator::new(
+                naga::valid::ValidationFlags::all(),
+                naga::valid::Capabilities::empty(),
+            )
+            .validate(&module)
+            .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(shader)));
+        }
+        // Every shader file is in the list (the prelude is in each).
+        fn count(dir: &std::path::Path) -> usize {
+            std::fs::read_dir(dir)
+                .unwrap()
+                .map(|e| e.unwrap().path())
+                .map(|p| match p.extension() {
+                    _ if p.is_dir() => count(&p),
+                    Some(e) if e == "wgsl" && !p.ends_with("prelude.wgsl") => 1,
+                    _ => 0,
+                })
+                .sum()
+        }
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/gpu");
+        assert_eq!(
+            count(&dir),
+            SHADERS.len(),
+            "shaders under {}",
+            dir.display()
+        );
+    }
 }

@@ -26,7 +26,7 @@ use crate::gpu::stage::{floats, Dispatch, Stage, StageError};
 use crate::gpu::Gpu;
 
 /// The shader's source.
-pub const SHADER: &str = include_str!("blend.wgsl");
+pub const SHADER: &str = concat!(include_str!("../prelude.wgsl"), include_str!("blend.wgsl"));
 
 /// The stage's uniform. Keep in sync with `BlendConfig` in blend.wgsl (the size test guards
 /// the layout: sixteen 4-byte fields, `reference` on a 16-byte boundary).

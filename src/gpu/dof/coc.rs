@@ -21,7 +21,7 @@ use crate::gpu::stage::{floats, Dispatch, Stage};
 use crate::gpu::Gpu;
 
 /// The shader's source.
-pub const SHADER: &str = include_str!("coc.wgsl");
+pub const SHADER: &str = concat!(include_str!("../prelude.wgsl"), include_str!("coc.wgsl"));
 
 /// Pixels per workgroup side (`@workgroup_size(16, 16)` in coc.wgsl).
 const WORKGROUP: u32 = 16;

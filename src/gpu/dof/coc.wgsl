@@ -37,9 +37,6 @@ struct CocConfig {
 @group(0) @binding(1) var<storage, read> depth: array<f32>;
 @group(0) @binding(2) var<storage, read_write> coc: array<f32>;
 
-const EXPONENT: u32 = 0x7f800000u;
-const MAGNITUDE: u32 = 0x7fffffffu;
-const SIGN: u32 = 0x80000000u;
 
 // P/D is floored at P·1e-20 (a depth 1e20 times nearer than the focus): with K at most 1e15
 // (the host clamps it) the product stays finite, and the CoC is −limit there anyway.
@@ -49,7 +46,7 @@ fn lens_coc(d: f32) -> f32 {
     let bits = bitcast<u32>(d);
     let magnitude = bits & MAGNITUDE;
     // NaN and +∞: far, P/D = 0.
-    if magnitude > EXPONENT || bits == EXPONENT {
+    if magnitude > INFINITY_BITS || bits == INFINITY_BITS {
         return clamp(config.scale, -config.limit, config.limit);
     }
     // Zero, negative, −∞: nearest (the CPU's −LARGEST, clamped).
@@ -64,13 +61,13 @@ fn map_coc(v: f32) -> f32 {
     let bits = bitcast<u32>(v);
     let magnitude = bits & MAGNITUDE;
     // NaN: in focus.
-    if magnitude > EXPONENT {
+    if magnitude > INFINITY_BITS {
         return 0.0;
     }
     // +∞ is the largest value, −∞ the smallest; finite values are clamped to [0, cap] so the
     // product stays finite (the CPU clamps the product, to the same result).
     var stored = clamp(v, 0.0, config.cap);
-    if magnitude == EXPONENT {
+    if magnitude == INFINITY_BITS {
         stored = select(config.cap, 0.0, (bits & SIGN) != 0u);
     }
     return clamp(stored * config.scale, 0.0, config.limit);

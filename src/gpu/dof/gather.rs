@@ -25,7 +25,7 @@ use crate::gpu::stage::{floats, Dispatch, Stage, StageError};
 use crate::gpu::Gpu;
 
 /// The shader's source.
-pub const SHADER: &str = include_str!("gather.wgsl");
+pub const SHADER: &str = concat!(include_str!("../prelude.wgsl"), include_str!("gather.wgsl"));
 
 /// The stage's uniform. Keep in sync with `GatherConfig` in gather.wgsl (the size test guards
 /// the layout: eight 4-byte fields, a multiple of 16 bytes as uniforms need).

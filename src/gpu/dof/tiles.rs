@@ -22,7 +22,7 @@ use crate::gpu::stage::{floats, Dispatch, Stage, StageError};
 use crate::gpu::Gpu;
 
 /// The shader's source.
-pub const SHADER: &str = include_str!("tiles.wgsl");
+pub const SHADER: &str = concat!(include_str!("../prelude.wgsl"), include_str!("tiles.wgsl"));
 
 /// Tiles per workgroup side (`@workgroup_size(8, 8)` in tiles.wgsl).
 const WORKGROUP: u32 = 8;

@@ -50,9 +50,6 @@ struct TilesConfig {
 @group(0) @binding(7) var<storage, read_write> highest: array<u32>;
 @group(0) @binding(8) var<storage, read_write> overall: atomic<u32>;
 
-const MAGNITUDE: u32 = 0x7fffffffu;
-const INFINITY_BITS: u32 = 0x7f800000u;
-const NEG_INFINITY_BITS: u32 = 0xff800000u;
 
 @compute @workgroup_size(8, 8)
 fn tile_min_max(@builtin(global_invocation_id) id: vec3<u32>) {

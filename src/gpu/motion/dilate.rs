@@ -23,7 +23,7 @@ use crate::gpu::stage::{tile_grid, Dispatch, Stage, StageError};
 use crate::gpu::Gpu;
 
 /// The shader's source.
-pub const SHADER: &str = include_str!("dilate.wgsl");
+pub const SHADER: &str = concat!(include_str!("../prelude.wgsl"), include_str!("dilate.wgsl"));
 
 /// Tiles per workgroup side (`@workgroup_size(8, 8)` in dilate.wgsl).
 const WORKGROUP: u32 = 8;
@@ -92,15 +92,6 @@ pub(crate) fn stage(device: &wgpu::Device) -> Stage {
 }
 
 impl Gpu {
-    /// [`crate::motion::dilate::dilate`] on the GPU; the CPU stage where the GPU cannot run
-    /// it, counted in [`Gpu::stages_on_cpu`].
-    pub fn dilate(&self, tiles: &TileGrid) -> TileGrid {
-        self.try_dilate(tiles).unwrap_or_else(|e| {
-            self.note_cpu_stage("dilate", &e);
-            crate::motion::dilate::dilate(tiles)
-        })
-    }
-
     /// [`crate::motion::dilate::dilate`] on the GPU, or why it could not run.
     pub fn try_dilate(&self, tiles: &TileGrid) -> Result<TileGrid, StageError> {
         let (columns, rows) = (tiles.columns, tiles.rows);

@@ -58,7 +58,6 @@ struct SourceTile {
 @group(0) @binding(4) var<storage, read_write> x: array<f32>;
 @group(0) @binding(5) var<storage, read_write> y: array<f32>;
 
-const INFINITY_BITS: u32 = 0x7f800000u;
 // √2 in f32, `std::f32::consts::SQRT_2` (0x3fb504f3), by its bits so no literal rounding
 // is involved.
 const REACH_BITS: u32 = 0x3fb504f3u;

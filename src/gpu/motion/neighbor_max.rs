@@ -17,7 +17,10 @@ use crate::gpu::stage::{tile_grid, Dispatch, Stage, StageError};
 use crate::gpu::Gpu;
 
 /// The shader's source.
-pub const SHADER: &str = include_str!("neighbor_max.wgsl");
+pub const SHADER: &str = concat!(
+    include_str!("../prelude.wgsl"),
+    include_str!("neighbor_max.wgsl")
+);
 
 /// Tiles per workgroup side (`@workgroup_size(8, 8)` in neighbor_max.wgsl).
 const WORKGROUP: u32 = 8;
@@ -48,15 +51,6 @@ pub(crate) fn stage(device: &wgpu::Device) -> Stage {
 }
 
 impl Gpu {
-    /// [`crate::motion::neighbor_max::neighbor_max`] on the GPU; the CPU stage where the GPU
-    /// cannot run it, counted in [`Gpu::stages_on_cpu`].
-    pub fn neighbor_max(&self, tiles: &TileGrid) -> TileGrid {
-        self.try_neighbor_max(tiles).unwrap_or_else(|e| {
-            self.note_cpu_stage("neighbor_max", &e);
-            crate::motion::neighbor_max::neighbor_max(tiles)
-        })
-    }
-
     /// [`crate::motion::neighbor_max::neighbor_max`] on the GPU, or why it could not run.
     pub fn try_neighbor_max(&self, tiles: &TileGrid) -> Result<TileGrid, StageError> {
         let (columns, rows) = (tiles.columns, tiles.rows);

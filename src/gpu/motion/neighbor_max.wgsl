@@ -27,7 +27,6 @@ struct NeighborMaxConfig {
 @group(0) @binding(3) var<storage, read_write> x: array<f32>;
 @group(0) @binding(4) var<storage, read_write> y: array<f32>;
 
-const INFINITY_BITS: u32 = 0x7f800000u;
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {

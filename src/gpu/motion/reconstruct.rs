@@ -33,7 +33,10 @@ use crate::gpu::stage::{floats, kept, read_back, Caught, StageError};
 use crate::gpu::Gpu;
 
 /// The shader's source.
-pub const SHADER: &str = include_str!("reconstruct.wgsl");
+pub const SHADER: &str = concat!(
+    include_str!("../prelude.wgsl"),
+    include_str!("reconstruct.wgsl")
+);
 
 /// Pixels per workgroup side (`@workgroup_size(8, 8)` in reconstruct.wgsl).
 const WORKGROUP: u32 = 8;
@@ -379,22 +382,11 @@ mod tests {
         // Keep in sync with reconstruct.wgsl: eleven 4-byte fields, no padding.
         assert_eq!(std::mem::size_of::<ReconstructConfig>(), 44);
         assert_eq!(std::mem::align_of::<ReconstructConfig>(), 4);
-        let fields = [
-            "width: u32",
-            "height: u32",
-            "tile: u32",
-            "k: f32",
-            "shutter: f32",
-            "offset: f32",
-            "taps: u32",
-            "inv_soft_z: f32",
-            "jitter: u32",
-            "variant: u32",
-            "seed: u32",
-        ];
-        assert_eq!(
-            crate::gpu::stage::wgsl_fields(SHADER, "ReconstructConfig"),
-            fields
+        crate::gpu::layout::assert_same_layout!(
+            ReconstructConfig,
+            SHADER,
+            "ReconstructConfig",
+            [width, height, tile, k, shutter, offset, taps, inv_soft_z, jitter, variant, seed]
         );
     }
 

@@ -155,7 +155,7 @@ fn texel6(i: u32) -> Texel {
 // lies past the support of `cone` and `cylinder` (taps are at least a quarter step from the
 // centre, so the CPU's product is ≥ 1e29 or ∞).
 fn huge(inv_length: f32) -> bool {
-    return (bitcast<u32>(inv_length) & 0x7fffffffu) >= bitcast<u32>(1e30f);
+    return (bitcast<u32>(inv_length) & MAGNITUDE) >= bitcast<u32>(1e30f);
 }
 
 // distance / |V|: the CPU's `distance * inv_length`, without computing with ∞.

@@ -90,7 +90,10 @@ use crate::gpu::stage::{floats, kept, read_back, Caught, StageError};
 use crate::gpu::Gpu;
 
 /// The shader's source.
-pub const SHADER: &str = include_str!("scatter.wgsl");
+pub const SHADER: &str = concat!(
+    include_str!("../prelude.wgsl"),
+    include_str!("scatter.wgsl")
+);
 
 /// Storage buffers the stages bind (every binding but the uniform).
 pub const STORAGE_BUFFERS: u32 = 12;

@@ -79,15 +79,7 @@ fn flat(group: vec3<u32>, groups: vec3<u32>, lane: u32) -> u32 {
     return (group.y * groups.x + group.x) * WORKGROUP + lane;
 }
 
-// NaN and infinity tested on the bits: WGSL lets an implementation assume neither occurs in
-// float arithmetic, so a float comparison with one proves nothing.
-fn is_nan(v: f32) -> bool {
-    return (bitcast<u32>(v) & 0x7fffffffu) > 0x7f800000u;
-}
-
-fn is_finite(v: f32) -> bool {
-    return (bitcast<u32>(v) & 0x7fffffffu) < 0x7f800000u;
-}
+// NaN and infinity are tested on the bits (`is_nan`, `is_finite`: the prelude).
 
 // ---- The f32 form of the geometry -------------------------------------------------------
 //

@@ -73,7 +73,10 @@ use crate::gpu::stage::{floats, kept, read_back, Caught, StageError};
 use crate::gpu::Gpu;
 
 /// The shader's source.
-pub const SHADER: &str = include_str!("stretch.wgsl");
+pub const SHADER: &str = concat!(
+    include_str!("../prelude.wgsl"),
+    include_str!("stretch.wgsl")
+);
 
 /// Invocations per workgroup of the 1-D stages (`GROUP` in stretch.wgsl).
 const GROUP: u32 = 256;

@@ -29,10 +29,6 @@ const MOST_SAMPLES: u32 = 64u;
 const MAX_SHIFT: f32 = 128.0;
 // A triangle that is not drawn (the ordered form of a NaN no depth can be).
 const NOT_DRAWN: u32 = 0u;
-// +∞ (WGSL has no literal for it).
-fn infinity() -> f32 {
-    return bitcast<f32>(0x7f800000u);
-}
 // Invocations per workgroup of the 1-D stages; rows of 65535 workgroups beyond that.
 const GROUP: u32 = 256u;
 
@@ -54,15 +50,6 @@ fn pixels() -> u32 {
     return config.width * config.height;
 }
 
-// An f32 as a u32 of the same order (total order: -0 below +0).
-fn ordered(f: f32) -> u32 {
-    let b = bitcast<u32>(f);
-    return select(b | 0x80000000u, ~b, (b & 0x80000000u) != 0u);
-}
-
-fn unordered(u: u32) -> f32 {
-    return bitcast<f32>(select(~u, u & 0x7fffffffu, (u & 0x80000000u) != 0u));
-}
 
 fn moving(w: vec2<f32>) -> bool {
     return sqrt(w.x * w.x + w.y * w.y) * config.shutter >= STILL;

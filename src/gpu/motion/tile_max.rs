@@ -22,7 +22,10 @@ use crate::gpu::stage::{tile_grid, Dispatch, Stage, StageError};
 use crate::gpu::Gpu;
 
 /// The shader's source.
-pub const SHADER: &str = include_str!("tile_max.wgsl");
+pub const SHADER: &str = concat!(
+    include_str!("../prelude.wgsl"),
+    include_str!("tile_max.wgsl")
+);
 
 /// The stage's uniform. Keep in sync with `TileMaxConfig` in tile_max.wgsl (the size test
 /// guards the layout: eight 4-byte fields, a multiple of 16 bytes as uniforms need).
@@ -70,23 +73,6 @@ pub(crate) fn stage(device: &wgpu::Device) -> Stage {
 }
 
 impl Gpu {
-    /// [`crate::motion::tile_max::tile_max`] on the GPU; the CPU stage where the GPU cannot
-    /// run it (a frame over the device's limits), counted in [`Gpu::stages_on_cpu`].
-    pub fn tile_max(
-        &self,
-        vx: &[f32],
-        vy: &[f32],
-        width: usize,
-        height: usize,
-        size: usize,
-    ) -> TileGrid {
-        self.try_tile_max(vx, vy, width, height, size)
-            .unwrap_or_else(|e| {
-                self.note_cpu_stage("tile_max", &e);
-                crate::motion::tile_max::tile_max(vx, vy, width, height, size)
-            })
-    }
-
     /// [`crate::motion::tile_max::tile_max`] on the GPU, or why it could not run.
     pub fn try_tile_max(
         &self,

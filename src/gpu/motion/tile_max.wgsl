@@ -43,8 +43,6 @@ struct TileMaxConfig {
 @group(0) @binding(4) var<storage, read_write> y: array<f32>;
 
 const LANES: u32 = 64u;
-// Above the bits of +∞: a NaN.
-const INFINITY_BITS: u32 = 0x7f800000u;
 // No pixel yet: after every pixel in the tile's order.
 const NONE: u32 = 0xffffffffu;
 
