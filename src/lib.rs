@@ -23,6 +23,7 @@ pub mod numeric;
 pub mod pipeline;
 pub mod process;
 pub mod settings;
+pub mod stages;
 
 pub use error::{Error, Problem, ProblemKind, Result};
 pub use frame::{Frame, Passes};

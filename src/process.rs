@@ -3,12 +3,13 @@
 //! ([`crate::motion`]) — "DoF before MB" (Sousa). `dof` and `motion` are siblings that never
 //! import each other; this module is where they meet, and where each stage's backend is chosen.
 
-use crate::dof::{CocSource, DofParams};
+use crate::dof::{self, CocSource, DofParams};
 use crate::frame::{Frame, Passes};
 use crate::gpu::Gpu;
-use crate::motion::{reconstruct, scatter, stretch, Algorithm, Shutter};
+use crate::motion::{self, reconstruct, scatter, stretch, Algorithm, Shutter};
 use crate::motion::{ReconstructParams, ScatterParams, StretchParams};
 use crate::numeric::{self, DepthKind, Replaced};
+use crate::stages::Cpu;
 
 /// The default shutter: 0.5 of the frame interval (180°), centred on the frame.
 pub const DEFAULT_SHUTTER: f32 = 0.5;
@@ -20,7 +21,7 @@ pub struct Params {
     /// Fraction of the frame interval the shutter is open (0.5 = 180°).
     pub shutter: f32,
     /// Where the exposure sits about the frame, in exposures: 0 centred, +½ opening at the
-    /// frame, −½ closing at it ([`crate::motion::Shutter`]).
+    /// frame, −½ closing at it ([`crate::motion::shutter::Shutter`]).
     pub shutter_offset: f32,
     pub reconstruct: ReconstructParams,
     pub scatter: ScatterParams,
@@ -89,9 +90,9 @@ pub fn process_clean(
 }
 
 /// [`process_clean`] on a backend: the stages that have a GPU twin run on `gpu` when it is
-/// given (depth of field's `coc`, tile min/max and gather; reconstruct's tile stages and
-/// gather; scatter's reach, accumulate and resolve; stretch's three stages), every other
-/// stage on the CPU in the same run.
+/// given (depth of field's `coc`, tile min/max, gather and blend's pyramid; reconstruct's
+/// tile stages and gather; scatter's and stretch's three stages), every other stage on the
+/// CPU in the same run.
 pub fn process_on(
     algorithm: Algorithm,
     params: &Params,
@@ -99,13 +100,24 @@ pub fn process_on(
     frame_number: i64,
     gpu: Option<&Gpu>,
 ) -> Frame {
-    let frame = match (&params.dof, gpu) {
-        (Some(dof), None) => crate::dof::apply(frame, dof),
-        #[cfg(feature = "gpu")]
-        (Some(dof), Some(gpu)) => crate::dof::apply_with(frame, dof, gpu),
-        #[cfg(not(feature = "gpu"))]
-        (Some(_), Some(gpu)) => match *gpu {},
-        (None, _) => frame,
+    match gpu {
+        Some(gpu) => process_with(algorithm, params, frame, frame_number, gpu),
+        None => process_with(algorithm, params, frame, frame_number, &Cpu),
+    }
+}
+
+/// [`process_clean`] with every pass's stages run by `stages` ([`crate::stages`]): the CPU's,
+/// or a backend's twins.
+pub fn process_with(
+    algorithm: Algorithm,
+    params: &Params,
+    frame: Frame,
+    frame_number: i64,
+    stages: &(impl dof::Stages + motion::Stages),
+) -> Frame {
+    let frame = match &params.dof {
+        Some(dof) => dof::apply_with(frame, dof, stages),
+        None => frame,
     };
     let shutter = Shutter {
         open: numeric::shutter(params.shutter),
@@ -113,25 +125,12 @@ pub fn process_on(
     };
     match algorithm {
         Algorithm::Reconstruct => {
-            let params = &params.reconstruct;
             // Frame numbers seed the jitter modulo 2³² (the hash is 32-bit).
             let seed = frame_number as u32;
-            match gpu {
-                #[cfg(feature = "gpu")]
-                Some(gpu) => gpu.reconstruct(frame, params, shutter, seed),
-                _ => reconstruct::reconstruct(frame, params, shutter, seed),
-            }
+            reconstruct::reconstruct_with(frame, &params.reconstruct, shutter, seed, stages)
         }
-        Algorithm::Scatter => match gpu {
-            #[cfg(feature = "gpu")]
-            Some(gpu) => gpu.scatter(frame, &params.scatter, shutter),
-            _ => scatter::scatter(frame, &params.scatter, shutter),
-        },
-        Algorithm::Stretch => match gpu {
-            #[cfg(feature = "gpu")]
-            Some(gpu) => gpu.stretch(frame, &params.stretch, shutter),
-            _ => stretch::stretch(frame, &params.stretch, shutter),
-        },
+        Algorithm::Scatter => scatter::scatter_with(frame, &params.scatter, shutter, stages),
+        Algorithm::Stretch => stretch::stretch_with(frame, &params.stretch, shutter, stages),
         Algorithm::None => Frame {
             depth: None,
             velocity: None,

@@ -130,8 +130,8 @@ pub(crate) mod with_gpu {
     use super::*;
     use shutter::gpu::{Gpu, Need};
     use shutter::motion::neighbor_max::neighbor_max;
+    use shutter::motion::reconstruct::Stages as _;
     use shutter::motion::tile_max::{tile_max, TileGrid};
-    use shutter::motion::TileStages;
     use std::io::Write;
     use std::sync::OnceLock;
 
@@ -619,6 +619,20 @@ pub(crate) mod with_gpu {
     /// dilate. (The gather's own twin differs by rounding: tests/gpu_reconstruct.rs.)
     #[test]
     fn reconstruct_with_its_tile_stages_on_the_gpu_gives_the_cpu_s_bits() {
+        use shutter::motion::reconstruct::Stages;
+        /// The tile stages on the GPU, the gather on the CPU.
+        struct TilesOnGpu<'a>(&'a Gpu);
+        impl Stages for TilesOnGpu<'_> {
+            fn tile_max(&self, vx: &[f32], vy: &[f32], w: usize, h: usize, s: usize) -> TileGrid {
+                self.0.tile_max(vx, vy, w, h, s)
+            }
+            fn neighbor_max(&self, tiles: &TileGrid) -> TileGrid {
+                self.0.neighbor_max(tiles)
+            }
+            fn dilate(&self, tiles: &TileGrid) -> TileGrid {
+                self.0.dilate(tiles)
+            }
+        }
         let Some(gpu) = gpu() else { return };
         use shutter::motion::reconstruct::{reconstruct, reconstruct_with};
         use shutter::motion::{ReconstructParams, Variant};
@@ -636,11 +650,9 @@ pub(crate) mod with_gpu {
                 ..ReconstructParams::default()
             };
             let cpu = reconstruct(frame.clone(), &params, 0.5, 3).color.unwrap();
-            let got = reconstruct_with(frame.clone(), &params, 0.5, 3, gpu, |c, inputs, color| {
-                inputs.gather(c, color)
-            })
-            .color
-            .unwrap();
+            let got = reconstruct_with(frame.clone(), &params, 0.5, 3, &TilesOnGpu(gpu))
+                .color
+                .unwrap();
             for (got, cpu) in [(&got.r, &cpu.r), (&got.g, &cpu.g), (&got.b, &cpu.b)] {
                 assert!(differing(got, cpu).is_empty(), "{name}");
             }

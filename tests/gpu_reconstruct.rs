@@ -10,7 +10,10 @@
 use std::io::Write;
 
 use shutter::frame::{Color, Frame, Velocity};
-use shutter::motion::reconstruct::{reconstruct, reconstruct_with};
+use shutter::gpu::Gpu;
+use shutter::motion::reconstruct::{
+    reconstruct, reconstruct_with, GatherInputs, ReconstructConfig, Stages,
+};
 use shutter::motion::{ReconstructParams, Shutter, Variant};
 use shutter::numeric::{sanitize, DepthKind};
 
@@ -51,6 +54,31 @@ fn parity(got: &[f32], cpu: &[f32]) -> Parity {
     parity_within(got, cpu, AGREE)
 }
 
+/// reconstruct's stages with the gather on the GPU, which must run (no fallback to the CPU
+/// stage), and every other stage on the CPU; `ran` says whether a gather ran.
+pub(crate) struct GatherOnGpu<'a> {
+    pub gpu: &'a Gpu,
+    pub ran: std::cell::Cell<bool>,
+}
+
+impl<'a> GatherOnGpu<'a> {
+    pub fn new(gpu: &'a Gpu) -> Self {
+        GatherOnGpu {
+            gpu,
+            ran: std::cell::Cell::new(false),
+        }
+    }
+}
+
+impl Stages for GatherOnGpu<'_> {
+    fn gather(&self, config: &ReconstructConfig, inputs: GatherInputs<'_>, color: &mut Color) {
+        self.gpu
+            .try_reconstruct_gather(config, &inputs, color)
+            .expect("the GPU gather runs");
+        self.ran.set(true);
+    }
+}
+
 /// Runs reconstruct on the CPU and with the gather on the GPU (which must run: no fallback)
 /// and checks the tolerance on every channel; prints the worst (max, mean, outside) seen.
 fn compare(
@@ -62,19 +90,9 @@ fn compare(
 ) {
     let Some(gpu) = gpu() else { return };
     let cpu = reconstruct(frame.clone(), params, shutter, seed);
-    let mut ran = false;
-    let got = reconstruct_with(
-        frame.clone(),
-        params,
-        shutter,
-        seed,
-        &shutter::motion::Cpu,
-        |config, inputs, color| {
-            gpu.try_reconstruct_gather(config, &inputs, color)
-                .expect("the GPU gather runs");
-            ran = true;
-        },
-    );
+    let on_gpu = GatherOnGpu::new(gpu);
+    let got = reconstruct_with(frame.clone(), params, shutter, seed, &on_gpu);
+    let ran = on_gpu.ran.get();
     let (cpu, got) = (cpu.color.unwrap(), got.color.unwrap());
     let channels = [
         ("R", &cpu.r, &got.r),
@@ -326,16 +344,9 @@ fn reconstruct_parity_fails_for_another_jitter() {
     let frame = stripes(61, 37, 9.0);
     let params = ReconstructParams::default();
     let cpu = reconstruct(frame.clone(), &params, 0.5, 1).color.unwrap();
-    let got = reconstruct_with(
-        frame,
-        &params,
-        0.5,
-        2,
-        &shutter::motion::Cpu,
-        |config, inputs, color| gpu.try_reconstruct_gather(config, &inputs, color).unwrap(),
-    )
-    .color
-    .unwrap();
+    let got = reconstruct_with(frame, &params, 0.5, 2, &GatherOnGpu::new(gpu))
+        .color
+        .unwrap();
     let p = parity(&got.r, &cpu.r);
     assert!(
         p.mean > MEAN || p.outside > FLIPS,
@@ -434,9 +445,10 @@ fn reconstruct_at_540p_prints_its_time() {
     let Some(gpu) = gpu() else { return };
     let frame = still_subject(960, 540, 12.0);
     let params = ReconstructParams::default();
-    let _ = gpu.reconstruct(frame.clone(), &params, 0.5, 1); // compiled and buffers made here
+    // Compiled and buffers made here.
+    let _ = reconstruct_with(frame.clone(), &params, 0.5, 1, gpu);
     let start = std::time::Instant::now();
-    let got = gpu.reconstruct(frame.clone(), &params, 0.5, 1);
+    let got = reconstruct_with(frame.clone(), &params, 0.5, 1, gpu);
     let seconds = start.elapsed().as_secs_f64();
     let start = std::time::Instant::now();
     let cpu = reconstruct(frame, &params, 0.5, 1);

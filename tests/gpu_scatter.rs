@@ -14,7 +14,7 @@ use std::io::Write;
 
 use shutter::frame::{Color, Frame, Positions};
 use shutter::gpu::motion::scatter::Order;
-use shutter::motion::scatter::scatter;
+use shutter::motion::scatter::{scatter, scatter_with, ScatterConfig};
 use shutter::motion::{CurveKind, Normalize, ScatterParams, Shutter, Weight};
 use shutter::numeric::{sanitize, DepthKind};
 
@@ -86,11 +86,21 @@ fn on_gpu(
     order: Order,
 ) -> Option<Color> {
     let gpu = gpu()?;
+    let config = ScatterConfig::new(frame.width, frame.height, params, shutter);
+    let passes = "the frame has every pass scatter reads";
     let out = gpu
-        .try_scatter(frame, params, shutter, order)
-        .expect("the GPU scatter runs")
-        .expect("the frame has every pass scatter reads");
-    Some(out.color.unwrap())
+        .try_scatter(
+            &config,
+            frame.color.as_ref().expect(passes),
+            frame.depth.as_ref().expect(passes),
+            [
+                frame.prev.as_ref().expect(passes),
+                frame.next.as_ref().expect(passes),
+            ],
+            order,
+        )
+        .expect("the GPU scatter runs");
+    Some(out)
 }
 
 /// Runs scatter on the CPU and on the GPU and checks the tolerance on every channel; prints
@@ -591,9 +601,10 @@ fn scatter_at_540p_prints_its_time() {
     let Some(gpu) = gpu() else { return };
     let frame = curving(960, 540, 23, 15.0);
     let params = ScatterParams::default();
-    let _ = gpu.scatter(frame.clone(), &params, 0.5); // compiled and buffers made here
+    // Compiled and buffers made here.
+    let _ = scatter_with(frame.clone(), &params, 0.5, gpu);
     let start = std::time::Instant::now();
-    let got = gpu.scatter(frame.clone(), &params, 0.5);
+    let got = scatter_with(frame.clone(), &params, 0.5, gpu);
     let seconds = start.elapsed().as_secs_f64();
     let start = std::time::Instant::now();
     let cpu = scatter(frame, &params, 0.5);

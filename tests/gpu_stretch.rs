@@ -11,7 +11,7 @@
 use std::io::Write;
 
 use shutter::frame::{Color, Frame, Velocity};
-use shutter::motion::stretch::{stretch, stretch_with};
+use shutter::motion::stretch::{stretch, stretch_with, Stages, StretchConfig};
 use shutter::motion::{Anchor, Shutter, StretchParams};
 use shutter::numeric::{sanitize, DepthKind};
 
@@ -76,13 +76,27 @@ fn parity_of(got: &Color, cpu: &Color) -> Parity {
     worst
 }
 
+/// stretch's stages on the GPU, which must run them (no fallback to the CPU stages).
+struct StagesOnGpu<'a>(&'a shutter::gpu::Gpu);
+
+impl Stages for StagesOnGpu<'_> {
+    fn stages(
+        &self,
+        config: &StretchConfig,
+        planes: &[Vec<f32>; 4],
+        z: &[f32],
+        v: &[[f32; 2]],
+    ) -> [Vec<f32>; 4] {
+        self.0
+            .try_stretch(config, planes, z, v)
+            .expect("the GPU stages run")
+    }
+}
+
 /// stretch with its stages on the GPU, which must run them (no fallback).
 fn on_gpu(frame: &Frame, params: &StretchParams, shutter: Shutter) -> Option<Color> {
     let gpu = gpu()?;
-    let out = stretch_with(frame.clone(), params, shutter, |config, planes, z, v| {
-        gpu.try_stretch(config, planes, z, v)
-            .expect("the GPU stages run")
-    });
+    let out = stretch_with(frame.clone(), params, shutter, &StagesOnGpu(gpu));
     Some(out.color.unwrap())
 }
 
@@ -310,7 +324,7 @@ fn stretch_on_the_gpu_matches_the_golden_image() {
     let Some(gpu) = gpu() else { return };
     let mut passes = crate::golden::scene_passes("rotor");
     sanitize(&mut passes, DepthKind::Depth);
-    let got = gpu.stretch(passes, &StretchParams::default(), centred(0.5));
+    let got = stretch_with(passes, &StretchParams::default(), centred(0.5), gpu);
     assert_eq!(gpu.stages_on_cpu(), 0, "the GPU stages ran");
     let golden = read_exr_reference(
         &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/golden/stretch.exr"),
@@ -496,9 +510,10 @@ fn stretch_at_540p_prints_its_time() {
     let Some(gpu) = gpu() else { return };
     let f = square(960, 540, 24.0);
     let params = StretchParams::default();
-    let _ = gpu.stretch(f.clone(), &params, centred(0.5)); // compiled and buffers made here
+    // Compiled and buffers made here.
+    let _ = stretch_with(f.clone(), &params, centred(0.5), gpu);
     let start = std::time::Instant::now();
-    let got = gpu.stretch(f.clone(), &params, centred(0.5));
+    let got = stretch_with(f.clone(), &params, centred(0.5), gpu);
     let seconds = start.elapsed().as_secs_f64();
     let start = std::time::Instant::now();
     let cpu = stretch(f, &params, centred(0.5));

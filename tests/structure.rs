@@ -4,7 +4,7 @@
 //! is left out, as dev-dependencies are.
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The top-level module each source file of `src/` belongs to, and the top-level modules its
 /// non-test code names through `crate::`.
@@ -115,4 +115,258 @@ fn no_modules_import_each_other_in_a_circle() {
     ] {
         assert!(graph.contains_key(module), "{module} not found");
     }
+}
+
+/// Every source file under `src/` (`.rs`), by its path relative to `src/`.
+fn source_files() -> Vec<PathBuf> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    let mut stack = vec![src.clone()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if path.extension().is_some_and(|e| e == "rs") {
+                files.push(path.strip_prefix(&src).unwrap().to_path_buf());
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
+/// The module path of a file: `motion/reconstruct/matte.rs` → [motion, reconstruct, matte];
+/// a `mod.rs` is its folder's module; `lib.rs` and `main.rs` the crate root.
+fn module_of(file: &Path) -> Vec<String> {
+    let mut parts: Vec<String> = file
+        .iter()
+        .map(|p| p.to_string_lossy().trim_end_matches(".rs").to_string())
+        .collect();
+    if matches!(
+        parts.last().map(String::as_str),
+        Some("mod" | "lib" | "main")
+    ) {
+        parts.pop();
+    }
+    parts
+}
+
+/// The file that defines the longest prefix of `path` (a module path from the crate root)
+/// that is a file: the file an item path reaches into.
+fn file_of(path: &[String], files: &BTreeSet<PathBuf>) -> Option<PathBuf> {
+    let mut found = None;
+    for n in 0..=path.len() {
+        let prefix = path[..n].join("/");
+        let candidates = if n == 0 {
+            vec![PathBuf::from("lib.rs")]
+        } else {
+            vec![
+                PathBuf::from(format!("{prefix}.rs")),
+                PathBuf::from(format!("{prefix}/mod.rs")),
+            ]
+        };
+        match candidates.into_iter().find(|c| files.contains(c)) {
+            Some(file) => found = Some(file),
+            None => break,
+        }
+    }
+    found
+}
+
+/// The paths a file's `use` declarations name, braces expanded (`a::{b, c::d}` → `a::b`,
+/// `a::c::d`; `self` in braces is the prefix itself).
+fn use_paths(code: &str) -> Vec<String> {
+    fn expand(tree: &str, prefix: &str, out: &mut Vec<String>) {
+        let tree = tree.trim();
+        if let Some(open) = tree.find('{') {
+            let head = tree[..open].trim().trim_end_matches("::");
+            let body = &tree[open + 1..tree.rfind('}').unwrap_or(tree.len())];
+            let prefix = join(prefix, head);
+            // Split the body at top-level commas.
+            let (mut depth, mut start) = (0, 0);
+            let bytes: Vec<char> = body.chars().collect();
+            let mut pieces = Vec::new();
+            for (i, c) in bytes.iter().enumerate() {
+                match c {
+                    '{' => depth += 1,
+                    '}' => depth -= 1,
+                    ',' if depth == 0 => {
+                        pieces.push(bytes[start..i].iter().collect::<String>());
+                        start = i + 1;
+                    }
+                    _ => {}
+                }
+            }
+            pieces.push(bytes[start..].iter().collect::<String>());
+            for piece in pieces {
+                expand(&piece, &prefix, out);
+            }
+        } else {
+            let path = tree.split(" as ").next().unwrap().trim();
+            if path.is_empty() {
+                return;
+            }
+            if path == "self" {
+                out.push(prefix.to_string());
+            } else {
+                out.push(join(prefix, path));
+            }
+        }
+    }
+    fn join(a: &str, b: &str) -> String {
+        match (a.is_empty(), b.is_empty()) {
+            (true, _) => b.to_string(),
+            (_, true) => a.to_string(),
+            _ => format!("{a}::{b}"),
+        }
+    }
+    let mut out = Vec::new();
+    for statement in code.split(';') {
+        let statement = statement.trim();
+        let Some(at) = statement.find("use ") else {
+            continue;
+        };
+        let before = &statement[..at];
+        // `pub use`, `pub(crate) use`: a re-export publishes an item where callers find it
+        // (a folder's `mod.rs` as its front door); it is not an import of the file's own
+        // code, so it is left out (callers then name the file that defines what they use).
+        if before.trim_end().ends_with("pub") || before.trim_end().ends_with(')') {
+            continue;
+        }
+        if !(before.is_empty() || before.ends_with('\n') || before.trim_end().ends_with(']')) {
+            continue;
+        }
+        expand(&statement[at + 4..], "", &mut out);
+    }
+    out
+}
+
+/// The files each file of `src/` imports: through `use` declarations and through paths in
+/// its code that start with `crate::` or `super::`, each resolved to the file that defines
+/// the longest module prefix it names (an item named through a parent's re-export counts as
+/// the parent's). Re-exports themselves (`pub use`) and test-only code are left out.
+fn file_imports() -> BTreeMap<PathBuf, BTreeSet<PathBuf>> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let files: BTreeSet<PathBuf> = source_files().into_iter().collect();
+    let mut graph = BTreeMap::new();
+    for file in &files {
+        let text = std::fs::read_to_string(src.join(file)).unwrap();
+        let code: String = text
+            .split("#[cfg(test)]")
+            .next()
+            .unwrap()
+            .lines()
+            .map(|l| l.split("//").next().unwrap())
+            .collect::<Vec<_>>()
+            .join("\n");
+        let module = module_of(file);
+        let mut paths = use_paths(&code);
+        for start in ["crate::", "super::"] {
+            for (i, _) in code.match_indices(start) {
+                if i > 0 {
+                    let before = code[..i].chars().next_back().unwrap();
+                    if before.is_ascii_alphanumeric() || before == '_' || before == ':' {
+                        continue;
+                    }
+                }
+                let path: String = code[i..]
+                    .chars()
+                    .take_while(|c| c.is_ascii_alphanumeric() || *c == '_' || *c == ':')
+                    .collect();
+                // `crate::a::{b, c}`: a use group, which `use_paths` expands (a `pub use`
+                // group is a re-export and left out there).
+                if !path.ends_with("::") {
+                    paths.push(path);
+                }
+            }
+        }
+        let mut uses = BTreeSet::new();
+        for path in paths {
+            let parts: Vec<&str> = path.split("::").filter(|p| !p.is_empty()).collect();
+            let absolute: Vec<String> = match parts.first() {
+                Some(&"crate") => parts[1..].iter().map(|s| s.to_string()).collect(),
+                Some(&"super") => {
+                    let mut base = module.clone();
+                    let mut rest = &parts[..];
+                    while rest.first() == Some(&"super") {
+                        base.pop();
+                        rest = &rest[1..];
+                    }
+                    base.extend(rest.iter().map(|s| s.to_string()));
+                    base
+                }
+                Some(&"self") => {
+                    let mut base = module.clone();
+                    base.extend(parts[1..].iter().map(|s| s.to_string()));
+                    base
+                }
+                // A child module of this one (`use config::Form;` beside `mod config;`).
+                Some(first) => {
+                    let mut child = module.clone();
+                    child.push(first.to_string());
+                    if file_of(&child, &files).is_none_or(|f| module_of(&f) != child) {
+                        continue;
+                    }
+                    child.extend(parts[1..].iter().map(|s| s.to_string()));
+                    child
+                }
+                None => continue,
+            };
+            if let Some(target) = file_of(&absolute, &files) {
+                if &target != file {
+                    uses.insert(target);
+                }
+            }
+        }
+        graph.insert(file.clone(), uses);
+    }
+    graph
+}
+
+#[test]
+fn no_files_import_each_other_in_a_circle() {
+    let graph = file_imports();
+    fn visit(
+        node: &PathBuf,
+        graph: &BTreeMap<PathBuf, BTreeSet<PathBuf>>,
+        path: &mut Vec<PathBuf>,
+        done: &mut BTreeSet<PathBuf>,
+        found: &mut Vec<String>,
+    ) {
+        if let Some(at) = path.iter().position(|n| n == node) {
+            let circle: Vec<String> = path[at..]
+                .iter()
+                .chain([node])
+                .map(|p| p.display().to_string())
+                .collect();
+            found.push(circle.join(" -> "));
+            return;
+        }
+        if done.contains(node) {
+            return;
+        }
+        path.push(node.clone());
+        for next in graph.get(node).into_iter().flatten() {
+            visit(next, graph, path, done, found);
+        }
+        path.pop();
+        done.insert(node.clone());
+    }
+    let (mut done, mut found) = (BTreeSet::new(), Vec::new());
+    for node in graph.keys() {
+        visit(node, &graph, &mut Vec::new(), &mut done, &mut found);
+    }
+    assert!(
+        found.is_empty(),
+        "files import each other:\n{}",
+        found.join("\n")
+    );
+    // The test sees the imports it guards.
+    let matte = PathBuf::from("motion/reconstruct/matte.rs");
+    assert!(
+        graph[&matte].contains(&PathBuf::from("motion/reconstruct/config.rs")),
+        "{:?}",
+        graph[&matte]
+    );
 }

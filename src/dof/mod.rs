@@ -255,9 +255,7 @@ pub trait Stages {
     }
 }
 
-/// Every stage on the CPU (rayon): the reference.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Cpu;
+pub use crate::stages::Cpu;
 
 impl Stages for Cpu {}
 

@@ -1,22 +1,41 @@
 //! The GPU context of a run: instance, adapter, device and queue, the compiled stages, and
 //! their buffers, created once and reused by every frame.
 
+use std::any::Any;
+use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, Mutex};
 
 use wgpu::{Backends, DeviceType};
 
-use super::motion::reconstruct::ReconstructPass;
-use super::motion::scatter::ScatterPass;
-use super::motion::stretch::StretchPass;
-use super::stage::Stage;
-use super::GpuTimes;
+use super::times::GpuTimes;
 
 /// The backends with what the passes need: compute, float storage and u32 buffer atomics
 /// (scatter's fixed-point sums). Never GL (see the module doc).
 const BACKENDS: Backends = Backends::VULKAN
     .union(Backends::METAL)
     .union(Backends::DX12);
+
+/// Why a GPU stage did not run (the caller runs the CPU stage instead).
+#[derive(Debug)]
+pub enum StageError {
+    /// A buffer is larger than one storage binding of this device.
+    TooLarge { bytes: u64, limit: u64 },
+    /// The device reported an error (validation, out of memory, lost).
+    Device(String),
+}
+
+impl std::fmt::Display for StageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StageError::TooLarge { bytes, limit } => write!(
+                f,
+                "a plane of {bytes} bytes exceeds the device's storage binding limit of {limit}"
+            ),
+            StageError::Device(e) => write!(f, "{e}"),
+        }
+    }
+}
 
 /// Which adapters a run accepts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -32,20 +51,10 @@ pub struct Gpu {
     pub(crate) device: wgpu::Device,
     pub(crate) queue: wgpu::Queue,
     info: wgpu::AdapterInfo,
-    /// The compiled stages, one per WGSL twin, each with its buffers by size.
-    pub(crate) coc: Stage,
-    pub(crate) tiles: Stage,
-    pub(crate) tile_max: Stage,
-    pub(crate) neighbor_max: Stage,
-    pub(crate) dilate: Stage,
-    pub(crate) gather: Stage,
-    pub(crate) blend: Stage,
-    /// reconstruct's gather, compiled on first use (a run without motion blur never needs it).
-    pub(crate) reconstruct: OnceLock<ReconstructPass>,
-    /// scatter's stages, compiled on first use.
-    pub(crate) scatter: OnceLock<ScatterPass>,
-    /// stretch's stages, compiled on first use.
-    pub(crate) stretch: OnceLock<StretchPass>,
+    /// What the twins compiled on this device — pipelines, with their buffers kept by size —
+    /// by name ([`Gpu::compiled`]): the context knows no twin, so adding one touches only its
+    /// own files.
+    compiled: Mutex<HashMap<&'static str, Arc<dyn Any + Send + Sync>>>,
     /// Stages with a twin that ran on the CPU for a frame (see [`Gpu::note_cpu_stage`]).
     stages_on_cpu: AtomicU64,
     /// The first stage that ran on the CPU instead, and why ([`Gpu::note_cpu_stage`]).
@@ -179,19 +188,10 @@ impl Gpu {
             .replace('\n', " ")
         })?;
         Ok(Gpu {
-            coc: super::dof::coc::stage(&device),
-            tiles: super::dof::tiles::stage(&device),
-            tile_max: super::motion::tile_max::stage(&device),
-            neighbor_max: super::motion::neighbor_max::stage(&device),
-            dilate: super::motion::dilate::stage(&device),
-            gather: super::dof::gather::stage(&device),
-            blend: super::dof::blend::stage(&device),
             device,
             queue,
             info,
-            reconstruct: OnceLock::new(),
-            scatter: OnceLock::new(),
-            stretch: OnceLock::new(),
+            compiled: Mutex::new(HashMap::new()),
             stages_on_cpu: AtomicU64::new(0),
             fallback: Mutex::new(None),
             profiling: AtomicBool::new(false),
@@ -226,6 +226,22 @@ impl Gpu {
         self.info.device_type == DeviceType::Cpu
     }
 
+    /// What a twin compiled under `name` (its pipelines and kept buffers), made by `make` on
+    /// first use and kept for the run. One type per name.
+    pub(crate) fn compiled<T: Any + Send + Sync>(
+        &self,
+        name: &'static str,
+        make: impl FnOnce(&wgpu::Device) -> T,
+    ) -> Arc<T> {
+        let mut compiled = self.compiled.lock().unwrap_or_else(|e| e.into_inner());
+        let entry = compiled
+            .entry(name)
+            .or_insert_with(|| Arc::new(make(&self.device)));
+        Arc::clone(entry)
+            .downcast::<T>()
+            .unwrap_or_else(|_| panic!("{name} was compiled as another type"))
+    }
+
     /// The one fallback of every stage with a twin: `gpu`, or where it could not run (a frame
     /// over the device's limits, a device without a feature the stage needs, an error the
     /// device reported), `cpu` — the CPU stage it stands for, whose result it must equal
@@ -234,7 +250,7 @@ impl Gpu {
     pub(crate) fn or_cpu<T>(
         &self,
         stage: &str,
-        gpu: impl FnOnce() -> Result<T, super::StageError>,
+        gpu: impl FnOnce() -> Result<T, StageError>,
         cpu: impl FnOnce() -> T,
     ) -> T {
         gpu().unwrap_or_else(|why| {
@@ -245,7 +261,7 @@ impl Gpu {
 
     /// Records that a stage with a GPU twin ran on the CPU for one frame, and why (the first
     /// reason is kept for the run's warning).
-    pub(crate) fn note_cpu_stage(&self, stage: &str, why: &super::StageError) {
+    pub(crate) fn note_cpu_stage(&self, stage: &str, why: &StageError) {
         self.stages_on_cpu.fetch_add(1, Ordering::Relaxed);
         let mut first = self.fallback.lock().unwrap_or_else(|e| e.into_inner());
         if first.is_none() {
@@ -275,11 +291,11 @@ impl Gpu {
         &self,
         part: fn(&mut GpuTimes) -> &mut f64,
         clock: &mut std::time::Instant,
-    ) -> Result<(), super::StageError> {
+    ) -> Result<(), StageError> {
         if self.profiling.load(Ordering::Relaxed) {
             self.device
                 .poll(wgpu::PollType::wait_indefinitely())
-                .map_err(|e| super::StageError::Device(e.to_string()))?;
+                .map_err(|e| StageError::Device(e.to_string()))?;
             let mut times = self.times.lock().unwrap_or_else(|e| e.into_inner());
             *part(&mut times) += clock.elapsed().as_secs_f64() * 1e3;
             *clock = std::time::Instant::now();
@@ -289,7 +305,7 @@ impl Gpu {
 
     /// The end of a stage's uploads: with profiling on, waits for them and books their time
     /// as upload ([`Gpu::mark`]).
-    pub(crate) fn uploaded(&self, clock: &mut std::time::Instant) -> Result<(), super::StageError> {
+    pub(crate) fn uploaded(&self, clock: &mut std::time::Instant) -> Result<(), StageError> {
         if self.profiling() {
             self.queue.submit([]);
         }
@@ -304,7 +320,7 @@ impl Gpu {
         encoder: &mut wgpu::CommandEncoder,
         label: &str,
         clock: &mut std::time::Instant,
-    ) -> Result<(), super::StageError> {
+    ) -> Result<(), StageError> {
         if self.profiling() {
             let fresh = self
                 .device

@@ -57,17 +57,32 @@ mod layout;
 pub mod motion;
 #[cfg(feature = "gpu")]
 mod stage;
+mod times;
 #[cfg(feature = "gpu")]
-pub use stage::StageError;
+pub use context::StageError;
 
 #[cfg(feature = "gpu")]
 pub use context::{Gpu, Need};
+pub use times::GpuTimes;
 
 /// Without the `gpu` feature there is no context: a type with no values, so code that takes
 /// an `Option<&Gpu>` compiles the same way in both builds.
 #[cfg(not(feature = "gpu"))]
 #[derive(Debug)]
 pub enum Gpu {}
+
+/// Without the `gpu` feature the context has every pass's stages with no twin: each trait's
+/// defaults, the CPU stages (never called: there is no value). This is the one place the
+/// feature reaches outside this module's own files; [`crate::process`] runs either build
+/// through the same code.
+#[cfg(not(feature = "gpu"))]
+mod no_twins {
+    use super::Gpu;
+    impl crate::dof::Stages for Gpu {}
+    impl crate::motion::reconstruct::Stages for Gpu {}
+    impl crate::motion::scatter::Stages for Gpu {}
+    impl crate::motion::stretch::Stages for Gpu {}
+}
 
 #[cfg(not(feature = "gpu"))]
 impl Gpu {
@@ -85,28 +100,6 @@ impl Gpu {
 
     pub fn stages_on_cpu(&self) -> u64 {
         match *self {}
-    }
-}
-
-/// Where a GPU stage's time went, ms, summed over the stages that ran: writing its inputs
-/// into device memory, its dispatches, and copying its outputs back. Measured on the host,
-/// with the queue drained between the three (see `Gpu::set_profiling`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct GpuTimes {
-    pub upload_ms: f64,
-    pub compute_ms: f64,
-    pub readback_ms: f64,
-}
-
-impl GpuTimes {
-    /// These sums over `runs` runs, per run.
-    pub fn per_run(self, runs: usize) -> GpuTimes {
-        let n = runs.max(1) as f64;
-        GpuTimes {
-            upload_ms: self.upload_ms / n,
-            compute_ms: self.compute_ms / n,
-            readback_ms: self.readback_ms / n,
-        }
     }
 }
 
@@ -150,7 +143,8 @@ pub struct BackendReport {
     /// Why `auto` runs on the CPU (no hardware adapter, a build without the GPU backend).
     pub fallback: Option<String>,
     /// Seconds spent looking for an adapter and creating the context (instance, adapter,
-    /// device, pipelines).
+    /// device). Each twin's pipelines compile when it first runs, so a run compiles only
+    /// what it uses.
     pub context_seconds: f64,
     /// Stages that have a GPU twin but ran on the CPU for a frame (e.g. a frame larger than
     /// the device's buffer limit), counted over frames.
@@ -243,24 +237,27 @@ mod tests {
             .validate(&module)
             .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(shader)));
         }
-        // Every shader file is in the list (the prelude is in each).
-        fn count(dir: &std::path::Path) -> usize {
-            std::fs::read_dir(dir)
-                .unwrap()
-                .map(|e| e.unwrap().path())
-                .map(|p| match p.extension() {
-                    _ if p.is_dir() => count(&p),
-                    Some(e) if e == "wgsl" && !p.ends_with("prelude.wgsl") => 1,
-                    _ => 0,
-                })
-                .sum()
+        // Every .wgsl file under src/gpu is part of a shader above (the prelude of each).
+        fn files(dir: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
+            for path in std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()) {
+                if path.is_dir() {
+                    files(&path, out);
+                } else if path.extension().is_some_and(|e| e == "wgsl") {
+                    out.push(path);
+                }
+            }
         }
+        let mut found = Vec::new();
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/gpu");
-        assert_eq!(
-            count(&dir),
-            SHADERS.len(),
-            "shaders under {}",
-            dir.display()
-        );
+        files(&dir, &mut found);
+        assert!(found.len() > SHADERS.len(), "{found:?}");
+        for path in found {
+            let text = std::fs::read_to_string(&path).unwrap();
+            assert!(
+                SHADERS.iter().any(|(_, shader)| shader.contains(&text)),
+                "{} is in no shader",
+                path.display()
+            );
+        }
     }
 }

@@ -12,7 +12,8 @@ use std::collections::HashMap;
 use std::sync::Mutex;
 use std::time::Instant;
 
-use super::Gpu;
+use super::context::Gpu;
+pub use super::context::StageError;
 
 /// Sets of sizes whose buffers are kept at once per stage or pass (a sequence has one; more
 /// are dropped).
@@ -54,27 +55,6 @@ impl Caught {
         match invalid.or(out_of_memory) {
             Some(error) => Err(StageError::Device(error.to_string())),
             None => Ok(()),
-        }
-    }
-}
-
-/// Why a GPU stage did not run (the caller runs the CPU stage instead).
-#[derive(Debug)]
-pub enum StageError {
-    /// A buffer is larger than one storage binding of this device.
-    TooLarge { bytes: u64, limit: u64 },
-    /// The device reported an error (validation, out of memory, lost).
-    Device(String),
-}
-
-impl std::fmt::Display for StageError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            StageError::TooLarge { bytes, limit } => write!(
-                f,
-                "a plane of {bytes} bytes exceeds the device's storage binding limit of {limit}"
-            ),
-            StageError::Device(e) => write!(f, "{e}"),
         }
     }
 }
@@ -358,22 +338,6 @@ pub(crate) fn read_back(
     };
     buffer.unmap();
     Ok(out)
-}
-
-/// The fields of WGSL struct `name` in `shader`, one `name: type` each, for the tests that
-/// hold a config uniform to its CPU struct.
-#[cfg(test)]
-pub(crate) fn wgsl_fields(shader: &str, name: &str) -> Vec<String> {
-    shader
-        .split(&format!("struct {name} {{"))
-        .nth(1)
-        .and_then(|s| s.split('}').next())
-        .unwrap_or_else(|| panic!("no struct {name} in the shader"))
-        .lines()
-        .map(str::trim)
-        .filter(|l| !l.is_empty() && !l.starts_with("//"))
-        .map(|l| l.trim_end_matches(',').to_string())
-        .collect()
 }
 
 /// 32-bit words read back as f32 (bit for bit).

@@ -109,6 +109,59 @@ pub fn dilate(tiles: &TileGrid) -> TileGrid {
     out
 }
 
+/// The stage's uniform on the GPU, uploaded as it is: `DilateConfig` in
+/// src/gpu/motion/dilate.wgsl (held to it by a layout test there). The CPU stage scans each
+/// source's own span instead of one radius. Four 4-byte fields, 16 bytes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]
+#[repr(C)]
+pub struct DilateConfig {
+    /// The grid, tiles.
+    pub columns: u32,
+    pub rows: u32,
+    /// The largest span of any live source, clamped to the grid, tiles: the scan's radius.
+    pub radius: u32,
+    pub _pad: u32,
+}
+
+/// One tile as a source: [`Source`] as the GPU reads it, `SourceTile` in
+/// src/gpu/motion/dilate.wgsl (held to it by a layout test there): eight 4-byte fields, 32
+/// bytes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]
+#[repr(C)]
+pub struct SourceTile {
+    /// |M|², px².
+    pub length2: f32,
+    /// ⌈|M_x|/tile⌉ and ⌈|M_y|/tile⌉ as the CPU's loop takes them (`as usize`: NaN is 0,
+    /// larger values saturate), here to u32.
+    pub span_x: u32,
+    pub span_y: u32,
+    /// The unit normal of M's line.
+    pub nx: f32,
+    pub ny: f32,
+    /// 1 when M can reach another tile: |M|² > 0 (not NaN) and a finite normal. On the CPU a
+    /// NaN |M|² never wins and a non-finite normal makes the reach test compare a NaN.
+    pub live: u32,
+    pub _pad: [u32; 2],
+}
+
+impl SourceTile {
+    pub fn new(m: (f32, f32), size: f32) -> SourceTile {
+        let s = Source::new(m, size);
+        let live = s.length2 > 0.0 && s.nx.is_finite() && s.ny.is_finite();
+        SourceTile {
+            length2: s.length2,
+            span_x: s.span_x as u32,
+            span_y: s.span_y as u32,
+            nx: s.nx,
+            ny: s.ny,
+            live: live as u32,
+            _pad: [0; 2],
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -164,5 +217,18 @@ mod tests {
         assert_eq!(out.get(1, 0), (-9.0, 0.0));
         assert_eq!(out.get(0, 0), (8.0, 0.0));
         assert_eq!(out.get(2, 0), (-9.0, 0.0));
+    }
+
+    #[test]
+    fn sources_that_reach_nothing_are_not_live() {
+        assert_eq!(SourceTile::new((0.0, 0.0), 8.0).live, 0);
+        assert_eq!(SourceTile::new((f32::NAN, 1.0), 8.0).live, 0);
+        // |M| = ∞ with infinite components: the normal is NaN.
+        assert_eq!(SourceTile::new((f32::INFINITY, 0.0), 8.0).live, 0);
+        // |M|² overflows with finite components: the normal is 0, and it reaches its span.
+        let huge = SourceTile::new((1e20, 0.0), 8.0);
+        assert_eq!((huge.live, huge.span_x), (1, u32::MAX));
+        let s = SourceTile::new((10.0, -3.0), 8.0);
+        assert_eq!((s.live, s.span_x, s.span_y), (1, 2, 1));
     }
 }

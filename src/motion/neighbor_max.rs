@@ -30,6 +30,31 @@ pub fn neighbor_max(tiles: &TileGrid) -> TileGrid {
     }
 }
 
+/// The stage's uniform on the GPU, uploaded as it is: `NeighborMaxConfig` in
+/// src/gpu/motion/neighbor_max.wgsl (held to it by a layout test there): the grid's size,
+/// which the CPU stage reads from the grid itself. Four 4-byte fields, 16 bytes as uniforms
+/// need.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]
+#[repr(C)]
+pub struct NeighborMaxConfig {
+    /// The grid, tiles.
+    pub columns: u32,
+    pub rows: u32,
+    pub _pad: [u32; 2],
+}
+
+impl NeighborMaxConfig {
+    /// The uniform for `neighbor_max(tiles)`.
+    pub fn of(tiles: &TileGrid) -> Self {
+        NeighborMaxConfig {
+            columns: tiles.columns as u32,
+            rows: tiles.rows as u32,
+            _pad: [0; 2],
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -43,6 +43,8 @@ use rayon::prelude::*;
 
 use super::triangle::{draw, Rect};
 use crate::frame::{Color, Frame};
+use crate::motion::shutter::Shutter;
+use crate::stages::Cpu;
 
 /// A pixel whose streak over the exposure is shorter than this many pixels is still.
 pub const STILL: f32 = 0.5;
@@ -133,11 +135,16 @@ pub struct StretchConfig {
 }
 
 impl StretchConfig {
+    /// Whether colour is averaged along the motion first, typed (the GPU reads the word).
+    pub fn texture_blur(&self) -> bool {
+        self.texture_blur != 0
+    }
+
     pub fn new(
         width: usize,
         height: usize,
         params: &StretchParams,
-        shutter: impl Into<super::Shutter>,
+        shutter: impl Into<Shutter>,
     ) -> Self {
         let shutter = shutter.into();
         // Rear is the talk's rear curtain: the frame closes the exposure whatever the offset
@@ -183,9 +190,29 @@ fn mix(a: f32, b: f32, t: f32) -> f32 {
 /// Applies the filter: [`texture_blur`] → [`move_vertices`] → [`rasterise`]. The frame must
 /// hold colour, depth and velocity; the output holds colour alone. A frame in which nothing
 /// moves keeps its colour untouched.
-pub fn stretch(frame: Frame, params: &StretchParams, shutter: impl Into<super::Shutter>) -> Frame {
-    stretch_with(frame, params, shutter, stages)
+pub fn stretch(frame: Frame, params: &StretchParams, shutter: impl Into<Shutter>) -> Frame {
+    stretch_with(frame, params, shutter, &Cpu)
 }
+
+/// Stretch's stages that a backend may run elsewhere: texture_blur → move_vertices →
+/// rasterise, as one (the GPU keeps the vertices and the drawn frame on the device between
+/// them). The default is the CPU's [`stages`], the reference; [`Cpu`] takes it, and the GPU
+/// (`crate::gpu::motion`) overrides it with its twin, which must return the same planes
+/// within the tolerance its parity test states (tests/gpu_stretch.rs).
+pub trait Stages {
+    /// [`stages`].
+    fn stages(
+        &self,
+        config: &StretchConfig,
+        planes: &[Vec<f32>; 4],
+        z: &[f32],
+        v: &[[f32; 2]],
+    ) -> [Vec<f32>; 4] {
+        stages(config, planes, z, v)
+    }
+}
+
+impl Stages for Cpu {}
 
 /// The three stages on the CPU: the colour planes (R, G, B, A) drawn over the sharp frame.
 pub fn stages(
@@ -195,7 +222,7 @@ pub fn stages(
     v: &[[f32; 2]],
 ) -> [Vec<f32>; 4] {
     // The sharp frame to draw first: pre-blurred along each pixel's motion if asked.
-    let mut out = if config.texture_blur != 0 {
+    let mut out = if config.texture_blur() {
         texture_blur(config, planes, z, v)
     } else {
         planes.clone()
@@ -205,15 +232,15 @@ pub fn stages(
     out
 }
 
-/// [`stretch`] with its stages run by `run` (the CPU's [`stages`], or the GPU twin's,
-/// `crate::gpu::stretch`), given the config, the colour planes (R, G, B, A: an opaque alpha
-/// where the frame has none), depth and velocity; it returns the four planes. Only frames
-/// in which something moves reach it.
+/// [`stretch`] with its [`Stages`] run by `stages` (the CPU's, [`Cpu`], or a backend's twin),
+/// given the config, the colour planes (R, G, B, A: an opaque alpha where the frame has
+/// none), depth and velocity; they return the four planes. Only frames in which something
+/// moves reach them; the config is made here from the frame's size, so it always matches.
 pub fn stretch_with(
     mut frame: Frame,
     params: &StretchParams,
-    shutter: impl Into<super::Shutter>,
-    run: impl FnOnce(&StretchConfig, &[Vec<f32>; 4], &[f32], &[[f32; 2]]) -> [Vec<f32>; 4],
+    shutter: impl Into<Shutter>,
+    stages: &impl Stages,
 ) -> Frame {
     let (width, height) = (frame.width, frame.height);
     frame.prev = None;
@@ -247,7 +274,7 @@ pub fn stretch_with(
         color.b,
         color.a.unwrap_or_else(|| vec![1.0; n]),
     ];
-    let [r, g, b, a] = run(&config, &planes, &z, &v);
+    let [r, g, b, a] = stages.stages(&config, &planes, &z, &v);
     frame.color = Some(Color {
         r,
         g,

@@ -75,6 +75,39 @@ pub fn tile_max(vx: &[f32], vy: &[f32], width: usize, height: usize, size: usize
     }
 }
 
+/// The stage's uniform on the GPU, uploaded as it is: `TileMaxConfig` in
+/// src/gpu/motion/tile_max.wgsl (held to it by a layout test there). Eight 4-byte fields, a
+/// multiple of 16 bytes as uniforms need.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]
+#[repr(C)]
+pub struct TileMaxConfig {
+    /// Frame size, pixels.
+    pub width: u32,
+    pub height: u32,
+    /// Tile edge k, pixels.
+    pub size: u32,
+    /// The grid: ⌈width/size⌉ × ⌈height/size⌉ tiles.
+    pub columns: u32,
+    pub rows: u32,
+    pub _pad: [u32; 3],
+}
+
+impl TileMaxConfig {
+    /// The uniform for `tile_max(vx, vy, width, height, size)` (a size of 0 is 1, as there).
+    pub fn new(width: usize, height: usize, size: usize) -> Self {
+        let size = size.max(1);
+        TileMaxConfig {
+            width: width as u32,
+            height: height as u32,
+            size: size as u32,
+            columns: width.div_ceil(size) as u32,
+            rows: height.div_ceil(size) as u32,
+            _pad: [0; 3],
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -22,8 +22,8 @@ use crate::dof::blend::plan;
 use crate::dof::DofConfig;
 use crate::frame::Color;
 
+use crate::gpu::context::Gpu;
 use crate::gpu::stage::{floats, Dispatch, Stage, StageError};
-use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = concat!(include_str!("../prelude.wgsl"), include_str!("blend.wgsl"));
@@ -167,7 +167,7 @@ impl Gpu {
             entry: 2,
             groups: [x, y, 1],
         });
-        let mut out = self.blend.run(
+        let mut out = self.compiled("blend", stage).run(
             self,
             bytemuck::bytes_of(&uniform),
             &[

@@ -16,9 +16,9 @@ use bytemuck::{Pod, Zeroable};
 use crate::dof::{CocSource, DofParams};
 use crate::frame::Frame;
 
+use crate::gpu::context::Gpu;
 pub use crate::gpu::stage::StageError;
 use crate::gpu::stage::{floats, Dispatch, Stage};
-use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = concat!(include_str!("../prelude.wgsl"), include_str!("coc.wgsl"));
@@ -133,7 +133,7 @@ impl Gpu {
             frame.windows.display.width,
             params,
         );
-        let mut out = self.coc.run(
+        let mut out = self.compiled("coc", stage).run(
             self,
             bytemuck::bytes_of(&config),
             &[bytemuck::cast_slice(depth)],

@@ -21,8 +21,8 @@ use crate::dof::gather::{inverse_area, plan, Tiles, LAYER, TILE};
 use crate::dof::DofConfig;
 use crate::frame::Color;
 
+use crate::gpu::context::Gpu;
 use crate::gpu::stage::{floats, Dispatch, Stage, StageError};
-use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = concat!(include_str!("../prelude.wgsl"), include_str!("gather.wgsl"));
@@ -154,7 +154,7 @@ impl Gpu {
             _pad: [0; 3],
         };
         let groups = [width.div_ceil(TILE) as u32, height.div_ceil(TILE) as u32, 1];
-        let mut out = self.gather.run(
+        let mut out = self.compiled("gather", stage).run(
             self,
             bytemuck::bytes_of(&uniform),
             &[

@@ -1,7 +1,7 @@
 //! Depth of field's GPU twins, mirroring [`crate::dof`]: `coc`, tile min/max (`tiles`), the
 //! bokeh `gather` and `blend`'s pyramid.
 
-use crate::gpu::Gpu;
+use crate::gpu::context::Gpu;
 
 pub mod blend;
 pub mod coc;

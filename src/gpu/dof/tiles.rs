@@ -18,8 +18,8 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::dof::gather::{gap_distance, Tiles, LAYER, TILE};
 
+use crate::gpu::context::Gpu;
 use crate::gpu::stage::{floats, Dispatch, Stage, StageError};
-use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = concat!(include_str!("../prelude.wgsl"), include_str!("tiles.wgsl"));
@@ -124,7 +124,7 @@ impl Gpu {
             config.rows.div_ceil(WORKGROUP),
             1,
         ];
-        let mut out = self.tiles.run(
+        let mut out = self.compiled("tiles", stage).run(
             self,
             bytemuck::bytes_of(&config),
             &[

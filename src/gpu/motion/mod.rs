@@ -2,7 +2,12 @@
 //! (`tile_max`, `neighbor_max`, `dilate`) and its gather (`reconstruct`), `scatter` and
 //! `stretch`.
 
-use crate::gpu::Gpu;
+use crate::frame::{Color, Positions};
+use crate::gpu::context::Gpu;
+use crate::motion::reconstruct::{self as reconstruct_cpu, GatherInputs, ReconstructConfig};
+use crate::motion::scatter::{self as scatter_cpu, ScatterConfig};
+use crate::motion::stretch::{self as stretch_cpu, StretchConfig};
+use crate::motion::tile_max::TileGrid;
 
 pub mod dilate;
 pub mod neighbor_max;
@@ -11,9 +16,9 @@ pub mod scatter;
 pub mod stretch;
 pub mod tile_max;
 
-/// Reconstruct's tile stages run here (each falls back to the CPU stage, counted, where the
-/// GPU cannot run it).
-impl crate::motion::TileStages for Gpu {
+/// Reconstruct's stages with a twin run here: the tile stages and the gather (the pack and
+/// the matte run on the CPU in the same run).
+impl reconstruct_cpu::Stages for Gpu {
     fn tile_max(
         &self,
         vx: &[f32],
@@ -21,7 +26,7 @@ impl crate::motion::TileStages for Gpu {
         width: usize,
         height: usize,
         size: usize,
-    ) -> crate::motion::tile_max::TileGrid {
+    ) -> TileGrid {
         self.or_cpu(
             "tile_max",
             || self.try_tile_max(vx, vy, width, height, size),
@@ -29,10 +34,7 @@ impl crate::motion::TileStages for Gpu {
         )
     }
 
-    fn neighbor_max(
-        &self,
-        tiles: &crate::motion::tile_max::TileGrid,
-    ) -> crate::motion::tile_max::TileGrid {
+    fn neighbor_max(&self, tiles: &TileGrid) -> TileGrid {
         self.or_cpu(
             "neighbor_max",
             || self.try_neighbor_max(tiles),
@@ -40,14 +42,57 @@ impl crate::motion::TileStages for Gpu {
         )
     }
 
-    fn dilate(
-        &self,
-        tiles: &crate::motion::tile_max::TileGrid,
-    ) -> crate::motion::tile_max::TileGrid {
+    fn dilate(&self, tiles: &TileGrid) -> TileGrid {
         self.or_cpu(
             "dilate",
             || self.try_dilate(tiles),
             || crate::motion::dilate::dilate(tiles),
+        )
+    }
+
+    fn gather(&self, config: &ReconstructConfig, inputs: GatherInputs<'_>, color: &mut Color) {
+        // In place: a gather that could not run has left the colour untouched.
+        let tried = self.try_reconstruct_gather(config, &inputs, color);
+        self.or_cpu(
+            "reconstruct gather",
+            || tried,
+            || inputs.gather(config, color),
+        )
+    }
+}
+
+/// Scatter's three stages run here, as one.
+impl scatter_cpu::Stages for Gpu {
+    fn stages(
+        &self,
+        config: &ScatterConfig,
+        color: Color,
+        depth: &[f32],
+        positions: [&Positions; 2],
+    ) -> Color {
+        let tried = self.try_scatter(config, &color, depth, positions, scatter::Order::default());
+        self.or_cpu(
+            "scatter",
+            || tried,
+            || scatter_cpu::stages(config, color, depth, positions),
+        )
+    }
+}
+
+/// Stretch's three stages run here, as one (a device that cannot blend float targets runs
+/// them on the CPU).
+impl stretch_cpu::Stages for Gpu {
+    fn stages(
+        &self,
+        config: &StretchConfig,
+        planes: &[Vec<f32>; 4],
+        z: &[f32],
+        v: &[[f32; 2]],
+    ) -> [Vec<f32>; 4] {
+        self.or_cpu(
+            "stretch",
+            || self.try_stretch(config, planes, z, v),
+            || stretch_cpu::stages(config, planes, z, v),
         )
     }
 }

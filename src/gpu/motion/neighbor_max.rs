@@ -9,12 +9,11 @@
 //! NaN and infinity as on the CPU; agreement stated and tested in tests/gpu.rs. Buffers are
 //! kept per grid size and reused.
 
-use bytemuck::{Pod, Zeroable};
-
+use crate::motion::neighbor_max::NeighborMaxConfig;
 use crate::motion::tile_max::TileGrid;
 
+use crate::gpu::context::Gpu;
 use crate::gpu::stage::{tile_grid, Dispatch, Stage, StageError};
-use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = concat!(
@@ -24,17 +23,6 @@ pub const SHADER: &str = concat!(
 
 /// Tiles per workgroup side (`@workgroup_size(8, 8)` in neighbor_max.wgsl).
 const WORKGROUP: u32 = 8;
-
-/// The stage's uniform. Keep in sync with `NeighborMaxConfig` in neighbor_max.wgsl (the size
-/// test guards the layout: four 4-byte fields, 16 bytes as uniforms need).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct NeighborMaxConfig {
-    /// The grid, tiles.
-    pub columns: u32,
-    pub rows: u32,
-    pub _pad: [u32; 2],
-}
 
 /// The compiled stage: bindings config, tiles x, tiles y, x, y.
 pub(crate) fn stage(device: &wgpu::Device) -> Stage {
@@ -58,13 +46,9 @@ impl Gpu {
         if n == 0 {
             return Ok(tiles.clone());
         }
-        let config = NeighborMaxConfig {
-            columns: columns as u32,
-            rows: rows as u32,
-            _pad: [0; 2],
-        };
+        let config = NeighborMaxConfig::of(tiles);
         let bytes = (n * 4) as u64;
-        let out = self.neighbor_max.run(
+        let out = self.compiled("neighbor_max", stage).run(
             self,
             bytemuck::bytes_of(&config),
             &[
@@ -95,5 +79,11 @@ mod tests {
         // Keep in sync with neighbor_max.wgsl: four 4-byte fields, 16 bytes.
         assert_eq!(std::mem::size_of::<NeighborMaxConfig>(), 16);
         assert_eq!(std::mem::align_of::<NeighborMaxConfig>(), 4);
+        crate::gpu::layout::assert_same_layout!(
+            NeighborMaxConfig,
+            SHADER,
+            "NeighborMaxConfig",
+            [columns, rows]
+        );
     }
 }

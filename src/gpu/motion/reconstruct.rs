@@ -27,10 +27,9 @@ use crate::frame::Color;
 #[cfg(doc)]
 use crate::motion::reconstruct::reconstruct_with;
 use crate::motion::reconstruct::{GatherInputs, ReconstructConfig};
-use crate::motion::ReconstructParams;
 
+use crate::gpu::context::Gpu;
 use crate::gpu::stage::{floats, kept, read_back, Caught, StageError};
-use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = concat!(
@@ -203,32 +202,6 @@ impl ReconstructPass {
 }
 
 impl Gpu {
-    /// [`crate::motion::reconstruct::reconstruct`] with its tile stages (tile_max,
-    /// neighbor_max, dilate) and its gather on the GPU (pack on the CPU); the CPU stage where
-    /// the GPU cannot run one (a frame over the device's limits), counted in
-    /// [`Gpu::stages_on_cpu`].
-    pub fn reconstruct(
-        &self,
-        frame: crate::frame::Frame,
-        params: &ReconstructParams,
-        shutter: impl Into<crate::motion::Shutter>,
-        seed: u32,
-    ) -> crate::frame::Frame {
-        crate::motion::reconstruct::reconstruct_with(
-            frame,
-            params,
-            shutter,
-            seed,
-            self,
-            |config, inputs, color| {
-                if let Err(e) = self.try_reconstruct_gather(config, &inputs, color) {
-                    self.note_cpu_stage("reconstruct gather", &e);
-                    inputs.gather(config, color);
-                }
-            },
-        )
-    }
-
     /// The gather ([`GatherInputs::gather`]) on the GPU, in place, or why it could not run
     /// (then `color` is untouched).
     pub fn try_reconstruct_gather(
@@ -279,9 +252,7 @@ impl Gpu {
                 limit: self.max_binding(),
             });
         }
-        let pass = self
-            .reconstruct
-            .get_or_init(|| ReconstructPass::new(&self.device));
+        let pass = self.compiled("reconstruct", ReconstructPass::new);
         // Errors from here on, the buffers' creation included, come back as a StageError
         // (the caller runs the CPU gather): out of memory as well as validation.
         let caught = Caught::push(&self.device);
@@ -397,17 +368,32 @@ mod tests {
         has(format!("const EPSILON: f32 = {:?};", cpu::EPSILON));
         has(format!(
             "const MOVING_SQUARED_BITS: u32 = {:#x}u;",
-            cpu::MOVING_SQUARED.to_bits()
+            cpu::config::MOVING_SQUARED.to_bits()
         ));
         has(format!(
             "const MAX_TAPS_PER_SIDE: u32 = {}u;",
-            cpu::MAX_TAPS_PER_SIDE
+            cpu::config::MAX_TAPS_PER_SIDE
         ));
-        has(format!("const TAP_SPACING: f32 = {:?};", cpu::TAP_SPACING));
-        has(format!("const COVER_SLOPE: f32 = {:?};", cpu::COVER_SLOPE));
-        has(format!("const SALT_TILE: u32 = {:#x}u;", cpu::SALT_TILE));
-        has(format!("const SALT_TAPS: u32 = {:#x}u;", cpu::SALT_TAPS));
-        has(format!("const SALT_PAPER: u32 = {:#x}u;", cpu::SALT_PAPER));
+        has(format!(
+            "const TAP_SPACING: f32 = {:?};",
+            cpu::config::TAP_SPACING
+        ));
+        has(format!(
+            "const COVER_SLOPE: f32 = {:?};",
+            cpu::gather_2014::COVER_SLOPE
+        ));
+        has(format!(
+            "const SALT_TILE: u32 = {:#x}u;",
+            cpu::gather_2014::SALT_TILE
+        ));
+        has(format!(
+            "const SALT_TAPS: u32 = {:#x}u;",
+            cpu::gather_2014::SALT_TAPS
+        ));
+        has(format!(
+            "const SALT_PAPER: u32 = {:#x}u;",
+            cpu::gather_2012::SALT_PAPER
+        ));
         for (name, variant) in [("PAPER", cpu::Variant::Paper), ("DUAL", cpu::Variant::Dual)] {
             has(format!("const {name}: u32 = {}u;", variant.code()));
         }

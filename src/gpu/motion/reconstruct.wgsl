@@ -542,14 +542,14 @@ fn weights(
     window: f32,
     scale: f32,
     edge: f32,
-    exposure: bool,
+    still_reach: f32,
 ) -> vec2<f32> {
     let dz = texel.z - centre_z;
     let behind = clamp(0.5 + scale * dz, 0.0, 1.0);
     let front = clamp(0.5 - scale * dz, 0.0, 1.0);
     var reach = 1.0;
-    if exposure && texel.length < HALF_PIXEL {
-        reach = 0.5;
+    if texel.length < HALF_PIXEL {
+        reach = still_reach;
     }
     return vec2<f32>(
         direction * front * clamp(texel.length * share - distance + reach, 0.0, 1.0),
@@ -557,7 +557,40 @@ fn weights(
     );
 }
 
+// The numbers that tell the 2014 filter's two forms apart (Blender's and ours, the exposure
+// variant), computed once from the config: the twin of `Form::of`
+// (src/motion/reconstruct/config.rs), whose fields say what each does and why.
+struct Form {
+    own_tile: bool,
+    tap_spacing: f32,
+    edge: f32,
+    still_reach: f32,
+    centre_count: f32,
+    still_second_set: bool,
+    half_step: bool,
+    split_taps: bool,
+    either_way: bool,
+    exposure_fill: bool,
+}
+
+fn form() -> Form {
+    let ours = config.variant == EXPOSURE;
+    return Form(
+        ours || config.offset != 0.0,
+        select(0.0, TAP_SPACING, ours),
+        select(1.0, 0.5, ours),
+        select(1.0, 0.5, ours),
+        select(1.0, 0.0, ours),
+        ours,
+        ours,
+        ours,
+        ours,
+        ours,
+    );
+}
+
 fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
+    let f = form();
     let width = config.width;
     let height = config.height;
     let size = f32(config.tile);
@@ -574,8 +607,8 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
     var m = tile_at(column, row);
     var m_length = sqrt(m.x * m.x + m.y * m.y);
     // Where the jittered lookup lands on a still tile, the pixel's own tile instead: always
-    // in the exposure variant, under an offset exposure in the 2014 one (see the CPU twin).
-    if (config.offset != 0.0 || config.variant == 3u) && m_length < HALF_PIXEL {
+    // in the exposure variant, under an offset exposure in the 2014 one (`Form::own_tile`).
+    if f.own_tile && m_length < HALF_PIXEL {
         m = tile_at(min(x / config.tile, columns() - 1u), min(y / config.tile, rows() - 1u));
         m_length = sqrt(m.x * m.x + m.y * m.y);
     }
@@ -588,31 +621,24 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
     if m_length < HALF_PIXEL {
         return centre.color;
     }
-    let exposure = config.variant == EXPOSURE;
     var k = max((config.taps + 3u) / 4u, 1u);
-    if exposure {
-        k = max(k, min(u32(ceil(m_length / TAP_SPACING)), MAX_TAPS_PER_SIDE));
+    if f.tap_spacing > 0.0 {
+        k = max(k, min(u32(ceil(m_length / f.tap_spacing)), MAX_TAPS_PER_SIDE));
     }
     let scale = config.inv_soft_z;
     // The offset exposure (see the CPU twin): each side covers its share of the line,
     // (1 − 2·offset) ahead and (1 + 2·offset) behind, at k taps per spread.
     let shift = 2.0 * config.offset;
-    var edge = 1.0;
-    if exposure {
-        edge = 0.5;
-    }
+    let edge = f.edge;
     var fg = vec4<f32>(0.0);
     var bg = vec4<f32>(0.0);
     var w_fg = 0.0;
     var w_bg = 0.0;
-    var count = 1.0;
-    if exposure {
-        count = 0.0;
-    }
+    var count = f.centre_count;
     // A still centre: the 2014 form gathers along the tile's vector alone; exposure takes its
     // second set along the tile's vector too, half a step off (see the CPU twin).
     var directions = 2u;
-    if own_length < HALF_PIXEL && !exposure {
+    if own_length < HALF_PIXEL && !f.still_second_set {
         directions = 1u;
     }
     let centre_z = centre.z;
@@ -628,7 +654,7 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
             let sx = side * dv.x;
             let sy = side * dv.y;
             var tap_offset = offset;
-            if exposure && d == 1u {
+            if f.half_step && d == 1u {
                 tap_offset = fract(offset + 0.5);
             }
             let extent = 1.0 - shift * side;
@@ -642,7 +668,7 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
                 let nearest = texel8(nearest_index);
                 let at = vec2<f32>(sx * t, sy * t);
                 var parts: Split;
-                if exposure {
+                if f.split_taps {
                     let cover = split_by_cover(nearest_index, scale, x, y, at, own_length < HALF_PIXEL);
                     if cover.valid {
                         parts = cover.parts;
@@ -662,14 +688,14 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
                 let other = parts.b;
                 let distance = length * t;
                 let along = dv.x * sample.vx + dv.y * sample.vy > 0.0;
-                let counts = exposure || sample.length < HALF_PIXEL || along;
+                let counts = f.either_way || sample.length < HALF_PIXEL || along;
                 let direction = select(0.0, 1.0, counts);
                 // Moving along the line on this side, a tap moves away from the centre.
                 let away0 = select(-side, side, along);
                 let away1 = select(-side, side, dv.x * other.vx + dv.y * other.vy > 0.0);
                 let window = own_length * extent;
-                let w0 = weights(sample, distance, direction, 1.0 - shift * away0, centre_z, window, scale, edge, exposure);
-                let w1 = weights(other, distance, direction, 1.0 - shift * away1, centre_z, window, scale, edge, exposure);
+                let w0 = weights(sample, distance, direction, 1.0 - shift * away0, centre_z, window, scale, edge, f.still_reach);
+                let w1 = weights(other, distance, direction, 1.0 - shift * away1, centre_z, window, scale, edge, f.still_reach);
                 count += direction;
                 fg += w0.x * sample.color + w1.x * other.color;
                 bg += w0.y * sample.color + w1.y * other.color;
@@ -679,7 +705,7 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
         }
     }
     let centre_color = centre.color;
-    if exposure {
+    if f.exposure_fill {
         // 0.5/|V| is at least 1 for |V| ≤ half a pixel (0 included): no division there.
         var cover = 1.0;
         if own_length > HALF_PIXEL {

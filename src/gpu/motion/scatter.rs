@@ -79,20 +79,20 @@
 use std::collections::HashMap;
 use std::sync::Mutex;
 
-use crate::frame::{Color, Frame};
-use crate::motion::scatter::{ScatterConfig, ScatterParams};
-use crate::motion::Shutter;
+use crate::frame::Color;
+use crate::motion::scatter::ScatterConfig;
 
 #[cfg(doc)]
 use crate::motion::scatter::STILL;
 
+use crate::gpu::context::Gpu;
 use crate::gpu::stage::{floats, kept, read_back, Caught, StageError};
-use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = concat!(
     include_str!("../prelude.wgsl"),
-    include_str!("scatter.wgsl")
+    include_str!("scatter.wgsl"),
+    include_str!("curve.wgsl")
 );
 
 /// Storage buffers the stages bind (every binding but the uniform).
@@ -299,54 +299,21 @@ impl ScatterPass {
 }
 
 impl Gpu {
-    /// [`crate::motion::scatter::scatter`] with its three stages on the GPU; the CPU pass
-    /// where the GPU cannot run it (a frame over the device's limits), counted in
-    /// [`Gpu::stages_on_cpu`].
-    pub fn scatter(
-        &self,
-        frame: Frame,
-        params: &ScatterParams,
-        shutter: impl Into<Shutter>,
-    ) -> Frame {
-        let shutter = shutter.into();
-        match self.try_scatter(&frame, params, shutter, Order::default()) {
-            Ok(Some(out)) => out,
-            Ok(None) => crate::motion::scatter::scatter(frame, params, shutter),
-            Err(e) => {
-                self.note_cpu_stage("scatter", &e);
-                crate::motion::scatter::scatter(frame, params, shutter)
-            }
-        }
-    }
-
-    /// The scatter pass on the GPU, dispatched in `order` (a test hook: the output must not
-    /// depend on it), or why it could not run. `Ok(None)` where the frame lacks one of the
-    /// passes scatter reads (the CPU pass then says what it does with such a frame).
+    /// Scatter's three stages on the GPU ([`crate::motion::scatter::stages`]' arguments and
+    /// result), dispatched in `order` (a test hook: the output must not depend on it), or why
+    /// they could not run.
     pub fn try_scatter(
         &self,
-        frame: &Frame,
-        params: &ScatterParams,
-        shutter: impl Into<Shutter>,
+        config: &ScatterConfig,
+        color: &Color,
+        depth: &[f32],
+        positions: [&crate::frame::Positions; 2],
         order: Order,
-    ) -> Result<Option<Frame>, StageError> {
-        let (width, height) = (frame.width, frame.height);
-        let (Some(color), Some(depth), Some(prev), Some(next)) =
-            (&frame.color, &frame.depth, &frame.prev, &frame.next)
-        else {
-            return Ok(None);
-        };
-        let pixels = width * height;
-        let config = ScatterConfig::new(width, height, params, shutter);
-        let out_color = if pixels == 0 {
-            color.clone()
-        } else {
-            self.run_scatter(&config, color, depth, [prev, next], order)?
-        };
-        // Colour alone, as the CPU pass returns it.
-        let mut out = Frame::new(width, height);
-        out.windows = frame.windows;
-        out.color = Some(out_color);
-        Ok(Some(out))
+    ) -> Result<Color, StageError> {
+        if config.width == 0 || config.height == 0 {
+            return Ok(color.clone());
+        }
+        self.run_scatter(config, color, depth, positions, order)
     }
 
     fn run_scatter(
@@ -374,13 +341,10 @@ impl Gpu {
         // Errors from here on, the pipelines' and buffers' creation included, come back as a
         // StageError (the caller runs the CPU pass): out of memory as well as validation.
         let caught = Caught::push(&self.device);
-        let made;
         let pass = if order == Order::default() {
-            self.scatter
-                .get_or_init(|| ScatterPass::new(&self.device, order))
+            self.compiled("scatter", |device| ScatterPass::new(device, order))
         } else {
-            made = ScatterPass::new(&self.device, order);
-            &made
+            std::sync::Arc::new(ScatterPass::new(&self.device, order))
         };
         let mut cache = pass.buffers.lock().unwrap_or_else(|e| e.into_inner());
         let buffers = kept(&mut cache, &pixels, || {
@@ -489,24 +453,25 @@ mod tests {
         // Keep in sync with scatter.wgsl: thirteen 4-byte fields, no padding.
         assert_eq!(std::mem::size_of::<ScatterConfig>(), 52);
         assert_eq!(std::mem::align_of::<ScatterConfig>(), 4);
-        let fields = [
-            "width: u32",
-            "height: u32",
-            "shutter: f32",
-            "offset: f32",
-            "segments: u32",
-            "sigma: f32",
-            "gaussian: u32",
-            "background_weight: f32",
-            "exposure: u32",
-            "arc: u32",
-            "max_curve: f32",
-            "flatness: f32",
-            "depth_tolerance: f32",
-        ];
-        assert_eq!(
-            crate::gpu::stage::wgsl_fields(SHADER, "ScatterConfig"),
-            fields
+        crate::gpu::layout::assert_same_layout!(
+            ScatterConfig,
+            SHADER,
+            "ScatterConfig",
+            [
+                width,
+                height,
+                shutter,
+                offset,
+                segments,
+                sigma,
+                gaussian,
+                background_weight,
+                exposure,
+                arc,
+                max_curve,
+                flatness,
+                depth_tolerance
+            ]
         );
     }
 
@@ -518,7 +483,10 @@ mod tests {
             "const MOST_SEGMENTS: u32 = {}u;",
             cpu::MOST_SEGMENTS
         ));
-        has(format!("const COVERED: f32 = {:?};", cpu::COVERED as f32));
+        has(format!(
+            "const COVERED: f32 = {:?};",
+            cpu::config::COVERED as f32
+        ));
         has(format!(
             "const COLLINEAR: f32 = {:?};",
             crate::motion::curve::COLLINEAR as f32

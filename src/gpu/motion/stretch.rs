@@ -66,11 +66,10 @@ use std::sync::Mutex;
 
 use rayon::prelude::*;
 
-use crate::frame::Frame;
-use crate::motion::stretch::{stages, stretch_with, StretchConfig, StretchParams};
+use crate::motion::stretch::StretchConfig;
 
+use crate::gpu::context::Gpu;
 use crate::gpu::stage::{floats, kept, read_back, Caught, StageError};
-use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = concat!(
@@ -403,23 +402,6 @@ fn groups(count: u64) -> (u32, u32) {
 }
 
 impl Gpu {
-    /// [`crate::motion::stretch::stretch`] with its three stages on the GPU; the CPU stages
-    /// where the GPU cannot run them (a frame over the device's limits, a device that cannot
-    /// blend float targets), counted in [`Gpu::stages_on_cpu`].
-    pub fn stretch(
-        &self,
-        frame: Frame,
-        params: &StretchParams,
-        shutter: impl Into<crate::motion::Shutter>,
-    ) -> Frame {
-        stretch_with(frame, params, shutter, |config, planes, z, v| {
-            self.try_stretch(config, planes, z, v).unwrap_or_else(|e| {
-                self.note_cpu_stage("stretch", &e);
-                stages(config, planes, z, v)
-            })
-        })
-    }
-
     /// texture_blur → move_vertices → rasterise on the GPU, with the arguments and result of
     /// the CPU's [`stages`], or why they could not run.
     pub fn try_stretch(
@@ -460,7 +442,7 @@ impl Gpu {
                 limit: self.max_binding(),
             });
         }
-        let pass = self.stretch.get_or_init(|| StretchPass::new(&self.device));
+        let pass = self.compiled("stretch", StretchPass::new);
         // Errors from here on, the buffers' creation included, come back as a StageError
         // (the caller runs the CPU stages): out of memory as well as validation.
         let caught = Caught::push(&self.device);
@@ -468,7 +450,7 @@ impl Gpu {
         let buffers = kept(&mut cache, &shape, || {
             pass.make_buffers(&self.device, shape)
         });
-        let result = self.run_stretch(pass, buffers, config, planes, z, v);
+        let result = self.run_stretch(&pass, buffers, config, planes, z, v);
         if let Err(error) = caught.check() {
             // Buffers that failed are not kept for the next frame.
             cache.remove(&shape);
@@ -662,21 +644,22 @@ mod tests {
         // Keep in sync with stretch.wgsl: ten 4-byte fields, no padding.
         assert_eq!(std::mem::size_of::<StretchConfig>(), 40);
         assert_eq!(std::mem::align_of::<StretchConfig>(), 4);
-        let fields = [
-            "width: u32",
-            "height: u32",
-            "shutter: f32",
-            "t0: f32",
-            "t1: f32",
-            "tear: f32",
-            "extent: f32",
-            "min_alpha: f32",
-            "depth_limit: f32",
-            "texture_blur: u32",
-        ];
-        assert_eq!(
-            crate::gpu::stage::wgsl_fields(SHADER, "StretchConfig"),
-            fields
+        crate::gpu::layout::assert_same_layout!(
+            StretchConfig,
+            SHADER,
+            "StretchConfig",
+            [
+                width,
+                height,
+                shutter,
+                t0,
+                t1,
+                tear,
+                extent,
+                min_alpha,
+                depth_limit,
+                texture_blur
+            ]
         );
     }
 

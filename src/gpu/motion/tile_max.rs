@@ -14,49 +14,16 @@
 //!
 //! Buffers are kept per frame size in the context and reused by every frame of that size.
 
-use bytemuck::{Pod, Zeroable};
+use crate::motion::tile_max::{TileGrid, TileMaxConfig};
 
-use crate::motion::tile_max::TileGrid;
-
+use crate::gpu::context::Gpu;
 use crate::gpu::stage::{tile_grid, Dispatch, Stage, StageError};
-use crate::gpu::Gpu;
 
 /// The shader's source.
 pub const SHADER: &str = concat!(
     include_str!("../prelude.wgsl"),
     include_str!("tile_max.wgsl")
 );
-
-/// The stage's uniform. Keep in sync with `TileMaxConfig` in tile_max.wgsl (the size test
-/// guards the layout: eight 4-byte fields, a multiple of 16 bytes as uniforms need).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct TileMaxConfig {
-    /// Frame size, pixels.
-    pub width: u32,
-    pub height: u32,
-    /// Tile edge k, pixels.
-    pub size: u32,
-    /// The grid: ⌈width/size⌉ × ⌈height/size⌉ tiles.
-    pub columns: u32,
-    pub rows: u32,
-    pub _pad: [u32; 3],
-}
-
-impl TileMaxConfig {
-    /// The uniform for `tile_max(vx, vy, width, height, size)` (a size of 0 is 1, as there).
-    pub fn new(width: usize, height: usize, size: usize) -> Self {
-        let size = size.max(1);
-        TileMaxConfig {
-            width: width as u32,
-            height: height as u32,
-            size: size as u32,
-            columns: width.div_ceil(size) as u32,
-            rows: height.div_ceil(size) as u32,
-            _pad: [0; 3],
-        }
-    }
-}
 
 /// The compiled stage: bindings config, vx, vy, x, y.
 pub(crate) fn stage(device: &wgpu::Device) -> Stage {
@@ -96,7 +63,7 @@ impl Gpu {
         }
         let n = width * height;
         let bytes = (tiles * 4) as u64;
-        let out = self.tile_max.run(
+        let out = self.compiled("tile_max", stage).run(
             self,
             bytemuck::bytes_of(&config),
             &[
@@ -123,6 +90,12 @@ mod tests {
         // Keep in sync with tile_max.wgsl: eight 4-byte fields, no padding, a multiple of 16.
         assert_eq!(std::mem::size_of::<TileMaxConfig>(), 32);
         assert_eq!(std::mem::align_of::<TileMaxConfig>(), 4);
+        crate::gpu::layout::assert_same_layout!(
+            TileMaxConfig,
+            SHADER,
+            "TileMaxConfig",
+            [width, height, size, columns, rows]
+        );
         // Partial tiles at the right and bottom count; a size of 0 is 1.
         let c = TileMaxConfig::new(17, 9, 8);
         assert_eq!((c.columns, c.rows), (3, 2));

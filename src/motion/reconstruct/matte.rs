@@ -27,7 +27,7 @@
 
 use rayon::prelude::*;
 
-use super::{ReconstructConfig, Texel2014, HALF_PIXEL};
+use super::config::{ReconstructConfig, Texel2014, HALF_PIXEL, LENGTH, Z};
 
 /// Per pixel: α (the moving surface's coverage), then the pixels the moving and the still
 /// colours of its pair come from, as `f32::from_bits` of their indices (the pixel's own
@@ -52,9 +52,6 @@ const NEIGHBOURS: [(i64, i64); 24] = [
     (-2, -2), (-1, -2), (0, -2), (1, -2), (2, -2), (-2, -1), (2, -1), (-2, 0),
     (2, 0), (-2, 1), (2, 1), (-2, 2), (-1, 2), (0, 2), (1, 2), (2, 2),
 ];
-
-const Z: usize = 4;
-const LENGTH: usize = 7;
 
 #[inline]
 fn moves(t: &Texel2014) -> bool {

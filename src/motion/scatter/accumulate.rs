@@ -6,8 +6,9 @@
 use crate::motion::curve::{length, Arc, Bezier, Point};
 use crate::motion::line::{Clip, Column, Walk, Whole, OVERHANG};
 
+use super::config::{CurveKind, Normalize, BLOCK, MOST_SEGMENTS};
+use super::job::{Moving, Scatter};
 use super::reach::Reach;
-use super::{Moving, Scatter, BLOCK, MOST_SEGMENTS};
 
 /// One curve, cut into segments, ready to draw.
 pub(super) struct Path {
@@ -46,7 +47,7 @@ impl Scatter<'_> {
         let (t0, t1) = (self.t0, self.t1);
         let most = p.segments as usize;
         let tolerance = p.flatness as f64;
-        let arc = if p.arc != 0 {
+        let arc = if p.curve() == CurveKind::Arc {
             Arc::fit(prev, now, next)
         } else {
             None
@@ -101,7 +102,7 @@ impl Scatter<'_> {
                 ];
             }
         }
-        if p.exposure != 0 {
+        if p.normalize() == Normalize::Exposure {
             // The curve's deposits add up to Σ length × mean weight of each segment (weights
             // are linear along a segment): divide so they add up to 1.
             // (With the box weight every mean is 1 and the sum is the total length, bit for bit.)

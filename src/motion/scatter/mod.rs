@@ -46,305 +46,57 @@
 //! within the per-channel range of the input colours.
 
 mod accumulate;
+pub mod config;
+mod job;
 mod reach;
 mod resolve;
 
 use rayon::prelude::*;
 
-use super::curve::{length, Point};
 use crate::frame::{Color, Frame, Positions};
+use crate::motion::shutter::Shutter;
+use crate::stages::Cpu;
+pub use config::{
+    CurveKind, Normalize, ScatterConfig, ScatterParams, Weight, MOST_SEGMENTS, STILL,
+};
+use config::{TILE_H, TILE_W};
+use job::Scatter;
 use reach::Reach;
-
-/// A pixel whose curve stays within this many pixels of p(0) over the shutter is still: its
-/// streak would be under half a pixel.
-pub const STILL: f64 = 0.25;
-/// The most segments a curve is cut into.
-pub const MOST_SEGMENTS: usize = 64;
-/// Output tiles are this many pixels wide and high.
-const TILE_W: usize = 256;
-const TILE_H: usize = 128;
-/// Reach is kept per block of this many pixels square.
-const BLOCK: usize = 16;
-/// Below this uncovered share an exposure-normalised pixel needs no background estimate.
-pub(crate) const COVERED: f64 = 1e-3;
-
-/// The weight along the curve.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Weight {
-    /// The paper's Gaussian in s, μ = ½.
-    Gaussian,
-    /// Every instant of the exposure the same: the ideal shutter.
-    Box,
-}
-
-impl Weight {
-    /// Every choice, by the name flags and presets use.
-    pub const ALL: &'static [(&'static str, Weight)] =
-        &[("box", Weight::Box), ("gaussian", Weight::Gaussian)];
-}
-
-/// How accumulated curves and the pixel's own colour combine.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Normalize {
-    /// Eq. 4 with background weight w_b.
-    Paper,
-    /// Deposits as shares of the exposure, the rest filled with what lies behind.
-    Exposure,
-}
-
-impl Normalize {
-    /// Every choice, by the name flags and presets use.
-    pub const ALL: &'static [(&'static str, Normalize)] = &[
-        ("exposure", Normalize::Exposure),
-        ("paper", Normalize::Paper),
-    ];
-}
-
-/// The curve through the three positions.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CurveKind {
-    /// The paper's quadratic Bézier.
-    Bezier,
-    /// A circular arc where the points turn, else the Bézier.
-    Arc,
-}
-
-impl CurveKind {
-    /// Every choice, by the name flags and presets use.
-    pub const ALL: &'static [(&'static str, CurveKind)] =
-        &[("bezier", CurveKind::Bezier), ("arc", CurveKind::Arc)];
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ScatterParams {
-    /// Line segments per curve (at most; see `flatness`). The paper's Δ = 11 points is 10
-    /// segments.
-    pub segments: usize,
-    /// σ of the Gaussian weight, in units of s (the whole frame interval −1..1 is s = 0..1).
-    pub sigma: f32,
-    pub weight: Weight,
-    /// w_b of eq. 4 (paper normalisation only).
-    pub background_weight: f32,
-    pub normalize: Normalize,
-    pub curve: CurveKind,
-    /// The longest a curve may be, in pixels: longer ones are scaled about p(0) to this length
-    /// (which bounds the work per curve).
-    pub max_curve: f32,
-    /// Fewer segments where they stray no more than this many pixels from the curve (0: always
-    /// `segments`). Short, straight motion then costs one segment.
-    pub flatness: f32,
-    /// A curve passes a pixel whose depth is at least its own depth / (1 + this) (relative).
-    pub depth_tolerance: f32,
-}
-
-impl Default for ScatterParams {
-    fn default() -> Self {
-        ScatterParams {
-            segments: 10,
-            sigma: 2.0,
-            weight: Weight::Box,
-            background_weight: 5.0,
-            normalize: Normalize::Exposure,
-            curve: CurveKind::Bezier,
-            max_curve: 256.0,
-            flatness: 0.1,
-            depth_tolerance: 0.02,
-        }
-    }
-}
-
-/// A moving pixel's three positions, and how far from p(0) its curve can deposit.
-#[derive(Clone, Copy)]
-struct Moving {
-    prev: Point,
-    now: Point,
-    next: Point,
-    reach: f64,
-}
-
-/// Everything scatter's stages read besides their buffers, as plain numbers: the shape of the
-/// uniform of its GPU twin, `ScatterConfig` in src/gpu/scatter.wgsl (keep the two in sync;
-/// the size test here and the field test in src/gpu/scatter.rs guard the layout).
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]
-#[repr(C)]
-pub struct ScatterConfig {
-    /// Frame size, pixels.
-    pub width: u32,
-    pub height: u32,
-    /// Fraction of the frame interval the shutter is open.
-    pub shutter: f32,
-    /// Where the exposure sits about the frame, in exposures ([`super::Shutter::offset`]):
-    /// the curve is kept over t ∈ [(offset − ½)·shutter, (offset + ½)·shutter].
-    pub offset: f32,
-    /// Line segments per curve, at most, in 1..=[`MOST_SEGMENTS`].
-    pub segments: u32,
-    /// σ of the Gaussian weight, in units of s.
-    pub sigma: f32,
-    /// 1 for the paper's Gaussian weight along the curve, 0 for the box.
-    pub gaussian: u32,
-    /// w_b of the paper's normalisation.
-    pub background_weight: f32,
-    /// 1 for the exposure normalisation, 0 for the paper's eq. 4.
-    pub exposure: u32,
-    /// 1 for circular arcs where the motion turns, 0 for the paper's Bézier.
-    pub arc: u32,
-    /// The longest a curve may be, pixels.
-    pub max_curve: f32,
-    /// Fewer segments where they stray at most this far from the curve, pixels.
-    pub flatness: f32,
-    /// A curve passes a pixel whose depth is at least its own / (1 + this).
-    pub depth_tolerance: f32,
-}
-
-impl ScatterConfig {
-    pub fn new(
-        width: usize,
-        height: usize,
-        params: &ScatterParams,
-        shutter: impl Into<super::Shutter>,
-    ) -> Self {
-        let shutter = shutter.into();
-        ScatterConfig {
-            width: width as u32,
-            height: height as u32,
-            shutter: shutter.open,
-            offset: shutter.offset,
-            segments: params.segments.clamp(1, MOST_SEGMENTS) as u32,
-            sigma: params.sigma,
-            gaussian: (params.weight == Weight::Gaussian) as u32,
-            background_weight: params.background_weight.max(0.0),
-            exposure: (params.normalize == Normalize::Exposure) as u32,
-            arc: (params.curve == CurveKind::Arc) as u32,
-            max_curve: params.max_curve,
-            flatness: params.flatness,
-            depth_tolerance: params.depth_tolerance,
-        }
-    }
-}
-
-/// One frame's scatter: its input buffers and config.
-struct Scatter<'a> {
-    width: usize,
-    height: usize,
-    color: &'a Color,
-    depth: &'a [f32],
-    prev: &'a Positions,
-    next: &'a Positions,
-    config: ScatterConfig,
-    /// The exposure: t ∈ [t0, t1] (frames from the frame's instant).
-    t0: f64,
-    t1: f64,
-    /// The farthest the exposure gets from the frame's instant, max(|t0|, |t1|): half the
-    /// shutter when it is centred.
-    half: f64,
-    /// The middle of the exposure, (t0 + t1)/2: where the Gaussian weight peaks.
-    middle: f64,
-}
-
-impl<'a> Scatter<'a> {
-    fn new(
-        config: ScatterConfig,
-        color: &'a Color,
-        depth: &'a [f32],
-        prev: &'a Positions,
-        next: &'a Positions,
-    ) -> Self {
-        let (t0, t1) = super::Shutter {
-            open: config.shutter,
-            offset: config.offset,
-        }
-        .interval();
-        let (t0, t1) = (t0 as f64, t1 as f64);
-        Scatter {
-            width: config.width as usize,
-            height: config.height as usize,
-            color,
-            depth,
-            prev,
-            next,
-            config,
-            t0,
-            t1,
-            half: t0.abs().max(t1.abs()),
-            middle: 0.5 * (t0 + t1),
-        }
-    }
-}
-
-impl Scatter<'_> {
-    #[inline]
-    fn color(&self, i: usize) -> [f32; 4] {
-        [
-            self.color.r[i],
-            self.color.g[i],
-            self.color.b[i],
-            self.color.a.as_ref().map_or(1.0, |a| a[i]),
-        ]
-    }
-
-    /// The motion of a moving pixel; `None` where it is still.
-    #[inline]
-    fn motion(&self, x: usize, y: usize) -> Option<Moving> {
-        let i = y * self.width + x;
-        let now = [x as f64 + 0.5, y as f64 + 0.5];
-        let prev = [self.prev.x[i] as f64, self.prev.y[i] as f64];
-        let next = [self.next.x[i] as f64, self.next.y[i] as f64];
-        let extent = self.extent(prev, now, next);
-        (extent >= STILL).then_some(Moving {
-            prev,
-            now,
-            next,
-            // What the scaling to max_curve leaves, and the pixel a segment reaches beside it.
-            reach: extent.min(self.config.max_curve as f64) + 1.0,
-        })
-    }
-
-    /// The positions of a pixel known to move, with its reach `r` from the reach pass
-    /// (skips [`Scatter::motion`]'s bound).
-    #[inline]
-    fn positions(&self, x: usize, y: usize, reach: f64) -> Moving {
-        let i = y * self.width + x;
-        Moving {
-            prev: [self.prev.x[i] as f64, self.prev.y[i] as f64],
-            now: [x as f64 + 0.5, y as f64 + 0.5],
-            next: [self.next.x[i] as f64, self.next.y[i] as f64],
-            reach,
-        }
-    }
-
-    /// A bound on how far the curve strays from p(0) during the exposure: with
-    /// p(t) = p0 + t·v + t²·a, at most h·|v| + h²·|a| for |t| ≤ h (h = `half`, the farthest
-    /// the exposure gets from the frame).
-    #[inline]
-    fn extent(&self, prev: Point, now: Point, next: Point) -> f64 {
-        let v = [0.5 * (next[0] - prev[0]), 0.5 * (next[1] - prev[1])];
-        let a = [
-            0.5 * (next[0] + prev[0]) - now[0],
-            0.5 * (next[1] + prev[1]) - now[1],
-        ];
-        self.half * length(v) + self.half * self.half * length(a)
-    }
-
-    #[inline]
-    fn weight(&self, t: f64) -> f64 {
-        if self.config.gaussian == 0 {
-            1.0
-        } else {
-            let d = 0.5 * (t - self.middle); // s − s(middle), μ at the exposure's middle
-            let sigma = self.config.sigma as f64;
-            (-d * d / (2.0 * sigma * sigma)).exp()
-        }
-    }
-}
 
 /// Applies the filter: [`reach`] → [`accumulate`] → [`resolve`]. The frame must hold colour,
 /// depth, prev and next; the output holds colour alone. A frame in which nothing moves keeps
 /// its colour untouched.
-pub fn scatter(
+pub fn scatter(frame: Frame, params: &ScatterParams, shutter: impl Into<Shutter>) -> Frame {
+    scatter_with(frame, params, shutter, &Cpu)
+}
+
+/// Scatter's stages that a backend may run elsewhere: reach → accumulate → resolve, as one
+/// (the GPU keeps the curves' sums on the device between them). The default is the CPU's
+/// [`stages`], the reference; [`Cpu`] takes it, and the GPU (`crate::gpu::motion`) overrides
+/// it with its twin, which must return the same colour within the tolerance its parity test
+/// states (tests/gpu_scatter.rs).
+pub trait Stages {
+    /// [`stages`].
+    fn stages(
+        &self,
+        config: &ScatterConfig,
+        color: Color,
+        depth: &[f32],
+        positions: [&Positions; 2],
+    ) -> Color {
+        stages(config, color, depth, positions)
+    }
+}
+
+impl Stages for Cpu {}
+
+/// [`scatter`] with its [`Stages`] run by `stages` (the CPU's, [`Cpu`], or a backend's twin);
+/// the config is made here from the frame's size, so it always matches the frame.
+pub fn scatter_with(
     mut frame: Frame,
     params: &ScatterParams,
-    shutter: impl Into<super::Shutter>,
+    shutter: impl Into<Shutter>,
+    stages: &impl Stages,
 ) -> Frame {
     let (width, height) = (frame.width, frame.height);
     frame.velocity = None;
@@ -357,16 +109,32 @@ pub fn scatter(
         return frame;
     };
     let config = ScatterConfig::new(width, height, params, shutter);
-    let job = Scatter::new(config, &color, &depth, &prev, &next);
+    // Colour alone, as on every path.
+    frame.color = Some(if width * height == 0 {
+        color
+    } else {
+        stages.stages(&config, color, &depth, [&prev, &next])
+    });
+    frame
+}
+
+/// The three stages on the CPU: [`reach`], then where anything moves [`accumulate`] and
+/// [`resolve`] tile by tile into new planes; the colour as it came where nothing moves.
+pub fn stages(
+    config: &ScatterConfig,
+    color: Color,
+    depth: &[f32],
+    [prev, next]: [&Positions; 2],
+) -> Color {
+    let (width, height) = (config.width as usize, config.height as usize);
+    let job = Scatter::new(*config, &color, depth, prev, next);
     let n = width * height;
     let columns = width.div_ceil(TILE_W);
 
     // How far each block's curves reach; nothing to do if nothing moves.
     let reach = Reach::of(&job);
     if reach.most == 0.0 || n == 0 {
-        // Colour alone, as on every path.
-        frame.color = Some(color);
-        return frame;
+        return color;
     }
     // Accumulate and normalise tile by tile, into new planes (curves read the input colours
     // while tiles are written).
@@ -421,13 +189,12 @@ pub fn scatter(
                 });
         });
     let [r, g, b, a] = out;
-    frame.color = Some(Color {
+    Color {
         r,
         g,
         b,
         a: has_alpha.then_some(a),
-    });
-    frame
+    }
 }
 
 #[cfg(test)]

@@ -5,7 +5,8 @@
 
 use rayon::prelude::*;
 
-use super::{Scatter, BLOCK};
+use super::config::BLOCK;
+use super::job::Scatter;
 
 /// For each BLOCK×BLOCK block of pixels, how far from its pixels their curves can deposit
 /// (0 where none moves): lets a tile find the pixels whose curves can reach it.

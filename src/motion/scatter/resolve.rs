@@ -3,8 +3,9 @@
 
 use crate::motion::curve::length;
 
+use super::config::{Normalize, BLOCK, COVERED};
+use super::job::{Moving, Scatter};
 use super::reach::Reach;
-use super::{Moving, Scatter, BLOCK, COVERED};
 
 impl Scatter<'_> {
     /// The output of pixel `i` from its accumulated `cell`.
@@ -15,7 +16,7 @@ impl Scatter<'_> {
         if total.is_nan() || total <= 0.0 {
             return own;
         }
-        if self.config.exposure == 0 {
+        if self.config.normalize() == Normalize::Paper {
             // The paper's eq. 4 (w_b is at least 0).
             let wb = self.config.background_weight as f64;
             std::array::from_fn(|ch| ((cell[ch] + wb * own[ch] as f64) / (total + wb)) as f32)

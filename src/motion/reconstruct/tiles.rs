@@ -1,0 +1,108 @@
+//! Which tiles each of reconstruct's later stages works on, and the loop that runs a gather
+//! over them: the paper's gather over the tiles whose NeighborMax blurs, the 2014 gather over
+//! those within one tile of a blurring one, and the 2014 pack over those within its taps'
+//! reach ([`packed_2014`]). Every other pixel keeps its colour, so still tiles cost nothing.
+
+use rayon::prelude::*;
+
+use super::config::{reach_factor, ReconstructConfig, MOVING_SQUARED};
+use crate::frame::Color;
+use crate::motion::tile_max::TileGrid;
+
+/// Whether a tile's NeighborMax blurs: |V|² above (0.5 px + ε)².
+#[inline]
+pub(crate) fn blurs(neighbors: &TileGrid, c: usize, r: usize) -> bool {
+    let (x, y) = neighbors.get(c, r);
+    x * x + y * y > MOVING_SQUARED
+}
+
+/// Whether any tile within `radius` tiles of (c, r) blurs.
+pub(crate) fn near_blur(tiles: &TileGrid, c: usize, r: usize, radius: usize) -> bool {
+    (r.saturating_sub(radius)..(r + radius + 1).min(tiles.rows)).any(|rr| {
+        (c.saturating_sub(radius)..(c + radius + 1).min(tiles.columns))
+            .any(|cc| blurs(tiles, cc, rr))
+    })
+}
+
+/// Which tiles of a grid a stage works on.
+pub struct TileMask {
+    columns: usize,
+    on: Vec<bool>,
+}
+
+impl TileMask {
+    /// Whether tile (column, row) is on.
+    #[inline]
+    pub fn get(&self, column: usize, row: usize) -> bool {
+        self.on[row * self.columns + column]
+    }
+}
+
+/// The tiles [`pack_2014`] packs: those within `reach + 1` tiles (Chebyshev) of a blurring
+/// one, where taps reach k px (up to 2k when the exposure is offset), `reach` tiles beyond
+/// the tile a pixel looks up. [`near_blur`] over every tile, computed as a square dilation in
+/// two passes of running counts, so its cost does not grow with the reach.
+pub fn packed_2014(config: &ReconstructConfig, tiles: &TileGrid) -> TileMask {
+    let reach = (config.k * reach_factor(config) / config.tile as f32).ceil() as usize + 1;
+    let (columns, rows) = (tiles.columns, tiles.rows);
+    // Within `reach` along one axis of a marked cell: a running count over a window.
+    let dilate = |marked: &dyn Fn(usize) -> bool, n: usize| -> Vec<bool> {
+        let mut prefix = vec![0u32; n + 1];
+        for i in 0..n {
+            prefix[i + 1] = prefix[i] + marked(i) as u32;
+        }
+        (0..n)
+            .map(|i| prefix[(i + reach + 1).min(n)] > prefix[i.saturating_sub(reach)])
+            .collect()
+    };
+    let mut across = vec![false; columns * rows];
+    for r in 0..rows {
+        let row = dilate(&|c| blurs(tiles, c, r), columns);
+        across[r * columns..(r + 1) * columns].copy_from_slice(&row);
+    }
+    let mut on = vec![false; columns * rows];
+    for c in 0..columns {
+        let column = dilate(&|r| across[r * columns + c], rows);
+        for (r, v) in column.into_iter().enumerate() {
+            on[r * columns + c] = v;
+        }
+    }
+    TileMask { columns, on }
+}
+
+/// Runs `pixel((column, row), x, y)` over every pixel of the tiles `selected(column, row)`
+/// picks, a band of tile rows per task, and writes its premultiplied RGBA in place; other
+/// pixels keep their colour.
+pub(crate) fn gather_tiles(
+    config: &ReconstructConfig,
+    columns: usize,
+    color: &mut Color,
+    selected: impl Fn(usize, usize) -> bool + Sync,
+    pixel: impl Fn((usize, usize), usize, usize) -> [f32; 4] + Sync,
+) {
+    let width = config.width as usize;
+    let size = config.tile as usize;
+    let n = width * config.height as usize;
+    let has_alpha = color.a.is_some();
+    let mut alpha = color.a.take().unwrap_or_else(|| vec![0.0; n]);
+    let band = size * width;
+    color
+        .r
+        .par_chunks_mut(band)
+        .zip(color.g.par_chunks_mut(band))
+        .zip(color.b.par_chunks_mut(band))
+        .zip(alpha.par_chunks_mut(band))
+        .enumerate()
+        .for_each(|(row, (((r, g), b), a))| {
+            for c in (0..columns).filter(|&c| selected(c, row)) {
+                for local_y in 0..r.len() / width {
+                    let y = row * size + local_y;
+                    for x in c * size..((c + 1) * size).min(width) {
+                        let o = local_y * width + x;
+                        [r[o], g[o], b[o], a[o]] = pixel((c, row), x, y);
+                    }
+                }
+            }
+        });
+    color.a = has_alpha.then_some(alpha);
+}
