@@ -1,0 +1,199 @@
+//! What the bench reports: a row per setting (or peer) and target, with its timings and
+//! errors ([`Row`]), each target's reference noise ([`NoiseFloor`]), the whole report
+//! ([`BenchReport`]), and the files written from it: bench.json, bench.md ([`markdown`]),
+//! pareto.svg/.png and one contact sheet per target (drawn by [`plot`](super::plot)).
+
+use std::path::Path;
+
+use serde::Serialize;
+
+use super::{plot, BenchOptions};
+use crate::error::{Error, Problem, ProblemKind, Result};
+use crate::frame::Frame;
+use crate::gpu::GpuTimes;
+use crate::lab::metrics::Scores;
+
+/// One row of the results.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub scene: String,
+    pub setting: String,
+    /// Where shutter's stages ran: cpu, or wgpu (the stages with a GPU twin on the GPU, the
+    /// rest on the CPU; the setting's label ends in "[wgpu]"); empty for a peer's row.
+    pub backend: String,
+    /// On wgpu, the GPU stages' upload, dispatch and readback per run, ms (measured apart
+    /// with the queue drained between them, see [`crate::gpu::Gpu::set_profiling`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gpu_stages: Option<GpuTimes>,
+    /// On wgpu, stage runs with a twin that ran on the CPU instead during the compute runs
+    /// (a frame over the device's limits); 0 when every twin ran on the GPU.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stages_on_cpu: Option<u64>,
+    /// The program that made the output, for a peer's row ("blender 5.2.3"); none for
+    /// shutter's own.
+    pub peer: Option<String>,
+    /// The settings a peer reports it ran with (null for shutter's rows: the label says).
+    #[serde(skip_serializing_if = "serde_json::Value::is_null")]
+    pub peer_settings: serde_json::Value,
+    /// Median processing time, ms (the algorithm on decoded passes, no I/O).
+    pub compute_ms: f64,
+    /// Median wall time of `shutter blur` on the frame, ms (process start, read, write); for a
+    /// peer, what it measured (null when nothing).
+    pub end_to_end_ms: Option<f64>,
+    /// Peak resident memory of that process, MiB.
+    pub peak_rss_mib: Option<f64>,
+    /// Errors against the reference over the whole frame.
+    pub whole: Scores,
+    /// Errors over the region blur changes (reference differs from the sharp frame).
+    pub region: Scores,
+    /// The region RMSE against the converged reference, estimated by taking out the
+    /// reference's noise: sqrt(max(0, region RMSE² − noise variance)) ([`noise`](super::noise)).
+    pub region_rmse_corrected: f64,
+}
+
+/// A target's reference noise over its region, from two renders with different sampling seeds.
+#[derive(Clone, Debug, Serialize)]
+pub struct NoiseFloor {
+    pub scene: String,
+    /// The sampling seeds of the two renders (the scene's layout is the same).
+    pub seeds: [u64; 2],
+    /// Pixels of the region.
+    pub pixels: usize,
+    /// The RMS noise of one reference over the region: sqrt(mean((r1 − r2)²) / 2).
+    pub noise_rmse: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchReport {
+    pub width: usize,
+    pub height: usize,
+    /// The shutter offset of the references and the settings (0 centred).
+    pub shutter_offset: f32,
+    pub samples: usize,
+    pub runs: usize,
+    pub threads: usize,
+    pub rows: Vec<Row>,
+    /// Each target's reference noise.
+    pub noise: Vec<NoiseFloor>,
+}
+
+pub(super) type Sheet = (String, Frame, Vec<(String, Frame)>, Frame);
+
+fn output_problem(path: &Path, detail: String) -> Error {
+    Problem::new(ProblemKind::Output, path, detail).into()
+}
+
+pub(super) fn write_text(path: &Path, text: &str) -> Result<()> {
+    crate::io::output::write_atomic(path, |w| {
+        use std::io::Write;
+        w.write_all(text.as_bytes()).map_err(|e| e.to_string())
+    })
+    .map_err(|d| output_problem(path, d))
+}
+
+pub(super) fn write_outputs(
+    options: &BenchOptions,
+    report: &BenchReport,
+    sheets: &[Sheet],
+) -> Result<()> {
+    let out = &options.out;
+    std::fs::create_dir_all(out.join("contact")).map_err(|e| output_problem(out, e.to_string()))?;
+    write_text(
+        &out.join("bench.json"),
+        &serde_json::to_string_pretty(report).unwrap_or_default(),
+    )?;
+    write_text(&out.join("bench.md"), &markdown(report))?;
+    let svg = plot::pareto_svg(report);
+    write_text(&out.join("pareto.svg"), &svg)?;
+    let (w, h, pixels) = plot::pareto_png(report);
+    plot::write_png(&out.join("pareto.png"), w, h, &pixels)?;
+    for (name, sharp, outputs, reference) in sheets {
+        let mut panels: Vec<(&str, &Frame)> = vec![("sharp input", sharp)];
+        for (label, frame) in outputs {
+            panels.push((label, frame));
+        }
+        panels.push(("reference", reference));
+        let (w, h, pixels) = plot::contact_sheet(&panels);
+        plot::write_png(
+            &out.join("contact")
+                .join(format!("{}.png", name.replace([' ', '+'], "-"))),
+            w,
+            h,
+            &pixels,
+        )?;
+    }
+    Ok(())
+}
+
+/// The results as a Markdown table.
+pub fn markdown(report: &BenchReport) -> String {
+    let mut text = format!(
+        "{}×{}, reference {} samples per pixel, median of {} runs, {} threads.\n\n\
+         Errors against the brute-force reference over the region blur changes (RMSE, PSNR \
+         on linear values; SSIM, FLIP on the sRGB display image) and RMSE over the whole \
+         frame. RMSE corr. is the region RMSE with the reference's own noise taken out, \
+         sqrt(max(0, RMSE² − noise²)); rows with a peer are another program's output on the \
+         same files, with the time it measured.\n\n",
+        report.width, report.height, report.samples, report.runs, report.threads
+    );
+    text.push_str(
+        "Reference noise over each target's region (RMS, from a second render with other \
+         samples):\n\n| scene | region px | noise RMSE |\n|---|---:|---:|\n",
+    );
+    for floor in &report.noise {
+        text.push_str(&format!(
+            "| {} | {} | {:.5} |\n",
+            floor.scene, floor.pixels, floor.noise_rmse
+        ));
+    }
+    text.push_str(
+        "\n| scene | setting | peer | compute ms | end-to-end ms | peak RSS MiB | region px | RMSE | RMSE corr. | PSNR dB | SSIM | FLIP | RMSE whole |\n\
+         |---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for row in &report.rows {
+        text.push_str(&format!(
+            "| {} | {} | {} | {:.2} | {} | {} | {} | {:.5} | {:.5} | {:.2} | {:.4} | {:.4} | {:.5} |\n",
+            row.scene,
+            row.setting,
+            row.peer.as_deref().unwrap_or("-"),
+            row.compute_ms,
+            row.end_to_end_ms
+                .map_or("-".to_string(), |m| format!("{m:.1}")),
+            row.peak_rss_mib
+                .map_or("-".to_string(), |m| format!("{m:.0}")),
+            row.region.pixels,
+            row.region.rmse,
+            row.region_rmse_corrected,
+            row.region.psnr,
+            row.region.ssim,
+            row.region.flip,
+            row.whole.rmse,
+        ));
+    }
+    let gpu_rows: Vec<&Row> = report
+        .rows
+        .iter()
+        .filter(|r| r.gpu_stages.is_some())
+        .collect();
+    if !gpu_rows.is_empty() {
+        text.push_str(
+            "\nGPU stages of the [wgpu] rows per run (ms; measured apart, the queue drained \
+             between them; the rest of compute ms is the stages on the CPU and the host's \
+             packing; fallbacks: stage runs with a twin that ran on the CPU instead):\n\n\
+             | scene | setting | upload | compute | readback | fallbacks |\n|---|---|---:|---:|---:|---:|\n",
+        );
+        for row in gpu_rows {
+            let t = row.gpu_stages.expect("filtered");
+            text.push_str(&format!(
+                "| {} | {} | {:.2} | {:.2} | {:.2} | {} |\n",
+                row.scene,
+                row.setting,
+                t.upload_ms,
+                t.compute_ms,
+                t.readback_ms,
+                row.stages_on_cpu.unwrap_or(0)
+            ));
+        }
+    }
+    text
+}
