@@ -17,14 +17,15 @@
 //!   over scenes, targets, settings and backends.
 
 pub mod noise;
+mod options;
 pub mod peers;
 pub mod plot;
 mod report;
 mod scenes;
 mod sweep;
 mod timing;
+mod write;
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use crate::error::{Error, Problem, ProblemKind, Result};
@@ -34,33 +35,14 @@ use crate::lab::metrics;
 use crate::lab::truth::scenes::SCENES;
 use crate::lab::truth::write::{resampled_role, SceneOptions};
 
+pub use options::BenchOptions;
 pub use report::{markdown, BenchReport, NoiseFloor, Row};
 pub use sweep::{sweep, targets, Setting, Target};
 
-use report::write_outputs;
 use scenes::{ensure_resampled, ensure_scene, read_rgb, rgb, scene_inputs};
 use sweep::has_twin;
 use timing::{Compute, EndToEnd};
-
-/// What to run.
-#[derive(Clone, Debug)]
-pub struct BenchOptions {
-    pub scenes: Vec<String>,
-    pub width: usize,
-    pub height: usize,
-    pub out: PathBuf,
-    /// Reference samples per pixel.
-    pub samples: usize,
-    /// Timed runs per measurement (the median is kept); at least 5.
-    pub runs: usize,
-    /// The shutter offset of the references and of every setting run against them
-    /// (`motion::Shutter::offset`; 0 centred).
-    pub shutter_offset: f32,
-    /// The shutter binary for the end-to-end runs.
-    pub binary: PathBuf,
-    /// A folder with a peers.json ([`peers`]) whose outputs are scored too.
-    pub peers: Option<PathBuf>,
-}
+use write::write_outputs;
 
 /// Runs the whole bench; `progress` gets a line per step.
 pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<BenchReport> {

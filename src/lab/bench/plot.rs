@@ -7,7 +7,7 @@ use std::sync::Once;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 
-use super::BenchReport;
+use super::report::BenchReport;
 use crate::error::{Problem, ProblemKind, Result};
 use crate::frame::Frame;
 use crate::lab::metrics::{display_rgb8, Rgb};

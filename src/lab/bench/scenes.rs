@@ -5,8 +5,8 @@
 
 use std::path::Path;
 
-use super::report::write_text;
-use super::BenchOptions;
+use super::options::BenchOptions;
+use super::write::write_text;
 use crate::error::{Error, Result};
 use crate::frame::Frame;
 use crate::io::passes::{read_color, Inputs};

@@ -8,8 +8,8 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use super::options::BenchOptions;
 use super::sweep::Setting;
-use super::BenchOptions;
 use crate::error::{Error, Problem, ProblemKind, Result};
 use crate::gpu::{Gpu, GpuTimes};
 use crate::io::passes::{plan_frame, read_frame, Inputs, PlanOptions};
