@@ -19,6 +19,10 @@
 //!
 //! The jitter of every pass comes from one 32-bit hash, [`hash`] (WGSL has no 64-bit
 //! integers, so the GPU twins compute the same numbers).
+//!
+//! The one approximate comparison of floats every test uses, unit and integration alike, is
+//! here too ([`close`], [`close_relative`], and [`all_close`] for slices), with its rules for
+//! NaN and infinities written once (the `exr` crate keeps one such helper for the same reason).
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -297,6 +301,127 @@ pub fn unit(seed: u32, stream: u32, index: u32) -> f32 {
     (hash(seed, stream, index) >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
 }
 
+/// The float types the approximate comparisons take: f32 and f64.
+pub trait Float:
+    Copy
+    + PartialOrd
+    + std::ops::Sub<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::fmt::Debug
+    + std::fmt::Display
+    + sealed::Sealed
+{
+    fn is_nan(self) -> bool;
+    fn is_infinite(self) -> bool;
+    fn abs(self) -> Self;
+}
+
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for f32 {}
+    impl Sealed for f64 {}
+}
+
+macro_rules! float {
+    ($t:ty) => {
+        impl Float for $t {
+            #[inline]
+            fn is_nan(self) -> bool {
+                <$t>::is_nan(self)
+            }
+            #[inline]
+            fn is_infinite(self) -> bool {
+                <$t>::is_infinite(self)
+            }
+            #[inline]
+            fn abs(self) -> Self {
+                <$t>::abs(self)
+            }
+        }
+    };
+}
+float!(f32);
+float!(f64);
+
+/// Whether `a` and `b` agree within `tolerance`: |a − b| ≤ tolerance.
+///
+/// The rules for what is not a number, so a test never passes by accident:
+/// - NaN is close only to NaN: a NaN where a number was expected fails, whatever the
+///   tolerance, and a NaN expected must come out NaN (any payload).
+/// - An infinity is close only to the same infinity, whatever the tolerance (+∞ is not close
+///   to −∞, nor to `f32::MAX`).
+/// - A tolerance of 0 asks for equality (−0 equals +0); a NaN or negative tolerance makes no
+///   two finite numbers close.
+#[inline]
+pub fn close<T: Float>(a: T, b: T, tolerance: T) -> bool {
+    if a.is_nan() || b.is_nan() {
+        a.is_nan() && b.is_nan()
+    } else if a.is_infinite() || b.is_infinite() {
+        a == b
+    } else {
+        (a - b).abs() <= tolerance
+    }
+}
+
+/// Whether `actual` is within `relative` of `expected`'s magnitude: |actual − expected| ≤
+/// relative·|expected|, with [`close`]'s rules for NaN and infinities. (An expected 0 asks for
+/// exactly 0: give an absolute tolerance to [`close`] where values near 0 are meant.)
+#[inline]
+pub fn close_relative<T: Float>(actual: T, expected: T, relative: T) -> bool {
+    close(actual, expected, relative * expected.abs())
+}
+
+/// Where two slices compared by [`all_close`] first disagree.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Mismatch<T> {
+    /// The slices differ in length.
+    Lengths { actual: usize, expected: usize },
+    /// The first index whose values are not [`close`].
+    At {
+        index: usize,
+        actual: T,
+        expected: T,
+    },
+}
+
+impl<T: Float> std::fmt::Display for Mismatch<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Mismatch::Lengths { actual, expected } => {
+                write!(f, "{actual} values where {expected} were expected")
+            }
+            Mismatch::At {
+                index,
+                actual,
+                expected,
+            } => write!(f, "index {index}: got {actual}, expected {expected}"),
+        }
+    }
+}
+
+/// Whether every value of `actual` is [`close`] to the value of `expected` at the same index
+/// (and the lengths agree); otherwise the first place they disagree.
+pub fn all_close<T: Float>(actual: &[T], expected: &[T], tolerance: T) -> Result<(), Mismatch<T>> {
+    if actual.len() != expected.len() {
+        return Err(Mismatch::Lengths {
+            actual: actual.len(),
+            expected: expected.len(),
+        });
+    }
+    match actual
+        .iter()
+        .zip(expected)
+        .position(|(&a, &e)| !close(a, e, tolerance))
+    {
+        Some(index) => Err(Mismatch::At {
+            index,
+            actual: actual[index],
+            expected: expected[index],
+        }),
+        None => Ok(()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -417,6 +542,80 @@ mod tests {
             })
             .sum();
         let mean = flips as f64 / 2000.0;
-        assert!((mean - 16.0).abs() < 0.5, "{mean}");
+        assert!(close(mean, 16.0, 0.5), "{mean}");
+    }
+
+    #[test]
+    fn close_compares_within_the_tolerance_inclusive() {
+        assert!(close(1.0f32, 1.25, 0.25));
+        assert!(close(1.25f32, 1.0, 0.25));
+        assert!(!close(1.0f32, 1.25, 0.2));
+        assert!(close(-0.0f32, 0.0, 0.0));
+        assert!(close(3.0f64, 3.0, 0.0));
+        assert!(!close(3.0f64, 3.0 + 1e-12, 0.0));
+        // A NaN or negative tolerance makes no two numbers close, equal ones included.
+        assert!(!close(1.0f32, 1.0, f32::NAN));
+        assert!(!close(1.0f64, 1.0, -1.0));
+    }
+
+    #[test]
+    fn close_holds_nan_close_only_to_nan_and_infinities_only_to_themselves() {
+        for tolerance in [0.0, 1.0, f32::MAX, f32::INFINITY] {
+            assert!(close(f32::NAN, f32::NAN, tolerance));
+            assert!(!close(f32::NAN, 0.0, tolerance));
+            assert!(!close(0.0, f32::NAN, tolerance));
+            assert!(!close(f32::NAN, f32::INFINITY, tolerance));
+            assert!(close(f32::INFINITY, f32::INFINITY, tolerance));
+            assert!(close(f32::NEG_INFINITY, f32::NEG_INFINITY, tolerance));
+            assert!(!close(f32::INFINITY, f32::NEG_INFINITY, tolerance));
+            assert!(!close(f32::INFINITY, f32::MAX, tolerance));
+            assert!(!close(f32::MAX, f32::INFINITY, tolerance));
+        }
+        // Any NaN payload.
+        assert!(close(f64::NAN, -f64::NAN, 0.0));
+    }
+
+    #[test]
+    fn close_relative_scales_with_the_expected_value() {
+        assert!(close_relative(101.0f64, 100.0, 0.01));
+        assert!(!close_relative(101.5f64, 100.0, 0.01));
+        assert!(close_relative(-99.0f32, -100.0, 0.01));
+        // Relative to the expected value, not the actual one.
+        assert!(!close_relative(100.0f64, 99.0, 0.01));
+        assert!(close_relative(0.0f32, 0.0, 0.5));
+        assert!(!close_relative(1e-30f32, 0.0, 0.5));
+        assert!(!close_relative(f32::NAN, 1.0, 1.0));
+        assert!(close_relative(f64::INFINITY, f64::INFINITY, 0.0));
+    }
+
+    #[test]
+    fn all_close_names_the_first_disagreement_or_the_lengths() {
+        assert_eq!(
+            all_close(&[1.0f32, f32::NAN], &[1.1, f32::NAN], 0.2),
+            Ok(())
+        );
+        assert_eq!(all_close::<f64>(&[], &[], 0.0), Ok(()));
+        let got = all_close(&[1.0f32, 2.0, 5.0, 9.0], &[1.0, 2.5, 5.0, 0.0], 0.1);
+        assert_eq!(
+            got,
+            Err(Mismatch::At {
+                index: 1,
+                actual: 2.0,
+                expected: 2.5
+            })
+        );
+        assert_eq!(got.unwrap_err().to_string(), "index 1: got 2, expected 2.5");
+        let got = all_close(&[0.0f64; 2], &[0.0; 3], 1.0);
+        assert_eq!(
+            got,
+            Err(Mismatch::Lengths {
+                actual: 2,
+                expected: 3
+            })
+        );
+        assert_eq!(
+            got.unwrap_err().to_string(),
+            "2 values where 3 were expected"
+        );
     }
 }

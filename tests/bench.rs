@@ -60,7 +60,7 @@ fn bench_runs_end_to_end_and_writes_its_reports() {
                 cpu["region"]["rmse"].as_f64().unwrap(),
             );
             assert!(
-                (e_gpu - e_cpu).abs() <= 0.01 * e_cpu,
+                close_relative(e_gpu, e_cpu, 0.01),
                 "{label}: {e_gpu} against {e_cpu}"
             );
             // stretch returns before any stage where nothing moves (the static scene), on

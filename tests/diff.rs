@@ -66,9 +66,9 @@ fn rmse_agrees_with_an_independent_computation() {
         }
     }
     let expected = (sum / (3 * w * h) as f64).sqrt();
-    assert!((ours - expected).abs() < 1e-6, "{ours} vs {expected}");
+    assert!(close(ours, expected, 1e-6), "{ours} vs {expected}");
     let psnr = report["frames"][0]["whole"]["psnr"].as_f64().unwrap();
-    assert!((psnr + 20.0 * expected.log10()).abs() < 1e-4);
+    assert!(close(psnr, -20.0 * expected.log10(), 1e-4), "{psnr}");
 }
 
 #[test]
@@ -158,5 +158,6 @@ fn sharp_frame_adds_changed_region_scores() {
     assert_eq!(region["pixels"], 1);
     // One pixel, error 0.3 in one channel of three: sqrt(0.09 / 3).
     let expected = (0.09f64 / 3.0).sqrt();
-    assert!((region["rmse"].as_f64().unwrap() - expected).abs() < 1e-6);
+    let rmse = region["rmse"].as_f64().unwrap();
+    assert!(close(rmse, expected, 1e-6), "{rmse} vs {expected}");
 }

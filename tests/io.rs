@@ -263,7 +263,7 @@ fn png_round_trip_is_srgb_and_exact_at_8_and_16_bits() {
     image::save_buffer(&input, &rgb, w as u32, h as u32, image::ColorType::Rgb8).unwrap();
     let color = read_color(&input);
     // Decoded to linear: code 128 is 21.6% linear.
-    assert!((color.r[128] - 0.215_861).abs() < 1e-5, "{}", color.r[128]);
+    assert!(close(color.r[128], 0.215_861, 1e-5), "{}", color.r[128]);
     assert!(color.a.is_none());
     for bits in ["8", "16"] {
         let out = dir.path().join(format!("out{bits}.png"));
@@ -297,11 +297,11 @@ fn straight_alpha_of_integer_images_is_premultiplied_in_memory() {
     let color = read_color(&input);
     let alpha = 128.0 / 255.0;
     assert!(
-        (color.r[0] - alpha).abs() < 1e-6,
+        close(color.r[0], alpha, 1e-6),
         "premultiplied: {}",
         color.r[0]
     );
-    assert!((color.a.unwrap()[0] - alpha).abs() < 1e-6);
+    assert!(close(color.a.unwrap()[0], alpha, 1e-6));
     let out = dir.path().join("a_out.png");
     let o = shutter(&["blur", "--color", &s(&input), "-o", &s(&out)]);
     assert!(o.status.success());

@@ -3,6 +3,8 @@
 
 use shutter::lab::metrics::flip_map_rgb8;
 
+use crate::support::close;
+
 #[test]
 fn flip_matches_nvidia_flip_evaluator() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/flip");
@@ -23,7 +25,7 @@ fn flip_matches_nvidia_flip_evaluator() {
         let mean = map.iter().map(|&v| v as f64).sum::<f64>() / map.len() as f64;
         let want = value["mean_flip"].as_f64().unwrap();
         assert!(
-            (mean - want).abs() < 1e-4,
+            close(mean, want, 1e-4),
             "{name}: ours {mean:.6}, flip-evaluator {want:.6}"
         );
     }

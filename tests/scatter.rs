@@ -72,12 +72,14 @@ pub fn variants() -> Vec<Params> {
     .collect()
 }
 
-/// A frame the pass must leave unchanged (the invariants table, tests/invariants.rs).
-pub fn still() -> Frame {
-    let mut f = frame(57, 31, 1, 0.0);
-    // A streak under half a pixel is no motion too (0.4 px per frame, shutter 0.75).
-    f.next.as_mut().unwrap().x[7] += 0.2;
-    f.prev.as_mut().unwrap().x[7] -= 0.2;
+/// A `w`×`h` frame the pass must leave unchanged (the invariants table, tests/invariants.rs).
+pub fn still(w: usize, h: usize) -> Frame {
+    let mut f = frame(w, h, 1, 0.0);
+    // A streak under half a pixel is no motion too (0.4 px per frame, shutter 0.75; at the
+    // right edge, far from any strip of motion the table adds at the left).
+    let i = h / 2 * w + w - 3;
+    f.next.as_mut().unwrap().x[i] += 0.2;
+    f.prev.as_mut().unwrap().x[i] -= 0.2;
     f
 }
 
@@ -186,8 +188,11 @@ fn velocity_is_never_read() {
         .contains("--velocity is not read"));
 }
 
-#[test]
-fn beats_reconstruct_on_rotor_and_gears() {
+/// Region errors at 320×180 on scene `name` of the unblurred frame, reconstruct's default,
+/// scatter's default and the 2012 reconstruct (the paper's filter: 15 taps, tiles of 20 px).
+/// (At 160×90 the gears' teeth move under a pixel, and the rotor's blades little enough that
+/// the default catches up.)
+fn against_reconstruct(name: &str) -> [f64; 4] {
     let paper = Params {
         reconstruct: shutter::motion::ReconstructParams {
             variant: shutter::motion::Variant::Paper,
@@ -198,30 +203,38 @@ fn beats_reconstruct_on_rotor_and_gears() {
         ..Params::default()
     };
     let runs = [
-        (Algorithm::None, Params::default()),
         (Algorithm::Reconstruct, Params::default()),
         (Algorithm::Scatter, Params::default()),
         (Algorithm::Reconstruct, paper),
     ];
-    // The gears turn slowly: at 160×90 their teeth move under a pixel; at 160×90 the rotor's
-    // blades move little enough that the 2014 reconstruct (the default) catches up. Curves
-    // beat lines on rotation: scatter errs at least 20 % less than the 2012 filter on both,
-    // and less than reconstruct's default on the rotor. (On the gears, whose rotation is slow
-    // and whose silhouettes are most of the region, the default's matte brought it level:
-    // 0.0165 against scatter's 0.0177 here, measured; both less than half the 2012 filter's.)
-    for (name, size) in [("rotor", (320, 180)), ("gears", (320, 180))] {
-        let (_, e, _, _) = scene_errors(name, size, &runs);
-        // Against the default: below it on the rotor, within 20 % of it on the gears.
-        let against_default = if name == "gears" { 1.2 } else { 1.0 };
-        assert!(
-            e[2] < against_default * e[1] && e[2] < 0.8 * e[3] && e[2] < e[0],
-            "{name}: scatter {} vs reconstruct {} (2012: {}) vs none {}",
-            e[2],
-            e[1],
-            e[3],
-            e[0]
-        );
-    }
+    let (none, e, _, _) = scene_errors(name, (320, 180), &runs);
+    [none, e[0], e[1], e[2]]
+}
+
+/// Curves beat lines on rotation: on the rotor, whose blades turn 20° a frame, scatter errs
+/// less than both reconstructs, and at least 20 % less than the 2012 filter (0.047 against
+/// the default's 0.097 and the 2012 filter's 0.145, measured).
+#[test]
+fn beats_both_reconstructs_on_the_rotor() {
+    let [none, default, scatter, paper] = against_reconstruct("rotor");
+    assert!(
+        scatter < default && scatter < 0.8 * paper && scatter < none,
+        "rotor: scatter {scatter} vs reconstruct {default} (2012: {paper}) vs none {none}"
+    );
+}
+
+/// On the gears, which turn slowly (7° a frame) and whose silhouettes are most of the region,
+/// scatter still errs at least 20 % less than the 2012 filter (0.0177 against 0.0386,
+/// measured). Reconstruct's default, since the coverage it reads from its mattes was
+/// steepened (de8889c), errs less than scatter here (0.0165): scatter is held within a fifth
+/// of it, not below it.
+#[test]
+fn beats_the_2012_reconstruct_on_the_gears_and_stays_within_a_fifth_of_the_default() {
+    let [none, default, scatter, paper] = against_reconstruct("gears");
+    assert!(
+        scatter < 1.2 * default && scatter < 0.8 * paper && scatter < none,
+        "gears: scatter {scatter} vs reconstruct {default} (2012: {paper}) vs none {none}"
+    );
 }
 
 #[test]

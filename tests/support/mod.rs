@@ -1,5 +1,6 @@
 //! Helpers shared by the integration tests: writing EXRs with any channels, running the
-//! binary, and the one approximate comparison used everywhere.
+//! binary, and assertions over the library's one approximate comparison
+//! (`shutter::numeric::close`).
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
@@ -129,32 +130,32 @@ pub fn channel<'a>(channels: &'a [(String, Vec<f32>)], name: &str) -> &'a [f32] 
         .1
 }
 
-/// The one approximate comparison: |a - e| <= tolerance, NaN equal only to NaN, infinities
-/// equal only to themselves.
-pub fn close(a: f32, e: f32, tolerance: f32) -> bool {
-    if a.is_nan() || e.is_nan() {
-        a.is_nan() && e.is_nan()
-    } else if a.is_infinite() || e.is_infinite() {
-        a == e
-    } else {
-        (a - e).abs() <= tolerance
-    }
-}
+/// The one approximate comparison, the library's (`shutter::numeric`: NaN close only to NaN,
+/// infinities only to themselves), so integration and unit tests share its rules.
+pub use shutter::numeric::{all_close, close, close_relative};
 
-/// [`close`] for every sample; panics naming the first differing index.
+/// [`all_close`] for every sample; panics naming the first differing index.
 pub fn assert_close(actual: &[f32], expected: &[f32], tolerance: f32, what: &str) {
-    assert_eq!(actual.len(), expected.len(), "{what}: lengths differ");
-    for (i, (&a, &e)) in actual.iter().zip(expected).enumerate() {
-        assert!(
-            close(a, e, tolerance),
-            "{what}: index {i}: got {a}, expected {e} (tolerance {tolerance})"
-        );
+    if let Err(mismatch) = all_close(actual, expected, tolerance) {
+        panic!("{what}: {mismatch} (tolerance {tolerance})");
     }
 }
 
-/// Bit-exact comparison (tolerance 0, NaN rules as above).
+/// Exact comparison (tolerance 0, NaN rules as above; −0 equals +0).
 pub fn assert_exact(actual: &[f32], expected: &[f32], what: &str) {
     assert_close(actual, expected, 0.0, what);
+}
+
+/// Bit-for-bit comparison (−0 differs from +0, NaNs by payload); panics naming the first
+/// differing index.
+pub fn assert_same_bits(actual: &[f32], expected: &[f32], what: &str) {
+    assert_eq!(actual.len(), expected.len(), "{what}: lengths differ");
+    if let Some(i) = (0..actual.len()).find(|&i| actual[i].to_bits() != expected[i].to_bits()) {
+        panic!(
+            "{what}: index {i}: got {}, expected {} (bit for bit)",
+            actual[i], expected[i]
+        );
+    }
 }
 
 /// Runs the shutter binary.
@@ -280,22 +281,115 @@ pub mod invariants {
     use shutter::motion::Algorithm;
     use shutter::process::{apply, Params};
 
-    use super::{assert_exact, planes};
+    use super::{assert_close, assert_same_bits, planes};
 
     pub type Make = fn(usize, usize, u32, f32) -> Frame;
 
     /// A frame that does not move comes back unchanged (`still` is a frame whose motion is
-    /// below the algorithm's threshold).
+    /// below the algorithm's threshold). Each pass returns such a frame before its first
+    /// stage ([`still_far_from_motion_is_identity`] checks the stages themselves).
     pub fn zero_motion_is_identity(algorithm: Algorithm, still: &Frame, variants: &[Params]) {
         for params in variants {
             let out = apply(algorithm, params, still.clone(), 3);
             for (a, b) in planes(&out).iter().zip(planes(still)) {
-                assert_exact(a, b, "zero motion");
+                assert_same_bits(a, b, "zero motion");
             }
         }
     }
 
-    pub fn uniform_stays_uniform(algorithm: Algorithm, make: Make, variants: &[Params]) {
+    /// Columns of the moving strip [`still_far_from_motion_is_identity`] puts at the left.
+    pub const STRIP: usize = 16;
+
+    /// `still` with its first [`STRIP`] columns taken, every pass, from `moving` (the same
+    /// size).
+    pub fn moving_strip(still: &Frame, moving: &Frame) -> Frame {
+        let w = still.width;
+        let splice = |to: &mut Vec<f32>, from: &[f32]| {
+            for (i, v) in to.iter_mut().enumerate() {
+                if i % w < STRIP {
+                    *v = from[i];
+                }
+            }
+        };
+        let mut f = still.clone();
+        if let (Some(to), Some(from)) = (f.color.as_mut(), moving.color.as_ref()) {
+            splice(&mut to.r, &from.r);
+            splice(&mut to.g, &from.g);
+            splice(&mut to.b, &from.b);
+            if let (Some(to), Some(from)) = (to.a.as_mut(), from.a.as_ref()) {
+                splice(to, from);
+            }
+        }
+        if let (Some(to), Some(from)) = (f.depth.as_mut(), moving.depth.as_ref()) {
+            splice(to, from);
+        }
+        if let (Some(to), Some(from)) = (f.velocity.as_mut(), moving.velocity.as_ref()) {
+            splice(&mut to.x, &from.x);
+            splice(&mut to.y, &from.y);
+        }
+        for (to, from) in [(&mut f.prev, &moving.prev), (&mut f.next, &moving.next)] {
+            if let (Some(to), Some(from)) = (to.as_mut(), from.as_ref()) {
+                splice(&mut to.x, &from.x);
+                splice(&mut to.y, &from.y);
+                if let (Some(to), Some(from)) = (to.z.as_mut(), from.z.as_ref()) {
+                    splice(to, from);
+                }
+            }
+        }
+        f
+    }
+
+    /// The pass's stages leave still pixels alone: on `still` with a moving strip at its left
+    /// ([`moving_strip`]), so that the whole pass runs (the strip must change), every pixel
+    /// `far` columns or more right of the strip (beyond the pass's reach from it) comes out
+    /// bit for bit as it went in.
+    pub fn still_far_from_motion_is_identity(
+        algorithm: Algorithm,
+        still: &Frame,
+        moving: &Frame,
+        variants: &[Params],
+        far: usize,
+    ) {
+        let f = moving_strip(still, moving);
+        let w = f.width;
+        assert!(w > STRIP + far, "{w} columns leave none far from the strip");
+        for (k, params) in variants.iter().enumerate() {
+            let out = apply(algorithm, params, f.clone(), 3);
+            for (channel, (o, i)) in planes(&out).iter().zip(planes(&f)).enumerate() {
+                let far = |p: &usize| p % w >= STRIP + far;
+                let changed = |p: &usize| o[*p].to_bits() != i[*p].to_bits();
+                if let Some(p) = (0..i.len()).filter(far).find(changed) {
+                    panic!(
+                        "variant {k}, channel {channel}: still pixel ({}, {}) (the moving \
+                         strip ends at x = {STRIP}) came out {} from {}",
+                        p % w,
+                        p / w,
+                        o[p],
+                        i[p]
+                    );
+                }
+            }
+            let strip = |plane: &[f32]| -> Vec<f32> {
+                (0..plane.len())
+                    .filter(|p| p % w < STRIP)
+                    .map(|p| plane[p])
+                    .collect()
+            };
+            assert!(
+                strip(planes(&out)[0]) != strip(planes(&f)[0]),
+                "variant {k}: the moving strip must change (the whole pass must run)"
+            );
+        }
+    }
+
+    /// A uniform colour comes back uniform, the same colour (up to `slack` relative: the
+    /// rounding of a weighted sum divided by its weights).
+    pub fn uniform_stays_uniform(
+        algorithm: Algorithm,
+        make: Make,
+        variants: &[Params],
+        slack: f32,
+    ) {
         let (w, h) = (61, 37);
         let n = w * h;
         let mut f = make(w, h, 2, 30.0);
@@ -308,9 +402,9 @@ pub mod invariants {
         for params in variants {
             let out = apply(algorithm, params, f.clone(), 1);
             let c = out.color.unwrap();
-            assert_exact(&c.r, &vec![0.7; n], "r");
-            assert_exact(&c.g, &vec![3.5; n], "g");
-            assert_exact(&c.b, &vec![0.0; n], "b");
+            for (plane, value, what) in [(&c.r, 0.7, "r"), (&c.g, 3.5, "g"), (&c.b, 0.0, "b")] {
+                assert_close(plane, &vec![value; n], slack * value, what);
+            }
         }
     }
 
