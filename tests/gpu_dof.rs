@@ -11,7 +11,8 @@ use crate::support::*;
 mod with_gpu {
     use super::*;
     use crate::gpu::with_gpu::{differing, gpu, milliseconds};
-    use shutter::dof::{coc_plane, CocSource, DofParams, Lens};
+    use shutter::dof::tiles::{tiles, TilesConfig};
+    use shutter::dof::{coc_plane, CocSource, DofParams, Lens, Stages};
     use shutter::frame::Frame;
     use std::io::Write;
 
@@ -328,7 +329,7 @@ mod with_gpu {
     #[test]
     fn dof_gather_matches_the_cpu_within_rounding() {
         let Some(gpu) = gpu() else { return };
-        use shutter::dof::gather::{gather, tiles};
+        use shutter::dof::gather::gather;
         use shutter::dof::DofConfig;
         use shutter::numeric::{sanitize, DepthKind};
         let lenses = [
@@ -373,7 +374,7 @@ mod with_gpu {
                     };
                     let coc = coc_plane(&frame, &params);
                     let config = DofConfig::new(w, h, &params);
-                    let t = tiles(&coc, w, h, config.epsilon);
+                    let t = tiles(&TilesConfig::new(w, h, config.epsilon), &coc);
                     let color = frame.color.as_ref().unwrap();
                     let cpu = gather(&config, color, &coc, &t);
                     let got = gpu
@@ -430,8 +431,8 @@ mod with_gpu {
     /// blend on `layers` at 320×180 with ε = 3 px through the CLI, cpu against wgpu: inside
     /// the blurred foreground the near field's spread equals each pixel's own blur but for
     /// rounding, where the two ladders once swapped on the last bit (dots up to 0.04 apart
-    /// between the backends; `blend::SPREAD_MARGIN`). Bound as in the parity test below:
-    /// 1e-5 of the range.
+    /// between the backends; `SPREAD_MARGIN` in src/dof/blend/pyramid/compose.rs). Bound as
+    /// in the parity test below: 1e-5 of the range.
     #[test]
     fn dof_blend_on_wgpu_keeps_the_cpu_s_ladders_inside_a_foreground() {
         let Some(_gpu) = gpu() else { return };
@@ -611,7 +612,6 @@ mod with_gpu {
     #[test]
     fn dof_tiles_match_the_cpu_exactly_on_lenses_stress_and_noise() {
         let Some(gpu) = gpu() else { return };
-        use shutter::dof::gather::tiles;
         let mut planes: Vec<(String, usize, usize, Vec<f32>, f32)> = Vec::new();
         let lenses = [
             (50.0, 2.0, 2.0, 48.0),
@@ -695,10 +695,9 @@ mod with_gpu {
         }
         let (mut count, mut far, mut near, mut reached) = (0, 0, 0, 0);
         for (what, w, h, coc, epsilon) in &planes {
-            let cpu = tiles(coc, *w, *h, *epsilon);
-            let got = gpu
-                .try_tiles(coc, *w, *h, *epsilon)
-                .expect("the GPU stage runs");
+            let config = TilesConfig::new(*w, *h, *epsilon);
+            let cpu = tiles(&config, coc);
+            let got = gpu.try_tiles(&config, coc).expect("the GPU stage runs");
             for (name, g, c) in [
                 ("reach", &got.reach, &cpu.reach),
                 ("own", &got.own, &cpu.own),
@@ -744,16 +743,16 @@ mod with_gpu {
     #[test]
     fn dof_tiles_at_1080p_print_their_time() {
         let Some(gpu) = gpu() else { return };
-        use shutter::dof::gather::tiles;
         let (w, h) = (1920, 1080);
         let coc = noise(w * h, 4, -48.0, 48.0);
+        let config = TilesConfig::new(w, h, 1.0);
         let mut got = None;
-        let gpu_ms = milliseconds(&mut || got = Some(gpu.tiles(&coc, w, h, 1.0)));
-        let cpu_ms = milliseconds(&mut || drop(tiles(&coc, w, h, 1.0)));
+        let gpu_ms = milliseconds(&mut || got = Some(gpu.tiles(&config, &coc)));
+        let cpu_ms = milliseconds(&mut || drop(tiles(&config, &coc)));
         let _ = writeln!(
             std::io::stderr(),
             "gpu: dof tiles 1920x1080 upload+dispatch+readback {gpu_ms:.2} ms (cpu {cpu_ms:.2} ms)"
         );
-        assert_eq!(got.unwrap(), tiles(&coc, w, h, 1.0));
+        assert_eq!(got.unwrap(), tiles(&config, &coc));
     }
 }

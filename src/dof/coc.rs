@@ -1,4 +1,6 @@
-//! The circle of confusion of a thin lens, in pixels (DESIGN.md "dof blend").
+//! `coc`: the circle of confusion of a thin lens, in pixels, and the stage that makes the
+//! signed CoC plane both depth-of-field methods read ([`coc_plane`], the first stage of
+//! [`super::apply`]; its GPU twin is `crate::gpu::dof::coc`, which reads a [`CocConfig`]).
 //!
 //! For focal length F, f-number N (aperture diameter A = F/N), focus distance P and a point
 //! at depth D, the blur circle on the sensor has diameter
@@ -9,6 +11,14 @@
 //!
 //! The signed form is positive behind the focus plane (the far field) and negative in front
 //! of it (the near field), as the near/far split of the gather needs.
+//!
+//! In: the depth plane (or a painted map read as depth). Out: the signed CoC diameter of
+//! every pixel, clamped to ±`max_coc`.
+
+use rayon::prelude::*;
+
+use super::{CocSource, DofParams};
+use crate::frame::Frame;
 
 /// A thin lens. Distances (focus and depth) in metres, the focal length's unit once it is
 /// out of millimetres: depth in other units is scaled on read (a preset's `[depth] scale`).
@@ -121,6 +131,109 @@ pub fn coc_potmesil(depth: f64, focus: f64, focal: f64, f_number: f64) -> f64 {
         / (f_number * depth)
 }
 
+/// The signed CoC diameter of every pixel, in pixels, clamped to ±`max_coc`; NaN never comes
+/// out (NaN depth is far; zero and negative depth are nearest).
+///
+/// The thin lens is evaluated in f64 (its twin folds it into [`CocConfig`] and works in f32,
+/// a difference bounded and tested in tests/gpu_dof.rs), so this stage reads the parameters,
+/// not the config.
+pub fn coc_plane(frame: &Frame, params: &DofParams) -> Vec<f32> {
+    let limit = params.max_coc;
+    let n = frame.pixel_count();
+    let Some(depth) = frame.depth.as_ref() else {
+        return vec![0.0; n];
+    };
+    match params.source {
+        CocSource::Lens(lens) => {
+            // The sensor spans the display window (the picture), not an overscan data window.
+            let display = frame.windows.display.width;
+            let width = if display > 0 { display } else { frame.width } as f64;
+            let lens = lens.in_pixels(width);
+            depth
+                .par_iter()
+                .map(|&d| (lens.signed(d as f64) as f32).clamp(-limit, limit))
+                .collect()
+        }
+        CocSource::Map { scale } => depth
+            .par_iter()
+            .map(|&v| {
+                let c = v * scale;
+                if c.is_nan() {
+                    0.0
+                } else {
+                    c.clamp(0.0, limit)
+                }
+            })
+            .collect(),
+    }
+}
+
+/// The `coc` stage's uniform, as its GPU twin reads it (`CocConfig` in
+/// src/gpu/dof/coc.wgsl; a test there holds the two layouts together): eight 4-byte fields,
+/// a multiple of 16 bytes as uniforms need.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]
+#[repr(C)]
+pub struct CocConfig {
+    /// Frame size, pixels.
+    pub width: u32,
+    pub height: u32,
+    /// 0: the thin lens and the depth pass; 1: a painted map.
+    pub source: u32,
+    /// The largest |CoC| (px): `max_coc`.
+    pub limit: f32,
+    /// lens: K, the far-limit CoC (px), `Lens::signed_coc(∞)`. map: the CoC of a stored 1.
+    pub scale: f32,
+    /// lens: the focus distance P (scene units).
+    pub focus: f32,
+    /// map: limit/scale, the largest stored value below the limit (0 when scale is 0).
+    pub cap: f32,
+    pub _pad: u32,
+}
+
+impl CocConfig {
+    /// The uniform for a `width`×`height` frame whose picture (display window) is
+    /// `display_width` pixels wide (0: the frame's width), as [`coc_plane`] reads them.
+    pub fn new(width: usize, height: usize, display_width: usize, params: &DofParams) -> Self {
+        let limit = params.max_coc.min(LARGEST as f32);
+        let mut config = CocConfig {
+            width: width as u32,
+            height: height as u32,
+            source: 0,
+            limit,
+            scale: 0.0,
+            focus: 0.0,
+            cap: 0.0,
+            _pad: 0,
+        };
+        match params.source {
+            CocSource::Lens(lens) => {
+                // The sensor spans the display window, as on the CPU.
+                let span = if display_width > 0 {
+                    display_width
+                } else {
+                    width
+                } as f64;
+                // The CPU's own function at D = ∞ gives K rounded exactly as it rounds the
+                // far field; it is at most LARGEST (1e6), far below the 1e15 the shader's
+                // floor on P/D assumes.
+                config.scale = lens.signed_coc(f64::INFINITY, span) as f32;
+                config.focus = lens.focus as f32;
+            }
+            CocSource::Map { scale } => {
+                config.source = 1;
+                config.scale = scale;
+                config.cap = if scale > 0.0 {
+                    ((limit as f64 / scale as f64).min(f32::MAX as f64)) as f32
+                } else {
+                    0.0
+                };
+            }
+        }
+        config
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -203,5 +316,32 @@ mod tests {
         }
         .check()
         .is_err());
+    }
+
+    #[test]
+    fn the_sensor_spans_the_display_window_not_the_overscan() {
+        let params = DofParams::new(CocSource::Lens(LENS));
+        // A 1920-wide picture rendered with 40 px of overscan each side.
+        let mut frame = Frame::new(2000, 4);
+        frame.windows.display = crate::frame::Window {
+            x: 0,
+            y: 0,
+            width: 1920,
+            height: 4,
+        };
+        frame.depth = Some(vec![4.0; 8000]);
+        // 17.094 px at 1920 wide (the hand-computed value above), not 17.806 at 2000.
+        let coc = coc_plane(&frame, &params);
+        assert!((coc[0] - 17.094).abs() < 1e-3, "{}", coc[0]);
+    }
+
+    #[test]
+    fn the_config_s_far_limit_is_the_cpu_s_own() {
+        let config = CocConfig::new(1920, 4, 0, &DofParams::new(CocSource::Lens(LENS)));
+        // A·F/(P − F) at 1920 px over 36 mm: 34.188 px (above).
+        assert!((config.scale - 34.188).abs() < 1e-3, "{}", config.scale);
+        assert_eq!(config.source, 0);
+        let map = CocConfig::new(4, 4, 0, &DofParams::default());
+        assert_eq!((map.source, map.scale, map.cap), (1, 32.0, 1.5));
     }
 }

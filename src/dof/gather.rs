@@ -1,18 +1,21 @@
 //! `gather`: depth of field as a flat bokeh gather with near and far fields, in the spirit of
 //! Sousa's CryENGINE 3 filter (seed 003, "far + near field processing", "tile min/max CoC").
 //!
-//! Inputs: colour and the signed CoC plane of [`super::coc_plane`] (negative in front of the
-//! focus plane). Output: the colour with depth of field. It sits before motion blur.
+//! Inputs: colour, the signed CoC plane of [`super::coc_plane`] (negative in front of the
+//! focus plane) and its tile min/max ([`super::tiles`]). Output: the colour with depth of
+//! field. It sits before motion blur. Its GPU twin is `crate::gpu::dof::gather`, which runs
+//! the per-pixel loop over the tile [`plan`] made here ([`OffsetTap`], [`TileTaps`]) with a
+//! [`GatherConfig`].
 //!
 //! The physics it approximates: each pixel spreads its light evenly over its bokeh — the
 //! aperture's shape at the pixel's CoC — so a point of radiance L with bokeh area a gives
 //! L/a to each pixel it covers, and nearer surfaces hide farther ones. Per output pixel p:
 //!
-//! 1. **Tiles.** Tiles of 16×16 keep their largest |CoC| and their smallest and largest
-//!    signed CoC. A tile gathers over the largest radius of any tile whose bokeh can reach it
-//!    (the near field's tile max of Sousa); a tile nothing out of focus can reach is copied;
-//!    a tile whose neighbourhood's min is not a layer below its own max has no near field
-//!    and skips that half of the work.
+//! 1. **Tiles** ([`super::tiles`]). Tiles of 16×16 keep their largest |CoC| and their
+//!    smallest and largest signed CoC. A tile gathers over the largest radius of any tile
+//!    whose bokeh can reach it (the near field's tile max of Sousa); a tile nothing out of
+//!    focus can reach is copied; a tile whose neighbourhood's min is not a layer below its
+//!    own max has no near field and skips that half of the work.
 //! 2. **Taps.** For R up to `rings` px, every pixel of the neighbourhood; beyond, the
 //!    [`super::bokeh`] rings scaled to R and snapped to whole pixels (merged where two land
 //!    on one). A tap's distance is the aperture's norm of its whole-pixel offset, so an
@@ -45,14 +48,9 @@
 use rayon::prelude::*;
 
 use super::bokeh::{grid, taps, Aperture, Tap};
+use super::tiles::{Tiles, LAYER, TILE};
 use super::DofConfig;
 use crate::frame::Color;
-
-/// Tile edge (px) of the reach pass.
-pub const TILE: usize = 16;
-
-/// Two pixels whose signed CoC differ by less than this (px) are the same layer.
-pub const LAYER: f32 = 1.0;
 
 /// Smallest bokeh radius a weight divides by (px): a pixel's own footprint.
 const SMALLEST_RADIUS: f32 = 0.5;
@@ -248,24 +246,67 @@ fn choose(reach: f32, own: f32, far_only: bool, half_focus: f32) -> Option<Choic
     })
 }
 
-/// One tap as the GPU twin of [`gather`] reads it: a whole-pixel offset, the aperture norms
-/// of it for the far and the near field, and the area it stands for (px²).
+/// The gather's uniform, as its GPU twin reads it (`GatherConfig` in
+/// src/gpu/dof/gather.wgsl; a test there holds the two layouts together): eight 4-byte
+/// fields, a multiple of 16 bytes as uniforms need. The rest of the gather's parameters
+/// (rings, blades, ε) are spent on the host, in [`plan`].
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]
+#[repr(C)]
+pub struct GatherConfig {
+    pub width: u32,
+    pub height: u32,
+    /// Tiles per row.
+    pub columns: u32,
+    /// 1 where the frame has alpha.
+    pub has_alpha: u32,
+    /// [`LAYER`].
+    pub layer: f32,
+    pub _pad: [u32; 3],
+}
+
+impl GatherConfig {
+    /// The uniform for gathering a frame of `config` with alpha or without.
+    pub fn new(config: &DofConfig, has_alpha: bool) -> Self {
+        GatherConfig {
+            width: config.width as u32,
+            height: config.height as u32,
+            columns: config.width.div_ceil(TILE) as u32,
+            has_alpha: has_alpha as u32,
+            layer: LAYER,
+            _pad: [0; 3],
+        }
+    }
+}
+
+/// One tap as the GPU twin of [`gather`] reads it (`Tap` in src/gpu/dof/gather.wgsl; a test
+/// there holds the layouts together): a whole-pixel offset, the aperture norms of it for the
+/// far and the near field, and the area it stands for (px²). Five 4-byte fields, the array
+/// stride in a storage buffer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]
+#[repr(C)]
 pub struct OffsetTap {
-    pub offset: [i32; 2],
+    pub dx: i32,
+    pub dy: i32,
     pub norm_far: f32,
     pub norm_near: f32,
     pub area: f32,
 }
 
-/// How one tile gathers, for the GPU twin: `fields` 0 copy, 1 the far field alone, 2 both
-/// fields over the same taps, 3 the far field over its own taps then the near field; the
-/// taps (start and count in [`TilePlan::taps`]) and the far field's own taps.
+/// How one tile gathers, as the GPU twin reads it (`Tile` in src/gpu/dof/gather.wgsl; a test
+/// there holds the layouts together): `fields` 0 copy, 1 the far field alone, 2 both fields
+/// over the same taps, 3 the far field over its own taps then the near field; the taps (start
+/// and count in [`TilePlan::taps`]) and the far field's own taps.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]
+#[repr(C)]
 pub struct TileTaps {
     pub fields: u32,
-    pub taps: [u32; 2],
-    pub far: [u32; 2],
+    pub taps_start: u32,
+    pub taps_count: u32,
+    pub far_start: u32,
+    pub far_count: u32,
 }
 
 /// What [`gather`] decides per tile, as the GPU twin reads it: every tile's choice and the
@@ -278,7 +319,7 @@ pub struct TilePlan {
 
 /// The plan [`gather`] follows for `tiles`: the same choices and the same taps, in order.
 pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
-    let rings_count = config.rings as usize;
+    let rings_count = config.rings;
     let aperture = Aperture::new(config.blades, config.blade_rotation);
     let rings = taps(rings_count, &aperture);
     // Taps made on a stride wider than any offset, so that each step holds its offset:
@@ -286,7 +327,7 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
     const STRIDE: isize = 1 << 24;
     let offset = |step: isize| {
         let dy = (step + STRIDE / 2).div_euclid(STRIDE);
-        [(step - dy * STRIDE) as i32, dy as i32]
+        ((step - dy * STRIDE) as i32, dy as i32)
     };
     let grids: Vec<Vec<PixelTap>> = (0..=rings_count)
         .map(|r| grid_taps(r, &aperture, STRIDE))
@@ -308,11 +349,15 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
             let mut made = Vec::new();
             let found = taps_for(radius, &grids, &rings, &aperture, STRIDE, &mut made);
             let start = plan.taps.len() as u32;
-            plan.taps.extend(found.iter().map(|t| OffsetTap {
-                offset: offset(t.step),
-                norm_far: t.norm_far,
-                norm_near: t.norm_near,
-                area: t.area,
+            plan.taps.extend(found.iter().map(|t| {
+                let (dx, dy) = offset(t.step);
+                OffsetTap {
+                    dx,
+                    dy,
+                    norm_far: t.norm_far,
+                    norm_near: t.norm_near,
+                    area: t.area,
+                }
             }));
             [start, found.len() as u32]
         })
@@ -321,8 +366,10 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
         let tile = match choose(tiles.reach[t], tiles.own[t], tiles.far_only[t], half_focus) {
             None => TileTaps {
                 fields: 0,
-                taps: [0, 0],
-                far: [0, 0],
+                taps_start: 0,
+                taps_count: 0,
+                far_start: 0,
+                far_count: 0,
             },
             Some(choice) => {
                 let main = list(choice.radius, &mut plan);
@@ -338,8 +385,10 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
                 };
                 TileTaps {
                     fields,
-                    taps: main,
-                    far,
+                    taps_start: main[0],
+                    taps_count: main[1],
+                    far_start: far[0],
+                    far_count: far[1],
                 }
             }
         };
@@ -368,10 +417,10 @@ enum Fields {
 }
 
 /// Depth of field by gathering; `coc` is the signed CoC plane (px, diameter), `tiles` its
-/// tile min/max ([`tiles`]).
+/// tile min/max ([`super::tiles::tiles`]).
 pub fn gather(config: &DofConfig, color: &Color, coc: &[f32], tiles: &Tiles) -> Color {
-    let (width, height) = (config.width as usize, config.height as usize);
-    let rings_count = config.rings as usize;
+    let (width, height) = (config.width, config.height);
+    let rings_count = config.rings;
     let aperture = Aperture::new(config.blades, config.blade_rotation);
     // Bokeh radii up to `rings` px gather every pixel of their neighbourhood (`grid`, in
     // pixels); larger ones the rings (in units of the radius), which are then at least a
@@ -586,117 +635,10 @@ fn gather_run(
     }
 }
 
-/// What the gather needs to know per tile (Sousa's tile min/max CoC).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Tiles {
-    /// The gather radius (px): the largest bokeh radius of any tile whose bokeh can reach
-    /// this one (0 where none out of focus can). Radii below ε/2 count as in focus.
-    pub reach: Vec<f32>,
-    /// The tile's own largest bokeh radius (px; 0 where all of it is in focus): the far
-    /// field's reach, since a far sample counts only within the pixel's own bokeh.
-    pub own: Vec<f32>,
-    /// True where no sample the tile can read is nearer than its own nearest-to-far pixel
-    /// by a layer: the tile min of the neighbourhood against the tile's own max. Such a tile
-    /// has no near field and skips that half of the work (with the same result: its near
-    /// weights would all be 0).
-    pub far_only: Vec<bool>,
-}
-
-/// The distance (px) between the nearest pixels of two tiles `dx` and `dy` tiles apart: the
-/// gap per axis is the whole tiles between them. The GPU twin (src/gpu/tiles.rs) takes a
-/// table of these from here (WGSL's square root is not correctly rounded, and the reach test
-/// compares it with a radius).
-pub fn gap_distance(dx: usize, dy: usize) -> f32 {
-    let gap = |a: usize| a.saturating_sub(1) as f32 * TILE as f32;
-    let (gx, gy) = (gap(dx), gap(dy));
-    (gx * gx + gy * gy).sqrt()
-}
-
-/// Tile max |CoC| (the reach) and tile min/max signed CoC (the far-only tiles).
-pub fn tiles(coc: &[f32], width: usize, height: usize, epsilon: f32) -> Tiles {
-    let tiles_x = width.div_ceil(TILE);
-    let tiles_y = height.div_ceil(TILE);
-    let count = tiles_x * tiles_y;
-    let mut largest = vec![0.0f32; count];
-    // Signed radii, as the gather compares them.
-    let mut lowest = vec![f32::INFINITY; count];
-    let mut highest = vec![f32::NEG_INFINITY; count];
-    for (y, row) in coc.chunks(width).enumerate() {
-        for (x, &c) in row.iter().enumerate() {
-            let t = (y / TILE) * tiles_x + x / TILE;
-            let r = 0.5 * c.abs();
-            if r >= 0.5 * epsilon && r > largest[t] {
-                largest[t] = r;
-            }
-            lowest[t] = lowest[t].min(0.5 * c);
-            highest[t] = highest[t].max(0.5 * c);
-        }
-    }
-    let overall = largest.iter().fold(0.0f32, |m, &r| m.max(r));
-    let span = ((overall + 1.0) / TILE as f32).ceil() as isize;
-    let mut reach = vec![0.0f32; count];
-    let mut far_only = vec![false; count];
-    for ty in 0..tiles_y as isize {
-        for tx in 0..tiles_x as isize {
-            let mut best = 0.0f32;
-            // The taps of this tile stay within `span` tiles (its radius + 1 px).
-            let mut nearest = f32::INFINITY;
-            for oy in (ty - span).max(0)..=(ty + span).min(tiles_y as isize - 1) {
-                for ox in (tx - span).max(0)..=(tx + span).min(tiles_x as isize - 1) {
-                    let other = oy as usize * tiles_x + ox as usize;
-                    nearest = nearest.min(lowest[other]);
-                    let r = largest[other];
-                    if r <= best {
-                        continue;
-                    }
-                    let (dx, dy) = ((tx - ox).unsigned_abs(), (ty - oy).unsigned_abs());
-                    if gap_distance(dx, dy) <= r + 1.0 {
-                        best = r;
-                    }
-                }
-            }
-            let t = ty as usize * tiles_x + tx as usize;
-            reach[t] = best;
-            // The gather's test: a sample is far when its radius > the pixel's − LAYER/2.
-            far_only[t] = nearest > highest[t] - 0.5 * LAYER;
-        }
-    }
-    Tiles {
-        reach,
-        own: largest,
-        far_only,
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn tiles_know_their_reach_and_whether_a_near_field_can_reach_them() {
-        // 64×16: four tiles in a row. CoC (diameter) 10 behind everywhere, but −20 (in
-        // front) in the first tile.
-        let (w, h) = (64, 16);
-        let coc: Vec<f32> = (0..w * h)
-            .map(|i| if i % w < 16 { -20.0 } else { 10.0 })
-            .collect();
-        let t = tiles(&coc, w, h, 1.0);
-        // Radius 10 reaches the second tile from the first; the others see radius 5.
-        assert_eq!(t.reach, vec![10.0, 10.0, 5.0, 5.0]);
-        // Neighbourhoods span ceil((10 + 1) / 16) = 1 tile each way. The front tile has
-        // nothing nearer than itself; the second has the front tile beside it; the third
-        // and fourth see only radius 5.
-        assert_eq!(t.far_only, vec![true, false, true, true]);
-        // All in focus: nothing to gather, nothing near.
-        let t = tiles(&vec![0.2; w * h], w, h, 1.0);
-        assert_eq!(t.reach, vec![0.0; 4]);
-        assert_eq!(t.far_only, vec![true; 4]);
-    }
-}
-
 #[cfg(test)]
 mod field_tests {
     use super::*;
+    use crate::dof::tiles::{tiles, TilesConfig};
     use crate::dof::DofParams;
 
     /// A grey frame from `paint` with the signed CoC plane `coc`, gathered.
@@ -709,7 +651,7 @@ mod field_tests {
             a: None,
         };
         let config = DofConfig::new(w, h, &DofParams::default());
-        let t = tiles(coc, w, h, config.epsilon);
+        let t = tiles(&TilesConfig::new(w, h, config.epsilon), coc);
         gather(&config, &color, coc, &t).r
     }
 

@@ -1,26 +1,34 @@
 //! Depth of field from colour and depth (or a painted circle-of-confusion map).
 //!
-//! - [`coc`]: the thin lens's signed circle of confusion in pixels;
+//! - [`coc`]: the thin lens's signed circle of confusion in pixels, and the `coc` stage
+//!   ([`coc_plane`]), the first of both methods;
 //! - [`blend`]: Wloka's blurriness blend (the sharp frame and progressively blurred images,
 //!   mixed by the blurriness interpolator T: a binomial pyramid, or the talk's two copies);
+//! - [`tiles`]: Sousa's tile min/max CoC, the stage between `coc` and the gather;
 //! - [`bokeh`]: the gather's tap pattern and the n-blade diaphragm shape;
 //! - [`gather`]: a flat-kernel bokeh gather in the spirit of Sousa's CryENGINE 3 filter, with
-//!   near and far fields and tile min/max CoC.
+//!   near and far fields.
 //!
 //! Both methods read colour and depth only (never velocity or positions), and both work on
 //! the signed CoC plane that [`coc_plane`] makes: negative in front of the focus plane, positive
 //! behind it, and monotone in depth, so ordering by signed CoC is ordering by depth. A painted
 //! CoC map is a plane of that kind with no near field.
+//!
+//! Each stage with a GPU twin (in `crate::gpu::dof`, under the same name) is a function of
+//! its config and its buffers; the `#[repr(C)]` uniform or struct a twin reads is defined
+//! here, beside the CPU stage it serves, and uploaded as it is. [`apply_with`] hands the
+//! stages to a backend through [`Stages`], whose defaults are the CPU stages.
 
 pub mod blend;
 pub mod bokeh;
 pub mod coc;
 pub mod gather;
+pub mod tiles;
 
 use rayon::prelude::*;
 
 use crate::frame::{Color, Frame, Passes};
-pub use coc::Lens;
+pub use coc::{coc_plane, Lens};
 
 /// Which depth-of-field method runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -147,95 +155,63 @@ impl DofParams {
     }
 }
 
-/// Everything the stages after `coc` read besides their buffers, as plain numbers: the shape
-/// of the uniform their GPU twins will take (keep the two in sync). Lengths in pixels.
+/// What the gather and blend read besides their buffers: the depth-of-field stages'
+/// host-side parameters, typed. Lengths in pixels.
+///
+/// It is never uploaded. The numbers a twin reads go in its stage's own uniform, defined
+/// beside the CPU stage and built from this or from the params ([`coc::CocConfig`],
+/// [`tiles::TilesConfig`], [`gather::GatherConfig`], [`blend::pyramid::BlendConfig`]): most
+/// of what is here is spent on the host (the rings and the diaphragm make the gather's tap
+/// lists; the form and the passes choose blend's code), and what the shaders read besides (a
+/// frame's alpha, the tile columns, the pyramid's levels and ladders) is known per frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C)]
 pub struct DofConfig {
     /// Frame size.
-    pub width: u32,
-    pub height: u32,
+    pub width: usize,
+    pub height: usize,
     /// ε: CoC diameters below this are in focus.
     pub epsilon: f32,
-    /// The largest CoC diameter (the `coc` stage clamps to it).
-    pub max_coc: f32,
     /// gather: diaphragm blades, 0 for round.
     pub blades: u32,
     /// gather: diaphragm rotation, degrees.
     pub blade_rotation: f32,
     /// gather: rings of taps.
-    pub rings: u32,
-    /// blend, the talk's form: passes n of the first copy; 0 chooses n from the frame's
-    /// largest CoC.
-    pub passes: u32,
-    /// blend: 0 the pyramid, 1 the talk's two copies.
-    pub blend_form: u32,
+    pub rings: usize,
+    /// blend, the talk's form: passes n of the first copy; `None` (or 0, which would blur
+    /// nothing) chooses n from the frame's largest CoC.
+    pub passes: Option<usize>,
+    /// blend: the pyramid or the talk's two copies.
+    pub blend_form: BlendForm,
 }
 
 impl DofConfig {
     pub fn new(width: usize, height: usize, params: &DofParams) -> Self {
         DofConfig {
-            width: width as u32,
-            height: height as u32,
+            width,
+            height,
             epsilon: params.epsilon,
-            max_coc: params.max_coc,
             blades: params.blades,
             blade_rotation: params.blade_rotation,
-            rings: params.rings as u32,
-            passes: params.passes.map_or(0, |n| n as u32),
-            blend_form: match params.blend_form {
-                BlendForm::Pyramid => 0,
-                BlendForm::Talk => 1,
-            },
+            rings: params.rings,
+            passes: params.passes,
+            blend_form: params.blend_form,
         }
-    }
-}
-
-/// The signed CoC diameter of every pixel, in pixels, clamped to ±`max_coc`; NaN never comes
-/// out (NaN depth is far; zero and negative depth are nearest).
-pub fn coc_plane(frame: &Frame, params: &DofParams) -> Vec<f32> {
-    let limit = params.max_coc;
-    let n = frame.pixel_count();
-    let Some(depth) = frame.depth.as_ref() else {
-        return vec![0.0; n];
-    };
-    match params.source {
-        CocSource::Lens(lens) => {
-            // The sensor spans the display window (the picture), not an overscan data window.
-            let display = frame.windows.display.width;
-            let width = if display > 0 { display } else { frame.width } as f64;
-            let lens = lens.in_pixels(width);
-            depth
-                .par_iter()
-                .map(|&d| (lens.signed(d as f64) as f32).clamp(-limit, limit))
-                .collect()
-        }
-        CocSource::Map { scale } => depth
-            .par_iter()
-            .map(|&v| {
-                let c = v * scale;
-                if c.is_nan() {
-                    0.0
-                } else {
-                    c.clamp(0.0, limit)
-                }
-            })
-            .collect(),
     }
 }
 
 /// The stages of depth of field a backend may run elsewhere (the GPU): the dispatch hook of
-/// [`apply_with`]. Each must return what the CPU stage it stands for returns (the defaults are
-/// the CPU stages; a GPU twin's parity with them is tested in tests/gpu.rs).
+/// [`apply_with`]. Each must return what the CPU stage it stands for returns: the defaults
+/// are the CPU stages, and a GPU twin's parity with them is tested in tests/gpu_dof.rs. A
+/// backend that cannot run a stage for a frame runs the default instead.
 pub trait Stages {
     /// [`coc_plane`].
     fn coc_plane(&self, frame: &Frame, params: &DofParams) -> Vec<f32> {
         coc_plane(frame, params)
     }
 
-    /// [`gather::tiles`].
-    fn tiles(&self, coc: &[f32], width: usize, height: usize, epsilon: f32) -> gather::Tiles {
-        gather::tiles(coc, width, height, epsilon)
+    /// [`tiles::tiles`].
+    fn tiles(&self, config: &tiles::TilesConfig, coc: &[f32]) -> tiles::Tiles {
+        tiles::tiles(config, coc)
     }
 
     /// [`gather::gather`].
@@ -244,7 +220,7 @@ pub trait Stages {
         config: &DofConfig,
         color: &Color,
         coc: &[f32],
-        tiles: &gather::Tiles,
+        tiles: &tiles::Tiles,
     ) -> Color {
         gather::gather(config, color, coc, tiles)
     }
@@ -260,7 +236,7 @@ pub use crate::stages::Cpu;
 impl Stages for Cpu {}
 
 /// Applies depth of field, stage by stage: `coc` ([`coc_plane`]) → tile min/max
-/// ([`gather::tiles`]) → [`gather::gather`], or `coc` → [`blend::blend`]. The output holds
+/// ([`tiles::tiles`]) → [`gather::gather`], or `coc` → [`blend::blend`]. The output holds
 /// the new colour and keeps every other pass, so motion blur can run after it ("DoF before
 /// MB", Sousa).
 pub fn apply(frame: Frame, params: &DofParams) -> Frame {
@@ -283,7 +259,8 @@ pub fn apply_with(frame: Frame, params: &DofParams, stages: &impl Stages) -> Fra
         // blend writes the colour in place.
         Method::Blend => stages.blend(&config, color, &coc),
         Method::Gather => {
-            let tiles = stages.tiles(&coc, frame.width, frame.height, config.epsilon);
+            let grid = tiles::TilesConfig::new(frame.width, frame.height, config.epsilon);
+            let tiles = stages.tiles(&grid, &coc);
             stages.gather(&config, &color, &coc, &tiles)
         }
     };
@@ -298,33 +275,9 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_config_is_nine_plain_words() {
-        // Uploaded as one uniform by the GPU twins: nine 4-byte fields, no padding.
-        assert_eq!(std::mem::size_of::<DofConfig>(), 36);
+    fn the_config_carries_the_params_typed() {
         let auto = DofConfig::new(4, 3, &DofParams::default());
-        assert_eq!((auto.passes, auto.rings), (0, 6));
-    }
-
-    #[test]
-    fn the_sensor_spans_the_display_window_not_the_overscan() {
-        let lens = Lens {
-            focal_mm: 50.0,
-            f_number: 2.0,
-            focus: 2.0,
-            sensor_mm: 36.0,
-        };
-        let params = DofParams::new(CocSource::Lens(lens));
-        // A 1920-wide picture rendered with 40 px of overscan each side.
-        let mut frame = Frame::new(2000, 4);
-        frame.windows.display = crate::frame::Window {
-            x: 0,
-            y: 0,
-            width: 1920,
-            height: 4,
-        };
-        frame.depth = Some(vec![4.0; 8000]);
-        // 17.094 px at 1920 wide (coc.rs's hand-computed value), not 17.806 at 2000.
-        let coc = coc_plane(&frame, &params);
-        assert!((coc[0] - 17.094).abs() < 1e-3, "{}", coc[0]);
+        assert_eq!((auto.passes, auto.rings), (None, 6));
+        assert_eq!(auto.blend_form, BlendForm::Pyramid);
     }
 }

@@ -10,15 +10,13 @@
 //!
 //! What a frame needs decided before any pixel is blurred — E, the number of levels, both
 //! ladders, whether and where T_near is read, the reference colour — is the CPU's own
-//! [`crate::dof::blend::plan`], made on the host. Three entry points run in order in one
-//! compute pass: level 1 from the frame, each further level from the one before, then one
+//! `crate::dof::blend::pyramid::plan`, made on the host. Three entry points run in order in
+//! one compute pass: level 1 from the frame, each further level from the one before, then one
 //! invocation per pixel. What may differ from the CPU is rounding: WGSL's division is not
 //! correctly rounded (a level's colour divided by its w, the half step's normalisation) and
-//! a driver may fuse a product into a sum; the tolerance in tests/gpu.rs says how much.
+//! a driver may fuse a product into a sum; the tolerance in tests/gpu_dof.rs says how much.
 
-use bytemuck::{Pod, Zeroable};
-
-use crate::dof::blend::plan;
+use crate::dof::blend::pyramid::{plan, BlendConfig};
 use crate::dof::DofConfig;
 use crate::frame::Color;
 
@@ -27,32 +25,6 @@ use crate::gpu::stage::{floats, Dispatch, Stage, StageError};
 
 /// The shader's source.
 pub const SHADER: &str = concat!(include_str!("../prelude.wgsl"), include_str!("blend.wgsl"));
-
-/// The stage's uniform. Keep in sync with `BlendConfig` in blend.wgsl (the size test guards
-/// the layout: sixteen 4-byte fields, `reference` on a 16-byte boundary).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct BlendConfig {
-    pub width: u32,
-    pub height: u32,
-    /// Levels 1 ..= `levels` are made.
-    pub levels: u32,
-    /// 1 where the frame has alpha.
-    pub has_alpha: u32,
-    /// The colour the texels are offset by (0 for a missing alpha).
-    pub reference: [f32; 4],
-    pub epsilon: f32,
-    /// 1 / (E − ε).
-    pub inverse_span: f32,
-    /// E.
-    pub largest: f32,
-    /// 1 where T_near is read.
-    pub near: u32,
-    /// T_near is read at levels `near_k` and `near_k` + 1, mixed by `near_f`.
-    pub near_k: u32,
-    pub near_f: f32,
-    pub _pad: [u32; 2],
-}
 
 /// Workgroups are 8 × 8 invocations.
 const GROUP: usize = 8;
@@ -73,29 +45,15 @@ pub(crate) fn stage(device: &wgpu::Device) -> Stage {
 }
 
 impl Gpu {
-    /// [`crate::dof::blend::blend`] with its pyramid form on the GPU (the talk's form, and
-    /// any frame the GPU cannot take, on the CPU, counted in [`Gpu::stages_on_cpu`]).
-    pub fn dof_blend(&self, config: &DofConfig, color: Color, coc: &[f32]) -> Color {
-        if config.blend_form != 0 {
-            return crate::dof::blend::blend(config, color, coc);
-        }
-        match self.try_dof_blend(config, &color, coc) {
-            Ok(out) => out,
-            Err(e) => {
-                self.note_cpu_stage("blend", &e);
-                crate::dof::blend::blend(config, color, coc)
-            }
-        }
-    }
-
-    /// [`crate::dof::blend::pyramid`] on the GPU, or why it could not run.
+    /// [`crate::dof::blend::pyramid::blend`] on the GPU, or why it could not run;
+    /// [`crate::dof::Stages::blend`] falls back to the CPU stage.
     pub fn try_dof_blend(
         &self,
         config: &DofConfig,
         color: &Color,
         coc: &[f32],
     ) -> Result<Color, StageError> {
-        let (width, height) = (config.width as usize, config.height as usize);
+        let (width, height) = (config.width, config.height);
         let n = width * height;
         let has_alpha = color.a.is_some();
         if n == 0 {
@@ -130,21 +88,7 @@ impl Gpu {
             Some(a) => planes.extend_from_slice(&a[..n]),
             None => planes.resize(4 * n, 0.0),
         }
-        let (near_k, near_f) = plan.near.unwrap_or((0, 0.0));
-        let uniform = BlendConfig {
-            width: width as u32,
-            height: height as u32,
-            levels: plan.levels as u32,
-            has_alpha: has_alpha as u32,
-            reference: plan.reference,
-            epsilon: config.epsilon,
-            inverse_span: plan.inverse_span,
-            largest: plan.largest,
-            near: plan.near.is_some() as u32,
-            near_k: near_k as u32,
-            near_f,
-            _pad: [0; 2],
-        };
+        let uniform = BlendConfig::new(config, &plan, has_alpha);
         let groups = |w: usize, h: usize| [w.div_ceil(GROUP) as u32, h.div_ceil(GROUP) as u32];
         let mut dispatches = Vec::with_capacity(plan.levels + 1);
         for (l, g) in geometry.chunks(3).enumerate() {
@@ -194,11 +138,27 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_config_is_sixteen_plain_words() {
-        // Keep in sync with blend.wgsl: `reference` (a vec4) at byte 16, the whole a
-        // multiple of 16 as uniforms need.
-        assert_eq!(std::mem::size_of::<BlendConfig>(), 64);
+    fn the_config_is_the_shader_s() {
+        // `reference` (a vec4) at byte 16, the whole a multiple of 16 as uniforms need.
         assert_eq!(std::mem::offset_of!(BlendConfig, reference), 16);
         assert_eq!(std::mem::offset_of!(BlendConfig, epsilon), 32);
+        crate::gpu::layout::assert_same_layout!(
+            BlendConfig,
+            SHADER,
+            "BlendConfig",
+            [
+                width,
+                height,
+                levels,
+                has_alpha,
+                reference,
+                epsilon,
+                inverse_span,
+                largest,
+                near,
+                near_k,
+                near_f
+            ]
+        );
     }
 }

@@ -1,4 +1,4 @@
-// Depth of field's blend, the pyramid form: the twin of `pyramid` (src/dof/blend.rs). Keep
+// Depth of field's blend, the pyramid form: the twin of `blend` in src/dof/blend/pyramid/. Keep
 // in sync with it: the same texels (colour offset by the reference and premultiplied by
 // w = max(T, 1/64), w, T_near), the same [1 3 3 1]/8 halvings (across, then down, the same
 // sums in the same order, indices clamped to the level), the same ladder and bracket, the
@@ -13,7 +13,7 @@
 //   a stage has one uniform for all its dispatches;
 // - `compose`: one invocation per pixel.
 
-// Keep in sync with `BlendConfig` in src/gpu/blend.rs.
+// Keep in sync with `BlendConfig` in src/dof/blend/pyramid/mod.rs (a test holds the layouts).
 struct BlendConfig {
     width: u32,
     height: u32,
@@ -53,7 +53,7 @@ struct BlendConfig {
 
 const IN_FOCUS_WEIGHT: f32 = 0.015625;
 const MIN_POSITIVE: f32 = 1.17549435e-38;
-// blend::SPREAD_MARGIN.
+// SPREAD_MARGIN in src/dof/blend/pyramid/compose.rs.
 const SPREAD_MARGIN: f32 = 1e-3;
 
 struct Texel {

@@ -1,4 +1,4 @@
-// Depth of field's `coc` stage on the GPU: the twin of `coc_plane` in src/dof/mod.rs (the
+// Depth of field's `coc` stage on the GPU: the twin of `coc_plane` in src/dof/coc.rs (the
 // CPU reference) and of `Lens::signed_coc` in src/dof/coc.rs. One invocation per pixel.
 //
 // In: the depth plane (scene units; or a painted map's stored values). Out: the signed CoC
@@ -7,15 +7,15 @@
 // negative depth (−∞ included) are nearest.
 //
 // The CPU evaluates the thin lens in f64; WGSL has no f64, so the host folds the lens into
-// two f32 numbers (src/gpu/coc.rs, `CocConfig::new`):
+// two f32 numbers (src/dof/coc.rs, `CocConfig::new`):
 //     signed CoC = K · (1 − P/D),   K = A·F/(P − F) · width/sensor  (the far limit, px)
 // which is the CPU's `−A·F·(P/D − 1)/(P − F) · width/sensor` rearranged. Its f32 error is
-// stated in tests/gpu.rs.
+// stated in tests/gpu_dof.rs.
 //
 // Non-finite inputs are recognised by their bits, not by comparisons: WGSL lets an
 // implementation assume that no NaN or infinity occurs in floating-point arithmetic.
 
-// Keep in sync with `CocConfig` in src/gpu/coc.rs (a size test guards the layout).
+// Keep in sync with `CocConfig` in src/dof/coc.rs (a test holds the layouts together).
 struct CocConfig {
     // Frame size, pixels.
     width: u32,

@@ -4,20 +4,20 @@
 //! In: the colour, the signed CoC plane and the tile min/max ([`Tiles`]). Out: the colour
 //! with depth of field. Bindings, in order: the [`GatherConfig`] uniform; the colour planes
 //! r, g, b, a one after the other (a zero without alpha); the CoC plane followed by each
-//! pixel's 1 / bokeh area; the taps; the tiles' plan; then the output planes r, g, b, a.
+//! pixel's 1 / bokeh area; the taps ([`crate::dof::gather::OffsetTap`]); the tiles' plan
+//! ([`crate::dof::gather::TileTaps`]); then the output planes r, g, b, a.
 //!
 //! What each tile gathers and over which taps is the CPU's own decision,
-//! [`crate::dof::gather::plan`], made on the host (a few thousand tiles; every tap list once):
-//! the twin only runs the per-pixel loop, one invocation per pixel, the taps in the CPU's
-//! order. The bokeh areas are the CPU's [`inverse_area`] (WGSL's division is not correctly
-//! rounded). What may still differ from the CPU is rounding: the two divisions of the
-//! composite, and a driver may fuse a product into a sum (WGSL allows it); the tolerance in
-//! tests/gpu.rs says how much that is.
-
-use bytemuck::{Pod, Zeroable};
+//! [`crate::dof::gather::plan`], made on the host (a few thousand tiles; every tap list once)
+//! and uploaded as it is: the twin only runs the per-pixel loop, one invocation per pixel, the
+//! taps in the CPU's order. The bokeh areas are the CPU's [`inverse_area`] (WGSL's division
+//! is not correctly rounded). What may still differ from the CPU is rounding: the two
+//! divisions of the composite, and a driver may fuse a product into a sum (WGSL allows it);
+//! the tolerance in tests/gpu_dof.rs says how much that is.
 
 use crate::dof::bokeh::Aperture;
-use crate::dof::gather::{inverse_area, plan, Tiles, LAYER, TILE};
+use crate::dof::gather::{inverse_area, plan, GatherConfig};
+use crate::dof::tiles::{Tiles, TILE};
 use crate::dof::DofConfig;
 use crate::frame::Color;
 
@@ -26,44 +26,6 @@ use crate::gpu::stage::{floats, Dispatch, Stage, StageError};
 
 /// The shader's source.
 pub const SHADER: &str = concat!(include_str!("../prelude.wgsl"), include_str!("gather.wgsl"));
-
-/// The stage's uniform. Keep in sync with `GatherConfig` in gather.wgsl (the size test guards
-/// the layout: eight 4-byte fields, a multiple of 16 bytes as uniforms need).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct GatherConfig {
-    pub width: u32,
-    pub height: u32,
-    /// Tiles per row.
-    pub columns: u32,
-    /// 1 where the frame has alpha.
-    pub has_alpha: u32,
-    /// [`LAYER`].
-    pub layer: f32,
-    pub _pad: [u32; 3],
-}
-
-/// One tap. Keep in sync with `Tap` in gather.wgsl (five 4-byte fields).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct GpuTap {
-    pub dx: i32,
-    pub dy: i32,
-    pub norm_far: f32,
-    pub norm_near: f32,
-    pub area: f32,
-}
-
-/// One tile's plan. Keep in sync with `Tile` in gather.wgsl (five 4-byte fields).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct GpuTile {
-    pub fields: u32,
-    pub taps_start: u32,
-    pub taps_count: u32,
-    pub far_start: u32,
-    pub far_count: u32,
-}
 
 /// The compiled stage: bindings config, color, coc, taps, tiles, then out.
 pub(crate) fn stage(device: &wgpu::Device) -> Stage {
@@ -80,23 +42,8 @@ pub(crate) fn stage(device: &wgpu::Device) -> Stage {
 }
 
 impl Gpu {
-    /// [`crate::dof::gather::gather`] on the GPU; the CPU stage where the GPU cannot run it,
-    /// counted in [`Gpu::stages_on_cpu`].
-    pub fn dof_gather(
-        &self,
-        config: &DofConfig,
-        color: &Color,
-        coc: &[f32],
-        tiles: &Tiles,
-    ) -> Color {
-        self.try_dof_gather(config, color, coc, tiles)
-            .unwrap_or_else(|e| {
-                self.note_cpu_stage("gather", &e);
-                crate::dof::gather::gather(config, color, coc, tiles)
-            })
-    }
-
-    /// [`crate::dof::gather::gather`] on the GPU, or why it could not run.
+    /// [`crate::dof::gather::gather`] on the GPU, or why it could not run;
+    /// [`crate::dof::Stages::gather`] falls back to the CPU stage.
     pub fn try_dof_gather(
         &self,
         config: &DofConfig,
@@ -104,35 +51,13 @@ impl Gpu {
         coc: &[f32],
         tiles: &Tiles,
     ) -> Result<Color, StageError> {
-        let (width, height) = (config.width as usize, config.height as usize);
+        let (width, height) = (config.width, config.height);
         let n = width * height;
         let has_alpha = color.a.is_some();
         if n == 0 {
             return Ok(color.clone());
         }
         let plan = plan(config, tiles);
-        let taps: Vec<GpuTap> = plan
-            .taps
-            .iter()
-            .map(|t| GpuTap {
-                dx: t.offset[0],
-                dy: t.offset[1],
-                norm_far: t.norm_far,
-                norm_near: t.norm_near,
-                area: t.area,
-            })
-            .collect();
-        let tile_plan: Vec<GpuTile> = plan
-            .tiles
-            .iter()
-            .map(|t| GpuTile {
-                fields: t.fields,
-                taps_start: t.taps[0],
-                taps_count: t.taps[1],
-                far_start: t.far[0],
-                far_count: t.far[1],
-            })
-            .collect();
         let mut planes = Vec::with_capacity(4 * n);
         planes.extend_from_slice(&color.r[..n]);
         planes.extend_from_slice(&color.g[..n]);
@@ -145,23 +70,16 @@ impl Gpu {
         let mut radii = Vec::with_capacity(2 * n);
         radii.extend_from_slice(&coc[..n]);
         radii.extend(coc[..n].iter().map(|&c| inverse_area(c, unit_area)));
-        let uniform = GatherConfig {
-            width: width as u32,
-            height: height as u32,
-            columns: width.div_ceil(TILE) as u32,
-            has_alpha: has_alpha as u32,
-            layer: LAYER,
-            _pad: [0; 3],
-        };
-        let groups = [width.div_ceil(TILE) as u32, height.div_ceil(TILE) as u32, 1];
+        let uniform = GatherConfig::new(config, has_alpha);
+        let groups = [uniform.columns, height.div_ceil(TILE) as u32, 1];
         let mut out = self.compiled("gather", stage).run(
             self,
             bytemuck::bytes_of(&uniform),
             &[
                 bytemuck::cast_slice(&planes),
                 bytemuck::cast_slice(&radii),
-                bytemuck::cast_slice(&taps),
-                bytemuck::cast_slice(&tile_plan),
+                bytemuck::cast_slice(&plan.taps),
+                bytemuck::cast_slice(&plan.tiles),
             ],
             &[(4 * n * 4) as u64],
             &[],
@@ -179,14 +97,30 @@ impl Gpu {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::dof::gather::{OffsetTap, TileTaps};
 
     #[test]
-    fn the_shared_structs_are_plain_words() {
-        // Keep in sync with gather.wgsl: the uniform is eight 4-byte fields (a multiple of
-        // 16), a tap and a tile five each (their array stride in a storage buffer).
-        assert_eq!(std::mem::size_of::<GatherConfig>(), 32);
-        assert_eq!(std::mem::size_of::<GpuTap>(), 20);
-        assert_eq!(std::mem::size_of::<GpuTile>(), 20);
-        assert_eq!(std::mem::align_of::<GpuTap>(), 4);
+    fn the_shared_structs_are_the_shader_s() {
+        // The uniform is eight 4-byte fields (a multiple of 16), a tap and a tile five each
+        // (their array stride in a storage buffer).
+        assert_eq!(std::mem::align_of::<OffsetTap>(), 4);
+        crate::gpu::layout::assert_same_layout!(
+            GatherConfig,
+            SHADER,
+            "GatherConfig",
+            [width, height, columns, has_alpha, layer]
+        );
+        crate::gpu::layout::assert_same_layout!(
+            OffsetTap,
+            SHADER,
+            "Tap",
+            [dx, dy, norm_far, norm_near, area]
+        );
+        crate::gpu::layout::assert_same_layout!(
+            TileTaps,
+            SHADER,
+            "Tile",
+            [fields, taps_start, taps_count, far_start, far_count]
+        );
     }
 }

@@ -3,7 +3,7 @@
 // in the same order, the same weights, the same sums (offset by the centre) and the same
 // composite. The tile plan (which fields, which taps) is the CPU's own (`dof::gather::plan`).
 
-// Keep in sync with `GatherConfig` in src/gpu/gather.rs.
+// Keep in sync with `GatherConfig` in src/dof/gather.rs (a test holds the layouts together).
 struct GatherConfig {
     width: u32,
     height: u32,
@@ -18,7 +18,7 @@ struct GatherConfig {
     _pad2: u32,
 }
 
-// Keep in sync with `GpuTap` in src/gpu/gather.rs.
+// Keep in sync with `OffsetTap` in src/dof/gather.rs.
 struct Tap {
     dx: i32,
     dy: i32,
@@ -27,7 +27,7 @@ struct Tap {
     area: f32,
 }
 
-// Keep in sync with `GpuTile` in src/gpu/gather.rs: fields 0 copy, 1 far, 2 both, 3 apart.
+// Keep in sync with `TileTaps` in src/dof/gather.rs: fields 0 copy, 1 far, 2 both, 3 apart.
 struct Tile {
     fields: u32,
     taps_start: u32,

@@ -1,45 +1,58 @@
 //! Depth of field's GPU twins, mirroring [`crate::dof`]: `coc`, tile min/max (`tiles`), the
-//! bokeh `gather` and `blend`'s pyramid.
+//! bokeh `gather` and `blend`'s pyramid. Each file holds a stage's shader, its compiled
+//! `Stage` and `Gpu::try_X`, the stage on the GPU or why it could not run; the configs and
+//! structs the shaders read are defined beside the CPU stages, in [`crate::dof`], and
+//! uploaded as they are. The impl below is where each stage falls back to its CPU twin,
+//! through `Gpu::or_cpu`, and the only place.
 
+use crate::dof::blend::{pyramid, talk};
+use crate::dof::tiles::{Tiles, TilesConfig};
+use crate::dof::{BlendForm, DofConfig, DofParams};
+use crate::frame::{Color, Frame};
 use crate::gpu::context::Gpu;
 
 pub mod blend;
 pub mod coc;
 pub mod gather;
 pub mod tiles;
-/// Depth of field's stages with a twin run here: `coc` and tile min/max (each falls back to
-/// the CPU stage, counted, where the GPU cannot run it).
+
+/// Depth of field's stages run here, each on the CPU instead (counted in
+/// [`Gpu::stages_on_cpu`], the first reason kept) where the GPU cannot run it for a frame.
 impl crate::dof::Stages for Gpu {
-    fn coc_plane(&self, frame: &crate::frame::Frame, params: &crate::dof::DofParams) -> Vec<f32> {
-        Gpu::coc_plane(self, frame, params)
+    fn coc_plane(&self, frame: &Frame, params: &DofParams) -> Vec<f32> {
+        self.or_cpu(
+            "coc",
+            || self.try_coc_plane(frame, params),
+            || crate::dof::coc_plane(frame, params),
+        )
     }
 
-    fn tiles(
-        &self,
-        coc: &[f32],
-        width: usize,
-        height: usize,
-        epsilon: f32,
-    ) -> crate::dof::gather::Tiles {
-        Gpu::tiles(self, coc, width, height, epsilon)
+    fn tiles(&self, config: &TilesConfig, coc: &[f32]) -> Tiles {
+        self.or_cpu(
+            "tiles",
+            || self.try_tiles(config, coc),
+            || crate::dof::tiles::tiles(config, coc),
+        )
     }
 
-    fn gather(
-        &self,
-        config: &crate::dof::DofConfig,
-        color: &crate::frame::Color,
-        coc: &[f32],
-        tiles: &crate::dof::gather::Tiles,
-    ) -> crate::frame::Color {
-        Gpu::dof_gather(self, config, color, coc, tiles)
+    fn gather(&self, config: &DofConfig, color: &Color, coc: &[f32], tiles: &Tiles) -> Color {
+        self.or_cpu(
+            "gather",
+            || self.try_dof_gather(config, color, coc, tiles),
+            || crate::dof::gather::gather(config, color, coc, tiles),
+        )
     }
 
-    fn blend(
-        &self,
-        config: &crate::dof::DofConfig,
-        color: crate::frame::Color,
-        coc: &[f32],
-    ) -> crate::frame::Color {
-        Gpu::dof_blend(self, config, color, coc)
+    fn blend(&self, config: &DofConfig, color: Color, coc: &[f32]) -> Color {
+        match config.blend_form {
+            BlendForm::Pyramid => self.or_cpu(
+                "blend",
+                || self.try_dof_blend(config, &color, coc),
+                // The CPU's pyramid writes the frame in place: a fallback takes a copy.
+                || pyramid::blend(config, color.clone(), coc),
+            ),
+            // The talk's form has no twin: it runs on the CPU, and is no fallback.
+            BlendForm::Talk => talk::blend(config, &color, coc),
+        }
     }
 }

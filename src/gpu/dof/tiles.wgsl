@@ -1,4 +1,4 @@
-// Depth of field's tile min/max stage on the GPU: the twin of `tiles` in src/dof/gather.rs
+// Depth of field's tile min/max stage on the GPU: the twin of `tiles` in src/dof/tiles.rs
 // (the CPU reference; Sousa's "tile min/max CoC"). Two entry points, dispatched in order, one
 // invocation per tile each:
 //
@@ -18,23 +18,23 @@
 // Every result is a maximum, a minimum or a comparison of values taken from the input, halved
 // (exact) or plus one (correctly rounded in WGSL as in Rust), so it is the CPU's bit for bit;
 // the one exception is a CoC below 2⁻¹²⁵ px, whose half is subnormal and may be flushed to zero
-// by a GPU (tests/gpu.rs states it). NaN is skipped by its bits, as the CPU's comparisons and
+// by a GPU (tests/gpu_dof.rs states it). NaN is skipped by its bits, as the CPU's comparisons and
 // f32::min/max skip it. The CPU's domain is a plane from `coc_plane` (finite, |CoC| ≤ 10⁶):
 // beyond it the CPU's span arithmetic overflows; here the span is clamped to the grid.
 
-// Keep in sync with `TilesConfig` in src/gpu/tiles.rs (a size test guards the layout).
+// Keep in sync with `TilesConfig` in src/dof/tiles.rs (a test holds the layouts together).
 struct TilesConfig {
     // Frame size, pixels.
     width: u32,
     height: u32,
-    // Tile edge, pixels (gather.rs's TILE), and its reciprocal (a power of two: exact).
+    // Tile edge, pixels (tiles.rs's TILE), and its reciprocal (a power of two: exact).
     tile: u32,
     // The grid: ⌈width/tile⌉ × ⌈height/tile⌉ tiles.
     columns: u32,
     rows: u32,
     // ε: CoC diameters below it are in focus (px).
     epsilon: f32,
-    // Two signed CoC radii closer than this are one layer (px; gather.rs's LAYER).
+    // Two signed CoC radii closer than this are one layer (px; tiles.rs's LAYER).
     layer: f32,
     inv_tile: f32,
 }

@@ -1,0 +1,437 @@
+//! The pyramid's compose stage: each output pixel mixed from the two images that bracket its
+//! CoC (seed 004, "Depth of Field: Render to Backbuffer", with the pyramid's levels for the
+//! talk's textures).
+//!
+//! In: the frame (written in place, a band of rows per task, with copies of the rows around
+//! the one written: a [`Window`]), its signed CoC and constants ([`Source`]), the levels
+//! ([`super::levels::build`]) each read through a [`Sampler`], and the frame's [`super::Plan`]
+//! (the two [`Ladder`]s, where T_near is read). Out: each pixel's colour, where it is blurred.
+//!
+//! Per frame row ([`compose_row`]): each pixel's blurriness T, raised to the near field's
+//! blurred T_near where that spreads over it by more than [`SPREAD_MARGIN`]; the level rows
+//! the row needs, each made once (two texel rows mixed, colour divided by w); then each
+//! blurred pixel mixed from the two images its ladder brackets it between: the sharp pixel,
+//! the half step (the 3×3 filter at full resolution, [`half`]) or a level sampled
+//! bilinearly. The GPU twin's `compose` entry point (`crate::gpu::dof::blend`) runs the same
+//! sums per pixel.
+
+use super::levels::{Ladder, Level, Source, Texel, MAX_LEVELS, NEAR, W, ZERO};
+use crate::dof::blend::IN_FOCUS_WEIGHT;
+
+/// Where pixel centres of a frame axis of `size` land in a level 2^L times smaller: for each
+/// pixel, the texel before it and the one after (clamped to the level) and the weight of the
+/// one after.
+fn axis_taps(size: usize, level: usize, texels: usize) -> Vec<(u32, u32, f32)> {
+    let scale = 0.5f64.powi(level as i32);
+    let last = texels as isize - 1;
+    (0..size)
+        .map(|x| {
+            let p = (x as f64 + 0.5) * scale - 0.5;
+            let before = p.floor();
+            let f = (p - before) as f32;
+            let i0 = (before as isize).clamp(0, last) as u32;
+            let i1 = (before as isize + 1).clamp(0, last) as u32;
+            (i0, i1, f)
+        })
+        .collect()
+}
+
+#[inline(always)]
+fn lerp(a: &Texel, b: &Texel, f: f32) -> Texel {
+    let mut o = ZERO;
+    for k in 0..8 {
+        o[k] = a[k] + f * (b[k] - a[k]);
+    }
+    o
+}
+
+/// Texel rows `a` and `b` mixed by f into `out`, colour divided by w. The mix runs over the
+/// rows' floats and the division a texel at a time (one 8-lane division by (w, w, w, w, 1,
+/// 1, 1, 1)): written over texels at once, the compiler transposes eight of them.
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn normalised_row(a: &[Texel], b: &[Texel], f: f32, out: &mut [Texel]) {
+    for ((o, a), b) in out
+        .as_flattened_mut()
+        .iter_mut()
+        .zip(a.as_flattened())
+        .zip(b.as_flattened())
+    {
+        *o = a + f * (b - a);
+    }
+    for t in out.iter_mut() {
+        // max(w, MIN_POSITIVE), NaN included, in one comparison.
+        let w = if t[W] > f32::MIN_POSITIVE {
+            t[W]
+        } else {
+            f32::MIN_POSITIVE
+        };
+        let divisor = [w, w, w, w, 1.0, 1.0, 1.0, 1.0];
+        for (v, d) in t.iter_mut().zip(divisor) {
+            *v /= d;
+        }
+    }
+}
+
+/// A level sampled bilinearly at the frame's pixel centres, a row at a time: the row
+/// between the two texel rows that bracket a frame row is made once, and each pixel of the
+/// frame row interpolates across it.
+pub(super) struct Sampler<'a> {
+    level: &'a Level,
+    across: Vec<(u32, u32, f32)>,
+    /// `across` as three planes, for loops that read one lane of many pixels.
+    across_planes: AxisPlanes,
+    down: Vec<(u32, u32, f32)>,
+}
+
+/// An axis's taps as planes: the texel before each pixel, the one after, the weight of the
+/// one after.
+struct AxisPlanes {
+    before: Vec<u32>,
+    after: Vec<u32>,
+    weight: Vec<f32>,
+}
+
+impl<'a> Sampler<'a> {
+    pub(super) fn new(level: &'a Level, number: usize, width: usize, height: usize) -> Self {
+        let across = axis_taps(width, number, level.width);
+        let across_planes = AxisPlanes {
+            before: across.iter().map(|t| t.0).collect(),
+            after: across.iter().map(|t| t.1).collect(),
+            weight: across.iter().map(|t| t.2).collect(),
+        };
+        Sampler {
+            level,
+            across,
+            across_planes,
+            down: axis_taps(height, number, level.height),
+        }
+    }
+
+    /// Fills `row` with this level interpolated down to frame row y, its colour then divided
+    /// by its w: so the weights count across texel rows and within texels, and pixels
+    /// interpolate the normalised colour across (one division per texel of the row, not two
+    /// per pixel; on `layers` at 640×360 it errs a little less, 0.0476 against 0.0478).
+    pub(super) fn row(&self, y: usize, row: &mut Vec<Texel>) {
+        let (r0, r1, f) = self.down[y];
+        let w = self.level.width;
+        let a = &self.level.texels[r0 as usize * w..(r0 as usize + 1) * w];
+        let b = &self.level.texels[r1 as usize * w..(r1 as usize + 1) * w];
+        row.resize(w, ZERO);
+        normalised_row(a, b, f, row);
+    }
+
+    /// The level at frame pixel x, from the row [`Sampler::row`] made.
+    #[inline(always)]
+    pub(super) fn at(&self, row: &[Texel], x: usize) -> Texel {
+        let (c0, c1, f) = self.across[x];
+        lerp(&row[c0 as usize], &row[c1 as usize], f)
+    }
+
+    /// T_near alone at frame pixel x, from the row [`Sampler::row`] made.
+    #[inline(always)]
+    fn near_at(&self, row: &[Texel], x: usize) -> f32 {
+        let (c0, c1, f) = self.across[x];
+        let (a, b) = (row[c0 as usize][NEAR], row[c1 as usize][NEAR]);
+        a + f * (b - a)
+    }
+}
+
+/// A compose task's own buffers: each level's row for the current frame row, and per pixel
+/// its blurriness.
+#[derive(Default)]
+pub(super) struct Scratch {
+    made: Vec<Vec<Texel>>,
+    blur: Vec<f32>,
+    /// Each blurred pixel's mix of two images, offset by the reference.
+    mixed: Vec<Texel>,
+    /// T_near of the two levels that bracket E, as planes.
+    near_lower: Vec<f32>,
+    near_upper: Vec<f32>,
+}
+
+/// The compose stage for frame row y: each pixel's blurriness, the levels the row needs,
+/// then each pixel mixed from the two levels that bracket its CoC (the sharp pixel as level
+/// 0). `out` holds the row of each plane, sharp, and is written in place; `window` holds
+/// copies of the rows around it as they were.
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+pub(super) fn compose_row(
+    pyramid: &Pyramid,
+    y: usize,
+    window: &Window,
+    scratch: &mut Scratch,
+    out: &mut [&mut [f32]],
+) {
+    let Pyramid {
+        source,
+        samplers,
+        ladders,
+        near,
+    } = pyramid;
+    let near = *near;
+    let width = out[0].len();
+    let row = y * width;
+    let coc = &source.coc[row..row + width];
+    let height = source.coc.len() / width;
+    let Scratch {
+        made,
+        blur,
+        mixed,
+        near_lower,
+        near_upper,
+    } = scratch;
+    made.resize(samplers.len(), Vec::new());
+    let mut ready = [false; MAX_LEVELS + 1];
+    // Makes level l's row (l ≥ 1) once.
+    let mut make = |l: usize, made: &mut Vec<Vec<Texel>>| {
+        if l > 0 && !ready[l] {
+            samplers[l - 1].row(y, &mut made[l - 1]);
+            ready[l] = true;
+        }
+    };
+
+    // Blurriness: the pixel's own T, or the near field's blurred T_near if larger (`near`
+    // counts in levels, without the half step).
+    blur.resize(width, 0.0);
+    for (t, &c) in blur.iter_mut().zip(coc) {
+        *t = source.interpolator(c);
+    }
+    if let Some((k, f)) = near {
+        make(k, made);
+        make(k + 1, made);
+        let (upper, upper_row) = (&samplers[k], &made[k]);
+        if k == 0 {
+            for (x, (t, &c)) in blur.iter_mut().zip(coc).enumerate() {
+                let lower = if c < 0.0 { *t } else { 0.0 };
+                spread(t, lower, upper.near_at(upper_row, x), f);
+            }
+        } else {
+            // T_near of the two levels' rows as planes, read with indices clamped to them
+            // (the taps are inside already; the clamp lets the loop run on vectors).
+            near_lane(&made[k - 1], near_lower);
+            near_lane(upper_row, near_upper);
+            let (lower, upper) = (&samplers[k - 1].across_planes, &upper.across_planes);
+            let (near_lower, near_upper) = (&near_lower[..], &near_upper[..]);
+            let (lower_last, upper_last) = (near_lower.len() - 1, near_upper.len() - 1);
+            assert!(lower_last < near_lower.len() && upper_last < near_upper.len());
+            let at = |lane: &[f32], last: usize, before: u32, after: u32, weight: f32| {
+                let a = lane[(before as usize).min(last)];
+                let b = lane[(after as usize).min(last)];
+                a + weight * (b - a)
+            };
+            for (t, (((b0, a0), w0), ((b1, a1), w1))) in blur.iter_mut().zip(
+                lower
+                    .before
+                    .iter()
+                    .zip(&lower.after)
+                    .zip(&lower.weight)
+                    .zip(upper.before.iter().zip(&upper.after).zip(&upper.weight)),
+            ) {
+                spread(
+                    t,
+                    at(near_lower, lower_last, *b0, *a0, *w0),
+                    at(near_upper, upper_last, *b1, *a1, *w1),
+                    f,
+                );
+            }
+        }
+    }
+
+    // The levels the row needs: those that bracket its least and its most blurred pixel,
+    // and all between.
+    let (mut least, mut most) = (f32::INFINITY, 0.0f32);
+    for &t in blur.iter() {
+        let t = t.abs();
+        if t > 0.0 {
+            least = least.min(t);
+            most = most.max(t);
+        }
+    }
+    let (epsilon, largest) = (source.epsilon, source.largest);
+    let to_coc = |t: f32| epsilon + t * (largest - epsilon);
+    // Image k of the ladder without the half step is level k, and either ladder brackets a
+    // CoC between the same levels from level 1 up.
+    let [ladder, plain] = ladders;
+    if most > 0.0 {
+        let (lo, _) = plain.bracket(to_coc(least));
+        let (hi, _) = plain.bracket(to_coc(most));
+        for l in lo.max(1)..=hi + 1 {
+            make(l, made);
+        }
+    }
+
+    let mut reference = ZERO;
+    reference[..4].copy_from_slice(&source.reference);
+    // `out` holds the sharp row: pixels left sharp are not touched.
+    let channels = out.len();
+    let images = Images {
+        source,
+        window,
+        channels,
+        reference: &reference,
+        width,
+        height,
+        y,
+        samplers,
+        made,
+    };
+    mixed.resize(width, ZERO);
+    for (x, (&t, m)) in blur.iter().zip(mixed.iter_mut()).enumerate() {
+        if t == 0.0 {
+            continue;
+        }
+        // A pixel blurred by the near field's spread mixes levels only: the half step shows
+        // its own neighbourhood, which the near field's blur reaches farther than.
+        let ladder = if t < 0.0 { plain } else { ladder };
+        let (k, f) = ladder.bracket(to_coc(t.abs()));
+        let lower = images.at(k, ladder.first, x);
+        let upper = images.at(k + 1, ladder.first, x);
+        *m = lerp(&lower, &upper, f);
+    }
+    // Then into the planes (the match gives the loop each plane's own iterator, so no
+    // store checks its bounds).
+    let blurred = blur.iter().zip(mixed.iter());
+    match out {
+        [r, g, b, a] => {
+            let planes = r
+                .iter_mut()
+                .zip(g.iter_mut())
+                .zip(b.iter_mut())
+                .zip(a.iter_mut());
+            for ((&t, m), (((r, g), b), a)) in blurred.zip(planes) {
+                if t != 0.0 {
+                    *r = reference[0] + m[0];
+                    *g = reference[1] + m[1];
+                    *b = reference[2] + m[2];
+                    *a = reference[3] + m[3];
+                }
+            }
+        }
+        [r, g, b] => {
+            let planes = r.iter_mut().zip(g.iter_mut()).zip(b.iter_mut());
+            for ((&t, m), ((r, g), b)) in blurred.zip(planes) {
+                if t != 0.0 {
+                    *r = reference[0] + m[0];
+                    *g = reference[1] + m[1];
+                    *b = reference[2] + m[2];
+                }
+            }
+        }
+        _ => unreachable!("colour has three planes or four"),
+    }
+}
+
+/// T_near of a level's row, as a plane.
+#[inline(always)]
+fn near_lane(row: &[Texel], lane: &mut Vec<f32>) {
+    lane.clear();
+    lane.extend(row.iter().map(|t| t[NEAR]));
+}
+
+/// How far the near field's spread must exceed a pixel's own blurriness (in T) to take
+/// over. Inside a uniformly blurred foreground the spread is the pixel's own T blurred, equal
+/// to it but for rounding, and the two ladders (with and without the half step) give
+/// different mixes there: compared bare, the last bit decided between them pixel by pixel,
+/// a pattern of dots over the foreground (seen between the CPU and the GPU twin on `layers`
+/// with ε = 3 px, up to 0.04 apart). 1e-3 of the blur range is 0.03 px of CoC at E = 32.
+const SPREAD_MARGIN: f32 = 1e-3;
+
+/// A pixel's blurriness `t` given the near field's T_near read at the two levels that
+/// bracket E, mixed by f: negative where the near field's spread sets the blur.
+#[inline(always)]
+fn spread(t: &mut f32, lower: f32, upper: f32, f: f32) {
+    let spread = lower + f * (upper - lower);
+    if spread > *t + SPREAD_MARGIN {
+        *t = -spread;
+    }
+}
+
+/// What the compose stage mixes for frame row y: the sharp frame (offset by the reference),
+/// the half step, and the levels' rows made for the row.
+struct Images<'a> {
+    source: &'a Source<'a>,
+    window: &'a Window<'a>,
+    channels: usize,
+    reference: &'a Texel,
+    width: usize,
+    height: usize,
+    y: usize,
+    samplers: &'a [Sampler<'a>],
+    made: &'a [Vec<Texel>],
+}
+
+impl Images<'_> {
+    /// Image j of a ladder whose level 1 is image `first`, at frame pixel x (a method, not
+    /// a closure: `multiversion` would leave a closure compiled for the baseline CPU, out
+    /// of line).
+    #[inline(always)]
+    fn at(&self, j: usize, first: usize, x: usize) -> Texel {
+        if j >= first {
+            self.samplers[j - first].at(&self.made[j - first], x)
+        } else if j == 0 {
+            let mut offset = ZERO;
+            for (lane, rows) in self.window.iter().take(self.channels).enumerate() {
+                offset[lane] = rows[1][x] - self.reference[lane];
+            }
+            offset
+        } else {
+            half(
+                self.source,
+                self.window,
+                self.channels,
+                self.reference,
+                self.width,
+                self.height,
+                x,
+                self.y,
+            )
+        }
+    }
+}
+
+/// What every compose task reads: the frame's constants and CoC, the levels' samplers, the
+/// two ladders (with and without the half step), and where T_near is read (in levels, if any
+/// pixel is in front of the focus plane).
+pub(super) struct Pyramid<'a> {
+    pub(super) source: &'a Source<'a>,
+    pub(super) samplers: &'a [Sampler<'a>],
+    pub(super) ladders: &'a [Ladder; 2],
+    pub(super) near: Option<(usize, f32)>,
+}
+
+/// Frame rows y − 1, y and y + 1 (clamped to the frame) of each colour plane, as they were
+/// before the compose stage wrote any of them: the compose stage writes in place.
+pub(super) type Window<'a> = [[&'a [f32]; 3]; 4];
+
+/// The half step at pixel (x, y): the 3×3 filter over the premultiplied neighbourhood,
+/// normalised (colour offset by the reference).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn half(
+    source: &Source,
+    window: &Window,
+    channels: usize,
+    reference: &Texel,
+    width: usize,
+    height: usize,
+    x: usize,
+    y: usize,
+) -> Texel {
+    const TAPS: [f32; 3] = [0.25, 0.5, 0.25];
+    let ys = [y.saturating_sub(1), y, (y + 1).min(height - 1)];
+    let xs = [x.saturating_sub(1), x, (x + 1).min(width - 1)];
+    let (mut sum, mut weights) = (ZERO, 0.0f32);
+    for (r, (ky, &sy)) in TAPS.iter().zip(&ys).enumerate() {
+        for (kx, &sx) in TAPS.iter().zip(&xs) {
+            let i = sy * width + sx;
+            let w = ky * kx * source.interpolator(source.coc[i]).max(IN_FOCUS_WEIGHT);
+            for ((v, rows), reference) in sum.iter_mut().zip(window).zip(reference).take(channels) {
+                *v += w * (rows[r][sx] - reference);
+            }
+            weights += w;
+        }
+    }
+    for v in sum.iter_mut() {
+        *v /= weights;
+    }
+    sum
+}
