@@ -1,4 +1,4 @@
-//! The planar passes of one frame, in the canonical convention of DESIGN.md:
+//! The planar passes of one frame, in the canonical convention of docs/DESIGN.md:
 //!
 //! - pixel (i, j) has its centre at (i + 0.5, j + 0.5); x grows right, y grows down;
 //! - colour is scene-linear RGB(A), premultiplied alpha, f32;

@@ -1,15 +1,26 @@
 //! shutter: an offline compositor that adds motion blur and depth of field to rendered frame
-//! sequences. See DESIGN.md (shared) for the conventions and algorithms, README.md for use.
+//! sequences. docs/DESIGN.md gives the conventions and the algorithms, README.md the use,
+//! docs/ARCHITECTURE.md the map of every file.
 //!
-//! - [`frame`]: the planar passes of one frame, canonical convention.
-//! - [`io`]: EXR and 8/16-bit images, pass files and presets, sequences, atomic output.
-//! - [`numeric`]: what non-finite and extreme values become, and the jitter hash.
-//! - [`process`]: one frame: the numeric policy, depth of field, then motion blur.
-//! - [`dof`], [`motion`]: the effects, siblings that never import each other.
-//! - [`gpu`]: the wgpu backend: the GPU context and the WGSL twins of the CPU stages.
-//! - [`pipeline`]: preflight, then read → process → write overlapped.
+//! The modules, from the bottom up (no two import each other; tests/structure.rs):
+//! - [`frame`]: the planar passes of one frame, in the canonical convention.
+//! - [`error`]: what went wrong, where, and what to do ([`Error`], [`Problem`]).
+//! - [`numeric`]: what non-finite and extreme values become, the jitter hash, and the one
+//!   approximate float comparison.
+//! - [`stages`]: the seam between a pass and its backend: each pass's `Stages` trait, whose
+//!   defaults are the CPU stages, and [`stages::Cpu`].
+//! - [`dof`], [`motion`]: the effects — depth of field and motion blur — siblings that never
+//!   import each other.
+//! - [`gpu`]: the wgpu backend: the context, and the WGSL twins of the CPU stages, mirroring
+//!   the effects' tree (`gpu::dof`, `gpu::motion`).
+//! - [`process`]: one frame: the numeric policy, depth of field, then motion blur, on a
+//!   backend.
+//! - [`io`]: EXR and 8/16-bit images, pass files and presets, sequences, locks, atomic output.
 //! - [`settings`]: every setting defined once (flag, preset key, range, default, help).
-//! - [`cli`]: the command line (the only part that prints).
+//! - [`pipeline`]: preflight, then read → process → write overlapped.
+//! - [`lab`]: the measuring lab — truth scenes, metrics, `diff`, `bench` — which the product
+//!   never imports.
+//! - [`cli`]: the command line, the only part that prints.
 
 pub mod cli;
 pub mod dof;

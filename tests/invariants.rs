@@ -1,4 +1,4 @@
-//! The invariants every pass keeps (DESIGN.md "Algorithms"), as one table over every motion
+//! The invariants every pass keeps (docs/DESIGN.md "Algorithms"), as one table over every motion
 //! blur algorithm and depth-of-field method: each is a weighted average of input colours
 //! with non-negative weights, so a still (or in-focus) frame comes back unchanged, a uniform
 //! colour stays uniform, every output channel stays within its input range, and hostile

@@ -1,4 +1,4 @@
-//! reconstruct: the invariants of DESIGN.md, numerics, determinism, and accuracy on the truth
+//! reconstruct: the invariants of docs/DESIGN.md, numerics, determinism, and accuracy on the truth
 //! scenes.
 
 use shutter::frame::{Frame, Velocity};

@@ -1,4 +1,4 @@
-//! scatter: the invariants of DESIGN.md, numerics, determinism, and accuracy on the truth
+//! scatter: the invariants of docs/DESIGN.md, numerics, determinism, and accuracy on the truth
 //! scenes against reconstruct.
 
 use shutter::frame::{Frame, Positions};

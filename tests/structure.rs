@@ -393,3 +393,71 @@ fn no_source_file_is_over_800_lines() {
     }
     assert!(long.is_empty(), "over {MOST_LINES} lines: {long:?}");
 }
+
+/// docs/ARCHITECTURE.md's "Every file" section: the files it names, each resolved against the
+/// folder heading above it (a line that starts with `` `src/…/` ``).
+fn files_the_architecture_names() -> BTreeSet<PathBuf> {
+    let doc =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/ARCHITECTURE.md"))
+            .unwrap();
+    let section = doc
+        .split("\n## Every file\n")
+        .nth(1)
+        .expect("docs/ARCHITECTURE.md has a section '## Every file'")
+        .split("\n## ")
+        .next()
+        .unwrap();
+    let mut folder = PathBuf::new();
+    let mut named = BTreeSet::new();
+    for line in section.lines() {
+        let names: Vec<&str> = line.split('`').skip(1).step_by(2).collect();
+        if let Some(heading) = line.strip_prefix('`').and_then(|l| l.split('`').next()) {
+            if let Some(path) = heading.strip_prefix("src/").filter(|p| p.ends_with('/')) {
+                folder = PathBuf::from(path);
+            } else if heading == "src/" {
+                folder = PathBuf::new();
+            }
+        }
+        for name in names {
+            if name.ends_with(".rs") || name.ends_with(".wgsl") {
+                named.insert(folder.join(name));
+            }
+        }
+    }
+    named
+}
+
+#[test]
+fn the_architecture_names_every_source_file_and_no_other() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = BTreeSet::new();
+    let mut stack = vec![src.clone()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if path.extension().is_some_and(|e| e == "rs" || e == "wgsl") {
+                files.insert(path.strip_prefix(&src).unwrap().to_path_buf());
+            }
+        }
+    }
+    let named = files_the_architecture_names();
+    let missing: Vec<_> = files.difference(&named).collect();
+    let stale: Vec<_> = named.difference(&files).collect();
+    assert!(
+        missing.is_empty() && stale.is_empty(),
+        "docs/ARCHITECTURE.md ('Every file'): files it does not name {missing:?}; names of \
+         files that do not exist {stale:?}"
+    );
+    // And the module table has a row for every top-level module.
+    let doc =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/ARCHITECTURE.md"))
+            .unwrap();
+    for module in imports().keys() {
+        assert!(
+            doc.contains(&format!("\n| `{module}` |")),
+            "docs/ARCHITECTURE.md's module table has no row for {module}"
+        );
+    }
+}

@@ -130,6 +130,7 @@ pub fn grid(radius: usize, aperture: &Aperture) -> Vec<Tap> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::numeric::close;
 
     #[test]
     fn round_taps_cover_the_disc_evenly() {
@@ -140,11 +141,11 @@ mod tests {
             // Areas sum to the disc out to half a ring step beyond the outer ring.
             let outer = 1.0 + 0.5 / rings as f32;
             let sum: f32 = t.iter().map(|t| t.area).sum();
-            assert!((sum - PI * outer * outer).abs() < 1e-4, "{rings}: {sum}");
+            assert!(close(sum, PI * outer * outer, 1e-4), "{rings}: {sum}");
             for tap in &t {
                 let r = (tap.dx * tap.dx + tap.dy * tap.dy).sqrt();
                 let (far, near) = (round.norm(-tap.dx, -tap.dy), round.norm(tap.dx, tap.dy));
-                assert!((far - r).abs() < 1e-5 && (near - r).abs() < 1e-5);
+                assert!(close(far, r, 1e-5) && close(near, r, 1e-5));
             }
         }
     }
@@ -163,23 +164,23 @@ mod tests {
     fn polygon_shape_matches_sousas_morph() {
         let hexagon = Aperture::new(6, 0.0);
         // Vertices at θ = ±π/6 lie at radius 1, edge middles (θ = 0) at cos(π/6).
-        assert!((hexagon.extent(PI / 6.0) - 1.0).abs() < 1e-6);
-        assert!((hexagon.extent(0.0) - (PI / 6.0).cos()).abs() < 1e-6);
+        assert!(close(hexagon.extent(PI / 6.0), 1.0, 1e-6));
+        assert!(close(hexagon.extent(0.0), (PI / 6.0).cos(), 1e-6));
         // Every tap lies inside the unit hexagon, on its own ring's polygon.
         for tap in taps(4, &hexagon) {
             let r = hexagon.norm(tap.dx, tap.dy);
             assert!(r <= 1.0 + 1e-5);
             let ring = (r * 4.0).round() / 4.0;
-            assert!((r - ring).abs() < 1e-4, "{r}");
+            assert!(close(r, ring, 1e-4), "{r}");
         }
         // Area of a regular hexagon of circumradius 1: 3√3/2.
-        assert!((hexagon.unit_area() - 1.5 * 3f32.sqrt()).abs() < 1e-5);
+        assert!(close(hexagon.unit_area(), 1.5 * 3f32.sqrt(), 1e-5));
         // A pentagon is not symmetric: the near field sees it turned over.
         let pentagon = Aperture::new(5, 0.0);
         let tap = taps(2, &pentagon)[3];
         assert!((pentagon.norm(-tap.dx, -tap.dy) - pentagon.norm(tap.dx, tap.dy)).abs() > 1e-3);
         // Rotating the blades turns the shape.
         let turned = Aperture::new(6, 30.0);
-        assert!((turned.extent(PI / 6.0) - (PI / 6.0).cos()).abs() < 1e-5);
+        assert!(close(turned.extent(PI / 6.0), (PI / 6.0).cos(), 1e-5));
     }
 }

@@ -237,6 +237,7 @@ impl CocConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::numeric::close;
 
     const LENS: Lens = Lens {
         focal_mm: 50.0,
@@ -250,13 +251,13 @@ mod tests {
         // F = 0.05 m, A = 0.025 m, P = 2 m, 1920 px over 36 mm (53.33 px per mm).
         // D = 4 m: 0.025·0.05·(2 − 4)/(4·1.95) = −3.2051e-4 m = 0.32051 mm → 17.094 px.
         let far = LENS.signed_coc(4.0, 1920.0);
-        assert!((far - 17.094).abs() < 1e-3, "{far}");
+        assert!(close(far, 17.094, 1e-3), "{far}");
         // D = 1 m: 0.025·0.05·1/(1·1.95) = 6.4103e-4 m → 34.188 px, in front.
         let near = LENS.signed_coc(1.0, 1920.0);
-        assert!((near + 34.188).abs() < 1e-3, "{near}");
+        assert!(close(near, -34.188, 1e-3), "{near}");
         // D = ∞: A·F/(P − F) = 0.00125/1.95 m → 34.188 px, behind.
-        assert!((LENS.signed_coc(f64::INFINITY, 1920.0) - 34.188).abs() < 1e-3);
-        assert!((LENS.signed_coc(f64::NAN, 1920.0) - 34.188).abs() < 1e-3);
+        assert!(close(LENS.signed_coc(f64::INFINITY, 1920.0), 34.188, 1e-3));
+        assert!(close(LENS.signed_coc(f64::NAN, 1920.0), 34.188, 1e-3));
         // In focus at P; degenerate depths are clamped, never NaN.
         assert!(LENS.coc(2.0, 1920.0) < 1e-12);
         assert_eq!(LENS.signed_coc(0.0, 1920.0), -LARGEST);
@@ -282,7 +283,7 @@ mod tests {
             let ours = lens.coc(d, 36.0) / 1000.0; // 36 px over 36 mm: px = mm
             for other in [coc_wloka(d, p, f, n), coc_potmesil(d, p, f, n), ours] {
                 assert!(
-                    (other - sousa.abs()).abs() <= 1e-12 + 1e-9 * sousa.abs(),
+                    close(other, sousa.abs(), 1e-12 + 1e-9 * sousa.abs()),
                     "D={d}: {other} vs {sousa}"
                 );
             }
@@ -332,14 +333,14 @@ mod tests {
         frame.depth = Some(vec![4.0; 8000]);
         // 17.094 px at 1920 wide (the hand-computed value above), not 17.806 at 2000.
         let coc = coc_plane(&frame, &params);
-        assert!((coc[0] - 17.094).abs() < 1e-3, "{}", coc[0]);
+        assert!(close(coc[0], 17.094, 1e-3), "{}", coc[0]);
     }
 
     #[test]
     fn the_config_s_far_limit_is_the_cpu_s_own() {
         let config = CocConfig::new(1920, 4, 0, &DofParams::new(CocSource::Lens(LENS)));
         // A·F/(P − F) at 1920 px over 36 mm: 34.188 px (above).
-        assert!((config.scale - 34.188).abs() < 1e-3, "{}", config.scale);
+        assert!(close(config.scale, 34.188, 1e-3), "{}", config.scale);
         assert_eq!(config.source, 0);
         let map = CocConfig::new(4, 4, 0, &DofParams::default());
         assert_eq!((map.source, map.scale, map.cap), (1, 32.0, 1.5));

@@ -640,6 +640,7 @@ mod field_tests {
     use super::*;
     use crate::dof::tiles::{tiles, TilesConfig};
     use crate::dof::DofParams;
+    use crate::numeric::close;
 
     /// A grey frame from `paint` with the signed CoC plane `coc`, gathered.
     fn run(w: usize, h: usize, paint: &dyn Fn(usize, usize) -> f32, coc: &[f32]) -> Vec<f32> {
@@ -686,7 +687,7 @@ mod field_tests {
                 }
                 let i = y * w + x;
                 assert!(
-                    (with[i] - without[i]).abs() < 1e-5,
+                    close(with[i], without[i], 1e-5),
                     "({x}, {y}): {} with the disc, {} without",
                     with[i],
                     without[i]
@@ -701,7 +702,7 @@ mod field_tests {
         for y in 8..h - 8 {
             for x in 100..w - 8 {
                 let v = with[y * w + x];
-                assert!((v - 0.5).abs() < 0.05, "({x}, {y}): {v}");
+                assert!(close(v, 0.5, 0.05), "({x}, {y}): {v}");
             }
         }
     }
@@ -720,7 +721,7 @@ mod field_tests {
         for y in 0..h {
             for x in 0..w {
                 let v = out[y * w + x];
-                assert!((v - 0.5).abs() < 0.06, "({x}, {y}): {v}");
+                assert!(close(v, 0.5, 0.06), "({x}, {y}): {v}");
             }
         }
     }

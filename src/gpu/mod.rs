@@ -1,34 +1,26 @@
-//! The wgpu backend (DESIGN.md "wgpu backend"): the GPU context, created once per run and
-//! reused across frames, and one module per pass stage beside its `.wgsl` twin, under the CPU
-//! stage's name (vello's `cpu/` and `shader/` pairing):
+//! The wgpu backend (docs/DESIGN.md "wgpu backend"): the GPU context, created once per run and
+//! reused across frames, and the WGSL twins of the CPU stages in a tree that mirrors the
+//! effects' (vello's `cpu/` and `shader/` pairing): the twin of `crate::dof::X` is
+//! `gpu::dof::X` + `X.wgsl`, of `crate::motion::X` is `gpu::motion::X` + `X.wgsl`, with the
+//! CPU stages' names inside.
 //!
-//! - [`coc`] + `coc.wgsl`: depth of field's `coc` stage, twin of [`crate::dof::coc_plane`];
-//! - [`tiles`] + `tiles.wgsl`: depth of field's tile min/max, twin of
-//!   [`crate::dof::gather::tiles`];
-//! - [`gather`] + `gather.wgsl`: depth of field's bokeh gather, twin of
-//!   [`crate::dof::gather::gather`];
-//! - [`blend`] + `blend.wgsl`: depth of field's blend (the pyramid), twin of
-//!   [`crate::dof::blend::pyramid`];
-//! - [`tile_max`] + `tile_max.wgsl`, [`neighbor_max`] + `neighbor_max.wgsl`, [`dilate`] +
-//!   `dilate.wgsl`: reconstruct's tile stages, twins of [`crate::motion::tile_max`],
-//!   [`crate::motion::neighbor_max`] and [`crate::motion::dilate`];
-//! - [`reconstruct`] + `reconstruct.wgsl`: reconstruct's `gather` stage, twin of
-//!   [`crate::motion::reconstruct::gather`] and [`crate::motion::reconstruct::gather_2014`]
-//!   (every variant);
-//! - [`scatter`] + `scatter.wgsl`: the whole scatter pass (reach → accumulate → resolve), twin
-//!   of [`crate::motion::scatter::scatter`] (every normalisation, curve kind and weight);
-//! - [`stretch`] + `stretch.wgsl`: stretch's texture_blur, move_vertices and rasterise (a
-//!   render pipeline), twins of those of [`crate::motion::stretch`];
-//! - `stage`: what most of them share (bindings config → inputs → outputs, buffers kept per
-//!   size).
+//! - [`dof`]: `coc`, `tiles` (tile min/max), `gather` (the bokeh gather) and `blend` (the
+//!   pyramid), and `impl crate::dof::Stages for Gpu`;
+//! - [`motion`]: reconstruct's `tile_max`, `neighbor_max`, `dilate` and its gather
+//!   (`reconstruct`, every variant), `scatter` (reach → accumulate → resolve) and `stretch`
+//!   (texture_blur, move_vertices, rasterise as a render pipeline), and the `Stages` impls of
+//!   the three passes;
+//! - `context`: [`Gpu`], its one fallback ([`Gpu`]`::or_cpu`) and what the twins compiled;
+//!   `stage`: what most twins share (bindings config → inputs → outputs, buffers kept per
+//!   size, readback, error scopes); `times`: [`GpuTimes`]; `prelude.wgsl`: what every shader
+//!   shares.
 //!
 //! The CPU passes are the reference; each twin has a parity test against them
-//! (tests/gpu.rs, tests/gpu_reconstruct.rs, tests/gpu_scatter.rs, tests/gpu_stretch.rs) with
-//! its tolerance stated and justified beside it. Under `--backend wgpu` depth of field's
-//! stages run on the GPU through [`crate::dof::Stages`], reconstruct's through
-//! [`crate::motion::TileStages`] and its gather hook, scatter's through [`Gpu::scatter`] and
-//! stretch's through [`Gpu::stretch`]; stages without a twin yet (blend's talk form,
-//! reconstruct's pack) run on the CPU in the same run.
+//! (tests/gpu.rs, tests/gpu_dof.rs, tests/gpu_reconstruct.rs, tests/gpu_scatter.rs,
+//! tests/gpu_stretch.rs) with its tolerance stated and justified beside it. Under `--backend
+//! wgpu` every pass runs through its `Stages` trait ([`crate::stages`]) on [`Gpu`]; stages
+//! without a twin (blend's talk form, reconstruct's pack and matte) run on the CPU in the same
+//! run.
 //!
 //! The backend is a run's choice ([`Backend`], `--backend cpu|wgpu|auto`):
 //! - `cpu` never touches wgpu;
@@ -39,7 +31,7 @@
 //!
 //! The instance is restricted to Vulkan, Metal and DX12: wgpu's GL backend (its silent
 //! fallback when no Vulkan driver is installed) lacks what the passes need (renderable
-//! `Rgba32Float`, buffer atomics; CRATES.md).
+//! `Rgba32Float`, buffer atomics; docs/CRATES.md).
 //!
 //! Built without the `gpu` feature (`cargo build --no-default-features`) this module keeps
 //! only [`Backend`], [`BackendReport`] and [`open`], which refuses `wgpu` and runs `auto` on
@@ -209,25 +201,16 @@ mod tests {
     use wgpu::naga;
 
     /// Every twin's shader, prelude included, as the device compiles it (vello validates its
-    /// shaders at build time; here a unit test does, with no device needed).
-    const SHADERS: &[(&str, &str)] = &[
-        ("coc", dof::coc::SHADER),
-        ("tiles", dof::tiles::SHADER),
-        ("gather", dof::gather::SHADER),
-        ("blend", dof::blend::SHADER),
-        ("tile_max", motion::tile_max::SHADER),
-        ("neighbor_max", motion::neighbor_max::SHADER),
-        ("dilate", motion::dilate::SHADER),
-        ("reconstruct", motion::reconstruct::SHADER),
-        ("scatter", motion::scatter::SHADER),
-        ("stretch", motion::stretch::SHADER),
-    ];
-
-    use super::{dof, motion};
+    /// shaders at build time; here a unit test does, with no device needed): each family's
+    /// list, kept beside its twins.
+    fn shaders() -> Vec<(&'static str, &'static str)> {
+        [super::dof::SHADERS, super::motion::SHADERS].concat()
+    }
 
     #[test]
     fn every_shader_parses_and_validates_without_a_device() {
-        for (name, shader) in SHADERS {
+        let shaders = shaders();
+        for (name, shader) in &shaders {
             let module = naga::front::wgsl::parse_str(shader)
                 .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(shader)));
             naga::valid::Validator::new(
@@ -250,11 +233,11 @@ mod tests {
         let mut found = Vec::new();
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/gpu");
         files(&dir, &mut found);
-        assert!(found.len() > SHADERS.len(), "{found:?}");
+        assert!(found.len() > shaders.len(), "{found:?}");
         for path in found {
             let text = std::fs::read_to_string(&path).unwrap();
             assert!(
-                SHADERS.iter().any(|(_, shader)| shader.contains(&text)),
+                shaders.iter().any(|(_, shader)| shader.contains(&text)),
                 "{} is in no shader",
                 path.display()
             );

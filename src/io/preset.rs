@@ -1,5 +1,5 @@
 //! Presets: how a renderer names and encodes its passes, converted on read to the canonical
-//! convention of DESIGN.md, plus optional algorithm and output settings.
+//! convention of docs/DESIGN.md, plus optional algorithm and output settings.
 //!
 //! Presets are TOML. The built-in ones live in `presets/` and are embedded in the binary;
 //! `--preset FILE.toml` loads one from disk. Every preset is merged over `shutter` (the

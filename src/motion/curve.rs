@@ -2,7 +2,7 @@
 //! (Guertin & Nowrouzezahrai, §3.2).
 //!
 //! - [`Bezier`]: the paper's quadratic Bézier with B(0) = p(-1), B(½) = p(0), B(1) = p(+1).
-//!   Two errata in the paper are fixed (DESIGN.md): the curve is
+//!   Two errata in the paper are fixed (docs/DESIGN.md): the curve is
 //!   `(1-s)²B0 + 2(1-s)s·B1 + s²B2` (the paper prints `(1-s²)`), and the middle control point
 //!   is `B1 = 2·p(0) - (p(-1) + p(1))/2` (the printed `p(0) - (p(-1) - p(1))/2` does not pass
 //!   through p(0)). Time t ∈ [-1, 1] maps to s = (t + 1)/2, so this is the quadratic
@@ -241,7 +241,11 @@ mod tests {
         assert_eq!(straight.segments(1.0, 0.1, 10), 1);
         // |B''| = 4·|p''(t)| = 8·|a| = 8·4.272 = 34.18 px; over Δs = 1 a chord strays
         // 34.18/8 px, so 0.1 px needs √(34.18 / 0.8) = 6.54 → 7 segments; over Δs = 0.1, 1.
-        assert!((b.bend() - 8.0 * (1.5f64.hypot(4.0))).abs() < 1e-9);
+        assert!(crate::numeric::close(
+            b.bend(),
+            8.0 * (1.5f64.hypot(4.0)),
+            1e-9
+        ));
         assert_eq!(b.segments(1.0, 0.1, 10), 7);
         assert_eq!(b.segments(1.0, 0.1, 5), 5);
         assert_eq!(b.segments(0.1, 0.1, 10), 1);

@@ -316,6 +316,7 @@ impl Walk {
 mod tests {
     use super::*;
     use crate::lab::truth::sample::hash01;
+    use crate::numeric::close;
 
     const BIG: Clip = Clip {
         x0: -1000,
@@ -343,7 +344,7 @@ mod tests {
             let length = (b[0] - a[0]).hypot(b[1] - a[1]);
             let (sum, _) = total(a, b, BIG);
             assert!(
-                (sum - length).abs() <= 0.01 * length,
+                close(sum, length, 0.01 * length),
                 "{a:?} → {b:?}: {sum} vs {length}"
             );
         }
@@ -406,7 +407,7 @@ mod tests {
         });
         assert!((64..=130).contains(&visits), "{visits}");
         let (sum, _) = total([-1e6, 10.5], [1e6, 10.5], clip);
-        assert!((sum - 64.0).abs() < 1e-6);
+        assert!(close(sum, 64.0, 1e-6));
         // Entirely outside: nothing, quickly.
         assert_eq!(total([-1e9, -5e8], [1e9, -4e8], clip).1, 0);
         assert_eq!(total([1e12, 3.0], [1e12 + 5.0, 3.0], clip).1, 0);
@@ -470,14 +471,14 @@ mod tests {
                 let exact = walk.column(column);
                 let is_whole = (whole.first..=whole.last).contains(&column);
                 // A column is whole exactly where its coverage is the full stretch.
-                let full = (exact.c0 + exact.c1 - walk.stretch).abs() < 1e-12;
+                let full = close(exact.c0 + exact.c1, walk.stretch, 1e-12);
                 assert_eq!(is_whole, full, "{k}: column {column}");
                 if is_whole {
                     let stepped = whole.column(column - whole.first);
                     let at = |c: &Column| c.row as f64 + c.c1 / (c.c0 + c.c1);
-                    assert!((at(&stepped) - at(&exact)).abs() < 1e-6, "{k}: {column}");
-                    assert!((stepped.c0 + stepped.c1 - walk.stretch).abs() < 1e-12);
-                    assert!((stepped.u - exact.u).abs() < 1e-9);
+                    assert!(close(at(&stepped), at(&exact), 1e-6), "{k}: {column}");
+                    assert!(close(stepped.c0 + stepped.c1, walk.stretch, 1e-12));
+                    assert!(close(stepped.u, exact.u, 1e-9));
                     whole_columns += 1;
                 }
             }

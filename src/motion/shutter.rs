@@ -3,7 +3,7 @@
 //! from.
 
 /// The exposure of a frame: how long the shutter is open and where that interval sits about
-/// the frame's own instant (DESIGN.md, "Conventions").
+/// the frame's own instant (docs/DESIGN.md, "Conventions").
 ///
 /// With `open` = φ (the fraction of the frame interval the shutter is open) and `offset` = o,
 /// the exposure covers the frame times t ∈ [(o − ½)·φ, (o + ½)·φ]: o is the middle of the

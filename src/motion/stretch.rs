@@ -1,6 +1,6 @@
 //! stretch — the vertex-stretch motion blur of Wloka & Zeleznik as presented by Arce & Wloka
 //! (*In-Game Special Effects and Lighting*, "Motion Blur: The Technique"), brought from
-//! meshes to images (DESIGN.md "stretch").
+//! meshes to images (docs/DESIGN.md "stretch").
 //!
 //! The image becomes a mesh: a vertex at every pixel centre carrying its colour, depth and
 //! velocity; two triangles per 2×2 quad of centres; no triangle where the depths of its
@@ -13,7 +13,7 @@
 //! - [`Anchor::Rear`] (the talk's version, rear-curtain: the object sharp at the end of the
 //!   exposure): where M·N < 0 the vertex moves back to the start of the exposure, by −v·φ, and
 //!   becomes translucent, `alpha = max(min_alpha, 1 − |v·φ|/extent)`; other vertices stay.
-//! - [`Anchor::Centre`] (for shutter centred on the frame, DESIGN.md): trailing vertices
+//! - [`Anchor::Centre`] (for shutter centred on the frame, docs/DESIGN.md): trailing vertices
 //!   move back by v·φ/2, leading ones (M·N > 0) forward by v·φ/2, both translucent by the
 //!   same formula with that displacement.
 //!
@@ -538,6 +538,7 @@ pub fn triangle_corners(t: usize, quads_across: usize, width: usize) -> [usize; 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::numeric::close;
 
     #[test]
     fn the_config_is_ten_plain_words() {
@@ -566,7 +567,7 @@ mod tests {
             let moved = move_vertices(&c, &z, &v);
             let [sx, sy] = moved[0].0;
             let length = (sx * sx + sy * sy).sqrt();
-            assert!((length - expected).abs() < 1e-3, "{vx}: {length}");
+            assert!(close(length, expected, 1e-3), "{vx}: {length}");
             // The direction is kept: moving along its normal (+x) it goes forward to t1,
             // moving against it back to t0, so +x either way; the far vertex stays.
             assert!(sy == 0.0 && sx > 0.0);

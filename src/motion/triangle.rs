@@ -89,6 +89,7 @@ pub fn draw(v: [[f64; 2]; 3], clip: Rect, mut fragment: impl FnMut(usize, usize,
 mod tests {
     use super::*;
     use crate::lab::truth::sample::hash01;
+    use crate::numeric::close;
 
     const CLIP: Rect = Rect {
         x0: 0,
@@ -101,7 +102,7 @@ mod tests {
         let mut count = vec![0u32; 64 * 64];
         for t in tris {
             draw(*t, CLIP, |x, y, w| {
-                assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-9);
+                assert!(close(w.iter().sum::<f64>(), 1.0, 1e-9));
                 assert!(w.iter().all(|&c| c >= -1e-12));
                 count[y * 64 + x] += 1;
             });
@@ -167,7 +168,7 @@ mod tests {
                 .sum();
             let count = coverage(&[t]).iter().sum::<u32>() as f64;
             assert!(
-                (count - area).abs() <= perimeter,
+                close(count, area, perimeter),
                 "{t:?}: {count} px vs area {area}"
             );
         }

@@ -274,7 +274,7 @@ pub fn planes(f: &shutter::frame::Frame) -> [&[f32]; 4] {
     [&c.r, &c.g, &c.b, c.a.as_deref().unwrap()]
 }
 
-/// The invariants every motion-blur algorithm keeps (DESIGN.md "Algorithms"), checked on
+/// The invariants every motion-blur algorithm keeps (docs/DESIGN.md "Algorithms"), checked on
 /// frames from `frame(width, height, seed, speed)` under each of `variants`.
 pub mod invariants {
     use shutter::frame::{Color, Frame};

@@ -229,6 +229,7 @@ fn to_color(mut planes: Vec<Vec<f32>>, alpha: bool) -> Color {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::numeric::close;
 
     #[test]
     fn binomial_is_repeated_talk_filter() {
@@ -237,7 +238,7 @@ mod tests {
         let expected = [1.0, 6.0, 15.0, 20.0, 15.0, 6.0, 1.0].map(|v: f32| v / 64.0);
         assert_eq!(k.len(), 7);
         for (a, b) in k.iter().zip(expected) {
-            assert!((a - b).abs() < 1e-7, "{a} vs {b}");
+            assert!(close(*a, b, 1e-7), "{a} vs {b}");
         }
         // Variance n/2 per pass count n, also for long kernels that are cut.
         for n in [1usize, 10, 144] {
@@ -248,7 +249,7 @@ mod tests {
                 .enumerate()
                 .map(|(i, w)| w * (i as f32 - h).powi(2))
                 .sum();
-            assert!((var - n as f32 / 2.0).abs() < 1e-3 * n as f32, "{n}: {var}");
+            assert!(close(var, n as f32 / 2.0, 1e-3 * n as f32), "{n}: {var}");
         }
         // The 2D kernel of one pass is the talk's e/4 + (b+d+f+h)/8 + (a+c+g+i)/16.
         let k = binomial(1);
@@ -262,7 +263,7 @@ mod tests {
     fn copy_two_n_stands_for_e() {
         for e in [8.0f32, 32.0, 48.0] {
             let n = default_passes(e);
-            assert!((equivalent_coc(2 * n) - e).abs() < 0.1 * e, "{e}");
+            assert!(close(equivalent_coc(2 * n), e, 0.1 * e), "{e}");
         }
     }
 }

@@ -16,6 +16,14 @@ pub mod coc;
 pub mod gather;
 pub mod tiles;
 
+/// Every depth-of-field twin's shader by name, for the test that validates them all.
+pub const SHADERS: &[(&str, &str)] = &[
+    ("coc", coc::SHADER),
+    ("tiles", tiles::SHADER),
+    ("gather", gather::SHADER),
+    ("blend", blend::SHADER),
+];
+
 /// Depth of field's stages run here, each on the CPU instead (counted in
 /// [`Gpu::stages_on_cpu`], the first reason kept) where the GPU cannot run it for a frame.
 impl crate::dof::Stages for Gpu {

@@ -16,6 +16,16 @@ pub mod scatter;
 pub mod stretch;
 pub mod tile_max;
 
+/// Every motion twin's shader by name, for the test that validates them all.
+pub const SHADERS: &[(&str, &str)] = &[
+    ("tile_max", tile_max::SHADER),
+    ("neighbor_max", neighbor_max::SHADER),
+    ("dilate", dilate::SHADER),
+    ("reconstruct", reconstruct::SHADER),
+    ("scatter", scatter::SHADER),
+    ("stretch", stretch::SHADER),
+];
+
 /// Reconstruct's stages with a twin run here: the tile stages and the gather (the pack and
 /// the matte run on the CPU in the same run).
 impl reconstruct_cpu::Stages for Gpu {

@@ -21,7 +21,7 @@
 //!
 //! **Why a compute rasteriser with integer atomics, not the render pipeline's lines.** The
 //! paper draws its segments as GL lines with additive blending into a float target. Measured
-//! (CRATES.md): lavapipe draws a 1-px line as a rectangle (coverage = Euclidean length) where
+//! (docs/CRATES.md): lavapipe draws a 1-px line as a rectangle (coverage = Euclidean length) where
 //! GL and many GPUs use the longer axis (~15 % less energy), so the same frame gives other
 //! images on other drivers; and float blending adds in whatever order the hardware retires
 //! fragments, so not even one driver repeats itself bit for bit. A compute rasteriser instead

@@ -403,7 +403,7 @@ fn groups(count: u64) -> (u32, u32) {
 
 impl Gpu {
     /// texture_blur → move_vertices → rasterise on the GPU, with the arguments and result of
-    /// the CPU's [`stages`], or why they could not run.
+    /// the CPU's [`stages`](crate::motion::stretch::stages), or why they could not run.
     pub fn try_stretch(
         &self,
         config: &StretchConfig,

@@ -275,6 +275,7 @@ impl MotionSource {
 mod tests {
     use super::*;
     use crate::io::preset::Preset;
+    use crate::numeric::close;
 
     fn rsmb(max_displace: f32) -> VectorSpec {
         let mut spec = Preset::builtin("rsmb").unwrap().velocity;
@@ -297,8 +298,8 @@ mod tests {
         assert_eq!(at16(65534), 10.0);
         assert_eq!(at16(0), -10.0);
         // The same stored value means different motion at the two depths.
-        assert!((at8(191) - 64.0 / 127.0 * 10.0).abs() < 1e-6);
-        assert!((at16(49151) - 16384.0 / 32767.0 * 10.0).abs() < 1e-6);
+        assert!(close(at8(191), 64.0 / 127.0 * 10.0, 1e-6));
+        assert!(close(at16(49151), 16384.0 / 32767.0 * 10.0, 1e-6));
         for code in 0..=255u16 {
             let expected = (code as f32 - 127.0) / 127.0 * 10.0;
             assert_eq!(at8(code), expected, "code {code}");

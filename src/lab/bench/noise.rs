@@ -45,6 +45,7 @@ pub fn corrected_rmse(rmse: f64, variance: f64) -> f64 {
 mod tests {
     use super::*;
     use crate::lab::metrics::rmse;
+    use crate::numeric::close;
 
     /// Walsh functions of index `k` over `n` samples: ±1, mutually orthogonal over any
     /// multiple of 2^(bits) samples, so sums of their products vanish exactly.
@@ -84,13 +85,13 @@ mod tests {
             Rgb::new(&converged, w, h),
         );
         let truth = rmse(&converged, &output, None);
-        assert!((truth - delta as f64).abs() < 1e-6, "{truth}");
+        assert!(close(truth, delta as f64, 1e-6), "{truth}");
         let variance = noise_variance(&first, &second, None);
-        assert!((variance.sqrt() - sigma as f64).abs() < 1e-6, "{variance}");
+        assert!(close(variance.sqrt(), sigma as f64, 1e-6), "{variance}");
         let raw = rmse(&first, &output, None);
-        assert!((raw - (delta as f64).hypot(sigma as f64)).abs() < 1e-6);
+        assert!(close(raw, (delta as f64).hypot(sigma as f64), 1e-6));
         let corrected = corrected_rmse(raw, variance);
-        assert!((corrected - truth).abs() < 1e-6, "{corrected} vs {truth}");
+        assert!(close(corrected, truth, 1e-6), "{corrected} vs {truth}");
     }
 
     #[test]
@@ -99,14 +100,14 @@ mod tests {
         let second = [vec![0.2, 5.0], vec![0.2, 5.0], vec![0.2, 5.0]];
         let (a, b) = (Rgb::new(&first, 2, 1), Rgb::new(&second, 2, 1));
         let v = noise_variance(&a, &b, Some(&[true, false]));
-        assert!((v - 0.02).abs() < 1e-9, "{v}");
+        assert!(close(v, 0.02, 1e-9), "{v}");
         assert_eq!(noise_variance(&a, &b, Some(&[false, false])), 0.0);
     }
 
     #[test]
     fn an_error_below_the_noise_floor_is_zero_not_imaginary() {
         assert_eq!(corrected_rmse(0.01, 0.0004), 0.0);
-        assert!((corrected_rmse(0.05, 0.0009) - 0.04).abs() < 1e-12);
+        assert!(close(corrected_rmse(0.05, 0.0009), 0.04, 1e-12));
     }
 
     #[test]
@@ -141,14 +142,14 @@ mod tests {
         let truth = rmse(&Rgb::new(&converged, w, h), &Rgb::new(&output, w, h), None);
         let raw = rmse(&Rgb::new(&first, w, h), &Rgb::new(&output, w, h), None);
         let variance = noise_variance(&Rgb::new(&first, w, h), &Rgb::new(&second, w, h), None);
-        assert!((variance - s * s / 3.0).abs() < 0.02 * s * s, "{variance}");
+        assert!(close(variance, s * s / 3.0, 0.02 * s * s), "{variance}");
         let corrected = corrected_rmse(raw, variance);
         assert!(
             raw > 1.5 * truth,
             "the noise matters here: {raw} vs {truth}"
         );
         assert!(
-            (corrected - truth).abs() < 0.03 * truth,
+            close(corrected, truth, 0.03 * truth),
             "{corrected} vs {truth}"
         );
     }

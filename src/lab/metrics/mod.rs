@@ -275,6 +275,7 @@ pub fn changed_region(sharp: &Rgb, reference: &Rgb, threshold: f32) -> Vec<bool>
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::numeric::close;
 
     #[test]
     fn rmse_by_hand() {
@@ -282,10 +283,10 @@ mod tests {
         let a = [vec![0.0, 0.0], vec![0.0, 0.0], vec![0.0, 0.0]];
         let b = [vec![0.1, 0.0], vec![0.2, 0.0], vec![0.3, 0.0]];
         let r = rmse(&Rgb::new(&a, 2, 1), &Rgb::new(&b, 2, 1), None);
-        assert!((r - (0.14f64 / 6.0).sqrt()).abs() < 1e-7, "{r}");
+        assert!(close(r, (0.14f64 / 6.0).sqrt(), 1e-7), "{r}");
         let only_first = [true, false];
         let r = rmse(&Rgb::new(&a, 2, 1), &Rgb::new(&b, 2, 1), Some(&only_first));
-        assert!((r - (0.14f64 / 3.0).sqrt()).abs() < 1e-7, "{r}");
+        assert!(close(r, (0.14f64 / 3.0).sqrt(), 1e-7), "{r}");
         assert_eq!(psnr_from_rmse(0.1), 20.0);
     }
 
@@ -295,7 +296,7 @@ mod tests {
         let s = compare(&Rgb::new(&a, 8, 8), &Rgb::new(&a, 8, 8), None);
         assert_eq!(s.rmse, 0.0);
         assert!(s.psnr.is_infinite());
-        assert!((s.ssim - 1.0).abs() < 1e-6);
+        assert!(close(s.ssim, 1.0, 1e-6));
         assert_eq!(s.flip, 0.0);
     }
 

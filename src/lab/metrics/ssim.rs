@@ -78,21 +78,18 @@ pub fn ssim_map(a: &[f32], b: &[f32], width: usize, height: usize) -> Vec<f32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::numeric::close;
 
     #[test]
     fn identical_is_one_and_a_constant_shift_lowers_luminance_term_only() {
         let a: Vec<f32> = (0..400).map(|i| ((i * 7) % 13) as f32 / 13.0).collect();
         let map = ssim_map(&a, &a, 20, 20);
-        assert!(map.iter().all(|v| (v - 1.0).abs() < 1e-5));
+        assert!(map.iter().all(|&v| close(v, 1.0, 1e-5)));
         // Flat images differing by a constant: SSIM = (2ab + C1) / (a² + b² + C1).
         let flat_a = vec![0.5; 400];
         let flat_b = vec![0.3; 400];
         let expected = ((2.0 * 0.5 * 0.3 + C1) / (0.25 + 0.09 + C1)) as f32;
         let map = ssim_map(&flat_a, &flat_b, 20, 20);
-        assert!(
-            map.iter().all(|v| (v - expected).abs() < 1e-5),
-            "{}",
-            map[0]
-        );
+        assert!(map.iter().all(|&v| close(v, expected, 1e-5)), "{}", map[0]);
     }
 }

@@ -1,5 +1,5 @@
 //! Truth: procedural scenes whose motion is known in closed form, their passes, and
-//! brute-force references to measure every algorithm against (DESIGN.md, "Measuring
+//! brute-force references to measure every algorithm against (docs/DESIGN.md, "Measuring
 //! accuracy").
 
 pub mod model;

@@ -447,6 +447,7 @@ impl Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::numeric::close;
 
     fn scene_with(shape: Shape) -> Scene {
         Scene {
@@ -549,14 +550,14 @@ mod tests {
         let coc_sensor = ((f / n) * f * (p - d) / (d * (p - f))).abs();
         let width = 1920.0;
         let expected = coc_sensor * width / 0.036;
-        assert!((lens.coc(d, width) - expected).abs() < 1e-9 * expected);
+        assert!(close(lens.coc(d, width), expected, 1e-9 * expected));
         assert!(lens.coc(p, width) < 1e-9, "in focus at P");
         // The renderer's aperture offsets trace the compositor's circle of confusion.
         for depth in [0.5, 2.0, 10.0, f64::INFINITY] {
             let rendered = 2.0 * lens.offset(DVec2::X, depth, width).length();
             let coc = lens.coc(depth, width);
             assert!(
-                (rendered - coc).abs() <= 1e-9 * coc.max(1.0),
+                close(rendered, coc, 1e-9 * coc.max(1.0)),
                 "{depth}: {rendered} vs {coc}"
             );
         }

@@ -73,17 +73,18 @@ pub fn concentric_disk(u: f64, v: f64) -> DVec2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::numeric::close;
 
     #[test]
     fn hash01_is_uniform_enough() {
         let n = 100_000;
         let mean: f64 = (0..n).map(|i| hash01(5, 1, i, 0)).sum::<f64>() / n as f64;
-        assert!((mean - 0.5).abs() < 0.01, "{mean}");
+        assert!(close(mean, 0.5, 0.01), "{mean}");
     }
 
     #[test]
     fn phi_5_solves_its_equation() {
-        assert!((PHI_5.powi(6) - PHI_5 - 1.0).abs() < 1e-12);
+        assert!(close(PHI_5.powi(6) - PHI_5, 1.0, 1e-12));
     }
 
     #[test]

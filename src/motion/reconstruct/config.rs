@@ -334,24 +334,25 @@ pub(crate) const LANES: usize = 8;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::numeric::close;
 
     #[test]
     fn half_spread_clamps_between_half_a_pixel_and_k() {
         // v = 10 px, φ = 0.5: q = 2.5 px, kept (up to ε).
         let (x, y) = half_spread(10.0, 0.0, 0.5, 20.0);
-        assert!((x - 2.5 * 2.5 / 2.51).abs() < 1e-6 && y == 0.0);
+        assert!(close(x, 2.5 * 2.5 / 2.51, 1e-6) && y == 0.0);
         // Far above k: length k·|q|/(|q|+ε) ≈ k, direction kept.
         let (x, y) = half_spread(0.0, -1e6, 1.0, 20.0);
-        assert!(x == 0.0 && (y + 20.0).abs() < 1e-3);
+        assert!(x == 0.0 && close(y, -20.0, 1e-3));
         // Tiny motion grows to half a pixel; none stays none.
         let (x, _) = half_spread(0.1, 0.0, 0.5, 20.0);
-        assert!((x - 0.5 * 0.025 / 0.035).abs() < 1e-6);
+        assert!(close(x, 0.5 * 0.025 / 0.035, 1e-6));
         assert_eq!(half_spread(0.0, 0.0, 0.5, 20.0), (0.0, 0.0));
         // Through the numeric policy, NaN is still and infinity is clamped to k.
         let v = crate::numeric::velocity;
         assert_eq!(half_spread(v(f32::NAN), 0.0, 0.5, 20.0), (0.0, 0.0));
         let (x, _) = half_spread(v(f32::INFINITY), 0.0, 0.5, 20.0);
-        assert!((x - 20.0).abs() < 1e-3);
+        assert!(close(x, 20.0, 1e-3));
     }
 
     #[test]

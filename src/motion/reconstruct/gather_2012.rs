@@ -173,6 +173,7 @@ fn soft_depth_compare(za: f32, zb: f32, inverse_extent: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::numeric::close;
 
     #[test]
     fn classification_filters_of_figure_4() {
@@ -181,12 +182,12 @@ mod tests {
         assert_eq!(cone(0.5), 0.5);
         assert_eq!(cone(1.25), 0.0);
         assert_eq!(cylinder(0.9), 1.0);
-        assert!((cylinder(1.0) - 0.5).abs() < 1e-6);
+        assert!(close(cylinder(1.0), 0.5, 1e-6));
         assert_eq!(cylinder(1.1), 0.0);
         // zb = 1 in front of za = 2: 1; behind: 0; within the soft extent (0.1): between.
         assert_eq!(soft_depth_compare(2.0, 1.0, 10.0), 1.0);
         assert_eq!(soft_depth_compare(1.0, 2.0, 10.0), 0.0);
-        assert!((soft_depth_compare(1.0, 1.05, 10.0) - 0.5).abs() < 1e-5);
+        assert!(close(soft_depth_compare(1.0, 1.05, 10.0), 0.5, 1e-5));
         // A still pixel (1/|v| = ∞) spreads nowhere, without NaN.
         assert_eq!(cone(0.3 * f32::INFINITY), 0.0);
         assert_eq!(cylinder(0.3 * f32::INFINITY), 0.0);

@@ -226,6 +226,7 @@ pub fn surfaces(texels: &[Texel2014], mattes: &[Matte], i: usize) -> (f32, [f32;
 mod tests {
     use super::*;
     use crate::motion::reconstruct::{ReconstructConfig, ReconstructParams};
+    use crate::numeric::close;
 
     fn texel(rgb: [f32; 3], z: f32, v: f32) -> Texel2014 {
         [rgb[0], rgb[1], rgb[2], 1.0, z, v, 0.0, v]
@@ -259,12 +260,12 @@ mod tests {
         let (config, texels) = edge([0.9, 0.5, 0.1], [0.1, 0.2, 0.6], 0.3, 1.0);
         let m = mattes(&config, &texels, |_, _| true);
         let (alpha, moving, still) = surfaces(&texels, &m, 2 * 12 + 5);
-        assert!((alpha - 0.3).abs() < 1e-5, "{alpha}");
+        assert!(close(alpha, 0.3, 1e-5), "{alpha}");
         for (got, want) in moving.iter().zip([0.9, 0.5, 0.1]) {
-            assert!((got - want).abs() < 1e-5, "{moving:?}");
+            assert!(close(*got, want, 1e-5), "{moving:?}");
         }
         for (got, want) in still.iter().zip([0.1, 0.2, 0.6]) {
-            assert!((got - want).abs() < 1e-5, "{still:?}");
+            assert!(close(*got, want, 1e-5), "{still:?}");
         }
         // Away from the edge, and on the moving side, the labels.
         assert_eq!(m[5][0], 0.0);

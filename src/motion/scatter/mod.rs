@@ -14,7 +14,7 @@
 //! Two normalisations:
 //! - [`Normalize::Paper`], eq. 4: `c' = (A.rgba + w_b·c) / (A.w + w_b)`, each pixel a curve
 //!   crosses weighted by its coverage times the weight along the curve.
-//! - [`Normalize::Exposure`] (beyond the paper; DESIGN.md "where the paper's weighting goes
+//! - [`Normalize::Exposure`] (beyond the paper; docs/DESIGN.md "where the paper's weighting goes
 //!   wrong"): each curve deposits its *share of the exposure*, coverage / curve length (times
 //!   the normalised weight along the curve), so A.w is the fraction of the shutter interval a
 //!   pixel is covered by moving surfaces. A pixel covered less than the whole interval shows
@@ -202,6 +202,7 @@ mod tests {
     use super::accumulate::add;
     use super::*;
     use crate::motion::line::{draw, Clip};
+    use crate::numeric::close_relative;
 
     fn still_frame(w: usize, h: usize) -> Frame {
         let n = w * h;
@@ -358,7 +359,7 @@ mod tests {
             for ch in 0..4 {
                 let want = own[ch] as f32;
                 assert!(
-                    ((got[ch] - want) / want).abs() <= 1e-5,
+                    close_relative(got[ch], want, 1e-5),
                     "{normalize:?}: {} vs {want}",
                     got[ch]
                 );

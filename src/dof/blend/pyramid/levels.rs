@@ -372,6 +372,7 @@ pub(super) fn build(source: &Source, width: usize, height: usize, count: usize) 
 mod tests {
     use super::super::compose::Sampler;
     use super::*;
+    use crate::numeric::close;
 
     /// The pyramid over a frame of `width` × `height` whose red is 1 at pixel (x0, y0) and 0
     /// elsewhere, every pixel fully blurred (T = 1, so w = 1): level L's red sampled at every
@@ -420,7 +421,7 @@ mod tests {
                     second += v as f64 * d * d;
                 }
                 assert!(
-                    (mass - 1.0).abs() < 0.02,
+                    close(mass, 1.0, 0.02),
                     "level {l} phase {phase}: mass {mass}"
                 );
                 assert!(
@@ -431,7 +432,7 @@ mod tests {
             }
             let stated = level_variance(l);
             assert!(
-                (variance - stated).abs() < 0.01 * stated,
+                close(variance, stated, 0.01 * stated),
                 "level {l}: measured {variance}, stated {stated}"
             );
         }
@@ -441,7 +442,7 @@ mod tests {
     fn the_ladder_mixes_continuously_between_levels() {
         let ladder = Ladder::new(5, false);
         // Level CoCs grow about twofold a level (3.5155 σ; level 1: σ² = 3/4 + 2/3 + 1/12).
-        assert!((level_coc(1) - 4.305).abs() < 0.01, "{}", level_coc(1));
+        assert!(close(level_coc(1), 4.305, 0.01), "{}", level_coc(1));
         for l in 1..5 {
             let ratio = level_coc(l + 1) / level_coc(l);
             assert!((1.9..2.1).contains(&ratio), "{l}: {ratio}");

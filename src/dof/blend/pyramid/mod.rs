@@ -280,6 +280,7 @@ pub fn blend(config: &DofConfig, mut color: Color, coc: &[f32]) -> Color {
 mod tests {
     use super::levels::HALF_VARIANCE;
     use super::*;
+    use crate::numeric::close;
 
     #[test]
     fn the_half_step_reads_the_frame_as_it_was_across_bands() {
@@ -319,7 +320,7 @@ mod tests {
                     let expected = sharp + f * (filtered - sharp);
                     let got = got[y * width + x] as f64;
                     assert!(
-                        (got - expected).abs() < 1e-5,
+                        close(got, expected, 1e-5),
                         "plane {k} ({x}, {y}): {got} against {expected}"
                     );
                 }
