@@ -10,7 +10,7 @@
 //! - **static**: nothing moves;
 //! - **sparse**: one moving square covering a given share of the pixels;
 //! - **wgpu**: the default on every-pixel-moving and on the 5 % sparse frame with the three
-//!   stages on the GPU (src/gpu/stretch.rs), wherever an adapter is present — on Mesa's
+//!   stages on the GPU (src/gpu/motion/stretch.rs), wherever an adapter is present — on Mesa's
 //!   lavapipe a record, not a speed: it runs the shaders on the same CPU cores.
 //!
 //! Median of 5 runs after one warm-up run.

@@ -1,5 +1,5 @@
-//! reconstruct's `gather` on the GPU (src/gpu/reconstruct.wgsl) against the CPU reference
-//! (src/motion/reconstruct.rs), every variant, on generated frames: moving stripes and edges,
+//! reconstruct's `gather` on the GPU (src/gpu/motion/reconstruct.wgsl) against the CPU reference
+//! (src/motion/reconstruct/), every variant, on generated frames: moving stripes and edges,
 //! a still subject over a moving background, noise with random motion, and stress frames
 //! (NaN, ±∞, huge and tiny velocity and depth, through the numeric policy as a run applies
 //! it); and `blur --backend wgpu` through the CLI. Skips as tests/gpu.rs says without an

@@ -1,4 +1,4 @@
-//! scatter on the GPU (src/gpu/scatter.wgsl: reach → accumulate → resolve) against the CPU
+//! scatter on the GPU (src/gpu/motion/scatter.wgsl: reach → accumulate → resolve) against the CPU
 //! reference (src/motion/scatter/), every normalisation × curve kind × weight, with shutter
 //! offsets, on generated frames: a spinning rotor over a panning background, curved motion
 //! over noise with alpha and depth motion, and stress frames (NaN, ±∞ and huge positions,

@@ -1,4 +1,4 @@
-//! stretch on the GPU (src/gpu/stretch.wgsl: texture_blur, move_vertices, rasterise as a
+//! stretch on the GPU (src/gpu/motion/stretch.wgsl: texture_blur, move_vertices, rasterise as a
 //! render pipeline) against the CPU reference (src/motion/stretch.rs), both anchors, with and
 //! without the texture pre-blur, with shutter offsets, on generated frames (a near square
 //! over a far moving background, noise over two depth layers so silhouettes are everywhere)
@@ -21,7 +21,7 @@ use crate::support::*;
 /// What the GPU may differ by, relative to the range of the CPU's output channel.
 ///
 /// The GPU decides coverage and barycentric weights with the CPU's edge functions and tie
-/// rule (src/gpu/stretch.rs), draws in the CPU's order and blends in primitive order, so a
+/// rule (src/gpu/motion/stretch.rs), draws in the CPU's order and blends in primitive order, so a
 /// pixel gets the same fragments in the same order on both sides and they differ by rounding:
 /// the edge functions in f32 on corners relative to the pixel centre against f64 on absolute
 /// positions, `src·α + dst·(1 − α)` against `dst + α·(src − dst)` per layer, WGSL's `sqrt`
@@ -41,7 +41,7 @@ use crate::support::*;
 /// Measured on lavapipe (Mesa 22.3, LLVM 15) over every frame, variant and offset here: max
 /// 2.8e-5 (the fast square), mean ≤ 2.5e-7, no pixel outside [`AGREE`]. (Drawing the
 /// triangles with the fixed-function rasteriser's coverage instead, 1–24 % of pixels were
-/// outside; src/gpu/stretch.rs says why.) A shader that drops the depth test, the tear or the
+/// outside; src/gpu/motion/stretch.rs says why.) A shader that drops the depth test, the tear or the
 /// anchor fails these bounds
 /// ([`stretch_parity_fails_without_the_depth_test_the_tear_or_the_anchor`]).
 const AGREE: f32 = 1e-4;

@@ -320,7 +320,7 @@ fn still_pixels_beside_a_moving_disc_do_not_count_its_fringe_twice() {
     // sparse at 160×90: a disc of 4 px radius moving (3.5, 1.25) px a frame over a still
     // background. A still pixel at the disc's rim holds part of the disc in its colour at the
     // frame's time; the taps bring the disc's streak to it as well. Before the matte
-    // (src/motion/matte.rs) that fringe was counted twice: over the 30 still pixels of the
+    // (src/motion/reconstruct/matte.rs) that fringe was counted twice: over the 30 still pixels of the
     // changed region the RMSE was 0.0400 (measured with the CLI on the same scene, `shutter
     // scene sparse --size 160x90 --samples 256`, and the binary before); with it, 0.0297, and
     // 0.0282 with the coverage steepened at still centres (COVER_SLOPE).

@@ -73,7 +73,7 @@ fn readme_settings_tables_match_the_definitions() {
     }
     assert!(
         text == expected,
-        "README.md's settings tables differ from src/settings.rs: run \
+        "README.md's settings tables differ from src/settings/: run \
          `SHUTTER_BLESS=1 cargo test readme` and review the diff"
     );
     // Every setting has its row.

@@ -22,7 +22,7 @@ pub const REACH: f32 = std::f32::consts::SQRT_2;
 
 /// What the reach test needs of a source tile's vector M, worked out once per tile: |M|², the
 /// tiles it spans each way along x and y (⌈|M_x|/tile⌉, ⌈|M_y|/tile⌉) and the unit normal of
-/// its line. The GPU twin (src/gpu/dilate.rs) takes these numbers from here too: WGSL's square
+/// its line. The GPU twin (src/gpu/motion/dilate.rs) takes these numbers from here too: WGSL's square
 /// root and division are not correctly rounded, and for diagonal motion the reach test sits
 /// exactly on its threshold (a tile beside the diagonal is √2 tiles from it).
 #[derive(Clone, Copy, Debug, PartialEq)]

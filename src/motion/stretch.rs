@@ -108,7 +108,7 @@ impl Default for StretchParams {
 }
 
 /// Everything stretch's stages read besides their buffers, as plain numbers: the uniform of
-/// its GPU twin (keep in sync with `struct StretchConfig` in src/gpu/stretch.wgsl; a test
+/// its GPU twin (keep in sync with `struct StretchConfig` in src/gpu/motion/stretch.wgsl; a test
 /// there compares the fields).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]

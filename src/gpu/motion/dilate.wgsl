@@ -25,7 +25,7 @@
 // axes). Diagonal and axis-aligned motion, where the test meets its threshold exactly, have
 // exact products. tests/gpu.rs states the tolerance.
 
-// Keep in sync with `DilateConfig` in src/gpu/dilate.rs (a size test guards the layout).
+// Keep in sync with `DilateConfig` in src/gpu/motion/dilate.rs (a size test guards the layout).
 struct DilateConfig {
     // The grid, tiles.
     columns: u32,
@@ -35,7 +35,7 @@ struct DilateConfig {
     _pad: u32,
 }
 
-// Keep in sync with `SourceTile` in src/gpu/dilate.rs: `Source` of src/motion/dilate.rs.
+// Keep in sync with `SourceTile` in src/gpu/motion/dilate.rs: `Source` of src/motion/dilate.rs.
 struct SourceTile {
     // |M|², px².
     length2: f32,

@@ -11,7 +11,7 @@
 // wins, +∞ wins over anything finite); a driver that fuses x·x + y·y into an fma, or flushes
 // subnormals, can only swap two vectors whose |v|² are within a rounding of each other.
 
-// Keep in sync with `NeighborMaxConfig` in src/gpu/neighbor_max.rs (a size test guards the
+// Keep in sync with `NeighborMaxConfig` in src/gpu/motion/neighbor_max.rs (a size test guards the
 // layout).
 struct NeighborMaxConfig {
     // The grid, tiles.

@@ -1,6 +1,6 @@
 // reconstruct's `gather` stage on the GPU: the twin of `gather` / `gather_pixel` (paper and
 // dual) and `gather_2014` / `gather_pixel_2014` with `around`, `bilinear` and `split` (2014
-// and exposure) in src/motion/reconstruct.rs, the CPU reference. Read the two side by side:
+// and exposure) in src/motion/reconstruct/, the CPU reference. Read the two side by side:
 // the names, the order of the operations and the order of the sums are the CPU's. One
 // invocation per pixel; a pixel outside the tiles the CPU gathers is left as it came.
 //
@@ -10,7 +10,7 @@
 //
 // Bindings, in the CPU functions' argument order: 0 the config, 1 texels, 2 velocity, 3
 // tiles, 4 colour, and 5 the exposure variant's mattes (`gather_2014`'s third argument;
-// three words a pixel, src/motion/matte.rs; one unread word otherwise). Planar buffers hold their planes one after the other, as the CPU's
+// three words a pixel, src/motion/reconstruct/matte.rs; one unread word otherwise). Planar buffers hold their planes one after the other, as the CPU's
 // structs do: velocity x then y, tiles x then y, colour r, g, b, a.
 //
 // Numerics: the inputs obey the numeric policy (finite colour and velocity, packed depth at
@@ -20,7 +20,7 @@
 // compute with it: `scaled` recognises a huge 1/|V| by its bits and gives a distance past
 // every filter's support, which is what the CPU's arithmetic gives.
 
-// Keep in sync with `ReconstructConfig` in src/motion/reconstruct.rs (a size test guards
+// Keep in sync with `ReconstructConfig` in src/motion/reconstruct/ (a size test guards
 // the layout: eleven 4-byte fields).
 struct ReconstructConfig {
     // Frame size, pixels.
@@ -57,7 +57,7 @@ struct ReconstructConfig {
 // moving and still partners (`Matte`).
 @group(0) @binding(5) var<storage, read> mattes: array<f32>;
 
-// The CPU's constants (src/motion/reconstruct.rs); a unit test in src/gpu/reconstruct.rs
+// The CPU's constants (src/motion/reconstruct/); a unit test in src/gpu/motion/reconstruct.rs
 // checks each against the Rust value.
 const HALF_PIXEL: f32 = 0.5;
 const EPSILON: f32 = 0.01;

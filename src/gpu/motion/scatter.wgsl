@@ -3,7 +3,7 @@
 // `reach` (which pixels move; a list of them) → `prepare` (the accumulate dispatch's size) →
 // `accumulate` (each moving pixel draws its curve into fixed-point sums) → `resolve` (each
 // pixel's output by the normalisation). Why a compute rasteriser with integer atomics, and
-// the f32 form of the geometry: src/gpu/scatter.rs.
+// the f32 form of the geometry: src/gpu/motion/scatter.rs.
 //
 // Bindings, in order: the ScatterConfig uniform; colour (R, G, B, A planes), depth, prev and
 // next (x, y, z planes each) — the CPU's inputs; then `state` (the moving count, the
@@ -11,7 +11,7 @@
 // five sums (R, G, B, A, weight; two words per pixel) and the output colour (four planes).
 
 // Keep in sync with `ScatterConfig` in src/motion/scatter/mod.rs (its size test and the test
-// in src/gpu/scatter.rs guard the layout: thirteen 4-byte fields).
+// in src/gpu/motion/scatter.rs guard the layout: thirteen 4-byte fields).
 struct ScatterConfig {
     width: u32,
     height: u32,
@@ -47,7 +47,7 @@ struct ScatterConfig {
 override WORKGROUP: u32 = 64u;
 override REVERSED: bool = false;
 
-// `state`'s words (keep in sync with src/gpu/scatter.rs).
+// `state`'s words (keep in sync with src/gpu/motion/scatter.rs).
 const COUNT: u32 = 0u;
 const DISPATCH: u32 = 1u;
 const BOUND: u32 = 4u;

@@ -1,5 +1,5 @@
 // stretch on the GPU: the twin of src/motion/stretch.rs (texture_blur → move_vertices →
-// rasterise), read side by side with it. src/gpu/stretch.rs says how the stages are run and
+// rasterise), read side by side with it. src/gpu/motion/stretch.rs says how the stages are run and
 // why rasterise is a render pipeline.
 //
 // Compute bindings (group 0), the CPU stages' arguments in order: config, planes (R, G, B, A
@@ -9,7 +9,7 @@
 // Render bindings (group 0, read-only): config, planes, z, blurred, vertices, order.
 
 // Keep in sync with StretchConfig in src/motion/stretch.rs (ten 4-byte words; a test in
-// src/gpu/stretch.rs compares the fields).
+// src/gpu/motion/stretch.rs compares the fields).
 struct StretchConfig {
     width: u32,
     height: u32,

@@ -21,7 +21,7 @@
 // flush subnormal results to zero. Either can change the winner only between two vectors
 // whose |v|² are within a rounding of each other, or below 2⁻¹²⁶ px²; tests/gpu.rs states it.
 
-// Keep in sync with `TileMaxConfig` in src/gpu/tile_max.rs (a size test guards the layout).
+// Keep in sync with `TileMaxConfig` in src/gpu/motion/tile_max.rs (a size test guards the layout).
 struct TileMaxConfig {
     // Frame size, pixels.
     width: u32,

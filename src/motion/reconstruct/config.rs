@@ -108,7 +108,7 @@ impl Default for ReconstructParams {
 }
 
 /// Everything reconstruct's stages read besides their buffers, as plain numbers: the uniform
-/// of its GPU twin, `ReconstructConfig` in src/gpu/reconstruct.wgsl (keep the two in sync; the
+/// of its GPU twin, `ReconstructConfig` in src/gpu/motion/reconstruct.wgsl (keep the two in sync; the
 /// size test below guards the layout).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]

@@ -103,8 +103,8 @@ impl Default for ScatterParams {
 }
 
 /// Everything scatter's stages read besides their buffers, as plain numbers: the shape of the
-/// uniform of its GPU twin, `ScatterConfig` in src/gpu/scatter.wgsl (keep the two in sync;
-/// the size test here and the field test in src/gpu/scatter.rs guard the layout).
+/// uniform of its GPU twin, `ScatterConfig` in src/gpu/motion/scatter.wgsl (keep the two in sync;
+/// the size test here and the field test in src/gpu/motion/scatter.rs guard the layout).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]
 #[repr(C)]
