@@ -52,6 +52,7 @@ impl Variant {
     ];
 
     /// The number the config carries.
+    #[inline]
     pub fn code(self) -> u32 {
         match self {
             Variant::Paper => 0,
@@ -63,6 +64,7 @@ impl Variant {
 
     /// The variant a config's code names ([`Variant::code`]); an unknown code is the
     /// default's.
+    #[inline]
     pub fn from_code(code: u32) -> Variant {
         Variant::ALL
             .iter()
@@ -72,6 +74,7 @@ impl Variant {
     }
 
     /// Whether this variant is the 2014 filter's (dilated tiles, split accumulation).
+    #[inline]
     pub fn is_2014(self) -> bool {
         matches!(self, Variant::Stable | Variant::Exposure)
     }
@@ -142,16 +145,19 @@ pub struct ReconstructConfig {
 
 impl ReconstructConfig {
     /// The variant, typed ([`Variant::from_code`] of the code the GPU reads).
+    #[inline]
     pub fn variant(&self) -> Variant {
         Variant::from_code(self.variant)
     }
 
     /// Whether the taps are jittered per pixel, typed (the GPU reads the word).
+    #[inline]
     pub fn jitters(&self) -> bool {
         self.jitter != 0
     }
 
     /// The 2014 gather's form under this config ([`Form::of`]).
+    #[inline]
     pub fn form(&self) -> Form {
         Form::of(self)
     }
@@ -209,20 +215,44 @@ pub struct Form {
 }
 
 impl Form {
+    /// Ours, the exposure variant's, whatever the offset.
+    pub const OURS: Form = Form {
+        own_tile: true,
+        tap_spacing: TAP_SPACING,
+        edge: 0.5,
+        still_reach: 0.5,
+        centre_count: 0.0,
+        still_second_set: true,
+        half_step: true,
+        split_taps: true,
+        either_way: true,
+        exposure_fill: true,
+    };
+
+    /// Blender's, under a centred exposure (offset, it looks up its own tile too).
+    pub const BLENDER: Form = Form {
+        own_tile: false,
+        tap_spacing: 0.0,
+        edge: 1.0,
+        still_reach: 1.0,
+        centre_count: 1.0,
+        still_second_set: false,
+        half_step: false,
+        split_taps: false,
+        either_way: false,
+        exposure_fill: false,
+    };
+
     /// The form `config` runs (paper and dual, which do not read it, get Blender's).
+    #[inline]
     pub fn of(config: &ReconstructConfig) -> Form {
-        let ours = config.variant() == Variant::Exposure;
-        Form {
-            own_tile: ours || config.offset != 0.0,
-            tap_spacing: if ours { TAP_SPACING } else { 0.0 },
-            edge: if ours { 0.5 } else { 1.0 },
-            still_reach: if ours { 0.5 } else { 1.0 },
-            centre_count: if ours { 0.0 } else { 1.0 },
-            still_second_set: ours,
-            half_step: ours,
-            split_taps: ours,
-            either_way: ours,
-            exposure_fill: ours,
+        if config.variant() == Variant::Exposure {
+            Form::OURS
+        } else {
+            Form {
+                own_tile: config.offset != 0.0,
+                ..Form::BLENDER
+            }
         }
     }
 }
@@ -268,12 +298,14 @@ pub fn reach_factor(config: &ReconstructConfig) -> f32 {
 
 /// Far depth (+∞ under the numeric policy) as a finite number, so that the soft depth
 /// comparison's differences stay finite.
+#[inline]
 pub(crate) fn finite_depth(z: f32) -> f32 {
     z.min(HUGE)
 }
 
 /// The clamped half-spread velocity of the paper: `V = q·max(0.5, min(|q|, k)) / (|q| + ε)`
 /// with `q = ½·v·φ`.
+#[inline]
 pub fn half_spread(vx: f32, vy: f32, shutter: f32, k: f32) -> (f32, f32) {
     let (qx, qy) = (0.5 * vx * shutter, 0.5 * vy * shutter);
     let length = (qx * qx + qy * qy).sqrt();
