@@ -9,53 +9,46 @@ use std::path::{Path, PathBuf};
 /// The top-level module each source file of `src/` belongs to, and the top-level modules its
 /// non-test code names through `crate::`.
 fn imports() -> BTreeMap<String, BTreeSet<String>> {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
-    let mut stack = vec![src.clone()];
-    while let Some(dir) = stack.pop() {
-        for entry in std::fs::read_dir(&dir).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                stack.push(path);
-                continue;
-            }
-            if path.extension().is_none_or(|e| e != "rs") {
-                continue;
-            }
-            let relative = path.strip_prefix(&src).unwrap();
-            let module = relative
-                .iter()
-                .next()
-                .unwrap()
-                .to_string_lossy()
-                .trim_end_matches(".rs")
-                .to_string();
-            if ["lib", "main"].contains(&module.as_str()) {
-                continue;
-            }
-            let text = std::fs::read_to_string(&path).unwrap();
-            // Code only: comments may name any module, and tests are left out.
-            let code: String = text
-                .split("#[cfg(test)]")
-                .next()
-                .unwrap()
-                .lines()
-                .filter(|l| !l.trim_start().starts_with("//"))
-                .collect::<Vec<_>>()
-                .join("\n");
-            let uses = graph.entry(module.clone()).or_default();
-            for (i, _) in code.match_indices("crate::") {
-                let name: String = code[i + 7..]
-                    .chars()
-                    .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
-                    .collect();
-                if !name.is_empty() && name != module {
-                    uses.insert(name);
-                }
+    for file in source_files() {
+        let module = file
+            .iter()
+            .next()
+            .unwrap()
+            .to_string_lossy()
+            .trim_end_matches(".rs")
+            .to_string();
+        if ["lib", "main"].contains(&module.as_str()) {
+            continue;
+        }
+        let code = code_of(&file);
+        let uses = graph.entry(module.clone()).or_default();
+        for (i, _) in code.match_indices("crate::") {
+            let name: String = code[i + 7..]
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                .collect();
+            if !name.is_empty() && name != module {
+                uses.insert(name);
             }
         }
     }
     graph
+}
+
+/// The code of a file under `src/`: comments (which may name any module) and test-only code
+/// (after `#[cfg(test)]`, as dev-dependencies are) left out.
+fn code_of(file: &Path) -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("src").join(file);
+    std::fs::read_to_string(path)
+        .unwrap()
+        .split("#[cfg(test)]")
+        .next()
+        .unwrap()
+        .lines()
+        .map(|l| l.split("//").next().unwrap())
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 #[test]
@@ -117,8 +110,13 @@ fn no_modules_import_each_other_in_a_circle() {
     }
 }
 
-/// Every source file under `src/` (`.rs`), by its path relative to `src/`.
+/// Every Rust source file under `src/`, by its path relative to `src/`.
 fn source_files() -> Vec<PathBuf> {
+    files_under_src(&["rs"])
+}
+
+/// Every file under `src/` whose extension is one of `extensions`, relative to `src/`.
+fn files_under_src(extensions: &[&str]) -> Vec<PathBuf> {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut files = Vec::new();
     let mut stack = vec![src.clone()];
@@ -127,7 +125,10 @@ fn source_files() -> Vec<PathBuf> {
             let path = entry.unwrap().path();
             if path.is_dir() {
                 stack.push(path);
-            } else if path.extension().is_some_and(|e| e == "rs") {
+            } else if path
+                .extension()
+                .is_some_and(|e| extensions.iter().any(|x| e == *x))
+            {
                 files.push(path.strip_prefix(&src).unwrap().to_path_buf());
             }
         }
@@ -247,19 +248,10 @@ fn use_paths(code: &str) -> Vec<String> {
 /// the longest module prefix it names (an item named through a parent's re-export counts as
 /// the parent's). Re-exports themselves (`pub use`) and test-only code are left out.
 fn file_imports() -> BTreeMap<PathBuf, BTreeSet<PathBuf>> {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let files: BTreeSet<PathBuf> = source_files().into_iter().collect();
     let mut graph = BTreeMap::new();
     for file in &files {
-        let text = std::fs::read_to_string(src.join(file)).unwrap();
-        let code: String = text
-            .split("#[cfg(test)]")
-            .next()
-            .unwrap()
-            .lines()
-            .map(|l| l.split("//").next().unwrap())
-            .collect::<Vec<_>>()
-            .join("\n");
+        let code = code_of(file);
         let module = module_of(file);
         let mut paths = use_paths(&code);
         for start in ["crate::", "super::"] {
@@ -376,21 +368,16 @@ const MOST_LINES: usize = 800;
 #[test]
 fn no_source_file_is_over_800_lines() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut long = Vec::new();
-    let mut stack = vec![src.clone()];
-    while let Some(dir) = stack.pop() {
-        for entry in std::fs::read_dir(&dir).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                stack.push(path);
-            } else if path.extension().is_some_and(|e| e == "rs" || e == "wgsl") {
-                let lines = std::fs::read_to_string(&path).unwrap().lines().count();
-                if lines > MOST_LINES {
-                    long.push(format!("{} ({lines} lines)", path.display()));
-                }
-            }
-        }
-    }
+    let long: Vec<String> = files_under_src(&["rs", "wgsl"])
+        .into_iter()
+        .filter_map(|file| {
+            let lines = std::fs::read_to_string(src.join(&file))
+                .unwrap()
+                .lines()
+                .count();
+            (lines > MOST_LINES).then(|| format!("{} ({lines} lines)", file.display()))
+        })
+        .collect();
     assert!(long.is_empty(), "over {MOST_LINES} lines: {long:?}");
 }
 
@@ -429,19 +416,7 @@ fn files_the_architecture_names() -> BTreeSet<PathBuf> {
 
 #[test]
 fn the_architecture_names_every_source_file_and_no_other() {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut files = BTreeSet::new();
-    let mut stack = vec![src.clone()];
-    while let Some(dir) = stack.pop() {
-        for entry in std::fs::read_dir(&dir).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                stack.push(path);
-            } else if path.extension().is_some_and(|e| e == "rs" || e == "wgsl") {
-                files.insert(path.strip_prefix(&src).unwrap().to_path_buf());
-            }
-        }
-    }
+    let files: BTreeSet<PathBuf> = files_under_src(&["rs", "wgsl"]).into_iter().collect();
     let named = files_the_architecture_names();
     let missing: Vec<_> = files.difference(&named).collect();
     let stale: Vec<_> = named.difference(&files).collect();

@@ -53,12 +53,12 @@ impl crate::dof::Stages for Gpu {
 
     fn blend(&self, config: &DofConfig, color: Color, coc: &[f32]) -> Color {
         match config.blend_form {
-            BlendForm::Pyramid => self.or_cpu(
-                "blend",
-                || self.try_dof_blend(config, &color, coc),
-                // The CPU's pyramid writes the frame in place: a fallback takes a copy.
-                || pyramid::blend(config, color.clone(), coc),
-            ),
+            BlendForm::Pyramid => {
+                // Tried first, so a fallback can hand the frame to the CPU's pyramid, which
+                // writes it in place.
+                let tried = self.try_dof_blend(config, &color, coc);
+                self.or_cpu("blend", || tried, || pyramid::blend(config, color, coc))
+            }
             // The talk's form has no twin: it runs on the CPU, and is no fallback.
             BlendForm::Talk => talk::blend(config, &color, coc),
         }
