@@ -39,26 +39,39 @@ pub fn gather_2014(
     color: &mut Color,
 ) {
     // Each of the two forms a run meets almost always (ours, and Blender's centred) is given
-    // to the gather as a constant, so the compiler specialises the gather for it: with the
-    // form read at run time, the ten choices kept the lanes' arithmetic from being
-    // specialised, and the default took 6 % more instructions at 1080p (callgrind, one
-    // thread, the bench's moving frame). Any other form (Blender's offset) runs as read.
+    // to the gather as a constant, chosen once per frame, so the compiler specialises a whole
+    // gather for it: with the form read at run time, the ten choices kept the lanes'
+    // arithmetic from being specialised, and the default took 6 % more instructions at 1080p
+    // (callgrind, one thread, the bench's moving frame); chosen per pixel, the three copies
+    // shared one loop and it ran 4 % slower than before issue 28 (perf, same frame). Any other
+    // form (Blender's offset) runs as read.
     let form = config.form();
-    let pixel = |x, y, form: &Form| gather_pixel_2014(config, form, texels, mattes, tiles, x, y);
+    if form == Form::OURS {
+        gather_2014_as(config, || Form::OURS, texels, mattes, tiles, color);
+    } else if form == Form::BLENDER {
+        gather_2014_as(config, || Form::BLENDER, texels, mattes, tiles, color);
+    } else {
+        gather_2014_as(config, || form, texels, mattes, tiles, color);
+    }
+}
+
+/// [`gather_2014`] in the form `form` gives: a constant for the usual two, so each has its own
+/// specialised copy.
+#[inline(always)]
+fn gather_2014_as(
+    config: &ReconstructConfig,
+    form: impl Fn() -> Form + Sync,
+    texels: &[Texel2014],
+    mattes: &[Matte],
+    tiles: &TileGrid,
+    color: &mut Color,
+) {
     gather_tiles(
         config,
         tiles.columns,
         color,
         |c, row| near_blur(tiles, c, row, 1),
-        |_, x, y| {
-            if form == Form::OURS {
-                pixel(x, y, &Form::OURS)
-            } else if form == Form::BLENDER {
-                pixel(x, y, &Form::BLENDER)
-            } else {
-                pixel(x, y, &form)
-            }
-        },
+        |_, x, y| gather_pixel_2014(config, &form(), texels, mattes, tiles, x, y),
     );
 }
 
