@@ -162,6 +162,30 @@ pub struct Frame {
     pub velocity: Option<Velocity>,
     pub prev: Option<Positions>,
     pub next: Option<Positions>,
+    /// What the colour file holds besides the passes, given back to the output.
+    pub carried: Carried,
+}
+
+/// What a frame brings from its colour file besides the passes and gives back to its output,
+/// untouched by them (issue 29: what comes in goes out). The passes keep it as it is: each
+/// returns the frame it was given with new colour.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Carried {
+    /// An 8/16-bit colour file's profile and metadata (`io::image` reads and writes them).
+    pub photo: Option<Photo>,
+}
+
+/// The metadata of an 8/16-bit photo, as its file stores it, so the output holds it again.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Photo {
+    /// The embedded ICC profile (its bytes as stored).
+    pub icc: Option<Vec<u8>>,
+    /// EXIF, XMP and IPTC, as stored.
+    pub exif: Option<Vec<u8>>,
+    pub xmp: Option<Vec<u8>>,
+    pub iptc: Option<Vec<u8>>,
+    /// Bits per sample of the input (8 or 16).
+    pub bits: u8,
 }
 
 impl Frame {
@@ -176,6 +200,7 @@ impl Frame {
             velocity: None,
             prev: None,
             next: None,
+            carried: Carried::default(),
         }
     }
 
