@@ -173,6 +173,9 @@ pub struct Frame {
 pub struct Carried {
     /// An 8/16-bit colour file's profile and metadata (`io::image` reads and writes them).
     pub photo: Option<Photo>,
+    /// An EXR colour file's header (of the part that holds the colour): its attributes and
+    /// form (compression, line order, blocks, each channel's pixel type) for the output's.
+    pub exr: Option<Box<exr::meta::header::Header>>,
 }
 
 /// The metadata of an 8/16-bit photo, as its file stores it, so the output holds it again.

@@ -28,5 +28,6 @@ mod settings;
 mod stretch;
 mod structure;
 mod suggest;
+mod survives;
 mod truth;
 mod views;

@@ -86,6 +86,7 @@ fn describe_kind(info: &FileInfo) -> String {
             compression,
             tiled,
             multipart,
+            ..
         } => {
             let mut compression = compression.clone();
             compression.dedup();

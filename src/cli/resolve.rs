@@ -157,9 +157,21 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
     if args.linear {
         preset.color.transfer = Transfer::Linear;
     }
+    // An EXR output records what made it (`shutter/settings`): the preset and every setting
+    // that is not its default, as flags. Not how the job ran (threads, frame ranges, paths,
+    // the backend, the pixel limit): a frame the GPU's fallback made on the CPU is the CPU's
+    // frame, byte for byte.
+    let mut record = vec![format!("--preset {}", preset.name)];
+    let defaults = settings::Settings::default();
+    record.extend(settings::flags(&settings::Settings {
+        backend: defaults.backend,
+        max_pixels: defaults.max_pixels,
+        ..settings.clone()
+    }));
     let output_options = OutputOptions {
         srgb: preset.color.transfer == Transfer::Srgb,
-        ..settings.output
+        record: record.join(" "),
+        ..settings.output.clone()
     };
 
     Ok(Job {

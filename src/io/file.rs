@@ -49,6 +49,9 @@ pub enum FileKind {
         compression: Vec<&'static str>,
         tiled: bool,
         multipart: bool,
+        /// Every part's header, whole: what the output takes its attributes and form from
+        /// when the file holds the colour.
+        headers: Vec<exr::meta::header::Header>,
     },
     Image {
         format: &'static str,
@@ -341,6 +344,7 @@ fn probe_exr(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
                 .iter()
                 .any(|h| matches!(h.blocks, exr::meta::BlockDescription::Tiles(_))),
             multipart,
+            headers: meta.headers.to_vec(),
         },
         width: first.layer_size.0,
         height: first.layer_size.1,

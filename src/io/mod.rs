@@ -2,6 +2,7 @@
 //! and presets, frame sequences, and atomic output.
 
 pub mod exr;
+pub mod exr_like;
 pub mod file;
 pub mod image;
 pub mod lock;

@@ -15,6 +15,7 @@ use std::sync::{Mutex, MutexGuard, PoisonError};
 use crate::error::{Problem, ProblemKind};
 use crate::frame::{Frame, Plane, Windows};
 use crate::io::exr::{self as exr_io, ExrOptions};
+use crate::io::exr_like::{self, ExrOutput};
 use crate::io::file::{FileInfo, FileKind};
 use crate::io::image::{self as image_io, ImageFormat};
 
@@ -38,9 +39,12 @@ impl OutputFormat {
 }
 
 /// How outputs are encoded.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct OutputOptions {
-    pub exr: ExrOptions,
+    /// EXR output: what does not follow the input.
+    pub exr: ExrOutput,
+    /// What made the frames, as `shutter blur` flags: an EXR output's `shutter/settings`.
+    pub record: String,
     /// PNG/TIFF bits per channel: 8 or 16.
     pub sixteen_bit: bool,
     /// Apply the sRGB transfer to integer outputs.
@@ -50,7 +54,8 @@ pub struct OutputOptions {
 impl Default for OutputOptions {
     fn default() -> Self {
         OutputOptions {
-            exr: ExrOptions::default(),
+            exr: ExrOutput::default(),
+            record: String::new(),
             sixteen_bit: false,
             srgb: true,
         }
@@ -100,7 +105,14 @@ impl Temporary {
         if in_flight.stopping {
             return Err("the run is stopping (interrupted); nothing more is written".into());
         }
-        let file = File::create(&path).map_err(|e| e.to_string())?;
+        // Readable too: an EXR's headers are read back to put its attributes in order.
+        let file = File::options()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(&path)
+            .map_err(|e| e.to_string())?;
         in_flight.temporaries.push(path.clone());
         Ok((
             Temporary {
@@ -362,14 +374,17 @@ pub fn write_frame(
             if let Some(a) = color.a {
                 channels.push(("A".to_string(), a));
             }
-            write_exr_atomic(
-                path,
-                frame.width,
-                frame.height,
-                frame.windows,
-                channels,
-                options.exr,
-            )
+            write_atomic(path, |writer| {
+                exr_like::write_like(
+                    writer,
+                    (frame.width, frame.height),
+                    frame.windows,
+                    channels,
+                    frame.carried.exr.as_deref(),
+                    &options.exr,
+                    &options.record,
+                )
+            })
         }
         OutputFormat::Image(format) => write_atomic(path, |writer| {
             image_io::write_color(

@@ -605,13 +605,14 @@ pub const DEFS: &[Def] = &[
         value_name: "NAME",
         help: "EXR compression",
         kind: Kind::Choice(|| WRITABLE_COMPRESSIONS.to_vec()),
-        unset: "",
-        get: |s| Value::Name(compression_name(s.output.exr.compression)),
-        set: |s, v| {
-            if let Some(c) = parse_compression(v.name()) {
-                s.output.exr.compression = c;
-            }
+        unset: "as the colour file's (zip when it is not an EXR)",
+        get: |s| {
+            s.output
+                .exr
+                .compression
+                .map_or(Value::Unset, |c| Value::Name(compression_name(c)))
         },
+        set: |s, v| s.output.exr.compression = parse_compression(v.name()),
     },
     Def {
         name: "half",
@@ -619,7 +620,8 @@ pub const DEFS: &[Def] = &[
         section: Section::Output,
         applies: &[],
         value_name: "",
-        help: "write EXR as 16-bit half floats (off: 32-bit float)",
+        help: "write every EXR channel as 16-bit half float (off: each as the colour file \
+               stores it; 32-bit float when it is not an EXR)",
         kind: Kind::Switch,
         unset: "",
         get: |s| Value::Switch(s.output.exr.half),

@@ -2,6 +2,7 @@
 
 use crate::error::Problem;
 use crate::frame::{Color, Frame, Passes, Plane};
+use crate::io::file::FileKind;
 use crate::io::image::srgb_to_linear;
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
@@ -67,6 +68,12 @@ pub fn read_frame_noted(plan: &FramePlan) -> Result<(Frame, Vec<String>), Proble
             }
         }
         frame.color = Some(Color { r, g, b, a });
+        // What the output takes from the colour file besides its colour.
+        let file = &plan.files[plan_color.rgb[0].file];
+        if let FileKind::Exr { headers, .. } = &file.info.kind {
+            let part = file.info.channels[file.channels[plan_color.rgb[0].entry]].part;
+            frame.carried.exr = headers.get(part).cloned().map(Box::new);
+        }
     }
     if let Some((slot, spec)) = &plan.depth {
         let mut depth = take(*slot, &mut decoded);

@@ -1,0 +1,364 @@
+//! An EXR output made like the colour file it came from (issue 29: what comes in goes out).
+//!
+//! In: the planes to write, the colour file's header (the part that held the colour; `None`
+//! when the colour came from a PNG, JPEG or TIFF), the output settings and the record of
+//! what made the frame. Out: the file, written through the caller's writer.
+//!
+//! The output's header is the input's, minus what describes the file's layout: every
+//! attribute the exr crate reads (chromaticities, whiteLuminance, framesPerSecond, timeCode,
+//! owner, comments, capDate, utcOffset, the camera matrices, the views, custom attributes of
+//! any type), the display window, the pixel aspect; the data window is the frame's. Not kept:
+//! the preview (it shows the pixels before the blur), and the layout (channels, chunk count,
+//! the tile levels: only the full-resolution level is read, so a mip-mapped input comes back
+//! as one level). Its form follows the input too: compression (unless `compression` is set),
+//! line order, scan lines or tiles of the same size (a tiled plate stays tiled, so the
+//! tools that read it by tiles still can), and each channel's pixel type (half stays half;
+//! `half` writes every channel half). Added: `shutter/version` and `shutter/settings` (the
+//! settings that differ from the defaults, as flags), as Nuke records `nuke/node_hash`.
+//!
+//! The exr crate writes custom attributes in the order of a `HashMap`, which differs from
+//! run to run; [`sort_attributes`] then puts each header's attributes in name order (as
+//! OpenEXR's own library writes them), in place, so the same frame gives the same bytes.
+
+use std::fs::File;
+use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
+
+use exr::compression::Compression;
+use exr::image::{AnyChannel, AnyChannels, Blocks, Encoding, FlatSamples, Image, Layer};
+use exr::math::Vec2;
+use exr::meta::attribute::{AttributeValue, IntegerBounds, SampleType, Text};
+use exr::meta::header::{Header, ImageAttributes, LayerAttributes};
+use exr::meta::BlockDescription;
+use exr::prelude::{f16, LineOrder, WritableImage};
+
+use crate::frame::{Plane, Windows};
+
+/// How an EXR output is encoded where it does not follow its input.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ExrOutput {
+    /// The compression; `None`: the input's (ZIP when the input is not an EXR, or its
+    /// compression is one the exr crate cannot write).
+    pub compression: Option<Compression>,
+    /// Every channel as 16-bit half; off: each channel as the input stored it (32-bit float
+    /// when the input is not an EXR).
+    pub half: bool,
+}
+
+/// The compression when neither the settings nor the input say one: ZIP over 16 lines, what
+/// compositors write by default.
+pub const DEFAULT_COMPRESSION: Compression = Compression::ZIP16;
+
+/// Writes `channels` as one scan-line or tiled EXR made like `input` (see the module doc),
+/// then puts its attributes in name order. `record` is `shutter/settings`' text.
+pub fn write_like(
+    writer: &mut BufWriter<File>,
+    (width, height): (usize, usize),
+    windows: Windows,
+    channels: Vec<(String, Plane)>,
+    input: Option<&Header>,
+    output: &ExrOutput,
+    record: &str,
+) -> Result<(), String> {
+    let stored = |name: &str| {
+        input.and_then(|h| {
+            h.channels
+                .list
+                .iter()
+                .find(|c| c.name.to_string() == name)
+                .map(|c| c.sample_type)
+        })
+    };
+    let list = channels
+        .into_iter()
+        .map(|(name, plane)| {
+            let kind = if output.half {
+                SampleType::F16
+            } else {
+                stored(&name).unwrap_or(SampleType::F32)
+            };
+            let samples = match kind {
+                SampleType::F16 => FlatSamples::F16(plane.into_iter().map(f16::from_f32).collect()),
+                // Integer channels are ids and counts: they come back as they were read.
+                SampleType::U32 => FlatSamples::U32(plane.into_iter().map(|v| v as u32).collect()),
+                SampleType::F32 => FlatSamples::F32(plane),
+            };
+            AnyChannel::new(Text::from(name.as_str()), samples)
+        })
+        .collect();
+    let encoding = encoding_like(input, output);
+    let mut layer_attributes = input.map_or_else(LayerAttributes::default, |h| {
+        let mut kept = h.own_attributes.clone();
+        kept.preview = None;
+        kept
+    });
+    layer_attributes.layer_position = Vec2(windows.data_origin.0, windows.data_origin.1);
+    for (name, value) in [
+        ("shutter/version", env!("CARGO_PKG_VERSION")),
+        ("shutter/settings", record),
+    ] {
+        layer_attributes
+            .other
+            .insert(Text::from(name), AttributeValue::Text(latin1(value)));
+    }
+    let display = IntegerBounds::new(
+        (windows.display.x, windows.display.y),
+        (windows.display.width, windows.display.height),
+    );
+    let image_attributes = match input {
+        Some(h) => ImageAttributes {
+            display_window: display,
+            ..h.shared_attributes.clone()
+        },
+        None => ImageAttributes::new(display),
+    };
+    let layer = Layer::new(
+        (width, height),
+        layer_attributes,
+        encoding,
+        AnyChannels::sort(list),
+    );
+    let image = Image {
+        attributes: image_attributes,
+        layer_data: layer,
+    };
+    image
+        .write()
+        .to_buffered(&mut *writer)
+        .map_err(|e| e.to_string())?;
+    writer.flush().map_err(|e| e.to_string())?;
+    sort_attributes(writer.get_mut()).map_err(|e| format!("sorting its attributes: {e}"))
+}
+
+/// The input's compression, blocks and line order, where the exr crate can write them and
+/// the settings do not say otherwise.
+fn encoding_like(input: Option<&Header>, output: &ExrOutput) -> Encoding {
+    let writable = |c: Compression| {
+        crate::io::exr::WRITABLE_COMPRESSIONS.contains(&crate::io::exr::compression_name(c))
+    };
+    let compression = output
+        .compression
+        .or(input.map(|h| h.compression).filter(|&c| writable(c)))
+        .unwrap_or(DEFAULT_COMPRESSION);
+    let blocks = match input.map(|h| h.blocks) {
+        Some(BlockDescription::Tiles(tiles)) => Blocks::Tiles(tiles.tile_size),
+        _ => Blocks::ScanLines,
+    };
+    let line_order = match input.map(|h| h.line_order) {
+        Some(LineOrder::Decreasing) => LineOrder::Decreasing,
+        _ => LineOrder::Increasing,
+    };
+    Encoding {
+        compression,
+        blocks,
+        line_order,
+    }
+}
+
+/// `text` as an EXR text attribute: EXR text is bytes, read as Latin-1 by OpenEXR's tools;
+/// a character outside it becomes `?`.
+fn latin1(text: &str) -> Text {
+    let bytes: Vec<u8> = text
+        .chars()
+        .map(|c| u8::try_from(u32::from(c)).unwrap_or(b'?'))
+        .collect();
+    Text::from_slice_unchecked(&bytes)
+}
+
+/// Puts the attributes of every header of the EXR in `file` in name order, in place. Every
+/// attribute is a self-contained record (name, type, size, value), so reordering them
+/// leaves each header, and so the offset tables after them, the same length.
+pub fn sort_attributes(file: &mut File) -> std::io::Result<()> {
+    const MULTIPART: u32 = 0x1000;
+    let invalid = |what: &str| std::io::Error::new(std::io::ErrorKind::InvalidData, what);
+    file.seek(SeekFrom::Start(0))?;
+    let mut bytes = Vec::new();
+    // Headers are small; read them in growing steps until the last one ends.
+    let mut step = 1 << 16;
+    loop {
+        let have = bytes.len();
+        Read::by_ref(file).take(step).read_to_end(&mut bytes)?;
+        let complete = bytes.len() < have + step as usize;
+        if let Some(end) = headers_end(&bytes)? {
+            bytes.truncate(end);
+            break;
+        }
+        if complete {
+            return Err(invalid("the headers do not end"));
+        }
+        step *= 2;
+    }
+    let version = u32::from_le_bytes(bytes[4..8].try_into().expect("eight bytes"));
+    let mut at = 8;
+    let mut sorted = bytes[..8].to_vec();
+    loop {
+        let records = header_records(&bytes, at)?;
+        let end = records.last().map_or(at, |r| r.end);
+        let mut order: Vec<_> = records.iter().collect();
+        order.sort_by_key(|r| &bytes[r.start..r.name_end]);
+        for r in order {
+            sorted.extend_from_slice(&bytes[r.start..r.end]);
+        }
+        sorted.push(0);
+        at = end + 1;
+        if version & MULTIPART == 0 || bytes.get(at) == Some(&0) {
+            break;
+        }
+    }
+    sorted.extend_from_slice(&bytes[at..]);
+    debug_assert_eq!(sorted.len(), bytes.len());
+    file.seek(SeekFrom::Start(0))?;
+    file.write_all(&sorted)?;
+    file.seek(SeekFrom::End(0))?;
+    Ok(())
+}
+
+/// One attribute's bytes: `start..end`, its name `start..name_end`.
+struct Record {
+    start: usize,
+    name_end: usize,
+    end: usize,
+}
+
+/// The attributes of the header that starts at `at` (up to its terminating zero byte).
+fn header_records(bytes: &[u8], mut at: usize) -> std::io::Result<Vec<Record>> {
+    let short = || std::io::Error::new(std::io::ErrorKind::UnexpectedEof, "a header is cut off");
+    let mut records = Vec::new();
+    while *bytes.get(at).ok_or_else(short)? != 0 {
+        let start = at;
+        let zero = |from: usize| {
+            bytes[from.min(bytes.len())..]
+                .iter()
+                .position(|&b| b == 0)
+                .map(|p| from + p)
+                .ok_or_else(short)
+        };
+        let name_end = zero(start)?;
+        let type_end = zero(name_end + 1)?;
+        let size_at = type_end + 1;
+        let size = bytes.get(size_at..size_at + 4).ok_or_else(short)?;
+        let size = i32::from_le_bytes(size.try_into().expect("four bytes"));
+        let size = usize::try_from(size).map_err(|_| short())?;
+        let end = size_at + 4 + size;
+        if end > bytes.len() {
+            return Err(short());
+        }
+        records.push(Record {
+            start,
+            name_end,
+            end,
+        });
+        at = end;
+    }
+    Ok(records)
+}
+
+/// Where the headers of the file whose first bytes are `bytes` end (after the last header's
+/// terminator, and the empty header that ends a multi-part file's list), or `None` when
+/// `bytes` stops before that.
+fn headers_end(bytes: &[u8]) -> std::io::Result<Option<usize>> {
+    if bytes.len() < 8 {
+        return Ok(None);
+    }
+    let multipart = u32::from_le_bytes(bytes[4..8].try_into().expect("eight bytes")) & 0x1000 != 0;
+    let mut at = 8;
+    loop {
+        let records = match header_records(bytes, at) {
+            Ok(records) => records,
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => return Ok(None),
+            Err(e) => return Err(e),
+        };
+        at = records.last().map_or(at, |r| r.end) + 1;
+        if !multipart {
+            return Ok(Some(at));
+        }
+        match bytes.get(at) {
+            None => return Ok(None),
+            Some(0) => return Ok(Some(at + 1)),
+            Some(_) => {}
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use exr::meta::MetaData;
+
+    /// A two-part file whose parts carry custom attributes, written by the exr crate.
+    fn two_parts(path: &std::path::Path) {
+        use exr::image::{AnyChannel, AnyChannels, FlatSamples, Image, Layer};
+        let layer = |name: &str, attributes: &[(&str, i32)]| {
+            let mut own = LayerAttributes::named(name);
+            for &(key, value) in attributes {
+                own.other
+                    .insert(Text::from(key), AttributeValue::I32(value));
+            }
+            Layer::new(
+                (3, 2),
+                own,
+                Encoding::FAST_LOSSLESS,
+                AnyChannels::sort(
+                    vec![AnyChannel::new(
+                        Text::from("Y"),
+                        FlatSamples::F32(vec![0.5; 6]),
+                    )]
+                    .into(),
+                ),
+            )
+        };
+        let image = Image::from_layers(
+            ImageAttributes::new(IntegerBounds::from_dimensions((3, 2))),
+            vec![
+                layer("beauty", &[("zeta", 1), ("alpha", 2), ("mid", 3)]),
+                layer("data", &[("b", 4), ("a", 5)]),
+            ],
+        );
+        image.write().to_file(path).unwrap();
+    }
+
+    /// The attribute names of each header, in the order the file holds them.
+    fn names_in_order(bytes: &[u8]) -> Vec<Vec<String>> {
+        let mut at = 8;
+        let mut headers = Vec::new();
+        loop {
+            let records = header_records(bytes, at).unwrap();
+            headers.push(
+                records
+                    .iter()
+                    .map(|r| String::from_utf8_lossy(&bytes[r.start..r.name_end]).into_owned())
+                    .collect(),
+            );
+            at = records.last().unwrap().end + 1;
+            if bytes[at] == 0 {
+                return headers;
+            }
+        }
+    }
+
+    #[test]
+    fn a_multi_part_files_attributes_are_put_in_name_order_and_read_the_same() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("two.exr");
+        two_parts(&path);
+        let before = MetaData::read_from_file(&path, false).unwrap();
+        let length = std::fs::metadata(&path).unwrap().len();
+        let mut file = File::options().read(true).write(true).open(&path).unwrap();
+        sort_attributes(&mut file).unwrap();
+        drop(file);
+        let bytes = std::fs::read(&path).unwrap();
+        assert_eq!(bytes.len() as u64, length);
+        let headers = names_in_order(&bytes);
+        assert_eq!(headers.len(), 2);
+        for names in &headers {
+            let mut sorted = names.clone();
+            sorted.sort();
+            assert_eq!(names, &sorted);
+        }
+        assert!(headers[0].contains(&"zeta".to_string()) && headers[1].contains(&"a".to_string()));
+        // The same headers, and the pixels still where the offset tables say.
+        let after = MetaData::read_from_file(&path, false).unwrap();
+        assert_eq!(before.headers, after.headers);
+        let image = exr::prelude::read_all_flat_layers_from_file(&path).unwrap();
+        assert_eq!(image.layer_data.len(), 2);
+    }
+}
