@@ -176,6 +176,40 @@ pub struct Carried {
     /// An EXR colour file's header (of the part that holds the colour): its attributes and
     /// form (compression, line order, blocks, each channel's pixel type) for the output's.
     pub exr: Option<Box<exr::meta::header::Header>>,
+    /// The names the beauty's channels had in the colour file (R, G, B and A when empty):
+    /// an EXR output names them so again.
+    pub beauty: Vec<String>,
+    /// Every other channel of the colour file's part, in its order, with its class
+    /// (`io::channels`): colour channels are blurred with the beauty's weights, data channels
+    /// come back as they were read.
+    pub channels: Vec<CarriedChannel>,
+}
+
+/// What a carried channel holds ([`crate::io::channels`] sorts them).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LayerClass {
+    /// Light (`diffuse.R`, `specular.A`): blurred with exactly the weights the beauty gets.
+    Colour,
+    /// A description of the surface (depth, vectors, normals, IDs): passed through unchanged.
+    Data,
+}
+
+impl LayerClass {
+    pub fn name(self) -> &'static str {
+        match self {
+            LayerClass::Colour => "colour",
+            LayerClass::Data => "data",
+        }
+    }
+}
+
+/// A channel of the colour file besides the beauty's, carried to the output.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CarriedChannel {
+    /// Its name as stored (`diffuse.R`).
+    pub name: String,
+    pub class: LayerClass,
+    pub plane: Plane,
 }
 
 /// The metadata of an 8/16-bit photo, as its file stores it, so the output holds it again.
@@ -203,6 +237,22 @@ impl Frame {
             velocity: None,
             prev: None,
             next: None,
+            carried: Carried::default(),
+        }
+    }
+
+    /// The frame's size and passes without its colour or what it carries: what a colour
+    /// layer is blurred with in the beauty's place.
+    pub fn clone_passes(&self) -> Frame {
+        Frame {
+            width: self.width,
+            height: self.height,
+            windows: self.windows,
+            color: None,
+            depth: self.depth.clone(),
+            velocity: self.velocity.clone(),
+            prev: self.prev.clone(),
+            next: self.next.clone(),
             carried: Carried::default(),
         }
     }

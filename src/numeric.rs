@@ -213,6 +213,13 @@ pub fn sanitize(frame: &mut Frame, depth_kind: DepthKind) -> Replaced {
             replaced.color += apply(a, &COLOR);
         }
     }
+    // The colour layers carried beside the beauty are blurred with it: the same policy.
+    // Data layers come back as they were read.
+    for channel in &mut frame.carried.channels {
+        if channel.class == crate::frame::LayerClass::Colour {
+            replaced.color += apply(&mut channel.plane, &COLOR);
+        }
+    }
     if let Some(plane) = frame.depth.as_mut() {
         replaced.depth += match depth_kind {
             DepthKind::Depth => apply(plane, &DEPTH),

@@ -15,7 +15,7 @@ use crate::frame::Frame;
 use crate::gpu::{Backend, BackendReport};
 use crate::io::lock::OutputLock;
 use crate::io::output::{
-    existing_frame_problem, remove_stale_temporaries, write_frame, OutputOptions,
+    existing_frame_problem, remove_stale_temporaries, write_frame, OutputFormat, OutputOptions,
 };
 use crate::io::passes::{output_folder_problems, preflight, read_frame_noted, Inputs, PlanOptions};
 use crate::io::preset::Preset;
@@ -295,7 +295,12 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         );
     }
     let mut todo = Vec::with_capacity(plans.len());
-    for plan in plans {
+    // An EXR output holds every channel of the colour file's part, so they are read too.
+    let every_channel = OutputFormat::from_path(&job.output.path(None)) == Some(OutputFormat::Exr);
+    for mut plan in plans {
+        if every_channel {
+            plan.read_every_channel();
+        }
         let (frame, path) = (plan.frame, job.output.path(plan.frame));
         match existing_output(job, &plan, &path) {
             Existing::Whole => {

@@ -4,7 +4,7 @@
 //! import each other; this module is where they meet, and where each stage's backend is chosen.
 
 use crate::dof::{self, CocSource, DofParams};
-use crate::frame::{Frame, Passes};
+use crate::frame::{Carried, Color, Frame, LayerClass, Passes, Plane};
 use crate::gpu::Gpu;
 use crate::motion::{self, reconstruct, scatter, stretch, Algorithm, Shutter};
 use crate::motion::{ReconstructParams, ScatterParams, StretchParams};
@@ -108,7 +108,57 @@ pub fn process_on(
 
 /// [`process_clean`] with every pass's stages run by `stages` ([`crate::stages`]): the CPU's,
 /// or a backend's twins.
+///
+/// The colour layers the frame carries beside its beauty (`diffuse.R`, `specular.A`, …;
+/// [`crate::io::channels`]) are blurred with exactly the weights the beauty gets: three at
+/// a time in the beauty's place, with the beauty's alpha, depth and motion, through the same
+/// passes. Every weight of every pass is a function of those alone, never of the colour, so
+/// the blur is linear in the colour and a beauty that is the sum of its light layers still
+/// is after it, to float rounding. Each group of three costs what the beauty does; sharing
+/// one computation of the weights between them is the next step (issue 29, point 6).
 pub fn process_with(
+    algorithm: Algorithm,
+    params: &Params,
+    mut frame: Frame,
+    frame_number: i64,
+    stages: &(impl dof::Stages + motion::Stages),
+) -> Frame {
+    let colour: Vec<usize> = (0..frame.carried.channels.len())
+        .filter(|&i| frame.carried.channels[i].class == LayerClass::Colour)
+        .collect();
+    // With nothing to do to the beauty there is nothing to do to its layers.
+    let idle = algorithm == Algorithm::None && params.dof.is_none();
+    if let (false, false, Some(beauty)) = (idle, colour.is_empty(), &frame.color) {
+        let n = frame.pixel_count();
+        for group in colour.chunks(3) {
+            let mut planes: Vec<Plane> = group
+                .iter()
+                .map(|&i| std::mem::take(&mut frame.carried.channels[i].plane))
+                .collect();
+            planes.resize_with(3, || vec![0.0; n]);
+            let [r, g, b]: [Plane; 3] = planes.try_into().expect("three planes");
+            let layers = Frame {
+                color: Some(Color {
+                    r,
+                    g,
+                    b,
+                    a: beauty.a.clone(),
+                }),
+                carried: Carried::default(),
+                ..frame.clone_passes()
+            };
+            let out = process_beauty(algorithm, params, layers, frame_number, stages);
+            let color = out.color.expect("the passes give colour back");
+            for (&i, plane) in group.iter().zip([color.r, color.g, color.b]) {
+                frame.carried.channels[i].plane = plane;
+            }
+        }
+    }
+    process_beauty(algorithm, params, frame, frame_number, stages)
+}
+
+/// The passes over the frame's beauty: depth of field when asked for, then the algorithm.
+fn process_beauty(
     algorithm: Algorithm,
     params: &Params,
     frame: Frame,

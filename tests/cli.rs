@@ -64,10 +64,13 @@ fn blender_multilayer_frame_with_preset_copies_rgb_exactly() {
         &s(&out),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // The beauty under the names it came with, and every other layer beside it.
     let written = read_exr_reference(&out);
-    assert_exact(channel(&written, "R"), &r, "R");
-    assert_exact(channel(&written, "G"), &g, "G");
-    assert_exact(channel(&written, "B"), &b, "B");
+    assert_exact(channel(&written, "RenderLayer.Combined.R"), &r, "R");
+    assert_exact(channel(&written, "RenderLayer.Combined.G"), &g, "G");
+    assert_exact(channel(&written, "RenderLayer.Combined.B"), &b, "B");
+    assert_exact(channel(&written, "RenderLayer.Depth.Z"), &vec![3.0; n], "Z");
+    assert_eq!(written.len(), 9, "every channel of the frame");
 }
 
 /// `--color`, `--depth` and `--velocity` of the shipped 3-frame canonical fixture.

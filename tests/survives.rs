@@ -90,7 +90,8 @@ fn write_plate(path: &Path, blocks: Blocks, line_order: LineOrder) {
     image.write().to_file(path).unwrap();
 }
 
-/// Depth and a uniform motion for the plate, so reconstruct blurs it.
+/// Depth and a uniform motion of 6 px a frame to the right for the plate (as velocity and as
+/// previous and next positions), so every algorithm blurs it.
 fn write_passes(dir: &Path) {
     let n = W * H;
     write_exr(&dir.join("depth.exr"), W, H, vec![("Z", vec![5.0; n])]);
@@ -100,22 +101,42 @@ fn write_passes(dir: &Path) {
         H,
         vec![("X", vec![6.0; n]), ("Y", vec![0.0; n])],
     );
+    let x = |shift: f32| (0..n).map(|i| (i % W) as f32 + 0.5 + shift).collect();
+    let y: Vec<f32> = (0..n).map(|i| (i / W) as f32 + 0.5).collect();
+    for (role, shift) in [("prev", -6.0), ("next", 6.0)] {
+        write_exr(
+            &dir.join(format!("{role}.exr")),
+            W,
+            H,
+            vec![("X", x(shift)), ("Y", y.clone())],
+        );
+    }
 }
 
 fn blur(dir: &Path, out: &str, extra: &[&str]) {
-    let mut args = vec![
-        "blur".to_string(),
-        "--algorithm".into(),
-        "reconstruct".into(),
-        "--color".into(),
+    // `dof` first in `extra` runs `shutter dof` (depth of field alone).
+    let (command, extra) = match extra.split_first() {
+        Some((&"dof", rest)) => ("dof", rest),
+        _ => ("blur", extra),
+    };
+    let mut args = vec![command.to_string()];
+    if command == "blur" && !extra.contains(&"--algorithm") {
+        args.extend(["--algorithm".to_string(), "reconstruct".into()]);
+    }
+    args.extend([
+        "--color".to_string(),
         s(&dir.join("color.exr")),
         "--depth".into(),
         s(&dir.join("depth.exr")),
         "--velocity".into(),
         s(&dir.join("velocity.exr")),
+        "--prev".into(),
+        s(&dir.join("prev.exr")),
+        "--next".into(),
+        s(&dir.join("next.exr")),
         "-o".into(),
         s(&dir.join(out)),
-    ];
+    ]);
     args.extend(extra.iter().map(|a| a.to_string()));
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let run = shutter(&args);
@@ -300,4 +321,191 @@ fn the_same_frame_gives_the_same_bytes_whatever_order_the_attributes_were_held_i
     let a = std::fs::read(dir.path().join("a.exr")).unwrap();
     let b = std::fs::read(dir.path().join("b.exr")).unwrap();
     assert!(a == b, "two runs of one frame wrote different bytes");
+}
+
+/// A multi-layer frame as renderers write them: a beauty RGBA that is the sum of its light
+/// layers `diffuse` and `specular` (stored `kind`), with `Z`, `velocity.X/Y` and an object
+/// ID (u32) beside them. Returns the beauty's colour planes.
+fn write_layered(path: &Path, kind: exr::meta::attribute::SampleType) {
+    use exr::meta::attribute::SampleType;
+    let n = W * H;
+    let stored = |plane: Vec<f32>| match kind {
+        SampleType::F16 => plane
+            .into_iter()
+            .map(|v| f16::from_f32(v).to_f32())
+            .collect(),
+        _ => plane,
+    };
+    let samples = |plane: &[f32]| match kind {
+        SampleType::F16 => FlatSamples::F16(plane.iter().map(|&v| f16::from_f32(v)).collect()),
+        _ => FlatSamples::F32(plane.to_vec()),
+    };
+    let diffuse: Vec<Vec<f32>> = (0..3).map(|c| stored(noise(n, 10 + c, 0.0, 2.0))).collect();
+    let specular: Vec<Vec<f32>> = (0..3).map(|c| stored(noise(n, 20 + c, 0.0, 0.5))).collect();
+    let mut list = Vec::new();
+    for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
+        let beauty: Vec<f32> = (0..n).map(|i| diffuse[c][i] + specular[c][i]).collect();
+        list.push(AnyChannel::new(Text::from(name), FlatSamples::F32(beauty)));
+        let layer = |l: &str| Text::from(format!("{l}.{name}").as_str());
+        list.push(AnyChannel::new(layer("diffuse"), samples(&diffuse[c])));
+        list.push(AnyChannel::new(layer("specular"), samples(&specular[c])));
+    }
+    let data =
+        |name: &str, plane: Vec<f32>| AnyChannel::new(Text::from(name), FlatSamples::F32(plane));
+    list.push(data("A", vec![1.0; n]));
+    list.push(data("Z", noise(n, 30, 1.0, 9.0)));
+    list.push(data("velocity.X", noise(n, 31, -5.0, 5.0)));
+    list.push(data("velocity.Y", noise(n, 32, -5.0, 5.0)));
+    list.push(AnyChannel::new(
+        Text::from("id"),
+        FlatSamples::U32((0..n as u32).map(|i| 1000 + i % 7).collect()),
+    ));
+    let layer = Layer::new(
+        (W, H),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(list.into()),
+    );
+    let image = Image::from_layer(layer);
+    image.write().to_file(path).unwrap();
+}
+
+/// Every run of a multi-layer frame: the channels of the input, the data ones bit for bit,
+/// and light layers that still add up to the beauty.
+fn check_layers(input: &Path, output: &Path, tolerance: f32) {
+    use crate::support::{channel, read_exr_reference};
+    let before = read_exr_reference(input);
+    let after = read_exr_reference(output);
+    let names = |c: &[(String, Vec<f32>)]| {
+        let mut names: Vec<String> = c.iter().map(|(n, _)| n.clone()).collect();
+        names.sort();
+        names
+    };
+    assert_eq!(names(&after), names(&before), "the output's channels");
+    for data in ["Z", "velocity.X", "velocity.Y", "id"] {
+        let (b, a) = (channel(&before, data), channel(&after, data));
+        assert!(
+            a.iter().zip(b).all(|(a, b)| a.to_bits() == b.to_bits()),
+            "{data} changed"
+        );
+    }
+    for c in ["R", "G", "B"] {
+        let beauty = channel(&after, c);
+        let diffuse = channel(&after, &format!("diffuse.{c}"));
+        let specular = channel(&after, &format!("specular.{c}"));
+        assert!(
+            beauty != channel(&before, c) && diffuse != channel(&before, &format!("diffuse.{c}")),
+            "{}: {c}: nothing was blurred",
+            output.display()
+        );
+        let worst = (0..W * H)
+            .map(|i| (beauty[i] - diffuse[i] - specular[i]).abs() / (1.0 + beauty[i].abs()))
+            .fold(0.0f32, f32::max);
+        assert!(
+            worst <= tolerance,
+            "{c}: diffuse + specular differs from the beauty by {worst:e} (relative)"
+        );
+    }
+}
+
+#[test]
+fn light_layers_blur_with_the_beautys_weights_and_data_layers_come_back_unchanged() {
+    use exr::meta::attribute::SampleType;
+    let dir = tempfile::tempdir().unwrap();
+    let color = dir.path().join("color.exr");
+    write_layered(&color, SampleType::F32);
+    write_passes(dir.path());
+    // A circle of confusion about 7 px across on the 40 px frame (depth 5 m, focus 0.3 m).
+    let lens = [
+        "--focal-length",
+        "50",
+        "--f-stop",
+        "1.4",
+        "--focus-distance",
+        "0.3",
+    ];
+    for (name, args) in [
+        ("reconstruct", &[][..]),
+        ("2012", &["--variant", "paper"][..]),
+        ("stretch", &["--algorithm", "stretch"][..]),
+        ("scatter", &["--algorithm", "scatter"][..]),
+        ("dof", &lens[..]),
+        ("dof-alone", &[&["dof"][..], &lens[..]].concat()[..]),
+    ] {
+        let out = format!("{name}.exr");
+        blur(dir.path(), &out, args);
+        // Float rounding: the beauty's sum and the layers' sums round apart.
+        check_layers(&color, &dir.path().join(&out), 1e-5);
+    }
+}
+
+#[test]
+fn half_light_layers_stay_half_and_add_up_within_its_rounding() {
+    use exr::meta::attribute::SampleType;
+    let dir = tempfile::tempdir().unwrap();
+    let color = dir.path().join("color.exr");
+    write_layered(&color, SampleType::F16);
+    write_passes(dir.path());
+    blur(dir.path(), "out.exr", &[]);
+    let out = dir.path().join("out.exr");
+    // Two half roundings of values up to 2.5: 2 × 2⁻¹¹ relative.
+    check_layers(&color, &out, 2.0 * 2f32.powi(-11));
+    if let Some(info) = oiiotool_info(&out) {
+        // OpenImageIO lists the beauty first, then the channels of no layer, then the
+        // layers, each channel with its pixel type.
+        let list = "channel list: R (float), G (float), B (float), A (float), Z (float), \
+                    id (uint), diffuse.R (half), diffuse.G (half), diffuse.B (half), \
+                    specular.R (half), specular.G (half), specular.B (half), \
+                    velocity.X (float), velocity.Y (float)";
+        assert!(info.contains("14 channel") && info.contains(list), "{info}");
+    }
+    let meta = MetaData::read_from_file(&out, false).unwrap();
+    for c in &meta.headers[0].channels.list {
+        let name = c.name.to_string();
+        let expected = if name.starts_with("diffuse") || name.starts_with("specular") {
+            SampleType::F16
+        } else if name == "id" {
+            SampleType::U32
+        } else {
+            SampleType::F32
+        };
+        assert_eq!(c.sample_type, expected, "{name}");
+    }
+}
+
+/// The GPU twins give every light layer the beauty's weights too: the layers go through the
+/// same dispatches, so they add up as on the CPU.
+#[cfg(feature = "gpu")]
+#[test]
+fn light_layers_add_up_on_the_gpu_too() {
+    use exr::meta::attribute::SampleType;
+    if crate::gpu::with_gpu::gpu().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let color = dir.path().join("color.exr");
+    write_layered(&color, SampleType::F32);
+    write_passes(dir.path());
+    let lens = [
+        "--focal-length",
+        "50",
+        "--f-stop",
+        "1.4",
+        "--focus-distance",
+        "0.3",
+    ];
+    for (name, args) in [
+        ("reconstruct", &[][..]),
+        ("stretch", &["--algorithm", "stretch"][..]),
+        ("scatter", &["--algorithm", "scatter"][..]),
+        ("dof-alone", &[&["dof"][..], &lens[..]].concat()[..]),
+    ] {
+        let out = format!("{name}.exr");
+        blur(
+            dir.path(),
+            &out,
+            &[args, &["--backend", "wgpu"][..]].concat(),
+        );
+        check_layers(&color, &dir.path().join(&out), 1e-5);
+    }
 }

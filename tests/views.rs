@@ -86,20 +86,21 @@ fn blur(color: &str, out: &Path, extra: &[&str]) -> std::process::Output {
     shutter(&args)
 }
 
+/// The beauty of an output (R, G, B, A): a mono file's output carries its depth and
+/// vectors beside it, a stereo one's does not (yet).
+fn beauty(path: &Path) -> Vec<(String, Vec<f32>)> {
+    let mut channels = read_exr_reference(path);
+    channels.retain(|(name, _)| ["R", "G", "B", "A"].contains(&name.as_str()));
+    assert_eq!(channels.len(), 4, "{path:?}");
+    channels
+}
+
 fn assert_same_image(a: &Path, b: &Path) {
-    assert_eq!(
-        read_exr_reference(a),
-        read_exr_reference(b),
-        "{a:?} and {b:?} differ"
-    );
+    assert_eq!(beauty(a), beauty(b), "{a:?} and {b:?} differ");
 }
 
 fn assert_different_images(a: &Path, b: &Path) {
-    assert_ne!(
-        read_exr_reference(a),
-        read_exr_reference(b),
-        "{a:?} and {b:?} are the same"
-    );
+    assert_ne!(beauty(a), beauty(b), "{a:?} and {b:?} are the same");
 }
 
 #[test]

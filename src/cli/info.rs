@@ -1,7 +1,8 @@
 //! `shutter info`: what is in image files, and which presets match them.
 
 use crate::error::{Error, Problem, ProblemKind, Result};
-use crate::io::file::{FileInfo, FileKind};
+use crate::io::channels::{self, LayerClass};
+use crate::io::file::{ChannelInfo, FileInfo, FileKind};
 use crate::io::passes::{passes_found, suggest, Suggestion};
 use crate::io::preset::{Preset, BUILTIN};
 
@@ -159,7 +160,11 @@ fn info_text(shown: &Shown) -> String {
             (Some(_), None) => "  no view".to_string(),
             _ => String::new(),
         };
-        text.push_str(&format!("    {name:<28} {}{in_view}\n", c.sample_type));
+        text.push_str(&format!(
+            "    {name:<28} {:<4} {:<6}{in_view}\n",
+            c.sample_type,
+            class_of(info, c).name()
+        ));
     }
     let Some(suggestion) = suggestion else {
         text.push_str("  presets:        choose a view with --view to match presets\n");
@@ -218,6 +223,7 @@ fn info_json(shown: &Shown) -> serde_json::Value {
         "channels": info.channels.iter().map(|c| serde_json::json!({
             "name": c.alias.clone().unwrap_or_else(|| c.name.clone()),
             "type": c.sample_type,
+            "class": class_of(info, c).name(),
             "part": c.part,
             "view": c.view,
         })).collect::<Vec<_>>(),
@@ -226,4 +232,17 @@ fn info_json(shown: &Shown) -> serde_json::Value {
         })).collect::<Vec<_>>(),
         "suggestion": suggestion,
     })
+}
+
+/// The class a channel has in an output (`io::channels`): how shutter treats it when the
+/// file is the colour file.
+fn class_of(info: &FileInfo, channel: &ChannelInfo) -> LayerClass {
+    let crypto = match &info.kind {
+        FileKind::Exr { headers, .. } => headers
+            .get(channel.part)
+            .map(channels::crypto_layers)
+            .unwrap_or_default(),
+        FileKind::Image { .. } => Vec::new(),
+    };
+    channels::class_of(&channel.name, &crypto)
 }

@@ -1,6 +1,7 @@
 //! Everything between files on disk and frames in memory: EXR and integer images, pass files
 //! and presets, frame sequences, and atomic output.
 
+pub mod channels;
 pub mod exr;
 pub mod exr_like;
 pub mod file;

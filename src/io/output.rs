@@ -366,21 +366,30 @@ pub fn write_frame(
     };
     match format {
         OutputFormat::Exr => {
-            let mut channels = vec![
-                ("R".to_string(), color.r),
-                ("G".to_string(), color.g),
-                ("B".to_string(), color.b),
-            ];
-            if let Some(a) = color.a {
-                channels.push(("A".to_string(), a));
+            // The beauty under the names it came with, then every channel carried beside it.
+            let carried = frame.carried;
+            // (Grey read as colour names one channel three times: it goes out as R, G, B.)
+            let distinct =
+                |names: &[String]| (1..names.len()).all(|i| !names[..i].contains(&names[i]));
+            let mut names = match carried.beauty.len() {
+                3 | 4 if distinct(&carried.beauty) => carried.beauty.clone(),
+                _ => ["R", "G", "B"].map(String::from).to_vec(),
+            };
+            // An alpha the colour file had not goes under the usual name.
+            if names.len() == 3 {
+                names.push("A".into());
             }
+            let mut planes = vec![color.r, color.g, color.b];
+            planes.extend(color.a);
+            let mut channels: Vec<(String, Plane)> = names.into_iter().zip(planes).collect();
+            channels.extend(carried.channels.into_iter().map(|c| (c.name, c.plane)));
             write_atomic(path, |writer| {
                 exr_like::write_like(
                     writer,
                     (frame.width, frame.height),
                     frame.windows,
                     channels,
-                    frame.carried.exr.as_deref(),
+                    carried.exr.as_deref(),
                     &options.exr,
                     &options.record,
                 )

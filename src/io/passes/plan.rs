@@ -32,6 +32,10 @@ pub(super) struct ColorPlan {
     pub(super) a: Option<Slot>,
     pub(super) decode_srgb: bool,
     pub(super) premultiply: bool,
+    /// The other channels of the colour's part (indices into the file's `channels`), read
+    /// only when [`FramePlan::read_every_channel`] asks, with their slots then.
+    pub(super) others: Vec<usize>,
+    pub(super) other_slots: Vec<Slot>,
 }
 
 #[derive(Clone, Debug)]
@@ -66,6 +70,34 @@ impl FramePlan {
     /// The files this frame reads.
     pub fn paths(&self) -> Vec<&Path> {
         self.files.iter().map(|f| f.info.path.as_path()).collect()
+    }
+
+    /// Reads, besides the passes, every other channel of the part of the colour file that
+    /// holds the colour, so the output can hold them again (an EXR output asks; the others
+    /// do not, and `diff` and `bench` read colour alone).
+    pub fn read_every_channel(&mut self) {
+        let Some(color) = &mut self.color else {
+            return;
+        };
+        let file = &mut self.files[color.rgb[0].file];
+        color.other_slots = color
+            .others
+            .iter()
+            .map(|&channel| {
+                let entry = file
+                    .channels
+                    .iter()
+                    .position(|&c| c == channel)
+                    .unwrap_or_else(|| {
+                        file.channels.push(channel);
+                        file.channels.len() - 1
+                    });
+                Slot {
+                    file: color.rgb[0].file,
+                    entry,
+                }
+            })
+            .collect();
     }
 }
 
@@ -149,6 +181,8 @@ pub fn plan_frame(
                         a: slots.get(3).copied().flatten(),
                         decode_srgb: integer && preset.color.transfer == Transfer::Srgb,
                         premultiply: integer,
+                        others: other_channels(info, &claimed),
+                        other_slots: Vec::new(),
                     });
                 }
             }
@@ -457,6 +491,23 @@ impl Planner<'_> {
             });
         Slot { file, entry }
     }
+}
+
+/// The channels of an EXR's colour part other than the beauty's (`beauty`, indices into
+/// `info.channels`, the first one's part the colour's). None for an integer image, whose
+/// channels are all the beauty's, nor for a multi-view file, whose channels `info` names
+/// without their view (carrying them is not done yet).
+fn other_channels(info: &FileInfo, beauty: &[usize]) -> Vec<usize> {
+    let Some(&first) = beauty.first() else {
+        return Vec::new();
+    };
+    if !matches!(info.kind, crate::io::file::FileKind::Exr { .. }) || info.views.is_some() {
+        return Vec::new();
+    }
+    let part = info.channels[first].part;
+    (0..info.channels.len())
+        .filter(|&i| info.channels[i].part == part && !beauty.contains(&i))
+        .collect()
 }
 
 fn alternatives(alts: &[Vec<String>]) -> String {

@@ -1,7 +1,8 @@
 //! Decoding a planned frame and converting its passes to the canonical convention.
 
 use crate::error::Problem;
-use crate::frame::{Color, Frame, Passes, Plane};
+use crate::frame::{CarriedChannel, Color, Frame, Passes, Plane};
+use crate::io::channels;
 use crate::io::file::FileKind;
 use crate::io::image::srgb_to_linear;
 use crate::io::preset::Preset;
@@ -53,6 +54,32 @@ pub fn read_frame_noted(plan: &FramePlan) -> Result<(Frame, Vec<String>), Proble
     };
 
     if let Some(plan_color) = &plan.color {
+        // The other channels of the colour's part first: a channel the passes read too (a
+        // depth in the colour file) is then cloned for them, not taken.
+        let file = &plan.files[plan_color.rgb[0].file];
+        let name_of = |slot: Slot| file.info.channels[file.channels[slot.entry]].name.clone();
+        if let FileKind::Exr { headers, .. } = &file.info.kind {
+            let part = file.info.channels[file.channels[plan_color.rgb[0].entry]].part;
+            let crypto = headers
+                .get(part)
+                .map(channels::crypto_layers)
+                .unwrap_or_default();
+            for &slot in &plan_color.other_slots {
+                let name = name_of(slot);
+                frame.carried.channels.push(CarriedChannel {
+                    class: channels::class_of(&name, &crypto),
+                    plane: take(slot, &mut decoded),
+                    name,
+                });
+            }
+            frame.carried.exr = headers.get(part).cloned().map(Box::new);
+            frame.carried.beauty = plan_color
+                .rgb
+                .iter()
+                .chain(&plan_color.a)
+                .map(|&slot| name_of(slot))
+                .collect();
+        }
         let mut r = take(plan_color.rgb[0], &mut decoded);
         let mut g = take(plan_color.rgb[1], &mut decoded);
         let mut b = take(plan_color.rgb[2], &mut decoded);
@@ -68,12 +95,6 @@ pub fn read_frame_noted(plan: &FramePlan) -> Result<(Frame, Vec<String>), Proble
             }
         }
         frame.color = Some(Color { r, g, b, a });
-        // What the output takes from the colour file besides its colour.
-        let file = &plan.files[plan_color.rgb[0].file];
-        if let FileKind::Exr { headers, .. } = &file.info.kind {
-            let part = file.info.channels[file.channels[plan_color.rgb[0].entry]].part;
-            frame.carried.exr = headers.get(part).cloned().map(Box::new);
-        }
     }
     if let Some((slot, spec)) = &plan.depth {
         let mut depth = take(*slot, &mut decoded);
@@ -126,6 +147,7 @@ fn plan_slots(plan: &FramePlan) -> Vec<Slot> {
     if let Some(c) = &plan.color {
         slots.extend(c.rgb);
         slots.extend(c.a);
+        slots.extend(&c.other_slots);
     }
     if let Some((slot, _)) = &plan.depth {
         slots.push(*slot);
