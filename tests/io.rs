@@ -427,3 +427,82 @@ fn parts_without_wanted_channels_are_never_decompressed() {
     let problem = read_frame(&plan_frame(&inputs, None, &needs_next).unwrap()).unwrap_err();
     assert_eq!(problem.kind, shutter::ProblemKind::Corrupt, "{problem}");
 }
+
+#[test]
+fn multi_part_files_of_every_mix_of_compressions_and_blocks_are_not_called_damaged() {
+    // The usual way to keep data lossless beside a lossy beauty: a DWAA part for the beauty,
+    // a ZIP one for depth and vectors. Parts of different chunk heights (32, 16, 1, 256 lines)
+    // and forms (scan lines, tiles) interleave their chunks in the file.
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (64, 300);
+    let n = w * h;
+    let r = noise(n, 9, 0.0, 1.0);
+    let half: Vec<f16> = r.iter().map(|&v| f16::from_f32(v)).collect();
+    let beauty = |compression, blocks| {
+        layer_with(
+            Some("beauty"),
+            (w, h),
+            blocks,
+            compression,
+            ["R", "G", "B"]
+                .map(|c| AnyChannel::new(c, FlatSamples::F16(half.clone())))
+                .into(),
+        )
+    };
+    let data = |compression, blocks| {
+        layer_with(
+            Some("data"),
+            (w, h),
+            blocks,
+            compression,
+            vec![AnyChannel::new("Z", FlatSamples::F32(r.clone()))],
+        )
+    };
+    let tiles = Blocks::Tiles(Vec2(32, 32));
+    for (i, (a, a_blocks, b, b_blocks)) in [
+        (
+            Compression::DWAA(None),
+            Blocks::ScanLines,
+            Compression::ZIP16,
+            Blocks::ScanLines,
+        ),
+        (
+            Compression::DWAB(None),
+            Blocks::ScanLines,
+            Compression::ZIP1,
+            Blocks::ScanLines,
+        ),
+        (Compression::PIZ, Blocks::ScanLines, Compression::RLE, tiles),
+        (
+            Compression::DWAA(None),
+            tiles,
+            Compression::Uncompressed,
+            Blocks::ScanLines,
+        ),
+        (
+            Compression::B44,
+            Blocks::ScanLines,
+            Compression::PXR24,
+            Blocks::ScanLines,
+        ),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let path = dir.path().join(format!("mix{i}.exr"));
+        let image = Image::empty(ImageAttributes::new(IntegerBounds::from_dimensions((w, h))))
+            .with_layer(beauty(a, a_blocks))
+            .with_layer(data(b, b_blocks));
+        image.write().to_file(&path).unwrap();
+        let info = FileInfo::probe(&path);
+        assert!(info.is_ok(), "{a} + {b}: {:?}", info.err());
+        let color = read_color(&path);
+        let expected: Vec<f32> = half.iter().map(|v| v.to_f32()).collect();
+        if !matches!(
+            a,
+            Compression::DWAA(_) | Compression::DWAB(_) | Compression::B44
+        ) {
+            assert_exact(&color.r, &expected, "R");
+        }
+    }
+}
