@@ -296,7 +296,8 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     }
     let mut todo = Vec::with_capacity(plans.len());
     // An EXR output holds every channel of the colour file's part, so they are read too.
-    let every_channel = OutputFormat::from_path(&job.output.path(None)) == Some(OutputFormat::Exr);
+    let every_channel = OutputFormat::from_path(&job.output.path(None)) == Some(OutputFormat::Exr)
+        && !job.output_options.beauty_only;
     for mut plan in plans {
         if every_channel {
             plan.read_every_channel();

@@ -509,3 +509,16 @@ fn light_layers_add_up_on_the_gpu_too() {
         check_layers(&color, &dir.path().join(&out), 1e-5);
     }
 }
+
+#[test]
+fn beauty_only_writes_the_beauty_alone_and_blurs_no_layer() {
+    use exr::meta::attribute::SampleType;
+    let dir = tempfile::tempdir().unwrap();
+    write_layered(&dir.path().join("color.exr"), SampleType::F32);
+    write_passes(dir.path());
+    blur(dir.path(), "out.exr", &["--beauty-only"]);
+    let written = crate::support::read_exr_reference(&dir.path().join("out.exr"));
+    let mut names: Vec<&str> = written.iter().map(|(n, _)| n.as_str()).collect();
+    names.sort();
+    assert_eq!(names, ["A", "B", "G", "R"]);
+}

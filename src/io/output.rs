@@ -45,6 +45,8 @@ pub struct OutputOptions {
     pub exr: ExrOutput,
     /// What made the frames, as `shutter blur` flags: an EXR output's `shutter/settings`.
     pub record: String,
+    /// An EXR output holds the beauty alone, not the colour file's other channels.
+    pub beauty_only: bool,
     /// PNG/TIFF bits per channel: 8 or 16.
     pub sixteen_bit: bool,
     /// Apply the sRGB transfer to integer outputs.
@@ -56,6 +58,7 @@ impl Default for OutputOptions {
         OutputOptions {
             exr: ExrOutput::default(),
             record: String::new(),
+            beauty_only: false,
             sixteen_bit: false,
             srgb: true,
         }

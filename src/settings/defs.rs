@@ -628,6 +628,19 @@ pub const DEFS: &[Def] = &[
         set: |s, v| s.output.exr.half = v.switch(),
     },
     Def {
+        name: "beauty-only",
+        flag: None,
+        section: Section::Output,
+        applies: &[],
+        value_name: "",
+        help: "write the beauty alone to an EXR (off: every channel of the colour file's part \
+               too, light layers blurred with the beauty's weights, data layers unchanged)",
+        kind: Kind::Switch,
+        unset: "",
+        get: |s| Value::Switch(s.output.beauty_only),
+        set: |s, v| s.output.beauty_only = v.switch(),
+    },
+    Def {
         name: "bit-depth",
         flag: None,
         section: Section::Output,
