@@ -41,8 +41,10 @@ impl OutputFormat {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct OutputOptions {
     pub exr: ExrOptions,
-    /// PNG/TIFF bits per channel: 8 or 16.
-    pub sixteen_bit: bool,
+    /// PNG/TIFF bits per channel: 8 or 16; `None`: as the input photo, 8 for any other input.
+    pub bit_depth: Option<u8>,
+    /// JPEG quality, 1 to 100.
+    pub jpeg_quality: u8,
     /// Apply the sRGB transfer to integer outputs.
     pub srgb: bool,
 }
@@ -51,7 +53,8 @@ impl Default for OutputOptions {
     fn default() -> Self {
         OutputOptions {
             exr: ExrOptions::default(),
-            sixteen_bit: false,
+            bit_depth: None,
+            jpeg_quality: 95,
             srgb: true,
         }
     }
@@ -372,15 +375,25 @@ pub fn write_frame(
             )
         }
         OutputFormat::Image(format) => write_atomic(path, |writer| {
-            image_io::write_color(
+            // What the input photo held, held again; its bit depth unless told otherwise.
+            let photo = frame.carried.photo.as_ref();
+            let bits = options
+                .bit_depth
+                .unwrap_or_else(|| photo.map_or(8, |p| p.bits));
+            let photo_options = image_io::PhotoOptions {
+                sixteen_bit: bits == 16,
+                linear: !options.srgb,
+                jpeg_quality: options.jpeg_quality,
+                photo,
+            };
+            image_io::write_photo(
                 writer,
                 format,
                 frame.width,
                 frame.height,
                 [&color.r, &color.g, &color.b],
                 color.a.as_deref(),
-                options.sixteen_bit,
-                options.srgb,
+                &photo_options,
             )
         }),
     }
