@@ -17,7 +17,11 @@ use crate::support::*;
 const ADOBE_GAMMA: f64 = 563.0 / 256.0;
 
 fn adobe_icc() -> Vec<u8> {
-    moxcms::ColorProfile::new_adobe_rgb().encode().unwrap()
+    let mut icc = moxcms::ColorProfile::new_adobe_rgb().encode().unwrap();
+    // The header's PCS illuminant exactly as ICC.1 (7.2.16) has it, D50 = (0.9642, 1.0,
+    // 0.8249) in s15Fixed16: moxcms writes a D50 a few units off, which libpng refuses.
+    icc[68..80].copy_from_slice(&[0, 0, 0xF6, 0xD6, 0, 1, 0, 0, 0, 0, 0xD3, 0x2D]);
+    icc
 }
 
 /// A big-endian EXIF block (a TIFF structure) whose IFD0 holds Make "ShTs" and Orientation.
@@ -271,22 +275,30 @@ fn an_orientation_6_jpeg_lines_up_with_a_map_painted_upright() {
     }
 }
 
+/// A 16-bit TIFF with straight alpha and a profile: out 16-bit, deflate or LZW, its alpha
+/// declared unassociated, its profile kept.
 #[test]
 fn a_tiff_comes_out_compressed_with_its_alpha_declared() {
     let dir = tempfile::tempdir().unwrap();
     let (w, h) = (32u32, 16u32);
-    let input = dir.path().join("in.png");
-    let pixels: Vec<u8> = (0..w * h)
+    let input = dir.path().join("in.tif");
+    let pixels: Vec<u16> = (0..w * h)
         .flat_map(|i| {
             [
-                (i % w * 8) as u8,
-                100,
-                50,
-                if i % 3 == 0 { 128 } else { 255 },
+                (i % w * 2000) as u16,
+                25000,
+                9000,
+                if i % 3 == 0 { 30000 } else { 65535 },
             ]
         })
         .collect();
-    image::save_buffer(&input, &pixels, w, h, image::ColorType::Rgba8).unwrap();
+    let bytes: Vec<u8> = pixels.iter().flat_map(|v| v.to_ne_bytes()).collect();
+    let icc = adobe_icc();
+    let mut encoder = image::codecs::tiff::TiffEncoder::new(std::fs::File::create(&input).unwrap());
+    encoder.set_icc_profile(icc.clone()).unwrap();
+    encoder
+        .write_image(&bytes, w, h, image::ExtendedColorType::Rgba16)
+        .unwrap();
     let velocity = dir.path().join("v.png");
     velocity_map(&velocity, w, h, |_, _| 3.0);
     let out = dir.path().join("out.tif");
@@ -300,8 +312,14 @@ fn a_tiff_comes_out_compressed_with_its_alpha_declared() {
         "LZW or deflate, not {compression}"
     );
     assert_eq!(tiff.get_tag_u32_vec(Tag::ExtraSamples).unwrap(), [2]);
+    assert_eq!(tiff.get_tag_u32_vec(Tag::BitsPerSample).unwrap(), [16; 4]);
+    assert_eq!(tiff.get_tag_u8_vec(Tag::IccProfile).unwrap(), icc);
     if let Some(info) = tool("tiffinfo", &[&s(&out)]) {
         assert!(info.contains("Deflate") || info.contains("LZW"), "{info}");
         assert!(info.contains("unassoc-alpha"), "{info}");
+    }
+    if let Some(tags) = exiftool(&out) {
+        assert_eq!(tags["ProfileDescription"], "Adobe RGB 1998", "{tags}");
+        assert_eq!(tags["ExtraSamples"], 2, "{tags}");
     }
 }

@@ -1,15 +1,16 @@
 //! What a photo holds besides its pixels, read so that the output can hold it again
 //! (`frame::Photo`): the ICC profile (JPEG APP2, PNG iCCP, TIFF tag 34675), EXIF (JPEG APP1,
-//! PNG eXIf), XMP (JPEG APP1, PNG iTXt, TIFF tag 700), IPTC (JPEG APP13, as its Photoshop
-//! resource blocks), the bits per sample and a JPEG's chroma subsampling.
+//! PNG eXIf), XMP (JPEG APP1, PNG iTXt, TIFF tag 700), IPTC (JPEG APP13 and TIFF tag 34377,
+//! as Photoshop resource blocks), the bits per sample and a JPEG's chroma subsampling.
 //!
 //! The pixels are turned upright on read (`read_planes`, by the orientation the image crate
 //! reads from EXIF or the TIFF tag), so the frame holds the upright photo and the EXIF and XMP
 //! carried with it say orientation 1: written again as they are, they describe the upright
 //! pixels of the output, and no viewer turns them a second time.
 //!
-//! Not read: EXIF and IPTC of a TIFF (an EXIF sub-directory and tag 33723, which the image
-//! crate does not give), and a PNG's IPTC (a hex text chunk of no settled form).
+//! Not read: a TIFF's EXIF (a sub-directory, and IFD0's own Make, Model, DateTime, …), a
+//! TIFF's bare IPTC (tag 33723, which exiftool writes as LONGs), a PNG's IPTC (a hex text
+//! chunk of no settled form) and a PNG's text chunks (tEXt, zTXt, but XMP's iTXt).
 
 use std::path::Path;
 
@@ -25,12 +26,22 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
         .with_guessed_format()
         .map_err(|e| e.to_string())?;
     let jpeg = reader.format() == Some(image::ImageFormat::Jpeg);
+    let tiff = reader.format() == Some(image::ImageFormat::Tiff);
     let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;
     let color = decoder.color_type();
     let bits = (color.bytes_per_pixel() / color.channel_count()) * 8;
     // A block that cannot be read is left out, not a reason to refuse the photo.
     let mut exif = decoder.exif_metadata().ok().flatten();
     let mut xmp = decoder.xmp_metadata().ok().flatten();
+    let (mut icc, mut iptc) = (decoder.icc_profile().ok().flatten(), None);
+    if jpeg {
+        iptc = decoder.iptc_metadata().ok().flatten();
+    }
+    if tiff {
+        // The image crate's TIFF reader gives no profile stored as UNDEFINED (as exiftool
+        // and Photoshop store it) and refuses XMP under its limits: the tiff crate reads them.
+        [icc, xmp, iptc] = tiff_blocks(path);
+    }
     if let Some(exif) = &mut exif {
         set_exif_orientation(exif, 1);
     }
@@ -43,16 +54,27 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
         None
     };
     Ok(Photo {
-        icc: decoder.icc_profile().ok().flatten(),
+        icc,
         exif,
         xmp,
-        iptc: if jpeg {
-            decoder.iptc_metadata().ok().flatten()
-        } else {
-            None
-        },
+        iptc,
         bits,
         sampling,
+    })
+}
+
+/// A TIFF's profile (tag 34675), XMP (tag 700) and Photoshop resource blocks (tag 34377,
+/// where IPTC sits beside its JPEG form), each as its bytes.
+fn tiff_blocks(path: &Path) -> [Option<Vec<u8>>; 3] {
+    let Ok(mut decoder) = std::fs::File::open(path)
+        .map_err(tiff::TiffError::from)
+        .and_then(tiff::decoder::Decoder::new)
+    else {
+        return [None, None, None];
+    };
+    [34675, 700, 34377].map(|tag| {
+        let tag = tiff::tags::Tag::from_u16_exhaustive(tag);
+        decoder.find_tag(tag).ok()??.into_u8_vec().ok()
     })
 }
 
