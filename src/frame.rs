@@ -191,6 +191,10 @@ pub struct Photo {
     /// A JPEG's chroma subsampling: its luma sampling factors over its chroma's, (2, 2) for
     /// 4:2:0, (1, 1) for 4:4:4; `None` for other files.
     pub sampling: Option<(u8, u8)>,
+    /// The file's colour is premultiplied by its alpha (a TIFF whose ExtraSamples says
+    /// associated alpha): the read divides it out before anything else. Outputs are written
+    /// with straight alpha, declared as such, whatever the input held.
+    pub premultiplied: bool,
 }
 
 impl Frame {

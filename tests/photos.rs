@@ -323,3 +323,30 @@ fn a_tiff_comes_out_compressed_with_its_alpha_declared() {
         assert_eq!(tags["ExtraSamples"], 2, "{tags}");
     }
 }
+
+/// A TIFF of associated alpha (ExtraSamples = 1, its colour premultiplied as stored) reads as
+/// the colour it means: written straight, a still frame gives back the straight colour.
+#[test]
+fn a_tiff_of_associated_alpha_is_not_premultiplied_twice() {
+    use tiff::encoder::{colortype, TiffEncoder};
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (8u32, 8u32);
+    let input = dir.path().join("assoc.tif");
+    // Straight colour 200 at alpha 128, stored premultiplied: 200 · 128 / 255 ≈ 100.
+    let pixels: Vec<u8> = (0..w * h).flat_map(|_| [100, 100, 100, 128]).collect();
+    let mut tiff = TiffEncoder::new(std::fs::File::create(&input).unwrap()).unwrap();
+    let mut image = tiff.new_image::<colortype::RGBA8>(w, h).unwrap();
+    image
+        .encoder()
+        .write_tag(tiff::tags::Tag::ExtraSamples, &[1u16][..])
+        .unwrap();
+    image.write_data(&pixels).unwrap();
+    let velocity = dir.path().join("v.png");
+    velocity_map(&velocity, w, h, |_, _| 0.0);
+    let out = dir.path().join("out.png");
+    blur(&input, &velocity, &out, &[]);
+    let result = image::open(&out).unwrap().to_rgba8();
+    for p in result.pixels() {
+        assert!((p[0] as i32 - 200).abs() <= 2 && p[3] == 128, "{p:?}");
+    }
+}

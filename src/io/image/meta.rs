@@ -34,13 +34,14 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
     let mut exif = decoder.exif_metadata().ok().flatten();
     let mut xmp = decoder.xmp_metadata().ok().flatten();
     let (mut icc, mut iptc) = (decoder.icc_profile().ok().flatten(), None);
+    let mut premultiplied = false;
     if jpeg {
         iptc = decoder.iptc_metadata().ok().flatten();
     }
     if tiff {
         // The image crate's TIFF reader gives no profile stored as UNDEFINED (as exiftool
         // and Photoshop store it) and refuses XMP under its limits: the tiff crate reads them.
-        [icc, xmp, iptc] = tiff_blocks(path);
+        ([icc, xmp, iptc], premultiplied) = tiff_blocks(path);
     }
     if let Some(exif) = &mut exif {
         set_exif_orientation(exif, 1);
@@ -60,22 +61,28 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
         iptc,
         bits,
         sampling,
+        premultiplied,
     })
 }
 
 /// A TIFF's profile (tag 34675), XMP (tag 700) and Photoshop resource blocks (tag 34377,
-/// where IPTC sits beside its JPEG form), each as its bytes.
-fn tiff_blocks(path: &Path) -> [Option<Vec<u8>>; 3] {
+/// where IPTC sits beside its JPEG form), each as its bytes; and whether its alpha is
+/// associated (ExtraSamples = 1: the colour is premultiplied).
+fn tiff_blocks(path: &Path) -> ([Option<Vec<u8>>; 3], bool) {
+    use tiff::tags::Tag;
     let Ok(mut decoder) = std::fs::File::open(path)
         .map_err(tiff::TiffError::from)
         .and_then(tiff::decoder::Decoder::new)
     else {
-        return [None, None, None];
+        return ([None, None, None], false);
     };
-    [34675, 700, 34377].map(|tag| {
-        let tag = tiff::tags::Tag::from_u16_exhaustive(tag);
+    let blocks = [34675, 700, 34377].map(|tag| {
+        let tag = Tag::from_u16_exhaustive(tag);
         decoder.find_tag(tag).ok()??.into_u8_vec().ok()
-    })
+    });
+    let extra = decoder.find_tag_unsigned_vec::<u16>(Tag::ExtraSamples);
+    let associated = extra.ok().flatten().is_some_and(|e| e.first() == Some(&1));
+    (blocks, associated)
 }
 
 /// Where IFD0's orientation (tag 0x0112, a SHORT) sits in an EXIF block (a TIFF structure,

@@ -326,15 +326,25 @@ pub fn write_color(
     write_photo(writer, format, width, height, rgb, alpha, &options)
 }
 
-/// Reads what a photo holds besides its pixels ([`read_photo`]) and, when `linearise`, turns
-/// its colour planes (as [`read_planes`] gave them) into the linear light of its profile.
-/// Returns the photo and a note when the profile could not give its curves.
+/// Reads what a photo holds besides its pixels ([`read_photo`]) and makes its colour planes
+/// (as [`read_planes`] gave them) straight: a file of associated alpha has its colour divided
+/// by `alpha` as stored, in its encoded values (where the file multiplied it). Then, when
+/// `linearise`, turns them into the linear light of its profile. Returns the photo and a
+/// note when the profile could not give its curves.
 pub fn read_photo_colour(
     path: &Path,
-    planes: [&mut [f32]; 3],
+    mut planes: [&mut [f32]; 3],
+    alpha: Option<&[f32]>,
     linearise: bool,
 ) -> Result<(Photo, Option<String>), String> {
     let photo = read_photo(path)?;
+    if let (true, Some(alpha)) = (photo.premultiplied, alpha) {
+        for plane in planes.iter_mut() {
+            for (v, &a) in plane.iter_mut().zip(alpha) {
+                *v = if a > 0.0 { (*v / a).min(1.0) } else { 0.0 };
+            }
+        }
+    }
     if !linearise {
         return Ok((photo, None));
     }

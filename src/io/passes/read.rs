@@ -64,6 +64,7 @@ pub fn read_frame_noted(plan: &FramePlan) -> Result<(Frame, Vec<String>), Proble
             let (photo, note) = read_photo_colour(
                 &colour_file.path,
                 [&mut r, &mut g, &mut b],
+                a.as_deref(),
                 plan_color.decode_srgb,
             )
             .map_err(|d| {
