@@ -217,12 +217,21 @@ pub struct CarriedChannel {
 pub struct Photo {
     /// The embedded ICC profile (its bytes as stored).
     pub icc: Option<Vec<u8>>,
-    /// EXIF, XMP and IPTC, as stored.
+    /// EXIF (a TIFF structure), XMP (the XML packet) and IPTC (a JPEG's Photoshop resource
+    /// blocks), as stored, but for the orientation, which says 1: the frame holds the photo
+    /// turned upright.
     pub exif: Option<Vec<u8>>,
     pub xmp: Option<Vec<u8>>,
     pub iptc: Option<Vec<u8>>,
     /// Bits per sample of the input (8 or 16).
     pub bits: u8,
+    /// A JPEG's chroma subsampling: its luma sampling factors over its chroma's, (2, 2) for
+    /// 4:2:0, (1, 1) for 4:4:4; `None` for other files.
+    pub sampling: Option<(u8, u8)>,
+    /// The file's colour is premultiplied by its alpha (a TIFF whose ExtraSamples says
+    /// associated alpha): the read divides it out before anything else. Outputs are written
+    /// with straight alpha, declared as such, whatever the input held.
+    pub premultiplied: bool,
 }
 
 impl Frame {

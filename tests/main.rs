@@ -20,6 +20,7 @@ mod io;
 mod lost;
 mod metrics;
 mod offset;
+mod photos;
 mod presets;
 mod properties;
 mod reconstruct;

@@ -47,8 +47,10 @@ pub struct OutputOptions {
     pub record: String,
     /// An EXR output holds the beauty alone, not the colour file's other channels.
     pub beauty_only: bool,
-    /// PNG/TIFF bits per channel: 8 or 16.
-    pub sixteen_bit: bool,
+    /// PNG/TIFF bits per channel: 8 or 16; `None`: as the input photo, 8 for any other input.
+    pub bit_depth: Option<u8>,
+    /// JPEG quality, 1 to 100.
+    pub jpeg_quality: u8,
     /// Apply the sRGB transfer to integer outputs.
     pub srgb: bool,
 }
@@ -59,7 +61,8 @@ impl Default for OutputOptions {
             exr: ExrOutput::default(),
             record: String::new(),
             beauty_only: false,
-            sixteen_bit: false,
+            bit_depth: None,
+            jpeg_quality: 95,
             srgb: true,
         }
     }
@@ -399,15 +402,25 @@ pub fn write_frame(
             })
         }
         OutputFormat::Image(format) => write_atomic(path, |writer| {
-            image_io::write_color(
+            // What the input photo held, held again; its bit depth unless told otherwise.
+            let photo = frame.carried.photo.as_ref();
+            let bits = options
+                .bit_depth
+                .unwrap_or_else(|| photo.map_or(8, |p| p.bits));
+            let photo_options = image_io::PhotoOptions {
+                sixteen_bit: bits == 16,
+                linear: !options.srgb,
+                jpeg_quality: options.jpeg_quality,
+                photo,
+            };
+            image_io::write_photo(
                 writer,
                 format,
                 frame.width,
                 frame.height,
                 [&color.r, &color.g, &color.b],
                 color.a.as_deref(),
-                options.sixteen_bit,
-                options.srgb,
+                &photo_options,
             )
         }),
     }

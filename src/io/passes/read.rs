@@ -1,10 +1,10 @@
 //! Decoding a planned frame and converting its passes to the canonical convention.
 
-use crate::error::Problem;
+use crate::error::{Problem, ProblemKind};
 use crate::frame::{CarriedChannel, Color, Frame, Passes, Plane};
 use crate::io::channels;
 use crate::io::file::FileKind;
-use crate::io::image::srgb_to_linear;
+use crate::io::image::read_photo_colour;
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 
@@ -84,10 +84,22 @@ pub fn read_frame_noted(plan: &FramePlan) -> Result<(Frame, Vec<String>), Proble
         let mut g = take(plan_color.rgb[1], &mut decoded);
         let mut b = take(plan_color.rgb[2], &mut decoded);
         let a = plan_color.a.map(|slot| take(slot, &mut decoded));
-        if plan_color.decode_srgb {
-            for plane in [&mut r, &mut g, &mut b] {
-                plane.iter_mut().for_each(|v| *v = srgb_to_linear(*v));
-            }
+        // A photo: its profile's curves make its colour linear (`decode_srgb`: unless the
+        // preset says the values are linear already), and its profile and metadata go with
+        // the frame to the output.
+        let colour_file = &plan.files[plan_color.rgb[0].file].info;
+        if colour_file.is_integer_image() {
+            let (photo, note) = read_photo_colour(
+                &colour_file.path,
+                [&mut r, &mut g, &mut b],
+                a.as_deref(),
+                plan_color.decode_srgb,
+            )
+            .map_err(|d| {
+                Problem::new(ProblemKind::Corrupt, &colour_file.path, d).frame(plan.frame)
+            })?;
+            notes.extend(note);
+            frame.carried.photo = Some(photo);
         }
         if let (true, Some(a)) = (plan_color.premultiply, &a) {
             for plane in [&mut r, &mut g, &mut b] {

@@ -1,18 +1,30 @@
 //! 8/16-bit (and float TIFF) images through the `image` crate: PNG, JPEG, TIFF.
 //!
 //! Channels are exposed by name like EXR channels: `R`, `G`, `B`, `A` for colour images and
-//! `Y`, `A` for grey ones. Integer samples are normalised to [0, 1]; the sRGB transfer is
-//! removed for colour passes (not for data maps) by the caller through [`srgb_to_linear`].
-//! Integer files hold straight (unassociated) alpha; shutter works premultiplied, so colour
-//! is premultiplied on read and divided back on write.
+//! `Y`, `A` for grey ones. Integer samples are normalised to [0, 1]; the transfer curve of
+//! the photo's ICC profile (sRGB's when it has none, `profile`) is removed for colour passes
+//! (not for data maps) by the caller through [`read_photo_colour`], which also reads what the
+//! photo holds besides its pixels (`meta`) for the output to hold again (`write`). Every
+//! image is turned upright by its orientation tag as it is read (the header's size is the
+//! upright size), so a map painted on the upright view lines up. Integer files hold straight
+//! (unassociated) alpha; shutter works premultiplied, so colour is premultiplied on read and
+//! divided back on write.
+
+mod meta;
+mod profile;
+mod write;
 
 use std::io::{Seek, Write};
 use std::path::Path;
 use std::sync::OnceLock;
 
-use image::{ColorType, DynamicImage, ImageDecoder, ImageEncoder, ImageReader, Limits};
+use image::{ColorType, DynamicImage, ImageDecoder, ImageReader, Limits};
 
-use crate::frame::Plane;
+use crate::frame::{Photo, Plane};
+
+pub use meta::{exif_orientation, jpeg_sampling, read_photo};
+pub use profile::Transfer;
+pub use write::{write_photo, PhotoOptions};
 
 /// What the header of an integer image says.
 #[derive(Clone, Debug, PartialEq)]
@@ -56,8 +68,8 @@ pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
         Some(image::ImageFormat::Tiff) => "tiff",
         _ => return Err("not a PNG, JPEG, TIFF or EXR file".into()),
     };
-    let decoder = reader.into_decoder().map_err(|e| e.to_string())?;
-    let (width, height) = decoder.dimensions();
+    let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;
+    let (width, height) = upright(decoder.dimensions(), orientation(&mut decoder));
     let color = decoder.color_type();
     let float = matches!(color, ColorType::Rgb32F | ColorType::Rgba32F);
     let bits = (color.bytes_per_pixel() / color.channel_count()) * 8;
@@ -71,17 +83,34 @@ pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
     })
 }
 
+/// The orientation an image records (EXIF, or a TIFF's tag); upright when it records none or
+/// one that cannot be read.
+fn orientation(decoder: &mut impl ImageDecoder) -> image::metadata::Orientation {
+    decoder
+        .orientation()
+        .unwrap_or(image::metadata::Orientation::NoTransforms)
+}
+
+/// The size of an image of stored size `(width, height)` once turned upright.
+fn upright((width, height): (u32, u32), orientation: image::metadata::Orientation) -> (u32, u32) {
+    use image::metadata::Orientation::*;
+    match orientation {
+        Rotate90 | Rotate270 | Rotate90FlipH | Rotate270FlipH => (height, width),
+        _ => (width, height),
+    }
+}
+
 /// Room the decoders get for their own buffers beyond the decoded image.
 const DECODER_ROOM: u64 = 64 << 20;
 
 /// The largest decoded pixel the image crate makes (RGBA, f32), in bytes.
 const LARGEST_PIXEL: u64 = 16;
 
-/// The decoded planes of an image (indexed as in [`ImageHeader::channels`]), integer
-/// samples normalised to [0, 1], no transfer function applied. `declared` is the size the
-/// header gave when it was checked: the decoder may not decode another size, nor allocate
-/// more than that size needs (in place of the image crate's fixed 512 MiB, which refused
-/// large 16-bit images the pixel limit admits).
+/// The decoded planes of an image (indexed as in [`ImageHeader::channels`]), turned upright,
+/// integer samples normalised to [0, 1], no transfer function applied. `declared` is the
+/// (upright) size the header gave when it was checked: the decoder may not decode another
+/// size, nor allocate more than that size needs (in place of the image crate's fixed 512 MiB,
+/// which refused large 16-bit images the pixel limit admits).
 pub fn read_planes(
     path: &Path,
     declared: (usize, usize),
@@ -91,8 +120,10 @@ pub fn read_planes(
         .with_guessed_format()
         .map_err(|e| e.to_string())?;
     let mut limits = Limits::default();
-    limits.max_image_width = Some(u32::try_from(declared.0).unwrap_or(u32::MAX));
-    limits.max_image_height = Some(u32::try_from(declared.1).unwrap_or(u32::MAX));
+    // Either side may be the stored width: the orientation is read with the header.
+    let side = u32::try_from(declared.0.max(declared.1)).unwrap_or(u32::MAX);
+    limits.max_image_width = Some(side);
+    limits.max_image_height = Some(side);
     limits.max_alloc = Some(
         (declared.0 as u64)
             .saturating_mul(declared.1 as u64)
@@ -100,7 +131,10 @@ pub fn read_planes(
             .saturating_add(DECODER_ROOM),
     );
     reader.limits(limits);
-    let image = reader.decode().map_err(|e| e.to_string())?;
+    let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;
+    let orientation = orientation(&mut decoder);
+    let mut image = DynamicImage::from_decoder(decoder).map_err(|e| e.to_string())?;
+    image.apply_orientation(orientation);
     let (width, height) = (image.width() as usize, image.height() as usize);
     let count = image.color().channel_count() as usize;
     let n = width * height;
@@ -271,7 +305,7 @@ impl ImageFormat {
 }
 
 /// Writes premultiplied linear colour as an sRGB-encoded (or linear) integer image with
-/// straight alpha. JPEG has no alpha and no 16-bit: it is written 8-bit RGB.
+/// straight alpha and nothing else: [`write_photo`] for a frame that carries no photo.
 #[allow(clippy::too_many_arguments)]
 pub fn write_color(
     writer: impl Write + Seek,
@@ -283,65 +317,41 @@ pub fn write_color(
     sixteen_bit: bool,
     srgb: bool,
 ) -> Result<(), String> {
-    let alpha = if format == ImageFormat::Jpeg {
-        None
-    } else {
-        alpha
+    let options = PhotoOptions {
+        sixteen_bit,
+        linear: !srgb,
+        jpeg_quality: 95,
+        photo: None,
     };
-    let sixteen_bit = sixteen_bit && format != ImageFormat::Jpeg;
-    let channels = if alpha.is_some() { 4 } else { 3 };
-    let max = if sixteen_bit { 65535 } else { 255 };
-    let n = width * height;
-    let mut codes = vec![0u32; n * channels];
-    for i in 0..n {
-        let a = alpha.map_or(1.0, |a| {
-            let a = a[i];
-            if a.is_finite() {
-                a.clamp(0.0, 1.0)
-            } else {
-                0.0
+    write_photo(writer, format, width, height, rgb, alpha, &options)
+}
+
+/// Reads what a photo holds besides its pixels ([`read_photo`]) and makes its colour planes
+/// (as [`read_planes`] gave them) straight: a file of associated alpha has its colour divided
+/// by `alpha` as stored, in its encoded values (where the file multiplied it). Then, when
+/// `linearise`, turns them into the linear light of its profile. Returns the photo and a
+/// note when the profile could not give its curves.
+pub fn read_photo_colour(
+    path: &Path,
+    mut planes: [&mut [f32]; 3],
+    alpha: Option<&[f32]>,
+    linearise: bool,
+) -> Result<(Photo, Option<String>), String> {
+    let photo = read_photo(path)?;
+    if let (true, Some(alpha)) = (photo.premultiplied, alpha) {
+        for plane in planes.iter_mut() {
+            for (v, &a) in plane.iter_mut().zip(alpha) {
+                *v = if a > 0.0 { (*v / a).min(1.0) } else { 0.0 };
             }
-        });
-        // Unpremultiply; where alpha is 0 the colour is 0.
-        let unpremultiply = if a > 0.0 { 1.0 / a } else { 0.0 };
-        for c in 0..3 {
-            let v = if alpha.is_some() {
-                rgb[c][i] * unpremultiply
-            } else {
-                rgb[c][i]
-            };
-            codes[i * channels + c] = encode(v, srgb, max);
-        }
-        if alpha.is_some() {
-            codes[i * channels + 3] = encode(a, false, max);
         }
     }
-    let color_type = match (channels, sixteen_bit) {
-        (3, false) => image::ExtendedColorType::Rgb8,
-        (4, false) => image::ExtendedColorType::Rgba8,
-        (3, true) => image::ExtendedColorType::Rgb16,
-        _ => image::ExtendedColorType::Rgba16,
-    };
-    let bytes: Vec<u8> = if sixteen_bit {
-        codes
-            .iter()
-            .flat_map(|&c| (c as u16).to_ne_bytes())
-            .collect()
-    } else {
-        codes.iter().map(|&c| c as u8).collect()
-    };
-    let (w, h) = (width as u32, height as u32);
-    let result = match format {
-        ImageFormat::Png => {
-            image::codecs::png::PngEncoder::new(writer).write_image(&bytes, w, h, color_type)
-        }
-        ImageFormat::Tiff => {
-            image::codecs::tiff::TiffEncoder::new(writer).write_image(&bytes, w, h, color_type)
-        }
-        ImageFormat::Jpeg => image::codecs::jpeg::JpegEncoder::new_with_quality(writer, 95)
-            .write_image(&bytes, w, h, color_type),
-    };
-    result.map_err(|e| e.to_string())
+    if !linearise {
+        return Ok((photo, None));
+    }
+    let transfer = Transfer::of(photo.icc.as_deref());
+    let max = if photo.bits == 16 { 65535 } else { 255 };
+    transfer.linearise(planes, max);
+    Ok((photo, transfer.note))
 }
 
 #[cfg(test)]

@@ -1,0 +1,251 @@
+//! What a photo holds besides its pixels, read so that the output can hold it again
+//! (`frame::Photo`): the ICC profile (JPEG APP2, PNG iCCP, TIFF tag 34675), EXIF (JPEG APP1,
+//! PNG eXIf), XMP (JPEG APP1, PNG iTXt, TIFF tag 700), IPTC (JPEG APP13 and TIFF tag 34377,
+//! as Photoshop resource blocks), the bits per sample and a JPEG's chroma subsampling.
+//!
+//! The pixels are turned upright on read (`read_planes`, by the orientation the image crate
+//! reads from EXIF or the TIFF tag), so the frame holds the upright photo and the EXIF and XMP
+//! carried with it say orientation 1: written again as they are, they describe the upright
+//! pixels of the output, and no viewer turns them a second time.
+//!
+//! Not read: a TIFF's EXIF (a sub-directory, and IFD0's own Make, Model, DateTime, …), a
+//! TIFF's bare IPTC (tag 33723, which exiftool writes as LONGs), a PNG's IPTC (a hex text
+//! chunk of no settled form) and a PNG's text chunks (tEXt, zTXt, but XMP's iTXt).
+
+use std::path::Path;
+
+use image::{ImageDecoder, ImageReader};
+
+use crate::frame::Photo;
+
+/// Reads the profile and metadata of an 8/16-bit image, without decoding its pixels, and sets
+/// the orientation its EXIF and XMP record to 1 (upright, as `read_planes` delivers it).
+pub fn read_photo(path: &Path) -> Result<Photo, String> {
+    let reader = ImageReader::open(path)
+        .map_err(|e| e.to_string())?
+        .with_guessed_format()
+        .map_err(|e| e.to_string())?;
+    let jpeg = reader.format() == Some(image::ImageFormat::Jpeg);
+    let tiff = reader.format() == Some(image::ImageFormat::Tiff);
+    let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;
+    let color = decoder.color_type();
+    let bits = (color.bytes_per_pixel() / color.channel_count()) * 8;
+    // A block that cannot be read is left out, not a reason to refuse the photo.
+    let mut exif = decoder.exif_metadata().ok().flatten();
+    let mut xmp = decoder.xmp_metadata().ok().flatten();
+    let (mut icc, mut iptc) = (decoder.icc_profile().ok().flatten(), None);
+    let mut premultiplied = false;
+    if jpeg {
+        iptc = decoder.iptc_metadata().ok().flatten();
+    }
+    if tiff {
+        // The image crate's TIFF reader gives no profile stored as UNDEFINED (as exiftool
+        // and Photoshop store it) and refuses XMP under its limits: the tiff crate reads them.
+        ([icc, xmp, iptc], premultiplied) = tiff_blocks(path);
+    }
+    if let Some(exif) = &mut exif {
+        set_exif_orientation(exif, 1);
+    }
+    if let Some(xmp) = &mut xmp {
+        set_xmp_orientation(xmp);
+    }
+    let sampling = if jpeg {
+        std::fs::read(path).ok().and_then(|b| jpeg_sampling(&b))
+    } else {
+        None
+    };
+    Ok(Photo {
+        icc,
+        exif,
+        xmp,
+        iptc,
+        bits,
+        sampling,
+        premultiplied,
+    })
+}
+
+/// A TIFF's profile (tag 34675), XMP (tag 700) and Photoshop resource blocks (tag 34377,
+/// where IPTC sits beside its JPEG form), each as its bytes; and whether its alpha is
+/// associated (ExtraSamples = 1: the colour is premultiplied).
+fn tiff_blocks(path: &Path) -> ([Option<Vec<u8>>; 3], bool) {
+    use tiff::tags::Tag;
+    let Ok(mut decoder) = std::fs::File::open(path)
+        .map_err(tiff::TiffError::from)
+        .and_then(tiff::decoder::Decoder::new)
+    else {
+        return ([None, None, None], false);
+    };
+    let blocks = [34675, 700, 34377].map(|tag| {
+        let tag = Tag::from_u16_exhaustive(tag);
+        decoder.find_tag(tag).ok()??.into_u8_vec().ok()
+    });
+    let extra = decoder.find_tag_unsigned_vec::<u16>(Tag::ExtraSamples);
+    let associated = extra.ok().flatten().is_some_and(|e| e.first() == Some(&1));
+    (blocks, associated)
+}
+
+/// Where IFD0's orientation (tag 0x0112, a SHORT) sits in an EXIF block (a TIFF structure,
+/// with or without the `Exif\0\0` of a JPEG segment before it), and its byte order.
+fn exif_orientation_at(exif: &[u8]) -> Option<(usize, bool)> {
+    let start = if exif.starts_with(b"Exif\0\0") { 6 } else { 0 };
+    let tiff = exif.get(start..)?;
+    let little = match tiff.get(0..2)? {
+        b"II" => true,
+        b"MM" => false,
+        _ => return None,
+    };
+    let u16_at = |at: usize| {
+        let b = tiff.get(at..at + 2)?;
+        Some(if little {
+            u16::from_le_bytes([b[0], b[1]])
+        } else {
+            u16::from_be_bytes([b[0], b[1]])
+        })
+    };
+    let ifd = {
+        let b = tiff.get(4..8)?;
+        let b = [b[0], b[1], b[2], b[3]];
+        (if little {
+            u32::from_le_bytes(b)
+        } else {
+            u32::from_be_bytes(b)
+        }) as usize
+    };
+    let count = u16_at(ifd)? as usize;
+    (0..count)
+        .map(|e| ifd + 2 + 12 * e)
+        .find(|&at| u16_at(at) == Some(0x0112) && u16_at(at + 2) == Some(3))
+        .map(|at| (start + at + 8, little))
+}
+
+/// The orientation an EXIF block records (1 to 8), if it records one.
+pub fn exif_orientation(exif: &[u8]) -> Option<u16> {
+    let (at, little) = exif_orientation_at(exif)?;
+    let b = [*exif.get(at)?, *exif.get(at + 1)?];
+    Some(if little {
+        u16::from_le_bytes(b)
+    } else {
+        u16::from_be_bytes(b)
+    })
+}
+
+/// Rewrites the orientation an EXIF block records, in place; a block without one is left.
+pub fn set_exif_orientation(exif: &mut [u8], value: u16) {
+    if let Some((at, little)) = exif_orientation_at(exif) {
+        let bytes = if little {
+            value.to_le_bytes()
+        } else {
+            value.to_be_bytes()
+        };
+        exif[at..at + 2].copy_from_slice(&bytes);
+    }
+}
+
+/// Sets XMP's `tiff:Orientation` (as an attribute or an element) to 1.
+fn set_xmp_orientation(xmp: &mut [u8]) {
+    for (open, close) in [
+        (&b"tiff:Orientation=\""[..], b'"'),
+        (&b"tiff:Orientation='"[..], b'\''),
+        (&b"<tiff:Orientation>"[..], b'<'),
+    ] {
+        let mut from = 0;
+        while let Some(found) = find(&xmp[from..], open) {
+            let value = from + found + open.len();
+            // A single digit 1-8: overwritten in place, so no length changes.
+            if xmp.get(value + 1) == Some(&close) && xmp[value].is_ascii_digit() {
+                xmp[value] = b'1';
+            }
+            from = value;
+        }
+    }
+}
+
+fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {
+    haystack.windows(needle.len()).position(|w| w == needle)
+}
+
+/// A JPEG's chroma subsampling: its luma sampling factors over its chroma's, (2, 2) for
+/// 4:2:0, (2, 1) for 4:2:2, (1, 1) for 4:4:4; `None` for a grey or CMYK JPEG, or chroma
+/// sampled unlike the usual forms (both chroma components at 1×1).
+pub fn jpeg_sampling(bytes: &[u8]) -> Option<(u8, u8)> {
+    let mut at = 2;
+    loop {
+        while bytes.get(at) == Some(&0xFF) && bytes.get(at + 1) == Some(&0xFF) {
+            at += 1;
+        }
+        if *bytes.get(at)? != 0xFF {
+            return None;
+        }
+        let marker = *bytes.get(at + 1)?;
+        at += 2;
+        if matches!(marker, 0x01 | 0xD0..=0xD7) {
+            continue;
+        }
+        if matches!(marker, 0xD9 | 0xDA) {
+            return None;
+        }
+        let length = u16::from_be_bytes([*bytes.get(at)?, *bytes.get(at + 1)?]) as usize;
+        // Start of frame: every SOFn but DHT (C4), JPG (C8) and DAC (CC).
+        if matches!(marker, 0xC0..=0xCF) && !matches!(marker, 0xC4 | 0xC8 | 0xCC) {
+            let frame = bytes.get(at..at + length)?;
+            if *frame.get(7)? != 3 {
+                return None;
+            }
+            let factors = |c: usize| {
+                let hv = *frame.get(8 + 3 * c + 1)?;
+                Some((hv >> 4, hv & 0x0F))
+            };
+            let (luma, cb, cr) = (factors(0)?, factors(1)?, factors(2)?);
+            return (cb == (1, 1) && cr == (1, 1)).then_some(luma);
+        }
+        at += length;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A big-endian EXIF block whose IFD0 holds Make (ASCII, 4 bytes inline) and Orientation.
+    fn exif_with_orientation(orientation: u16) -> Vec<u8> {
+        let mut b = b"MM\0\x2a\0\0\0\x08".to_vec();
+        b.extend(2u16.to_be_bytes());
+        b.extend([0x01, 0x0F, 0, 2, 0, 0, 0, 4]);
+        b.extend(b"ABC\0");
+        b.extend([0x01, 0x12, 0, 3, 0, 0, 0, 1]);
+        b.extend(orientation.to_be_bytes());
+        b.extend([0, 0, 0, 0, 0, 0]);
+        b
+    }
+
+    #[test]
+    fn exif_orientation_is_read_and_rewritten_in_place() {
+        let mut exif = exif_with_orientation(6);
+        assert_eq!(exif_orientation(&exif), Some(6));
+        let before = exif.len();
+        set_exif_orientation(&mut exif, 1);
+        assert_eq!((exif_orientation(&exif), exif.len()), (Some(1), before));
+        assert_eq!(exif_orientation(b"MM\0\x2a\0\0\0\x08\0\0"), None);
+    }
+
+    #[test]
+    fn xmp_orientation_becomes_1_in_both_forms() {
+        let mut xmp = b"<x tiff:Orientation=\"6\"/><tiff:Orientation>8</tiff:Orientation>".to_vec();
+        set_xmp_orientation(&mut xmp);
+        assert_eq!(
+            xmp,
+            b"<x tiff:Orientation=\"1\"/><tiff:Orientation>1</tiff:Orientation>"
+        );
+    }
+
+    #[test]
+    fn jpeg_sampling_reads_the_frame_header() {
+        // SOI, SOF0 of 3 components: Y 2×2, Cb 1×1, Cr 1×1 (4:2:0).
+        let mut jpeg = vec![0xFF, 0xD8, 0xFF, 0xC0, 0, 17, 8, 0, 16, 0, 16, 3];
+        jpeg.extend([1, 0x22, 0, 2, 0x11, 1, 3, 0x11, 1]);
+        assert_eq!(jpeg_sampling(&jpeg), Some((2, 2)));
+        jpeg[13] = 0x21;
+        assert_eq!(jpeg_sampling(&jpeg), Some((2, 1)));
+    }
+}

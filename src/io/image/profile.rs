@@ -1,0 +1,208 @@
+//! The transfer curves of a photo's colour, from its embedded ICC profile: moxcms parses the
+//! profile and evaluates its tone curves (`rTRC`, `gTRC`, `bTRC`, or `kTRC` for grey), sRGB's
+//! curve (IEC 61966-2-1) when the file embeds none.
+//!
+//! Input: the profile's bytes as the file stored them (`frame::Photo::icc`). Output: the
+//! [`Transfer`] that turns 8/16-bit codes into the profile's own linear light on read
+//! (`io::passes::read`) and linear light back into codes on write (`write`). Only the curves
+//! are applied, not the primaries: the blur is a linear operation, which commutes with the
+//! profile's 3×3 matrix, so blurring in the profile's linear RGB and in XYZ agree, and the
+//! output, encoded with the same curves, is in the input's colour space and embeds its
+//! profile again. A profile without curves (LUT-based, CMYK, Lab) leaves the colour decoded
+//! with sRGB's curve, with a note saying so.
+
+use moxcms::{ColorProfile, DataColorSpace, ToneCurveEvaluator, ToneReprCurve};
+
+/// A curve from encoded [0, 1] to linear [0, 1].
+type Curve = Box<dyn ToneCurveEvaluator + Send + Sync>;
+
+/// The curves of one photo's colour, per channel R, G, B (`None`: the values are linear).
+pub struct Transfer {
+    curves: Option<[Curve; 3]>,
+    /// Whether the profile describes RGB colour, and so may be embedded in an RGB output.
+    pub embeds: bool,
+    /// What the profile could not give (its curves, or its colour space), for the run's notes.
+    pub note: Option<String>,
+}
+
+impl std::fmt::Debug for Transfer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Transfer")
+            .field("linear", &self.curves.is_none())
+            .field("embeds", &self.embeds)
+            .field("note", &self.note)
+            .finish()
+    }
+}
+
+fn srgb_curves() -> [Curve; 3] {
+    let srgb = ColorProfile::new_srgb();
+    curves_of(&srgb).expect("moxcms's sRGB profile has its three curves")
+}
+
+fn curves_of(profile: &ColorProfile) -> Option<[Curve; 3]> {
+    let make = |trc: &Option<ToneReprCurve>| trc.as_ref()?.make_linear_evaluator().ok();
+    match profile.color_space {
+        DataColorSpace::Rgb => Some([
+            make(&profile.red_trc)?,
+            make(&profile.green_trc)?,
+            make(&profile.blue_trc)?,
+        ]),
+        DataColorSpace::Gray => Some([
+            make(&profile.gray_trc)?,
+            make(&profile.gray_trc)?,
+            make(&profile.gray_trc)?,
+        ]),
+        _ => None,
+    }
+}
+
+impl Transfer {
+    /// Values that are linear already (`--linear`, float files).
+    pub fn linear() -> Transfer {
+        Transfer {
+            curves: None,
+            embeds: false,
+            note: None,
+        }
+    }
+
+    /// sRGB's curves: a file with no profile.
+    pub fn srgb() -> Transfer {
+        Transfer {
+            curves: Some(srgb_curves()),
+            embeds: false,
+            note: None,
+        }
+    }
+
+    /// The curves of an embedded profile (sRGB's when there is none, or when the profile has
+    /// no curves to give, with a note).
+    pub fn of(icc: Option<&[u8]>) -> Transfer {
+        let Some(icc) = icc else {
+            return Transfer::srgb();
+        };
+        let fallback = |embeds: bool, why: String| Transfer {
+            curves: Some(srgb_curves()),
+            embeds,
+            note: Some(format!(
+                "{why}: the colour is linearised with sRGB's curve; the profile is kept"
+            )),
+        };
+        let profile = match ColorProfile::new_from_slice(icc) {
+            Ok(profile) => profile,
+            Err(e) => {
+                return fallback(
+                    false,
+                    format!("the embedded ICC profile is unreadable ({e})"),
+                )
+            }
+        };
+        let embeds = profile.color_space == DataColorSpace::Rgb;
+        match curves_of(&profile) {
+            Some(curves) => Transfer {
+                curves: Some(curves),
+                embeds,
+                note: None,
+            },
+            None => fallback(
+                embeds,
+                format!(
+                    "the embedded ICC profile ({:?}) has no tone curves (a LUT-based profile)",
+                    profile.color_space
+                ),
+            ),
+        }
+    }
+
+    /// Turns normalised codes (`code / max`, as `read_planes` gives them) into linear light,
+    /// through a table of the curve at every code.
+    pub fn linearise(&self, planes: [&mut [f32]; 3], max: u32) {
+        let Some(curves) = &self.curves else { return };
+        for (plane, curve) in planes.into_iter().zip(curves) {
+            let table: Vec<f32> = (0..=max)
+                .map(|k| curve.evaluate_value(k as f32 / max as f32))
+                .collect();
+            for v in plane.iter_mut() {
+                let code = (v.clamp(0.0, 1.0) * max as f32).round() as usize;
+                *v = table[code];
+            }
+        }
+    }
+
+    /// The encoder of linear light into codes of `max` (255 or 65535) levels, channel by
+    /// channel.
+    pub fn encoder(&self, max: u32) -> Encoder {
+        let edges = self.curves.as_ref().map(|curves| {
+            curves.each_ref().map(|curve| {
+                // Entry k: the linear value where code k + 1 starts (the curve at the middle
+                // of codes k and k + 1), so that each value takes the code nearest to it in
+                // the encoded space, for any increasing curve, without inverting it.
+                (0..max)
+                    .map(|k| curve.evaluate_value((k as f32 + 0.5) / max as f32))
+                    .collect()
+            })
+        });
+        Encoder { edges, max }
+    }
+}
+
+/// Linear light to codes, through tables of code boundaries.
+pub struct Encoder {
+    edges: Option<[Vec<f32>; 3]>,
+    max: u32,
+}
+
+impl Encoder {
+    /// The code of a linear value in channel `c` (0, 1, 2); NaN takes code 0.
+    pub fn encode(&self, v: f32, c: usize) -> u32 {
+        let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+        match &self.edges {
+            Some(edges) => edges[c].partition_point(|&edge| edge <= v) as u32,
+            None => (v * self.max as f32 + 0.5) as u32,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn no_profile_is_srgb() {
+        // 50% sRGB grey is 21.4% linear (IEC 61966-2-1).
+        let transfer = Transfer::of(None);
+        let mut plane = vec![128.0 / 255.0];
+        transfer.linearise([&mut plane, &mut [0.0], &mut [1.0]], 255);
+        assert!((plane[0] - 0.215_861).abs() < 1e-5, "{}", plane[0]);
+        assert_eq!(transfer.encoder(255).encode(plane[0], 0), 128);
+    }
+
+    #[test]
+    fn every_code_round_trips_through_a_gamma_profile() {
+        let icc = ColorProfile::new_adobe_rgb().encode().unwrap();
+        let transfer = Transfer::of(Some(&icc));
+        assert!(transfer.embeds && transfer.note.is_none());
+        for max in [255u32, 65535] {
+            let encoder = transfer.encoder(max);
+            let codes: Vec<f32> = (0..=max).map(|k| k as f32 / max as f32).collect();
+            let mut planes = [codes.clone(), codes.clone(), codes];
+            let [r, g, b] = &mut planes;
+            transfer.linearise([r, g, b], max);
+            for (k, &v) in planes[0].iter().enumerate() {
+                assert_eq!(encoder.encode(v, 0), k as u32, "max {max}");
+            }
+            // Adobe RGB (1998): a pure gamma of 563/256.
+            let half = planes[1][(max / 2) as usize];
+            let expected = ((max / 2) as f32 / max as f32).powf(563.0 / 256.0);
+            assert!((half - expected).abs() < 1e-5, "{half} {expected}");
+        }
+    }
+
+    #[test]
+    fn an_unreadable_profile_falls_back_to_srgb_with_a_note() {
+        let transfer = Transfer::of(Some(b"not a profile"));
+        assert!(!transfer.embeds);
+        assert!(transfer.note.unwrap().contains("unreadable"));
+    }
+}

@@ -1,0 +1,352 @@
+//! Photos keep what they came with (issue 29, point 4): an 8/16-bit photo's ICC profile, EXIF
+//! and chroma subsampling come out again, its colour is blurred in its profile's linear light,
+//! its bit depth is kept, its orientation is honoured once, and TIFFs come out compressed with
+//! their alpha declared. Fixtures are made here at run time; the outputs are read back by
+//! `exiftool` and `tiffinfo` where installed (skipped with a note when absent, unless
+//! SHUTTER_REQUIRE_TOOLS=1), and by the image and tiff crates' decoders.
+
+use std::path::Path;
+use std::process::Command;
+
+use image::{ImageDecoder, ImageEncoder};
+
+use crate::support::*;
+
+/// Adobe RGB (1998): its tone curve is a pure gamma of 563/256 (Adobe RGB (1998) Color Image
+/// Encoding, 4.3.1.2), not sRGB's.
+const ADOBE_GAMMA: f64 = 563.0 / 256.0;
+
+fn adobe_icc() -> Vec<u8> {
+    let mut icc = moxcms::ColorProfile::new_adobe_rgb().encode().unwrap();
+    // The header's PCS illuminant exactly as ICC.1 (7.2.16) has it, D50 = (0.9642, 1.0,
+    // 0.8249) in s15Fixed16: moxcms writes a D50 a few units off, which libpng refuses.
+    icc[68..80].copy_from_slice(&[0, 0, 0xF6, 0xD6, 0, 1, 0, 0, 0, 0, 0xD3, 0x2D]);
+    icc
+}
+
+/// A big-endian EXIF block (a TIFF structure) whose IFD0 holds Make "ShTs" and Orientation.
+fn exif(orientation: u16) -> Vec<u8> {
+    let mut b = b"MM\0\x2a\0\0\0\x08".to_vec();
+    b.extend(2u16.to_be_bytes());
+    // Make: ASCII, 5 bytes with its NUL, at offset 38 (after the IFD).
+    b.extend([0x01, 0x0F, 0, 2, 0, 0, 0, 5, 0, 0, 0, 38]);
+    b.extend([0x01, 0x12, 0, 3, 0, 0, 0, 1]);
+    b.extend(orientation.to_be_bytes());
+    b.extend([0, 0, 0, 0, 0, 0]);
+    b.extend(b"ShTs\0");
+    b
+}
+
+/// `exiftool -j -n` of a file, or `None` (with a note) when exiftool is not installed; fails
+/// instead when SHUTTER_REQUIRE_TOOLS=1.
+fn exiftool(path: &Path) -> Option<serde_json::Value> {
+    tool("exiftool", &["-j", "-n", &s(path)]).map(|out| {
+        let all: serde_json::Value = serde_json::from_str(&out).unwrap();
+        all[0].clone()
+    })
+}
+
+fn tool(name: &str, args: &[&str]) -> Option<String> {
+    match Command::new(name).args(args).output() {
+        Ok(o) => Some(String::from_utf8_lossy(&o.stdout).into_owned()),
+        Err(_) if std::env::var("SHUTTER_REQUIRE_TOOLS").as_deref() == Ok("1") => {
+            panic!("{name} is not installed and SHUTTER_REQUIRE_TOOLS=1")
+        }
+        Err(_) => {
+            eprintln!("note: {name} is not installed; its reading of the output is skipped");
+            None
+        }
+    }
+}
+
+/// A painted velocity map (the `painted` preset: (r, g) = v / 64 + 0.5) of `w` × `h`, moving
+/// `dx(x, y)` pixels a frame to the right.
+fn velocity_map(path: &Path, w: u32, h: u32, dx: impl Fn(u32, u32) -> f32) {
+    let mut bytes = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let r = ((dx(x, y) / 64.0 + 0.5) * 65535.0).round() as u16;
+            bytes.extend([r, 32768, 0].iter().flat_map(|v| v.to_ne_bytes()));
+        }
+    }
+    image::save_buffer(path, &bytes, w, h, image::ColorType::Rgb16).unwrap();
+}
+
+fn blur(color: &Path, velocity: &Path, out: &Path, extra: &[&str]) {
+    let mut args = vec![
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "--preset",
+        "painted",
+        "--color",
+    ];
+    // Reconstruct needs depth: one flat plane (the `painted` preset's grey).
+    let depth = velocity.with_file_name("depth.png");
+    let size = image::image_dimensions(velocity).unwrap();
+    let grey = vec![128u8; (size.0 * size.1) as usize];
+    image::save_buffer(&depth, &grey, size.0, size.1, image::ColorType::L8).unwrap();
+    let (color, velocity, depth, out) = (s(color), s(velocity), s(&depth), s(out));
+    args.extend([color.as_str(), "--velocity", &velocity, "--depth", &depth]);
+    args.extend(["-o", &out]);
+    args.extend(extra);
+    let o = shutter(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+fn decoder(path: &Path) -> Box<dyn ImageDecoder> {
+    let reader = image::ImageReader::open(path)
+        .unwrap()
+        .with_guessed_format()
+        .unwrap();
+    Box::new(reader.into_decoder().unwrap())
+}
+
+#[test]
+fn a_jpeg_comes_out_with_its_profile_exif_and_subsampling() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (48u32, 32u32);
+    let input = dir.path().join("in.jpg");
+    let pixels: Vec<u8> = (0..w * h)
+        .flat_map(|i| [(i % w * 5) as u8, (i / w * 7) as u8, 90])
+        .collect();
+    let icc = adobe_icc();
+    // Written by jpeg-encoder at 4:2:0, the usual camera form.
+    let mut encoder = jpeg_encoder::Encoder::new_file(&input, 92).unwrap();
+    encoder.set_sampling_factor(jpeg_encoder::SamplingFactor::R_4_2_0);
+    encoder.add_icc_profile(&icc).unwrap();
+    encoder.add_exif_metadata(&exif(1)).unwrap();
+    encoder
+        .encode(&pixels, w as u16, h as u16, jpeg_encoder::ColorType::Rgb)
+        .unwrap();
+    let velocity = dir.path().join("v.png");
+    velocity_map(&velocity, w, h, |_, _| 6.0);
+    let out = dir.path().join("out.jpg");
+    blur(&input, &velocity, &out, &[]);
+
+    // The image crate's reader: the profile byte for byte, EXIF's Make.
+    let mut read = decoder(&out);
+    assert_eq!(read.icc_profile().unwrap().as_deref(), Some(&icc[..]));
+    let exif_out = read.exif_metadata().unwrap().expect("EXIF kept");
+    assert!(exif_out.windows(5).any(|w| w == b"ShTs\0"));
+    let Some(tags) = exiftool(&out) else { return };
+    assert_eq!(tags["Make"], "ShTs", "{tags}");
+    assert_eq!(tags["ProfileDescription"], "Adobe RGB 1998", "{tags}");
+    assert_eq!(tags["YCbCrSubSampling"], "2 2", "{tags}");
+    assert_eq!(tags["Orientation"], 1, "{tags}");
+}
+
+/// Blurred in the profile's own linear light: red and green hold the same pattern inverted
+/// (full on one column, off the next), so whatever weights the blur gives a pixel, its red and
+/// green in linear light add up to full: with Adobe RGB's pure gamma, G = (1 − (R/255)^γ)^(1/γ)
+/// · 255 within a code. Blurred in sRGB's light instead, a mixed pixel misses it by 2 codes
+/// and more; blurred in the encoded values, by 20.
+#[test]
+fn an_adobe_rgb_photo_blurs_in_its_own_linear_light() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (64u32, 8u32);
+    let input = dir.path().join("adobe.png");
+    let pixels: Vec<u8> = (0..w * h)
+        .flat_map(|i| {
+            if i % w % 2 == 0 {
+                [255, 0, 60]
+            } else {
+                [0, 255, 60]
+            }
+        })
+        .collect();
+    let mut png = Vec::new();
+    let mut encoder = image::codecs::png::PngEncoder::new(&mut png);
+    encoder.set_icc_profile(adobe_icc()).unwrap();
+    encoder
+        .write_image(&pixels, w, h, image::ExtendedColorType::Rgb8)
+        .unwrap();
+    std::fs::write(&input, png).unwrap();
+    let velocity = dir.path().join("v.png");
+    velocity_map(&velocity, w, h, |_, _| 9.0);
+    let out = dir.path().join("out.png");
+    blur(&input, &velocity, &out, &[]);
+
+    let result = image::open(&out).unwrap().to_rgb8();
+    let decode = |code: u8| (code as f64 / 255.0).powf(ADOBE_GAMMA);
+    let encode = |linear: f64| linear.max(0.0).powf(1.0 / ADOBE_GAMMA) * 255.0;
+    let mut mixed = 0;
+    for p in result.pixels() {
+        let [r, g, b] = p.0;
+        let expected_g = encode(1.0 - decode(r));
+        assert!(
+            (g as f64 - expected_g).abs() <= 1.0,
+            "R {r} G {g}: linear light wants G {expected_g:.2}"
+        );
+        assert_eq!(b, 60, "a flat channel stays as it was");
+        mixed += (30..225).contains(&r) as usize;
+    }
+    assert!(mixed > (w * h / 2) as usize, "the blur mixes the columns");
+}
+
+#[test]
+fn a_16_bit_png_comes_out_16_bit_unless_told() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16u32, 8u32);
+    let input = dir.path().join("in16.png");
+    let pixels: Vec<u16> = (0..w * h * 3).map(|i| (i * 97 % 65536) as u16).collect();
+    let bytes: Vec<u8> = pixels.iter().flat_map(|v| v.to_ne_bytes()).collect();
+    image::save_buffer(&input, &bytes, w, h, image::ColorType::Rgb16).unwrap();
+    let velocity = dir.path().join("v.png");
+    velocity_map(&velocity, w, h, |_, _| 0.0);
+    for (extra, bits) in [(&[][..], 16), (&["--bit-depth", "8"][..], 8)] {
+        let out = dir.path().join(format!("out{bits}.png"));
+        blur(&input, &velocity, &out, extra);
+        let color = decoder(&out).color_type();
+        assert_eq!(color.bytes_per_pixel() * 8 / color.channel_count(), bits);
+        if let Some(tags) = exiftool(&out) {
+            assert_eq!(tags["BitDepth"], bits, "{tags}");
+        }
+    }
+}
+
+/// A phone's portrait photo: stored 48 × 32 with EXIF orientation 6 (turn 90° clockwise to
+/// view), so 32 × 48 upright. The velocity map is painted on the upright view: the top rows
+/// move, the bottom rows are still.
+#[test]
+fn an_orientation_6_jpeg_lines_up_with_a_map_painted_upright() {
+    let dir = tempfile::tempdir().unwrap();
+    let (uw, uh) = (32u32, 48u32);
+    // Upright: vertical stripes two pixels wide.
+    let upright = |x: u32, _y: u32| if (x / 2).is_multiple_of(2) { 40u8 } else { 210 };
+    // Stored S is the upright view turned back: D(x, y) = S(y, uw - 1 - x).
+    let (sw, sh) = (uh, uw);
+    let stored: Vec<u8> = (0..sw * sh)
+        .flat_map(|i| {
+            let (sx, sy) = (i % sw, i / sw);
+            let v = upright(uw - 1 - sy, sx);
+            [v, v, v]
+        })
+        .collect();
+    let input = dir.path().join("portrait.jpg");
+    let mut jpeg = Vec::new();
+    let mut encoder = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, 98);
+    encoder.set_exif_metadata(exif(6)).unwrap();
+    encoder
+        .write_image(&stored, sw, sh, image::ExtendedColorType::Rgb8)
+        .unwrap();
+    std::fs::write(&input, jpeg).unwrap();
+    let velocity = dir.path().join("v.png");
+    velocity_map(&velocity, uw, uh, |_, y| if y < 16 { 8.0 } else { 0.0 });
+    let out = dir.path().join("out.png");
+    blur(&input, &velocity, &out, &[]);
+
+    let result = image::open(&out).unwrap().to_luma8();
+    assert_eq!(result.dimensions(), (uw, uh), "written upright");
+    let step = |y: u32| {
+        (0..uw - 1)
+            .map(|x| {
+                (result.get_pixel(x + 1, y)[0] as i32 - result.get_pixel(x, y)[0] as i32).abs()
+            })
+            .sum::<i32>()
+    };
+    // The still rows far below the moving ones keep their stripes; the moving rows lose them.
+    for y in 28..uh {
+        for x in 0..uw {
+            let (got, want) = (result.get_pixel(x, y)[0] as i32, upright(x, y) as i32);
+            assert!(
+                (got - want).abs() <= 12,
+                "still ({x}, {y}): {got} vs {want}"
+            );
+        }
+    }
+    for y in 2..12 {
+        assert!(
+            3 * step(y) < step(40),
+            "row {y}: {} vs {}",
+            step(y),
+            step(40)
+        );
+    }
+    // Written upright, the EXIF it carries says so: no viewer turns it again.
+    let exif = decoder(&out).exif_metadata().unwrap().expect("EXIF kept");
+    assert_eq!(shutter::io::image::exif_orientation(&exif), Some(1));
+    if let Some(tags) = exiftool(&out) {
+        assert_eq!(tags["Orientation"], 1, "{tags}");
+        assert_eq!(
+            (tags["ImageWidth"].clone(), tags["ImageHeight"].clone()),
+            (32.into(), 48.into())
+        );
+    }
+}
+
+/// A 16-bit TIFF with straight alpha and a profile: out 16-bit, deflate or LZW, its alpha
+/// declared unassociated, its profile kept.
+#[test]
+fn a_tiff_comes_out_compressed_with_its_alpha_declared() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (32u32, 16u32);
+    let input = dir.path().join("in.tif");
+    let pixels: Vec<u16> = (0..w * h)
+        .flat_map(|i| {
+            [
+                (i % w * 2000) as u16,
+                25000,
+                9000,
+                if i % 3 == 0 { 30000 } else { 65535 },
+            ]
+        })
+        .collect();
+    let bytes: Vec<u8> = pixels.iter().flat_map(|v| v.to_ne_bytes()).collect();
+    let icc = adobe_icc();
+    let mut encoder = image::codecs::tiff::TiffEncoder::new(std::fs::File::create(&input).unwrap());
+    encoder.set_icc_profile(icc.clone()).unwrap();
+    encoder
+        .write_image(&bytes, w, h, image::ExtendedColorType::Rgba16)
+        .unwrap();
+    let velocity = dir.path().join("v.png");
+    velocity_map(&velocity, w, h, |_, _| 3.0);
+    let out = dir.path().join("out.tif");
+    blur(&input, &velocity, &out, &[]);
+
+    use tiff::tags::Tag;
+    let mut tiff = tiff::decoder::Decoder::new(std::fs::File::open(&out).unwrap()).unwrap();
+    let compression = tiff.get_tag_u32(Tag::Compression).unwrap();
+    assert!(
+        matches!(compression, 5 | 8 | 32946),
+        "LZW or deflate, not {compression}"
+    );
+    assert_eq!(tiff.get_tag_u32_vec(Tag::ExtraSamples).unwrap(), [2]);
+    assert_eq!(tiff.get_tag_u32_vec(Tag::BitsPerSample).unwrap(), [16; 4]);
+    assert_eq!(tiff.get_tag_u8_vec(Tag::IccProfile).unwrap(), icc);
+    if let Some(info) = tool("tiffinfo", &[&s(&out)]) {
+        assert!(info.contains("Deflate") || info.contains("LZW"), "{info}");
+        assert!(info.contains("unassoc-alpha"), "{info}");
+    }
+    if let Some(tags) = exiftool(&out) {
+        assert_eq!(tags["ProfileDescription"], "Adobe RGB 1998", "{tags}");
+        assert_eq!(tags["ExtraSamples"], 2, "{tags}");
+    }
+}
+
+/// A TIFF of associated alpha (ExtraSamples = 1, its colour premultiplied as stored) reads as
+/// the colour it means: written straight, a still frame gives back the straight colour.
+#[test]
+fn a_tiff_of_associated_alpha_is_not_premultiplied_twice() {
+    use tiff::encoder::{colortype, TiffEncoder};
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (8u32, 8u32);
+    let input = dir.path().join("assoc.tif");
+    // Straight colour 200 at alpha 128, stored premultiplied: 200 · 128 / 255 ≈ 100.
+    let pixels: Vec<u8> = (0..w * h).flat_map(|_| [100, 100, 100, 128]).collect();
+    let mut tiff = TiffEncoder::new(std::fs::File::create(&input).unwrap()).unwrap();
+    let mut image = tiff.new_image::<colortype::RGBA8>(w, h).unwrap();
+    image
+        .encoder()
+        .write_tag(tiff::tags::Tag::ExtraSamples, &[1u16][..])
+        .unwrap();
+    image.write_data(&pixels).unwrap();
+    let velocity = dir.path().join("v.png");
+    velocity_map(&velocity, w, h, |_, _| 0.0);
+    let out = dir.path().join("out.png");
+    blur(&input, &velocity, &out, &[]);
+    let result = image::open(&out).unwrap().to_rgba8();
+    for p in result.pixels() {
+        assert!((p[0] as i32 - 200).abs() <= 2 && p[3] == 128, "{p:?}");
+    }
+}
