@@ -522,3 +522,42 @@ fn beauty_only_writes_the_beauty_alone_and_blurs_no_layer() {
     names.sort();
     assert_eq!(names, ["A", "B", "G", "R"]);
 }
+
+/// README.md's "What survives" table: every row names the tests that check it (or says it is
+/// open), and every test it names exists.
+#[test]
+fn the_readme_what_survives_table_names_tests_that_exist() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let start = readme
+        .find("<!-- survives -->")
+        .expect("the table's start marker");
+    let end = readme
+        .find("<!-- end survives -->")
+        .expect("the table's end marker");
+    let rows: Vec<&str> = readme[start..end]
+        .lines()
+        .filter(|l| l.starts_with('|') && !l.starts_with("| input") && !l.starts_with("|---"))
+        .collect();
+    assert!(rows.len() >= 15, "{} rows", rows.len());
+    for row in rows {
+        let checked = row.trim_end_matches('|').rsplit('|').next().unwrap().trim();
+        if checked == "open" {
+            continue;
+        }
+        let names: Vec<&str> = checked.split(", ").map(|n| n.trim_matches('`')).collect();
+        assert!(
+            !names.is_empty() && !names[0].is_empty(),
+            "no test named: {row}"
+        );
+        for name in names {
+            let (module, test) = name.split_once("::").unwrap_or_else(|| panic!("{name}"));
+            let source = std::fs::read_to_string(root.join("tests").join(format!("{module}.rs")))
+                .unwrap_or_else(|_| panic!("{name}: no tests/{module}.rs"));
+            assert!(
+                source.contains(&format!("fn {test}()")),
+                "{name}: no such test in tests/{module}.rs"
+            );
+        }
+    }
+}

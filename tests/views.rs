@@ -125,6 +125,9 @@ fn single_part_stereo_reads_the_default_view_and_view_right_the_other() {
     assert_same_image(&out("left.exr"), &out("mono-left.exr"));
     assert_same_image(&out("right.exr"), &out("mono-right.exr"));
     assert_different_images(&out("right.exr"), &out("left.exr"));
+    // One view is written: no multiView list naming views the file does not hold.
+    let meta = exr::meta::MetaData::read_from_file(out("right.exr"), false).unwrap();
+    assert_eq!(meta.headers[0].own_attributes.multi_view_names, None);
 }
 
 #[test]

@@ -10,7 +10,7 @@
 //! any type), the display window, the pixel aspect; the data window is the frame's. Not kept:
 //! the preview (it shows the pixels before the blur), and the layout (channels, chunk count,
 //! the tile levels: only the full-resolution level is read, so a mip-mapped input comes back
-//! as one level). Its form follows the input too: compression (unless `compression` is set),
+//! as one level), and a multi-view file's `multiView` list (one view is written). Its form follows the input too: compression (unless `compression` is set),
 //! line order, scan lines or tiles of the same size (a tiled plate stays tiled, so the
 //! tools that read it by tiles still can), and each channel's pixel type (half stays half;
 //! `half` writes every channel half). Added: `shutter/version` and `shutter/settings` (the
@@ -89,6 +89,9 @@ pub fn write_like(
     let mut layer_attributes = input.map_or_else(LayerAttributes::default, |h| {
         let mut kept = h.own_attributes.clone();
         kept.preview = None;
+        // One view is written (the one read): a multiView list would name views the file
+        // does not hold, and make its channels the default view's.
+        kept.multi_view_names = None;
         kept
     });
     layer_attributes.layer_position = Vec2(windows.data_origin.0, windows.data_origin.1);
