@@ -149,6 +149,31 @@ impl Windows {
             },
         }
     }
+
+    /// A plane of `width × height` samples over the data window, as the display window shows
+    /// it: what lies outside the display is cut off, what the data does not cover is 0.
+    pub fn on_display(&self, plane: &[f32], width: usize, height: usize) -> Vec<f32> {
+        let display = self.display;
+        let (ox, oy) = self.data_origin;
+        if (ox, oy) == (display.x, display.y) && (width, height) == (display.width, display.height)
+        {
+            return plane.to_vec();
+        }
+        let mut out = vec![0.0; display.width * display.height];
+        for (dy, row) in out.chunks_mut(display.width.max(1)).enumerate() {
+            let y = i64::from(display.y) + dy as i64 - i64::from(oy);
+            if y < 0 || y >= height as i64 {
+                continue;
+            }
+            for (dx, v) in row.iter_mut().enumerate() {
+                let x = i64::from(display.x) + dx as i64 - i64::from(ox);
+                if (0..width as i64).contains(&x) {
+                    *v = plane[y as usize * width + x as usize];
+                }
+            }
+        }
+        out
+    }
 }
 
 /// The passes of one frame. All present planes have `width * height` samples.

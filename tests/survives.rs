@@ -561,3 +561,112 @@ fn the_readme_what_survives_table_names_tests_that_exist() {
         }
     }
 }
+
+#[test]
+fn vectors_read_from_a_lossy_part_are_warned_about_by_channel() {
+    // DWAA keeps `velocity.Y` (a name ending in Y, as luminance) only roughly and
+    // `velocity.X` exactly: OpenEXR's rule is by name, whatever the pixel type.
+    let dir = tempfile::tempdir().unwrap();
+    write_plate(
+        &dir.path().join("color.exr"),
+        Blocks::ScanLines,
+        LineOrder::Increasing,
+    );
+    write_passes(dir.path());
+    let n = W * H;
+    let vectors = Layer::new(
+        (W, H),
+        LayerAttributes::default(),
+        Encoding {
+            compression: Compression::DWAA(None),
+            blocks: Blocks::ScanLines,
+            line_order: LineOrder::Increasing,
+        },
+        AnyChannels::sort(
+            vec![
+                AnyChannel::new("X", FlatSamples::F32(vec![6.0; n])),
+                AnyChannel::new("Y", FlatSamples::F32(vec![0.0; n])),
+            ]
+            .into(),
+        ),
+    );
+    Image::from_layer(vectors)
+        .write()
+        .to_file(dir.path().join("velocity.exr"))
+        .unwrap();
+    let run = shutter(&[
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &s(&dir.path().join("color.exr")),
+        "--depth",
+        &s(&dir.path().join("depth.exr")),
+        "--velocity",
+        &s(&dir.path().join("velocity.exr")),
+        "-o",
+        &s(&dir.path().join("out.exr")),
+        "--json",
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    let warnings = report["warnings"].to_string();
+    assert!(
+        warnings.contains("velocity: channel Y is compressed with dwaa"),
+        "{warnings}"
+    );
+    assert!(!warnings.contains("channel X"), "{warnings}");
+    assert!(!warnings.contains("depth:"), "{warnings}");
+}
+
+#[test]
+fn a_picture_from_an_exr_is_its_display_window_not_its_overscan() {
+    use shutter::frame::{Window, Windows};
+    let dir = tempfile::tempdir().unwrap();
+    // Overscan: 4 px beyond the 16×10 picture on the left and right, 2 above and below.
+    let (dw, dh) = (24usize, 14usize);
+    let windows = Windows {
+        data_origin: (-4, -2),
+        display: Window {
+            x: 0,
+            y: 0,
+            width: 16,
+            height: 10,
+        },
+    };
+    // Each pixel holds its own file x coordinate over 32, so the picture's columns say where
+    // they came from.
+    let r: Vec<f32> = (0..dw * dh)
+        .map(|i| ((i % dw) as f32 - 4.0 + 8.0) / 32.0)
+        .collect();
+    let file = std::io::BufWriter::new(std::fs::File::create(dir.path().join("c.exr")).unwrap());
+    shutter::io::exr::write_channels(
+        file,
+        dw,
+        dh,
+        windows,
+        vec![
+            ("R".into(), r.clone()),
+            ("G".into(), r.clone()),
+            ("B".into(), r),
+        ],
+        shutter::io::exr::ExrOptions::default(),
+    )
+    .unwrap();
+    let out = dir.path().join("out.png");
+    let run = shutter(&[
+        "blur",
+        "--linear",
+        "--color",
+        &s(&dir.path().join("c.exr")),
+        "-o",
+        &s(&out),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let picture = image::open(&out).unwrap().to_rgb8();
+    assert_eq!(picture.dimensions(), (16, 10));
+    for x in 0..16u32 {
+        let expected = ((x as f32 + 8.0) / 32.0 * 255.0).round() as u8;
+        assert_eq!(picture.get_pixel(x, 5)[0], expected, "column {x}");
+    }
+}

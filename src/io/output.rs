@@ -402,6 +402,26 @@ pub fn write_frame(
             })
         }
         OutputFormat::Image(format) => write_atomic(path, |writer| {
+            // A picture is the display window: an EXR's overscan is cut off, and what its
+            // data window does not cover is transparent black.
+            let display = frame.windows.display;
+            let (width, height) = (display.width, display.height);
+            if width
+                .checked_mul(height)
+                .is_none_or(|n| n > crate::io::file::DEFAULT_MAX_PIXELS)
+            {
+                return Err(format!(
+                    "the display window is {width}x{height}, too large for a picture"
+                ));
+            }
+            let on_display =
+                |plane: &[f32]| frame.windows.on_display(plane, frame.width, frame.height);
+            let rgb = [
+                on_display(&color.r),
+                on_display(&color.g),
+                on_display(&color.b),
+            ];
+            let alpha = color.a.as_deref().map(on_display);
             // What the input photo held, held again; its bit depth unless told otherwise.
             let photo = frame.carried.photo.as_ref();
             let bits = options
@@ -416,10 +436,10 @@ pub fn write_frame(
             image_io::write_photo(
                 writer,
                 format,
-                frame.width,
-                frame.height,
-                [&color.r, &color.g, &color.b],
-                color.a.as_deref(),
+                width,
+                height,
+                [&rgb[0], &rgb[1], &rgb[2]],
+                alpha.as_deref(),
                 &photo_options,
             )
         }),

@@ -376,6 +376,41 @@ pub fn plan_frame(
         }
     }
 
+    // Depth and vectors are data: a lossy compression keeps them only roughly.
+    let mut data: Vec<(&str, Slot)> = plan
+        .depth
+        .iter()
+        .map(|(slot, _)| ("depth", *slot))
+        .collect();
+    for (pass, source) in [
+        ("velocity", &plan.velocity),
+        ("prev", &plan.prev),
+        ("next", &plan.next),
+    ] {
+        if let Some(source) = source {
+            data.extend(
+                [source.x, source.y]
+                    .into_iter()
+                    .chain(source.z)
+                    .map(|s| (pass, s)),
+            );
+        }
+    }
+    for (pass, slot) in data {
+        let file = &planner.files[slot.file];
+        let channel = &file.info.channels[file.channels[slot.entry]];
+        if let Some(method) = stored_lossily(&file.info, channel) {
+            let warning = format!(
+                "{pass}: channel {} is compressed with {method}, which keeps a {} channel of \
+                 that name only approximately; store depth and vectors losslessly (zip, piz)",
+                channel.name, channel.sample_type
+            );
+            if !plan.warnings.contains(&warning) {
+                plan.warnings.push(warning);
+            }
+        }
+    }
+
     if planner.problems.is_empty() {
         plan.files = planner.files;
         Ok(plan)
@@ -508,6 +543,30 @@ fn other_channels(info: &FileInfo, beauty: &[usize]) -> Vec<usize> {
     (0..info.channels.len())
         .filter(|&i| info.channels[i].part == part && !beauty.contains(&i))
         .collect()
+}
+
+/// How `channel`'s part compresses it lossily, if it does: DWAA and DWAB compress a channel
+/// whose name ends in R, G, B or Y (BY, RY) as colour, whatever its pixel type (OpenEXR's
+/// rule: a vector's `velocity.Y` is one); B44 and B44A every half channel; PXR24 every float
+/// one (to 24 bits).
+fn stored_lossily(info: &FileInfo, channel: &crate::io::file::ChannelInfo) -> Option<&'static str> {
+    let crate::io::file::FileKind::Exr { compression, .. } = &info.kind else {
+        return None;
+    };
+    let method = *compression.get(channel.part)?;
+    let suffix = channel
+        .name
+        .rsplit('.')
+        .next()
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    let lossy = match method {
+        "dwaa" | "dwab" => ["r", "g", "b", "y", "by", "ry"].contains(&suffix.as_str()),
+        "b44" | "b44a" => channel.sample_type == "f16",
+        "pxr24" => channel.sample_type == "f32",
+        _ => false,
+    };
+    lossy.then_some(method)
 }
 
 fn alternatives(alts: &[Vec<String>]) -> String {
