@@ -198,9 +198,11 @@ pub struct Frame {
 pub struct Carried {
     /// An 8/16-bit colour file's profile and metadata (`io::image` reads and writes them).
     pub photo: Option<Photo>,
-    /// An EXR colour file's header (of the part that holds the colour): its attributes and
-    /// form (compression, line order, blocks, each channel's pixel type) for the output's.
-    pub exr: Option<Box<exr::meta::header::Header>>,
+    /// An EXR colour file's headers, every part's: the output is made like them (attributes
+    /// and form: compression, line order, blocks, each channel's pixel type), part for part.
+    pub headers: Vec<exr::meta::header::Header>,
+    /// Which of `headers` holds the beauty.
+    pub colour_part: usize,
     /// The names the beauty's channels had in the colour file (R, G, B and A when empty):
     /// an EXR output names them so again.
     pub beauty: Vec<String>,
@@ -233,6 +235,8 @@ impl LayerClass {
 pub struct CarriedChannel {
     /// Its name as stored (`diffuse.R`).
     pub name: String,
+    /// The part of the colour file it is stored in.
+    pub part: usize,
     pub class: LayerClass,
     pub plane: Plane,
 }

@@ -670,3 +670,137 @@ fn a_picture_from_an_exr_is_its_display_window_not_its_overscan() {
         assert_eq!(picture.get_pixel(x, 5)[0], expected, "column {x}");
     }
 }
+
+/// A multi-part frame as Nuke writes one: the beauty (`rgba`, PIZ half), a light layer as a
+/// part of its own (`diffuse`, channels R, G, B, equal to the beauty), and the data in a ZIP
+/// part (`data`: Z, velocity.X, velocity.Y).
+fn write_multi_part(path: &Path) {
+    let n = W * H;
+    let light: Vec<Vec<f32>> = (0..3).map(|c| noise(n, 40 + c, 0.0, 1.0)).collect();
+    let half = |p: &[f32]| FlatSamples::F16(p.iter().map(|&v| f16::from_f32(v)).collect());
+    let part = |name: &str, compression, channels: Vec<AnyChannel<FlatSamples>>| {
+        Layer::new(
+            (W, H),
+            LayerAttributes::named(name),
+            Encoding {
+                compression,
+                blocks: Blocks::ScanLines,
+                line_order: LineOrder::Increasing,
+            },
+            AnyChannels::sort(channels.into()),
+        )
+    };
+    let rgb = |l: &[Vec<f32>]| {
+        ["R", "G", "B"]
+            .into_iter()
+            .zip(l)
+            .map(|(c, p)| AnyChannel::new(c, half(p)))
+            .collect::<Vec<_>>()
+    };
+    let data = vec![
+        AnyChannel::new("Z", FlatSamples::F32(noise(n, 50, 1.0, 9.0))),
+        AnyChannel::new("velocity.X", FlatSamples::F32(noise(n, 51, -3.0, 3.0))),
+        AnyChannel::new("velocity.Y", FlatSamples::F32(noise(n, 52, -3.0, 3.0))),
+    ];
+    let image = Image::empty(ImageAttributes::new(IntegerBounds::from_dimensions((W, H))))
+        .with_layer(part("rgba", Compression::PIZ, rgb(&light)))
+        .with_layer(part("diffuse", Compression::PIZ, rgb(&light)))
+        .with_layer(part("data", Compression::ZIP16, data));
+    image.write().to_file(path).unwrap();
+}
+
+/// (part name, compression, channel names) of each part of an EXR.
+fn parts_of(path: &Path) -> Vec<(String, Compression, Vec<String>)> {
+    let meta = MetaData::read_from_file(path, false).unwrap();
+    meta.headers
+        .iter()
+        .map(|h| {
+            (
+                h.own_attributes
+                    .layer_name
+                    .as_ref()
+                    .map_or(String::new(), |n| n.to_string()),
+                h.compression,
+                h.channels.list.iter().map(|c| c.name.to_string()).collect(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn a_multi_part_frame_comes_back_part_for_part() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = dir.path().join("color.exr");
+    write_multi_part(&color);
+    write_passes(dir.path());
+    blur(dir.path(), "out.exr", &[]);
+    let out = dir.path().join("out.exr");
+    let rgb = vec!["B".to_string(), "G".into(), "R".into()];
+    assert_eq!(
+        parts_of(&out),
+        vec![
+            ("rgba".into(), Compression::PIZ, rgb.clone()),
+            ("diffuse".into(), Compression::PIZ, rgb),
+            (
+                "data".into(),
+                Compression::ZIP16,
+                vec!["Z".into(), "velocity.X".into(), "velocity.Y".into()]
+            ),
+        ]
+    );
+    // Read part by part: the light part blurred as the beauty, the data part bit for bit.
+    let read = |path: &Path| {
+        let image = exr::prelude::read_all_flat_layers_from_file(path).unwrap();
+        image
+            .layer_data
+            .into_iter()
+            .map(|layer| {
+                layer
+                    .channel_data
+                    .list
+                    .into_iter()
+                    .map(|c| c.sample_data.values_as_f32().collect::<Vec<f32>>())
+                    .collect::<Vec<_>>()
+            })
+            .collect::<Vec<_>>()
+    };
+    let (before, after) = (read(&color), read(&out));
+    assert_ne!(after[0], before[0], "the beauty was not blurred");
+    assert_eq!(
+        after[1], after[0],
+        "the light part is blurred as the beauty"
+    );
+    for (a, b) in after[2].iter().zip(&before[2]) {
+        assert!(a.iter().zip(b).all(|(a, b)| a.to_bits() == b.to_bits()));
+    }
+    if let Some(info) = oiiotool_info(&out) {
+        assert!(info.contains("3 subimages"), "{info}");
+    }
+}
+
+#[test]
+fn data_under_a_dwa_output_goes_to_a_lossless_part_of_its_own() {
+    use exr::meta::attribute::SampleType;
+    let dir = tempfile::tempdir().unwrap();
+    let color = dir.path().join("color.exr");
+    write_layered(&color, SampleType::F32);
+    write_passes(dir.path());
+    blur(dir.path(), "out.exr", &["--compression", "dwaa"]);
+    let out = dir.path().join("out.exr");
+    let parts = parts_of(&out);
+    assert_eq!(parts.len(), 2, "{parts:?}");
+    assert!(matches!(parts[0].1, Compression::DWAA(_)), "{parts:?}");
+    assert_eq!(parts[1].0, "rgba.data");
+    assert_eq!(parts[1].1, Compression::ZIP16);
+    assert_eq!(parts[1].2, ["Z", "id", "velocity.X", "velocity.Y"]);
+    // The data comes back bit for bit.
+    use crate::support::{channel, read_exr_reference};
+    let (before, after) = (read_exr_reference(&color), read_exr_reference(&out));
+    for data in ["Z", "velocity.X", "velocity.Y", "id"] {
+        let (b, a) = (channel(&before, data), channel(&after, data));
+        assert!(
+            a.iter().zip(b).all(|(a, b)| a.to_bits() == b.to_bits()),
+            "{data}"
+        );
+    }
+}

@@ -418,8 +418,10 @@ pub fn read_channels(path: &Path, wanted: &[ChannelRef]) -> exr::error::Result<R
         })?
         .collect::<exr::error::Result<_>>()?;
 
-    // Group the chunks into bands of rows: every chunk of a band covers the same rows, bands
-    // do not overlap, so each band can be written by its own task without locks.
+    // Group the chunks into bands of rows that do not overlap, so each band can be written by
+    // its own task without locks. A chunk that starts inside a band joins it and the band
+    // grows to hold it: the parts of one file may cut their rows differently (a PIZ part's
+    // 32-line chunks beside a ZIP part's 16).
     let mut located = Vec::with_capacity(chunks.len());
     for chunk in chunks {
         let header = &meta.headers[chunk.layer_index];
@@ -433,12 +435,9 @@ pub fn read_channels(path: &Path, wanted: &[ChannelRef]) -> exr::error::Result<R
     let mut bands: Vec<(usize, usize, Vec<Chunk>)> = Vec::new();
     for (y, h, _, chunk) in located {
         match bands.last_mut() {
-            Some((band_y, band_h, chunks)) if *band_y == y => {
-                *band_h = (*band_h).max(h);
+            Some((band_y, band_h, chunks)) if y < *band_y + *band_h || y == *band_y => {
+                *band_h = (*band_h).max(y + h - *band_y);
                 chunks.push(chunk);
-            }
-            Some((band_y, band_h, _)) if y < *band_y + *band_h => {
-                return Err(invalid("overlapping chunks"));
             }
             _ => bands.push((y, h, vec![chunk])),
         }

@@ -1,8 +1,9 @@
 //! An EXR output made like the colour file it came from (issue 29: what comes in goes out).
 //!
-//! In: the planes to write, the colour file's header (the part that held the colour; `None`
-//! when the colour came from a PNG, JPEG or TIFF), the output settings and the record of
-//! what made the frame. Out: the file, written through the caller's writer.
+//! In: the planes to write, part by part, each with the colour file's header of that part
+//! (`None` when the colour came from a PNG, JPEG or TIFF), the output settings and the record
+//! of what made the frame. Out: the file, written through the caller's writer, with as many
+//! parts as the input had (those carried), and under DWA one more for the data.
 //!
 //! The output's header is the input's, minus what describes the file's layout: every
 //! attribute the exr crate reads (chromaticities, whiteLuminance, framesPerSecond, timeCode,
@@ -31,7 +32,7 @@ use exr::meta::header::{Header, ImageAttributes, LayerAttributes};
 use exr::meta::BlockDescription;
 use exr::prelude::{f16, LineOrder, WritableImage};
 
-use crate::frame::{Plane, Windows};
+use crate::frame::{LayerClass, Plane, Windows};
 
 /// How an EXR output is encoded where it does not follow its input.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -48,17 +49,125 @@ pub struct ExrOutput {
 /// compositors write by default.
 pub const DEFAULT_COMPRESSION: Compression = Compression::ZIP16;
 
-/// Writes `channels` as one scan-line or tiled EXR made like `input` (see the module doc),
-/// then puts its attributes in name order. `record` is `shutter/settings`' text.
+/// One part of the output: the input part it is made like (`None`: a new file's defaults)
+/// and its channels, each with whether it is data (a DWA part keeps its data apart).
+pub struct OutPart<'a> {
+    pub input: Option<&'a Header>,
+    pub channels: Vec<(String, Plane, LayerClass)>,
+}
+
+/// Writes `parts` as one EXR, each part made like its input part (see the module doc), then
+/// puts the attributes in name order. `record` is `shutter/settings`' text.
+///
+/// Under DWAA or DWAB, which compress every channel whose name ends in R, G, B or Y as
+/// colour (`velocity.Y`, `N.R`), a part's data channels go to a part of their own,
+/// `<part>.data`, with ZIP: data is never written lossily, and a layer's channels stay
+/// together.
 pub fn write_like(
     writer: &mut BufWriter<File>,
     (width, height): (usize, usize),
     windows: Windows,
-    channels: Vec<(String, Plane)>,
-    input: Option<&Header>,
+    parts: Vec<OutPart>,
     output: &ExrOutput,
     record: &str,
 ) -> Result<(), String> {
+    let display = IntegerBounds::new(
+        (windows.display.x, windows.display.y),
+        (windows.display.width, windows.display.height),
+    );
+    let image_attributes = match parts.first().and_then(|p| p.input) {
+        Some(h) => ImageAttributes {
+            display_window: display,
+            ..h.shared_attributes.clone()
+        },
+        None => ImageAttributes::new(display),
+    };
+    // Each part, and the lossless part its data needs under DWA.
+    let mut layers = Vec::new();
+    for part in parts {
+        let encoding = encoding_like(part.input, output);
+        let (kept, apart): (Vec<_>, Vec<_>) =
+            part.channels.into_iter().partition(|(_, _, class)| {
+                !(is_dwa(encoding.compression) && *class == LayerClass::Data)
+            });
+        let attributes = attributes_like(part.input, windows, record);
+        let data_part = (!apart.is_empty()).then(|| {
+            let mut data_attributes = attributes.clone();
+            let name = attributes
+                .layer_name
+                .as_ref()
+                .map_or("rgba".to_string(), |n| n.to_string());
+            data_attributes.layer_name = Some(latin1(&format!("{name}.data")));
+            let data_encoding = Encoding {
+                compression: DEFAULT_COMPRESSION,
+                ..encoding
+            };
+            (data_attributes, data_encoding, part.input, apart)
+        });
+        if !kept.is_empty() {
+            layers.push((attributes, encoding, part.input, kept));
+        }
+        layers.extend(data_part);
+    }
+    let several = layers.len() > 1;
+    let layers: Vec<_> = layers
+        .into_iter()
+        .enumerate()
+        .map(|(i, (mut attributes, encoding, input, channels))| {
+            // Every part of a multi-part file has a name.
+            if several && attributes.layer_name.is_none() {
+                attributes.layer_name = Some(Text::from(if i == 0 { "rgba" } else { "part" }));
+            }
+            Layer::new(
+                (width, height),
+                attributes,
+                encoding,
+                AnyChannels::sort(channels_like(channels, input, output).into()),
+            )
+        })
+        .collect();
+    let image = Image::from_layers(image_attributes, layers);
+    image
+        .write()
+        .to_buffered(&mut *writer)
+        .map_err(|e| e.to_string())?;
+    writer.flush().map_err(|e| e.to_string())?;
+    sort_attributes(writer.get_mut()).map_err(|e| format!("sorting its attributes: {e}"))
+}
+
+fn is_dwa(compression: Compression) -> bool {
+    matches!(compression, Compression::DWAA(_) | Compression::DWAB(_))
+}
+
+/// The input part's attributes, minus the preview and the views, at the frame's data window,
+/// with shutter's record.
+fn attributes_like(input: Option<&Header>, windows: Windows, record: &str) -> LayerAttributes {
+    let mut attributes = input.map_or_else(LayerAttributes::default, |h| {
+        let mut kept = h.own_attributes.clone();
+        kept.preview = None;
+        // One view is written (the one read): a multiView list would name views the file
+        // does not hold, and make its channels the default view's.
+        kept.multi_view_names = None;
+        kept
+    });
+    attributes.layer_position = Vec2(windows.data_origin.0, windows.data_origin.1);
+    for (name, value) in [
+        ("shutter/version", env!("CARGO_PKG_VERSION")),
+        ("shutter/settings", record),
+    ] {
+        attributes
+            .other
+            .insert(Text::from(name), AttributeValue::Text(latin1(value)));
+    }
+    attributes
+}
+
+/// Each channel's samples in the pixel type its input part stored it in (half with `half`).
+fn channels_like(
+    channels: Vec<(String, Plane, LayerClass)>,
+    input: Option<&Header>,
+    output: &ExrOutput,
+) -> Vec<AnyChannel<FlatSamples>> {
     let stored = |name: &str| {
         input.and_then(|h| {
             h.channels
@@ -68,9 +177,9 @@ pub fn write_like(
                 .map(|c| c.sample_type)
         })
     };
-    let list = channels
+    channels
         .into_iter()
-        .map(|(name, plane)| {
+        .map(|(name, plane, _)| {
             let kind = if output.half {
                 SampleType::F16
             } else {
@@ -84,52 +193,7 @@ pub fn write_like(
             };
             AnyChannel::new(Text::from(name.as_str()), samples)
         })
-        .collect();
-    let encoding = encoding_like(input, output);
-    let mut layer_attributes = input.map_or_else(LayerAttributes::default, |h| {
-        let mut kept = h.own_attributes.clone();
-        kept.preview = None;
-        // One view is written (the one read): a multiView list would name views the file
-        // does not hold, and make its channels the default view's.
-        kept.multi_view_names = None;
-        kept
-    });
-    layer_attributes.layer_position = Vec2(windows.data_origin.0, windows.data_origin.1);
-    for (name, value) in [
-        ("shutter/version", env!("CARGO_PKG_VERSION")),
-        ("shutter/settings", record),
-    ] {
-        layer_attributes
-            .other
-            .insert(Text::from(name), AttributeValue::Text(latin1(value)));
-    }
-    let display = IntegerBounds::new(
-        (windows.display.x, windows.display.y),
-        (windows.display.width, windows.display.height),
-    );
-    let image_attributes = match input {
-        Some(h) => ImageAttributes {
-            display_window: display,
-            ..h.shared_attributes.clone()
-        },
-        None => ImageAttributes::new(display),
-    };
-    let layer = Layer::new(
-        (width, height),
-        layer_attributes,
-        encoding,
-        AnyChannels::sort(list),
-    );
-    let image = Image {
-        attributes: image_attributes,
-        layer_data: layer,
-    };
-    image
-        .write()
-        .to_buffered(&mut *writer)
-        .map_err(|e| e.to_string())?;
-    writer.flush().map_err(|e| e.to_string())?;
-    sort_attributes(writer.get_mut()).map_err(|e| format!("sorting its attributes: {e}"))
+        .collect()
 }
 
 /// The input's compression, blocks and line order, where the exr crate can write them and

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use crate::error::{Problem, ProblemKind};
-use crate::frame::{Frame, Plane, Windows};
+use crate::frame::{Frame, LayerClass, Plane, Windows};
 use crate::io::exr::{self as exr_io, ExrOptions};
 use crate::io::exr_like::{self, ExrOutput};
 use crate::io::file::{FileInfo, FileKind};
@@ -387,15 +387,33 @@ pub fn write_frame(
             }
             let mut planes = vec![color.r, color.g, color.b];
             planes.extend(color.a);
-            let mut channels: Vec<(String, Plane)> = names.into_iter().zip(planes).collect();
-            channels.extend(carried.channels.into_iter().map(|c| (c.name, c.plane)));
+            let beauty = names
+                .into_iter()
+                .zip(planes)
+                .map(|(name, plane)| (name, plane, LayerClass::Colour));
+            // Part for part as the colour file (one part when it is not an EXR); a part none
+            // of whose channels were carried is left out.
+            let count = carried.headers.len().max(1);
+            let mut parts: Vec<Vec<(String, Plane, LayerClass)>> = vec![Vec::new(); count];
+            parts[carried.colour_part.min(count - 1)].extend(beauty);
+            for c in carried.channels {
+                parts[c.part.min(count - 1)].push((c.name, c.plane, c.class));
+            }
+            let parts = parts
+                .into_iter()
+                .enumerate()
+                .filter(|(_, channels)| !channels.is_empty())
+                .map(|(p, channels)| exr_like::OutPart {
+                    input: carried.headers.get(p),
+                    channels,
+                })
+                .collect();
             write_atomic(path, |writer| {
                 exr_like::write_like(
                     writer,
                     (frame.width, frame.height),
                     frame.windows,
-                    channels,
-                    carried.exr.as_deref(),
+                    parts,
                     &options.exr,
                     &options.record,
                 )

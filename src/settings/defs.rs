@@ -633,8 +633,8 @@ pub const DEFS: &[Def] = &[
         section: Section::Output,
         applies: &[],
         value_name: "",
-        help: "write the beauty alone to an EXR (off: every channel of the colour file's part \
-               too, light layers blurred with the beauty's weights, data layers unchanged)",
+        help: "write the beauty alone to an EXR (off: every channel of the colour file too, \
+               light layers blurred with the beauty's weights, data layers unchanged)",
         kind: Kind::Switch,
         unset: "",
         get: |s| Value::Switch(s.output.beauty_only),

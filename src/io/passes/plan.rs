@@ -172,6 +172,8 @@ pub fn plan_frame(
                         .iter()
                         .map(|c| c.map(|c| planner.slot(file, c)))
                         .collect();
+                    let (others, left) = other_channels(info, &claimed);
+                    plan.warnings.extend(left);
                     plan.color = Some(ColorPlan {
                         rgb: [
                             slots[0].expect("required"),
@@ -181,7 +183,7 @@ pub fn plan_frame(
                         a: slots.get(3).copied().flatten(),
                         decode_srgb: integer && preset.color.transfer == Transfer::Srgb,
                         premultiply: integer,
-                        others: other_channels(info, &claimed),
+                        others,
                         other_slots: Vec::new(),
                     });
                 }
@@ -528,21 +530,49 @@ impl Planner<'_> {
     }
 }
 
-/// The channels of an EXR's colour part other than the beauty's (`beauty`, indices into
-/// `info.channels`, the first one's part the colour's). None for an integer image, whose
-/// channels are all the beauty's, nor for a multi-view file, whose channels `info` names
+/// The channels of an EXR colour file other than the beauty's (`beauty`, indices into
+/// `info.channels`): those of the beauty's part, and of every other part whose data window is
+/// the beauty's (the others are named in the returned warning). None for an integer image,
+/// whose channels are all the beauty's, nor for a multi-view file, whose channels `info` names
 /// without their view (carrying them is not done yet).
-fn other_channels(info: &FileInfo, beauty: &[usize]) -> Vec<usize> {
-    let Some(&first) = beauty.first() else {
-        return Vec::new();
+fn other_channels(info: &FileInfo, beauty: &[usize]) -> (Vec<usize>, Option<String>) {
+    let crate::io::file::FileKind::Exr { headers, .. } = &info.kind else {
+        return (Vec::new(), None);
     };
-    if !matches!(info.kind, crate::io::file::FileKind::Exr { .. }) || info.views.is_some() {
-        return Vec::new();
+    let Some(&first) = beauty.first() else {
+        return (Vec::new(), None);
+    };
+    if info.views.is_some() {
+        return (Vec::new(), None);
     }
-    let part = info.channels[first].part;
-    (0..info.channels.len())
-        .filter(|&i| info.channels[i].part == part && !beauty.contains(&i))
-        .collect()
+    let colour = &headers[info.channels[first].part];
+    let alike = |part: usize| {
+        let h = &headers[part];
+        h.layer_size == colour.layer_size
+            && h.own_attributes.layer_position == colour.own_attributes.layer_position
+            && crate::io::exr::unsupported_reason(h).is_none()
+    };
+    let others = (0..info.channels.len())
+        .filter(|&i| alike(info.channels[i].part) && !beauty.contains(&i))
+        .collect();
+    let left: Vec<String> = (0..headers.len())
+        .filter(|&p| !alike(p))
+        .map(|p| {
+            headers[p]
+                .own_attributes
+                .layer_name
+                .as_ref()
+                .map_or(format!("part {p}"), |n| format!("part {n}"))
+        })
+        .collect();
+    let warning = (!left.is_empty()).then(|| {
+        format!(
+            "{} of the colour file: a data window other than the beauty's (or deep data), not \
+             written to the output",
+            left.join(", ")
+        )
+    });
+    (others, warning)
 }
 
 /// How `channel`'s part compresses it lossily, if it does: DWAA and DWAB compress a channel

@@ -57,27 +57,30 @@ pub fn read_frame_noted(plan: &FramePlan) -> Result<(Frame, Vec<String>), Proble
         // The other channels of the colour's part first: a channel the passes read too (a
         // depth in the colour file) is then cloned for them, not taken.
         let file = &plan.files[plan_color.rgb[0].file];
-        let name_of = |slot: Slot| file.info.channels[file.channels[slot.entry]].name.clone();
+        let channel_of = |slot: Slot| &file.info.channels[file.channels[slot.entry]];
         if let FileKind::Exr { headers, .. } = &file.info.kind {
-            let part = file.info.channels[file.channels[plan_color.rgb[0].entry]].part;
-            let crypto = headers
-                .get(part)
-                .map(channels::crypto_layers)
-                .unwrap_or_default();
             for &slot in &plan_color.other_slots {
-                let name = name_of(slot);
+                let channel = channel_of(slot);
+                let crypto = headers
+                    .get(channel.part)
+                    .map(channels::crypto_layers)
+                    .unwrap_or_default();
+                // A channel of a named part is classed as `part.channel` (`diffuse.R`).
+                let qualified = channel.alias.as_ref().unwrap_or(&channel.name);
                 frame.carried.channels.push(CarriedChannel {
-                    class: channels::class_of(&name, &crypto),
+                    class: channels::class_of(qualified, &crypto),
+                    name: channel.name.clone(),
+                    part: channel.part,
                     plane: take(slot, &mut decoded),
-                    name,
                 });
             }
-            frame.carried.exr = headers.get(part).cloned().map(Box::new);
+            frame.carried.headers = headers.clone();
+            frame.carried.colour_part = channel_of(plan_color.rgb[0]).part;
             frame.carried.beauty = plan_color
                 .rgb
                 .iter()
                 .chain(&plan_color.a)
-                .map(|&slot| name_of(slot))
+                .map(|&slot| channel_of(slot).name.clone())
                 .collect();
         }
         let mut r = take(plan_color.rgb[0], &mut decoded);
