@@ -408,22 +408,29 @@ fn check_layers(input: &Path, output: &Path, tolerance: f32) {
     }
 }
 
-#[test]
-fn light_layers_blur_with_the_beautys_weights_and_data_layers_come_back_unchanged() {
-    use exr::meta::attribute::SampleType;
+/// A circle of confusion about 7 px across on the 40 px frame (depth 5 m, focus 0.3 m).
+const LENS: [&str; 6] = [
+    "--focal-length",
+    "50",
+    "--f-stop",
+    "1.4",
+    "--focus-distance",
+    "0.3",
+];
+
+/// A folder holding the float multi-layer frame (`color.exr`) and its passes.
+fn layered_frame() -> (tempfile::TempDir, std::path::PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let color = dir.path().join("color.exr");
-    write_layered(&color, SampleType::F32);
+    write_layered(&color, exr::meta::attribute::SampleType::F32);
     write_passes(dir.path());
-    // A circle of confusion about 7 px across on the 40 px frame (depth 5 m, focus 0.3 m).
-    let lens = [
-        "--focal-length",
-        "50",
-        "--f-stop",
-        "1.4",
-        "--focus-distance",
-        "0.3",
-    ];
+    (dir, color)
+}
+
+#[test]
+fn light_layers_blur_with_the_beautys_weights_and_data_layers_come_back_unchanged() {
+    let (dir, color) = layered_frame();
+    let lens = LENS;
     for (name, args) in [
         ("reconstruct", &[][..]),
         ("2012", &["--variant", "paper"][..]),
@@ -478,22 +485,11 @@ fn half_light_layers_stay_half_and_add_up_within_its_rounding() {
 #[cfg(feature = "gpu")]
 #[test]
 fn light_layers_add_up_on_the_gpu_too() {
-    use exr::meta::attribute::SampleType;
     if crate::gpu::with_gpu::gpu().is_none() {
         return;
     }
-    let dir = tempfile::tempdir().unwrap();
-    let color = dir.path().join("color.exr");
-    write_layered(&color, SampleType::F32);
-    write_passes(dir.path());
-    let lens = [
-        "--focal-length",
-        "50",
-        "--f-stop",
-        "1.4",
-        "--focus-distance",
-        "0.3",
-    ];
+    let (dir, color) = layered_frame();
+    let lens = LENS;
     for (name, args) in [
         ("reconstruct", &[][..]),
         ("stretch", &["--algorithm", "stretch"][..]),
