@@ -8,7 +8,8 @@
 //! Writes a sequence of single-part EXRs holding RGBA f32 + Z + velocity (X, Y), ZIP, under
 //! `target/bench-data/`, then times, over the same frames:
 //! - **floor**: the exr crate alone decoding each file (all channels, its bulk flat-sample
-//!   reader, default parallelism) and encoding RGBA f32 ZIP scan lines, frame after frame;
+//!   reader, default parallelism) and encoding them all again as f32 ZIP scan lines (what
+//!   shutter's output holds since it keeps every channel, issue 29), frame after frame;
 //! - **shutter**: `shutter blur --algorithm none --color frame.####.exr -o out.####.exr`,
 //!   run in-process (preflight, read, process, write, atomic rename), best of 3.
 //!
@@ -74,12 +75,7 @@ fn floor(paths: &[PathBuf], out_dir: &Path) -> f64 {
             .expect("floor read");
         let layer = image.layer_data;
         let size = layer.size;
-        let rgba: SmallVec<[AnyChannel<FlatSamples>; 4]> = layer
-            .channel_data
-            .list
-            .into_iter()
-            .filter(|c| ["R", "G", "B", "A"].contains(&c.name.to_string().as_str()))
-            .collect();
+        let every = layer.channel_data.list;
         let out = Image::from_layer(Layer::new(
             size,
             LayerAttributes::default(),
@@ -88,7 +84,7 @@ fn floor(paths: &[PathBuf], out_dir: &Path) -> f64 {
                 blocks: Blocks::ScanLines,
                 line_order: LineOrder::Increasing,
             },
-            AnyChannels::sort(rgba),
+            AnyChannels::sort(every),
         ));
         out.write()
             .to_file(out_dir.join(format!("floor.{index:04}.exr")))
