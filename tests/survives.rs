@@ -800,3 +800,108 @@ fn data_under_a_dwa_output_goes_to_a_lossless_part_of_its_own() {
         );
     }
 }
+
+#[test]
+fn passes_are_placed_by_their_data_windows() {
+    use shutter::frame::{Window, Windows};
+    let dir = tempfile::tempdir().unwrap();
+    let display = Window {
+        x: 0,
+        y: 0,
+        width: W,
+        height: H,
+    };
+    let write = |name: &str, (ox, oy): (i32, i32), (w, h): (usize, usize), channels| {
+        let file = std::io::BufWriter::new(std::fs::File::create(dir.path().join(name)).unwrap());
+        let windows = Windows {
+            data_origin: (ox, oy),
+            display,
+        };
+        shutter::io::exr::write_channels(
+            file,
+            w,
+            h,
+            windows,
+            channels,
+            shutter::io::exr::ExrOptions::default(),
+        )
+        .unwrap();
+    };
+    // The beauty: an auto-bbox from (4, 2), 20×10 of the 40×24 picture.
+    let (cw, ch) = (20, 10);
+    write(
+        "color.exr",
+        (4, 2),
+        (cw, ch),
+        ["R", "G", "B"]
+            .map(|c| (c.to_string(), noise(cw * ch, 60, 0.0, 1.0)))
+            .into(),
+    );
+    // Depth rendered with 8 px of overscan: each pixel holds its file coordinates, so the
+    // depth the beauty's pixels were given says where it was read from.
+    let (dw, dh) = (W + 16, H + 16);
+    let coded: Vec<f32> = (0..dw * dh)
+        .map(|i| {
+            let (x, y) = ((i % dw) as f32 - 8.0, (i / dw) as f32 - 8.0);
+            1000.0 + x + 100.0 * y
+        })
+        .collect();
+    write("depth.exr", (-8, -8), (dw, dh), vec![("Z".into(), coded)]);
+    let info = shutter::io::file::FileInfo::probe(&dir.path().join("color.exr")).unwrap();
+    assert_eq!(info.windows.data_origin, (4, 2));
+    let preset = shutter::io::preset::Preset::builtin("shutter").unwrap();
+    let inputs = shutter::io::passes::Inputs {
+        depth: Some(
+            shutter::io::sequence::PathPattern::parse(&s(&dir.path().join("depth.exr"))).unwrap(),
+        ),
+        ..shutter::io::passes::Inputs::color_only(
+            shutter::io::sequence::PathPattern::parse(&s(&dir.path().join("color.exr"))).unwrap(),
+        )
+    };
+    let options = shutter::io::passes::PlanOptions {
+        preset: &preset,
+        layer: None,
+        view: None,
+        needs: shutter::Passes {
+            color: true,
+            depth: true,
+            ..shutter::Passes::default()
+        },
+        max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
+    };
+    let plan = shutter::io::passes::plan_frame(&inputs, None, &options).unwrap();
+    let frame = shutter::io::passes::read_frame(&plan).unwrap();
+    let depth = frame.depth.unwrap();
+    assert_eq!(depth.len(), cw * ch);
+    for (i, &z) in depth.iter().enumerate() {
+        let (x, y) = (4 + i % cw, 2 + i / cw);
+        assert_eq!(z, 1000.0 + x as f32 + 100.0 * y as f32, "pixel ({x}, {y})");
+    }
+
+    // A depth that stops short of the beauty's bottom row is refused, naming both windows.
+    write(
+        "short.exr",
+        (0, 0),
+        (W, 11),
+        vec![("Z".into(), vec![5.0; W * 11])],
+    );
+    let run = shutter(&[
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &s(&dir.path().join("color.exr")),
+        "--depth",
+        &s(&dir.path().join("short.exr")),
+        "-o",
+        &s(&dir.path().join("out.exr")),
+    ]);
+    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+    assert!(
+        stderr(&run).contains(
+            "its data window (0, 0) - (39, 10) does not cover the color pass's (4, 2) - (23, 11)"
+        ),
+        "{}",
+        stderr(&run)
+    );
+}

@@ -69,6 +69,20 @@ pub fn compression_name(compression: Compression) -> &'static str {
     }
 }
 
+/// Whether compression `method` (by name) keeps a channel of this name and pixel type
+/// exactly: DWAA and DWAB compress a channel whose name ends in R, G, B or Y (BY, RY; any
+/// case) as colour, whatever its pixel type (OpenEXR's rule: a vector's `velocity.Y` is
+/// one); B44 and B44A every half channel; PXR24 every float one (to 24 bits).
+pub fn keeps_exactly(method: &str, name: &str, sample_type: &str) -> bool {
+    let suffix = name.rsplit('.').next().unwrap_or("").to_ascii_lowercase();
+    !match method {
+        "dwaa" | "dwab" => ["r", "g", "b", "y", "by", "ry"].contains(&suffix.as_str()),
+        "b44" | "b44a" => sample_type == "f16",
+        "pxr24" => sample_type == "f32",
+        _ => false,
+    }
+}
+
 /// The compression methods shutter can write, by name.
 pub const WRITABLE_COMPRESSIONS: &[&str] = &[
     "none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa", "dwab",

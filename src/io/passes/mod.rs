@@ -28,6 +28,7 @@ mod preflight;
 mod read;
 mod suggest;
 mod validity;
+mod window;
 
 pub use plan::{passes_found, plan_frame, FramePlan, PlanOptions};
 pub use preflight::{output_folder_problems, preflight};

@@ -5,11 +5,13 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Problem, ProblemKind};
 use crate::frame::Passes;
+use crate::io::exr as exr_io;
 use crate::io::file::FileInfo;
 use crate::io::preset::{Preset, Transfer, VectorSpec};
 use crate::io::sequence::PathPattern;
 
 use super::convert::Decode;
+use super::window::DataWindow;
 use super::Inputs;
 
 /// A channel to read: which planned file, which entry of that file's read list.
@@ -64,6 +66,8 @@ pub struct FramePlan {
     pub(super) next: Option<VectorPlan>,
     /// Conversions that are approximations (e.g. next positions extrapolated).
     pub warnings: Vec<String>,
+    /// The colour file's windows: the frame's (every pass is cut to its data window).
+    pub(super) color_windows: Option<crate::frame::Windows>,
 }
 
 impl FramePlan {
@@ -127,15 +131,16 @@ pub fn plan_frame(
         files: Vec::new(),
         problems: Vec::new(),
         probed: Vec::new(),
-        color_size: None,
+        color_window: None,
     };
     let color_path = inputs.color.path(frame);
     let color_info = planner.probe(&color_path, "color");
-    planner.color_size = color_info.as_ref().map(|i| (i.width, i.height));
+    planner.color_window = color_info.as_ref().map(DataWindow::of);
     let mut plan = FramePlan {
         frame,
         width: color_info.as_ref().map_or(0, |i| i.width),
         height: color_info.as_ref().map_or(0, |i| i.height),
+        color_windows: color_info.as_ref().map(|i| i.windows),
         files: Vec::new(),
         color: None,
         depth: None,
@@ -433,8 +438,8 @@ struct Planner<'a> {
     problems: Vec<Problem>,
     /// Files already probed in this frame (a path is probed once).
     probed: Vec<(PathBuf, Option<FileInfo>)>,
-    /// The colour file's size, once its header has been read.
-    color_size: Option<(usize, usize)>,
+    /// The colour file's data window, once its header has been read.
+    color_window: Option<DataWindow>,
 }
 
 impl Planner<'_> {
@@ -486,24 +491,30 @@ impl Planner<'_> {
     /// colour file could not be read, its problem is the one reported, not a mismatch with
     /// a size nobody knows.
     fn check_size(&mut self, info: &FileInfo, pass: &'static str) -> bool {
-        let Some((width, height)) = self.color_size else {
+        let Some(colour) = self.color_window else {
             return true;
         };
-        if (info.width, info.height) != (width, height) {
-            self.problem(
-                Problem::new(
-                    ProblemKind::SizeMismatch,
-                    &info.path,
-                    format!(
-                        "{}x{} but the color pass is {width}x{height}",
-                        info.width, info.height
-                    ),
-                )
-                .pass(pass),
-            );
-            return false;
+        // A pass is placed by its data window in the file's coordinates: one that covers the
+        // colour's is read and cropped to it (depth rendered with overscan); one that does not
+        // is an error naming what it leaves out.
+        let own = DataWindow::of(info);
+        if own.covers(&colour) {
+            return true;
         }
-        true
+        let detail = if own.origin == colour.origin || (own.width, own.height) == (0, 0) {
+            format!(
+                "{}x{} but the color pass is {}x{}",
+                info.width, info.height, colour.width, colour.height
+            )
+        } else {
+            format!(
+                "its data window {} does not cover the color pass's {}",
+                own.describe(),
+                colour.describe()
+            )
+        };
+        self.problem(Problem::new(ProblemKind::SizeMismatch, &info.path, detail).pass(pass));
+        false
     }
 
     fn add_file(&mut self, info: FileInfo) -> usize {
@@ -575,28 +586,13 @@ fn other_channels(info: &FileInfo, beauty: &[usize]) -> (Vec<usize>, Option<Stri
     (others, warning)
 }
 
-/// How `channel`'s part compresses it lossily, if it does: DWAA and DWAB compress a channel
-/// whose name ends in R, G, B or Y (BY, RY) as colour, whatever its pixel type (OpenEXR's
-/// rule: a vector's `velocity.Y` is one); B44 and B44A every half channel; PXR24 every float
-/// one (to 24 bits).
+/// How `channel`'s part compresses it lossily, if it does ([`exr_io::keeps_exactly`]).
 fn stored_lossily(info: &FileInfo, channel: &crate::io::file::ChannelInfo) -> Option<&'static str> {
     let crate::io::file::FileKind::Exr { compression, .. } = &info.kind else {
         return None;
     };
     let method = *compression.get(channel.part)?;
-    let suffix = channel
-        .name
-        .rsplit('.')
-        .next()
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    let lossy = match method {
-        "dwaa" | "dwab" => ["r", "g", "b", "y", "by", "ry"].contains(&suffix.as_str()),
-        "b44" | "b44a" => channel.sample_type == "f16",
-        "pxr24" => channel.sample_type == "f32",
-        _ => false,
-    };
-    lossy.then_some(method)
+    (!exr_io::keeps_exactly(method, &channel.name, channel.sample_type)).then_some(method)
 }
 
 fn alternatives(alts: &[Vec<String>]) -> String {

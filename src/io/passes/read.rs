@@ -10,6 +10,7 @@ use crate::io::sequence::PathPattern;
 
 use super::convert::MotionSource;
 use super::plan::{plan_frame, FramePlan, PlanOptions, Slot};
+use super::window::DataWindow;
 use super::Inputs;
 
 /// Decodes the planned files and converts them to canonical passes.
@@ -23,17 +24,30 @@ pub fn read_frame(plan: &FramePlan) -> Result<Frame, Problem> {
 pub fn read_frame_noted(plan: &FramePlan) -> Result<(Frame, Vec<String>), Problem> {
     let mut notes = Vec::new();
     let mut decoded: Vec<Vec<Plane>> = Vec::with_capacity(plan.files.len());
+    let (width, height) = (plan.width, plan.height);
+    let colour = plan.color_windows.map(|windows| DataWindow {
+        origin: windows.data_origin,
+        width,
+        height,
+    });
     for file in &plan.files {
-        let planes = file
+        let mut planes = file
             .info
             .read(&file.channels)
             .map_err(|p| p.frame(plan.frame))?;
+        // A pass whose data window is larger than the colour's (overscan) is cut to it; the
+        // plan made sure it covers it.
+        let own = DataWindow::of(&file.info);
+        if let Some(colour) = colour.filter(|c| *c != own) {
+            for plane in &mut planes {
+                *plane = own.crop(plane, &colour);
+            }
+        }
         decoded.push(planes);
     }
-    let (width, height) = (plan.width, plan.height);
     let mut frame = Frame::new(width, height);
-    if let Some(first) = plan.files.first() {
-        frame.windows = first.info.windows;
+    if let Some(windows) = plan.color_windows {
+        frame.windows = windows;
     }
     // Takes a plane out of `decoded` (cloning when a channel serves two passes).
     let mut uses = vec![Vec::new(); decoded.len()];

@@ -1,0 +1,65 @@
+//! Where a pass's pixels lie: its data window in the file's coordinates. A pass is placed by
+//! it against the colour's (issue 29): one that covers the colour's window is read and cut to
+//! it (depth rendered with overscan beside an auto-bbox beauty), one that does not is refused
+//! by the plan, naming both windows.
+
+use crate::frame::Plane;
+use crate::io::file::FileInfo;
+
+/// Where a file's pixels lie in the file's coordinates: its data window.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DataWindow {
+    pub origin: (i32, i32),
+    pub width: usize,
+    pub height: usize,
+}
+
+impl DataWindow {
+    pub fn of(info: &FileInfo) -> Self {
+        DataWindow {
+            origin: info.windows.data_origin,
+            width: info.width,
+            height: info.height,
+        }
+    }
+
+    fn end(&self) -> (i64, i64) {
+        (
+            i64::from(self.origin.0) + self.width as i64,
+            i64::from(self.origin.1) + self.height as i64,
+        )
+    }
+
+    /// Whether every pixel of `other` lies in this window.
+    pub fn covers(&self, other: &DataWindow) -> bool {
+        let (end, other_end) = (self.end(), other.end());
+        self.origin.0 <= other.origin.0
+            && self.origin.1 <= other.origin.1
+            && end.0 >= other_end.0
+            && end.1 >= other_end.1
+    }
+
+    /// `(x0, y0) - (x1, y1)`, inclusive, as EXR headers and `shutter info` give windows.
+    pub fn describe(&self) -> String {
+        let end = self.end();
+        format!(
+            "({}, {}) - ({}, {})",
+            self.origin.0,
+            self.origin.1,
+            end.0 - 1,
+            end.1 - 1
+        )
+    }
+
+    /// `plane` (this window's samples) cut to `to`, which it covers.
+    pub fn crop(&self, plane: &[f32], to: &DataWindow) -> Plane {
+        let dx = (to.origin.0 - self.origin.0) as usize;
+        let dy = (to.origin.1 - self.origin.1) as usize;
+        let mut out = Vec::with_capacity(to.width * to.height);
+        for y in 0..to.height {
+            let start = (dy + y) * self.width + dx;
+            out.extend_from_slice(&plane[start..start + to.width]);
+        }
+        out
+    }
+}
