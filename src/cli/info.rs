@@ -160,11 +160,13 @@ fn info_text(shown: &Shown) -> String {
             (Some(_), None) => "  no view".to_string(),
             _ => String::new(),
         };
-        text.push_str(&format!(
-            "    {name:<28} {:<4} {:<6}{in_view}\n",
+        let line = format!(
+            "    {name:<28} {:<4} {:<6}{in_view}",
             c.sample_type,
             class_of(info, c).name()
-        ));
+        );
+        text.push_str(line.trim_end());
+        text.push('\n');
     }
     let Some(suggestion) = suggestion else {
         text.push_str("  presets:        choose a view with --view to match presets\n");
