@@ -90,6 +90,14 @@ fn write_plate(path: &Path, blocks: Blocks, line_order: LineOrder) {
     image.write().to_file(path).unwrap();
 }
 
+/// A folder holding the plate (`color.exr`, see [`write_plate`]) and its passes.
+fn plate_frame(blocks: Blocks, line_order: LineOrder) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    write_plate(&dir.path().join("color.exr"), blocks, line_order);
+    write_passes(dir.path());
+    dir
+}
+
 /// Depth and a uniform motion of 6 px a frame to the right for the plate (as velocity and as
 /// previous and next positions), so every algorithm blurs it.
 fn write_passes(dir: &Path) {
@@ -170,13 +178,7 @@ fn oiiotool_info(path: &Path) -> Option<String> {
 
 #[test]
 fn a_plates_attributes_pixel_types_and_compression_come_back() {
-    let dir = tempfile::tempdir().unwrap();
-    write_plate(
-        &dir.path().join("color.exr"),
-        Blocks::ScanLines,
-        LineOrder::Increasing,
-    );
-    write_passes(dir.path());
+    let dir = plate_frame(Blocks::ScanLines, LineOrder::Increasing);
     blur(dir.path(), "out.exr", &[]);
     let out = dir.path().join("out.exr");
 
@@ -240,13 +242,7 @@ fn a_plates_attributes_pixel_types_and_compression_come_back() {
 
 #[test]
 fn settings_override_the_plates_compression_and_pixel_type() {
-    let dir = tempfile::tempdir().unwrap();
-    write_plate(
-        &dir.path().join("color.exr"),
-        Blocks::ScanLines,
-        LineOrder::Increasing,
-    );
-    write_passes(dir.path());
+    let dir = plate_frame(Blocks::ScanLines, LineOrder::Increasing);
     blur(dir.path(), "out.exr", &["--compression", "zips"]);
     let meta = MetaData::read_from_file(dir.path().join("out.exr"), false).unwrap();
     assert_eq!(meta.headers[0].compression, Compression::ZIP1);
@@ -282,13 +278,7 @@ fn settings_override_the_plates_compression_and_pixel_type() {
 
 #[test]
 fn a_tiled_plate_in_decreasing_line_order_comes_back_tiled_in_that_order() {
-    let dir = tempfile::tempdir().unwrap();
-    write_plate(
-        &dir.path().join("color.exr"),
-        Blocks::Tiles(Vec2(16, 8)),
-        LineOrder::Decreasing,
-    );
-    write_passes(dir.path());
+    let dir = plate_frame(Blocks::Tiles(Vec2(16, 8)), LineOrder::Decreasing);
     blur(dir.path(), "out.exr", &[]);
     let out = dir.path().join("out.exr");
     let meta = MetaData::read_from_file(&out, false).unwrap();
@@ -309,13 +299,7 @@ fn the_same_frame_gives_the_same_bytes_whatever_order_the_attributes_were_held_i
     // The exr crate writes custom attributes in the order of a HashMap, which differs from
     // process to process; with seven custom attributes (five of the plate's, shutter's two)
     // two runs agree by chance once in 5,040.
-    let dir = tempfile::tempdir().unwrap();
-    write_plate(
-        &dir.path().join("color.exr"),
-        Blocks::ScanLines,
-        LineOrder::Increasing,
-    );
-    write_passes(dir.path());
+    let dir = plate_frame(Blocks::ScanLines, LineOrder::Increasing);
     blur(dir.path(), "a.exr", &[]);
     blur(dir.path(), "b.exr", &[]);
     let a = std::fs::read(dir.path().join("a.exr")).unwrap();
@@ -562,13 +546,7 @@ fn the_readme_what_survives_table_names_tests_that_exist() {
 fn vectors_read_from_a_lossy_part_are_warned_about_by_channel() {
     // DWAA keeps `velocity.Y` (a name ending in Y, as luminance) only roughly and
     // `velocity.X` exactly: OpenEXR's rule is by name, whatever the pixel type.
-    let dir = tempfile::tempdir().unwrap();
-    write_plate(
-        &dir.path().join("color.exr"),
-        Blocks::ScanLines,
-        LineOrder::Increasing,
-    );
-    write_passes(dir.path());
+    let dir = plate_frame(Blocks::ScanLines, LineOrder::Increasing);
     let n = W * H;
     let vectors = Layer::new(
         (W, H),
