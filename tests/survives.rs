@@ -883,3 +883,31 @@ fn passes_are_placed_by_their_data_windows() {
         stderr(&run)
     );
 }
+
+#[test]
+fn a_presets_layers_table_overrides_a_layers_class() {
+    use crate::support::{channel, read_exr_reference};
+    let (dir, color) = layered_frame();
+    let preset = dir.path().join("layers.toml");
+    std::fs::write(
+        &preset,
+        "[layers]\nspecular = \"data\"\nvelocity = \"colour\"\n",
+    )
+    .unwrap();
+    blur(dir.path(), "out.exr", &["--preset", &s(&preset)]);
+    let (before, after) = (
+        read_exr_reference(&color),
+        read_exr_reference(&dir.path().join("out.exr")),
+    );
+    // specular, light by its name, kept as data: bit for bit; velocity, data by its name,
+    // blurred as light; diffuse as the rule says.
+    assert_eq!(
+        channel(&after, "specular.R"),
+        channel(&before, "specular.R")
+    );
+    assert_ne!(
+        channel(&after, "velocity.X"),
+        channel(&before, "velocity.X")
+    );
+    assert_ne!(channel(&after, "diffuse.R"), channel(&before, "diffuse.R"));
+}

@@ -195,6 +195,23 @@ fn one() -> f32 {
     1.0
 }
 
+/// A layer's class as a preset names it (`[layers]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LayerClassName {
+    Colour,
+    Data,
+}
+
+impl LayerClassName {
+    pub fn class(self) -> crate::frame::LayerClass {
+        match self {
+            LayerClassName::Colour => crate::frame::LayerClass::Colour,
+            LayerClassName::Data => crate::frame::LayerClass::Data,
+        }
+    }
+}
+
 /// A resolved preset: every pass described.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -218,6 +235,11 @@ pub struct Preset {
     pub dof: toml::Table,
     #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
     pub output: toml::Table,
+    /// The class of the colour file's layers by name, over the rule `io::channels` gives
+    /// (`albedo = "data"` keeps a layer sharp, `"ViewLayer.Mist" = "colour"` blurs one):
+    /// `[layers]` in a preset file, merged key by key like the settings.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub layers: std::collections::BTreeMap<String, LayerClassName>,
     /// The names (or paths) this preset was built from, for messages.
     #[serde(skip)]
     pub name: String,

@@ -38,6 +38,8 @@ pub(super) struct ColorPlan {
     /// only when [`FramePlan::read_every_channel`] asks, with their slots then.
     pub(super) others: Vec<usize>,
     pub(super) other_slots: Vec<Slot>,
+    /// The preset's classes of layers by name (`[layers]`), over `io::channels`' rule.
+    pub(super) layer_classes: std::collections::BTreeMap<String, crate::frame::LayerClass>,
 }
 
 #[derive(Clone, Debug)]
@@ -190,6 +192,11 @@ pub fn plan_frame(
                         premultiply: integer,
                         others,
                         other_slots: Vec::new(),
+                        layer_classes: preset
+                            .layers
+                            .iter()
+                            .map(|(layer, class)| (layer.clone(), class.class()))
+                            .collect(),
                     });
                 }
             }

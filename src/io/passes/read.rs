@@ -81,8 +81,13 @@ pub fn read_frame_noted(plan: &FramePlan) -> Result<(Frame, Vec<String>), Proble
                     .unwrap_or_default();
                 // A channel of a named part is classed as `part.channel` (`diffuse.R`).
                 let qualified = channel.alias.as_ref().unwrap_or(&channel.name);
+                let (layer, _) = channels::split(qualified);
+                let class = match plan_color.layer_classes.get(layer) {
+                    Some(&class) => class,
+                    None => channels::class_of(qualified, &crypto),
+                };
                 frame.carried.channels.push(CarriedChannel {
-                    class: channels::class_of(qualified, &crypto),
+                    class,
                     name: channel.name.clone(),
                     part: channel.part,
                     plane: take(slot, &mut decoded),
