@@ -4,7 +4,7 @@
 //! import each other; this module is where they meet, and where each stage's backend is chosen.
 
 use crate::dof::{self, CocSource, DofParams};
-use crate::frame::{Carried, Color, Frame, LayerClass, Passes, Plane};
+use crate::frame::{Color, Frame, LayerClass, Passes};
 use crate::gpu::Gpu;
 use crate::motion::{self, reconstruct, scatter, stretch, Algorithm, Shutter};
 use crate::motion::{ReconstructParams, ScatterParams, StretchParams};
@@ -112,10 +112,12 @@ pub fn process_on(
 /// The colour layers the frame carries beside its beauty (`diffuse.R`, `specular.A`, …;
 /// [`crate::io::channels`]) are blurred with exactly the weights the beauty gets: three at
 /// a time in the beauty's place, with the beauty's alpha, depth and motion, through the same
-/// passes. Every weight of every pass is a function of those alone, never of the colour, so
-/// the blur is linear in the colour and a beauty that is the sum of its light layers still
-/// is after it, to float rounding. Each group of three costs what the beauty does; sharing
-/// one computation of the weights between them is the next step (issue 29, point 6).
+/// passes. Every weight of every pass is a function of those alone, but for reconstruct's
+/// mattes (the exposure variant's coverage at silhouettes, fitted on colour), which are made
+/// once from the beauty and read by every layer ([`reconstruct::reconstruct_layers_with`]);
+/// so the blur is linear in the colour and a beauty that is the sum of its light layers still
+/// is after it, to float rounding. Each group of three costs about what the beauty does;
+/// carrying the layers through the beauty's gathers is the next step (issue 29, point 6).
 pub fn process_with(
     algorithm: Algorithm,
     params: &Params,
@@ -128,70 +130,192 @@ pub fn process_with(
         .collect();
     // With nothing to do to the beauty there is nothing to do to its layers.
     let idle = algorithm == Algorithm::None && params.dof.is_none();
-    if let (false, false, Some(beauty)) = (idle, colour.is_empty(), &frame.color) {
-        let n = frame.pixel_count();
-        for group in colour.chunks(3) {
-            let mut planes: Vec<Plane> = group
-                .iter()
-                .map(|&i| std::mem::take(&mut frame.carried.channels[i].plane))
-                .collect();
-            planes.resize_with(3, || vec![0.0; n]);
-            let [r, g, b]: [Plane; 3] = planes.try_into().expect("three planes");
-            let layers = Frame {
-                color: Some(Color {
-                    r,
-                    g,
-                    b,
-                    a: beauty.a.clone(),
-                }),
-                carried: Carried::default(),
-                ..frame.clone_passes()
-            };
-            let out = process_beauty(algorithm, params, layers, frame_number, stages);
-            let color = out.color.expect("the passes give colour back");
-            for (&i, plane) in group.iter().zip([color.r, color.g, color.b]) {
-                frame.carried.channels[i].plane = plane;
+    let Some(beauty) = frame.color.as_ref().filter(|_| !idle && !colour.is_empty()) else {
+        return process_beauty(algorithm, params, frame, &mut [], frame_number, stages);
+    };
+    let n = frame.pixel_count();
+    let alpha = beauty.a.clone();
+    let names: Vec<&str> = colour
+        .iter()
+        .map(|&i| frame.carried.channels[i].name.as_str())
+        .collect();
+    let groups = slots(&names);
+    let mut layers: Vec<Color> = groups
+        .iter()
+        .map(|group| {
+            let [r, g, b] = group.map(|slot| match slot {
+                Some(k) => std::mem::take(&mut frame.carried.channels[colour[k]].plane),
+                None => vec![0.0; n],
+            });
+            Color {
+                r,
+                g,
+                b,
+                a: alpha.clone(),
+            }
+        })
+        .collect();
+    let mut frame = process_beauty(algorithm, params, frame, &mut layers, frame_number, stages);
+    for (group, layer) in groups.iter().zip(layers) {
+        for (slot, plane) in group.iter().zip([layer.r, layer.g, layer.b]) {
+            if let Some(k) = slot {
+                frame.carried.channels[colour[*k]].plane = plane;
             }
         }
     }
-    process_beauty(algorithm, params, frame, frame_number, stages)
+    frame
 }
 
-/// The passes over the frame's beauty: depth of field when asked for, then the algorithm.
+/// Colour channels (by name) placed three at a time in the beauty's R, G and B: each
+/// channel named for red (`diffuse.R`, `R`, `specular.red`) in R, green in G and blue in B,
+/// any other (a layer's alpha, `emission.X`) where there is room, in order. Returns the
+/// groups, each slot the index in `names` of the channel it holds (`None`: empty). Where a
+/// pass fits a number to colour (reconstruct's mattes, per channel), a layer's R then gets
+/// the beauty's R's, so layers that add up to the beauty channel by channel still do.
+fn slots(names: &[&str]) -> Vec<[Option<usize>; 3]> {
+    let mut queues: [Vec<usize>; 3] = Default::default();
+    let mut others = Vec::new();
+    for (k, name) in names.iter().enumerate() {
+        let component = name.rsplit('.').next().unwrap_or(name).to_ascii_lowercase();
+        match component.as_str() {
+            "r" | "red" => queues[0].push(k),
+            "g" | "green" => queues[1].push(k),
+            "b" | "blue" => queues[2].push(k),
+            _ => others.push(k),
+        }
+    }
+    let mut groups = vec![[None; 3]; queues.iter().map(Vec::len).max().unwrap_or(0)];
+    for (slot, queue) in queues.iter().enumerate() {
+        for (group, &k) in queue.iter().enumerate() {
+            groups[group][slot] = Some(k);
+        }
+    }
+    // The others fill the empty slots first, then groups of their own.
+    let mut others = others.into_iter();
+    for group in groups.iter_mut() {
+        for slot in group.iter_mut().filter(|s| s.is_none()) {
+            *slot = others.next();
+        }
+    }
+    let rest: Vec<usize> = others.collect();
+    for chunk in rest.chunks(3) {
+        let mut group = [None; 3];
+        for (slot, &k) in group.iter_mut().zip(chunk) {
+            *slot = Some(k);
+        }
+        groups.push(group);
+    }
+    groups
+}
+
+/// The passes over the frame's beauty and `layers` (colour beside it, each with its alpha):
+/// depth of field when asked for, then the algorithm. Reconstruct takes the layers into its
+/// pass (they share its mattes); every other pass runs on each layer in the beauty's place.
 fn process_beauty(
     algorithm: Algorithm,
     params: &Params,
     frame: Frame,
+    layers: &mut [Color],
     frame_number: i64,
     stages: &(impl dof::Stages + motion::Stages),
 ) -> Frame {
     let frame = match &params.dof {
-        Some(dof) => dof::apply_with(frame, dof, stages),
+        Some(dof) => {
+            for layer in layers.iter_mut() {
+                in_place(&frame, layer, &|f| dof::apply_with(f, dof, stages));
+            }
+            dof::apply_with(frame, dof, stages)
+        }
         None => frame,
     };
     let shutter = Shutter {
         open: numeric::shutter(params.shutter),
         offset: numeric::shutter_offset(params.shutter_offset),
     };
-    match algorithm {
-        Algorithm::Reconstruct => {
-            // Frame numbers seed the jitter modulo 2³² (the hash is 32-bit).
-            let seed = frame_number as u32;
-            reconstruct::reconstruct_with(frame, &params.reconstruct, shutter, seed, stages)
-        }
-        Algorithm::Scatter => scatter::scatter_with(frame, &params.scatter, shutter, stages),
-        Algorithm::Stretch => stretch::stretch_with(frame, &params.stretch, shutter, stages),
+    let pass = |f: Frame| match algorithm {
+        Algorithm::Reconstruct => unreachable!("reconstruct takes its layers itself"),
+        Algorithm::Scatter => scatter::scatter_with(f, &params.scatter, shutter, stages),
+        Algorithm::Stretch => stretch::stretch_with(f, &params.stretch, shutter, stages),
         Algorithm::None => Frame {
             depth: None,
             velocity: None,
             prev: None,
             next: None,
-            ..frame
+            ..f
         },
+    };
+    match algorithm {
+        Algorithm::Reconstruct => {
+            // Frame numbers seed the jitter modulo 2³² (the hash is 32-bit).
+            let seed = frame_number as u32;
+            reconstruct::reconstruct_layers_with(
+                frame,
+                layers,
+                &params.reconstruct,
+                shutter,
+                seed,
+                stages,
+            )
+        }
+        _ => {
+            for layer in layers.iter_mut() {
+                in_place(&frame, layer, &pass);
+            }
+            pass(frame)
+        }
     }
+}
+
+/// `pass` run on `layer` in the beauty's place: a frame of `passes`' passes with its colour.
+fn in_place(passes: &Frame, layer: &mut Color, pass: &dyn Fn(Frame) -> Frame) {
+    let empty = Color {
+        r: Vec::new(),
+        g: Vec::new(),
+        b: Vec::new(),
+        a: None,
+    };
+    let alone = Frame {
+        color: Some(std::mem::replace(layer, empty)),
+        ..passes.clone_passes()
+    };
+    *layer = pass(alone).color.expect("the passes give colour back");
 }
 
 /// [`process`] without the count of replaced values.
 pub fn apply(algorithm: Algorithm, params: &Params, frame: Frame, frame_number: i64) -> Frame {
     process(algorithm, params, frame, frame_number).0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::slots;
+
+    #[test]
+    fn a_layer_s_red_green_and_blue_take_the_beauty_s_slots() {
+        // As an EXR stores them: sorted by name, B before G before R.
+        let names = [
+            "diffuse.A",
+            "diffuse.B",
+            "diffuse.G",
+            "diffuse.R",
+            "emission.X",
+            "specular.B",
+            "specular.G",
+            "specular.R",
+            "sss.red",
+        ];
+        assert_eq!(
+            slots(&names),
+            [
+                [Some(3), Some(2), Some(1)],
+                [Some(7), Some(6), Some(5)],
+                [Some(8), Some(0), Some(4)],
+            ]
+        );
+        assert_eq!(
+            slots(&["u", "v", "w", "x"]),
+            [[Some(0), Some(1), Some(2)], [Some(3), None, None]]
+        );
+        assert!(slots(&[]).is_empty());
+    }
 }

@@ -172,7 +172,7 @@ impl ReconstructPass {
             U::MAP_READ | U::COPY_DST,
         );
         // Other variants do not read it: a word, to fill the binding.
-        let matte_floats = if shape.mattes { 3 * shape.pixels } else { 1 };
+        let matte_floats = if shape.mattes { 6 * shape.pixels } else { 1 };
         let mattes = buffer("reconstruct mattes", floats(matte_floats), input);
         let entries: Vec<wgpu::BindGroupEntry> =
             [&config, &texels, &velocity, &tiles, &color, &mattes]

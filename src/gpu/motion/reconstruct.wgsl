@@ -10,7 +10,7 @@
 //
 // Bindings, in the CPU functions' argument order: 0 the config, 1 texels, 2 velocity, 3
 // tiles, 4 colour, and 5 the exposure variant's mattes (`gather_2014`'s third argument;
-// three words a pixel, src/motion/reconstruct/matte.rs; one unread word otherwise). Planar buffers hold their planes one after the other, as the CPU's
+// six words a pixel, src/motion/reconstruct/matte.rs; one unread word otherwise). Planar buffers hold their planes one after the other, as the CPU's
 // structs do: velocity x then y, tiles x then y, colour r, g, b, a.
 //
 // Numerics: the inputs obey the numeric policy (finite colour and velocity, packed depth at
@@ -54,7 +54,7 @@ struct ReconstructConfig {
 @group(0) @binding(3) var<storage, read> tiles: array<f32>;
 @group(0) @binding(4) var<storage, read_write> color: array<f32>;
 // Per pixel: α, then the indices (as the bits of a float) of the pixels whose colours are its
-// moving and still partners (`Matte`).
+// moving and still partners, then its unmixing's extrapolation in R, G and B (`Matte`).
 @group(0) @binding(5) var<storage, read> mattes: array<f32>;
 
 // The CPU's constants (src/motion/reconstruct/); a unit test in src/gpu/motion/reconstruct.rs
@@ -396,26 +396,25 @@ struct Surfaces {
 }
 
 fn surfaces(i: u32) -> Surfaces {
-    let alpha = mattes[3u * i];
+    let alpha = mattes[6u * i];
     let c = texel8(i);
-    let fi = bitcast<u32>(mattes[3u * i + 1u]);
-    let bi = bitcast<u32>(mattes[3u * i + 2u]);
+    let fi = bitcast<u32>(mattes[6u * i + 1u]);
+    let bi = bitcast<u32>(mattes[6u * i + 2u]);
     if fi == i && bi == i {
         // No pair: α is the label, and both surfaces are the colour itself.
         return Surfaces(alpha, c.color.xyz, c.color.xyz);
     }
     let f = texel8(fi).color.xyz;
     let b = texel8(bi).color.xyz;
-    let low = min(min(c.color.xyz, f), b);
-    let high = max(max(c.color.xyz, f), b);
+    let e = vec3<f32>(mattes[6u * i + 3u], mattes[6u * i + 4u], mattes[6u * i + 5u]);
     var out: Surfaces;
     out.alpha = alpha;
     if c.length >= HALF_PIXEL {
-        out.moving = clamp((c.color.xyz - (1.0 - alpha) * b) / alpha, low, high);
+        out.moving = c.color.xyz + e * (c.color.xyz - b);
         out.still = b;
     } else {
         out.moving = f;
-        out.still = clamp((c.color.xyz - alpha * f) / (1.0 - alpha), low, high);
+        out.still = c.color.xyz + e * (c.color.xyz - f);
     }
     return out;
 }
@@ -435,7 +434,7 @@ fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>, s
     var plain = true;
     for (var q = 0u; q < 4u; q++) {
         let j = corners.index[q];
-        if bitcast<u32>(mattes[3u * j + 1u]) != j || bitcast<u32>(mattes[3u * j + 2u]) != j {
+        if bitcast<u32>(mattes[6u * j + 1u]) != j || bitcast<u32>(mattes[6u * j + 2u]) != j {
             plain = false;
         }
     }
@@ -478,9 +477,9 @@ fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>, s
         var fg_texel = t;
         var bg_texel = t;
         if t_moves {
-            bg_texel = texel8(bitcast<u32>(mattes[3u * j + 2u]));
+            bg_texel = texel8(bitcast<u32>(mattes[6u * j + 2u]));
         } else {
-            fg_texel = texel8(bitcast<u32>(mattes[3u * j + 1u]));
+            fg_texel = texel8(bitcast<u32>(mattes[6u * j + 1u]));
         }
         if w_m > heavy_m && fg_texel.length >= HALF_PIXEL {
             heavy_m = w_m;

@@ -547,10 +547,7 @@ fn split_by_cover(
     let corners = around_index((width, height), x, y, offset);
     // Away from every silhouette (no pixel of the four has a pair) coverage is the labels':
     // [`split`] reads the tap.
-    if corners.iter().all(|&(j, _)| {
-        let m = &mattes[j];
-        m[1].to_bits() as usize == j && m[2].to_bits() as usize == j
-    }) {
+    if corners.iter().all(|&(j, _)| matte::unpaired(&mattes[j], j)) {
         return None;
     }
     let near = &texels[nearest];

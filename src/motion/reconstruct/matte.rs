@@ -31,8 +31,22 @@ use super::config::{ReconstructConfig, Texel2014, HALF_PIXEL, LENGTH, Z};
 
 /// Per pixel: α (the moving surface's coverage), then the pixels the moving and the still
 /// colours of its pair come from, as `f32::from_bits` of their indices (the pixel's own
-/// index where it has no pair). The GPU reads the same three words.
-pub type Matte = [f32; 3];
+/// index where it has no pair), then how far its own surface's colour is extrapolated from
+/// its partner's through its own in each of R, G and B ([`surfaces`], [`extrapolation`]; 0
+/// without a pair). The GPU reads the same six words.
+///
+/// All six are fitted on the beauty's colour and given as they are to every light layer
+/// (issue 29): with the unmixing's clamp to the colours' range turned into a factor per
+/// channel, a tap's colour is linear in the colour it is read from, so light layers that
+/// add up to the beauty channel by channel still do after the gather (a layer's R, G and B
+/// take the beauty's R, G and B factors; `crate::process` places them so).
+pub type Matte = [f32; 6];
+
+/// Where a matte's pair points: pixel `i` itself when it has none.
+#[inline]
+pub fn unpaired(m: &Matte, i: usize) -> bool {
+    m[1].to_bits() as usize == i && m[2].to_bits() as usize == i
+}
 
 /// A pair must explain the colour within this share of the pair's squared distance.
 pub const RESIDUAL: f32 = 0.02;
@@ -67,14 +81,14 @@ pub fn mattes(
 ) -> Vec<Matte> {
     let (width, height) = (config.width as usize, config.height as usize);
     let size = config.tile as usize;
-    let mut out = vec![[0.0f32; 3]; width * height];
+    let mut out = vec![[0.0f32; 6]; width * height];
     out.par_chunks_mut(width.max(1))
         .enumerate()
         .for_each(|(y, row)| {
             for (x, m) in row.iter_mut().enumerate() {
                 let i = y * width + x;
                 let own = f32::from_bits(i as u32);
-                *m = [moves(&texels[i]) as u32 as f32, own, own];
+                *m = [moves(&texels[i]) as u32 as f32, own, own, 0.0, 0.0, 0.0];
                 if selected(x / size, y / size) {
                     if let Some(found) = matte(config, texels, &selected, x, y) {
                         *m = found;
@@ -165,7 +179,58 @@ fn matte(
     } else {
         alpha.min(0.5)
     };
-    Some([alpha, f32::from_bits(f as u32), f32::from_bits(b as u32)])
+    let (fc, bc) = (&texels[f as usize], &texels[b as usize]);
+    let [er, eg, eb] = extrapolation(centre, fc, bc, alpha, moving);
+    Some([
+        alpha,
+        f32::from_bits(f as u32),
+        f32::from_bits(b as u32),
+        er,
+        eg,
+        eb,
+    ])
+}
+
+/// How far a pixel of colour `c` with coverage α by the moving surface (pair `f` moving, `b`
+/// still) extrapolates its own surface's colour from its partner's through its own, channel
+/// by channel: a moving pixel's surface is `c + e·(c − b)`, a still one's `c + e·(c − f)`,
+/// with `e` the unmixing's (1 − α)/α or α/(1 − α) (at most 1: α ≥ ½ on a moving pixel, ≤ ½
+/// on a still one). A pair explains the colour only within its residual, so each channel's
+/// `e` is cut to the most that keeps it within the three colours' range (the clamp of the
+/// unmixed colour, as a factor): every output stays within its inputs' range, as the
+/// gather's convex weights promise, and the same factors applied to a light layer's colours
+/// are linear in them. Finite and in [0, 1] whatever the colours.
+pub fn extrapolation(
+    c: &Texel2014,
+    f: &Texel2014,
+    b: &Texel2014,
+    alpha: f32,
+    moving: bool,
+) -> [f32; 3] {
+    let (partner, most) = if moving {
+        (b, (1.0 - alpha) / alpha)
+    } else {
+        (f, alpha / (1.0 - alpha))
+    };
+    [0, 1, 2].map(|ch| {
+        let low = c[ch].min(f[ch]).min(b[ch]);
+        let high = c[ch].max(f[ch]).max(b[ch]);
+        let d = c[ch] - partner[ch];
+        let room = if d > 0.0 {
+            (high - c[ch]) / d
+        } else if d < 0.0 {
+            (low - c[ch]) / d
+        } else {
+            most
+        };
+        // (A NaN room, from colours near the numeric policy's bound, gives no extrapolation.)
+        let e = if room.is_nan() { 0.0 } else { most.min(room) };
+        if e.is_finite() {
+            e.clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
+    })
 }
 
 /// Where colour `c` projects on the line from `b` (α 0) to `f` (α 1), clamped to [0, 1]; the
@@ -187,15 +252,19 @@ pub fn fit(c: &Texel2014, f: &Texel2014, b: &Texel2014) -> (f32, f32, f32) {
 }
 
 /// Pixel `i`'s coverage and its two surfaces' colours (RGB): the moving surface's and the
-/// still one's. A moving pixel's own is its colour with the still partner's share taken out,
-/// a still pixel's likewise; the other is its partner's colour. A pixel with no pair gives
-/// its own colour to both.
+/// still one's. A moving pixel's own is its colour extrapolated away from its still
+/// partner's by the matte's fourth word ([`extrapolation`]), a still pixel's likewise from
+/// its moving partner's; the other is its partner's colour. A pixel with no pair gives its
+/// own colour to both. Linear in the texels' colours: the matte, fitted on the beauty, holds
+/// every number that depends on colour.
 #[inline]
 pub fn surfaces(texels: &[Texel2014], mattes: &[Matte], i: usize) -> (f32, [f32; 3], [f32; 3]) {
-    let [alpha, f, b] = mattes[i];
+    let m = &mattes[i];
+    let [alpha, f, b, er, eg, eb] = *m;
+    let e = [er, eg, eb];
     let c = &texels[i];
-    if f.to_bits() as usize == i && b.to_bits() as usize == i {
-        // No pair: α is the label (0 or 1), and the formulas below give the colour itself.
+    if unpaired(m, i) {
+        // No pair: α is the label (0 or 1), and the colour is both surfaces'.
         let own = [c[0], c[1], c[2]];
         return (alpha, own, own);
     }
@@ -203,20 +272,13 @@ pub fn surfaces(texels: &[Texel2014], mattes: &[Matte], i: usize) -> (f32, [f32;
     let b = &texels[b.to_bits() as usize];
     let mut moving = [0.0f32; 3];
     let mut still = [0.0f32; 3];
-    // Unmixing extrapolates from the partner through the pixel's colour (by at most as far
-    // again: α ≥ ½ on a moving pixel, ≤ ½ on a still one, so no division is by less than ½).
-    // A pair explains the colour only within its residual, so the result is kept within the
-    // three colours' range: every output stays within its inputs' range, as the gather's
-    // convex weights promise.
     for ch in 0..3 {
-        let low = c[ch].min(f[ch]).min(b[ch]);
-        let high = c[ch].max(f[ch]).max(b[ch]);
         if moves(c) {
-            moving[ch] = ((c[ch] - (1.0 - alpha) * b[ch]) / alpha).clamp(low, high);
+            moving[ch] = c[ch] + e[ch] * (c[ch] - b[ch]);
             still[ch] = b[ch];
         } else {
             moving[ch] = f[ch];
-            still[ch] = ((c[ch] - alpha * f[ch]) / (1.0 - alpha)).clamp(low, high);
+            still[ch] = c[ch] + e[ch] * (c[ch] - f[ch]);
         }
     }
     (alpha, moving, still)

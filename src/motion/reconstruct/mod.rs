@@ -157,7 +157,22 @@ impl GatherInputs<'_> {
 /// [`reconstruct`] with its [`Stages`] run by `stages` (the CPU's, [`Cpu`], or a backend's
 /// twins); the config is made here from the frame's size, so it always matches the frame.
 pub fn reconstruct_with(
+    frame: Frame,
+    params: &ReconstructParams,
+    shutter: impl Into<Shutter>,
+    seed: u32,
+    stages: &impl Stages,
+) -> Frame {
+    reconstruct_layers_with(frame, &mut [], params, shutter, seed, stages)
+}
+
+/// [`reconstruct_with`], and `layers` (light layers beside the beauty, each with the
+/// beauty's alpha) blurred in place with exactly the beauty's weights: the tiles and the
+/// exposure variant's mattes, the only numbers that depend on colour, are made once from
+/// the beauty and read by every layer's gather.
+pub fn reconstruct_layers_with(
     mut frame: Frame,
+    layers: &mut [Color],
     params: &ReconstructParams,
     shutter: impl Into<Shutter>,
     seed: u32,
@@ -214,12 +229,21 @@ pub fn reconstruct_with(
         };
         let packed = packed_2014(&config, &dilated);
         let texels = pack_2014(&config, &color, &depth, &velocity, &dilated, &packed);
-        drop(depth);
         let mattes = if config.variant() == Variant::Exposure {
             matte::mattes(&config, &texels, |c, row| packed.get(c, row))
         } else {
             Vec::new()
         };
+        for layer in layers.iter_mut() {
+            let texels = pack_2014(&config, layer, &depth, &velocity, &dilated, &packed);
+            let inputs = GatherInputs::Stable {
+                texels: &texels,
+                mattes: &mattes,
+                tiles: &dilated,
+            };
+            stages.gather(&config, inputs, layer);
+        }
+        drop(depth);
         let inputs = GatherInputs::Stable {
             texels: &texels,
             mattes: &mattes,
@@ -234,6 +258,15 @@ pub fn reconstruct_with(
         } else {
             stages.neighbor_max(&tiles)
         };
+        for layer in layers.iter_mut() {
+            let texels = pack(&config, layer, &depth, &velocity, &neighbors);
+            let inputs = GatherInputs::Paper {
+                texels: &texels,
+                velocity: &velocity,
+                neighbors: &neighbors,
+            };
+            stages.gather(&config, inputs, layer);
+        }
         let texels = pack(&config, &color, &depth, &velocity, &neighbors);
         drop(depth);
         let inputs = GatherInputs::Paper {
