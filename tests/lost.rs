@@ -111,6 +111,25 @@ fn sigint_removes_the_temporary_file() {
     a_signal_removes_the_temporary_file("INT", 130);
 }
 
+/// Every other signal that ends a run (issue 30: SIGHUP from a closed terminal or ssh
+/// connection, SIGXCPU from a farm's CPU-time limit, …) cleans up as SIGTERM does and exits
+/// 128 + its number; before, each left its lock and sometimes a temporary file.
+#[cfg(unix)]
+#[test]
+fn every_terminating_signal_removes_the_temporary_file() {
+    for (name, code) in [
+        ("HUP", 129),
+        ("QUIT", 131),
+        ("USR1", 138),
+        ("USR2", 140),
+        ("ALRM", 142),
+        ("XCPU", 152),
+        ("XFSZ", 153),
+    ] {
+        a_signal_removes_the_temporary_file(name, code);
+    }
+}
+
 #[test]
 fn stale_temporary_files_of_a_dead_process_are_removed() {
     let dir = tempfile::tempdir().unwrap();

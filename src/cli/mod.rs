@@ -101,26 +101,48 @@ fn check_thread_variable() -> Result<()> {
     }
 }
 
-/// On SIGINT or SIGTERM: stop writing, remove the temporary files of frames in flight,
-/// release the output locks (the library's registries, [`crate::io::abandon`]), say so in one
-/// line and exit 130 or 143 (128 + the signal, as a shell reports it). Frames already renamed
-/// into place are whole; `--skip-existing` finishes the run. A thread of its own waits for
-/// the signal (signal-hook), so the cleanup is ordinary code, not a signal handler's.
+/// The signals that end a run the way SIGTERM does, with their names: every catchable one
+/// whose default action ends the process and that a user, a shell, a terminal or a farm
+/// sends. SIGHUP: the terminal or ssh connection closed; SIGQUIT: Ctrl-\\; SIGUSR1/2: some
+/// schedulers' warning before a kill; SIGALRM: a timer; SIGXCPU: a CPU-time limit (a farm's
+/// `ulimit -t`); SIGXFSZ: a file-size limit. SIGPIPE is not among them: Rust ignores it, so
+/// a closed pipe is an error on the write that meets it, ended as errors are.
+#[cfg(unix)]
+pub const STOPPING_SIGNALS: [(i32, &str); 9] = {
+    use signal_hook::consts::*;
+    [
+        (SIGHUP, "SIGHUP"),
+        (SIGINT, "SIGINT"),
+        (SIGQUIT, "SIGQUIT"),
+        (SIGTERM, "SIGTERM"),
+        (SIGUSR1, "SIGUSR1"),
+        (SIGUSR2, "SIGUSR2"),
+        (SIGALRM, "SIGALRM"),
+        (SIGXCPU, "SIGXCPU"),
+        (SIGXFSZ, "SIGXFSZ"),
+    ]
+};
+
+/// On any of [`STOPPING_SIGNALS`]: stop writing, remove the temporary files of frames in
+/// flight, release the output locks (the library's registries, [`crate::io::abandon`]), say
+/// so in one line and exit 128 + the signal's number, as a shell reports it (130 for SIGINT,
+/// 143 for SIGTERM, 129 for SIGHUP, 152 for SIGXCPU). Frames already renamed into place are
+/// whole; `--skip-existing` finishes the run. A thread of its own waits for the signal
+/// (signal-hook), so the cleanup is ordinary code, not a signal handler's.
 #[cfg(unix)]
 fn stop_cleanly_on_signals() {
-    use signal_hook::consts::{SIGINT, SIGTERM};
-    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+    let numbers = STOPPING_SIGNALS.map(|(number, _)| number);
+    let Ok(mut signals) = signal_hook::iterator::Signals::new(numbers) else {
         // Without the handler the default applies: the process dies, and the next run over
         // the same outputs removes what it left.
         return;
     };
     std::thread::spawn(move || {
         if let Some(signal) = signals.forever().next() {
-            let (name, code) = if signal == SIGINT {
-                ("SIGINT", 130)
-            } else {
-                ("SIGTERM", 143)
-            };
+            let name = STOPPING_SIGNALS
+                .iter()
+                .find(|(number, _)| *number == signal)
+                .map_or("a signal", |(_, name)| name);
             let abandoned = crate::io::abandon();
             eprintln!(
                 "shutter: stopped by {name}: {} unfinished temporary file{} removed, frames \
@@ -128,7 +150,7 @@ fn stop_cleanly_on_signals() {
                 abandoned.temporaries,
                 if abandoned.temporaries == 1 { "" } else { "s" }
             );
-            std::process::exit(code);
+            std::process::exit(128 + signal);
         }
     });
 }
