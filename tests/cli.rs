@@ -361,6 +361,61 @@ fn output_equal_to_input_is_refused() {
     assert_eq!(std::fs::read(&input).unwrap(), before);
 }
 
+/// A second mount of the input folder (issue 30): the output's path differs from every
+/// input's, but its folder is the input's folder (same device and inode), so writing it
+/// would replace the input. Before, every colour input was replaced by its blurred frame.
+/// Needs `mount --bind` (root, and a system that lets it mount): skipped with a note where
+/// it cannot mount.
+#[cfg(unix)]
+#[test]
+fn an_output_through_a_second_mount_of_the_input_folder_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (inputs, mirror) = (dir.path().join("in"), dir.path().join("mirror"));
+    std::fs::create_dir_all(&inputs).unwrap();
+    std::fs::create_dir_all(&mirror).unwrap();
+    for frame in 1..=2 {
+        write_canonical_frame(&inputs, Some(frame), 4, 4);
+    }
+    let mounted = std::process::Command::new("mount")
+        .args(["--bind", &s(&inputs), &s(&mirror)])
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok_and(|status| status.success());
+    if !mounted {
+        eprintln!("skipped: mount --bind is not allowed here (needs root)");
+        return;
+    }
+    // Unmounted however the test ends.
+    struct Unmount(std::path::PathBuf);
+    impl Drop for Unmount {
+        fn drop(&mut self) {
+            let _ = std::process::Command::new("umount").arg(&self.0).status();
+        }
+    }
+    let _unmount = Unmount(mirror.clone());
+    let before = std::fs::read(inputs.join("C.0001.exr")).unwrap();
+    let color = format!("{}/C.####.exr", inputs.display());
+    let out = format!("{}/C.####.exr", mirror.display());
+    let o = shutter(&["blur", "--color", &color, "-o", &out]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("overwrite the input"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(inputs.join("C.0001.exr")).unwrap(), before);
+}
+
+/// An existing output that is the input under another name (a hard link) is the input.
+#[cfg(unix)]
+#[test]
+fn an_output_that_is_a_hard_link_of_the_input_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 4, 4);
+    let input = dir.path().join("C.exr");
+    let link = dir.path().join("linked.exr");
+    std::fs::hard_link(&input, &link).unwrap();
+    let o = shutter(&["blur", "--color", &s(&input), "-o", &s(&link)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("overwrite the input"), "{}", stderr(&o));
+}
+
 #[test]
 fn skip_existing_resumes_a_run() {
     let dir = tempfile::tempdir().unwrap();

@@ -431,3 +431,35 @@ fn killed_runs_resume_to_identical_outputs() {
     }
     eprintln!("{left_behind} of 20 kills left a temporary or lock file to clean up");
 }
+
+/// Someone deletes a running job's lock file and a second job starts on the same frames
+/// (issue 30): the second takes a new lock file and runs; the first finds, before it renames
+/// its next frame into place, that its lock is gone and the frames are another's, and stops
+/// with 75 without writing it. Before, both ran to the end and exited 0.
+#[test]
+fn a_deleted_lock_file_stops_the_job_that_lost_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = sequence(dir.path(), 12, 320, 240);
+    let out_dir = dir.path().join("out");
+    let out = format!("{}/o.####.exr", out_dir.display());
+    let args = ["blur", "--color", &color, "-o", &out, "--threads", "1"];
+    let mut first = spawn(&args);
+    let lock = out_dir.join(".o.####.exr.lock");
+    assert!(
+        wait_for_name(&mut first, &out_dir, |n| n.ends_with(".tmp")),
+        "the first run ended before it wrote a frame"
+    );
+    std::fs::remove_file(&lock).unwrap();
+    let second = spawn(&args).wait_with_output().unwrap();
+    let first = first.wait_with_output().unwrap();
+    let (e1, e2) = (stderr(&first), stderr(&second));
+    assert!(second.status.success(), "the second job: {e2}");
+    assert_eq!(first.status.code(), Some(75), "the first job: {e1}");
+    assert!(e1.contains("was deleted while this run held it"), "{e1}");
+    // Every frame whole, nothing left over.
+    let left = names(&out_dir);
+    assert_eq!(left.len(), 12, "{left:?}");
+    for n in &left {
+        assert_eq!(read_exr_reference(&out_dir.join(n)).len(), 4, "{n}");
+    }
+}

@@ -15,6 +15,13 @@
 //! takes a lock on the whole file, which succeeds only when no other process holds a frame,
 //! and unlinks while holding it. A job that opened the file just before that unlink finds,
 //! once locked, that the path names another file (or none) and starts again.
+//!
+//! A lock file deleted under a running job (by hand, or with its folder) would let a second
+//! job lock a new file at the same path and write the same frames: before each frame is
+//! renamed into place the job checks that its lock is still the file its path names
+//! ([`verify_held`]), takes it again on a new file when it is not, and stops (exit 75)
+//! without writing the frame when another job holds any of its frames there. It never
+//! removes a lock file that is not its own.
 
 use std::fs::{File, OpenOptions};
 use std::path::{Path, PathBuf};
@@ -49,10 +56,13 @@ pub struct OutputLock {
     path: PathBuf,
 }
 
-/// The locks this process holds, so that a signal handler can release them.
+/// The locks this process holds, so that a signal handler can release them and a write can
+/// check them ([`verify_held`]).
 struct Held {
     path: PathBuf,
     file: File,
+    /// The byte ranges of its frames ([`byte_ranges`]).
+    ranges: Vec<(u64, u64)>,
     /// Folders made for the lock file, deepest first: removed again if still empty.
     created: Vec<PathBuf>,
 }
@@ -127,6 +137,7 @@ impl OutputLock {
                 held().push(Held {
                     path: path.clone(),
                     file,
+                    ranges,
                     created,
                 });
                 Ok(OutputLock { path })
@@ -158,6 +169,61 @@ impl Drop for OutputLock {
     }
 }
 
+/// Checks that every lock this process holds is still on the file its path names, just
+/// before a frame is renamed into place. Someone may have deleted the lock file (or its
+/// folder) under a running job, and a second job on the same frames would then lock a new
+/// file and run beside it: a lock whose file is gone is taken again on a new file at the
+/// same path, and when another process holds any of its frames there, this fails, naming
+/// it, so the frame is not written (the run stops with exit 75) and the two jobs do not
+/// write one frame. Without held locks (a library caller) nothing is checked.
+pub fn verify_held() -> Result<(), String> {
+    let mut held = held();
+    for lock in held.iter_mut() {
+        if still_named(&lock.file, &lock.path) {
+            continue;
+        }
+        let lost = |why: String| {
+            format!(
+                "the lock file {} was deleted while this run held it, and {why}; stopping so \
+                 that two jobs do not write one frame",
+                lock.path.display()
+            )
+        };
+        if let Some(folder) = lock.path.parent() {
+            std::fs::create_dir_all(folder)
+                .map_err(|e| lost(format!("it cannot be made again: {e}")))?;
+        }
+        let file = OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(&lock.path)
+            .map_err(|e| lost(format!("it cannot be made again: {e}")))?;
+        for &(start, len) in &lock.ranges {
+            match platform::lock_range(&file, start, len) {
+                Ok(true) => {}
+                Ok(false) => {
+                    let (frame, pid) = platform::holder(&file, start, len);
+                    let who = pid.map_or("another process".to_string(), |pid| {
+                        format!("another process (pid {pid})")
+                    });
+                    let frame = frame_of(frame.unwrap_or(start))
+                        .map_or(String::new(), |f| format!(" frame {f}"));
+                    return Err(lost(format!("{who} has since locked{frame}")));
+                }
+                Err(e) => return Err(lost(format!("it cannot be locked again: {e}"))),
+            }
+        }
+        if !still_named(&file, &lock.path) {
+            return Err(lost("it keeps being replaced".to_string()));
+        }
+        // The old file (unlinked) goes, and our locks on it with it.
+        lock.file = file;
+    }
+    Ok(())
+}
+
 /// Releases every lock this process holds (for a signal handler, before the process
 /// exits): removes each lock file no other process holds a frame of, and the folders made
 /// for it if they are empty. Returns how many locks were released.
@@ -171,7 +237,10 @@ pub fn abandon_locks() -> usize {
 fn release(held: Held) {
     // Our own byte ranges never conflict with a lock we take over them, so the whole file
     // locks only when no other process holds a frame: then nobody needs the file.
-    if matches!(platform::lock_range(&held.file, 0, 0), Ok(true)) {
+    // A lock file deleted under us and made again by another job is that job's: left alone.
+    if matches!(platform::lock_range(&held.file, 0, 0), Ok(true))
+        && still_named(&held.file, &held.path)
+    {
         let _ = std::fs::remove_file(&held.path);
     }
     drop(held.file);
@@ -339,6 +408,19 @@ mod tests {
         assert_eq!(ranges, [(base - 2, 3)]);
         assert_eq!(frame_of(base - 2), Some(-2));
         assert_eq!(frame_of(0), None);
+    }
+
+    #[test]
+    fn a_lock_file_made_again_by_another_job_is_left_to_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let output = PathPattern::parse(&format!("{}/o.####.exr", dir.path().display())).unwrap();
+        let lock = OutputLock::acquire(&output, &[Some(1)]).unwrap();
+        // Deleted under the job, and made again by another one.
+        std::fs::remove_file(lock.path()).unwrap();
+        std::fs::write(lock.path(), b"").unwrap();
+        let path = lock.path().to_path_buf();
+        drop(lock);
+        assert!(path.exists(), "the other job's lock file was removed");
     }
 
     #[test]

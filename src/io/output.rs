@@ -169,6 +169,9 @@ pub fn write_atomic(
     let mut writer = BufWriter::new(file);
     write(&mut writer).and_then(|()| writer.flush().map_err(|e| e.to_string()))?;
     drop(writer);
+    // The output lock must still be ours (someone may have deleted its file): else another
+    // job may be writing this frame.
+    crate::io::lock::verify_held()?;
     temporary.rename_to(path)
 }
 

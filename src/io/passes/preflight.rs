@@ -13,15 +13,56 @@ use crate::io::sequence::PathPattern;
 use super::plan::{plan_frame, FramePlan, PlanOptions};
 use super::Inputs;
 
-/// True when two paths name the same file (or would, once the output exists).
-fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
+/// True when writing `output` would replace the file `input` names: the same path once
+/// symbolic links and `..` are resolved, or (Unix) the same name in the same folder, the
+/// folder told by its device and inode, so that a second mount of the input folder (a bind
+/// mount, another NFS mount point of the same export) is caught; or the same file (device
+/// and inode) when the output exists, which a hard link of the input would be.
+fn same_file(input: &Path, output: &Path) -> bool {
+    let paths_agree = match (input.canonicalize(), output.canonicalize()) {
         (Ok(a), Ok(b)) => a == b,
         _ => {
             let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-            absolute(a) == absolute(b)
+            absolute(input) == absolute(output)
+        }
+    };
+    paths_agree || same_entry(input, output)
+}
+
+/// The same file, or the same name in the same folder, by device and inode (Unix).
+#[cfg(unix)]
+fn same_entry(input: &Path, output: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    let id = |meta: std::fs::Metadata| (meta.dev(), meta.ino());
+    if let (Ok(a), Ok(b)) = (std::fs::metadata(input), std::fs::metadata(output)) {
+        if id(a) == id(b) {
+            return true;
         }
     }
+    // The entry a path names: its folder's identity and its name. The input's is taken
+    // through its links (what is read is the file they lead to), and as written.
+    let entry = |p: &Path| -> Option<((u64, u64), std::ffi::OsString)> {
+        let name = p.file_name()?.to_os_string();
+        let folder = match p.parent() {
+            Some(f) if !f.as_os_str().is_empty() => f,
+            _ => Path::new("."),
+        };
+        Some((id(std::fs::metadata(folder).ok()?), name))
+    };
+    let Some(out) = entry(output) else {
+        return false;
+    };
+    let resolved = input.canonicalize().ok();
+    let same = [Some(input), resolved.as_deref()]
+        .into_iter()
+        .flatten()
+        .any(|p| entry(p).as_ref() == Some(&out));
+    same
+}
+
+#[cfg(not(unix))]
+fn same_entry(_input: &Path, _output: &Path) -> bool {
+    false
 }
 
 /// A folder (or anything but a file) where a frame's output would go: it cannot be
