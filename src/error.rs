@@ -30,6 +30,9 @@ pub enum ProblemKind {
     /// Writing a frame failed after the preflight passed (a full disk, an I/O error): worth
     /// retrying (exit 75).
     WriteFailed,
+    /// An input changed after the preflight checked it (replaced mid-run): the run stops at
+    /// the frame that reads it (exit 1: the input is not what was checked).
+    Changed,
 }
 
 impl ProblemKind {
@@ -95,6 +98,7 @@ impl fmt::Display for Problem {
             ProblemKind::View => "which view",
             ProblemKind::Busy => "busy",
             ProblemKind::WriteFailed => "cannot write",
+            ProblemKind::Changed => "changed",
         };
         write!(f, "{what}: {}", self.path.display())?;
         if let Some(frame) = self.frame {

@@ -463,3 +463,160 @@ fn a_deleted_lock_file_stops_the_job_that_lost_it() {
         assert_eq!(read_exr_reference(&out_dir.join(n)).len(), 4, "{n}");
     }
 }
+
+/// A pass replaced after the preflight, before its frame is read (issue 30): a depth file of
+/// the same size without its `Z` channel. Its headers are checked again through the file it
+/// is decoded from: the run stops at that frame, naming the file, the frame and the channel,
+/// with the frames before it written and nothing of it. Before, the frame was read anyway
+/// (wrong in 18,563 pixels) and the run exited 0. The colour file replaced the same way.
+#[test]
+fn an_input_replaced_after_the_preflight_stops_the_run_at_its_frame() {
+    for (role, replacement) in [("Z", "depth"), ("C", "colour")] {
+        let dir = tempfile::tempdir().unwrap();
+        let color = sequence(dir.path(), 12, 320, 240);
+        let out_dir = dir.path().join("out");
+        let out = format!("{}/o.####.exr", out_dir.display());
+        let (depth, velocity) = (role_pattern(dir.path(), "Z"), role_pattern(dir.path(), "V"));
+        let mut child = spawn(&[
+            "blur",
+            "--algorithm",
+            "reconstruct",
+            "--color",
+            &color,
+            "--depth",
+            &depth,
+            "--velocity",
+            &velocity,
+            "-o",
+            &out,
+            "--threads",
+            "1",
+        ]);
+        assert!(
+            wait_for_name(&mut child, &out_dir, |n| n.ends_with(".tmp")),
+            "the run ended before it wrote a frame"
+        );
+        // Same size, same kind of file, but no channel the pass reads.
+        let swapped = dir.path().join(format!("{role}.0010.exr"));
+        let staged = dir.path().join("staged.exr");
+        write_exr(&staged, 320, 240, vec![("other", vec![0.5; 320 * 240])]);
+        std::fs::rename(&staged, &swapped).unwrap();
+        let o = child.wait_with_output().unwrap();
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{replacement}: {err}");
+        let name = if role == "Z" { "Z" } else { "R" };
+        assert!(
+            err.contains(&format!("{role}.0010.exr, frame 10"))
+                && err.contains("changed after the preflight")
+                && err.contains(&format!("channel {name} is no longer in it")),
+            "{replacement}: {err}"
+        );
+        let written = names(&out_dir);
+        let expected: Vec<String> = (1..10).map(|f| format!("o.{f:04}.exr")).collect();
+        assert_eq!(written, expected, "{replacement}");
+    }
+}
+
+/// Waits up to `seconds` for `child`; kills it and fails if it is still running then.
+fn finish_within(mut child: Child, seconds: u64, what: &str) -> std::process::Output {
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(seconds) {
+            let _ = child.kill();
+            panic!("{what}: still running after {seconds} s (it waits on something)");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+fn mkfifo(path: &Path) {
+    let status = Command::new("mkfifo").arg(path).status().expect("mkfifo");
+    assert!(status.success(), "mkfifo {}", path.display());
+}
+
+/// Named pipes and devices are not files (issue 30): as an input, a preset, or put in an
+/// input's place mid-run, each is refused at once with a clear error; before, a pipe hung the
+/// run forever (holding the lock mid-run) and `--preset /dev/zero` read until memory ran out.
+#[test]
+fn pipes_and_devices_are_refused_not_waited_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipe = dir.path().join("C.exr");
+    mkfifo(&pipe);
+    let out = s(&dir.path().join("o.exr"));
+    let o = finish_within(
+        spawn(&["blur", "--color", &s(&pipe), "-o", &out]),
+        30,
+        "a pipe as the colour",
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("not a regular file (a named pipe)"),
+        "{}",
+        stderr(&o)
+    );
+
+    write_canonical_frame(dir.path(), Some(1), 8, 8);
+    let color = s(&dir.path().join("C.0001.exr"));
+    let preset_pipe = dir.path().join("p.toml");
+    mkfifo(&preset_pipe);
+    for preset in [s(&preset_pipe), "/dev/zero".to_string()] {
+        let o = finish_within(
+            spawn(&["blur", "--color", &color, "-o", &out, "--preset", &preset]),
+            30,
+            &preset,
+        );
+        assert_eq!(o.status.code(), Some(2), "{preset}: {}", stderr(&o));
+        assert!(stderr(&o).contains("not a regular file"), "{}", stderr(&o));
+    }
+    // A preset too large to be one.
+    let big = dir.path().join("big.toml");
+    std::fs::write(&big, format!("# {}\n", "x".repeat(2 << 20))).unwrap();
+    let o = shutter(&["blur", "--color", &color, "-o", &out, "--preset", &s(&big)]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("larger than 1024 KiB"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// A pipe put in a pass's place after the preflight stops the run at its frame, at once.
+#[test]
+fn a_pipe_put_in_an_input_s_place_mid_run_stops_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = sequence(dir.path(), 12, 320, 240);
+    let out_dir = dir.path().join("out");
+    let out = format!("{}/o.####.exr", out_dir.display());
+    let (depth, velocity) = (role_pattern(dir.path(), "Z"), role_pattern(dir.path(), "V"));
+    let mut child = spawn(&[
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &color,
+        "--depth",
+        &depth,
+        "--velocity",
+        &velocity,
+        "-o",
+        &out,
+        "--threads",
+        "1",
+    ]);
+    assert!(
+        wait_for_name(&mut child, &out_dir, |n| n.ends_with(".tmp")),
+        "the run ended before it wrote a frame"
+    );
+    let swapped = dir.path().join("Z.0010.exr");
+    std::fs::remove_file(&swapped).unwrap();
+    mkfifo(&swapped);
+    let o = finish_within(child, 60, "a pipe mid-run");
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("Z.0010.exr, frame 10") && err.contains("not a regular file"),
+        "{err}"
+    );
+    assert!(names(&out_dir).iter().all(|n| !n.starts_with('.')));
+}

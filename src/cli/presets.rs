@@ -29,8 +29,11 @@ pub fn presets(args: PresetsArgs) -> Result<()> {
             // A file: check it loads and its settings are valid, then print it as written.
             let preset = Preset::load(std::slice::from_ref(&name))?;
             settings::resolve(&settings::Given::default(), &preset)?;
-            let text = std::fs::read_to_string(&name)
-                .map_err(|e| Error::usage(format!("cannot read {name}: {e}")))?;
+            let text = crate::io::input::read_small_text(
+                std::path::Path::new(&name),
+                crate::io::preset::PRESET_CAP,
+            )
+            .map_err(|e| Error::usage(format!("cannot read {name}: {e}")))?;
             out(&text);
             Ok(())
         }

@@ -11,7 +11,6 @@
 //! Writing uses exr's image API with scan-line blocks and an explicit compression (exr's
 //! default is RLE tiles, which is not what compositors expect).
 
-use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
@@ -28,6 +27,9 @@ use rayon::prelude::*;
 
 use crate::frame::{Plane, Windows};
 
+/// What starts the text of an error of [`read_channels_checked`]'s check.
+pub const CHANGED: &str = "changed since the preflight: ";
+
 /// A channel of an EXR file: which part (exr calls it a layer) and which index in the part's
 /// sorted channel list.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -42,7 +44,7 @@ pub struct ChannelRef {
 /// refuses exactly the headers decoding would.
 pub fn read_meta(path: &Path) -> exr::error::Result<MetaData> {
     // The exr crate's decoding reader reads attributes with its `pedantic` turned over.
-    MetaData::read_from_file(path, true)
+    MetaData::read_from_buffered(BufReader::new(crate::io::input::open_input(path)?), true)
 }
 
 /// Checks headers as the exr crate's decoding reader does (non-strictly): windows not
@@ -139,7 +141,7 @@ pub fn unsupported_reason(header: &Header) -> Option<String> {
 /// and half-copied files, and tables that point several entries at one chunk, which a
 /// decoder would otherwise turn into a frame with black lines, before any output is written.
 pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<(), String> {
-    let mut file = File::open(path).map_err(|e| e.to_string())?;
+    let mut file = crate::io::input::open_input(path).map_err(|e| e.to_string())?;
     let file_len = file.metadata().map_err(|e| e.to_string())?.len();
     let mut counting = CountingReader {
         inner: BufReader::new(&mut file),
@@ -381,9 +383,23 @@ pub fn windows_of(header: &Header) -> Windows {
 /// Reads the wanted channels (distinct) into planes, in the order asked for. All wanted
 /// channels must lie in parts of the same data-window size.
 pub fn read_channels(path: &Path, wanted: &[ChannelRef]) -> exr::error::Result<ReadChannels> {
-    let file = File::open(path)?;
+    read_channels_checked(path, wanted, |_| Ok(()))
+}
+
+/// An EXR's wanted channels decoded, as [`read_channels`], after `check` has seen the
+/// headers read from the same open file (so a file replaced between a check of its path and
+/// the open cannot slip through); an error of `check` stops the read before any pixel is
+/// decoded, as [`Error::Invalid`](exr::error::Error::Invalid) with its text after
+/// [`CHANGED`].
+pub fn read_channels_checked(
+    path: &Path,
+    wanted: &[ChannelRef],
+    check: impl FnOnce(&MetaData) -> Result<(), String>,
+) -> exr::error::Result<ReadChannels> {
+    let file = crate::io::input::open_input(path)?;
     let reader = exr::block::read(BufReader::new(file), false)?;
     let meta = reader.meta_data().clone();
+    check(&meta).map_err(|e| exr::error::Error::Invalid(format!("{CHANGED}{e}").into()))?;
 
     let first = wanted.first().map_or(0, |c| c.part);
     let header = meta

@@ -106,10 +106,11 @@ impl FileInfo {
     /// a complete stream (JPEG).
     pub fn probe_within(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
         let mut magic = [0u8; 4];
-        let opened = std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut magic));
+        let opened = crate::io::input::open_input(path).and_then(|mut f| f.read_exact(&mut magic));
         if let Err(e) = opened {
             let (kind, detail) = match e.kind() {
                 std::io::ErrorKind::NotFound => (ProblemKind::MissingFile, "no such file".into()),
+                std::io::ErrorKind::InvalidInput => (ProblemKind::Unsupported, e.to_string()),
                 std::io::ErrorKind::UnexpectedEof => (
                     ProblemKind::Corrupt,
                     "the file is too short to be an image".into(),
@@ -205,6 +206,57 @@ impl FileInfo {
         matches!(self.kind, FileKind::Image { float: false, .. })
     }
 
+    /// Whether the headers `meta` (read again when the frame is decoded) still hold what the
+    /// preflight saw: the same parts, and for each of `channels` (indices into
+    /// [`FileInfo::channels`]) the same name and sample type at the same place, in a part of
+    /// the same windows. Else what changed, naming the channel.
+    fn same_headers(&self, meta: &exr::meta::MetaData, channels: &[usize]) -> Result<(), String> {
+        let FileKind::Exr { headers, .. } = &self.kind else {
+            return Ok(());
+        };
+        if meta.headers.len() != headers.len() {
+            return Err(format!(
+                "it has {} part{}, it had {}",
+                meta.headers.len(),
+                if meta.headers.len() == 1 { "" } else { "s" },
+                headers.len()
+            ));
+        }
+        for &i in channels {
+            let info = &self.channels[i];
+            let (was, now) = (&headers[info.part], &meta.headers[info.part]);
+            // As stored (a view's channel is known by its name without the view).
+            let Some(stored) = was.channels.list.get(info.index) else {
+                continue;
+            };
+            let name = stored.name.to_string();
+            let found = now.channels.list.get(info.index);
+            if found.is_none_or(|c| c.name != stored.name) {
+                let moved = now.channels.list.iter().any(|c| c.name == stored.name);
+                return Err(if moved {
+                    format!("channel {name} moved")
+                } else {
+                    format!("channel {name} is no longer in it")
+                });
+            }
+            let sample = sample_type_name(found.expect("found").sample_type);
+            if sample != info.sample_type {
+                return Err(format!(
+                    "channel {name} is {sample}, it was {}",
+                    info.sample_type
+                ));
+            }
+            if exr_io::windows_of(now) != exr_io::windows_of(was)
+                || now.layer_size != was.layer_size
+            {
+                return Err(format!(
+                    "the data or display window of channel {name}'s part changed"
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// Decodes the given channels (indices into `channels`, distinct) into planes.
     pub fn read(&self, channels: &[usize]) -> Result<Vec<Plane>, Problem> {
         let corrupt = |detail: String| Problem::new(ProblemKind::Corrupt, &self.path, detail);
@@ -217,7 +269,20 @@ impl FileInfo {
                         index: self.channels[i].index,
                     })
                     .collect();
-                let read = exr_io::read_channels(&self.path, &refs).map_err(|e| match e {
+                let read = exr_io::read_channels_checked(&self.path, &refs, |meta| {
+                    self.same_headers(meta, channels)
+                })
+                .map_err(|e| match e {
+                    exr::error::Error::Invalid(what) if what.starts_with(exr_io::CHANGED) => {
+                        Problem::new(ProblemKind::Changed, &self.path, {
+                            let what = &what[exr_io::CHANGED.len()..];
+                            format!(
+                                "the file changed after the preflight checked it: {what}; \
+                                 nothing was read from it (check it again with shutter info, \
+                                 then rerun with --skip-existing)"
+                            )
+                        })
+                    }
                     exr::error::Error::NotSupported(what) => {
                         Problem::new(ProblemKind::Unsupported, &self.path, what.to_string())
                     }
@@ -239,12 +304,30 @@ impl FileInfo {
                 let (width, height, mut planes) =
                     image_io::read_planes(&self.path, (self.width, self.height))
                         .map_err(corrupt)?;
-                if (width, height) != (self.width, self.height) {
-                    return Err(Problem::new(
-                        ProblemKind::SizeMismatch,
+                let changed = |what: String| {
+                    Problem::new(
+                        ProblemKind::Changed,
                         &self.path,
-                        "the file changed size since it was checked",
-                    ));
+                        format!(
+                            "the file changed after the preflight checked it: {what}; nothing \
+                             was read from it (check it again with shutter info, then rerun \
+                             with --skip-existing)"
+                        ),
+                    )
+                };
+                if (width, height) != (self.width, self.height) {
+                    return Err(changed(format!(
+                        "it is {width}x{height}, it was {}x{}",
+                        self.width, self.height
+                    )));
+                }
+                let stored = self.channels.iter().map(|c| c.index + 1).max().unwrap_or(0);
+                if planes.len() != stored {
+                    return Err(changed(format!(
+                        "it holds {} channel{}, it held {stored}",
+                        planes.len(),
+                        if planes.len() == 1 { "" } else { "s" }
+                    )));
                 }
                 // A grey image's R, G and B share one plane: take it on its last use.
                 let mut result = Vec::with_capacity(channels.len());
@@ -322,11 +405,7 @@ fn probe_exr(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
                 alias,
                 part,
                 index,
-                sample_type: match channel.sample_type {
-                    exr::meta::attribute::SampleType::F16 => "f16",
-                    exr::meta::attribute::SampleType::F32 => "f32",
-                    exr::meta::attribute::SampleType::U32 => "u32",
-                },
+                sample_type: sample_type_name(channel.sample_type),
                 view,
             });
         }
@@ -399,4 +478,13 @@ fn probe_image(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
         views: None,
         view: None,
     })
+}
+
+/// The name [`ChannelInfo::sample_type`] gives an EXR sample type.
+fn sample_type_name(kind: exr::meta::attribute::SampleType) -> &'static str {
+    match kind {
+        exr::meta::attribute::SampleType::F16 => "f16",
+        exr::meta::attribute::SampleType::F32 => "f32",
+        exr::meta::attribute::SampleType::U32 => "u32",
+    }
 }

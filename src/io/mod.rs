@@ -6,6 +6,7 @@ pub mod exr;
 pub mod exr_like;
 pub mod file;
 pub mod image;
+pub mod input;
 pub mod lock;
 pub mod output;
 pub mod passes;

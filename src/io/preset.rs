@@ -274,6 +274,9 @@ fn parse_table(text: &str, origin: &str) -> Result<toml::Table> {
         .map_err(|e| Error::usage(format!("preset {origin}: {e}")))
 }
 
+/// The largest preset file read (1 MiB; the built-in ones are under 4 KiB).
+pub const PRESET_CAP: u64 = 1 << 20;
+
 /// Loads the TOML of one preset: a built-in name, or a path to a `.toml` file.
 fn load_table(name_or_path: &str) -> Result<toml::Table> {
     if let Some(text) = builtin_text(name_or_path) {
@@ -281,7 +284,7 @@ fn load_table(name_or_path: &str) -> Result<toml::Table> {
     }
     let path = std::path::Path::new(name_or_path);
     if path.extension().is_some_and(|e| e == "toml") || path.exists() {
-        let text = std::fs::read_to_string(path).map_err(|e| {
+        let text = crate::io::input::read_small_text(path, PRESET_CAP).map_err(|e| {
             Error::usage(format!("cannot read preset file {}: {e}", path.display()))
         })?;
         return parse_table(&text, name_or_path);

@@ -14,15 +14,14 @@
 
 use std::path::Path;
 
-use image::{ImageDecoder, ImageReader};
+use image::ImageDecoder;
 
 use crate::frame::Photo;
 
 /// Reads the profile and metadata of an 8/16-bit image, without decoding its pixels, and sets
 /// the orientation its EXIF and XMP record to 1 (upright, as `read_planes` delivers it).
 pub fn read_photo(path: &Path) -> Result<Photo, String> {
-    let reader = ImageReader::open(path)
-        .map_err(|e| e.to_string())?
+    let reader = crate::io::image::input_reader(path)?
         .with_guessed_format()
         .map_err(|e| e.to_string())?;
     let jpeg = reader.format() == Some(image::ImageFormat::Jpeg);
@@ -50,7 +49,9 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
         set_xmp_orientation(xmp);
     }
     let sampling = if jpeg {
-        std::fs::read(path).ok().and_then(|b| jpeg_sampling(&b))
+        crate::io::input::read_input(path)
+            .ok()
+            .and_then(|b| jpeg_sampling(&b))
     } else {
         None
     };
@@ -70,7 +71,8 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
 /// associated (ExtraSamples = 1: the colour is premultiplied).
 fn tiff_blocks(path: &Path) -> ([Option<Vec<u8>>; 3], bool) {
     use tiff::tags::Tag;
-    let Ok(mut decoder) = std::fs::File::open(path)
+    let Ok(mut decoder) = crate::io::input::open_input(path)
+        .map(std::io::BufReader::new)
         .map_err(tiff::TiffError::from)
         .and_then(tiff::decoder::Decoder::new)
     else {

@@ -50,11 +50,21 @@ fn channel_names(color: ColorType) -> Vec<(&'static str, usize)> {
     }
 }
 
+/// An image reader on an input file ([`crate::io::input::open_input`]: a regular file, opened
+/// without waiting), its format guessed from the name until the content says otherwise.
+pub fn input_reader(path: &Path) -> Result<ImageReader<std::io::BufReader<std::fs::File>>, String> {
+    let file = crate::io::input::open_input(path).map_err(|e| e.to_string())?;
+    let mut reader = ImageReader::new(std::io::BufReader::new(file));
+    if let Ok(format) = image::ImageFormat::from_path(path) {
+        reader.set_format(format);
+    }
+    Ok(reader)
+}
+
 /// Reads the header only. The decoder is told the pixel limit as a width and a height of
 /// `max_pixels` each (the image crate's limits are per axis); the caller checks the product.
 pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
-    let mut reader = ImageReader::open(path)
-        .map_err(|e| e.to_string())?
+    let mut reader = crate::io::image::input_reader(path)?
         .with_guessed_format()
         .map_err(|e| e.to_string())?;
     let mut limits = Limits::default();
@@ -115,8 +125,7 @@ pub fn read_planes(
     path: &Path,
     declared: (usize, usize),
 ) -> Result<(usize, usize, Vec<Plane>), String> {
-    let mut reader = ImageReader::open(path)
-        .map_err(|e| e.to_string())?
+    let mut reader = crate::io::image::input_reader(path)?
         .with_guessed_format()
         .map_err(|e| e.to_string())?;
     let mut limits = Limits::default();
@@ -187,7 +196,7 @@ pub fn read_planes(
 /// bit (progressive AC scans can skip runs of blocks; DC scans cannot), so the entropy-coded
 /// data holds at least ⌈w/8⌉·⌈h/8⌉ bits.
 pub fn check_jpeg(path: &Path, width: usize, height: usize) -> Result<(), String> {
-    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    let bytes = crate::io::input::read_input(path).map_err(|e| e.to_string())?;
     check_jpeg_bytes(&bytes, width, height)
 }
 
