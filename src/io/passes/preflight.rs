@@ -158,6 +158,49 @@ fn probe_writable(folder: &Path) -> std::io::Result<()> {
     std::fs::remove_file(&probe)
 }
 
+/// More frames than this without a colour file are reported as one problem, by ranges,
+/// before any frame is planned (a frame spec of a million frames over a sequence of three
+/// would otherwise make, hold and print a million problems).
+pub const MISSING_IN_BULK: usize = 100;
+
+/// The frames of `frames` that have no colour file, found from one listing of its folder,
+/// as one problem when there are more than [`MISSING_IN_BULK`]; `None` otherwise (and when
+/// the folder cannot be listed: the frames' own checks then say why).
+fn missing_in_bulk(color: &PathPattern, frames: &[Option<i64>]) -> Option<Problem> {
+    if !color.is_sequence() || frames.len() <= MISSING_IN_BULK {
+        return None;
+    }
+    let found: std::collections::HashSet<i64> = color.discover().ok()?.into_iter().collect();
+    let mut missing: Vec<i64> = frames
+        .iter()
+        .flatten()
+        .copied()
+        .filter(|f| !found.contains(f))
+        .collect();
+    if missing.len() <= MISSING_IN_BULK {
+        return None;
+    }
+    missing.sort_unstable();
+    let listed = crate::io::sequence::format_frames(&missing);
+    let shown: String = if listed.len() > 200 {
+        let cut = listed[..200].rfind(',').unwrap_or(200);
+        format!("{}, …", &listed[..cut])
+    } else {
+        listed
+    };
+    Some(Problem::new(
+        ProblemKind::MissingFile,
+        Path::new(&color.raw),
+        format!(
+            "{} of the {} frames asked for have no colour file (frames {shown}); {} were found; \
+             check --frames",
+            missing.len(),
+            frames.len(),
+            found.len()
+        ),
+    ))
+}
+
 /// Plans every frame of `frames` and checks that each output can be written without
 /// overwriting an input; returns the plans, or all the problems found.
 pub fn preflight(
@@ -166,6 +209,9 @@ pub fn preflight(
     frames: &[Option<i64>],
     options: &PlanOptions,
 ) -> Result<Vec<FramePlan>> {
+    if let Some(problem) = missing_in_bulk(&inputs.color, frames) {
+        return Err(Error::Files(vec![problem]));
+    }
     let results: Vec<std::result::Result<FramePlan, Vec<Problem>>> = frames
         .par_iter()
         .map(|&frame| {
