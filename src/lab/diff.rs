@@ -7,8 +7,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::error::{Error, Problem, ProblemKind, Result};
-use crate::frame::Frame;
-use crate::io::passes::read_color;
+
+use crate::io::passes::{plan_color, read_frame, FramePlan};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::lab::metrics::{self, Metric, Rgb, Scores};
@@ -57,8 +57,9 @@ pub struct DiffReport {
     pub failed: bool,
 }
 
-fn read(pattern: &PathPattern, frame: Option<i64>, preset: &Preset) -> Result<Frame, Problem> {
-    read_color(pattern, frame, preset).map_err(|mut problems| problems.remove(0))
+/// The colour's plan, from its header alone.
+fn plan(pattern: &PathPattern, frame: Option<i64>, preset: &Preset) -> Result<FramePlan, Problem> {
+    plan_color(pattern, frame, preset).map_err(|mut problems| problems.remove(0))
 }
 
 /// The per-pixel error map of the gating metric, in [0, 1] for the heatmap, and the value
@@ -122,8 +123,14 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
         .frames
         .par_iter()
         .map(|&frame| {
-            let a = read(&job.a, frame, &preset)?;
-            let b = read(&job.b, frame, &preset)?;
+            // Sizes from the headers, before anything is decoded: two large images of
+            // different sizes are told apart in milliseconds.
+            let (a, b) = (plan(&job.a, frame, &preset)?, plan(&job.b, frame, &preset)?);
+            let sharp = job
+                .sharp
+                .as_ref()
+                .map(|sharp| plan(sharp, frame, &preset))
+                .transpose()?;
             let (wa, ha, wb, hb) = (a.width, a.height, b.width, b.height);
             if (wa, ha) != (wb, hb) {
                 return Err(Problem::new(
@@ -133,23 +140,26 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
                 )
                 .frame(frame));
             }
+            if let (Some(s), Some(path)) = (&sharp, &job.sharp) {
+                let (ws, hs) = (s.width, s.height);
+                if (ws, hs) != (wa, ha) {
+                    return Err(Problem::new(
+                        ProblemKind::SizeMismatch,
+                        path.path(frame),
+                        format!("{ws}x{hs} but the images are {wa}x{ha}"),
+                    )
+                    .frame(frame));
+                }
+            }
+            let (a, b) = (read_frame(&a)?, read_frame(&b)?);
             let (ra, rb) = (
                 Rgb::of(&a).expect("colour read"),
                 Rgb::of(&b).expect("colour read"),
             );
             let whole = metrics::compare(&ra, &rb, None);
-            let region = match &job.sharp {
+            let region = match &sharp {
                 Some(sharp) => {
-                    let s = read(sharp, frame, &preset)?;
-                    let (ws, hs) = (s.width, s.height);
-                    if (ws, hs) != (wa, ha) {
-                        return Err(Problem::new(
-                            ProblemKind::SizeMismatch,
-                            sharp.path(frame),
-                            format!("{ws}x{hs} but the images are {wa}x{ha}"),
-                        )
-                        .frame(frame));
-                    }
+                    let s = read_frame(sharp)?;
                     let mask =
                         metrics::changed_region(&Rgb::of(&s).expect("colour read"), &ra, 1e-3);
                     Some(metrics::compare(&ra, &rb, Some(&mask)))

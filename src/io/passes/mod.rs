@@ -32,7 +32,7 @@ mod window;
 
 pub use plan::{passes_found, plan_frame, FramePlan, PlanOptions};
 pub use preflight::{output_folder_problems, preflight};
-pub use read::{read_color, read_frame, read_frame_noted};
+pub use read::{plan_color, read_color, read_frame, read_frame_noted};
 pub use suggest::{suggest, Candidate, Found, Suggestion};
 
 use crate::io::sequence::PathPattern;

@@ -205,6 +205,17 @@ pub fn read_color(
     frame: Option<i64>,
     preset: &Preset,
 ) -> Result<Frame, Vec<Problem>> {
+    let plan = plan_color(pattern, frame, preset)?;
+    read_frame(&plan).map_err(|problem| vec![problem])
+}
+
+/// [`read_color`]'s plan, from the file's header alone (its size is the plan's): what to
+/// check before anything is decoded.
+pub fn plan_color(
+    pattern: &PathPattern,
+    frame: Option<i64>,
+    preset: &Preset,
+) -> Result<FramePlan, Vec<Problem>> {
     let options = PlanOptions {
         preset,
         layer: None,
@@ -212,6 +223,5 @@ pub fn read_color(
         needs: Passes::COLOR,
         max_pixels: crate::io::file::DEFAULT_MAX_PIXELS,
     };
-    let plan = plan_frame(&Inputs::color_only(pattern.clone()), frame, &options)?;
-    read_frame(&plan).map_err(|problem| vec![problem])
+    plan_frame(&Inputs::color_only(pattern.clone()), frame, &options)
 }
