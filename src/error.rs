@@ -40,6 +40,33 @@ impl ProblemKind {
     pub fn is_transient(self) -> bool {
         matches!(self, ProblemKind::Busy | ProblemKind::WriteFailed)
     }
+
+    /// The kind of an I/O error met on the output side (making a folder, the lock file, the
+    /// writability probe): a full disk or a quota exceeded (ENOSPC, EDQUOT) is the moment's,
+    /// [`ProblemKind::WriteFailed`] (exit 75) wherever it is found, as when a frame is
+    /// written; any other error is [`ProblemKind::Output`] (exit 1: permissions, a file in
+    /// the way).
+    pub fn of_output_error(error: &std::io::Error) -> ProblemKind {
+        if is_out_of_space(error) {
+            ProblemKind::WriteFailed
+        } else {
+            ProblemKind::Output
+        }
+    }
+}
+
+/// A full disk or an exceeded quota (ENOSPC, EDQUOT).
+pub fn is_out_of_space(error: &std::io::Error) -> bool {
+    #[cfg(unix)]
+    {
+        if let Some(code) = error.raw_os_error() {
+            return code == nix::libc::ENOSPC || code == nix::libc::EDQUOT;
+        }
+    }
+    matches!(
+        error.kind(),
+        std::io::ErrorKind::StorageFull | std::io::ErrorKind::QuotaExceeded
+    )
 }
 
 /// One problem with one file of one frame.

@@ -474,7 +474,7 @@ fn create_parent(path: &Path, frame: Option<i64>) -> std::result::Result<(), Pro
         Some(parent) if !parent.as_os_str().is_empty() => {
             std::fs::create_dir_all(parent).map_err(|e| {
                 Problem::new(
-                    ProblemKind::Output,
+                    ProblemKind::of_output_error(&e),
                     parent,
                     format!("cannot create the output folder: {e}"),
                 )

@@ -186,5 +186,8 @@ fn sizes_are_compared_before_anything_is_decoded() {
     let err = stderr(&o);
     // diff's exit for inputs it cannot compare (README, exit codes).
     assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("size mismatch") && err.contains("8192x8000 but"), "{err}");
+    assert!(
+        err.contains("size mismatch") && err.contains("8192x8000 but"),
+        "{err}"
+    );
 }

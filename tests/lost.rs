@@ -651,3 +651,49 @@ fn a_huge_frame_spec_over_a_short_sequence_is_one_line_at_once() {
         "{err}"
     );
 }
+
+/// A full disk is the moment's, wherever it is found (issue 30): found by the writability
+/// probe before anything is written (a tmpfs with no inode left), the run exits 75 (retry),
+/// as it does when a frame's write meets it. Before, the probe's ENOSPC exited 1 ("fix the
+/// input"). Needs `mount -t tmpfs` (root): skipped with a note where it cannot mount.
+#[test]
+fn a_full_disk_found_by_the_probe_exits_75() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 8, 8);
+    let disk = dir.path().join("disk");
+    std::fs::create_dir_all(&disk).unwrap();
+    let mounted = Command::new("mount")
+        .args([
+            "-t",
+            "tmpfs",
+            "-o",
+            "size=1m,nr_inodes=4",
+            "tmpfs",
+            &s(&disk),
+        ])
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|status| status.success());
+    if !mounted {
+        eprintln!("skipped: mount -t tmpfs is not allowed here (needs root)");
+        return;
+    }
+    struct Unmount(PathBuf);
+    impl Drop for Unmount {
+        fn drop(&mut self) {
+            let _ = Command::new("umount").arg(&self.0).status();
+        }
+    }
+    let _unmount = Unmount(disk.clone());
+    // Every inode taken.
+    for k in 0.. {
+        if std::fs::write(disk.join(format!("f{k}")), b"").is_err() {
+            break;
+        }
+    }
+    let color = s(&dir.path().join("C.exr"));
+    let o = shutter(&["blur", "--color", &color, "-o", &s(&disk.join("o.exr"))]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(75), "{err}");
+    assert!(err.contains("is full"), "{err}");
+}

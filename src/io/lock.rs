@@ -81,13 +81,16 @@ impl OutputLock {
     /// Fails, naming the frame and the process, when another process holds one of them.
     pub fn acquire(output: &PathPattern, frames: &[Option<i64>]) -> Result<OutputLock, Problem> {
         let path = lock_path(output);
+        let fail_with = |e: &std::io::Error, detail: String| {
+            Problem::new(ProblemKind::of_output_error(e), &path, detail)
+        };
         let fail = |detail: String| Problem::new(ProblemKind::Output, &path, detail);
         let folder = path.parent().unwrap_or(Path::new("."));
         let created = create_folders(folder).map_err(|e| {
-            fail(format!(
-                "cannot create the output folder {}: {e}",
-                folder.display()
-            ))
+            fail_with(
+                &e,
+                format!("cannot create the output folder {}: {e}", folder.display()),
+            )
         })?;
         let ranges = byte_ranges(frames);
         let result = (|| {
@@ -98,7 +101,7 @@ impl OutputLock {
                     .create(true)
                     .truncate(false)
                     .open(&path)
-                    .map_err(|e| fail(format!("cannot open the lock file: {e}")))?;
+                    .map_err(|e| fail_with(&e, format!("cannot open the lock file: {e}")))?;
                 for &(start, len) in &ranges {
                     match platform::lock_range(&file, start, len) {
                         Ok(true) => {}

@@ -131,15 +131,25 @@ pub fn output_folder_problems(
                 "the output folder cannot be made: {} is a file, not a folder; choose another -o",
                 existing.display()
             ))),
-            Ok(_) if probe => {
-                if let Err(e) = probe_writable(existing) {
-                    problems.push(problem(format!(
-                        "the folder {} is not writable ({e}); change its permissions or write \
-                         elsewhere with -o",
-                        existing.display()
-                    )));
-                }
-            }
+            Ok(_) if probe => match probe_writable(existing) {
+                Err(e) if crate::error::is_out_of_space(&e) => problems.push(
+                    Problem::new(
+                        ProblemKind::WriteFailed,
+                        &path,
+                        format!(
+                            "the disk holding {} is full ({e}); make room and rerun",
+                            existing.display()
+                        ),
+                    )
+                    .frame(frame),
+                ),
+                Err(e) => problems.push(problem(format!(
+                    "the folder {} is not writable ({e}); change its permissions or write \
+                     elsewhere with -o",
+                    existing.display()
+                ))),
+                Ok(()) => {}
+            },
             Ok(_) => {}
             Err(e) => problems.push(problem(format!("the output folder cannot be checked: {e}"))),
         }
