@@ -519,3 +519,69 @@ fn multi_part_files_of_every_mix_of_compressions_and_blocks_are_not_called_damag
         }
     }
 }
+
+/// Two parts that both hold R, G, B and A, neither named as the main one (issue 30): which is
+/// the colour cannot be told from the names, so the run stops naming both parts and how to
+/// choose, instead of reading the first silently; a preset naming `PART.R` reads that part,
+/// and a part named `rgba` is the main one wherever it is in the file.
+#[test]
+fn a_colour_in_two_parts_is_refused_until_a_preset_names_the_part() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("two.exr");
+    let part = |name: &'static str, value: f32| Part {
+        name: Some(name),
+        view: None,
+        multi_view: None,
+        channels: ["R", "G", "B", "A"]
+            .iter()
+            .map(|c| (c.to_string(), vec![value; 16]))
+            .collect(),
+    };
+    write_parts(
+        &path,
+        (4, 4),
+        vec![part("first", 0.25), part("other", 0.75)],
+    );
+    let out = dir.path().join("o.exr");
+    let o = shutter(&["blur", "--color", &s(&path), "-o", &s(&out)]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("channel R is in more than one part (first, other)")
+            && err.contains("first.R"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let preset = dir.path().join("other.toml");
+    std::fs::write(
+        &preset,
+        "[color]\nchannels = [[\"other.R\", \"other.G\", \"other.B\", \"other.A\"]]\n",
+    )
+    .unwrap();
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &s(&path),
+        "-o",
+        &s(&out),
+        "--preset",
+        &s(&preset),
+        "--beauty-only",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let written = read_exr_reference(&out);
+    assert!(channel(&written, "R").iter().all(|&v| v == 0.75));
+    // `rgba` second: still the one read.
+    write_parts(&path, (4, 4), vec![part("first", 0.25), part("rgba", 0.75)]);
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &s(&path),
+        "-o",
+        &s(&out),
+        "--beauty-only",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let written = read_exr_reference(&out);
+    assert!(channel(&written, "R").iter().all(|&v| v == 0.75));
+}

@@ -136,6 +136,68 @@ impl FileInfo {
     }
 
     /// Index of the channel with this name (stored name first, then part-qualified alias).
+    /// The parts whose names mark the main layer of a multi-part file: OpenEXR's and Nuke's
+    /// `rgba`, and `beauty`.
+    pub const MAIN_PARTS: [&str; 2] = ["rgba", "beauty"];
+
+    /// Makes the channels `found` for `names` (by [`FileInfo::find`]) come from one part that
+    /// can be told: where a name found by itself (not as `part.name`) is in several parts of
+    /// a multi-part file (`rgba` and `diffuse` both holding R, G, B), the part named `rgba`
+    /// or `beauty` ([`FileInfo::MAIN_PARTS`]) when exactly one of them holds it, else an
+    /// error naming the parts and how to choose, rather than the first part, silently.
+    pub fn one_part(&self, names: &[String], found: &mut [Option<usize>]) -> Result<(), String> {
+        let FileKind::Exr { headers, .. } = &self.kind else {
+            return Ok(());
+        };
+        let part_name = |part: usize| {
+            headers
+                .get(part)
+                .and_then(|h| h.own_attributes.layer_name.as_ref())
+                .map_or(format!("part {part}"), |n| n.to_string())
+        };
+        for (name, index) in names.iter().zip(found.iter_mut()) {
+            let Some(at) = *index else { continue };
+            if self.channels[at].name != *name {
+                continue;
+            }
+            let mut parts: Vec<usize> = self
+                .channels
+                .iter()
+                .filter(|c| c.name == *name)
+                .map(|c| c.part)
+                .collect();
+            parts.sort_unstable();
+            parts.dedup();
+            if parts.len() < 2 {
+                continue;
+            }
+            let main: Vec<usize> = parts
+                .iter()
+                .copied()
+                .filter(|&p| {
+                    let n = part_name(p).to_ascii_lowercase();
+                    Self::MAIN_PARTS.contains(&n.as_str())
+                })
+                .collect();
+            if let [part] = main[..] {
+                *index = self
+                    .channels
+                    .iter()
+                    .position(|c| c.part == part && c.name == *name);
+                continue;
+            }
+            let listed: Vec<String> = parts.iter().map(|&p| part_name(p)).collect();
+            return Err(format!(
+                "channel {name} is in more than one part ({}) and none is the main one (rgba \
+                 or beauty); say which with a preset that names it as PART.{name} (for \
+                 example {}.{name})",
+                listed.join(", "),
+                listed[0]
+            ));
+        }
+        Ok(())
+    }
+
     pub fn find(&self, name: &str) -> Option<usize> {
         self.channels
             .iter()

@@ -651,7 +651,11 @@ pub(super) fn find_channels(
         }
         match matches.len() {
             0 => continue,
-            1 => return Ok(Some(matches.remove(0).1)),
+            1 => {
+                let (_, mut found) = matches.remove(0);
+                info.one_part(alternative, &mut found)?;
+                return Ok(Some(found));
+            }
             _ => {
                 let names: Vec<String> = matches.into_iter().filter_map(|(l, _)| l).collect();
                 return Err(format!(
