@@ -527,3 +527,48 @@ fn none_and_in_focus_depth_of_field_write_finite_frames_and_count_what_they_repl
         assert_eq!((red[3], red[4], red[5]), (0.0, 1e30, -1e30), "{what}");
     }
 }
+
+/// Valid files of kinds the decoders do not read are "not supported", with what to do, not
+/// "corrupt" with a decoder's text (issue 30): a 12-bit JPEG and an arithmetic-coded one
+/// (a baseline JPEG's frame header changed to say so, as such files carry it), and a TIFF
+/// of 32-bit integers.
+#[test]
+fn unsupported_kinds_of_valid_files_are_told_from_damaged_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let baseline = dir.path().join("baseline.jpg");
+    image::RgbImage::from_pixel(16, 16, image::Rgb([90, 120, 200]))
+        .save(&baseline)
+        .unwrap();
+    let bytes = std::fs::read(&baseline).unwrap();
+    let sof = bytes
+        .windows(2)
+        .position(|w| w == [0xFF, 0xC0])
+        .expect("a baseline frame header");
+    let mut twelve = bytes.clone();
+    (twelve[sof + 1], twelve[sof + 4]) = (0xC1, 12);
+    let mut arithmetic = bytes.clone();
+    arithmetic[sof + 1] = 0xC9;
+    let tiff = dir.path().join("u32.tif");
+    {
+        let file = std::fs::File::create(&tiff).unwrap();
+        let mut encoder = tiff::encoder::TiffEncoder::new(file).unwrap();
+        encoder
+            .write_image::<tiff::encoder::colortype::RGB32>(4, 4, &[7u32; 48])
+            .unwrap();
+    }
+    for (name, bytes, why) in [
+        ("twelve.jpg", Some(twelve), "a 12-bit JPEG"),
+        ("arithmetic.jpg", Some(arithmetic), "an arithmetic-coded JPEG"),
+        ("u32.tif", None, "Unhandled TIFF sample format"),
+    ] {
+        let path = dir.path().join(name);
+        if let Some(bytes) = bytes {
+            std::fs::write(&path, bytes).unwrap();
+        }
+        let problem = FileInfo::probe(&path).unwrap_err();
+        assert_eq!(problem.kind, ProblemKind::Unsupported, "{name}: {problem}");
+        assert!(problem.to_string().contains(why), "{name}: {problem}");
+    }
+    // The file they were made from is read.
+    assert!(FileInfo::probe(&baseline).is_ok());
+}

@@ -364,8 +364,12 @@ impl FileInfo {
             }
             FileKind::Image { .. } => {
                 let (width, height, mut planes) =
-                    image_io::read_planes(&self.path, (self.width, self.height))
-                        .map_err(corrupt)?;
+                    image_io::read_planes(&self.path, (self.width, self.height)).map_err(
+                        |detail| match detail.strip_prefix(image_io::NOT_SUPPORTED) {
+                            Some(what) => Problem::new(ProblemKind::Unsupported, &self.path, what),
+                            None => corrupt(detail),
+                        },
+                    )?;
                 let changed = |what: String| {
                     Problem::new(
                         ProblemKind::Changed,
@@ -498,12 +502,13 @@ fn probe_exr(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
 
 fn probe_image(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
     let header = image_io::probe(path, max_pixels).map_err(|detail| {
-        let kind = if detail.starts_with("not a ") {
-            ProblemKind::Unsupported
-        } else {
-            ProblemKind::Corrupt
-        };
-        Problem::new(kind, path, detail)
+        match detail.strip_prefix(image_io::NOT_SUPPORTED) {
+            Some(what) => Problem::new(ProblemKind::Unsupported, path, what),
+            None if detail.starts_with("not a ") => {
+                Problem::new(ProblemKind::Unsupported, path, detail)
+            }
+            None => Problem::new(ProblemKind::Corrupt, path, detail),
+        }
     })?;
     check_size(path, header.width, header.height, max_pixels)?;
     if header.format == "jpeg" {

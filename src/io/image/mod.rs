@@ -61,6 +61,64 @@ pub fn input_reader(path: &Path) -> Result<ImageReader<std::io::BufReader<std::f
     Ok(reader)
 }
 
+/// What starts the text of an error for a valid file of a kind the decoders do not read
+/// (`crate::io::file` reports it as "not supported", not "corrupt").
+pub const NOT_SUPPORTED: &str = "not supported: ";
+
+/// The image crate's error in words, [`NOT_SUPPORTED`] first where it says the file uses a
+/// feature its decoder lacks (a TIFF of 32-bit integers) rather than that the file is bad.
+fn image_error(e: image::ImageError) -> String {
+    match e {
+        image::ImageError::Unsupported(what) => format!("{NOT_SUPPORTED}{what}"),
+        other => other.to_string(),
+    }
+}
+
+/// Why a JPEG cannot be read though it may be valid, from its frame header: a precision
+/// other than 8 bits (12-bit JPEG), or a coding other than Huffman baseline, extended or
+/// progressive (arithmetic coding, lossless, hierarchical). `None` for a JPEG the decoder
+/// reads, or whose markers end before a frame header (the decoder then says what is wrong).
+pub fn jpeg_unsupported(bytes: &[u8]) -> Option<String> {
+    let mut at = 2;
+    loop {
+        while bytes.get(at) == Some(&0xFF) && bytes.get(at + 1) == Some(&0xFF) {
+            at += 1;
+        }
+        let (Some(&0xFF), Some(&marker)) = (bytes.get(at), bytes.get(at + 1)) else {
+            return None;
+        };
+        at += 2;
+        match marker {
+            0xD9 | 0xDA => return None,
+            0x01 | 0xD0..=0xD7 => continue,
+            _ => {}
+        }
+        let length = u16::from_be_bytes([*bytes.get(at)?, *bytes.get(at + 1)?]) as usize;
+        match marker {
+            0xC0..=0xC2 => {
+                let precision = *bytes.get(at + 2)?;
+                return (precision != 8).then(|| {
+                    format!("a {precision}-bit JPEG (only 8-bit JPEGs are read; convert it to a 16-bit PNG or TIFF)")
+                });
+            }
+            0xC3 => return Some("a lossless JPEG (only lossy 8-bit JPEGs are read)".into()),
+            0xC5..=0xC7 | 0xCD..=0xCF => {
+                return Some(
+                    "a hierarchical JPEG (only sequential and progressive JPEGs are read)".into(),
+                )
+            }
+            0xC9..=0xCB => {
+                return Some(
+                    "an arithmetic-coded JPEG (only Huffman-coded JPEGs are read; re-encode it)"
+                        .into(),
+                )
+            }
+            _ => {}
+        }
+        at += length;
+    }
+}
+
 /// Reads the header only. The decoder is told the pixel limit as a width and a height of
 /// `max_pixels` each (the image crate's limits are per axis); the caller checks the product.
 pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
@@ -78,7 +136,13 @@ pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
         Some(image::ImageFormat::Tiff) => "tiff",
         _ => return Err("not a PNG, JPEG, TIFF or EXR file".into()),
     };
-    let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;
+    if format == "jpeg" {
+        let bytes = crate::io::input::read_input(path).map_err(|e| e.to_string())?;
+        if let Some(why) = jpeg_unsupported(&bytes) {
+            return Err(format!("{NOT_SUPPORTED}{why}"));
+        }
+    }
+    let mut decoder = reader.into_decoder().map_err(image_error)?;
     let (width, height) = upright(decoder.dimensions(), orientation(&mut decoder));
     let color = decoder.color_type();
     let float = matches!(color, ColorType::Rgb32F | ColorType::Rgba32F);
@@ -140,9 +204,9 @@ pub fn read_planes(
             .saturating_add(DECODER_ROOM),
     );
     reader.limits(limits);
-    let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;
+    let mut decoder = reader.into_decoder().map_err(image_error)?;
     let orientation = orientation(&mut decoder);
-    let mut image = DynamicImage::from_decoder(decoder).map_err(|e| e.to_string())?;
+    let mut image = DynamicImage::from_decoder(decoder).map_err(image_error)?;
     image.apply_orientation(orientation);
     let (width, height) = (image.width() as usize, image.height() as usize);
     let count = image.color().channel_count() as usize;
