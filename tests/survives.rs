@@ -882,6 +882,31 @@ fn passes_are_placed_by_their_data_windows() {
         "{}",
         stderr(&run)
     );
+    // A depth of the beauty's size, one pixel to the right (issue 30: it was read as if
+    // aligned): refused the same way.
+    write(
+        "offset.exr",
+        (5, 2),
+        (cw, ch),
+        vec![("Z".into(), vec![5.0; cw * ch])],
+    );
+    let run = shutter(&[
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &s(&dir.path().join("color.exr")),
+        "--depth",
+        &s(&dir.path().join("offset.exr")),
+        "-o",
+        &s(&dir.path().join("out.exr")),
+    ]);
+    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+    assert!(
+        stderr(&run).contains("its data window (5, 2) - (24, 11) does not cover"),
+        "{}",
+        stderr(&run)
+    );
 }
 
 #[test]
