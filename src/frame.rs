@@ -12,6 +12,20 @@
 /// One channel of one pass, row-major, `width * height` samples.
 pub type Plane = Vec<f32>;
 
+/// A plane of `n` zeros, or an error when the system refuses the memory (the allocation is
+/// fallible: no abort).
+pub fn try_plane(n: usize) -> Result<Plane, String> {
+    let mut plane = Plane::new();
+    plane.try_reserve_exact(n).map_err(|e| {
+        format!(
+            "cannot allocate a plane of {n} samples ({} MiB): {e}",
+            (n as u64 * 4).div_ceil(1 << 20)
+        )
+    })?;
+    plane.resize(n, 0.0);
+    Ok(plane)
+}
+
 /// The screen position of the centre of pixel `index` of a row-major image `width` wide.
 pub fn pixel_centre(index: usize, width: usize) -> (f32, f32) {
     ((index % width) as f32 + 0.5, (index / width) as f32 + 0.5)

@@ -17,7 +17,9 @@ use crate::io::lock::OutputLock;
 use crate::io::output::{
     existing_frame_problem, remove_stale_temporaries, write_frame, OutputFormat, OutputOptions,
 };
-use crate::io::passes::{output_folder_problems, preflight, read_frame_noted, Inputs, PlanOptions};
+use crate::io::passes::{
+    output_folder_problems, preflight, read_frame_noted, FramePlan, Inputs, PlanOptions,
+};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::motion::Algorithm;
@@ -43,6 +45,9 @@ pub struct Job {
     pub backend: Backend,
     /// The largest input frame in pixels (setting `max-pixels`).
     pub max_pixels: usize,
+    /// The most memory the run may need, in bytes (setting `max-memory`); `None`:
+    /// [`memory_limit`].
+    pub max_memory: Option<u64>,
     /// Preflight only: report what each frame would do, read no pixels, write nothing.
     pub dry_run: bool,
     /// Warnings found while resolving the job (flags that do not apply), reported by [`run`].
@@ -231,8 +236,41 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         needs: crate::process::needs(job.algorithm, &job.params),
         max_pixels: job.max_pixels,
     };
-    let plans = preflight(&job.inputs, &job.output, &job.frames, &options)
+    let mut plans = preflight(&job.inputs, &job.output, &job.frames, &options)
         .map_err(|e| name_pass(job, e))?;
+    // An EXR output holds every channel of the colour file's part, so they are read too.
+    let every_channel = OutputFormat::from_path(&job.output.path(None)) == Some(OutputFormat::Exr)
+        && !job.output_options.beauty_only;
+    if every_channel {
+        plans.iter_mut().for_each(FramePlan::read_every_channel);
+    }
+    // What the frames need in memory, from their headers, against the limit.
+    let limit = job.max_memory.unwrap_or_else(memory_limit);
+    if let Some(plan) = plans.iter().max_by_key(|p| p.memory_needed()) {
+        let needed = plan.memory_needed();
+        if needed > limit {
+            let mib = |bytes: u64| bytes.div_ceil(1 << 20);
+            return Err(crate::Error::Files(vec![Problem::new(
+                ProblemKind::TooLarge,
+                plan.paths().first().copied().unwrap_or(Path::new("")),
+                format!(
+                    "this frame needs about {} MiB (its passes decode to {} MiB, a picture \
+                     decoder holds {} MiB more), over the {} MiB max-memory allows{}; raise \
+                     --max-memory if the machine has it, or give the job to one that does",
+                    mib(needed),
+                    mib(plan.decoded_bytes()),
+                    mib(plan.decoder_bytes()),
+                    mib(limit),
+                    if job.max_memory.is_none() {
+                        " (by default half the machine's memory, within its limits)"
+                    } else {
+                        ""
+                    }
+                ),
+            )
+            .frame(plan.frame)]));
+        }
+    }
     report.preflight_seconds = preflight_start.elapsed().as_secs_f64();
     if job.dry_run {
         for plan in &plans {
@@ -295,13 +333,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         );
     }
     let mut todo = Vec::with_capacity(plans.len());
-    // An EXR output holds every channel of the colour file's part, so they are read too.
-    let every_channel = OutputFormat::from_path(&job.output.path(None)) == Some(OutputFormat::Exr)
-        && !job.output_options.beauty_only;
-    for mut plan in plans {
-        if every_channel {
-            plan.read_every_channel();
-        }
+    for plan in plans {
         let (frame, path) = (plan.frame, job.output.path(plan.frame));
         match existing_output(job, &plan, &path) {
             Existing::Whole => {
@@ -483,6 +515,39 @@ fn create_parent(path: &Path, frame: Option<i64>) -> std::result::Result<(), Pro
         }
         _ => Ok(()),
     }
+}
+
+/// The memory a run may need when `max-memory` is not given: half the machine's physical
+/// memory, and no more than the process may have (its address-space limit, `ulimit -v`,
+/// less room for code, thread stacks and the allocator's reservations; a cgroup's
+/// `memory.max`, as containers and farm schedulers set it). 8 GiB where none can be read.
+pub fn memory_limit() -> u64 {
+    let mut limit = physical_memory().map_or(8 << 30, |total| total / 2);
+    #[cfg(unix)]
+    if let Ok((soft, _)) = nix::sys::resource::getrlimit(nix::sys::resource::Resource::RLIMIT_AS) {
+        if soft != nix::sys::resource::RLIM_INFINITY {
+            limit = limit.min(soft.saturating_sub(ADDRESS_SPACE_ROOM));
+        }
+    }
+    if let Some(cgroup) = std::fs::read_to_string("/sys/fs/cgroup/memory.max")
+        .ok()
+        .and_then(|t| t.trim().parse::<u64>().ok())
+    {
+        limit = limit.min(cgroup);
+    }
+    limit
+}
+
+/// What the address space holds besides the frames' memory: the program, thread stacks, the
+/// allocator's per-thread arenas (reserved, not used), the GPU driver's mappings.
+const ADDRESS_SPACE_ROOM: u64 = 768 << 20;
+
+/// Physical memory (Linux: /proc/meminfo's MemTotal); `None` elsewhere.
+fn physical_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemTotal:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib << 10)
 }
 
 /// Peak resident set size from /proc (Linux); `None` elsewhere.

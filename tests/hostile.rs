@@ -558,7 +558,11 @@ fn unsupported_kinds_of_valid_files_are_told_from_damaged_ones() {
     }
     for (name, bytes, why) in [
         ("twelve.jpg", Some(twelve), "a 12-bit JPEG"),
-        ("arithmetic.jpg", Some(arithmetic), "an arithmetic-coded JPEG"),
+        (
+            "arithmetic.jpg",
+            Some(arithmetic),
+            "an arithmetic-coded JPEG",
+        ),
         ("u32.tif", None, "Unhandled TIFF sample format"),
     ] {
         let path = dir.path().join(name);
@@ -571,4 +575,139 @@ fn unsupported_kinds_of_valid_files_are_told_from_damaged_ones() {
     }
     // The file they were made from is read.
     assert!(FileInfo::probe(&baseline).is_ok());
+}
+
+/// A zlib stream of `n` zero bytes, written by hand (fixed Huffman codes: a literal 0, then
+/// copies of 258 bytes at distance 1) so a test can make a gigabyte's worth in a few MB.
+fn zlib_of_zeros(n: usize) -> Vec<u8> {
+    struct Bits {
+        out: Vec<u8>,
+        acc: u64,
+        count: u32,
+    }
+    impl Bits {
+        fn put(&mut self, value: u64, bits: u32) {
+            self.acc |= value << self.count;
+            self.count += bits;
+            while self.count >= 8 {
+                self.out.push(self.acc as u8);
+                self.acc >>= 8;
+                self.count -= 8;
+            }
+        }
+        /// A Huffman code, most significant bit first.
+        fn code(&mut self, code: u64, bits: u32) {
+            let reversed = (0..bits).fold(0, |r, i| r | ((code >> i) & 1) << (bits - 1 - i));
+            self.put(reversed, bits);
+        }
+    }
+    let mut bits = Bits {
+        out: vec![0x78, 0x01],
+        acc: 0,
+        count: 0,
+    };
+    bits.put(1, 1); // final block
+    bits.put(1, 2); // fixed Huffman codes
+    bits.code(0x30, 8); // literal 0
+    let mut left = n - 1;
+    while left >= 258 {
+        bits.code(0b1100_0101, 8); // length 258 (code 285)
+        bits.code(0, 5); // distance 1
+        left -= 258;
+    }
+    for _ in 0..left {
+        bits.code(0x30, 8);
+    }
+    bits.code(0, 7); // end of block (code 256)
+    bits.put(0, 7);
+    let mut out = bits.out;
+    let adler = ((n % 65521) as u32) << 16 | 1;
+    out.extend(adler.to_be_bytes());
+    out
+}
+
+/// A PNG whose colour-profile chunk inflates to 1 GB (issue 30): the profile is capped before
+/// it is inflated, so opening it costs what any small PNG does (peak RSS under 200 MB, of
+/// which the program is most; it was 530 MB), and the picture is read.
+#[test]
+fn a_profile_that_inflates_to_a_gigabyte_is_not_inflated() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bomb.png");
+    {
+        let file = std::fs::File::create(&path).unwrap();
+        let mut encoder = png::Encoder::new(file, 8, 8);
+        encoder.set_color(png::ColorType::Rgb);
+        let mut writer = encoder.write_header().unwrap();
+        let mut iccp = b"bomb\0\0".to_vec();
+        iccp.extend(zlib_of_zeros(1 << 30));
+        writer
+            .write_chunk(png::chunk::ChunkType(*b"iCCP"), &iccp)
+            .unwrap();
+        writer.write_image_data(&[128u8; 8 * 8 * 3]).unwrap();
+    }
+    let out = dir.path().join("out.png");
+    let o = shutter(&["blur", "--color", &s(&path), "-o", &s(&out), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    if let Some(peak) = report["peak_rss_mib"].as_f64() {
+        assert!(peak < 200.0, "peak RSS {peak} MiB");
+    }
+}
+
+/// A 550 KB PNG declaring 12000×12000 (within the pixel limit) needs gigabytes decoded
+/// (issue 30): under a 2 GB address-space cap the run is refused in the preflight with exit 1
+/// and the figures, nothing left behind; before, the allocation failed mid-run and the
+/// process aborted, leaving its temporary file and lock.
+#[cfg(unix)]
+#[test]
+fn a_frame_that_would_not_fit_is_refused_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("big.png");
+    {
+        let file = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
+        let mut encoder = png::Encoder::new(file, 12000, 12000);
+        encoder.set_color(png::ColorType::Rgba);
+        encoder.set_compression(png::Compression::Fast);
+        let mut writer = encoder.write_header().unwrap();
+        let mut stream = writer.stream_writer().unwrap();
+        let row = vec![0u8; 12000 * 4];
+        for _ in 0..12000 {
+            std::io::Write::write_all(&mut stream, &row).unwrap();
+        }
+        stream.finish().unwrap();
+    }
+    let out_dir = dir.path().join("out");
+    let bin = env!("CARGO_BIN_EXE_shutter");
+    let script = format!(
+        "ulimit -v 2000000; exec '{bin}' blur --color '{}' -o '{}/o.png'",
+        path.display(),
+        out_dir.display()
+    );
+    let o = std::process::Command::new("sh")
+        .args(["-c", &script])
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("too large") && err.contains("max-memory allows"),
+        "{err}"
+    );
+    assert!(!out_dir.exists(), "the output folder was made");
+    // Given the memory, the same limit written out refuses it too, whatever the machine.
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &s(&path),
+        "-o",
+        &s(&out_dir.join("o.png")),
+        "--max-memory",
+        "1024",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("over the 1024 MiB max-memory allows"),
+        "{}",
+        stderr(&o)
+    );
 }

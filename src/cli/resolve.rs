@@ -166,6 +166,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
     record.extend(settings::flags(&settings::Settings {
         backend: defaults.backend,
         max_pixels: defaults.max_pixels,
+        max_memory: defaults.max_memory,
         ..settings.clone()
     }));
     let output_options = OutputOptions {
@@ -191,6 +192,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         dry_run: args.dry_run,
         backend: settings.backend,
         max_pixels: settings.max_pixels,
+        max_memory: settings.max_memory.map(|mib| mib << 20),
         warnings,
     })
 }

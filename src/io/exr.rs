@@ -426,7 +426,15 @@ pub fn read_channels_checked(
         }
     }
 
-    let mut planes: Vec<Plane> = wanted.iter().map(|_| vec![0.0; width * height]).collect();
+    // Allocated fallibly: memory refused by the system is an error that ends the run cleanly
+    // (temporary files removed, the lock released), not an abort.
+    let mut planes: Vec<Plane> = wanted
+        .iter()
+        .map(|_| crate::frame::try_plane(width * height))
+        .collect::<Result<_, String>>()
+        .map_err(|e| {
+            exr::error::Error::Io(std::io::Error::new(std::io::ErrorKind::OutOfMemory, e))
+        })?;
     if wanted.is_empty() || width == 0 || height == 0 {
         return Ok(ReadChannels {
             width,

@@ -122,6 +122,24 @@ pub const DEFS: &[Def] = &[
         set: |s, v| s.max_pixels = v.number() as usize,
     },
     Def {
+        name: "max-memory",
+        flag: None,
+        section: Section::Blur,
+        applies: &[],
+        value_name: "MIB",
+        help: "the most memory a run may need, in MiB, estimated from every input's header \
+               before anything is decoded (a frame's decoded passes, four times over for the \
+               frames in flight and the passes' buffers, and a decoder's own); a run over it \
+               stops in the preflight, naming the frame",
+        kind: whole(64.0, 1_073_741_824.0),
+        unset: "half the machine's memory, within the process's address-space and cgroup limits",
+        get: |s| {
+            s.max_memory
+                .map_or(Value::Unset, |m| Value::Number(m as f64))
+        },
+        set: |s, v| s.max_memory = Some(v.number() as u64),
+    },
+    Def {
         name: "shutter",
         flag: None,
         section: Section::Blur,

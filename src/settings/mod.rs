@@ -114,6 +114,9 @@ pub struct Settings {
     pub backend: Backend,
     /// The largest input frame, in pixels, checked from each file's header.
     pub max_pixels: usize,
+    /// The most memory a run may need, in MiB (`None`: [`crate::pipeline::memory_limit`]'s
+    /// share of the machine), checked from the headers before anything is decoded.
+    pub max_memory: Option<u64>,
 }
 
 /// The lens as settings: the three that turn depth of field on have no default.
@@ -143,6 +146,7 @@ impl Default for Settings {
             output: OutputOptions::default(),
             backend: Backend::default(),
             max_pixels: crate::io::file::DEFAULT_MAX_PIXELS,
+            max_memory: None,
         }
     }
 }

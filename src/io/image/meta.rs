@@ -21,9 +21,14 @@ use crate::frame::Photo;
 /// Reads the profile and metadata of an 8/16-bit image, without decoding its pixels, and sets
 /// the orientation its EXIF and XMP record to 1 (upright, as `read_planes` delivers it).
 pub fn read_photo(path: &Path) -> Result<Photo, String> {
-    let reader = crate::io::image::input_reader(path)?
+    let mut reader = crate::io::image::input_reader(path)?
         .with_guessed_format()
         .map_err(|e| e.to_string())?;
+    // The profile and metadata chunks inflated, and nothing else: capped as the probe caps
+    // them.
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(crate::io::image::HEADER_ROOM);
+    reader.limits(limits);
     let jpeg = reader.format() == Some(image::ImageFormat::Jpeg);
     let tiff = reader.format() == Some(image::ImageFormat::Tiff);
     let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;

@@ -129,6 +129,9 @@ pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
     let side = u32::try_from(max_pixels).unwrap_or(u32::MAX);
     limits.max_image_width = Some(side);
     limits.max_image_height = Some(side);
+    // Reading a header allocates only what its ancillary chunks inflate to (a profile, text):
+    // capped, so a chunk that inflates to gigabytes is refused, not decompressed.
+    limits.max_alloc = Some(HEADER_ROOM);
     reader.limits(limits);
     let format = match reader.format() {
         Some(image::ImageFormat::Png) => "png",
@@ -173,6 +176,10 @@ fn upright((width, height): (u32, u32), orientation: image::metadata::Orientatio
         _ => (width, height),
     }
 }
+
+/// What reading a picture's header may allocate: its ICC profile, EXIF, XMP and text chunks
+/// inflated (a profile is rarely over 1 MiB; the largest in use are a few MiB).
+pub const HEADER_ROOM: u64 = 32 << 20;
 
 /// Room the decoders get for their own buffers beyond the decoded image.
 const DECODER_ROOM: u64 = 64 << 20;

@@ -19,10 +19,12 @@
 //! - [`read`]: the decode, colour and depth conversions;
 //! - [`convert`]: motion from any of the preset's motion sections to the pass needed;
 //! - [`suggest`]: the preset a file most likely needs, and why (`shutter info`);
+//! - [`memory`]: what a frame costs in memory, from its plan;
 //! - [`validity`]: vectors marked invalid (by the vector file's alpha) take the motion of
 //!   the nearest valid one.
 
 mod convert;
+mod memory;
 mod plan;
 mod preflight;
 mod read;

@@ -1,0 +1,70 @@
+//! What a frame costs in memory, from its plan (the headers alone), so that a run that would
+//! not fit is refused in the preflight instead of failing, or aborting, part-way (issue 30:
+//! a 446 KB PNG declaring 12000×12000 needed 3.8 GB).
+//!
+//! The estimate is an upper bound measured against peak RSS (BENCHMARKS.md, "Memory"): a
+//! frame's decoded planes (every channel read, four bytes a sample) four times over (the
+//! frame being read, the one being processed with its buffers, the one being written: a
+//! 1080p reconstruct peaks at 3.1× its planes, 2.2× with six light layers, scatter at 1.7×),
+//! plus what a picture's decoder holds besides (its own buffer, and a copy when it turns the
+//! picture upright), plus a fixed base for the program itself.
+
+use super::plan::FramePlan;
+use crate::io::file::FileKind;
+
+/// The program's own memory besides the frames' (code, threads, the GPU context's host
+/// side).
+pub const BASE: u64 = 96 << 20;
+
+/// How many times its decoded planes a frame may hold at once, across the pipeline's stages.
+pub const PLANES_FACTOR: u64 = 4;
+
+impl FramePlan {
+    /// The decoded planes' bytes: every channel read, as f32.
+    pub fn decoded_bytes(&self) -> u64 {
+        self.files
+            .iter()
+            .map(|f| f.channels.len() as u64 * pixels(f.info.width, f.info.height) * 4)
+            .sum()
+    }
+
+    /// The most a picture decoder holds besides the planes: its decoded buffer and the copy
+    /// an orientation makes (0 for EXR, decoded straight into the planes).
+    pub fn decoder_bytes(&self) -> u64 {
+        self.files
+            .iter()
+            .map(|f| match f.info.kind {
+                FileKind::Image { bits, float, .. } => {
+                    let sample = if float {
+                        4
+                    } else {
+                        u64::from(bits.div_ceil(8))
+                    };
+                    let stored = f
+                        .info
+                        .channels
+                        .iter()
+                        .map(|c| c.index + 1)
+                        .max()
+                        .unwrap_or(1);
+                    2 * pixels(f.info.width, f.info.height) * stored as u64 * sample
+                }
+                FileKind::Exr { .. } => 0,
+            })
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// The memory a run over frames like this one needs at most: [`PLANES_FACTOR`] times the
+    /// decoded planes, the decoder's own, and [`BASE`].
+    pub fn memory_needed(&self) -> u64 {
+        PLANES_FACTOR
+            .saturating_mul(self.decoded_bytes())
+            .saturating_add(self.decoder_bytes())
+            .saturating_add(BASE)
+    }
+}
+
+fn pixels(width: usize, height: usize) -> u64 {
+    (width as u64).saturating_mul(height as u64)
+}
