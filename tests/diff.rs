@@ -191,3 +191,94 @@ fn sizes_are_compared_before_anything_is_decoded() {
         "{err}"
     );
 }
+
+/// Two 40×30 RGB images: a copy of `pair`'s noise, and the same with `edit` applied to its
+/// planes (R, G, B).
+fn edited(dir: &std::path::Path, edit: impl Fn(&mut [Vec<f32>; 3])) -> (String, String) {
+    let (w, h) = (40, 30);
+    let planes = || {
+        [
+            noise(w * h, 1, 0.0, 1.0),
+            noise(w * h, 2, 0.0, 1.0),
+            noise(w * h, 3, 0.0, 1.0),
+        ]
+    };
+    let write = |name: &str, [r, g, b]: [Vec<f32>; 3]| {
+        let path = dir.join(name);
+        write_exr(&path, w, h, vec![("R", r), ("G", g), ("B", b)]);
+        s(&path)
+    };
+    let mut changed = planes();
+    edit(&mut changed);
+    (
+        write("golden.exr", planes()),
+        write("candidate.exr", changed),
+    )
+}
+
+/// A NaN in the candidate fails the gate (issue 31): it was counted, shown, then treated as
+/// 0, so `--fail 0.01` passed it; `--allow-nonfinite` lets it through.
+#[test]
+fn a_nan_fails_the_gate_unless_allowed() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = edited(dir.path(), |p| p[1][17] = f32::NAN);
+    let o = shutter(&["diff", &a, &b, "--fail", "0.01"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("1 non-finite samples"),
+        "{}",
+        stderr(&o)
+    );
+    // No gate asked for: a NaN still fails.
+    let o = shutter(&["diff", &a, &b]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let o = shutter(&["diff", &a, &b, "--fail", "0.01", "--allow-nonfinite"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+/// A 10×10 block brightened by 0.5 (issue 31): the whole-frame RMSE (0.144 on this 40×30
+/// frame; 0.0095 on the probe's larger one) can stay under a gate set for noise, but 100
+/// pixels are over a per-pixel threshold; the largest difference is reported where it is.
+#[test]
+fn a_small_bright_block_fails_a_per_pixel_gate() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = edited(dir.path(), |p| {
+        for y in 5..15 {
+            for x in 20..30 {
+                for plane in p.iter_mut() {
+                    plane[y * 40 + x] += 0.5;
+                }
+            }
+        }
+    });
+    let o = shutter(&["diff", &a, &b, "--fail", "0.2"]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "the aggregate gate: {}",
+        stderr(&o)
+    );
+    let o = shutter(&["diff", &a, &b, "--fail", "0.2", "--fail-pixel", "0.1"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("100 pixels differ by more than --fail-pixel 0.1 (allowed: 0)"),
+        "{}",
+        stderr(&o)
+    );
+    let text = stdout(&o);
+    assert!(text.contains("largest difference 0.5"), "{text}");
+    let at = text.split("largest difference").nth(1).unwrap();
+    let (x, y): (usize, usize) = {
+        let inside = &at[at.find('(').unwrap() + 1..at.find(')').unwrap()];
+        let mut parts = inside.split(", ").map(|v| v.parse().unwrap());
+        (parts.next().unwrap(), parts.next().unwrap())
+    };
+    assert!((20..30).contains(&x) && (5..15).contains(&y), "{text}");
+    // Allowed by count, or by share (100 of 1,200 pixels is 8.3 %).
+    for allow in [["--allow-pixels", "100"], ["--fail-percent", "8.4"]] {
+        let mut args = vec!["diff", &a, &b, "--fail-pixel", "0.1"];
+        args.extend(allow);
+        let o = shutter(&args);
+        assert_eq!(o.status.code(), Some(0), "{allow:?}: {}", stderr(&o));
+    }
+}

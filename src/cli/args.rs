@@ -325,6 +325,27 @@ pub struct DiffArgs {
     #[arg(long, value_name = "Y")]
     pub fail: Option<f64>,
 
+    /// Fail a pixel whose largest channel difference is over T (absolute); the frame fails
+    /// when more pixels fail than --allow-pixels / --fail-percent allow (none by default).
+    #[arg(long, value_name = "T")]
+    pub fail_pixel: Option<f64>,
+
+    /// Warn about pixels whose largest channel difference is over T.
+    #[arg(long, value_name = "T")]
+    pub warn_pixel: Option<f64>,
+
+    /// How many pixels may fail --fail-pixel in a frame.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub allow_pixels: usize,
+
+    /// What share of a frame's pixels (percent) may fail --fail-pixel.
+    #[arg(long, value_name = "P", default_value_t = 0.0)]
+    pub fail_percent: f64,
+
+    /// Let NaN and infinite values through (by default any in either image fails the frame).
+    #[arg(long)]
+    pub allow_nonfinite: bool,
+
     /// Write the per-pixel error of the metric as a PNG (a pattern for sequences).
     #[arg(long, value_name = "OUT.png")]
     pub heatmap: Option<String>,

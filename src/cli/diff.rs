@@ -59,10 +59,18 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
             args.metric
         ))
     })?;
-    for (flag, value) in [("--warn", args.warn), ("--fail", args.fail)] {
+    for (flag, value) in [
+        ("--warn", args.warn),
+        ("--fail", args.fail),
+        ("--fail-pixel", args.fail_pixel),
+        ("--warn-pixel", args.warn_pixel),
+    ] {
         if value.is_some_and(|v| !v.is_finite()) {
             return Err(Error::usage(format!("{flag} must be a finite number")));
         }
+    }
+    if !(0.0..=100.0).contains(&args.fail_percent) {
+        return Err(Error::usage("--fail-percent must be between 0 and 100"));
     }
     let a = PathPattern::parse(&args.a)?;
     let b = PathPattern::parse(&args.b)?;
@@ -93,6 +101,11 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
         heatmap,
         preset: Preset::load(&args.preset)?,
         linear: args.linear,
+        fail_pixel: args.fail_pixel,
+        warn_pixel: args.warn_pixel,
+        allow_pixels: args.allow_pixels,
+        fail_percent: args.fail_percent,
+        allow_nonfinite: args.allow_nonfinite,
     };
     let report = crate::lab::diff::run(&job)?;
     if args.json {
@@ -102,6 +115,13 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
         for f in &report.frames {
             let label = f.frame.map_or(String::new(), |n| format!("frame {n}: "));
             text += &format!("{label}{}\n", format_scores(&f.whole));
+            let m = &f.largest;
+            if m.error > 0.0 {
+                text += &format!(
+                    "{label}largest difference {:.6} at ({}, {}) {}: {} against {}\n",
+                    m.error, m.x, m.y, m.channel, m.a, m.b
+                );
+            }
             if let Some(region) = &f.region {
                 text += &format!("{label}changed region: {}\n", format_scores(region));
             }
@@ -120,12 +140,17 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
         eprintln!("shutter: warning: {warning}");
     }
     if report.failed {
-        let failed = report.frames.iter().filter(|f| f.failed).count();
+        let failed: Vec<&crate::lab::diff::FrameDiff> =
+            report.frames.iter().filter(|f| f.failed).collect();
+        let first = failed[0];
+        let at = first
+            .frame
+            .map_or(String::new(), |n| format!(" (first: frame {n})"));
         eprintln!(
-            "shutter: FAIL: {failed} of {} frames have {} worse than --fail {}",
+            "shutter: FAIL: {} of {} frames fail{at}: {}",
+            failed.len(),
             report.frames.len(),
-            report.metric,
-            args.fail.unwrap_or_default()
+            first.why.as_deref().unwrap_or("")
         );
         return Ok(1);
     }

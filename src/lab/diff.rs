@@ -11,7 +11,7 @@ use crate::error::{Error, Problem, ProblemKind, Result};
 use crate::io::passes::{plan_color, read_frame, FramePlan};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
-use crate::lab::metrics::{self, Metric, Rgb, Scores};
+use crate::lab::metrics::{self, Largest, Metric, Rgb, Scores};
 
 /// A diff job.
 #[derive(Clone, Debug)]
@@ -27,6 +27,48 @@ pub struct DiffJob {
     pub heatmap: Option<PathPattern>,
     pub preset: Preset,
     pub linear: bool,
+    /// Per-pixel gates: a pixel whose largest channel difference is over `fail_pixel` fails,
+    /// and a frame with more failing pixels than `allowed_pixels` allows fails.
+    pub fail_pixel: Option<f64>,
+    pub warn_pixel: Option<f64>,
+    /// How many pixels may fail `fail_pixel`: a count, or a share of the frame (the larger).
+    pub allow_pixels: usize,
+    pub fail_percent: f64,
+    /// Non-finite values (NaN, ±∞) in either image do not fail the frame.
+    pub allow_nonfinite: bool,
+}
+
+/// Why a frame fails, in words, or `None`.
+fn failure(job: &DiffJob, whole: &Scores, value: f64, over_fail: usize) -> Option<String> {
+    if whole.non_finite > 0 && !job.allow_nonfinite {
+        return Some(format!(
+            "{} non-finite samples (NaN or infinite; --allow-nonfinite lets them through)",
+            whole.non_finite
+        ));
+    }
+    if let Some(limit) = job.fail {
+        if job.metric.exceeds(value, limit) {
+            return Some(format!(
+                "{} {value:.6} worse than --fail {limit}",
+                job.metric.name()
+            ));
+        }
+    }
+    if let Some(threshold) = job.fail_pixel {
+        let allowed = allowed_pixels(job, whole.pixels);
+        if over_fail > allowed {
+            return Some(format!(
+                "{over_fail} pixels differ by more than --fail-pixel {threshold} (allowed: {allowed})"
+            ));
+        }
+    }
+    None
+}
+
+/// How many pixels of `pixels` may fail the per-pixel gate.
+fn allowed_pixels(job: &DiffJob, pixels: usize) -> usize {
+    job.allow_pixels
+        .max((job.fail_percent / 100.0 * pixels as f64).floor() as usize)
 }
 
 /// Scores of one frame.
@@ -40,8 +82,15 @@ pub struct FrameDiff {
     pub region: Option<Scores>,
     /// The gating metric's value for this frame.
     pub value: f64,
+    /// The largest difference of one channel (finite samples), where and what.
+    pub largest: Largest,
+    /// Pixels whose largest channel difference is over `--fail-pixel` and `--warn-pixel`.
+    pub pixels_over_fail: usize,
+    pub pixels_over_warn: usize,
     pub warned: bool,
     pub failed: bool,
+    /// Why it failed, in words.
+    pub why: Option<String>,
 }
 
 /// The outcome of a diff.
@@ -172,6 +221,12 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
                     .map_err(|e| e.problems()[0].clone())?;
             }
             let value = job.metric.of(&whole);
+            let (errors, largest) = metrics::pixel_errors(&ra, &rb);
+            let over = |threshold: Option<f64>| {
+                threshold.map_or(0, |t| errors.iter().filter(|&&e| e as f64 > t).count())
+            };
+            let (pixels_over_fail, pixels_over_warn) = (over(job.fail_pixel), over(job.warn_pixel));
+            let why = failure(job, &whole, value, pixels_over_fail);
             Ok(FrameDiff {
                 frame,
                 a: job.a.path(frame),
@@ -179,8 +234,13 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
                 whole,
                 region,
                 value,
-                warned: job.warn.is_some_and(|w| job.metric.exceeds(value, w)),
-                failed: job.fail.is_some_and(|f| job.metric.exceeds(value, f)),
+                largest,
+                pixels_over_fail,
+                pixels_over_warn,
+                warned: job.warn.is_some_and(|w| job.metric.exceeds(value, w))
+                    || pixels_over_warn > 0,
+                failed: why.is_some(),
+                why,
             })
         })
         .collect();
@@ -210,11 +270,18 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
     let mut warnings = Vec::new();
     for f in &frames {
         let label = f.frame.map_or(String::new(), |n| format!("frame {n}: "));
-        if f.warned {
+        if job.warn.is_some_and(|w| job.metric.exceeds(f.value, w)) {
             warnings.push(format!(
                 "{label}{name} {:.6} crosses --warn {}",
                 f.value,
                 job.warn.unwrap_or_default()
+            ));
+        }
+        if f.pixels_over_warn > 0 {
+            warnings.push(format!(
+                "{label}{} pixels differ by more than --warn-pixel {}",
+                f.pixels_over_warn,
+                job.warn_pixel.unwrap_or_default()
             ));
         }
     }

@@ -140,6 +140,48 @@ pub fn squared_error_map(a: &Rgb, b: &Rgb) -> (Vec<f64>, usize) {
     (map, bad)
 }
 
+/// The largest difference in one channel between two images, where it is and both values.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Largest {
+    pub error: f64,
+    pub x: usize,
+    pub y: usize,
+    pub channel: &'static str,
+    /// The reference's value there, and the tested image's.
+    pub a: f64,
+    pub b: f64,
+}
+
+/// Per pixel, the largest absolute difference of its channels (+∞ where either image holds a
+/// non-finite value), and the largest finite one over the image with where it is.
+pub fn pixel_errors(a: &Rgb, b: &Rgb) -> (Vec<f32>, Largest) {
+    let n = a.width * a.height;
+    let mut map = vec![0.0f32; n];
+    let mut largest = Largest::default();
+    for (c, channel) in ["R", "G", "B"].into_iter().enumerate() {
+        for (i, m) in map.iter_mut().enumerate() {
+            let (x, y) = (a.planes[c][i], b.planes[c][i]);
+            if !x.is_finite() || !y.is_finite() {
+                *m = f32::INFINITY;
+                continue;
+            }
+            let d = (x as f64 - y as f64).abs();
+            *m = m.max(d as f32);
+            if d > largest.error {
+                largest = Largest {
+                    error: d,
+                    x: i % a.width.max(1),
+                    y: i / a.width.max(1),
+                    channel,
+                    a: x as f64,
+                    b: y as f64,
+                };
+            }
+        }
+    }
+    (map, largest)
+}
+
 /// RMSE over the three channels of the pixels in `mask` (all when `None`).
 pub fn rmse(a: &Rgb, b: &Rgb, mask: Option<&[bool]>) -> f64 {
     rmse_of_map(&squared_error_map(a, b).0, mask)
