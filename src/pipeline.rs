@@ -246,8 +246,9 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     }
     // What the frames need in memory, from their headers, against the limit.
     let limit = job.max_memory.unwrap_or_else(memory_limit);
-    if let Some(plan) = plans.iter().max_by_key(|p| p.memory_needed()) {
-        let needed = plan.memory_needed();
+    let gpu = job.backend != Backend::Cpu;
+    if let Some(plan) = plans.iter().max_by_key(|p| p.memory_needed(gpu)) {
+        let needed = plan.memory_needed(gpu);
         if needed > limit {
             let mib = |bytes: u64| bytes.div_ceil(1 << 20);
             return Err(crate::Error::Files(vec![Problem::new(

@@ -711,3 +711,34 @@ fn a_frame_that_would_not_fit_is_refused_before_anything_is_written() {
         stderr(&o)
     );
 }
+
+/// A backend that may run on a GPU needs more memory on the host (the driver's side, and
+/// with a software driver its device memory and shader compiler: lavapipe's 1080p runs peak
+/// at 3–4 times the CPU's): the same small frame fits 200 MiB on the CPU, and is refused
+/// there with `--backend wgpu`, in the preflight, before any GPU is looked for.
+#[cfg(feature = "gpu")]
+#[test]
+fn a_gpu_backend_is_counted_in_the_memory_a_run_needs() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 8, 8);
+    let color = s(&dir.path().join("C.exr"));
+    let out = s(&dir.path().join("o.exr"));
+    let run = |backend: &str| {
+        shutter(&[
+            "blur",
+            "--color",
+            &color,
+            "-o",
+            &out,
+            "--max-memory",
+            "200",
+            "--backend",
+            backend,
+        ])
+    };
+    let o = run("cpu");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = run("wgpu");
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("max-memory allows"), "{}", stderr(&o));
+}
