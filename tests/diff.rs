@@ -173,16 +173,7 @@ fn sizes_are_compared_before_anything_is_decoded() {
     let (a, b) = (dir.path().join("a.png"), dir.path().join("b.png"));
     image::GrayImage::new(8192, 8192).save(&a).unwrap();
     image::GrayImage::new(8192, 8000).save(&b).unwrap();
-    let bin = env!("CARGO_BIN_EXE_shutter");
-    let script = format!(
-        "ulimit -v 1000000; exec '{bin}' diff '{}' '{}'",
-        a.display(),
-        b.display()
-    );
-    let o = std::process::Command::new("sh")
-        .args(["-c", &script])
-        .output()
-        .unwrap();
+    let o = shutter_capped(1_000_000, &["diff", &s(&a), &s(&b)]);
     let err = stderr(&o);
     // diff's exit for inputs it cannot compare (README, exit codes).
     assert_eq!(o.status.code(), Some(2), "{err}");

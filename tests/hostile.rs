@@ -677,16 +677,8 @@ fn a_frame_that_would_not_fit_is_refused_before_anything_is_written() {
         stream.finish().unwrap();
     }
     let out_dir = dir.path().join("out");
-    let bin = env!("CARGO_BIN_EXE_shutter");
-    let script = format!(
-        "ulimit -v 2000000; exec '{bin}' blur --color '{}' -o '{}/o.png'",
-        path.display(),
-        out_dir.display()
-    );
-    let o = std::process::Command::new("sh")
-        .args(["-c", &script])
-        .output()
-        .unwrap();
+    let out = format!("{}/o.png", out_dir.display());
+    let o = shutter_capped(2_000_000, &["blur", "--color", &s(&path), "-o", &out]);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(

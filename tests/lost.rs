@@ -464,6 +464,35 @@ fn a_deleted_lock_file_stops_the_job_that_lost_it() {
     }
 }
 
+/// A reconstruct run over 12 frames of 320×240 written into `dir` (colour, depth and
+/// velocity files), on one thread, once it is writing its first frame; and its output folder.
+fn reconstruct_under_way(dir: &Path) -> (Child, PathBuf) {
+    let color = sequence(dir, 12, 320, 240);
+    let out_dir = dir.join("out");
+    let out = format!("{}/o.####.exr", out_dir.display());
+    let (depth, velocity) = (role_pattern(dir, "Z"), role_pattern(dir, "V"));
+    let mut child = spawn(&[
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &color,
+        "--depth",
+        &depth,
+        "--velocity",
+        &velocity,
+        "-o",
+        &out,
+        "--threads",
+        "1",
+    ]);
+    assert!(
+        wait_for_name(&mut child, &out_dir, |n| n.ends_with(".tmp")),
+        "the run ended before it wrote a frame"
+    );
+    (child, out_dir)
+}
+
 /// A pass replaced after the preflight, before its frame is read (issue 30): a depth file of
 /// the same size without its `Z` channel. Its headers are checked again through the file it
 /// is decoded from: the run stops at that frame, naming the file, the frame and the channel,
@@ -473,29 +502,7 @@ fn a_deleted_lock_file_stops_the_job_that_lost_it() {
 fn an_input_replaced_after_the_preflight_stops_the_run_at_its_frame() {
     for (role, replacement) in [("Z", "depth"), ("C", "colour")] {
         let dir = tempfile::tempdir().unwrap();
-        let color = sequence(dir.path(), 12, 320, 240);
-        let out_dir = dir.path().join("out");
-        let out = format!("{}/o.####.exr", out_dir.display());
-        let (depth, velocity) = (role_pattern(dir.path(), "Z"), role_pattern(dir.path(), "V"));
-        let mut child = spawn(&[
-            "blur",
-            "--algorithm",
-            "reconstruct",
-            "--color",
-            &color,
-            "--depth",
-            &depth,
-            "--velocity",
-            &velocity,
-            "-o",
-            &out,
-            "--threads",
-            "1",
-        ]);
-        assert!(
-            wait_for_name(&mut child, &out_dir, |n| n.ends_with(".tmp")),
-            "the run ended before it wrote a frame"
-        );
+        let (child, out_dir) = reconstruct_under_way(dir.path());
         // Same size, same kind of file, but no channel the pass reads.
         let swapped = dir.path().join(format!("{role}.0010.exr"));
         let staged = dir.path().join("staged.exr");
@@ -585,29 +592,7 @@ fn pipes_and_devices_are_refused_not_waited_on() {
 #[test]
 fn a_pipe_put_in_an_input_s_place_mid_run_stops_the_run() {
     let dir = tempfile::tempdir().unwrap();
-    let color = sequence(dir.path(), 12, 320, 240);
-    let out_dir = dir.path().join("out");
-    let out = format!("{}/o.####.exr", out_dir.display());
-    let (depth, velocity) = (role_pattern(dir.path(), "Z"), role_pattern(dir.path(), "V"));
-    let mut child = spawn(&[
-        "blur",
-        "--algorithm",
-        "reconstruct",
-        "--color",
-        &color,
-        "--depth",
-        &depth,
-        "--velocity",
-        &velocity,
-        "-o",
-        &out,
-        "--threads",
-        "1",
-    ]);
-    assert!(
-        wait_for_name(&mut child, &out_dir, |n| n.ends_with(".tmp")),
-        "the run ended before it wrote a frame"
-    );
+    let (child, out_dir) = reconstruct_under_way(dir.path());
     let swapped = dir.path().join("Z.0010.exr");
     std::fs::remove_file(&swapped).unwrap();
     mkfifo(&swapped);

@@ -166,6 +166,25 @@ pub fn shutter(args: &[&str]) -> Output {
         .expect("run shutter")
 }
 
+/// Runs the shutter binary with `args` under an address-space cap of `kib` KiB (`ulimit -v`,
+/// through `sh`): what a machine with that little memory, or a farm's limit, allows.
+#[cfg(unix)]
+pub fn shutter_capped(kib: u64, args: &[&str]) -> Output {
+    let quoted: Vec<String> = args
+        .iter()
+        .map(|a| format!("'{}'", a.replace('\'', "'\\''")))
+        .collect();
+    let script = format!(
+        "ulimit -v {kib}; exec '{}' {}",
+        env!("CARGO_BIN_EXE_shutter"),
+        quoted.join(" ")
+    );
+    Command::new("sh")
+        .args(["-c", &script])
+        .output()
+        .expect("run sh")
+}
+
 pub fn stderr(output: &Output) -> String {
     String::from_utf8_lossy(&output.stderr).into_owned()
 }
