@@ -775,3 +775,43 @@ fn a_sequence_warns_once_about_derived_motion() {
         stderr(&o)
     );
 }
+
+/// A sequence on disk with a frame missing is warned about (issue 31: it was skipped without
+/// a word); a pattern that matches nothing is bad input, exit 1 (it was a usage error, 2);
+/// Houdini's `$F4` and `@@@@` name the frames as `####` does.
+#[test]
+fn holes_unmatched_patterns_and_houdini_tokens() {
+    let dir = tempfile::tempdir().unwrap();
+    for frame in [1, 2, 4] {
+        write_canonical_frame(dir.path(), Some(frame), 4, 4);
+    }
+    let color = format!("{}/C.####.exr", dir.path().display());
+    let out = format!("{}/out/o.####.exr", dir.path().display());
+    let o = shutter(&["blur", "--color", &color, "-o", &out, "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let warnings = report["warnings"].to_string();
+    assert!(
+        warnings.contains("has no frame 3: 1 frame is missing between 1 and 4"),
+        "{warnings}"
+    );
+    let nothing = format!("{}/nothing.####.exr", dir.path().display());
+    let o = shutter(&["blur", "--color", &nothing, "-o", &out]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("no files match the pattern"),
+        "{}",
+        stderr(&o)
+    );
+    for (input, output) in [("C.$F4.exr", "h/o.$F4.exr"), ("C.@@@@.exr", "a/o.@@@@.exr")] {
+        let input = format!("{}/{input}", dir.path().display());
+        let output = format!("{}/{output}", dir.path().display());
+        let o = shutter(&["blur", "--color", &input, "-o", &output, "--frames", "1,2"]);
+        assert!(o.status.success(), "{input}: {}", stderr(&o));
+        let folder = std::path::Path::new(&output)
+            .parent()
+            .unwrap()
+            .to_path_buf();
+        assert!(folder.join("o.0001.exr").exists() && folder.join("o.0002.exr").exists());
+    }
+}

@@ -134,10 +134,28 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
                 .expect("is_sequence");
             let found = source.discover()?;
             if found.is_empty() {
-                return Err(Error::usage(format!(
-                    "no files match '{}'; check the pattern or pass --frames",
-                    source.raw
-                )));
+                // Bad input (exit 1), not a bad command: the files are not there.
+                return Err(Error::Files(vec![crate::error::Problem::new(
+                    crate::error::ProblemKind::MissingFile,
+                    std::path::Path::new(&source.raw),
+                    "no files match the pattern; check it, or pass --frames",
+                )]));
+            }
+            // Holes in a sequence found on disk: a render that left frames out.
+            let holes = crate::io::sequence::holes(&found);
+            if !holes.is_empty() {
+                warnings.push(format!(
+                    "'{}' has no frame{} {}: {} frame{} missing between {} and {} (they are \
+                     not written; --frames names every frame wanted and makes a missing one \
+                     an error)",
+                    source.raw,
+                    if holes.len() == 1 { "" } else { "s" },
+                    crate::io::sequence::format_frames(&holes),
+                    holes.len(),
+                    if holes.len() == 1 { " is" } else { "s are" },
+                    found[0],
+                    found[found.len() - 1]
+                ));
             }
             found.into_iter().map(Some).collect()
         }

@@ -21,12 +21,20 @@ pub struct PathPattern {
 }
 
 impl PathPattern {
-    /// Parses `####` (one `#` per digit) or `%0Nd` / `%d` in the file name part of a path.
+    /// Parses `####` (one `#` per digit), `%0Nd` / `%d`, Houdini's `$F4` / `$F` or `@@@@` (two
+    /// or more `@`, one per digit: a single `@` is left alone, as in `icon@2x.png`) in the file
+    /// name part of a path.
     pub fn parse(raw: &str) -> Result<Self> {
-        let placeholder = find_hashes(raw).or_else(|| find_printf(raw));
+        let find = |raw: &str| {
+            find_hashes(raw)
+                .or_else(|| find_printf(raw))
+                .or_else(|| find_houdini(raw))
+                .or_else(|| find_ats(raw))
+        };
+        let placeholder = find(raw);
         if let Some((start, end, _)) = &placeholder {
             let rest = &raw[*end..];
-            if find_hashes(rest).is_some() || find_printf(rest).is_some() {
+            if find(rest).is_some() {
                 return Err(Error::usage(format!(
                     "'{raw}' holds more than one frame placeholder; use one '####' or '%04d'"
                 )));
@@ -124,6 +132,37 @@ fn find_hashes(raw: &str) -> Option<(usize, usize, usize)> {
     Some((start, start + len, len))
 }
 
+/// Houdini's `$F4` (four digits, zero-padded) or `$F` (unpadded), not `$FOO`.
+fn find_houdini(raw: &str) -> Option<(usize, usize, usize)> {
+    let mut from = 0;
+    while let Some(at) = raw[from..].find("$F") {
+        let start = from + at;
+        let after = &raw[start + 2..];
+        let digits = after.bytes().take_while(u8::is_ascii_digit).count();
+        let next = after[digits..].chars().next();
+        if !next.is_some_and(|c| c.is_ascii_alphabetic() || c == '_') {
+            let width = after[..digits].parse().unwrap_or(1usize).max(1);
+            return Some((start, start + 2 + digits, width));
+        }
+        from = start + 2;
+    }
+    None
+}
+
+/// A run of two or more `@`, one per digit.
+fn find_ats(raw: &str) -> Option<(usize, usize, usize)> {
+    let mut from = 0;
+    while let Some(at) = raw[from..].find('@') {
+        let start = from + at;
+        let len = raw[start..].bytes().take_while(|&b| b == b'@').count();
+        if len >= 2 {
+            return Some((start, start + len, len));
+        }
+        from = start + len;
+    }
+    None
+}
+
 fn find_printf(raw: &str) -> Option<(usize, usize, usize)> {
     let bytes = raw.as_bytes();
     let mut i = 0;
@@ -146,6 +185,31 @@ fn find_printf(raw: &str) -> Option<(usize, usize, usize)> {
         i += 1;
     }
     None
+}
+
+/// The frames missing between the first and last of `found` (sorted, distinct), at the
+/// step most of them keep (a sequence rendered on twos has no holes at the odd frames); at
+/// most [`MAX_FRAMES`] listed.
+pub fn holes(found: &[i64]) -> Vec<i64> {
+    if found.len() < 2 {
+        return Vec::new();
+    }
+    // The smallest step between neighbours is the sequence's.
+    let step = found
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .min()
+        .unwrap_or(1)
+        .max(1);
+    let mut holes = Vec::new();
+    for w in found.windows(2) {
+        let mut f = w[0] + step;
+        while f < w[1] && holes.len() < MAX_FRAMES {
+            holes.push(f);
+            f += step;
+        }
+    }
+    holes
 }
 
 /// Frame numbers beyond ±this are refused: far beyond any shot's numbering, and small
@@ -335,6 +399,30 @@ mod tests {
     #[test]
     fn two_placeholders_are_refused() {
         assert!(PathPattern::parse("a.####.%04d.exr").is_err());
+        assert!(PathPattern::parse("a.$F4.@@@@.exr").is_err());
+    }
+
+    #[test]
+    fn holes_are_the_frames_missing_at_the_sequence_s_step() {
+        assert_eq!(holes(&[1, 2, 3, 6, 7, 9]), [4, 5, 8]);
+        // On twos: no holes at the odd frames, one at 7.
+        assert_eq!(holes(&[1, 3, 5, 9, 11]), [7]);
+        assert!(holes(&[4]).is_empty());
+    }
+
+    #[test]
+    fn houdini_and_at_tokens_are_frame_placeholders() {
+        let p = PathPattern::parse("render/beauty.$F4.exr").unwrap();
+        assert_eq!(p.path(Some(42)), PathBuf::from("render/beauty.0042.exr"));
+        assert_eq!(p.with_hashes(), "render/beauty.####.exr");
+        let p = PathPattern::parse("beauty.$F.exr").unwrap();
+        assert_eq!(p.path(Some(42)), PathBuf::from("beauty.42.exr"));
+        let p = PathPattern::parse("beauty.@@@@.exr").unwrap();
+        assert_eq!(p.path(Some(7)), PathBuf::from("beauty.0007.exr"));
+        // Not placeholders: a variable that only starts with F, a single @.
+        for plain in ["$FOO/beauty.exr", "icon@2x.png", "$F_x.exr"] {
+            assert!(!PathPattern::parse(plain).unwrap().is_sequence(), "{plain}");
+        }
     }
 
     #[test]
