@@ -273,3 +273,41 @@ fn a_small_bright_block_fails_a_per_pixel_gate() {
         assert_eq!(o.status.code(), Some(0), "{allow:?}: {}", stderr(&o));
     }
 }
+
+/// Alpha zeroed over part of the frame, colour untouched (issue 31): RMSE is 0, but alpha is
+/// compared pixel by pixel, so `--fail-pixel` fails it and the largest difference names A.
+#[test]
+fn an_alpha_only_change_fails_a_per_pixel_gate() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (40, 30);
+    let rgb = || {
+        vec![
+            ("R", noise(w * h, 1, 0.0, 1.0)),
+            ("G", noise(w * h, 2, 0.0, 1.0)),
+            ("B", noise(w * h, 3, 0.0, 1.0)),
+        ]
+    };
+    let (a, b) = (dir.path().join("a.exr"), dir.path().join("b.exr"));
+    let mut with_alpha = rgb();
+    with_alpha.push(("A", vec![1.0; w * h]));
+    write_exr(&a, w, h, with_alpha);
+    let mut cut = rgb();
+    cut.push((
+        "A",
+        (0..w * h)
+            .map(|i| if i < 520 { 0.0 } else { 1.0 })
+            .collect(),
+    ));
+    write_exr(&b, w, h, cut);
+    let o = shutter(&["diff", &s(&a), &s(&b), "--fail", "0"]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "RMSE is of colour: {}",
+        stderr(&o)
+    );
+    let o = shutter(&["diff", &s(&a), &s(&b), "--fail-pixel", "0.01"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("520 pixels differ"), "{}", stderr(&o));
+    assert!(stdout(&o).contains(") A: 1 against 0"), "{}", stdout(&o));
+}

@@ -221,7 +221,20 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
                     .map_err(|e| e.problems()[0].clone())?;
             }
             let value = job.metric.of(&whole);
-            let (errors, largest) = metrics::pixel_errors(&ra, &rb);
+            let (mut errors, mut largest) = metrics::pixel_errors(&ra, &rb);
+            // Alpha too (a missing alpha reads as opaque): an alpha-only change is a change.
+            let alpha = |f: &crate::frame::Frame| f.color.as_ref().and_then(|c| c.a.clone());
+            let (alpha_a, alpha_b) = (alpha(&a), alpha(&b));
+            if alpha_a.is_some() || alpha_b.is_some() {
+                let ones = vec![1.0; wa * ha];
+                metrics::add_channel(
+                    alpha_a.as_deref().unwrap_or(&ones),
+                    alpha_b.as_deref().unwrap_or(&ones),
+                    ("A", wa),
+                    &mut errors,
+                    &mut largest,
+                );
+            }
             let over = |threshold: Option<f64>| {
                 threshold.map_or(0, |t| errors.iter().filter(|&&e| e as f64 > t).count())
             };

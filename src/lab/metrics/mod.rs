@@ -155,31 +155,48 @@ pub struct Largest {
 /// Per pixel, the largest absolute difference of its channels (+∞ where either image holds a
 /// non-finite value), and the largest finite one over the image with where it is.
 pub fn pixel_errors(a: &Rgb, b: &Rgb) -> (Vec<f32>, Largest) {
-    let n = a.width * a.height;
-    let mut map = vec![0.0f32; n];
+    let mut map = vec![0.0f32; a.width * a.height];
     let mut largest = Largest::default();
     for (c, channel) in ["R", "G", "B"].into_iter().enumerate() {
-        for (i, m) in map.iter_mut().enumerate() {
-            let (x, y) = (a.planes[c][i], b.planes[c][i]);
-            if !x.is_finite() || !y.is_finite() {
-                *m = f32::INFINITY;
-                continue;
-            }
-            let d = (x as f64 - y as f64).abs();
-            *m = m.max(d as f32);
-            if d > largest.error {
-                largest = Largest {
-                    error: d,
-                    x: i % a.width.max(1),
-                    y: i / a.width.max(1),
-                    channel,
-                    a: x as f64,
-                    b: y as f64,
-                };
-            }
-        }
+        add_channel(
+            a.planes[c],
+            b.planes[c],
+            (channel, a.width),
+            &mut map,
+            &mut largest,
+        );
     }
     (map, largest)
+}
+
+/// One more channel (`name`, of an image `width` wide) folded into [`pixel_errors`]'s map and
+/// largest difference.
+pub fn add_channel(
+    a: &[f32],
+    b: &[f32],
+    (name, width): (&'static str, usize),
+    errors: &mut [f32],
+    largest: &mut Largest,
+) {
+    for (i, e) in errors.iter_mut().enumerate() {
+        let (x, y) = (a[i], b[i]);
+        if !x.is_finite() || !y.is_finite() {
+            *e = f32::INFINITY;
+            continue;
+        }
+        let d = (x as f64 - y as f64).abs();
+        *e = e.max(d as f32);
+        if d > largest.error {
+            *largest = Largest {
+                error: d,
+                x: i % width.max(1),
+                y: i / width.max(1),
+                channel: name,
+                a: x as f64,
+                b: y as f64,
+            };
+        }
+    }
 }
 
 /// RMSE over the three channels of the pixels in `mask` (all when `None`).
