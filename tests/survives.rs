@@ -935,6 +935,22 @@ fn a_presets_layers_table_overrides_a_layers_class() {
         channel(&before, "velocity.X")
     );
     assert_ne!(channel(&after, "diffuse.R"), channel(&before, "diffuse.R"));
+    // `shutter info --preset` shows the classes the run gave them.
+    let o = shutter(&["info", &s(&color), "--json", "--preset", &s(&preset)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let class = |name: &str| {
+        doc[0]["channels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["name"] == name)
+            .map(|c| c["class"].as_str().unwrap().to_string())
+            .unwrap()
+    };
+    assert_eq!(class("specular.R"), "data");
+    assert_eq!(class("velocity.X"), "colour");
+    assert_eq!(class("diffuse.R"), "colour");
 }
 
 /// A frame whose beauty is the sum of two light layers, at a moving silhouette with the

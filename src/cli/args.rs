@@ -243,6 +243,11 @@ pub struct InfoArgs {
     /// file's default view].
     #[arg(long, value_name = "NAME")]
     pub view: Option<String>,
+
+    /// Presets whose `[layers]` tables class the channels as a run with them would (the
+    /// classes shown are otherwise the name rule's).
+    #[arg(long, value_name = "P")]
+    pub preset: Vec<String>,
 }
 
 #[derive(Debug, Args)]

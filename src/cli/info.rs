@@ -1,5 +1,7 @@
 //! `shutter info`: what is in image files, and which presets match them.
 
+use std::collections::BTreeMap;
+
 use crate::error::{Error, Problem, ProblemKind, Result};
 use crate::io::channels::{self, LayerClass};
 use crate::io::file::{ChannelInfo, FileInfo, FileKind};
@@ -15,6 +17,16 @@ pub fn info(args: InfoArgs) -> Result<()> {
         .filter(|(name, _)| crate::io::preset::is_convention(name))
         .map(|(name, _)| Preset::builtin(name))
         .collect::<Result<_>>()?;
+    // A preset's `[layers]` table, as a run with it classes the channels.
+    let layers: BTreeMap<String, LayerClass> = if args.preset.is_empty() {
+        BTreeMap::new()
+    } else {
+        Preset::load(&args.preset)?
+            .layers
+            .iter()
+            .map(|(layer, class)| (layer.clone(), class.class()))
+            .collect()
+    };
     let mut problems = Vec::new();
     let mut documents = Vec::new();
     for path in &args.files {
@@ -50,6 +62,7 @@ pub fn info(args: InfoArgs) -> Result<()> {
             None => (Vec::new(), None),
         };
         let shown = Shown {
+            layers: &layers,
             info: &info,
             view: seen.as_ref().and_then(|s| s.view.as_deref()),
             matches: &matches,
@@ -73,6 +86,8 @@ pub fn info(args: InfoArgs) -> Result<()> {
 
 /// What `info` shows of one file.
 struct Shown<'a> {
+    /// A preset's classes of layers by name, over the name rule.
+    layers: &'a BTreeMap<String, LayerClass>,
     info: &'a FileInfo,
     /// The view presets were matched in (multi-view files).
     view: Option<&'a str>,
@@ -116,6 +131,7 @@ fn describe_kind(info: &FileInfo) -> String {
 
 fn info_text(shown: &Shown) -> String {
     let Shown {
+        layers,
         info,
         view,
         matches,
@@ -163,7 +179,7 @@ fn info_text(shown: &Shown) -> String {
         let line = format!(
             "    {name:<28} {:<4} {:<6}{in_view}",
             c.sample_type,
-            class_of(info, c).name()
+            class_of(info, c, layers).name()
         );
         text.push_str(line.trim_end());
         text.push('\n');
@@ -202,6 +218,7 @@ fn info_text(shown: &Shown) -> String {
 
 fn info_json(shown: &Shown) -> serde_json::Value {
     let Shown {
+        layers,
         info,
         view,
         matches,
@@ -225,7 +242,7 @@ fn info_json(shown: &Shown) -> serde_json::Value {
         "channels": info.channels.iter().map(|c| serde_json::json!({
             "name": c.alias.clone().unwrap_or_else(|| c.name.clone()),
             "type": c.sample_type,
-            "class": class_of(info, c).name(),
+            "class": class_of(info, c, layers).name(),
             "part": c.part,
             "view": c.view,
         })).collect::<Vec<_>>(),
@@ -238,7 +255,16 @@ fn info_json(shown: &Shown) -> serde_json::Value {
 
 /// The class a channel has in an output (`io::channels`): how shutter treats it when the
 /// file is the colour file.
-fn class_of(info: &FileInfo, channel: &ChannelInfo) -> LayerClass {
+fn class_of(
+    info: &FileInfo,
+    channel: &ChannelInfo,
+    layers: &BTreeMap<String, LayerClass>,
+) -> LayerClass {
+    // As the read classes it: by `part.channel` where the part has a name (`diffuse.R`).
+    let qualified = channel.alias.as_ref().unwrap_or(&channel.name);
+    if let Some(&class) = layers.get(channels::split(qualified).0) {
+        return class;
+    }
     let crypto = match &info.kind {
         FileKind::Exr { headers, .. } => headers
             .get(channel.part)
@@ -246,5 +272,5 @@ fn class_of(info: &FileInfo, channel: &ChannelInfo) -> LayerClass {
             .unwrap_or_default(),
         FileKind::Image { .. } => Vec::new(),
     };
-    channels::class_of(&channel.name, &crypto)
+    channels::class_of(qualified, &crypto)
 }
