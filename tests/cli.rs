@@ -539,10 +539,10 @@ fn json_summary_has_per_stage_times() {
     assert!(warnings
         .iter()
         .any(|w| w.as_str().unwrap().contains("--velocity is not read")));
-    assert!(
-        stderr(&o).is_empty(),
-        "silent on a non-terminal: {}",
-        stderr(&o)
+    // On stderr too, one line, though it is not a terminal (issue 31: a farm's log).
+    assert_eq!(
+        stderr(&o),
+        "shutter: warning: --velocity is not read: algorithm none does not need it\n"
     );
 }
 
@@ -814,4 +814,30 @@ fn holes_unmatched_patterns_and_houdini_tokens() {
             .to_path_buf();
         assert!(folder.join("o.0001.exr").exists() && folder.join("o.0002.exr").exists());
     }
+}
+
+/// Warnings reach a pipe (issue 31: a farm's log; they were dropped unless --verbose), one
+/// line each, and `--quiet` silences them while `--json` keeps them.
+#[test]
+fn warnings_are_printed_on_a_pipe_unless_quiet() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 4, 4);
+    let color = s(&dir.path().join("C.exr"));
+    let depth = s(&dir.path().join("Z.exr"));
+    let out = s(&dir.path().join("o.exr"));
+    // Depth given to an algorithm that does not read it: a warning.
+    let o = shutter(&["blur", "--color", &color, "--depth", &depth, "-o", &out]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.lines()
+            .any(|l| l.starts_with("shutter: warning: --depth is not read")),
+        "{err}"
+    );
+    let o = shutter(&[
+        "blur", "--color", &color, "--depth", &depth, "-o", &out, "-q", "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).is_empty(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("--depth is not read"), "{}", stdout(&o));
 }

@@ -148,6 +148,11 @@ pub struct BlurArgs {
     #[arg(short, long)]
     pub verbose: bool,
 
+    /// Print no warnings on stderr (they are still in --json). Without it every warning is
+    /// one line on stderr, on a terminal or a pipe (a farm's log).
+    #[arg(short, long, conflicts_with = "verbose")]
+    pub quiet: bool,
+
     /// Worker threads, at most the larger of 256 and the cores [default: RAYON_NUM_THREADS,
     /// else one per core].
     #[arg(long, value_name = "N")]

@@ -33,6 +33,7 @@ pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
     }
     let terminal = std::io::stderr().is_terminal();
     let verbose = args.verbose;
+    let quiet = args.quiet;
     let mut bar: Option<indicatif::ProgressBar> = None;
     let mut on_event = |event: Event| match event {
         Event::Started { frames } => {
@@ -63,10 +64,11 @@ pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
                 eprintln!("shutter: skipped {} (exists)", path.display());
             }
         }
+        // Every warning, one line, on a terminal or a pipe (a farm's log), unless --quiet.
+        Event::Warning(_) if quiet => {}
         Event::Warning(message) => match &bar {
             Some(b) => b.println(format!("shutter: warning: {message}")),
-            None if verbose || terminal => eprintln!("shutter: warning: {message}"),
-            None => {}
+            None => eprintln!("shutter: warning: {message}"),
         },
     };
     let result = run(&job, &mut on_event);
