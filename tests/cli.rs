@@ -91,7 +91,31 @@ fn canonical_fixture_passes() -> Vec<String> {
 fn shipped_fixtures_run_as_in_the_readme() {
     let dir = tempfile::tempdir().unwrap();
     let root = env!("CARGO_MANIFEST_DIR");
+    // The README's first command: blurred by reconstruct, with no warning.
     let out = format!("{}/blur.####.exr", dir.path().display());
+    let mut args = vec![
+        "blur".to_string(),
+        "--algorithm".into(),
+        "reconstruct".into(),
+    ];
+    args.extend(canonical_fixture_passes());
+    args.extend(["-o".to_string(), out]);
+    let o = shutter(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).is_empty(), "{}", stderr(&o));
+    for frame in 1..=3 {
+        let input = read_exr_reference(std::path::Path::new(&format!(
+            "{root}/fixtures/canonical/color.{frame:04}.exr"
+        )));
+        let output = read_exr_reference(&dir.path().join(format!("blur.{frame:04}.exr")));
+        assert!(
+            channel(&output, "R") != channel(&input, "R"),
+            "frame {frame} was not blurred"
+        );
+        assert!(channel(&output, "R").iter().all(|v| v.is_finite()));
+    }
+    // Without --algorithm: none, colour unchanged.
+    let out = format!("{}/none.####.exr", dir.path().display());
     let mut args = vec!["blur".to_string()];
     args.extend(canonical_fixture_passes());
     args.extend(["-o".to_string(), out]);
@@ -101,7 +125,7 @@ fn shipped_fixtures_run_as_in_the_readme() {
         let input = read_exr_reference(std::path::Path::new(&format!(
             "{root}/fixtures/canonical/color.{frame:04}.exr"
         )));
-        let output = read_exr_reference(&dir.path().join(format!("blur.{frame:04}.exr")));
+        let output = read_exr_reference(&dir.path().join(format!("none.{frame:04}.exr")));
         for name in ["R", "G", "B", "A"] {
             assert_exact(channel(&output, name), channel(&input, name), name);
         }
