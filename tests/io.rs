@@ -558,30 +558,21 @@ fn a_colour_in_two_parts_is_refused_until_a_preset_names_the_part() {
         "[color]\nchannels = [[\"other.R\", \"other.G\", \"other.B\", \"other.A\"]]\n",
     )
     .unwrap();
-    let o = shutter(&[
-        "blur",
-        "--color",
-        &s(&path),
-        "-o",
-        &s(&out),
-        "--preset",
-        &s(&preset),
-        "--beauty-only",
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let written = read_exr_reference(&out);
-    assert!(channel(&written, "R").iter().all(|&v| v == 0.75));
+    // The beauty alone, read from the part holding 0.75.
+    let (input, output) = (s(&path), s(&out));
+    let reads_the_second_part = |extra: &[&str]| {
+        let mut args = vec!["blur", "--color", &input, "-o", &output, "--beauty-only"];
+        args.extend(extra);
+        let o = shutter(&args);
+        assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
+        let written = read_exr_reference(&out);
+        assert!(
+            channel(&written, "R").iter().all(|&v| v == 0.75),
+            "{extra:?}"
+        );
+    };
+    reads_the_second_part(&["--preset", &s(&preset)]);
     // `rgba` second: still the one read.
     write_parts(&path, (4, 4), vec![part("first", 0.25), part("rgba", 0.75)]);
-    let o = shutter(&[
-        "blur",
-        "--color",
-        &s(&path),
-        "-o",
-        &s(&out),
-        "--beauty-only",
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let written = read_exr_reference(&out);
-    assert!(channel(&written, "R").iter().all(|&v| v == 0.75));
+    reads_the_second_part(&[]);
 }

@@ -856,56 +856,37 @@ fn passes_are_placed_by_their_data_windows() {
         assert_eq!(z, 1000.0 + x as f32 + 100.0 * y as f32, "pixel ({x}, {y})");
     }
 
-    // A depth that stops short of the beauty's bottom row is refused, naming both windows.
-    write(
+    // A depth that does not cover the beauty's window is refused, naming both windows:
+    // (depth file, its origin and size, the words expected).
+    let refused = |name: &str, origin: (i32, i32), (w, h): (usize, usize), expected: &str| {
+        write(name, origin, (w, h), vec![("Z".into(), vec![5.0; w * h])]);
+        let run = shutter(&[
+            "blur",
+            "--algorithm",
+            "reconstruct",
+            "--color",
+            &s(&dir.path().join("color.exr")),
+            "--depth",
+            &s(&dir.path().join(name)),
+            "-o",
+            &s(&dir.path().join("out.exr")),
+        ]);
+        assert_eq!(run.status.code(), Some(1), "{name}: {}", stderr(&run));
+        assert!(stderr(&run).contains(expected), "{name}: {}", stderr(&run));
+    };
+    // One that stops short of the beauty's bottom row.
+    refused(
         "short.exr",
         (0, 0),
         (W, 11),
-        vec![("Z".into(), vec![5.0; W * 11])],
+        "its data window (0, 0) - (39, 10) does not cover the color pass's (4, 2) - (23, 11)",
     );
-    let run = shutter(&[
-        "blur",
-        "--algorithm",
-        "reconstruct",
-        "--color",
-        &s(&dir.path().join("color.exr")),
-        "--depth",
-        &s(&dir.path().join("short.exr")),
-        "-o",
-        &s(&dir.path().join("out.exr")),
-    ]);
-    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
-    assert!(
-        stderr(&run).contains(
-            "its data window (0, 0) - (39, 10) does not cover the color pass's (4, 2) - (23, 11)"
-        ),
-        "{}",
-        stderr(&run)
-    );
-    // A depth of the beauty's size, one pixel to the right (issue 30: it was read as if
-    // aligned): refused the same way.
-    write(
+    // One of the beauty's size, one pixel to the right (issue 30: it was read as if aligned).
+    refused(
         "offset.exr",
         (5, 2),
         (cw, ch),
-        vec![("Z".into(), vec![5.0; cw * ch])],
-    );
-    let run = shutter(&[
-        "blur",
-        "--algorithm",
-        "reconstruct",
-        "--color",
-        &s(&dir.path().join("color.exr")),
-        "--depth",
-        &s(&dir.path().join("offset.exr")),
-        "-o",
-        &s(&dir.path().join("out.exr")),
-    ]);
-    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
-    assert!(
-        stderr(&run).contains("its data window (5, 2) - (24, 11) does not cover"),
-        "{}",
-        stderr(&run)
+        "its data window (5, 2) - (24, 11) does not cover",
     );
 }
 

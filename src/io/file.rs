@@ -135,7 +135,6 @@ impl FileInfo {
         }
     }
 
-    /// Index of the channel with this name (stored name first, then part-qualified alias).
     /// The parts whose names mark the main layer of a multi-part file: OpenEXR's and Nuke's
     /// `rgba`, and `beauty`.
     pub const MAIN_PARTS: [&str; 2] = ["rgba", "beauty"];
@@ -198,6 +197,7 @@ impl FileInfo {
         Ok(())
     }
 
+    /// Index of the channel with this name (stored name first, then part-qualified alias).
     pub fn find(&self, name: &str) -> Option<usize> {
         self.channels
             .iter()
@@ -268,6 +268,18 @@ impl FileInfo {
         matches!(self.kind, FileKind::Image { float: false, .. })
     }
 
+    /// The problem of a file that is no longer what the preflight checked: `what` changed.
+    fn changed(&self, what: &str) -> Problem {
+        Problem::new(
+            ProblemKind::Changed,
+            &self.path,
+            format!(
+                "the file changed after the preflight checked it: {what}; nothing was read \
+                 from it (check it again with shutter info, then rerun with --skip-existing)"
+            ),
+        )
+    }
+
     /// Whether the headers `meta` (read again when the frame is decoded) still hold what the
     /// preflight saw: the same parts, and for each of `channels` (indices into
     /// [`FileInfo::channels`]) the same name and sample type at the same place, in a part of
@@ -336,14 +348,7 @@ impl FileInfo {
                 })
                 .map_err(|e| match e {
                     exr::error::Error::Invalid(what) if what.starts_with(exr_io::CHANGED) => {
-                        Problem::new(ProblemKind::Changed, &self.path, {
-                            let what = &what[exr_io::CHANGED.len()..];
-                            format!(
-                                "the file changed after the preflight checked it: {what}; \
-                                 nothing was read from it (check it again with shutter info, \
-                                 then rerun with --skip-existing)"
-                            )
-                        })
+                        self.changed(&what[exr_io::CHANGED.len()..])
                     }
                     exr::error::Error::NotSupported(what) => {
                         Problem::new(ProblemKind::Unsupported, &self.path, what.to_string())
@@ -354,11 +359,10 @@ impl FileInfo {
                     other => corrupt(other.to_string()),
                 })?;
                 if (read.width, read.height) != (self.width, self.height) {
-                    return Err(Problem::new(
-                        ProblemKind::SizeMismatch,
-                        &self.path,
-                        "the file changed size since it was checked",
-                    ));
+                    return Err(self.changed(&format!(
+                        "it is {}x{}, it was {}x{}",
+                        read.width, read.height, self.width, self.height
+                    )));
                 }
                 Ok(read.planes)
             }
@@ -370,26 +374,15 @@ impl FileInfo {
                             None => corrupt(detail),
                         },
                     )?;
-                let changed = |what: String| {
-                    Problem::new(
-                        ProblemKind::Changed,
-                        &self.path,
-                        format!(
-                            "the file changed after the preflight checked it: {what}; nothing \
-                             was read from it (check it again with shutter info, then rerun \
-                             with --skip-existing)"
-                        ),
-                    )
-                };
                 if (width, height) != (self.width, self.height) {
-                    return Err(changed(format!(
+                    return Err(self.changed(&format!(
                         "it is {width}x{height}, it was {}x{}",
                         self.width, self.height
                     )));
                 }
                 let stored = self.channels.iter().map(|c| c.index + 1).max().unwrap_or(0);
                 if planes.len() != stored {
-                    return Err(changed(format!(
+                    return Err(self.changed(&format!(
                         "it holds {} channel{}, it held {stored}",
                         planes.len(),
                         if planes.len() == 1 { "" } else { "s" }
@@ -510,11 +503,8 @@ fn probe_image(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
             None => Problem::new(ProblemKind::Corrupt, path, detail),
         }
     })?;
+    // (A JPEG's stream was checked by the probe: cut short is corrupt.)
     check_size(path, header.width, header.height, max_pixels)?;
-    if header.format == "jpeg" {
-        image_io::check_jpeg(path, header.width, header.height)
-            .map_err(|detail| Problem::new(ProblemKind::Corrupt, path, detail))?;
-    }
     let sample_type = match (header.float, header.bits) {
         (true, _) => "f32",
         (false, 16) => "u16",

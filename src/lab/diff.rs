@@ -223,13 +223,15 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
             let value = job.metric.of(&whole);
             let (mut errors, mut largest) = metrics::pixel_errors(&ra, &rb);
             // Alpha too (a missing alpha reads as opaque): an alpha-only change is a change.
-            let alpha = |f: &crate::frame::Frame| f.color.as_ref().and_then(|c| c.a.clone());
-            let (alpha_a, alpha_b) = (alpha(&a), alpha(&b));
-            if alpha_a.is_some() || alpha_b.is_some() {
+            fn alpha(f: &crate::frame::Frame) -> Option<&[f32]> {
+                f.color.as_ref().and_then(|c| c.a.as_deref())
+            }
+            let (a_alpha, b_alpha) = (alpha(&a), alpha(&b));
+            if a_alpha.is_some() || b_alpha.is_some() {
                 let ones = vec![1.0; wa * ha];
                 metrics::add_channel(
-                    alpha_a.as_deref().unwrap_or(&ones),
-                    alpha_b.as_deref().unwrap_or(&ones),
+                    a_alpha.unwrap_or(&ones),
+                    b_alpha.unwrap_or(&ones),
                     ("A", wa),
                     &mut errors,
                     &mut largest,

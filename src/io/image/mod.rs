@@ -139,14 +139,24 @@ pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
         Some(image::ImageFormat::Tiff) => "tiff",
         _ => return Err("not a PNG, JPEG, TIFF or EXR file".into()),
     };
-    if format == "jpeg" {
+    // A JPEG is read once, for both checks of its stream: a kind the decoder does not read
+    // (before the decoder says so as damage), and a stream cut short.
+    let jpeg = if format == "jpeg" {
         let bytes = crate::io::input::read_input(path).map_err(|e| e.to_string())?;
         if let Some(why) = jpeg_unsupported(&bytes) {
             return Err(format!("{NOT_SUPPORTED}{why}"));
         }
-    }
+        Some(bytes)
+    } else {
+        None
+    };
     let mut decoder = reader.into_decoder().map_err(image_error)?;
     let (width, height) = upright(decoder.dimensions(), orientation(&mut decoder));
+    // Past the pixel limit the caller's size check speaks first.
+    let within = (width as u64).saturating_mul(height as u64) <= max_pixels as u64;
+    if let (Some(bytes), true) = (&jpeg, within) {
+        check_jpeg_bytes(bytes, width as usize, height as usize)?;
+    }
     let color = decoder.color_type();
     let float = matches!(color, ColorType::Rgb32F | ColorType::Rgba32F);
     let bits = (color.bytes_per_pixel() / color.channel_count()) * 8;
@@ -266,11 +276,6 @@ pub fn read_planes(
 /// full-resolution component, and every block's DC difference takes a code of at least one
 /// bit (progressive AC scans can skip runs of blocks; DC scans cannot), so the entropy-coded
 /// data holds at least ⌈w/8⌉·⌈h/8⌉ bits.
-pub fn check_jpeg(path: &Path, width: usize, height: usize) -> Result<(), String> {
-    let bytes = crate::io::input::read_input(path).map_err(|e| e.to_string())?;
-    check_jpeg_bytes(&bytes, width, height)
-}
-
 fn check_jpeg_bytes(bytes: &[u8], width: usize, height: usize) -> Result<(), String> {
     let cut = "the JPEG stream is cut short (no end-of-image marker after its image data); \
                the file is truncated or damaged";
