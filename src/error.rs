@@ -36,6 +36,23 @@ pub enum ProblemKind {
 }
 
 impl ProblemKind {
+    /// The kind's stable name in `--json` error objects (README: "JSON").
+    pub fn name(self) -> &'static str {
+        match self {
+            ProblemKind::MissingFile => "missing_file",
+            ProblemKind::MissingChannel => "missing_channel",
+            ProblemKind::SizeMismatch => "size_mismatch",
+            ProblemKind::Corrupt => "corrupt",
+            ProblemKind::Unsupported => "unsupported",
+            ProblemKind::Output => "output",
+            ProblemKind::TooLarge => "too_large",
+            ProblemKind::View => "view",
+            ProblemKind::Busy => "busy",
+            ProblemKind::WriteFailed => "write_failed",
+            ProblemKind::Changed => "changed",
+        }
+    }
+
     /// Whether a retry may succeed with the same inputs: the job was not wrong, the moment was.
     pub fn is_transient(self) -> bool {
         matches!(self, ProblemKind::Busy | ProblemKind::WriteFailed)

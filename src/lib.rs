@@ -38,3 +38,7 @@ pub mod stages;
 
 pub use error::{Error, Problem, ProblemKind, Result};
 pub use frame::{Frame, Passes};
+
+/// The version of the form of every command's `--json` document (`"schema"` in each): raised
+/// when a field is removed or changes meaning, not when one is added (README: "JSON").
+pub const JSON_SCHEMA: u32 = 1;

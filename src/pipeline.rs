@@ -71,6 +71,12 @@ pub enum Event {
 /// The summary of a run.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Report {
+    /// The version of the `--json` document's form ([`crate::JSON_SCHEMA`]).
+    pub schema: u32,
+    /// The command that ran (`blur`, `dof`: the command line sets it).
+    pub command: &'static str,
+    /// True: the run finished (a failed run's `--json` is an error object instead).
+    pub ok: bool,
     pub algorithm: String,
     pub preset: String,
     /// The exposure the motion blur rendered: the fraction of the frame interval the shutter
@@ -99,6 +105,16 @@ pub struct Report {
     /// headers, nothing written).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub planned: Vec<Planned>,
+    /// The frames written, in frame order, and those `--skip-existing` skipped.
+    pub outputs: Vec<Output>,
+    pub skipped: Vec<Output>,
+}
+
+/// One frame's output file.
+#[derive(Clone, Debug, Serialize, PartialEq, Eq, PartialOrd, Ord)]
+pub struct Output {
+    pub frame: Option<i64>,
+    pub path: PathBuf,
 }
 
 /// One frame of a dry run: its output and what a run would do with it.
@@ -219,6 +235,8 @@ fn name_pass(job: &Job, error: crate::Error) -> crate::Error {
 pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     let start = Instant::now();
     let mut report = Report {
+        schema: crate::JSON_SCHEMA,
+        ok: true,
         algorithm: job.algorithm.name().to_string(),
         preset: job.preset.name.clone(),
         shutter: crate::numeric::shutter(job.params.shutter),
@@ -339,6 +357,10 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         match existing_output(job, &plan, &path) {
             Existing::Whole => {
                 report.frames_skipped += 1;
+                report.skipped.push(Output {
+                    frame,
+                    path: path.clone(),
+                });
                 on_event(Event::Skipped { frame, path });
                 continue;
             }
@@ -457,6 +479,10 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                     match written {
                         Ok(()) => {
                             report.frames_written += 1;
+                            report.outputs.push(Output {
+                                frame,
+                                path: path.clone(),
+                            });
                             on_event(Event::Written { frame, path });
                         }
                         Err(problem) => {
@@ -481,6 +507,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     })?;
     report.read_seconds = read_seconds;
     report.process_seconds = process_seconds;
+    report.outputs.sort();
     #[cfg(feature = "gpu")]
     if let Some(gpu) = gpu {
         report.backend.stages_on_cpu = gpu.stages_on_cpu();

@@ -614,7 +614,7 @@ fn info_prints_size_channels_compression_and_matching_preset() {
         &format!("{root}/fixtures/canonical/depth.0001.exr"),
     ]);
     let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
-    assert_eq!(json[0]["channels"][0]["type"], "f16");
+    assert_eq!(json["files"][0]["channels"][0]["type"], "f16");
     let o = shutter(&["info", "no/such/file.exr"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("missing file"));

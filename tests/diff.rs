@@ -35,12 +35,13 @@ fn identical_images_pass_different_ones_fail_missing_ones_are_errors() {
     let o = shutter(&["diff", &a, &c, "--fail", "0.01"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("FAIL"));
+    // Could not compare: 3 (2 is a usage error, as for every command).
     let o = shutter(&["diff", &a, &s(&dir.path().join("nope.exr"))]);
-    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(o.status.code(), Some(3));
     assert!(stderr(&o).contains("missing file"));
     let small = pair(dir.path(), "small.exr", 20, 30, 1, 0.0);
     let o = shutter(&["diff", &a, &small]);
-    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(o.status.code(), Some(3));
     assert!(stderr(&o).contains("size mismatch"), "{}", stderr(&o));
 }
 
@@ -176,7 +177,7 @@ fn sizes_are_compared_before_anything_is_decoded() {
     let o = shutter_capped(1_000_000, &["diff", &s(&a), &s(&b)]);
     let err = stderr(&o);
     // diff's exit for inputs it cannot compare (README, exit codes).
-    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(o.status.code(), Some(3), "{err}");
     assert!(
         err.contains("size mismatch") && err.contains("8192x8000 but"),
         "{err}"
@@ -252,7 +253,8 @@ fn a_small_bright_block_fails_a_per_pixel_gate() {
     let o = shutter(&["diff", &a, &b, "--fail", "0.2", "--fail-pixel", "0.1"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(
-        stderr(&o).contains("100 pixels differ by more than --fail-pixel 0.1 (allowed: 0)"),
+        stderr(&o)
+            .contains("100 pixels over the per-pixel gate (allowed: 0; by layer: beauty 100)"),
         "{}",
         stderr(&o)
     );
@@ -308,6 +310,220 @@ fn an_alpha_only_change_fails_a_per_pixel_gate() {
     );
     let o = shutter(&["diff", &s(&a), &s(&b), "--fail-pixel", "0.01"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(stderr(&o).contains("520 pixels differ"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("520 pixels over the per-pixel gate"),
+        "{}",
+        stderr(&o)
+    );
     assert!(stdout(&o).contains(") A: 1 against 0"), "{}", stdout(&o));
+}
+
+/// A frame as a renderer writes one: beauty RGBA, a light layer, depth and vectors; `edit`
+/// changes the named channels' planes.
+fn layered(path: &std::path::Path, edit: impl Fn(&str, &mut Vec<f32>)) {
+    let (w, h) = (40, 30);
+    let names = [
+        "R",
+        "G",
+        "B",
+        "A",
+        "diffuse.R",
+        "diffuse.G",
+        "diffuse.B",
+        "Z",
+        "velocity.X",
+        "velocity.Y",
+    ];
+    let channels = names
+        .iter()
+        .enumerate()
+        .map(|(i, &name)| {
+            let mut plane = match name {
+                "A" => vec![1.0; w * h],
+                "Z" => noise(w * h, 40, 1.0, 100.0),
+                _ => noise(w * h, 10 + i as u32, 0.0, 1.0),
+            };
+            edit(name, &mut plane);
+            (name, plane)
+        })
+        .collect();
+    write_exr(path, w, h, channels);
+}
+
+fn json(o: &std::process::Output) -> serde_json::Value {
+    serde_json::from_str(&stdout(o)).unwrap_or_else(|e| panic!("{e}: {}", stdout(o)))
+}
+
+/// Every layer is compared (issue 31): a change in a light layer alone fails --fail-pixel and
+/// is named in the per-layer figures; depth is gated by --data-fail-pixel (0: exact), an
+/// infinite depth written alike in both is no change, a lost layer fails and an added one
+/// warns.
+#[test]
+fn every_layer_is_compared_with_its_own_gate() {
+    let dir = tempfile::tempdir().unwrap();
+    let golden = dir.path().join("golden.exr");
+    layered(&golden, |_, _| {});
+    let g = s(&golden);
+
+    // An AOV-only change: the beauty's figures stay 0.
+    let aov = dir.path().join("aov.exr");
+    layered(&aov, |name, p| {
+        if name == "diffuse.G" {
+            p[7 * 40 + 9] += 0.25;
+        }
+    });
+    let o = shutter(&["diff", &g, &s(&aov), "--fail-pixel", "0.1", "--json"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let report = json(&o);
+    let frame = &report["frames"][0];
+    assert_eq!(frame["whole"]["rmse"], 0.0, "the beauty is untouched");
+    let layers = frame["layers"].as_array().unwrap();
+    let names: Vec<&str> = layers
+        .iter()
+        .map(|l| l["layer"].as_str().unwrap())
+        .collect();
+    // The beauty first, then the file's order (EXR sorts channels by name).
+    assert_eq!(names, ["beauty", "Z", "diffuse", "velocity"]);
+    let diffuse = &layers[2];
+    assert_eq!(diffuse["class"], "colour");
+    assert_eq!(diffuse["pixels_over_fail"], 1);
+    assert_eq!(diffuse["largest"]["channel"], "diffuse.G");
+    assert_eq!(
+        (
+            diffuse["largest"]["x"].clone(),
+            diffuse["largest"]["y"].clone()
+        ),
+        (9.into(), 7.into())
+    );
+    // Its RMSE over its 3 channels of 1,200 pixels, and its mean absolute error.
+    let rmse = diffuse["rmse"].as_f64().unwrap();
+    let d = 0.25f64;
+    assert!((rmse - (d * d / 3600.0).sqrt()).abs() < 1e-6, "{rmse}");
+    assert!((diffuse["mae"].as_f64().unwrap() - d / 3600.0).abs() < 1e-7);
+    assert_eq!(layers[1]["class"], "data");
+
+    // Depth off by 1e-3 on one pixel: exact fails it, a tolerance of 0.01 lets it through,
+    // --fail-pixel alone (colour) does not look at it.
+    let depth = dir.path().join("depth.exr");
+    layered(&depth, |name, p| {
+        if name == "Z" {
+            p[100] += 1e-3;
+        }
+    });
+    for (flags, code) in [
+        (vec!["--fail-pixel", "0.1"], 0),
+        (vec!["--data-fail-pixel", "0"], 1),
+        (vec!["--data-fail-pixel", "0.01"], 0),
+    ] {
+        let d = s(&depth);
+        let mut args = vec!["diff", &g, &d];
+        args.extend(flags.iter().copied());
+        let o = shutter(&args);
+        assert_eq!(o.status.code(), Some(code), "{flags:?}: {}", stderr(&o));
+    }
+
+    // An infinite depth in both is no change; in one only, it fails.
+    let inf_a = dir.path().join("inf_a.exr");
+    let inf_b = dir.path().join("inf_b.exr");
+    layered(&inf_a, |name, p| {
+        if name == "Z" {
+            p[5] = f32::INFINITY;
+        }
+    });
+    layered(&inf_b, |name, p| {
+        if name == "Z" {
+            p[5] = f32::INFINITY;
+        }
+    });
+    let o = shutter(&["diff", &s(&inf_a), &s(&inf_b), "--data-fail-pixel", "0"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = shutter(&["diff", &g, &s(&inf_b)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("1 non-finite samples in Z"),
+        "{}",
+        stderr(&o)
+    );
+
+    // A lost layer fails; an added one warns.
+    let fewer = dir.path().join("fewer.exr");
+    let keep = ["R", "G", "B", "A", "diffuse.R", "diffuse.G", "diffuse.B"];
+    let read = read_exr_reference(&golden);
+    write_exr(
+        &fewer,
+        40,
+        30,
+        read.iter()
+            .filter(|(n, _)| keep.contains(&n.as_str()))
+            .map(|(n, p)| (n.as_str(), p.clone()))
+            .collect(),
+    );
+    let o = shutter(&["diff", &g, &s(&fewer)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o)
+            .contains("the candidate lacks 3 channels of the reference: Z, velocity.X, velocity.Y"),
+        "{}",
+        stderr(&o)
+    );
+    let o = shutter(&["diff", &s(&fewer), &g]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stderr(&o).contains("warning: the candidate has channels the reference lacks: Z"));
+    // --warn-exit makes the warning an exit code of its own.
+    let o = shutter(&["diff", &s(&fewer), &g, "--warn-exit"]);
+    assert_eq!(o.status.code(), Some(4), "{}", stderr(&o));
+}
+
+/// idiff's relative threshold: a sample fails only when its difference is also over R times
+/// the mean magnitude of the two values (0.5 against 0.6: 0.1 / 0.55 = 0.18).
+#[test]
+fn a_relative_threshold_and_a_hard_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.exr"), dir.path().join("b.exr"));
+    let flat = |v: f32| vec![v; 16];
+    write_exr(
+        &a,
+        4,
+        4,
+        vec![("R", flat(0.5)), ("G", flat(0.5)), ("B", flat(0.5))],
+    );
+    let mut r = flat(0.5);
+    r[5] = 0.6;
+    write_exr(&b, 4, 4, vec![("R", r), ("G", flat(0.5)), ("B", flat(0.5))]);
+    for (relative, code) in [("0.17", 1), ("0.19", 0)] {
+        let o = shutter(&[
+            "diff",
+            &s(&a),
+            &s(&b),
+            "--fail-pixel",
+            "0.05",
+            "--fail-relative",
+            relative,
+        ]);
+        assert_eq!(o.status.code(), Some(code), "{relative}: {}", stderr(&o));
+    }
+    // Allowed by count, but over the hard limit.
+    let o = shutter(&[
+        "diff",
+        &s(&a),
+        &s(&b),
+        "--fail-pixel",
+        "0.05",
+        "--allow-pixels",
+        "1",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = shutter(&[
+        "diff",
+        &s(&a),
+        &s(&b),
+        "--fail-pixel",
+        "0.05",
+        "--allow-pixels",
+        "1",
+        "--hard-fail",
+        "0.09",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--hard-fail 0.09"), "{}", stderr(&o));
 }

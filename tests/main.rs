@@ -3,11 +3,13 @@
 
 mod support;
 
+mod automation;
 mod bench;
 mod cli;
 mod diff;
 mod dof;
 mod farm;
+mod gate;
 mod golden;
 mod gpu;
 mod gpu_dof;

@@ -22,7 +22,7 @@ fn info(path: &Path) -> serde_json::Value {
     let o = shutter(&["info", "--json", &s(path)]);
     assert!(o.status.success(), "{}", stderr(&o));
     let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
-    json[0].clone()
+    json["files"][0].clone()
 }
 
 fn info_text(path: &Path) -> String {

@@ -921,7 +921,7 @@ fn a_presets_layers_table_overrides_a_layers_class() {
     assert!(o.status.success(), "{}", stderr(&o));
     let doc: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let class = |name: &str| {
-        doc[0]["channels"]
+        doc["files"][0]["channels"]
             .as_array()
             .unwrap()
             .iter()

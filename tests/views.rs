@@ -246,8 +246,8 @@ fn a_multi_part_file_whose_first_part_has_no_view_needs_view() {
     assert!(text.contains("choose a view with --view"), "{text}");
     let o = shutter(&["info", "--json", &s(&stereo)]);
     let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
-    assert!(json[0]["suggestion"].is_null());
-    assert!(json[0]["views"]["default"].is_null());
+    assert!(json["files"][0]["suggestion"].is_null());
+    assert!(json["files"][0]["views"]["default"].is_null());
 
     let (_, right) = mono(d);
     let o = blur(&s(&stereo), &out.join("o.exr"), &["--view", "right"]);
@@ -326,14 +326,14 @@ fn info_shows_the_views_and_matches_presets_in_the_view_asked_for() {
     assert!(o.status.success(), "{}", stderr(&o));
     let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     assert_eq!(
-        json[0]["views"]["names"],
+        json["files"][0]["views"]["names"],
         serde_json::json!(["left", "right"])
     );
-    assert_eq!(json[0]["views"]["default"], "left");
-    assert_eq!(json[0]["views"]["read"], "right");
-    assert_eq!(json[0]["suggestion"]["preset"], "shutter");
+    assert_eq!(json["files"][0]["views"]["default"], "left");
+    assert_eq!(json["files"][0]["views"]["read"], "right");
+    assert_eq!(json["files"][0]["suggestion"]["preset"], "shutter");
     // In view right, shutter reads right's colour, depth and velocity: 7 channels.
-    assert_eq!(json[0]["suggestion"]["matched"], 7);
+    assert_eq!(json["files"][0]["suggestion"]["matched"], 7);
 
     let o = shutter(&["info", "--view", "centre", &s(&stereo)]);
     assert_eq!(o.status.code(), Some(1));

@@ -36,9 +36,10 @@ pub enum Command {
     Presets(PresetsArgs),
     /// Write a procedural test scene: its passes and brute-force references.
     Scene(SceneArgs),
-    /// Compare two images or sequences: metrics, a CI gate, a heatmap. Exit codes: 0 within
-    /// --fail, 1 over it, 2 an unreadable input or a size mismatch.
-    Diff(DiffArgs),
+    /// Compare two images or sequences, every channel: metrics, CI gates, a heatmap, an HTML
+    /// report. Exit codes: 0 pass, 1 fail, 2 usage, 3 could not compare (an unreadable input,
+    /// sizes that differ), 4 warned (with --warn-exit); --idiff gives idiff's.
+    Diff(Box<DiffArgs>),
     /// Time and score every algorithm setting on the truth scenes: bench.json, bench.md,
     /// pareto.svg/.png and contact sheets.
     Bench(BenchArgs),
@@ -335,26 +336,64 @@ pub struct DiffArgs {
     #[arg(long, value_name = "Y")]
     pub fail: Option<f64>,
 
-    /// Fail a pixel whose largest channel difference is over T (absolute); the frame fails
-    /// when more pixels fail than --allow-pixels / --fail-percent allow (none by default).
+    /// Fail a pixel with a colour channel (the beauty's R, G, B, A and every light layer)
+    /// that differs by more than T; the frame fails when more pixels fail than
+    /// --allow-pixels / --fail-percent allow (none by default).
     #[arg(long, value_name = "T")]
     pub fail_pixel: Option<f64>,
 
-    /// Warn about pixels whose largest channel difference is over T.
+    /// Warn about pixels with a colour channel that differs by more than T.
     #[arg(long, value_name = "T")]
     pub warn_pixel: Option<f64>,
 
-    /// How many pixels may fail --fail-pixel in a frame.
+    /// Fail a pixel with a data channel (depth, vectors, normals, IDs) that differs by more
+    /// than T (0: any difference), counted with --fail-pixel's.
+    #[arg(long, value_name = "T")]
+    pub data_fail_pixel: Option<f64>,
+
+    /// Warn about pixels with a data channel that differs by more than T.
+    #[arg(long, value_name = "T")]
+    pub data_warn_pixel: Option<f64>,
+
+    /// A sample fails only if its difference is also over R times the mean magnitude of its
+    /// two values (idiff's -failrelative; 0: off).
+    #[arg(long, value_name = "R", default_value_t = 0.0)]
+    pub fail_relative: f64,
+
+    /// The same for the warning thresholds (idiff's -warnrelative).
+    #[arg(long, value_name = "R", default_value_t = 0.0)]
+    pub warn_relative: f64,
+
+    /// Fail the frame if any sample of any channel differs by more than H, whatever
+    /// --allow-pixels and --fail-percent allow.
+    #[arg(long, value_name = "H")]
+    pub hard_fail: Option<f64>,
+
+    /// How many pixels may fail the per-pixel gates in a frame.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub allow_pixels: usize,
 
-    /// What share of a frame's pixels (percent) may fail --fail-pixel.
+    /// What share of a frame's pixels (percent) may fail the per-pixel gates.
     #[arg(long, value_name = "P", default_value_t = 0.0)]
     pub fail_percent: f64,
 
     /// Let NaN and infinite values through (by default any in either image fails the frame).
     #[arg(long)]
     pub allow_nonfinite: bool,
+
+    /// Exit 4 when a frame warns and none fails (by default a warning exits 0).
+    #[arg(long)]
+    pub warn_exit: bool,
+
+    /// Behave as OpenImageIO's idiff for drop-in use: its exit codes (0 pass, 1 warn, 2 fail,
+    /// 3 sizes or channels differ, 4 an input unreadable) and, unless given, its thresholds
+    /// (--fail-pixel 1e-6 --warn-pixel 1e-6, on data channels too).
+    #[arg(long)]
+    pub idiff: bool,
+
+    /// Write an HTML report of the comparison (index.html, report.json, thumbs/) in DIR.
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
 
     /// Write the per-pixel error of the metric as a PNG (a pattern for sequences).
     #[arg(long, value_name = "OUT.png")]
@@ -379,6 +418,10 @@ pub struct DiffArgs {
     /// Print JSON on stdout.
     #[arg(long)]
     pub json: bool,
+
+    /// Print no warnings on stderr (they stay in --json).
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
 #[derive(Debug, Args)]

@@ -75,9 +75,10 @@ pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
     if let Some(b) = bar.take() {
         b.finish_and_clear();
     }
-    let report = result?;
+    let mut report = result?;
+    report.command = if dof { "dof" } else { "blur" };
     if args.json {
-        out(&(serde_json::to_string_pretty(&report).unwrap_or_default() + "\n"));
+        super::out_json(&report);
     } else if args.dry_run {
         // One line a frame: what it would do, its output, and why a redo.
         let text: String = report

@@ -38,8 +38,9 @@ fn frames_for(
 
 fn format_scores(s: &crate::lab::metrics::Scores) -> String {
     format!(
-        "rmse {:.6}  psnr {:.2} dB  ssim {:.5}  flip {:.5}  ({} px{})",
+        "rmse {:.6}  mae {:.6}  psnr {:.2} dB (peak 1)  ssim {:.5}  flip {:.5}  ({} px{})",
         s.rmse,
+        s.mae,
         s.psnr,
         s.ssim,
         s.flip,
@@ -50,6 +51,61 @@ fn format_scores(s: &crate::lab::metrics::Scores) -> String {
             String::new()
         }
     )
+}
+
+/// How `diff` reports its outcome as an exit code: its own table, or idiff's (README:
+/// "Exit codes").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Codes {
+    Shutter { warn_exit: bool },
+    Idiff,
+}
+
+impl Codes {
+    pub fn of(args: &DiffArgs) -> Codes {
+        if args.idiff {
+            Codes::Idiff
+        } else {
+            Codes::Shutter {
+                warn_exit: args.warn_exit,
+            }
+        }
+    }
+
+    /// The code for a comparison made: failed, warned, and whether the channel sets differ.
+    fn verdict(self, failed: bool, warned: bool, channels_differ: bool) -> i32 {
+        match self {
+            Codes::Shutter { warn_exit } => {
+                if failed {
+                    1
+                } else if warned && warn_exit {
+                    4
+                } else {
+                    0
+                }
+            }
+            Codes::Idiff if channels_differ => 3,
+            Codes::Idiff if failed => 2,
+            Codes::Idiff if warned => 1,
+            Codes::Idiff => 0,
+        }
+    }
+
+    /// The code for a comparison not made: a bad command line, sizes that differ, or an
+    /// input that cannot be read.
+    pub fn error(self, error: &Error) -> i32 {
+        let sizes = !error.problems().is_empty()
+            && error
+                .problems()
+                .iter()
+                .all(|p| p.kind == crate::error::ProblemKind::SizeMismatch);
+        match (self, error) {
+            (Codes::Shutter { .. }, Error::Usage(_)) => 2,
+            (Codes::Shutter { .. }, _) => 3,
+            (Codes::Idiff, _) if sizes => 3,
+            (Codes::Idiff, _) => 4,
+        }
+    }
 }
 
 pub fn diff(args: DiffArgs) -> Result<i32> {
@@ -64,9 +120,17 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
         ("--fail", args.fail),
         ("--fail-pixel", args.fail_pixel),
         ("--warn-pixel", args.warn_pixel),
+        ("--data-fail-pixel", args.data_fail_pixel),
+        ("--data-warn-pixel", args.data_warn_pixel),
+        ("--hard-fail", args.hard_fail),
+        ("--fail-relative", Some(args.fail_relative)),
+        ("--warn-relative", Some(args.warn_relative)),
     ] {
         if value.is_some_and(|v| !v.is_finite()) {
             return Err(Error::usage(format!("{flag} must be a finite number")));
+        }
+        if flag != "--warn" && flag != "--fail" && value.is_some_and(|v| v < 0.0) {
+            return Err(Error::usage(format!("{flag} must not be negative")));
         }
     }
     if !(0.0..=100.0).contains(&args.fail_percent) {
@@ -101,25 +165,56 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
         heatmap,
         preset: Preset::load(&args.preset)?,
         linear: args.linear,
-        fail_pixel: args.fail_pixel,
-        warn_pixel: args.warn_pixel,
+        gates: gates(&args),
         allow_pixels: args.allow_pixels,
         fail_percent: args.fail_percent,
         allow_nonfinite: args.allow_nonfinite,
+        report: args.report.clone(),
     };
     let report = crate::lab::diff::run(&job)?;
     if args.json {
-        out(&(serde_json::to_string_pretty(&report).unwrap_or_default() + "\n"));
+        super::out_json(&report);
     } else {
         let mut text = String::new();
         for f in &report.frames {
             let label = f.frame.map_or(String::new(), |n| format!("frame {n}: "));
             text += &format!("{label}{}\n", format_scores(&f.whole));
+            let e = &f.every_channel;
             let m = &f.largest;
+            text += &format!(
+                "{label}every channel ({}): mean error {:.6}  rms error {:.6}  psnr {:.2} dB (peak {})\n",
+                e.channels, e.mean_error, e.rms_error, e.psnr, e.psnr_peak
+            );
             if m.error > 0.0 {
                 text += &format!(
                     "{label}largest difference {:.6} at ({}, {}) {}: {} against {}\n",
-                    m.error, m.x, m.y, m.channel, m.a, m.b
+                    m.error, m.x, m.y, m.channel, m.a as f32, m.b as f32
+                );
+            }
+            for layer in f.layers.iter().skip(1) {
+                if layer.largest.error > 0.0 || layer.non_finite > 0 {
+                    text += &format!(
+                        "{label}layer {} ({}): rmse {:.6}  mae {:.6}  largest {:.6} at ({}, {}) {}{}\n",
+                        layer.layer,
+                        layer.class,
+                        layer.rmse,
+                        layer.mae,
+                        layer.largest.error,
+                        layer.largest.x,
+                        layer.largest.y,
+                        layer.largest.channel,
+                        if layer.non_finite > 0 {
+                            format!(", {} non-finite", layer.non_finite)
+                        } else {
+                            String::new()
+                        }
+                    );
+                }
+            }
+            if !f.missing_channels.is_empty() {
+                text += &format!(
+                    "{label}missing from the candidate: {}\n",
+                    f.missing_channels.join(", ")
                 );
             }
             if let Some(region) = &f.region {
@@ -136,9 +231,20 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
         }
         out(&text);
     }
-    for warning in &report.warnings {
-        eprintln!("shutter: warning: {warning}");
+    if let Some(dir) = &args.report {
+        crate::lab::diff::report::write(dir, &report)?;
     }
+    if !args.quiet {
+        for warning in &report.warnings {
+            eprintln!("shutter: warning: {warning}");
+        }
+    }
+    let warned = report.frames.iter().any(|f| f.warned);
+    let channels_differ = report
+        .frames
+        .iter()
+        .any(|f| !f.missing_channels.is_empty() || !f.extra_channels.is_empty());
+    let code = Codes::of(&args).verdict(report.failed, warned, channels_differ);
     if report.failed {
         let failed: Vec<&crate::lab::diff::FrameDiff> =
             report.frames.iter().filter(|f| f.failed).collect();
@@ -152,7 +258,21 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
             report.frames.len(),
             first.why.as_deref().unwrap_or("")
         );
-        return Ok(1);
     }
-    Ok(0)
+    Ok(code)
+}
+
+/// The per-pixel gates the flags give; with --idiff, idiff's default thresholds where no
+/// threshold of that kind is given.
+fn gates(args: &DiffArgs) -> crate::lab::diff::Gates {
+    let idiff = |given: Option<f64>| given.or(args.idiff.then_some(1e-6));
+    crate::lab::diff::Gates {
+        fail: idiff(args.fail_pixel),
+        warn: idiff(args.warn_pixel),
+        data_fail: idiff(args.data_fail_pixel),
+        data_warn: idiff(args.data_warn_pixel),
+        fail_relative: args.fail_relative,
+        warn_relative: args.warn_relative,
+        hard_fail: args.hard_fail,
+    }
 }

@@ -75,7 +75,22 @@ pub fn info(args: InfoArgs) -> Result<()> {
         }
     }
     if args.json {
-        out(&(serde_json::to_string_pretty(&documents).unwrap_or_default() + "\n"));
+        // One document: the files described and, when some could not be, the error object
+        // a failed run's --json carries (README: "JSON").
+        let document = if problems.is_empty() {
+            serde_json::json!({
+                "schema": crate::JSON_SCHEMA,
+                "command": "info",
+                "ok": true,
+                "files": documents,
+            })
+        } else {
+            let error = Error::Files(problems.clone());
+            let mut document = super::error_json("info", &error, error.exit_code());
+            document["files"] = serde_json::Value::Array(documents);
+            document
+        };
+        super::out_json(&document);
     }
     if problems.is_empty() {
         Ok(())
@@ -184,6 +199,18 @@ fn info_text(shown: &Shown) -> String {
         text.push_str(line.trim_end());
         text.push('\n');
     }
+    for (part, rows) in attribute_rows(info) {
+        text.push_str(&match part {
+            Some(name) => format!("  attributes ({name}):\n"),
+            None => "  attributes:\n".to_string(),
+        });
+        for row in rows {
+            text.push_str(&format!(
+                "    {:<28} {:<15} {}\n",
+                row.name, row.kind, row.text
+            ));
+        }
+    }
     let Some(suggestion) = suggestion else {
         text.push_str("  presets:        choose a view with --view to match presets\n");
         return text;
@@ -216,6 +243,30 @@ fn info_text(shown: &Shown) -> String {
     text
 }
 
+/// The header attributes of each part of an EXR (named by its part's name, or `part N` in a
+/// multi-part file), or a photo's metadata blocks.
+fn attribute_rows(info: &FileInfo) -> Vec<(Option<String>, Vec<super::attributes::Shown>)> {
+    match &info.kind {
+        FileKind::Exr { headers, .. } => headers
+            .iter()
+            .enumerate()
+            .map(|(i, h)| {
+                let name = (headers.len() > 1).then(|| {
+                    h.own_attributes
+                        .layer_name
+                        .as_ref()
+                        .map_or(format!("part {i}"), |n| format!("part {i}, {n}"))
+                });
+                (name, super::attributes::of_header(h))
+            })
+            .collect(),
+        FileKind::Image { .. } => match crate::io::image::read_photo(&info.path) {
+            Ok(photo) => vec![(None, super::attributes::of_photo(&photo))],
+            Err(_) => Vec::new(),
+        },
+    }
+}
+
 fn info_json(shown: &Shown) -> serde_json::Value {
     let Shown {
         layers,
@@ -245,6 +296,12 @@ fn info_json(shown: &Shown) -> serde_json::Value {
             "class": class_of(info, c, layers).name(),
             "part": c.part,
             "view": c.view,
+        })).collect::<Vec<_>>(),
+        "attributes": attribute_rows(info).into_iter().map(|(part, rows)| serde_json::json!({
+            "part": part,
+            "attributes": rows.into_iter().map(|r| serde_json::json!({
+                "name": r.name, "type": r.kind, "value": r.json,
+            })).collect::<Vec<_>>(),
         })).collect::<Vec<_>>(),
         "presets": matches.iter().map(|(name, found)| serde_json::json!({
             "name": name, "passes": found,

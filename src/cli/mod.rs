@@ -3,6 +3,7 @@
 //! report. Only this module prints.
 
 pub mod args;
+mod attributes;
 mod bench;
 mod blur;
 mod diff;
@@ -25,12 +26,48 @@ pub fn main() -> i32 {
         Ok(cli) => cli,
         Err(e) => {
             let _ = e.print();
-            return e.exit_code();
+            let mut code = e.exit_code();
+            let args: Vec<String> = std::env::args().skip(1).collect();
+            let command = args.first().map_or("", String::as_str);
+            // A command line clap cannot parse is a comparison not made: idiff's 4.
+            if code == 2 && command == "diff" && args.iter().any(|a| a == "--idiff") {
+                code = 4;
+            }
+            // --json asked for: the error object on stdout, as for any failed run.
+            if code != 0 && args.iter().any(|a| a == "--json") {
+                let rendered = e.to_string();
+                let message = rendered
+                    .lines()
+                    .next()
+                    .unwrap_or_default()
+                    .trim_start_matches("error: ")
+                    .to_string();
+                let error = Error::usage(format!("{message} (see shutter {command} --help)"));
+                out_json(&error_json(command, &error, code));
+            }
+            return code;
         }
     };
+    let (command, json) = match &cli.command {
+        Command::Blur(a) => ("blur", a.json),
+        Command::Dof(a) => ("dof", a.json),
+        Command::Info(a) => ("info", a.json),
+        Command::Diff(a) => ("diff", a.json),
+        Command::Presets(_) => ("presets", false),
+        Command::Scene(_) => ("scene", false),
+        Command::Bench(_) => ("bench", false),
+        Command::Frames(_) => ("frames", false),
+    };
+    let failed = |error: &Error, code: i32| {
+        print_error(error);
+        // Unless the command printed its own document with the error in it (info).
+        if json && !JSON_PRINTED.load(std::sync::atomic::Ordering::Relaxed) {
+            out_json(&error_json(command, error, code));
+        }
+        code
+    };
     if let Err(error) = check_thread_variable() {
-        print_error(&error);
-        return error.exit_code();
+        return failed(&error, error.exit_code());
     }
     stop_cleanly_on_signals();
     let result = match cli.command {
@@ -42,23 +79,60 @@ pub fn main() -> i32 {
         Command::Bench(args) => bench::bench(args),
         Command::Frames(args) => frames(args),
         Command::Diff(args) => {
-            return match diff::diff(args) {
+            let codes = diff::Codes::of(&args);
+            return match diff::diff(*args) {
                 Ok(code) => code,
-                Err(error) => {
-                    print_error(&error);
-                    // For diff, an unreadable input is not a comparison result: exit 2.
-                    2
-                }
+                // A comparison not made is not a comparison's result: its own code.
+                Err(error) => failed(&error, codes.error(&error)),
             };
         }
     };
     match result {
         Ok(()) => 0,
-        Err(error) => {
-            print_error(&error);
-            error.exit_code()
-        }
+        Err(error) => failed(&error, error.exit_code()),
     }
+}
+
+/// The document `--json` prints on stdout when a command fails (README: "JSON"): the schema,
+/// the command, `"ok": false` and an error object with the exit code, the kind of error and
+/// every problem (file, frame, pass, channel, what went wrong).
+pub fn error_json(command: &str, error: &Error, code: i32) -> serde_json::Value {
+    let kind = match error {
+        Error::Usage(_) => "usage",
+        Error::Device(_) => "device",
+        Error::Files(_) if code == crate::error::TRANSIENT_EXIT => "transient",
+        Error::Files(_) => "files",
+    };
+    let problems: Vec<serde_json::Value> = error
+        .problems()
+        .iter()
+        .map(|p| {
+            serde_json::json!({
+                "kind": p.kind.name(),
+                "path": p.path,
+                "frame": p.frame,
+                "pass": p.pass,
+                "channel": p.channel,
+                "detail": p.detail,
+                "message": p.to_string(),
+            })
+        })
+        .collect();
+    let message = match error {
+        Error::Usage(m) | Error::Device(m) => m.clone(),
+        Error::Files(_) => error.to_string(),
+    };
+    serde_json::json!({
+        "schema": crate::JSON_SCHEMA,
+        "command": command,
+        "ok": false,
+        "error": {
+            "exit_code": code,
+            "kind": kind,
+            "message": message,
+            "problems": problems,
+        }
+    })
 }
 
 /// The thread limit never falls below this, whatever the machine: enough for any farm node's
@@ -193,6 +267,15 @@ fn frames(args: args::FramesArgs) -> Result<()> {
 
 /// Writes `text` to stdout, the one way every command prints its results. A reader that
 /// closed the pipe early (`| head`) is not an error, so nothing panics.
+/// Whether a `--json` document went to stdout (one per run).
+static JSON_PRINTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Prints a `--json` document on stdout.
+fn out_json(document: &impl serde::Serialize) {
+    JSON_PRINTED.store(true, std::sync::atomic::Ordering::Relaxed);
+    out(&(serde_json::to_string_pretty(document).unwrap_or_default() + "\n"));
+}
+
 fn out(text: &str) {
     use std::io::Write;
     let _ = std::io::stdout().lock().write_all(text.as_bytes());

@@ -46,6 +46,9 @@ impl<'a> Rgb<'a> {
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Scores {
     pub rmse: f64,
+    /// Mean absolute difference per channel sample.
+    pub mae: f64,
+    /// PSNR for a peak of 1.0 (display white in scene-linear): `-20 log10(rmse)`.
     pub psnr: f64,
     pub ssim: f64,
     pub flip: f64,
@@ -141,12 +144,13 @@ pub fn squared_error_map(a: &Rgb, b: &Rgb) -> (Vec<f64>, usize) {
 }
 
 /// The largest difference in one channel between two images, where it is and both values.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Largest {
     pub error: f64,
     pub x: usize,
     pub y: usize,
-    pub channel: &'static str,
+    /// The channel's name as the file stores it.
+    pub channel: String,
     /// The reference's value there, and the tested image's.
     pub a: f64,
     pub b: f64,
@@ -174,7 +178,7 @@ pub fn pixel_errors(a: &Rgb, b: &Rgb) -> (Vec<f32>, Largest) {
 pub fn add_channel(
     a: &[f32],
     b: &[f32],
-    (name, width): (&'static str, usize),
+    (name, width): (&str, usize),
     errors: &mut [f32],
     largest: &mut Largest,
 ) {
@@ -191,7 +195,7 @@ pub fn add_channel(
                 error: d,
                 x: i % width.max(1),
                 y: i / width.max(1),
-                channel: name,
+                channel: name.to_string(),
                 a: x as f64,
                 b: y as f64,
             };
@@ -211,6 +215,24 @@ fn rmse_of_map(squared: &[f64], mask: Option<&[bool]>) -> f64 {
         0.0
     } else {
         (sum / (3 * count) as f64).sqrt()
+    }
+}
+
+/// Mean absolute difference over the three channels of the pixels in `mask` (all when
+/// `None`); non-finite samples count as 0, as in [`rmse`].
+pub fn mean_absolute(a: &Rgb, b: &Rgb, mask: Option<&[bool]>) -> f64 {
+    let n = a.width * a.height;
+    let mut map = vec![0.0f64; n];
+    for c in 0..3 {
+        for (i, m) in map.iter_mut().enumerate() {
+            *m += (finite(a.planes[c][i]) as f64 - finite(b.planes[c][i]) as f64).abs();
+        }
+    }
+    let (sum, count) = masked_sum(&map, mask);
+    if count == 0 {
+        0.0
+    } else {
+        sum / (3 * count) as f64
     }
 }
 
@@ -301,6 +323,7 @@ pub fn compare(reference: &Rgb, test: &Rgb, mask: Option<&[bool]>) -> Scores {
     let (squared, non_finite) = squared_error_map(reference, test);
     let pixels = mask.map_or(squared.len(), |m| m.iter().filter(|&&v| v).count());
     let rmse = rmse_of_map(&squared, mask);
+    let mae = mean_absolute(reference, test, mask);
     let ssim_map = ssim::ssim_map(
         &display_luma(reference),
         &display_luma(test),
@@ -310,6 +333,7 @@ pub fn compare(reference: &Rgb, test: &Rgb, mask: Option<&[bool]>) -> Scores {
     let flip = flip_map(reference, test);
     Scores {
         rmse,
+        mae,
         psnr: psnr_from_rmse(rmse),
         ssim: if pixels == 0 {
             1.0

@@ -1,5 +1,9 @@
-//! `shutter diff`: compares two images or two sequences frame by frame, with a metric gate
-//! for CI (warn and fail thresholds) and a heatmap of the per-pixel error.
+//! `shutter diff`: compares two images or two sequences frame by frame, every channel of
+//! them (`channels`), with gates for CI (aggregate metric, per-pixel thresholds, non-finite
+//! values, channels lost), a heatmap of the per-pixel error and an HTML report (`report`).
+
+pub mod channels;
+pub mod report;
 
 use std::path::{Path, PathBuf};
 
@@ -12,6 +16,8 @@ use crate::io::passes::{plan_color, read_frame, FramePlan};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::lab::metrics::{self, Largest, Metric, Rgb, Scores};
+
+pub use channels::{EveryChannel, Gates, LayerDiff};
 
 /// A diff job.
 #[derive(Clone, Debug)]
@@ -27,24 +33,54 @@ pub struct DiffJob {
     pub heatmap: Option<PathPattern>,
     pub preset: Preset,
     pub linear: bool,
-    /// Per-pixel gates: a pixel whose largest channel difference is over `fail_pixel` fails,
-    /// and a frame with more failing pixels than `allowed_pixels` allows fails.
-    pub fail_pixel: Option<f64>,
-    pub warn_pixel: Option<f64>,
+    /// Per-pixel gates: a pixel with a channel over its class's threshold fails, and a frame
+    /// with more failing pixels than `allow_pixels`/`fail_percent` allow fails.
+    pub gates: Gates,
     /// How many pixels may fail `fail_pixel`: a count, or a share of the frame (the larger).
     pub allow_pixels: usize,
     pub fail_percent: f64,
     /// Non-finite values (NaN, ±∞) in either image do not fail the frame.
     pub allow_nonfinite: bool,
+    /// A folder for the HTML report and its thumbnails (`report`).
+    pub report: Option<PathBuf>,
 }
 
 /// Why a frame fails, in words, or `None`.
-fn failure(job: &DiffJob, whole: &Scores, value: f64, over_fail: usize) -> Option<String> {
-    if whole.non_finite > 0 && !job.allow_nonfinite {
+fn failure(
+    job: &DiffJob,
+    compared: &channels::Compared,
+    value: f64,
+    pixels: usize,
+) -> Option<String> {
+    if compared.non_finite > 0 && !job.allow_nonfinite {
+        let layers: Vec<&str> = compared
+            .layers
+            .iter()
+            .filter(|l| l.non_finite > 0)
+            .map(|l| l.layer.as_str())
+            .collect();
         return Some(format!(
-            "{} non-finite samples (NaN or infinite; --allow-nonfinite lets them through)",
-            whole.non_finite
+            "{} non-finite samples in {} (NaN or infinite; --allow-nonfinite lets them through)",
+            compared.non_finite,
+            layers.join(", ")
         ));
+    }
+    if !compared.missing.is_empty() {
+        return Some(format!(
+            "the candidate lacks {} channel{} of the reference: {}",
+            compared.missing.len(),
+            if compared.missing.len() == 1 { "" } else { "s" },
+            compared.missing.join(", ")
+        ));
+    }
+    if let Some(hard) = job.gates.hard_fail {
+        if compared.over_hard > 0 {
+            let m = &compared.every.max_error;
+            return Some(format!(
+                "{} samples differ by more than --hard-fail {hard} (largest {:.6} at ({}, {}) {})",
+                compared.over_hard, m.error, m.x, m.y, m.channel
+            ));
+        }
     }
     if let Some(limit) = job.fail {
         if job.metric.exceeds(value, limit) {
@@ -54,11 +90,19 @@ fn failure(job: &DiffJob, whole: &Scores, value: f64, over_fail: usize) -> Optio
             ));
         }
     }
-    if let Some(threshold) = job.fail_pixel {
-        let allowed = allowed_pixels(job, whole.pixels);
-        if over_fail > allowed {
+    if job.gates.fail.is_some() || job.gates.data_fail.is_some() {
+        let allowed = allowed_pixels(job, pixels);
+        let over = compared.pixels_over_fail;
+        if over > allowed {
+            let layers: Vec<String> = compared
+                .layers
+                .iter()
+                .filter(|l| l.pixels_over_fail > 0)
+                .map(|l| format!("{} {}", l.layer, l.pixels_over_fail))
+                .collect();
             return Some(format!(
-                "{over_fail} pixels differ by more than --fail-pixel {threshold} (allowed: {allowed})"
+                "{over} pixels over the per-pixel gate (allowed: {allowed}; by layer: {})",
+                layers.join(", ")
             ));
         }
     }
@@ -77,25 +121,42 @@ pub struct FrameDiff {
     pub frame: Option<i64>,
     pub a: PathBuf,
     pub b: PathBuf,
+    /// The beauty's RGB (SSIM and FLIP on its display image).
     pub whole: Scores,
     /// Over the pixels where `sharp` and `a` differ (when `--sharp` is given).
     pub region: Option<Scores>,
     /// The gating metric's value for this frame.
     pub value: f64,
-    /// The largest difference of one channel (finite samples), where and what.
+    /// The largest difference of one sample of any channel (finite samples), where and what.
     pub largest: Largest,
-    /// Pixels whose largest channel difference is over `--fail-pixel` and `--warn-pixel`.
+    /// Every channel at once, as idiff gives its figures.
+    pub every_channel: EveryChannel,
+    /// Each layer's figures: the beauty first.
+    pub layers: Vec<LayerDiff>,
+    /// Channels of the reference the candidate lacks (a failure), and the reverse (warned).
+    pub missing_channels: Vec<String>,
+    pub extra_channels: Vec<String>,
+    /// Pixels with a channel over its gate (`--fail-pixel` for colour, `--data-fail-pixel`
+    /// for data), and over the warning thresholds.
     pub pixels_over_fail: usize,
     pub pixels_over_warn: usize,
+    /// Samples over `--hard-fail`.
+    pub samples_over_hard: usize,
     pub warned: bool,
     pub failed: bool,
     /// Why it failed, in words.
     pub why: Option<String>,
+    /// With `--report`: the thumbnails written, relative to the report's folder.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thumbnails: Option<report::Thumbnails>,
 }
 
 /// The outcome of a diff.
 #[derive(Clone, Debug, Serialize)]
 pub struct DiffReport {
+    /// The version of this JSON's form (README: "JSON").
+    pub schema: u32,
+    pub command: &'static str,
     pub metric: &'static str,
     pub warn: Option<f64>,
     pub fail: Option<f64>,
@@ -134,14 +195,20 @@ fn error_map(metric: Metric, a: &Rgb, b: &Rgb) -> (Vec<f32>, f64) {
     }
 }
 
-/// Writes a per-pixel error map in [0, 1] as a PNG with the magma colour map.
-pub fn write_heatmap(path: &Path, width: usize, height: usize, map: &[f32]) -> Result<()> {
+/// A per-pixel map in [0, 1] as interleaved 8-bit RGB through the magma colour map.
+fn magma(map: &[f32]) -> Vec<u8> {
     let lut = nv_flip::magma_lut().to_vec();
     let mut bytes = Vec::with_capacity(map.len() * 3);
     for v in map {
         let index = (v.clamp(0.0, 1.0) * 255.0).round() as usize;
         bytes.extend_from_slice(&lut[index * 3..index * 3 + 3]);
     }
+    bytes
+}
+
+/// Writes a per-pixel error map in [0, 1] as a PNG with the magma colour map.
+pub fn write_heatmap(path: &Path, width: usize, height: usize, map: &[f32]) -> Result<()> {
+    let bytes = magma(map);
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent).map_err(|e| {
             Problem::new(ProblemKind::Output, parent, format!("cannot create: {e}"))
@@ -200,6 +267,9 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
                     .frame(frame));
                 }
             }
+            let (mut a, mut b) = (a, b);
+            a.read_every_channel();
+            b.read_every_channel();
             let (a, b) = (read_frame(&a)?, read_frame(&b)?);
             let (ra, rb) = (
                 Rgb::of(&a).expect("colour read"),
@@ -221,27 +291,15 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
                     .map_err(|e| e.problems()[0].clone())?;
             }
             let value = job.metric.of(&whole);
-            let (mut errors, mut largest) = metrics::pixel_errors(&ra, &rb);
-            // Alpha too (a missing alpha reads as opaque): an alpha-only change is a change.
-            fn alpha(f: &crate::frame::Frame) -> Option<&[f32]> {
-                f.color.as_ref().and_then(|c| c.a.as_deref())
-            }
-            let (a_alpha, b_alpha) = (alpha(&a), alpha(&b));
-            if a_alpha.is_some() || b_alpha.is_some() {
-                let ones = vec![1.0; wa * ha];
-                metrics::add_channel(
-                    a_alpha.unwrap_or(&ones),
-                    b_alpha.unwrap_or(&ones),
-                    ("A", wa),
-                    &mut errors,
-                    &mut largest,
-                );
-            }
-            let over = |threshold: Option<f64>| {
-                threshold.map_or(0, |t| errors.iter().filter(|&&e| e as f64 > t).count())
-            };
-            let (pixels_over_fail, pixels_over_warn) = (over(job.fail_pixel), over(job.warn_pixel));
-            let why = failure(job, &whole, value, pixels_over_fail);
+            // Every channel: the beauty's alpha (a missing alpha reads as opaque), every light
+            // and data layer, each against its class's gate.
+            let compared = channels::compare(&a, &b, &job.gates);
+            let thumbnails = job
+                .report
+                .as_ref()
+                .map(|dir| report::thumbnails(dir, frame, &ra, &rb, &compared.errors))
+                .transpose()?;
+            let why = failure(job, &compared, value, wa * ha);
             Ok(FrameDiff {
                 frame,
                 a: job.a.path(frame),
@@ -249,11 +307,18 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
                 whole,
                 region,
                 value,
-                largest,
-                pixels_over_fail,
-                pixels_over_warn,
+                largest: compared.every.max_error.clone(),
+                pixels_over_fail: compared.pixels_over_fail,
+                pixels_over_warn: compared.pixels_over_warn,
+                samples_over_hard: compared.over_hard,
                 warned: job.warn.is_some_and(|w| job.metric.exceeds(value, w))
-                    || pixels_over_warn > 0,
+                    || compared.pixels_over_warn > 0
+                    || !compared.extra.is_empty(),
+                every_channel: compared.every,
+                layers: compared.layers,
+                missing_channels: compared.missing,
+                extra_channels: compared.extra,
+                thumbnails,
                 failed: why.is_some(),
                 why,
             })
@@ -294,13 +359,20 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
         }
         if f.pixels_over_warn > 0 {
             warnings.push(format!(
-                "{label}{} pixels differ by more than --warn-pixel {}",
-                f.pixels_over_warn,
-                job.warn_pixel.unwrap_or_default()
+                "{label}{} pixels over the per-pixel warning (--warn-pixel / --data-warn-pixel)",
+                f.pixels_over_warn
+            ));
+        }
+        if !f.extra_channels.is_empty() {
+            warnings.push(format!(
+                "{label}the candidate has channels the reference lacks: {}",
+                f.extra_channels.join(", ")
             ));
         }
     }
     Ok(DiffReport {
+        schema: crate::JSON_SCHEMA,
+        command: "diff",
         metric: name,
         warn: job.warn,
         fail: job.fail,

@@ -1,0 +1,178 @@
+//! `shutter info`'s header attributes (issue 31): every attribute an EXR part stores, as
+//! `iinfo -v` lists them, with its type and value in text and JSON; for an 8/16-bit photo,
+//! the metadata blocks it holds (ICC profile, EXIF, XMP, IPTC) and their sizes.
+
+use exr::meta::attribute::AttributeValue;
+use serde_json::{json, Value};
+
+/// One attribute: its name, its type as the file names it, its value in text and in JSON.
+pub struct Shown {
+    pub name: String,
+    pub kind: &'static str,
+    pub text: String,
+    pub json: Value,
+}
+
+fn floats(values: &[f32]) -> String {
+    values
+        .iter()
+        .map(|v| v.to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// An attribute's type name, its value in text and in JSON.
+fn value(value: &AttributeValue) -> (&'static str, String, Value) {
+    use AttributeValue as A;
+    match value {
+        A::Text(t) => ("string", format!("\"{t}\""), json!(t.to_string())),
+        A::TextVector(list) => {
+            let texts: Vec<String> = list.iter().map(|t| t.to_string()).collect();
+            ("stringvector", format!("{texts:?}"), json!(texts))
+        }
+        A::F32(v) => ("float", v.to_string(), json!(v)),
+        A::F64(v) => ("double", v.to_string(), json!(v)),
+        A::I32(v) => ("int", v.to_string(), json!(v)),
+        A::Rational((n, d)) => ("rational", format!("{n}/{d}"), json!([n, d])),
+        A::IntVec2(v) => ("v2i", format!("{}, {}", v.0, v.1), json!([v.0, v.1])),
+        A::FloatVec2(v) => ("v2f", format!("{}, {}", v.0, v.1), json!([v.0, v.1])),
+        A::IntVec3((x, y, z)) => ("v3i", format!("{x}, {y}, {z}"), json!([x, y, z])),
+        A::FloatVec3((x, y, z)) => ("v3f", format!("{x}, {y}, {z}"), json!([x, y, z])),
+        A::IntegerBounds(b) => {
+            let (x0, y0) = (b.position.0, b.position.1);
+            let (x1, y1) = (x0 + b.size.0 as i32 - 1, y0 + b.size.1 as i32 - 1);
+            (
+                "box2i",
+                format!("({x0}, {y0}) - ({x1}, {y1})"),
+                json!([x0, y0, x1, y1]),
+            )
+        }
+        A::FloatRect(r) => (
+            "box2f",
+            format!("({}, {}) - ({}, {})", r.min.0, r.min.1, r.max.0, r.max.1),
+            json!([r.min.0, r.min.1, r.max.0, r.max.1]),
+        ),
+        A::Chromaticities(c) => {
+            let v = [
+                c.red.0, c.red.1, c.green.0, c.green.1, c.blue.0, c.blue.1, c.white.0, c.white.1,
+            ];
+            ("chromaticities", floats(&v), json!(v))
+        }
+        A::Matrix3x3(m) => ("m33f", floats(m), json!(m.to_vec())),
+        A::Matrix4x4(m) => ("m44f", floats(m), json!(m.to_vec())),
+        A::Compression(c) => {
+            let name = crate::io::exr::compression_name(*c);
+            ("compression", name.to_string(), json!(name))
+        }
+        A::LineOrder(o) => {
+            let name = format!("{o:?}").to_lowercase();
+            ("lineOrder", name.clone(), json!(name))
+        }
+        A::TimeCode(t) => {
+            let sep = if t.drop_frame { ';' } else { ':' };
+            let text = format!(
+                "{:02}:{:02}:{:02}{sep}{:02}",
+                t.hours, t.minutes, t.seconds, t.frame
+            );
+            ("timecode", text.clone(), json!(text))
+        }
+        A::KeyCode(k) => {
+            let text = format!(
+                "manufacturer {} type {} prefix {} count {} perf offset {} perfs/frame {} perfs/count {}",
+                k.film_manufacturer_code,
+                k.film_type,
+                k.film_roll_prefix,
+                k.count,
+                k.perforation_offset,
+                k.perforations_per_frame,
+                k.perforations_per_count
+            );
+            ("keycode", text.clone(), json!(text))
+        }
+        A::Preview(p) => {
+            let text = format!("{}x{} preview", p.size.0, p.size.1);
+            (
+                "preview",
+                text,
+                json!({"width": p.size.0, "height": p.size.1}),
+            )
+        }
+        A::TileDescription(t) => {
+            let text = format!(
+                "{}x{} tiles, {:?}, round {:?}",
+                t.tile_size.0, t.tile_size.1, t.level_mode, t.rounding_mode
+            );
+            ("tiledesc", text.clone(), json!(text))
+        }
+        A::EnvironmentMap(e) => {
+            let text = format!("{e:?}").to_lowercase();
+            ("envmap", text.clone(), json!(text))
+        }
+        A::BlockType(b) => {
+            use exr::meta::attribute::BlockType as B;
+            // As the file stores it (OpenEXR's names).
+            let text = match b {
+                B::ScanLine => "scanlineimage",
+                B::Tile => "tiledimage",
+                B::DeepScanLine => "deepscanline",
+                B::DeepTile => "deeptile",
+            };
+            ("string", text.to_string(), json!(text))
+        }
+        A::ChannelList(list) => {
+            let names: Vec<String> = list.list.iter().map(|c| c.name.to_string()).collect();
+            ("chlist", names.join(", "), json!(names))
+        }
+        A::Bytes { type_hint, bytes } => {
+            let text = format!("{} bytes ({type_hint})", bytes.len());
+            ("bytes", text.clone(), json!(text))
+        }
+        A::Custom { kind, bytes } => {
+            let text = format!("{} bytes of type {kind}", bytes.len());
+            ("custom", text.clone(), json!(text))
+        }
+    }
+}
+
+/// Every attribute of one EXR part but its channel list (which `info` lists with each
+/// channel's class), sorted by name.
+pub fn of_header(header: &exr::meta::header::Header) -> Vec<Shown> {
+    let mut shown: Vec<Shown> = header
+        .all_named_attributes()
+        .map(|(name, v)| (String::from_utf8_lossy(name).into_owned(), v))
+        .filter(|(name, _)| name != "channels")
+        .map(|(name, v)| {
+            let (kind, text, json) = value(&v);
+            Shown {
+                name,
+                kind,
+                text,
+                json,
+            }
+        })
+        .collect();
+    shown.sort_by(|a, b| a.name.cmp(&b.name));
+    shown
+}
+
+/// The metadata blocks of a photo, as [`Shown`] rows.
+pub fn of_photo(photo: &crate::frame::Photo) -> Vec<Shown> {
+    let mut shown = Vec::new();
+    let mut block = |name: &str, bytes: &Option<Vec<u8>>, extra: String| {
+        if let Some(bytes) = bytes {
+            let text = format!("{} bytes{extra}", bytes.len());
+            shown.push(Shown {
+                name: name.to_string(),
+                kind: "block",
+                text,
+                json: json!({ "bytes": bytes.len() }),
+            });
+        }
+    };
+    block("icc_profile", &photo.icc, String::new());
+    // The read turns the photo upright and records orientation 1 in what it keeps.
+    block("exif", &photo.exif, String::new());
+    block("xmp", &photo.xmp, String::new());
+    block("iptc", &photo.iptc, String::new());
+    shown
+}

@@ -1,0 +1,339 @@
+//! Every channel of two frames compared (issue 31): the beauty's R, G, B and alpha, every
+//! light layer and every data layer the colour file holds, matched by name.
+//!
+//! In: the two frames as read with every channel ([`crate::io::passes::FramePlan::read_every_channel`])
+//! and the per-pixel gates. Out: per layer figures (RMSE, mean absolute error, the largest
+//! difference with its pixel, channel and both values, pixels over the gates), the figures
+//! over every channel as `idiff` gives them (mean error, RMS error, PSNR with its peak, max
+//! error), the pixels over each gate, and the channels only one side holds.
+//!
+//! Colour channels (the beauty and light layers) are gated by `--fail-pixel`/`--warn-pixel`;
+//! data channels (depth, vectors, normals, IDs) by `--data-fail-pixel`/`--data-warn-pixel`,
+//! whose 0 means exact. A sample fails a gate when its absolute difference is over the
+//! threshold and over the relative threshold times the mean of the two magnitudes (idiff's
+//! `-failrelative`). A non-finite sample in a colour channel fails every gate; in a data
+//! channel only where the two sides differ (an infinite depth behind everything, written
+//! alike in both, is not a change).
+
+use serde::Serialize;
+
+use crate::frame::{Frame, LayerClass};
+use crate::lab::metrics::Largest;
+
+/// The per-pixel gates.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Gates {
+    pub fail: Option<f64>,
+    pub warn: Option<f64>,
+    pub data_fail: Option<f64>,
+    pub data_warn: Option<f64>,
+    /// Relative thresholds (a fraction of the mean magnitude of the two values); 0: none.
+    pub fail_relative: f64,
+    pub warn_relative: f64,
+    /// No sample may differ by more than this, whatever the allowances.
+    pub hard_fail: Option<f64>,
+}
+
+impl Gates {
+    fn of(&self, class: LayerClass) -> (Option<f64>, Option<f64>) {
+        match class {
+            LayerClass::Colour => (self.fail, self.warn),
+            LayerClass::Data => (self.data_fail, self.data_warn),
+        }
+    }
+}
+
+/// One layer's figures (the beauty's is named `beauty`; a channel of no layer, such as `Z`,
+/// is its own layer).
+#[derive(Clone, Debug, Serialize)]
+pub struct LayerDiff {
+    pub layer: String,
+    pub class: &'static str,
+    pub channels: Vec<String>,
+    pub rmse: f64,
+    pub mae: f64,
+    /// The largest finite difference of one sample, where and what.
+    pub largest: Largest,
+    /// Samples non-finite in either side (for data layers: where the two differ).
+    pub non_finite: usize,
+    pub pixels_over_fail: usize,
+    pub pixels_over_warn: usize,
+}
+
+/// The figures over every channel compared, defined as OpenImageIO's `idiff` defines them.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct EveryChannel {
+    pub channels: usize,
+    /// Mean absolute difference over every sample.
+    pub mean_error: f64,
+    pub rms_error: f64,
+    /// `20 log10(peak / rms_error)`; the peak is the largest magnitude in either image, and
+    /// at least 1.0 (idiff's).
+    pub psnr: f64,
+    pub psnr_peak: f64,
+    pub max_error: Largest,
+}
+
+/// The outcome of comparing every channel of one frame.
+#[derive(Clone, Debug, Default)]
+pub struct Compared {
+    /// The beauty first, then the other layers in the reference's order.
+    pub layers: Vec<LayerDiff>,
+    pub every: EveryChannel,
+    /// Pixels where any channel fails (warns): over its class's threshold.
+    pub pixels_over_fail: usize,
+    pub pixels_over_warn: usize,
+    /// Samples over `--hard-fail` (non-finite ones included).
+    pub over_hard: usize,
+    /// Non-finite samples that count (every layer's).
+    pub non_finite: usize,
+    /// Per pixel, the largest difference of any channel (+∞ where a counted sample is
+    /// non-finite).
+    pub errors: Vec<f32>,
+    /// Channels of the reference the candidate lacks, and the reverse.
+    pub missing: Vec<String>,
+    pub extra: Vec<String>,
+}
+
+/// One channel of both sides.
+struct Pair<'a> {
+    name: String,
+    layer: String,
+    class: LayerClass,
+    a: &'a [f32],
+    b: &'a [f32],
+}
+
+/// The channels to compare, grouped by layer in the reference's order, and the names only
+/// one side holds. The beauty's alpha, when one side lacks it, reads as 1 (opaque).
+fn pairs<'a>(
+    a: &'a Frame,
+    b: &'a Frame,
+    ones: &'a [f32],
+) -> (Vec<Pair<'a>>, Vec<String>, Vec<String>) {
+    let mut out = Vec::new();
+    let names = |f: &Frame| -> Vec<String> {
+        if f.carried.beauty.is_empty() {
+            ["R", "G", "B", "A"].map(String::from).to_vec()
+        } else {
+            f.carried.beauty.clone()
+        }
+    };
+    if let (Some(ca), Some(cb)) = (&a.color, &b.color) {
+        let (pa, pb) = (ca.planes(), cb.planes());
+        let na = names(a);
+        for c in 0..4 {
+            let (x, y) = (pa.get(c).copied(), pb.get(c).copied());
+            if c == 3 && x.is_none() && y.is_none() {
+                continue;
+            }
+            out.push(Pair {
+                name: na
+                    .get(c)
+                    .cloned()
+                    .unwrap_or_else(|| "RGBA"[c..c + 1].to_string()),
+                layer: "beauty".to_string(),
+                class: LayerClass::Colour,
+                a: x.unwrap_or(ones),
+                b: y.unwrap_or(ones),
+            });
+        }
+    }
+    let key = |f: &Frame, i: usize| {
+        let c = &f.carried.channels[i];
+        let dup = f
+            .carried
+            .channels
+            .iter()
+            .filter(|o| o.name == c.name)
+            .count()
+            > 1;
+        if dup {
+            format!("{} (part {})", c.name, c.part)
+        } else {
+            c.name.clone()
+        }
+    };
+    let keys_b: Vec<String> = (0..b.carried.channels.len()).map(|i| key(b, i)).collect();
+    let mut missing = Vec::new();
+    let mut matched = vec![false; keys_b.len()];
+    for (i, channel) in a.carried.channels.iter().enumerate() {
+        let name = key(a, i);
+        match keys_b.iter().position(|k| *k == name) {
+            Some(j) => {
+                matched[j] = true;
+                let layer = crate::io::channels::split(&channel.name).0;
+                out.push(Pair {
+                    layer: if layer.is_empty() {
+                        channel.name.clone()
+                    } else {
+                        layer.to_string()
+                    },
+                    name,
+                    class: channel.class,
+                    a: &channel.plane,
+                    b: &b.carried.channels[j].plane,
+                });
+            }
+            None => missing.push(name),
+        }
+    }
+    let extra = keys_b
+        .into_iter()
+        .zip(matched)
+        .filter(|(_, m)| !m)
+        .map(|(k, _)| k)
+        .collect();
+    // Group by layer, keeping the order in which layers first appear.
+    let mut order: Vec<String> = Vec::new();
+    for p in &out {
+        if !order.contains(&p.layer) {
+            order.push(p.layer.clone());
+        }
+    }
+    out.sort_by_key(|p| order.iter().position(|l| *l == p.layer));
+    (out, missing, extra)
+}
+
+/// Whether a sample's difference `d` (of values `x`, `y`) is over `threshold` and over
+/// `relative` times the mean of their magnitudes.
+fn over(d: f64, x: f64, y: f64, threshold: f64, relative: f64) -> bool {
+    d > threshold && d > relative * (x.abs() + y.abs()) / 2.0
+}
+
+/// Compares every channel the two frames share (same size: checked before).
+pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
+    let n = a.width * a.height;
+    let ones = vec![1.0f32; n];
+    let (pairs, missing, extra) = pairs(a, b, &ones);
+    // Per pixel: bit 0 fails, bit 1 warns (any layer).
+    let mut flags = vec![0u8; n];
+    let mut errors = vec![0.0f32; n];
+    let mut layer_flags = vec![0u8; n];
+    let mut layers: Vec<LayerDiff> = Vec::new();
+    let (mut sum_abs, mut sum_sq, mut peak, mut samples) = (0.0f64, 0.0f64, 1.0f64, 0usize);
+    let mut every_largest = Largest::default();
+    let mut over_hard = 0;
+    let mut non_finite_total = 0;
+    let mut start = 0;
+    while start < pairs.len() {
+        let layer = &pairs[start].layer;
+        let end = start
+            + pairs[start..]
+                .iter()
+                .take_while(|p| &p.layer == layer)
+                .count();
+        let group = &pairs[start..end];
+        layer_flags.iter_mut().for_each(|f| *f = 0);
+        let (mut l_abs, mut l_sq, mut l_non_finite) = (0.0f64, 0.0f64, 0usize);
+        let mut l_largest = Largest::default();
+        for pair in group {
+            let (fail, warn) = gates.of(pair.class);
+            let data = pair.class == LayerClass::Data;
+            for i in 0..n {
+                let (x, y) = (pair.a[i], pair.b[i]);
+                if !x.is_finite() || !y.is_finite() {
+                    let same = x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan());
+                    if data && same {
+                        continue;
+                    }
+                    l_non_finite += 1;
+                    errors[i] = f32::INFINITY;
+                    layer_flags[i] |= u8::from(fail.is_some()) | (u8::from(warn.is_some()) << 1);
+                    if gates.hard_fail.is_some() {
+                        over_hard += 1;
+                    }
+                    continue;
+                }
+                let (x, y) = (x as f64, y as f64);
+                let d = (x - y).abs();
+                errors[i] = errors[i].max(d as f32);
+                l_abs += d;
+                l_sq += d * d;
+                peak = peak.max(x.abs()).max(y.abs());
+                if fail.is_some_and(|t| over(d, x, y, t, gates.fail_relative)) {
+                    layer_flags[i] |= 1;
+                }
+                if warn.is_some_and(|t| over(d, x, y, t, gates.warn_relative)) {
+                    layer_flags[i] |= 2;
+                }
+                if gates.hard_fail.is_some_and(|h| d > h) {
+                    over_hard += 1;
+                }
+                // Ties go to the first pixel in reading order, then the first channel, as
+                // idiff reports them.
+                let better = |best: &Largest| {
+                    d > best.error
+                        || (d == best.error
+                            && d > 0.0
+                            && (i / a.width.max(1), i % a.width.max(1)) < (best.y, best.x))
+                };
+                if better(&l_largest) {
+                    l_largest = Largest {
+                        error: d,
+                        x: i % a.width.max(1),
+                        y: i / a.width.max(1),
+                        channel: pair.name.clone(),
+                        a: x,
+                        b: y,
+                    };
+                }
+            }
+        }
+        if l_largest.error > every_largest.error
+            || (l_largest.error == every_largest.error
+                && l_largest.error > 0.0
+                && (l_largest.y, l_largest.x) < (every_largest.y, every_largest.x))
+        {
+            every_largest = l_largest.clone();
+        }
+        let count = (group.len() * n).max(1) as f64;
+        sum_abs += l_abs;
+        sum_sq += l_sq;
+        samples += group.len() * n;
+        non_finite_total += l_non_finite;
+        let mut l_fail = 0;
+        let mut l_warn = 0;
+        for (f, l) in flags.iter_mut().zip(&layer_flags) {
+            *f |= l;
+            l_fail += usize::from(l & 1 != 0);
+            l_warn += usize::from(l & 2 != 0);
+        }
+        layers.push(LayerDiff {
+            layer: layer.clone(),
+            class: group[0].class.name(),
+            channels: group.iter().map(|p| p.name.clone()).collect(),
+            rmse: (l_sq / count).sqrt(),
+            mae: l_abs / count,
+            largest: l_largest,
+            non_finite: l_non_finite,
+            pixels_over_fail: l_fail,
+            pixels_over_warn: l_warn,
+        });
+        start = end;
+    }
+    let samples_f = samples.max(1) as f64;
+    let rms_error = (sum_sq / samples_f).sqrt();
+    Compared {
+        every: EveryChannel {
+            channels: pairs.len(),
+            mean_error: sum_abs / samples_f,
+            rms_error,
+            psnr: if rms_error == 0.0 {
+                f64::INFINITY
+            } else {
+                20.0 * (peak / rms_error).log10()
+            },
+            psnr_peak: peak,
+            max_error: every_largest,
+        },
+        pixels_over_fail: flags.iter().filter(|&&f| f & 1 != 0).count(),
+        pixels_over_warn: flags.iter().filter(|&&f| f & 2 != 0).count(),
+        over_hard,
+        non_finite: non_finite_total,
+        layers,
+        errors,
+        missing,
+        extra,
+    }
+}
