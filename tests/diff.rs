@@ -527,3 +527,28 @@ fn a_relative_threshold_and_a_hard_limit() {
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("--hard-fail 0.09"), "{}", stderr(&o));
 }
+
+/// A hole in the reference sequence is warned about; a pattern that matches nothing is an
+/// input not there (could not compare: 3), not a bad command line (2).
+#[test]
+fn sequence_holes_are_warned_and_an_empty_pattern_is_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    for n in [1, 2, 4] {
+        pair(dir.path(), &format!("a.{n:04}.exr"), 8, 8, n, 0.0);
+        pair(dir.path(), &format!("b.{n:04}.exr"), 8, 8, n, 0.0);
+    }
+    let (a, b) = (
+        s(&dir.path().join("a.####.exr")),
+        s(&dir.path().join("b.####.exr")),
+    );
+    let o = shutter(&["diff", &a, &b]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("has no frame 3 between 1 and 4"),
+        "{}",
+        stderr(&o)
+    );
+    let o = shutter(&["diff", &s(&dir.path().join("c.####.exr")), &b]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no files match"), "{}", stderr(&o));
+}

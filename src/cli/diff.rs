@@ -7,12 +7,13 @@ use crate::io::sequence::{parse_frames, PathPattern};
 use super::args::DiffArgs;
 use super::out;
 
-/// Frames for a pair of patterns: `--frames`, else those on disk for the first.
+/// Frames for a pair of patterns: `--frames`, else those on disk for the first (with a
+/// warning for the holes between them).
 fn frames_for(
     first: &PathPattern,
     others: &[&PathPattern],
     spec: Option<&str>,
-) -> Result<Vec<Option<i64>>> {
+) -> Result<(Vec<Option<i64>>, Vec<String>)> {
     let sequence = first.is_sequence();
     if others.iter().any(|p| p.is_sequence() != sequence) {
         return Err(Error::usage(
@@ -21,18 +22,37 @@ fn frames_for(
     }
     match (spec, sequence) {
         (Some(_), false) => Err(Error::usage("--frames needs patterns with #### or %04d")),
-        (Some(spec), true) => Ok(parse_frames(spec)?.into_iter().map(Some).collect()),
+        (Some(spec), true) => Ok((
+            parse_frames(spec)?.into_iter().map(Some).collect(),
+            Vec::new(),
+        )),
         (None, true) => {
             let found = first.discover()?;
             if found.is_empty() {
-                return Err(Error::usage(format!(
-                    "no files match '{}'; check the pattern or pass --frames",
-                    first.raw
-                )));
+                // Nothing to compare: the files are not there (not a bad command line).
+                return Err(Error::Files(vec![crate::error::Problem::new(
+                    crate::error::ProblemKind::MissingFile,
+                    std::path::Path::new(&first.raw),
+                    "no files match the pattern; check it, or pass --frames",
+                )]));
             }
-            Ok(found.into_iter().map(Some).collect())
+            let holes = crate::io::sequence::holes(&found);
+            let warnings = if holes.is_empty() {
+                Vec::new()
+            } else {
+                vec![format!(
+                    "'{}' has no frame{} {} between {} and {}: not compared (--frames names \
+                     every frame wanted and makes a missing one an error)",
+                    first.raw,
+                    if holes.len() == 1 { "" } else { "s" },
+                    crate::io::sequence::format_frames(&holes),
+                    found[0],
+                    found[found.len() - 1]
+                )]
+            };
+            Ok((found.into_iter().map(Some).collect(), warnings))
         }
-        (None, false) => Ok(vec![None]),
+        (None, false) => Ok((vec![None], Vec::new())),
     }
 }
 
@@ -146,7 +166,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
         .transpose()?;
     let mut others = vec![&b];
     others.extend(sharp.as_ref());
-    let frames = frames_for(&a, &others, args.frames.as_deref())?;
+    let (frames, hole_warnings) = frames_for(&a, &others, args.frames.as_deref())?;
     if let Some(heatmap) = &heatmap {
         if frames.len() > 1 && !heatmap.is_sequence() {
             return Err(Error::usage(
@@ -171,7 +191,8 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
         allow_nonfinite: args.allow_nonfinite,
         report: args.report.clone(),
     };
-    let report = crate::lab::diff::run(&job)?;
+    let mut report = crate::lab::diff::run(&job)?;
+    report.warnings.splice(0..0, hole_warnings);
     if args.json {
         super::out_json(&report);
     } else {
