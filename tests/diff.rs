@@ -254,7 +254,7 @@ fn a_small_bright_block_fails_a_per_pixel_gate() {
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(
         stderr(&o)
-            .contains("100 pixels over the per-pixel gate (allowed: 0; by layer: beauty 100)"),
+            .contains("100 pixels over the per-pixel gate (allowed: 0; by layer: [beauty] 100)"),
         "{}",
         stderr(&o)
     );
@@ -383,7 +383,7 @@ fn every_layer_is_compared_with_its_own_gate() {
         .map(|l| l["layer"].as_str().unwrap())
         .collect();
     // The beauty first, then the file's order (EXR sorts channels by name).
-    assert_eq!(names, ["beauty", "Z", "diffuse", "velocity"]);
+    assert_eq!(names, ["[beauty]", "Z", "diffuse", "velocity"]);
     let diffuse = &layers[2];
     assert_eq!(diffuse["class"], "colour");
     assert_eq!(diffuse["pixels_over_fail"], 1);
@@ -551,4 +551,90 @@ fn sequence_holes_are_warned_and_an_empty_pattern_is_bad_input() {
     let o = shutter(&["diff", &s(&dir.path().join("c.####.exr")), &b]);
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     assert!(stderr(&o).contains("no files match"), "{}", stderr(&o));
+}
+
+/// Parts of a multi-part file are matched by their names, not their order: the same layers
+/// written in another order are the same image; a changed layer is named by its part.
+#[test]
+fn parts_are_matched_by_name() {
+    use crate::support::{write_parts, Part};
+    let dir = tempfile::tempdir().unwrap();
+    let n = 8 * 6;
+    let part = |name: &'static str, seed: u32, bump: f32| Part {
+        name: Some(name),
+        view: None,
+        multi_view: None,
+        channels: ["R", "G", "B"]
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let mut p = noise(n, seed + i as u32, 0.0, 1.0);
+                p[0] += bump;
+                (c.to_string(), p)
+            })
+            .collect(),
+    };
+    let (a, b, c) = (
+        dir.path().join("a.exr"),
+        dir.path().join("b.exr"),
+        dir.path().join("c.exr"),
+    );
+    write_parts(
+        &a,
+        (8, 6),
+        vec![
+            part("rgba", 1, 0.0),
+            part("diffuse", 5, 0.0),
+            part("specular", 9, 0.0),
+        ],
+    );
+    write_parts(
+        &b,
+        (8, 6),
+        vec![
+            part("rgba", 1, 0.0),
+            part("specular", 9, 0.0),
+            part("diffuse", 5, 0.0),
+        ],
+    );
+    write_parts(
+        &c,
+        (8, 6),
+        vec![
+            part("rgba", 1, 0.0),
+            part("diffuse", 5, 0.5),
+            part("specular", 9, 0.0),
+        ],
+    );
+    let o = shutter(&["diff", &s(&a), &s(&b), "--fail-pixel", "0", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let layers: Vec<String> = json(&o)["frames"][0]["layers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l["layer"].as_str().unwrap().to_string())
+        .collect();
+    assert_eq!(layers, ["[beauty]", "diffuse", "specular"]);
+    let o = shutter(&["diff", &s(&a), &s(&c), "--fail-pixel", "0.1"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("by layer: diffuse 1)"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// --allow-nonfinite lets a NaN through every gate, the per-pixel and hard ones included,
+/// while it is still counted.
+#[test]
+fn allowed_nonfinite_values_pass_every_gate() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = edited(dir.path(), |p| p[0][10] = f32::NAN);
+    for gate in [["--fail-pixel", "0.1"], ["--hard-fail", "1"]] {
+        let mut args = vec!["diff", &a, &b, "--allow-nonfinite", "--json"];
+        args.extend(gate);
+        let o = shutter(&args);
+        assert_eq!(o.status.code(), Some(0), "{gate:?}: {}", stderr(&o));
+        assert_eq!(json(&o)["frames"][0]["whole"]["non_finite"], 1);
+    }
 }

@@ -143,12 +143,12 @@ fn a_sequence_with_five_regressions_in_one_call() {
     assert_eq!(failed, [true, true, true, true, false], "{}", stderr(&o));
     let why = |n: usize| frames[n]["why"].as_str().unwrap_or_default().to_string();
     assert!(
-        why(0).contains("non-finite samples in beauty"),
+        why(0).contains("non-finite samples in [beauty]"),
         "{}",
         why(0)
     );
     assert!(
-        why(1).contains("100 pixels") && why(1).contains("beauty 100"),
+        why(1).contains("100 pixels over") && why(1).contains("[beauty] 100)"),
         "{}",
         why(1)
     );
@@ -158,7 +158,7 @@ fn a_sequence_with_five_regressions_in_one_call() {
         why(2)
     );
     assert!(
-        why(3).contains("36 pixels") && why(3).contains("diffuse 36"),
+        why(3).contains("36 pixels over") && why(3).contains("diffuse 36)"),
         "{}",
         why(3)
     );
@@ -292,4 +292,64 @@ fn a_sequence_with_five_regressions_in_one_call() {
         colourful > 20_000,
         "{colourful} coloured pixels: thumbnails missing?"
     );
+}
+
+/// `--idiff`'s exit codes against Debian's idiff on the same pairs: identical (0), a
+/// difference under the fail threshold but over the warning (1, idiff's documented code:
+/// Debian's idiff 2.4 counts the pixels over the warning but exits 0), over it (2), sizes
+/// that differ (2, as idiff 2.4 compares and fails them), an input missing (4).
+#[test]
+fn idiff_codes_match_idiff() {
+    let dir = tempfile::tempdir().unwrap();
+    let flat = |v: f32, n: usize| vec![v; n];
+    let write = |name: &str, w: usize, h: usize, r: f32| {
+        let path = dir.path().join(name);
+        write_exr(
+            &path,
+            w,
+            h,
+            vec![
+                ("R", flat(r, w * h)),
+                ("G", flat(0.5, w * h)),
+                ("B", flat(0.5, w * h)),
+            ],
+        );
+        s(&path)
+    };
+    let a = write("a.exr", 8, 8, 0.5);
+    let same = write("same.exr", 8, 8, 0.5);
+    let near = write("near.exr", 8, 8, 0.6);
+    let small = write("small.exr", 8, 6, 0.5);
+    let missing = s(&dir.path().join("missing.exr"));
+    for (b, theirs_flags, ours_flags, expected) in [
+        (&same, vec![], vec![], 0),
+        (&near, vec!["-fail", "0.5"], vec!["--fail-pixel", "0.5"], 1),
+        (&near, vec![], vec![], 2),
+        (&small, vec![], vec![], 2),
+        (&missing, vec![], vec![], 4),
+    ] {
+        let mut args = theirs_flags.clone();
+        args.extend([a.as_str(), b.as_str()]);
+        let Some(theirs) = tool("idiff", &args) else {
+            return;
+        };
+        let mut args = vec!["diff", "--idiff"];
+        args.extend(ours_flags.iter().copied());
+        args.extend([a.as_str(), b.as_str()]);
+        let ours = shutter(&args);
+        eprintln!(
+            "{b} {theirs_flags:?}: idiff {:?}, ours {:?}",
+            theirs.status.code(),
+            ours.status.code()
+        );
+        assert_eq!(ours.status.code(), Some(expected), "{b}: {}", stderr(&ours));
+        if expected != 1 {
+            assert_eq!(
+                ours.status.code(),
+                theirs.status.code(),
+                "{b}: {}",
+                stderr(&ours)
+            );
+        }
+    }
 }

@@ -33,4 +33,5 @@ mod structure;
 mod suggest;
 mod survives;
 mod truth;
+mod vectors;
 mod views;

@@ -46,6 +46,41 @@ pub enum Command {
     /// Expand a frame spec and cut it into chunks, as a farm task runs them: prints each
     /// chunk's frames as a spec for --frames, one line per chunk (or chunk K alone).
     Frames(FramesArgs),
+    /// Fit how a vector pass is stored from the frames themselves (meaning, x/y swap, y axis,
+    /// zero, scale) and print the preset section that reads it.
+    Vectors(VectorsArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct VectorsArgs {
+    /// Colour: a #### / %04d pattern of a sequence (frame n and a neighbour at least).
+    #[arg(long, value_name = "PATH")]
+    pub color: String,
+
+    /// The file(s) holding the vectors [default: the colour files].
+    #[arg(long, value_name = "PATH")]
+    pub velocity: Option<String>,
+
+    /// The two stored channels, in the file's order [default: the first pair the preset's
+    /// [velocity] section finds].
+    #[arg(long, value_name = "X,Y")]
+    pub channels: Option<String>,
+
+    /// Presets for finding the colour and vector channels (see shutter presets).
+    #[arg(long, value_name = "P")]
+    pub preset: Vec<String>,
+
+    /// The frame to fit at [default: the middle frame with neighbours on both sides].
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    pub frame: Option<i64>,
+
+    /// Write the fitted reading as a preset file (use it after the presets given).
+    #[arg(long, value_name = "FILE")]
+    pub write_preset: Option<PathBuf>,
+
+    /// Print JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Debug, Args)]

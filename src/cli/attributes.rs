@@ -25,7 +25,12 @@ fn floats(values: &[f32]) -> String {
 fn value(value: &AttributeValue) -> (&'static str, String, Value) {
     use AttributeValue as A;
     match value {
-        A::Text(t) => ("string", format!("\"{t}\""), json!(t.to_string())),
+        // One line in text: a newline shows as \n.
+        A::Text(t) => (
+            "string",
+            format!("{:?}", t.to_string()),
+            json!(t.to_string()),
+        ),
         A::TextVector(list) => {
             let texts: Vec<String> = list.iter().map(|t| t.to_string()).collect();
             ("stringvector", format!("{texts:?}"), json!(texts))

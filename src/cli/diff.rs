@@ -104,8 +104,8 @@ impl Codes {
                     0
                 }
             }
-            Codes::Idiff if channels_differ => 3,
-            Codes::Idiff if failed => 2,
+            // Debian's idiff 2.4 fails images whose channels differ (exit 2), as sizes.
+            Codes::Idiff if failed || channels_differ => 2,
             Codes::Idiff if warned => 1,
             Codes::Idiff => 0,
         }
@@ -122,7 +122,8 @@ impl Codes {
         match (self, error) {
             (Codes::Shutter { .. }, Error::Usage(_)) => 2,
             (Codes::Shutter { .. }, _) => 3,
-            (Codes::Idiff, _) if sizes => 3,
+            // Debian's idiff 2.4 compares sizes that differ and fails them (exit 2).
+            (Codes::Idiff, _) if sizes => 2,
             (Codes::Idiff, _) => 4,
         }
     }
@@ -295,5 +296,6 @@ fn gates(args: &DiffArgs) -> crate::lab::diff::Gates {
         fail_relative: args.fail_relative,
         warn_relative: args.warn_relative,
         hard_fail: args.hard_fail,
+        allow_nonfinite: args.allow_nonfinite,
     }
 }

@@ -11,6 +11,7 @@ mod info;
 mod presets;
 mod resolve;
 mod scene;
+mod vectors;
 
 pub use resolve::resolve;
 
@@ -57,6 +58,7 @@ pub fn main() -> i32 {
         Command::Scene(_) => ("scene", false),
         Command::Bench(_) => ("bench", false),
         Command::Frames(_) => ("frames", false),
+        Command::Vectors(a) => ("vectors", a.json),
     };
     let failed = |error: &Error, code: i32| {
         print_error(error);
@@ -84,6 +86,12 @@ pub fn main() -> i32 {
                 Ok(code) => code,
                 // A comparison not made is not a comparison's result: its own code.
                 Err(error) => failed(&error, codes.error(&error)),
+            };
+        }
+        Command::Vectors(args) => {
+            return match vectors::vectors(args) {
+                Ok(code) => code,
+                Err(error) => failed(&error, error.exit_code()),
             };
         }
     };

@@ -24,6 +24,7 @@
 //!   the nearest valid one.
 
 mod convert;
+mod fit;
 mod memory;
 mod plan;
 mod preflight;
@@ -32,6 +33,7 @@ mod suggest;
 mod validity;
 mod window;
 
+pub use fit::{describe as describe_reading, fit, Fit, FitInput, Reading};
 pub use plan::{passes_found, plan_frame, FramePlan, PlanOptions};
 pub use preflight::{output_folder_problems, preflight};
 pub use read::{plan_color, read_color, read_frame, read_frame_noted};

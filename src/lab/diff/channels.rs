@@ -32,6 +32,8 @@ pub struct Gates {
     pub warn_relative: f64,
     /// No sample may differ by more than this, whatever the allowances.
     pub hard_fail: Option<f64>,
+    /// Non-finite samples fail no gate (they are still counted).
+    pub allow_nonfinite: bool,
 }
 
 impl Gates {
@@ -95,6 +97,10 @@ pub struct Compared {
     pub extra: Vec<String>,
 }
 
+/// The beauty's layer name in the figures: no channel's layer is named so (a channel name
+/// holds no brackets in any renderer's output; a layer named `beauty` stays its own).
+pub const BEAUTY: &str = "[beauty]";
+
 /// One channel of both sides.
 struct Pair<'a> {
     name: String,
@@ -132,26 +138,25 @@ fn pairs<'a>(
                     .get(c)
                     .cloned()
                     .unwrap_or_else(|| "RGBA"[c..c + 1].to_string()),
-                layer: "beauty".to_string(),
+                layer: BEAUTY.to_string(),
                 class: LayerClass::Colour,
                 a: x.unwrap_or(ones),
                 b: y.unwrap_or(ones),
             });
         }
     }
+    // A channel of a named part of a multi-part file is `part.channel`, as the read and
+    // `shutter info` name it, so parts are matched by name, not by their order.
     let key = |f: &Frame, i: usize| {
         let c = &f.carried.channels[i];
-        let dup = f
-            .carried
-            .channels
-            .iter()
-            .filter(|o| o.name == c.name)
-            .count()
-            > 1;
-        if dup {
-            format!("{} (part {})", c.name, c.part)
-        } else {
-            c.name.clone()
+        let part = (f.carried.headers.len() > 1)
+            .then(|| f.carried.headers.get(c.part))
+            .flatten()
+            .and_then(|h| h.own_attributes.layer_name.as_ref())
+            .map(|n| n.to_string());
+        match part {
+            Some(part) if !c.name.starts_with(&format!("{part}.")) => format!("{part}.{}", c.name),
+            _ => c.name.clone(),
         }
     };
     let keys_b: Vec<String> = (0..b.carried.channels.len()).map(|i| key(b, i)).collect();
@@ -162,10 +167,10 @@ fn pairs<'a>(
         match keys_b.iter().position(|k| *k == name) {
             Some(j) => {
                 matched[j] = true;
-                let layer = crate::io::channels::split(&channel.name).0;
+                let layer = crate::io::channels::split(&name).0;
                 out.push(Pair {
                     layer: if layer.is_empty() {
-                        channel.name.clone()
+                        name.clone()
                     } else {
                         layer.to_string()
                     },
@@ -238,10 +243,13 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
                         continue;
                     }
                     l_non_finite += 1;
-                    errors[i] = f32::INFINITY;
-                    layer_flags[i] |= u8::from(fail.is_some()) | (u8::from(warn.is_some()) << 1);
-                    if gates.hard_fail.is_some() {
-                        over_hard += 1;
+                    if !gates.allow_nonfinite {
+                        errors[i] = f32::INFINITY;
+                        layer_flags[i] |=
+                            u8::from(fail.is_some()) | (u8::from(warn.is_some()) << 1);
+                        if gates.hard_fail.is_some() {
+                            over_hard += 1;
+                        }
                     }
                     continue;
                 }
@@ -260,8 +268,8 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
                 if gates.hard_fail.is_some_and(|h| d > h) {
                     over_hard += 1;
                 }
-                // Ties go to the first pixel in reading order, then the first channel, as
-                // idiff reports them.
+                // Ties go to the first pixel in reading order (then the first channel of
+                // the layer in the file's order).
                 let better = |best: &Largest| {
                     d > best.error
                         || (d == best.error

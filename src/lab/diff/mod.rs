@@ -146,6 +146,9 @@ pub struct FrameDiff {
     pub failed: bool,
     /// Why it failed, in words.
     pub why: Option<String>,
+    /// What was not compared, and why (parts of another data window).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
     /// With `--report`: the thumbnails written, relative to the report's folder.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub thumbnails: Option<report::Thumbnails>,
@@ -157,6 +160,8 @@ pub struct DiffReport {
     /// The version of this JSON's form (README: "JSON").
     pub schema: u32,
     pub command: &'static str,
+    /// True: the comparison was made (whatever its verdict, `failed`).
+    pub ok: bool,
     pub metric: &'static str,
     pub warn: Option<f64>,
     pub fail: Option<f64>,
@@ -270,6 +275,14 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
             let (mut a, mut b) = (a, b);
             a.read_every_channel();
             b.read_every_channel();
+            // Parts the read leaves out (another data window, deep data) are not compared.
+            let notes: Vec<String> = a
+                .warnings
+                .iter()
+                .chain(&b.warnings)
+                .filter(|w| w.contains("part"))
+                .map(|w| w.replace("not written to the output", "not compared"))
+                .collect();
             let (a, b) = (read_frame(&a)?, read_frame(&b)?);
             let (ra, rb) = (
                 Rgb::of(&a).expect("colour read"),
@@ -319,6 +332,7 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
                 missing_channels: compared.missing,
                 extra_channels: compared.extra,
                 thumbnails,
+                notes,
                 failed: why.is_some(),
                 why,
             })
@@ -363,6 +377,9 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
                 f.pixels_over_warn
             ));
         }
+        for note in &f.notes {
+            warnings.push(format!("{label}{note}"));
+        }
         if !f.extra_channels.is_empty() {
             warnings.push(format!(
                 "{label}the candidate has channels the reference lacks: {}",
@@ -373,6 +390,7 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
     Ok(DiffReport {
         schema: crate::JSON_SCHEMA,
         command: "diff",
+        ok: true,
         metric: name,
         warn: job.warn,
         fail: job.fail,

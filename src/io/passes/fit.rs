@@ -1,0 +1,565 @@
+//! How a vector pass is stored, fitted from the frames themselves (issue 32, `shutter
+//! vectors`): frame n−1's colour, moved by the true motion, is frame n. The motion between
+//! frame n and its neighbours is measured at textured points by block matching (a pyramid,
+//! coarse to fine, sub-pixel at the end), and the stored values at those points are fitted to
+//! it under every reading a preset can state: the four offset meanings and the two absolute
+//! positions, x and y swapped or not, y up or down, the value meaning "still" (zero), the
+//! scale (uniform in pixels, or per axis for screen-normalised units; a render's shutter is a
+//! scale too).
+//!
+//! In: the luma of frame n and of n−1 and/or n+1, and the two stored components at n. Out:
+//! every reading's fit (its residual in pixels over the points, robust to occlusion: a point
+//! off by more than a pixel counts as a pixel), the residual of no motion, and a verdict: a
+//! reading chosen,
+//! or why none is (nothing fits better than no motion; two readings fit alike; an axis
+//! never moves, so its sign and scale are not seen).
+
+use serde::Serialize;
+
+use crate::io::preset::{Meaning, Units};
+
+/// What the fit reads.
+pub struct FitInput<'a> {
+    pub width: usize,
+    pub height: usize,
+    /// Luma of frame n, and of n−1 and n+1 where they exist.
+    pub current: &'a [f32],
+    pub prev: Option<&'a [f32]>,
+    pub next: Option<&'a [f32]>,
+    /// The two stored components at frame n, in the file's order.
+    pub stored: [&'a [f32]; 2],
+}
+
+/// One reading of the stored values and how well it fits.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Reading {
+    pub meaning: Meaning,
+    /// The file's second component is x.
+    pub swap: bool,
+    pub y_up: bool,
+    pub zero: f32,
+    pub scale: f32,
+    pub units: Units,
+    /// RMS distance in pixels between the motion this reading gives and the motion measured
+    /// (the best four fifths of the points).
+    pub residual: f64,
+    /// The scale fitted per axis, in pixels per stored unit, before rounding.
+    pub fitted_scale: [f64; 2],
+    /// Whether the reading's scale is positive (else no preset can state it).
+    pub consistent: bool,
+}
+
+/// The outcome.
+#[derive(Clone, Debug, Serialize)]
+pub struct Fit {
+    /// Every reading, best first.
+    pub readings: Vec<Reading>,
+    /// RMS of the measured motion: the residual of reading no motion at all.
+    pub no_motion: f64,
+    /// Points where motion was measured.
+    pub points: usize,
+    /// The reading chosen, or `None` with `why`.
+    pub chosen: Option<Reading>,
+    pub why: Option<String>,
+}
+
+/// The largest motion looked for, in pixels per frame at full size.
+const SEARCH: f32 = 192.0;
+/// Half the side of a matched patch.
+const PATCH: isize = 4;
+/// Points sampled at most.
+const MAX_POINTS: usize = 4096;
+
+fn downsample(plane: &[f32], w: usize, h: usize) -> (Vec<f32>, usize, usize) {
+    let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+    let mut out = vec![0.0; nw * nh];
+    for y in 0..nh {
+        for x in 0..nw {
+            let at =
+                |dx: usize, dy: usize| plane[(2 * y + dy).min(h - 1) * w + (2 * x + dx).min(w - 1)];
+            out[y * nw + x] = 0.25 * (at(0, 0) + at(1, 0) + at(0, 1) + at(1, 1));
+        }
+    }
+    (out, nw, nh)
+}
+
+struct Level {
+    plane: Vec<f32>,
+    w: usize,
+    h: usize,
+}
+
+fn pyramid(plane: &[f32], w: usize, h: usize, levels: usize) -> Vec<Level> {
+    let mut out = vec![Level {
+        plane: plane.to_vec(),
+        w,
+        h,
+    }];
+    for _ in 1..levels {
+        let last = out.last().expect("one level");
+        let (plane, w, h) = downsample(&last.plane, last.w, last.h);
+        out.push(Level { plane, w, h });
+    }
+    out
+}
+
+fn sample(l: &Level, x: isize, y: isize) -> f32 {
+    let x = x.clamp(0, l.w as isize - 1) as usize;
+    let y = y.clamp(0, l.h as isize - 1) as usize;
+    l.plane[y * l.w + x]
+}
+
+/// Sum of squared differences between the patch of `a` at (x, y) and of `b` at (x+dx, y+dy).
+fn ssd(a: &Level, b: &Level, (x, y): (isize, isize), (dx, dy): (isize, isize)) -> f32 {
+    let mut sum = 0.0;
+    for py in -PATCH..=PATCH {
+        for px in -PATCH..=PATCH {
+            let d = sample(a, x + px, y + py) - sample(b, x + dx + px, y + dy + py);
+            sum += d * d;
+        }
+    }
+    sum
+}
+
+/// The displacement from frame n's point (x, y) to where its patch is in `other`, in full
+/// size pixels, or `None` where the match is not clear.
+fn track(a: &[Level], b: &[Level], (x, y): (usize, usize), texture: f32) -> Option<(f32, f32)> {
+    let top = a.len() - 1;
+    let mut d = (0isize, 0isize);
+    for level in (0..=top).rev() {
+        let (la, lb) = (&a[level], &b[level]);
+        let p = ((x >> level) as isize, (y >> level) as isize);
+        let radius = if level == top {
+            // The search at the coarsest level spans the motion looked for, and at most a
+            // quarter of that level's frame.
+            let cap = (la.w.min(la.h) / 4).max(2) as isize;
+            ((SEARCH / (1 << level) as f32).ceil() as isize).min(cap)
+        } else {
+            2
+        };
+        let centre = if level == top {
+            (0, 0)
+        } else {
+            (d.0 * 2, d.1 * 2)
+        };
+        let mut best = (f32::INFINITY, centre);
+        for dy in -radius..=radius {
+            for dx in -radius..=radius {
+                let c = (centre.0 + dx, centre.1 + dy);
+                let s = ssd(la, lb, p, c);
+                // Ties to the smaller displacement, so a flat patch reads as still.
+                if s < best.0
+                    || (s == best.0 && c.0.abs() + c.1.abs() < best.1 .0.abs() + best.1 .1.abs())
+                {
+                    best = (s, c);
+                }
+            }
+        }
+        d = best.1;
+    }
+    let (la, lb) = (&a[0], &b[0]);
+    let p = (x as isize, y as isize);
+    let here = ssd(la, lb, p, d);
+    // A clear match: the patch found is closer than the patch shifted by a pixel is to
+    // itself (a motion of half a pixel off the grid costs about a quarter of that).
+    if here > 0.35 * texture + 1e-9 {
+        return None;
+    }
+    let refine = |minus: f32, plus: f32| {
+        let denominator = minus - 2.0 * here + plus;
+        if denominator > 1e-12 {
+            (0.5 * (minus - plus) / denominator).clamp(-0.5, 0.5)
+        } else {
+            0.0
+        }
+    };
+    let fx = refine(
+        ssd(la, lb, p, (d.0 - 1, d.1)),
+        ssd(la, lb, p, (d.0 + 1, d.1)),
+    );
+    let fy = refine(
+        ssd(la, lb, p, (d.0, d.1 - 1)),
+        ssd(la, lb, p, (d.0, d.1 + 1)),
+    );
+    Some((d.0 as f32 + fx, d.1 as f32 + fy))
+}
+
+/// Textured points of frame n on a grid, with their patch's variation (sum of squared
+/// differences to its one-pixel shifts).
+fn points(l: &Level) -> Vec<((usize, usize), f32)> {
+    let margin = PATCH as usize + 1;
+    if l.w <= 2 * margin || l.h <= 2 * margin {
+        return Vec::new();
+    }
+    let area = (l.w - 2 * margin) * (l.h - 2 * margin);
+    let stride = ((area as f64 / MAX_POINTS as f64).sqrt().ceil() as usize).max(2);
+    let mut out = Vec::new();
+    for y in (margin..l.h - margin).step_by(stride) {
+        for x in (margin..l.w - margin).step_by(stride) {
+            let p = (x as isize, y as isize);
+            let texture = ssd(l, l, p, (1, 0)).min(ssd(l, l, p, (0, 1)));
+            out.push(((x, y), texture));
+        }
+    }
+    // The better textured half, and none that is flat.
+    let mut energies: Vec<f32> = out.iter().map(|p| p.1).collect();
+    energies.sort_by(f32::total_cmp);
+    let floor = energies[energies.len() / 2].max(1e-6);
+    out.retain(|p| p.1 >= floor);
+    out
+}
+
+/// A distance beyond which a point counts as not fitting at all (occlusion, a mismatch).
+const TRUNCATE: f64 = 1.0;
+
+/// The RMS of per-point distances, each at most [`TRUNCATE`]: robust to the few points
+/// that match nothing, while a reading that misses a whole motion (a layer) pays for every
+/// point of it.
+fn robust_rms(distances: &mut [f64]) -> f64 {
+    if distances.is_empty() {
+        return 0.0;
+    }
+    let sum: f64 = distances.iter().map(|d| d.min(TRUNCATE).powi(2)).sum();
+    (sum / distances.len() as f64).sqrt()
+}
+
+/// The RMS of the motion itself, the residual of reading no motion (not truncated).
+fn rms(distances: &[f64]) -> f64 {
+    if distances.is_empty() {
+        return 0.0;
+    }
+    (distances.iter().map(|d| d * d).sum::<f64>() / distances.len() as f64).sqrt()
+}
+
+/// `v` rounded to a simple fraction (n/d, d ≤ 8) when it is within 1.5 % of one.
+fn simple(v: f64) -> f64 {
+    let mut best = v;
+    let mut error = 0.015;
+    for d in 1..=8 {
+        let n = (v * d as f64).round();
+        if n == 0.0 {
+            continue;
+        }
+        let e = ((n / d as f64) - v).abs() / v.abs().max(1e-12);
+        if e < error {
+            error = e;
+            best = n / d as f64;
+        }
+    }
+    best
+}
+
+/// Fits every reading. `stored` components that never vary make their axis unseen.
+pub fn fit(input: &FitInput) -> Fit {
+    let (w, h) = (input.width, input.height);
+    let levels = {
+        let mut n = 1;
+        while n < 6 && (w.min(h) >> n) >= 24 {
+            n += 1;
+        }
+        n
+    };
+    let current = pyramid(input.current, w, h, levels);
+    let sides: Vec<(bool, Vec<Level>)> = [(false, input.prev), (true, input.next)]
+        .into_iter()
+        .filter_map(|(forward, plane)| plane.map(|p| (forward, pyramid(p, w, h, levels))))
+        .collect();
+    let chosen_points = points(&current[0]);
+    // Motion measured to each neighbour at each point (None: not clear there).
+    let measured: Vec<Vec<Option<(f32, f32)>>> = sides
+        .iter()
+        .map(|(_, other)| {
+            use rayon::prelude::*;
+            chosen_points
+                .par_iter()
+                .map(|&(p, texture)| track(&current, other, p, texture))
+                .collect()
+        })
+        .collect();
+    let mut readings = Vec::new();
+    let mut no_motion = Vec::new();
+    let mut used = 0;
+    for (side, (forward, _)) in sides.iter().enumerate() {
+        let mut s = [Vec::new(), Vec::new()];
+        let mut m = [Vec::new(), Vec::new()];
+        let mut c = [Vec::new(), Vec::new()];
+        for (k, &((x, y), _)) in chosen_points.iter().enumerate() {
+            let Some((mx, my)) = measured[side][k] else {
+                continue;
+            };
+            let (a, b) = (input.stored[0][y * w + x], input.stored[1][y * w + x]);
+            if !a.is_finite() || !b.is_finite() {
+                continue;
+            }
+            s[0].push(a as f64);
+            s[1].push(b as f64);
+            m[0].push(mx as f64);
+            m[1].push(my as f64);
+            c[0].push(x as f64 + 0.5);
+            c[1].push(y as f64 + 0.5);
+            no_motion.push(((mx * mx + my * my) as f64).sqrt());
+        }
+        used = used.max(s[0].len());
+        if s[0].len() < 8 {
+            continue;
+        }
+        for absolute in [false, true] {
+            for swap in [false, true] {
+                for units in [Units::Pixels, Units::Normalized] {
+                    // Offsets: x's sign picks the meaning; positions are not negated.
+                    let x_signs: &[f64] = if absolute { &[1.0] } else { &[1.0, -1.0] };
+                    for &sx in x_signs {
+                        for sy in [1.0, -1.0] {
+                            let candidate = Candidate {
+                                forward: *forward,
+                                absolute,
+                                swap,
+                                units,
+                                signs: (sx, sy),
+                            };
+                            readings.push(candidate.fit(&s, &m, &c, (w, h)));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    // A negative scale is the opposite sign's reading, fitted there.
+    readings.retain(|r| r.consistent);
+    readings.sort_by(|a, b| a.residual.total_cmp(&b.residual));
+    let no_motion = rms(&no_motion);
+    let (chosen, why) = decide(&readings, no_motion, input.stored);
+    Fit {
+        readings,
+        no_motion,
+        points: used,
+        chosen,
+        why,
+    }
+}
+
+/// One reading to fit: which neighbour and form (offset or position), the components'
+/// order, the units, and the signs of x and y.
+struct Candidate {
+    forward: bool,
+    absolute: bool,
+    swap: bool,
+    units: Units,
+    signs: (f64, f64),
+}
+
+impl Candidate {
+    /// Fits the reading's scale k and zero z (one of each for both axes: the model
+    /// t = σ·u·k·(s − z), u the units' factor per axis, a position with y up mirrored about
+    /// h) by least squares, refitted on the best four fifths of the points, then with the
+    /// zero snapped to 0 or 0.5 where it is near.
+    fn fit(
+        &self,
+        s: &[Vec<f64>; 2],
+        m: &[Vec<f64>; 2],
+        c: &[Vec<f64>; 2],
+        (w, h): (usize, usize),
+    ) -> Reading {
+        let (s0, s1) = if self.swap {
+            (&s[1], &s[0])
+        } else {
+            (&s[0], &s[1])
+        };
+        let stored = [s0, s1];
+        let factor = match self.units {
+            Units::Pixels => [1.0, 1.0],
+            Units::Normalized => [w as f64, h as f64],
+        };
+        let sign = [self.signs.0, self.signs.1];
+        let mirrored = self.absolute && self.signs.1 < 0.0;
+        // Rows (axis, point): a·k + b·(k·z) = t, with a = σ·u·s and b = −σ·u.
+        let target = |axis: usize, i: usize| {
+            let t = m[axis][i] + if self.absolute { c[axis][i] } else { 0.0 };
+            if axis == 1 && mirrored {
+                t - h as f64
+            } else {
+                t
+            }
+        };
+        let n = s0.len();
+        let row = |axis: usize, i: usize| {
+            let g = sign[axis] * factor[axis];
+            (g * stored[axis][i], -g)
+        };
+        let solve = |keep: &[usize], zero: Option<f64>| -> (f64, f64) {
+            // Normal equations for (k, kz), or for k alone with z fixed.
+            let (mut aa, mut ab, mut bb, mut at, mut bt) = (0.0, 0.0, 0.0, 0.0, 0.0);
+            for &i in keep {
+                for axis in 0..2 {
+                    let (mut a, b) = row(axis, i);
+                    let t = target(axis, i);
+                    if let Some(z) = zero {
+                        a += b * z;
+                        aa += a * a;
+                        at += a * t;
+                        continue;
+                    }
+                    aa += a * a;
+                    ab += a * b;
+                    bb += b * b;
+                    at += a * t;
+                    bt += b * t;
+                }
+            }
+            match zero {
+                Some(z) => (if aa > 1e-18 { at / aa } else { 0.0 }, z),
+                None => {
+                    let det = aa * bb - ab * ab;
+                    if det.abs() < 1e-18 {
+                        (if aa > 1e-18 { at / aa } else { 0.0 }, 0.0)
+                    } else {
+                        let k = (at * bb - bt * ab) / det;
+                        let kz = (aa * bt - ab * at) / det;
+                        (k, if k.abs() > 1e-12 { kz / k } else { 0.0 })
+                    }
+                }
+            }
+        };
+        let distance = |(k, z): (f64, f64), i: usize| {
+            let d = |axis: usize| {
+                let (a, b) = row(axis, i);
+                target(axis, i) - (a * k + b * k * z)
+            };
+            d(0).hypot(d(1))
+        };
+        // The zero is 0 or 0.5 (a free one, with one scale, fits a single motion under any
+        // reading); the one that fits better is kept.
+        let mut best: Option<((f64, f64), Vec<usize>, f64)> = None;
+        for zero in [0.0, 0.5] {
+            let mut keep: Vec<usize> = (0..n).collect();
+            let mut kz = solve(&keep, Some(zero));
+            for _ in 0..2 {
+                let mut order: Vec<usize> = (0..n).collect();
+                order.sort_by(|&i, &j| distance(kz, i).total_cmp(&distance(kz, j)));
+                keep = order[..(n * 9 / 10).max(2).min(n)].to_vec();
+                kz = solve(&keep, Some(zero));
+            }
+            let mut d: Vec<f64> = (0..n).map(|i| distance(kz, i)).collect();
+            let r = robust_rms(&mut d);
+            if best.as_ref().is_none_or(|b| r < b.2) {
+                best = Some((kz, keep, r));
+            }
+        }
+        let (kz, _, _) = best.expect("two zeros tried");
+        let fitted = kz;
+        let k = simple(kz.0);
+        let mut distances: Vec<f64> = (0..n).map(|i| distance((k, kz.1), i)).collect();
+        let meaning = match (self.forward, self.absolute, self.signs.0 > 0.0) {
+            (false, false, true) => Meaning::ToPrev,
+            (false, false, false) => Meaning::Velocity,
+            (true, false, true) => Meaning::ToNext,
+            (true, false, false) => Meaning::FromNext,
+            (false, true, _) => Meaning::PrevPosition,
+            (true, true, _) => Meaning::NextPosition,
+        };
+        Reading {
+            meaning,
+            swap: self.swap,
+            y_up: self.signs.0 != self.signs.1,
+            zero: kz.1 as f32,
+            scale: k as f32,
+            units: self.units,
+            residual: robust_rms(&mut distances),
+            fitted_scale: [fitted.0 * factor[0], fitted.0 * factor[1]],
+            consistent: k > 0.0,
+        }
+    }
+}
+
+/// The verdict: the best reading, unless nothing fits clearly better than no motion, a
+/// different reading fits about as well, or an axis never moves.
+fn decide(
+    readings: &[Reading],
+    no_motion: f64,
+    stored: [&[f32]; 2],
+) -> (Option<Reading>, Option<String>) {
+    let Some(best) = readings.first() else {
+        return (
+            None,
+            Some("no textured point could be followed to a neighbouring frame: give frames with detail and a neighbour on each side".into()),
+        );
+    };
+    if no_motion < 0.25 || best.residual > 0.5 * no_motion {
+        return (
+            None,
+            Some(format!(
+                "nothing fits clearly better than no motion (best {:.2} px against {:.2} px without motion)",
+                best.residual, no_motion
+            )),
+        );
+    }
+    if !best.consistent {
+        return (
+            None,
+            Some("the best reading has no positive scale: no preset states it".into()),
+        );
+    }
+    let varies = |c: &[f32]| {
+        let finite = c.iter().filter(|v| v.is_finite());
+        let (lo, hi) = finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        });
+        hi - lo > 1e-6
+    };
+    let y_component = usize::from(!best.swap);
+    if !varies(stored[y_component]) || !varies(stored[1 - y_component]) {
+        return (
+            None,
+            Some(
+                "one stored component never changes: that axis's sign and scale cannot be seen \
+                 (a pan along one axis says nothing of the other); give frames where both move"
+                    .into(),
+            ),
+        );
+    }
+    let alike = readings.iter().skip(1).find(|r| {
+        r.residual <= best.residual * 1.25 + 0.05
+            && (r.meaning != best.meaning || r.swap != best.swap || r.y_up != best.y_up)
+    });
+    if let Some(other) = alike {
+        let reason = if other.meaning.is_backward() != best.meaning.is_backward() {
+            " (the motion is the same before and after this frame, so backward and forward \
+             readings fit alike: a frame whose motion changes tells them apart)"
+        } else {
+            ""
+        };
+        return (
+            None,
+            Some(format!(
+                "two readings fit alike: {} ({:.3} px) and {} ({:.3} px){reason}",
+                describe(best),
+                best.residual,
+                describe(other),
+                other.residual
+            )),
+        );
+    }
+    (Some(best.clone()), None)
+}
+
+/// A reading in words.
+pub fn describe(r: &Reading) -> String {
+    format!(
+        "{:?}{}{}, zero {}, scale {} ({})",
+        r.meaning,
+        if r.swap { ", x/y swapped" } else { "" },
+        if r.y_up { ", y up" } else { ", y down" },
+        r.zero,
+        r.scale,
+        match r.units {
+            Units::Pixels => "pixels",
+            Units::Normalized => "normalised",
+        }
+    )
+    .replace("ToPrev", "to_prev")
+    .replace("ToNext", "to_next")
+    .replace("FromNext", "from_next")
+    .replace("Velocity", "velocity")
+    .replace("PrevPosition", "prev_position")
+    .replace("NextPosition", "next_position")
+}

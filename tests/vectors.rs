@@ -1,0 +1,317 @@
+//! `shutter vectors` (issue 32): sequences with known motion — a textured background and a
+//! foreground square, each moving on its own accelerating path, so that every component is
+//! observable and backward and forward motion differ — written with their vectors in
+//! disguised conventions; the fit recovers each, and the preset it writes makes `shutter
+//! blur` give the frames the canonical vectors give.
+
+use std::path::Path;
+
+use crate::support::{read_exr_reference, s, shutter, stderr, stdout, write_exr};
+
+const W: usize = 96;
+const H: usize = 64;
+
+/// Value noise on a 3-pixel lattice, bilinear between lattice values: a texture defined at
+/// every real position, so a shifted copy is exact.
+fn texture(x: f32, y: f32, seed: u32) -> f32 {
+    let lattice = |i: i64, j: i64| {
+        let mut h = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            ^ (j as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
+            ^ (seed as u64).wrapping_mul(0x1656_67B1_9E37_79F9);
+        h ^= h >> 29;
+        h = h.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        h ^= h >> 32;
+        (h % 1000) as f32 / 1000.0
+    };
+    let (u, v) = (x / 3.0, y / 3.0);
+    let (i, j) = (u.floor() as i64, v.floor() as i64);
+    let (fu, fv) = (u - u.floor(), v - v.floor());
+    let top = lattice(i, j) * (1.0 - fu) + lattice(i + 1, j) * fu;
+    let bottom = lattice(i, j + 1) * (1.0 - fu) + lattice(i + 1, j + 1) * fu;
+    top * (1.0 - fv) + bottom * fv
+}
+
+/// Where each layer has moved by frame t (pixels): accelerating, so the motion before a frame
+/// and after it differ.
+fn background(t: f32) -> (f32, f32) {
+    (4.0 * t + 1.0 * t * t, -3.0 * t + 0.8 * t * t)
+}
+
+fn foreground(t: f32) -> (f32, f32) {
+    (-5.0 * t + 0.5 * t * t, 2.0 * t + 0.6 * t * t)
+}
+
+/// Whether pixel centre (x, y) of frame t is on the foreground square.
+fn on_square(x: f32, y: f32, t: f32) -> bool {
+    let (dx, dy) = foreground(t);
+    let (x, y) = (x - dx, y - dy);
+    (26.0..78.0).contains(&x) && (14.0..50.0).contains(&y)
+}
+
+/// Frame t's colour and depth, and per pixel the layer's motion p(t) − p(t−1) and
+/// p(t+1) − p(t).
+#[allow(clippy::type_complexity)]
+fn frame(t: i64) -> ([Vec<f32>; 4], Vec<(f32, f32)>, Vec<(f32, f32)>) {
+    let t = t as f32;
+    let mut rgb = [
+        vec![0.0; W * H],
+        vec![0.0; W * H],
+        vec![0.0; W * H],
+        vec![10.0; W * H],
+    ];
+    let mut back = vec![(0.0, 0.0); W * H];
+    let mut forward = vec![(0.0, 0.0); W * H];
+    for y in 0..H {
+        for x in 0..W {
+            let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
+            let i = y * W + x;
+            let (path, seed): (fn(f32) -> (f32, f32), u32) = if on_square(cx, cy, t) {
+                rgb[3][i] = 2.0;
+                (foreground, 7)
+            } else {
+                (background, 3)
+            };
+            let (px, py) = path(t);
+            for (c, plane) in rgb.iter_mut().take(3).enumerate() {
+                plane[i] = texture(cx - px, cy - py, seed + c as u32);
+            }
+            let (a, b, c) = (path(t - 1.0), path(t), path(t + 1.0));
+            back[i] = (b.0 - a.0, b.1 - a.1);
+            forward[i] = (c.0 - b.0, c.1 - b.1);
+        }
+    }
+    (rgb, back, forward)
+}
+
+/// How the vectors are disguised in a sequence.
+#[derive(Clone, Copy)]
+enum Disguise {
+    /// Canonical: velocity p(0) − p(−1), pixels, y down.
+    Canonical,
+    /// Forward offsets p(+1) − p(0), y up (Nuke's forward).
+    ForwardYUp,
+    /// Velocity scaled by a half-open shutter (stored = 0.5 · velocity).
+    HalfShutter,
+    /// Backward offsets p(−1) − p(0), normalised to the frame, stored around 0.5.
+    BackwardNormalised,
+}
+
+fn write_sequence(dir: &Path, disguise: Disguise) {
+    for t in 1..=3 {
+        let (rgb, back, forward) = frame(t);
+        let [r, g, b, z] = rgb;
+        let (vx, vy): (Vec<f32>, Vec<f32>) = (0..W * H)
+            .map(|i| match disguise {
+                Disguise::Canonical => back[i],
+                Disguise::ForwardYUp => (forward[i].0, -forward[i].1),
+                Disguise::HalfShutter => (0.5 * back[i].0, 0.5 * back[i].1),
+                Disguise::BackwardNormalised => {
+                    (0.5 - back[i].0 / W as f32, 0.5 - back[i].1 / H as f32)
+                }
+            })
+            .unzip();
+        write_exr(
+            &dir.join(format!("c.{t:04}.exr")),
+            W,
+            H,
+            vec![
+                ("R", r),
+                ("G", g),
+                ("B", b),
+                ("Z", z),
+                ("mv.x", vx),
+                ("mv.y", vy),
+            ],
+        );
+    }
+}
+
+fn fit(dir: &Path, preset: &Path) -> std::process::Output {
+    shutter(&[
+        "vectors",
+        "--color",
+        &s(&dir.join("c.####.exr")),
+        "--channels",
+        "mv.x,mv.y",
+        "--write-preset",
+        &s(preset),
+    ])
+}
+
+fn blur(dir: &Path, presets: &[&Path], out: &str) -> Vec<(String, Vec<f32>)> {
+    let mut args = vec![
+        "blur".to_string(),
+        "--algorithm".into(),
+        "reconstruct".into(),
+        "--color".into(),
+        s(&dir.join("c.####.exr")),
+        "--frames".into(),
+        "2".into(),
+        "-o".into(),
+        s(&dir.join(out)),
+        "-q".into(),
+    ];
+    for p in presets {
+        args.push("--preset".into());
+        args.push(s(p));
+    }
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let o = shutter(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    read_exr_reference(&dir.join(out.replace("####", "0002")))
+}
+
+#[test]
+fn three_disguised_conventions_are_recovered_and_blur_as_the_canonical() {
+    let root = tempfile::tempdir().unwrap();
+    // The canonical sequence's blur, through a preset naming the vector channels.
+    let canonical = root.path().join("canonical");
+    std::fs::create_dir_all(&canonical).unwrap();
+    write_sequence(&canonical, Disguise::Canonical);
+    let plain = root.path().join("plain.toml");
+    std::fs::write(
+        &plain,
+        "[velocity]\nchannels = [[\"mv.x\", \"mv.y\"]]\nmeaning = \"velocity\"\n\
+         [prev]\nchannels = [[\"mv.x\", \"mv.y\"]]\nmeaning = \"velocity\"\n\
+         [next]\nchannels = [[\"mv.x\", \"mv.y\"]]\nmeaning = \"velocity\"\n",
+    )
+    .unwrap();
+    let reference = blur(&canonical, &[&plain], "o.####.exr");
+    // The canonical sequence fits as itself.
+    let fitted = root.path().join("canonical.toml");
+    let o = fit(&canonical, &fitted);
+    assert_eq!(o.status.code(), Some(0), "{}\n{}", stdout(&o), stderr(&o));
+    let text = std::fs::read_to_string(&fitted).unwrap();
+    assert!(text.contains("meaning = \"velocity\""), "{text}");
+
+    // The presets that state each disguise as it was written.
+    let truth = |meaning: &str, extra: &str| {
+        ["velocity", "prev", "next"]
+            .map(|section| {
+                format!("[{section}]\nchannels = [[\"mv.x\", \"mv.y\"]]\nmeaning = \"{meaning}\"\n{extra}")
+            })
+            .join("")
+    };
+    for (name, disguise, expect, truth) in [
+        (
+            "forward",
+            Disguise::ForwardYUp,
+            [
+                "meaning = \"to_next\"",
+                "y_up = true",
+                "scale = 1.0",
+                "zero = 0.0",
+            ],
+            truth("to_next", "y_up = true\n"),
+        ),
+        (
+            "half",
+            Disguise::HalfShutter,
+            [
+                "meaning = \"velocity\"",
+                "y_up = false",
+                "scale = 2.0",
+                "zero = 0.0",
+            ],
+            truth("velocity", "scale = 2.0\n"),
+        ),
+        (
+            "normalised",
+            Disguise::BackwardNormalised,
+            [
+                "meaning = \"to_prev\"",
+                "units = \"normalized\"",
+                "scale = 1.0",
+                "zero = 0.5",
+            ],
+            truth("to_prev", "units = \"normalized\"\nzero = 0.5\n"),
+        ),
+    ] {
+        let dir = root.path().join(name);
+        std::fs::create_dir_all(&dir).unwrap();
+        write_sequence(&dir, disguise);
+        let preset = root.path().join(format!("{name}.toml"));
+        let o = fit(&dir, &preset);
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{name}: {}\n{}",
+            stdout(&o),
+            stderr(&o)
+        );
+        let text = std::fs::read_to_string(&preset).unwrap();
+        for needle in expect {
+            assert!(text.contains(needle), "{name}: {needle:?} not in\n{text}");
+        }
+        // Blurred through the preset written, the frame is the one the true reading gives
+        // (for the backward disguises, the canonical sequence's).
+        let got = blur(&dir, &[&preset], "o.####.exr");
+        let stated = root.path().join(format!("{name}-truth.toml"));
+        std::fs::write(&stated, truth).unwrap();
+        let expected = blur(&dir, &[&stated], "t.####.exr");
+        for ((n, a), (_, b)) in got.iter().zip(&expected) {
+            let worst = a
+                .iter()
+                .zip(b)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0f32, f32::max);
+            assert!(worst < 1e-3, "{name}: channel {n} differs by {worst}");
+        }
+        if !matches!(disguise, Disguise::ForwardYUp) {
+            // The colour (the vectors themselves come back as stored: they differ).
+            for ((n, a), (_, b)) in got
+                .iter()
+                .zip(&reference)
+                .filter(|((n, _), _)| n.len() == 1)
+            {
+                let worst = a
+                    .iter()
+                    .zip(b)
+                    .map(|(x, y)| (x - y).abs())
+                    .fold(0.0f32, f32::max);
+                assert!(
+                    worst < 1e-3,
+                    "{name} against canonical: {n} differs by {worst}"
+                );
+            }
+        }
+    }
+}
+
+/// A sequence whose motion never changes vertically (a horizontal pan) says nothing about y:
+/// the fit says so and writes no preset (exit 1); a still sequence fits nothing better than
+/// no motion.
+#[test]
+fn what_the_frames_cannot_tell_is_reported_not_chosen() {
+    let dir = tempfile::tempdir().unwrap();
+    for t in 1..=3i64 {
+        let shift = 3.0 * t as f32;
+        let (mut r, mut g, mut b) = (vec![0.0; W * H], vec![0.0; W * H], vec![0.0; W * H]);
+        for y in 0..H {
+            for x in 0..W {
+                let (cx, cy) = (x as f32 + 0.5 - shift, y as f32 + 0.5);
+                let i = y * W + x;
+                r[i] = texture(cx, cy, 1);
+                g[i] = texture(cx, cy, 2);
+                b[i] = texture(cx, cy, 3);
+            }
+        }
+        write_exr(
+            &dir.path().join(format!("c.{t:04}.exr")),
+            W,
+            H,
+            vec![
+                ("R", r),
+                ("G", g),
+                ("B", b),
+                ("mv.x", vec![3.0; W * H]),
+                ("mv.y", vec![0.0; W * H]),
+            ],
+        );
+    }
+    let preset = dir.path().join("p.toml");
+    let o = fit(dir.path(), &preset);
+    assert_eq!(o.status.code(), Some(1), "{}", stdout(&o));
+    assert!(stdout(&o).contains("undecided"), "{}", stdout(&o));
+    assert!(!preset.exists());
+}
