@@ -574,37 +574,26 @@ fn parts_are_matched_by_name() {
             })
             .collect(),
     };
-    let (a, b, c) = (
-        dir.path().join("a.exr"),
-        dir.path().join("b.exr"),
-        dir.path().join("c.exr"),
+    let write = |name: &str, order: [(&'static str, u32, f32); 3]| {
+        let path = dir.path().join(name);
+        write_parts(
+            &path,
+            (8, 6),
+            order.map(|(n, seed, bump)| part(n, seed, bump)).into(),
+        );
+        path
+    };
+    let a = write(
+        "a.exr",
+        [("rgba", 1, 0.0), ("diffuse", 5, 0.0), ("specular", 9, 0.0)],
     );
-    write_parts(
-        &a,
-        (8, 6),
-        vec![
-            part("rgba", 1, 0.0),
-            part("diffuse", 5, 0.0),
-            part("specular", 9, 0.0),
-        ],
+    let b = write(
+        "b.exr",
+        [("rgba", 1, 0.0), ("specular", 9, 0.0), ("diffuse", 5, 0.0)],
     );
-    write_parts(
-        &b,
-        (8, 6),
-        vec![
-            part("rgba", 1, 0.0),
-            part("specular", 9, 0.0),
-            part("diffuse", 5, 0.0),
-        ],
-    );
-    write_parts(
-        &c,
-        (8, 6),
-        vec![
-            part("rgba", 1, 0.0),
-            part("diffuse", 5, 0.5),
-            part("specular", 9, 0.0),
-        ],
+    let c = write(
+        "c.exr",
+        [("rgba", 1, 0.0), ("diffuse", 5, 0.5), ("specular", 9, 0.0)],
     );
     let o = shutter(&["diff", &s(&a), &s(&b), "--fail-pixel", "0", "--json"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));

@@ -219,18 +219,7 @@ pub fn write_heatmap(path: &Path, width: usize, height: usize, map: &[f32]) -> R
             Problem::new(ProblemKind::Output, parent, format!("cannot create: {e}"))
         })?;
     }
-    crate::io::output::write_atomic(path, |w| {
-        use image::ImageEncoder;
-        image::codecs::png::PngEncoder::new(w)
-            .write_image(
-                &bytes,
-                width as u32,
-                height as u32,
-                image::ExtendedColorType::Rgb8,
-            )
-            .map_err(|e| e.to_string())
-    })
-    .map_err(|detail| Problem::new(ProblemKind::Output, path, detail).into())
+    crate::lab::bench::plot::write_png(path, width, height, &bytes)
 }
 
 /// Compares every frame. Unreadable inputs and size mismatches are errors (all of them

@@ -54,21 +54,6 @@ fn shrink(rgb: &[u8], width: usize, height: usize) -> (Vec<u8>, usize, usize) {
     (out, w, h)
 }
 
-fn write_png(path: &Path, rgb: &[u8], width: usize, height: usize) -> Result<()> {
-    crate::io::output::write_atomic(path, |w| {
-        use image::ImageEncoder;
-        image::codecs::png::PngEncoder::new(w)
-            .write_image(
-                rgb,
-                width as u32,
-                height as u32,
-                image::ExtendedColorType::Rgb8,
-            )
-            .map_err(|e| e.to_string())
-    })
-    .map_err(|detail| Problem::new(ProblemKind::Output, path, detail).into())
-}
-
 fn create_dir(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir)
         .map_err(|e| Problem::new(ProblemKind::Output, dir, format!("cannot create: {e}")).into())
@@ -110,7 +95,8 @@ pub fn thumbnails(
         (&names.heatmap, heat),
     ] {
         let (small, sw, sh) = shrink(&rgb, w, h);
-        write_png(&dir.join(name), &small, sw, sh).map_err(|e| e.problems()[0].clone())?;
+        crate::lab::bench::plot::write_png(&dir.join(name), sw, sh, &small)
+            .map_err(|e| e.problems()[0].clone())?;
     }
     Ok(names)
 }
