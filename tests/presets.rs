@@ -1009,3 +1009,63 @@ fn max_displace_on_the_command_line_equals_the_preset_key() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("--max-displace 8"), "{}", stdout(&o));
 }
+
+/// The presets written from the documented facts (issue 32): V-Ray's velocity element
+/// (p(+1) − p(0), pixels, y up), Unreal's MRQ pass (0.5 = still, normalised to the screen),
+/// Arnold's raw motionvector (over a half-frame shutter: scale 2), each read back to the
+/// motion written.
+#[test]
+fn vray_unreal_and_arnold_presets() {
+    let t = Truth::new();
+    let dir = tempfile::tempdir().unwrap();
+    let n = W * H;
+    // A motion per pixel, in pixels per frame, y down.
+    let (vx, vy): (Vec<f32>, Vec<f32>) = (0..n)
+        .map(|k| ((k % W) as f32 * 0.5 - 3.0, 2.0 - (k / W) as f32 * 0.25))
+        .unzip();
+    for (name, [x, y], stored) in [
+        (
+            "vray",
+            ["VRayVelocity.R", "VRayVelocity.G"],
+            (vx.clone(), vy.iter().map(|v| -v).collect::<Vec<f32>>()),
+        ),
+        (
+            "unreal",
+            [
+                "FinalImageMovieRenderQueue_MotionVectors.R",
+                "FinalImageMovieRenderQueue_MotionVectors.G",
+            ],
+            (
+                vx.iter().map(|v| 0.5 + v / W as f32).collect(),
+                vy.iter().map(|v| 0.5 + v / H as f32).collect(),
+            ),
+        ),
+        (
+            "arnold",
+            ["motionvector.R", "motionvector.G"],
+            (
+                vx.iter().map(|v| v / 2.0).collect(),
+                vy.iter().map(|v| v / 2.0).collect(),
+            ),
+        ),
+    ] {
+        let path = dir.path().join(format!("{name}.exr"));
+        write_exr(
+            &path,
+            W,
+            H,
+            vec![
+                ("R", t.rgba[0].clone()),
+                ("G", t.rgba[1].clone()),
+                ("B", t.rgba[2].clone()),
+                ("Z", t.depth.clone()),
+                (x, stored.0),
+                (y, stored.1),
+            ],
+        );
+        let frame = read_all(&Preset::builtin(name).unwrap(), &inputs(&path));
+        let velocity = frame.velocity.as_ref().unwrap();
+        assert_close(&velocity.x, &vx, 1e-4, &format!("{name} velocity x"));
+        assert_close(&velocity.y, &vy, 1e-4, &format!("{name} velocity y"));
+    }
+}

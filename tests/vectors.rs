@@ -315,3 +315,38 @@ fn what_the_frames_cannot_tell_is_reported_not_chosen() {
     assert!(stdout(&o).contains("undecided"), "{}", stdout(&o));
     assert!(!preset.exists());
 }
+
+/// `blur` checks the preset's reading before it blurs: a wrong y axis is warned about, naming
+/// the reading that fits; the right one is not; `--check-vectors off` skips the check.
+#[test]
+fn blur_warns_when_another_reading_fits_clearly_better() {
+    let dir = tempfile::tempdir().unwrap();
+    write_sequence(dir.path(), Disguise::Canonical);
+    let preset = |y_up: bool| {
+        let path = dir.path().join(format!("y{y_up}.toml"));
+        std::fs::write(
+            &path,
+            format!("[velocity]\nchannels = [[\"mv.x\", \"mv.y\"]]\nmeaning = \"velocity\"\ny_up = {y_up}\n"),
+        )
+        .unwrap();
+        s(&path)
+    };
+    let run = |preset: &str, extra: &[&str]| {
+        let mut args = vec!["blur", "--algorithm", "reconstruct", "--color"];
+        let color = s(&dir.path().join("c.####.exr"));
+        let out = s(&dir.path().join("out/o.####.exr"));
+        args.extend([color.as_str(), "-o", out.as_str(), "--preset", preset]);
+        args.extend(extra);
+        let o = shutter(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o)
+    };
+    let wrong = run(&preset(true), &[]);
+    assert!(
+        wrong.contains("fit another reading better than the preset's")
+            && wrong.contains("velocity, y down"),
+        "{wrong}"
+    );
+    assert!(!run(&preset(false), &[]).contains("another reading"));
+    assert!(!run(&preset(true), &["--check-vectors", "off"]).contains("another reading"));
+}

@@ -176,6 +176,12 @@ pub struct BlurArgs {
     #[arg(long)]
     pub dry_run: bool,
 
+    /// Before blurring, fit the vectors against one frame's neighbours (as shutter vectors
+    /// does) and warn when another reading fits clearly better than the preset's: on or off
+    /// (for farms that have checked once).
+    #[arg(long, value_name = "on|off", default_value = "on")]
+    pub check_vectors: String,
+
     /// Print a JSON summary on stdout (frames, per-stage seconds, warnings).
     #[arg(long)]
     pub json: bool,

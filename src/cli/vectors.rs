@@ -37,17 +37,14 @@ fn channel_names(
             _ => Err(Error::usage("--channels takes two names: X,Y")),
         };
     }
-    let colour: Vec<&String> = preset.color.channels.iter().flatten().collect();
-    for alternative in &preset.velocity.channels {
-        let [x, y, ..] = alternative.as_slice() else {
-            continue;
+    if let Some([x, y]) = crate::io::passes::velocity_channels(info, preset, shared) {
+        let name = |i: usize| {
+            info.channels[i]
+                .alias
+                .clone()
+                .unwrap_or_else(|| info.channels[i].name.clone())
         };
-        if shared && (colour.contains(&x) || colour.contains(&y)) {
-            continue;
-        }
-        if info.find(x).is_some() && info.find(y).is_some() {
-            return Ok([x.clone(), y.clone()]);
-        }
+        return Ok([name(x), name(y)]);
     }
     Err(Problem::new(
         ProblemKind::MissingChannel,
@@ -273,4 +270,80 @@ pub fn vectors(args: VectorsArgs) -> Result<i32> {
         }
         _ => Ok(0),
     }
+}
+
+/// The check `blur` runs before it blurs (issue 32, point 2): on the middle frame that has a
+/// neighbour, the stored velocity is fitted against the motion measured in the colour, and
+/// the preset's own reading is scored as it is. A warning when another reading fits clearly
+/// better (more than twice as close, and by over a quarter pixel); `None` otherwise, and
+/// whenever the check cannot be made (no vector file, no neighbour, a still sequence, RE:Vision
+/// codes).
+pub fn check(job: &crate::pipeline::Job) -> Option<String> {
+    let needs = crate::process::needs(job.algorithm, &job.params);
+    let spec = &job.preset.velocity;
+    if !needs.velocity || spec.encoding != crate::io::preset::Encoding::Plain {
+        return None;
+    }
+    let color = &job.inputs.color;
+    let frames: Vec<i64> = job.frames.iter().flatten().copied().collect();
+    let on_disk = |f: i64| color.path(Some(f)).is_file();
+    let with_neighbour: Vec<i64> = frames
+        .iter()
+        .copied()
+        .filter(|&f| on_disk(f - 1) || on_disk(f + 1))
+        .collect();
+    let frame = *with_neighbour.get(with_neighbour.len() / 2)?;
+    let vectors = job.inputs.velocity.as_ref().unwrap_or(color);
+    let info = FileInfo::probe(&vectors.path(Some(frame))).ok()?;
+    let [x, y] =
+        crate::io::passes::velocity_channels(&info, &job.preset, job.inputs.velocity.is_none())?;
+    let planes = info.read(&[x, y]).ok()?;
+    let (current, w, h) = luma(color, frame, &job.preset).ok()?;
+    if (info.width, info.height) != (w, h) {
+        return None;
+    }
+    let side = |f: i64| {
+        on_disk(f)
+            .then(|| luma(color, f, &job.preset).ok())
+            .flatten()
+            .filter(|(_, nw, nh)| (*nw, *nh) == (w, h))
+            .map(|(p, _, _)| p)
+    };
+    let (prev, next) = (side(frame - 1), side(frame + 1));
+    let result = fit(&FitInput {
+        width: w,
+        height: h,
+        current: &current,
+        prev: prev.as_deref(),
+        next: next.as_deref(),
+        stored: [&planes[0], &planes[1]],
+    });
+    let best = result.readings.first()?;
+    if result.no_motion < 0.5 {
+        return None;
+    }
+    let stated = Reading {
+        meaning: spec.meaning,
+        swap: false,
+        y_up: spec.y_up,
+        zero: spec.zero,
+        scale: spec.scale,
+        units: spec.units,
+        residual: 0.0,
+        fitted_scale: [0.0; 2],
+        consistent: true,
+    };
+    let own = result.residual_of(&stated)?;
+    (own > 2.0 * best.residual + 0.25).then(|| {
+        format!(
+            "the vectors fit another reading better than the preset's, measured on frame \
+             {frame} against its neighbours: {} ({:.2} px) against the preset's {} ({:.2} px; \
+             no motion {:.2} px); check with shutter vectors, or --check-vectors off",
+            crate::io::passes::describe_reading(best),
+            best.residual,
+            crate::io::passes::describe_reading(&stated),
+            own,
+            result.no_motion
+        )
+    })
 }

@@ -17,6 +17,9 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("nuke", include_str!("../../presets/nuke.toml")),
     ("painted", include_str!("../../presets/painted.toml")),
     ("rsmb", include_str!("../../presets/rsmb.toml")),
+    ("vray", include_str!("../../presets/vray.toml")),
+    ("unreal", include_str!("../../presets/unreal.toml")),
+    ("arnold", include_str!("../../presets/arnold.toml")),
     ("preview", include_str!("../../presets/preview.toml")),
     ("final", include_str!("../../presets/final.toml")),
 ];
@@ -502,7 +505,7 @@ mod tests {
         assert_eq!(err.exit_code(), 2);
         assert!(err
             .to_string()
-            .contains("blender, nuke, painted, rsmb, preview, final"));
+            .contains("blender, nuke, painted, rsmb, vray, unreal, arnold, preview, final"));
     }
 
     #[test]

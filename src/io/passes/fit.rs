@@ -61,6 +61,20 @@ pub struct Fit {
     /// The reading chosen, or `None` with `why`.
     pub chosen: Option<Reading>,
     pub why: Option<String>,
+    /// The samples fitted, per neighbour: (forward, stored, measured, centres).
+    #[serde(skip)]
+    samples: Vec<Samples>,
+    #[serde(skip)]
+    size: (usize, usize),
+}
+
+/// The points of one neighbour: stored values, measured motion and pixel centres per axis.
+#[derive(Clone, Debug)]
+struct Samples {
+    forward: bool,
+    s: [Vec<f64>; 2],
+    m: [Vec<f64>; 2],
+    c: [Vec<f64>; 2],
 }
 
 /// The largest motion looked for, in pixels per frame at full size.
@@ -277,6 +291,7 @@ pub fn fit(input: &FitInput) -> Fit {
         })
         .collect();
     let mut readings = Vec::new();
+    let mut samples = Vec::new();
     let mut no_motion = Vec::new();
     let mut used = 0;
     for (side, (forward, _)) in sides.iter().enumerate() {
@@ -303,6 +318,12 @@ pub fn fit(input: &FitInput) -> Fit {
         if s[0].len() < 8 {
             continue;
         }
+        samples.push(Samples {
+            forward: *forward,
+            s: s.clone(),
+            m: m.clone(),
+            c: c.clone(),
+        });
         for absolute in [false, true] {
             for swap in [false, true] {
                 for units in [Units::Pixels, Units::Normalized] {
@@ -335,6 +356,36 @@ pub fn fit(input: &FitInput) -> Fit {
         points: used,
         chosen,
         why,
+        samples,
+        size: (w, h),
+    }
+}
+
+impl Fit {
+    /// The residual of a reading as given (its own scale and zero, not refitted), against
+    /// the neighbour its meaning looks to; `None` when that neighbour was not measured.
+    pub fn residual_of(&self, r: &Reading) -> Option<f64> {
+        let forward = !r.meaning.is_backward();
+        let side = self.samples.iter().find(|s| s.forward == forward)?;
+        let sx = match r.meaning {
+            Meaning::Velocity | Meaning::FromNext => -1.0,
+            _ => 1.0,
+        };
+        let candidate = Candidate {
+            forward,
+            absolute: r.meaning.is_position(),
+            swap: r.swap,
+            units: r.units,
+            signs: (sx, if r.y_up { -sx } else { sx }),
+        };
+        let mut d = candidate.distances(
+            &side.s,
+            &side.m,
+            &side.c,
+            self.size,
+            (r.scale as f64, r.zero as f64),
+        );
+        Some(robust_rms(&mut d))
     }
 }
 
@@ -349,6 +400,40 @@ struct Candidate {
 }
 
 impl Candidate {
+    /// Each point's distance between the motion measured and the motion this reading gives
+    /// with scale k and zero z.
+    fn distances(
+        &self,
+        s: &[Vec<f64>; 2],
+        m: &[Vec<f64>; 2],
+        c: &[Vec<f64>; 2],
+        (w, h): (usize, usize),
+        (k, z): (f64, f64),
+    ) -> Vec<f64> {
+        let (s0, s1) = if self.swap {
+            (&s[1], &s[0])
+        } else {
+            (&s[0], &s[1])
+        };
+        let factor = match self.units {
+            Units::Pixels => [1.0, 1.0],
+            Units::Normalized => [w as f64, h as f64],
+        };
+        let mirrored = self.absolute && self.signs.1 < 0.0;
+        (0..s0.len())
+            .map(|i| {
+                let d = |axis: usize, stored: f64, sign: f64| {
+                    let mut t = m[axis][i] + if self.absolute { c[axis][i] } else { 0.0 };
+                    if axis == 1 && mirrored {
+                        t -= h as f64;
+                    }
+                    t - sign * factor[axis] * k * (stored - z)
+                };
+                d(0, s0[i], self.signs.0).hypot(d(1, s1[i], self.signs.1))
+            })
+            .collect()
+    }
+
     /// Fits the reading's scale k and zero z (one of each for both axes: the model
     /// t = σ·u·k·(s − z), u the units' factor per axis, a position with y up mirrored about
     /// h) by least squares, refitted on the best four fifths of the points, then with the

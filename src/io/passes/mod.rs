@@ -83,3 +83,29 @@ impl Inputs {
         self.all().iter().any(|(_, p)| p.is_sequence())
     }
 }
+
+/// The first pair of channels of `info` that the preset's [velocity] alternatives name
+/// (`{layer}` substituted with each view layer found), skipping the colour's channels when the
+/// vectors share the colour's file: what `shutter vectors` fits.
+pub fn velocity_channels(
+    info: &crate::io::file::FileInfo,
+    preset: &crate::io::preset::Preset,
+    shared: bool,
+) -> Option<[usize; 2]> {
+    let skip: Vec<usize> = if shared {
+        plan::find_channels(info, &preset.color.channels, 3, &[], None)
+            .ok()
+            .flatten()
+            .map(|found| found.into_iter().flatten().collect())
+            .unwrap_or_default()
+    } else {
+        Vec::new()
+    };
+    let found = plan::find_channels(info, &preset.velocity.channels, 2, &skip, None)
+        .ok()
+        .flatten()?;
+    Some([
+        found.first().copied().flatten()?,
+        found.get(1).copied().flatten()?,
+    ])
+}
