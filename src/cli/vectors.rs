@@ -22,6 +22,23 @@ fn luma(pattern: &PathPattern, frame: i64, preset: &Preset) -> Result<(Vec<f32>,
     Ok((y, f.width, f.height))
 }
 
+/// The fit of one frame's stored planes against its neighbours' luma.
+fn fit_frames(
+    (width, height): (usize, usize),
+    current: &[f32],
+    [prev, next]: [&Option<Vec<f32>>; 2],
+    planes: &[Vec<f32>],
+) -> crate::io::passes::Fit {
+    fit(&FitInput {
+        width,
+        height,
+        current,
+        prev: prev.as_deref(),
+        next: next.as_deref(),
+        stored: [&planes[0], &planes[1]],
+    })
+}
+
 /// The two stored channels' names: `--channels`, else the first pair of the preset's
 /// [velocity] alternatives the file holds (not the colour's own channels, in a shared file).
 fn channel_names(
@@ -183,14 +200,7 @@ pub fn vectors(args: VectorsArgs) -> Result<i32> {
         .into());
     }
     let start = std::time::Instant::now();
-    let result = fit(&FitInput {
-        width: w,
-        height: h,
-        current: &current,
-        prev: prev.as_deref(),
-        next: next.as_deref(),
-        stored: [&planes[0], &planes[1]],
-    });
+    let result = fit_frames((w, h), &current, [&prev, &next], &planes);
     let seconds = start.elapsed().as_secs_f64();
     let next_best = result
         .chosen
@@ -310,14 +320,7 @@ pub fn check(job: &crate::pipeline::Job) -> Option<String> {
             .map(|(p, _, _)| p)
     };
     let (prev, next) = (side(frame - 1), side(frame + 1));
-    let result = fit(&FitInput {
-        width: w,
-        height: h,
-        current: &current,
-        prev: prev.as_deref(),
-        next: next.as_deref(),
-        stored: [&planes[0], &planes[1]],
-    });
+    let result = fit_frames((w, h), &current, [&prev, &next], &planes);
     let best = result.readings.first()?;
     if result.no_motion < 0.5 {
         return None;

@@ -434,10 +434,10 @@ impl Candidate {
             .collect()
     }
 
-    /// Fits the reading's scale k and zero z (one of each for both axes: the model
-    /// t = σ·u·k·(s − z), u the units' factor per axis, a position with y up mirrored about
-    /// h) by least squares, refitted on the best four fifths of the points, then with the
-    /// zero snapped to 0 or 0.5 where it is near.
+    /// Fits the reading's scale k for each zero, 0 and 0.5 (one of each for both axes: the
+    /// model t = σ·u·k·(s − z), u the units' factor per axis, a position with y up mirrored
+    /// about h), by least squares refitted on the closest nine tenths of the points; keeps the
+    /// zero that fits better and rounds k to a simple fraction where it is within 1.5 %.
     fn fit(
         &self,
         s: &[Vec<f64>; 2],
@@ -471,69 +471,40 @@ impl Candidate {
             let g = sign[axis] * factor[axis];
             (g * stored[axis][i], -g)
         };
-        let solve = |keep: &[usize], zero: Option<f64>| -> (f64, f64) {
-            // Normal equations for (k, kz), or for k alone with z fixed.
-            let (mut aa, mut ab, mut bb, mut at, mut bt) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        // Least squares for k with z fixed: rows (axis, point) a·k = t, a = σ·u·(s − z).
+        let solve = |keep: &[usize], z: f64| -> (f64, f64) {
+            let (mut aa, mut at) = (0.0, 0.0);
             for &i in keep {
                 for axis in 0..2 {
-                    let (mut a, b) = row(axis, i);
-                    let t = target(axis, i);
-                    if let Some(z) = zero {
-                        a += b * z;
-                        aa += a * a;
-                        at += a * t;
-                        continue;
-                    }
+                    let (a, b) = row(axis, i);
+                    let a = a + b * z;
                     aa += a * a;
-                    ab += a * b;
-                    bb += b * b;
-                    at += a * t;
-                    bt += b * t;
+                    at += a * target(axis, i);
                 }
             }
-            match zero {
-                Some(z) => (if aa > 1e-18 { at / aa } else { 0.0 }, z),
-                None => {
-                    let det = aa * bb - ab * ab;
-                    if det.abs() < 1e-18 {
-                        (if aa > 1e-18 { at / aa } else { 0.0 }, 0.0)
-                    } else {
-                        let k = (at * bb - bt * ab) / det;
-                        let kz = (aa * bt - ab * at) / det;
-                        (k, if k.abs() > 1e-12 { kz / k } else { 0.0 })
-                    }
-                }
-            }
+            (if aa > 1e-18 { at / aa } else { 0.0 }, z)
         };
-        let distance = |(k, z): (f64, f64), i: usize| {
-            let d = |axis: usize| {
-                let (a, b) = row(axis, i);
-                target(axis, i) - (a * k + b * k * z)
-            };
-            d(0).hypot(d(1))
-        };
+        let size = (w, h);
         // The zero is 0 or 0.5 (a free one, with one scale, fits a single motion under any
         // reading); the one that fits better is kept.
-        let mut best: Option<((f64, f64), Vec<usize>, f64)> = None;
+        let mut best: Option<((f64, f64), f64)> = None;
         for zero in [0.0, 0.5] {
-            let mut keep: Vec<usize> = (0..n).collect();
-            let mut kz = solve(&keep, Some(zero));
+            let mut kz = solve(&(0..n).collect::<Vec<_>>(), zero);
             for _ in 0..2 {
+                let d = self.distances(s, m, c, size, kz);
                 let mut order: Vec<usize> = (0..n).collect();
-                order.sort_by(|&i, &j| distance(kz, i).total_cmp(&distance(kz, j)));
-                keep = order[..(n * 9 / 10).max(2).min(n)].to_vec();
-                kz = solve(&keep, Some(zero));
+                order.sort_by(|&i, &j| d[i].total_cmp(&d[j]));
+                kz = solve(&order[..(n * 9 / 10).max(2).min(n)], zero);
             }
-            let mut d: Vec<f64> = (0..n).map(|i| distance(kz, i)).collect();
-            let r = robust_rms(&mut d);
-            if best.as_ref().is_none_or(|b| r < b.2) {
-                best = Some((kz, keep, r));
+            let r = robust_rms(&mut self.distances(s, m, c, size, kz));
+            if best.is_none_or(|b| r < b.1) {
+                best = Some((kz, r));
             }
         }
-        let (kz, _, _) = best.expect("two zeros tried");
+        let (kz, _) = best.expect("two zeros tried");
         let fitted = kz;
         let k = simple(kz.0);
-        let mut distances: Vec<f64> = (0..n).map(|i| distance((k, kz.1), i)).collect();
+        let mut distances = self.distances(s, m, c, size, (k, kz.1));
         let meaning = match (self.forward, self.absolute, self.signs.0 > 0.0) {
             (false, false, true) => Meaning::ToPrev,
             (false, false, false) => Meaning::Velocity,
