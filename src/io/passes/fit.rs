@@ -179,6 +179,20 @@ fn track(a: &[Level], b: &[Level], (x, y): (usize, usize), texture: f32) -> Opti
     if here > 0.35 * texture + 1e-9 {
         return None;
     }
+    // And a unique one: every displacement two or three pixels away matches clearly worse
+    // (on an edge or a stripe the patch slides along it at little cost: the aperture
+    // problem, which would give any reading's motion along the edge).
+    let mut ring = f32::INFINITY;
+    for dy in -3isize..=3 {
+        for dx in -3isize..=3 {
+            if dx.abs().max(dy.abs()) >= 2 {
+                ring = ring.min(ssd(la, lb, p, (d.0 + dx, d.1 + dy)));
+            }
+        }
+    }
+    if ring < 2.0 * here + 0.25 * texture {
+        return None;
+    }
     let refine = |minus: f32, plus: f32| {
         let denominator = minus - 2.0 * here + plus;
         if denominator > 1e-12 {
