@@ -183,6 +183,12 @@ fn three_disguised_conventions_are_recovered_and_blur_as_the_canonical() {
     assert_eq!(o.status.code(), Some(0), "{}\n{}", stdout(&o), stderr(&o));
     let text = std::fs::read_to_string(&fitted).unwrap();
     assert!(text.contains("meaning = \"velocity\""), "{text}");
+    // Backward vectors answer for [velocity] and [prev]; [next] stays the preset's.
+    assert!(
+        text.contains("[prev]") && !text.contains("[next]"),
+        "{text}"
+    );
+    assert!(text.contains("encoding = \"plain\""), "{text}");
 
     // The presets that state each disguise as it was written.
     let truth = |meaning: &str, extra: &str| {
@@ -326,17 +332,26 @@ fn blur_warns_when_another_reading_fits_clearly_better() {
         let path = dir.path().join(format!("y{y_up}.toml"));
         std::fs::write(
             &path,
-            format!("[velocity]\nchannels = [[\"mv.x\", \"mv.y\"]]\nmeaning = \"velocity\"\ny_up = {y_up}\n"),
+            ["velocity", "prev"]
+                .map(|section| {
+                    format!("[{section}]\nchannels = [[\"mv.x\", \"mv.y\"]]\nmeaning = \"velocity\"\ny_up = {y_up}\n")
+                })
+                .join(""),
         )
         .unwrap();
         s(&path)
     };
     let run = |preset: &str, extra: &[&str]| {
-        let mut args = vec!["blur", "--algorithm", "reconstruct", "--color"];
+        let algorithm = if extra.contains(&"scatter") {
+            "scatter"
+        } else {
+            "reconstruct"
+        };
+        let mut args = vec!["blur", "--algorithm", algorithm, "--color"];
         let color = s(&dir.path().join("c.####.exr"));
         let out = s(&dir.path().join("out/o.####.exr"));
         args.extend([color.as_str(), "-o", out.as_str(), "--preset", preset]);
-        args.extend(extra);
+        args.extend(extra.iter().filter(|a| **a != "scatter"));
         let o = shutter(&args);
         assert!(o.status.success(), "{}", stderr(&o));
         stderr(&o)
@@ -349,4 +364,7 @@ fn blur_warns_when_another_reading_fits_clearly_better() {
     );
     assert!(!run(&preset(false), &[]).contains("another reading"));
     assert!(!run(&preset(true), &["--check-vectors", "off"]).contains("another reading"));
+    // Scatter reads [prev]: that section is checked.
+    let scatter = run(&preset(true), &["scatter"]);
+    assert!(scatter.contains("another reading"), "{scatter}");
 }

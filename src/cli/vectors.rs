@@ -22,6 +22,22 @@ fn luma(pattern: &PathPattern, frame: i64, preset: &Preset) -> Result<(Vec<f32>,
     Ok((y, f.width, f.height))
 }
 
+/// The middle one of `frames` with a neighbour on both sides (`exists`), else with one.
+fn middle_with_neighbours(frames: &[i64], exists: impl Fn(i64) -> bool) -> Option<i64> {
+    let both: Vec<i64> = frames
+        .iter()
+        .copied()
+        .filter(|&f| exists(f - 1) && exists(f + 1))
+        .collect();
+    let any: Vec<i64> = frames
+        .iter()
+        .copied()
+        .filter(|&f| exists(f - 1) || exists(f + 1))
+        .collect();
+    let pick = if both.is_empty() { any } else { both };
+    pick.get(pick.len() / 2).copied()
+}
+
 /// The fit of one frame's stored planes against its neighbours' luma.
 fn fit_frames(
     (width, height): (usize, usize),
@@ -54,7 +70,8 @@ fn channel_names(
             _ => Err(Error::usage("--channels takes two names: X,Y")),
         };
     }
-    if let Some([x, y]) = crate::io::passes::velocity_channels(info, preset, shared) {
+    if let Some([x, y]) = crate::io::passes::vector_channels(info, preset, &preset.velocity, shared)
+    {
         let name = |i: usize| {
             info.channels[i]
                 .alias
@@ -84,7 +101,7 @@ fn preset_text(r: &Reading, names: &[String; 2], source: &str, others: &str) -> 
     };
     let section = |name: &str| {
         format!(
-            "[{name}]\nchannels = [[\"{x}\", \"{y}\"]]\nmeaning = \"{}\"\nzero = {:?}\nscale = {:?}\nunits = \"{}\"\ny_up = {}\n",
+            "[{name}]\nchannels = [[\"{x}\", \"{y}\"]]\nmeaning = \"{}\"\nencoding = \"plain\"\nzero = {:?}\nscale = {:?}\ndead_zone = 0.0\nunits = \"{}\"\ny_up = {}\n",
             serde_json::to_value(r.meaning)
                 .ok()
                 .and_then(|v| v.as_str().map(String::from))
@@ -98,14 +115,20 @@ fn preset_text(r: &Reading, names: &[String; 2], source: &str, others: &str) -> 
             r.y_up
         )
     };
+    // The sections these vectors answer for: [velocity], and [prev] or [next] by the
+    // direction they point; the other direction stays the preset's (Blender's Z,W).
+    let other = if r.meaning.is_backward() {
+        "prev"
+    } else {
+        "next"
+    };
     format!(
         "# Written by shutter vectors from {source}: the stored vectors fitted to the motion \
          measured\n# between the frames ({} px RMS; {others}).\n# Use it after the presets the \
-         fit was run with, e.g. --preset blender --preset this.toml.\n\n{}\n{}\n{}",
+         fit was run with, e.g. --preset blender --preset this.toml.\n\n{}\n{}",
         round(r.residual),
         section("velocity"),
-        section("prev"),
-        section("next")
+        section(other)
     )
 }
 
@@ -129,26 +152,13 @@ pub fn vectors(args: VectorsArgs) -> Result<i32> {
     let has = |f: i64| found.contains(&f);
     let frame = match args.frame {
         Some(f) => f,
-        None => {
-            let both: Vec<i64> = found
-                .iter()
-                .copied()
-                .filter(|&f| has(f - 1) && has(f + 1))
-                .collect();
-            let any: Vec<i64> = found
-                .iter()
-                .copied()
-                .filter(|&f| has(f - 1) || has(f + 1))
-                .collect();
-            let pick = if both.is_empty() { any } else { both };
-            *pick.get(pick.len() / 2).ok_or_else(|| {
-                Error::Files(vec![Problem::new(
-                    ProblemKind::MissingFile,
-                    std::path::Path::new(&color.raw),
-                    "no frame with a neighbouring frame: the fit needs two consecutive frames",
-                )])
-            })?
-        }
+        None => middle_with_neighbours(&found, has).ok_or_else(|| {
+            Error::Files(vec![Problem::new(
+                ProblemKind::MissingFile,
+                std::path::Path::new(&color.raw),
+                "no frame with a neighbouring frame: the fit needs two consecutive frames",
+            )])
+        })?,
     };
     let (current, w, h) = luma(&color, frame, &preset)?;
     let neighbour = |f: i64| -> Result<Option<Vec<f32>>> {
@@ -282,31 +292,36 @@ pub fn vectors(args: VectorsArgs) -> Result<i32> {
     }
 }
 
-/// The check `blur` runs before it blurs (issue 32, point 2): on the middle frame that has a
-/// neighbour, the stored velocity is fitted against the motion measured in the colour, and
+/// The check `blur` runs before it blurs (issue 32, point 2): on the middle frame with
+/// neighbours (as `shutter vectors` picks it), the stored vectors the run reads ([velocity],
+/// or [prev]/[next] for scatter) are fitted against the motion measured in the colour, and
 /// the preset's own reading is scored as it is. A warning when another reading fits clearly
 /// better (more than twice as close, and by over a quarter pixel); `None` otherwise, and
 /// whenever the check cannot be made (no vector file, no neighbour, a still sequence, RE:Vision
 /// codes).
 pub fn check(job: &crate::pipeline::Job) -> Option<String> {
     let needs = crate::process::needs(job.algorithm, &job.params);
-    let spec = &job.preset.velocity;
-    if !needs.velocity || spec.encoding != crate::io::preset::Encoding::Plain {
+    // The section the run reads motion from: [velocity] (reconstruct, stretch), else [prev]
+    // or [next] (scatter), with its own file.
+    let (spec, file) = if needs.velocity {
+        (&job.preset.velocity, &job.inputs.velocity)
+    } else if needs.prev {
+        (&job.preset.prev, &job.inputs.prev)
+    } else if needs.next {
+        (&job.preset.next, &job.inputs.next)
+    } else {
+        return None;
+    };
+    if spec.encoding != crate::io::preset::Encoding::Plain {
         return None;
     }
     let color = &job.inputs.color;
     let frames: Vec<i64> = job.frames.iter().flatten().copied().collect();
     let on_disk = |f: i64| color.path(Some(f)).is_file();
-    let with_neighbour: Vec<i64> = frames
-        .iter()
-        .copied()
-        .filter(|&f| on_disk(f - 1) || on_disk(f + 1))
-        .collect();
-    let frame = *with_neighbour.get(with_neighbour.len() / 2)?;
-    let vectors = job.inputs.velocity.as_ref().unwrap_or(color);
+    let frame = middle_with_neighbours(&frames, on_disk)?;
+    let vectors = file.as_ref().unwrap_or(color);
     let info = FileInfo::probe(&vectors.path(Some(frame))).ok()?;
-    let [x, y] =
-        crate::io::passes::velocity_channels(&info, &job.preset, job.inputs.velocity.is_none())?;
+    let [x, y] = crate::io::passes::vector_channels(&info, &job.preset, spec, file.is_none())?;
     let planes = info.read(&[x, y]).ok()?;
     let (current, w, h) = luma(color, frame, &job.preset).ok()?;
     if (info.width, info.height) != (w, h) {

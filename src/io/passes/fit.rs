@@ -1,11 +1,11 @@
 //! How a vector pass is stored, fitted from the frames themselves (issue 32, `shutter
 //! vectors`): frame n−1's colour, moved by the true motion, is frame n. The motion between
 //! frame n and its neighbours is measured at textured points by block matching (a pyramid,
-//! coarse to fine, sub-pixel at the end), and the stored values at those points are fitted to
-//! it under every reading a preset can state: the four offset meanings and the two absolute
-//! positions, x and y swapped or not, y up or down, the value meaning "still" (zero), the
-//! scale (uniform in pixels, or per axis for screen-normalised units; a render's shutter is a
-//! scale too).
+//! coarse to fine, sub-pixel at the end, only where the match is unique), and the stored
+//! values at those points are fitted to it under every reading a preset can state: the four
+//! offset meanings and the two absolute positions, x and y swapped or not, y up or down, the
+//! value meaning "still" (zero, 0 or 0.5), one scale (in pixels, or in screen-normalised
+//! units, which scale x by the width and y by the height; a render's shutter is a scale too).
 //!
 //! In: the luma of frame n and of n−1 and/or n+1, and the two stored components at n. Out:
 //! every reading's fit (its residual in pixels over the points, robust to occlusion: a point
@@ -43,7 +43,8 @@ pub struct Reading {
     /// RMS distance in pixels between the motion this reading gives and the motion measured
     /// (the best four fifths of the points).
     pub residual: f64,
-    /// The scale fitted per axis, in pixels per stored unit, before rounding.
+    /// The scale fitted (one for both axes) in pixels per stored unit on each axis (the
+    /// units' factor applied), before rounding.
     pub fitted_scale: [f64; 2],
     /// Whether the reading's scale is positive (else no preset can state it).
     pub consistent: bool,
@@ -576,8 +577,7 @@ fn decide(
         });
         hi - lo > 1e-6
     };
-    let y_component = usize::from(!best.swap);
-    if !varies(stored[y_component]) || !varies(stored[1 - y_component]) {
+    if !varies(stored[0]) || !varies(stored[1]) {
         return (
             None,
             Some(

@@ -84,12 +84,13 @@ impl Inputs {
     }
 }
 
-/// The first pair of channels of `info` that the preset's [velocity] alternatives name
+/// The first pair of channels of `info` that a motion section's alternatives name
 /// (`{layer}` substituted with each view layer found), skipping the colour's channels when the
 /// vectors share the colour's file: what `shutter vectors` fits.
-pub fn velocity_channels(
+pub fn vector_channels(
     info: &crate::io::file::FileInfo,
     preset: &crate::io::preset::Preset,
+    section: &crate::io::preset::VectorSpec,
     shared: bool,
 ) -> Option<[usize; 2]> {
     let skip: Vec<usize> = if shared {
@@ -101,7 +102,7 @@ pub fn velocity_channels(
     } else {
         Vec::new()
     };
-    let found = plan::find_channels(info, &preset.velocity.channels, 2, &skip, None)
+    let found = plan::find_channels(info, &section.channels, 2, &skip, None)
         .ok()
         .flatten()?;
     Some([
