@@ -490,40 +490,20 @@ fn a_relative_threshold_and_a_hard_limit() {
     let mut r = flat(0.5);
     r[5] = 0.6;
     write_exr(&b, 4, 4, vec![("R", r), ("G", flat(0.5)), ("B", flat(0.5))]);
+    let (a, b) = (s(&a), s(&b));
+    let diff = |gates: &[&str]| {
+        let mut args = vec!["diff", a.as_str(), b.as_str(), "--fail-pixel", "0.05"];
+        args.extend(gates);
+        shutter(&args)
+    };
     for (relative, code) in [("0.17", 1), ("0.19", 0)] {
-        let o = shutter(&[
-            "diff",
-            &s(&a),
-            &s(&b),
-            "--fail-pixel",
-            "0.05",
-            "--fail-relative",
-            relative,
-        ]);
+        let o = diff(&["--fail-relative", relative]);
         assert_eq!(o.status.code(), Some(code), "{relative}: {}", stderr(&o));
     }
     // Allowed by count, but over the hard limit.
-    let o = shutter(&[
-        "diff",
-        &s(&a),
-        &s(&b),
-        "--fail-pixel",
-        "0.05",
-        "--allow-pixels",
-        "1",
-    ]);
+    let o = diff(&["--allow-pixels", "1"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let o = shutter(&[
-        "diff",
-        &s(&a),
-        &s(&b),
-        "--fail-pixel",
-        "0.05",
-        "--allow-pixels",
-        "1",
-        "--hard-fail",
-        "0.09",
-    ]);
+    let o = diff(&["--allow-pixels", "1", "--hard-fail", "0.09"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("--hard-fail 0.09"), "{}", stderr(&o));
 }
@@ -626,4 +606,49 @@ fn allowed_nonfinite_values_pass_every_gate() {
         assert_eq!(o.status.code(), Some(0), "{gate:?}: {}", stderr(&o));
         assert_eq!(json(&o)["frames"][0]["whole"]["non_finite"], 1);
     }
+}
+
+/// A part the read cannot place (its data window is not the beauty's) is named as not
+/// compared, so a change in it cannot pass unseen.
+#[test]
+fn a_part_of_another_data_window_is_named_as_not_compared() {
+    use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
+    use exr::math::Vec2;
+    use exr::meta::attribute::{IntegerBounds, Text};
+    use exr::meta::header::{ImageAttributes, LayerAttributes};
+    use exr::prelude::WritableImage;
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, light: f32| {
+        let layer = |part: &str, position: (i32, i32), value: f32| {
+            let mut layer = Layer::new(
+                (8, 6),
+                LayerAttributes::named(Text::from(part)),
+                Encoding::default(),
+                AnyChannels::sort(
+                    ["R", "G", "B"]
+                        .iter()
+                        .map(|c| AnyChannel::new(*c, FlatSamples::F32(vec![value; 48])))
+                        .collect(),
+                ),
+            );
+            layer.attributes.layer_position = Vec2(position.0, position.1);
+            layer
+        };
+        let path = dir.path().join(name);
+        Image::from_layers(
+            ImageAttributes::new(IntegerBounds::new((0, 0), (8, 6))),
+            vec![layer("rgba", (0, 0), 0.5), layer("light", (2, 1), light)],
+        )
+        .write()
+        .to_file(&path)
+        .unwrap();
+        s(&path)
+    };
+    let (a, b) = (write("a.exr", 0.1), write("b.exr", 0.9));
+    let o = shutter(&["diff", &a, &b, "--fail-pixel", "0.1"]);
+    assert!(
+        stderr(&o).contains("part light of") && stderr(&o).contains("not compared"),
+        "{}",
+        stderr(&o)
+    );
 }

@@ -317,8 +317,13 @@ pub fn check(job: &crate::pipeline::Job) -> Option<String> {
     }
     let color = &job.inputs.color;
     let frames: Vec<i64> = job.frames.iter().flatten().copied().collect();
-    let on_disk = |f: i64| color.path(Some(f)).is_file();
-    let frame = middle_with_neighbours(&frames, on_disk)?;
+    // Neighbours from the job's own frames (the preflight found them); only where none has
+    // one (a farm chunk of one frame) is the disk asked, for the middle frame alone: no stat
+    // per frame of a long sequence before the run starts.
+    let listed: std::collections::HashSet<i64> = frames.iter().copied().collect();
+    let on_disk = |f: i64| listed.contains(&f) || color.path(Some(f)).is_file();
+    let frame = middle_with_neighbours(&frames, |f| listed.contains(&f))
+        .or_else(|| frames.get(frames.len() / 2).copied())?;
     let vectors = file.as_ref().unwrap_or(color);
     let info = FileInfo::probe(&vectors.path(Some(frame))).ok()?;
     let [x, y] = crate::io::passes::vector_channels(&info, &job.preset, spec, file.is_none())?;

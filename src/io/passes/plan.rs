@@ -68,6 +68,9 @@ pub struct FramePlan {
     pub(super) next: Option<VectorPlan>,
     /// Conversions that are approximations (e.g. next positions extrapolated).
     pub warnings: Vec<String>,
+    /// Parts of the colour file its other channels are not read from (another data window,
+    /// deep data), by name: named in `warnings`, and by `diff` as not compared.
+    pub parts_left_out: Vec<String>,
     /// The colour file's windows: the frame's (every pass is cut to its data window).
     pub(super) color_windows: Option<crate::frame::Windows>,
 }
@@ -150,6 +153,7 @@ pub fn plan_frame(
         prev: None,
         next: None,
         warnings: Vec::new(),
+        parts_left_out: Vec::new(),
     };
     let preset = options.preset;
     let needs = options.needs;
@@ -180,7 +184,14 @@ pub fn plan_frame(
                         .map(|c| c.map(|c| planner.slot(file, c)))
                         .collect();
                     let (others, left) = other_channels(info, &claimed);
-                    plan.warnings.extend(left);
+                    if !left.is_empty() {
+                        plan.warnings.push(format!(
+                            "{} of the colour file: a data window other than the beauty's (or \
+                             deep data), not written to the output",
+                            left.join(", ")
+                        ));
+                    }
+                    plan.parts_left_out = left;
                     plan.color = Some(ColorPlan {
                         rgb: [
                             slots[0].expect("required"),
@@ -550,18 +561,18 @@ impl Planner<'_> {
 
 /// The channels of an EXR colour file other than the beauty's (`beauty`, indices into
 /// `info.channels`): those of the beauty's part, and of every other part whose data window is
-/// the beauty's (the others are named in the returned warning). None for an integer image,
+/// the beauty's (the others are returned by name: `part N` or `part NAME`). None for an integer image,
 /// whose channels are all the beauty's, nor for a multi-view file, whose channels `info` names
 /// without their view (carrying them is not done yet).
-fn other_channels(info: &FileInfo, beauty: &[usize]) -> (Vec<usize>, Option<String>) {
+fn other_channels(info: &FileInfo, beauty: &[usize]) -> (Vec<usize>, Vec<String>) {
     let crate::io::file::FileKind::Exr { headers, .. } = &info.kind else {
-        return (Vec::new(), None);
+        return (Vec::new(), Vec::new());
     };
     let Some(&first) = beauty.first() else {
-        return (Vec::new(), None);
+        return (Vec::new(), Vec::new());
     };
     if info.views.is_some() {
-        return (Vec::new(), None);
+        return (Vec::new(), Vec::new());
     }
     let colour = &headers[info.channels[first].part];
     let alike = |part: usize| {
@@ -583,14 +594,7 @@ fn other_channels(info: &FileInfo, beauty: &[usize]) -> (Vec<usize>, Option<Stri
                 .map_or(format!("part {p}"), |n| format!("part {n}"))
         })
         .collect();
-    let warning = (!left.is_empty()).then(|| {
-        format!(
-            "{} of the colour file: a data window other than the beauty's (or deep data), not \
-             written to the output",
-            left.join(", ")
-        )
-    });
-    (others, warning)
+    (others, left)
 }
 
 /// How `channel`'s part compresses it lossily, if it does ([`exr_io::keeps_exactly`]).

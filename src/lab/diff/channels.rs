@@ -18,7 +18,19 @@
 use serde::Serialize;
 
 use crate::frame::{Frame, LayerClass};
-use crate::lab::metrics::Largest;
+
+/// The largest difference in one channel between two images, where it is and both values.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Largest {
+    pub error: f64,
+    pub x: usize,
+    pub y: usize,
+    /// The channel's name as the file stores it.
+    pub channel: String,
+    /// The reference's value there, and the tested image's.
+    pub a: f64,
+    pub b: f64,
+}
 
 /// The per-pixel gates.
 #[derive(Clone, Copy, Debug, Default)]

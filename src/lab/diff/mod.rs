@@ -15,9 +15,9 @@ use crate::error::{Error, Problem, ProblemKind, Result};
 use crate::io::passes::{plan_color, read_frame, FramePlan};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
-use crate::lab::metrics::{self, Largest, Metric, Rgb, Scores};
+use crate::lab::metrics::{self, Metric, Rgb, Scores};
 
-pub use channels::{EveryChannel, Gates, LayerDiff};
+pub use channels::{EveryChannel, Gates, Largest, LayerDiff};
 
 /// A diff job.
 #[derive(Clone, Debug)]
@@ -265,12 +265,17 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
             a.read_every_channel();
             b.read_every_channel();
             // Parts the read leaves out (another data window, deep data) are not compared.
-            let notes: Vec<String> = a
-                .warnings
-                .iter()
-                .chain(&b.warnings)
-                .filter(|w| w.contains("part"))
-                .map(|w| w.replace("not written to the output", "not compared"))
+            let notes: Vec<String> = [(&a, &job.a), (&b, &job.b)]
+                .into_iter()
+                .filter(|(plan, _)| !plan.parts_left_out.is_empty())
+                .map(|(plan, pattern)| {
+                    format!(
+                        "{} of {}: a data window other than the beauty's (or deep data), not \
+                         compared",
+                        plan.parts_left_out.join(", "),
+                        pattern.path(frame).display()
+                    )
+                })
                 .collect();
             let (a, b) = (read_frame(&a)?, read_frame(&b)?);
             let (ra, rb) = (

@@ -143,66 +143,6 @@ pub fn squared_error_map(a: &Rgb, b: &Rgb) -> (Vec<f64>, usize) {
     (map, bad)
 }
 
-/// The largest difference in one channel between two images, where it is and both values.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
-pub struct Largest {
-    pub error: f64,
-    pub x: usize,
-    pub y: usize,
-    /// The channel's name as the file stores it.
-    pub channel: String,
-    /// The reference's value there, and the tested image's.
-    pub a: f64,
-    pub b: f64,
-}
-
-/// Per pixel, the largest absolute difference of its channels (+∞ where either image holds a
-/// non-finite value), and the largest finite one over the image with where it is.
-pub fn pixel_errors(a: &Rgb, b: &Rgb) -> (Vec<f32>, Largest) {
-    let mut map = vec![0.0f32; a.width * a.height];
-    let mut largest = Largest::default();
-    for (c, channel) in ["R", "G", "B"].into_iter().enumerate() {
-        add_channel(
-            a.planes[c],
-            b.planes[c],
-            (channel, a.width),
-            &mut map,
-            &mut largest,
-        );
-    }
-    (map, largest)
-}
-
-/// One more channel (`name`, of an image `width` wide) folded into [`pixel_errors`]'s map and
-/// largest difference.
-pub fn add_channel(
-    a: &[f32],
-    b: &[f32],
-    (name, width): (&str, usize),
-    errors: &mut [f32],
-    largest: &mut Largest,
-) {
-    for (i, e) in errors.iter_mut().enumerate() {
-        let (x, y) = (a[i], b[i]);
-        if !x.is_finite() || !y.is_finite() {
-            *e = f32::INFINITY;
-            continue;
-        }
-        let d = (x as f64 - y as f64).abs();
-        *e = e.max(d as f32);
-        if d > largest.error {
-            *largest = Largest {
-                error: d,
-                x: i % width.max(1),
-                y: i / width.max(1),
-                channel: name.to_string(),
-                a: x as f64,
-                b: y as f64,
-            };
-        }
-    }
-}
-
 /// RMSE over the three channels of the pixels in `mask` (all when `None`).
 pub fn rmse(a: &Rgb, b: &Rgb, mask: Option<&[bool]>) -> f64 {
     rmse_of_map(&squared_error_map(a, b).0, mask)
