@@ -4,7 +4,7 @@ move) before a textured wall, written as Blender writes a multi-layer EXR
 (ViewLayer.Combined.RGBA, ViewLayer.Depth.Z, ViewLayer.Vector.XYZW).
 
     python -m venv target/bpy && target/bpy/bin/pip install bpy==5.2.3   # ~400 MB, once
-    target/bpy/bin/python scripts/cycles_vectors.py OUT_DIR [WIDTH HEIGHT SAMPLES]
+    target/bpy/bin/python scripts/cycles_vectors.py OUT_DIR [WIDTH HEIGHT SAMPLES [DEPTH]]
     shutter vectors --preset blender --color 'OUT_DIR/shot.####.exr'
 
 Motion blur is off (the vectors come with a sharp beauty, as a render for post blur is made).
@@ -20,6 +20,8 @@ def main():
     width = int(sys.argv[2]) if len(sys.argv) > 2 else 320
     height = int(sys.argv[3]) if len(sys.argv) > 3 else 180
     samples = int(sys.argv[4]) if len(sys.argv) > 4 else 16
+    # "32" (float) or "16" (half, as the shipped fixture fixtures/cycles is written).
+    depth = sys.argv[5] if len(sys.argv) > 5 else "32"
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
@@ -42,7 +44,7 @@ def main():
     if hasattr(settings, "media_type"):
         settings.media_type = "MULTI_LAYER_IMAGE"
     settings.file_format = "OPEN_EXR_MULTILAYER"
-    settings.color_depth = "32"
+    settings.color_depth = depth
     settings.exr_codec = "ZIP"
     scene.render.filepath = f"{out}/shot.####"
 

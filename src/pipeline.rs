@@ -18,7 +18,8 @@ use crate::io::output::{
     existing_frame_problem, remove_stale_temporaries, write_frame, OutputFormat, OutputOptions,
 };
 use crate::io::passes::{
-    output_folder_problems, preflight, read_frame_noted, FramePlan, Inputs, PlanOptions,
+    output_folder_problems, preflight, read_frame_keeping, FramePlan, Inputs, PlanOptions,
+    VectorCheck,
 };
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
@@ -52,6 +53,10 @@ pub struct Job {
     pub dry_run: bool,
     /// Warnings found while resolving the job (flags that do not apply), reported by [`run`].
     pub warnings: Vec<String>,
+    /// Fit the stored vectors against the motion in the frames read, and warn when the
+    /// preset's reading fits clearly worse than another (`--check-vectors`;
+    /// `io::passes::VectorCheck`).
+    pub check_vectors: bool,
 }
 
 /// What the pipeline tells its caller while it runs.
@@ -91,6 +96,8 @@ pub struct Report {
     pub process_seconds: f64,
     pub write_seconds: f64,
     pub preflight_seconds: f64,
+    /// Seconds the vector check took (within the read stage's).
+    pub check_seconds: f64,
     /// Wall-clock seconds for the whole job.
     pub wall_seconds: f64,
     /// Peak resident memory of the process, in MiB, where the OS reports it.
@@ -265,8 +272,18 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     // What the frames need in memory, from their headers, against the limit.
     let limit = job.max_memory.unwrap_or_else(memory_limit);
     let gpu = job.backend != Backend::Cpu;
-    if let Some(plan) = plans.iter().max_by_key(|p| p.memory_needed(gpu)) {
-        let needed = plan.memory_needed(gpu);
+    // The vector check holds a few planes of one frame besides.
+    let checks = job.check_vectors && VectorCheck::applies(&job.inputs.color, options.needs);
+    let needed = |plan: &FramePlan| {
+        let check = if checks {
+            VectorCheck::memory(plan.width, plan.height)
+        } else {
+            0
+        };
+        plan.memory_needed(gpu).saturating_add(check)
+    };
+    if let Some(plan) = plans.iter().max_by_key(|p| needed(p)) {
+        let needed = needed(plan);
         if needed > limit {
             let mib = |bytes: u64| bytes.div_ceil(1 << 20);
             return Err(crate::Error::Files(vec![Problem::new(
@@ -408,104 +425,118 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     on_event(Event::Started {
         frames: plans.len(),
     });
-    let (read_seconds, process_seconds) = std::thread::scope(|scope| -> Result<(f64, f64)> {
-        // The read stage applies the numeric policy, so its scan overlaps processing.
-        // A frame, what the numeric policy replaced in it, and the read's notes.
-        type Read = (Frame, Replaced, Vec<String>);
-        let (read_tx, read_rx) = mpsc::sync_channel::<std::result::Result<Read, Problem>>(0);
-        type Done = (Option<i64>, Frame, Replaced, Vec<String>);
-        let (done_tx, done_rx) = mpsc::sync_channel::<std::result::Result<Done, Problem>>(0);
+    let mut check = job
+        .check_vectors
+        .then(|| VectorCheck::new(&job.inputs.color, &job.preset, &todo, options.needs))
+        .flatten();
+    let (read_seconds, process_seconds, check_seconds) =
+        std::thread::scope(|scope| -> Result<(f64, f64, f64)> {
+            // The read stage applies the numeric policy, so its scan overlaps processing.
+            // A frame, what the numeric policy replaced in it, and the read's notes.
+            type Read = (Frame, Replaced, Vec<String>);
+            let (read_tx, read_rx) = mpsc::sync_channel::<std::result::Result<Read, Problem>>(0);
+            type Done = (Option<i64>, Frame, Replaced, Vec<String>);
+            let (done_tx, done_rx) = mpsc::sync_channel::<std::result::Result<Done, Problem>>(0);
 
-        let reader = scope.spawn(move || {
-            let mut seconds = 0.0;
-            for plan in &plans {
-                let t = Instant::now();
-                let frame = read_frame_noted(plan).map(|(mut frame, notes)| {
-                    let replaced = crate::numeric::sanitize(&mut frame, depth_kind(&job.params));
-                    (frame, replaced, notes)
-                });
-                seconds += t.elapsed().as_secs_f64();
-                let failed = frame.is_err();
-                if read_tx.send(frame).is_err() || failed {
-                    break;
-                }
-            }
-            seconds
-        });
-
-        let frames: Vec<Option<i64>> = todo.clone();
-        let processor = scope.spawn(move || {
-            let mut seconds = 0.0;
-            for (frame_number, frame) in frames.into_iter().zip(read_rx) {
-                let message = match frame {
-                    Ok((frame, replaced, notes)) => {
-                        let t = Instant::now();
-                        let out = process_on(
-                            job.algorithm,
-                            &job.params,
-                            frame,
-                            frame_number.unwrap_or(0),
-                            gpu,
-                        );
-                        seconds += t.elapsed().as_secs_f64();
-                        Ok((frame_number, out, replaced, notes))
-                    }
-                    Err(problem) => Err(problem),
-                };
-                let failed = message.is_err();
-                if done_tx.send(message).is_err() || failed {
-                    break;
-                }
-            }
-            seconds
-        });
-
-        let mut failure = None;
-        for message in done_rx {
-            match message {
-                Ok((frame, out, replaced, notes)) => {
-                    for note in notes {
-                        warn(&mut report, on_event, note);
-                    }
-                    warn_replaced(&mut report, on_event, &replaced, frame);
-                    report.replaced.add(replaced);
-                    let path = job.output.path(frame);
+            let reader = scope.spawn(move || {
+                let (mut seconds, mut check_seconds) = (0.0, 0.0);
+                for (index, plan) in plans.iter().enumerate() {
                     let t = Instant::now();
-                    // Folders are made only when a frame is ready to go in them, so a run
-                    // that fails earlier leaves the file system as it was.
-                    let written = create_parent(&path, frame)
-                        .and_then(|()| write_frame(&path, out, &job.output_options, frame));
-                    report.write_seconds += t.elapsed().as_secs_f64();
-                    match written {
-                        Ok(()) => {
-                            report.frames_written += 1;
-                            report.outputs.push(Output {
-                                frame,
-                                path: path.clone(),
-                            });
-                            on_event(Event::Written { frame, path });
-                        }
-                        Err(problem) => {
-                            failure = Some(problem);
-                            break;
-                        }
+                    let keep = check.as_ref().is_some_and(|c| c.keeps(index));
+                    let frame =
+                        read_frame_keeping(plan, keep).map(|(mut frame, mut notes, stored)| {
+                            let replaced =
+                                crate::numeric::sanitize(&mut frame, depth_kind(&job.params));
+                            if let Some(c) = check.as_mut().filter(|c| !c.done()) {
+                                let t = Instant::now();
+                                notes.extend(c.offer(index, &frame, stored));
+                                check_seconds += t.elapsed().as_secs_f64();
+                            }
+                            (frame, replaced, notes)
+                        });
+                    seconds += t.elapsed().as_secs_f64();
+                    let failed = frame.is_err();
+                    if read_tx.send(frame).is_err() || failed {
+                        break;
                     }
                 }
-                Err(problem) => {
-                    failure = Some(problem);
-                    break;
+                (seconds, check_seconds)
+            });
+
+            let frames: Vec<Option<i64>> = todo.clone();
+            let processor = scope.spawn(move || {
+                let mut seconds = 0.0;
+                for (frame_number, frame) in frames.into_iter().zip(read_rx) {
+                    let message = match frame {
+                        Ok((frame, replaced, notes)) => {
+                            let t = Instant::now();
+                            let out = process_on(
+                                job.algorithm,
+                                &job.params,
+                                frame,
+                                frame_number.unwrap_or(0),
+                                gpu,
+                            );
+                            seconds += t.elapsed().as_secs_f64();
+                            Ok((frame_number, out, replaced, notes))
+                        }
+                        Err(problem) => Err(problem),
+                    };
+                    let failed = message.is_err();
+                    if done_tx.send(message).is_err() || failed {
+                        break;
+                    }
+                }
+                seconds
+            });
+
+            let mut failure = None;
+            for message in done_rx {
+                match message {
+                    Ok((frame, out, replaced, notes)) => {
+                        for note in notes {
+                            warn(&mut report, on_event, note);
+                        }
+                        warn_replaced(&mut report, on_event, &replaced, frame);
+                        report.replaced.add(replaced);
+                        let path = job.output.path(frame);
+                        let t = Instant::now();
+                        // Folders are made only when a frame is ready to go in them, so a run
+                        // that fails earlier leaves the file system as it was.
+                        let written = create_parent(&path, frame)
+                            .and_then(|()| write_frame(&path, out, &job.output_options, frame));
+                        report.write_seconds += t.elapsed().as_secs_f64();
+                        match written {
+                            Ok(()) => {
+                                report.frames_written += 1;
+                                report.outputs.push(Output {
+                                    frame,
+                                    path: path.clone(),
+                                });
+                                on_event(Event::Written { frame, path });
+                            }
+                            Err(problem) => {
+                                failure = Some(problem);
+                                break;
+                            }
+                        }
+                    }
+                    Err(problem) => {
+                        failure = Some(problem);
+                        break;
+                    }
                 }
             }
-        }
-        // Dropping the receiver (end of the loop) unblocks and stops the other stages.
-        let read_seconds = reader.join().unwrap_or(0.0);
-        let process_seconds = processor.join().unwrap_or(0.0);
-        match failure {
-            Some(problem) => Err(name_pass(job, problem.into())),
-            None => Ok((read_seconds, process_seconds)),
-        }
-    })?;
+            // Dropping the receiver (end of the loop) unblocks and stops the other stages.
+            let (read_seconds, check_seconds) = reader.join().unwrap_or((0.0, 0.0));
+            let process_seconds = processor.join().unwrap_or(0.0);
+            match failure {
+                Some(problem) => Err(name_pass(job, problem.into())),
+                None => Ok((read_seconds, process_seconds, check_seconds)),
+            }
+        })?;
     report.read_seconds = read_seconds;
+    report.check_seconds = check_seconds;
     report.process_seconds = process_seconds;
     report.outputs.sort();
     #[cfg(feature = "gpu")]

@@ -98,32 +98,42 @@ enum Disguise {
 
 fn write_sequence(dir: &Path, disguise: Disguise) {
     for t in 1..=3 {
-        let (rgb, back, forward) = frame(t);
-        let [r, g, b, z] = rgb;
-        let (vx, vy): (Vec<f32>, Vec<f32>) = (0..W * H)
-            .map(|i| match disguise {
-                Disguise::Canonical => back[i],
-                Disguise::ForwardYUp => (forward[i].0, -forward[i].1),
-                Disguise::HalfShutter => (0.5 * back[i].0, 0.5 * back[i].1),
-                Disguise::BackwardNormalised => {
-                    (0.5 - back[i].0 / W as f32, 0.5 - back[i].1 / H as f32)
-                }
-            })
-            .unzip();
-        write_exr(
-            &dir.join(format!("c.{t:04}.exr")),
-            W,
-            H,
-            vec![
-                ("R", r),
-                ("G", g),
-                ("B", b),
-                ("Z", z),
-                ("mv.x", vx),
-                ("mv.y", vy),
-            ],
-        );
+        write_frame(dir, t, t, false, disguise);
     }
+}
+
+/// File `number` of a sequence: frame t of the motion, or with `still` its picture with no
+/// motion stored (the vectors of a frame whose neighbour is the same picture).
+fn write_frame(dir: &Path, number: i64, t: i64, still: bool, disguise: Disguise) {
+    let (rgb, mut back, mut forward) = frame(t);
+    if still {
+        back.fill((0.0, 0.0));
+        forward.fill((0.0, 0.0));
+    }
+    let [r, g, b, z] = rgb;
+    let (vx, vy): (Vec<f32>, Vec<f32>) = (0..W * H)
+        .map(|i| match disguise {
+            Disguise::Canonical => back[i],
+            Disguise::ForwardYUp => (forward[i].0, -forward[i].1),
+            Disguise::HalfShutter => (0.5 * back[i].0, 0.5 * back[i].1),
+            Disguise::BackwardNormalised => {
+                (0.5 - back[i].0 / W as f32, 0.5 - back[i].1 / H as f32)
+            }
+        })
+        .unzip();
+    write_exr(
+        &dir.join(format!("c.{number:04}.exr")),
+        W,
+        H,
+        vec![
+            ("R", r),
+            ("G", g),
+            ("B", b),
+            ("Z", z),
+            ("mv.x", vx),
+            ("mv.y", vy),
+        ],
+    );
 }
 
 fn fit(dir: &Path, preset: &Path) -> std::process::Output {
@@ -367,4 +377,129 @@ fn blur_warns_when_another_reading_fits_clearly_better() {
     // Scatter reads [prev]: that section is checked.
     let scatter = run(&preset(true), &["scatter"]);
     assert!(scatter.contains("another reading"), "{scatter}");
+}
+
+/// The check fits frames the run reads: a still start (three frames of one picture, no
+/// motion stored) says nothing, and the check goes on to the first frame that moves; a farm
+/// chunk of one frame reads its neighbours' colour from disk. `--json` gives its seconds.
+#[test]
+fn blur_checks_past_a_still_start_and_in_a_chunk_of_one_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    // Files 1-3 hold frame 1's picture, still; files 4 and 5 move on from it.
+    for number in 1..=5 {
+        write_frame(
+            dir.path(),
+            number,
+            (number - 2).max(1),
+            number <= 3,
+            Disguise::Canonical,
+        );
+    }
+    let preset = |y_up: bool| {
+        let path = dir.path().join(format!("y{y_up}.toml"));
+        std::fs::write(
+            &path,
+            format!("[velocity]\nchannels = [[\"mv.x\", \"mv.y\"]]\nmeaning = \"velocity\"\ny_up = {y_up}\n"),
+        )
+        .unwrap();
+        s(&path)
+    };
+    let run = |preset: &str, frames: &str| {
+        let color = s(&dir.path().join("c.####.exr"));
+        let out = s(&dir.path().join(format!("out{frames}/o.####.exr")));
+        let o = shutter(&[
+            "blur",
+            "--algorithm",
+            "reconstruct",
+            "--color",
+            &color,
+            "--frames",
+            frames,
+            "-o",
+            &out,
+            "--preset",
+            preset,
+            "--json",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        (stderr(&o), report["check_seconds"].as_f64().unwrap())
+    };
+    let (wrong, seconds) = run(&preset(true), "1-5");
+    assert!(
+        wrong.contains("another reading") && wrong.contains("measured on frame 4"),
+        "{wrong}"
+    );
+    assert!(seconds > 0.0);
+    let (right, _) = run(&preset(false), "1-5");
+    assert!(!right.contains("another reading"), "{right}");
+    // One frame, its neighbours read from disk for the check alone.
+    let (chunk, _) = run(&preset(true), "4");
+    assert!(chunk.contains("measured on frame 4"), "{chunk}");
+    let (still, _) = run(&preset(true), "2");
+    assert!(!still.contains("another reading"), "{still}");
+}
+
+/// A real Cycles render (fixtures/cycles, Blender 5.2.3): the fit finds exactly what the
+/// `blender` preset states, for X,Y (backward offsets, y up) and for Z,W (forward, y up);
+/// `blur`'s check passes the preset and warns about it with y flipped.
+#[test]
+fn a_real_cycles_render_fits_the_blender_preset() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let color = format!("{root}/fixtures/cycles/shot.####.exr");
+    let fit = |channels: &str| {
+        let o = shutter(&[
+            "vectors",
+            "--preset",
+            "blender",
+            "--color",
+            &color,
+            "--channels",
+            channels,
+            "--json",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        report["chosen"].clone()
+    };
+    let xy = fit("ViewLayer.Vector.X,ViewLayer.Vector.Y");
+    assert_eq!(xy["meaning"], "to_prev", "{xy}");
+    let zw = fit("ViewLayer.Vector.Z,ViewLayer.Vector.W");
+    assert_eq!(zw["meaning"], "from_next", "{zw}");
+    for chosen in [&xy, &zw] {
+        assert_eq!(chosen["y_up"], true, "{chosen}");
+        assert_eq!(chosen["swap"], false, "{chosen}");
+        assert_eq!(chosen["zero"], 0.0, "{chosen}");
+        assert_eq!(chosen["scale"], 1.0, "{chosen}");
+        assert_eq!(chosen["units"], "pixels", "{chosen}");
+        assert!(chosen["residual"].as_f64().unwrap() < 0.3, "{chosen}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let y_down = dir.path().join("y_down.toml");
+    std::fs::write(&y_down, "[velocity]\ny_up = false\n").unwrap();
+    let blur = |presets: &[&str]| {
+        let out = s(&dir.path().join("o.####.exr"));
+        let mut args = vec![
+            "blur",
+            "--algorithm",
+            "reconstruct",
+            "--color",
+            &color,
+            "-o",
+            &out,
+        ];
+        for p in presets {
+            args.extend(["--preset", p]);
+        }
+        let o = shutter(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o)
+    };
+    let right = blur(&["blender"]);
+    assert!(!right.contains("another reading"), "{right}");
+    let wrong = blur(&["blender", &s(&y_down)]);
+    assert!(
+        wrong.contains("another reading") && wrong.contains("to_prev, y up"),
+        "{wrong}"
+    );
 }

@@ -176,9 +176,9 @@ pub struct BlurArgs {
     #[arg(long)]
     pub dry_run: bool,
 
-    /// Before blurring, fit the vectors against one frame's neighbours (as shutter vectors
-    /// does) and warn when another reading fits clearly better than the preset's: on or off
-    /// (for farms that have checked once).
+    /// As it blurs, fit the stored vectors of one frame it reads against its neighbours (as
+    /// shutter vectors does) and warn when another reading fits clearly better than the
+    /// preset's: on or off (for farms that have checked once).
     #[arg(long, value_name = "on|off", default_value = "on")]
     pub check_vectors: String,
 

@@ -24,21 +24,7 @@ pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
             .num_threads(threads)
             .build_global();
     }
-    let mut job = resolve(&args)?;
-    let check = match args.check_vectors.as_str() {
-        "on" => !args.dry_run,
-        "off" => false,
-        other => {
-            return Err(Error::usage(format!(
-                "--check-vectors takes on or off, not '{other}'"
-            )))
-        }
-    };
-    if check {
-        if let Some(warning) = super::vectors::check(&job) {
-            job.warnings.push(warning);
-        }
-    }
+    let job = resolve(&args)?;
     if dof && job.params.dof.is_none() {
         return Err(Error::usage(
             "shutter dof needs a lens (--focal-length, --f-stop and --focus-distance) or a \

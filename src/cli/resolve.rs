@@ -212,5 +212,14 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         max_pixels: settings.max_pixels,
         max_memory: settings.max_memory.map(|mib| mib << 20),
         warnings,
+        check_vectors: match args.check_vectors.as_str() {
+            "on" => true,
+            "off" => false,
+            other => {
+                return Err(Error::usage(format!(
+                    "--check-vectors takes on or off, not '{other}'"
+                )))
+            }
+        },
     })
 }

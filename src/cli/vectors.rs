@@ -15,11 +15,7 @@ use super::args::VectorsArgs;
 fn luma(pattern: &PathPattern, frame: i64, preset: &Preset) -> Result<(Vec<f32>, usize, usize)> {
     let f = read_color(pattern, Some(frame), preset).map_err(Error::Files)?;
     let c = f.color.as_ref().expect("colour read");
-    let y = (0..f.width * f.height)
-        .map(|i| 0.2126 * c.r[i] + 0.7152 * c.g[i] + 0.0722 * c.b[i])
-        .map(|v| if v.is_finite() { v } else { 0.0 })
-        .collect();
-    Ok((y, f.width, f.height))
+    Ok((crate::io::passes::luma(c), f.width, f.height))
 }
 
 /// The middle one of `frames` with a neighbour on both sides (`exists`), else with one.
@@ -52,6 +48,7 @@ fn fit_frames(
         prev: prev.as_deref(),
         next: next.as_deref(),
         stored: [&planes[0], &planes[1]],
+        max_points: crate::io::passes::FIT_POINTS,
     })
 }
 
@@ -290,83 +287,4 @@ pub fn vectors(args: VectorsArgs) -> Result<i32> {
         }
         _ => Ok(0),
     }
-}
-
-/// The check `blur` runs before it blurs (issue 32, point 2): on the middle frame with
-/// neighbours (as `shutter vectors` picks it), the stored vectors the run reads ([velocity],
-/// or [prev]/[next] for scatter) are fitted against the motion measured in the colour, and
-/// the preset's own reading is scored as it is. A warning when another reading fits clearly
-/// better (more than twice as close, and by over a quarter pixel); `None` otherwise, and
-/// whenever the check cannot be made (no vector file, no neighbour, a still sequence, RE:Vision
-/// codes).
-pub fn check(job: &crate::pipeline::Job) -> Option<String> {
-    let needs = crate::process::needs(job.algorithm, &job.params);
-    // The section the run reads motion from: [velocity] (reconstruct, stretch), else [prev]
-    // or [next] (scatter), with its own file.
-    let (spec, file) = if needs.velocity {
-        (&job.preset.velocity, &job.inputs.velocity)
-    } else if needs.prev {
-        (&job.preset.prev, &job.inputs.prev)
-    } else if needs.next {
-        (&job.preset.next, &job.inputs.next)
-    } else {
-        return None;
-    };
-    if spec.encoding != crate::io::preset::Encoding::Plain {
-        return None;
-    }
-    let color = &job.inputs.color;
-    let frames: Vec<i64> = job.frames.iter().flatten().copied().collect();
-    // Neighbours from the job's own frames (the preflight found them); only where none has
-    // one (a farm chunk of one frame) is the disk asked, for the middle frame alone: no stat
-    // per frame of a long sequence before the run starts.
-    let listed: std::collections::HashSet<i64> = frames.iter().copied().collect();
-    let on_disk = |f: i64| listed.contains(&f) || color.path(Some(f)).is_file();
-    let frame = middle_with_neighbours(&frames, |f| listed.contains(&f))
-        .or_else(|| frames.get(frames.len() / 2).copied())?;
-    let vectors = file.as_ref().unwrap_or(color);
-    let info = FileInfo::probe(&vectors.path(Some(frame))).ok()?;
-    let [x, y] = crate::io::passes::vector_channels(&info, &job.preset, spec, file.is_none())?;
-    let planes = info.read(&[x, y]).ok()?;
-    let (current, w, h) = luma(color, frame, &job.preset).ok()?;
-    if (info.width, info.height) != (w, h) {
-        return None;
-    }
-    let side = |f: i64| {
-        on_disk(f)
-            .then(|| luma(color, f, &job.preset).ok())
-            .flatten()
-            .filter(|(_, nw, nh)| (*nw, *nh) == (w, h))
-            .map(|(p, _, _)| p)
-    };
-    let (prev, next) = (side(frame - 1), side(frame + 1));
-    let result = fit_frames((w, h), &current, [&prev, &next], &planes);
-    let best = result.readings.first()?;
-    if result.no_motion < 0.5 {
-        return None;
-    }
-    let stated = Reading {
-        meaning: spec.meaning,
-        swap: false,
-        y_up: spec.y_up,
-        zero: spec.zero,
-        scale: spec.scale,
-        units: spec.units,
-        residual: 0.0,
-        fitted_scale: [0.0; 2],
-        consistent: true,
-    };
-    let own = result.residual_of(&stated)?;
-    (own > 2.0 * best.residual + 0.25).then(|| {
-        format!(
-            "the vectors fit another reading better than the preset's, measured on frame \
-             {frame} against its neighbours: {} ({:.2} px) against the preset's {} ({:.2} px; \
-             no motion {:.2} px); check with shutter vectors, or --check-vectors off",
-            crate::io::passes::describe_reading(best),
-            best.residual,
-            crate::io::passes::describe_reading(&stated),
-            own,
-            result.no_motion
-        )
-    })
 }

@@ -28,6 +28,9 @@ pub struct FitInput<'a> {
     pub next: Option<&'a [f32]>,
     /// The two stored components at frame n, in the file's order.
     pub stored: [&'a [f32]; 2],
+    /// Points sampled at most, on a grid ([`FIT_POINTS`] for `shutter vectors`; fewer for
+    /// the check before a blur, which only has to tell a clearly wrong reading).
+    pub max_points: usize,
 }
 
 /// One reading of the stored values and how well it fits.
@@ -59,6 +62,8 @@ pub struct Fit {
     pub no_motion: f64,
     /// Points where motion was measured.
     pub points: usize,
+    /// Whether each stored component varies over those points (else its axis is not seen).
+    pub varying: [bool; 2],
     /// The reading chosen, or `None` with `why`.
     pub chosen: Option<Reading>,
     pub why: Option<String>,
@@ -82,38 +87,48 @@ struct Samples {
 const SEARCH: f32 = 192.0;
 /// Half the side of a matched patch.
 const PATCH: isize = 4;
-/// Points sampled at most.
-const MAX_POINTS: usize = 4096;
+/// Points `shutter vectors` samples at most (on a grid, before the flat ones are dropped).
+pub const FIT_POINTS: usize = 4096;
 
 fn downsample(plane: &[f32], w: usize, h: usize) -> (Vec<f32>, usize, usize) {
     let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
     let mut out = vec![0.0; nw * nh];
-    for y in 0..nh {
-        for x in 0..nw {
-            let at =
-                |dx: usize, dy: usize| plane[(2 * y + dy).min(h - 1) * w + (2 * x + dx).min(w - 1)];
-            out[y * nw + x] = 0.25 * (at(0, 0) + at(1, 0) + at(0, 1) + at(1, 1));
+    for (y, row) in out.chunks_exact_mut(nw).enumerate() {
+        let (r0, r1) = ((2 * y).min(h - 1) * w, (2 * y + 1).min(h - 1) * w);
+        let (top, bottom) = (&plane[r0..r0 + w], &plane[r1..r1 + w]);
+        if w >= 2 {
+            // Each output sample averages a 2×2 block (an odd last column or row is dropped).
+            for (x, v) in row.iter_mut().enumerate() {
+                *v = 0.25 * (top[2 * x] + top[2 * x + 1] + bottom[2 * x] + bottom[2 * x + 1]);
+            }
+        } else {
+            row[0] = 0.5 * (top[0] + bottom[0]);
         }
     }
     (out, nw, nh)
 }
 
-struct Level {
-    plane: Vec<f32>,
+struct Level<'a> {
+    plane: std::borrow::Cow<'a, [f32]>,
     w: usize,
     h: usize,
 }
 
-fn pyramid(plane: &[f32], w: usize, h: usize, levels: usize) -> Vec<Level> {
+/// The frame (borrowed, not copied) and its halvings.
+fn pyramid(plane: &[f32], w: usize, h: usize, levels: usize) -> Vec<Level<'_>> {
     let mut out = vec![Level {
-        plane: plane.to_vec(),
+        plane: std::borrow::Cow::Borrowed(plane),
         w,
         h,
     }];
     for _ in 1..levels {
         let last = out.last().expect("one level");
         let (plane, w, h) = downsample(&last.plane, last.w, last.h);
-        out.push(Level { plane, w, h });
+        out.push(Level {
+            plane: std::borrow::Cow::Owned(plane),
+            w,
+            h,
+        });
     }
     out
 }
@@ -124,16 +139,53 @@ fn sample(l: &Level, x: isize, y: isize) -> f32 {
     l.plane[y * l.w + x]
 }
 
-/// Sum of squared differences between the patch of `a` at (x, y) and of `b` at (x+dx, y+dy).
-fn ssd(a: &Level, b: &Level, (x, y): (isize, isize), (dx, dy): (isize, isize)) -> f32 {
+/// Sum of squared differences between the patch of `a` at (x, y) and of `b` at (x+dx, y+dy),
+/// edges clamped; stops adding once the sum passes `limit` (a search's best so far), so a
+/// search pays little for the displacements that lose.
+fn ssd_below(
+    a: &Level,
+    b: &Level,
+    (x, y): (isize, isize),
+    (dx, dy): (isize, isize),
+    limit: f32,
+) -> f32 {
+    let inside = |l: &Level, x: isize, y: isize| {
+        x - PATCH >= 0 && y - PATCH >= 0 && x + PATCH < l.w as isize && y + PATCH < l.h as isize
+    };
     let mut sum = 0.0;
+    if inside(a, x, y) && inside(b, x + dx, y + dy) {
+        // Both patches inside their frames: rows of contiguous samples, no clamping.
+        let side = (2 * PATCH + 1) as usize;
+        for py in -PATCH..=PATCH {
+            let ra = ((y + py) as usize) * a.w + (x - PATCH) as usize;
+            let rb = ((y + dy + py) as usize) * b.w + (x + dx - PATCH) as usize;
+            let row: f32 = a.plane[ra..ra + side]
+                .iter()
+                .zip(&b.plane[rb..rb + side])
+                .map(|(p, q)| (p - q) * (p - q))
+                .sum();
+            sum += row;
+            if sum > limit {
+                return sum;
+            }
+        }
+        return sum;
+    }
     for py in -PATCH..=PATCH {
         for px in -PATCH..=PATCH {
             let d = sample(a, x + px, y + py) - sample(b, x + dx + px, y + dy + py);
             sum += d * d;
         }
+        if sum > limit {
+            return sum;
+        }
     }
     sum
+}
+
+/// The whole sum of squared differences (see [`ssd_below`]).
+fn ssd(a: &Level, b: &Level, p: (isize, isize), d: (isize, isize)) -> f32 {
+    ssd_below(a, b, p, d, f32::INFINITY)
 }
 
 /// The displacement from frame n's point (x, y) to where its patch is in `other`, in full
@@ -161,7 +213,7 @@ fn track(a: &[Level], b: &[Level], (x, y): (usize, usize), texture: f32) -> Opti
         for dy in -radius..=radius {
             for dx in -radius..=radius {
                 let c = (centre.0 + dx, centre.1 + dy);
-                let s = ssd(la, lb, p, c);
+                let s = ssd_below(la, lb, p, c, best.0);
                 // Ties to the smaller displacement, so a flat patch reads as still.
                 if s < best.0
                     || (s == best.0 && c.0.abs() + c.1.abs() < best.1 .0.abs() + best.1 .1.abs())
@@ -215,13 +267,13 @@ fn track(a: &[Level], b: &[Level], (x, y): (usize, usize), texture: f32) -> Opti
 
 /// Textured points of frame n on a grid, with their patch's variation (sum of squared
 /// differences to its one-pixel shifts).
-fn points(l: &Level) -> Vec<((usize, usize), f32)> {
+fn points(l: &Level, max_points: usize) -> Vec<((usize, usize), f32)> {
     let margin = PATCH as usize + 1;
     if l.w <= 2 * margin || l.h <= 2 * margin {
         return Vec::new();
     }
     let area = (l.w - 2 * margin) * (l.h - 2 * margin);
-    let stride = ((area as f64 / MAX_POINTS as f64).sqrt().ceil() as usize).max(2);
+    let stride = ((area as f64 / max_points.max(1) as f64).sqrt().ceil() as usize).max(2);
     let mut out = Vec::new();
     for y in (margin..l.h - margin).step_by(stride) {
         for x in (margin..l.w - margin).step_by(stride) {
@@ -293,7 +345,7 @@ pub fn fit(input: &FitInput) -> Fit {
         .into_iter()
         .filter_map(|(forward, plane)| plane.map(|p| (forward, pyramid(p, w, h, levels))))
         .collect();
-    let chosen_points = points(&current[0]);
+    let chosen_points = points(&current[0], input.max_points);
     // Motion measured to each neighbour at each point (None: not clear there).
     let measured: Vec<Vec<Option<(f32, f32)>>> = sides
         .iter()
@@ -364,11 +416,25 @@ pub fn fit(input: &FitInput) -> Fit {
     readings.retain(|r| r.consistent);
     readings.sort_by(|a, b| a.residual.total_cmp(&b.residual));
     let no_motion = rms(&no_motion);
-    let (chosen, why) = decide(&readings, no_motion, input.stored);
+    // Each stored component must vary where the motion was measured, or its axis's sign
+    // and scale are not seen (the values are finite there: points with others are dropped).
+    let varies = |axis: usize| {
+        samples.iter().any(|side| {
+            let (lo, hi) = side.s[axis]
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+                    (lo.min(v), hi.max(v))
+                });
+            hi - lo > 1e-6
+        })
+    };
+    let varying = [varies(0), varies(1)];
+    let (chosen, why) = decide(&readings, no_motion, varying);
     Fit {
         readings,
         no_motion,
         points: used,
+        varying,
         chosen,
         why,
         samples,
@@ -547,7 +613,7 @@ impl Candidate {
 fn decide(
     readings: &[Reading],
     no_motion: f64,
-    stored: [&[f32]; 2],
+    varying: [bool; 2],
 ) -> (Option<Reading>, Option<String>) {
     let Some(best) = readings.first() else {
         return (
@@ -570,14 +636,7 @@ fn decide(
             Some("the best reading has no positive scale: no preset states it".into()),
         );
     }
-    let varies = |c: &[f32]| {
-        let finite = c.iter().filter(|v| v.is_finite());
-        let (lo, hi) = finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &v| {
-            (lo.min(v), hi.max(v))
-        });
-        hi - lo > 1e-6
-    };
-    if !varies(stored[0]) || !varies(stored[1]) {
+    if !varying[0] || !varying[1] {
         return (
             None,
             Some(

@@ -23,6 +23,7 @@
 //! - [`validity`]: vectors marked invalid (by the vector file's alpha) take the motion of
 //!   the nearest valid one.
 
+mod check;
 mod convert;
 mod fit;
 mod memory;
@@ -33,10 +34,13 @@ mod suggest;
 mod validity;
 mod window;
 
-pub use fit::{describe as describe_reading, fit, Fit, FitInput, Reading};
+pub use check::{luma, VectorCheck};
+pub use fit::{describe as describe_reading, fit, Fit, FitInput, Reading, FIT_POINTS};
 pub use plan::{passes_found, plan_frame, FramePlan, PlanOptions};
 pub use preflight::{output_folder_problems, preflight};
-pub use read::{plan_color, read_color, read_frame, read_frame_noted};
+pub use read::{
+    plan_color, read_color, read_frame, read_frame_keeping, read_frame_noted, StoredVectors,
+};
 pub use suggest::{suggest, Candidate, Found, Suggestion};
 
 use crate::io::sequence::PathPattern;

@@ -5,7 +5,7 @@ use crate::frame::{CarriedChannel, Color, Frame, Passes, Plane};
 use crate::io::channels;
 use crate::io::file::FileKind;
 use crate::io::image::read_photo_colour;
-use crate::io::preset::Preset;
+use crate::io::preset::{Preset, VectorSpec};
 use crate::io::sequence::PathPattern;
 
 use super::convert::MotionSource;
@@ -22,6 +22,25 @@ pub fn read_frame(plan: &FramePlan) -> Result<Frame, Problem> {
 /// could not foresee (vectors marked invalid, filled or read as still). A note's text does
 /// not name the frame, so a sequence reports each kind once.
 pub fn read_frame_noted(plan: &FramePlan) -> Result<(Frame, Vec<String>), Problem> {
+    read_frame_keeping(plan, false).map(|(frame, notes, _)| (frame, notes))
+}
+
+/// The stored values of a frame's first motion pass ([velocity], else [prev], else [next]),
+/// x and y as the file holds them under the section's reading, before that reading converts
+/// them: what the vector check fits (`io::passes::check`).
+pub struct StoredVectors {
+    /// The section that reads them, as the plan resolved it.
+    pub spec: VectorSpec,
+    pub planes: [Plane; 2],
+}
+
+/// [`read_frame_noted`], keeping a copy of the stored vectors with `keep` (the one frame the
+/// vector check fits).
+pub fn read_frame_keeping(
+    plan: &FramePlan,
+    keep: bool,
+) -> Result<(Frame, Vec<String>, Option<StoredVectors>), Problem> {
+    let mut kept = None;
     let mut notes = Vec::new();
     let mut decoded: Vec<Vec<Plane>> = Vec::with_capacity(plan.files.len());
     let (width, height) = (plan.width, plan.height);
@@ -149,6 +168,12 @@ pub fn read_frame_noted(plan: &FramePlan) -> Result<(Frame, Vec<String>), Proble
         let Some(source) = source else { continue };
         let x = take(source.x, &mut decoded);
         let y = take(source.y, &mut decoded);
+        if keep && kept.is_none() {
+            kept = Some(StoredVectors {
+                spec: source.spec.clone(),
+                planes: [x.clone(), y.clone()],
+            });
+        }
         let z = source.z.map(|slot| take(slot, &mut decoded));
         let alpha = source.alpha.map(|slot| take(slot, &mut decoded));
         let mut motion = MotionSource::decode(&source.spec, source.decode, x, y, z, width, height);
@@ -173,7 +198,7 @@ pub fn read_frame_noted(plan: &FramePlan) -> Result<(Frame, Vec<String>), Proble
             _ => frame.next = Some(motion.position(width, false)),
         }
     }
-    Ok((frame, notes))
+    Ok((frame, notes, kept))
 }
 
 fn plan_slots(plan: &FramePlan) -> Vec<Slot> {
