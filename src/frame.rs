@@ -253,6 +253,9 @@ pub struct CarriedChannel {
     pub part: usize,
     pub class: LayerClass,
     pub plane: Plane,
+    /// A u32 channel's values exactly as stored (`plane` holds them as f32, rounded over
+    /// 2²⁴): what an output of u32 channels writes back. Always data.
+    pub exact: Option<Vec<u32>>,
 }
 
 /// The metadata of an 8/16-bit photo, as its file stores it, so the output holds it again.

@@ -309,7 +309,7 @@ fn the_same_frame_gives_the_same_bytes_whatever_order_the_attributes_were_held_i
 
 /// A multi-layer frame as renderers write them: a beauty RGBA that is the sum of its light
 /// layers `diffuse` and `specular` (stored `kind`), with `Z`, `velocity.X/Y` and an object
-/// ID (u32) beside them. Returns the beauty's colour planes.
+/// ID (u32, values over 2²⁴ among them, where an f32 rounds) beside them.
 fn write_layered(path: &Path, kind: exr::meta::attribute::SampleType) {
     use exr::meta::attribute::SampleType;
     let n = W * H;
@@ -342,7 +342,7 @@ fn write_layered(path: &Path, kind: exr::meta::attribute::SampleType) {
     list.push(data("velocity.Y", noise(n, 32, -5.0, 5.0)));
     list.push(AnyChannel::new(
         Text::from("id"),
-        FlatSamples::U32((0..n as u32).map(|i| 1000 + i % 7).collect()),
+        FlatSamples::U32((0..n).map(|i| IDS[i % IDS.len()]).collect()),
     ));
     let layer = Layer::new(
         (W, H),
@@ -354,9 +354,54 @@ fn write_layered(path: &Path, kind: exr::meta::attribute::SampleType) {
     image.write().to_file(path).unwrap();
 }
 
-/// Every run of a multi-layer frame: the channels of the input, the data ones bit for bit,
-/// and light layers that still add up to the beauty.
+/// Object IDs as a renderer hashes them: small ones, and ones an f32 cannot hold (2²⁴ + 1,
+/// a NaN's bit pattern, the largest).
+const IDS: [u32; 7] = [
+    1000,
+    16_777_217,
+    16_777_219,
+    0x7FC0_0001,
+    0x8000_0001,
+    3_000_000_001,
+    u32::MAX,
+];
+
+/// A u32 channel of an EXR, as stored.
+fn read_u32(path: &Path, name: &str) -> Vec<u32> {
+    use exr::prelude::*;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .unwrap();
+    for layer in image.layer_data {
+        for channel in layer.channel_data.list {
+            if channel.name.to_string() == name {
+                match channel.sample_data {
+                    FlatSamples::U32(values) => return values,
+                    other => panic!("{name} is not u32: {other:?}"),
+                }
+            }
+        }
+    }
+    panic!("no channel {name}")
+}
+
+/// Every run of a multi-layer frame: the channels of the input, the data ones bit for bit
+/// (the IDs as u32, every bit), and light layers that still add up to the beauty.
 fn check_layers(input: &Path, output: &Path, tolerance: f32) {
+    let ids = read_u32(output, "id");
+    assert!(
+        ids.iter()
+            .enumerate()
+            .all(|(i, &v)| v == IDS[i % IDS.len()]),
+        "{}: the IDs changed: {:?}",
+        output.display(),
+        &ids[..IDS.len()]
+    );
     use crate::support::{channel, read_exr_reference};
     let before = read_exr_reference(input);
     let after = read_exr_reference(output);
@@ -1003,6 +1048,7 @@ fn silhouette() -> shutter::frame::Frame {
         // As an EXR holds them, sorted by name: B, G, R.
         for (c, plane) in ["R", "G", "B"].into_iter().zip(planes).rev() {
             channels.push(CarriedChannel {
+                exact: None,
                 name: format!("{name}.{c}"),
                 part: 0,
                 class: LayerClass::Colour,

@@ -36,6 +36,9 @@ pub const CHANGED: &str = "changed since the preflight: ";
 pub struct ChannelRef {
     pub part: usize,
     pub index: usize,
+    /// A u32 channel's samples as their bit patterns (`f32::from_bits`): exact, where a
+    /// conversion to f32 rounds every value over 2²⁴ (IDs, hashes). Other types ignore it.
+    pub bits: bool,
 }
 
 /// Reads the headers only, as the exr crate's reader does when it decodes: every attribute
@@ -525,7 +528,8 @@ pub fn read_channels_checked(
                     let dest = slices[target]
                         .get_mut(start..start + line.sample_count)
                         .ok_or_else(|| invalid("line outside its band"))?;
-                    convert_line(header.channels.list[line.channel].sample_type, bytes, dest)?;
+                    let kind = header.channels.list[line.channel].sample_type;
+                    convert_line(kind, bytes, dest, wanted[target].bits)?;
                 }
             }
             Ok(())
@@ -539,7 +543,12 @@ pub fn read_channels_checked(
     })
 }
 
-fn convert_line(kind: SampleType, bytes: &[u8], dest: &mut [f32]) -> exr::error::Result<()> {
+fn convert_line(
+    kind: SampleType,
+    bytes: &[u8],
+    dest: &mut [f32],
+    bits: bool,
+) -> exr::error::Result<()> {
     let size = kind.bytes_per_sample();
     if bytes.len() != dest.len() * size {
         return Err(invalid("line byte count"));
@@ -553,6 +562,11 @@ fn convert_line(kind: SampleType, bytes: &[u8], dest: &mut [f32]) -> exr::error:
         SampleType::F32 => {
             for (d, b) in dest.iter_mut().zip(bytes.chunks_exact(4)) {
                 *d = f32::from_ne_bytes([b[0], b[1], b[2], b[3]]);
+            }
+        }
+        SampleType::U32 if bits => {
+            for (d, b) in dest.iter_mut().zip(bytes.chunks_exact(4)) {
+                *d = f32::from_bits(u32::from_ne_bytes([b[0], b[1], b[2], b[3]]));
             }
         }
         SampleType::U32 => {

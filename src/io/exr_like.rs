@@ -50,10 +50,22 @@ pub struct ExrOutput {
 pub const DEFAULT_COMPRESSION: Compression = Compression::ZIP16;
 
 /// One part of the output: the input part it is made like (`None`: a new file's defaults)
-/// and its channels, each with whether it is data (a DWA part keeps its data apart).
+/// and its channels.
 pub struct OutPart<'a> {
     pub input: Option<&'a Header>,
-    pub channels: Vec<(String, Plane, LayerClass)>,
+    pub channels: Vec<OutChannel>,
+}
+
+/// One channel to write.
+#[derive(Clone, Debug)]
+pub struct OutChannel {
+    pub name: String,
+    pub plane: Plane,
+    /// Whether it is data (a DWA part keeps its data apart, lossless).
+    pub class: LayerClass,
+    /// A u32 channel's values as read, exactly (`CarriedChannel::exact`): written when the
+    /// channel goes out as u32.
+    pub exact: Option<Vec<u32>>,
 }
 
 /// Writes `parts` as one EXR, each part made like its input part (see the module doc), then
@@ -86,10 +98,10 @@ pub fn write_like(
     let mut layers = Vec::new();
     for part in parts {
         let encoding = encoding_like(part.input, output);
-        let (kept, apart): (Vec<_>, Vec<_>) =
-            part.channels.into_iter().partition(|(_, _, class)| {
-                !(is_dwa(encoding.compression) && *class == LayerClass::Data)
-            });
+        let (kept, apart): (Vec<_>, Vec<_>) = part
+            .channels
+            .into_iter()
+            .partition(|c| !(is_dwa(encoding.compression) && c.class == LayerClass::Data));
         let attributes = attributes_like(part.input, windows, record);
         let data_part = (!apart.is_empty()).then(|| {
             let mut data_attributes = attributes.clone();
@@ -164,7 +176,7 @@ fn attributes_like(input: Option<&Header>, windows: Windows, record: &str) -> La
 
 /// Each channel's samples in the pixel type its input part stored it in (half with `half`).
 fn channels_like(
-    channels: Vec<(String, Plane, LayerClass)>,
+    channels: Vec<OutChannel>,
     input: Option<&Header>,
     output: &ExrOutput,
 ) -> Vec<AnyChannel<FlatSamples>> {
@@ -179,7 +191,10 @@ fn channels_like(
     };
     channels
         .into_iter()
-        .map(|(name, plane, _)| {
+        .map(|channel| {
+            let OutChannel {
+                name, plane, exact, ..
+            } = channel;
             let kind = if output.half {
                 SampleType::F16
             } else {
@@ -187,8 +202,12 @@ fn channels_like(
             };
             let samples = match kind {
                 SampleType::F16 => FlatSamples::F16(plane.into_iter().map(f16::from_f32).collect()),
-                // Integer channels are ids and counts: they come back as they were read.
-                SampleType::U32 => FlatSamples::U32(plane.into_iter().map(|v| v as u32).collect()),
+                // Integer channels are ids and counts: they come back as they were read, to
+                // the bit where they were read exactly (IDs over 2²⁴).
+                SampleType::U32 => FlatSamples::U32(match exact {
+                    Some(values) => values,
+                    None => plane.into_iter().map(|v| v as u32).collect(),
+                }),
                 SampleType::F32 => FlatSamples::F32(plane),
             };
             AnyChannel::new(Text::from(name.as_str()), samples)

@@ -333,6 +333,13 @@ impl FileInfo {
 
     /// Decodes the given channels (indices into `channels`, distinct) into planes.
     pub fn read(&self, channels: &[usize]) -> Result<Vec<Plane>, Problem> {
+        self.read_bits(channels, &[])
+    }
+
+    /// [`FileInfo::read`], the channels `bits` lists (indices into `channels`) that are
+    /// u32 read as their bit patterns (`f32::from_bits`): exact, for channels written back
+    /// as they came (IDs over 2²⁴).
+    pub fn read_bits(&self, channels: &[usize], bits: &[usize]) -> Result<Vec<Plane>, Problem> {
         let corrupt = |detail: String| Problem::new(ProblemKind::Corrupt, &self.path, detail);
         match self.kind {
             FileKind::Exr { .. } => {
@@ -341,6 +348,7 @@ impl FileInfo {
                     .map(|&i| exr_io::ChannelRef {
                         part: self.channels[i].part,
                         index: self.channels[i].index,
+                        bits: bits.contains(&i),
                     })
                     .collect();
                 let read = exr_io::read_channels_checked(&self.path, &refs, |meta| {

@@ -393,14 +393,24 @@ pub fn write_frame(
             let beauty = names
                 .into_iter()
                 .zip(planes)
-                .map(|(name, plane)| (name, plane, LayerClass::Colour));
+                .map(|(name, plane)| exr_like::OutChannel {
+                    name,
+                    plane,
+                    class: LayerClass::Colour,
+                    exact: None,
+                });
             // Part for part as the colour file (one part when it is not an EXR); a part none
             // of whose channels were carried is left out.
             let count = carried.headers.len().max(1);
-            let mut parts: Vec<Vec<(String, Plane, LayerClass)>> = vec![Vec::new(); count];
+            let mut parts: Vec<Vec<exr_like::OutChannel>> = vec![Vec::new(); count];
             parts[carried.colour_part.min(count - 1)].extend(beauty);
             for c in carried.channels {
-                parts[c.part.min(count - 1)].push((c.name, c.plane, c.class));
+                parts[c.part.min(count - 1)].push(exr_like::OutChannel {
+                    name: c.name,
+                    plane: c.plane,
+                    class: c.class,
+                    exact: c.exact,
+                });
             }
             let parts = parts
                 .into_iter()

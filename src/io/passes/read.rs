@@ -1,7 +1,7 @@
 //! Decoding a planned frame and converting its passes to the canonical convention.
 
 use crate::error::{Problem, ProblemKind};
-use crate::frame::{CarriedChannel, Color, Frame, Passes, Plane};
+use crate::frame::{CarriedChannel, Color, Frame, LayerClass, Passes, Plane};
 use crate::io::channels;
 use crate::io::file::FileKind;
 use crate::io::image::read_photo_colour;
@@ -9,7 +9,7 @@ use crate::io::preset::{Preset, VectorSpec};
 use crate::io::sequence::PathPattern;
 
 use super::convert::MotionSource;
-use super::plan::{plan_frame, FramePlan, PlanOptions, Slot};
+use super::plan::{plan_frame, ColorPlan, FramePlan, PlanOptions, Slot};
 use super::window::DataWindow;
 use super::Inputs;
 
@@ -49,10 +49,18 @@ pub fn read_frame_keeping(
         width,
         height,
     });
-    for file in &plan.files {
+    // The u32 data channels carried to the output are read as their bits, exactly, unless
+    // a pass reads them too (as a number).
+    let exact = exact_slots(plan);
+    for (index, file) in plan.files.iter().enumerate() {
+        let bits: Vec<usize> = exact
+            .iter()
+            .filter(|slot| slot.file == index)
+            .map(|slot| file.channels[slot.entry])
+            .collect();
         let mut planes = file
             .info
-            .read(&file.channels)
+            .read_bits(&file.channels, &bits)
             .map_err(|p| p.frame(plan.frame))?;
         // A pass whose data window is larger than the colour's (overscan) is cut to it; the
         // plan made sure it covers it.
@@ -94,22 +102,19 @@ pub fn read_frame_keeping(
         if let FileKind::Exr { headers, .. } = &file.info.kind {
             for &slot in &plan_color.other_slots {
                 let channel = channel_of(slot);
-                let crypto = headers
-                    .get(channel.part)
-                    .map(channels::crypto_layers)
-                    .unwrap_or_default();
-                // A channel of a named part is classed as `part.channel` (`diffuse.R`).
-                let qualified = channel.alias.as_ref().unwrap_or(&channel.name);
-                let (layer, _) = channels::split(qualified);
-                let class = match plan_color.layer_classes.get(layer) {
-                    Some(&class) => class,
-                    None => channels::class_of(qualified, &crypto),
-                };
+                let mut plane = take(slot, &mut decoded);
+                // Bits read exactly: the values as stored, and as numbers in the plane.
+                let exact = exact.contains(&slot).then(|| {
+                    let values: Vec<u32> = plane.iter().map(|v| v.to_bits()).collect();
+                    plane = values.iter().map(|&v| v as f32).collect();
+                    values
+                });
                 frame.carried.channels.push(CarriedChannel {
-                    class,
+                    class: carried_class(plan_color, headers, channel),
                     name: channel.name.clone(),
                     part: channel.part,
-                    plane: take(slot, &mut decoded),
+                    plane,
+                    exact,
                 });
             }
             frame.carried.headers = headers.clone();
@@ -199,6 +204,52 @@ pub fn read_frame_keeping(
         }
     }
     Ok((frame, notes, kept))
+}
+
+/// The class of a channel carried beside the beauty: the preset's for its layer
+/// (`[layers]`), else `io::channels`' rule; a channel of a named part is classed as
+/// `part.channel` (`diffuse.R`).
+fn carried_class(
+    plan_color: &ColorPlan,
+    headers: &[exr::meta::header::Header],
+    channel: &crate::io::file::ChannelInfo,
+) -> LayerClass {
+    let crypto = headers
+        .get(channel.part)
+        .map(channels::crypto_layers)
+        .unwrap_or_default();
+    let qualified = channel.alias.as_ref().unwrap_or(&channel.name);
+    let (layer, _) = channels::split(qualified);
+    match plan_color.layer_classes.get(layer) {
+        Some(&class) => class,
+        None => channels::class_of(qualified, &crypto),
+    }
+}
+
+/// The carried channels read as exact u32 bits: data, stored u32, and read by no pass.
+fn exact_slots(plan: &FramePlan) -> Vec<Slot> {
+    let Some(plan_color) = &plan.color else {
+        return Vec::new();
+    };
+    let file = &plan.files[plan_color.rgb[0].file];
+    let FileKind::Exr { headers, .. } = &file.info.kind else {
+        return Vec::new();
+    };
+    let passes: Vec<Slot> = plan_slots(plan)
+        .into_iter()
+        .filter(|s| !plan_color.other_slots.contains(s))
+        .collect();
+    plan_color
+        .other_slots
+        .iter()
+        .copied()
+        .filter(|slot| {
+            let channel = &file.info.channels[file.channels[slot.entry]];
+            channel.sample_type == "u32"
+                && carried_class(plan_color, headers, channel) == LayerClass::Data
+                && !passes.contains(slot)
+        })
+        .collect()
 }
 
 fn plan_slots(plan: &FramePlan) -> Vec<Slot> {
