@@ -96,8 +96,10 @@ pub struct Report {
     pub process_seconds: f64,
     pub write_seconds: f64,
     pub preflight_seconds: f64,
-    /// Seconds the vector check took (within the read stage's).
-    pub check_seconds: f64,
+    /// What the vector check did (`--check-vectors`); absent when it was off or had nothing
+    /// to check (a still, no motion read).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vector_check: Option<crate::io::passes::CheckReport>,
     /// Wall-clock seconds for the whole job.
     pub wall_seconds: f64,
     /// Peak resident memory of the process, in MiB, where the OS reports it.
@@ -427,10 +429,11 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     });
     let mut check = job
         .check_vectors
-        .then(|| VectorCheck::new(&job.inputs.color, &job.preset, &todo, options.needs))
+        .then(|| VectorCheck::new(&job.inputs.color, &options, &todo))
         .flatten();
-    let (read_seconds, process_seconds, check_seconds) =
-        std::thread::scope(|scope| -> Result<(f64, f64, f64)> {
+    type Checked = Option<crate::io::passes::CheckReport>;
+    let (read_seconds, process_seconds, vector_check) =
+        std::thread::scope(|scope| -> Result<(f64, f64, Checked)> {
             // The read stage applies the numeric policy, so its scan overlaps processing.
             // A frame, what the numeric policy replaced in it, and the read's notes.
             type Read = (Frame, Replaced, Vec<String>);
@@ -460,7 +463,11 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                         break;
                     }
                 }
-                (seconds, check_seconds)
+                let report = check.map(|c| crate::io::passes::CheckReport {
+                    seconds: check_seconds,
+                    ..c.report()
+                });
+                (seconds, report)
             });
 
             let frames: Vec<Option<i64>> = todo.clone();
@@ -528,15 +535,15 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                 }
             }
             // Dropping the receiver (end of the loop) unblocks and stops the other stages.
-            let (read_seconds, check_seconds) = reader.join().unwrap_or((0.0, 0.0));
+            let (read_seconds, vector_check) = reader.join().unwrap_or((0.0, None));
             let process_seconds = processor.join().unwrap_or(0.0);
             match failure {
                 Some(problem) => Err(name_pass(job, problem.into())),
-                None => Ok((read_seconds, process_seconds, check_seconds)),
+                None => Ok((read_seconds, process_seconds, vector_check)),
             }
         })?;
     report.read_seconds = read_seconds;
-    report.check_seconds = check_seconds;
+    report.vector_check = vector_check;
     report.process_seconds = process_seconds;
     report.outputs.sort();
     #[cfg(feature = "gpu")]

@@ -1132,3 +1132,48 @@ fn light_layers_add_up_at_a_moving_silhouette() {
         }
     }
 }
+
+/// `diff` compares u32 IDs as they are stored: two IDs over 2²⁴ that one f32 holds alike
+/// (16777217 against 16777216) are a difference, and the data gate fails it.
+#[test]
+fn diff_tells_ids_apart_that_an_f32_rounds_alike() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, changed: bool| {
+        let n = W * H;
+        let mut ids: Vec<u32> = (0..n).map(|i| IDS[i % IDS.len()]).collect();
+        if changed {
+            // IDS[1] is 2²⁴ + 1: its neighbour below rounds to the same f32.
+            ids[1] = 16_777_216;
+        }
+        let mut list = vec![AnyChannel::new(Text::from("id"), FlatSamples::U32(ids))];
+        for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
+            list.push(AnyChannel::new(
+                Text::from(name),
+                FlatSamples::F32(noise(n, 40 + c as u32, 0.0, 1.0)),
+            ));
+        }
+        let layer = Layer::new(
+            (W, H),
+            LayerAttributes::default(),
+            Encoding::FAST_LOSSLESS,
+            AnyChannels::sort(list.into()),
+        );
+        let path = dir.path().join(name);
+        Image::from_layer(layer).write().to_file(&path).unwrap();
+        s(&path)
+    };
+    let (a, b, same) = (
+        write("a.exr", false),
+        write("b.exr", true),
+        write("c.exr", false),
+    );
+    let o = shutter(&["diff", &a, &b, "--data-fail-pixel", "0", "--json"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let text = report.to_string();
+    let largest = &report["frames"][0]["largest"];
+    assert_eq!(largest["channel"], "id", "{text}");
+    assert_eq!(largest["error"], 1.0, "{text}");
+    let o = shutter(&["diff", &a, &same, "--data-fail-pixel", "0"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}

@@ -381,9 +381,11 @@ fn blur_warns_when_another_reading_fits_clearly_better() {
 
 /// The check fits frames the run reads: a still start (three frames of one picture, no
 /// motion stored) says nothing, and the check goes on to the first frame that moves; a farm
-/// chunk of one frame reads its neighbours' colour from disk. `--json` gives its seconds.
+/// chunk of one frame reads the neighbour its reading looks toward (the previous) from disk;
+/// a chunk of two fits its second frame against its first, read by the run. `--json` says
+/// which frames it fitted and what it found; the frames written are the same without it.
 #[test]
-fn blur_checks_past_a_still_start_and_in_a_chunk_of_one_frame() {
+fn blur_checks_past_a_still_start_and_in_chunks_of_one_and_two_frames() {
     let dir = tempfile::tempdir().unwrap();
     // Files 1-3 hold frame 1's picture, still; files 4 and 5 move on from it.
     for number in 1..=5 {
@@ -404,9 +406,9 @@ fn blur_checks_past_a_still_start_and_in_a_chunk_of_one_frame() {
         .unwrap();
         s(&path)
     };
-    let run = |preset: &str, frames: &str| {
+    let run = |preset: &str, frames: &str, check: &str| {
         let color = s(&dir.path().join("c.####.exr"));
-        let out = s(&dir.path().join(format!("out{frames}/o.####.exr")));
+        let out = s(&dir.path().join(format!("out{frames}{check}/o.####.exr")));
         let o = shutter(&[
             "blur",
             "--algorithm",
@@ -420,24 +422,58 @@ fn blur_checks_past_a_still_start_and_in_a_chunk_of_one_frame() {
             "--preset",
             preset,
             "--json",
+            "--check-vectors",
+            check,
         ]);
         assert!(o.status.success(), "{}", stderr(&o));
         let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-        (stderr(&o), report["check_seconds"].as_f64().unwrap())
+        (stderr(&o), report["vector_check"].clone())
     };
-    let (wrong, seconds) = run(&preset(true), "1-5");
+    let fitted = |check: &serde_json::Value| -> (Vec<i64>, String) {
+        let frames = check["frames"].as_array().unwrap();
+        (
+            frames.iter().map(|f| f.as_i64().unwrap()).collect(),
+            check["outcome"].as_str().unwrap().to_string(),
+        )
+    };
+    let (wrong, check) = run(&preset(true), "1-5", "on");
     assert!(
-        wrong.contains("another reading") && wrong.contains("measured on frame 4"),
+        wrong.contains("measured on frame 4 against frames 3 and 5"),
         "{wrong}"
     );
-    assert!(seconds > 0.0);
-    let (right, _) = run(&preset(false), "1-5");
+    assert_eq!(fitted(&check), (vec![2, 3, 4], "warned".into()));
+    assert!(check["seconds"].as_f64().unwrap() > 0.0);
+    let (right, check) = run(&preset(false), "1-5", "on");
     assert!(!right.contains("another reading"), "{right}");
-    // One frame, its neighbours read from disk for the check alone.
-    let (chunk, _) = run(&preset(true), "4");
-    assert!(chunk.contains("measured on frame 4"), "{chunk}");
-    let (still, _) = run(&preset(true), "2");
+    assert_eq!(fitted(&check), (vec![2, 3, 4], "fits".into()));
+    // Off: no report, and the same frames.
+    let (_, off) = run(&preset(false), "1-5", "off");
+    assert!(off.is_null(), "{off}");
+    for f in 1..=5 {
+        let frame = |check: &str| {
+            read_exr_reference(&dir.path().join(format!("out1-5{check}/o.{f:04}.exr")))
+        };
+        assert!(
+            frame("on") == frame("off"),
+            "frame {f} differs with the check"
+        );
+    }
+    // Chunks: one frame reads frame 3 from disk; two fit frame 5 against frame 4.
+    let (chunk, check) = run(&preset(true), "4", "on");
+    assert!(
+        chunk.contains("measured on frame 4 against frame 3:"),
+        "{chunk}"
+    );
+    assert_eq!(fitted(&check), (vec![4], "warned".into()));
+    let (pair, check) = run(&preset(true), "4-5", "on");
+    assert!(
+        pair.contains("measured on frame 5 against frame 4:"),
+        "{pair}"
+    );
+    assert_eq!(fitted(&check), (vec![5], "warned".into()));
+    let (still, check) = run(&preset(true), "2", "on");
     assert!(!still.contains("another reading"), "{still}");
+    assert_eq!(fitted(&check), (vec![2], "nothing to judge".into()));
 }
 
 /// A real Cycles render (fixtures/cycles, Blender 5.2.3): the fit finds exactly what the
@@ -487,19 +523,23 @@ fn a_real_cycles_render_fits_the_blender_preset() {
             &color,
             "-o",
             &out,
+            "--json",
         ];
         for p in presets {
             args.extend(["--preset", p]);
         }
         let o = shutter(&args);
         assert!(o.status.success(), "{}", stderr(&o));
-        stderr(&o)
+        let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        (stderr(&o), report["vector_check"]["outcome"].clone())
     };
-    let right = blur(&["blender"]);
+    let (right, outcome) = blur(&["blender"]);
     assert!(!right.contains("another reading"), "{right}");
-    let wrong = blur(&["blender", &s(&y_down)]);
+    assert_eq!(outcome, "fits");
+    let (wrong, outcome) = blur(&["blender", &s(&y_down)]);
     assert!(
         wrong.contains("another reading") && wrong.contains("to_prev, y up"),
         "{wrong}"
     );
+    assert_eq!(outcome, "warned");
 }

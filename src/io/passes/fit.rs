@@ -443,6 +443,13 @@ pub fn fit(input: &FitInput) -> Fit {
 }
 
 impl Fit {
+    /// The RMS of the motion measured toward one neighbour (the next with `forward`), per
+    /// axis, in pixels; `None` when that neighbour was not measured.
+    pub fn motion_toward(&self, forward: bool) -> Option<[f64; 2]> {
+        let side = self.samples.iter().find(|s| s.forward == forward)?;
+        Some([rms(&side.m[0]), rms(&side.m[1])])
+    }
+
     /// The residual of a reading as given (its own scale and zero, not refitted), against
     /// the neighbour its meaning looks to; `None` when that neighbour was not measured.
     pub fn residual_of(&self, r: &Reading) -> Option<f64> {

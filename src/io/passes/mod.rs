@@ -34,7 +34,7 @@ mod suggest;
 mod validity;
 mod window;
 
-pub use check::{luma, VectorCheck};
+pub use check::{luma, CheckReport, VectorCheck};
 pub use fit::{describe as describe_reading, fit, Fit, FitInput, Reading, FIT_POINTS};
 pub use plan::{passes_found, plan_frame, FramePlan, PlanOptions};
 pub use preflight::{output_folder_problems, preflight};
