@@ -258,6 +258,23 @@ pub struct CarriedChannel {
     pub exact: Option<Vec<u32>>,
 }
 
+/// One of a PNG's text chunks: a keyword (`Comment`, `Software`, `parameters`) and its text.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PngText {
+    pub keyword: String,
+    pub text: String,
+    /// tEXt (Latin-1), zTXt (Latin-1, compressed) or iTXt (UTF-8).
+    pub kind: TextKind,
+}
+
+/// The chunk a PNG text came in, and goes out in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TextKind {
+    Latin1,
+    Compressed,
+    International,
+}
+
 /// The metadata of an 8/16-bit photo, as its file stores it, so the output holds it again.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Photo {
@@ -269,6 +286,9 @@ pub struct Photo {
     pub exif: Option<Vec<u8>>,
     pub xmp: Option<Vec<u8>>,
     pub iptc: Option<Vec<u8>>,
+    /// A PNG's text chunks (tEXt, zTXt, iTXt; XMP's iTXt is `xmp`), in file order: written
+    /// again to a PNG output.
+    pub texts: Vec<PngText>,
     /// Bits per sample of the input (8 or 16).
     pub bits: u8,
     /// A JPEG's chroma subsampling: its luma sampling factors over its chroma's, (2, 2) for

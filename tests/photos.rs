@@ -350,3 +350,63 @@ fn a_tiff_of_associated_alpha_is_not_premultiplied_twice() {
         assert!((p[0] as i32 - 200).abs() <= 2 && p[3] == 128, "{p:?}");
     }
 }
+
+/// A PNG's text chunks come out again, each in its kind: tEXt, zTXt (compressed) and iTXt
+/// (UTF-8), as a renderer or an image generator leaves its settings there.
+#[test]
+fn a_pngs_text_chunks_come_out_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16u32, 8u32);
+    let input = dir.path().join("texts.png");
+    {
+        let file = std::io::BufWriter::new(std::fs::File::create(&input).unwrap());
+        let mut encoder = png::Encoder::new(file, w, h);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder
+            .add_text_chunk("Comment".into(), "made by hand".into())
+            .unwrap();
+        encoder
+            .add_ztxt_chunk("Description".into(), "a long description ".repeat(20))
+            .unwrap();
+        encoder
+            .add_itxt_chunk("Title".into(), "Été à Zürich".into())
+            .unwrap();
+        let mut writer = encoder.write_header().unwrap();
+        let pixels: Vec<u8> = (0..w * h * 3).map(|i| (i * 7 % 256) as u8).collect();
+        writer.write_image_data(&pixels).unwrap();
+    }
+    let velocity = dir.path().join("v.png");
+    velocity_map(&velocity, w, h, |_, _| 3.0);
+    let out = dir.path().join("out.png");
+    blur(&input, &velocity, &out, &[]);
+    let reader = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&out).unwrap()))
+        .read_info()
+        .unwrap();
+    let info = reader.info();
+    let latin1: Vec<(&str, &str)> = info
+        .uncompressed_latin1_text
+        .iter()
+        .map(|t| (t.keyword.as_str(), t.text.as_str()))
+        .collect();
+    assert_eq!(latin1, [("Comment", "made by hand")]);
+    let compressed = &info.compressed_latin1_text;
+    assert_eq!(compressed.len(), 1);
+    assert_eq!(compressed[0].keyword, "Description");
+    assert_eq!(
+        compressed[0].get_text().unwrap(),
+        "a long description ".repeat(20)
+    );
+    let utf8 = &info.utf8_text;
+    assert_eq!(utf8.len(), 1);
+    assert_eq!(utf8[0].keyword, "Title");
+    assert_eq!(utf8[0].get_text().unwrap(), "Été à Zürich");
+    if let Some(tags) = exiftool(&out) {
+        assert_eq!(tags["Comment"], "made by hand", "{tags}");
+        assert_eq!(tags["Title"], "Été à Zürich", "{tags}");
+        assert!(
+            tags["Description"].as_str().unwrap().starts_with("a long"),
+            "{tags}"
+        );
+    }
+}

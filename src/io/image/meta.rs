@@ -9,8 +9,10 @@
 //! pixels of the output, and no viewer turns them a second time.
 //!
 //! Not read: a TIFF's EXIF (a sub-directory, and IFD0's own Make, Model, DateTime, …), a
-//! TIFF's bare IPTC (tag 33723, which exiftool writes as LONGs), a PNG's IPTC (a hex text
-//! chunk of no settled form) and a PNG's text chunks (tEXt, zTXt, but XMP's iTXt).
+//! TIFF's bare IPTC (tag 33723, which exiftool writes as LONGs) and a PNG's IPTC (a hex text
+//! chunk of no settled form: it comes through as the text chunk it is). A PNG's text chunks
+//! (tEXt, zTXt, iTXt) are read with the png crate, whose decoder the image crate does not
+//! expose for them.
 
 use std::path::Path;
 
@@ -31,6 +33,11 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
     reader.limits(limits);
     let jpeg = reader.format() == Some(image::ImageFormat::Jpeg);
     let tiff = reader.format() == Some(image::ImageFormat::Tiff);
+    let texts = if reader.format() == Some(image::ImageFormat::Png) {
+        png_texts(path)
+    } else {
+        Vec::new()
+    };
     let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;
     let color = decoder.color_type();
     let bits = (color.bytes_per_pixel() / color.channel_count()) * 8;
@@ -65,10 +72,59 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
         exif,
         xmp,
         iptc,
+        texts,
         bits,
         sampling,
         premultiplied,
     })
+}
+
+/// A PNG's text chunks before its image data (where writers put them), in file order, each
+/// as its kind: tEXt, zTXt (inflated), iTXt (but XMP's, which is `Photo::xmp`). A chunk that
+/// cannot be read is left out; the decoder's allocations are capped as the header's are.
+fn png_texts(path: &Path) -> Vec<crate::frame::PngText> {
+    use crate::frame::{PngText, TextKind};
+    let Ok(file) = crate::io::input::open_input(path) else {
+        return Vec::new();
+    };
+    let limits = png::Limits {
+        bytes: crate::io::image::HEADER_ROOM as usize,
+    };
+    let decoder = png::Decoder::new_with_limits(std::io::BufReader::new(file), limits);
+    let Ok(reader) = decoder.read_info() else {
+        return Vec::new();
+    };
+    let info = reader.info();
+    // The three lists are kept apart by the decoder: file order within each kind.
+    let mut texts: Vec<PngText> = info
+        .uncompressed_latin1_text
+        .iter()
+        .map(|t| PngText {
+            keyword: t.keyword.clone(),
+            text: t.text.clone(),
+            kind: TextKind::Latin1,
+        })
+        .collect();
+    texts.extend(info.compressed_latin1_text.iter().filter_map(|t| {
+        Some(PngText {
+            keyword: t.keyword.clone(),
+            text: t.get_text().ok()?,
+            kind: TextKind::Compressed,
+        })
+    }));
+    texts.extend(
+        info.utf8_text
+            .iter()
+            .filter(|t| t.keyword != super::write::PNG_XMP_KEYWORD)
+            .filter_map(|t| {
+                Some(PngText {
+                    keyword: t.keyword.clone(),
+                    text: t.get_text().ok()?,
+                    kind: TextKind::International,
+                })
+            }),
+    );
+    texts
 }
 
 /// A TIFF's profile (tag 34675), XMP (tag 700) and Photoshop resource blocks (tag 34377,

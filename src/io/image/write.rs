@@ -3,8 +3,9 @@
 //! EXIF, XMP and IPTC carried over where the format has a place for them.
 //!
 //! Each format through its own encoder, for what image's encoders do not pass on:
-//! - PNG (png crate): iCCP, eXIf, and XMP as the iTXt chunk `XML:com.adobe.xmp`. IPTC is not
-//!   written (PNG has no settled place for it).
+//! - PNG (png crate): iCCP, eXIf, XMP as the iTXt chunk `XML:com.adobe.xmp`, and a PNG
+//!   input's text chunks (tEXt, zTXt, iTXt) again, each in its kind. IPTC is not written (PNG
+//!   has no settled place for it).
 //! - TIFF (tiff crate): deflate with the horizontal predictor (lossless, and what every TIFF
 //!   reader reads; LZW compresses photos less), `ExtraSamples` = 2 (unassociated alpha: the
 //!   file holds straight alpha), the profile in tag 34675, XMP in tag 700, IPTC as Photoshop
@@ -35,7 +36,7 @@ pub struct PhotoOptions<'a> {
 }
 
 /// The XMP packet's keyword in a PNG iTXt chunk (XMP specification part 3, 1.1.5).
-const PNG_XMP_KEYWORD: &str = "XML:com.adobe.xmp";
+pub(super) const PNG_XMP_KEYWORD: &str = "XML:com.adobe.xmp";
 
 /// The header of XMP in a JPEG APP1 segment, and of Photoshop resource blocks in APP13.
 const JPEG_XMP_HEADER: &[u8] = b"http://ns.adobe.com/xap/1.0/\0";
@@ -142,6 +143,17 @@ fn write_png(
         encoder
             .add_itxt_chunk(PNG_XMP_KEYWORD.into(), text)
             .map_err(|e| e.to_string())?;
+    }
+    // The input PNG's text chunks, each in its own kind (one the encoder refuses, a keyword
+    // over 79 bytes say, is left out rather than losing the frame).
+    for t in photo.map_or(&[][..], |p| &p.texts[..]) {
+        use crate::frame::TextKind;
+        let (keyword, text) = (t.keyword.clone(), t.text.clone());
+        let _ = match t.kind {
+            TextKind::Latin1 => encoder.add_text_chunk(keyword, text),
+            TextKind::Compressed => encoder.add_ztxt_chunk(keyword, text),
+            TextKind::International => encoder.add_itxt_chunk(keyword, text),
+        };
     }
     let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
     // PNG stores 16-bit samples big-endian.
