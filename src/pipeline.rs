@@ -507,6 +507,22 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                         warn_replaced(&mut report, on_event, &replaced, frame);
                         report.replaced.add(replaced);
                         let path = job.output.path(frame);
+                        let jpeg = OutputFormat::from_path(&path)
+                            == Some(OutputFormat::Image(crate::io::image::ImageFormat::Jpeg));
+                        if let (true, Some(photo)) = (jpeg, out.carried.photo.as_ref()) {
+                            for (block, bytes) in crate::io::image::jpeg_left_out(photo) {
+                                warn(
+                                    &mut report,
+                                    on_event,
+                                    format!(
+                                        "the {block} the input holds ({} KB) is larger than a \
+                                         JPEG segment holds (64 KB): the JPEG output leaves it \
+                                         out (a PNG or TIFF output keeps it)",
+                                        bytes.div_ceil(1024)
+                                    ),
+                                );
+                            }
+                        }
                         let t = Instant::now();
                         // Folders are made only when a frame is ready to go in them, so a run
                         // that fails earlier leaves the file system as it was.

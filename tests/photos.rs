@@ -410,3 +410,73 @@ fn a_pngs_text_chunks_come_out_again() {
         );
     }
 }
+
+/// A block one JPEG segment cannot hold (here a PNG's XMP of ~100 KB, as a long edit history
+/// makes) is left out of a JPEG output with a warning naming it; the frame is written, with
+/// its EXIF.
+#[test]
+fn a_jpeg_output_leaves_out_a_block_too_large_for_its_segment_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16u32, 8u32);
+    let input = dir.path().join("big_xmp.png");
+    let history = "<rdf:li>an edit</rdf:li>".repeat(4000);
+    let xmp = format!(
+        "<x:xmpmeta xmlns:x=\"adobe:ns:meta/\"><rdf:RDF \
+         xmlns:rdf=\"http://www.w3.org/1999/02/22-rdf-syntax-ns#\"><rdf:Description \
+         xmlns:dc=\"http://purl.org/dc/elements/1.1/\"><dc:subject><rdf:Bag>{history}\
+         </rdf:Bag></dc:subject></rdf:Description></rdf:RDF></x:xmpmeta>"
+    );
+    assert!(xmp.len() > 90_000);
+    {
+        let file = std::io::BufWriter::new(std::fs::File::create(&input).unwrap());
+        let mut info = png::Info::with_size(w, h);
+        info.color_type = png::ColorType::Rgb;
+        info.bit_depth = png::BitDepth::Eight;
+        info.exif_metadata = Some(exif(1).into());
+        let mut encoder = png::Encoder::with_info(file, info).unwrap();
+        encoder
+            .add_itxt_chunk("XML:com.adobe.xmp".into(), xmp)
+            .unwrap();
+        let mut writer = encoder.write_header().unwrap();
+        let pixels: Vec<u8> = (0..w * h * 3).map(|i| (i * 5 % 256) as u8).collect();
+        writer.write_image_data(&pixels).unwrap();
+    }
+    let velocity = dir.path().join("v.png");
+    velocity_map(&velocity, w, h, |_, _| 2.0);
+    let out = dir.path().join("out.jpg");
+    let depth = dir.path().join("depth.png");
+    image::save_buffer(
+        &depth,
+        &vec![128u8; (w * h) as usize],
+        w,
+        h,
+        image::ColorType::L8,
+    )
+    .unwrap();
+    let o = shutter(&[
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "--preset",
+        "painted",
+        "--color",
+        &s(&input),
+        "--velocity",
+        &s(&velocity),
+        "--depth",
+        &s(&depth),
+        "-o",
+        &s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("the XMP the input holds") && err.contains("leaves it out"),
+        "{err}"
+    );
+    assert!(!err.contains("EXIF the input"), "{err}");
+    if let Some(tags) = exiftool(&out) {
+        assert_eq!(tags["Make"], "ShTs", "{tags}");
+        assert!(tags.get("Subject").is_none(), "{tags}");
+    }
+}

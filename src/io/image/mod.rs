@@ -24,7 +24,7 @@ use crate::frame::{Photo, Plane};
 
 pub use meta::{exif_orientation, jpeg_sampling, read_photo};
 pub use profile::Transfer;
-pub use write::{write_photo, PhotoOptions};
+pub use write::{jpeg_left_out, write_photo, PhotoOptions};
 
 /// What the header of an integer image says.
 #[derive(Clone, Debug, PartialEq)]

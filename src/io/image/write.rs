@@ -42,6 +42,37 @@ pub(super) const PNG_XMP_KEYWORD: &str = "XML:com.adobe.xmp";
 const JPEG_XMP_HEADER: &[u8] = b"http://ns.adobe.com/xap/1.0/\0";
 const JPEG_IPTC_HEADER: &[u8] = b"Photoshop 3.0\0";
 
+/// The most an APPn segment of a JPEG holds after its marker and length: 65535 − 2.
+const JPEG_SEGMENT_ROOM: usize = 65533;
+
+/// The blocks of a photo too large for the one JPEG segment each goes in (EXIF, XMP, IPTC
+/// over 64 KB: a PNG's eXIf or a long edit history's XMP), with their sizes in bytes: a JPEG
+/// output leaves them out (Extended XMP, split over segments, is not written), and the run
+/// warns. The profile is split over as many segments as it needs.
+pub fn jpeg_left_out(photo: &Photo) -> Vec<(&'static str, usize)> {
+    let exif = photo
+        .exif
+        .as_deref()
+        .map(|e| e.strip_prefix(b"Exif\0\0").unwrap_or(e));
+    [
+        ("EXIF", exif.map(|e| e.len() + 6)),
+        (
+            "XMP",
+            photo.xmp.as_ref().map(|x| x.len() + JPEG_XMP_HEADER.len()),
+        ),
+        (
+            "IPTC",
+            photo
+                .iptc
+                .as_ref()
+                .map(|i| i.len() + JPEG_IPTC_HEADER.len()),
+        ),
+    ]
+    .into_iter()
+    .filter_map(|(name, size)| size.filter(|&n| n > JPEG_SEGMENT_ROOM).map(|n| (name, n)))
+    .collect()
+}
+
 /// TIFF tags image's encoder has no name for: XMP (Adobe XMP part 3, 1.1.6) and Photoshop
 /// image resources (TIFF/EP, where IPTC lives in a TIFF).
 const TIFF_XMP: u16 = 700;
@@ -240,23 +271,31 @@ fn write_jpeg(
         .unwrap_or(SamplingFactor::R_4_4_4);
     encoder.set_sampling_factor(sampling);
     // EXIF first (readers look for it right after the JFIF header), then XMP, the profile
-    // and IPTC.
+    // and IPTC; a block one segment cannot hold is left out (`jpeg_left_out`: the run warns),
+    // not the frame.
+    let fits = |payload: usize| payload <= JPEG_SEGMENT_ROOM;
     if let Some(exif) = photo.and_then(|p| p.exif.as_deref()) {
         let exif = exif.strip_prefix(b"Exif\0\0").unwrap_or(exif);
-        encoder.add_exif_metadata(exif).map_err(error)?;
+        if fits(exif.len() + 6) {
+            encoder.add_exif_metadata(exif).map_err(error)?;
+        }
     }
     if let Some(xmp) = photo.and_then(|p| p.xmp.as_deref()) {
-        encoder
-            .add_app_segment(1, [JPEG_XMP_HEADER, xmp].concat())
-            .map_err(error)?;
+        if fits(JPEG_XMP_HEADER.len() + xmp.len()) {
+            encoder
+                .add_app_segment(1, [JPEG_XMP_HEADER, xmp].concat())
+                .map_err(error)?;
+        }
     }
     if let Some(icc) = icc {
         encoder.add_icc_profile(icc).map_err(error)?;
     }
     if let Some(iptc) = photo.and_then(|p| p.iptc.as_deref()) {
-        encoder
-            .add_app_segment(13, [JPEG_IPTC_HEADER, iptc].concat())
-            .map_err(error)?;
+        if fits(JPEG_IPTC_HEADER.len() + iptc.len()) {
+            encoder
+                .add_app_segment(13, [JPEG_IPTC_HEADER, iptc].concat())
+                .map_err(error)?;
+        }
     }
     encoder.encode(rgb, w, h, ColorType::Rgb).map_err(error)
 }
