@@ -245,8 +245,13 @@ fn flags_the_output_format_cannot_use_are_warned_about() {
     let dir = tempfile::tempdir().unwrap();
     colour_sequence(dir.path(), 16, 8, ExrOptions::default());
     let input = format!("{}/C.####.exr", dir.path().display());
-    let cases: [(&str, &[&str], &str); 4] = [
+    let cases: [(&str, &[&str], &str); 5] = [
         ("jpg", &["--bit-depth", "16"], "JPEG is always 8-bit"),
+        (
+            "png",
+            &["--jpeg-quality", "80"],
+            "--jpeg-quality applies to JPEG output",
+        ),
         ("png", &["--half"], "--half applies to EXR output"),
         (
             "tif",

@@ -28,6 +28,10 @@ fn output_warnings(given: &settings::Given, format: OutputFormat) -> Vec<String>
             ));
         }
     }
+    if typed("jpeg-quality") && format != OutputFormat::Image(ImageFormat::Jpeg) {
+        warnings
+            .push("--jpeg-quality applies to JPEG output, not this -o: it has no effect".into());
+    }
     if typed("bit-depth") {
         match format {
             OutputFormat::Exr => warnings.push(
