@@ -1177,3 +1177,90 @@ fn diff_tells_ids_apart_that_an_f32_rounds_alike() {
     let o = shutter(&["diff", &a, &same, "--data-fail-pixel", "0"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
+
+/// A u32 channel a pass reads (a depth stored as integers) is read as its number, not as the
+/// bits an ID layer is carried in: the frame blurs as with the same depth stored as float,
+/// and the IDs beside it still come back bit for bit.
+#[test]
+fn a_u32_depth_is_read_as_a_number_beside_exact_ids() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = W * H;
+    let depth: Vec<u32> = (0..n).map(|i| if i % W < W / 2 { 1 } else { 20 }).collect();
+    let write = |name: &str, integer: bool| {
+        let mut list = vec![AnyChannel::new(
+            Text::from("id"),
+            FlatSamples::U32((0..n).map(|i| IDS[i % IDS.len()]).collect()),
+        )];
+        list.push(AnyChannel::new(
+            Text::from("Z"),
+            if integer {
+                FlatSamples::U32(depth.clone())
+            } else {
+                FlatSamples::F32(depth.iter().map(|&d| d as f32).collect())
+            },
+        ));
+        for (c, channel) in ["R", "G", "B"].into_iter().enumerate() {
+            list.push(AnyChannel::new(
+                Text::from(channel),
+                FlatSamples::F32(noise(n, 50 + c as u32, 0.0, 1.0)),
+            ));
+        }
+        let layer = Layer::new(
+            (W, H),
+            LayerAttributes::default(),
+            Encoding::FAST_LOSSLESS,
+            AnyChannels::sort(list.into()),
+        );
+        let path = dir.path().join(name);
+        Image::from_layer(layer).write().to_file(&path).unwrap();
+        path
+    };
+    let dof = |input: &Path, out: &str, extra: &[&str]| {
+        let out = dir.path().join(out);
+        let mut args = vec![
+            "dof".to_string(),
+            "--focal-length".into(),
+            "50".into(),
+            "--f-stop".into(),
+            "1.4".into(),
+            "--focus-distance".into(),
+            "1".into(),
+            "--color".into(),
+            s(input),
+            "-o".into(),
+            s(&out),
+        ];
+        args.extend(extra.iter().map(|a| a.to_string()));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = shutter(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        out
+    };
+    let u32_input = write("u32.exr", true);
+    let integer = dof(&u32_input, "u32_out.exr", &[]);
+    let float = dof(&write("f32.exr", false), "f32_out.exr", &[]);
+    use crate::support::{channel, read_exr_reference};
+    let (a, b) = (read_exr_reference(&integer), read_exr_reference(&float));
+    for c in ["R", "G", "B"] {
+        assert!(
+            channel(&a, c) == channel(&b, c),
+            "{c} differs with a u32 depth"
+        );
+    }
+    assert!(
+        channel(&a, "R") != noise(n, 50, 0.0, 1.0),
+        "nothing was blurred"
+    );
+    let ids = read_u32(&integer, "id");
+    assert!(ids
+        .iter()
+        .enumerate()
+        .all(|(i, &v)| v == IDS[i % IDS.len()]));
+    // --half makes the float channels half; the IDs stay u32, every bit.
+    let half = dof(&u32_input, "half_out.exr", &["--half"]);
+    let ids = read_u32(&half, "id");
+    assert!(ids
+        .iter()
+        .enumerate()
+        .all(|(i, &v)| v == IDS[i % IDS.len()]));
+}

@@ -14,7 +14,7 @@
 //! as one level), and a multi-view file's `multiView` list (one view is written). Its form follows the input too: compression (unless `compression` is set),
 //! line order, scan lines or tiles of the same size (a tiled plate stays tiled, so the
 //! tools that read it by tiles still can), and each channel's pixel type (half stays half;
-//! `half` writes every channel half). Added: `shutter/version` and `shutter/settings` (the
+//! `half` writes every float channel half, u32 stays u32). Added: `shutter/version` and `shutter/settings` (the
 //! settings that differ from the defaults, as flags), as Nuke records `nuke/node_hash`.
 //!
 //! The exr crate writes custom attributes in the order of a `HashMap`, which differs from
@@ -195,10 +195,12 @@ fn channels_like(
             let OutChannel {
                 name, plane, exact, ..
             } = channel;
-            let kind = if output.half {
-                SampleType::F16
-            } else {
-                stored(&name).unwrap_or(SampleType::F32)
+            // Half for every float channel with `half`; a u32 channel (IDs) stays u32, which
+            // half would destroy (every ID over 2048).
+            let kind = match stored(&name) {
+                Some(SampleType::U32) => SampleType::U32,
+                _ if output.half => SampleType::F16,
+                stored => stored.unwrap_or(SampleType::F32),
             };
             let samples = match kind {
                 SampleType::F16 => FlatSamples::F16(plane.into_iter().map(f16::from_f32).collect()),
@@ -206,7 +208,8 @@ fn channels_like(
                 // the bit where they were read exactly (IDs over 2²⁴).
                 SampleType::U32 => FlatSamples::U32(match exact {
                     Some(values) => values,
-                    None => plane.into_iter().map(|v| v as u32).collect(),
+                    // A u32 classed colour by a preset (blurred): to the nearest integer.
+                    None => plane.into_iter().map(|v| v.round() as u32).collect(),
                 }),
                 SampleType::F32 => FlatSamples::F32(plane),
             };

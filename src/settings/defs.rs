@@ -638,8 +638,9 @@ pub const DEFS: &[Def] = &[
         section: Section::Output,
         applies: &[],
         value_name: "",
-        help: "write every EXR channel as 16-bit half float (off: each as the colour file \
-               stores it; 32-bit float when it is not an EXR)",
+        help: "write every float EXR channel as 16-bit half float, u32 channels (IDs) as \
+               they are (off: each as the colour file stores it; 32-bit float when it is not \
+               an EXR)",
         kind: Kind::Switch,
         unset: "",
         get: |s| Value::Switch(s.output.exr.half),

@@ -236,6 +236,11 @@ impl<'a> VectorCheck<'a> {
             self.last = Some(here);
             return None;
         };
+        // Codes (RE:Vision's) are not a reading the fit states: nothing to check, at all.
+        if stored.spec.encoding != Encoding::Plain {
+            self.candidates.clear();
+            return None;
+        }
         let size = here.size;
         let backward = stored.spec.meaning.is_backward();
         let prev = match self.last.take() {
@@ -305,13 +310,16 @@ impl<'a> VectorCheck<'a> {
             (true, false) => format!("frame {}", frame - 1),
             _ => format!("frame {}", frame + 1),
         };
-        self.report.frames.push(frame);
         let verdict = judge(
             &current,
             prev.as_deref(),
             next.map(|n| &n.plane[..]),
             &stored,
         );
+        if verdict.is_some() {
+            self.report.frames.push(frame);
+        }
+        let verdict = verdict.unwrap_or(Verdict::Silent);
         self.last = Some(current);
         match verdict {
             Verdict::Warn(text) => {
@@ -348,16 +356,26 @@ fn stated(spec: &VectorSpec) -> Reading {
     }
 }
 
-/// The fit of one frame and what it says of the preset's reading.
+/// The fit of one frame and what it says of the preset's reading; `None` where no fit ran
+/// (no neighbour, or codes no reading states).
 fn judge(
     current: &Luma,
     prev: Option<&[f32]>,
     next: Option<&[f32]>,
     stored: &StoredVectors,
-) -> Verdict {
+) -> Option<Verdict> {
     if stored.spec.encoding != Encoding::Plain || (prev.is_none() && next.is_none()) {
-        return Verdict::Silent;
+        return None;
     }
+    Some(judge_fit(current, prev, next, stored))
+}
+
+fn judge_fit(
+    current: &Luma,
+    prev: Option<&[f32]>,
+    next: Option<&[f32]>,
+    stored: &StoredVectors,
+) -> Verdict {
     let (width, height) = current.size;
     let [x, y] = &stored.planes;
     let result: Fit = fit(&FitInput {

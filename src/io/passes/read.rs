@@ -207,8 +207,8 @@ pub fn read_frame_keeping(
 }
 
 /// The class of a channel carried beside the beauty: the preset's for its layer
-/// (`[layers]`), else `io::channels`' rule; a channel of a named part is classed as
-/// `part.channel` (`diffuse.R`).
+/// (`[layers]`), else data for a u32 channel, else `io::channels`' rule; a channel of a
+/// named part is classed as `part.channel` (`diffuse.R`).
 fn carried_class(
     plan_color: &ColorPlan,
     headers: &[exr::meta::header::Header],
@@ -222,6 +222,8 @@ fn carried_class(
     let (layer, _) = channels::split(qualified);
     match plan_color.layer_classes.get(layer) {
         Some(&class) => class,
+        // Integers hold IDs and counts, never light (a u32 `obj.R` included).
+        None if channel.sample_type == "u32" => LayerClass::Data,
         None => channels::class_of(qualified, &crypto),
     }
 }
@@ -235,10 +237,19 @@ fn exact_slots(plan: &FramePlan) -> Vec<Slot> {
     let FileKind::Exr { headers, .. } = &file.info.kind else {
         return Vec::new();
     };
-    let passes: Vec<Slot> = plan_slots(plan)
+    // The slots the passes read (a u32 depth or vector in the colour's part is in
+    // `other_slots` too, and is read as a number for them).
+    let mut passes: Vec<Slot> = plan_color.rgb.to_vec();
+    passes.extend(plan_color.a);
+    passes.extend(plan.depth.as_ref().map(|(slot, _)| *slot));
+    for v in [&plan.velocity, &plan.prev, &plan.next]
         .into_iter()
-        .filter(|s| !plan_color.other_slots.contains(s))
-        .collect();
+        .flatten()
+    {
+        passes.extend([v.x, v.y]);
+        passes.extend(v.z);
+        passes.extend(v.alpha);
+    }
     plan_color
         .other_slots
         .iter()
