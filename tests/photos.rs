@@ -72,7 +72,9 @@ fn velocity_map(path: &Path, w: u32, h: u32, dx: impl Fn(u32, u32) -> f32) {
     image::save_buffer(path, &bytes, w, h, image::ColorType::Rgb16).unwrap();
 }
 
-fn blur(color: &Path, velocity: &Path, out: &Path, extra: &[&str]) {
+/// Blurs through the `painted` preset (a flat depth made beside `velocity`); the run's
+/// output, which succeeded.
+fn blur(color: &Path, velocity: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
     let mut args = vec![
         "blur",
         "--algorithm",
@@ -92,6 +94,28 @@ fn blur(color: &Path, velocity: &Path, out: &Path, extra: &[&str]) {
     args.extend(extra);
     let o = shutter(&args);
     assert!(o.status.success(), "{}", stderr(&o));
+    o
+}
+
+/// An 8-bit RGB PNG of a gradient, written by the png crate with `exif` as its eXIf chunk
+/// and whatever `chunks` adds (text chunks) before its image data.
+fn write_png(
+    path: &Path,
+    w: u32,
+    h: u32,
+    exif: Option<Vec<u8>>,
+    chunks: impl FnOnce(&mut png::Encoder<std::io::BufWriter<std::fs::File>>),
+) {
+    let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    let mut info = png::Info::with_size(w, h);
+    info.color_type = png::ColorType::Rgb;
+    info.bit_depth = png::BitDepth::Eight;
+    info.exif_metadata = exif.map(Into::into);
+    let mut encoder = png::Encoder::with_info(file, info).unwrap();
+    chunks(&mut encoder);
+    let mut writer = encoder.write_header().unwrap();
+    let pixels: Vec<u8> = (0..w * h * 3).map(|i| (i * 7 % 256) as u8).collect();
+    writer.write_image_data(&pixels).unwrap();
 }
 
 fn decoder(path: &Path) -> Box<dyn ImageDecoder> {
@@ -358,11 +382,7 @@ fn a_pngs_text_chunks_come_out_again() {
     let dir = tempfile::tempdir().unwrap();
     let (w, h) = (16u32, 8u32);
     let input = dir.path().join("texts.png");
-    {
-        let file = std::io::BufWriter::new(std::fs::File::create(&input).unwrap());
-        let mut encoder = png::Encoder::new(file, w, h);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
+    write_png(&input, w, h, None, |encoder| {
         encoder
             .add_text_chunk("Comment".into(), "made by hand".into())
             .unwrap();
@@ -372,10 +392,7 @@ fn a_pngs_text_chunks_come_out_again() {
         encoder
             .add_itxt_chunk("Title".into(), "Été à Zürich".into())
             .unwrap();
-        let mut writer = encoder.write_header().unwrap();
-        let pixels: Vec<u8> = (0..w * h * 3).map(|i| (i * 7 % 256) as u8).collect();
-        writer.write_image_data(&pixels).unwrap();
-    }
+    });
     let velocity = dir.path().join("v.png");
     velocity_map(&velocity, w, h, |_, _| 3.0);
     let out = dir.path().join("out.png");
@@ -427,48 +444,15 @@ fn a_jpeg_output_leaves_out_a_block_too_large_for_its_segment_and_says_so() {
          </rdf:Bag></dc:subject></rdf:Description></rdf:RDF></x:xmpmeta>"
     );
     assert!(xmp.len() > 90_000);
-    {
-        let file = std::io::BufWriter::new(std::fs::File::create(&input).unwrap());
-        let mut info = png::Info::with_size(w, h);
-        info.color_type = png::ColorType::Rgb;
-        info.bit_depth = png::BitDepth::Eight;
-        info.exif_metadata = Some(exif(1).into());
-        let mut encoder = png::Encoder::with_info(file, info).unwrap();
+    write_png(&input, w, h, Some(exif(1)), |encoder| {
         encoder
             .add_itxt_chunk("XML:com.adobe.xmp".into(), xmp)
             .unwrap();
-        let mut writer = encoder.write_header().unwrap();
-        let pixels: Vec<u8> = (0..w * h * 3).map(|i| (i * 5 % 256) as u8).collect();
-        writer.write_image_data(&pixels).unwrap();
-    }
+    });
     let velocity = dir.path().join("v.png");
     velocity_map(&velocity, w, h, |_, _| 2.0);
     let out = dir.path().join("out.jpg");
-    let depth = dir.path().join("depth.png");
-    image::save_buffer(
-        &depth,
-        &vec![128u8; (w * h) as usize],
-        w,
-        h,
-        image::ColorType::L8,
-    )
-    .unwrap();
-    let o = shutter(&[
-        "blur",
-        "--algorithm",
-        "reconstruct",
-        "--preset",
-        "painted",
-        "--color",
-        &s(&input),
-        "--velocity",
-        &s(&velocity),
-        "--depth",
-        &s(&depth),
-        "-o",
-        &s(&out),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let o = blur(&input, &velocity, &out, &[]);
     let err = stderr(&o);
     assert!(
         err.contains("the XMP the input holds") && err.contains("leaves it out"),

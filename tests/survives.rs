@@ -368,16 +368,7 @@ const IDS: [u32; 7] = [
 
 /// A u32 channel of an EXR, as stored.
 fn read_u32(path: &Path, name: &str) -> Vec<u32> {
-    use exr::prelude::*;
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .all_layers()
-        .all_attributes()
-        .from_file(path)
-        .unwrap();
-    for layer in image.layer_data {
+    for layer in crate::support::read_exr_layers(path) {
         for channel in layer.channel_data.list {
             if channel.name.to_string() == name {
                 match channel.sample_data {
@@ -1133,6 +1124,26 @@ fn light_layers_add_up_at_a_moving_silhouette() {
     }
 }
 
+/// A single-layer EXR of RGB noise (`seed`) and the channels given, as the exr crate
+/// writes it.
+fn write_rgb_with(path: &Path, seed: u32, extra: Vec<AnyChannel<FlatSamples>>) {
+    let n = W * H;
+    let mut list = extra;
+    for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
+        list.push(AnyChannel::new(
+            Text::from(name),
+            FlatSamples::F32(noise(n, seed + c as u32, 0.0, 1.0)),
+        ));
+    }
+    let layer = Layer::new(
+        (W, H),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(list.into()),
+    );
+    Image::from_layer(layer).write().to_file(path).unwrap();
+}
+
 /// `diff` compares u32 IDs as they are stored: two IDs over 2²⁴ that one f32 holds alike
 /// (16777217 against 16777216) are a difference, and the data gate fails it.
 #[test]
@@ -1145,21 +1156,9 @@ fn diff_tells_ids_apart_that_an_f32_rounds_alike() {
             // IDS[1] is 2²⁴ + 1: its neighbour below rounds to the same f32.
             ids[1] = 16_777_216;
         }
-        let mut list = vec![AnyChannel::new(Text::from("id"), FlatSamples::U32(ids))];
-        for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
-            list.push(AnyChannel::new(
-                Text::from(name),
-                FlatSamples::F32(noise(n, 40 + c as u32, 0.0, 1.0)),
-            ));
-        }
-        let layer = Layer::new(
-            (W, H),
-            LayerAttributes::default(),
-            Encoding::FAST_LOSSLESS,
-            AnyChannels::sort(list.into()),
-        );
         let path = dir.path().join(name);
-        Image::from_layer(layer).write().to_file(&path).unwrap();
+        let id = AnyChannel::new(Text::from("id"), FlatSamples::U32(ids));
+        write_rgb_with(&path, 40, vec![id]);
         s(&path)
     };
     let (a, b, same) = (
@@ -1187,32 +1186,20 @@ fn a_u32_depth_is_read_as_a_number_beside_exact_ids() {
     let n = W * H;
     let depth: Vec<u32> = (0..n).map(|i| if i % W < W / 2 { 1 } else { 20 }).collect();
     let write = |name: &str, integer: bool| {
-        let mut list = vec![AnyChannel::new(
+        let id = AnyChannel::new(
             Text::from("id"),
             FlatSamples::U32((0..n).map(|i| IDS[i % IDS.len()]).collect()),
-        )];
-        list.push(AnyChannel::new(
+        );
+        let z = AnyChannel::new(
             Text::from("Z"),
             if integer {
                 FlatSamples::U32(depth.clone())
             } else {
                 FlatSamples::F32(depth.iter().map(|&d| d as f32).collect())
             },
-        ));
-        for (c, channel) in ["R", "G", "B"].into_iter().enumerate() {
-            list.push(AnyChannel::new(
-                Text::from(channel),
-                FlatSamples::F32(noise(n, 50 + c as u32, 0.0, 1.0)),
-            ));
-        }
-        let layer = Layer::new(
-            (W, H),
-            LayerAttributes::default(),
-            Encoding::FAST_LOSSLESS,
-            AnyChannels::sort(list.into()),
         );
         let path = dir.path().join(name);
-        Image::from_layer(layer).write().to_file(&path).unwrap();
+        write_rgb_with(&path, 50, vec![id, z]);
         path
     };
     let dof = |input: &Path, out: &str, extra: &[&str]| {

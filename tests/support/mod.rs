@@ -103,23 +103,32 @@ pub fn noise(n: usize, seed: u32, lo: f32, hi: f32) -> Vec<f32> {
 
 /// Reads every channel of an EXR through exr's own image API (independent of our reader).
 pub fn read_exr_reference(path: &Path) -> Vec<(String, Vec<f32>)> {
-    use exr::prelude::*;
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .all_layers()
-        .all_attributes()
-        .from_file(path)
-        .unwrap();
     let mut out = Vec::new();
-    for layer in image.layer_data {
+    for layer in read_exr_layers(path) {
         for channel in layer.channel_data.list {
             let values: Vec<f32> = channel.sample_data.values_as_f32().collect();
             out.push((channel.name.to_string(), values));
         }
     }
     out
+}
+
+/// Every layer of an EXR with its channels as stored (the exr crate's reader).
+pub fn read_exr_layers(
+    path: &Path,
+) -> Vec<exr::image::Layer<exr::image::AnyChannels<exr::image::FlatSamples>>> {
+    use exr::prelude::*;
+    read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .unwrap()
+        .layer_data
+        .into_iter()
+        .collect()
 }
 
 pub fn channel<'a>(channels: &'a [(String, Vec<f32>)], name: &str) -> &'a [f32] {
