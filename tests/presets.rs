@@ -25,6 +25,25 @@ struct Truth {
 }
 
 impl Truth {
+    /// The colour channels (RGB, with `alpha` A) followed by `rest`, as `write_exr` takes
+    /// them.
+    fn with_colour<'a>(
+        &self,
+        alpha: bool,
+        rest: Vec<(&'a str, Vec<f32>)>,
+    ) -> Vec<(&'a str, Vec<f32>)> {
+        let mut channels = vec![
+            ("R", self.rgba[0].clone()),
+            ("G", self.rgba[1].clone()),
+            ("B", self.rgba[2].clone()),
+        ];
+        if alpha {
+            channels.push(("A", self.rgba[3].clone()));
+        }
+        channels.extend(rest);
+        channels
+    }
+
     fn new() -> Truth {
         let n = W * H;
         let mut prev = [vec![0.0; n], vec![0.0; n]];
@@ -145,17 +164,7 @@ fn shutter_preset_separate_files() {
     let t = Truth::new();
     let dir = tempfile::tempdir().unwrap();
     let p = |name: &str| dir.path().join(name);
-    write_exr(
-        &p("C.exr"),
-        W,
-        H,
-        vec![
-            ("R", t.rgba[0].clone()),
-            ("G", t.rgba[1].clone()),
-            ("B", t.rgba[2].clone()),
-            ("A", t.rgba[3].clone()),
-        ],
-    );
+    write_exr(&p("C.exr"), W, H, t.with_colour(true, Vec::new()));
     write_exr(&p("Z.exr"), W, H, vec![("Z", t.depth.clone())]);
     let v = t.velocity();
     write_exr(
@@ -204,19 +213,18 @@ fn shutter_preset_one_multilayer_file() {
         &path,
         W,
         H,
-        vec![
-            ("R", t.rgba[0].clone()),
-            ("G", t.rgba[1].clone()),
-            ("B", t.rgba[2].clone()),
-            ("A", t.rgba[3].clone()),
-            ("Z", t.depth.clone()),
-            ("velocity.X", v[0].clone()),
-            ("velocity.Y", v[1].clone()),
-            ("prev.X", t.prev[0].clone()),
-            ("prev.Y", t.prev[1].clone()),
-            ("next.X", t.next[0].clone()),
-            ("next.Y", t.next[1].clone()),
-        ],
+        t.with_colour(
+            true,
+            vec![
+                ("Z", t.depth.clone()),
+                ("velocity.X", v[0].clone()),
+                ("velocity.Y", v[1].clone()),
+                ("prev.X", t.prev[0].clone()),
+                ("prev.Y", t.prev[1].clone()),
+                ("next.X", t.next[0].clone()),
+                ("next.Y", t.next[1].clone()),
+            ],
+        ),
     );
     let frame = read_all(&Preset::builtin("shutter").unwrap(), &inputs(&path));
     t.check(&frame, 0.0, "shutter multi-layer");
@@ -320,17 +328,16 @@ fn nuke_preset() {
         &path,
         W,
         H,
-        vec![
-            ("R", t.rgba[0].clone()),
-            ("G", t.rgba[1].clone()),
-            ("B", t.rgba[2].clone()),
-            ("A", t.rgba[3].clone()),
-            ("depth.Z", t.depth.clone()),
-            ("forward.u", fu),
-            ("forward.v", fv),
-            ("backward.u", bu),
-            ("backward.v", bv),
-        ],
+        t.with_colour(
+            true,
+            vec![
+                ("depth.Z", t.depth.clone()),
+                ("forward.u", fu),
+                ("forward.v", fv),
+                ("backward.u", bu),
+                ("backward.v", bv),
+            ],
+        ),
     );
     let frame = read_all(&Preset::builtin("nuke").unwrap(), &inputs(&path));
     t.check(&frame, 0.0, "nuke");
@@ -499,13 +506,7 @@ y_up = true
         &path,
         W,
         H,
-        vec![
-            ("R", t.rgba[0].clone()),
-            ("G", t.rgba[1].clone()),
-            ("B", t.rgba[2].clone()),
-            ("mv.r", r),
-            ("mv.g", g),
-        ],
+        t.with_colour(false, vec![("mv.r", r), ("mv.g", g)]),
     );
     let options = PlanOptions {
         preset: &preset,
@@ -695,16 +696,7 @@ fn rsmb_preset_8_and_16_bit() {
     let dir = tempfile::tempdir().unwrap();
     let preset = rsmb_preset(dir.path());
     let color = dir.path().join("C.exr");
-    write_exr(
-        &color,
-        W,
-        H,
-        vec![
-            ("R", t.rgba[0].clone()),
-            ("G", t.rgba[1].clone()),
-            ("B", t.rgba[2].clone()),
-        ],
-    );
+    write_exr(&color, W, H, t.with_colour(false, Vec::new()));
     let backward = offsets(&t.prev);
     let forward = offsets(&t.next);
     for (bits, still, ext) in [(8u8, 127.0f32, "png"), (16, 32767.0, "tif")] {
@@ -1054,14 +1046,10 @@ fn vray_unreal_and_arnold_presets() {
             &path,
             W,
             H,
-            vec![
-                ("R", t.rgba[0].clone()),
-                ("G", t.rgba[1].clone()),
-                ("B", t.rgba[2].clone()),
-                ("Z", t.depth.clone()),
-                (x, stored.0),
-                (y, stored.1),
-            ],
+            t.with_colour(
+                false,
+                vec![("Z", t.depth.clone()), (x, stored.0), (y, stored.1)],
+            ),
         );
         let frame = read_all(&Preset::builtin(name).unwrap(), &inputs(&path));
         let velocity = frame.velocity.as_ref().unwrap();

@@ -34,24 +34,6 @@ fn middle_with_neighbours(frames: &[i64], exists: impl Fn(i64) -> bool) -> Optio
     pick.get(pick.len() / 2).copied()
 }
 
-/// The fit of one frame's stored planes against its neighbours' luma.
-fn fit_frames(
-    (width, height): (usize, usize),
-    current: &[f32],
-    [prev, next]: [&Option<Vec<f32>>; 2],
-    planes: &[Vec<f32>],
-) -> crate::io::passes::Fit {
-    fit(&FitInput {
-        width,
-        height,
-        current,
-        prev: prev.as_deref(),
-        next: next.as_deref(),
-        stored: [&planes[0], &planes[1]],
-        max_points: crate::io::passes::FIT_POINTS,
-    })
-}
-
 /// The two stored channels' names: `--channels`, else the first pair of the preset's
 /// [velocity] alternatives the file holds (not the colour's own channels, in a shared file).
 fn channel_names(
@@ -207,7 +189,15 @@ pub fn vectors(args: VectorsArgs) -> Result<i32> {
         .into());
     }
     let start = std::time::Instant::now();
-    let result = fit_frames((w, h), &current, [&prev, &next], &planes);
+    let result = fit(&FitInput {
+        width: w,
+        height: h,
+        current: &current,
+        prev: prev.as_deref(),
+        next: next.as_deref(),
+        stored: [&planes[0], &planes[1]],
+        max_points: crate::io::passes::FIT_POINTS,
+    });
     let seconds = start.elapsed().as_secs_f64();
     let next_best = result
         .chosen

@@ -273,29 +273,30 @@ fn write_jpeg(
     // EXIF first (readers look for it right after the JFIF header), then XMP, the profile
     // and IPTC; a block one segment cannot hold is left out (`jpeg_left_out`: the run warns),
     // not the frame.
-    let fits = |payload: usize| payload <= JPEG_SEGMENT_ROOM;
-    if let Some(exif) = photo.and_then(|p| p.exif.as_deref()) {
+    let left_out = photo.map(jpeg_left_out).unwrap_or_default();
+    let kept = |name: &str| !left_out.iter().any(|(block, _)| *block == name);
+    if let Some(exif) = photo
+        .and_then(|p| p.exif.as_deref())
+        .filter(|_| kept("EXIF"))
+    {
         let exif = exif.strip_prefix(b"Exif\0\0").unwrap_or(exif);
-        if fits(exif.len() + 6) {
-            encoder.add_exif_metadata(exif).map_err(error)?;
-        }
+        encoder.add_exif_metadata(exif).map_err(error)?;
     }
-    if let Some(xmp) = photo.and_then(|p| p.xmp.as_deref()) {
-        if fits(JPEG_XMP_HEADER.len() + xmp.len()) {
-            encoder
-                .add_app_segment(1, [JPEG_XMP_HEADER, xmp].concat())
-                .map_err(error)?;
-        }
+    if let Some(xmp) = photo.and_then(|p| p.xmp.as_deref()).filter(|_| kept("XMP")) {
+        encoder
+            .add_app_segment(1, [JPEG_XMP_HEADER, xmp].concat())
+            .map_err(error)?;
     }
     if let Some(icc) = icc {
         encoder.add_icc_profile(icc).map_err(error)?;
     }
-    if let Some(iptc) = photo.and_then(|p| p.iptc.as_deref()) {
-        if fits(JPEG_IPTC_HEADER.len() + iptc.len()) {
-            encoder
-                .add_app_segment(13, [JPEG_IPTC_HEADER, iptc].concat())
-                .map_err(error)?;
-        }
+    if let Some(iptc) = photo
+        .and_then(|p| p.iptc.as_deref())
+        .filter(|_| kept("IPTC"))
+    {
+        encoder
+            .add_app_segment(13, [JPEG_IPTC_HEADER, iptc].concat())
+            .map_err(error)?;
     }
     encoder.encode(rgb, w, h, ColorType::Rgb).map_err(error)
 }

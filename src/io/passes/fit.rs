@@ -296,7 +296,7 @@ const TRUNCATE: f64 = 1.0;
 /// The RMS of per-point distances, each at most [`TRUNCATE`]: robust to the few points
 /// that match nothing, while a reading that misses a whole motion (a layer) pays for every
 /// point of it.
-fn robust_rms(distances: &mut [f64]) -> f64 {
+fn robust_rms(distances: &[f64]) -> f64 {
     if distances.is_empty() {
         return 0.0;
     }
@@ -466,14 +466,14 @@ impl Fit {
             units: r.units,
             signs: (sx, if r.y_up { -sx } else { sx }),
         };
-        let mut d = candidate.distances(
+        let d = candidate.distances(
             &side.s,
             &side.m,
             &side.c,
             self.size,
             (r.scale as f64, r.zero as f64),
         );
-        Some(robust_rms(&mut d))
+        Some(robust_rms(&d))
     }
 }
 
@@ -488,6 +488,34 @@ struct Candidate {
 }
 
 impl Candidate {
+    /// The stored components in the reading's x, y order.
+    fn oriented<'a>(&self, s: &'a [Vec<f64>; 2]) -> [&'a [f64]; 2] {
+        if self.swap {
+            [&s[1], &s[0]]
+        } else {
+            [&s[0], &s[1]]
+        }
+    }
+
+    /// The units' factor per axis: pixels, or the frame's width and height.
+    fn factor(&self, (w, h): (usize, usize)) -> [f64; 2] {
+        match self.units {
+            Units::Pixels => [1.0, 1.0],
+            Units::Normalized => [w as f64, h as f64],
+        }
+    }
+
+    /// What point i's stored value on `axis` should give: the measured offset, or for a
+    /// position the point's own centre plus it (mirrored about the height with y up).
+    fn target(&self, m: &[Vec<f64>; 2], c: &[Vec<f64>; 2], h: usize, axis: usize, i: usize) -> f64 {
+        let t = m[axis][i] + if self.absolute { c[axis][i] } else { 0.0 };
+        if axis == 1 && self.absolute && self.signs.1 < 0.0 {
+            t - h as f64
+        } else {
+            t
+        }
+    }
+
     /// Each point's distance between the motion measured and the motion this reading gives
     /// with scale k and zero z.
     fn distances(
@@ -495,29 +523,19 @@ impl Candidate {
         s: &[Vec<f64>; 2],
         m: &[Vec<f64>; 2],
         c: &[Vec<f64>; 2],
-        (w, h): (usize, usize),
+        size: (usize, usize),
         (k, z): (f64, f64),
     ) -> Vec<f64> {
-        let (s0, s1) = if self.swap {
-            (&s[1], &s[0])
-        } else {
-            (&s[0], &s[1])
-        };
-        let factor = match self.units {
-            Units::Pixels => [1.0, 1.0],
-            Units::Normalized => [w as f64, h as f64],
-        };
-        let mirrored = self.absolute && self.signs.1 < 0.0;
-        (0..s0.len())
+        let stored = self.oriented(s);
+        let factor = self.factor(size);
+        let sign = [self.signs.0, self.signs.1];
+        (0..stored[0].len())
             .map(|i| {
-                let d = |axis: usize, stored: f64, sign: f64| {
-                    let mut t = m[axis][i] + if self.absolute { c[axis][i] } else { 0.0 };
-                    if axis == 1 && mirrored {
-                        t -= h as f64;
-                    }
-                    t - sign * factor[axis] * k * (stored - z)
+                let d = |axis: usize| {
+                    self.target(m, c, size.1, axis, i)
+                        - sign[axis] * factor[axis] * k * (stored[axis][i] - z)
                 };
-                d(0, s0[i], self.signs.0).hypot(d(1, s1[i], self.signs.1))
+                d(0).hypot(d(1))
             })
             .collect()
     }
@@ -531,48 +549,24 @@ impl Candidate {
         s: &[Vec<f64>; 2],
         m: &[Vec<f64>; 2],
         c: &[Vec<f64>; 2],
-        (w, h): (usize, usize),
+        size: (usize, usize),
     ) -> Reading {
-        let (s0, s1) = if self.swap {
-            (&s[1], &s[0])
-        } else {
-            (&s[0], &s[1])
-        };
-        let stored = [s0, s1];
-        let factor = match self.units {
-            Units::Pixels => [1.0, 1.0],
-            Units::Normalized => [w as f64, h as f64],
-        };
+        let stored = self.oriented(s);
+        let factor = self.factor(size);
         let sign = [self.signs.0, self.signs.1];
-        let mirrored = self.absolute && self.signs.1 < 0.0;
-        // Rows (axis, point): a·k + b·(k·z) = t, with a = σ·u·s and b = −σ·u.
-        let target = |axis: usize, i: usize| {
-            let t = m[axis][i] + if self.absolute { c[axis][i] } else { 0.0 };
-            if axis == 1 && mirrored {
-                t - h as f64
-            } else {
-                t
-            }
-        };
-        let n = s0.len();
-        let row = |axis: usize, i: usize| {
-            let g = sign[axis] * factor[axis];
-            (g * stored[axis][i], -g)
-        };
+        let n = stored[0].len();
         // Least squares for k with z fixed: rows (axis, point) a·k = t, a = σ·u·(s − z).
         let solve = |keep: &[usize], z: f64| -> (f64, f64) {
             let (mut aa, mut at) = (0.0, 0.0);
             for &i in keep {
                 for axis in 0..2 {
-                    let (a, b) = row(axis, i);
-                    let a = a + b * z;
+                    let a = sign[axis] * factor[axis] * (stored[axis][i] - z);
                     aa += a * a;
-                    at += a * target(axis, i);
+                    at += a * self.target(m, c, size.1, axis, i);
                 }
             }
             (if aa > 1e-18 { at / aa } else { 0.0 }, z)
         };
-        let size = (w, h);
         // The zero is 0 or 0.5 (a free one, with one scale, fits a single motion under any
         // reading); the one that fits better is kept.
         let mut best: Option<((f64, f64), f64)> = None;
@@ -584,15 +578,14 @@ impl Candidate {
                 order.sort_by(|&i, &j| d[i].total_cmp(&d[j]));
                 kz = solve(&order[..(n * 9 / 10).max(2).min(n)], zero);
             }
-            let r = robust_rms(&mut self.distances(s, m, c, size, kz));
+            let r = robust_rms(&self.distances(s, m, c, size, kz));
             if best.is_none_or(|b| r < b.1) {
                 best = Some((kz, r));
             }
         }
         let (kz, _) = best.expect("two zeros tried");
-        let fitted = kz;
         let k = simple(kz.0);
-        let mut distances = self.distances(s, m, c, size, (k, kz.1));
+        let distances = self.distances(s, m, c, size, (k, kz.1));
         let meaning = match (self.forward, self.absolute, self.signs.0 > 0.0) {
             (false, false, true) => Meaning::ToPrev,
             (false, false, false) => Meaning::Velocity,
@@ -608,8 +601,8 @@ impl Candidate {
             zero: kz.1 as f32,
             scale: k as f32,
             units: self.units,
-            residual: robust_rms(&mut distances),
-            fitted_scale: [fitted.0 * factor[0], fitted.0 * factor[1]],
+            residual: robust_rms(&distances),
+            fitted_scale: [kz.0 * factor[0], kz.0 * factor[1]],
             consistent: k > 0.0,
         }
     }

@@ -23,6 +23,7 @@
 //! - [`validity`]: vectors marked invalid (by the vector file's alpha) take the motion of
 //!   the nearest valid one.
 
+mod carried;
 mod check;
 mod convert;
 mod fit;

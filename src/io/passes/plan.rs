@@ -38,6 +38,10 @@ pub(super) struct ColorPlan {
     /// only when [`FramePlan::read_every_channel`] asks, with their slots then.
     pub(super) others: Vec<usize>,
     pub(super) other_slots: Vec<Slot>,
+    /// Each other channel's class, and whether it is read exactly (a u32 data channel no
+    /// pass reads: its bits, so IDs over 2²⁴ come back as they were), beside `other_slots`.
+    pub(super) other_classes: Vec<crate::frame::LayerClass>,
+    pub(super) other_exact: Vec<bool>,
     /// The preset's classes of layers by name (`[layers]`), over `io::channels`' rule.
     pub(super) layer_classes: std::collections::BTreeMap<String, crate::frame::LayerClass>,
 }
@@ -79,34 +83,6 @@ impl FramePlan {
     /// The files this frame reads.
     pub fn paths(&self) -> Vec<&Path> {
         self.files.iter().map(|f| f.info.path.as_path()).collect()
-    }
-
-    /// Reads, besides the passes, every other channel of the part of the colour file that
-    /// holds the colour, so the output can hold them again (an EXR output asks; the others
-    /// do not, and `diff` and `bench` read colour alone).
-    pub fn read_every_channel(&mut self) {
-        let Some(color) = &mut self.color else {
-            return;
-        };
-        let file = &mut self.files[color.rgb[0].file];
-        color.other_slots = color
-            .others
-            .iter()
-            .map(|&channel| {
-                let entry = file
-                    .channels
-                    .iter()
-                    .position(|&c| c == channel)
-                    .unwrap_or_else(|| {
-                        file.channels.push(channel);
-                        file.channels.len() - 1
-                    });
-                Slot {
-                    file: color.rgb[0].file,
-                    entry,
-                }
-            })
-            .collect();
     }
 }
 
@@ -203,6 +179,8 @@ pub fn plan_frame(
                         premultiply: integer,
                         others,
                         other_slots: Vec::new(),
+                        other_classes: Vec::new(),
+                        other_exact: Vec::new(),
                         layer_classes: preset
                             .layers
                             .iter()

@@ -1,15 +1,14 @@
 //! Decoding a planned frame and converting its passes to the canonical convention.
 
 use crate::error::{Problem, ProblemKind};
-use crate::frame::{CarriedChannel, Color, Frame, LayerClass, Passes, Plane};
-use crate::io::channels;
+use crate::frame::{CarriedChannel, Color, Frame, Passes, Plane};
 use crate::io::file::FileKind;
 use crate::io::image::read_photo_colour;
 use crate::io::preset::{Preset, VectorSpec};
 use crate::io::sequence::PathPattern;
 
 use super::convert::MotionSource;
-use super::plan::{plan_frame, ColorPlan, FramePlan, PlanOptions, Slot};
+use super::plan::{plan_frame, FramePlan, PlanOptions, Slot};
 use super::window::DataWindow;
 use super::Inputs;
 
@@ -49,9 +48,15 @@ pub fn read_frame_keeping(
         width,
         height,
     });
-    // The u32 data channels carried to the output are read as their bits, exactly, unless
-    // a pass reads them too (as a number).
-    let exact = exact_slots(plan);
+    // The u32 data channels carried to the output are read as their bits, exactly (the
+    // plan says which: none a pass reads as a number).
+    let exact: Vec<Slot> = plan
+        .color
+        .iter()
+        .flat_map(|c| c.other_slots.iter().zip(&c.other_exact))
+        .filter(|(_, &exact)| exact)
+        .map(|(slot, _)| *slot)
+        .collect();
     for (index, file) in plan.files.iter().enumerate() {
         let bits: Vec<usize> = exact
             .iter()
@@ -100,17 +105,20 @@ pub fn read_frame_keeping(
         let file = &plan.files[plan_color.rgb[0].file];
         let channel_of = |slot: Slot| &file.info.channels[file.channels[slot.entry]];
         if let FileKind::Exr { headers, .. } = &file.info.kind {
-            for &slot in &plan_color.other_slots {
+            let others = (plan_color.other_slots.iter())
+                .zip(&plan_color.other_classes)
+                .zip(&plan_color.other_exact);
+            for ((&slot, &class), &read_exactly) in others {
                 let channel = channel_of(slot);
                 let mut plane = take(slot, &mut decoded);
                 // Bits read exactly: the values as stored, and as numbers in the plane.
-                let exact = exact.contains(&slot).then(|| {
+                let exact = read_exactly.then(|| {
                     let values: Vec<u32> = plane.iter().map(|v| v.to_bits()).collect();
                     plane = values.iter().map(|&v| v as f32).collect();
                     values
                 });
                 frame.carried.channels.push(CarriedChannel {
-                    class: carried_class(plan_color, headers, channel),
+                    class,
                     name: channel.name.clone(),
                     part: channel.part,
                     plane,
@@ -204,63 +212,6 @@ pub fn read_frame_keeping(
         }
     }
     Ok((frame, notes, kept))
-}
-
-/// The class of a channel carried beside the beauty: the preset's for its layer
-/// (`[layers]`), else data for a u32 channel, else `io::channels`' rule; a channel of a
-/// named part is classed as `part.channel` (`diffuse.R`).
-fn carried_class(
-    plan_color: &ColorPlan,
-    headers: &[exr::meta::header::Header],
-    channel: &crate::io::file::ChannelInfo,
-) -> LayerClass {
-    let crypto = headers
-        .get(channel.part)
-        .map(channels::crypto_layers)
-        .unwrap_or_default();
-    let qualified = channel.alias.as_ref().unwrap_or(&channel.name);
-    let (layer, _) = channels::split(qualified);
-    match plan_color.layer_classes.get(layer) {
-        Some(&class) => class,
-        // Integers hold IDs and counts, never light (a u32 `obj.R` included).
-        None if channel.sample_type == "u32" => LayerClass::Data,
-        None => channels::class_of(qualified, &crypto),
-    }
-}
-
-/// The carried channels read as exact u32 bits: data, stored u32, and read by no pass.
-fn exact_slots(plan: &FramePlan) -> Vec<Slot> {
-    let Some(plan_color) = &plan.color else {
-        return Vec::new();
-    };
-    let file = &plan.files[plan_color.rgb[0].file];
-    let FileKind::Exr { headers, .. } = &file.info.kind else {
-        return Vec::new();
-    };
-    // The slots the passes read (a u32 depth or vector in the colour's part is in
-    // `other_slots` too, and is read as a number for them).
-    let mut passes: Vec<Slot> = plan_color.rgb.to_vec();
-    passes.extend(plan_color.a);
-    passes.extend(plan.depth.as_ref().map(|(slot, _)| *slot));
-    for v in [&plan.velocity, &plan.prev, &plan.next]
-        .into_iter()
-        .flatten()
-    {
-        passes.extend([v.x, v.y]);
-        passes.extend(v.z);
-        passes.extend(v.alpha);
-    }
-    plan_color
-        .other_slots
-        .iter()
-        .copied()
-        .filter(|slot| {
-            let channel = &file.info.channels[file.channels[slot.entry]];
-            channel.sample_type == "u32"
-                && carried_class(plan_color, headers, channel) == LayerClass::Data
-                && !passes.contains(slot)
-        })
-        .collect()
 }
 
 fn plan_slots(plan: &FramePlan) -> Vec<Slot> {
