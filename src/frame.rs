@@ -96,6 +96,16 @@ pub struct Color {
 }
 
 impl Color {
+    /// A colour of no pixels: what stands in a colour's place while it is moved out.
+    pub fn empty() -> Color {
+        Color {
+            r: Vec::new(),
+            g: Vec::new(),
+            b: Vec::new(),
+            a: None,
+        }
+    }
+
     /// The planes present: R, G, B, then alpha where there is one.
     pub fn planes(&self) -> Vec<&[f32]> {
         [Some(&self.r), Some(&self.g), Some(&self.b), self.a.as_ref()]

@@ -116,8 +116,10 @@ pub fn process_on(
 /// mattes (the exposure variant's coverage at silhouettes, fitted on colour), which are made
 /// once from the beauty and read by every layer ([`reconstruct::reconstruct_layers_with`]);
 /// so the blur is linear in the colour and a beauty that is the sum of its light layers still
-/// is after it, to float rounding. Each group of three costs about what the beauty does;
-/// carrying the layers through the beauty's gathers is the next step (issue 29, point 6).
+/// is after it, to float rounding. Scatter on the CPU carries the layers through the
+/// beauty's own curves ([`scatter::stages_carrying`]), so a layer costs its sums alone; the
+/// other passes, and every pass on the GPU, run each group of three in the beauty's place,
+/// which costs about what the beauty does (issue 29, point 6).
 pub fn process_with(
     algorithm: Algorithm,
     params: &Params,
@@ -220,12 +222,7 @@ fn process_beauty(
     stages: &(impl dof::Stages + motion::Stages),
 ) -> Frame {
     let frame = match &params.dof {
-        Some(dof) => {
-            for layer in layers.iter_mut() {
-                in_place(&frame, layer, &|f| dof::apply_with(f, dof, stages));
-            }
-            dof::apply_with(frame, dof, stages)
-        }
+        Some(dof) => dof::apply_layers_with(frame, layers, dof, stages),
         None => frame,
     };
     let shutter = Shutter {
@@ -233,8 +230,7 @@ fn process_beauty(
         offset: numeric::shutter_offset(params.shutter_offset),
     };
     let pass = |f: Frame| match algorithm {
-        Algorithm::Reconstruct => unreachable!("reconstruct takes its layers itself"),
-        Algorithm::Scatter => scatter::scatter_with(f, &params.scatter, shutter, stages),
+        Algorithm::Reconstruct | Algorithm::Scatter => unreachable!("they take their layers"),
         Algorithm::Stretch => stretch::stretch_with(f, &params.stretch, shutter, stages),
         Algorithm::None => Frame {
             depth: None,
@@ -245,6 +241,9 @@ fn process_beauty(
         },
     };
     match algorithm {
+        Algorithm::Scatter => {
+            scatter::scatter_layers_with(frame, layers, &params.scatter, shutter, stages)
+        }
         Algorithm::Reconstruct => {
             // Frame numbers seed the jitter modulo 2³² (the hash is 32-bit).
             let seed = frame_number as u32;
@@ -268,14 +267,8 @@ fn process_beauty(
 
 /// `pass` run on `layer` in the beauty's place: a frame of `passes`' passes with its colour.
 fn in_place(passes: &Frame, layer: &mut Color, pass: &dyn Fn(Frame) -> Frame) {
-    let empty = Color {
-        r: Vec::new(),
-        g: Vec::new(),
-        b: Vec::new(),
-        a: None,
-    };
     let alone = Frame {
-        color: Some(std::mem::replace(layer, empty)),
+        color: Some(std::mem::replace(layer, Color::empty())),
         ..passes.clone_passes()
     };
     *layer = pass(alone).color.expect("the passes give colour back");

@@ -225,6 +225,31 @@ pub trait Stages {
         gather::gather(config, color, coc, tiles)
     }
 
+    /// [`gather::gather`], and the R, G and B of `layers` (light layers beside the beauty)
+    /// blurred in place with its weights: on the CPU carried through the beauty's taps
+    /// ([`gather::gather_carrying`]); their alpha is left as it came.
+    fn gather_carrying(
+        &self,
+        config: &DofConfig,
+        color: &Color,
+        coc: &[f32],
+        tiles: &tiles::Tiles,
+        layers: &mut [Color],
+    ) -> Color {
+        let planes: Vec<&[f32]> = layers
+            .iter()
+            .flat_map(|l| [&l.r[..], &l.g[..], &l.b[..]])
+            .collect();
+        let (out, carried) = gather::gather_carrying(config, color, coc, tiles, &planes);
+        let mut carried = carried.into_iter();
+        for layer in layers.iter_mut() {
+            for plane in [&mut layer.r, &mut layer.g, &mut layer.b] {
+                *plane = carried.next().expect("three planes a layer");
+            }
+        }
+        out
+    }
+
     /// [`blend::blend`].
     fn blend(&self, config: &DofConfig, color: Color, coc: &[f32]) -> Color {
         blend::blend(config, color, coc)
@@ -246,6 +271,19 @@ pub fn apply(frame: Frame, params: &DofParams) -> Frame {
 /// [`apply`] with the stages that have a twin elsewhere (`coc`, tile min/max, the gather,
 /// blend) run by `stages`; the others run here on the CPU.
 pub fn apply_with(frame: Frame, params: &DofParams, stages: &impl Stages) -> Frame {
+    apply_layers_with(frame, &mut [], params, stages)
+}
+
+/// [`apply_with`], and `layers` (light layers beside the beauty, each with the beauty's
+/// alpha) blurred in place with exactly the beauty's weights: the CoC plane and the tiles
+/// are made once, the gather carries the layers through the beauty's taps
+/// ([`Stages::gather_carrying`]), and blend runs on each layer with the beauty's CoC.
+pub fn apply_layers_with(
+    frame: Frame,
+    layers: &mut [Color],
+    params: &DofParams,
+    stages: &impl Stages,
+) -> Frame {
     let coc = stages.coc_plane(&frame, params);
     let largest = coc.par_iter().map(|c| c.abs()).reduce(|| 0.0, f32::max);
     if largest < params.epsilon || frame.color.is_none() {
@@ -257,11 +295,21 @@ pub fn apply_with(frame: Frame, params: &DofParams, stages: &impl Stages) -> Fra
     let color = frame.color.take().expect("checked");
     let out = match params.method {
         // blend writes the colour in place.
-        Method::Blend => stages.blend(&config, color, &coc),
+        Method::Blend => {
+            for layer in layers.iter_mut() {
+                let alone = std::mem::replace(layer, Color::empty());
+                *layer = stages.blend(&config, alone, &coc);
+            }
+            stages.blend(&config, color, &coc)
+        }
         Method::Gather => {
             let grid = tiles::TilesConfig::new(frame.width, frame.height, config.epsilon);
             let tiles = stages.tiles(&grid, &coc);
-            stages.gather(&config, &color, &coc, &tiles)
+            if layers.is_empty() {
+                stages.gather(&config, &color, &coc, &tiles)
+            } else {
+                stages.gather_carrying(&config, &color, &coc, &tiles, layers)
+            }
         }
     };
     Frame {

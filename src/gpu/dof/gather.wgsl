@@ -1,9 +1,9 @@
-// Depth of field's bokeh gather: the twin of `gather` (src/dof/gather.rs), one workgroup per
+// Depth of field's bokeh gather: the twin of `gather` (src/dof/gather/mod.rs), one workgroup per
 // 16×16 tile, one invocation per pixel. Keep in sync with `gather_run` there: the same taps
 // in the same order, the same weights, the same sums (offset by the centre) and the same
 // composite. The tile plan (which fields, which taps) is the CPU's own (`dof::gather::plan`).
 
-// Keep in sync with `GatherConfig` in src/dof/gather.rs (a test holds the layouts together).
+// Keep in sync with `GatherConfig` in src/dof/gather/mod.rs (a test holds the layouts together).
 struct GatherConfig {
     width: u32,
     height: u32,
@@ -18,7 +18,7 @@ struct GatherConfig {
     _pad2: u32,
 }
 
-// Keep in sync with `OffsetTap` in src/dof/gather.rs.
+// Keep in sync with `OffsetTap` in src/dof/gather/mod.rs.
 struct Tap {
     dx: i32,
     dy: i32,
@@ -27,7 +27,7 @@ struct Tap {
     area: f32,
 }
 
-// Keep in sync with `TileTaps` in src/dof/gather.rs: fields 0 copy, 1 far, 2 both, 3 apart.
+// Keep in sync with `TileTaps` in src/dof/gather/mod.rs: fields 0 copy, 1 far, 2 both, 3 apart.
 struct Tile {
     fields: u32,
     taps_start: u32,
@@ -50,7 +50,7 @@ struct Tile {
 const TILE: u32 = 16u;
 
 // Index i of a row or column of n pixels reflected into it about its edges, the edge pixel
-// repeated (`mirror` in gather.rs).
+// repeated (`mirror` in gather/mod.rs).
 fn mirror(i: i32, n: u32) -> u32 {
     let period = 2 * i32(n);
     var m = i % period;

@@ -51,6 +51,23 @@ impl crate::dof::Stages for Gpu {
         )
     }
 
+    /// Each layer through the gather in the beauty's place (the same weights; carrying them
+    /// through one dispatch, as the CPU does, is issue 29's next step here).
+    fn gather_carrying(
+        &self,
+        config: &DofConfig,
+        color: &Color,
+        coc: &[f32],
+        tiles: &Tiles,
+        layers: &mut [Color],
+    ) -> Color {
+        for layer in layers.iter_mut() {
+            let blurred = self.gather(config, layer, coc, tiles);
+            (layer.r, layer.g, layer.b) = (blurred.r, blurred.g, blurred.b);
+        }
+        self.gather(config, color, coc, tiles)
+    }
+
     fn blend(&self, config: &DofConfig, color: Color, coc: &[f32]) -> Color {
         match config.blend_form {
             BlendForm::Pyramid => {

@@ -87,6 +87,29 @@ impl scatter_cpu::Stages for Gpu {
             || scatter_cpu::stages(config, color, depth, positions),
         )
     }
+
+    /// Each layer through the same stages in the beauty's place (the same weights; carrying
+    /// them through one dispatch, as the CPU does, is issue 29's next step here).
+    fn stages_carrying(
+        &self,
+        config: &ScatterConfig,
+        color: Color,
+        depth: &[f32],
+        positions: [&Positions; 2],
+        layers: &mut [Color],
+    ) -> Color {
+        for layer in layers.iter_mut() {
+            let alone = Color {
+                r: std::mem::take(&mut layer.r),
+                g: std::mem::take(&mut layer.g),
+                b: std::mem::take(&mut layer.b),
+                a: layer.a.clone(),
+            };
+            let blurred = self.stages(config, alone, depth, positions);
+            (layer.r, layer.g, layer.b) = (blurred.r, blurred.g, blurred.b);
+        }
+        self.stages(config, color, depth, positions)
+    }
 }
 
 /// Stretch's three stages run here, as one (a device that cannot blend float targets runs

@@ -22,6 +22,8 @@ pub(super) struct Scatter<'a> {
     pub(super) width: usize,
     pub(super) height: usize,
     pub(super) color: &'a Color,
+    /// Colour planes carried beside the beauty (light layers), blurred with its weights.
+    pub(super) extra: Vec<&'a [f32]>,
     pub(super) depth: &'a [f32],
     pub(super) prev: &'a Positions,
     pub(super) next: &'a Positions,
@@ -54,6 +56,7 @@ impl<'a> Scatter<'a> {
             width: config.width as usize,
             height: config.height as usize,
             color,
+            extra: Vec::new(),
             depth,
             prev,
             next,

@@ -86,6 +86,19 @@ pub trait Stages {
     ) -> Color {
         stages(config, color, depth, positions)
     }
+
+    /// [`stages`] with `layers` (light layers beside the beauty) blurred in place with the
+    /// beauty's weights: on the CPU carried through the same curves ([`stages_carrying`]).
+    fn stages_carrying(
+        &self,
+        config: &ScatterConfig,
+        color: Color,
+        depth: &[f32],
+        positions: [&Positions; 2],
+        layers: &mut [Color],
+    ) -> Color {
+        stages_carrying(config, color, depth, positions, layers)
+    }
 }
 
 impl Stages for Cpu {}
@@ -93,7 +106,20 @@ impl Stages for Cpu {}
 /// [`scatter`] with its [`Stages`] run by `stages` (the CPU's, [`Cpu`], or a backend's twin);
 /// the config is made here from the frame's size, so it always matches the frame.
 pub fn scatter_with(
+    frame: Frame,
+    params: &ScatterParams,
+    shutter: impl Into<Shutter>,
+    stages: &impl Stages,
+) -> Frame {
+    scatter_layers_with(frame, &mut [], params, shutter, stages)
+}
+
+/// [`scatter_with`], and `layers` (light layers beside the beauty) blurred in place with
+/// exactly the beauty's weights ([`Stages::stages_carrying`]); their alpha is the beauty's
+/// and is left as it came.
+pub fn scatter_layers_with(
     mut frame: Frame,
+    layers: &mut [Color],
     params: &ScatterParams,
     shutter: impl Into<Shutter>,
     stages: &impl Stages,
@@ -112,8 +138,10 @@ pub fn scatter_with(
     // Colour alone, as on every path.
     frame.color = Some(if width * height == 0 {
         color
-    } else {
+    } else if layers.is_empty() {
         stages.stages(&config, color, &depth, [&prev, &next])
+    } else {
+        stages.stages_carrying(&config, color, &depth, [&prev, &next], layers)
     });
     frame
 }
@@ -124,16 +152,40 @@ pub fn stages(
     config: &ScatterConfig,
     color: Color,
     depth: &[f32],
+    positions: [&Positions; 2],
+) -> Color {
+    stages_carrying(config, color, depth, positions, &mut [])
+}
+
+/// [`stages`], carrying the R, G and B planes of `layers` (light layers) through the same
+/// curves: each curve deposits their values at its pixel with the weights it deposits the
+/// beauty's, into sums of their own beside the beauty's cells, and each pixel resolves them
+/// as it resolves the beauty (the same normalisation, the same pixels behind). So a layer
+/// comes out with the bits it would get in the beauty's place, at the cost of its sums
+/// alone: no curve is built twice.
+pub fn stages_carrying(
+    config: &ScatterConfig,
+    color: Color,
+    depth: &[f32],
     [prev, next]: [&Positions; 2],
+    layers: &mut [Color],
 ) -> Color {
     let (width, height) = (config.width as usize, config.height as usize);
-    let job = Scatter::new(*config, &color, depth, prev, next);
+    let inputs: Vec<Vec<f32>> = layers
+        .iter_mut()
+        .flat_map(|l| [&mut l.r, &mut l.g, &mut l.b])
+        .map(std::mem::take)
+        .collect();
+    let mut job = Scatter::new(*config, &color, depth, prev, next);
+    job.extra = inputs.iter().map(Vec::as_slice).collect();
     let n = width * height;
     let columns = width.div_ceil(TILE_W);
 
     // How far each block's curves reach; nothing to do if nothing moves.
     let reach = Reach::of(&job);
     if reach.most == 0.0 || n == 0 {
+        drop(job);
+        give_back(layers, inputs);
         return color;
     }
     // Accumulate and normalise tile by tile, into new planes (curves read the input colours
@@ -146,14 +198,25 @@ pub fn stages(
         .is_none_or(|a| a.par_iter().all(|&v| v == 1.0));
     // Every tile writes all its pixels: those no curve reaches get their input.
     let mut out: [Vec<f32>; 4] = std::array::from_fn(|_| vec![0.0; n]);
+    let mut out_extra: Vec<Vec<f32>> = inputs.iter().map(|_| vec![0.0; n]).collect();
     let [r, g, b, a] = &mut out;
     let strip = TILE_H * width;
+    // The carried planes' strips, strip by strip.
+    let mut extra_strips: Vec<Vec<&mut [f32]>> = (0..height.div_ceil(TILE_H))
+        .map(|_| Vec::with_capacity(out_extra.len()))
+        .collect();
+    for plane in out_extra.iter_mut() {
+        for (strips, piece) in extra_strips.iter_mut().zip(plane.chunks_mut(strip)) {
+            strips.push(piece);
+        }
+    }
     r.par_chunks_mut(strip)
         .zip(g.par_chunks_mut(strip))
         .zip(b.par_chunks_mut(strip))
         .zip(a.par_chunks_mut(strip))
+        .zip(extra_strips)
         .enumerate()
-        .for_each(|(tile_row, (((r, g), b), a))| {
+        .for_each(|(tile_row, ((((r, g), b), a), extra))| {
             let ty0 = tile_row * TILE_H;
             let ty1 = (ty0 + TILE_H).min(height);
             // Each tile's pieces of the strip's rows, R, G, B and A.
@@ -174,26 +237,52 @@ pub fn stages(
                     tile.push([r, g, b, a]);
                 }
             }
+            // The same for the carried planes: per tile, per row, each plane's piece.
+            let mut carried: Vec<Vec<Vec<&mut [f32]>>> =
+                (0..columns).map(|_| Vec::with_capacity(TILE_H)).collect();
+            for _ in ty0..ty1 {
+                for tile in carried.iter_mut() {
+                    tile.push(Vec::with_capacity(extra.len()));
+                }
+            }
+            for plane in extra {
+                for (row, piece) in plane.chunks_mut(width).enumerate() {
+                    for (tile, piece) in carried.iter_mut().zip(piece.chunks_mut(TILE_W)) {
+                        tile[row].push(piece);
+                    }
+                }
+            }
             // Tiles of the strip in parallel too (a 1080p frame has only 9 strips).
-            tiles
-                .into_par_iter()
-                .enumerate()
-                .for_each(|(column, mut rows)| {
+            tiles.into_par_iter().zip(carried).enumerate().for_each(
+                |(column, (mut rows, mut carried))| {
                     let tx0 = column * TILE_W;
                     let rect = [tx0, ty0, (tx0 + TILE_W).min(width), ty1];
                     if opaque {
-                        job.tile::<4>(&reach, rect, &mut rows);
+                        job.tile::<4>(&reach, rect, &mut rows, &mut carried);
                     } else {
-                        job.tile::<5>(&reach, rect, &mut rows);
+                        job.tile::<5>(&reach, rect, &mut rows, &mut carried);
                     }
-                });
+                },
+            );
         });
+    drop(job);
+    give_back(layers, out_extra);
     let [r, g, b, a] = out;
     Color {
         r,
         g,
         b,
         a: has_alpha.then_some(a),
+    }
+}
+
+/// `planes` (three a layer, R, G, B) put back into `layers`.
+fn give_back(layers: &mut [Color], planes: Vec<Vec<f32>>) {
+    let mut planes = planes.into_iter();
+    for layer in layers {
+        for plane in [&mut layer.r, &mut layer.g, &mut layer.b] {
+            *plane = planes.next().expect("three planes a layer");
+        }
     }
 }
 
@@ -292,7 +381,8 @@ mod tests {
                 .iter_mut()
                 .map(|[r, g, b, a]| [&mut r[..], &mut g[..], &mut b[..], &mut a[..]])
                 .collect();
-            job.tile::<N>(reach, rect, &mut rows);
+            let mut carried: Vec<Vec<&mut [f32]>> = (y0..y1).map(|_| Vec::new()).collect();
+            job.tile::<N>(reach, rect, &mut rows, &mut carried);
             planes
                 .iter()
                 .flatten()
@@ -310,6 +400,69 @@ mod tests {
                     bits::<5>(&job, &reach, rect),
                     "{normalize:?} {rect:?}"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn carried_layers_get_the_bits_they_get_in_the_beautys_place() {
+        // A block moving over a still background (so the exposure normalisation fills what
+        // the block uncovers from behind), with and without alpha, each normalisation: a
+        // layer carried through the beauty's curves must come out bit for bit as it does
+        // blurred alone in the beauty's place, and the beauty as it does with no layer.
+        let (w, h) = (300, 150);
+        let mut f = still_frame(w, h);
+        let moving = |i: usize| (100..200).contains(&(i % w)) && (30..120).contains(&(i / w));
+        let wave = |i: usize, k: f32| (i as f32 * k).sin() + 1.0;
+        let color = f.color.as_mut().unwrap();
+        for i in 0..w * h {
+            color.r[i] = wave(i, 0.37);
+            color.g[i] = wave(i, 0.21);
+        }
+        f.depth = Some(
+            (0..w * h)
+                .map(|i| if moving(i) { 2.0 } else { 8.0 })
+                .collect(),
+        );
+        let (prev, next) = (f.prev.as_mut().unwrap(), f.next.as_mut().unwrap());
+        for i in (0..w * h).filter(|&i| moving(i)) {
+            prev.x[i] -= 12.0;
+            next.x[i] += 9.0;
+            next.y[i] += 3.0;
+        }
+        let layer = |k: f32, alpha: &Option<Vec<f32>>| Color {
+            r: (0..w * h).map(|i| wave(i, k)).collect(),
+            g: (0..w * h).map(|i| wave(i, 2.0 * k)).collect(),
+            b: vec![0.125; w * h],
+            a: alpha.clone(),
+        };
+        let bits = |plane: &[f32]| plane.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        for alpha in [
+            None,
+            Some((0..w * h).map(|i| wave(i, 0.05) / 2.0).collect()),
+        ] {
+            f.color.as_mut().unwrap().a = alpha.clone();
+            for normalize in [Normalize::Paper, Normalize::Exposure] {
+                let params = ScatterParams {
+                    normalize,
+                    ..ScatterParams::default()
+                };
+                let mut layers = [layer(0.11, &alpha), layer(0.07, &alpha)];
+                let carried = scatter_layers_with(f.clone(), &mut layers, &params, 1.0, &Cpu);
+                let beauty = scatter(f.clone(), &params, 1.0).color.unwrap();
+                let got = carried.color.unwrap();
+                assert_eq!(bits(&got.r), bits(&beauty.r), "{normalize:?}");
+                assert_eq!(bits(&got.b), bits(&beauty.b), "{normalize:?}");
+                for (k, carried) in [0.11, 0.07].into_iter().zip(&layers) {
+                    let mut alone = f.clone();
+                    alone.color = Some(layer(k, &alpha));
+                    let want = scatter(alone, &params, 1.0).color.unwrap();
+                    // The layer moved: the comparison is not of a copy.
+                    assert_ne!(bits(&want.r), bits(&layer(k, &alpha).r));
+                    assert_eq!(bits(&carried.r), bits(&want.r), "{normalize:?} {k}");
+                    assert_eq!(bits(&carried.g), bits(&want.g), "{normalize:?} {k}");
+                    assert_eq!(bits(&carried.b), bits(&want.b), "{normalize:?} {k}");
+                }
             }
         }
     }

@@ -7,47 +7,111 @@ use super::config::{Normalize, BLOCK, COVERED};
 use super::job::{Moving, Scatter};
 use super::reach::Reach;
 
+/// How a pixel's output is made from its cell, the same for every channel: found once per
+/// pixel from the weight sum, then applied to the beauty's channels and to every carried one
+/// ([`Scatter::channel`]), so light layers get exactly the beauty's weights.
+pub(super) enum Resolution {
+    /// No curve deposited: the input.
+    Own,
+    /// The paper's eq. 4, with the background weight `wb`.
+    Paper { wb: f64, total: f64 },
+    /// Covered for `total` < 1 of the exposure: the deposits, and what lies behind for the
+    /// rest.
+    Rest { rest: f64, behind: Behind },
+    /// Covered at least once over: the deposits averaged.
+    Mean { total: f64 },
+}
+
+/// What lies behind a pixel not wholly covered: its own colour, or the average of the first
+/// farther pixel found along its motion either way.
+pub(super) enum Behind {
+    Own,
+    Found { pixels: [usize; 2], count: usize },
+}
+
 impl Scatter<'_> {
-    /// The output of pixel `i` from its accumulated `cell`.
+    /// The output of pixel (x, y) from its accumulated `cell`.
+    #[cfg(test)]
     pub(super) fn resolve(&self, cell: &[f64; 5], x: usize, y: usize, reach: &Reach) -> [f32; 4] {
-        let i = y * self.width + x;
-        let own = self.color(i);
-        let total = cell[4];
+        let resolution = self.resolution(cell[4], x, y, reach);
+        self.resolved(&resolution, cell, y * self.width + x)
+    }
+
+    /// The beauty's channels of pixel `i` by `resolution`, from its `cell`.
+    pub(super) fn resolved(&self, resolution: &Resolution, cell: &[f64; 5], i: usize) -> [f32; 4] {
+        let alpha = |j: usize| self.color.a.as_ref().map_or(1.0, |a| a[j]);
+        [
+            self.channel(resolution, cell[0], i, |j| self.color.r[j]),
+            self.channel(resolution, cell[1], i, |j| self.color.g[j]),
+            self.channel(resolution, cell[2], i, |j| self.color.b[j]),
+            self.channel(resolution, cell[3], i, alpha),
+        ]
+    }
+
+    /// How pixel (x, y), whose deposits weigh `total`, is resolved.
+    pub(super) fn resolution(&self, total: f64, x: usize, y: usize, reach: &Reach) -> Resolution {
         if total.is_nan() || total <= 0.0 {
-            return own;
-        }
-        if self.config.normalize() == Normalize::Paper {
+            Resolution::Own
+        } else if self.config.normalize() == Normalize::Paper {
             // The paper's eq. 4 (w_b is at least 0).
             let wb = self.config.background_weight as f64;
-            std::array::from_fn(|ch| ((cell[ch] + wb * own[ch] as f64) / (total + wb)) as f32)
+            Resolution::Paper { wb, total }
         } else if total < 1.0 {
             let rest = 1.0 - total;
             let behind = if rest > COVERED {
                 self.behind(x, y, reach)
             } else {
-                own
+                Behind::Own
             };
-            std::array::from_fn(|ch| (cell[ch] + rest * behind[ch] as f64) as f32)
+            Resolution::Rest { rest, behind }
         } else {
-            std::array::from_fn(|ch| (cell[ch] / total) as f32)
+            Resolution::Mean { total }
         }
     }
 
-    /// The colour behind moving pixel `i`: the nearest farther surface along its motion
+    /// One channel of pixel `i` resolved: `sum` its deposits, `plane` its input values.
+    #[inline]
+    pub(super) fn channel(
+        &self,
+        resolution: &Resolution,
+        sum: f64,
+        i: usize,
+        plane: impl Fn(usize) -> f32,
+    ) -> f32 {
+        match *resolution {
+            Resolution::Own => plane(i),
+            Resolution::Paper { wb, total } => ((sum + wb * plane(i) as f64) / (total + wb)) as f32,
+            Resolution::Rest { rest, ref behind } => {
+                let behind = match *behind {
+                    Behind::Own => plane(i),
+                    Behind::Found { pixels, count } => {
+                        let mut s = 0.0f64;
+                        for &j in &pixels[..count] {
+                            s += plane(j) as f64;
+                        }
+                        (s / count as f64) as f32
+                    }
+                };
+                (sum + rest * behind as f64) as f32
+            }
+            Resolution::Mean { total } => (sum / total) as f32,
+        }
+    }
+
+    /// What lies behind moving pixel (x, y): the nearest farther surface along its motion
     /// (either way; the average if both), else its own colour.
-    fn behind(&self, x: usize, y: usize, reach: &Reach) -> [f32; 4] {
+    fn behind(&self, x: usize, y: usize, reach: &Reach) -> Behind {
         let i = y * self.width + x;
-        let own = self.color(i);
         let Some(Moving {
             prev, now, next, ..
         }) = self.motion(x, y)
         else {
-            return own;
+            return Behind::Own;
         };
         let v = [next[0] - prev[0], next[1] - prev[1]];
         let l = length(v);
         if l.is_nan() || l <= 0.0 {
-            return own;
+            return Behind::Own;
         }
         let dir = [v[0] / l, v[1] / l];
         let limit = self.depth[i] * (1.0 + self.config.depth_tolerance);
@@ -66,9 +130,9 @@ impl Scatter<'_> {
         let by1 = ((y + steps) / BLOCK).min(reach.down - 1);
         let deepest = |bx: usize, by: usize| reach.deepest[by * reach.across + bx];
         if (by0..=by1).all(|by| (bx0..=bx1).all(|bx| deepest(bx, by) <= limit)) {
-            return own;
+            return Behind::Own;
         }
-        let mut sum = [0.0f64; 4];
+        let mut pixels = [0; 2];
         let mut found = 0;
         for side in [1.0, -1.0] {
             for k in 1..steps + 1 {
@@ -79,18 +143,19 @@ impl Scatter<'_> {
                 }
                 let j = y as usize * self.width + x as usize;
                 if self.depth[j] > limit {
-                    for (s, c) in sum.iter_mut().zip(self.color(j)) {
-                        *s += c as f64;
-                    }
+                    pixels[found] = j;
                     found += 1;
                     break;
                 }
             }
         }
         if found == 0 {
-            own
+            Behind::Own
         } else {
-            sum.map(|s| (s / found as f64) as f32)
+            Behind::Found {
+                pixels,
+                count: found,
+            }
         }
     }
 }

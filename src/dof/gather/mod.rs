@@ -45,25 +45,18 @@
 //! combination of input pixels (within their range), computed per pixel in a fixed order
 //! (the same bits for any thread count).
 
+mod run;
+
 use rayon::prelude::*;
 
 use super::bokeh::{grid, taps, Aperture, Tap};
 use super::tiles::{Tiles, LAYER, TILE};
 use super::DofConfig;
 use crate::frame::Color;
+use run::{carry_run, gather_run, Fields, Padded, PixelTap, Row, RowWeights};
 
 /// Smallest bokeh radius a weight divides by (px): a pixel's own footprint.
 const SMALLEST_RADIUS: f32 = 0.5;
-
-/// One tap of a tile's pattern: a whole-pixel offset (as an index step in the padded
-/// planes), the aperture norms of the offset, and the area it stands for (px²).
-#[derive(Clone, Copy, Debug)]
-struct PixelTap {
-    step: isize,
-    norm_far: f32,
-    norm_near: f32,
-    area: f32,
-}
 
 /// A whole-pixel offset with the area it stands for, as a tap of a tile's pattern: its index
 /// step in the padded planes and the aperture norms of the offset (of −offset for the far
@@ -130,61 +123,49 @@ fn mirror(i: isize, n: usize) -> usize {
     (if m >= n as isize { period - 1 - m } else { m }) as usize
 }
 
-/// The planes the gather reads, padded by `pad` pixels on every side (and a tile more on the
-/// right) with the frame mirrored about its edges, so taps never need bounds checks.
-///
-/// Beyond the frame the world goes on and a post-process cannot see it. Of the three ways
-/// to stand in for it, mirroring erred least on `layers` at 640×360 (region RMSE 0.0178,
-/// against 0.0186 clamping to the edge and 0.0185 renormalising over the taps inside):
-/// clamping smears the border row across the whole bokeh, renormalising leaves a border
-/// pixel's far field one-sided and its near field's opacity short, while a mirrored
-/// neighbourhood keeps the texture's local statistics and its edges.
-struct Padded {
-    stride: usize,
-    pad: usize,
-    /// r, g, b, a (zero without alpha), signed bokeh radius, 1 / bokeh area.
-    planes: [Vec<f32>; 6],
-}
-
+/// How the padded planes are made (the padding is [`mirror`]'s).
 impl Padded {
     fn new(
         color: &Color,
         coc: &[f32],
-        width: usize,
-        height: usize,
+        extra: &[&[f32]],
+        (width, height): (usize, usize),
         pad: usize,
         unit_area: f32,
     ) -> Self {
         // A tile's last run reads a whole TILE of lanes: room for that on the right.
         let stride = width + 2 * pad + TILE;
         let rows = height + 2 * pad;
-        let source = |plane: usize, x: usize, y: usize| -> f32 {
-            let i = y * width + x;
-            match plane {
-                0 => color.r[i],
-                1 => color.g[i],
-                2 => color.b[i],
-                3 => color.a.as_ref().map_or(0.0, |a| a[i]),
-                4 => 0.5 * coc[i],
-                _ => inverse_area(coc[i], unit_area),
-            }
-        };
-        let planes = [0, 1, 2, 3, 4, 5].map(|plane| {
+        // Each padded column's source column, found once for every row and plane.
+        let columns: Vec<usize> = (0..stride)
+            .map(|px| mirror(px as isize - pad as isize, width))
+            .collect();
+        let padded = |value: &(dyn Fn(usize) -> f32 + Sync)| {
             let mut out = vec![0.0f32; stride * rows];
             out.par_chunks_mut(stride)
                 .enumerate()
                 .for_each(|(py, row)| {
                     let y = mirror(py as isize - pad as isize, height);
-                    for (px, v) in row.iter_mut().enumerate() {
-                        *v = source(plane, mirror(px as isize - pad as isize, width), y);
+                    for (v, &x) in row.iter_mut().zip(&columns) {
+                        *v = value(y * width + x);
                     }
                 });
             out
-        });
+        };
+        let planes = [
+            padded(&|i| color.r[i]),
+            padded(&|i| color.g[i]),
+            padded(&|i| color.b[i]),
+            padded(&|i| color.a.as_ref().map_or(0.0, |a| a[i])),
+            padded(&|i| 0.5 * coc[i]),
+            padded(&|i| inverse_area(coc[i], unit_area)),
+        ];
+        let extra = extra.iter().map(|plane| padded(&|i| plane[i])).collect();
         Padded {
             stride,
             pad,
             planes,
+            extra,
         }
     }
 
@@ -405,20 +386,24 @@ pub fn inverse_area(coc: f32, unit_area: f32) -> f32 {
     1.0 / (unit_area * r * r)
 }
 
-/// Which fields a tile row gathers, and over which taps.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Fields {
-    /// No near field: the far field over the far taps.
-    Far,
-    /// Both fields in one loop over the same taps (the tile's own radius sets its reach).
-    Both,
-    /// The far field over its own (denser) taps, then the near field over the reach's.
-    Apart,
-}
-
 /// Depth of field by gathering; `coc` is the signed CoC plane (px, diameter), `tiles` its
 /// tile min/max ([`super::tiles::tiles`]).
 pub fn gather(config: &DofConfig, color: &Color, coc: &[f32], tiles: &Tiles) -> Color {
+    gather_carrying(config, color, coc, tiles, &[]).0
+}
+
+/// [`gather`], carrying `extra` (colour planes beside the beauty: light layers) through the
+/// beauty's taps: each tile row's weights are computed once, by the beauty's loop, and
+/// applied to every carried plane in the same order ([`run::carry_run`]), so each comes out
+/// with the bits it would get in the beauty's place at the cost of its sums alone. Returns
+/// the colour and the carried planes, in order.
+pub fn gather_carrying(
+    config: &DofConfig,
+    color: &Color,
+    coc: &[f32],
+    tiles: &Tiles,
+    extra: &[&[f32]],
+) -> (Color, Vec<Vec<f32>>) {
     let (width, height) = (config.width, config.height);
     let rings_count = config.rings;
     let aperture = Aperture::new(config.blades, config.blade_rotation);
@@ -431,7 +416,7 @@ pub fn gather(config: &DofConfig, color: &Color, coc: &[f32], tiles: &Tiles) -> 
     let reach = &tiles.reach;
     let largest = reach.iter().fold(0.0f32, |m, &r| m.max(r));
     let pad = largest.ceil() as usize + 2;
-    let padded = Padded::new(color, coc, width, height, pad, unit_area);
+    let padded = Padded::new(color, coc, extra, (width, height), pad, unit_area);
     let stride = padded.stride as isize;
     let grids: Vec<Vec<PixelTap>> = (0..=rings_count)
         .map(|r| grid_taps(r, &aperture, stride))
@@ -439,200 +424,105 @@ pub fn gather(config: &DofConfig, color: &Color, coc: &[f32], tiles: &Tiles) -> 
     let tiles_x = width.div_ceil(TILE);
     let half_focus = (0.5 * config.epsilon).max(SMALLEST_RADIUS);
 
-    // Output planes r, g, b, a, filled a band of tile rows at a time.
+    // Output planes r, g, b, a, and the carried planes, filled a band of tile rows at a time.
     let mut out = [0, 1, 2, 3].map(|_| vec![0.0f32; width * height]);
+    let mut out_extra: Vec<Vec<f32>> = extra.iter().map(|_| vec![0.0; width * height]).collect();
+    let mut extra_bands: Vec<Vec<&mut [f32]>> = (0..height.div_ceil(TILE))
+        .map(|_| Vec::with_capacity(extra.len()))
+        .collect();
+    for plane in out_extra.iter_mut() {
+        for (bands, band) in extra_bands.iter_mut().zip(plane.chunks_mut(TILE * width)) {
+            bands.push(band);
+        }
+    }
     let [out_r, out_g, out_b, out_a] = &mut out;
     out_r
         .par_chunks_mut(TILE * width)
         .zip(out_g.par_chunks_mut(TILE * width))
         .zip(out_b.par_chunks_mut(TILE * width))
         .zip(out_a.par_chunks_mut(TILE * width))
+        .zip(extra_bands)
         .enumerate()
-        .for_each(|(ty, (((band_r, band_g), band_b), band_a))| {
-            let mut bands = [band_r, band_g, band_b, band_a];
-            for tx in 0..tiles_x {
-                let t = ty * tiles_x + tx;
-                let x0 = tx * TILE;
-                let span = TILE.min(width - x0);
-                let rows = bands[0].len() / width;
-                let Some(choice) = choose(reach[t], tiles.own[t], tiles.far_only[t], half_focus)
-                else {
+        .for_each(
+            |(ty, ((((band_r, band_g), band_b), band_a), mut extra_bands))| {
+                let mut bands = [band_r, band_g, band_b, band_a];
+                let mut weights = RowWeights {
+                    keep: !extra.is_empty(),
+                    ..RowWeights::default()
+                };
+                for tx in 0..tiles_x {
+                    let t = ty * tiles_x + tx;
+                    let x0 = tx * TILE;
+                    let span = TILE.min(width - x0);
+                    let rows = bands[0].len() / width;
+                    let Some(choice) =
+                        choose(reach[t], tiles.own[t], tiles.far_only[t], half_focus)
+                    else {
+                        for row in 0..rows {
+                            let start = padded.index(x0, ty * TILE + row);
+                            for (k, band) in bands.iter_mut().enumerate() {
+                                band[row * width + x0..row * width + x0 + span]
+                                    .copy_from_slice(&padded.planes[k][start..start + span]);
+                            }
+                            for (band, plane) in extra_bands.iter_mut().zip(&padded.extra) {
+                                band[row * width + x0..row * width + x0 + span]
+                                    .copy_from_slice(&plane[start..start + span]);
+                            }
+                        }
+                        continue;
+                    };
+                    let mut made = Vec::new();
+                    let taps =
+                        taps_for(choice.radius, &grids, &rings, &aperture, stride, &mut made);
+                    let mut made_far = Vec::new();
+                    let far_taps = match choice.far_radius {
+                        None => taps,
+                        Some(0.0) => &[][..],
+                        Some(own) => {
+                            taps_for(own, &grids, &rings, &aperture, stride, &mut made_far)
+                        }
+                    };
+                    let mode = choice.fields;
                     for row in 0..rows {
                         let start = padded.index(x0, ty * TILE + row);
+                        let run = Row {
+                            start,
+                            span,
+                            far_taps,
+                            taps,
+                            fields: mode,
+                        };
+                        let mut result = [[0.0f32; TILE]; 4];
+                        gather_run(&padded, &run, &mut result, &mut weights);
                         for (k, band) in bands.iter_mut().enumerate() {
                             band[row * width + x0..row * width + x0 + span]
-                                .copy_from_slice(&padded.planes[k][start..start + span]);
+                                .copy_from_slice(&result[k][..span]);
+                        }
+                        // Four planes at a time, the last group's empty places filled with its
+                        // last plane (computed, not kept).
+                        for (bands, planes) in extra_bands.chunks_mut(4).zip(padded.extra.chunks(4))
+                        {
+                            let last = planes.len() - 1;
+                            let group = [0, 1, 2, 3].map(|k| &planes[k.min(last)][..]);
+                            let mut carried = [[0.0f32; TILE]; 4];
+                            carry_run(group, &run, &weights, &mut carried);
+                            for (band, plane) in bands.iter_mut().zip(&carried) {
+                                band[row * width + x0..row * width + x0 + span]
+                                    .copy_from_slice(&plane[..span]);
+                            }
                         }
                     }
-                    continue;
-                };
-                let mut made = Vec::new();
-                let taps = taps_for(choice.radius, &grids, &rings, &aperture, stride, &mut made);
-                let mut made_far = Vec::new();
-                let far_taps = match choice.far_radius {
-                    None => taps,
-                    Some(0.0) => &[][..],
-                    Some(own) => taps_for(own, &grids, &rings, &aperture, stride, &mut made_far),
-                };
-                let mode = choice.fields;
-                for row in 0..rows {
-                    let start = padded.index(x0, ty * TILE + row);
-                    let mut result = [[0.0f32; TILE]; 4];
-                    gather_run(&padded, start, span, far_taps, taps, mode, &mut result);
-                    for (k, band) in bands.iter_mut().enumerate() {
-                        band[row * width + x0..row * width + x0 + span]
-                            .copy_from_slice(&result[k][..span]);
-                    }
                 }
-            }
-        });
+            },
+        );
     let [r, g, b, a] = out;
-    Color {
+    let color = Color {
         r,
         g,
         b,
         a: has_alpha.then_some(a),
-    }
-}
-
-/// Gathers `span` (≤ [`TILE`]) consecutive pixels starting at padded index `start` over one
-/// tile's taps: taps outside, pixels inside, so the inner loop runs along memory.
-///
-/// Compiled twice, chosen at run time by `multiversion`: with AVX-512 a tile row of 16 pixels
-/// is one vector (2.6× faster at 1080p on the dev machine; AVX2 alone gave nothing). Only
-/// lanes change, never the order of operations, and nothing is fused, so both versions give
-/// the same bits.
-#[multiversion::multiversion(targets("x86_64+avx512f+avx512vl"))]
-fn gather_run(
-    padded: &Padded,
-    start: usize,
-    span: usize,
-    far_taps: &[PixelTap],
-    taps: &[PixelTap],
-    fields: Fields,
-    out: &mut [[f32; TILE]; 4],
-) {
-    let [pr, pg, pb, pa, pc, pia] = &padded.planes;
-    let centre = |plane: &[f32]| -> [f32; TILE] {
-        let mut v = [0.0f32; TILE];
-        v[..span].copy_from_slice(&plane[start..start + span]);
-        v
     };
-    let (cr, cg, cb, ca, cc, cia) = (
-        centre(pr),
-        centre(pg),
-        centre(pb),
-        centre(pa),
-        centre(pc),
-        centre(pia),
-    );
-    let mut rp = [0.0f32; TILE];
-    let mut split = [0.0f32; TILE];
-    for x in 0..TILE {
-        rp[x] = cc[x].abs();
-        split[x] = cc[x] - 0.5 * LAYER;
-    }
-    // Sums of weight × (sample − centre), so a uniform frame stays exact. p's own weight
-    // starts the far sum.
-    let mut far = [[0.0f32; TILE]; 4];
-    let mut far_weight = cia;
-    let mut near = [[0.0f32; TILE]; 4];
-    let mut opacity = [0.0f32; TILE];
-    if fields == Fields::Far || fields == Fields::Apart {
-        // The far half of the loop below, alone (with no near field, the same bits: there
-        // every near weight would be 0). The six lane slices are spelt out in each loop:
-        // taking them through one helper (an array `map`) lost the vectorisation (699 ms
-        // against ~250 at 1080p).
-        for tap in far_taps {
-            let base = (start as isize + tap.step) as usize;
-            let sr = &pr[base..base + TILE];
-            let sg = &pg[base..base + TILE];
-            let sb = &pb[base..base + TILE];
-            let sa = &pa[base..base + TILE];
-            let sc = &pc[base..base + TILE];
-            let sia = &pia[base..base + TILE];
-            for x in 0..TILE {
-                let rs = sc[x].abs();
-                // In `Apart`, a nearer sample is the near field's, counted below.
-                let is_far = fields == Fields::Far || sc[x] > split[x];
-                let cover_far = (rs.min(rp[x]) - tap.norm_far + 0.5).clamp(0.0, 1.0);
-                let wf = if is_far { cover_far * sia[x] } else { 0.0 };
-                let d = [sr[x] - cr[x], sg[x] - cg[x], sb[x] - cb[x], sa[x] - ca[x]];
-                for k in 0..4 {
-                    far[k][x] += wf * d[k];
-                }
-                far_weight[x] += wf;
-            }
-        }
-    }
-    if fields == Fields::Apart {
-        // The near half of the loop below, alone.
-        for tap in taps {
-            let base = (start as isize + tap.step) as usize;
-            let sr = &pr[base..base + TILE];
-            let sg = &pg[base..base + TILE];
-            let sb = &pb[base..base + TILE];
-            let sa = &pa[base..base + TILE];
-            let sc = &pc[base..base + TILE];
-            let sia = &pia[base..base + TILE];
-            for x in 0..TILE {
-                let rs = sc[x].abs();
-                let cover_near = (rs - tap.norm_near + 0.5).clamp(0.0, 1.0);
-                let wn = if sc[x] > split[x] {
-                    0.0
-                } else {
-                    cover_near * tap.area * sia[x]
-                };
-                let d = [sr[x] - cr[x], sg[x] - cg[x], sb[x] - cb[x], sa[x] - ca[x]];
-                for k in 0..4 {
-                    near[k][x] += wn * d[k];
-                }
-                opacity[x] += wn;
-            }
-        }
-    }
-    if fields == Fields::Both {
-        for tap in taps {
-            let base = (start as isize + tap.step) as usize;
-            let sr = &pr[base..base + TILE];
-            let sg = &pg[base..base + TILE];
-            let sb = &pb[base..base + TILE];
-            let sa = &pa[base..base + TILE];
-            let sc = &pc[base..base + TILE];
-            let sia = &pia[base..base + TILE];
-            for x in 0..TILE {
-                let rs = sc[x].abs();
-                let is_far = sc[x] > split[x];
-                let cover_far = (rs.min(rp[x]) - tap.norm_far + 0.5).clamp(0.0, 1.0);
-                let cover_near = (rs - tap.norm_near + 0.5).clamp(0.0, 1.0);
-                let wf = if is_far { cover_far * sia[x] } else { 0.0 };
-                let wn = if is_far {
-                    0.0
-                } else {
-                    cover_near * tap.area * sia[x]
-                };
-                let d = [sr[x] - cr[x], sg[x] - cg[x], sb[x] - cb[x], sa[x] - ca[x]];
-                for k in 0..4 {
-                    far[k][x] += wf * d[k];
-                    near[k][x] += wn * d[k];
-                }
-                far_weight[x] += wf;
-                opacity[x] += wn;
-            }
-        }
-    }
-    let base = [cr, cg, cb, ca];
-    for x in 0..span {
-        let (near_scale, rest) = if opacity[x] > 1.0 {
-            (1.0 / opacity[x], 0.0)
-        } else {
-            (1.0, 1.0 - opacity[x])
-        };
-        let far_scale = rest / far_weight[x];
-        for k in 0..4 {
-            out[k][x] = base[k][x] + near[k][x] * near_scale + far[k][x] * far_scale;
-        }
-    }
+    (color, out_extra)
 }
 
 #[cfg(test)]
@@ -704,6 +594,53 @@ mod field_tests {
                 let v = with[y * w + x];
                 assert!(close(v, 0.5, 0.05), "({x}, {y}): {v}");
             }
+        }
+    }
+
+    #[test]
+    fn carried_planes_get_the_bits_they_get_in_the_beautys_place() {
+        // A near disc over a far texture with a band in focus: tiles of every kind (far field
+        // alone, both fields, fields apart, copied). Five carried planes (a group of four and
+        // one of one) must come out bit for bit as each does gathered alone as the beauty's
+        // red, and the beauty as it does with nothing carried.
+        let (w, h) = (192, 96);
+        let disc = |x: usize, y: usize| {
+            let (dx, dy) = (x as f32 - 40.0, y as f32 - 48.0);
+            dx * dx + dy * dy < 18.0 * 18.0
+        };
+        let coc: Vec<f32> = (0..w * h)
+            .map(|i| match (i % w, i / w) {
+                (x, y) if disc(x, y) => -40.0,
+                (x, _) if x > 150 => 0.2,
+                _ => 9.0,
+            })
+            .collect();
+        let wave = |k: f32| -> Vec<f32> { (0..w * h).map(|i| (i as f32 * k).sin()).collect() };
+        let color = Color {
+            r: wave(0.37),
+            g: wave(0.21),
+            b: wave(0.05),
+            a: Some(wave(0.013)),
+        };
+        let config = DofConfig::new(w, h, &DofParams::default());
+        let t = tiles(&TilesConfig::new(w, h, config.epsilon), &coc);
+        let kinds: std::collections::BTreeSet<u32> =
+            plan(&config, &t).tiles.iter().map(|t| t.fields).collect();
+        assert_eq!(kinds, [0, 1, 2, 3].into());
+        let extra: Vec<Vec<f32>> = [0.11, 0.07, 0.5, 0.9, 0.003].map(wave).into();
+        let planes: Vec<&[f32]> = extra.iter().map(Vec::as_slice).collect();
+        let (beauty, carried) = gather_carrying(&config, &color, &coc, &t, &planes);
+        let bits = |plane: &[f32]| plane.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(beauty, gather(&config, &color, &coc, &t));
+        assert_eq!(carried.len(), 5);
+        for (plane, got) in extra.iter().zip(&carried) {
+            let alone = Color {
+                r: plane.clone(),
+                ..color.clone()
+            };
+            let want = gather(&config, &alone, &coc, &t).r;
+            assert_ne!(bits(&want), bits(plane));
+            assert_eq!(bits(got), bits(&want));
         }
     }
 
