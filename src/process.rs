@@ -116,10 +116,12 @@ pub fn process_on(
 /// mattes (the exposure variant's coverage at silhouettes, fitted on colour), which are made
 /// once from the beauty and read by every layer ([`reconstruct::reconstruct_layers_with`]);
 /// so the blur is linear in the colour and a beauty that is the sum of its light layers still
-/// is after it, to float rounding. Scatter on the CPU carries the layers through the
-/// beauty's own curves ([`scatter::stages_carrying`]), so a layer costs its sums alone; the
-/// other passes, and every pass on the GPU, run each group of three in the beauty's place,
-/// which costs about what the beauty does (issue 29, point 6).
+/// is after it, to float rounding. On the CPU, scatter, the bokeh gather and reconstruct's
+/// 2014 variants carry the layers through the beauty's own work (its curves, its taps'
+/// weights: [`scatter::stages_carrying`], [`dof::gather::gather_carrying`],
+/// [`reconstruct::gather_2014::gather_2014_carrying`]), so a layer costs its share of the
+/// sums alone; the other passes, and every pass on the GPU, run each group of three in the
+/// beauty's place, which costs about what the beauty does (issue 29, point 6).
 pub fn process_with(
     algorithm: Algorithm,
     params: &Params,

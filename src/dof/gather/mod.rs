@@ -394,7 +394,7 @@ pub fn gather(config: &DofConfig, color: &Color, coc: &[f32], tiles: &Tiles) -> 
 
 /// [`gather`], carrying `extra` (colour planes beside the beauty: light layers) through the
 /// beauty's taps: each tile row's weights are computed once, by the beauty's loop, and
-/// applied to every carried plane in the same order ([`run::carry_run`]), so each comes out
+/// applied to every carried plane in the same order (`run::carry_run`), so each comes out
 /// with the bits it would get in the beauty's place at the cost of its sums alone. Returns
 /// the colour and the carried planes, in order.
 pub fn gather_carrying(

@@ -4,7 +4,9 @@
 
 use crate::frame::{Color, Positions};
 use crate::gpu::context::Gpu;
+use crate::motion::reconstruct::matte::Matte;
 use crate::motion::reconstruct::{self as reconstruct_cpu, GatherInputs, ReconstructConfig};
+use crate::motion::reconstruct::{Texel2014, TileMask};
 use crate::motion::scatter::{self as scatter_cpu, ScatterConfig};
 use crate::motion::stretch::{self as stretch_cpu, StretchConfig};
 use crate::motion::tile_max::TileGrid;
@@ -68,6 +70,48 @@ impl reconstruct_cpu::Stages for Gpu {
             || tried,
             || inputs.gather(config, color),
         )
+    }
+
+    /// Each colour through the gather in the beauty's place, its texels the beauty's with
+    /// its colour in them (what the pack makes of it: the same depth and motion, on the same
+    /// tiles); the same weights. Carrying them through one dispatch, as the CPU does, is issue 29's next
+    /// step here.
+    fn gather_2014_carrying(
+        &self,
+        config: &ReconstructConfig,
+        (texels, mattes, tiles): (&[Texel2014], &[Matte], &TileGrid),
+        packed: &TileMask,
+        colours: &mut [&mut Color],
+    ) {
+        let (width, size) = (config.width as usize, config.tile as usize);
+        for (k, color) in colours.iter_mut().enumerate() {
+            let own;
+            let texels = if k == 0 {
+                texels
+            } else {
+                own = texels
+                    .iter()
+                    .enumerate()
+                    .map(|(i, t)| {
+                        // Zero off the packed tiles, as the pack leaves them.
+                        if !packed.get(i % width / size, i / width / size) {
+                            return [0.0; 8];
+                        }
+                        let a = color.a.as_ref().map_or(1.0, |a| a[i]);
+                        [
+                            color.r[i], color.g[i], color.b[i], a, t[4], t[5], t[6], t[7],
+                        ]
+                    })
+                    .collect::<Vec<_>>();
+                &own[..]
+            };
+            let inputs = GatherInputs::Stable {
+                texels,
+                mattes,
+                tiles,
+            };
+            self.gather(config, inputs, color);
+        }
     }
 }
 

@@ -11,20 +11,14 @@ use super::config::{
     Form, ReconstructConfig, Texel2014, HALF_PIXEL, LANES, LENGTH, MAX_TAPS_PER_SIDE, VX, VY, Z,
 };
 use super::matte::{self, Matte};
-use super::tiles::{gather_tiles, near_blur};
+use super::pack::pack_tiles;
+use super::taps::{bilinear, split, split_by_cover, Colours};
+use super::tiles::{gather_tiles_of, near_blur, TileMask};
 use crate::frame::Color;
 use crate::motion::tile_max::TileGrid;
 use crate::numeric::unit;
 
-/// How much [`split_by_cover`] steepens the coverage it reads for a still centre, about its
-/// half level. A pixel's coverage by an edge ramps from 0 to 1 over one pixel as the edge
-/// crosses it; read between pixel centres (bilinearly), the ramp spreads over two, so a still
-/// pixel just outside a moving surface's rim counted the surface as reaching it. Measured on
-/// the truth scenes (BENCHMARKS.md, "The matte"): 1.25 at still centres takes sparse from
-/// 0.0171 to 0.0150 and gears from 0.0174 to 0.0160 at 320×180 (sparse 0.0128 → 0.0122 and
-/// gears 0.0154 → 0.0145 at 640×360), the others within 0.7 %; 1.5 and 2, or steepening at
-/// moving centres too, cost crossing up to 10 %.
-pub const COVER_SLOPE: f32 = 1.25;
+pub use super::taps::COVER_SLOPE;
 
 /// Jitter salts of the 2014 gather: the tile lookup and the taps' offset.
 pub const SALT_TILE: u32 = 0x5449_4c45;
@@ -38,41 +32,137 @@ pub fn gather_2014(
     tiles: &TileGrid,
     color: &mut Color,
 ) {
+    let beauty = |j: usize| {
+        let t = &texels[j];
+        [[t[0], t[1], t[2], t[3]]]
+    };
+    gather_2014_of(config, texels, &beauty, mattes, tiles, &mut [color]);
+}
+
+/// [`gather_2014`] of several colours at once, each in place: the beauty (first) and light
+/// layers beside it (R, G, B in the beauty's places, with its alpha), every one blurred with
+/// exactly the weights the beauty gets. The weights read only the texels' depth and motion
+/// and the mattes, so they are computed once for up to eight colours, whose values ride along
+/// each tap ([`super::taps`]): each colour comes out with the bits it gets alone in the
+/// beauty's place. `packed` is the tiles the texels were packed on ([`super::packed_2014`]),
+/// where the colours are packed beside them.
+///
+/// Up to eight at a time, in chunks as even as they can be, each gathered by a copy of the
+/// gather for its count (eight copies of the default form cost 4 s of a 77 s release build).
+/// With six light layers at 1080p (the bench's `moving` frame), one pass of seven took
+/// 2.5–2.8 s where passes of four and three took 3.8–4.2 s, and a pass of eight with one
+/// colour repeated 3.2 s (the beauty alone: 1.2 s): each colour's share of a tap costs far
+/// less than the tap's weights, but a colour carried for nothing costs its share.
+pub fn gather_2014_carrying(
+    config: &ReconstructConfig,
+    texels: &[Texel2014],
+    mattes: &[Matte],
+    tiles: &TileGrid,
+    packed: &TileMask,
+    colours: &mut [&mut Color],
+) {
+    if colours.is_empty() {
+        return;
+    }
+    let size = colours.len().div_ceil(colours.len().div_ceil(8));
+    let inputs = (texels, mattes, tiles, packed);
+    for chunk in colours.chunks_mut(size) {
+        match chunk.len() {
+            1 => gather_packed::<1>(config, inputs, chunk),
+            2 => gather_packed::<2>(config, inputs, chunk),
+            3 => gather_packed::<3>(config, inputs, chunk),
+            4 => gather_packed::<4>(config, inputs, chunk),
+            5 => gather_packed::<5>(config, inputs, chunk),
+            6 => gather_packed::<6>(config, inputs, chunk),
+            7 => gather_packed::<7>(config, inputs, chunk),
+            _ => gather_packed::<8>(config, inputs, chunk),
+        }
+    }
+}
+
+/// `G` `colours` packed pixel by pixel on the packed tiles, then gathered together.
+fn gather_packed<const G: usize>(
+    config: &ReconstructConfig,
+    (texels, mattes, tiles, packed): (&[Texel2014], &[Matte], &TileGrid, &TileMask),
+    colours: &mut [&mut Color],
+) {
+    let values: Vec<Colours<G>> = {
+        let sources: [&Color; G] = std::array::from_fn(|g| &*colours[g]);
+        pack_tiles(
+            config,
+            tiles.columns,
+            [[0.0; 4]; G],
+            |c, row| packed.get(c, row),
+            |i| sources.map(|c| [c.r[i], c.g[i], c.b[i], c.a.as_ref().map_or(1.0, |a| a[i])]),
+        )
+    };
+    let colour = |j: usize| values[j];
+    gather_2014_of(config, texels, &colour, mattes, tiles, colours);
+}
+
+/// The gather of `G` colours, `colour(j)` those of pixel j, written into `out` (the first
+/// `out.len()` of them).
+fn gather_2014_of<const G: usize>(
+    config: &ReconstructConfig,
+    texels: &[Texel2014],
+    colour: &(impl Fn(usize) -> Colours<G> + Sync),
+    mattes: &[Matte],
+    tiles: &TileGrid,
+    out: &mut [&mut Color],
+) {
     // Each of the two forms a run meets almost always (ours, and Blender's centred) is given
     // to the gather as a constant, chosen once per frame, so the compiler specialises a whole
     // gather for it: with the form read at run time, the ten choices kept the lanes'
     // arithmetic from being specialised, and the default took 6 % more instructions at 1080p
     // (callgrind, one thread, the bench's moving frame); chosen per pixel, the three copies
     // shared one loop and it ran 4 % slower than before issue 28 (perf, same frame). Any other
-    // form (Blender's offset) runs as read.
+    // form (Blender's offset) runs as read. Carrying layers (G > 1), only ours, the default, has
+    // its own copy.
     let form = config.form();
+    let inputs = (texels, colour, mattes, tiles);
     if form == Form::OURS {
-        gather_2014_as(config, || Form::OURS, texels, mattes, tiles, color);
-    } else if form == Form::BLENDER {
-        gather_2014_as(config, || Form::BLENDER, texels, mattes, tiles, color);
+        gather_2014_as(config, || Form::OURS, inputs, out);
+    } else if G == 1 && form == Form::BLENDER {
+        gather_2014_as(config, || Form::BLENDER, inputs, out);
     } else {
-        gather_2014_as(config, || form, texels, mattes, tiles, color);
+        gather_2014_as(config, || form, inputs, out);
     }
 }
 
 /// [`gather_2014`] in the form `form` gives: a constant for the usual two, so each has its own
 /// specialised copy.
 #[inline(always)]
-fn gather_2014_as(
+fn gather_2014_as<const G: usize>(
     config: &ReconstructConfig,
     form: impl Fn() -> Form + Sync,
-    texels: &[Texel2014],
-    mattes: &[Matte],
-    tiles: &TileGrid,
-    color: &mut Color,
+    (texels, colour, mattes, tiles): (
+        &[Texel2014],
+        &(impl Fn(usize) -> Colours<G> + Sync),
+        &[Matte],
+        &TileGrid,
+    ),
+    out: &mut [&mut Color],
 ) {
-    gather_tiles(
+    let sources = Sources {
+        texels,
+        colour,
+        mattes,
+    };
+    gather_tiles_of(
         config,
         tiles.columns,
-        color,
+        out,
         |c, row| near_blur(tiles, c, row, 1),
-        |_, x, y| gather_pixel_2014(config, &form(), texels, mattes, tiles, x, y),
+        |_, x, y| gather_pixel_2014(config, &form(), &sources, tiles, x, y),
     );
+}
+
+/// What a pixel's gather reads: the texels (depth and motion), the colours carried
+/// (`colour(j)`, pixel j's) and the mattes.
+struct Sources<'a, C> {
+    texels: &'a [Texel2014],
+    colour: &'a C,
+    mattes: &'a [Matte],
 }
 
 /// The 2014 filter at pixel (x, y), as Blender's compositor runs it (Jimenez's version of
@@ -96,15 +186,19 @@ fn gather_2014_as(
 /// Ours (the exposure variant) changes that recipe where `form` ([`Form`]) says, each field
 /// with its reason. Returns premultiplied RGBA, a convex mix of taps and centre.
 #[inline(always)]
-fn gather_pixel_2014(
+fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>>(
     config: &ReconstructConfig,
     form: &Form,
-    texels: &[Texel2014],
-    mattes: &[Matte],
+    sources: &Sources<C>,
     tiles: &TileGrid,
     x: usize,
     y: usize,
-) -> [f32; 4] {
+) -> Colours<G> {
+    let Sources {
+        texels,
+        colour,
+        mattes,
+    } = *sources;
     let (width, height) = (config.width as usize, config.height as usize);
     let size = config.tile as f32;
     let i = y * width + x;
@@ -146,7 +240,7 @@ fn gather_pixel_2014(
         m_length = own_length;
     }
     if m_length < HALF_PIXEL {
-        return [centre[0], centre[1], centre[2], centre[3]];
+        return colour(i);
     }
     let k = config.taps.div_ceil(4).max(1) as usize;
     // Ours takes at least one tap per TAP_SPACING px of the longer vector on each side (up to
@@ -183,8 +277,8 @@ fn gather_pixel_2014(
             1.0
         }
     };
-    let mut fg = [0.0f32; 4];
-    let mut bg = [0.0f32; 4];
+    let mut fg = [[0.0f32; 4]; G];
+    let mut bg = [[0.0f32; 4]; G];
     let (mut w_fg, mut w_bg) = (0.0f32, 0.0f32);
     // The centre holds one slot of the count in Blender's form.
     let mut count = form.centre_count;
@@ -231,10 +325,13 @@ fn gather_pixel_2014(
                 let mut live = [0.0f32; LANES];
                 // Each tap as up to two surfaces (see [`split`]): `sample` with `share` of
                 // the tap, `other` with the rest; colours are summed with their shares.
+                // (Depth and motion in the texels, colours beside them.)
                 let mut sample = [[0.0f32; 8]; LANES];
                 let mut share = [0.0f32; LANES];
                 let mut other = [[0.0f32; 8]; LANES];
                 let mut other_share = [0.0f32; LANES];
+                let mut sample_colour = [[[0.0f32; 4]; G]; LANES];
+                let mut other_colour = [[[0.0f32; 4]; G]; LANES];
                 for l in 0..LANES.min(k - first) {
                     t[l] = ((first + l) as f32 + offset) * step;
                     let px = (x as f32 + 0.5 + sx * t[l]).max(0.0) as usize;
@@ -243,8 +340,9 @@ fn gather_pixel_2014(
                     let nearest = texels[nearest_index];
                     let at = (sx * t[l], sy * t[l]);
                     if form.split_taps {
-                        (sample[l], share[l], other[l], other_share[l]) = split_by_cover(
+                        let parts = split_by_cover(
                             texels,
+                            colour,
                             mattes,
                             (width, height),
                             nearest_index,
@@ -254,8 +352,11 @@ fn gather_pixel_2014(
                             own_length < HALF_PIXEL,
                         )
                         .unwrap_or_else(|| {
-                            split(texels, (width, height), &nearest, scale, x, y, at)
+                            let size = (width, height);
+                            split(texels, colour, size, nearest_index, scale, x, y, at)
                         });
+                        (sample[l], sample_colour[l], share[l]) = parts.0;
+                        (other[l], other_colour[l], other_share[l]) = parts.1;
                     } else {
                         // Colour is read between pixels (bilinear, as a GPU's filtered
                         // texture read, which Blender's runs), depth and motion at the
@@ -263,10 +364,12 @@ fn gather_pixel_2014(
                         // length, not a few whole pixels (on `sparse` at 320×180 this halved
                         // the error, 0.042 → 0.021). A still surface is read at the nearest
                         // texel alone: it does not blur.
-                        sample[l] = if nearest[LENGTH] >= HALF_PIXEL {
-                            bilinear(texels, (width, height), nearest, scale, x, y, at)
+                        sample[l] = nearest;
+                        sample_colour[l] = if nearest[LENGTH] >= HALF_PIXEL {
+                            let size = (width, height);
+                            bilinear(texels, colour, size, nearest_index, scale, x, y, at)
                         } else {
-                            nearest
+                            colour(nearest_index)
                         };
                         share[l] = 1.0;
                     }
@@ -314,9 +417,12 @@ fn gather_pixel_2014(
                     count += direction;
                 }
                 for l in 0..LANES {
-                    for ch in 0..4 {
-                        fg[ch] += f[l][0] * sample[l][ch] + f[l][1] * other[l][ch];
-                        bg[ch] += b[l][0] * sample[l][ch] + b[l][1] * other[l][ch];
+                    let (s, o) = (&sample_colour[l], &other_colour[l]);
+                    for g in 0..G {
+                        for ch in 0..4 {
+                            fg[g][ch] += f[l][0] * s[g][ch] + f[l][1] * o[g][ch];
+                            bg[g][ch] += b[l][0] * s[g][ch] + b[l][1] * o[g][ch];
+                        }
                     }
                     w_fg += f[l][0] * share[l] + f[l][1] * other_share[l];
                     w_bg += b[l][0] * share[l] + b[l][1] * other_share[l];
@@ -325,7 +431,8 @@ fn gather_pixel_2014(
             }
         }
     }
-    let mut out = [0.0f32; 4];
+    let mut out = [[0.0f32; 4]; G];
+    let centre_colour = colour(i);
     if form.exposure_fill {
         // What the taps leave uncovered shows the centre's own surface for the share of the
         // shutter it spends over the pixel, 1/(2|V|), and what lies behind it (the
@@ -340,18 +447,22 @@ fn gather_pixel_2014(
         let inverse = if count > 0.0 { 1.0 / count } else { 0.0 };
         // A still centre's own surface is its colour less the moving surface's fringe in it
         // (the matte's; the taps bring the moving surface back for as long as it covers).
-        let mut own_colour = [centre[0], centre[1], centre[2], centre[3]];
+        let mut own_colour = centre_colour;
         if own_length < HALF_PIXEL && !mattes.is_empty() {
-            let (_, _, still) = matte::surfaces(texels, mattes, i);
-            own_colour[..3].copy_from_slice(&still);
+            let (_, _, still) = matte::surfaces_of(texels, mattes, i, colour);
+            for g in 0..G {
+                own_colour[g][..3].copy_from_slice(&still[g]);
+            }
         }
-        for ch in 0..4 {
-            let background = if w_bg > 0.0 {
-                cover * own_colour[ch] + (1.0 - cover) * bg[ch] / w_bg
-            } else {
-                own_colour[ch]
-            };
-            out[ch] = (fg[ch] + bg[ch]) * inverse + background * missing;
+        for g in 0..G {
+            for ch in 0..4 {
+                let background = if w_bg > 0.0 {
+                    cover * own_colour[g][ch] + (1.0 - cover) * bg[g][ch] / w_bg
+                } else {
+                    own_colour[g][ch]
+                };
+                out[g][ch] = (fg[g][ch] + bg[g][ch]) * inverse + background * missing;
+            }
         }
         return out;
     }
@@ -360,276 +471,148 @@ fn gather_pixel_2014(
     let w = 1.0 / (50.0 * (4 * k) as f32);
     let w_bg = w_bg + w;
     let missing = (1.0 - (w_fg + w_bg) / count).clamp(0.0, 1.0);
-    for ch in 0..4 {
-        let background = (bg[ch] + w * centre[ch]) / w_bg;
-        out[ch] = (fg[ch] + bg[ch] + w * centre[ch]) / count + background * missing;
+    for g in 0..G {
+        let (fg, bg, centre) = (&fg[g], &bg[g], &centre_colour[g]);
+        for ch in 0..4 {
+            let background = (bg[ch] + w * centre[ch]) / w_bg;
+            out[g][ch] = (fg[ch] + bg[ch] + w * centre[ch]) / count + background * missing;
+        }
     }
     out
 }
 
-/// The four texels around pixel (x, y) + `offset` (clamped to the frame), each with its
-/// bilinear weight: [`bilinear`] and [`split`] read a tap through this.
-#[inline(always)]
-fn around(
-    texels: &[Texel2014],
-    (width, height): (usize, usize),
-    x: usize,
-    y: usize,
-    offset: (f32, f32),
-) -> [(&Texel2014, f32); 4] {
-    around_index((width, height), x, y, offset).map(|(i, w)| (&texels[i], w))
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::{Frame, Velocity};
+    use crate::motion::reconstruct::{
+        matte, pack_2014, packed_2014, reconstruct_layers_with, spread_2014, ReconstructParams,
+        Variant,
+    };
+    use crate::motion::{dilate::dilate, tile_max::tile_max};
+    use crate::stages::Cpu;
 
-/// [`around`]'s pixels, as indices.
-#[inline(always)]
-fn around_index(
-    (width, height): (usize, usize),
-    x: usize,
-    y: usize,
-    offset: (f32, f32),
-) -> [(usize, f32); 4] {
-    let fx = (x as f32 + offset.0).max(0.0);
-    let fy = (y as f32 + offset.1).max(0.0);
-    let (x0, y0) = (fx as usize, fy as usize);
-    let (wx, wy) = (fx - x0 as f32, fy - y0 as f32);
-    let (x0, x1) = (x0.min(width - 1), (x0 + 1).min(width - 1));
-    let (y0, y1) = (y0.min(height - 1), (y0 + 1).min(height - 1));
-    [
-        (y0 * width + x0, (1.0 - wx) * (1.0 - wy)),
-        (y0 * width + x1, wx * (1.0 - wy)),
-        (y1 * width + x0, (1.0 - wx) * wy),
-        (y1 * width + x1, wx * wy),
-    ]
-}
-
-/// The colour of `nearest` (the texel nearest to pixel (x, y) + `offset`, a moving one)
-/// read bilinearly at that point, over the four texels around it that move or share its
-/// surface (within the soft depth extent, `scale` = 1 / SOFT_Z_EXTENT), so a tap never takes
-/// colour across a silhouette from a still surface. Depth and motion stay the nearest's.
-#[inline(always)]
-fn bilinear(
-    texels: &[Texel2014],
-    (width, height): (usize, usize),
-    mut nearest: Texel2014,
-    scale: f32,
-    x: usize,
-    y: usize,
-    offset: (f32, f32),
-) -> Texel2014 {
-    let [c0, c1, c2, c3] = around(texels, (width, height), x, y, offset);
-    let corners = [c0.0, c1.0, c2.0, c3.0];
-    let z = nearest[Z];
-    let mixes =
-        |t: &Texel2014| ((t[Z] - z).abs() * scale < 1.0 || t[LENGTH] >= HALF_PIXEL) as u32 as f32;
-    let w = [
-        c0.1 * mixes(corners[0]),
-        c1.1 * mixes(corners[1]),
-        c2.1 * mixes(corners[2]),
-        c3.1 * mixes(corners[3]),
-    ];
-    let total = w[0] + w[1] + w[2] + w[3];
-    if total > 0.0 {
-        let inverse = 1.0 / total;
-        for ch in 0..4 {
-            nearest[ch] = (w[0] * corners[0][ch]
-                + w[1] * corners[1][ch]
-                + w[2] * corners[2][ch]
-                + w[3] * corners[3][ch])
-                * inverse;
-        }
-    }
-    nearest
-}
-
-/// The exposure variant's tap at pixel (x, y) + `offset`, read between pixels and split by
-/// surface: the four texels around the point with their bilinear weights, in two parts. Part
-/// A is what lies on the surface of `nearest` (the texels that share its depth within the
-/// soft extent, `scale` = 1 / SOFT_Z_EXTENT, and, when it moves, any that move); part B is
-/// the rest, with the depth and motion of its heaviest texel. Each part's colour is its
-/// texels' colour summed with their weights (a still part's, one texel's colour times its
-/// share: a still surface does not blur), so its mean is the colour over its share; the two
-/// shares add up to one. The gather weighs each part as a tap of its own surface.
-///
-/// Why: at a silhouette the point falls partly on the moving surface and partly beside it,
-/// and over the shutter a box integrates the surface's coverage of the pixel as it slides a
-/// fraction of a pixel across it. Read whole, as its nearest texel's surface ([`bilinear`]
-/// renormalises over that surface's texels), a tap counts the moving surface as covering
-/// the point wherever the nearest texel is the surface's, and still neighbours as not
-/// covered at all: the silhouette moves in whole-pixel steps, too far out in every
-/// direction the motion has a component across it (the top and bottom rims of a disc
-/// moving sideways, the ends of its streak). Split, the coverage ramps over the pixel
-/// between the two texel centres, where the pixel-centre classification of depth and motion
-/// puts the edge. On `sparse` at 320×180 (a disc of 8 px moving 7.4 px a frame) this takes
-/// the default's error from 0.0255 to 0.0206, and no truth scene gets worse. Where any of
-/// the four pixels has a matte, [`split_by_cover`] reads the tap instead, with the edge
-/// where the pixels' colours put it.
-#[inline(always)]
-fn split(
-    texels: &[Texel2014],
-    (width, height): (usize, usize),
-    nearest: &Texel2014,
-    scale: f32,
-    x: usize,
-    y: usize,
-    offset: (f32, f32),
-) -> (Texel2014, f32, Texel2014, f32) {
-    let corners = around(texels, (width, height), x, y, offset);
-    let moves = nearest[LENGTH] >= HALF_PIXEL;
-    let mut a = *nearest;
-    let mut b = [0.0f32; 8];
-    a[..4].fill(0.0);
-    let (mut share_a, mut share_b, mut heaviest) = (0.0f32, 0.0f32, 0.0f32);
-    let mut heaviest_color = [0.0f32; 4];
-    for (texel, w) in corners {
-        let same = (texel[Z] - nearest[Z]).abs() * scale < 1.0;
-        let texel_moves = texel[LENGTH] >= HALF_PIXEL;
-        let on_surface = if moves {
-            same || texel_moves
-        } else {
-            same && !texel_moves
+    /// A textured disc moving over a still textured background, with a fringe of mixed
+    /// colour at its rim (so the exposure variant's mattes pair pixels), and `n` light
+    /// layers of other textures.
+    fn scene(w: usize, h: usize, n: usize) -> (Frame, Vec<Color>) {
+        let wave = |k: f32| -> Vec<f32> {
+            (0..w * h)
+                .map(|i| (i as f32 * k).sin() * 0.5 + 0.5)
+                .collect()
         };
-        if on_surface {
-            for ch in 0..4 {
-                a[ch] += w * texel[ch];
-            }
-            share_a += w;
-        } else {
-            for ch in 0..4 {
-                b[ch] += w * texel[ch];
-            }
-            share_b += w;
-            if w > heaviest {
-                heaviest = w;
-                b[4..].copy_from_slice(&texel[4..]);
-                heaviest_color.copy_from_slice(&texel[..4]);
+        let inside = |i: usize| {
+            let (dx, dy) = ((i % w) as f32 - 30.0, (i / w) as f32 - 24.0);
+            (dx * dx + dy * dy).sqrt()
+        };
+        let mut frame = Frame::new(w, h);
+        let alpha: Vec<f32> = (0..w * h)
+            .map(|i| (inside(i) < 13.0) as u8 as f32 * 0.5 + 0.5)
+            .collect();
+        let mut color = Color {
+            r: wave(0.37),
+            g: wave(0.21),
+            b: wave(0.05),
+            a: Some(alpha.clone()),
+        };
+        for i in 0..w * h {
+            // The rim: a mix of the disc's colour and the background's.
+            if (12.0..13.0).contains(&inside(i)) {
+                color.r[i] = 0.5 * color.r[i] + 0.4;
             }
         }
+        frame.color = Some(color);
+        frame.depth = Some(
+            (0..w * h)
+                .map(|i| if inside(i) < 12.5 { 1.0 } else { 9.0 })
+                .collect(),
+        );
+        frame.velocity = Some(Velocity {
+            x: (0..w * h)
+                .map(|i| if inside(i) < 12.5 { 9.0 } else { 0.0 })
+                .collect(),
+            y: (0..w * h)
+                .map(|i| if inside(i) < 12.5 { 3.0 } else { 0.0 })
+                .collect(),
+        });
+        let layers = (0..n)
+            .map(|k| Color {
+                r: wave(0.011 * (k + 1) as f32),
+                g: wave(0.7 + k as f32),
+                b: wave(0.003 * (k + 2) as f32),
+                a: Some(alpha.clone()),
+            })
+            .collect();
+        (frame, layers)
     }
-    // A still surface does not blur: its part takes one texel's colour (the nearest's, or
-    // the heaviest of part B), not a mix of its neighbours'.
-    if !moves {
-        for ch in 0..4 {
-            a[ch] = share_a * nearest[ch];
-        }
-    }
-    if b[LENGTH] < HALF_PIXEL {
-        for ch in 0..4 {
-            b[ch] = share_b * heaviest_color[ch];
-        }
-    }
-    (a, share_a, b, share_b)
-}
 
-/// The exposure variant's tap at pixel (x, y) + `offset`, split by coverage ([`matte`]):
-/// each of the four pixels around the point gives its bilinear weight times its coverage α to
-/// the moving surface, in that surface's colour, and the rest to the still surface behind;
-/// part A is the surface of the nearest pixel (`nearest`, an index), part B the other, each
-/// with the depth and motion of its heaviest contributor (a still pixel's moving partner for
-/// the moving part). A still part takes one colour, as in [`split`]: the nearest's own still
-/// surface, or its heaviest contributor's. Each part's colour is summed with its share, as in
-/// [`split`]. `None` where the still pixels among the four lie on more than one surface (or
-/// not on the nearest's, when it is still): [`split`] reads the tap then.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn split_by_cover(
-    texels: &[Texel2014],
-    mattes: &[Matte],
-    (width, height): (usize, usize),
-    nearest: usize,
-    scale: f32,
-    (x, y): (usize, usize),
-    offset: (f32, f32),
-    steepen: bool,
-) -> Option<(Texel2014, f32, Texel2014, f32)> {
-    if mattes.is_empty() {
-        return None;
+    /// Each of `layers` gathered alone in the beauty's place as it was before colours were
+    /// carried: packed with its own colour, gathered with the beauty's tiles and mattes.
+    fn alone(frame: &Frame, layers: &[Color], params: &ReconstructParams) -> Vec<Color> {
+        let (w, h) = (frame.width, frame.height);
+        let config = ReconstructConfig::new(w, h, params, 0.5, 7);
+        let velocity = frame.velocity.as_ref().unwrap();
+        let depth = frame.depth.as_ref().unwrap();
+        let mut tiles = tile_max(&velocity.x, &velocity.y, w, h, config.tile as usize);
+        for (x, y) in tiles.x.iter_mut().zip(tiles.y.iter_mut()) {
+            (*x, *y) = spread_2014(*x, *y, &config);
+        }
+        let dilated = dilate(&tiles);
+        let packed = packed_2014(&config, &dilated);
+        let beauty = frame.color.as_ref().unwrap();
+        let texels = pack_2014(&config, beauty, depth, velocity, &dilated, &packed);
+        let mattes = if params.variant == Variant::Exposure {
+            matte::mattes(&config, &texels, |c, row| packed.get(c, row))
+        } else {
+            Vec::new()
+        };
+        assert!(
+            params.variant != Variant::Exposure
+                || mattes
+                    .iter()
+                    .enumerate()
+                    .any(|(i, m)| !matte::unpaired(m, i))
+        );
+        layers
+            .iter()
+            .map(|layer| {
+                let texels = pack_2014(&config, layer, depth, velocity, &dilated, &packed);
+                let mut out = layer.clone();
+                gather_2014(&config, &texels, &mattes, &dilated, &mut out);
+                out
+            })
+            .collect()
     }
-    let corners = around_index((width, height), x, y, offset);
-    // Away from every silhouette (no pixel of the four has a pair) coverage is the labels':
-    // [`split`] reads the tap.
-    if corners.iter().all(|&(j, _)| matte::unpaired(&mattes[j], j)) {
-        return None;
-    }
-    let near = &texels[nearest];
-    let moves = near[LENGTH] >= HALF_PIXEL;
-    let mut still_z = (!moves).then_some(near[Z]);
-    for (j, _) in corners {
-        let t = &texels[j];
-        if t[LENGTH] < HALF_PIXEL {
-            match still_z {
-                None => still_z = Some(t[Z]),
-                Some(z) if (t[Z] - z).abs() * scale >= 1.0 => return None,
-                Some(_) => {}
+
+    #[test]
+    fn carried_layers_get_the_bits_they_get_in_the_beautys_place() {
+        // Nine layers and the beauty: two passes of five colours. Both 2014 forms.
+        let bits = |c: &Color| {
+            [&c.r, &c.g, &c.b].map(|p| p.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
+        };
+        for variant in [Variant::Exposure, Variant::Stable] {
+            let params = ReconstructParams {
+                variant,
+                ..ReconstructParams::default()
+            };
+            let (frame, layers) = scene(64, 48, 9);
+            let want = alone(&frame, &layers, &params);
+            let beauty = alone(&frame, &[frame.color.clone().unwrap()], &params);
+            let mut carried = layers.clone();
+            let out = reconstruct_layers_with(frame, &mut carried, &params, 0.5, 7, &Cpu);
+            assert_eq!(
+                bits(out.color.as_ref().unwrap()),
+                bits(&beauty[0]),
+                "{variant:?}"
+            );
+            for (k, (got, want)) in carried.iter().zip(&want).enumerate() {
+                assert_ne!(
+                    bits(want),
+                    bits(&layers[k]),
+                    "{variant:?} {k}: the layer moved"
+                );
+                assert_eq!(bits(got), bits(want), "{variant:?} layer {k}");
             }
         }
     }
-    let mut moving = [0.0f32; 8];
-    let mut still = [0.0f32; 8];
-    let (mut share_m, mut share_s) = (0.0f32, 0.0f32);
-    let (mut heavy_m, mut heavy_s) = (0.0f32, -1.0f32);
-    let mut still_colour = [0.0f32; 4];
-    for (j, w) in corners {
-        let t = &texels[j];
-        let (alpha, fg, bg) = matte::surfaces(texels, mattes, j);
-        let (w_m, w_s) = (w * alpha, w * (1.0 - alpha));
-        for ch in 0..3 {
-            moving[ch] += w_m * fg[ch];
-        }
-        moving[3] += w_m * t[3];
-        share_m += w_m;
-        share_s += w_s;
-        let t_moves = t[LENGTH] >= HALF_PIXEL;
-        let fg_texel = if t_moves {
-            t
-        } else {
-            &texels[mattes[j][1].to_bits() as usize]
-        };
-        let bg_texel = if t_moves {
-            &texels[mattes[j][2].to_bits() as usize]
-        } else {
-            t
-        };
-        if w_m > heavy_m && fg_texel[LENGTH] >= HALF_PIXEL {
-            heavy_m = w_m;
-            moving[4..].copy_from_slice(&fg_texel[4..]);
-        }
-        if w_s > heavy_s {
-            heavy_s = w_s;
-            still[4..].copy_from_slice(&bg_texel[4..]);
-            still_colour = [bg[0], bg[1], bg[2], bg_texel[3]];
-        }
-    }
-    // At a still centre, the coverage read between pixels is steepened about its half level:
-    // interpolated between pixel centres, coverages ramp over two pixels where an edge's
-    // coverage of a pixel ramps over one (see COVER_SLOPE).
-    let total = share_m + share_s;
-    if steepen && share_m > 0.0 && share_s > 0.0 {
-        let cover = share_m / total;
-        let steeper = ((cover - 0.5) * COVER_SLOPE + 0.5).clamp(0.0, 1.0);
-        let factor = steeper / cover;
-        for v in moving.iter_mut().take(4) {
-            *v *= factor;
-        }
-        share_m = steeper * total;
-        share_s = (1.0 - steeper) * total;
-    }
-    if heavy_m == 0.0 {
-        // No moving surface here after all: all of it is the still one.
-        share_s += share_m;
-        share_m = 0.0;
-        moving = [0.0; 8];
-    }
-    if !moves {
-        let (_, _, bg) = matte::surfaces(texels, mattes, nearest);
-        still_colour = [bg[0], bg[1], bg[2], near[3]];
-        still[4..].copy_from_slice(&near[4..]);
-    }
-    for ch in 0..4 {
-        still[ch] = share_s * still_colour[ch];
-    }
-    Some(if moves {
-        (moving, share_m, still, share_s)
-    } else {
-        (still, share_s, moving, share_m)
-    })
 }

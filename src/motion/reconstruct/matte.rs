@@ -259,26 +259,47 @@ pub fn fit(c: &Texel2014, f: &Texel2014, b: &Texel2014) -> (f32, f32, f32) {
 /// every number that depends on colour.
 #[inline]
 pub fn surfaces(texels: &[Texel2014], mattes: &[Matte], i: usize) -> (f32, [f32; 3], [f32; 3]) {
+    let colour = |j: usize| {
+        let t = &texels[j];
+        [[t[0], t[1], t[2], t[3]]]
+    };
+    let (alpha, [moving], [still]) = surfaces_of(texels, mattes, i, &colour);
+    (alpha, moving, still)
+}
+
+/// [`surfaces`] of `G` colours at once (the beauty's and carried layers', `colour(j)` those
+/// of pixel j, R, G, B in the beauty's places): each unmixed with the beauty's matte, channel
+/// by channel, as the beauty is.
+#[inline(always)]
+pub fn surfaces_of<const G: usize>(
+    texels: &[Texel2014],
+    mattes: &[Matte],
+    i: usize,
+    colour: &impl Fn(usize) -> [[f32; 4]; G],
+) -> (f32, [[f32; 3]; G], [[f32; 3]; G]) {
     let m = &mattes[i];
     let [alpha, f, b, er, eg, eb] = *m;
     let e = [er, eg, eb];
-    let c = &texels[i];
+    let c = colour(i);
     if unpaired(m, i) {
         // No pair: α is the label (0 or 1), and the colour is both surfaces'.
-        let own = [c[0], c[1], c[2]];
+        let own = c.map(|c| [c[0], c[1], c[2]]);
         return (alpha, own, own);
     }
-    let f = &texels[f.to_bits() as usize];
-    let b = &texels[b.to_bits() as usize];
-    let mut moving = [0.0f32; 3];
-    let mut still = [0.0f32; 3];
-    for ch in 0..3 {
-        if moves(c) {
-            moving[ch] = c[ch] + e[ch] * (c[ch] - b[ch]);
-            still[ch] = b[ch];
-        } else {
-            moving[ch] = f[ch];
-            still[ch] = c[ch] + e[ch] * (c[ch] - f[ch]);
+    let f = colour(f.to_bits() as usize);
+    let b = colour(b.to_bits() as usize);
+    let mut moving = [[0.0f32; 3]; G];
+    let mut still = [[0.0f32; 3]; G];
+    let own_moves = moves(&texels[i]);
+    for g in 0..G {
+        for ch in 0..3 {
+            if own_moves {
+                moving[g][ch] = c[g][ch] + e[ch] * (c[g][ch] - b[g][ch]);
+                still[g][ch] = b[g][ch];
+            } else {
+                moving[g][ch] = f[g][ch];
+                still[g][ch] = c[g][ch] + e[ch] * (c[g][ch] - f[g][ch]);
+            }
         }
     }
     (alpha, moving, still)

@@ -37,7 +37,8 @@
 //! - [`pack`]: each pixel's texel, for the tiles that blur;
 //! - [`matte`]: the exposure variant's coverage at silhouettes;
 //! - [`gather_2014`]: the 2014 filter's gather, in both its forms (Blender's and ours, told
-//!   apart by the numbers of [`config::Form`]);
+//!   apart by the numbers of [`config::Form`]), of the beauty and any light layers carried
+//!   beside it; [`taps`]: how it reads a tap between pixels;
 //! - [`gather_2012`]: the 2012 paper's gather (paper and dual).
 //!
 //! This file holds the pass: [`reconstruct`], and [`reconstruct_with`] with the stages a
@@ -49,6 +50,7 @@ pub mod gather_2012;
 pub mod gather_2014;
 pub mod matte;
 pub mod pack;
+pub mod taps;
 pub mod tiles;
 
 pub use config::{
@@ -114,6 +116,20 @@ pub trait Stages {
     fn gather(&self, config: &ReconstructConfig, inputs: GatherInputs<'_>, color: &mut Color) {
         inputs.gather(config, color)
     }
+
+    /// The 2014 gather of the beauty and light layers beside it (`colours`, the beauty
+    /// first), each in place with the beauty's weights: on the CPU, computed once for up to
+    /// four colours at a time ([`gather_2014::gather_2014_carrying`]). `texels` are the
+    /// beauty's, packed on `packed`.
+    fn gather_2014_carrying(
+        &self,
+        config: &ReconstructConfig,
+        (texels, mattes, tiles): (&[Texel2014], &[Matte], &TileGrid),
+        packed: &TileMask,
+        colours: &mut [&mut Color],
+    ) {
+        gather_2014::gather_2014_carrying(config, texels, mattes, tiles, packed, colours)
+    }
 }
 
 impl Stages for Cpu {}
@@ -169,7 +185,9 @@ pub fn reconstruct_with(
 /// [`reconstruct_with`], and `layers` (light layers beside the beauty, each with the
 /// beauty's alpha) blurred in place with exactly the beauty's weights: the tiles and the
 /// exposure variant's mattes, the only numbers that depend on colour, are made once from
-/// the beauty and read by every layer's gather.
+/// the beauty. The 2014 variants then gather the layers with the beauty, up to eight
+/// colours a pass ([`Stages::gather_2014_carrying`]); paper and dual gather each layer in
+/// the beauty's place.
 pub fn reconstruct_layers_with(
     mut frame: Frame,
     layers: &mut [Color],
@@ -234,22 +252,21 @@ pub fn reconstruct_layers_with(
         } else {
             Vec::new()
         };
-        for layer in layers.iter_mut() {
-            let texels = pack_2014(&config, layer, &depth, &velocity, &dilated, &packed);
+        drop(depth);
+        if layers.is_empty() {
             let inputs = GatherInputs::Stable {
                 texels: &texels,
                 mattes: &mattes,
                 tiles: &dilated,
             };
-            stages.gather(&config, inputs, layer);
+            stages.gather(&config, inputs, &mut color);
+        } else {
+            let mut colours: Vec<&mut Color> = std::iter::once(&mut color)
+                .chain(layers.iter_mut())
+                .collect();
+            let inputs = (&texels[..], &mattes[..], &dilated);
+            stages.gather_2014_carrying(&config, inputs, &packed, &mut colours);
         }
-        drop(depth);
-        let inputs = GatherInputs::Stable {
-            texels: &texels,
-            mattes: &mattes,
-            tiles: &dilated,
-        };
-        stages.gather(&config, inputs, &mut color);
     } else {
         // An offset streak reaches up to 2k, two tiles of k: NeighborMax over 5×5 tiles then
         // (the 3×3 stage twice).

@@ -80,29 +80,60 @@ pub(crate) fn gather_tiles(
     selected: impl Fn(usize, usize) -> bool + Sync,
     pixel: impl Fn((usize, usize), usize, usize) -> [f32; 4] + Sync,
 ) {
+    gather_tiles_of(config, columns, &mut [color], selected, |tile, x, y| {
+        [pixel(tile, x, y)]
+    });
+}
+
+/// [`gather_tiles`] of up to `G` colours at once: `pixel` gives `G` colours' RGBA, the first
+/// `colours.len()` written into `colours` in order.
+pub(crate) fn gather_tiles_of<const G: usize>(
+    config: &ReconstructConfig,
+    columns: usize,
+    colours: &mut [&mut Color],
+    selected: impl Fn(usize, usize) -> bool + Sync,
+    pixel: impl Fn((usize, usize), usize, usize) -> [[f32; 4]; G] + Sync,
+) {
     let width = config.width as usize;
     let size = config.tile as usize;
     let n = width * config.height as usize;
-    let has_alpha = color.a.is_some();
-    let mut alpha = color.a.take().unwrap_or_else(|| vec![0.0; n]);
-    let band = size * width;
-    color
-        .r
-        .par_chunks_mut(band)
-        .zip(color.g.par_chunks_mut(band))
-        .zip(color.b.par_chunks_mut(band))
-        .zip(alpha.par_chunks_mut(band))
+    let band = (size * width).max(1);
+    // Alpha planes taken out, zeros where a colour has none (written, then dropped).
+    assert!(colours.len() <= G, "at most {G} colours");
+    let has_alpha: Vec<bool> = colours.iter().map(|c| c.a.is_some()).collect();
+    let mut alphas: Vec<Vec<f32>> = colours
+        .iter_mut()
+        .map(|c| c.a.take().unwrap_or_else(|| vec![0.0; n]))
+        .collect();
+    // Each band's planes: R, G, B and A of each colour in turn.
+    let mut bands: Vec<Vec<&mut [f32]>> = (0..n.div_ceil(band))
+        .map(|_| Vec::with_capacity(4 * colours.len()))
+        .collect();
+    for (color, alpha) in colours.iter_mut().zip(alphas.iter_mut()) {
+        for plane in [&mut color.r, &mut color.g, &mut color.b, alpha] {
+            for (planes, piece) in bands.iter_mut().zip(plane.chunks_mut(band)) {
+                planes.push(piece);
+            }
+        }
+    }
+    bands
+        .into_par_iter()
         .enumerate()
-        .for_each(|(row, (((r, g), b), a))| {
+        .for_each(|(row, mut planes)| {
             for c in (0..columns).filter(|&c| selected(c, row)) {
-                for local_y in 0..r.len() / width {
+                for local_y in 0..planes[0].len() / width {
                     let y = row * size + local_y;
                     for x in c * size..((c + 1) * size).min(width) {
                         let o = local_y * width + x;
-                        [r[o], g[o], b[o], a[o]] = pixel((c, row), x, y);
+                        let value = pixel((c, row), x, y);
+                        for (k, plane) in planes.iter_mut().enumerate() {
+                            plane[o] = value[k / 4][k % 4];
+                        }
                     }
                 }
             }
         });
-    color.a = has_alpha.then_some(alpha);
+    for ((color, alpha), has) in colours.iter_mut().zip(alphas).zip(has_alpha) {
+        color.a = has.then_some(alpha);
+    }
 }
