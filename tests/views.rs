@@ -86,8 +86,7 @@ fn blur(color: &str, out: &Path, extra: &[&str]) -> std::process::Output {
     shutter(&args)
 }
 
-/// The beauty of an output (R, G, B, A): a mono file's output carries its depth and
-/// vectors beside it, a stereo one's does not (yet).
+/// The beauty of an output (R, G, B, A).
 fn beauty(path: &Path) -> Vec<(String, Vec<f32>)> {
     let mut channels = read_exr_reference(path);
     channels.retain(|(name, _)| ["R", "G", "B", "A"].contains(&name.as_str()));
@@ -168,6 +167,96 @@ fn multi_part_stereo_reads_the_first_parts_view_and_view_left_the_other() {
     assert_same_image(&out("default.exr"), &out("mono-right.exr"));
     assert_same_image(&out("left.exr"), &out("mono-left.exr"));
     assert_different_images(&out("default.exr"), &out("left.exr"));
+}
+
+/// One view's passes with a light layer and an object-ID layer beside them, as a renderer
+/// writes each eye.
+fn view_with_layers(seed: u32) -> Vec<(&'static str, Vec<f32>)> {
+    let n = W * H;
+    let mut passes = view_passes(seed);
+    passes.extend([
+        ("diffuse.R", noise(n, seed + 6, 0.0, 0.5)),
+        ("diffuse.G", noise(n, seed + 7, 0.0, 0.5)),
+        ("diffuse.B", noise(n, seed + 8, 0.0, 0.5)),
+        ("crypto.id", noise(n, seed + 9, 0.0, 100.0)),
+    ]);
+    passes
+}
+
+#[test]
+fn a_view_comes_out_with_every_channel_its_mono_file_gives_and_the_others_are_named() {
+    // Both schemes: each view's output holds every channel the same view written as a file
+    // of its own gives (light layers blurred with its beauty, depth, vectors and IDs as they
+    // came), and the run says which views it did not write.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let names = d.join("names.exr");
+    let mut channels = named(view_with_layers(LEFT), |n| n.to_string());
+    channels.extend(named(view_with_layers(RIGHT), in_view("right")));
+    let part = |name, view, multi_view, channels| Part {
+        name,
+        view,
+        multi_view,
+        channels,
+    };
+    write_parts(
+        &names,
+        (W, H),
+        vec![part(None, None, Some(&["left", "right"][..]), channels)],
+    );
+    let parts = d.join("parts.exr");
+    write_parts(
+        &parts,
+        (W, H),
+        vec![
+            part(
+                Some("left"),
+                Some("left"),
+                None,
+                named(view_with_layers(LEFT), |n| n.to_string()),
+            ),
+            part(
+                Some("right"),
+                Some("right"),
+                None,
+                named(view_with_layers(RIGHT), |n| n.to_string()),
+            ),
+        ],
+    );
+    let mono = |seed: u32, name: &str| {
+        let path = d.join(name);
+        write_exr(&path, W, H, view_with_layers(seed));
+        let out = d.join("out").join(name);
+        let o = blur(&s(&path), &out, &[]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let mut channels = read_exr_reference(&out);
+        channels.sort_by(|a, b| a.0.cmp(&b.0));
+        channels
+    };
+    let (left, right) = (mono(LEFT, "left.exr"), mono(RIGHT, "right.exr"));
+    assert_eq!(left.len(), 11);
+    for (stereo, view, other, want) in [
+        (&names, "left", "right", &left),
+        (&names, "right", "left", &right),
+        (&parts, "left", "right", &left),
+        (&parts, "right", "left", &right),
+    ] {
+        let out = d.join("out").join(format!(
+            "{view}-{}",
+            stereo.file_name().unwrap().to_string_lossy()
+        ));
+        let o = blur(&s(stereo), &out, &["--view", view, "--json"]);
+        assert!(o.status.success(), "{view}: {}", stderr(&o));
+        let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        let warnings = report["warnings"].to_string();
+        assert!(
+            warnings.contains(&format!("other views ({other})")),
+            "{warnings}"
+        );
+        let mut got = read_exr_reference(&out);
+        got.sort_by(|a, b| a.0.cmp(&b.0));
+        assert_eq!(&got, want, "{view} of {stereo:?}");
+    }
 }
 
 #[test]

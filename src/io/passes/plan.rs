@@ -168,6 +168,22 @@ pub fn plan_frame(
                         ));
                     }
                     plan.parts_left_out = left;
+                    if let (Some(views), Some(view)) = (&info.views, &info.view) {
+                        let others: Vec<&str> = views
+                            .names
+                            .iter()
+                            .filter(|v| *v != view)
+                            .map(String::as_str)
+                            .collect();
+                        if !others.is_empty() {
+                            plan.warnings.push(format!(
+                                "view {view} of the colour file is written, as a file of one \
+                                 view; its other views ({}) are not: a run reads one view \
+                                 (--view)",
+                                others.join(", ")
+                            ));
+                        }
+                    }
                     plan.color = Some(ColorPlan {
                         rgb: [
                             slots[0].expect("required"),
@@ -539,9 +555,10 @@ impl Planner<'_> {
 
 /// The channels of an EXR colour file other than the beauty's (`beauty`, indices into
 /// `info.channels`): those of the beauty's part, and of every other part whose data window is
-/// the beauty's (the others are returned by name: `part N` or `part NAME`). None for an integer image,
-/// whose channels are all the beauty's, nor for a multi-view file, whose channels `info` names
-/// without their view (carrying them is not done yet).
+/// the beauty's (the others are returned by name: `part N` or `part NAME`). None for an
+/// integer image, whose channels are all the beauty's. A multi-view file is seen as the view
+/// read ([`FileInfo::in_view`]): its channels and those of no view, named without the view,
+/// so it comes out as a file of that view.
 fn other_channels(info: &FileInfo, beauty: &[usize]) -> (Vec<usize>, Vec<String>) {
     let crate::io::file::FileKind::Exr { headers, .. } = &info.kind else {
         return (Vec::new(), Vec::new());
@@ -549,9 +566,6 @@ fn other_channels(info: &FileInfo, beauty: &[usize]) -> (Vec<usize>, Vec<String>
     let Some(&first) = beauty.first() else {
         return (Vec::new(), Vec::new());
     };
-    if info.views.is_some() {
-        return (Vec::new(), Vec::new());
-    }
     let colour = &headers[info.channels[first].part];
     let alike = |part: usize| {
         let h = &headers[part];
@@ -562,8 +576,10 @@ fn other_channels(info: &FileInfo, beauty: &[usize]) -> (Vec<usize>, Vec<String>
     let others = (0..info.channels.len())
         .filter(|&i| alike(info.channels[i].part) && !beauty.contains(&i))
         .collect();
+    // Parts of the channels seen (a multi-view file's other views are not).
+    let seen: std::collections::BTreeSet<usize> = info.channels.iter().map(|c| c.part).collect();
     let left: Vec<String> = (0..headers.len())
-        .filter(|&p| !alike(p))
+        .filter(|&p| seen.contains(&p) && !alike(p))
         .map(|p| {
             headers[p]
                 .own_attributes
