@@ -428,6 +428,95 @@ mod with_gpu {
         );
     }
 
+    /// The gather carrying light layers (`gather_carrying`): ten colours (two dispatches of at
+    /// most eight) against the CPU's carried gather, each colour within the tolerance the
+    /// gather's own parity test states (1e-5 of its range per pixel, mean 1e-7), on two
+    /// lenses with and without alpha; the beauty carried equals the beauty gathered alone on
+    /// the GPU within the same bound.
+    #[test]
+    fn dof_gather_carrying_layers_matches_the_cpu_within_rounding() {
+        let Some(gpu) = gpu() else { return };
+        use shutter::dof::gather::gather_carrying;
+        use shutter::dof::DofConfig;
+        use shutter::frame::Color;
+        use shutter::numeric::{sanitize, DepthKind};
+        let (w, h) = (70, 45);
+        let n = w * h;
+        for (k, (focus, alpha)) in [(2.0f32, true), (0.7, false)].into_iter().enumerate() {
+            let lens = Lens {
+                focal_mm: 85.0,
+                f_number: 1.4,
+                focus: focus as f64,
+                sensor_mm: 36.0,
+            };
+            let mut frame = depth_frame(w, h, 40 + k as u32, focus);
+            let colour = |seed: u32| Color {
+                r: noise(n, seed, 0.0, 4.0),
+                g: noise(n, seed + 1, -1.0, 1.0),
+                b: noise(n, seed + 2, 0.0, 0.01),
+                a: alpha.then(|| noise(n, 99, 0.0, 1.0)),
+            };
+            frame.color = Some(colour(1));
+            let _ = sanitize(&mut frame, DepthKind::Depth);
+            let params = DofParams {
+                max_coc: 64.0,
+                ..DofParams::new(CocSource::Lens(lens))
+            };
+            let coc = coc_plane(&frame, &params);
+            let config = DofConfig::new(w, h, &params);
+            let t = tiles(&TilesConfig::new(w, h, config.epsilon), &coc);
+            let beauty = frame.color.clone().unwrap();
+            let layers: Vec<Color> = (0..9).map(|j| colour(10 + 3 * j)).collect();
+            let colours: Vec<&Color> = std::iter::once(&beauty).chain(&layers).collect();
+            let got = gpu
+                .try_dof_gather_carrying(&config, &colours, &coc, &t)
+                .unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(got.len(), 10);
+            let planes: Vec<&[f32]> = layers
+                .iter()
+                .flat_map(|l| [&l.r[..], &l.g[..], &l.b[..]])
+                .collect();
+            let (cpu_beauty, cpu_layers) = gather_carrying(&config, &beauty, &coc, &t, &planes);
+            let alone = gpu.try_dof_gather(&config, &beauty, &coc, &t).unwrap();
+            let mut want: Vec<(&str, &[f32], &[f32])> = vec![
+                ("beauty r", &got[0].r, &cpu_beauty.r),
+                ("beauty b", &got[0].b, &cpu_beauty.b),
+                ("beauty alone r", &got[0].r, &alone.r),
+            ];
+            if alpha {
+                want.push((
+                    "beauty a",
+                    got[0].a.as_ref().unwrap(),
+                    cpu_beauty.a.as_ref().unwrap(),
+                ));
+            }
+            for (j, layer) in got[1..].iter().enumerate() {
+                want.push(("layer r", &layer.r, &cpu_layers[3 * j]));
+                want.push(("layer g", &layer.g, &cpu_layers[3 * j + 1]));
+                want.push(("layer b", &layer.b, &cpu_layers[3 * j + 2]));
+            }
+            for (what, got, cpu) in want {
+                let (lo, hi) = cpu
+                    .iter()
+                    .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+                let range = (hi - lo).max(f32::MIN_POSITIVE);
+                let d = diff(got, cpu);
+                assert!(
+                    d.max <= 1e-5 * range,
+                    "lens {k} {what}: {} > 1e-5 of {range}",
+                    d.max
+                );
+                assert!(
+                    d.mean <= 1e-7 * range as f64,
+                    "lens {k} {what}: mean {}",
+                    d.mean
+                );
+            }
+            // The layers moved: this is no comparison of copies.
+            assert_ne!(cpu_layers[0], layers[0].r);
+        }
+    }
+
     /// blend on `layers` at 320×180 with ε = 3 px through the CLI, cpu against wgpu: inside
     /// the blurred foreground the near field's spread equals each pixel's own blur but for
     /// rounding, where the two ladders once swapped on the last bit (dots up to 0.04 apart

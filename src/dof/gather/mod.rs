@@ -243,7 +243,10 @@ pub struct GatherConfig {
     pub has_alpha: u32,
     /// [`LAYER`].
     pub layer: f32,
-    pub _pad: [u32; 3],
+    /// The colours the twin's buffers hold, RGBA each (its `gather_carrying`: the beauty and
+    /// light layers; 1 for `gather`).
+    pub colours: u32,
+    pub _pad: [u32; 2],
 }
 
 impl GatherConfig {
@@ -255,7 +258,8 @@ impl GatherConfig {
             columns: config.width.div_ceil(TILE) as u32,
             has_alpha: has_alpha as u32,
             layer: LAYER,
-            _pad: [0; 3],
+            colours: 1,
+            _pad: [0; 2],
         }
     }
 }

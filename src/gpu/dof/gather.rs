@@ -2,7 +2,10 @@
 //! [`crate::dof::gather::gather`] (Sousa's near and far fields over a tile's taps).
 //!
 //! In: the colour, the signed CoC plane and the tile min/max ([`Tiles`]). Out: the colour
-//! with depth of field. Bindings, in order: the [`GatherConfig`] uniform; the colour planes
+//! with depth of field. Entry `gather_carrying` gathers the beauty and light layers beside it
+//! (up to [`MOST_COLOURS`] colours a dispatch, their planes one colour after another in the
+//! same bindings), each tap's weights computed once for all of them: the twin of
+//! [`crate::dof::gather::gather_carrying`]. Bindings, in order: the [`GatherConfig`] uniform; the colour planes
 //! r, g, b, a one after the other (a zero without alpha); the CoC plane followed by each
 //! pixel's 1 / bokeh area; the taps ([`crate::dof::gather::OffsetTap`]); the tiles' plan
 //! ([`crate::dof::gather::TileTaps`]); then the output planes r, g, b, a.
@@ -27,13 +30,17 @@ use crate::gpu::stage::{floats, Dispatch, Stage, StageError};
 /// The shader's source.
 pub const SHADER: &str = concat!(include_str!("../prelude.wgsl"), include_str!("gather.wgsl"));
 
-/// The compiled stage: bindings config, color, coc, taps, tiles, then out.
+/// Most colours one dispatch of `gather_carrying` gathers (`MOST_COLOURS` in the shader).
+pub const MOST_COLOURS: usize = 8;
+
+/// The compiled stage: bindings config, color, coc, taps, tiles, then out; entries `gather`
+/// and `gather_carrying`.
 pub(crate) fn stage(device: &wgpu::Device) -> Stage {
     Stage::new(
         device,
         "gather",
         SHADER,
-        &["gather"],
+        &["gather", "gather_carrying"],
         std::mem::size_of::<GatherConfig>(),
         4,
         1,
@@ -92,6 +99,74 @@ impl Gpu {
         let g = out.split_off(n);
         Ok(Color { r: out, g, b, a })
     }
+
+    /// [`crate::dof::gather::gather_carrying`] on the GPU: `colours` (the beauty, then light
+    /// layers with its alpha) gathered with the beauty's weights, each tap's weights computed
+    /// once for as many colours as one dispatch holds (at most [`MOST_COLOURS`], and as many
+    /// as fit one storage binding), or why it could not run.
+    pub fn try_dof_gather_carrying(
+        &self,
+        config: &DofConfig,
+        colours: &[&Color],
+        coc: &[f32],
+        tiles: &Tiles,
+    ) -> Result<Vec<Color>, StageError> {
+        let (width, height) = (config.width, config.height);
+        let n = width * height;
+        if n == 0 {
+            return Ok(colours.iter().map(|&c| c.clone()).collect());
+        }
+        let plan = plan(config, tiles);
+        let unit_area = Aperture::new(config.blades, config.blade_rotation).unit_area();
+        let mut radii = Vec::with_capacity(2 * n);
+        radii.extend_from_slice(&coc[..n]);
+        radii.extend(coc[..n].iter().map(|&c| inverse_area(c, unit_area)));
+        // As many colours a dispatch as one binding holds (16 bytes a pixel each).
+        let fit = (self.max_binding() / (16 * n as u64)).max(1) as usize;
+        let per_dispatch = MOST_COLOURS.min(fit);
+        let mut gathered = Vec::with_capacity(colours.len());
+        for chunk in colours.chunks(per_dispatch) {
+            let mut planes = Vec::with_capacity(4 * n * chunk.len());
+            for color in chunk {
+                planes.extend_from_slice(&color.r[..n]);
+                planes.extend_from_slice(&color.g[..n]);
+                planes.extend_from_slice(&color.b[..n]);
+                match &color.a {
+                    Some(a) => planes.extend_from_slice(&a[..n]),
+                    None => planes.resize(planes.len() + n, 0.0),
+                }
+            }
+            let uniform = GatherConfig {
+                colours: chunk.len() as u32,
+                ..GatherConfig::new(config, chunk[0].a.is_some())
+            };
+            let groups = [uniform.columns, height.div_ceil(TILE) as u32, 1];
+            let mut out = self.compiled("gather", stage).run(
+                self,
+                bytemuck::bytes_of(&uniform),
+                &[
+                    bytemuck::cast_slice(&planes),
+                    bytemuck::cast_slice(&radii),
+                    bytemuck::cast_slice(&plan.taps),
+                    bytemuck::cast_slice(&plan.tiles),
+                ],
+                &[(4 * n * chunk.len() * 4) as u64],
+                &[],
+                &[Dispatch { entry: 1, groups }],
+            )?;
+            let out = floats(out.pop().expect("one output"));
+            for (color, planes) in chunk.iter().zip(out.chunks_exact(4 * n)) {
+                let plane = |k: usize| planes[k * n..(k + 1) * n].to_vec();
+                gathered.push(Color {
+                    r: plane(0),
+                    g: plane(1),
+                    b: plane(2),
+                    a: color.a.is_some().then(|| plane(3)),
+                });
+            }
+        }
+        Ok(gathered)
+    }
 }
 
 #[cfg(test)]
@@ -108,7 +183,7 @@ mod tests {
             GatherConfig,
             SHADER,
             "GatherConfig",
-            [width, height, columns, has_alpha, layer]
+            [width, height, columns, has_alpha, layer, colours]
         );
         crate::gpu::layout::assert_same_layout!(
             OffsetTap,

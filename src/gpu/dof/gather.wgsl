@@ -13,7 +13,8 @@ struct GatherConfig {
     has_alpha: u32,
     // gather::LAYER.
     layer: f32,
-    _pad0: u32,
+    // The colours in `color` and `out` (`gather_carrying`): the beauty's, light layers'.
+    colours: u32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -37,14 +38,15 @@ struct Tile {
 }
 
 @group(0) @binding(0) var<uniform> config: GatherConfig;
-// r, g, b, a planes one after the other (a zero without alpha).
+// r, g, b, a planes one after the other (a zero without alpha); `gather_carrying`: those of
+// each colour in turn.
 @group(0) @binding(1) var<storage, read> color: array<f32>;
 // The signed CoC plane (diameter, px), then 1 / bokeh area per pixel (the CPU's
 // `inverse_area`: WGSL's division is not correctly rounded).
 @group(0) @binding(2) var<storage, read> coc: array<f32>;
 @group(0) @binding(3) var<storage, read> taps: array<Tap>;
 @group(0) @binding(4) var<storage, read> tiles: array<Tile>;
-// r, g, b, a planes one after the other.
+// r, g, b, a planes one after the other (of each colour in turn).
 @group(0) @binding(5) var<storage, read_write> out: array<f32>;
 
 const TILE: u32 = 16u;
@@ -171,4 +173,125 @@ fn gather(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id)
     out[n + p] = o.y;
     out[2u * n + p] = o.z;
     out[3u * n + p] = o.w;
+}
+
+// Most colours `gather_carrying` gathers in one dispatch.
+const MOST_COLOURS: u32 = 8u;
+
+// Colour g's RGBA at pixel i (its planes the g-th four in `color`).
+fn colour_at(g: u32, i: u32, n: u32) -> vec4<f32> {
+    let base = 4u * g * n;
+    return vec4<f32>(color[base + i], color[base + n + i], color[base + 2u * n + i], color[base + 3u * n + i]);
+}
+
+// The pixel at offset (dx, dy) from pixel (x, y), mirrored into the frame.
+fn tap_index(x: u32, y: u32, dx: i32, dy: i32) -> u32 {
+    return mirror(i32(y) + dy, config.height) * config.width + mirror(i32(x) + dx, config.width);
+}
+
+// `gather` of `config.colours` colours at once, the twin of the CPU's `gather_carrying`: each
+// tap's weights computed once, from the CoC, and every colour summed with them in `gather`'s
+// order (sample minus centre), so each comes out as `gather` gives it in the beauty's place.
+@compute @workgroup_size(16, 16)
+fn gather_carrying(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    let x = group.x * TILE + local.x;
+    let y = group.y * TILE + local.y;
+    if (x >= config.width || y >= config.height) {
+        return;
+    }
+    let n = config.width * config.height;
+    let p = y * config.width + x;
+    let colours = min(config.colours, MOST_COLOURS);
+    let tile = tiles[group.y * config.columns + group.x];
+    var centre: array<vec4<f32>, MOST_COLOURS>;
+    for (var g = 0u; g < colours; g++) {
+        centre[g] = colour_at(g, p, n);
+    }
+    var far: array<vec4<f32>, MOST_COLOURS>;
+    var near: array<vec4<f32>, MOST_COLOURS>;
+    var far_weight = coc[n + p];
+    var opacity = 0.0;
+    if (tile.fields != 0u) {
+        let cc = 0.5 * coc[p];
+        let rp = abs(cc);
+        let split = cc - 0.5 * config.layer;
+        if (tile.fields == 1u || tile.fields == 3u) {
+            for (var k = 0u; k < tile.far_count; k++) {
+                let tap = taps[tile.far_start + k];
+                let i = tap_index(x, y, tap.dx, tap.dy);
+                let sc = 0.5 * coc[i];
+                let rs = abs(sc);
+                let is_far = tile.fields == 1u || sc > split;
+                let cover_far = clamp(min(rs, rp) - tap.norm_far + 0.5, 0.0, 1.0);
+                var wf = 0.0;
+                if (is_far) {
+                    wf = cover_far * coc[n + i];
+                }
+                for (var g = 0u; g < colours; g++) {
+                    far[g] += wf * (colour_at(g, i, n) - centre[g]);
+                }
+                far_weight += wf;
+            }
+        }
+        if (tile.fields == 3u) {
+            for (var k = 0u; k < tile.taps_count; k++) {
+                let tap = taps[tile.taps_start + k];
+                let i = tap_index(x, y, tap.dx, tap.dy);
+                let sc = 0.5 * coc[i];
+                let rs = abs(sc);
+                let cover_near = clamp(rs - tap.norm_near + 0.5, 0.0, 1.0);
+                var wn = 0.0;
+                if (!(sc > split)) {
+                    wn = cover_near * tap.area * coc[n + i];
+                }
+                for (var g = 0u; g < colours; g++) {
+                    near[g] += wn * (colour_at(g, i, n) - centre[g]);
+                }
+                opacity += wn;
+            }
+        }
+        if (tile.fields == 2u) {
+            for (var k = 0u; k < tile.taps_count; k++) {
+                let tap = taps[tile.taps_start + k];
+                let i = tap_index(x, y, tap.dx, tap.dy);
+                let sc = 0.5 * coc[i];
+                let rs = abs(sc);
+                let is_far = sc > split;
+                let cover_far = clamp(min(rs, rp) - tap.norm_far + 0.5, 0.0, 1.0);
+                let cover_near = clamp(rs - tap.norm_near + 0.5, 0.0, 1.0);
+                var wf = 0.0;
+                var wn = 0.0;
+                if (is_far) {
+                    wf = cover_far * coc[n + i];
+                } else {
+                    wn = cover_near * tap.area * coc[n + i];
+                }
+                for (var g = 0u; g < colours; g++) {
+                    let d = colour_at(g, i, n) - centre[g];
+                    far[g] += wf * d;
+                    near[g] += wn * d;
+                }
+                far_weight += wf;
+                opacity += wn;
+            }
+        }
+    }
+    var near_scale = 1.0;
+    var rest = 1.0 - opacity;
+    if (opacity > 1.0) {
+        near_scale = 1.0 / opacity;
+        rest = 0.0;
+    }
+    let far_scale = rest / far_weight;
+    for (var g = 0u; g < colours; g++) {
+        var o = centre[g];
+        if (tile.fields != 0u) {
+            o = centre[g] + near[g] * near_scale + far[g] * far_scale;
+        }
+        let base = 4u * g * n;
+        out[base + p] = o.x;
+        out[base + n + p] = o.y;
+        out[base + 2u * n + p] = o.z;
+        out[base + 3u * n + p] = o.w;
+    }
 }

@@ -10,6 +10,7 @@ use crate::dof::tiles::{Tiles, TilesConfig};
 use crate::dof::{BlendForm, DofConfig, DofParams};
 use crate::frame::{Color, Frame};
 use crate::gpu::context::Gpu;
+use crate::stages::Cpu;
 
 pub mod blend;
 pub mod coc;
@@ -51,8 +52,8 @@ impl crate::dof::Stages for Gpu {
         )
     }
 
-    /// Each layer through the gather in the beauty's place (the same weights; carrying them
-    /// through one dispatch, as the CPU does, is issue 29's next step here).
+    /// The beauty and its layers through `gather_carrying`'s dispatches, each tap's weights
+    /// computed once for every colour of a dispatch.
     fn gather_carrying(
         &self,
         config: &DofConfig,
@@ -61,11 +62,22 @@ impl crate::dof::Stages for Gpu {
         tiles: &Tiles,
         layers: &mut [Color],
     ) -> Color {
-        for layer in layers.iter_mut() {
-            let blurred = self.gather(config, layer, coc, tiles);
-            (layer.r, layer.g, layer.b) = (blurred.r, blurred.g, blurred.b);
+        let tried = {
+            let colours: Vec<&Color> = std::iter::once(color).chain(layers.iter()).collect();
+            self.try_dof_gather_carrying(config, &colours, coc, tiles)
+        };
+        match tried {
+            Ok(mut gathered) => {
+                for (layer, blurred) in layers.iter_mut().zip(gathered.drain(1..)) {
+                    (layer.r, layer.g, layer.b) = (blurred.r, blurred.g, blurred.b);
+                }
+                gathered.pop().expect("the beauty")
+            }
+            Err(why) => {
+                self.note_cpu_stage("gather", &why);
+                crate::dof::Stages::gather_carrying(&Cpu, config, color, coc, tiles, layers)
+            }
         }
-        self.gather(config, color, coc, tiles)
     }
 
     fn blend(&self, config: &DofConfig, color: Color, coc: &[f32]) -> Color {
