@@ -66,13 +66,7 @@ impl Gpu {
         }
         let plan = plan(config, tiles);
         let mut planes = Vec::with_capacity(4 * n);
-        planes.extend_from_slice(&color.r[..n]);
-        planes.extend_from_slice(&color.g[..n]);
-        planes.extend_from_slice(&color.b[..n]);
-        match &color.a {
-            Some(a) => planes.extend_from_slice(&a[..n]),
-            None => planes.resize(4 * n, 0.0),
-        }
+        push_planes(&mut planes, color, n);
         let unit_area = Aperture::new(config.blades, config.blade_rotation).unit_area();
         let mut radii = Vec::with_capacity(2 * n);
         radii.extend_from_slice(&coc[..n]);
@@ -128,13 +122,7 @@ impl Gpu {
         for chunk in colours.chunks(per_dispatch) {
             let mut planes = Vec::with_capacity(4 * n * chunk.len());
             for color in chunk {
-                planes.extend_from_slice(&color.r[..n]);
-                planes.extend_from_slice(&color.g[..n]);
-                planes.extend_from_slice(&color.b[..n]);
-                match &color.a {
-                    Some(a) => planes.extend_from_slice(&a[..n]),
-                    None => planes.resize(planes.len() + n, 0.0),
-                }
+                push_planes(&mut planes, color, n);
             }
             let uniform = GatherConfig {
                 colours: chunk.len() as u32,
@@ -166,6 +154,18 @@ impl Gpu {
             }
         }
         Ok(gathered)
+    }
+}
+
+/// `color`'s r, g, b and a planes (a zero without alpha) after `planes`, as the shader reads
+/// a colour.
+fn push_planes(planes: &mut Vec<f32>, color: &Color, n: usize) {
+    planes.extend_from_slice(&color.r[..n]);
+    planes.extend_from_slice(&color.g[..n]);
+    planes.extend_from_slice(&color.b[..n]);
+    match &color.a {
+        Some(a) => planes.extend_from_slice(&a[..n]),
+        None => planes.resize(planes.len() + n, 0.0),
     }
 }
 

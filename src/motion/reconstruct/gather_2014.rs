@@ -12,7 +12,7 @@ use super::config::{
 };
 use super::matte::{self, Matte};
 use super::pack::pack_tiles;
-use super::taps::{bilinear, split, split_by_cover, Colours};
+use super::taps::{bilinear, split, split_by_cover, At, Colours};
 use super::tiles::{gather_tiles_of, near_blur, TileMask};
 use crate::frame::Color;
 use crate::motion::tile_max::TileGrid;
@@ -338,23 +338,17 @@ fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>>(
                     let py = (y as f32 + 0.5 + sy * t[l]).max(0.0) as usize;
                     let nearest_index = py.min(height - 1) * width + px.min(width - 1);
                     let nearest = texels[nearest_index];
-                    let at = (sx * t[l], sy * t[l]);
+                    let at = At {
+                        size: (width, height),
+                        nearest: nearest_index,
+                        scale,
+                        pixel: (x, y),
+                        offset: (sx * t[l], sy * t[l]),
+                    };
                     if form.split_taps {
-                        let parts = split_by_cover(
-                            texels,
-                            colour,
-                            mattes,
-                            (width, height),
-                            nearest_index,
-                            scale,
-                            (x, y),
-                            at,
-                            own_length < HALF_PIXEL,
-                        )
-                        .unwrap_or_else(|| {
-                            let size = (width, height);
-                            split(texels, colour, size, nearest_index, scale, x, y, at)
-                        });
+                        let still = own_length < HALF_PIXEL;
+                        let parts = split_by_cover(texels, colour, mattes, &at, still)
+                            .unwrap_or_else(|| split(texels, colour, &at));
                         (sample[l], sample_colour[l], share[l]) = parts.0;
                         (other[l], other_colour[l], other_share[l]) = parts.1;
                     } else {
@@ -366,8 +360,7 @@ fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>>(
                         // texel alone: it does not blur.
                         sample[l] = nearest;
                         sample_colour[l] = if nearest[LENGTH] >= HALF_PIXEL {
-                            let size = (width, height);
-                            bilinear(texels, colour, size, nearest_index, scale, x, y, at)
+                            bilinear(texels, colour, &at)
                         } else {
                             colour(nearest_index)
                         };

@@ -29,6 +29,24 @@ pub type Colours<const G: usize> = [[f32; 4]; G];
 /// words unused), its colours summed with their weights, and its share of the tap.
 pub(crate) type Part<const G: usize> = (Texel2014, Colours<G>, f32);
 
+/// Where a tap is read: the frame's size, the pixel nearest to the tap's point (an index),
+/// 1 / SOFT_Z_EXTENT (`scale`), the gathering pixel (x, y) and the point's offset from it.
+#[derive(Clone, Copy)]
+pub(crate) struct At {
+    pub(crate) size: (usize, usize),
+    pub(crate) nearest: usize,
+    pub(crate) scale: f32,
+    pub(crate) pixel: (usize, usize),
+    pub(crate) offset: (f32, f32),
+}
+
+impl At {
+    /// The four pixels around the tap's point, with their bilinear weights.
+    fn corners(&self) -> [(usize, f32); 4] {
+        around_index(self.size, self.pixel.0, self.pixel.1, self.offset)
+    }
+}
+
 /// The four pixels around pixel (x, y) + `offset` (clamped to the frame), as indices, each
 /// with its bilinear weight.
 #[inline(always)]
@@ -52,23 +70,18 @@ pub(crate) fn around_index(
     ]
 }
 
-/// The colours of pixel `nearest` (the pixel nearest to (x, y) + `offset`, a moving one) read
-/// bilinearly at that point, over the four pixels around it that move or share its surface
-/// (within the soft depth extent, `scale` = 1 / SOFT_Z_EXTENT), so a tap never takes colour
-/// across a silhouette from a still surface. Depth and motion stay the nearest's.
+/// The colours at the tap's point `at` (its nearest pixel a moving one) read bilinearly, over
+/// the four pixels around it that move or share the nearest's surface (within the soft depth
+/// extent), so a tap never takes colour across a silhouette from a still surface. Depth and
+/// motion stay the nearest's.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn bilinear<const G: usize>(
     texels: &[Texel2014],
     colour: &impl Fn(usize) -> Colours<G>,
-    (width, height): (usize, usize),
-    nearest: usize,
-    scale: f32,
-    x: usize,
-    y: usize,
-    offset: (f32, f32),
+    at: &At,
 ) -> Colours<G> {
-    let [c0, c1, c2, c3] = around_index((width, height), x, y, offset);
+    let At { nearest, scale, .. } = *at;
+    let [c0, c1, c2, c3] = at.corners();
     let corners = [&texels[c0.0], &texels[c1.0], &texels[c2.0], &texels[c3.0]];
     let z = texels[nearest][Z];
     let mixes =
@@ -99,10 +112,10 @@ pub(crate) fn bilinear<const G: usize>(
     }
 }
 
-/// The exposure variant's tap at pixel (x, y) + `offset`, read between pixels and split by
-/// surface: the four pixels around the point with their bilinear weights, in two parts. Part
-/// A is what lies on the surface of `nearest` (the pixels that share its depth within the
-/// soft extent, `scale` = 1 / SOFT_Z_EXTENT, and, when it moves, any that move); part B is
+/// The exposure variant's tap at `at`, read between pixels and split by surface: the four
+/// pixels around the point with their bilinear weights, in two parts. Part A is what lies on
+/// the surface of the nearest pixel (the pixels that share its depth within the soft
+/// extent, and, when it moves, any that move); part B is
 /// the rest, with the depth and motion of its heaviest pixel. Each part's colour is its
 /// pixels' colour summed with their weights (a still part's, one pixel's colour times its
 /// share: a still surface does not blur), so its mean is the colour over its share; the two
@@ -122,18 +135,13 @@ pub(crate) fn bilinear<const G: usize>(
 /// the four pixels has a matte, [`split_by_cover`] reads the tap instead, with the edge
 /// where the pixels' colours put it.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn split<const G: usize>(
     texels: &[Texel2014],
     colour: &impl Fn(usize) -> Colours<G>,
-    (width, height): (usize, usize),
-    nearest: usize,
-    scale: f32,
-    x: usize,
-    y: usize,
-    offset: (f32, f32),
+    at: &At,
 ) -> (Part<G>, Part<G>) {
-    let corners = around_index((width, height), x, y, offset);
+    let At { nearest, scale, .. } = *at;
+    let corners = at.corners();
     let near = &texels[nearest];
     let moves = near[LENGTH] >= HALF_PIXEL;
     let mut a = *near;
@@ -194,32 +202,28 @@ pub(crate) fn split<const G: usize>(
     ((a, colour_a, share_a), (b, colour_b, share_b))
 }
 
-/// The exposure variant's tap at pixel (x, y) + `offset`, split by coverage ([`matte`]):
+/// The exposure variant's tap at `at`, split by coverage ([`matte`]):
 /// each of the four pixels around the point gives its bilinear weight times its coverage α to
 /// the moving surface, in that surface's colour, and the rest to the still surface behind;
-/// part A is the surface of the nearest pixel (`nearest`, an index), part B the other, each
+/// part A is the surface of the nearest pixel, part B the other, each
 /// with the depth and motion of its heaviest contributor (a still pixel's moving partner for
 /// the moving part). A still part takes one colour, as in [`split`]: the nearest's own still
 /// surface, or its heaviest contributor's. Each part's colour is summed with its share, as in
 /// [`split`]. `None` where the still pixels among the four lie on more than one surface (or
 /// not on the nearest's, when it is still): [`split`] reads the tap then.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn split_by_cover<const G: usize>(
     texels: &[Texel2014],
     colour: &impl Fn(usize) -> Colours<G>,
     mattes: &[Matte],
-    (width, height): (usize, usize),
-    nearest: usize,
-    scale: f32,
-    (x, y): (usize, usize),
-    offset: (f32, f32),
+    at: &At,
     steepen: bool,
 ) -> Option<(Part<G>, Part<G>)> {
     if mattes.is_empty() {
         return None;
     }
-    let corners = around_index((width, height), x, y, offset);
+    let At { nearest, scale, .. } = *at;
+    let corners = at.corners();
     // Away from every silhouette (no pixel of the four has a pair) coverage is the labels':
     // [`split`] reads the tap.
     if corners.iter().all(|&(j, _)| matte::unpaired(&mattes[j], j)) {
