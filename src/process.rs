@@ -214,8 +214,9 @@ fn slots(names: &[&str]) -> Vec<[Option<usize>; 3]> {
 }
 
 /// The passes over the frame's beauty and `layers` (colour beside it, each with its alpha):
-/// depth of field when asked for, then the algorithm. Reconstruct takes the layers into its
-/// pass (they share its mattes); every other pass runs on each layer in the beauty's place.
+/// depth of field when asked for, then the algorithm. Depth of field, reconstruct and scatter
+/// take the layers into their passes (they share the CoC and tiles, the mattes, the curves);
+/// stretch runs on each layer in the beauty's place.
 fn process_beauty(
     algorithm: Algorithm,
     params: &Params,

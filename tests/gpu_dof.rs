@@ -472,11 +472,11 @@ mod with_gpu {
                 .try_dof_gather_carrying(&config, &colours, &coc, &t)
                 .unwrap_or_else(|e| panic!("{e}"));
             assert_eq!(got.len(), 10);
-            let planes: Vec<&[f32]> = layers
+            let planes: Vec<Vec<f32>> = layers
                 .iter()
-                .flat_map(|l| [&l.r[..], &l.g[..], &l.b[..]])
+                .flat_map(|l| [l.r.clone(), l.g.clone(), l.b.clone()])
                 .collect();
-            let (cpu_beauty, cpu_layers) = gather_carrying(&config, &beauty, &coc, &t, &planes);
+            let (cpu_beauty, cpu_layers) = gather_carrying(&config, &beauty, &coc, &t, planes);
             let alone = gpu.try_dof_gather(&config, &beauty, &coc, &t).unwrap();
             let mut want: Vec<(&str, &[f32], &[f32])> = vec![
                 ("beauty r", &got[0].r, &cpu_beauty.r),

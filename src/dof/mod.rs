@@ -236,11 +236,12 @@ pub trait Stages {
         tiles: &tiles::Tiles,
         layers: &mut [Color],
     ) -> Color {
-        let planes: Vec<&[f32]> = layers
-            .iter()
-            .flat_map(|l| [&l.r[..], &l.g[..], &l.b[..]])
+        let planes: Vec<Vec<f32>> = layers
+            .iter_mut()
+            .flat_map(|l| [&mut l.r, &mut l.g, &mut l.b])
+            .map(std::mem::take)
             .collect();
-        let (out, carried) = gather::gather_carrying(config, color, coc, tiles, &planes);
+        let (out, carried) = gather::gather_carrying(config, color, coc, tiles, planes);
         let mut carried = carried.into_iter();
         for layer in layers.iter_mut() {
             for plane in [&mut layer.r, &mut layer.g, &mut layer.b] {

@@ -128,7 +128,7 @@ pub const DEFS: &[Def] = &[
         applies: &[],
         value_name: "MIB",
         help: "the most memory a run may need, in MiB, estimated from every input's header \
-               before anything is decoded (a frame's decoded passes, four times over for the \
+               before anything is decoded (a frame's decoded passes, five times over for the \
                frames in flight and the passes' buffers, and a decoder's own); a run over it \
                stops in the preflight, naming the frame",
         kind: whole(64.0, 1_073_741_824.0),

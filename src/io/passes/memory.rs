@@ -3,9 +3,11 @@
 //! a 446 KB PNG declaring 12000×12000 needed 3.8 GB).
 //!
 //! The estimate is an upper bound measured against peak RSS (BENCHMARKS.md, "Memory"): a
-//! frame's decoded planes (every channel read, four bytes a sample) four times over (the
+//! frame's decoded planes (every channel read, four bytes a sample) five times over (the
 //! frame being read, the one being processed with its buffers, the one being written: a
-//! 1080p reconstruct peaks at 3.1× its planes, 2.2× with six light layers, scatter at 1.7×),
+//! 1080p reconstruct peaks at 3.1× its planes and scatter at 1.7×; with light layers carried
+//! through the passes, a three-frame bokeh gather of twenty RGB layers at 4.7× and scatter at
+//! 4.4×, the processed frame holding its layers' padded copies or their sums beside them),
 //! plus what a picture's decoder holds besides (its own buffer, and a copy when it turns the
 //! picture upright), plus a fixed base for the program itself.
 
@@ -17,7 +19,7 @@ use crate::io::file::FileKind;
 pub const BASE: u64 = 96 << 20;
 
 /// How many times its decoded planes a frame may hold at once, across the pipeline's stages.
-pub const PLANES_FACTOR: u64 = 4;
+pub const PLANES_FACTOR: u64 = 5;
 
 /// What a GPU backend adds: the driver's host side (with a software driver such as
 /// lavapipe, its device memory and shader compiler too), and the frame's buffers mirrored on

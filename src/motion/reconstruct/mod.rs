@@ -119,7 +119,7 @@ pub trait Stages {
 
     /// The 2014 gather of the beauty and light layers beside it (`colours`, the beauty
     /// first), each in place with the beauty's weights: on the CPU, computed once for up to
-    /// four colours at a time ([`gather_2014::gather_2014_carrying`]). `texels` are the
+    /// eight colours at a time ([`gather_2014::gather_2014_carrying`]). `texels` are the
     /// beauty's, packed on `packed`.
     fn gather_2014_carrying(
         &self,

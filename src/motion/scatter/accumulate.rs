@@ -340,6 +340,11 @@ thread_local! {
     static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::default();
 }
 
+/// Drops every pool thread's sums of carried planes ([`Scratch::extra`]).
+pub(super) fn free_carried_sums() {
+    rayon::broadcast(|_| SCRATCH.with_borrow_mut(|scratch| scratch.extra = Vec::new()));
+}
+
 /// One segment of a curve being drawn into a tile's cells.
 struct Segment<'a, const N: usize, const CARRY: bool> {
     acc: &'a mut [[f64; N]],

@@ -267,6 +267,12 @@ pub fn stages_carrying(
         });
     drop(job);
     give_back(layers, out_extra);
+    if !layers.is_empty() {
+        // Each thread's sums of the carried planes are dropped with the frame: kept, every
+        // thread of the pool would hold a tile's worth of them (3.5 % of the carried planes
+        // each) until it ends.
+        accumulate::free_carried_sums();
+    }
     let [r, g, b, a] = out;
     Color {
         r,
