@@ -260,6 +260,135 @@ fn a_view_comes_out_with_every_channel_its_mono_file_gives_and_the_others_are_na
 }
 
 #[test]
+fn a_part_of_no_view_comes_out_and_the_default_views_own_layers_stay_its_own() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let n = W * H;
+    let part = |name, view, channels| Part {
+        name,
+        view,
+        multi_view: None,
+        channels,
+    };
+    // Parts: each view's passes, then a part of no view whose channels share the views'
+    // names (R, G, B): it is a part of its own, not a view's, and must come out.
+    let parts = d.join("parts.exr");
+    let shared = vec![
+        ("R".to_string(), noise(n, 70, 0.0, 1.0)),
+        ("G".to_string(), noise(n, 71, 0.0, 1.0)),
+        ("B".to_string(), noise(n, 72, 0.0, 1.0)),
+    ];
+    write_parts(
+        &parts,
+        (W, H),
+        vec![
+            part(
+                Some("left"),
+                Some("left"),
+                named(view_passes(LEFT), |n| n.to_string()),
+            ),
+            part(
+                Some("right"),
+                Some("right"),
+                named(view_passes(RIGHT), |n| n.to_string()),
+            ),
+            part(Some("shared"), None, shared),
+        ],
+    );
+    let out = d.join("out").join("parts.exr");
+    let o = blur(&s(&parts), &out, &["--view", "right"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let layers: Vec<(Option<String>, Vec<String>)> = crate::support::read_exr_layers(&out)
+        .iter()
+        .map(|l| {
+            let name = l.attributes.layer_name.as_ref().map(|t| t.to_string());
+            let channels = l
+                .channel_data
+                .list
+                .iter()
+                .map(|c| c.name.to_string())
+                .collect();
+            (name, channels)
+        })
+        .collect();
+    assert!(
+        layers.contains(&(
+            Some("shared".into()),
+            vec!["B".into(), "G".into(), "R".into()]
+        )),
+        "{layers:?}"
+    );
+    // A plain file of one view: no part says it is a view's (a part of no view may then
+    // come first).
+    let meta = exr::meta::MetaData::read_from_file(&out, false).unwrap();
+    assert!(meta
+        .headers
+        .iter()
+        .all(|h| h.own_attributes.view_name.is_none()));
+    // One part: the default view (left) writes its layers without its name, the other view
+    // with it. Right has `diffuse.right.R,G,B` but no alpha: left's `diffuse.A` is left's,
+    // and must not come out as right's; `spec`, which no view writes as its own, is of no
+    // view and comes out with either.
+    let names = d.join("names.exr");
+    let mut channels = named(view_passes(LEFT), |n| n.to_string());
+    for (k, name) in [
+        "diffuse.R",
+        "diffuse.G",
+        "diffuse.B",
+        "diffuse.A",
+        "spec.R",
+        "spec.G",
+        "spec.B",
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        channels.push((name.to_string(), noise(n, 80 + k as u32, 0.0, 1.0)));
+    }
+    channels.extend(named(view_passes(RIGHT), in_view("right")));
+    for (k, name) in ["diffuse.right.R", "diffuse.right.G", "diffuse.right.B"]
+        .into_iter()
+        .enumerate()
+    {
+        channels.push((name.to_string(), noise(n, 90 + k as u32, 0.0, 1.0)));
+    }
+    write_parts(
+        &names,
+        (W, H),
+        vec![Part {
+            name: None,
+            view: None,
+            multi_view: Some(&["left", "right"]),
+            channels,
+        }],
+    );
+    let written = |view: &str| {
+        let out = d.join("out").join(format!("names-{view}.exr"));
+        let o = blur(&s(&names), &out, &["--view", view]);
+        assert!(o.status.success(), "{view}: {}", stderr(&o));
+        let mut names: Vec<String> = read_exr_reference(&out)
+            .into_iter()
+            .map(|(n, _)| n)
+            .collect();
+        names.sort();
+        names
+    };
+    let base = ["A", "B", "G", "R", "Z", "velocity.X", "velocity.Y"];
+    let with = |extra: &[&str]| {
+        let mut all: Vec<String> = base.iter().chain(extra).map(|n| n.to_string()).collect();
+        all.sort();
+        all
+    };
+    let spec = ["spec.B", "spec.G", "spec.R"];
+    let diffuse = ["diffuse.B", "diffuse.G", "diffuse.R"];
+    assert_eq!(written("right"), with(&[&diffuse[..], &spec[..]].concat()));
+    assert_eq!(
+        written("left"),
+        with(&[&diffuse[..], &["diffuse.A"], &spec[..]].concat())
+    );
+}
+
+#[test]
 fn an_unknown_view_stops_the_run_listing_the_views_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

@@ -160,6 +160,9 @@ fn attributes_like(input: Option<&Header>, windows: Windows, record: &str) -> La
         // One view is written (the one read): a multiView list would name views the file
         // does not hold, and make its channels the default view's.
         kept.multi_view_names = None;
+        // Nor a part's `view`: the output is a file of one view, whose parts are plain (a
+        // part of no view may come first in it, which a multi-view file may not have).
+        kept.view_name = None;
         kept
     });
     attributes.layer_position = Vec2(windows.data_origin.0, windows.data_origin.1);

@@ -170,6 +170,25 @@ impl FileInfo {
             if parts.len() < 2 {
                 continue;
             }
+            // Seen as one view, the view's own part is the main one (a part of no view holds
+            // channels of its own: a multi-view file's `R` is the view's).
+            let of_view: Vec<usize> = parts
+                .iter()
+                .copied()
+                .filter(|&p| {
+                    self.channels
+                        .iter()
+                        .any(|c| c.part == p && c.view.is_some())
+                })
+                .collect();
+            if let (Some(_), [part]) = (&self.view, &of_view[..]) {
+                let part = *part;
+                *index = self
+                    .channels
+                    .iter()
+                    .position(|c| c.part == part && c.name == *name);
+                continue;
+            }
             let main: Vec<usize> = parts
                 .iter()
                 .copied()
@@ -229,21 +248,43 @@ impl FileInfo {
                 ..c.clone()
             })
             .collect();
+        let names = views.scheme == crate::io::view::Scheme::Names;
         let taken = |name: &str, channels: &[ChannelInfo]| {
             channels
                 .iter()
                 .any(|c| c.name == name || c.alias.as_deref() == Some(name))
         };
+        // In the one-part scheme, a layer another view writes as its own (`diffuse.right.R`)
+        // is a layer of each view: its plain channels (`diffuse.R`, `diffuse.A`) are the
+        // default view's, even where the other view lacks one of them (OpenEXR writes the
+        // default view's channels without its name).
+        let layer = |name: &str| name.rsplit_once('.').map(|(layer, _)| layer.to_string());
+        let per_view: std::collections::BTreeSet<String> = self
+            .channels
+            .iter()
+            .filter(|c| {
+                names
+                    && c.view
+                        .as_ref()
+                        .is_some_and(|v| Some(v) != views.default.as_ref())
+            })
+            .filter_map(|c| layer(&views.strip(&c.name, c.view.as_deref().unwrap_or(""))))
+            .collect();
+        let default = views.default.as_deref() == Some(chosen.as_str());
         let shared: Vec<ChannelInfo> = self
             .channels
             .iter()
             .filter(|c| c.view.is_none())
-            .filter(|c| !taken(&c.name, &channels))
+            // Parts of no view hold channels of their own, whatever their names: only the
+            // one-part scheme's names can stand for a channel of the view.
+            .filter(|c| !names || !taken(&c.name, &channels))
+            .filter(|c| default || !layer(&c.name).is_some_and(|l| per_view.contains(&l)))
             .cloned()
             .collect();
         channels.extend(shared);
-        // In the file's order, as the channels of a file of one view are.
-        channels.sort_by_key(|c| (c.part, c.index));
+        // In the file's order, as the channels of a file of one view are; in the parts
+        // scheme the view's own first, so a preset finds its `R` before a part of no view's.
+        channels.sort_by_key(|c| (!names && c.view.is_none(), c.part, c.index));
         Ok(FileInfo {
             channels,
             view: Some(chosen),
