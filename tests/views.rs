@@ -169,6 +169,21 @@ fn multi_part_stereo_reads_the_first_parts_view_and_view_left_the_other() {
     assert_different_images(&out("default.exr"), &out("left.exr"));
 }
 
+/// A part of a file `write_parts` writes.
+fn part(
+    name: Option<&'static str>,
+    view: Option<&'static str>,
+    multi_view: Option<&'static [&'static str]>,
+    channels: Vec<(String, Vec<f32>)>,
+) -> Part {
+    Part {
+        name,
+        view,
+        multi_view,
+        channels,
+    }
+}
+
 /// One view's passes with a light layer and an object-ID layer beside them, as a renderer
 /// writes each eye.
 fn view_with_layers(seed: u32) -> Vec<(&'static str, Vec<f32>)> {
@@ -193,12 +208,6 @@ fn a_view_comes_out_with_every_channel_its_mono_file_gives_and_the_others_are_na
     let names = d.join("names.exr");
     let mut channels = named(view_with_layers(LEFT), |n| n.to_string());
     channels.extend(named(view_with_layers(RIGHT), in_view("right")));
-    let part = |name, view, multi_view, channels| Part {
-        name,
-        view,
-        multi_view,
-        channels,
-    };
     write_parts(
         &names,
         (W, H),
@@ -264,12 +273,6 @@ fn a_part_of_no_view_comes_out_and_the_default_views_own_layers_stay_its_own() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let n = W * H;
-    let part = |name, view, channels| Part {
-        name,
-        view,
-        multi_view: None,
-        channels,
-    };
     // Parts: each view's passes, then a part of no view whose channels share the views'
     // names (R, G, B): it is a part of its own, not a view's, and must come out.
     let parts = d.join("parts.exr");
@@ -285,14 +288,16 @@ fn a_part_of_no_view_comes_out_and_the_default_views_own_layers_stay_its_own() {
             part(
                 Some("left"),
                 Some("left"),
+                None,
                 named(view_passes(LEFT), |n| n.to_string()),
             ),
             part(
                 Some("right"),
                 Some("right"),
+                None,
                 named(view_passes(RIGHT), |n| n.to_string()),
             ),
-            part(Some("shared"), None, shared),
+            part(Some("shared"), None, None, shared),
         ],
     );
     let out = d.join("out").join("parts.exr");

@@ -19,7 +19,7 @@
 //! the tolerance in tests/gpu_dof.rs says how much that is.
 
 use crate::dof::bokeh::Aperture;
-use crate::dof::gather::{inverse_area, plan, GatherConfig};
+use crate::dof::gather::{inverse_area, plan, GatherConfig, TilePlan};
 use crate::dof::tiles::{Tiles, TILE};
 use crate::dof::DofConfig;
 use crate::frame::Color;
@@ -72,21 +72,7 @@ impl Gpu {
         radii.extend_from_slice(&coc[..n]);
         radii.extend(coc[..n].iter().map(|&c| inverse_area(c, unit_area)));
         let uniform = GatherConfig::new(config, has_alpha);
-        let groups = [uniform.columns, height.div_ceil(TILE) as u32, 1];
-        let mut out = self.compiled("gather", stage).run(
-            self,
-            bytemuck::bytes_of(&uniform),
-            &[
-                bytemuck::cast_slice(&planes),
-                bytemuck::cast_slice(&radii),
-                bytemuck::cast_slice(&plan.taps),
-                bytemuck::cast_slice(&plan.tiles),
-            ],
-            &[(4 * n * 4) as u64],
-            &[],
-            &[Dispatch { entry: 0, groups }],
-        )?;
-        let mut out = floats(out.pop().expect("one output"));
+        let mut out = self.dispatch_gather(&uniform, 0, &planes, &radii, &plan)?;
         let a = has_alpha.then(|| out.split_off(3 * n));
         out.truncate(3 * n);
         let b = out.split_off(2 * n);
@@ -128,21 +114,7 @@ impl Gpu {
                 colours: chunk.len() as u32,
                 ..GatherConfig::new(config, chunk[0].a.is_some())
             };
-            let groups = [uniform.columns, height.div_ceil(TILE) as u32, 1];
-            let mut out = self.compiled("gather", stage).run(
-                self,
-                bytemuck::bytes_of(&uniform),
-                &[
-                    bytemuck::cast_slice(&planes),
-                    bytemuck::cast_slice(&radii),
-                    bytemuck::cast_slice(&plan.taps),
-                    bytemuck::cast_slice(&plan.tiles),
-                ],
-                &[(4 * n * chunk.len() * 4) as u64],
-                &[],
-                &[Dispatch { entry: 1, groups }],
-            )?;
-            let out = floats(out.pop().expect("one output"));
+            let out = self.dispatch_gather(&uniform, 1, &planes, &radii, &plan)?;
             for (color, planes) in chunk.iter().zip(out.chunks_exact(4 * n)) {
                 let plane = |k: usize| planes[k * n..(k + 1) * n].to_vec();
                 gathered.push(Color {
@@ -154,6 +126,36 @@ impl Gpu {
             }
         }
         Ok(gathered)
+    }
+}
+
+impl Gpu {
+    /// One dispatch of the gather's entry `entry` (0 `gather`, 1 `gather_carrying`) over the
+    /// colours' `planes` (four a colour, `uniform.colours` of them), with the CoC and bokeh
+    /// areas (`radii`) and the plan; returns the output planes.
+    fn dispatch_gather(
+        &self,
+        uniform: &GatherConfig,
+        entry: usize,
+        planes: &[f32],
+        radii: &[f32],
+        plan: &TilePlan,
+    ) -> Result<Vec<f32>, StageError> {
+        let groups = [uniform.columns, uniform.height.div_ceil(TILE as u32), 1];
+        let mut out = self.compiled("gather", stage).run(
+            self,
+            bytemuck::bytes_of(uniform),
+            &[
+                bytemuck::cast_slice(planes),
+                bytemuck::cast_slice(radii),
+                bytemuck::cast_slice(&plan.taps),
+                bytemuck::cast_slice(&plan.tiles),
+            ],
+            &[(planes.len() * 4) as u64],
+            &[],
+            &[Dispatch { entry, groups }],
+        )?;
+        Ok(floats(out.pop().expect("one output")))
     }
 }
 
