@@ -4,7 +4,6 @@
 //! CI, else skipped with a note).
 
 use std::path::Path;
-use std::process::Command;
 
 use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
 use exr::math::Vec2;
@@ -13,7 +12,7 @@ use exr::meta::header::{ImageAttributes, LayerAttributes};
 use exr::meta::{BlockDescription, MetaData};
 use exr::prelude::{f16, Blocks, Compression, LineOrder, WritableImage};
 
-use crate::support::{noise, s, shutter, stderr, write_exr};
+use crate::support::{noise, oiiotool_info, s, shutter, stderr, write_exr};
 
 const W: usize = 40;
 const H: usize = 24;
@@ -149,31 +148,6 @@ fn blur(dir: &Path, out: &str, extra: &[&str]) {
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let run = shutter(&args);
     assert!(run.status.success(), "{}", stderr(&run));
-}
-
-/// `oiiotool --info -v` of a file, or `None` (with a note) where it is not installed and
-/// `SHUTTER_REQUIRE_TOOLS` does not ask for it.
-fn oiiotool_info(path: &Path) -> Option<String> {
-    match Command::new("oiiotool")
-        .args(["--info", "-v", &s(path)])
-        .output()
-    {
-        Ok(out) => {
-            assert!(
-                out.status.success(),
-                "oiiotool failed on {}",
-                path.display()
-            );
-            Some(String::from_utf8_lossy(&out.stdout).into_owned())
-        }
-        Err(_) if std::env::var_os("SHUTTER_REQUIRE_TOOLS").is_some() => {
-            panic!("SHUTTER_REQUIRE_TOOLS is set and oiiotool is not installed")
-        }
-        Err(_) => {
-            eprintln!("note: oiiotool is not installed; only our reader checks the output");
-            None
-        }
-    }
 }
 
 #[test]

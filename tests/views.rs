@@ -330,6 +330,15 @@ fn a_part_of_no_view_comes_out_and_the_default_views_own_layers_stay_its_own() {
         .headers
         .iter()
         .all(|h| h.own_attributes.view_name.is_none()));
+    // And OpenImageIO, which nobody here wrote, reads both parts, as plain parts.
+    if let Some(info) = crate::support::oiiotool_info(&out) {
+        // The view's seven channels, then the shared part's three.
+        assert!(
+            info.contains("2 subimages: 32x24 [f,f,f,f,f,f,f], 32x24 [f,f,f]"),
+            "{info}"
+        );
+        assert!(!info.contains("multiView"), "{info}");
+    }
     // One part: the default view (left) writes its layers without its name, the other view
     // with it. Right has `diffuse.right.R,G,B` but no alpha: left's `diffuse.A` is left's,
     // and must not come out as right's; `spec`, which no view writes as its own, is of no

@@ -142,8 +142,9 @@ impl FileInfo {
     /// Makes the channels `found` for `names` (by [`FileInfo::find`]) come from one part that
     /// can be told: where a name found by itself (not as `part.name`) is in several parts of
     /// a multi-part file (`rgba` and `diffuse` both holding R, G, B), the part named `rgba`
-    /// or `beauty` ([`FileInfo::MAIN_PARTS`]) when exactly one of them holds it, else an
-    /// error naming the parts and how to choose, rather than the first part, silently.
+    /// or `beauty` ([`FileInfo::MAIN_PARTS`]) when exactly one of them holds it (in a file
+    /// seen as one view, the view's own part), else an error naming the parts and how to
+    /// choose, rather than the first part, silently.
     pub fn one_part(&self, names: &[String], found: &mut [Option<usize>]) -> Result<(), String> {
         let FileKind::Exr { headers, .. } = &self.kind else {
             return Ok(());
@@ -282,9 +283,9 @@ impl FileInfo {
             .cloned()
             .collect();
         channels.extend(shared);
-        // In the file's order, as the channels of a file of one view are; in the parts
-        // scheme the view's own first, so a preset finds its `R` before a part of no view's.
-        channels.sort_by_key(|c| (!names && c.view.is_none(), c.part, c.index));
+        // In the file's order, as the channels of a file of one view are (a name in the
+        // view's part and a part of no view is settled by `one_part`).
+        channels.sort_by_key(|c| (c.part, c.index));
         Ok(FileInfo {
             channels,
             view: Some(chosen),

@@ -713,3 +713,28 @@ pub fn blur_on(
     assert_eq!(json["backend"]["used"], backend, "{json}");
     (json, dir.join(format!("{stem}.0001.exr")))
 }
+
+/// `oiiotool --info -v` of a file, or `None` (with a note) where it is not installed and
+/// `SHUTTER_REQUIRE_TOOLS` does not ask for it.
+pub fn oiiotool_info(path: &Path) -> Option<String> {
+    match Command::new("oiiotool")
+        .args(["--info", "-v", &s(path)])
+        .output()
+    {
+        Ok(out) => {
+            assert!(
+                out.status.success(),
+                "oiiotool failed on {}",
+                path.display()
+            );
+            Some(String::from_utf8_lossy(&out.stdout).into_owned())
+        }
+        Err(_) if std::env::var_os("SHUTTER_REQUIRE_TOOLS").is_some() => {
+            panic!("SHUTTER_REQUIRE_TOOLS is set and oiiotool is not installed")
+        }
+        Err(_) => {
+            eprintln!("note: oiiotool is not installed; only our reader checks the output");
+            None
+        }
+    }
+}
