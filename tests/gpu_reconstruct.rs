@@ -11,11 +11,15 @@ use std::io::Write;
 
 use shutter::frame::{Color, Frame, Velocity};
 use shutter::gpu::Gpu;
+use shutter::motion::reconstruct::matte::Matte;
 use shutter::motion::reconstruct::{
-    reconstruct, reconstruct_with, GatherInputs, ReconstructConfig, Stages,
+    reconstruct, reconstruct_layers_with, reconstruct_with, GatherInputs, ReconstructConfig,
+    Stages, Texel2014, TileMask,
 };
+use shutter::motion::tile_max::TileGrid;
 use shutter::motion::{ReconstructParams, Shutter, Variant};
 use shutter::numeric::{sanitize, DepthKind};
+use shutter::stages::Cpu;
 
 use crate::gpu::with_gpu::gpu;
 use crate::support::*;
@@ -465,4 +469,148 @@ fn reconstruct_at_540p_prints_its_time() {
         p.mean
     );
     assert!(p.max <= MAX && p.mean <= MEAN && p.outside <= FLIPS);
+}
+
+/// reconstruct's stages with the carrying 2014 gather on the GPU in groups of at most
+/// `per_dispatch` colours, each of which must run (no fallback to the CPU); `dispatches`
+/// counts them.
+struct CarryingOnGpu<'a> {
+    gpu: &'a Gpu,
+    per_dispatch: usize,
+    dispatches: std::cell::Cell<usize>,
+}
+
+impl Stages for CarryingOnGpu<'_> {
+    fn gather_2014_carrying(
+        &self,
+        config: &ReconstructConfig,
+        inputs: (&[Texel2014], &[Matte], &TileGrid),
+        packed: &TileMask,
+        colours: &mut [&mut Color],
+    ) {
+        for group in colours.chunks_mut(self.per_dispatch) {
+            self.gpu
+                .try_reconstruct_gather_carrying(config, inputs, packed, group)
+                .expect("the GPU's carrying gather runs");
+            self.dispatches.set(self.dispatches.get() + 1);
+        }
+    }
+}
+
+/// `n` light layers for `frame`, each its own noise (no two alike, none the beauty), with the
+/// beauty's alpha, as a run hands them to the pass.
+fn light_layers(frame: &Frame, n: u32) -> Vec<Color> {
+    let pixels = frame.width * frame.height;
+    let alpha = frame.color.as_ref().unwrap().a.clone();
+    (0..n)
+        .map(|k| Color {
+            r: noise(pixels, 40 + 3 * k, 0.0, 2.0 + k as f32),
+            g: noise(pixels, 41 + 3 * k, 0.0, 1.0),
+            b: noise(pixels, 42 + 3 * k, -0.1, 0.5),
+            a: alpha.clone(),
+        })
+        .collect()
+}
+
+/// The planes of `color` by name (alpha where it has one).
+fn planes(color: &Color) -> Vec<(&'static str, &Vec<f32>)> {
+    let mut out = vec![("R", &color.r), ("G", &color.g), ("B", &color.b)];
+    out.extend(color.a.as_ref().map(|a| ("A", a)));
+    out
+}
+
+/// Light layers carried through the GPU's 2014 gather beside the beauty (issue 29: the same
+/// weights, computed once a tap for every colour of a dispatch) come out as the CPU carries
+/// them, within the gather's parity above, in one dispatch or in several: nine layers and the
+/// beauty in groups of eight and two, and of three (the real backend's grouping, as many as
+/// a binding holds, is run too). Both 2014 forms, with alpha and without; every layer moved.
+#[test]
+fn reconstruct_carries_light_layers_in_its_dispatches_as_the_cpu_does() {
+    let Some(gpu) = gpu() else { return };
+    let mut without_alpha = stripes(45, 29, 9.0);
+    without_alpha.color.as_mut().unwrap().a = None;
+    let frames = [
+        ("stripes", stripes(61, 45, 9.0)),
+        ("still subject", still_subject(52, 40, 11.0)),
+        ("stripes without alpha", without_alpha),
+    ];
+    let params = [
+        ReconstructParams::default(),
+        ReconstructParams {
+            variant: Variant::Stable,
+            ..ReconstructParams::default()
+        },
+        ReconstructParams {
+            taps: 9,
+            max_blur: 13,
+            jitter: false,
+            ..ReconstructParams::default()
+        },
+    ];
+    for (what, frame) in &frames {
+        let layers = light_layers(frame, 9);
+        for params in &params {
+            let mut cpu_layers = layers.clone();
+            let cpu = reconstruct_layers_with(frame.clone(), &mut cpu_layers, params, 0.5, 7, &Cpu);
+            for per_dispatch in [8, 3, 0] {
+                let mut got_layers = layers.clone();
+                let on_gpu = CarryingOnGpu {
+                    gpu,
+                    per_dispatch,
+                    dispatches: std::cell::Cell::new(0),
+                };
+                let got = if per_dispatch == 0 {
+                    let got = reconstruct_layers_with(
+                        frame.clone(),
+                        &mut got_layers,
+                        params,
+                        0.5,
+                        7,
+                        gpu,
+                    );
+                    assert_eq!(gpu.stages_on_cpu(), 0, "the GPU gather ran");
+                    got
+                } else {
+                    let got = reconstruct_layers_with(
+                        frame.clone(),
+                        &mut got_layers,
+                        params,
+                        0.5,
+                        7,
+                        &on_gpu,
+                    );
+                    assert_eq!(on_gpu.dispatches.get(), 10usize.div_ceil(per_dispatch));
+                    got
+                };
+                let colours =
+                    std::iter::once((cpu.color.as_ref().unwrap(), got.color.as_ref().unwrap()))
+                        .chain(cpu_layers.iter().zip(&got_layers));
+                for (k, (cpu, got)) in colours.enumerate() {
+                    let input = if k == 0 {
+                        frame.color.as_ref().unwrap()
+                    } else {
+                        &layers[k - 1]
+                    };
+                    let moved = planes(cpu)
+                        .into_iter()
+                        .zip(planes(input))
+                        .any(|((_, c), (_, i))| c != i);
+                    assert!(moved, "{what}, {params:?}: colour {k} did not move");
+                    for ((name, c), (_, g)) in planes(cpu).into_iter().zip(planes(got)) {
+                        let p = parity(g, c);
+                        assert!(
+                            p.max <= MAX && p.mean <= MEAN && p.outside <= FLIPS,
+                            "{what}, {params:?}, {per_dispatch} a dispatch, colour {k} {name}: \
+                             max {:e} (GPU {} CPU {}), mean {:e}, {:.4}% outside {AGREE:e}",
+                            p.max,
+                            g[p.worst],
+                            c[p.worst],
+                            p.mean,
+                            p.outside * 100.0
+                        );
+                    }
+                }
+            }
+        }
+    }
 }

@@ -72,45 +72,32 @@ impl reconstruct_cpu::Stages for Gpu {
         )
     }
 
-    /// Each colour through the gather in the beauty's place, its texels the beauty's with
-    /// its colour in them (what the pack makes of it: the same depth and motion, on the same
-    /// tiles); the same weights. Carrying them through one dispatch, as the CPU does, is issue 29's next
-    /// step here.
+    /// The beauty and its layers carried through the 2014 gather's dispatches
+    /// ([`Gpu::try_reconstruct_gather_carrying`]): each tap's weights computed once for as
+    /// many colours as a dispatch holds, in groups as even as the CPU's passes. A group the
+    /// GPU could not run is gathered on the CPU (the same weights; the others are kept).
     fn gather_2014_carrying(
         &self,
         config: &ReconstructConfig,
-        (texels, mattes, tiles): (&[Texel2014], &[Matte], &TileGrid),
+        inputs: (&[Texel2014], &[Matte], &TileGrid),
         packed: &TileMask,
         colours: &mut [&mut Color],
     ) {
-        let (width, size) = (config.width as usize, config.tile as usize);
-        for (k, color) in colours.iter_mut().enumerate() {
-            let own;
-            let texels = if k == 0 {
-                texels
-            } else {
-                own = texels
-                    .iter()
-                    .enumerate()
-                    .map(|(i, t)| {
-                        // Zero off the packed tiles, as the pack leaves them.
-                        if !packed.get(i % width / size, i / width / size) {
-                            return [0.0; 8];
-                        }
-                        let a = color.a.as_ref().map_or(1.0, |a| a[i]);
-                        [
-                            color.r[i], color.g[i], color.b[i], a, t[4], t[5], t[6], t[7],
-                        ]
-                    })
-                    .collect::<Vec<_>>();
-                &own[..]
-            };
-            let inputs = GatherInputs::Stable {
-                texels,
-                mattes,
-                tiles,
-            };
-            self.gather(config, inputs, color);
+        let pixels = config.width as usize * config.height as usize;
+        let most = self.reconstruct_colours_per_dispatch(pixels).max(1);
+        let size = colours.len().div_ceil(colours.len().div_ceil(most).max(1));
+        for group in colours.chunks_mut(size.max(1)) {
+            let tried = self.try_reconstruct_gather_carrying(config, inputs, packed, group);
+            self.or_cpu(
+                "reconstruct gather",
+                || tried,
+                || {
+                    let (texels, mattes, tiles) = inputs;
+                    reconstruct_cpu::gather_2014::gather_2014_carrying(
+                        config, texels, mattes, tiles, packed, group,
+                    )
+                },
+            )
         }
     }
 }

@@ -16,17 +16,27 @@
 //! allows a few ulp), and a driver's fusing of a multiply and an add. The parity tests in
 //! tests/gpu_reconstruct.rs bound the effect.
 //!
+//! The 2014 gather also carries light layers (`gather_2014_carrying`, the twin of
+//! [`crate::motion::reconstruct::gather_2014::gather_2014_carrying`]): the same entry, its
+//! pipeline compiled with the shader's `COLOURS` set to the count, reads up to
+//! [`MOST_COLOURS`] colours packed beside the texels and mixes them all along each tap, whose
+//! weights it computes once (each count has its own pipeline, as it has its own copy on the
+//! CPU).
+//!
 //! Buffers are kept per frame shape in the context and reused by every frame of that shape.
 //! The whole colour is uploaded so that the pixels the gather leaves alone come back as they
 //! went (the CPU's in-place write); a frame larger than one storage binding runs on the CPU.
 
 use std::collections::HashMap;
-use std::sync::Mutex;
+use std::sync::{Mutex, OnceLock};
 
 use crate::frame::Color;
+use crate::motion::reconstruct::matte::Matte;
+use crate::motion::reconstruct::pack::pack_tiles;
 #[cfg(doc)]
 use crate::motion::reconstruct::reconstruct_with;
-use crate::motion::reconstruct::{GatherInputs, ReconstructConfig};
+use crate::motion::reconstruct::{GatherInputs, ReconstructConfig, Texel2014, TileMask};
+use crate::motion::tile_max::TileGrid;
 
 use crate::gpu::context::Gpu;
 use crate::gpu::stage::{floats, kept, read_back, Caught, StageError};
@@ -34,8 +44,13 @@ use crate::gpu::stage::{floats, kept, read_back, Caught, StageError};
 /// The shader's source.
 pub const SHADER: &str = concat!(
     include_str!("../prelude.wgsl"),
-    include_str!("reconstruct.wgsl")
+    include_str!("reconstruct.wgsl"),
+    include_str!("reconstruct_taps.wgsl")
 );
+
+/// Most colours one dispatch of the 2014 gather carries (`MOST_COLOURS` in the shader): the
+/// CPU's most a pass.
+pub use crate::motion::reconstruct::gather_2014::MOST_COLOURS;
 
 /// Pixels per workgroup side (`@workgroup_size(8, 8)` in reconstruct.wgsl).
 const WORKGROUP: u32 = 8;
@@ -51,6 +66,8 @@ struct Shape {
     velocity: bool,
     /// Whether the gather reads the mattes (exposure).
     mattes: bool,
+    /// The colours the 2014 gather carries (0: the beauty alone, from the texels).
+    colours: usize,
 }
 
 /// The buffers of one frame shape.
@@ -61,16 +78,44 @@ struct Buffers {
     tiles: wgpu::Buffer,
     color: wgpu::Buffer,
     mattes: wgpu::Buffer,
+    carried: wgpu::Buffer,
     readback: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
 }
 
-/// The compiled stage (both entry points) and its buffers, kept in the context.
+/// The compiled stage (both entry points; the 2014 gather's carrying pipelines as each count
+/// is first asked for) and its buffers, kept in the context.
 pub(crate) struct ReconstructPass {
+    module: wgpu::ShaderModule,
+    pipeline_layout: wgpu::PipelineLayout,
     gather: wgpu::ComputePipeline,
     gather_2014: wgpu::ComputePipeline,
+    /// `gather_2014` with COLOURS = n + 1 at n.
+    carrying: [OnceLock<wgpu::ComputePipeline>; MOST_COLOURS],
     layout: wgpu::BindGroupLayout,
     buffers: Mutex<HashMap<Shape, Buffers>>,
+}
+
+/// The 2014 gather's pipeline for `colours` colours (0: the beauty alone, from the texels).
+fn pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    entry: &str,
+    colours: usize,
+) -> wgpu::ComputePipeline {
+    let constants = [("COLOURS", colours as f64)];
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: Some(layout),
+        module,
+        entry_point: Some(entry),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants: &constants,
+            ..Default::default()
+        },
+        cache: None,
+    })
 }
 
 impl ReconstructPass {
@@ -109,6 +154,7 @@ impl ReconstructPass {
                 storage(3, true),
                 storage(4, false),
                 storage(5, true),
+                storage(6, true),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -116,22 +162,29 @@ impl ReconstructPass {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
         ReconstructPass {
-            gather: pipeline("gather"),
-            gather_2014: pipeline("gather_2014"),
+            gather: pipeline(device, &module, &pipeline_layout, "gather", 0),
+            gather_2014: pipeline(device, &module, &pipeline_layout, "gather_2014", 0),
+            carrying: Default::default(),
+            module,
+            pipeline_layout,
             layout,
             buffers: Mutex::new(HashMap::new()),
         }
+    }
+
+    /// The 2014 gather's pipeline carrying `colours` colours (1 to [`MOST_COLOURS`]),
+    /// compiled the first time it is asked for.
+    fn carrying(&self, device: &wgpu::Device, colours: usize) -> &wgpu::ComputePipeline {
+        self.carrying[colours - 1].get_or_init(|| {
+            pipeline(
+                device,
+                &self.module,
+                &self.pipeline_layout,
+                "gather_2014",
+                colours,
+            )
+        })
     }
 
     fn make_buffers(&self, device: &wgpu::Device, shape: Shape) -> Buffers {
@@ -160,7 +213,7 @@ impl ReconstructPass {
         let velocity_floats = if shape.velocity { 2 * shape.pixels } else { 1 };
         let velocity = buffer("reconstruct velocity", floats(velocity_floats), input);
         let tiles = buffer("reconstruct tiles", floats(2 * shape.tiles), input);
-        let color_bytes = floats(4 * shape.pixels);
+        let color_bytes = floats(4 * shape.colours.max(1) * shape.pixels);
         let color = buffer(
             "reconstruct color",
             color_bytes,
@@ -174,15 +227,22 @@ impl ReconstructPass {
         // Other variants do not read it: a word, to fill the binding.
         let matte_floats = if shape.mattes { 6 * shape.pixels } else { 1 };
         let mattes = buffer("reconstruct mattes", floats(matte_floats), input);
-        let entries: Vec<wgpu::BindGroupEntry> =
-            [&config, &texels, &velocity, &tiles, &color, &mattes]
-                .into_iter()
-                .enumerate()
-                .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                    binding: binding as u32,
-                    resource: buffer.as_entire_binding(),
-                })
-                .collect();
+        // The plain gather does not read it: one RGBA (its element), to fill the binding.
+        let carried = buffer(
+            "reconstruct carried colours",
+            floats((4 * shape.colours * shape.pixels).max(4)),
+            input,
+        );
+        let entries: Vec<wgpu::BindGroupEntry> = [
+            &config, &texels, &velocity, &tiles, &color, &mattes, &carried,
+        ]
+        .into_iter()
+        .enumerate()
+        .map(|(binding, buffer)| wgpu::BindGroupEntry {
+            binding: binding as u32,
+            resource: buffer.as_entire_binding(),
+        })
+        .collect();
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("reconstruct"),
             layout: &self.layout,
@@ -195,10 +255,22 @@ impl ReconstructPass {
             tiles,
             color,
             mattes,
+            carried,
             readback,
             bind_group,
         }
     }
+}
+
+/// What one gather dispatch uploads besides the config: the texels, the pixel velocity
+/// (paper and dual), the tiles, the mattes (exposure), the colours carried (the 2014 gather
+/// carrying layers: each colour's packed texels, colour after colour).
+struct Upload<'a> {
+    texels: &'a [f32],
+    velocity: Option<&'a crate::frame::Velocity>,
+    tiles: &'a TileGrid,
+    mattes: &'a [f32],
+    carried: &'a [[f32; 4]],
 }
 
 impl Gpu {
@@ -210,42 +282,109 @@ impl Gpu {
         inputs: &GatherInputs<'_>,
         color: &mut Color,
     ) -> Result<(), StageError> {
-        let pixels = config.width as usize * config.height as usize;
-        if pixels == 0 {
-            return Ok(());
-        }
-        let (texels, velocity, tiles, mattes, entry): (&[f32], _, _, &[f32], _) = match *inputs {
+        let upload = match *inputs {
             GatherInputs::Paper {
                 texels,
                 velocity,
                 neighbors,
-            } => (
-                bytemuck::cast_slice(texels),
-                Some(velocity),
-                neighbors,
-                &[],
-                false,
-            ),
+            } => Upload {
+                texels: bytemuck::cast_slice(texels),
+                velocity: Some(velocity),
+                tiles: neighbors,
+                mattes: &[],
+                carried: &[],
+            },
             GatherInputs::Stable {
                 texels,
                 mattes,
                 tiles,
-            } => (
-                bytemuck::cast_slice(texels),
-                None,
+            } => Upload {
+                texels: bytemuck::cast_slice(texels),
+                velocity: None,
                 tiles,
-                bytemuck::cast_slice(mattes),
-                true,
-            ),
+                mattes: bytemuck::cast_slice(mattes),
+                carried: &[],
+            },
         };
+        self.dispatch_reconstruct(config, upload, &mut [color])
+    }
+
+    /// How many colours one dispatch of the carrying 2014 gather takes at most for a frame of
+    /// `pixels`: [`MOST_COLOURS`], or as many as one storage binding holds (16 bytes a pixel
+    /// each); 0 where not even the texels fit.
+    pub fn reconstruct_colours_per_dispatch(&self, pixels: usize) -> usize {
+        let limit = self.max_binding();
+        if 32 * pixels as u64 > limit {
+            return 0;
+        }
+        MOST_COLOURS.min((limit / (16 * pixels.max(1) as u64)) as usize)
+    }
+
+    /// [`crate::motion::reconstruct::gather_2014::gather_2014_carrying`] on the GPU for one
+    /// dispatch's `colours` (1 to [`Gpu::reconstruct_colours_per_dispatch`]: the beauty
+    /// first, or a further group of light layers), each in place with the beauty's weights,
+    /// or why it could not run (then the colours are untouched). `texels` are the beauty's,
+    /// packed on `packed`, whose tiles the colours are packed on too.
+    pub fn try_reconstruct_gather_carrying(
+        &self,
+        config: &ReconstructConfig,
+        (texels, mattes, tiles): (&[Texel2014], &[Matte], &TileGrid),
+        packed: &TileMask,
+        colours: &mut [&mut Color],
+    ) -> Result<(), StageError> {
+        let pixels = config.width as usize * config.height as usize;
+        let most = self.reconstruct_colours_per_dispatch(pixels);
+        if colours.len() > most {
+            return Err(StageError::TooLarge {
+                bytes: (16 * pixels * colours.len()) as u64,
+                limit: self.max_binding(),
+            });
+        }
+        let mut carried = Vec::with_capacity(colours.len() * pixels);
+        for c in colours.iter() {
+            let alpha = c.a.as_deref();
+            carried.extend(pack_tiles(
+                config,
+                tiles.columns,
+                [0.0; 4],
+                |column, row| packed.get(column, row),
+                |i| [c.r[i], c.g[i], c.b[i], alpha.map_or(1.0, |a| a[i])],
+            ));
+        }
+        let upload = Upload {
+            texels: bytemuck::cast_slice(texels),
+            velocity: None,
+            tiles,
+            mattes: bytemuck::cast_slice(mattes),
+            carried: &carried,
+        };
+        self.dispatch_reconstruct(config, upload, colours)
+    }
+
+    /// One dispatch of the gather over `upload`, `colours` written back in place.
+    fn dispatch_reconstruct(
+        &self,
+        config: &ReconstructConfig,
+        upload: Upload<'_>,
+        colours: &mut [&mut Color],
+    ) -> Result<(), StageError> {
+        let pixels = config.width as usize * config.height as usize;
+        if pixels == 0 {
+            return Ok(());
+        }
+        // The carrying gather reads its colours from `carried`; the others from the texels.
+        let carrying = !upload.carried.is_empty();
         let shape = Shape {
             pixels,
-            tiles: tiles.x.len(),
-            texel: texels.len() / pixels,
-            velocity: velocity.is_some(),
-            mattes: !mattes.is_empty(),
+            tiles: upload.tiles.x.len(),
+            texel: upload.texels.len() / pixels,
+            velocity: upload.velocity.is_some(),
+            mattes: !upload.mattes.is_empty(),
+            colours: if carrying { colours.len() } else { 0 },
         };
-        let largest = (texels.len().max(4 * pixels) * 4) as u64;
+        let plane = (pixels * 4) as u64;
+        let planes = 4 * shape.colours.max(1);
+        let largest = ((upload.texels.len() * 4) as u64).max(planes as u64 * plane);
         if largest > self.max_binding() {
             return Err(StageError::TooLarge {
                 bytes: largest,
@@ -253,9 +392,17 @@ impl Gpu {
             });
         }
         let pass = self.compiled("reconstruct", ReconstructPass::new);
-        // Errors from here on, the buffers' creation included, come back as a StageError
-        // (the caller runs the CPU gather): out of memory as well as validation.
+        // Errors from here on, the buffers' and a carrying pipeline's creation included, come
+        // back as a StageError (the caller runs the CPU gather): out of memory as well as
+        // validation.
         let caught = Caught::push(&self.device);
+        let pipeline = if carrying {
+            pass.carrying(&self.device, shape.colours)
+        } else if shape.texel == 8 {
+            &pass.gather_2014
+        } else {
+            &pass.gather
+        };
         let mut cache = pass.buffers.lock().unwrap_or_else(|e| e.into_inner());
         let buffers = kept(&mut cache, &shape, || {
             pass.make_buffers(&self.device, shape)
@@ -263,33 +410,35 @@ impl Gpu {
 
         let mut clock = std::time::Instant::now();
         let queue = &self.queue;
-        let plane = (pixels * 4) as u64;
         queue.write_buffer(&buffers.config, 0, bytemuck::bytes_of(config));
-        queue.write_buffer(&buffers.texels, 0, bytemuck::cast_slice(texels));
-        if !mattes.is_empty() {
-            queue.write_buffer(&buffers.mattes, 0, bytemuck::cast_slice(mattes));
+        queue.write_buffer(&buffers.texels, 0, bytemuck::cast_slice(upload.texels));
+        if !upload.mattes.is_empty() {
+            queue.write_buffer(&buffers.mattes, 0, bytemuck::cast_slice(upload.mattes));
         }
-        if let Some(velocity) = velocity {
+        if carrying {
+            queue.write_buffer(&buffers.carried, 0, bytemuck::cast_slice(upload.carried));
+        }
+        if let Some(velocity) = upload.velocity {
             queue.write_buffer(&buffers.velocity, 0, bytemuck::cast_slice(&velocity.x));
             queue.write_buffer(&buffers.velocity, plane, bytemuck::cast_slice(&velocity.y));
         }
+        let tiles = upload.tiles;
         let tile_plane = (tiles.x.len() * 4) as u64;
         queue.write_buffer(&buffers.tiles, 0, bytemuck::cast_slice(&tiles.x));
         queue.write_buffer(&buffers.tiles, tile_plane, bytemuck::cast_slice(&tiles.y));
-        // Alpha, when the frame has none, is not written: the gather's alpha is dropped then.
-        let planes = [
-            Some(&color.r),
-            Some(&color.g),
-            Some(&color.b),
-            color.a.as_ref(),
-        ];
-        for (p, channel) in planes.iter().enumerate() {
-            if let Some(channel) = channel {
-                queue.write_buffer(
-                    &buffers.color,
-                    p as u64 * plane,
-                    bytemuck::cast_slice(channel),
-                );
+        // Alpha, where a colour has none, is not written: the gather's alpha is dropped then.
+        for (g, color) in colours.iter().enumerate() {
+            let channels = [
+                Some(&color.r),
+                Some(&color.g),
+                Some(&color.b),
+                color.a.as_ref(),
+            ];
+            for (p, channel) in channels.iter().enumerate() {
+                if let Some(channel) = channel {
+                    let at = (4 * g + p) as u64 * plane;
+                    queue.write_buffer(&buffers.color, at, bytemuck::cast_slice(channel));
+                }
             }
         }
         self.uploaded(&mut clock)?;
@@ -303,11 +452,7 @@ impl Gpu {
                 label: Some("reconstruct gather"),
                 timestamp_writes: None,
             });
-            compute.set_pipeline(if entry {
-                &pass.gather_2014
-            } else {
-                &pass.gather
-            });
+            compute.set_pipeline(pipeline);
             compute.set_bind_group(0, &buffers.bind_group, &[]);
             compute.dispatch_workgroups(
                 config.width.div_ceil(WORKGROUP),
@@ -316,8 +461,10 @@ impl Gpu {
             );
         }
         self.computed(&mut encoder, "reconstruct", &mut clock)?;
-        let channels = if color.a.is_some() { 4 } else { 3 };
-        let bytes = channels * plane;
+        // Every colour's planes up to the last one written (the last colour's alpha only if
+        // it has one).
+        let last_alpha = colours.last().is_some_and(|c| c.a.is_some());
+        let bytes = (planes as u64 - u64::from(!last_alpha)) * plane;
         encoder.copy_buffer_to_buffer(&buffers.color, 0, &buffers.readback, 0, bytes);
         queue.submit([encoder.finish()]);
         if let Err(error) = caught.check() {
@@ -327,17 +474,14 @@ impl Gpu {
         }
         let out = floats(read_back(&self.device, &buffers.readback, bytes)?);
         self.mark(|t| &mut t.readback_ms, &mut clock)?;
-        let mut planes = out.chunks_exact(pixels);
-        for channel in [
-            Some(&mut color.r),
-            Some(&mut color.g),
-            Some(&mut color.b),
-            color.a.as_mut(),
-        ]
-        .into_iter()
-        .flatten()
-        {
-            channel.copy_from_slice(planes.next().expect("one plane per channel"));
+        for (g, color) in colours.iter_mut().enumerate() {
+            let plane_of = |p: usize| &out[(4 * g + p) * pixels..(4 * g + p + 1) * pixels];
+            color.r.copy_from_slice(plane_of(0));
+            color.g.copy_from_slice(plane_of(1));
+            color.b.copy_from_slice(plane_of(2));
+            if let Some(a) = color.a.as_mut() {
+                a.copy_from_slice(plane_of(3));
+            }
         }
         Ok(())
     }
@@ -377,6 +521,10 @@ mod tests {
         has(format!(
             "const TAP_SPACING: f32 = {:?};",
             cpu::config::TAP_SPACING
+        ));
+        has(format!(
+            "const MOST_COLOURS: u32 = {}u;",
+            cpu::gather_2014::MOST_COLOURS
         ));
         has(format!(
             "const COVER_SLOPE: f32 = {:?};",

@@ -9,9 +9,15 @@
 // the 2014 filter). In and out: the premultiplied colour, written in place.
 //
 // Bindings, in the CPU functions' argument order: 0 the config, 1 texels, 2 velocity, 3
-// tiles, 4 colour, and 5 the exposure variant's mattes (`gather_2014`'s third argument;
-// six words a pixel, src/motion/reconstruct/matte.rs; one unread word otherwise). Planar buffers hold their planes one after the other, as the CPU's
-// structs do: velocity x then y, tiles x then y, colour r, g, b, a.
+// tiles, 4 colour, 5 the exposure variant's mattes (`gather_2014`'s third argument; six words
+// a pixel, src/motion/reconstruct/matte.rs; one unread word otherwise), and 6 the colours the
+// 2014 gather carries beside the beauty (`gather_2014_carrying`'s; one unread word
+// otherwise). Planar buffers hold their planes one after the other, as the CPU's structs do:
+// velocity x then y, tiles x then y, colour r, g, b, a (of each colour in turn when the
+// gather carries several).
+//
+// The 2014 gather's tap reading (`around`, `bilinear`, `split`, `split_by_cover`,
+// `surfaces`) is in reconstruct_taps.wgsl, concatenated after this file.
 //
 // Numerics: the inputs obey the numeric policy (finite colour and velocity, packed depth at
 // most 1e30), so everything but one quantity stays finite. That one is the paper texel's
@@ -56,6 +62,10 @@ struct ReconstructConfig {
 // Per pixel: α, then the indices (as the bits of a float) of the pixels whose colours are its
 // moving and still partners, then its unmixing's extrapolation in R, G and B (`Matte`).
 @group(0) @binding(5) var<storage, read> mattes: array<f32>;
+// The 2014 gather's colours when it carries several (COLOURS ≥ 1), packed as the CPU packs
+// them (zero off the packed tiles): colour g of pixel j at g·width·height + j. One unread
+// word otherwise.
+@group(0) @binding(6) var<storage, read> carried: array<vec4<f32>>;
 
 // The CPU's constants (src/motion/reconstruct/); a unit test in src/gpu/motion/reconstruct.rs
 // checks each against the Rust value.
@@ -266,9 +276,22 @@ fn gather(@builtin(global_invocation_id) id: vec3<u32>) {
 
 // ---- 2014 and exposure ----
 
-// `Texel2014`: premultiplied RGBA, depth, the half-spread V and |V|.
+// Most colours one pipeline of the 2014 gather mixes along the same taps (the CPU's eight a
+// pass).
+const MOST_COLOURS: u32 = 8u;
+
+// The colours the 2014 gather mixes along its taps and where it reads them, set per pipeline
+// so that each count has its own specialised copy (as each count has on the CPU): 0, the
+// beauty alone, read from the texels (the CPU's `gather_2014`); n from 1 to MOST_COLOURS, n
+// colours read from `carried` (`gather_2014_carrying`: the beauty, then light layers with its
+// alpha). Every weight reads only the texels' depth and motion and the mattes (fitted on the
+// beauty), never the colours mixed, so each colour comes out as it does alone in the beauty's
+// place.
+override COLOURS: u32 = 0u;
+
+// The depth and motion of a `Texel2014` (its words 4 to 7): depth, the half-spread V and |V|.
+// Its colour words are read by `colour`.
 struct Texel2014 {
-    color: vec4<f32>,
     z: f32,
     vx: f32,
     vy: f32,
@@ -277,256 +300,46 @@ struct Texel2014 {
 
 fn texel8(i: u32) -> Texel2014 {
     let o = 8u * i;
-    return Texel2014(
-        vec4<f32>(texels[o], texels[o + 1u], texels[o + 2u], texels[o + 3u]),
-        texels[o + 4u],
-        texels[o + 5u],
-        texels[o + 6u],
-        texels[o + 7u],
-    );
+    return Texel2014(texels[o + 4u], texels[o + 5u], texels[o + 6u], texels[o + 7u]);
 }
 
-// `around`: the indices of the four texels around pixel (x, y) + offset (clamped to the
-// frame) and their bilinear weights.
-struct Around {
-    index: array<u32, 4>,
-    weight: array<f32, 4>,
+// How many colours this pipeline mixes.
+fn colours() -> u32 {
+    return max(COLOURS, 1u);
 }
 
-fn around(x: u32, y: u32, offset: vec2<f32>) -> Around {
-    let width = config.width;
-    let height = config.height;
-    let fx = max(f32(x) + offset.x, 0.0);
-    let fy = max(f32(y) + offset.y, 0.0);
-    let x0u = u32(fx);
-    let y0u = u32(fy);
-    let wx = fx - f32(x0u);
-    let wy = fy - f32(y0u);
-    let x0 = min(x0u, width - 1u);
-    let x1 = min(x0u + 1u, width - 1u);
-    let y0 = min(y0u, height - 1u);
-    let y1 = min(y0u + 1u, height - 1u);
-    return Around(
-        array<u32, 4>(y0 * width + x0, y0 * width + x1, y1 * width + x0, y1 * width + x1),
-        array<f32, 4>((1.0 - wx) * (1.0 - wy), wx * (1.0 - wy), (1.0 - wx) * wy, wx * wy),
-    );
-}
-
-// `bilinear`: the colour of `nearest` read between pixels over the corners that move or
-// share its surface.
-fn bilinear(nearest_in: Texel2014, scale: f32, x: u32, y: u32, offset: vec2<f32>) -> Texel2014 {
-    var nearest = nearest_in;
-    let corners = around(x, y, offset);
-    let z = nearest.z;
-    var c: array<Texel2014, 4>;
-    var w: array<f32, 4>;
-    for (var q = 0u; q < 4u; q++) {
-        c[q] = texel8(corners.index[q]);
-        let mixes = abs(c[q].z - z) * scale < 1.0 || c[q].length >= HALF_PIXEL;
-        w[q] = corners.weight[q] * select(0.0, 1.0, mixes);
+// Colour g of pixel j, premultiplied RGBA (the CPU's `colour(j)[g]`).
+fn colour(g: u32, j: u32) -> vec4<f32> {
+    if COLOURS == 0u {
+        let o = 8u * j;
+        return vec4<f32>(texels[o], texels[o + 1u], texels[o + 2u], texels[o + 3u]);
     }
-    let total = w[0] + w[1] + w[2] + w[3];
-    if total > 0.0 {
-        let inverse = 1.0 / total;
-        nearest.color = (w[0] * c[0].color + w[1] * c[1].color + w[2] * c[2].color
-            + w[3] * c[3].color) * inverse;
-    }
-    return nearest;
+    return carried[g * config.width * config.height + j];
 }
 
-// `split`'s result: the tap's two surfaces and their shares.
-struct Split {
-    a: Texel2014,
-    share_a: f32,
-    b: Texel2014,
-    share_b: f32,
+// The CPU's `Colours<G>`: an RGBA per colour, the first `colours()` of them used.
+struct Colours {
+    c: array<vec4<f32>, MOST_COLOURS>,
 }
 
-// `split`: the exposure variant's tap read between pixels and split by surface.
-fn split(nearest: Texel2014, scale: f32, x: u32, y: u32, offset: vec2<f32>) -> Split {
-    let corners = around(x, y, offset);
-    let moves = nearest.length >= HALF_PIXEL;
-    var a = nearest;
-    a.color = vec4<f32>(0.0);
-    var b = Texel2014(vec4<f32>(0.0), 0.0, 0.0, 0.0, 0.0);
-    var share_a = 0.0;
-    var share_b = 0.0;
-    var heaviest = 0.0;
-    var heaviest_color = vec4<f32>(0.0);
-    for (var q = 0u; q < 4u; q++) {
-        let texel = texel8(corners.index[q]);
-        let w = corners.weight[q];
-        let same = abs(texel.z - nearest.z) * scale < 1.0;
-        let texel_moves = texel.length >= HALF_PIXEL;
-        var on_surface = same && !texel_moves;
-        if moves {
-            on_surface = same || texel_moves;
-        }
-        if on_surface {
-            a.color += w * texel.color;
-            share_a += w;
-        } else {
-            b.color += w * texel.color;
-            share_b += w;
-            if w > heaviest {
-                heaviest = w;
-                b.z = texel.z;
-                b.vx = texel.vx;
-                b.vy = texel.vy;
-                b.length = texel.length;
-                heaviest_color = texel.color;
-            }
-        }
-    }
-    if !moves {
-        a.color = share_a * nearest.color;
-    }
-    if b.length < HALF_PIXEL {
-        b.color = share_b * heaviest_color;
-    }
-    return Split(a, share_a, b, share_b);
-}
-
-// `matte::surfaces`: pixel i's coverage by the moving surface, and the colours (RGB) of its
-// moving and still surfaces.
-struct Surfaces {
-    alpha: f32,
-    moving: vec3<f32>,
-    still: vec3<f32>,
-}
-
-fn surfaces(i: u32) -> Surfaces {
-    let alpha = mattes[6u * i];
-    let c = texel8(i);
-    let fi = bitcast<u32>(mattes[6u * i + 1u]);
-    let bi = bitcast<u32>(mattes[6u * i + 2u]);
-    if fi == i && bi == i {
-        // No pair: α is the label, and both surfaces are the colour itself.
-        return Surfaces(alpha, c.color.xyz, c.color.xyz);
-    }
-    let f = texel8(fi).color.xyz;
-    let b = texel8(bi).color.xyz;
-    let e = vec3<f32>(mattes[6u * i + 3u], mattes[6u * i + 4u], mattes[6u * i + 5u]);
-    var out: Surfaces;
-    out.alpha = alpha;
-    if c.length >= HALF_PIXEL {
-        out.moving = c.color.xyz + e * (c.color.xyz - b);
-        out.still = b;
-    } else {
-        out.moving = f;
-        out.still = c.color.xyz + e * (c.color.xyz - f);
+fn colours_of(j: u32) -> Colours {
+    var out: Colours;
+    for (var g = 0u; g < colours(); g++) {
+        out.c[g] = colour(g, j);
     }
     return out;
 }
 
-// `split_by_cover`: the exposure variant's tap split by the mattes' coverage; `valid` false
-// where the CPU returns `None` (then `split` reads the tap).
-struct Cover {
-    parts: Split,
-    valid: bool,
-}
-
-fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>, steepen: bool) -> Cover {
-    var out: Cover;
-    out.valid = false;
-    let corners = around(x, y, offset);
-    // Away from every silhouette (no pixel of the four has a pair): `split` reads the tap.
-    var plain = true;
-    for (var q = 0u; q < 4u; q++) {
-        let j = corners.index[q];
-        if bitcast<u32>(mattes[6u * j + 1u]) != j || bitcast<u32>(mattes[6u * j + 2u]) != j {
-            plain = false;
-        }
+// Pixel i of each colour's r, g, b, a planes (the colours' planes one after the other).
+fn write_colours(i: u32, out: Colours) {
+    let n = config.width * config.height;
+    for (var g = 0u; g < colours(); g++) {
+        let o = 4u * g * n + i;
+        color[o] = out.c[g].x;
+        color[o + n] = out.c[g].y;
+        color[o + 2u * n] = out.c[g].z;
+        color[o + 3u * n] = out.c[g].w;
     }
-    if plain {
-        return out;
-    }
-    let near = texel8(nearest);
-    let moves = near.length >= HALF_PIXEL;
-    var still_z = near.z;
-    var have_still = !moves;
-    for (var q = 0u; q < 4u; q++) {
-        let t = texel8(corners.index[q]);
-        if t.length < HALF_PIXEL {
-            if !have_still {
-                still_z = t.z;
-                have_still = true;
-            } else if abs(t.z - still_z) * scale >= 1.0 {
-                return out;
-            }
-        }
-    }
-    var moving = Texel2014(vec4<f32>(0.0), 0.0, 0.0, 0.0, 0.0);
-    var still = Texel2014(vec4<f32>(0.0), 0.0, 0.0, 0.0, 0.0);
-    var share_m = 0.0;
-    var share_s = 0.0;
-    var heavy_m = 0.0;
-    var heavy_s = -1.0;
-    var still_colour = vec4<f32>(0.0);
-    for (var q = 0u; q < 4u; q++) {
-        let j = corners.index[q];
-        let w = corners.weight[q];
-        let t = texel8(j);
-        let s = surfaces(j);
-        let w_m = w * s.alpha;
-        let w_s = w * (1.0 - s.alpha);
-        moving.color += vec4<f32>(w_m * s.moving, w_m * t.color.w);
-        share_m += w_m;
-        share_s += w_s;
-        let t_moves = t.length >= HALF_PIXEL;
-        var fg_texel = t;
-        var bg_texel = t;
-        if t_moves {
-            bg_texel = texel8(bitcast<u32>(mattes[6u * j + 2u]));
-        } else {
-            fg_texel = texel8(bitcast<u32>(mattes[6u * j + 1u]));
-        }
-        if w_m > heavy_m && fg_texel.length >= HALF_PIXEL {
-            heavy_m = w_m;
-            moving.z = fg_texel.z;
-            moving.vx = fg_texel.vx;
-            moving.vy = fg_texel.vy;
-            moving.length = fg_texel.length;
-        }
-        if w_s > heavy_s {
-            heavy_s = w_s;
-            still.z = bg_texel.z;
-            still.vx = bg_texel.vx;
-            still.vy = bg_texel.vy;
-            still.length = bg_texel.length;
-            still_colour = vec4<f32>(s.still, bg_texel.color.w);
-        }
-    }
-    // A still centre: the coverage steepened about its half level (see the CPU twin).
-    let total = share_m + share_s;
-    if steepen && share_m > 0.0 && share_s > 0.0 {
-        let cover = share_m / total;
-        let steeper = clamp((cover - 0.5) * COVER_SLOPE + 0.5, 0.0, 1.0);
-        let factor = steeper / cover;
-        moving.color *= factor;
-        share_m = steeper * total;
-        share_s = (1.0 - steeper) * total;
-    }
-    if heavy_m == 0.0 {
-        share_s += share_m;
-        share_m = 0.0;
-        moving = Texel2014(vec4<f32>(0.0), 0.0, 0.0, 0.0, 0.0);
-    }
-    if !moves {
-        still_colour = vec4<f32>(surfaces(nearest).still, near.color.w);
-        still.z = near.z;
-        still.vx = near.vx;
-        still.vy = near.vy;
-        still.length = near.length;
-    }
-    still.color = share_s * still_colour;
-    out.valid = true;
-    if moves {
-        out.parts = Split(moving, share_m, still, share_s);
-    } else {
-        out.parts = Split(still, share_s, moving, share_m);
-    }
-    return out;
 }
 
 // A tap surface's foreground (x) and background (y) weights; `share`: the tap's reach
@@ -588,7 +401,7 @@ fn form() -> Form {
     );
 }
 
-fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
+fn gather_pixel_2014(x: u32, y: u32) -> Colours {
     let f = form();
     let width = config.width;
     let height = config.height;
@@ -618,7 +431,7 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
         m_length = own_length;
     }
     if m_length < HALF_PIXEL {
-        return centre.color;
+        return colours_of(i);
     }
     var k = max((config.taps + 3u) / 4u, 1u);
     if f.tap_spacing > 0.0 {
@@ -629,8 +442,8 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
     // (1 − 2·offset) ahead and (1 + 2·offset) behind, at k taps per spread.
     let shift = 2.0 * config.offset;
     let edge = f.edge;
-    var fg = vec4<f32>(0.0);
-    var bg = vec4<f32>(0.0);
+    var fg: Colours;
+    var bg: Colours;
     var w_fg = 0.0;
     var w_bg = 0.0;
     var count = f.centre_count;
@@ -664,7 +477,6 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
                 let px = u32(max(f32(x) + 0.5 + sx * t, 0.0));
                 let py = u32(max(f32(y) + 0.5 + sy * t, 0.0));
                 let nearest_index = min(py, height - 1u) * width + min(px, width - 1u);
-                let nearest = texel8(nearest_index);
                 let at = vec2<f32>(sx * t, sy * t);
                 var parts: Split;
                 if f.split_taps {
@@ -672,19 +484,20 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
                     if cover.valid {
                         parts = cover.parts;
                     } else {
-                        parts = split(nearest, scale, x, y, at);
+                        parts = split(nearest_index, scale, x, y, at);
                     }
                 } else {
-                    parts.a = nearest;
+                    let nearest = texel8(nearest_index);
+                    parts.a.texel = nearest;
                     if nearest.length >= HALF_PIXEL {
-                        parts.a = bilinear(nearest, scale, x, y, at);
+                        parts.a.colour = bilinear(nearest_index, scale, x, y, at);
+                    } else {
+                        parts.a.colour = colours_of(nearest_index);
                     }
-                    parts.share_a = 1.0;
-                    parts.b = Texel2014(vec4<f32>(0.0), 0.0, 0.0, 0.0, 0.0);
-                    parts.share_b = 0.0;
+                    parts.a.share = 1.0;
                 }
-                let sample = parts.a;
-                let other = parts.b;
+                let sample = parts.a.texel;
+                let other = parts.b.texel;
                 let distance = length * t;
                 let along = dv.x * sample.vx + dv.y * sample.vy > 0.0;
                 let counts = f.either_way || sample.length < HALF_PIXEL || along;
@@ -696,14 +509,16 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
                 let w0 = weights(sample, distance, direction, 1.0 - shift * away0, centre_z, window, scale, edge, f.still_reach);
                 let w1 = weights(other, distance, direction, 1.0 - shift * away1, centre_z, window, scale, edge, f.still_reach);
                 count += direction;
-                fg += w0.x * sample.color + w1.x * other.color;
-                bg += w0.y * sample.color + w1.y * other.color;
-                w_fg += w0.x * parts.share_a + w1.x * parts.share_b;
-                w_bg += w0.y * parts.share_a + w1.y * parts.share_b;
+                for (var g = 0u; g < colours(); g++) {
+                    fg.c[g] += w0.x * parts.a.colour.c[g] + w1.x * parts.b.colour.c[g];
+                    bg.c[g] += w0.y * parts.a.colour.c[g] + w1.y * parts.b.colour.c[g];
+                }
+                w_fg += w0.x * parts.a.share + w1.x * parts.b.share;
+                w_bg += w0.y * parts.a.share + w1.y * parts.b.share;
             }
         }
     }
-    let centre_color = centre.color;
+    var out: Colours;
     if f.exposure_fill {
         // 0.5/|V| is at least 1 for |V| ≤ half a pixel (0 included): no division there.
         var cover = 1.0;
@@ -716,26 +531,34 @@ fn gather_pixel_2014(x: u32, y: u32) -> vec4<f32> {
             missing = clamp(1.0 - (w_fg + w_bg) / count, 0.0, 1.0);
             inverse = 1.0 / count;
         }
-        // A still centre's own surface: its colour less the moving surface's fringe.
-        var own_colour = centre_color;
-        if own_length < HALF_PIXEL {
-            own_colour = vec4<f32>(surfaces(i).still, centre_color.w);
+        for (var g = 0u; g < colours(); g++) {
+            // A still centre's own surface: its colour less the moving surface's fringe.
+            var own_colour = colour(g, i);
+            if own_length < HALF_PIXEL {
+                own_colour = vec4<f32>(surfaces(g, i).still, own_colour.w);
+            }
+            var background = own_colour;
+            if w_bg > 0.0 {
+                background = cover * own_colour + (1.0 - cover) * bg.c[g] / w_bg;
+            }
+            out.c[g] = (fg.c[g] + bg.c[g]) * inverse + background * missing;
         }
-        var background = own_colour;
-        if w_bg > 0.0 {
-            background = cover * own_colour + (1.0 - cover) * bg / w_bg;
-        }
-        return (fg + bg) * inverse + background * missing;
+        return out;
     }
     // Blender's own addition: a little of the centre in the background.
     let w = 1.0 / (50.0 * f32(4u * k));
     let w_bg_all = w_bg + w;
     let missing = clamp(1.0 - (w_fg + w_bg_all) / count, 0.0, 1.0);
-    let background = (bg + w * centre_color) / w_bg_all;
-    return (fg + bg + w * centre_color) / count + background * missing;
+    for (var g = 0u; g < colours(); g++) {
+        let centre_colour = colour(g, i);
+        let background = (bg.c[g] + w * centre_colour) / w_bg_all;
+        out.c[g] = (fg.c[g] + bg.c[g] + w * centre_colour) / count + background * missing;
+    }
+    return out;
 }
 
-// 2014 and exposure: pixels of the tiles within one tile of a blurring (dilated) tile.
+// 2014 and exposure: pixels of the tiles within one tile of a blurring (dilated) tile. Its
+// pipelines set COLOURS: 0 for `gather_2014`, the count for `gather_2014_carrying`.
 @compute @workgroup_size(8, 8)
 fn gather_2014(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= config.width || id.y >= config.height {
@@ -744,5 +567,5 @@ fn gather_2014(@builtin(global_invocation_id) id: vec3<u32>) {
     if !near_blur(id.x / config.tile, id.y / config.tile, 1u) {
         return;
     }
-    write_color(id.y * config.width + id.x, gather_pixel_2014(id.x, id.y));
+    write_colours(id.y * config.width + id.x, gather_pixel_2014(id.x, id.y));
 }

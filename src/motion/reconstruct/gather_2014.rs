@@ -24,6 +24,9 @@ pub use super::taps::COVER_SLOPE;
 pub const SALT_TILE: u32 = 0x5449_4c45;
 pub const SALT_TAPS: u32 = 0x5441_5053;
 
+/// Most colours [`gather_2014_carrying`] gathers in one pass (the GPU twin: in one dispatch).
+pub const MOST_COLOURS: usize = 8;
+
 /// The 2014 filter's gather, in place, over the tiles within one tile of a blurring one.
 pub fn gather_2014(
     config: &ReconstructConfig,
@@ -66,7 +69,7 @@ pub fn gather_2014_carrying(
     if colours.is_empty() {
         return;
     }
-    let size = colours.len().div_ceil(colours.len().div_ceil(8));
+    let size = colours.len().div_ceil(colours.len().div_ceil(MOST_COLOURS));
     let inputs = (texels, mattes, tiles, packed);
     for chunk in colours.chunks_mut(size) {
         match chunk.len() {
