@@ -243,6 +243,10 @@ pub enum LayerClass {
     Colour,
     /// A description of the surface (depth, vectors, normals, IDs): passed through unchanged.
     Data,
+    /// Data carried with the motion (a preset's `[layers]` asks): each pixel takes the value
+    /// of the nearest surface whose streak covers it over the exposure
+    /// ([`crate::motion::carry`]); unchanged by depth of field.
+    Motion,
 }
 
 impl LayerClass {
@@ -250,7 +254,14 @@ impl LayerClass {
         match self {
             LayerClass::Colour => "colour",
             LayerClass::Data => "data",
+            LayerClass::Motion => "motion",
         }
+    }
+
+    /// Whether the class holds data (values never mixed: passed through, or carried with the
+    /// motion), not light.
+    pub fn is_data(self) -> bool {
+        self != LayerClass::Colour
     }
 }
 

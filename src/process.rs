@@ -123,7 +123,48 @@ pub fn process_on(
 /// sums alone, and the GPU's bokeh gather and reconstruct's 2014 gather carry them through
 /// their dispatches likewise; the other passes, and scatter on the GPU, run each group of
 /// three in the beauty's place, which costs about what the beauty does (issue 29, point 6).
+///
+/// Data layers a preset classes `motion` take, after a motion blur, the value of the nearest
+/// surface whose streak covers each pixel ([`motion::carry`]), found from the frame's depth
+/// and motion before the passes; other data layers come back as they were read.
 pub fn process_with(
+    algorithm: Algorithm,
+    params: &Params,
+    frame: Frame,
+    frame_number: i64,
+    stages: &(impl dof::Stages + motion::Stages),
+) -> Frame {
+    let carried: Vec<usize> = (0..frame.carried.channels.len())
+        .filter(|&i| frame.carried.channels[i].class == LayerClass::Motion)
+        .collect();
+    let nearest = if carried.is_empty() || algorithm == Algorithm::None {
+        None
+    } else {
+        motion::carry::nearest_surfaces(&frame, shutter_of(params))
+    };
+    let mut frame = process_layers(algorithm, params, frame, frame_number, stages);
+    if let Some(nearest) = nearest {
+        for &i in &carried {
+            let channel = &mut frame.carried.channels[i];
+            channel.plane = motion::carry::carried(&channel.plane, &nearest);
+            if let Some(exact) = &channel.exact {
+                channel.exact = Some(motion::carry::carried(exact, &nearest));
+            }
+        }
+    }
+    frame
+}
+
+/// The exposure `params` ask for, through the numeric policy.
+fn shutter_of(params: &Params) -> Shutter {
+    Shutter {
+        open: numeric::shutter(params.shutter),
+        offset: numeric::shutter_offset(params.shutter_offset),
+    }
+}
+
+/// [`process_with`] but for the data layers: the beauty and its colour layers.
+fn process_layers(
     algorithm: Algorithm,
     params: &Params,
     mut frame: Frame,
@@ -229,10 +270,7 @@ fn process_beauty(
         Some(dof) => dof::apply_layers_with(frame, layers, dof, stages),
         None => frame,
     };
-    let shutter = Shutter {
-        open: numeric::shutter(params.shutter),
-        offset: numeric::shutter_offset(params.shutter_offset),
-    };
+    let shutter = shutter_of(params);
     let pass = |f: Frame| match algorithm {
         Algorithm::Reconstruct | Algorithm::Scatter => unreachable!("they take their layers"),
         Algorithm::Stretch => stretch::stretch_with(f, &params.stretch, shutter, stages),

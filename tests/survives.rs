@@ -1225,3 +1225,153 @@ fn a_u32_depth_is_read_as_a_number_beside_exact_ids() {
         .enumerate()
         .all(|(i, &v)| v == IDS[i % IDS.len()]));
 }
+
+/// A square (x 10..16, y 8..16, depth 2, ID 3 000 000 001, over 2²⁴) moving 12 px a frame
+/// to the right over a still background (depth 10, ID 7), as a colour file holding `Z`,
+/// `velocity.X/Y`, `N.X` (data by name) and `id` (u32) beside the beauty, with the passes.
+fn moving_square(dir: &Path) {
+    let n = W * H;
+    let inside = |i: usize| (10..16).contains(&(i % W)) && (8..16).contains(&(i / W));
+    let plane = |fg: f32, bg: f32| -> Vec<f32> {
+        (0..n).map(|i| if inside(i) { fg } else { bg }).collect()
+    };
+    let data =
+        |name: &str, plane: Vec<f32>| AnyChannel::new(Text::from(name), FlatSamples::F32(plane));
+    let list = vec![
+        data("R", noise(n, 60, 0.0, 1.0)),
+        data("G", plane(0.9, 0.1)),
+        data("B", plane(0.2, 0.6)),
+        data("Z", plane(2.0, 10.0)),
+        data("velocity.X", plane(12.0, 0.0)),
+        data("velocity.Y", vec![0.0; n]),
+        data("N.X", noise(n, 61, -1.0, 1.0)),
+        AnyChannel::new(
+            Text::from("id"),
+            FlatSamples::U32(
+                (0..n)
+                    .map(|i| if inside(i) { 3_000_000_001 } else { 7 })
+                    .collect(),
+            ),
+        ),
+    ];
+    let layer = Layer::new(
+        (W, H),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(list.into()),
+    );
+    Image::from_layer(layer)
+        .write()
+        .to_file(dir.join("color.exr"))
+        .unwrap();
+    write_exr(&dir.join("depth.exr"), W, H, vec![("Z", plane(2.0, 10.0))]);
+    write_exr(
+        &dir.join("velocity.exr"),
+        W,
+        H,
+        vec![("X", plane(12.0, 0.0)), ("Y", vec![0.0; n])],
+    );
+    let y: Vec<f32> = (0..n).map(|i| (i / W) as f32 + 0.5).collect();
+    for (role, step) in [("prev", -12.0), ("next", 12.0)] {
+        let x = (0..n)
+            .map(|i| (i % W) as f32 + 0.5 + if inside(i) { step } else { 0.0 })
+            .collect();
+        write_exr(
+            &dir.join(format!("{role}.exr")),
+            W,
+            H,
+            vec![("X", x), ("Y", y.clone())],
+        );
+    }
+}
+
+/// A preset's `[layers]` may carry data with the motion (`"motion"`): after a motion blur,
+/// each pixel a nearer surface's streak covers takes that surface's depth, vectors and ID
+/// (an ID over 2²⁴ exactly), and the rest keep theirs; a data layer not named (`N`) comes back
+/// bit for bit, and depth of field, which moves nothing, leaves them all as they were.
+#[test]
+fn a_preset_carries_depth_vectors_and_ids_with_the_motion() {
+    use crate::support::{channel, read_exr_reference};
+    let dir = tempfile::tempdir().unwrap();
+    moving_square(dir.path());
+    let preset = dir.path().join("carry.toml");
+    std::fs::write(
+        &preset,
+        "[layers]\nZ = \"motion\"\nvelocity = \"motion\"\nid = \"motion\"\n",
+    )
+    .unwrap();
+    let before = read_exr_reference(&dir.path().join("color.exr"));
+    // The square's streak under the default shutter (0.5, centred): ±3 px about it, so the
+    // pixels x 7..=18 of its rows.
+    let streaked = |i: usize| (7..=18).contains(&(i % W)) && (8..16).contains(&(i / W));
+    for algorithm in ["reconstruct", "scatter", "stretch"] {
+        let out = format!("{algorithm}.exr");
+        blur(
+            dir.path(),
+            &out,
+            &["--algorithm", algorithm, "--preset", &s(&preset)],
+        );
+        let path = dir.path().join(&out);
+        let after = read_exr_reference(&path);
+        let (z, vx) = (channel(&after, "Z"), channel(&after, "velocity.X"));
+        let ids = read_u32(&path, "id");
+        for i in 0..W * H {
+            let (want_z, want_v, want_id) = if streaked(i) {
+                (2.0, 12.0, 3_000_000_001)
+            } else {
+                (10.0, 0.0, 7)
+            };
+            let at = (i % W, i / W);
+            assert_eq!(z[i], want_z, "{algorithm}: Z at {at:?}");
+            assert_eq!(vx[i], want_v, "{algorithm}: velocity.X at {at:?}");
+            assert_eq!(ids[i], want_id, "{algorithm}: id at {at:?}");
+        }
+        assert_eq!(
+            channel(&after, "N.X"),
+            channel(&before, "N.X"),
+            "{algorithm}"
+        );
+        assert_ne!(channel(&after, "R"), channel(&before, "R"), "{algorithm}");
+    }
+    blur(
+        dir.path(),
+        "dof.exr",
+        &[&["dof", "--preset", &s(&preset)][..], &LENS[..]].concat(),
+    );
+    let after = read_exr_reference(&dir.path().join("dof.exr"));
+    for name in ["Z", "velocity.X", "N.X"] {
+        assert_eq!(channel(&after, name), channel(&before, name), "dof: {name}");
+    }
+    // `shutter info --preset` names the class.
+    let o = shutter(&[
+        "info",
+        &s(&dir.path().join("color.exr")),
+        "--json",
+        "--preset",
+        &s(&preset),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let classes: Vec<(String, String)> = doc["files"][0]["channels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| {
+            (
+                c["name"].as_str().unwrap().into(),
+                c["class"].as_str().unwrap().into(),
+            )
+        })
+        .collect();
+    for (name, class) in [
+        ("Z", "motion"),
+        ("velocity.X", "motion"),
+        ("id", "motion"),
+        ("N.X", "data"),
+    ] {
+        assert!(
+            classes.contains(&(name.to_string(), class.to_string())),
+            "{name}: {classes:?}"
+        );
+    }
+}

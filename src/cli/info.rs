@@ -319,7 +319,7 @@ fn class_of(
 ) -> LayerClass {
     // As the read classes it: by `part.channel` where the part has a name (`diffuse.R`).
     let qualified = channel.alias.as_ref().unwrap_or(&channel.name);
-    if let Some(&class) = layers.get(channels::split(qualified).0) {
+    if let Some(class) = channels::preset_class(layers, qualified) {
         return class;
     }
     let crypto = match &info.kind {

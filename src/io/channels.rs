@@ -69,6 +69,19 @@ pub fn split(name: &str) -> (&str, &str) {
     }
 }
 
+/// The class a preset's `[layers]` table gives channel `name` (as the read names it:
+/// `part.channel` where the part has a name): its layer's (`diffuse` for `diffuse.R`), or, for
+/// a channel of no layer (`Z`), its own name's.
+pub fn preset_class(
+    layers: &std::collections::BTreeMap<String, LayerClass>,
+    name: &str,
+) -> Option<LayerClass> {
+    match split(name) {
+        ("", own) => layers.get(own).copied(),
+        (layer, _) => layers.get(layer).copied(),
+    }
+}
+
 /// The class of channel `name`; `crypto_layers` are the layer names the file's
 /// `cryptomatte/<key>/name` attributes give.
 pub fn class_of(name: &str, crypto_layers: &[String]) -> LayerClass {

@@ -101,7 +101,7 @@ pub fn write_like(
         let (kept, apart): (Vec<_>, Vec<_>) = part
             .channels
             .into_iter()
-            .partition(|c| !(is_dwa(encoding.compression) && c.class == LayerClass::Data));
+            .partition(|c| !(is_dwa(encoding.compression) && c.class.is_data()));
         let attributes = attributes_like(part.input, windows, record);
         let data_part = (!apart.is_empty()).then(|| {
             let mut data_attributes = attributes.clone();

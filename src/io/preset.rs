@@ -204,6 +204,7 @@ fn one() -> f32 {
 pub enum LayerClassName {
     Colour,
     Data,
+    Motion,
 }
 
 impl LayerClassName {
@@ -211,6 +212,7 @@ impl LayerClassName {
         match self {
             LayerClassName::Colour => crate::frame::LayerClass::Colour,
             LayerClassName::Data => crate::frame::LayerClass::Data,
+            LayerClassName::Motion => crate::frame::LayerClass::Motion,
         }
     }
 }
@@ -239,7 +241,8 @@ pub struct Preset {
     #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
     pub output: toml::Table,
     /// The class of the colour file's layers by name, over the rule `io::channels` gives
-    /// (`albedo = "data"` keeps a layer sharp, `"ViewLayer.Mist" = "colour"` blurs one):
+    /// (`albedo = "data"` keeps a layer sharp, `"ViewLayer.Mist" = "colour"` blurs one,
+    /// `Z = "motion"` carries depth with the motion: [`crate::motion::carry`]):
     /// `[layers]` in a preset file, merged key by key like the settings.
     #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub layers: std::collections::BTreeMap<String, LayerClassName>,

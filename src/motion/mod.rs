@@ -10,6 +10,7 @@
 //! Each pass hands the stages a backend may run elsewhere to it through its own `Stages` trait
 //! ([`crate::stages`]); [`Stages`] is all three, the bound a backend meets.
 
+pub mod carry;
 pub mod curve;
 pub mod dilate;
 pub mod line;

@@ -48,9 +48,7 @@ impl FramePlan {
             .iter()
             .zip(&color.other_classes)
             .map(|(slot, &class)| {
-                channel_of(slot).sample_type == "u32"
-                    && class == crate::frame::LayerClass::Data
-                    && !passes.contains(slot)
+                channel_of(slot).sample_type == "u32" && class.is_data() && !passes.contains(slot)
             })
             .collect();
     }
@@ -90,9 +88,8 @@ fn carried_class(
         .map(channels::crypto_layers)
         .unwrap_or_default();
     let qualified = channel.alias.as_ref().unwrap_or(&channel.name);
-    let (layer, _) = channels::split(qualified);
-    match layer_classes.get(layer) {
-        Some(&class) => class,
+    match channels::preset_class(layer_classes, qualified) {
+        Some(class) => class,
         // Integers hold IDs and counts, never light (a u32 `obj.R` included).
         None if channel.sample_type == "u32" => crate::frame::LayerClass::Data,
         None => channels::class_of(qualified, &crypto),

@@ -52,7 +52,7 @@ impl Gates {
     fn of(&self, class: LayerClass) -> (Option<f64>, Option<f64>) {
         match class {
             LayerClass::Colour => (self.fail, self.warn),
-            LayerClass::Data => (self.data_fail, self.data_warn),
+            LayerClass::Data | LayerClass::Motion => (self.data_fail, self.data_warn),
         }
     }
 }
@@ -254,7 +254,7 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
         let mut l_largest = Largest::default();
         for pair in group {
             let (fail, warn) = gates.of(pair.class);
-            let data = pair.class == LayerClass::Data;
+            let data = pair.class.is_data();
             for i in 0..n {
                 let (x, y) = (pair.a[i], pair.b[i]);
                 if pair.exact.is_none() && (!x.is_finite() || !y.is_finite()) {
