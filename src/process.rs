@@ -137,10 +137,9 @@ pub fn process_with(
     let carried: Vec<usize> = (0..frame.carried.channels.len())
         .filter(|&i| frame.carried.channels[i].class == LayerClass::Motion)
         .collect();
-    let nearest = if carried.is_empty() || algorithm == Algorithm::None {
-        None
-    } else {
-        motion::carry::nearest_surfaces(&frame, shutter_of(params))
+    let nearest = match streak_of(algorithm, params) {
+        Some(streak) if !carried.is_empty() => motion::carry::nearest_surfaces(&frame, &streak),
+        _ => None,
     };
     let mut frame = process_layers(algorithm, params, frame, frame_number, stages);
     if let Some(nearest) = nearest {
@@ -153,6 +152,42 @@ pub fn process_with(
         }
     }
     frame
+}
+
+/// The streaks `algorithm` draws, as [`motion::carry`] follows them: its exposure, its path,
+/// its longest streak and its depth tolerance. `None` for no motion blur.
+fn streak_of(algorithm: Algorithm, params: &Params) -> Option<motion::carry::Streak> {
+    use motion::carry::{Nearer, Path, Streak};
+    let shutter = shutter_of(params);
+    Some(match algorithm {
+        Algorithm::None => return None,
+        // The half-spread is at most k a side ([`reconstruct::spread_2014`]).
+        Algorithm::Reconstruct => Streak {
+            interval: shutter.interval(),
+            path: Path::Straight,
+            longest: 2.0 * params.reconstruct.max_blur as f32,
+            nearer: Nearer::By(params.reconstruct.soft_z.max(0.0)),
+        },
+        Algorithm::Stretch => {
+            // Each side's shift is at most MAX_SHIFT.
+            let config = stretch::StretchConfig::new(1, 1, &params.stretch, shutter);
+            let sides = u8::from(config.t0 < 0.0) + u8::from(config.t1 > 0.0);
+            Streak {
+                interval: (config.t0, config.t1),
+                path: Path::Straight,
+                longest: stretch::MAX_SHIFT * f32::from(sides),
+                nearer: Nearer::ByFraction(params.stretch.depth_tolerance.max(0.0)),
+            }
+        }
+        Algorithm::Scatter => Streak {
+            interval: shutter.interval(),
+            path: Path::Curve {
+                arc: params.scatter.curve == motion::CurveKind::Arc,
+            },
+            longest: params.scatter.max_curve.max(1.0),
+            nearer: Nearer::ByFraction(params.scatter.depth_tolerance.max(0.0)),
+        },
+    })
 }
 
 /// The exposure `params` ask for, through the numeric policy.

@@ -121,6 +121,11 @@ fn write_passes(dir: &Path) {
 }
 
 fn blur(dir: &Path, out: &str, extra: &[&str]) {
+    blur_with(dir, out, extra, &[]);
+}
+
+/// [`blur`] with the environment variables `env` set; what it printed.
+fn blur_with(dir: &Path, out: &str, extra: &[&str], env: &[(&str, &str)]) -> Vec<u8> {
     // `dof` first in `extra` runs `shutter dof` (depth of field alone).
     let (command, extra) = match extra.split_first() {
         Some((&"dof", rest)) => ("dof", rest),
@@ -145,9 +150,13 @@ fn blur(dir: &Path, out: &str, extra: &[&str]) {
         s(&dir.join(out)),
     ]);
     args.extend(extra.iter().map(|a| a.to_string()));
-    let args: Vec<&str> = args.iter().map(String::as_str).collect();
-    let run = shutter(&args);
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"))
+        .args(&args)
+        .envs(env.iter().copied())
+        .output()
+        .expect("run shutter");
     assert!(run.status.success(), "{}", stderr(&run));
+    run.stdout
 }
 
 #[test]
@@ -497,6 +506,32 @@ fn light_layers_add_up_on_the_gpu_too() {
             &[args, &["--backend", "wgpu"][..]].concat(),
         );
         check_layers(&color, &dir.path().join(&out), 1e-5);
+    }
+    // reconstruct's carrying gather on a device whose binding holds two colours of this frame
+    // (two dispatches: the beauty and diffuse, then specular), and on one that holds not even
+    // the texels (every colour on the CPU, in one pass): the CPU's layers, within the
+    // gather's parity, and bit for bit.
+    use crate::support::{channel, read_exr_reference};
+    blur(dir.path(), "cpu.exr", &[]);
+    let cpu = read_exr_reference(&dir.path().join("cpu.exr"));
+    for (limit, exact) in [("32768", false), ("4096", true)] {
+        let out = format!("limit-{limit}.exr");
+        let env = [("SHUTTER_GPU_MAX_BINDING", limit)];
+        let printed = blur_with(dir.path(), &out, &["--backend", "wgpu", "--json"], &env);
+        let report: serde_json::Value = serde_json::from_slice(&printed).unwrap();
+        let on_cpu = report["backend"]["stages_on_cpu"].as_u64().unwrap();
+        assert_eq!(on_cpu > 0, exact, "limit {limit}: {report}");
+        let got = read_exr_reference(&dir.path().join(&out));
+        for name in ["R", "diffuse.R", "specular.G", "specular.B"] {
+            let (c, g) = (channel(&cpu, name), channel(&got, name));
+            let worst = c
+                .iter()
+                .zip(g)
+                .map(|(c, g)| (c - g).abs())
+                .fold(0.0f32, f32::max);
+            let bound = if exact { 0.0 } else { 1e-5 };
+            assert!(worst <= bound, "limit {limit}: {name} differs by {worst:e}");
+        }
     }
 }
 
@@ -1303,14 +1338,27 @@ fn a_preset_carries_depth_vectors_and_ids_with_the_motion() {
     let before = read_exr_reference(&dir.path().join("color.exr"));
     // The square's streak under the default shutter (0.5, centred): ±3 px about it, so the
     // pixels x 7..=18 of its rows.
-    let streaked = |i: usize| (7..=18).contains(&(i % W)) && (8..16).contains(&(i / W));
-    for algorithm in ["reconstruct", "scatter", "stretch"] {
-        let out = format!("{algorithm}.exr");
-        blur(
-            dir.path(),
-            &out,
-            &["--algorithm", algorithm, "--preset", &s(&preset)],
-        );
+    // Stretch's rear curtain exposes [−0.5, 0]: 6 px behind it alone, x 4..=15.
+    let runs = [
+        ("reconstruct", "centre", 7..=18),
+        ("scatter", "centre", 7..=18),
+        ("stretch", "centre", 7..=18),
+        ("stretch", "rear", 4..=15),
+    ];
+    for (algorithm, anchor, columns) in runs {
+        let streaked = |i: usize| columns.contains(&(i % W)) && (8..16).contains(&(i / W));
+        let out = format!("{algorithm}-{anchor}.exr");
+        let mut args = vec![
+            "--algorithm",
+            algorithm,
+            "--preset",
+            preset.to_str().unwrap(),
+        ];
+        if algorithm == "stretch" {
+            args.extend(["--anchor", anchor]);
+        }
+        let algorithm = format!("{algorithm} {anchor}");
+        blur(dir.path(), &out, &args);
         let path = dir.path().join(&out);
         let after = read_exr_reference(&path);
         let (z, vx) = (channel(&after, "Z"), channel(&after, "velocity.X"));

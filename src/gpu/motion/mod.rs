@@ -84,20 +84,25 @@ impl reconstruct_cpu::Stages for Gpu {
         colours: &mut [&mut Color],
     ) {
         let pixels = config.width as usize * config.height as usize;
-        let most = self.reconstruct_colours_per_dispatch(pixels).max(1);
+        let (texels, mattes, tiles) = inputs;
+        let cpu = |group: &mut [&mut Color]| {
+            reconstruct_cpu::gather_2014::gather_2014_carrying(
+                config, texels, mattes, tiles, packed, group,
+            )
+        };
+        let most = self.reconstruct_colours_per_dispatch(pixels);
+        if most == 0 {
+            // Not even the texels fit a binding: all on the CPU, eight colours a pass.
+            let why = crate::gpu::stage::StageError::TooLarge {
+                bytes: 32 * pixels as u64,
+                limit: self.max_binding(),
+            };
+            return self.or_cpu("reconstruct gather", || Err(why), || cpu(colours));
+        }
         let size = colours.len().div_ceil(colours.len().div_ceil(most).max(1));
         for group in colours.chunks_mut(size.max(1)) {
             let tried = self.try_reconstruct_gather_carrying(config, inputs, packed, group);
-            self.or_cpu(
-                "reconstruct gather",
-                || tried,
-                || {
-                    let (texels, mattes, tiles) = inputs;
-                    reconstruct_cpu::gather_2014::gather_2014_carrying(
-                        config, texels, mattes, tiles, packed, group,
-                    )
-                },
-            )
+            self.or_cpu("reconstruct gather", || tried, || cpu(group))
         }
     }
 }
