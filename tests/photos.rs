@@ -1,8 +1,10 @@
-//! Photos keep what they came with (issue 29, point 4): an 8/16-bit photo's ICC profile, EXIF
-//! and chroma subsampling come out again, its colour is blurred in its profile's linear light,
-//! its bit depth is kept, its orientation is honoured once, and TIFFs come out compressed with
-//! their alpha declared. Fixtures are made here at run time; the outputs are read back by
-//! `exiftool` and `tiffinfo` where installed (skipped with a note when absent, unless
+//! Photos keep what they came with (issue 29, point 4): an 8/16-bit photo's ICC profile, EXIF,
+//! XMP, IPTC and chroma subsampling come out again (EXIF, XMP and IPTC from and to JPEG, PNG
+//! and TIFF alike), its colour is blurred in its profile's linear light, its bit depth is
+//! kept, its orientation is honoured once, and TIFFs come out compressed with their alpha
+//! declared. Fixtures are made here at run time (tagged by exiftool where a test needs what
+//! only a real client writes); the outputs are read back by `exiftool`, `oiiotool` and
+//! `tiffinfo` where installed (skipped with a note when absent, unless
 //! SHUTTER_REQUIRE_TOOLS=1), and by the image and tiff crates' decoders.
 
 use std::path::Path;
@@ -462,5 +464,158 @@ fn a_jpeg_output_leaves_out_a_block_too_large_for_its_segment_and_says_so() {
     if let Some(tags) = exiftool(&out) {
         assert_eq!(tags["Make"], "ShTs", "{tags}");
         assert!(tags.get("Subject").is_none(), "{tags}");
+    }
+}
+
+/// Sets tags of `path` with exiftool (`-overwrite_original`); false, with a note, where it is
+/// not installed (a failure where SHUTTER_REQUIRE_TOOLS=1).
+fn exiftool_set(path: &Path, args: &[&str]) -> bool {
+    let path = s(path);
+    let mut all = vec!["-q", "-q", "-overwrite_original"];
+    all.extend(args);
+    all.push(&path);
+    tool("exiftool", &all).is_some()
+}
+
+/// What exiftool writes into a photo for the metadata tests: IFD0 tags, an Exif and a GPS
+/// directory's, XMP and IPTC, and orientation 6 (turn 90° clockwise to view).
+const TAGGED: [&str; 10] = [
+    "-Make=ShTs",
+    "-Model=Model X",
+    "-Artist=A. Person",
+    "-DateTimeOriginal=2024:05:06 07:08:09",
+    "-GPSLatitude=12.5",
+    "-GPSLatitudeRef=N",
+    "-Orientation#=6",
+    "-XMP-dc:Title=A title",
+    "-IPTC:Keywords=one",
+    "-IPTC:Keywords=two",
+];
+
+/// A portrait stored on its side, `sw` × `sh`, to be turned 90° clockwise: upright
+/// (`sh` × `sw`) it is bright in its top-left corner, dark elsewhere.
+fn portrait_on_its_side(sw: u32, sh: u32) -> Vec<u8> {
+    let uw = sh;
+    (0..sw * sh)
+        .flat_map(|i| {
+            let (ux, uy) = (uw - 1 - i / sw, i % sw);
+            let v = if ux < 8 && uy < 8 { 230 } else { 20 };
+            [v, v, v]
+        })
+        .collect()
+}
+
+/// What every output of the metadata tests holds, read by exiftool: the tags [`TAGGED`]
+/// wrote (`iptc`: and its IPTC), the pixels upright and said to be so (orientation 1 or none).
+fn assert_tagged(tags: &serde_json::Value, iptc: bool) {
+    assert_eq!(tags["Make"], "ShTs", "{tags}");
+    assert_eq!(tags["Model"], "Model X", "{tags}");
+    assert_eq!(tags["Artist"], "A. Person", "{tags}");
+    assert_eq!(tags["DateTimeOriginal"], "2024:05:06 07:08:09", "{tags}");
+    assert_eq!(tags["GPSLatitude"], 12.5, "{tags}");
+    assert_eq!(tags["Title"], "A title", "{tags}");
+    if iptc {
+        assert_eq!(
+            tags["Keywords"],
+            serde_json::json!(["one", "two"]),
+            "{tags}"
+        );
+    }
+    assert!(
+        tags.get("Orientation").is_none_or(|o| o == 1),
+        "turned upright once: {tags}"
+    );
+    assert_eq!(
+        (&tags["ImageWidth"], &tags["ImageHeight"]),
+        (&32.into(), &48.into())
+    );
+}
+
+/// The pixels of an output of the metadata tests are the upright view: bright top left.
+fn assert_upright(out: &Path) {
+    let result = image::open(out).unwrap().to_luma8();
+    assert_eq!(result.dimensions(), (32, 48));
+    assert!(result.get_pixel(3, 3)[0] > 150, "bright top left");
+    assert!(result.get_pixel(28, 3)[0] < 80 && result.get_pixel(3, 44)[0] < 80);
+}
+
+/// A TIFF whose EXIF (IFD0's tags, its Exif and GPS directories), XMP and IPTC exiftool wrote,
+/// stored on its side with orientation 6: a TIFF, a JPEG and a PNG out of it hold them all
+/// again (but IPTC in a PNG, which has no place for it), as exiftool and OpenImageIO read
+/// them, the pixels turned upright once.
+#[test]
+fn a_tiffs_exif_xmp_and_iptc_come_out_in_a_tiff_a_jpeg_and_a_png_turned_upright_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let (sw, sh) = (48u32, 32u32);
+    let input = dir.path().join("tagged.tif");
+    let encoder = image::codecs::tiff::TiffEncoder::new(std::fs::File::create(&input).unwrap());
+    let stored = portrait_on_its_side(sw, sh);
+    encoder
+        .write_image(&stored, sw, sh, image::ExtendedColorType::Rgb8)
+        .unwrap();
+    if !exiftool_set(&input, &TAGGED) {
+        return;
+    }
+    let velocity = dir.path().join("v.png");
+    velocity_map(&velocity, sh, sw, |_, _| 0.0);
+    for (name, iptc) in [("out.tif", true), ("out.jpg", true), ("out.png", false)] {
+        let out = dir.path().join(name);
+        blur(&input, &velocity, &out, &[]);
+        assert_upright(&out);
+        assert_tagged(&exiftool(&out).unwrap(), iptc);
+        if let Some(info) = oiiotool_info(&out) {
+            let mut lines = vec![
+                "Make: \"ShTs\"",
+                "Artist: \"A. Person\"",
+                "Exif:DateTimeOriginal: \"2024:05:06 07:08:09\"",
+                "Orientation: 1 (normal)",
+            ];
+            if iptc {
+                lines.push("Keywords: \"one; two\"");
+            }
+            for line in lines {
+                assert!(info.contains(line), "{name}: {line} in\n{info}");
+            }
+        }
+    }
+}
+
+/// A JPEG's EXIF (big-endian, as the helper and many cameras write it) comes out in a TIFF:
+/// its IFD0 tags in the TIFF's IFD0, its Exif and GPS directories as directories of the TIFF,
+/// its orientation 1 as the pixels are turned upright.
+#[test]
+fn a_jpegs_exif_comes_out_in_a_tiff() {
+    let dir = tempfile::tempdir().unwrap();
+    let (sw, sh) = (48u32, 32u32);
+    let input = dir.path().join("tagged.jpg");
+    let mut encoder = jpeg_encoder::Encoder::new_file(&input, 95).unwrap();
+    encoder.add_exif_metadata(&exif(6)).unwrap();
+    encoder
+        .encode(
+            &portrait_on_its_side(sw, sh),
+            sw as u16,
+            sh as u16,
+            jpeg_encoder::ColorType::Rgb,
+        )
+        .unwrap();
+    let tagged = exiftool_set(&input, &TAGGED[1..]);
+    let velocity = dir.path().join("v.png");
+    velocity_map(&velocity, sh, sw, |_, _| 0.0);
+    let out = dir.path().join("out.tif");
+    blur(&input, &velocity, &out, &[]);
+    assert_upright(&out);
+
+    use tiff::tags::Tag;
+    let mut tiff = tiff::decoder::Decoder::new(std::fs::File::open(&out).unwrap()).unwrap();
+    assert_eq!(tiff.get_tag_ascii_string(Tag::Make).unwrap(), "ShTs");
+    assert_eq!(tiff.get_tag_u32(Tag::Orientation).unwrap(), 1);
+    if tagged {
+        let exif = tiff.get_tag(Tag::ExifDirectory).unwrap().into_ifd_pointer();
+        let exif = tiff.read_directory(exif.unwrap()).unwrap();
+        let date = tiff
+            .read_directory_tags(&exif)
+            .get_tag_ascii_string(Tag::Unknown(36867));
+        assert_eq!(date.unwrap(), "2024:05:06 07:08:09");
+        assert_tagged(&exiftool(&out).unwrap(), true);
     }
 }

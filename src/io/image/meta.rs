@@ -1,18 +1,18 @@
 //! What a photo holds besides its pixels, read so that the output can hold it again
 //! (`frame::Photo`): the ICC profile (JPEG APP2, PNG iCCP, TIFF tag 34675), EXIF (JPEG APP1,
-//! PNG eXIf), XMP (JPEG APP1, PNG iTXt, TIFF tag 700), IPTC (JPEG APP13 and TIFF tag 34377,
-//! as Photoshop resource blocks), the bits per sample and a JPEG's chroma subsampling.
+//! PNG eXIf, a TIFF's IFD0 tags and Exif and GPS directories gathered into that form by
+//! `tiff_meta`), XMP (JPEG APP1, PNG iTXt, TIFF tag 700), IPTC (JPEG APP13 and TIFF tag 34377
+//! as Photoshop resource blocks, a TIFF's bare tag 33723 wrapped as one), the bits per sample
+//! and a JPEG's chroma subsampling.
 //!
 //! The pixels are turned upright on read (`read_planes`, by the orientation the image crate
 //! reads from EXIF or the TIFF tag), so the frame holds the upright photo and the EXIF and XMP
 //! carried with it say orientation 1: written again as they are, they describe the upright
 //! pixels of the output, and no viewer turns them a second time.
 //!
-//! Not read: a TIFF's EXIF (a sub-directory, and IFD0's own Make, Model, DateTime, …), a
-//! TIFF's bare IPTC (tag 33723, which exiftool writes as LONGs) and a PNG's IPTC (a hex text
-//! chunk of no settled form: it comes through as the text chunk it is). A PNG's text chunks
-//! (tEXt, zTXt, iTXt) are read with the png crate, whose decoder the image crate does not
-//! expose for them.
+//! Not read: a PNG's IPTC (a hex text chunk of no settled form: it comes through as the text
+//! chunk it is). A PNG's text chunks (tEXt, zTXt, iTXt) are read with the png crate, whose
+//! decoder the image crate does not expose for them.
 
 use std::path::Path;
 
@@ -51,8 +51,9 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
     }
     if tiff {
         // The image crate's TIFF reader gives no profile stored as UNDEFINED (as exiftool
-        // and Photoshop store it) and refuses XMP under its limits: the tiff crate reads them.
-        ([icc, xmp, iptc], premultiplied) = tiff_blocks(path);
+        // and Photoshop store it), refuses XMP under its limits and gives no EXIF: the tiff
+        // crate reads them.
+        ([icc, exif, xmp, iptc], premultiplied) = tiff_blocks(path);
     }
     if let Some(exif) = &mut exif {
         set_exif_orientation(exif, 1);
@@ -127,25 +128,42 @@ fn png_texts(path: &Path) -> Vec<crate::frame::PngText> {
     texts
 }
 
-/// A TIFF's profile (tag 34675), XMP (tag 700) and Photoshop resource blocks (tag 34377,
-/// where IPTC sits beside its JPEG form), each as its bytes; and whether its alpha is
-/// associated (ExtraSamples = 1: the colour is premultiplied).
-fn tiff_blocks(path: &Path) -> ([Option<Vec<u8>>; 3], bool) {
-    use tiff::tags::Tag;
+/// A TIFF's profile (tag 34675), EXIF (its IFD0's descriptive tags and the directories they
+/// point to, as one block: `tiff_meta`), XMP (tag 700) and Photoshop resource blocks (tag
+/// 34377, where IPTC sits beside its JPEG form; bare IPTC, tag 33723, wrapped as one where
+/// they hold none), each as its bytes; and whether its alpha is associated (ExtraSamples = 1:
+/// the colour is premultiplied).
+fn tiff_blocks(path: &Path) -> ([Option<Vec<u8>>; 4], bool) {
+    use super::tiff_meta;
+    use tiff::tags::{Tag, Type, ValueBuffer};
     let Ok(mut decoder) = crate::io::input::open_input(path)
         .map(std::io::BufReader::new)
         .map_err(tiff::TiffError::from)
         .and_then(tiff::decoder::Decoder::new)
     else {
-        return ([None, None, None], false);
+        return ([None, None, None, None], false);
     };
-    let blocks = [34675, 700, 34377].map(|tag| {
+    // Each value's bytes as stored, whatever its type (exiftool types tag 33723 LONG).
+    let [icc, xmp, photoshop, bare] = [34675, 700, 34377, 33723].map(|tag| {
+        let mut value = ValueBuffer::empty(Type::BYTE);
         let tag = Tag::from_u16_exhaustive(tag);
-        decoder.find_tag(tag).ok()??.into_u8_vec().ok()
+        let found = decoder.image_ifd().find_tag_buf(tag, &mut value).ok()??;
+        (found.count() > 0).then(|| value.as_bytes().to_vec())
     });
+    let iptc = match (photoshop, bare) {
+        (Some(resources), _) if tiff_meta::iptc_records(&resources).is_some() => Some(resources),
+        (resources, Some(records)) => {
+            let mut resources = resources.unwrap_or_default();
+            resources.extend(tiff_meta::iptc_resource(&records));
+            Some(resources)
+        }
+        (resources, None) => resources,
+    };
+    let room = crate::io::image::HEADER_ROOM as usize;
+    let exif = tiff_meta::exif_of_tiff(&mut decoder, room).map(|e| tiff_meta::to_block(&e));
     let extra = decoder.find_tag_unsigned_vec::<u16>(Tag::ExtraSamples);
     let associated = extra.ok().flatten().is_some_and(|e| e.first() == Some(&1));
-    (blocks, associated)
+    ([icc, exif, xmp, iptc], associated)
 }
 
 /// Where IFD0's orientation (tag 0x0112, a SHORT) sits in an EXIF block (a TIFF structure,

@@ -12,6 +12,7 @@
 
 mod meta;
 mod profile;
+mod tiff_meta;
 mod write;
 
 use std::io::{Seek, Write};

@@ -8,9 +8,12 @@
 //!   has no settled place for it).
 //! - TIFF (tiff crate): deflate with the horizontal predictor (lossless, and what every TIFF
 //!   reader reads; LZW compresses photos less), `ExtraSamples` = 2 (unassociated alpha: the
-//!   file holds straight alpha), the profile in tag 34675, XMP in tag 700, IPTC as Photoshop
-//!   resource blocks in tag 34377. EXIF is not written (it would be a sub-directory of its
-//!   own, rebuilt entry by entry).
+//!   file holds straight alpha), the profile in tag 34675, XMP in tag 700, IPTC's datasets
+//!   bare in tag 33723 (where exiftool writes them and libtiff's readers, OpenImageIO's among
+//!   them, look) and any other Photoshop resources in tag 34377, each value at a word
+//!   boundary (the encoder's own tags are not always). EXIF is spread out as a TIFF holds it
+//!   (`tiff_meta`): its descriptive IFD0 tags in the image's IFD0, its Exif and GPS
+//!   directories as directories of their own that IFD0 points to.
 //! - JPEG (jpeg-encoder): the quality asked for, the input's chroma subsampling (any of
 //!   4:4:4, 4:4:0, 4:2:2, 4:2:0, 4:1:1, 4:4:1; 4:4:4 for a file that is not a JPEG), the
 //!   profile in APP2 segments, EXIF and XMP in APP1, IPTC in APP13. No alpha, 8 bits only.
@@ -20,6 +23,7 @@ use std::io::{Seek, Write};
 use crate::frame::Photo;
 
 use super::profile::Transfer;
+use super::tiff_meta;
 use super::ImageFormat;
 
 /// How a photo is written.
@@ -73,10 +77,12 @@ pub fn jpeg_left_out(photo: &Photo) -> Vec<(&'static str, usize)> {
     .collect()
 }
 
-/// TIFF tags image's encoder has no name for: XMP (Adobe XMP part 3, 1.1.6) and Photoshop
-/// image resources (TIFF/EP, where IPTC lives in a TIFF).
+/// The TIFF tags of what a photo carries: its ICC profile (ICC.1, annex B.4), XMP (Adobe XMP
+/// part 3, 1.1.6), Photoshop image resources (TIFF/EP) and bare IPTC (IPTC-NAA, TIFF/EP).
+const TIFF_ICC: u16 = 34675;
 const TIFF_XMP: u16 = 700;
 const TIFF_PHOTOSHOP: u16 = 34377;
+const TIFF_IPTC: u16 = 33723;
 
 /// `ExtraSamples` value for unassociated (straight) alpha (TIFF 6.0, section 18).
 const UNASSOCIATED_ALPHA: u16 = 2;
@@ -209,7 +215,7 @@ fn write_tiff(
     photo: Option<&Photo>,
 ) -> Result<(), String> {
     use tiff::encoder::{colortype, Compression, DeflateLevel, Predictor, TiffEncoder};
-    use tiff::tags::Tag;
+    use tiff::tags::{Tag, Type};
     let error = |e: tiff::TiffError| e.to_string();
     let mut encoder = TiffEncoder::new(writer)
         .map_err(error)?
@@ -217,6 +223,17 @@ fn write_tiff(
         .with_predictor(Predictor::Horizontal);
     let xmp = photo.and_then(|p| p.xmp.as_deref());
     let iptc = photo.and_then(|p| p.iptc.as_deref());
+    // IPTC's datasets in tag 33723, the other Photoshop resources (if any) in 34377.
+    let records = iptc.and_then(tiff_meta::iptc_records);
+    let resources = iptc.map(tiff_meta::without_iptc).filter(|r| !r.is_empty());
+    // EXIF's directories below IFD0 go before the image, whose IFD0 points to them.
+    let exif = photo
+        .and_then(|p| p.exif.as_deref())
+        .and_then(tiff_meta::parse);
+    let pointers = match &exif {
+        Some(exif) => tiff_meta::write_sub_directories(&mut encoder, exif).map_err(error)?,
+        None => Vec::new(),
+    };
     // The tags beside the pixels: alpha declared, then what the photo came with.
     macro_rules! write_image {
         ($color:ty, $data:expr) => {{
@@ -226,15 +243,21 @@ fn write_tiff(
                 tags.write_tag(Tag::ExtraSamples, &[UNASSOCIATED_ALPHA][..])
                     .map_err(error)?;
             }
-            if let Some(icc) = icc {
-                tags.write_tag(Tag::IccProfile, icc).map_err(error)?;
+            for (tag, block) in [
+                (TIFF_ICC, icc),
+                (TIFF_XMP, xmp),
+                (TIFF_PHOTOSHOP, resources.as_deref()),
+            ] {
+                if let Some(block) = block {
+                    tiff_meta::write_raw(tags, tag, Type::BYTE, block).map_err(error)?;
+                }
             }
-            if let Some(xmp) = xmp {
-                tags.write_tag(Tag::Unknown(TIFF_XMP), xmp).map_err(error)?;
+            if let Some(records) = records {
+                let longs = tiff_meta::iptc_as_longs(records);
+                tiff_meta::write_raw(tags, TIFF_IPTC, Type::LONG, &longs).map_err(error)?;
             }
-            if let Some(iptc) = iptc {
-                tags.write_tag(Tag::Unknown(TIFF_PHOTOSHOP), iptc)
-                    .map_err(error)?;
+            if let Some(exif) = &exif {
+                tiff_meta::write_ifd0(tags, exif, &pointers).map_err(error)?;
             }
             image.write_data($data).map_err(error)
         }};
