@@ -120,9 +120,9 @@ pub fn process_on(
 /// 2014 variants carry the layers through the beauty's own work (its curves, its taps'
 /// weights: [`scatter::stages_carrying`], [`dof::gather::gather_carrying`],
 /// [`reconstruct::gather_2014::gather_2014_carrying`]), so a layer costs its share of the
-/// sums alone, and the GPU's bokeh gather and reconstruct's 2014 gather carry them through
-/// their dispatches likewise; the other passes, and scatter on the GPU, run each group of
-/// three in the beauty's place, which costs about what the beauty does (issue 29, point 6).
+/// sums alone, and the GPU's bokeh gather, scatter and reconstruct's 2014 gather carry them
+/// through their dispatches likewise; the other passes run each group of three in the
+/// beauty's place, which costs about what the beauty does (issue 29, point 6).
 ///
 /// Data layers a preset classes `motion` take, after a motion blur, the value of the nearest
 /// surface whose streak covers each pixel ([`motion::carry`]), found from the frame's depth

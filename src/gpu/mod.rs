@@ -202,9 +202,11 @@ mod tests {
 
     /// Every twin's shader, prelude included, as the device compiles it (vello validates its
     /// shaders at build time; here a unit test does, with no device needed): each family's
-    /// list, kept beside its twins.
+    /// list, kept beside its twins, and scatter's second module, the one that carries light
+    /// layers.
     fn shaders() -> Vec<(&'static str, &'static str)> {
-        [super::dof::SHADERS, super::motion::SHADERS].concat()
+        let carrying = [("scatter carrying", super::motion::scatter::SHADER_CARRYING)];
+        [super::dof::SHADERS, super::motion::SHADERS, &carrying].concat()
     }
 
     #[test]

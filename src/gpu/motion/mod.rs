@@ -124,8 +124,9 @@ impl scatter_cpu::Stages for Gpu {
         )
     }
 
-    /// Each layer through the same stages in the beauty's place (the same weights; carrying
-    /// them through one dispatch, as the CPU does, is issue 29's next step here).
+    /// The layers carried through the same dispatches (`Gpu::try_scatter_carrying`: the
+    /// curves drawn once, each deposit into the layers' sums with the beauty's weight, each
+    /// pixel resolved once for all); the whole frame on the CPU where that cannot run.
     fn stages_carrying(
         &self,
         config: &ScatterConfig,
@@ -134,17 +135,15 @@ impl scatter_cpu::Stages for Gpu {
         positions: [&Positions; 2],
         layers: &mut [Color],
     ) -> Color {
-        for layer in layers.iter_mut() {
-            let alone = Color {
-                r: std::mem::take(&mut layer.r),
-                g: std::mem::take(&mut layer.g),
-                b: std::mem::take(&mut layer.b),
-                a: layer.a.clone(),
-            };
-            let blurred = self.stages(config, alone, depth, positions);
-            (layer.r, layer.g, layer.b) = (blurred.r, blurred.g, blurred.b);
+        let order = scatter::Order::default();
+        match self.try_scatter_carrying(config, &color, depth, positions, layers, order) {
+            Ok(beauty) => beauty,
+            Err(why) => {
+                // The layers are as they came.
+                self.note_cpu_stage("scatter", &why);
+                scatter_cpu::stages_carrying(config, color, depth, positions, layers)
+            }
         }
-        self.stages(config, color, depth, positions)
     }
 }
 

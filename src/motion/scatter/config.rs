@@ -1,6 +1,6 @@
 //! scatter's parameters and the numbers its stages read: the weights, normalisations and
 //! curves to choose from, and the config (the GPU twin's uniform, `ScatterConfig` in
-//! src/gpu/motion/scatter.wgsl), with the constants that bound the work.
+//! src/gpu/motion/scatter/scatter.wgsl), with the constants that bound the work.
 
 use crate::motion::shutter::Shutter;
 
@@ -103,8 +103,9 @@ impl Default for ScatterParams {
 }
 
 /// Everything scatter's stages read besides their buffers, as plain numbers: the shape of the
-/// uniform of its GPU twin, `ScatterConfig` in src/gpu/motion/scatter.wgsl (keep the two in sync;
-/// the size test here and the field test in src/gpu/motion/scatter.rs guard the layout).
+/// uniform of its GPU twin, `ScatterConfig` in src/gpu/motion/scatter/scatter.wgsl (keep the two
+/// in sync; the size test here and the field test in src/gpu/motion/scatter/mod.rs guard the
+/// layout).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]
 #[repr(C)]

@@ -3,15 +3,21 @@
 // `reach` (which pixels move; a list of them) → `prepare` (the accumulate dispatch's size) →
 // `accumulate` (each moving pixel draws its curve into fixed-point sums) → `resolve` (each
 // pixel's output by the normalisation). Why a compute rasteriser with integer atomics, and
-// the f32 form of the geometry: src/gpu/motion/scatter.rs.
+// the f32 form of the geometry: src/gpu/motion/scatter/mod.rs.
 //
 // Bindings, in order: the ScatterConfig uniform; colour (R, G, B, A planes), depth, prev and
 // next (x, y, z planes each) — the CPU's inputs; then `state` (the moving count, the
 // accumulate dispatch, the colour bounds, the host's flags), the list of moving pixels, the
 // five sums (R, G, B, A, weight; two words per pixel) and the output colour (four planes).
+//
+// Light layers: this file goes into two modules. Its stages call four hooks, `carry_bound`,
+// `carry_pen`, `carry_deposit` and `carry_resolve`, at the points where the CPU handles its
+// carried planes (`Scatter::extra`): alone.wgsl defines them empty (the beauty alone, whose
+// compiled code is then what it was without them), carrying.wgsl carries light layers
+// through the same dispatches with bindings of their own (group 1).
 
-// Keep in sync with `ScatterConfig` in src/motion/scatter/mod.rs (its size test and the test
-// in src/gpu/motion/scatter.rs guard the layout: thirteen 4-byte fields).
+// Keep in sync with `ScatterConfig` in src/motion/scatter/config.rs (its size test and the test
+// in src/gpu/motion/scatter/mod.rs guard the layout: thirteen 4-byte fields).
 struct ScatterConfig {
     width: u32,
     height: u32,
@@ -47,11 +53,15 @@ struct ScatterConfig {
 override WORKGROUP: u32 = 64u;
 override REVERSED: bool = false;
 
-// `state`'s words (keep in sync with src/gpu/motion/scatter.rs).
+// `state`'s words (keep in sync with src/gpu/motion/scatter/pass.rs).
 const COUNT: u32 = 0u;
 const DISPATCH: u32 = 1u;
 const BOUND: u32 = 4u;
 const FLAGS: u32 = 8u;
+// The light layers carried (the host's; 0 for the beauty alone) and their channels' colour
+// bounds (carrying.wgsl), as BOUND holds the beauty's.
+const LAYERS: u32 = 9u;
+const CARRIED_BOUND: u32 = 16u;
 // Flags the host sets: every alpha is 1 (alpha sums are the weight sums), and the positions
 // carry depth (z planes).
 const OPAQUE: u32 = 1u;
@@ -168,6 +178,7 @@ fn reach(
         // Non-negative floats order as their bits do.
         atomicMax(&state[BOUND + ch], bitcast<u32>(abs(color[ch * n + i])));
     }
+    carry_bound(i);
 }
 
 // Between reach and accumulate: one workgroup of `WORKGROUP` invocations per moving pixel, in
@@ -348,7 +359,11 @@ fn add(channel: u32, p: u32, v: f32) {
 // The power of two 2^e above every |colour| of a moving pixel in channel `ch` (1 where the
 // channel is all 0): colours times 2^−e lie in (−1, 1), exactly.
 fn scale_exponent(ch: u32) -> i32 {
-    let bits = atomicLoad(&state[BOUND + ch]);
+    return exponent_above(atomicLoad(&state[BOUND + ch]));
+}
+
+// e of `scale_exponent` for a bound's bits (a non-negative float's).
+fn exponent_above(bits: u32) -> i32 {
     if bits == 0u {
         return 0;
     }
@@ -356,7 +371,7 @@ fn scale_exponent(ch: u32) -> i32 {
 }
 
 // The drawing of one curve: its colour (times 2^−e per channel), where its pixel is, and
-// whether alpha sums are kept.
+// whether alpha sums are kept. (The carried layers' colours: `carry_pen`.)
 struct Pen {
     color: vec4<f32>,
     corner: vec2<i32>,
@@ -383,6 +398,8 @@ fn deposit(pen: Pen, px: i32, py: i32, d: f32, z: f32) {
         add(3u, p, d * pen.color.w);
     }
     add(4u, p, d);
+    // The carried layers' deposits, with the same weight (`Segment::carry`).
+    carry_deposit(p, d);
 }
 
 // Draws the segment a → b (relative to the pixel's corner) with weights w0 → w1 and depths
@@ -513,6 +530,7 @@ fn accumulate(
         opaque,
         1.0 + config.depth_tolerance,
     );
+    carry_pen(i);
     for (var s = 0u; s < segments; s++) {
         draw(pen, points[s], points[s + 1u], weights[s], weights[s + 1u], depths[s], depths[s + 1u]);
     }
@@ -546,6 +564,11 @@ fn decode(p: u32, channel: u32) -> f32 {
             hi = atomicLoad(&sum_w[2u * p + 1u]);
         }
     }
+    return fixed_value(lo, hi);
+}
+
+// The value of a sum's two words (low, high), in units of its channel's scale.
+fn fixed_value(lo: u32, hi: u32) -> f32 {
     return f32(bitcast<i32>(hi)) + f32(lo) * (1.0 / FIXED);
 }
 
@@ -554,27 +577,32 @@ fn own_color(p: u32) -> vec4<f32> {
     return vec4<f32>(color[p], color[n + p], color[2u * n + p], color[3u * n + p]);
 }
 
+// What lies behind a pixel not wholly covered (`Behind`): the first farther pixel found
+// along its motion either way, `count` of them (0: its own colour).
+struct Behind {
+    pixels: vec2<u32>,
+    count: u32,
+}
+
 // `Scatter::behind`: the nearest farther surface along the pixel's motion (either way; the
 // average if both), else its own colour. (The CPU first asks its blocks' deepest depths
 // whether the walk can find anything; that only skips walks that find nothing.)
-fn behind(p: u32) -> vec4<f32> {
-    let own = own_color(p);
+fn behind(p: u32) -> Behind {
+    var found = Behind(vec2<u32>(0u), 0u);
     let m = motion_of(p);
     let e = extent(m);
     if !(e >= STILL) {
-        return own;
+        return found;
     }
     let v = m.next - m.prev;
     let l = length2(v);
     if is_nan(l) || l <= 0.0 {
-        return own;
+        return found;
     }
     let dir = v / l;
     let limit = depth[p] * (1.0 + config.depth_tolerance);
     let steps = u32(ceil(min(e, config.max_curve) + 2.0));
     let now = vec2<f32>(f32(p % config.width) + 0.5, f32(p / config.width) + 0.5);
-    var sum = vec4<f32>(0.0);
-    var found = 0u;
     for (var s = 0; s < 2; s++) {
         let side = select(-1.0, 1.0, s == 0);
         for (var k = 1u; k <= steps; k++) {
@@ -585,20 +613,91 @@ fn behind(p: u32) -> vec4<f32> {
             }
             let j = u32(y) * config.width + u32(x);
             if depth[j] > limit {
-                sum += own_color(j);
-                found += 1u;
+                found.pixels[found.count] = j;
+                found.count += 1u;
                 break;
             }
         }
     }
-    if found == 0u {
-        return own;
-    }
-    return sum / f32(found);
+    return found;
 }
 
-// Stage 3: each pixel's output from its sums (`Scatter::resolve`), computed in the channels'
-// scaled units (so no sum of huge colours overflows f32) and scaled back at the end.
+// The beauty's colour behind: the average of the pixels found, else `own`.
+fn behind_color(b: Behind, own: vec4<f32>) -> vec4<f32> {
+    if b.count == 0u {
+        return own;
+    }
+    var sum = vec4<f32>(0.0);
+    for (var k = 0u; k < b.count; k++) {
+        sum += own_color(b.pixels[k]);
+    }
+    return sum / f32(b.count);
+}
+
+// How a pixel's output is made from its sums, the same for every channel (`Resolution`):
+// found once per pixel from the weight sum, then applied to the beauty's channels and to
+// every carried one (`carry_resolve`), so light layers get exactly the beauty's weights.
+const OWN: u32 = 0u;
+const PAPER: u32 = 1u;
+const REST: u32 = 2u;
+const MEAN: u32 = 3u;
+
+struct Resolution {
+    // OWN (no curve deposited: the input), PAPER (eq. 4), REST (covered for `total` < 1 of
+    // the exposure: the deposits and what lies behind for the rest) or MEAN (covered at
+    // least once over: the deposits averaged).
+    kind: u32,
+    // The weight sum.
+    total: f32,
+    // REST: the share not covered, and what lies behind.
+    rest: f32,
+    behind: Behind,
+}
+
+// `Scatter::resolution`: how pixel p, whose deposits weigh `total`, is resolved.
+fn resolution(p: u32, total: f32) -> Resolution {
+    var r = Resolution(OWN, total, 0.0, Behind(vec2<u32>(0u), 0u));
+    if !(total > 0.0) {
+        return r;
+    }
+    if config.exposure == 0u {
+        r.kind = PAPER;
+    } else if total < 1.0 {
+        r.kind = REST;
+        r.rest = 1.0 - total;
+        if r.rest > COVERED {
+            r.behind = behind(p);
+        }
+    } else {
+        r.kind = MEAN;
+    }
+    return r;
+}
+
+// `Scatter::channel`: one channel of a pixel by `r`, from `sum`, its deposits in units of
+// the channel's scale 2^e, `own`, its input, and `back`, what lies behind (REST only), in
+// the scaled units (so no sum of huge colours overflows f32) and scaled back at the end.
+fn resolved(r: Resolution, sum: f32, e: i32, own: f32, back: f32) -> f32 {
+    switch r.kind {
+        case PAPER: {
+            // The paper's eq. 4 (w_b is at least 0).
+            let wb = config.background_weight;
+            return ldexp((sum + wb * ldexp(own, -e)) / (r.total + wb), e);
+        }
+        case REST: {
+            return ldexp(sum, e) + r.rest * back;
+        }
+        case MEAN: {
+            return ldexp(sum / r.total, e);
+        }
+        default: {
+            return own;
+        }
+    }
+}
+
+// Stage 3: each pixel's output from its sums (`Scatter::resolve`), resolved once and
+// applied to the beauty's channels, then to the carried layers' (`carry_resolve`).
 @compute @workgroup_size(WORKGROUP)
 fn resolve(
     @builtin(workgroup_id) group: vec3<u32>,
@@ -611,41 +710,20 @@ fn resolve(
         return;
     }
     let own = own_color(p);
-    let total = decode(p, 4u);
+    let r = resolution(p, decode(p, 4u));
     var result = own;
-    if total > 0.0 {
+    if r.kind != OWN {
         let opaque = (atomicLoad(&state[FLAGS]) & OPAQUE) != 0u;
-        var sums = vec4<f32>(0.0);
-        var e = vec4<i32>(0);
+        var back = own;
+        if r.kind == REST {
+            back = behind_color(r.behind, own);
+        }
         for (var ch = 0u; ch < 4u; ch++) {
             if ch == 3u && opaque {
                 // An opaque frame's alpha sums are its weight sums.
-                sums[ch] = total;
-                e[ch] = 0;
+                result[ch] = resolved(r, r.total, 0, own[ch], back[ch]);
             } else {
-                sums[ch] = decode(p, ch);
-                e[ch] = scale_exponent(ch);
-            }
-        }
-        if config.exposure == 0u {
-            // The paper's eq. 4 (w_b is at least 0).
-            let wb = config.background_weight;
-            for (var ch = 0u; ch < 4u; ch++) {
-                let scaled = ldexp(own[ch], -e[ch]);
-                result[ch] = ldexp((sums[ch] + wb * scaled) / (total + wb), e[ch]);
-            }
-        } else if total < 1.0 {
-            let rest = 1.0 - total;
-            var back = own;
-            if rest > COVERED {
-                back = behind(p);
-            }
-            for (var ch = 0u; ch < 4u; ch++) {
-                result[ch] = ldexp(sums[ch], e[ch]) + rest * back[ch];
-            }
-        } else {
-            for (var ch = 0u; ch < 4u; ch++) {
-                result[ch] = ldexp(sums[ch] / total, e[ch]);
+                result[ch] = resolved(r, decode(p, ch), scale_exponent(ch), own[ch], back[ch]);
             }
         }
     }
@@ -653,4 +731,5 @@ fn resolve(
     out[n + p] = result.y;
     out[2u * n + p] = result.z;
     out[3u * n + p] = result.w;
+    carry_resolve(p, r);
 }

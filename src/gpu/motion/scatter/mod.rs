@@ -1,0 +1,328 @@
+//! Motion blur's `scatter` pass on the GPU (`scatter.wgsl`; the device side in `pass.rs`):
+//! the twin of [`crate::motion::scatter::scatter`] (Guertin & Nowrouzezahrai's curve
+//! scatter), every normalisation (paper, exposure), curve kind (Bézier, arc) and weight (box,
+//! Gaussian), the flatness-adaptive segment counts and the shutter offset, stage for stage:
+//!
+//! 1. `reach`: per pixel, the CPU's motion test (`Scatter::motion`: the curve's extent over
+//!    the exposure against [`STILL`]); moving pixels join a list through an atomic counter
+//!    and raise a per-channel bound on |colour|. `prepare` turns the count into the size of
+//!    the next dispatch (indirect), so a still frame or still pixels cost no curve work.
+//! 2. `accumulate`: one invocation per moving pixel builds its path as `Scatter::path` does
+//!    (segments, weights, depths, scaling to `max_curve`, the exposure share) and walks each
+//!    segment with [`crate::motion::line`]'s coverage model (a column's exact length, split
+//!    linearly between the two nearest pixel centres), depth-tested against the frame, into
+//!    fixed-point sums.
+//! 3. `resolve`: per pixel, eq. 4 or the exposure normalisation, with `behind` (the search
+//!    along the motion for a farther surface) where a pixel is not wholly covered.
+//!
+//! Bindings, in order: the [`ScatterConfig`] uniform (the CPU's own struct), colour, depth,
+//! prev, next (the CPU's inputs, planes one after the other), then `state`, the moving list,
+//! the five sums and the output colour.
+//!
+//! **Light layers** (RGB colours beside the beauty, sharing its alpha: issue 29) are carried
+//! through the same dispatches, as the CPU's [`stages_carrying`] carries them through the
+//! same curves: [`Gpu::try_scatter_carrying`]. The curves are drawn once; each deposit adds
+//! every layer channel's value at the curve's pixel, with the weight it gives the beauty,
+//! into a 64-bit sum of the channel's own (one buffer, a plane of two words a pixel per
+//! channel, bind group 1), and `resolve` finds each pixel's resolution once (which
+//! normalisation, the weight sum, the pixels behind) and applies it to the beauty's channels
+//! and every layer's. Each layer channel has its own colour bound and fixed-point scale, found
+//! by `reach` over the same moving pixels, so a layer's sums are the bits it gets alone in
+//! the beauty's place, and so is its output where the compiler evaluates the two alike
+//! (tests/gpu_scatter.rs measures it). Up to [`MOST_LAYERS`] layers ride one run, and as many
+//! as their sums fit one storage binding (24 bytes a pixel a layer: two at 1080p under
+//! lavapipe's 128 MiB); more are split into runs of equal size, each run drawing the curves
+//! again (and the beauty's sums with them: its output is the first run's). Where not even
+//! one layer fits, or the device allows fewer than [`CARRYING_STORAGE_BUFFERS`] storage
+//! buffers per stage, each layer runs through the stages alone in the beauty's place, as
+//! before layers were carried; where that cannot run either the whole frame runs on the CPU.
+//!
+//! **Why two modules, not a layer count in the config.** The stages call four hooks
+//! (`carry_bound`, `carry_pen`, `carry_deposit`, `carry_resolve`): alone.wgsl defines them
+//! empty, carrying.wgsl carries the layers, and the same scatter.wgsl and curve.wgsl go into
+//! both ([`SHADER`], [`SHADER_CARRYING`]). A layer count in the config, read by one module,
+//! would leave a loop and its count's load at every deposit of the beauty alone, and the
+//! layers' bindings in its pipeline layout, needing buffers bound with no layers; an override
+//! constant would still leave the bindings statically used (WGSL has no conditional
+//! compilation) and compile a pipeline per count. The beauty alone's module is instead what
+//! it was, bindings, sums and all (the hooks inline to nothing), and the carrying module is
+//! compiled the first time a frame brings layers. Where a run carries layers its count is a
+//! word of `state`, beside the host's flags, and their channels' bounds follow the beauty's
+//! there.
+//!
+//! **Why a compute rasteriser with integer atomics, not the render pipeline's lines.** The
+//! paper draws its segments as GL lines with additive blending into a float target. Measured
+//! (docs/CRATES.md): lavapipe draws a 1-px line as a rectangle (coverage = Euclidean length) where
+//! GL and many GPUs use the longer axis (~15 % less energy), so the same frame gives other
+//! images on other drivers; and float blending adds in whatever order the hardware retires
+//! fragments, so not even one driver repeats itself bit for bit. A compute rasteriser instead
+//! runs our own coverage model — the CPU's, so the two can be compared at all — and
+//! deposits into **64-bit fixed-point integer sums**: integer addition is associative, so the
+//! result is the same for any dispatch order, workgroup size or thread count, bit for bit, by
+//! construction (tests/gpu_scatter.rs checks two runs, two workgroup sizes and a reversed
+//! list). WGSL has neither 64-bit integers nor 64-bit atomics, so each sum is two
+//! `atomic<u32>` words: `atomicAdd` on the low word returns the old value, and where the
+//! addition wrapped the high word takes the carry (with the high part); in two's complement,
+//! so negative colours add too, and the sum modulo 2⁶⁴ does not depend on order. Float
+//! atomics (`SHADER_FLOAT32_ATOMIC`) would be order-dependent; a sort of deposits by pixel
+//! would be deterministic but costs a global sort per frame.
+//!
+//! **The fixed point.** 32 fractional bits, so a sum holds |Σ| < 2³¹ and a deposit is rounded
+//! to 2⁻³² of its channel's scale. Each colour channel is scaled by 2^−e, the power of two
+//! just above the largest |colour| of a moving pixel in that channel (found by `reach` with
+//! `atomicMax` on the bits, so exactly, and the scaling loses nothing): a deposit
+//! (coverage × weight × colour) is then below its weight in magnitude. The weights are at
+//! most ~1.4 per column and pixel, so a pixel's weight sum stays below 2³¹ unless more than
+//! ~10⁹ curve columns cross it (π·max_curve² moving pixels × 64 segments is 1.3·10⁷ at the
+//! default 256 px). Resolution: 2⁻³² ≈ 2.3·10⁻¹⁰ of the channel's bound per deposit, far
+//! below f32 for any real frame; a frame whose bound is huge (the numeric policy's 10³⁰)
+//! loses the small colours of the pixels those huge ones reach, relative to that bound — a
+//! difference of 10⁻¹⁰ of the frame's range, which the parity test bounds. Resolve computes
+//! in the scaled units and scales back at the end, so sums of huge colours stay finite.
+//!
+//! **The f32 form.** WGSL has no f64, and the CPU's geometry is absolute f64 (positions may
+//! lie 10¹² px off-screen). Here every position is taken relative to the corner of the
+//! moving pixel (p(0) = (½, ½), pixel boundaries at integers), so after the scaling to
+//! `max_curve` every point of a curve lies within `max_curve` px of the origin and f32 holds
+//! it to ~2⁻¹⁵ px; far positions lose only their own relative rounding (6·10⁻⁸), which the
+//! scaling shrinks with them. The arc's points are formed in chord form about p(0) (see
+//! `arc_at` in the shader) because the CPU's centre + r·(cos, sin) cancels digits of the
+//! radius (up to 10⁷ px), and its turns from p(0) to p(±1) are taken at once (atan2 of the
+//! cross and dot products of the two radii) rather than as differences of absolute angles
+//! (measured: the arcs' largest difference from the CPU fell from 1.8·10⁻⁴ to 3·10⁻⁵ of the
+//! range). The CPU keeps its f64: the two agree to f32 rounding of the
+//! geometry, which moves a coverage by ~10⁻⁵ of a pixel; where a rounding moves a decision (a
+//! segment count at a flatness boundary, a depth test on its threshold, the still test at
+//! exactly [`STILL`]) a pixel differs by more, rarely; tests/gpu_scatter.rs states and
+//! measures both. (Making the CPU follow the f32 form would change nothing it measures and
+//! give up what f64 buys it: sums that repeat a colour exactly.)
+//!
+//! Other differences from the CPU, none visible in output: the CPU visits curves tile by tile
+//! and keeps f64 sums; the GPU visits each curve once (the sums make order immaterial). A
+//! segment whose depth is not finite at either end draws nothing, as on the CPU (where its
+//! depth change is NaN and fails every test). The CPU's block-deepest shortcut in `behind`
+//! only skips searches that find nothing and is dropped.
+//!
+//! A frame larger than one storage binding (its colour, 16 bytes a pixel: 128 MiB on
+//! lavapipe, a 4K frame), or a device with fewer than [`STORAGE_BUFFERS`] storage buffers per
+//! stage, runs on the CPU, counted and warned about, as every twin does.
+
+mod pass;
+
+use crate::frame::{Color, Positions};
+use crate::motion::scatter::ScatterConfig;
+
+#[cfg(doc)]
+use crate::motion::scatter::{stages_carrying, STILL};
+
+use crate::gpu::context::Gpu;
+use crate::gpu::stage::StageError;
+use pass::carried_sum_bytes;
+pub use pass::{
+    Order, CARRYING_STORAGE_BUFFERS, MOST_LAYERS, SHADER, SHADER_CARRYING, STORAGE_BUFFERS,
+};
+
+impl Gpu {
+    /// Scatter's three stages on the GPU ([`crate::motion::scatter::stages`]' arguments and
+    /// result), dispatched in `order` (a test hook: the output must not depend on it), or why
+    /// they could not run.
+    pub fn try_scatter(
+        &self,
+        config: &ScatterConfig,
+        color: &Color,
+        depth: &[f32],
+        positions: [&Positions; 2],
+        order: Order,
+    ) -> Result<Color, StageError> {
+        if config.width == 0 || config.height == 0 {
+            return Ok(color.clone());
+        }
+        let (beauty, _) = self.run_scatter(config, color, depth, positions, order, &[])?;
+        Ok(beauty)
+    }
+
+    /// [`crate::motion::scatter::stages_carrying`] on the GPU: the beauty's output, and the
+    /// R, G and B of `layers` (light layers, whose alpha is the beauty's) blurred in place
+    /// with the beauty's weights, carried through the same dispatches in runs of at most
+    /// [`Gpu::scatter_layers_per_run`] (each layer alone in the beauty's place where that is
+    /// 0); or why they could not run, the layers then untouched.
+    pub fn try_scatter_carrying(
+        &self,
+        config: &ScatterConfig,
+        color: &Color,
+        depth: &[f32],
+        positions: [&Positions; 2],
+        layers: &mut [Color],
+        order: Order,
+    ) -> Result<Color, StageError> {
+        let pixels = config.width as usize * config.height as usize;
+        if pixels == 0 || layers.is_empty() {
+            return self.try_scatter(config, color, depth, positions, order);
+        }
+        let per_run = self.scatter_layers_per_run(pixels, order);
+        let mut beauty = None;
+        // Every layer's output, kept until every run has run (a failure leaves the layers as
+        // they came, for the CPU).
+        let mut planes = Vec::with_capacity(3 * layers.len());
+        if per_run == 0 {
+            for layer in layers.iter() {
+                let (out, _) = self.run_scatter(config, layer, depth, positions, order, &[])?;
+                planes.extend([out.r, out.g, out.b]);
+            }
+            beauty = Some(self.try_scatter(config, color, depth, positions, order)?);
+        } else {
+            // Runs of equal size (as many as the most a run carries needs): the buffers made
+            // for the first serve every one.
+            let runs = layers.len().div_ceil(per_run);
+            let size = layers.len().div_ceil(runs);
+            for run in layers.chunks(size) {
+                let run: Vec<&Color> = run.iter().collect();
+                let (out, carried) =
+                    self.run_scatter(config, color, depth, positions, order, &run)?;
+                beauty.get_or_insert(out);
+                planes.extend(carried);
+            }
+        }
+        let mut planes = planes.into_iter();
+        for layer in layers.iter_mut() {
+            for plane in [&mut layer.r, &mut layer.g, &mut layer.b] {
+                *plane = planes.next().expect("three planes a layer");
+            }
+        }
+        Ok(beauty.expect("a run of the beauty"))
+    }
+
+    /// The most light layers one run of [`Gpu::try_scatter_carrying`] carries over `pixels`:
+    /// at most `order.layers` and [`MOST_LAYERS`], as many as their sums fit one storage
+    /// binding, and 0 (each in the beauty's place) on a device with fewer storage buffers per
+    /// stage than [`CARRYING_STORAGE_BUFFERS`].
+    pub fn scatter_layers_per_run(&self, pixels: usize, order: Order) -> usize {
+        let allowed = self.device.limits().max_storage_buffers_per_shader_stage;
+        if allowed < CARRYING_STORAGE_BUFFERS {
+            return 0;
+        }
+        let fit = (self.max_binding() / carried_sum_bytes(pixels.max(1), 1)) as usize;
+        fit.min(MOST_LAYERS).min(order.layers)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::scatter as cpu;
+
+    /// The hooks' empty definitions, last in [`SHADER`].
+    const ALONE: &str = include_str!("alone.wgsl");
+
+    #[test]
+    fn the_config_is_the_cpu_s_thirteen_words_in_both_languages() {
+        // Keep in sync with scatter.wgsl: thirteen 4-byte fields, no padding (both modules
+        // take it from there).
+        assert_eq!(std::mem::size_of::<ScatterConfig>(), 52);
+        assert_eq!(std::mem::align_of::<ScatterConfig>(), 4);
+        crate::gpu::layout::assert_same_layout!(
+            ScatterConfig,
+            SHADER_CARRYING,
+            "ScatterConfig",
+            [
+                width,
+                height,
+                shutter,
+                offset,
+                segments,
+                sigma,
+                gaussian,
+                background_weight,
+                exposure,
+                arc,
+                max_curve,
+                flatness,
+                depth_tolerance
+            ]
+        );
+        crate::gpu::layout::assert_same_layout!(
+            ScatterConfig,
+            SHADER,
+            "ScatterConfig",
+            [
+                width,
+                height,
+                shutter,
+                offset,
+                segments,
+                sigma,
+                gaussian,
+                background_weight,
+                exposure,
+                arc,
+                max_curve,
+                flatness,
+                depth_tolerance
+            ]
+        );
+    }
+
+    #[test]
+    fn the_shader_s_constants_are_the_cpu_s() {
+        use super::pass::{CARRIED_BOUND, DISPATCH, FLAGS, HAS_Z, LAYERS, MOST_GROUPS, OPAQUE};
+        // scatter.wgsl and curve.wgsl go into both modules alike.
+        assert!(SHADER_CARRYING.starts_with(SHADER.trim_end_matches(ALONE)));
+        let has = |line: String| assert!(SHADER.contains(&line), "scatter.wgsl lacks {line}");
+        has(format!("const STILL: f32 = {:?};", cpu::STILL as f32));
+        has(format!(
+            "const MOST_SEGMENTS: u32 = {}u;",
+            cpu::MOST_SEGMENTS
+        ));
+        has(format!(
+            "const COVERED: f32 = {:?};",
+            cpu::config::COVERED as f32
+        ));
+        has(format!(
+            "const COLLINEAR: f32 = {:?};",
+            crate::motion::curve::COLLINEAR as f32
+        ));
+        has(format!(
+            "const LARGEST_RADIUS: f32 = {:?};",
+            crate::motion::curve::LARGEST_RADIUS as f32
+        ));
+        has(format!("const TAU: f32 = {:?};", std::f32::consts::TAU));
+        has(format!("const PI: f32 = {:?};", std::f32::consts::PI));
+        has(format!("const FLAGS: u32 = {FLAGS}u;"));
+        has(format!("const DISPATCH: u32 = {DISPATCH}u;"));
+        has(format!("const OPAQUE: u32 = {OPAQUE}u;"));
+        has(format!("const HAS_Z: u32 = {HAS_Z}u;"));
+        has(format!("const MOST_GROUPS: u32 = {MOST_GROUPS}u;"));
+        has(format!("const LAYERS: u32 = {LAYERS}u;"));
+        has(format!("const CARRIED_BOUND: u32 = {CARRIED_BOUND}u;"));
+        has(format!(
+            "@binding({STORAGE_BUFFERS}) var<storage, read_write> out"
+        ));
+        // The carrying module: its bindings, and as many layers as the host gives a run.
+        let carries = |line: String| {
+            assert!(
+                SHADER_CARRYING.contains(&line),
+                "carrying.wgsl lacks {line}"
+            )
+        };
+        carries(format!("const MOST_LAYERS: u32 = {MOST_LAYERS}u;"));
+        carries(format!("const MOST_CARRIED: u32 = {}u;", 3 * MOST_LAYERS));
+        let groups = CARRYING_STORAGE_BUFFERS - STORAGE_BUFFERS;
+        carries(format!(
+            "@group(1) @binding({}) var<storage, read_write> carried_out",
+            groups - 1
+        ));
+        assert!(
+            !SHADER.contains("@group(1)"),
+            "the beauty alone binds no layers"
+        );
+        // The private path arrays hold the most segments.
+        has(format!(
+            "var<private> lengths: array<f32, {}>;",
+            cpu::MOST_SEGMENTS
+        ));
+        has(format!(
+            "var<private> points: array<vec2<f32>, {}>;",
+            cpu::MOST_SEGMENTS + 1
+        ));
+    }
+}
