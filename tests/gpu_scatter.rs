@@ -546,24 +546,8 @@ fn blur_scatter_on_wgpu_equals_the_cpu_and_falls_back_over_the_limits() {
         return;
     }
     let dir = small_scene("rotor", 96, 54, 1, 4);
-    let (color, depth, prev, next) = (
-        role_pattern(dir.path(), "color"),
-        role_pattern(dir.path(), "depth"),
-        role_pattern(dir.path(), "prev"),
-        role_pattern(dir.path(), "next"),
-    );
-    let args = [
-        "--algorithm",
-        "scatter",
-        "--color",
-        &color,
-        "--depth",
-        &depth,
-        "--prev",
-        &prev,
-        "--next",
-        &next,
-    ];
+    let args = scatter_args(dir.path());
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let mut outputs = Vec::new();
     for (backend, limit) in [("cpu", None), ("wgpu", None), ("wgpu", Some("4096"))] {
         let stem = format!("{backend}{}", if limit.is_some() { "-limit" } else { "" });
@@ -895,24 +879,8 @@ fn blur_scatter_with_light_layers_on_wgpu_carries_them_and_splits_them_over_the_
             .map(|(name, v)| (name.as_str(), v.clone()))
             .collect(),
     );
-    let (color, depth, prev, next) = (
-        role_pattern(dir.path(), "color"),
-        role_pattern(dir.path(), "depth"),
-        role_pattern(dir.path(), "prev"),
-        role_pattern(dir.path(), "next"),
-    );
-    let args = [
-        "--algorithm",
-        "scatter",
-        "--color",
-        &color,
-        "--depth",
-        &depth,
-        "--prev",
-        &prev,
-        "--next",
-        &next,
-    ];
+    let args = scatter_args(dir.path());
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
     // A layer's sums are 24 bytes a pixel, the beauty's colour 16.
     let (one_layer, no_layer) = ((36 * n).to_string(), (20 * n).to_string());
     let mut outputs = Vec::new();
@@ -946,4 +914,13 @@ fn blur_scatter_with_light_layers_on_wgpu_carries_them_and_splits_them_over_the_
             assert!(p.max <= ALONE, "{name}: alone {:e} from carried", p.max);
         }
     }
+}
+
+/// `blur --algorithm scatter` on the colour, depth, previous and next passes in `dir`.
+fn scatter_args(dir: &std::path::Path) -> Vec<String> {
+    let mut args = vec!["--algorithm".to_string(), "scatter".into()];
+    for role in ["color", "depth", "prev", "next"] {
+        args.extend([format!("--{role}"), role_pattern(dir, role)]);
+    }
+    args
 }
