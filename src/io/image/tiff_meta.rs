@@ -99,6 +99,11 @@ pub(super) fn kept_in_ifd0(tag: u16) -> bool {
             | 347 // JPEGTables
             | 512..=521 // old-style JPEG
             | 529..=532 // YCbCr coefficients, subsampling, positioning, ReferenceBlackWhite
+            | 346 // Indexed
+            | 433 // Decode
+            | 32995..=32998 // SGI's Matteing (an associated alpha to libtiff), data and image depth
+            | 33421 | 33422 // TIFF/EP's CFA pattern
+            | 50706..=52999 // DNG's tags: with DNGVersion, readers take the output for raw
             | 700 | 33723 | 34377 | 34675 | 37724
     )
 }
@@ -127,7 +132,12 @@ pub(super) fn parse(block: &[u8]) -> Option<Exif> {
         b"MM" => false,
         _ => return None,
     };
-    let read = Reader { tiff, little };
+    let read = Reader {
+        tiff,
+        little,
+        room: std::cell::Cell::new(tiff.len()),
+        visited: std::cell::RefCell::new(Vec::new()),
+    };
     if read.u16(2)? != 42 {
         return None;
     }
@@ -138,6 +148,13 @@ pub(super) fn parse(block: &[u8]) -> Option<Exif> {
 struct Reader<'a> {
     tiff: &'a [u8],
     little: bool,
+    /// The bytes the values stored apart from their entries may still take: the block's
+    /// length, so a hostile block whose entries all point at one large value (or whose
+    /// pointers name one directory many times) costs no more than the block.
+    room: std::cell::Cell<usize>,
+    /// The directories read: each once, so a pointer back to one (IFD0 among them) is not
+    /// followed.
+    visited: std::cell::RefCell<Vec<usize>>,
 }
 
 impl Reader<'_> {
@@ -162,15 +179,23 @@ impl Reader<'_> {
     }
 
     fn dir(&self, at: usize, depth: usize) -> Option<Dir> {
+        if self.visited.borrow().contains(&at) {
+            return None;
+        }
+        self.visited.borrow_mut().push(at);
         let mut dir = Dir::default();
+        // Each pointer tag followed once.
+        let mut followed = Vec::new();
         for e in 0..self.u16(at)? as usize {
             let entry = at + 2 + 12 * e;
             let (tag, ty, count) = (self.u16(entry)?, self.u16(entry + 2)?, self.u32(entry + 4)?);
             let value = entry + 8;
             if let Some(follow) = follows(depth, tag) {
+                let first = !followed.contains(&tag);
+                followed.push(tag);
                 let sub = self
                     .u32(value)
-                    .filter(|_| follow)
+                    .filter(|_| follow && first)
                     .and_then(|to| self.dir(to as usize, depth + 1));
                 if let Some(sub) = sub.filter(|s| !s.fields.is_empty()) {
                     dir.subs.push((tag, sub));
@@ -184,6 +209,10 @@ impl Reader<'_> {
                 value
             } else {
                 let Some(to) = self.u32(value) else { continue };
+                if len > self.room.get() {
+                    continue;
+                }
+                self.room.set(self.room.get() - len);
                 to as usize
             };
             if let Some(bytes) = self.tiff.get(from..from.saturating_add(len)) {
@@ -311,7 +340,8 @@ pub(super) fn exif_of_tiff<R: Read + Seek>(decoder: &mut Decoder<R>, room: usize
     let little = decoder.byte_order() == tiff::tags::ByteOrder::LittleEndian;
     let ifd0 = decoder.ifd_pointer()?;
     let mut room = room;
-    let ifd0 = read_dir(decoder, ifd0, 0, &mut room)?;
+    let mut visited = Vec::new();
+    let ifd0 = read_dir(decoder, ifd0, 0, &mut room, &mut visited)?;
     (!ifd0.fields.is_empty() || !ifd0.subs.is_empty()).then_some(Exif { little, ifd0 })
 }
 
@@ -320,7 +350,14 @@ fn read_dir<R: Read + Seek>(
     at: IfdPointer,
     depth: usize,
     room: &mut usize,
+    visited: &mut Vec<u64>,
 ) -> Option<Dir> {
+    // Each directory once: a pointer back to one (IFD0 among them) is not followed.
+    if visited.contains(&at.0) {
+        return None;
+    }
+    visited.push(at.0);
+    let little = decoder.byte_order() == tiff::tags::ByteOrder::LittleEndian;
     let directory = decoder.read_directory(at).ok()?;
     let entries: Vec<(Tag, u16, u64)> = directory
         .iter()
@@ -337,7 +374,7 @@ fn read_dir<R: Read + Seek>(
             let Some(to) = to.ok().flatten().and_then(|v| v.into_ifd_pointer().ok()) else {
                 continue;
             };
-            if let Some(sub) = read_dir(decoder, to, depth + 1, room) {
+            if let Some(sub) = read_dir(decoder, to, depth + 1, room, visited) {
                 if !sub.fields.is_empty() {
                     dir.subs.push((code, sub));
                 }
@@ -360,15 +397,54 @@ fn read_dir<R: Read + Seek>(
             .find_tag_buf(tag, &mut value);
         if read.is_ok_and(|found| found.is_some()) && value.as_bytes().len() == len {
             *room -= len;
-            dir.fields.push(Field {
+            let field = Field {
                 tag: code,
                 ty,
                 count,
                 bytes: value.as_bytes().to_vec(),
+            };
+            dir.fields.push(if depth == 0 && code == ORIENTATION {
+                as_short(field, little)
+            } else {
+                field
             });
         }
     }
     Some(dir)
+}
+
+/// The orientation tag, which the carried EXIF resets to 1 where the pixels were turned
+/// upright (as a SHORT: [`super::meta`] looks for it so).
+const ORIENTATION: u16 = 274;
+
+/// A one-value integer field (an orientation stored as LONG, which the decoder honours as it
+/// does a SHORT) as the SHORT TIFF 6.0 asks for, so the reset to 1 finds it; any other as it
+/// is.
+fn as_short(field: Field, little: bool) -> Field {
+    let value = match (field.ty, field.count, field.bytes.as_slice()) {
+        (4 | 9, 1, &[a, b, c, d]) => {
+            let v = if little {
+                u32::from_le_bytes([a, b, c, d])
+            } else {
+                u32::from_be_bytes([a, b, c, d])
+            };
+            u16::try_from(v).ok()
+        }
+        _ => None,
+    };
+    match value {
+        Some(v) => Field {
+            ty: 3,
+            bytes: if little {
+                v.to_le_bytes()
+            } else {
+                v.to_be_bytes()
+            }
+            .to_vec(),
+            ..field
+        },
+        None => field,
+    }
 }
 
 /// Writes an EXIF's directories below IFD0 into a TIFF being encoded, each outside the chain
@@ -563,20 +639,8 @@ mod tests {
     /// Make (ASCII, out of line), Orientation (SHORT, inline), an Exif directory with a
     /// RATIONAL and an Interoperability directory below it, and a GPS directory.
     fn sample(little: bool) -> Exif {
-        let short = |v: u16| {
-            if little {
-                v.to_le_bytes()
-            } else {
-                v.to_be_bytes()
-            }
-        };
-        let long = |v: u32| {
-            if little {
-                v.to_le_bytes()
-            } else {
-                v.to_be_bytes()
-            }
-        };
+        let short = |v: u16| [v.to_be_bytes(), v.to_le_bytes()][little as usize];
+        let long = |v: u32| [v.to_be_bytes(), v.to_le_bytes()][little as usize];
         let interop = Dir {
             fields: vec![field(1, 2, 4, b"R98\0")],
             subs: vec![],
@@ -616,6 +680,58 @@ mod tests {
     }
 
     #[test]
+    fn a_hostile_block_costs_no_more_than_itself_and_no_directory_is_read_twice() {
+        // IFD0: 100 Exif pointers to one directory and 100 descriptions each the whole block
+        // (offset 0); the directory's Interoperability pointer names IFD0 again.
+        let (n, len) = (200u16, 4096u32);
+        let sub = 8 + 2 + 12 * u32::from(n) + 4;
+        let mut b = b"II*\0\x08\0\0\0".to_vec();
+        let entry = |b: &mut Vec<u8>, tag: u16, ty: u16, count: u32, value: u32| {
+            b.extend([tag.to_le_bytes(), ty.to_le_bytes()].concat());
+            b.extend([count.to_le_bytes(), value.to_le_bytes()].concat());
+        };
+        b.extend(n.to_le_bytes());
+        for e in 0..n {
+            match e % 2 {
+                0 => entry(&mut b, EXIF_IFD, 4, 1, sub),
+                _ => entry(&mut b, 270, 2, len, 0),
+            }
+        }
+        b.extend([0u8; 4]);
+        b.extend(2u16.to_le_bytes());
+        entry(&mut b, 36867, 2, 2, u32::from_le_bytes(*b"A\0\0\0"));
+        entry(&mut b, INTEROP_IFD, 4, 1, 8);
+        b.resize(len as usize, 0);
+        let read = parse(&b).unwrap();
+        let stored: usize = read.ifd0.fields.iter().map(|f| f.bytes.len()).sum();
+        assert!(
+            stored <= b.len(),
+            "{stored} bytes from a block of {}",
+            b.len()
+        );
+        assert_eq!(read.ifd0.subs.len(), 1);
+        assert!(read.ifd0.subs[0].1.subs.is_empty());
+    }
+
+    #[test]
+    fn an_orientation_stored_as_a_long_is_carried_as_a_short() {
+        for little in [true, false] {
+            let six = if little {
+                6u32.to_le_bytes()
+            } else {
+                6u32.to_be_bytes()
+            };
+            let short = as_short(field(ORIENTATION, 4, 1, &six), little);
+            let want = if little {
+                6u16.to_le_bytes()
+            } else {
+                6u16.to_be_bytes()
+            };
+            assert_eq!(short, field(ORIENTATION, 3, 1, &want));
+        }
+    }
+
+    #[test]
     fn a_value_outside_the_block_or_of_an_uncarried_type_is_left_out() {
         let mut block = to_block(&sample(false));
         // IFD0's first entry (Make): its value's offset pointed past the end.
@@ -629,21 +745,16 @@ mod tests {
     }
 
     #[test]
-    fn a_pointer_back_to_ifd0_ends_at_the_depth_followed() {
-        // IFD0 whose Exif pointer names IFD0 itself.
+    fn a_pointer_back_to_ifd0_is_not_followed() {
+        // IFD0 whose Exif pointer names IFD0 itself: its Make kept, no Exif directory (it
+        // would hold IFD0's layout tags).
         let mut block = b"MM\0\x2a\0\0\0\x08\0\x02".to_vec();
         block.extend([0x01, 0x0F, 0, 2, 0, 0, 0, 2, b'A', 0, 0, 0]);
         block.extend([0x87, 0x69, 0, 4, 0, 0, 0, 1, 0, 0, 0, 8]);
         block.extend([0; 4]);
         let read = parse(&block).unwrap();
-        assert_eq!(read.ifd0.subs.len(), 1);
-        let (tag, below) = &read.ifd0.subs[0];
-        assert_eq!(
-            (*tag, below.fields.len()),
-            (EXIF_IFD, 1),
-            "Make, not the pointer"
-        );
-        assert!(below.subs.is_empty());
+        assert_eq!(read.ifd0.fields.len(), 1);
+        assert!(read.ifd0.subs.is_empty());
     }
 
     #[test]

@@ -31,11 +31,15 @@
 //! the beauty's place, and so is its output where the compiler evaluates the two alike
 //! (tests/gpu_scatter.rs measures it). Up to [`MOST_LAYERS`] layers ride one run, and as many
 //! as their sums fit one storage binding (24 bytes a pixel a layer: two at 1080p under
-//! lavapipe's 128 MiB); more are split into runs of equal size, each run drawing the curves
-//! again (and the beauty's sums with them: its output is the first run's). Where not even
-//! one layer fits, or the device allows fewer than [`CARRYING_STORAGE_BUFFERS`] storage
+//! lavapipe's 128 MiB); more are split into runs as even as they can be, each run drawing the
+//! curves again (and the beauty's sums with them: its output is the first run's). Where not
+//! even one layer fits, or the device allows fewer than [`CARRYING_STORAGE_BUFFERS`] storage
 //! buffers per stage, each layer runs through the stages alone in the beauty's place, as
-//! before layers were carried; where that cannot run either the whole frame runs on the CPU.
+//! before layers were carried. A run that fails on the device all the same (out of memory, a
+//! driver refusing the carrying module) is tried again with half as many layers a run, down
+//! to each layer alone; where that cannot run either the whole frame runs on the CPU. (The
+//! budget is one binding; a device's total memory is not asked: 60 bytes a pixel a layer,
+//! about 4 GB for eight layers at 4K.)
 //!
 //! **Why two modules, not a layer count in the config.** The stages call four hooks
 //! (`carry_bound`, `carry_pen`, `carry_deposit`, `carry_resolve`): alone.wgsl defines them
@@ -159,37 +163,61 @@ impl Gpu {
         if pixels == 0 || layers.is_empty() {
             return self.try_scatter(config, color, depth, positions, order);
         }
-        let per_run = self.scatter_layers_per_run(pixels, order);
-        let mut beauty = None;
-        // Every layer's output, kept until every run has run (a failure leaves the layers as
-        // they came, for the CPU).
-        let mut planes = Vec::with_capacity(3 * layers.len());
-        if per_run == 0 {
-            for layer in layers.iter() {
-                let (out, _) = self.run_scatter(config, layer, depth, positions, order, &[])?;
-                planes.extend([out.r, out.g, out.b]);
+        // A run that fails on the device (out of memory, a driver refusing the carrying
+        // module) is tried again with half as many layers a run, down to each layer alone in
+        // the beauty's place, before the frame goes to the CPU.
+        let mut per_run = self.scatter_layers_per_run(pixels, order);
+        let (beauty, planes) = loop {
+            match self.scatter_runs(config, color, depth, positions, layers, order, per_run) {
+                Ok(done) => break done,
+                Err(why) if per_run == 0 || !order.retry => return Err(why),
+                Err(_) => per_run /= 2,
             }
-            beauty = Some(self.try_scatter(config, color, depth, positions, order)?);
-        } else {
-            // Runs of equal size (as many as the most a run carries needs): the buffers made
-            // for the first serve every one.
-            let runs = layers.len().div_ceil(per_run);
-            let size = layers.len().div_ceil(runs);
-            for run in layers.chunks(size) {
-                let run: Vec<&Color> = run.iter().collect();
-                let (out, carried) =
-                    self.run_scatter(config, color, depth, positions, order, &run)?;
-                beauty.get_or_insert(out);
-                planes.extend(carried);
-            }
-        }
+        };
         let mut planes = planes.into_iter();
         for layer in layers.iter_mut() {
             for plane in [&mut layer.r, &mut layer.g, &mut layer.b] {
                 *plane = planes.next().expect("three planes a layer");
             }
         }
-        Ok(beauty.expect("a run of the beauty"))
+        Ok(beauty)
+    }
+
+    /// The beauty's output and every layer's R, G and B planes through runs of at most
+    /// `per_run` layers (each layer alone in the beauty's place where that is 0), kept until
+    /// every run has run: a failure leaves the layers as they came.
+    #[allow(clippy::too_many_arguments)]
+    fn scatter_runs(
+        &self,
+        config: &ScatterConfig,
+        color: &Color,
+        depth: &[f32],
+        positions: [&Positions; 2],
+        layers: &[Color],
+        order: Order,
+        per_run: usize,
+    ) -> Result<(Color, Vec<Vec<f32>>), StageError> {
+        let mut planes = Vec::with_capacity(3 * layers.len());
+        if per_run == 0 {
+            for layer in layers {
+                let (out, _) = self.run_scatter(config, layer, depth, positions, order, &[])?;
+                planes.extend([out.r, out.g, out.b]);
+            }
+            let beauty = self.try_scatter(config, color, depth, positions, order)?;
+            return Ok((beauty, planes));
+        }
+        // Runs as even as they can be (as many as the most a run carries needs): the buffers
+        // made for the first serve every one.
+        let runs = layers.len().div_ceil(per_run);
+        let size = layers.len().div_ceil(runs);
+        let mut beauty = None;
+        for run in layers.chunks(size) {
+            let run: Vec<&Color> = run.iter().collect();
+            let (out, carried) = self.run_scatter(config, color, depth, positions, order, &run)?;
+            beauty.get_or_insert(out);
+            planes.extend(carried);
+        }
+        Ok((beauty.expect("a run of the beauty"), planes))
     }
 
     /// The most light layers one run of [`Gpu::try_scatter_carrying`] carries over `pixels`:

@@ -61,13 +61,15 @@ pub(super) fn carried_sum_bytes(pixels: usize, layers: usize) -> u64 {
 
 /// How the stages are dispatched: their workgroup size, whether `accumulate` walks the
 /// moving list backwards, and how many light layers one run carries at most (fewer where
-/// their sums would not fit one binding; 0: each layer alone in the beauty's place). The
-/// output must not depend on any of them (a test hook; runs use [`Order::default`]).
+/// their sums would not fit one binding; 0: each layer alone in the beauty's place), and
+/// whether a run that fails is tried again with fewer. The output must not depend on any of
+/// them (a test hook; runs use [`Order::default`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Order {
     pub workgroup: u32,
     pub reversed: bool,
     pub layers: usize,
+    pub retry: bool,
 }
 
 impl Default for Order {
@@ -76,6 +78,7 @@ impl Default for Order {
             workgroup: 64,
             reversed: false,
             layers: MOST_LAYERS,
+            retry: true,
         }
     }
 }
