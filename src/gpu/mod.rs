@@ -205,7 +205,13 @@ mod tests {
     /// list, kept beside its twins, and scatter's second module, the one that carries light
     /// layers.
     fn shaders() -> Vec<(&'static str, &'static str)> {
-        let carrying = [("scatter carrying", super::motion::scatter::SHADER_CARRYING)];
+        let carrying = [
+            ("scatter carrying", super::motion::scatter::SHADER_CARRYING),
+            (
+                "reconstruct carrying",
+                super::motion::reconstruct::SHADER_CARRYING,
+            ),
+        ];
         [super::dof::SHADERS, super::motion::SHADERS, &carrying].concat()
     }
 

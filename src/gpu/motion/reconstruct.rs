@@ -45,7 +45,17 @@ use crate::gpu::stage::{floats, kept, read_back, Caught, StageError};
 pub const SHADER: &str = concat!(
     include_str!("../prelude.wgsl"),
     include_str!("reconstruct.wgsl"),
-    include_str!("reconstruct_taps.wgsl")
+    include_str!("reconstruct_taps.wgsl"),
+    "const MOST_COLOURS: u32 = 1u;\n"
+);
+
+/// The carrying module's source: the same stages, up to eight colours a pipeline
+/// ([`MOST_COLOURS`]; a unit test holds the two together).
+pub const SHADER_CARRYING: &str = concat!(
+    include_str!("../prelude.wgsl"),
+    include_str!("reconstruct.wgsl"),
+    include_str!("reconstruct_taps.wgsl"),
+    "const MOST_COLOURS: u32 = 8u;\n"
 );
 
 /// Most colours one dispatch of the 2014 gather carries (`MOST_COLOURS` in the shader): the
@@ -86,7 +96,8 @@ struct Buffers {
 /// The compiled stage (both entry points; the 2014 gather's carrying pipelines as each count
 /// is first asked for) and its buffers, kept in the context.
 pub(crate) struct ReconstructPass {
-    module: wgpu::ShaderModule,
+    /// [`SHADER_CARRYING`]'s module, made the first time a frame carries layers.
+    carrying_module: OnceLock<wgpu::ShaderModule>,
     pipeline_layout: wgpu::PipelineLayout,
     gather: wgpu::ComputePipeline,
     gather_2014: wgpu::ComputePipeline,
@@ -166,7 +177,7 @@ impl ReconstructPass {
             gather: pipeline(device, &module, &pipeline_layout, "gather", 0),
             gather_2014: pipeline(device, &module, &pipeline_layout, "gather_2014", 0),
             carrying: Default::default(),
-            module,
+            carrying_module: OnceLock::new(),
             pipeline_layout,
             layout,
             buffers: Mutex::new(HashMap::new()),
@@ -177,9 +188,15 @@ impl ReconstructPass {
     /// compiled the first time it is asked for.
     fn carrying(&self, device: &wgpu::Device, colours: usize) -> &wgpu::ComputePipeline {
         self.carrying[colours - 1].get_or_init(|| {
+            let module = self.carrying_module.get_or_init(|| {
+                device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some("reconstruct.wgsl, carrying"),
+                    source: wgpu::ShaderSource::Wgsl(SHADER_CARRYING.into()),
+                })
+            });
             pipeline(
                 device,
-                &self.module,
+                module,
                 &self.pipeline_layout,
                 "gather_2014",
                 colours,
@@ -522,10 +539,15 @@ mod tests {
             "const TAP_SPACING: f32 = {:?};",
             cpu::config::TAP_SPACING
         ));
-        has(format!(
-            "const MOST_COLOURS: u32 = {}u;",
+        assert!(SHADER_CARRYING.ends_with(&format!(
+            "const MOST_COLOURS: u32 = {}u;\n",
             cpu::gather_2014::MOST_COLOURS
-        ));
+        )));
+        assert!(SHADER.ends_with("const MOST_COLOURS: u32 = 1u;\n"));
+        assert_eq!(
+            SHADER.trim_end_matches("const MOST_COLOURS: u32 = 1u;\n"),
+            SHADER_CARRYING.trim_end_matches("const MOST_COLOURS: u32 = 8u;\n")
+        );
         has(format!(
             "const COVER_SLOPE: f32 = {:?};",
             cpu::gather_2014::COVER_SLOPE

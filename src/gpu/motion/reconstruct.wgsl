@@ -276,9 +276,10 @@ fn gather(@builtin(global_invocation_id) id: vec3<u32>) {
 
 // ---- 2014 and exposure ----
 
-// Most colours one pipeline of the 2014 gather mixes along the same taps (the CPU's eight a
-// pass).
-const MOST_COLOURS: u32 = 8u;
+// MOST_COLOURS, the most colours one pipeline of the 2014 gather mixes along the same taps,
+// is declared by the module's last line: 1 in the beauty's module, so its colours are plain
+// values (with arrays of eight, lavapipe's beauty gather took 7 % longer), 8 in the carrying
+// module (the CPU's eight a pass).
 
 // The colours the 2014 gather mixes along its taps and where it reads them, set per pipeline
 // so that each count has its own specialised copy (as each count has on the CPU): 0, the

@@ -195,10 +195,9 @@ fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>, s
     var share_s = 0.0;
     var heavy_m = 0.0;
     var heavy_s = -1.0;
-    // The still part's colour: the still surface of `still_pixel`, the alpha of the pixel
-    // behind it (itself when it is still).
-    var still_pixel = nearest;
-    var still_behind = nearest;
+    // The still part's colours (RGBA of each), from the heaviest still contributor, as the
+    // loop meets it (the CPU's `still_colour`).
+    var still_colour: Colours;
     for (var q = 0u; q < 4u; q++) {
         let j = corners.index[q];
         let w = corners.weight[q];
@@ -206,12 +205,6 @@ fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>, s
         let alpha = mattes[6u * j];
         let w_m = w * alpha;
         let w_s = w * (1.0 - alpha);
-        for (var g = 0u; g < colours(); g++) {
-            let s = surfaces(g, j);
-            moving.colour.c[g] += vec4<f32>(w_m * s.moving, w_m * colour(g, j).w);
-        }
-        share_m += w_m;
-        share_s += w_s;
         let t_moves = t.length >= HALF_PIXEL;
         var fg_texel = t;
         var bg_index = j;
@@ -220,15 +213,23 @@ fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>, s
         } else {
             fg_texel = texel8(bitcast<u32>(mattes[6u * j + 1u]));
         }
+        let heavier = w_s > heavy_s;
+        for (var g = 0u; g < colours(); g++) {
+            let s = surfaces(g, j);
+            moving.colour.c[g] += vec4<f32>(w_m * s.moving, w_m * colour(g, j).w);
+            if heavier {
+                still_colour.c[g] = vec4<f32>(s.still, colour(g, bg_index).w);
+            }
+        }
+        share_m += w_m;
+        share_s += w_s;
         if w_m > heavy_m && fg_texel.length >= HALF_PIXEL {
             heavy_m = w_m;
             moving.texel = fg_texel;
         }
-        if w_s > heavy_s {
+        if heavier {
             heavy_s = w_s;
             still.texel = texel8(bg_index);
-            still_pixel = j;
-            still_behind = bg_index;
         }
     }
     // A still centre: the coverage steepened about its half level (see the CPU twin).
@@ -249,13 +250,13 @@ fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>, s
         moving = Part();
     }
     if !moves {
-        still_pixel = nearest;
-        still_behind = nearest;
+        for (var g = 0u; g < colours(); g++) {
+            still_colour.c[g] = vec4<f32>(surfaces(g, nearest).still, colour(g, nearest).w);
+        }
         still.texel = near;
     }
     for (var g = 0u; g < colours(); g++) {
-        let surface = surfaces(g, still_pixel).still;
-        still.colour.c[g] = share_s * vec4<f32>(surface, colour(g, still_behind).w);
+        still.colour.c[g] = share_s * still_colour.c[g];
     }
     moving.share = share_m;
     still.share = share_s;
