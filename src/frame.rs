@@ -230,6 +230,9 @@ pub struct Carried {
     /// The names the beauty's channels had in the colour file (R, G, B and A when empty):
     /// an EXR output names them so again.
     pub beauty: Vec<String>,
+    /// The same names as stored, view and all (`right.R` where `beauty` says `R`): what a
+    /// multi-view output names each view's beauty.
+    pub beauty_stored: Vec<String>,
     /// Every other channel of the colour file's part, in its order, with its class
     /// (`io::channels`): colour channels are blurred with the beauty's weights, data channels
     /// come back as they were read.
@@ -268,8 +271,14 @@ impl LayerClass {
 /// A channel of the colour file besides the beauty's, carried to the output.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CarriedChannel {
-    /// Its name as stored (`diffuse.R`).
+    /// Its name as the view read sees it (`diffuse.R`; in a file of no views, as stored).
     pub name: String,
+    /// Its name as stored, view and all (`diffuse.right.R`): what a multi-view output
+    /// writes.
+    pub stored: String,
+    /// A channel of no view in a multi-view file: every view reads it, a multi-view output
+    /// writes it once.
+    pub shared: bool,
     /// The part of the colour file it is stored in.
     pub part: usize,
     pub class: LayerClass,
@@ -277,6 +286,9 @@ pub struct CarriedChannel {
     /// A u32 channel's values exactly as stored (`plane` holds them as f32, rounded over
     /// 2²⁴): what an output of u32 channels writes back. Always data.
     pub exact: Option<Vec<u32>>,
+    /// The data window of a part of data passed through at its own window, not the
+    /// beauty's (`plane` is its size); `None`: the frame's.
+    pub window: Option<Window>,
 }
 
 /// One of a PNG's text chunks: a keyword (`Comment`, `Software`, `parameters`) and its text.

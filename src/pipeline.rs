@@ -15,7 +15,7 @@ use crate::frame::Frame;
 use crate::gpu::{Backend, BackendReport};
 use crate::io::lock::OutputLock;
 use crate::io::output::{
-    existing_frame_problem, remove_stale_temporaries, write_frame, OutputFormat, OutputOptions,
+    existing_frame_problem, remove_stale_temporaries, write_views, OutputFormat, OutputOptions,
 };
 use crate::io::passes::{
     output_folder_problems, preflight, read_frame_keeping, FramePlan, Inputs, PlanOptions,
@@ -36,7 +36,8 @@ pub struct Job {
     pub frames: Vec<Option<i64>>,
     pub preset: Preset,
     pub layer: Option<String>,
-    /// The view of multi-view EXRs to read (`--view`); each file's default when `None`.
+    /// The view of multi-view EXRs to read (`--view`). `None`: every view of a multi-view
+    /// colour file into an EXR output of every channel, else each file's default.
     pub view: Option<String>,
     pub algorithm: Algorithm,
     pub params: Params,
@@ -215,7 +216,7 @@ fn existing_output(job: &Job, plan: &crate::io::passes::FramePlan, output: &Path
     if !job.skip_existing {
         return Existing::Kept;
     }
-    match existing_frame_problem(output, plan.width, plan.height) {
+    match existing_frame_problem(output, plan.width, plan.height, plan.largest_part()) {
         None => Existing::Whole,
         Some(why) => Existing::Broken(why),
     }
@@ -256,27 +257,51 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     // Every frame is planned, those --skip-existing may skip included: the plan gives the
     // size their output must have.
     let preflight_start = Instant::now();
+    // An EXR output holds every channel of the colour file's part, so they are read too.
+    let every_channel = OutputFormat::from_path(&job.output.path(None)) == Some(OutputFormat::Exr)
+        && !job.output_options.beauty_only;
+    // And every view of a multi-view colour file, each planned, read and processed as that
+    // view alone (the first is the default), then written into one file.
+    let views = views_to_write(job, every_channel);
     let options = PlanOptions {
         preset: &job.preset,
         layer: job.layer.as_deref(),
-        view: job.view.as_deref(),
+        view: views[0].as_deref(),
         needs: crate::process::needs(job.algorithm, &job.params),
         max_pixels: job.max_pixels,
     };
     let mut plans = preflight(&job.inputs, &job.output, &job.frames, &options)
         .map_err(|e| name_pass(job, e))?;
-    // An EXR output holds every channel of the colour file's part, so they are read too.
-    let every_channel = OutputFormat::from_path(&job.output.path(None)) == Some(OutputFormat::Exr)
-        && !job.output_options.beauty_only;
+    // The other views' plans, frame by frame.
+    let mut others: Vec<Vec<FramePlan>> = plans.iter().map(|_| Vec::new()).collect();
+    for view in &views[1..] {
+        let options = PlanOptions {
+            view: view.as_deref(),
+            ..options.clone()
+        };
+        let view_plans = preflight(&job.inputs, &job.output, &job.frames, &options)
+            .map_err(|e| name_pass(job, e))?;
+        for (frame, plan) in others.iter_mut().zip(view_plans) {
+            frame.push(plan);
+        }
+    }
     if every_channel {
-        plans.iter_mut().for_each(FramePlan::read_every_channel);
+        for plan in plans.iter_mut().chain(others.iter_mut().flatten()) {
+            plan.read_every_channel();
+            plan.read_parts_apart();
+        }
+    }
+    if views.len() == 1 {
+        if let Some(warning) = plans.first().and_then(FramePlan::unwritten_views) {
+            warn(&mut report, on_event, warning);
+        }
     }
     // What the frames need in memory, from their headers, against the limit.
     let limit = job.max_memory.unwrap_or_else(memory_limit);
     let gpu = job.backend != Backend::Cpu;
     // The vector check holds a few planes of one frame besides.
     let checks = job.check_vectors && VectorCheck::applies(&job.inputs.color, options.needs);
-    let needed = |plan: &FramePlan| {
+    let needed_alone = |plan: &FramePlan| {
         let check = if checks {
             VectorCheck::memory(plan.width, plan.height)
         } else {
@@ -284,8 +309,17 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         };
         plan.memory_needed(gpu).saturating_add(check)
     };
-    if let Some(plan) = plans.iter().max_by_key(|p| needed(p)) {
-        let needed = needed(plan);
+    // A frame of several views: each view's needs in turn, the views done before it held.
+    let needed = |index: usize| {
+        let views = std::iter::once(&plans[index]).chain(&others[index]);
+        let held: u64 = views.clone().map(FramePlan::decoded_bytes).sum();
+        views
+            .map(|p| needed_alone(p).saturating_add(held - p.decoded_bytes()))
+            .max()
+            .unwrap_or(0)
+    };
+    if let Some(index) = (0..plans.len()).max_by_key(|&i| needed(i)) {
+        let (plan, needed) = (&plans[index], needed(index));
         if needed > limit {
             let mib = |bytes: u64| bytes.div_ceil(1 << 20);
             return Err(crate::Error::Files(vec![Problem::new(
@@ -371,7 +405,8 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         );
     }
     let mut todo = Vec::with_capacity(plans.len());
-    for plan in plans {
+    let mut todo_others = Vec::with_capacity(plans.len());
+    for (plan, other_views) in plans.into_iter().zip(others) {
         let (frame, path) = (plan.frame, job.output.path(plan.frame));
         match existing_output(job, &plan, &path) {
             Existing::Whole => {
@@ -394,8 +429,9 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             Existing::None | Existing::Kept => {}
         }
         todo.push(plan);
+        todo_others.push(other_views);
     }
-    let plans = todo;
+    let (plans, others) = (todo, todo_others);
     let todo: Vec<Option<i64>> = plans.iter().map(|p| p.frame).collect();
     let gpu = gpu.as_ref();
     // Pass files given but not read (the algorithm does not need them, or the pass came
@@ -418,7 +454,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     for warning in &job.warnings {
         warn(&mut report, on_event, warning.clone());
     }
-    for plan in &plans {
+    for plan in plans.iter().chain(others.iter().flatten()) {
         for warning in &plan.warnings {
             warn(&mut report, on_event, warning.clone());
         }
@@ -435,10 +471,11 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     let (read_seconds, process_seconds, vector_check) =
         std::thread::scope(|scope| -> Result<(f64, f64, Checked)> {
             // The read stage applies the numeric policy, so its scan overlaps processing.
-            // A frame, what the numeric policy replaced in it, and the read's notes.
-            type Read = (Frame, Replaced, Vec<String>);
+            // A frame (each view's), what the numeric policy replaced in it, and the read's
+            // notes.
+            type Read = (Vec<Frame>, Replaced, Vec<String>);
             let (read_tx, read_rx) = mpsc::sync_channel::<std::result::Result<Read, Problem>>(0);
-            type Done = (Option<i64>, Frame, Replaced, Vec<String>);
+            type Done = (Option<i64>, Vec<Frame>, Replaced, Vec<String>);
             let (done_tx, done_rx) = mpsc::sync_channel::<std::result::Result<Done, Problem>>(0);
 
             let reader = scope.spawn(move || {
@@ -446,7 +483,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                 for (index, plan) in plans.iter().enumerate() {
                     let t = Instant::now();
                     let keep = check.as_ref().is_some_and(|c| c.keeps(index));
-                    let frame =
+                    let mut frame =
                         read_frame_keeping(plan, keep).map(|(mut frame, mut notes, stored)| {
                             let replaced =
                                 crate::numeric::sanitize(&mut frame, depth_kind(&job.params));
@@ -455,8 +492,26 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                                 notes.extend(c.offer(index, &frame, stored));
                                 check_seconds += t.elapsed().as_secs_f64();
                             }
-                            (frame, replaced, notes)
+                            (vec![frame], replaced, notes)
                         });
+                    // The other views of the frame, read alike (the vector check has seen
+                    // the first).
+                    for view in &others[index] {
+                        let Ok((frames, replaced, notes)) = &mut frame else {
+                            break;
+                        };
+                        match read_frame_keeping(view, false) {
+                            Ok((mut read, more, _)) => {
+                                replaced.add(crate::numeric::sanitize(
+                                    &mut read,
+                                    depth_kind(&job.params),
+                                ));
+                                notes.extend(more);
+                                frames.push(read);
+                            }
+                            Err(problem) => frame = Err(problem),
+                        }
+                    }
                     seconds += t.elapsed().as_secs_f64();
                     let failed = frame.is_err();
                     if read_tx.send(frame).is_err() || failed {
@@ -475,15 +530,20 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                 let mut seconds = 0.0;
                 for (frame_number, frame) in frames.into_iter().zip(read_rx) {
                     let message = match frame {
-                        Ok((frame, replaced, notes)) => {
+                        Ok((frames, replaced, notes)) => {
                             let t = Instant::now();
-                            let out = process_on(
-                                job.algorithm,
-                                &job.params,
-                                frame,
-                                frame_number.unwrap_or(0),
-                                gpu,
-                            );
+                            let out = frames
+                                .into_iter()
+                                .map(|frame| {
+                                    process_on(
+                                        job.algorithm,
+                                        &job.params,
+                                        frame,
+                                        frame_number.unwrap_or(0),
+                                        gpu,
+                                    )
+                                })
+                                .collect();
                             seconds += t.elapsed().as_secs_f64();
                             Ok((frame_number, out, replaced, notes))
                         }
@@ -509,7 +569,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                         let path = job.output.path(frame);
                         let jpeg = OutputFormat::from_path(&path)
                             == Some(OutputFormat::Image(crate::io::image::ImageFormat::Jpeg));
-                        if let (true, Some(photo)) = (jpeg, out.carried.photo.as_ref()) {
+                        if let (true, Some(photo)) = (jpeg, out[0].carried.photo.as_ref()) {
                             for (block, bytes) in crate::io::image::jpeg_left_out(photo) {
                                 warn(
                                     &mut report,
@@ -527,7 +587,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                         // Folders are made only when a frame is ready to go in them, so a run
                         // that fails earlier leaves the file system as it was.
                         let written = create_parent(&path, frame)
-                            .and_then(|()| write_frame(&path, out, &job.output_options, frame));
+                            .and_then(|()| write_views(&path, out, &job.output_options, frame));
                         report.write_seconds += t.elapsed().as_secs_f64();
                         match written {
                             Ok(()) => {
@@ -581,6 +641,31 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     report.wall_seconds = start.elapsed().as_secs_f64();
     report.peak_rss_mib = peak_rss_mib();
     Ok(report)
+}
+
+/// The views a run reads and writes: `--view`'s; else, for an EXR output of every channel,
+/// every view of a multi-view colour file (the first frame's; a later frame without one of
+/// them stops the preflight), the default first; else each file's default (`None`).
+fn views_to_write(job: &Job, every_channel: bool) -> Vec<Option<String>> {
+    if job.view.is_some() || !every_channel {
+        return vec![job.view.clone()];
+    }
+    let first = job.frames.first().copied().flatten();
+    let Ok(info) = crate::io::file::FileInfo::probe(&job.inputs.color.path(first)) else {
+        // The preflight says what is wrong with it.
+        return vec![None];
+    };
+    match info.views {
+        Some(views) if views.names.len() > 1 => {
+            let mut names = views.names.clone();
+            if let Some(default) = &views.default {
+                names.retain(|n| n != default);
+                names.insert(0, default.clone());
+            }
+            names.into_iter().map(Some).collect()
+        }
+        _ => vec![None],
+    }
 }
 
 fn create_parent(path: &Path, frame: Option<i64>) -> std::result::Result<(), Problem> {

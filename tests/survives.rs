@@ -1050,6 +1050,9 @@ fn silhouette() -> shutter::frame::Frame {
             channels.push(CarriedChannel {
                 exact: None,
                 name: format!("{name}.{c}"),
+                stored: format!("{name}.{c}"),
+                shared: false,
+                window: None,
                 part: 0,
                 class: LayerClass::Colour,
                 plane,
@@ -1422,4 +1425,121 @@ fn a_preset_carries_depth_vectors_and_ids_with_the_motion() {
             "{name}: {classes:?}"
         );
     }
+}
+
+#[test]
+fn parts_of_other_data_windows_come_out_data_as_it_was_and_light_on_the_beautys_window() {
+    // A Nuke auto-bbox light layer (its own smaller window) and a depth part rendered with
+    // overscan, beside a full-frame beauty: the depth part comes out as it went in, at its
+    // own window; the light layer is placed on the beauty's window and blurred with the
+    // beauty's weights. The light layer is the beauty inside its box and the beauty is black
+    // outside it, so once placed it is the beauty, and must blur to the blurred beauty.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_passes(d);
+    let (bx, by, bw, bh) = (8, 6, 16, 12);
+    let inside = |i: usize| {
+        let (x, y) = (i % W, i / W);
+        (bx..bx + bw).contains(&x) && (by..by + bh).contains(&y)
+    };
+    let beauty: Vec<Vec<f32>> = (0..3)
+        .map(|c| {
+            let noise = noise(W * H, 80 + c, 0.0, 1.0);
+            (0..W * H)
+                .map(|i| if inside(i) { noise[i] } else { 0.0 })
+                .collect()
+        })
+        .collect();
+    let boxed: Vec<Vec<f32>> = beauty
+        .iter()
+        .map(|p| (0..W * H).filter(|&i| inside(i)).map(|i| p[i]).collect())
+        .collect();
+    let (ow, oh) = (W + 8, H + 8);
+    let depth: Vec<f32> = (0..ow * oh).map(|i| 1000.0 + i as f32).collect();
+    let part = |name: &str, (x, y): (i32, i32), size, channels: Vec<AnyChannel<FlatSamples>>| {
+        let mut attributes = LayerAttributes::named(name);
+        attributes.layer_position = Vec2(x, y);
+        Layer::new(
+            size,
+            attributes,
+            Encoding::FAST_LOSSLESS,
+            AnyChannels::sort(channels.into()),
+        )
+    };
+    let rgb = |planes: &[Vec<f32>]| {
+        ["R", "G", "B"]
+            .into_iter()
+            .zip(planes)
+            .map(|(c, p)| AnyChannel::new(c, FlatSamples::F32(p.clone())))
+            .collect::<Vec<_>>()
+    };
+    let image = Image::empty(ImageAttributes::new(IntegerBounds::from_dimensions((W, H))))
+        .with_layer(part("rgba", (0, 0), (W, H), rgb(&beauty)))
+        .with_layer(part(
+            "diffuse",
+            (bx as i32, by as i32),
+            (bw, bh),
+            rgb(&boxed),
+        ))
+        .with_layer(part(
+            "depth",
+            (-4, -4),
+            (ow, oh),
+            vec![AnyChannel::new("Z", FlatSamples::F32(depth.clone()))],
+        ));
+    image.write().to_file(d.join("color.exr")).unwrap();
+    let printed = blur_with(d, "out.exr", &["--json"], &[]);
+    let report: serde_json::Value = serde_json::from_slice(&printed).unwrap();
+    let warnings = report["warnings"].to_string();
+    assert!(!warnings.contains("not written"), "{warnings}");
+
+    let layers = crate::support::read_exr_layers(&d.join("out.exr"));
+    let find = |name: &str| {
+        (layers.iter())
+            .find(|l| {
+                l.attributes
+                    .layer_name
+                    .as_ref()
+                    .map(|t| t.to_string())
+                    .as_deref()
+                    == Some(name)
+            })
+            .unwrap_or_else(|| panic!("no part {name}"))
+    };
+    let channel = |name: &str, c: &str| -> Vec<f32> {
+        let layer = find(name);
+        let found = (layer.channel_data.list.iter())
+            .find(|ch| ch.name.to_string() == c)
+            .unwrap_or_else(|| panic!("no {name}.{c}"));
+        found.sample_data.values_as_f32().collect()
+    };
+    // The depth part: its window and its values, as they came.
+    let depth_part = find("depth");
+    assert_eq!(depth_part.attributes.layer_position, Vec2(-4, -4));
+    assert_eq!(depth_part.size, Vec2(ow, oh));
+    assert_eq!(channel("depth", "Z"), depth);
+    // The light layer: on the beauty's window, blurred as the beauty.
+    let diffuse = find("diffuse");
+    assert_eq!(diffuse.attributes.layer_position, Vec2(0, 0));
+    assert_eq!(diffuse.size, Vec2(W, H));
+    for c in ["R", "G", "B"] {
+        let (got, want) = (channel("diffuse", c), channel("rgba", c));
+        assert!(
+            got.iter().zip(&want).all(|(a, b)| (a - b).abs() <= 1e-6),
+            "diffuse.{c} is not the blurred beauty"
+        );
+        // And the blur moved it: light reached outside its box.
+        assert!(
+            (0..W * H).any(|i| !inside(i) && got[i] > 0.01),
+            "{c} did not blur"
+        );
+    }
+    // OpenImageIO, which nobody here wrote, reads the three parts.
+    if let Some(info) = oiiotool_info(&d.join("out.exr")) {
+        assert!(info.contains("3 subimages"), "{info}");
+    }
+    // A rerun finds the frame whole (its depth part larger than the beauty).
+    let printed = blur_with(d, "out.exr", &["--json", "--skip-existing"], &[]);
+    let report: serde_json::Value = serde_json::from_slice(&printed).unwrap();
+    assert_eq!(report["frames_skipped"], 1, "{report}");
 }

@@ -1,5 +1,6 @@
-//! Multi-view (stereo) EXRs: the default view is read, `--view` reads another, and a view
-//! that cannot be settled stops the run before anything is written, listing the views.
+//! Multi-view (stereo) EXRs: an EXR output holds every view, each blurred as that view
+//! alone, `--view` reads and writes one (a picture output the default), and a view that
+//! cannot be settled stops the run before anything is written, listing the views.
 //! Both of OpenEXR's schemes (MultiViewOpenEXR.html): one part with a `multiView` attribute
 //! and view-named channels, and parts with a `view` attribute each.
 
@@ -86,9 +87,23 @@ fn blur(color: &str, out: &Path, extra: &[&str]) -> std::process::Output {
     shutter(&args)
 }
 
-/// The beauty of an output (R, G, B, A).
+/// The beauty of an output's first part holding one (R, G, B, A): an output of every view
+/// has the default view's first.
 fn beauty(path: &Path) -> Vec<(String, Vec<f32>)> {
-    let mut channels = read_exr_reference(path);
+    let layers = crate::support::read_exr_layers(path);
+    let has_red = |l: &&exr::image::Layer<exr::image::AnyChannels<exr::image::FlatSamples>>| {
+        l.channel_data
+            .list
+            .iter()
+            .any(|c| c.name.to_string() == "R")
+    };
+    let first = layers.iter().find(has_red).expect("a beauty").clone();
+    let mut channels: Vec<(String, Vec<f32>)> = first
+        .channel_data
+        .list
+        .into_iter()
+        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+        .collect();
     channels.retain(|(name, _)| ["R", "G", "B", "A"].contains(&name.as_str()));
     assert_eq!(channels.len(), 4, "{path:?}");
     channels
@@ -127,6 +142,11 @@ fn single_part_stereo_reads_the_default_view_and_view_right_the_other() {
     // One view is written: no multiView list naming views the file does not hold.
     let meta = exr::meta::MetaData::read_from_file(out("right.exr"), false).unwrap();
     assert_eq!(meta.headers[0].own_attributes.multi_view_names, None);
+    // Without --view, both, with the list.
+    let meta = exr::meta::MetaData::read_from_file(out("default.exr"), false).unwrap();
+    let list = meta.headers[0].own_attributes.multi_view_names.as_ref();
+    let list: Vec<String> = list.unwrap().iter().map(|t| t.to_string()).collect();
+    assert_eq!(list, ["left", "right"]);
 }
 
 #[test]
@@ -167,6 +187,12 @@ fn multi_part_stereo_reads_the_first_parts_view_and_view_left_the_other() {
     assert_same_image(&out("default.exr"), &out("mono-right.exr"));
     assert_same_image(&out("left.exr"), &out("mono-left.exr"));
     assert_different_images(&out("default.exr"), &out("left.exr"));
+    // Without --view, both views' parts, the default's first.
+    let meta = exr::meta::MetaData::read_from_file(out("default.exr"), false).unwrap();
+    let views: Vec<Option<String>> = (meta.headers.iter())
+        .map(|h| h.own_attributes.view_name.as_ref().map(|t| t.to_string()))
+        .collect();
+    assert_eq!(views, [Some("right".into()), Some("left".into())]);
 }
 
 /// A part of a file `write_parts` writes.
@@ -265,6 +291,116 @@ fn a_view_comes_out_with_every_channel_its_mono_file_gives_and_the_others_are_na
         let mut got = read_exr_reference(&out);
         got.sort_by(|a, b| a.0.cmp(&b.0));
         assert_eq!(&got, want, "{view} of {stereo:?}");
+    }
+}
+
+/// The channels of an output, sorted by name, each with its part's view.
+fn channels_by_view(path: &Path) -> Vec<(Option<String>, String, Vec<f32>)> {
+    let mut all = Vec::new();
+    for layer in crate::support::read_exr_layers(path) {
+        let view = layer.attributes.view_name.as_ref().map(|t| t.to_string());
+        for c in layer.channel_data.list {
+            let values = c.sample_data.values_as_f32().collect();
+            all.push((view.clone(), c.name.to_string(), values));
+        }
+    }
+    all.sort_by(|a, b| (&a.0, &a.1).cmp(&(&b.0, &b.1)));
+    all
+}
+
+#[test]
+fn an_exr_output_holds_every_view_each_as_that_view_alone_gives() {
+    // Both schemes, with a light layer, IDs and a channel of no view: without --view, one
+    // output holds each view's channels under the names (and in the parts) they are stored
+    // in, with the bits that view gives written alone (--view), the channels of no view
+    // once, and the views attribute; nothing warns of views left out.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let n = W * H;
+    let extra = ("notes.N".to_string(), noise(n, 99, 0.0, 1.0));
+    let names = d.join("names.exr");
+    let mut channels = named(view_with_layers(LEFT), |n| n.to_string());
+    channels.extend(named(view_with_layers(RIGHT), in_view("right")));
+    channels.push(extra.clone());
+    write_parts(
+        &names,
+        (W, H),
+        vec![part(None, None, Some(&["left", "right"][..]), channels)],
+    );
+    let parts = d.join("parts.exr");
+    write_parts(
+        &parts,
+        (W, H),
+        vec![
+            part(
+                Some("left"),
+                Some("left"),
+                None,
+                named(view_with_layers(LEFT), |n| n.to_string()),
+            ),
+            part(
+                Some("right"),
+                Some("right"),
+                None,
+                named(view_with_layers(RIGHT), |n| n.to_string()),
+            ),
+            part(Some("notes"), None, None, vec![extra.clone()]),
+        ],
+    );
+    for (stereo, one_part) in [(&names, true), (&parts, false)] {
+        let file = stereo.file_name().unwrap().to_string_lossy().to_string();
+        let run = |out: &str, extra: &[&str]| {
+            let out = d.join("out").join(format!("{out}-{file}"));
+            let o = blur(&s(stereo), &out, &[extra, &["--json"]].concat());
+            assert!(o.status.success(), "{out:?}: {}", stderr(&o));
+            let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+            (out, report["warnings"].to_string())
+        };
+        let (every, warnings) = run("every", &[]);
+        assert!(!warnings.contains("other views"), "{warnings}");
+        let (left, _) = run("left", &["--view", "left"]);
+        let (right, _) = run("right", &["--view", "right"]);
+        // What each view written alone gives, named and placed as the input stores it.
+        let mut want = Vec::new();
+        for (view, path) in [("left", &left), ("right", &right)] {
+            for (_, name, values) in channels_by_view(path) {
+                let shared = name == "notes.N";
+                if shared && view == "right" {
+                    continue;
+                }
+                if one_part {
+                    let stored = if view == "right" && !shared {
+                        in_view("right")(&name)
+                    } else {
+                        name
+                    };
+                    want.push((None, stored, values));
+                } else {
+                    let part_view = (!shared).then(|| view.to_string());
+                    want.push((part_view, name, values));
+                }
+            }
+        }
+        want.sort_by(|a, b| (&a.0, &a.1).cmp(&(&b.0, &b.1)));
+        let got = channels_by_view(&every);
+        assert_eq!(
+            got.iter().map(|c| (&c.0, &c.1)).collect::<Vec<_>>(),
+            want.iter().map(|c| (&c.0, &c.1)).collect::<Vec<_>>(),
+            "{file}"
+        );
+        assert!(got == want, "{file}: the values differ");
+        // The views blurred apart: the right beauty is not the left's.
+        assert_different_images(&left, &right);
+        // OpenImageIO, which nobody here wrote, reads the views.
+        if let Some(info) = crate::support::oiiotool_info(&every) {
+            if one_part {
+                assert!(info.contains("multiView: \"left\", \"right\""), "{info}");
+            } else {
+                // (It details the first subimage, the default view's.)
+                assert!(info.contains("view: \"left\""), "{info}");
+                assert!(info.contains("3 subimages"), "{info}");
+            }
+        }
     }
 }
 
@@ -459,7 +595,8 @@ fn a_multi_part_file_whose_first_part_has_no_view_needs_view() {
     let out = d.join("out");
     std::fs::create_dir_all(&out).unwrap();
     let before = snapshot(&out);
-    let o = blur(&s(&stereo), &out.join("o.exr"), &[]);
+    // A picture holds one view: which one, the file does not say.
+    let o = blur(&s(&stereo), &out.join("o.png"), &[]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     let err = stderr(&o);
     for needle in [s(&stereo).as_str(), "left, right", "no default", "--view"] {
@@ -481,12 +618,39 @@ fn a_multi_part_file_whose_first_part_has_no_view_needs_view() {
     assert!(json["files"][0]["suggestion"].is_null());
     assert!(json["files"][0]["views"]["default"].is_null());
 
-    let (_, right) = mono(d);
+    let (left, right) = mono(d);
+    let o = blur(&left, &out.join("mono-left.exr"), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
     let o = blur(&s(&stereo), &out.join("o.exr"), &["--view", "right"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let o = blur(&right, &out.join("mono.exr"), &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_same_image(&out.join("o.exr"), &out.join("mono.exr"));
+
+    // An EXR of every view needs no default: it is written with a view's part first, as
+    // OpenEXR asks (a part of no view may not come first), the part of no view after.
+    let o = blur(&s(&stereo), &out.join("every.exr"), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let layers = crate::support::read_exr_layers(&out.join("every.exr"));
+    let parts: Vec<(Option<String>, Option<String>)> = (layers.iter())
+        .map(|l| {
+            let text = |t: &Option<exr::meta::attribute::Text>| t.as_ref().map(|t| t.to_string());
+            (
+                text(&l.attributes.layer_name),
+                text(&l.attributes.view_name),
+            )
+        })
+        .collect();
+    let named = |n: &str, v: Option<&str>| (Some(n.to_string()), v.map(String::from));
+    assert_eq!(
+        parts,
+        [
+            named("rgb-left", Some("left")),
+            named("notes", None),
+            named("rgb-right", Some("right"))
+        ]
+    );
+    assert_same_image(&out.join("every.exr"), &out.join("mono-left.exr"));
 }
 
 #[test]

@@ -134,8 +134,8 @@ pub struct BlurArgs {
     #[arg(long, value_name = "NAME")]
     pub layer: Option<String>,
 
-    /// View of multi-view (stereo) EXRs to read, e.g. right [default: each file's default
-    /// view; a file that names none needs this].
+    /// View of multi-view (stereo) EXRs to read and write alone, e.g. right [default: an EXR
+    /// output holds every view; a picture output reads each file's default view].
     #[arg(long, value_name = "NAME")]
     pub view: Option<String>,
 

@@ -11,11 +11,13 @@
 //! any type), the display window, the pixel aspect; the data window is the frame's. Not kept:
 //! the preview (it shows the pixels before the blur), and the layout (channels, chunk count,
 //! the tile levels: only the full-resolution level is read, so a mip-mapped input comes back
-//! as one level), and a multi-view file's `multiView` list (one view is written). Its form follows the input too: compression (unless `compression` is set),
-//! line order, scan lines or tiles of the same size (a tiled plate stays tiled, so the
-//! tools that read it by tiles still can), and each channel's pixel type (half stays half;
-//! `half` writes every float channel half, u32 stays u32). Added: `shutter/version` and `shutter/settings` (the
-//! settings that differ from the defaults, as flags), as Nuke records `nuke/node_hash`.
+//! as one level), and, where one view of a multi-view file is written, its `multiView` list
+//! and parts' `view` attributes (an output of every view keeps them). Its form follows the
+//! input too: compression (unless `compression` is set), line order, scan lines or tiles of
+//! the same size (a tiled plate stays tiled, so the tools that read it by tiles still can),
+//! and each channel's pixel type (half stays half; `half` writes every float channel half,
+//! u32 stays u32). Added: `shutter/version` and `shutter/settings` (the settings that differ
+//! from the defaults, as flags), as Nuke records `nuke/node_hash`.
 //!
 //! The exr crate writes custom attributes in the order of a `HashMap`, which differs from
 //! run to run; [`sort_attributes`] then puts each header's attributes in name order (as
@@ -32,7 +34,7 @@ use exr::meta::header::{Header, ImageAttributes, LayerAttributes};
 use exr::meta::BlockDescription;
 use exr::prelude::{f16, LineOrder, WritableImage};
 
-use crate::frame::{LayerClass, Plane, Windows};
+use crate::frame::{LayerClass, Plane, Window};
 
 /// How an EXR output is encoded where it does not follow its input.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -49,11 +51,22 @@ pub struct ExrOutput {
 /// compositors write by default.
 pub const DEFAULT_COMPRESSION: Compression = Compression::ZIP16;
 
-/// One part of the output: the input part it is made like (`None`: a new file's defaults)
-/// and its channels.
+/// One part of the output: the input part it is made like (`None`: a new file's defaults),
+/// its data window (in the file's coordinates) and its channels, each of the window's size.
 pub struct OutPart<'a> {
     pub input: Option<&'a Header>,
+    pub data: Window,
     pub channels: Vec<OutChannel>,
+}
+
+/// Whether the output holds one view of a multi-view input, or all of them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Views {
+    /// One view, or a file of no views: a plain file, without the input's `multiView` list
+    /// or parts' `view` attributes (they would name views it does not hold).
+    One,
+    /// Every view: the input's view attributes are kept.
+    Every,
 }
 
 /// One channel to write.
@@ -68,8 +81,9 @@ pub struct OutChannel {
     pub exact: Option<Vec<u32>>,
 }
 
-/// Writes `parts` as one EXR, each part made like its input part (see the module doc), then
-/// puts the attributes in name order. `record` is `shutter/settings`' text.
+/// Writes `parts` as one EXR over the display window `display`, each part made like its
+/// input part (see the module doc), then puts the attributes in name order. `record` is
+/// `shutter/settings`' text.
 ///
 /// Under DWAA or DWAB, which compress every channel whose name ends in R, G, B or Y as
 /// colour (`velocity.Y`, `N.R`), a part's data channels go to a part of their own,
@@ -77,16 +91,13 @@ pub struct OutChannel {
 /// together.
 pub fn write_like(
     writer: &mut BufWriter<File>,
-    (width, height): (usize, usize),
-    windows: Windows,
+    display: Window,
     parts: Vec<OutPart>,
     output: &ExrOutput,
     record: &str,
+    views: Views,
 ) -> Result<(), String> {
-    let display = IntegerBounds::new(
-        (windows.display.x, windows.display.y),
-        (windows.display.width, windows.display.height),
-    );
+    let display = IntegerBounds::new((display.x, display.y), (display.width, display.height));
     let image_attributes = match parts.first().and_then(|p| p.input) {
         Some(h) => ImageAttributes {
             display_window: display,
@@ -102,7 +113,7 @@ pub fn write_like(
             .channels
             .into_iter()
             .partition(|c| !(is_dwa(encoding.compression) && c.class.is_data()));
-        let attributes = attributes_like(part.input, windows, record);
+        let attributes = attributes_like(part.input, part.data, record, views);
         let data_part = (!apart.is_empty()).then(|| {
             let mut data_attributes = attributes.clone();
             let name = attributes
@@ -114,10 +125,10 @@ pub fn write_like(
                 compression: DEFAULT_COMPRESSION,
                 ..encoding
             };
-            (data_attributes, data_encoding, part.input, apart)
+            (data_attributes, data_encoding, part.input, part.data, apart)
         });
         if !kept.is_empty() {
-            layers.push((attributes, encoding, part.input, kept));
+            layers.push((attributes, encoding, part.input, part.data, kept));
         }
         layers.extend(data_part);
     }
@@ -125,13 +136,13 @@ pub fn write_like(
     let layers: Vec<_> = layers
         .into_iter()
         .enumerate()
-        .map(|(i, (mut attributes, encoding, input, channels))| {
+        .map(|(i, (mut attributes, encoding, input, data, channels))| {
             // Every part of a multi-part file has a name.
             if several && attributes.layer_name.is_none() {
                 attributes.layer_name = Some(Text::from(if i == 0 { "rgba" } else { "part" }));
             }
             Layer::new(
-                (width, height),
+                (data.width, data.height),
                 attributes,
                 encoding,
                 AnyChannels::sort(channels_like(channels, input, output).into()),
@@ -151,21 +162,29 @@ fn is_dwa(compression: Compression) -> bool {
     matches!(compression, Compression::DWAA(_) | Compression::DWAB(_))
 }
 
-/// The input part's attributes, minus the preview and the views, at the frame's data window,
-/// with shutter's record.
-fn attributes_like(input: Option<&Header>, windows: Windows, record: &str) -> LayerAttributes {
+/// The input part's attributes, minus the preview (and the views where one is written), at
+/// the part's data window, with shutter's record.
+fn attributes_like(
+    input: Option<&Header>,
+    data: Window,
+    record: &str,
+    views: Views,
+) -> LayerAttributes {
     let mut attributes = input.map_or_else(LayerAttributes::default, |h| {
         let mut kept = h.own_attributes.clone();
         kept.preview = None;
-        // One view is written (the one read): a multiView list would name views the file
-        // does not hold, and make its channels the default view's.
-        kept.multi_view_names = None;
-        // Nor a part's `view`: the output is a file of one view, whose parts are plain (a
-        // part of no view may come first in it, which a multi-view file may not have).
-        kept.view_name = None;
+        if views == Views::One {
+            // One view is written (the one read): a multiView list would name views the
+            // file does not hold, and make its channels the default view's.
+            kept.multi_view_names = None;
+            // Nor a part's `view`: the output is a file of one view, whose parts are plain
+            // (a part of no view may come first in it, which a multi-view file may not
+            // have).
+            kept.view_name = None;
+        }
         kept
     });
-    attributes.layer_position = Vec2(windows.data_origin.0, windows.data_origin.1);
+    attributes.layer_position = Vec2(data.x, data.y);
     for (name, value) in [
         ("shutter/version", env!("CARGO_PKG_VERSION")),
         ("shutter/settings", record),

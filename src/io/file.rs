@@ -311,6 +311,39 @@ impl FileInfo {
     }
 
     /// The problem of a file that is no longer what the preflight checked: `what` changed.
+    /// An EXR's `channels` (indices into `channels`, all in parts of one data window),
+    /// `bits` as in [`FileInfo::read_bits`], at their parts' window: the colour's, or that of
+    /// a part read apart (a part whose data window is not the beauty's, carried to the
+    /// output).
+    pub fn read_exr(
+        &self,
+        channels: &[usize],
+        bits: &[usize],
+    ) -> Result<exr_io::ReadChannels, Problem> {
+        let corrupt = |detail: String| Problem::new(ProblemKind::Corrupt, &self.path, detail);
+        let refs: Vec<exr_io::ChannelRef> = channels
+            .iter()
+            .map(|&i| exr_io::ChannelRef {
+                part: self.channels[i].part,
+                index: self.channels[i].index,
+                bits: bits.contains(&i),
+            })
+            .collect();
+        exr_io::read_channels_checked(&self.path, &refs, |meta| self.same_headers(meta, channels))
+            .map_err(|e| match e {
+                exr::error::Error::Invalid(what) if what.starts_with(exr_io::CHANGED) => {
+                    self.changed(&what[exr_io::CHANGED.len()..])
+                }
+                exr::error::Error::NotSupported(what) => {
+                    Problem::new(ProblemKind::Unsupported, &self.path, what.to_string())
+                }
+                exr::error::Error::Io(io) if io.kind() == std::io::ErrorKind::NotFound => {
+                    Problem::new(ProblemKind::MissingFile, &self.path, io.to_string())
+                }
+                other => corrupt(other.to_string()),
+            })
+    }
+
     fn changed(&self, what: &str) -> Problem {
         Problem::new(
             ProblemKind::Changed,
@@ -385,29 +418,7 @@ impl FileInfo {
         let corrupt = |detail: String| Problem::new(ProblemKind::Corrupt, &self.path, detail);
         match self.kind {
             FileKind::Exr { .. } => {
-                let refs: Vec<exr_io::ChannelRef> = channels
-                    .iter()
-                    .map(|&i| exr_io::ChannelRef {
-                        part: self.channels[i].part,
-                        index: self.channels[i].index,
-                        bits: bits.contains(&i),
-                    })
-                    .collect();
-                let read = exr_io::read_channels_checked(&self.path, &refs, |meta| {
-                    self.same_headers(meta, channels)
-                })
-                .map_err(|e| match e {
-                    exr::error::Error::Invalid(what) if what.starts_with(exr_io::CHANGED) => {
-                        self.changed(&what[exr_io::CHANGED.len()..])
-                    }
-                    exr::error::Error::NotSupported(what) => {
-                        Problem::new(ProblemKind::Unsupported, &self.path, what.to_string())
-                    }
-                    exr::error::Error::Io(io) if io.kind() == std::io::ErrorKind::NotFound => {
-                        Problem::new(ProblemKind::MissingFile, &self.path, io.to_string())
-                    }
-                    other => corrupt(other.to_string()),
-                })?;
+                let read = self.read_exr(channels, bits)?;
                 if (read.width, read.height) != (self.width, self.height) {
                     return Err(self.changed(&format!(
                         "it is {}x{}, it was {}x{}",

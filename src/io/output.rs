@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use crate::error::{Problem, ProblemKind};
-use crate::frame::{Frame, LayerClass, Plane, Windows};
+use crate::frame::{Frame, LayerClass, Plane, Window, Windows};
 use crate::io::exr::{self as exr_io, ExrOptions};
 use crate::io::exr_like::{self, ExrOutput};
 use crate::io::file::{FileInfo, FileKind};
@@ -251,7 +251,12 @@ pub fn remove_stale_temporaries(outputs: &[PathBuf]) -> Vec<PathBuf> {
 /// format its name says (`--skip-existing`); `None` when it can. EXR: the header and the
 /// chunk table (every chunk inside the file, as preflight checks inputs); PNG, TIFF, JPEG:
 /// the header and a full decode (they have no chunk table to check).
-pub fn existing_frame_problem(path: &Path, width: usize, height: usize) -> Option<String> {
+pub fn existing_frame_problem(
+    path: &Path,
+    width: usize,
+    height: usize,
+    largest: usize,
+) -> Option<String> {
     let meta = match std::fs::metadata(path) {
         Ok(meta) => meta,
         Err(e) => return Some(format!("it cannot be read: {e}")),
@@ -264,8 +269,10 @@ pub fn existing_frame_problem(path: &Path, width: usize, height: usize) -> Optio
     }
     let expected = OutputFormat::from_path(path)?;
     // The header checks preflight makes of inputs (for EXR the chunk table too, for JPEG the
-    // stream), with the frame's own size as the pixel limit.
-    let info = match FileInfo::probe_within(path, width.saturating_mul(height).max(1)) {
+    // stream), with the frame's own size as the pixel limit (or `largest`, the largest part
+    // of the colour file, which a part passed through at its own window may be).
+    let limit = width.saturating_mul(height).max(largest).max(1);
+    let info = match FileInfo::probe_within(path, limit) {
         Ok(info) => info,
         Err(problem) => return Some(problem.detail),
     };
@@ -285,7 +292,14 @@ pub fn existing_frame_problem(path: &Path, width: usize, height: usize) -> Optio
     if format.is_some() {
         return format;
     }
-    if (info.width, info.height) != (width, height) {
+    // An EXR's beauty may be in any of its parts.
+    let sizes: Vec<(usize, usize)> = match &info.kind {
+        FileKind::Exr { headers, .. } => (headers.iter())
+            .map(|h| (h.layer_size.0, h.layer_size.1))
+            .collect(),
+        FileKind::Image { .. } => vec![(info.width, info.height)],
+    };
+    if !sizes.contains(&(width, height)) {
         return Some(format!(
             "it is {}x{}, the frame is {width}x{height}",
             info.width, info.height
@@ -366,73 +380,45 @@ pub fn write_frame(
     options: &OutputOptions,
     frame_number: Option<i64>,
 ) -> Result<(), Problem> {
+    write_views(path, vec![frame], options, frame_number)
+}
+
+/// Writes `views`, the frames of every view of one multi-view colour file (each read as
+/// that view alone, in the file's order of views), to `path` atomically, as one EXR of every
+/// view: each view's channels under the names and in the parts they are stored in, the
+/// channels of no view once (the first view's), and the input's view attributes. One frame is
+/// written as [`write_frame`] writes it; a picture holds the first view. The folder must
+/// exist.
+pub fn write_views(
+    path: &Path,
+    views: Vec<Frame>,
+    options: &OutputOptions,
+    frame_number: Option<i64>,
+) -> Result<(), Problem> {
     let fail = |detail: String| Problem::new(ProblemKind::Output, path, detail).frame(frame_number);
     let format = OutputFormat::from_path(path).ok_or_else(|| {
         fail("unknown output format; use .exr, .png, .tif, .tiff, .jpg or .jpeg".into())
     })?;
-    let Some(color) = frame.color else {
+    if views.iter().any(|f| f.color.is_none()) || views.is_empty() {
         return Err(fail("the frame has no colour to write".into()));
-    };
+    }
     match format {
         OutputFormat::Exr => {
-            // The beauty under the names it came with, then every channel carried beside it.
-            let carried = frame.carried;
-            // (Grey read as colour names one channel three times: it goes out as R, G, B.)
-            let distinct =
-                |names: &[String]| (1..names.len()).all(|i| !names[..i].contains(&names[i]));
-            let mut names = match carried.beauty.len() {
-                3 | 4 if distinct(&carried.beauty) => carried.beauty.clone(),
-                _ => ["R", "G", "B"].map(String::from).to_vec(),
+            let every = if views.len() > 1 {
+                exr_like::Views::Every
+            } else {
+                exr_like::Views::One
             };
-            // An alpha the colour file had not goes under the usual name.
-            if names.len() == 3 {
-                names.push("A".into());
-            }
-            let mut planes = vec![color.r, color.g, color.b];
-            planes.extend(color.a);
-            let beauty = names
-                .into_iter()
-                .zip(planes)
-                .map(|(name, plane)| exr_like::OutChannel {
-                    name,
-                    plane,
-                    class: LayerClass::Colour,
-                    exact: None,
-                });
-            // Part for part as the colour file (one part when it is not an EXR); a part none
-            // of whose channels were carried is left out.
-            let count = carried.headers.len().max(1);
-            let mut parts: Vec<Vec<exr_like::OutChannel>> = vec![Vec::new(); count];
-            parts[carried.colour_part.min(count - 1)].extend(beauty);
-            for c in carried.channels {
-                parts[c.part.min(count - 1)].push(exr_like::OutChannel {
-                    name: c.name,
-                    plane: c.plane,
-                    class: c.class,
-                    exact: c.exact,
-                });
-            }
-            let parts = parts
-                .into_iter()
-                .enumerate()
-                .filter(|(_, channels)| !channels.is_empty())
-                .map(|(p, channels)| exr_like::OutPart {
-                    input: carried.headers.get(p),
-                    channels,
-                })
-                .collect();
+            let display = views[0].windows.display;
+            let headers = views[0].carried.headers.clone();
+            let parts = exr_parts(views, &headers);
             write_atomic(path, |writer| {
-                exr_like::write_like(
-                    writer,
-                    (frame.width, frame.height),
-                    frame.windows,
-                    parts,
-                    &options.exr,
-                    &options.record,
-                )
+                exr_like::write_like(writer, display, parts, &options.exr, &options.record, every)
             })
         }
         OutputFormat::Image(format) => write_atomic(path, |writer| {
+            let frame = &views[0];
+            let color = frame.color.as_ref().expect("checked");
             // A picture is the display window: an EXR's overscan is cut off, and what its
             // data window does not cover is transparent black.
             let display = frame.windows.display;
@@ -478,4 +464,101 @@ pub fn write_frame(
     // The preflight found the place writable: a failure now (a full disk, an I/O error) is
     // the moment's, and a retry may succeed.
     .map_err(|detail| Problem::new(ProblemKind::WriteFailed, path, detail).frame(frame_number))
+}
+
+/// The parts of an EXR output of `views` (see [`write_views`]), made like `headers`, the
+/// colour file's (one part when it is not an EXR); a part none of whose channels were
+/// carried is left out.
+fn exr_parts(
+    views: Vec<Frame>,
+    headers: &[exr::meta::header::Header],
+) -> Vec<exr_like::OutPart<'_>> {
+    let every = views.len() > 1;
+    let count = headers.len().max(1);
+    let mut parts: Vec<Vec<exr_like::OutChannel>> = vec![Vec::new(); count];
+    let mut windows: Vec<Option<Window>> = vec![None; count];
+    for (v, frame) in views.into_iter().enumerate() {
+        let carried = frame.carried;
+        let color = frame.color.expect("checked");
+        let data = Window {
+            x: frame.windows.data_origin.0,
+            y: frame.windows.data_origin.1,
+            width: frame.width,
+            height: frame.height,
+        };
+        // The beauty under the names it came with (as stored, view and all, beside other
+        // views), then every channel carried beside it.
+        let came_as = if every {
+            &carried.beauty_stored
+        } else {
+            &carried.beauty
+        };
+        // (Grey read as colour names one channel three times: it goes out as R, G, B.)
+        let distinct = |names: &[String]| (1..names.len()).all(|i| !names[..i].contains(&names[i]));
+        let mut names = match came_as.len() {
+            3 | 4 if distinct(came_as) => came_as.clone(),
+            _ => ["R", "G", "B"].map(String::from).to_vec(),
+        };
+        // An alpha the colour file had not goes under the usual name, beside a view's
+        // beauty in its layer (`right.A` beside `right.R`).
+        if names.len() == 3 {
+            let alpha = match names[0].rsplit_once('.') {
+                Some((layer, _)) if every => format!("{layer}.A"),
+                _ => "A".to_string(),
+            };
+            names.push(alpha);
+        }
+        let mut planes = vec![color.r, color.g, color.b];
+        planes.extend(color.a);
+        let part = carried.colour_part.min(count - 1);
+        windows[part].get_or_insert(data);
+        parts[part].extend(names.into_iter().zip(planes).map(|(name, plane)| {
+            exr_like::OutChannel {
+                name,
+                plane,
+                class: LayerClass::Colour,
+                exact: None,
+            }
+        }));
+        for c in carried.channels {
+            // The channels of no view are each view's: written once.
+            if every && c.shared && v > 0 {
+                continue;
+            }
+            let part = c.part.min(count - 1);
+            // (A part passed through at its own window holds no channel of the frame's.)
+            windows[part].get_or_insert(c.window.unwrap_or(data));
+            parts[part].push(exr_like::OutChannel {
+                name: if every { c.stored } else { c.name },
+                plane: c.plane,
+                class: c.class,
+                exact: c.exact,
+            });
+        }
+    }
+    let mut out: Vec<exr_like::OutPart> = parts
+        .into_iter()
+        .zip(windows)
+        .enumerate()
+        .filter_map(|(p, (channels, data))| {
+            Some(exr_like::OutPart {
+                input: headers.get(p),
+                data: data?,
+                channels,
+            })
+        })
+        .collect();
+    // A part of no view may not come first in a multi-view file: the first part of a view
+    // goes first (its view is the default).
+    if every {
+        let viewed = |p: &exr_like::OutPart| {
+            p.input
+                .is_some_and(|h| h.own_attributes.view_name.is_some())
+        };
+        if let Some(first) = out.iter().position(viewed) {
+            let part = out.remove(first);
+            out.insert(0, part);
+        }
+    }
+    out
 }

@@ -1,11 +1,34 @@
-//! The channels of the colour file's part besides the passes, carried to the output (issue
-//! 29): which they are, each one's class (light blurred with the beauty, or data passed
-//! through), and which are read exactly (u32 data no pass reads), decided once per frame's
-//! plan so the read only follows it.
+//! The channels of the colour file besides the passes, carried to the output (issue 29):
+//! which they are, each one's class (light blurred with the beauty, or data passed through),
+//! which are read exactly (u32 data no pass reads), which parts are read apart (another data
+//! window), decided once per frame's plan so the read only follows it; and which views of a
+//! multi-view colour file a run leaves out.
 
+use super::parts::PartApart;
 use super::plan::{FramePlan, Slot};
 
 impl FramePlan {
+    /// The warning that a multi-view colour file's other views are not written, when one view
+    /// of it is (`--view`, or a picture output).
+    pub fn unwritten_views(&self) -> Option<String> {
+        let color = self.color.as_ref()?;
+        let info = &self.files[color.rgb[0].file].info;
+        let (views, view) = (info.views.as_ref()?, info.view.as_ref()?);
+        let others: Vec<&str> = views
+            .names
+            .iter()
+            .filter(|v| *v != view)
+            .map(String::as_str)
+            .collect();
+        (!others.is_empty()).then(|| {
+            format!(
+                "view {view} of the colour file is written, as a file of one view; its other \
+                 views ({}) are not: --view reads one view, a picture holds one",
+                others.join(", ")
+            )
+        })
+    }
+
     /// Reads, besides the passes, every other channel of the part of the colour file that
     /// holds the colour, so the output can hold them again (an EXR output asks; the others
     /// do not, and `diff` and `bench` read colour alone).
@@ -49,6 +72,54 @@ impl FramePlan {
             .zip(&color.other_classes)
             .map(|(slot, &class)| {
                 channel_of(slot).sample_type == "u32" && class.is_data() && !passes.contains(slot)
+            })
+            .collect();
+    }
+
+    /// The most pixels a part of the colour file holds (0 for a picture): what a part of its
+    /// output passed through at its own window may hold.
+    pub fn largest_part(&self) -> usize {
+        let Some(color) = &self.color else {
+            return 0;
+        };
+        match &self.files[color.rgb[0].file].info.kind {
+            crate::io::file::FileKind::Exr { headers, .. } => (headers.iter())
+                .map(|h| h.layer_size.0.saturating_mul(h.layer_size.1))
+                .max()
+                .unwrap_or(0),
+            _ => 0,
+        }
+    }
+
+    /// Reads, besides, the parts of the colour file whose data window is not the beauty's
+    /// (an EXR output asks, after [`FramePlan::read_every_channel`]): each part of data
+    /// alone comes back as it was, at its own window; a part holding light (or data carried
+    /// with the motion) is placed on the beauty's window, where the passes work, and
+    /// written there.
+    pub fn read_parts_apart(&mut self) {
+        let Some(color) = &mut self.color else {
+            return;
+        };
+        let info = &self.files[color.rgb[0].file].info;
+        let headers = match &info.kind {
+            crate::io::file::FileKind::Exr { headers, .. } => &headers[..],
+            _ => &[],
+        };
+        color.apart_read = color
+            .apart
+            .iter()
+            .map(|&part| {
+                let channels: Vec<usize> = (0..info.channels.len())
+                    .filter(|&i| info.channels[i].part == part)
+                    .collect();
+                let classes = (channels.iter())
+                    .map(|&i| carried_class(&color.layer_classes, headers, &info.channels[i]))
+                    .collect();
+                PartApart {
+                    part,
+                    channels,
+                    classes,
+                }
             })
             .collect();
     }

@@ -30,12 +30,30 @@ pub const GPU_BASE: u64 = 320 << 20;
 pub const GPU_PLANES_FACTOR: u64 = 3;
 
 impl FramePlan {
-    /// The decoded planes' bytes: every channel read, as f32.
+    /// The decoded planes' bytes: every channel read, as f32 (a part of the colour file read
+    /// apart at its own window counted at the larger of its window and the beauty's, which
+    /// it may be placed on).
     pub fn decoded_bytes(&self) -> u64 {
+        let apart: u64 = self.color.as_ref().map_or(0, |color| {
+            let info = &self.files[color.rgb[0].file].info;
+            let FileKind::Exr { headers, .. } = &info.kind else {
+                return 0;
+            };
+            let beauty = pixels(info.width, info.height);
+            (color.apart_read.iter())
+                .map(|part| {
+                    let size = headers
+                        .get(part.part)
+                        .map_or(0, |h| pixels(h.layer_size.0, h.layer_size.1));
+                    part.channels.len() as u64 * size.max(beauty) * 4
+                })
+                .sum()
+        });
         self.files
             .iter()
             .map(|f| f.channels.len() as u64 * pixels(f.info.width, f.info.height) * 4)
-            .sum()
+            .sum::<u64>()
+            .saturating_add(apart)
     }
 
     /// The most a picture decoder holds besides the planes: its decoded buffer and the copy

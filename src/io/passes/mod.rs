@@ -28,6 +28,7 @@ mod check;
 mod convert;
 mod fit;
 mod memory;
+mod parts;
 mod plan;
 mod preflight;
 mod read;

@@ -11,6 +11,7 @@ use crate::io::preset::{Preset, Transfer, VectorSpec};
 use crate::io::sequence::PathPattern;
 
 use super::convert::Decode;
+use super::parts::{other_channels, PartApart};
 use super::window::DataWindow;
 use super::Inputs;
 
@@ -37,6 +38,11 @@ pub(super) struct ColorPlan {
     /// The other channels of the colour's part (indices into the file's `channels`), read
     /// only when [`FramePlan::read_every_channel`] asks, with their slots then.
     pub(super) others: Vec<usize>,
+    /// The parts of the colour file whose data window is not the beauty's (indices into
+    /// its headers), read apart only when [`FramePlan::read_parts_apart`] asks, with each
+    /// part's channels (indices into the file's `channels`) and classes then.
+    pub(super) apart: Vec<usize>,
+    pub(super) apart_read: Vec<PartApart>,
     pub(super) other_slots: Vec<Slot>,
     /// Each other channel's class, and whether it is read exactly (a u32 data channel no
     /// pass reads: its bits, so IDs over 2²⁴ come back as they were), beside `other_slots`.
@@ -159,31 +165,25 @@ pub fn plan_frame(
                         .iter()
                         .map(|c| c.map(|c| planner.slot(file, c)))
                         .collect();
-                    let (others, left) = other_channels(info, &claimed);
-                    if !left.is_empty() {
+                    let (others, apart, left) = other_channels(info, &claimed);
+                    let unread: Vec<&String> = left
+                        .iter()
+                        .zip(&apart)
+                        .filter(|(_, part)| part.is_none())
+                        .map(|(name, _)| name)
+                        .collect();
+                    if !unread.is_empty() {
                         plan.warnings.push(format!(
-                            "{} of the colour file: a data window other than the beauty's (or \
-                             deep data), not written to the output",
-                            left.join(", ")
+                            "{} of the colour file: deep data, or data shutter does not \
+                             decode, not written to the output",
+                            unread
+                                .iter()
+                                .map(|n| n.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", ")
                         ));
                     }
                     plan.parts_left_out = left;
-                    if let (Some(views), Some(view)) = (&info.views, &info.view) {
-                        let others: Vec<&str> = views
-                            .names
-                            .iter()
-                            .filter(|v| *v != view)
-                            .map(String::as_str)
-                            .collect();
-                        if !others.is_empty() {
-                            plan.warnings.push(format!(
-                                "view {view} of the colour file is written, as a file of one \
-                                 view; its other views ({}) are not: a run reads one view \
-                                 (--view)",
-                                others.join(", ")
-                            ));
-                        }
-                    }
                     plan.color = Some(ColorPlan {
                         rgb: [
                             slots[0].expect("required"),
@@ -194,6 +194,8 @@ pub fn plan_frame(
                         decode_srgb: integer && preset.color.transfer == Transfer::Srgb,
                         premultiply: integer,
                         others,
+                        apart: apart.into_iter().flatten().collect(),
+                        apart_read: Vec::new(),
                         other_slots: Vec::new(),
                         other_classes: Vec::new(),
                         other_exact: Vec::new(),
@@ -551,44 +553,6 @@ impl Planner<'_> {
             });
         Slot { file, entry }
     }
-}
-
-/// The channels of an EXR colour file other than the beauty's (`beauty`, indices into
-/// `info.channels`): those of the beauty's part, and of every other part whose data window is
-/// the beauty's (the others are returned by name: `part N` or `part NAME`). None for an
-/// integer image, whose channels are all the beauty's. A multi-view file is seen as the view
-/// read ([`FileInfo::in_view`]): its channels and those of no view, named without the view,
-/// so it comes out as a file of that view.
-fn other_channels(info: &FileInfo, beauty: &[usize]) -> (Vec<usize>, Vec<String>) {
-    let crate::io::file::FileKind::Exr { headers, .. } = &info.kind else {
-        return (Vec::new(), Vec::new());
-    };
-    let Some(&first) = beauty.first() else {
-        return (Vec::new(), Vec::new());
-    };
-    let colour = &headers[info.channels[first].part];
-    let alike = |part: usize| {
-        let h = &headers[part];
-        h.layer_size == colour.layer_size
-            && h.own_attributes.layer_position == colour.own_attributes.layer_position
-            && crate::io::exr::unsupported_reason(h).is_none()
-    };
-    let others = (0..info.channels.len())
-        .filter(|&i| alike(info.channels[i].part) && !beauty.contains(&i))
-        .collect();
-    // Parts of the channels seen (a multi-view file's other views are not).
-    let seen: std::collections::BTreeSet<usize> = info.channels.iter().map(|c| c.part).collect();
-    let left: Vec<String> = (0..headers.len())
-        .filter(|&p| seen.contains(&p) && !alike(p))
-        .map(|p| {
-            headers[p]
-                .own_attributes
-                .layer_name
-                .as_ref()
-                .map_or(format!("part {p}"), |n| format!("part {n}"))
-        })
-        .collect();
-    (others, left)
 }
 
 /// How `channel`'s part compresses it lossily, if it does ([`exr_io::keeps_exactly`]).

@@ -120,10 +120,55 @@ pub fn read_frame_keeping(
                 frame.carried.channels.push(CarriedChannel {
                     class,
                     name: channel.name.clone(),
+                    stored: stored_name(headers, channel),
+                    shared: file.info.views.is_some() && channel.view.is_none(),
                     part: channel.part,
                     plane,
                     exact,
+                    window: None,
                 });
+            }
+            // The parts of another data window, each read on its own.
+            for apart in &plan_color.apart_read {
+                let passed = apart.passed_through();
+                // A part passed through keeps its u32 data to the bit.
+                let bits: Vec<usize> = (apart.channels.iter().copied())
+                    .filter(|&i| passed && file.info.channels[i].sample_type == "u32")
+                    .collect();
+                let read = (file.info)
+                    .read_exr(&apart.channels, &bits)
+                    .map_err(|p| p.frame(plan.frame))?;
+                let own = DataWindow {
+                    origin: read.windows.data_origin,
+                    width: read.width,
+                    height: read.height,
+                };
+                let to = colour.unwrap_or(own);
+                let planes = read.planes.into_iter();
+                let channels = apart.channels.iter().zip(&apart.classes).zip(planes);
+                for ((&i, &class), mut plane) in channels {
+                    let channel = &file.info.channels[i];
+                    let exact = bits.contains(&i).then(|| {
+                        let values: Vec<u32> = plane.iter().map(|v| v.to_bits()).collect();
+                        plane = values.iter().map(|&v| v as f32).collect();
+                        values
+                    });
+                    let (plane, window) = if passed {
+                        (plane, Some(own.as_window()))
+                    } else {
+                        (own.place(&plane, &to), None)
+                    };
+                    frame.carried.channels.push(CarriedChannel {
+                        class,
+                        name: channel.name.clone(),
+                        stored: stored_name(headers, channel),
+                        part: channel.part,
+                        shared: file.info.views.is_some() && channel.view.is_none(),
+                        plane,
+                        exact,
+                        window,
+                    });
+                }
             }
             frame.carried.headers = headers.clone();
             frame.carried.colour_part = channel_of(plan_color.rgb[0]).part;
@@ -132,6 +177,12 @@ pub fn read_frame_keeping(
                 .iter()
                 .chain(&plan_color.a)
                 .map(|&slot| channel_of(slot).name.clone())
+                .collect();
+            frame.carried.beauty_stored = plan_color
+                .rgb
+                .iter()
+                .chain(&plan_color.a)
+                .map(|&slot| stored_name(headers, channel_of(slot)))
                 .collect();
         }
         let mut r = take(plan_color.rgb[0], &mut decoded);
@@ -262,4 +313,16 @@ pub fn plan_color(
         max_pixels: crate::io::file::DEFAULT_MAX_PIXELS,
     };
     plan_frame(&Inputs::color_only(pattern.clone()), frame, &options)
+}
+
+/// A channel's name as its file stores it (a view's channel seen without its view,
+/// [`crate::io::file::FileInfo::in_view`], has it in its header still).
+fn stored_name(
+    headers: &[exr::meta::header::Header],
+    channel: &crate::io::file::ChannelInfo,
+) -> String {
+    headers
+        .get(channel.part)
+        .and_then(|h| h.channels.list.get(channel.index))
+        .map_or_else(|| channel.name.clone(), |c| c.name.to_string())
 }

@@ -23,6 +23,16 @@ impl DataWindow {
         }
     }
 
+    /// The window as the frame keeps windows.
+    pub fn as_window(&self) -> crate::frame::Window {
+        crate::frame::Window {
+            x: self.origin.0,
+            y: self.origin.1,
+            width: self.width,
+            height: self.height,
+        }
+    }
+
     fn end(&self) -> (i64, i64) {
         (
             i64::from(self.origin.0) + self.width as i64,
@@ -49,6 +59,29 @@ impl DataWindow {
             end.0 - 1,
             end.1 - 1
         )
+    }
+
+    /// `plane` (this window's samples) placed on `to`: what `to` holds of it, 0 where it
+    /// does not reach.
+    pub fn place(&self, plane: &[f32], to: &DataWindow) -> Plane {
+        let mut out = vec![0.0; to.width * to.height];
+        let (end, to_end) = (self.end(), to.end());
+        let x0 = i64::from(self.origin.0).max(i64::from(to.origin.0));
+        let x1 = end.0.min(to_end.0);
+        let y0 = i64::from(self.origin.1).max(i64::from(to.origin.1));
+        let y1 = end.1.min(to_end.1);
+        if x0 >= x1 {
+            return out;
+        }
+        let n = (x1 - x0) as usize;
+        for y in y0..y1 {
+            let from = (y - i64::from(self.origin.1)) as usize * self.width
+                + (x0 - i64::from(self.origin.0)) as usize;
+            let at = (y - i64::from(to.origin.1)) as usize * to.width
+                + (x0 - i64::from(to.origin.0)) as usize;
+            out[at..at + n].copy_from_slice(&plane[from..from + n]);
+        }
+        out
     }
 
     /// `plane` (this window's samples) cut to `to`, which it covers.
