@@ -116,13 +116,14 @@ pub fn process_on(
 /// mattes (the exposure variant's coverage at silhouettes, fitted on colour), which are made
 /// once from the beauty and read by every layer ([`reconstruct::reconstruct_layers_with`]);
 /// so the blur is linear in the colour and a beauty that is the sum of its light layers still
-/// is after it, to float rounding. On the CPU, scatter, the bokeh gather and reconstruct's
-/// 2014 variants carry the layers through the beauty's own work (its curves, its taps'
-/// weights: [`scatter::stages_carrying`], [`dof::gather::gather_carrying`],
-/// [`reconstruct::gather_2014::gather_2014_carrying`]), so a layer costs its share of the
-/// sums alone, and the GPU's bokeh gather, scatter and reconstruct's 2014 gather carry them
-/// through their dispatches likewise; the other passes run each group of three in the
-/// beauty's place, which costs about what the beauty does (issue 29, point 6).
+/// is after it, to float rounding. On the CPU, scatter, the bokeh gather, reconstruct's
+/// 2014 variants and stretch carry the layers through the beauty's own work (its curves,
+/// its taps' weights, its fragments: [`scatter::stages_carrying`],
+/// [`dof::gather::gather_carrying`], [`reconstruct::gather_2014::gather_2014_carrying`],
+/// [`stretch::stages_carrying`]), so a layer costs its share of the sums alone, and the
+/// GPU's bokeh gather, scatter and reconstruct's 2014 gather carry them through their
+/// dispatches likewise; the other passes (and stretch on the GPU) run each group of three in
+/// the beauty's place, which costs about what the beauty does (issue 29, point 6).
 ///
 /// Data layers a preset classes `motion` take, after a motion blur, the value of the nearest
 /// surface whose streak covers each pixel ([`motion::carry`]), found from the frame's depth
@@ -290,9 +291,9 @@ fn slots(names: &[&str]) -> Vec<[Option<usize>; 3]> {
 }
 
 /// The passes over the frame's beauty and `layers` (colour beside it, each with its alpha):
-/// depth of field when asked for, then the algorithm. Depth of field, reconstruct and scatter
-/// take the layers into their passes (they share the CoC and tiles, the mattes, the curves);
-/// stretch runs on each layer in the beauty's place.
+/// depth of field when asked for, then the algorithm. Depth of field and every motion pass
+/// take the layers into their passes (they share the CoC and tiles, the mattes, the curves,
+/// stretch's taps and fragments).
 fn process_beauty(
     algorithm: Algorithm,
     params: &Params,
@@ -307,8 +308,9 @@ fn process_beauty(
     };
     let shutter = shutter_of(params);
     let pass = |f: Frame| match algorithm {
-        Algorithm::Reconstruct | Algorithm::Scatter => unreachable!("they take their layers"),
-        Algorithm::Stretch => stretch::stretch_with(f, &params.stretch, shutter, stages),
+        Algorithm::Reconstruct | Algorithm::Scatter | Algorithm::Stretch => {
+            unreachable!("they take their layers")
+        }
         Algorithm::None => Frame {
             depth: None,
             velocity: None,
@@ -320,6 +322,9 @@ fn process_beauty(
     match algorithm {
         Algorithm::Scatter => {
             scatter::scatter_layers_with(frame, layers, &params.scatter, shutter, stages)
+        }
+        Algorithm::Stretch => {
+            stretch::stretch_layers_with(frame, layers, &params.stretch, shutter, stages)
         }
         Algorithm::Reconstruct => {
             // Frame numbers seed the jitter modulo 2³² (the hash is 32-bit).

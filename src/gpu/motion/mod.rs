@@ -163,4 +163,29 @@ impl stretch_cpu::Stages for Gpu {
             || stretch_cpu::stages(config, planes, z, v),
         )
     }
+
+    /// Each layer drawn in the beauty's place, one run of the three stages a layer (with the
+    /// beauty's alpha, as the CPU's carrying path reads it), then the beauty: the render
+    /// pipeline's two targets already take the 32 bytes a pixel WebGPU promises for colour
+    /// attachments, so a layer cannot ride in the beauty's draw (src/gpu/motion/stretch.rs).
+    fn stages_carrying(
+        &self,
+        config: &StretchConfig,
+        planes: &[Vec<f32>; 4],
+        z: &[f32],
+        v: &[[f32; 2]],
+        layers: &mut [Color],
+    ) -> [Vec<f32>; 4] {
+        for layer in layers.iter_mut() {
+            let alone = [
+                std::mem::take(&mut layer.r),
+                std::mem::take(&mut layer.g),
+                std::mem::take(&mut layer.b),
+                planes[3].clone(),
+            ];
+            let [r, g, b, _] = self.stages(config, &alone, z, v);
+            (layer.r, layer.g, layer.b) = (r, g, b);
+        }
+        self.stages(config, planes, z, v)
+    }
 }

@@ -1,4 +1,4 @@
-// stretch on the GPU: the twin of src/motion/stretch.rs (texture_blur → move_vertices →
+// stretch on the GPU: the twin of src/motion/stretch/ (texture_blur → move_vertices →
 // rasterise), read side by side with it. src/gpu/motion/stretch.rs says how the stages are run and
 // why rasterise is a render pipeline.
 //
@@ -8,7 +8,7 @@
 // ([f32; 2], f32)), keys (one per triangle) and range (the frame's range per channel).
 // Render bindings (group 0, read-only): config, planes, z, blurred, vertices, order.
 
-// Keep in sync with StretchConfig in src/motion/stretch.rs (ten 4-byte words; a test in
+// Keep in sync with StretchConfig in src/motion/stretch/config.rs (ten 4-byte words; a test in
 // src/gpu/motion/stretch.rs compares the fields).
 struct StretchConfig {
     width: u32,
