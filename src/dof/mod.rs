@@ -255,6 +255,20 @@ pub trait Stages {
     fn blend(&self, config: &DofConfig, color: Color, coc: &[f32]) -> Color {
         blend::blend(config, color, coc)
     }
+
+    /// [`blend::blend`], and the R, G and B of `layers` (light layers beside the beauty)
+    /// blurred in place with its weights: on the CPU the pyramid carries them through the
+    /// beauty's plan, weights and mixes ([`blend::blend_carrying`]); their alpha is left as
+    /// it came.
+    fn blend_carrying(
+        &self,
+        config: &DofConfig,
+        color: Color,
+        coc: &[f32],
+        layers: &mut [Color],
+    ) -> Color {
+        blend::blend_carrying(config, color, coc, layers)
+    }
 }
 
 pub use crate::stages::Cpu;
@@ -278,7 +292,8 @@ pub fn apply_with(frame: Frame, params: &DofParams, stages: &impl Stages) -> Fra
 /// [`apply_with`], and `layers` (light layers beside the beauty, each with the beauty's
 /// alpha) blurred in place with exactly the beauty's weights: the CoC plane and the tiles
 /// are made once, the gather carries the layers through the beauty's taps
-/// ([`Stages::gather_carrying`]), and blend runs on each layer with the beauty's CoC.
+/// ([`Stages::gather_carrying`]), and blend's pyramid through the beauty's weights and mixes
+/// ([`Stages::blend_carrying`]).
 pub fn apply_layers_with(
     frame: Frame,
     layers: &mut [Color],
@@ -297,11 +312,11 @@ pub fn apply_layers_with(
     let out = match params.method {
         // blend writes the colour in place.
         Method::Blend => {
-            for layer in layers.iter_mut() {
-                let alone = std::mem::replace(layer, Color::empty());
-                *layer = stages.blend(&config, alone, &coc);
+            if layers.is_empty() {
+                stages.blend(&config, color, &coc)
+            } else {
+                stages.blend_carrying(&config, color, &coc, layers)
             }
-            stages.blend(&config, color, &coc)
         }
         Method::Gather => {
             let grid = tiles::TilesConfig::new(frame.width, frame.height, config.epsilon);

@@ -92,4 +92,20 @@ impl crate::dof::Stages for Gpu {
             BlendForm::Talk => talk::blend(config, &color, coc),
         }
     }
+
+    /// Each layer through the twin in the beauty's place, then the beauty: the pyramid's
+    /// dispatches do not carry layers yet (the CPU's `blend_carrying` does).
+    fn blend_carrying(
+        &self,
+        config: &DofConfig,
+        color: Color,
+        coc: &[f32],
+        layers: &mut [Color],
+    ) -> Color {
+        for layer in layers.iter_mut() {
+            let alone = std::mem::replace(layer, Color::empty());
+            *layer = self.blend(config, alone, coc);
+        }
+        self.blend(config, color, coc)
+    }
 }

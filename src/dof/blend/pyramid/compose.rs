@@ -37,7 +37,7 @@ fn axis_taps(size: usize, level: usize, texels: usize) -> Vec<(u32, u32, f32)> {
 }
 
 #[inline(always)]
-fn lerp(a: &Texel, b: &Texel, f: f32) -> Texel {
+pub(super) fn lerp(a: &Texel, b: &Texel, f: f32) -> Texel {
     let mut o = ZERO;
     for k in 0..8 {
         o[k] = a[k] + f * (b[k] - a[k]);
@@ -68,6 +68,31 @@ fn normalised_row(a: &[Texel], b: &[Texel], f: f32, out: &mut [Texel]) {
         let divisor = [w, w, w, w, 1.0, 1.0, 1.0, 1.0];
         for (v, d) in t.iter_mut().zip(divisor) {
             *v /= d;
+        }
+    }
+}
+
+/// [`normalised_row`] for a carried group: texel rows `a` and `b` mixed by f into `out`,
+/// every lane divided by the w of `beauty`'s texel (that of the beauty's row mixed by the
+/// same f, so each lane gets the divisor the beauty's colour got).
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn carried_normalised_row(a: &[Texel], b: &[Texel], f: f32, beauty: &[Texel], out: &mut [Texel]) {
+    for ((o, a), b) in out
+        .as_flattened_mut()
+        .iter_mut()
+        .zip(a.as_flattened())
+        .zip(b.as_flattened())
+    {
+        *o = a + f * (b - a);
+    }
+    for (t, u) in out.iter_mut().zip(beauty) {
+        let w = if u[W] > f32::MIN_POSITIVE {
+            u[W]
+        } else {
+            f32::MIN_POSITIVE
+        };
+        for v in t.iter_mut() {
+            *v /= w;
         }
     }
 }
@@ -120,6 +145,24 @@ impl<'a> Sampler<'a> {
         normalised_row(a, b, f, row);
     }
 
+    /// [`Sampler::row`] of a carried group's level (this level's size, `super::carry`): the
+    /// texel rows mixed the same way and every lane divided by the w of `beauty`, the row
+    /// [`Sampler::row`] made of this level for the same frame row.
+    pub(super) fn carried_row(
+        &self,
+        level: &Level,
+        y: usize,
+        beauty: &[Texel],
+        row: &mut Vec<Texel>,
+    ) {
+        let (r0, r1, f) = self.down[y];
+        let w = level.width;
+        let a = &level.texels[r0 as usize * w..(r0 as usize + 1) * w];
+        let b = &level.texels[r1 as usize * w..(r1 as usize + 1) * w];
+        row.resize(w, ZERO);
+        carried_normalised_row(a, b, f, beauty, row);
+    }
+
     /// The level at frame pixel x, from the row [`Sampler::row`] made.
     #[inline(always)]
     pub(super) fn at(&self, row: &[Texel], x: usize) -> Texel {
@@ -140,8 +183,13 @@ impl<'a> Sampler<'a> {
 /// its blurriness.
 #[derive(Default)]
 pub(super) struct Scratch {
-    made: Vec<Vec<Texel>>,
-    blur: Vec<f32>,
+    /// Level l's row (l ≥ 1) at l − 1, colour divided by w and w itself (the carried
+    /// planes' rows divide by it: `super::carry`).
+    pub(super) made: Vec<Vec<Texel>>,
+    /// Each pixel's blurriness, negative where the near field's spread sets it.
+    pub(super) blur: Vec<f32>,
+    /// The levels made for the row's mixes (first, last), if any pixel of it is blurred.
+    pub(super) mixing: Option<(usize, usize)>,
     /// Each blurred pixel's mix of two images, offset by the reference.
     mixed: Vec<Texel>,
     /// T_near of the two levels that bracket E, as planes.
@@ -175,6 +223,7 @@ pub(super) fn compose_row(
     let Scratch {
         made,
         blur,
+        mixing,
         mixed,
         near_lower,
         near_upper,
@@ -251,12 +300,14 @@ pub(super) fn compose_row(
     // Image k of the ladder without the half step is level k, and either ladder brackets a
     // CoC between the same levels from level 1 up.
     let [ladder, plain] = ladders;
+    *mixing = None;
     if most > 0.0 {
         let (lo, _) = plain.bracket(to_coc(least));
         let (hi, _) = plain.bracket(to_coc(most));
         for l in lo.max(1)..=hi + 1 {
             make(l, made);
         }
+        *mixing = Some((lo.max(1), hi + 1));
     }
 
     let mut reference = ZERO;

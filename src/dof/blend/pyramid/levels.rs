@@ -228,7 +228,7 @@ const LANES: usize = 6;
 /// Halves a plane's row across, [1 3 3 1]/8 over 2i − 1 ..= 2i + 2, clamped to its ends (the
 /// planar twin of [`halve_row`], the same sums in the same order).
 #[inline(always)]
-fn halve_plane_row(row: &[f32], out: &mut [f32]) {
+pub(super) fn halve_plane_row(row: &[f32], out: &mut [f32]) {
     let last = row.len() - 1;
     let tap = |i: usize| {
         let c = 2 * i;
@@ -358,6 +358,13 @@ pub(super) fn build(source: &Source, width: usize, height: usize, count: usize) 
         height: h2,
         texels,
     });
+    halve_levels(&mut levels, count);
+    levels
+}
+
+/// Levels 2 ..= `count` halved from level 1, the first of `levels` (for the beauty's texels
+/// and the carried planes' alike: the same sums lane by lane).
+pub(super) fn halve_levels(levels: &mut Vec<Level>, count: usize) {
     while levels.len() < count {
         let above = levels.last().expect("level 1 is made first");
         let next = halve(above.width, above.height, |y, out, _| {
@@ -365,7 +372,6 @@ pub(super) fn build(source: &Source, width: usize, height: usize, count: usize) 
         });
         levels.push(next);
     }
-    levels
 }
 
 #[cfg(test)]
