@@ -4,7 +4,7 @@
 //! Both of OpenEXR's schemes (MultiViewOpenEXR.html): one part with a `multiView` attribute
 //! and view-named channels, and parts with a `view` attribute each.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::support::{
     noise, read_exr_reference, s, shutter, snapshot, stderr, stdout, write_exr, write_parts, Part,
@@ -224,6 +224,41 @@ fn view_with_layers(seed: u32) -> Vec<(&'static str, Vec<f32>)> {
     passes
 }
 
+/// Stereo files of [`view_with_layers`] in both schemes, `names.exr` (one part, `multiView`)
+/// and `parts.exr` (a part a view), with `shared`, a channel of no view, beside them (in the
+/// one part, or in a part of its own named `notes`).
+fn stereo_with_layers(d: &Path, shared: Option<(String, Vec<f32>)>) -> (PathBuf, PathBuf) {
+    let names = d.join("names.exr");
+    let mut channels = named(view_with_layers(LEFT), |n| n.to_string());
+    channels.extend(named(view_with_layers(RIGHT), in_view("right")));
+    channels.extend(shared.clone());
+    write_parts(
+        &names,
+        (W, H),
+        vec![part(None, None, Some(&["left", "right"][..]), channels)],
+    );
+    let parts = d.join("parts.exr");
+    let mut list = vec![
+        part(
+            Some("left"),
+            Some("left"),
+            None,
+            named(view_with_layers(LEFT), |n| n.to_string()),
+        ),
+        part(
+            Some("right"),
+            Some("right"),
+            None,
+            named(view_with_layers(RIGHT), |n| n.to_string()),
+        ),
+    ];
+    if let Some(channel) = shared {
+        list.push(part(Some("notes"), None, None, vec![channel]));
+    }
+    write_parts(&parts, (W, H), list);
+    (names, parts)
+}
+
 #[test]
 fn a_view_comes_out_with_every_channel_its_mono_file_gives_and_the_others_are_named() {
     // Both schemes: each view's output holds every channel the same view written as a file
@@ -231,33 +266,7 @@ fn a_view_comes_out_with_every_channel_its_mono_file_gives_and_the_others_are_na
     // came), and the run says which views it did not write.
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let names = d.join("names.exr");
-    let mut channels = named(view_with_layers(LEFT), |n| n.to_string());
-    channels.extend(named(view_with_layers(RIGHT), in_view("right")));
-    write_parts(
-        &names,
-        (W, H),
-        vec![part(None, None, Some(&["left", "right"][..]), channels)],
-    );
-    let parts = d.join("parts.exr");
-    write_parts(
-        &parts,
-        (W, H),
-        vec![
-            part(
-                Some("left"),
-                Some("left"),
-                None,
-                named(view_with_layers(LEFT), |n| n.to_string()),
-            ),
-            part(
-                Some("right"),
-                Some("right"),
-                None,
-                named(view_with_layers(RIGHT), |n| n.to_string()),
-            ),
-        ],
-    );
+    let (names, parts) = stereo_with_layers(d, None);
     let mono = |seed: u32, name: &str| {
         let path = d.join(name);
         write_exr(&path, W, H, view_with_layers(seed));
@@ -316,37 +325,8 @@ fn an_exr_output_holds_every_view_each_as_that_view_alone_gives() {
     // once, and the views attribute; nothing warns of views left out.
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let n = W * H;
-    let extra = ("notes.N".to_string(), noise(n, 99, 0.0, 1.0));
-    let names = d.join("names.exr");
-    let mut channels = named(view_with_layers(LEFT), |n| n.to_string());
-    channels.extend(named(view_with_layers(RIGHT), in_view("right")));
-    channels.push(extra.clone());
-    write_parts(
-        &names,
-        (W, H),
-        vec![part(None, None, Some(&["left", "right"][..]), channels)],
-    );
-    let parts = d.join("parts.exr");
-    write_parts(
-        &parts,
-        (W, H),
-        vec![
-            part(
-                Some("left"),
-                Some("left"),
-                None,
-                named(view_with_layers(LEFT), |n| n.to_string()),
-            ),
-            part(
-                Some("right"),
-                Some("right"),
-                None,
-                named(view_with_layers(RIGHT), |n| n.to_string()),
-            ),
-            part(Some("notes"), None, None, vec![extra.clone()]),
-        ],
-    );
+    let extra = ("notes.N".to_string(), noise(W * H, 99, 0.0, 1.0));
+    let (names, parts) = stereo_with_layers(d, Some(extra));
     for (stereo, one_part) in [(&names, true), (&parts, false)] {
         let file = stereo.file_name().unwrap().to_string_lossy().to_string();
         let run = |out: &str, extra: &[&str]| {
