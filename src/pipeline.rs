@@ -209,14 +209,21 @@ enum Existing {
 }
 
 /// The one judgement of an existing output, for the run and for --dry-run alike.
-fn existing_output(job: &Job, plan: &crate::io::passes::FramePlan, output: &Path) -> Existing {
+fn existing_output(
+    job: &Job,
+    plan: &crate::io::passes::FramePlan,
+    output: &Path,
+    views: &[Option<String>],
+) -> Existing {
     if std::fs::symlink_metadata(output).is_err() {
         return Existing::None;
     }
     if !job.skip_existing {
         return Existing::Kept;
     }
-    match existing_frame_problem(output, plan.width, plan.height, plan.largest_part()) {
+    let views: Vec<&str> = views.iter().flatten().map(String::as_str).collect();
+    let views = if views.len() > 1 { &views[..] } else { &[] };
+    match existing_frame_problem(output, plan.width, plan.height, plan.largest_part(), views) {
         None => Existing::Whole,
         Some(why) => Existing::Broken(why),
     }
@@ -309,17 +316,13 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         };
         plan.memory_needed(gpu).saturating_add(check)
     };
-    // A frame of several views: each view's needs in turn, the views done before it held.
-    let needed = |index: usize| {
-        let views = std::iter::once(&plans[index]).chain(&others[index]);
-        let held: u64 = views.clone().map(FramePlan::decoded_bytes).sum();
-        views
-            .map(|p| needed_alone(p).saturating_add(held - p.decoded_bytes()))
-            .max()
-            .unwrap_or(0)
-    };
+    // A frame of several views: each stage of the pipeline holds all of a frame's views, so
+    // each view counts in full.
+    let views_of = |index: usize| std::iter::once(&plans[index]).chain(&others[index]);
+    let needed = |index: usize| views_of(index).map(needed_alone).sum::<u64>();
+    let decoded = |index: usize| views_of(index).map(FramePlan::decoded_bytes).sum::<u64>();
     if let Some(index) = (0..plans.len()).max_by_key(|&i| needed(i)) {
-        let (plan, needed) = (&plans[index], needed(index));
+        let (plan, needed, decoded) = (&plans[index], needed(index), decoded(index));
         if needed > limit {
             let mib = |bytes: u64| bytes.div_ceil(1 << 20);
             return Err(crate::Error::Files(vec![Problem::new(
@@ -330,7 +333,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                      decoder holds {} MiB more), over the {} MiB max-memory allows{}; raise \
                      --max-memory if the machine has it, or give the job to one that does",
                     mib(needed),
-                    mib(plan.decoded_bytes()),
+                    mib(decoded),
                     mib(plan.decoder_bytes()),
                     mib(limit),
                     if job.max_memory.is_none() {
@@ -347,7 +350,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     if job.dry_run {
         for plan in &plans {
             let (frame, output) = (plan.frame, job.output.path(plan.frame));
-            let (action, why) = match existing_output(job, plan, &output) {
+            let (action, why) = match existing_output(job, plan, &output, &views) {
                 Existing::None => ("write", None),
                 Existing::Kept => ("overwrite", None),
                 Existing::Whole => ("skip", None),
@@ -408,7 +411,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     let mut todo_others = Vec::with_capacity(plans.len());
     for (plan, other_views) in plans.into_iter().zip(others) {
         let (frame, path) = (plan.frame, job.output.path(plan.frame));
-        match existing_output(job, &plan, &path) {
+        match existing_output(job, &plan, &path, &views) {
             Existing::Whole => {
                 report.frames_skipped += 1;
                 report.skipped.push(Output {

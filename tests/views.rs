@@ -719,3 +719,175 @@ fn info_shows_the_views_and_matches_presets_in_the_view_asked_for() {
         stderr(&o)
     );
 }
+
+#[test]
+fn views_of_other_windows_and_a_part_of_no_view_first_come_out_each_at_its_window() {
+    // Parts: IDs of no view first (overscan, u32 over 2²⁴), the left view at the frame, the
+    // right view on a window of its own, and a left part of light and IDs on another window.
+    use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
+    use exr::math::Vec2;
+    use exr::meta::attribute::{IntegerBounds, Text};
+    use exr::meta::header::{ImageAttributes, LayerAttributes};
+    use exr::prelude::WritableImage;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let ids = |n: usize| {
+        (0..n as u32)
+            .map(|i| 0x8000_0001 + 7 * i)
+            .collect::<Vec<u32>>()
+    };
+    let layer = |name: &str, view: Option<&str>, (x, y), (w, h), channels: Vec<AnyChannel<_>>| {
+        let mut attributes = LayerAttributes::named(name);
+        attributes.view_name = view.map(Text::from);
+        attributes.layer_position = Vec2(x, y);
+        Layer::new(
+            (w, h),
+            attributes,
+            Encoding::FAST_LOSSLESS,
+            AnyChannels::sort(channels.into()),
+        )
+    };
+    let passes = |(w, h): (usize, usize), seed: u32| -> Vec<AnyChannel<FlatSamples>> {
+        let n = w * h;
+        let mut list: Vec<(&str, Vec<f32>)> = vec![
+            ("R", noise(n, seed, 0.0, 1.0)),
+            ("G", noise(n, seed + 1, 0.0, 1.0)),
+            ("B", noise(n, seed + 2, 0.0, 1.0)),
+            ("Z", noise(n, seed + 3, 1.0, 5.0)),
+            ("velocity.X", noise(n, seed + 4, -6.0, 6.0)),
+            ("velocity.Y", noise(n, seed + 5, -3.0, 3.0)),
+        ];
+        list.push(("A", vec![1.0; n]));
+        (list.into_iter())
+            .map(|(c, p)| AnyChannel::new(c, FlatSamples::F32(p)))
+            .collect()
+    };
+    let (sw, sh) = (20, 12);
+    let mut spec: Vec<AnyChannel<FlatSamples>> = ["spec.R", "spec.G", "spec.B"]
+        .into_iter()
+        .enumerate()
+        .map(|(k, c)| AnyChannel::new(c, FlatSamples::F32(noise(sw * sh, 30 + k as u32, 0.0, 1.0))))
+        .collect();
+    spec.push(AnyChannel::new("id2", FlatSamples::U32(ids(sw * sh))));
+    let image = Image::empty(ImageAttributes::new(IntegerBounds::from_dimensions((W, H))))
+        .with_layer(layer(
+            "ids",
+            None,
+            (-4, -4),
+            (W + 8, H + 8),
+            vec![AnyChannel::new(
+                "id",
+                FlatSamples::U32(ids((W + 8) * (H + 8))),
+            )],
+        ))
+        .with_layer(layer(
+            "left",
+            Some("left"),
+            (0, 0),
+            (W, H),
+            passes((W, H), LEFT),
+        ))
+        .with_layer(layer(
+            "right",
+            Some("right"),
+            (4, 3),
+            (20, 16),
+            passes((20, 16), RIGHT),
+        ))
+        .with_layer(layer("spec_left", Some("left"), (-10, -6), (sw, sh), spec));
+    let stereo = d.join("stereo.exr");
+    image.write().to_file(&stereo).unwrap();
+    let out = d.join("out.exr");
+    let o = blur(&s(&stereo), &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let layers = crate::support::read_exr_layers(&out);
+    let part = |name: &str| {
+        (layers.iter())
+            .find(|l| {
+                l.attributes
+                    .layer_name
+                    .as_ref()
+                    .map(|t| t.to_string())
+                    .as_deref()
+                    == Some(name)
+            })
+            .unwrap_or_else(|| panic!("no part {name}"))
+    };
+    let u32s = |l: &Layer<AnyChannels<FlatSamples>>, c: &str| match &(l.channel_data.list.iter())
+        .find(|ch| ch.name.to_string() == c)
+        .unwrap()
+        .sample_data
+    {
+        FlatSamples::U32(v) => v.clone(),
+        other => panic!("{c} is not u32: {other:?}"),
+    };
+    // A view's part first; each part at its window.
+    let first = layers[0]
+        .attributes
+        .view_name
+        .as_ref()
+        .map(|t| t.to_string());
+    assert_eq!(first.as_deref(), Some("left"));
+    let right = part("right");
+    assert_eq!(
+        (right.attributes.layer_position, right.size),
+        (Vec2(4, 3), Vec2(20, 16))
+    );
+    let id = part("ids");
+    assert_eq!(
+        (id.attributes.layer_position, id.size),
+        (Vec2(-4, -4), Vec2(W + 8, H + 8))
+    );
+    assert_eq!(u32s(id, "id"), ids((W + 8) * (H + 8)));
+    // The left part of light is placed on left's window, its IDs placed to the bit.
+    let spec = part("spec_left");
+    assert_eq!(
+        (spec.attributes.layer_position, spec.size),
+        (Vec2(0, 0), Vec2(W, H))
+    );
+    let placed = u32s(spec, "id2");
+    let stored = ids(sw * sh);
+    for y in 0..H {
+        for x in 0..W {
+            let want = if x < sw - 10 && y < sh - 6 {
+                stored[(y + 6) * sw + x + 10]
+            } else {
+                0
+            };
+            assert_eq!(placed[y * W + x], want, "id2 at ({x}, {y})");
+        }
+    }
+    // The right view alone gives the same beauty as the right part of every view.
+    let alone = d.join("right.exr");
+    let o = blur(&s(&stereo), &alone, &["--view", "right"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let beauty_of = |l: &Layer<AnyChannels<FlatSamples>>| -> Vec<Vec<f32>> {
+        (l.channel_data.list.iter())
+            .filter(|c| ["R", "G", "B"].contains(&c.name.to_string().as_str()))
+            .map(|c| c.sample_data.values_as_f32().collect())
+            .collect()
+    };
+    let alone_layers = crate::support::read_exr_layers(&alone);
+    let alone_right = (alone_layers.iter())
+        .find(|l| {
+            l.channel_data
+                .list
+                .iter()
+                .any(|c| c.name.to_string() == "R")
+        })
+        .unwrap();
+    assert_eq!(beauty_of(alone_right), beauty_of(right));
+    // A rerun with --skip-existing finds it whole; an output of one view is not.
+    let o = blur(&s(&stereo), &out, &["--skip-existing", "--json"]);
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(report["frames_skipped"], 1, "{report}");
+    let o = blur(&s(&stereo), &alone, &["--skip-existing", "--json"]);
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(report["frames_skipped"], 0, "{report}");
+    assert!(
+        report["warnings"]
+            .to_string()
+            .contains("does not hold the view"),
+        "{report}"
+    );
+}

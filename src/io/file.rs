@@ -286,8 +286,23 @@ impl FileInfo {
         // In the file's order, as the channels of a file of one view are (a name in the
         // view's part and a part of no view is settled by `one_part`).
         channels.sort_by_key(|c| (c.part, c.index));
+        // The view's size and windows are its first part's (the file's are its first
+        // part's, which may be another view's, or a part of no view of another window).
+        let first = (channels.iter())
+            .find(|c| c.view.as_deref() == Some(chosen.as_str()))
+            .map(|c| c.part);
+        let (mut width, mut height, mut windows) = (self.width, self.height, self.windows);
+        if let (Some(part), FileKind::Exr { headers, .. }) = (first, &self.kind) {
+            if let Some(header) = headers.get(part) {
+                (width, height) = (header.layer_size.0, header.layer_size.1);
+                windows = exr_io::windows_of(header);
+            }
+        }
         Ok(FileInfo {
             channels,
+            width,
+            height,
+            windows,
             view: Some(chosen),
             ..self.clone()
         })

@@ -256,6 +256,7 @@ pub fn existing_frame_problem(
     width: usize,
     height: usize,
     largest: usize,
+    views: &[&str],
 ) -> Option<String> {
     let meta = match std::fs::metadata(path) {
         Ok(meta) => meta,
@@ -299,6 +300,12 @@ pub fn existing_frame_problem(
             .collect(),
         FileKind::Image { .. } => vec![(info.width, info.height)],
     };
+    // An output of every view holds each of them (one of a view, or of an older run, does
+    // not).
+    let held = info.views.as_ref().map_or(Vec::new(), |v| v.names.clone());
+    if let Some(view) = views.iter().find(|v| !held.iter().any(|h| h == *v)) {
+        return Some(format!("it does not hold the view {view}"));
+    }
     if !sizes.contains(&(width, height)) {
         return Some(format!(
             "it is {}x{}, the frame is {width}x{height}",

@@ -131,9 +131,12 @@ pub fn read_frame_keeping(
             // The parts of another data window, each read on its own.
             for apart in &plan_color.apart_read {
                 let passed = apart.passed_through();
-                // A part passed through keeps its u32 data to the bit.
-                let bits: Vec<usize> = (apart.channels.iter().copied())
-                    .filter(|&i| passed && file.info.channels[i].sample_type == "u32")
+                // Its u32 data keeps its bits, passed through or placed.
+                let bits: Vec<usize> = (apart.channels.iter().zip(&apart.classes))
+                    .filter(|(&i, class)| {
+                        class.is_data() && file.info.channels[i].sample_type == "u32"
+                    })
+                    .map(|(&i, _)| i)
                     .collect();
                 let read = (file.info)
                     .read_exr(&apart.channels, &bits)
@@ -153,10 +156,11 @@ pub fn read_frame_keeping(
                         plane = values.iter().map(|&v| v as f32).collect();
                         values
                     });
-                    let (plane, window) = if passed {
-                        (plane, Some(own.as_window()))
+                    let (plane, exact, window) = if passed {
+                        (plane, exact, Some(own.as_window()))
                     } else {
-                        (own.place(&plane, &to), None)
+                        let exact = exact.map(|values| own.place(&values, &to));
+                        (own.place(&plane, &to), exact, None)
                     };
                     frame.carried.channels.push(CarriedChannel {
                         class,

@@ -63,8 +63,8 @@ impl DataWindow {
 
     /// `plane` (this window's samples) placed on `to`: what `to` holds of it, 0 where it
     /// does not reach.
-    pub fn place(&self, plane: &[f32], to: &DataWindow) -> Plane {
-        let mut out = vec![0.0; to.width * to.height];
+    pub fn place<T: Copy + Default>(&self, plane: &[T], to: &DataWindow) -> Vec<T> {
+        let mut out = vec![T::default(); to.width * to.height];
         let (end, to_end) = (self.end(), to.end());
         let x0 = i64::from(self.origin.0).max(i64::from(to.origin.0));
         let x1 = end.0.min(to_end.0);
