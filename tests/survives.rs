@@ -1494,18 +1494,7 @@ fn parts_of_other_data_windows_come_out_data_as_it_was_and_light_on_the_beautys_
     assert!(!warnings.contains("not written"), "{warnings}");
 
     let layers = crate::support::read_exr_layers(&d.join("out.exr"));
-    let find = |name: &str| {
-        (layers.iter())
-            .find(|l| {
-                l.attributes
-                    .layer_name
-                    .as_ref()
-                    .map(|t| t.to_string())
-                    .as_deref()
-                    == Some(name)
-            })
-            .unwrap_or_else(|| panic!("no part {name}"))
-    };
+    let find = |name: &str| crate::support::part_named(&layers, name);
     let channel = |name: &str, c: &str| -> Vec<f32> {
         let layer = find(name);
         let found = (layer.channel_data.list.iter())

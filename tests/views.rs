@@ -801,18 +801,7 @@ fn views_of_other_windows_and_a_part_of_no_view_first_come_out_each_at_its_windo
     let o = blur(&s(&stereo), &out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     let layers = crate::support::read_exr_layers(&out);
-    let part = |name: &str| {
-        (layers.iter())
-            .find(|l| {
-                l.attributes
-                    .layer_name
-                    .as_ref()
-                    .map(|t| t.to_string())
-                    .as_deref()
-                    == Some(name)
-            })
-            .unwrap_or_else(|| panic!("no part {name}"))
-    };
+    let part = |name: &str| crate::support::part_named(&layers, name);
     let u32s = |l: &Layer<AnyChannels<FlatSamples>>, c: &str| match &(l.channel_data.list.iter())
         .find(|ch| ch.name.to_string() == c)
         .unwrap()

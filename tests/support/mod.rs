@@ -131,6 +131,20 @@ pub fn read_exr_layers(
         .collect()
 }
 
+/// The layer (part) of `layers` named `name`.
+pub fn part_named<'a>(
+    layers: &'a [exr::image::Layer<exr::image::AnyChannels<exr::image::FlatSamples>>],
+    name: &str,
+) -> &'a exr::image::Layer<exr::image::AnyChannels<exr::image::FlatSamples>> {
+    let named = |l: &&exr::image::Layer<_>| {
+        let layer_name = l.attributes.layer_name.as_ref().map(|t| t.to_string());
+        layer_name.as_deref() == Some(name)
+    };
+    (layers.iter())
+        .find(named)
+        .unwrap_or_else(|| panic!("no part {name}"))
+}
+
 pub fn channel<'a>(channels: &'a [(String, Vec<f32>)], name: &str) -> &'a [f32] {
     &channels
         .iter()
