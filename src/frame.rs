@@ -152,6 +152,37 @@ pub struct Window {
 }
 
 impl Window {
+    /// `plane` (this window's samples) placed on `to`: what `to` holds of it, the default (0)
+    /// where it does not reach.
+    pub fn place<T: Copy + Default>(&self, plane: &[T], to: &Window) -> Vec<T> {
+        if self == to {
+            return plane.to_vec();
+        }
+        let mut out = vec![T::default(); to.width * to.height];
+        let end = |w: &Window| {
+            (
+                i64::from(w.x) + w.width as i64,
+                i64::from(w.y) + w.height as i64,
+            )
+        };
+        let (end, to_end) = (end(self), end(to));
+        let x0 = i64::from(self.x).max(i64::from(to.x));
+        let x1 = end.0.min(to_end.0);
+        let y0 = i64::from(self.y).max(i64::from(to.y));
+        let y1 = end.1.min(to_end.1);
+        if x0 >= x1 {
+            return out;
+        }
+        let n = (x1 - x0) as usize;
+        for y in y0..y1 {
+            let from =
+                (y - i64::from(self.y)) as usize * self.width + (x0 - i64::from(self.x)) as usize;
+            let at = (y - i64::from(to.y)) as usize * to.width + (x0 - i64::from(to.x)) as usize;
+            out[at..at + n].copy_from_slice(&plane[from..from + n]);
+        }
+        out
+    }
+
     /// The last pixel's coordinates (inclusive), as EXR headers and `shutter info` give them.
     pub fn max(&self) -> (i32, i32) {
         (
@@ -177,26 +208,14 @@ impl Windows {
     /// A plane of `width × height` samples over the data window, as the display window shows
     /// it: what lies outside the display is cut off, what the data does not cover is 0.
     pub fn on_display(&self, plane: &[f32], width: usize, height: usize) -> Vec<f32> {
-        let display = self.display;
-        let (ox, oy) = self.data_origin;
-        if (ox, oy) == (display.x, display.y) && (width, height) == (display.width, display.height)
-        {
-            return plane.to_vec();
-        }
-        let mut out = vec![0.0; display.width * display.height];
-        for (dy, row) in out.chunks_mut(display.width.max(1)).enumerate() {
-            let y = i64::from(display.y) + dy as i64 - i64::from(oy);
-            if y < 0 || y >= height as i64 {
-                continue;
-            }
-            for (dx, v) in row.iter_mut().enumerate() {
-                let x = i64::from(display.x) + dx as i64 - i64::from(ox);
-                if (0..width as i64).contains(&x) {
-                    *v = plane[y as usize * width + x as usize];
-                }
-            }
-        }
-        out
+        let (x, y) = self.data_origin;
+        let data = Window {
+            x,
+            y,
+            width,
+            height,
+        };
+        data.place(plane, &self.display)
     }
 }
 
@@ -391,6 +410,25 @@ impl Frame {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_plane_placed_on_another_window_keeps_what_overlaps_and_is_0_elsewhere() {
+        let w = |x, y, width, height| Window {
+            x,
+            y,
+            width,
+            height,
+        };
+        // 3×2 at (-1, 1): values 1..=6.
+        let from = w(-1, 1, 3, 2);
+        let plane = [1, 2, 3, 4, 5, 6];
+        // Onto 2×3 at (0, 0): row 0 uncovered; rows 1 and 2 take columns 0 and 1 of the
+        // plane's x = 0, 1 (its second and third columns).
+        assert_eq!(from.place(&plane, &w(0, 0, 2, 3)), [0, 0, 2, 3, 5, 6]);
+        // No overlap at all: all 0; the same window: the plane itself.
+        assert_eq!(from.place(&plane, &w(5, 5, 2, 1)), [0, 0]);
+        assert_eq!(from.place(&plane, &from), plane);
+    }
 
     #[test]
     fn pixel_centres_are_at_half_integers_y_down() {

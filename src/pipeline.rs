@@ -314,7 +314,10 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         } else {
             0
         };
-        plan.memory_needed(gpu).saturating_add(check)
+        let layers = job.algorithm.layer_copies() * plan.light_layer_bytes();
+        plan.memory_needed(gpu)
+            .saturating_add(check)
+            .saturating_add(layers)
     };
     // A frame of several views: each stage of the pipeline holds all of a frame's views, so
     // each view counts in full.

@@ -739,3 +739,49 @@ fn a_gpu_backend_is_counted_in_the_memory_a_run_needs() {
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("max-memory allows"), "{}", stderr(&o));
 }
+
+/// Stretch holds a second copy of the light layers (packed, its input and output side by
+/// side): the preflight counts it, and counts it for stretch alone. A 512×512 frame with ten
+/// RGB layers (30 planes of 1 MiB) needs 30 MiB more through stretch than through
+/// reconstruct.
+#[test]
+fn stretch_counts_its_copy_of_the_light_layers_in_the_memory_a_run_needs() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (512, 512);
+    let n = w * h;
+    let mut channels: Vec<(String, Vec<f32>)> = ["R", "G", "B", "A", "Z"]
+        .iter()
+        .map(|c| (c.to_string(), vec![1.0; n]))
+        .collect();
+    channels.push(("velocity.X".into(), vec![4.0; n]));
+    channels.push(("velocity.Y".into(), vec![0.0; n]));
+    for k in 0..10 {
+        for c in ["R", "G", "B"] {
+            channels.push((format!("light{k}.{c}"), vec![0.5; n]));
+        }
+    }
+    let path = dir.path().join("layered.exr");
+    let channels = channels
+        .iter()
+        .map(|(n, p)| (n.as_str(), p.clone()))
+        .collect();
+    crate::support::write_exr(&path, w, h, channels);
+    let needs = |algorithm: &str| -> u64 {
+        let o = shutter(&[
+            "blur",
+            "--algorithm",
+            algorithm,
+            "--color",
+            &s(&path),
+            "-o",
+            &s(&dir.path().join("o.exr")),
+            "--max-memory",
+            "64",
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        let err = stderr(&o);
+        let at = err.find("needs about ").expect("the estimate") + "needs about ".len();
+        err[at..].split(' ').next().unwrap().parse().unwrap()
+    };
+    assert_eq!(needs("stretch") - needs("reconstruct"), 30);
+}

@@ -65,6 +65,19 @@ impl Algorithm {
             .map_or("?", |(n, _)| n)
     }
 
+    /// Copies of a frame's light layers the pass holds beyond what the memory estimate's
+    /// planes factor counts (`io::passes::memory`): stretch carries them packed pixel-major,
+    /// its input and output side by side, one more copy than the layers read (four 1080p
+    /// frames of seventeen RGB layers peaked at 2541–2706 MiB where the planes alone allowed
+    /// 2414; the passes that run each layer in the beauty's place or sum into their own
+    /// planes stay within it).
+    pub fn layer_copies(self) -> u64 {
+        match self {
+            Algorithm::Stretch => 1,
+            _ => 0,
+        }
+    }
+
     /// The passes this algorithm reads; nothing else is decoded.
     pub fn needs(self) -> Passes {
         match self {

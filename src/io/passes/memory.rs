@@ -56,6 +56,21 @@ impl FramePlan {
             .saturating_add(apart)
     }
 
+    /// The light layers' bytes (the colour channels carried beside the beauty, as f32 on the
+    /// beauty's window): what a pass that holds another copy of them adds
+    /// ([`crate::motion::Algorithm::layer_copies`]).
+    pub fn light_layer_bytes(&self) -> u64 {
+        let Some(color) = &self.color else {
+            return 0;
+        };
+        let colour = |c: &&crate::frame::LayerClass| **c == crate::frame::LayerClass::Colour;
+        let channels = color.other_classes.iter().filter(colour).count()
+            + (color.apart_read.iter())
+                .map(|p| p.classes.iter().filter(colour).count())
+                .sum::<usize>();
+        channels as u64 * pixels(self.width, self.height) * 4
+    }
+
     /// The most a picture decoder holds besides the planes: its decoded buffer and the copy
     /// an orientation makes (0 for EXR, decoded straight into the planes).
     pub fn decoder_bytes(&self) -> u64 {

@@ -159,6 +159,7 @@ pub fn read_frame_keeping(
                     let (plane, exact, window) = if passed {
                         (plane, exact, Some(own.as_window()))
                     } else {
+                        let (own, to) = (own.as_window(), to.as_window());
                         let exact = exact.map(|values| own.place(&values, &to));
                         (own.place(&plane, &to), exact, None)
                     };

@@ -61,29 +61,6 @@ impl DataWindow {
         )
     }
 
-    /// `plane` (this window's samples) placed on `to`: what `to` holds of it, 0 where it
-    /// does not reach.
-    pub fn place<T: Copy + Default>(&self, plane: &[T], to: &DataWindow) -> Vec<T> {
-        let mut out = vec![T::default(); to.width * to.height];
-        let (end, to_end) = (self.end(), to.end());
-        let x0 = i64::from(self.origin.0).max(i64::from(to.origin.0));
-        let x1 = end.0.min(to_end.0);
-        let y0 = i64::from(self.origin.1).max(i64::from(to.origin.1));
-        let y1 = end.1.min(to_end.1);
-        if x0 >= x1 {
-            return out;
-        }
-        let n = (x1 - x0) as usize;
-        for y in y0..y1 {
-            let from = (y - i64::from(self.origin.1)) as usize * self.width
-                + (x0 - i64::from(self.origin.0)) as usize;
-            let at = (y - i64::from(to.origin.1)) as usize * to.width
-                + (x0 - i64::from(to.origin.0)) as usize;
-            out[at..at + n].copy_from_slice(&plane[from..from + n]);
-        }
-        out
-    }
-
     /// `plane` (this window's samples) cut to `to`, which it covers.
     pub fn crop(&self, plane: &[f32], to: &DataWindow) -> Plane {
         let dx = (to.origin.0 - self.origin.0) as usize;
