@@ -34,6 +34,7 @@ pub mod numeric;
 pub mod pipeline;
 pub mod process;
 pub mod settings;
+pub mod stack;
 pub mod stages;
 
 pub use error::{Error, Problem, ProblemKind, Result};

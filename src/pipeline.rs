@@ -36,6 +36,9 @@ pub struct Job {
     pub frames: Vec<Option<i64>>,
     pub preset: Preset,
     pub layer: Option<String>,
+    /// A stack of view layers, front first (`--layers`): each read with its name for
+    /// `{layer}`, blurred alone and merged front over back (`crate::stack`). Empty: no stack.
+    pub stack: Vec<String>,
     /// The view of multi-view EXRs to read (`--view`). `None`: every view of a multi-view
     /// colour file into an EXR output of every channel, else each file's default.
     pub view: Option<String>,
@@ -269,33 +272,62 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         && !job.output_options.beauty_only;
     // And every view of a multi-view colour file, each planned, read and processed as that
     // view alone (the first is the default), then written into one file.
-    let views = views_to_write(job, every_channel);
+    // A stack of layers is read from one view.
+    let views = if job.stack.is_empty() {
+        views_to_write(job, every_channel)
+    } else {
+        vec![job.view.clone()]
+    };
     let options = PlanOptions {
         preset: &job.preset,
-        layer: job.layer.as_deref(),
+        layer: job.stack.first().map_or(job.layer.as_deref(), |l| Some(l)),
         view: views[0].as_deref(),
         needs: crate::process::needs(job.algorithm, &job.params),
         max_pixels: job.max_pixels,
     };
     let mut plans = preflight(&job.inputs, &job.output, &job.frames, &options)
         .map_err(|e| name_pass(job, e))?;
-    // The other views' plans, frame by frame.
+    // The other views' (or the stack's other layers') plans, frame by frame.
     let mut others: Vec<Vec<FramePlan>> = plans.iter().map(|_| Vec::new()).collect();
-    for view in &views[1..] {
-        let options = PlanOptions {
-            view: view.as_deref(),
-            ..options.clone()
-        };
-        let view_plans = preflight(&job.inputs, &job.output, &job.frames, &options)
+    let more: Vec<PlanOptions> = if job.stack.is_empty() {
+        (views[1..].iter())
+            .map(|view| PlanOptions {
+                view: view.as_deref(),
+                ..options.clone()
+            })
+            .collect()
+    } else {
+        (job.stack[1..].iter())
+            .map(|layer| PlanOptions {
+                layer: Some(layer),
+                ..options.clone()
+            })
+            .collect()
+    };
+    for options in &more {
+        let unit_plans = preflight(&job.inputs, &job.output, &job.frames, options)
             .map_err(|e| name_pass(job, e))?;
-        for (frame, plan) in others.iter_mut().zip(view_plans) {
+        for (frame, plan) in others.iter_mut().zip(unit_plans) {
             frame.push(plan);
         }
     }
+    if !job.stack.is_empty() {
+        for (first, rest) in plans.iter().zip(&others) {
+            crate::io::passes::stack_problem(first, rest, &job.stack)
+                .map_or(Ok(()), |p| Err(crate::Error::Files(vec![p])))?;
+        }
+    }
     if every_channel {
-        for plan in plans.iter_mut().chain(others.iter_mut().flatten()) {
-            plan.read_every_channel();
-            plan.read_parts_apart();
+        for (plan, layer) in plans.iter_mut().map(|p| (p, 0)).chain(
+            (others.iter_mut()).flat_map(|o| o.iter_mut().enumerate().map(|(i, p)| (p, i + 1))),
+        ) {
+            match job.stack.get(layer) {
+                Some(own) => plan.read_layer_channels(own, &job.stack, layer == 0),
+                None => {
+                    plan.read_every_channel();
+                    plan.read_parts_apart();
+                }
+            }
         }
     }
     if views.len() == 1 {
@@ -538,18 +570,22 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                     let message = match frame {
                         Ok((frames, replaced, notes)) => {
                             let t = Instant::now();
-                            let out = frames
-                                .into_iter()
-                                .map(|frame| {
-                                    process_on(
-                                        job.algorithm,
-                                        &job.params,
-                                        frame,
-                                        frame_number.unwrap_or(0),
-                                        gpu,
-                                    )
-                                })
-                                .collect();
+                            let number = frame_number.unwrap_or(0);
+                            let out = if job.stack.is_empty() {
+                                (frames.into_iter())
+                                    .map(|frame| {
+                                        process_on(job.algorithm, &job.params, frame, number, gpu)
+                                    })
+                                    .collect()
+                            } else {
+                                vec![crate::stack::process_stack(
+                                    job.algorithm,
+                                    &job.params,
+                                    frames,
+                                    number,
+                                    gpu,
+                                )]
+                            };
                             seconds += t.elapsed().as_secs_f64();
                             Ok((frame_number, out, replaced, notes))
                         }

@@ -45,13 +45,13 @@ use crate::support::*;
 /// Measured on lavapipe (Mesa 22.3, LLVM 15) over every frame and variant here: max 1.5e-5
 /// (a stress frame, paper variant), mean ≤ 6e-8, no pixel outside [`AGREE`]; the jitter-free
 /// variants and the 2014 filter mostly agree bit for bit.
-const AGREE: f32 = 1e-4;
+pub(crate) const AGREE: f32 = 1e-4;
 /// The largest difference at any pixel.
-const MAX: f32 = 0.25;
+pub(crate) const MAX: f32 = 0.25;
 /// The share of pixels allowed outside [`AGREE`].
-const FLIPS: f64 = 0.002;
+pub(crate) const FLIPS: f64 = 0.002;
 /// The mean absolute difference, relative to the range.
-const MEAN: f64 = 1e-5;
+pub(crate) const MEAN: f64 = 1e-5;
 
 /// This file's [`parity_within`]: pixels outside [`AGREE`] counted.
 fn parity(got: &[f32], cpu: &[f32]) -> Parity {

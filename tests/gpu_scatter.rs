@@ -66,13 +66,13 @@ use crate::support::*;
 /// p(0)'s). With flips: 8.9·10⁻⁴ for arcs at flatness 0.02 (no pixel outside [`AGREE`]),
 /// 1.2·10⁻² and 0.36 % of pixels on `rotor fast`, mean at most 1.5·10⁻⁵; a 960×540 frame of
 /// curved motion has one pixel at 0.2 (a background estimate), mean 3.2·10⁻⁶.
-const AGREE: f32 = 1e-3;
+pub(crate) const AGREE: f32 = 1e-3;
 /// The largest difference at any pixel.
-const MAX: f32 = 1.0;
+pub(crate) const MAX: f32 = 1.0;
 /// The share of pixels allowed outside [`AGREE`].
-const FLIPS: f64 = 0.01;
+pub(crate) const FLIPS: f64 = 0.01;
 /// The mean absolute difference, relative to the range.
-const MEAN: f64 = 3e-5;
+pub(crate) const MEAN: f64 = 3e-5;
 /// The share outside [`AGREE`] and the mean on stress frames.
 const STRESS: (f64, f64) = (0.02, 5e-3);
 

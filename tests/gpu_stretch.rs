@@ -44,13 +44,13 @@ use crate::support::*;
 /// outside; src/gpu/motion/stretch.rs says why.) A shader that drops the depth test, the tear or the
 /// anchor fails these bounds
 /// ([`stretch_parity_fails_without_the_depth_test_the_tear_or_the_anchor`]).
-const AGREE: f32 = 1e-4;
+pub(crate) const AGREE: f32 = 1e-4;
 /// The share of pixels allowed outside [`AGREE`].
-const FLIPS: f64 = 0.001;
+pub(crate) const FLIPS: f64 = 0.001;
 /// The mean absolute difference, relative to the range.
-const MEAN: f64 = 1e-5;
+pub(crate) const MEAN: f64 = 1e-5;
 /// The largest difference at any pixel: a flipped fragment can move a pixel across the range.
-const MAX: f32 = 1.0;
+pub(crate) const MAX: f32 = 1.0;
 
 impl Parity {
     fn within(&self) -> bool {

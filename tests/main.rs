@@ -19,6 +19,7 @@ mod gpu_stretch;
 mod hostile;
 mod invariants;
 mod io;
+mod layers;
 mod lost;
 mod metrics;
 mod offset;

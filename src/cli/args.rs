@@ -134,6 +134,18 @@ pub struct BlurArgs {
     #[arg(long, value_name = "NAME")]
     pub layer: Option<String>,
 
+    /// A stack of view layers, front first (FG,BG): each read with its name for {layer},
+    /// blurred alone with its own depth and motion, and merged front over back, so what a
+    /// nearer layer uncovers is what the layer behind holds. An EXR output holds the merged
+    /// beauty as R, G, B, A and every layer's channels, each blurred with its own layer.
+    #[arg(
+        long,
+        value_name = "NAME,NAME",
+        value_delimiter = ',',
+        conflicts_with = "layer"
+    )]
+    pub layers: Vec<String>,
+
     /// View of multi-view (stereo) EXRs to read and write alone, e.g. right [default: an EXR
     /// output holds every view; a picture output reads each file's default view].
     #[arg(long, value_name = "NAME")]

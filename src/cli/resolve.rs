@@ -122,6 +122,24 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         }
     }
 
+    let stack = args.layers.clone();
+    if !stack.is_empty() {
+        if !preset.channel_names().any(|n| n.contains("{layer}")) {
+            return Err(Error::usage(format!(
+                "--layers: preset {} names no channel by view layer, so every layer would \
+                 read the same channels (the blender preset names them, or a preset of \
+                 your own with {{layer}} in its channel names)",
+                preset.name
+            )));
+        }
+        if let Some(name) = (0..stack.len()).find_map(|i| {
+            (stack[..i].contains(&stack[i]) || stack[i].is_empty()).then(|| &stack[i])
+        }) {
+            return Err(Error::usage(format!(
+                "--layers names each view layer once, front first (FG,BG); '{name}' is not"
+            )));
+        }
+    }
     let frames: Vec<Option<i64>> = match (&args.frames, inputs.is_sequence()) {
         (Some(_), false) => {
             return Err(Error::usage(
@@ -203,6 +221,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         frames,
         preset,
         layer: args.layer.clone(),
+        stack,
         view: args.view.clone(),
         algorithm: settings.algorithm,
         params: Params {

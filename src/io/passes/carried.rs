@@ -76,6 +76,68 @@ impl FramePlan {
             .collect();
     }
 
+    /// The names, as stored, of the channels the beauty is read from (R, G, B, then alpha).
+    pub fn colour_names(&self) -> Vec<String> {
+        let Some(color) = &self.color else {
+            return Vec::new();
+        };
+        (color.rgb.iter().chain(&color.a))
+            .map(|slot| {
+                let file = &self.files[slot.file];
+                file.info.channels[file.channels[slot.entry]].name.clone()
+            })
+            .collect()
+    }
+
+    /// [`FramePlan::read_every_channel`] and [`FramePlan::read_parts_apart`] for layer `own`
+    /// of a stack of view layers (`--layers`, `stack` naming them all): it carries the
+    /// channels of its own layer (`own.…`), blurred with its own weights; the stack's
+    /// first layer (`rest`) carries besides the channels of no layer of the stack (another
+    /// view layer, a composite, the parts of another data window) as data, which go out as
+    /// they came. No layer reads another's.
+    pub fn read_layer_channels(&mut self, own: &str, stack: &[String], rest: bool) {
+        let layer_of = |name: &str| {
+            stack
+                .iter()
+                .find(|l| {
+                    name.strip_prefix(l.as_str())
+                        .is_some_and(|r| r.starts_with('.'))
+                })
+                .cloned()
+        };
+        if let Some(color) = &mut self.color {
+            let info = &self.files[color.rgb[0].file].info;
+            color
+                .others
+                .retain(|&c| match layer_of(&info.channels[c].name) {
+                    Some(layer) => layer == own,
+                    None => rest,
+                });
+            if !rest {
+                color.apart.clear();
+            }
+        }
+        self.read_every_channel();
+        self.read_parts_apart();
+        let Some(color) = &mut self.color else {
+            return;
+        };
+        let info = &self.files[color.rgb[0].file].info;
+        let data = crate::frame::LayerClass::Data;
+        for (k, &c) in color.others.iter().enumerate() {
+            if layer_of(&info.channels[c].name).is_none() {
+                color.other_classes[k] = data;
+            }
+        }
+        for part in &mut color.apart_read {
+            for (class, &c) in part.classes.iter_mut().zip(&part.channels) {
+                if layer_of(&info.channels[c].name).as_deref() != Some(own) {
+                    *class = data;
+                }
+            }
+        }
+    }
+
     /// The most pixels a part of the colour file holds (0 for a picture): what a part of its
     /// output passed through at its own window may hold.
     pub fn largest_part(&self) -> usize {
@@ -165,4 +227,56 @@ fn carried_class(
         None if channel.sample_type == "u32" => crate::frame::LayerClass::Data,
         None => channels::class_of(qualified, &crypto),
     }
+}
+
+/// What is wrong with one frame's stack of view layers (`--layers`, `stack` naming them,
+/// `first` the front layer's plan, `rest` the others'), if anything: each layer's colour must
+/// be its own (not a fallback of the preset's, R, G, B, that every layer would read alike),
+/// and the layers one picture, the same size.
+pub fn stack_problem(
+    first: &FramePlan,
+    rest: &[FramePlan],
+    stack: &[String],
+) -> Option<crate::error::Problem> {
+    use crate::error::{Problem, ProblemKind};
+    let path = |plan: &FramePlan| {
+        (plan.paths().first().copied())
+            .unwrap_or(std::path::Path::new(""))
+            .to_path_buf()
+    };
+    for (plan, name) in std::iter::once(first).chain(rest).zip(stack) {
+        let names = plan.colour_names();
+        if let Some(other) = names.iter().find(|n| !n.starts_with(&format!("{name}."))) {
+            return Some(
+                Problem::new(
+                    ProblemKind::MissingChannel,
+                    path(plan),
+                    format!(
+                        "view layer {name} of --layers has no colour of its own: the preset \
+                         reads {other} for it; check the layer's name (`shutter info` lists \
+                         the file's channels)"
+                    ),
+                )
+                .pass("color")
+                .frame(plan.frame),
+            );
+        }
+    }
+    for (plan, name) in rest.iter().zip(&stack[1..]) {
+        if (plan.width, plan.height) != (first.width, first.height) {
+            return Some(
+                Problem::new(
+                    ProblemKind::SizeMismatch,
+                    path(plan),
+                    format!(
+                        "layer {name} is {}x{}, layer {} {}x{}: a stack's layers are one \
+                         picture, the same size",
+                        plan.width, plan.height, stack[0], first.width, first.height
+                    ),
+                )
+                .frame(plan.frame),
+            );
+        }
+    }
+    None
 }

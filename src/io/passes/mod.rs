@@ -36,6 +36,7 @@ mod suggest;
 mod validity;
 mod window;
 
+pub use carried::stack_problem;
 pub use check::{luma, CheckReport, VectorCheck};
 pub use fit::{describe as describe_reading, fit, Fit, FitInput, Reading, FIT_POINTS};
 pub use plan::{passes_found, plan_frame, FramePlan, PlanOptions};

@@ -487,8 +487,11 @@ impl Planner<'_> {
             ProblemKind::MissingChannel,
             &info.path,
             format!(
-                "not in the file with preset {}; the file has {}",
+                "not in the file with preset {}{}; the file has {}",
                 self.options.preset.name,
+                (self.options.layer)
+                    .filter(|_| wanted.contains("{layer}"))
+                    .map_or(String::new(), |l| format!(" for view layer {l}")),
                 info.channel_list()
             ),
         )

@@ -1,0 +1,335 @@
+//! Layer stacks (issue 33): a shot rendered in view layers, front to back. Each layer is
+//! blurred alone, premultiplied, with its own depth and motion, so what a nearer layer
+//! uncovers is what the layer behind holds rather than a guess; then the layers are merged
+//! front over back.
+//!
+//! A layer's alpha is its coverage. A pixel it does not cover (alpha 0) is empty, not a
+//! surface: whatever its passes say, it is still and as far as can be, so it neither moves
+//! nor hides anything ([`prepare_for_motion`]). A covered pixel whose passes say nothing is
+//! there (a renderer samples depth and vectors at one point: at a layer's edge that point can
+//! miss the surface the colour's samples saw; Blender writes depth 10¹⁰ and no motion there)
+//! takes the passes of the nearest pixel of a surface within [`EDGE_REACH`] px. For depth of
+//! field an empty pixel takes the depth of the nearest surface, so the gathers, which
+//! normalise by the weights they meet, meet a field whose circles of confusion are those of
+//! the layer's own surfaces and spread nothing from the empty space
+//! ([`prepare_for_dof`]).
+
+use crate::frame::{pixel_centre, CarriedChannel, Color, Frame, LayerClass, Plane};
+use crate::gpu::Gpu;
+use crate::motion::Algorithm;
+use crate::numeric::DepthKind;
+use crate::process::{depth_kind, process_on, Params};
+
+/// Depth at or beyond this says no surface is there: Blender writes 10¹⁰ (and no motion) at
+/// a pixel whose depth sample hits nothing of the layer; a real surface 10⁹ scene units away
+/// is, for a lens and for motion, at infinity.
+pub const NO_SURFACE: f32 = 1e9;
+
+/// How far (px) a covered pixel with no surface of its own looks for the surface it covers:
+/// the reach of a renderer's pixel filter (Blackman–Harris 1.5 px wide, Gaussian, box), two
+/// pixels with room.
+pub const EDGE_REACH: f32 = 2.0;
+
+/// The names the merged beauty goes out under (an EXR output): a file's main RGBA layer.
+pub const MERGED: [&str; 4] = ["R", "G", "B", "A"];
+
+/// Blurs each layer of `layers` (front first) with `algorithm` and `params` and merges them
+/// front over back ([`merge`]).
+pub fn process_stack(
+    algorithm: Algorithm,
+    params: &Params,
+    layers: Vec<Frame>,
+    frame_number: i64,
+    gpu: Option<&Gpu>,
+) -> Frame {
+    let blurred = layers
+        .into_iter()
+        .map(|layer| blur_layer(algorithm, params, layer, frame_number, gpu))
+        .collect();
+    merge(blurred)
+}
+
+/// One layer through the effects: depth of field with its empty pixels at their nearest
+/// surface's depth, then the motion blur with them still and far.
+pub fn blur_layer(
+    algorithm: Algorithm,
+    params: &Params,
+    mut layer: Frame,
+    frame_number: i64,
+    gpu: Option<&Gpu>,
+) -> Frame {
+    let Some(coverage) = layer.color.as_ref().and_then(|c| c.a.clone()) else {
+        // No alpha: the layer covers every pixel, and is a frame like any other.
+        return process_on(algorithm, params, layer, frame_number, gpu);
+    };
+    let surface = surface_pixels(&layer, &coverage, depth_kind(params));
+    let nearest = nearest_surface(layer.width, layer.height, &surface);
+    let Some(dof) = params.dof else {
+        prepare_for_motion(&mut layer, &coverage, &surface, &nearest);
+        return process_on(algorithm, params, layer, frame_number, gpu);
+    };
+    if algorithm == Algorithm::None {
+        prepare_for_dof(&mut layer, &coverage, &surface, &nearest);
+        return process_on(algorithm, params, layer, frame_number, gpu);
+    }
+    // Both: the motion's passes wait while depth of field runs on a depth of its own.
+    let motion = (
+        layer.depth.clone(),
+        layer.velocity.take(),
+        layer.prev.take(),
+        layer.next.take(),
+    );
+    prepare_for_dof(&mut layer, &coverage, &surface, &nearest);
+    let dof_only = Params {
+        dof: Some(dof),
+        ..*params
+    };
+    let mut defocused = process_on(Algorithm::None, &dof_only, layer, frame_number, gpu);
+    (
+        defocused.depth,
+        defocused.velocity,
+        defocused.prev,
+        defocused.next,
+    ) = motion;
+    prepare_for_motion(&mut defocused, &coverage, &surface, &nearest);
+    let motion_only = Params {
+        dof: None,
+        ..*params
+    };
+    process_on(algorithm, &motion_only, defocused, frame_number, gpu)
+}
+
+/// Which pixels hold a surface of the layer: covered (alpha above 0) and, where there is a
+/// depth, one nearer than [`NO_SURFACE`] (a painted CoC map says nothing of that: covered
+/// is enough).
+pub fn surface_pixels(layer: &Frame, coverage: &[f32], kind: DepthKind) -> Vec<bool> {
+    match (&layer.depth, kind) {
+        (Some(depth), DepthKind::Depth) => coverage
+            .iter()
+            .zip(depth)
+            .map(|(&a, &z)| a > 0.0 && z < NO_SURFACE)
+            .collect(),
+        _ => coverage.iter().map(|&a| a > 0.0).collect(),
+    }
+}
+
+/// For every pixel, the index of the nearest pixel of a surface (Euclidean, to within the
+/// propagation's rounding: two raster sweeps over the 8-neighbourhood, each pixel offered
+/// its neighbours' nearest), `u32::MAX` where the layer has none.
+pub fn nearest_surface(width: usize, height: usize, surface: &[bool]) -> Vec<u32> {
+    const NONE: u32 = u32::MAX;
+    let mut nearest: Vec<u32> = (0..surface.len())
+        .map(|i| if surface[i] { i as u32 } else { NONE })
+        .collect();
+    let distance = |i: usize, s: u32| -> u64 {
+        let (x, y) = ((i % width) as i64, (i / width) as i64);
+        let (sx, sy) = ((s as usize % width) as i64, (s as usize / width) as i64);
+        ((x - sx).pow(2) + (y - sy).pow(2)) as u64
+    };
+    let offer = |nearest: &mut Vec<u32>, i: usize, from: usize| {
+        let s = nearest[from];
+        if s != NONE && (nearest[i] == NONE || distance(i, s) < distance(i, nearest[i])) {
+            nearest[i] = s;
+        }
+    };
+    let (w, h) = (width as i64, height as i64);
+    for pass in 0..2 {
+        // Forward: from the left and the row above; backward: from the right and below.
+        let (rows, step): (Vec<i64>, i64) = if pass == 0 {
+            ((0..h).collect(), 1)
+        } else {
+            ((0..h).rev().collect(), -1)
+        };
+        for y in rows {
+            let xs: Vec<i64> = if step == 1 {
+                (0..w).collect()
+            } else {
+                (0..w).rev().collect()
+            };
+            for &x in &xs {
+                let i = (y * w + x) as usize;
+                for (dx, dy) in [(-step, 0), (-step, -step), (0, -step), (step, -step)] {
+                    let (nx, ny) = (x + dx, y + dy);
+                    if (0..w).contains(&nx) && (0..h).contains(&ny) {
+                        offer(&mut nearest, i, (ny * w + nx) as usize);
+                    }
+                }
+            }
+            // And back along the row, so a surface to the other side reaches this row now.
+            for &x in xs.iter().rev() {
+                let i = (y * w + x) as usize;
+                let nx = x + step;
+                if (0..w).contains(&nx) {
+                    offer(&mut nearest, i, (y * w + nx) as usize);
+                }
+            }
+        }
+    }
+    nearest
+}
+
+fn within(i: usize, s: u32, width: usize, reach: f32) -> bool {
+    let (x, y) = pixel_centre(i, width);
+    let (sx, sy) = pixel_centre(s as usize, width);
+    (x - sx).powi(2) + (y - sy).powi(2) <= reach * reach
+}
+
+/// The motion passes of an empty pixel (still, infinitely far), and those of a covered pixel
+/// with no surface of its own (its nearest surface's within [`EDGE_REACH`], else still).
+pub fn prepare_for_motion(layer: &mut Frame, coverage: &[f32], surface: &[bool], nearest: &[u32]) {
+    let width = layer.width;
+    for i in 0..coverage.len() {
+        if surface[i] {
+            continue;
+        }
+        let s = nearest[i];
+        let from = (coverage[i] > 0.0 && s != u32::MAX && within(i, s, width, EDGE_REACH))
+            .then_some(s as usize);
+        if let Some(depth) = layer.depth.as_mut() {
+            depth[i] = from.map_or(f32::INFINITY, |s| depth[s]);
+        }
+        if let Some(v) = layer.velocity.as_mut() {
+            (v.x[i], v.y[i]) = from.map_or((0.0, 0.0), |s| (v.x[s], v.y[s]));
+        }
+        let (x, y) = pixel_centre(i, width);
+        for positions in [layer.prev.as_mut(), layer.next.as_mut()]
+            .into_iter()
+            .flatten()
+        {
+            match from {
+                // The surface's displacement, from this pixel.
+                Some(s) => {
+                    let (sx, sy) = pixel_centre(s, width);
+                    positions.x[i] = positions.x[s] - sx + x;
+                    positions.y[i] = positions.y[s] - sy + y;
+                    if let Some(z) = positions.z.as_mut() {
+                        z[i] = z[s];
+                    }
+                }
+                None => {
+                    positions.x[i] = x;
+                    positions.y[i] = y;
+                    if let Some(z) = positions.z.as_mut() {
+                        z[i] = f32::INFINITY;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The depth depth of field reads: every pixel that is not a surface takes its nearest
+/// surface's (infinitely far where the layer has none).
+pub fn prepare_for_dof(layer: &mut Frame, _coverage: &[f32], surface: &[bool], nearest: &[u32]) {
+    if let Some(depth) = layer.depth.as_mut() {
+        for i in 0..surface.len() {
+            if !surface[i] {
+                depth[i] = match nearest[i] {
+                    u32::MAX => f32::INFINITY,
+                    s => depth[s as usize],
+                };
+            }
+        }
+    }
+}
+
+/// Merges blurred layers, front first, front over back (premultiplied: what a layer lets
+/// through is 1 − its alpha, clamped to 0..1). The merged frame is the first layer's frame
+/// with the merged colour as its beauty (an EXR output names it [`MERGED`]); each layer's own
+/// blurred beauty and the channels it carried go out beside it, under their names.
+pub fn merge(layers: Vec<Frame>) -> Frame {
+    let mut layers = layers.into_iter();
+    let Some(mut merged) = layers.next() else {
+        return Frame::new(0, 0);
+    };
+    let mut channels = Vec::new();
+    let Some(front) = merged.color.take() else {
+        return merged;
+    };
+    channels.extend(beauty_channels(&merged, &front));
+    let mut color = front;
+    let n = merged.width * merged.height;
+    let mut alpha = color.a.take().unwrap_or_else(|| vec![1.0; n]);
+    channels.append(&mut merged.carried.channels);
+    for mut layer in layers {
+        let Some(behind) = layer.color.take() else {
+            continue;
+        };
+        channels.extend(beauty_channels(&layer, &behind));
+        channels.append(&mut layer.carried.channels);
+        over(&mut color, &mut alpha, &behind);
+    }
+    color.a = Some(alpha);
+    merged.color = Some(color);
+    merged.carried.beauty = MERGED.map(String::from).to_vec();
+    merged.carried.beauty_stored = merged.carried.beauty.clone();
+    // A channel of the file under the merged beauty's names is the one it replaces.
+    channels.retain(|c| !MERGED.contains(&c.name.as_str()));
+    merged.carried.channels = channels;
+    merged
+}
+
+/// `behind` under what is merged so far (`color`, `alpha`).
+fn over(color: &mut Color, alpha: &mut Plane, behind: &Color) {
+    let through: Vec<f32> = alpha.iter().map(|&a| 1.0 - a.clamp(0.0, 1.0)).collect();
+    for (front, back) in [
+        (&mut color.r, &behind.r),
+        (&mut color.g, &behind.g),
+        (&mut color.b, &behind.b),
+    ] {
+        for ((f, &b), &t) in front.iter_mut().zip(back).zip(&through) {
+            *f += t * b;
+        }
+    }
+    for (i, (a, &t)) in alpha.iter_mut().zip(&through).enumerate() {
+        *a += t * behind.a.as_ref().map_or(1.0, |b| b[i]);
+    }
+}
+
+/// A layer's own blurred beauty as channels beside the merged one, under the names it had
+/// (`FG.Combined.R`); none when it had no layer's names (a picture, or plain R, G, B: the
+/// merged beauty takes those).
+fn beauty_channels(layer: &Frame, color: &Color) -> Vec<CarriedChannel> {
+    let carried = &layer.carried;
+    let planes = color.planes();
+    if carried.beauty.len() != planes.len() || carried.beauty.iter().any(|n| !n.contains('.')) {
+        return Vec::new();
+    }
+    (carried.beauty.iter().zip(&carried.beauty_stored))
+        .zip(planes)
+        .map(|((name, stored), plane)| CarriedChannel {
+            name: name.clone(),
+            stored: stored.clone(),
+            shared: false,
+            part: carried.colour_part,
+            class: LayerClass::Colour,
+            plane: plane.to_vec(),
+            exact: None,
+            window: None,
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_nearest_surface_is_found_across_the_frame_both_ways() {
+        // 7×3, surfaces at (1, 0) and (6, 2).
+        let (w, h) = (7, 3);
+        let mut surface = vec![false; w * h];
+        surface[1] = true;
+        surface[2 * w + 6] = true;
+        let nearest = nearest_surface(w, h, &surface);
+        // (0, 2): (1, 0) is √5 away, (6, 2) 6.
+        assert_eq!(nearest[2 * w], 1);
+        // (5, 0): (6, 2) is √5 away, (1, 0) 4.
+        assert_eq!(nearest[5], (2 * w + 6) as u32);
+        // Each surface is its own.
+        assert_eq!(nearest[1], 1);
+        assert!(nearest_surface(2, 2, &[false; 4])
+            .iter()
+            .all(|&s| s == u32::MAX));
+    }
+}

@@ -1,0 +1,514 @@
+//! Layer stacks (`--layers`, issue 33): a shot rendered in view layers, each blurred alone
+//! with its own depth and motion and merged front over back. The frames are Blender's
+//! multi-layer EXRs (`<layer>.Combined.RGBA`, `.Depth.Z`, `.Vector.XYZW`, pixels with y up,
+//! X, Y = p(−1) − p(0)), written here.
+
+use std::path::{Path, PathBuf};
+
+use crate::support::*;
+
+const W: usize = 96;
+const H: usize = 16;
+/// The still box of the foreground layer: columns [BOX.0, BOX.1).
+const BOX: (usize, usize) = (40, 56);
+const BOX_RGB: [f32; 3] = [0.9, 0.3, 0.1];
+/// The background pans right this many pixels a frame (the default shutter, 0.5 of the
+/// frame centred on it, streaks it over 10 px).
+const PAN: f32 = 20.0;
+const STRIPE_PERIOD: f32 = 12.0;
+
+/// The background's texture at screen x (a pixel's centre is i + 0.5) at the frame's time.
+fn stripes(x: f32) -> f32 {
+    0.5 + 0.4 * (std::f32::consts::TAU * x / STRIPE_PERIOD).sin()
+}
+
+/// The background at pixel i over the exposure, worked out by hand: the texture moves right
+/// by PAN a frame, the shutter is open over t ∈ [−¼, ¼], so the pixel sees the texture over
+/// [x − PAN/4, x + PAN/4] evenly; the mean of a sinusoid over a window of width L is its
+/// value at the centre times sin(πL/P)/(πL/P).
+fn streaked(i: usize) -> f32 {
+    let x = i as f32 + 0.5;
+    let l = PAN / 2.0;
+    let k = std::f32::consts::PI * l / STRIPE_PERIOD;
+    0.5 + 0.4 * (std::f32::consts::TAU * x / STRIPE_PERIOD).sin() * k.sin() / k
+}
+
+fn in_box(i: usize) -> bool {
+    (BOX.0..BOX.1).contains(&(i % W))
+}
+
+/// The channels of layer `name`: colour (premultiplied), alpha, depth, vector (X, Y, Z, W).
+fn layer_channels(
+    name: &str,
+    rgb: [Vec<f32>; 3],
+    alpha: Vec<f32>,
+    depth: Vec<f32>,
+    motion: Vec<f32>,
+) -> Vec<(String, Vec<f32>)> {
+    let [r, g, b] = rgb;
+    let n = W * H;
+    vec![
+        (format!("{name}.Combined.R"), r),
+        (format!("{name}.Combined.G"), g),
+        (format!("{name}.Combined.B"), b),
+        (format!("{name}.Combined.A"), alpha),
+        (format!("{name}.Depth.Z"), depth),
+        // Blender's X, Y = p(−1) − p(0) and Z, W = p(0) − p(+1), y up: a pixel moving
+        // right by m has X = Z = −m.
+        (
+            format!("{name}.Vector.X"),
+            motion.iter().map(|m| -m).collect(),
+        ),
+        (format!("{name}.Vector.Y"), vec![0.0; n]),
+        (
+            format!("{name}.Vector.Z"),
+            motion.iter().map(|m| -m).collect(),
+        ),
+        (format!("{name}.Vector.W"), vec![0.0; n]),
+    ]
+}
+
+/// The panning background layer `BG` (every pixel covered, depth 30).
+fn background() -> Vec<(String, Vec<f32>)> {
+    let n = W * H;
+    let value: Vec<f32> = (0..n).map(|i| stripes((i % W) as f32 + 0.5)).collect();
+    layer_channels(
+        "BG",
+        [value.clone(), value.clone(), value],
+        vec![1.0; n],
+        vec![30.0; n],
+        vec![PAN; n],
+    )
+}
+
+/// The foreground layer `FG`: a still box at depth 3; its empty pixels hold `empty_depth`
+/// and move by `empty_motion` (what they say must not matter).
+fn foreground(empty_depth: f32, empty_motion: f32) -> Vec<(String, Vec<f32>)> {
+    foreground_moving(0.0, empty_depth, empty_motion)
+}
+
+/// [`foreground`] with the box moving right by `motion` px a frame.
+fn foreground_moving(motion: f32, empty_depth: f32, empty_motion: f32) -> Vec<(String, Vec<f32>)> {
+    let n = W * H;
+    let plane = |inside: f32, outside: f32| -> Vec<f32> {
+        (0..n)
+            .map(|i| if in_box(i) { inside } else { outside })
+            .collect()
+    };
+    layer_channels(
+        "FG",
+        BOX_RGB.map(|c| plane(c, 0.0)),
+        plane(1.0, 0.0),
+        plane(3.0, empty_depth),
+        plane(motion, empty_motion),
+    )
+}
+
+fn write(path: &Path, layers: Vec<Vec<(String, Vec<f32>)>>) {
+    let channels: Vec<(String, Vec<f32>)> = layers.into_iter().flatten().collect();
+    write_exr(
+        path,
+        W,
+        H,
+        channels
+            .iter()
+            .map(|(n, p)| (n.as_str(), p.clone()))
+            .collect(),
+    );
+}
+
+/// Runs `shutter <command> --preset blender --color <input> -o <out> <args…>`, checks it
+/// succeeded, and returns the output's channels.
+fn run(command: &str, input: &Path, out: PathBuf, args: &[&str]) -> Vec<(String, Vec<f32>)> {
+    let mut all = vec![
+        command,
+        "--preset",
+        "blender",
+        "--color",
+        input.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    all.extend(args);
+    let o = shutter(&all);
+    assert!(o.status.success(), "{all:?}: {}", stderr(&o));
+    read_exr_reference(&out)
+}
+
+const LENS: [&str; 6] = [
+    "--focal-length",
+    "50",
+    "--f-stop",
+    "1.4",
+    "--focus-distance",
+    "3",
+];
+
+/// An empty pixel of a layer (alpha 0) neither moves nor hides anything, whatever its
+/// passes say: here the foreground's empty pixels claim to be nearer than its box and to
+/// move 30 px a frame (or, for depth of field, to lie far out of focus in front of it). The
+/// box stays exactly as it is and every pixel it does not cover is exactly what the
+/// background alone gives.
+#[test]
+fn an_empty_layer_pixel_neither_moves_nor_darkens_what_is_behind_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("layers.exr");
+    write(&input, vec![foreground(0.5, -30.0), background()]);
+    let cases: Vec<(&str, Vec<&str>)> = vec![
+        ("blur", vec!["--algorithm", "reconstruct"]),
+        ("blur", vec!["--algorithm", "scatter"]),
+        ("blur", vec!["--algorithm", "stretch"]),
+        ("dof", [&["--method", "gather"][..], &LENS].concat()),
+        ("dof", [&["--method", "blend"][..], &LENS].concat()),
+    ];
+    for (command, args) in cases {
+        let what = format!("{command} {}", args[1]);
+        let stacked = run(
+            command,
+            &input,
+            dir.path().join(format!("stack-{}.exr", args[1])),
+            &[&args[..], &["--layers", "FG,BG"]].concat(),
+        );
+        let alone = run(
+            command,
+            &input,
+            dir.path().join(format!("bg-{}.exr", args[1])),
+            &[&args[..], &["--layer", "BG"]].concat(),
+        );
+        for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
+            let merged = channel(&stacked, name);
+            let behind = channel(&alone, &format!("BG.Combined.{name}"));
+            for i in 0..W * H {
+                let expected = if in_box(i) { BOX_RGB[c] } else { behind[i] };
+                assert!(
+                    (merged[i] - expected).abs() <= 1e-6,
+                    "{what} {name} at ({}, {}): {} where {expected} (in the box: {})",
+                    i % W,
+                    i / W,
+                    merged[i],
+                    in_box(i)
+                );
+            }
+        }
+        let alpha = channel(&stacked, "A");
+        assert!(alpha.iter().all(|&a| (a - 1.0).abs() <= 1e-6), "{what}: A");
+        // The layers go out beside the merged beauty, each blurred with its own weights.
+        let fg = channel(&stacked, "FG.Combined.A");
+        assert!(
+            (0..W * H).all(|i| fg[i] == if in_box(i) { 1.0 } else { 0.0 }),
+            "{what}: the still box's layer is as it was"
+        );
+        assert_same_bits(
+            channel(&stacked, "BG.Combined.R"),
+            channel(&alone, "BG.Combined.R"),
+            &format!("{what}: BG.Combined.R"),
+        );
+    }
+}
+
+/// A still foreground over a panning background: the box stays sharp, and the background
+/// streaks right up to its edge with what the background layer holds behind it (worked out
+/// by hand above), where a single layer can only guess what the box hides.
+#[test]
+fn a_still_foreground_over_a_panning_background_stays_sharp_with_the_background_streaking_to_its_edge(
+) {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("layers.exr");
+    // Blender's empty pixels: depth 10¹⁰, no motion.
+    write(&input, vec![foreground(1e10, 0.0), background()]);
+    // The same frame as one layer: the box where it is, the background elsewhere.
+    let single = dir.path().join("single.exr");
+    let n = W * H;
+    let pick = |inside: f32, outside: &[f32]| -> Vec<f32> {
+        (0..n)
+            .map(|i| if in_box(i) { inside } else { outside[i] })
+            .collect()
+    };
+    let bg = background();
+    let value = &bg[0].1;
+    write(
+        &single,
+        vec![layer_channels(
+            "ViewLayer",
+            BOX_RGB.map(|c| pick(c, value)),
+            vec![1.0; n],
+            pick(3.0, &vec![30.0; n]),
+            pick(0.0, &vec![PAN; n]),
+        )],
+    );
+    for algorithm in ["reconstruct", "scatter", "stretch"] {
+        let args = ["--algorithm", algorithm];
+        let stacked = run(
+            "blur",
+            &input,
+            dir.path().join(format!("stack-{algorithm}.exr")),
+            &[&args[..], &["--layers", "FG,BG"]].concat(),
+        );
+        let one = run(
+            "blur",
+            &single,
+            dir.path().join(format!("one-{algorithm}.exr")),
+            &args,
+        );
+        let r = channel(&stacked, "R");
+        for i in (0..n).filter(|&i| in_box(i)) {
+            assert!(
+                (r[i] - BOX_RGB[0]).abs() <= 1e-6,
+                "{algorithm}: the box at ({}, {}) is {}, not sharp",
+                i % W,
+                i / W,
+                r[i]
+            );
+        }
+        // The three pixels each side of the box: what the background holds behind it.
+        let beside: Vec<usize> = (0..n)
+            .filter(|&i| {
+                let x = i % W;
+                (BOX.0 - 3..BOX.0).contains(&x) || (BOX.1..BOX.1 + 3).contains(&x)
+            })
+            .collect();
+        // And the pixels away from the box and from the frame's edges: the algorithm's own
+        // error on a pan.
+        let away: Vec<usize> = (0..n)
+            .filter(|&i| {
+                let x = i % W;
+                (10..BOX.0 - 10).contains(&x) || (BOX.1 + 10..W - 10).contains(&x)
+            })
+            .collect();
+        let worst = |plane: &[f32], at: &[usize]| {
+            (at.iter())
+                .map(|&i| (plane[i] - streaked(i % W)).abs())
+                .fold(0.0f32, f32::max)
+        };
+        let one = channel(&one, "ViewLayer.Combined.R");
+        let (stack_error, single_error, own) =
+            (worst(r, &beside), worst(one, &beside), worst(r, &away));
+        eprintln!(
+            "{algorithm}: beside the box, stack {stack_error}, single layer {single_error}; \
+             away from it {own}"
+        );
+        assert!(
+            own <= 0.03 && stack_error <= own + 0.002,
+            "{algorithm}: beside the box the stack errs {stack_error}, away from it {own}"
+        );
+        assert!(
+            single_error >= 4.0 * stack_error.max(0.005),
+            "{algorithm}: the single layer errs {single_error} beside the box, the stack \
+             {stack_error}: the case does not show what layers fix"
+        );
+    }
+}
+
+/// Three layers merge in their order, front over back: premultiplied halves of red and green
+/// over opaque blue give R ½, G ¼, B ¼, A 1 (still layers: the blur leaves them as they are);
+/// given back to front, blue covers everything.
+#[test]
+fn three_layers_merge_in_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("three.exr");
+    let n = W * H;
+    let flat = |v: f32| vec![v; n];
+    let layer = |name: &str, rgb: [f32; 3], a: f32, depth: f32| {
+        layer_channels(name, rgb.map(flat), flat(a), flat(depth), flat(0.0))
+    };
+    write(
+        &input,
+        vec![
+            layer("Red", [0.5, 0.0, 0.0], 0.5, 1.0),
+            layer("Green", [0.0, 0.5, 0.0], 0.5, 2.0),
+            layer("Blue", [0.0, 0.0, 1.0], 1.0, 3.0),
+        ],
+    );
+    for (order, expected) in [
+        ("Red,Green,Blue", [0.5, 0.25, 0.25, 1.0]),
+        ("Blue,Green,Red", [0.0, 0.0, 1.0, 1.0]),
+        ("Green,Red,Blue", [0.25, 0.5, 0.25, 1.0]),
+    ] {
+        let out = run(
+            "blur",
+            &input,
+            dir.path().join("o.exr"),
+            &["--algorithm", "reconstruct", "--layers", order],
+        );
+        for (name, want) in ["R", "G", "B", "A"].into_iter().zip(expected) {
+            let got = channel(&out, name);
+            assert!(
+                got.iter().all(|&v| (v - want).abs() <= 1e-6),
+                "{order}: {name} is {} where {want}",
+                got[0]
+            );
+        }
+        // Each layer goes out beside the merge, as it was (nothing moves).
+        assert!(channel(&out, "Green.Combined.G").iter().all(|&v| v == 0.5));
+    }
+}
+
+/// `--layers` asks for a preset that names channels by view layer, and for each layer once.
+#[test]
+fn layers_need_a_preset_of_view_layers_and_each_layer_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("layers.exr");
+    write(&input, vec![foreground(1e10, 0.0), background()]);
+    let out = s(&dir.path().join("o.exr"));
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &s(&input),
+        "-o",
+        &out,
+        "--layers",
+        "FG,BG",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("names no channel by view layer"),
+        "{}",
+        stderr(&o)
+    );
+    let o = shutter(&[
+        "blur",
+        "--preset",
+        "blender",
+        "--color",
+        &s(&input),
+        "-o",
+        &out,
+        "--layers",
+        "FG,FG",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("each view layer once"),
+        "{}",
+        stderr(&o)
+    );
+    let o = shutter(&[
+        "blur",
+        "--preset",
+        "blender",
+        "--color",
+        &s(&input),
+        "-o",
+        &out,
+        "--layers",
+        "FG,Nope",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("Nope"), "{}", stderr(&o));
+    assert!(!Path::new(&out).exists());
+}
+
+/// A stack on `--backend wgpu` gives the CPU's stack within each pass's own parity bound
+/// (tests/gpu_reconstruct.rs, gpu_scatter.rs, gpu_stretch.rs for the motion blurs, 1e-3 of
+/// the range as tests/gpu_dof.rs for depth of field): each layer runs through the pass's
+/// twins, and the merge is the same arithmetic on both. A box moving 8 px a frame over the
+/// panning background, and in focus before it.
+#[cfg(feature = "gpu")]
+#[test]
+fn a_stack_on_wgpu_equals_the_cpu_within_each_pass_s_tolerance() {
+    if crate::gpu::with_gpu::gpu().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("layers.exr");
+    write(
+        &input,
+        vec![foreground_moving(-8.0, 1e10, 0.0), background()],
+    );
+    type Bound = (f32, f32, f64, f64);
+    let cases: Vec<(&str, Vec<&str>, Bound)> = vec![
+        (
+            "blur",
+            vec!["--algorithm", "reconstruct"],
+            (
+                crate::gpu_reconstruct::AGREE,
+                crate::gpu_reconstruct::MAX,
+                crate::gpu_reconstruct::FLIPS,
+                crate::gpu_reconstruct::MEAN,
+            ),
+        ),
+        (
+            "blur",
+            vec!["--algorithm", "scatter"],
+            (
+                crate::gpu_scatter::AGREE,
+                crate::gpu_scatter::MAX,
+                crate::gpu_scatter::FLIPS,
+                crate::gpu_scatter::MEAN,
+            ),
+        ),
+        (
+            "blur",
+            vec!["--algorithm", "stretch"],
+            (
+                crate::gpu_stretch::AGREE,
+                crate::gpu_stretch::MAX,
+                crate::gpu_stretch::FLIPS,
+                crate::gpu_stretch::MEAN,
+            ),
+        ),
+        (
+            "dof",
+            [&["--method", "gather"][..], &LENS].concat(),
+            (1e-3, 1e-3, 0.0, 1e-3),
+        ),
+        (
+            "dof",
+            [&["--method", "blend"][..], &LENS].concat(),
+            (1e-3, 1e-3, 0.0, 1e-3),
+        ),
+    ];
+    for (command, args, (agree, max, flips, mean)) in cases {
+        let what = format!("{command} {}", args[1]);
+        let mut outputs = Vec::new();
+        for backend in ["cpu", "wgpu"] {
+            let out = dir.path().join(format!("{}-{backend}.exr", args[1]));
+            let mut all = vec![
+                command,
+                "--preset",
+                "blender",
+                "--color",
+                input.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+                "--layers",
+                "FG,BG",
+                "--backend",
+                backend,
+                "--json",
+            ];
+            all.extend(&args);
+            let o = shutter(&all);
+            assert!(o.status.success(), "{what} {backend}: {}", stderr(&o));
+            let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+            assert_eq!(json["backend"]["used"], backend, "{json}");
+            if backend == "wgpu" {
+                assert_eq!(json["backend"]["stages_on_cpu"], 0, "{what}: {json}");
+            }
+            outputs.push(read_exr_reference(&out));
+        }
+        let input = read_exr_reference(&input);
+        for name in ["R", "G", "B", "A"] {
+            let (cpu, got) = (channel(&outputs[0], name), channel(&outputs[1], name));
+            let p = parity_within(got, cpu, agree);
+            eprintln!(
+                "gpu: stack {what} {name}: max {:e} mean {:e} outside {:.3}%",
+                p.max,
+                p.mean,
+                p.outside * 100.0
+            );
+            assert!(
+                p.max <= max && p.mean <= mean && p.outside <= flips,
+                "{what} {name}: max {:e} mean {:e} outside {}",
+                p.max,
+                p.mean,
+                p.outside
+            );
+        }
+        assert_ne!(
+            channel(&outputs[0], "R"),
+            channel(&input, "BG.Combined.R"),
+            "{what}: nothing was blurred"
+        );
+    }
+}
