@@ -174,44 +174,65 @@ fn within(i: usize, s: u32, width: usize, reach: f32) -> bool {
     (x - sx).powi(2) + (y - sy).powi(2) <= reach * reach
 }
 
-/// The motion passes of an empty pixel (still, infinitely far), and those of a covered pixel
-/// with no surface of its own (its nearest surface's within [`EDGE_REACH`], else still).
+/// The motion passes of an empty pixel (still, infinitely far); of a covered pixel with no
+/// surface of its own (its nearest surface's within [`EDGE_REACH`], an opaque one's first,
+/// else still); and of a pixel at a layer's edge, partly covered, those of the nearest pixel
+/// the layer covers wholly within [`EDGE_REACH`], where there is one: a renderer's vectors at
+/// an edge are an average over the pixel's samples, the misses' (no motion, or a hidden
+/// surface's) among them (Cycles: X, Y of a layer rendered without the background are alpha
+/// times the surface's), and a surface moves as its inside next to it does.
 pub fn prepare_for_motion(layer: &mut Frame, coverage: &[f32], surface: &[bool], nearest: &[u32]) {
+    let (width, n) = (layer.width, coverage.len());
+    let solid: Vec<bool> = (0..n).map(|i| surface[i] && coverage[i] >= SOLID).collect();
+    let nearest_solid = nearest_surface(width, layer.height, &solid);
+    let near =
+        |i: usize, s: u32| (s != u32::MAX && within(i, s, width, EDGE_REACH)).then_some(s as usize);
+    // The edges first, from pixels nothing changes; then the rest, from those.
+    for i in (0..n).filter(|&i| surface[i] && !solid[i]) {
+        if let Some(s) = near(i, nearest_solid[i]) {
+            copy_motion(layer, i, Some(s), false);
+        }
+    }
+    for i in (0..n).filter(|&i| !surface[i]) {
+        let from = (coverage[i] > 0.0)
+            .then(|| near(i, nearest_solid[i]).or_else(|| near(i, nearest[i])))
+            .flatten();
+        copy_motion(layer, i, from, true);
+    }
+}
+
+/// Pixels a layer covers at least this much are wholly its surface (alpha 1 to rounding).
+const SOLID: f32 = 0.999;
+
+/// Gives pixel `i` the motion of pixel `from` (its displacement, from `i`), and its depth
+/// when `depth`; `None`: still and infinitely far.
+fn copy_motion(layer: &mut Frame, i: usize, from: Option<usize>, depth: bool) {
     let width = layer.width;
-    for i in 0..coverage.len() {
-        if surface[i] {
-            continue;
-        }
-        let s = nearest[i];
-        let from = (coverage[i] > 0.0 && s != u32::MAX && within(i, s, width, EDGE_REACH))
-            .then_some(s as usize);
-        if let Some(depth) = layer.depth.as_mut() {
-            depth[i] = from.map_or(f32::INFINITY, |s| depth[s]);
-        }
-        if let Some(v) = layer.velocity.as_mut() {
-            (v.x[i], v.y[i]) = from.map_or((0.0, 0.0), |s| (v.x[s], v.y[s]));
-        }
-        let (x, y) = pixel_centre(i, width);
-        for positions in [layer.prev.as_mut(), layer.next.as_mut()]
-            .into_iter()
-            .flatten()
-        {
-            match from {
-                // The surface's displacement, from this pixel.
-                Some(s) => {
-                    let (sx, sy) = pixel_centre(s, width);
-                    positions.x[i] = positions.x[s] - sx + x;
-                    positions.y[i] = positions.y[s] - sy + y;
-                    if let Some(z) = positions.z.as_mut() {
-                        z[i] = z[s];
-                    }
+    if let (true, Some(plane)) = (depth, layer.depth.as_mut()) {
+        plane[i] = from.map_or(f32::INFINITY, |s| plane[s]);
+    }
+    if let Some(v) = layer.velocity.as_mut() {
+        (v.x[i], v.y[i]) = from.map_or((0.0, 0.0), |s| (v.x[s], v.y[s]));
+    }
+    let (x, y) = pixel_centre(i, width);
+    for positions in [layer.prev.as_mut(), layer.next.as_mut()]
+        .into_iter()
+        .flatten()
+    {
+        match from {
+            Some(s) => {
+                let (sx, sy) = pixel_centre(s, width);
+                positions.x[i] = positions.x[s] - sx + x;
+                positions.y[i] = positions.y[s] - sy + y;
+                if let Some(z) = positions.z.as_mut() {
+                    z[i] = z[s];
                 }
-                None => {
-                    positions.x[i] = x;
-                    positions.y[i] = y;
-                    if let Some(z) = positions.z.as_mut() {
-                        z[i] = f32::INFINITY;
-                    }
+            }
+            None => {
+                positions.x[i] = x;
+                positions.y[i] = y;
+                if let Some(z) = positions.z.as_mut() {
+                    z[i] = f32::INFINITY;
                 }
             }
         }
@@ -286,13 +307,41 @@ fn over(color: &mut Color, alpha: &mut Plane, behind: &Color) {
     }
 }
 
+/// Names a layer read from a file of its own `name` in the output: its beauty (`name.R`,
+/// unless the file names it under `name.` already: `FG.Combined.R`) and every channel it
+/// carries (`name.diffuse.R`).
+pub fn name_layer(layer: &mut Frame, name: &str) {
+    let prefix = format!("{name}.");
+    let named = |n: &String| {
+        if n.starts_with(&prefix) {
+            n.clone()
+        } else {
+            format!("{prefix}{n}")
+        }
+    };
+    let planes = layer.color.as_ref().map_or(0, |c| c.planes().len());
+    let carried = &mut layer.carried;
+    if carried.beauty.len() != planes {
+        carried.beauty = MERGED[..planes].iter().map(|n| n.to_string()).collect();
+        carried.beauty_stored = carried.beauty.clone();
+    }
+    carried.beauty = carried.beauty.iter().map(named).collect();
+    carried.beauty_stored = carried.beauty_stored.iter().map(named).collect();
+    for channel in &mut carried.channels {
+        channel.name = named(&channel.name);
+        channel.stored = named(&channel.stored);
+    }
+}
+
 /// A layer's own blurred beauty as channels beside the merged one, under the names it had
 /// (`FG.Combined.R`); none when it had no layer's names (a picture, or plain R, G, B: the
 /// merged beauty takes those).
 fn beauty_channels(layer: &Frame, color: &Color) -> Vec<CarriedChannel> {
     let carried = &layer.carried;
     let planes = color.planes();
-    if carried.beauty.len() != planes.len() || carried.beauty.iter().any(|n| !n.contains('.')) {
+    let names = &carried.beauty;
+    let distinct = (1..names.len()).all(|i| !names[..i].contains(&names[i]));
+    if names.len() != planes.len() || !distinct || names.iter().any(|n| !n.contains('.')) {
         return Vec::new();
     }
     (carried.beauty.iter().zip(&carried.beauty_stored))

@@ -512,3 +512,119 @@ fn a_stack_on_wgpu_equals_the_cpu_within_each_pass_s_tolerance() {
         );
     }
 }
+
+/// A stack rendered one file per layer (`--color` repeated, front first, each pass once per
+/// file) merges as the same layers in one file do, bit for bit, and each layer goes out
+/// under its file's name (`fg.R`).
+#[test]
+fn a_stack_of_one_file_per_layer_merges_as_one_file_of_view_layers_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("layers.exr");
+    let (fg, bg) = (foreground_moving(-8.0, 1e10, 0.0), background());
+    write(&input, vec![fg.clone(), bg.clone()]);
+    // Each layer as canonical pass files: colour, depth, and velocity p(0) − p(−1), y down
+    // (Blender's X is p(−1) − p(0): its negation).
+    let mut flags: Vec<String> = Vec::new();
+    for (stem, layer) in [("fg", &fg), ("bg", &bg)] {
+        let get = |suffix: &str| {
+            layer
+                .iter()
+                .find(|(n, _)| n.ends_with(suffix))
+                .unwrap()
+                .1
+                .clone()
+        };
+        let path = |what: &str| dir.path().join(format!("{stem}.{what}.exr"));
+        write_exr(
+            &path("color"),
+            W,
+            H,
+            vec![
+                ("R", get("Combined.R")),
+                ("G", get("Combined.G")),
+                ("B", get("Combined.B")),
+                ("A", get("Combined.A")),
+            ],
+        );
+        write_exr(&path("depth"), W, H, vec![("Z", get("Depth.Z"))]);
+        let x: Vec<f32> = get("Vector.X").iter().map(|v| -v).collect();
+        write_exr(
+            &path("velocity"),
+            W,
+            H,
+            vec![("X", x), ("Y", vec![0.0; W * H])],
+        );
+        for what in ["color", "depth", "velocity"] {
+            flags.push(format!("--{what}"));
+            flags.push(s(&path(what)));
+        }
+    }
+    let stacked = run(
+        "blur",
+        &input,
+        dir.path().join("one-file.exr"),
+        &["--algorithm", "reconstruct", "--layers", "FG,BG"],
+    );
+    let out = dir.path().join("files.exr");
+    let mut args = vec![
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    args.extend(flags.iter().map(String::as_str));
+    let o = shutter(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let files = read_exr_reference(&out);
+    for name in ["R", "G", "B", "A"] {
+        assert_same_bits(channel(&files, name), channel(&stacked, name), name);
+        assert_same_bits(
+            channel(&files, &format!("fg.{name}")),
+            channel(&stacked, &format!("FG.Combined.{name}")),
+            name,
+        );
+    }
+    // A pass given for some layers and not others says what it wants.
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &flags[1],
+        "--color",
+        &flags[7],
+        "--depth",
+        &flags[3],
+        "-o",
+        &s(&dir.path().join("x.exr")),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("once per colour file"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// `--layer FG` on a file of two view layers blurs FG alone: the other layer's channels come
+/// back as they came, not blurred with FG's weights as if they were light of FG.
+#[test]
+fn one_view_layer_of_several_leaves_the_others_as_they_came() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("layers.exr");
+    write(&input, vec![foreground_moving(-8.0, 1e10, 0.0), background()]);
+    let out = run(
+        "blur",
+        &input,
+        dir.path().join("fg.exr"),
+        &["--algorithm", "reconstruct", "--layer", "FG"],
+    );
+    let stored = read_exr_reference(&input);
+    for name in ["BG.Combined.R", "BG.Combined.A", "BG.Depth.Z", "BG.Vector.X"] {
+        assert_same_bits(channel(&out, name), channel(&stored, name), name);
+    }
+    assert_ne!(
+        channel(&out, "FG.Combined.R"),
+        channel(&stored, "FG.Combined.R"),
+        "FG is blurred"
+    );
+}

@@ -110,25 +110,29 @@ pub struct BlurArgs {
     pub preset: Vec<String>,
 
     /// Colour pass: a file, or a sequence pattern with #### or %04d. With a multi-layer EXR
-    /// the preset finds the other passes in it.
-    #[arg(long, value_name = "PATH")]
-    pub color: String,
+    /// the preset finds the other passes in it. Repeat it for a stack of view layers rendered
+    /// one file per layer, front first (see --layers).
+    #[arg(long, value_name = "PATH", required = true)]
+    pub color: Vec<String>,
 
-    /// Depth pass file or pattern (default: looked up in the colour file).
+    /// Depth pass file or pattern (default: looked up in the colour file); once per --color.
     #[arg(long, value_name = "PATH")]
-    pub depth: Option<String>,
+    pub depth: Vec<String>,
 
-    /// Velocity pass file or pattern (default: looked up in the colour file).
+    /// Velocity pass file or pattern (default: looked up in the colour file); once per
+    /// --color.
     #[arg(long, value_name = "PATH")]
-    pub velocity: Option<String>,
+    pub velocity: Vec<String>,
 
-    /// Previous-position pass file or pattern (default: looked up in the colour file).
+    /// Previous-position pass file or pattern (default: looked up in the colour file); once
+    /// per --color.
     #[arg(long, value_name = "PATH")]
-    pub prev: Option<String>,
+    pub prev: Vec<String>,
 
-    /// Next-position pass file or pattern (default: looked up in the colour file).
+    /// Next-position pass file or pattern (default: looked up in the colour file); once per
+    /// --color.
     #[arg(long, value_name = "PATH")]
-    pub next: Option<String>,
+    pub next: Vec<String>,
 
     /// View layer substituted for {layer} in preset channel names (default: found in the file).
     #[arg(long, value_name = "NAME")]
@@ -138,6 +142,8 @@ pub struct BlurArgs {
     /// blurred alone with its own depth and motion, and merged front over back, so what a
     /// nearer layer uncovers is what the layer behind holds. An EXR output holds the merged
     /// beauty as R, G, B, A and every layer's channels, each blurred with its own layer.
+    /// With --color repeated (one file per layer), it names the files' layers [default: each
+    /// file's name up to its first period].
     #[arg(
         long,
         value_name = "NAME,NAME",

@@ -7,7 +7,7 @@ use crate::io::output::{OutputFormat, OutputOptions};
 use crate::io::passes::Inputs;
 use crate::io::preset::{Encoding, Preset, Transfer};
 use crate::io::sequence::{parse_frames, PathPattern};
-use crate::pipeline::Job;
+use crate::pipeline::{Job, StackLayer};
 use crate::process::Params;
 use crate::settings::{self};
 
@@ -89,19 +89,55 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         }
     }
 
-    let pattern = |p: &Option<String>| p.as_deref().map(PathPattern::parse).transpose();
-    if args.coc_map.is_some() && args.depth.is_some() {
+    if args.coc_map.is_some() && !args.depth.is_empty() {
         return Err(Error::usage(
             "--coc-map is read in place of depth: give --coc-map or --depth, not both",
         ));
     }
-    let inputs = Inputs {
-        color: PathPattern::parse(&args.color)?,
-        depth: pattern(&args.depth.clone().or_else(|| args.coc_map.clone()))?,
-        velocity: pattern(&args.velocity)?,
-        prev: pattern(&args.prev)?,
-        next: pattern(&args.next)?,
-    };
+    // One colour file, or one a layer (a stack rendered one file per layer): each other pass
+    // given not at all (found in the colour file), or once per colour file.
+    let count = args.color.len();
+    for (flag, given) in [
+        ("depth", &args.depth),
+        ("velocity", &args.velocity),
+        ("prev", &args.prev),
+        ("next", &args.next),
+    ] {
+        if !given.is_empty() && given.len() != count {
+            return Err(Error::usage(format!(
+                "--{flag} is given {} times and --color {count}: give it once per colour file \
+                 (a stack of one file per layer, front first), or not at all to find it in \
+                 each colour file",
+                given.len()
+            )));
+        }
+    }
+    if count > 1 && args.coc_map.is_some() {
+        return Err(Error::usage(
+            "--coc-map paints one picture's blur: it does not go with a stack of one colour \
+             file per layer (give each layer's depth with --depth)",
+        ));
+    }
+    let pattern = |p: Option<&String>| p.map(|p| PathPattern::parse(p)).transpose();
+    let mut layer_inputs = Vec::with_capacity(count);
+    for k in 0..count {
+        layer_inputs.push(Inputs {
+            color: PathPattern::parse(&args.color[k])?,
+            depth: pattern(args.depth.get(k).or(args.coc_map.as_ref()))?,
+            velocity: pattern(args.velocity.get(k))?,
+            prev: pattern(args.prev.get(k))?,
+            next: pattern(args.next.get(k))?,
+        });
+    }
+    if layer_inputs
+        .iter()
+        .any(|i| i.is_sequence() != layer_inputs[0].is_sequence())
+    {
+        return Err(Error::usage(
+            "the colour files of a stack are all sequences (#### or %04d) or all single files",
+        ));
+    }
+    let inputs = layer_inputs[0].clone();
     let output = PathPattern::parse(&args.output)?;
     let Some(format) = OutputFormat::from_path(&output.path(None)) else {
         return Err(Error::usage(format!(
@@ -122,24 +158,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         }
     }
 
-    let stack = args.layers.clone();
-    if !stack.is_empty() {
-        if !preset.channel_names().any(|n| n.contains("{layer}")) {
-            return Err(Error::usage(format!(
-                "--layers: preset {} names no channel by view layer, so every layer would \
-                 read the same channels (the blender preset names them, or a preset of \
-                 your own with {{layer}} in its channel names)",
-                preset.name
-            )));
-        }
-        if let Some(name) = (0..stack.len()).find_map(|i| {
-            (stack[..i].contains(&stack[i]) || stack[i].is_empty()).then(|| &stack[i])
-        }) {
-            return Err(Error::usage(format!(
-                "--layers names each view layer once, front first (FG,BG); '{name}' is not"
-            )));
-        }
-    }
+    let stack = stack_of(args, &preset, &layer_inputs)?;
     let frames: Vec<Option<i64>> = match (&args.frames, inputs.is_sequence()) {
         (Some(_), false) => {
             return Err(Error::usage(
@@ -245,4 +264,66 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
             }
         },
     })
+}
+
+/// The stack of view layers a job blurs and merges (`crate::stack`), front first: one file a
+/// layer (`--color` repeated; `--layers` names them, else each file's name does), or the view
+/// layers `--layers` names in one file. Empty: no stack.
+fn stack_of(args: &BlurArgs, preset: &Preset, inputs: &[Inputs]) -> Result<Vec<StackLayer>> {
+    let by_layer = preset.channel_names().any(|n| n.contains("{layer}"));
+    let names = &args.layers;
+    if let Some(name) = (0..names.len())
+        .find_map(|i| (names[..i].contains(&names[i]) || names[i].is_empty()).then(|| &names[i]))
+    {
+        return Err(Error::usage(format!(
+            "--layers names each view layer once, front first (FG,BG); '{name}' is not"
+        )));
+    }
+    if inputs.len() > 1 {
+        if !names.is_empty() && names.len() != inputs.len() {
+            return Err(Error::usage(format!(
+                "--layers names {} layers and --color gives {} files: one name a file, front \
+                 first",
+                names.len(),
+                inputs.len()
+            )));
+        }
+        // Each file's name up to its first period (`fg.####.exr`: fg), unless two share one.
+        let stems: Vec<String> = (inputs.iter())
+            .map(|i| {
+                let path = std::path::Path::new(&i.color.raw);
+                let name = path.file_name().map(|n| n.to_string_lossy().to_string());
+                name.and_then(|n| n.split('.').next().map(str::to_string))
+                    .unwrap_or_default()
+            })
+            .collect();
+        let distinct =
+            (0..stems.len()).all(|i| !stems[i].is_empty() && !stems[..i].contains(&stems[i]));
+        return Ok((inputs.iter().enumerate())
+            .map(|(k, inputs)| StackLayer {
+                name: match (names.get(k), distinct) {
+                    (Some(name), _) => name.clone(),
+                    (None, true) => stems[k].clone(),
+                    (None, false) => format!("layer{}", k + 1),
+                },
+                inputs: Some(inputs.clone()),
+                layer: names.get(k).filter(|_| by_layer).cloned(),
+            })
+            .collect());
+    }
+    if !names.is_empty() && !by_layer {
+        return Err(Error::usage(format!(
+            "--layers: preset {} names no channel by view layer, so every layer would read \
+             the same channels (the blender preset names them, or a preset of your own with \
+             {{layer}} in its channel names; or give one --color a layer)",
+            preset.name
+        )));
+    }
+    Ok((names.iter())
+        .map(|name| StackLayer {
+            name: name.clone(),
+            inputs: None,
+            layer: Some(name.clone()),
+        })
+        .collect())
 }

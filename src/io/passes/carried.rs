@@ -229,14 +229,15 @@ fn carried_class(
     }
 }
 
-/// What is wrong with one frame's stack of view layers (`--layers`, `stack` naming them,
-/// `first` the front layer's plan, `rest` the others'), if anything: each layer's colour must
-/// be its own (not a fallback of the preset's, R, G, B, that every layer would read alike),
-/// and the layers one picture, the same size.
+/// What is wrong with one frame's stack of view layers (`stack` naming them, `first` the
+/// front layer's plan, `rest` the others'), if anything: in one file of view layers
+/// (`shared`), each layer's colour must be its own (not a fallback of the preset's, R, G, B,
+/// that every layer would read alike); and the layers are one picture, the same size.
 pub fn stack_problem(
     first: &FramePlan,
     rest: &[FramePlan],
     stack: &[String],
+    shared: bool,
 ) -> Option<crate::error::Problem> {
     use crate::error::{Problem, ProblemKind};
     let path = |plan: &FramePlan| {
@@ -245,6 +246,9 @@ pub fn stack_problem(
             .to_path_buf()
     };
     for (plan, name) in std::iter::once(first).chain(rest).zip(stack) {
+        if !shared {
+            break;
+        }
         let names = plan.colour_names();
         if let Some(other) = names.iter().find(|n| !n.starts_with(&format!("{name}."))) {
             return Some(

@@ -27,6 +27,9 @@ use crate::motion::Algorithm;
 use crate::numeric::Replaced;
 use crate::process::{depth_kind, process_on, Params};
 
+mod memory;
+pub use memory::{memory_limit, peak_rss_mib};
+
 /// A blur job, fully resolved (preset merged, flags applied, frames listed).
 #[derive(Clone, Debug)]
 pub struct Job {
@@ -36,9 +39,9 @@ pub struct Job {
     pub frames: Vec<Option<i64>>,
     pub preset: Preset,
     pub layer: Option<String>,
-    /// A stack of view layers, front first (`--layers`): each read with its name for
-    /// `{layer}`, blurred alone and merged front over back (`crate::stack`). Empty: no stack.
-    pub stack: Vec<String>,
+    /// A stack of view layers, front first (`--layers`, or `--color` repeated): each read,
+    /// blurred alone and merged front over back (`crate::stack`). Empty: no stack.
+    pub stack: Vec<StackLayer>,
     /// The view of multi-view EXRs to read (`--view`). `None`: every view of a multi-view
     /// colour file into an EXR output of every channel, else each file's default.
     pub view: Option<String>,
@@ -61,6 +64,20 @@ pub struct Job {
     /// preset's reading fits clearly worse than another (`--check-vectors`;
     /// `io::passes::VectorCheck`).
     pub check_vectors: bool,
+}
+
+/// A layer of a stack.
+#[derive(Clone, Debug)]
+pub struct StackLayer {
+    /// Its name: in a file of several view layers, the one `--layers` gave; with a file of
+    /// its own, what its channels are named under in the output (`fg.R`), unless they are
+    /// already (`FG.Combined.R`).
+    pub name: String,
+    /// Its own pass files (one file a layer); `None`: the job's (a file of view layers).
+    pub inputs: Option<Inputs>,
+    /// What `{layer}` stands for in the preset's channel names when it reads this layer
+    /// (`None`: the view layer found in the file).
+    pub layer: Option<String>,
 }
 
 /// What the pipeline tells its caller while it runs.
@@ -280,40 +297,57 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     };
     let options = PlanOptions {
         preset: &job.preset,
-        layer: job.stack.first().map_or(job.layer.as_deref(), |l| Some(l)),
+        layer: job
+            .stack
+            .first()
+            .map_or(job.layer.as_deref(), |l| l.layer.as_deref()),
         view: views[0].as_deref(),
         needs: crate::process::needs(job.algorithm, &job.params),
         max_pixels: job.max_pixels,
     };
+    // A stack's first layer's files are the job's inputs.
     let mut plans = preflight(&job.inputs, &job.output, &job.frames, &options)
         .map_err(|e| name_pass(job, e))?;
     // The other views' (or the stack's other layers') plans, frame by frame.
     let mut others: Vec<Vec<FramePlan>> = plans.iter().map(|_| Vec::new()).collect();
-    let more: Vec<PlanOptions> = if job.stack.is_empty() {
+    let more: Vec<(&Inputs, PlanOptions)> = if job.stack.is_empty() {
         (views[1..].iter())
-            .map(|view| PlanOptions {
-                view: view.as_deref(),
-                ..options.clone()
+            .map(|view| {
+                let options = PlanOptions {
+                    view: view.as_deref(),
+                    ..options.clone()
+                };
+                (&job.inputs, options)
             })
             .collect()
     } else {
         (job.stack[1..].iter())
-            .map(|layer| PlanOptions {
-                layer: Some(layer),
-                ..options.clone()
+            .map(|layer| {
+                let options = PlanOptions {
+                    layer: layer.layer.as_deref(),
+                    ..options.clone()
+                };
+                (layer.inputs.as_ref().unwrap_or(&job.inputs), options)
             })
             .collect()
     };
-    for options in &more {
-        let unit_plans = preflight(&job.inputs, &job.output, &job.frames, options)
-            .map_err(|e| name_pass(job, e))?;
+    for (inputs, options) in &more {
+        let unit_plans =
+            preflight(inputs, &job.output, &job.frames, options).map_err(|e| name_pass(job, e))?;
         for (frame, plan) in others.iter_mut().zip(unit_plans) {
             frame.push(plan);
         }
     }
+    // The view layers of one file, by name (a stack of one file a layer reads each whole).
+    let shared: Vec<String> = if job.stack.iter().any(|l| l.inputs.is_some()) {
+        Vec::new()
+    } else {
+        job.stack.iter().map(|l| l.name.clone()).collect()
+    };
     if !job.stack.is_empty() {
+        let names: Vec<String> = job.stack.iter().map(|l| l.name.clone()).collect();
         for (first, rest) in plans.iter().zip(&others) {
-            crate::io::passes::stack_problem(first, rest, &job.stack)
+            crate::io::passes::stack_problem(first, rest, &names, !shared.is_empty())
                 .map_or(Ok(()), |p| Err(crate::Error::Files(vec![p])))?;
         }
     }
@@ -321,9 +355,14 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         for (plan, layer) in plans.iter_mut().map(|p| (p, 0)).chain(
             (others.iter_mut()).flat_map(|o| o.iter_mut().enumerate().map(|(i, p)| (p, i + 1))),
         ) {
-            match job.stack.get(layer) {
-                Some(own) => plan.read_layer_channels(own, &job.stack, layer == 0),
-                None => {
+            match (shared.get(layer), &job.layer) {
+                (Some(own), _) => plan.read_layer_channels(own, &shared, layer == 0),
+                // One view layer of a file of several (`--layer`): the others come back as
+                // they came, not blurred with this one's weights.
+                (None, Some(own)) if job.stack.is_empty() => {
+                    plan.read_layer_channels(own, std::slice::from_ref(own), true)
+                }
+                (None, _) => {
                     plan.read_every_channel();
                     plan.read_parts_apart();
                 }
@@ -578,6 +617,13 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                                     })
                                     .collect()
                             } else {
+                                // A layer of a file of its own goes out under its name.
+                                let mut frames = frames;
+                                for (frame, layer) in frames.iter_mut().zip(&job.stack) {
+                                    if layer.inputs.is_some() {
+                                        crate::stack::name_layer(frame, &layer.name);
+                                    }
+                                }
                                 vec![crate::stack::process_stack(
                                     job.algorithm,
                                     &job.params,
@@ -724,45 +770,4 @@ fn create_parent(path: &Path, frame: Option<i64>) -> std::result::Result<(), Pro
         }
         _ => Ok(()),
     }
-}
-
-/// The memory a run may need when `max-memory` is not given: half the machine's physical
-/// memory, and no more than the process may have (its address-space limit, `ulimit -v`,
-/// less room for code, thread stacks and the allocator's reservations; a cgroup's
-/// `memory.max`, as containers and farm schedulers set it). 8 GiB where none can be read.
-pub fn memory_limit() -> u64 {
-    let mut limit = physical_memory().map_or(8 << 30, |total| total / 2);
-    #[cfg(unix)]
-    if let Ok((soft, _)) = nix::sys::resource::getrlimit(nix::sys::resource::Resource::RLIMIT_AS) {
-        if soft != nix::sys::resource::RLIM_INFINITY {
-            limit = limit.min(soft.saturating_sub(ADDRESS_SPACE_ROOM));
-        }
-    }
-    if let Some(cgroup) = std::fs::read_to_string("/sys/fs/cgroup/memory.max")
-        .ok()
-        .and_then(|t| t.trim().parse::<u64>().ok())
-    {
-        limit = limit.min(cgroup);
-    }
-    limit
-}
-
-/// What the address space holds besides the frames' memory: the program, thread stacks, the
-/// allocator's per-thread arenas (reserved, not used), the GPU driver's mappings.
-const ADDRESS_SPACE_ROOM: u64 = 768 << 20;
-
-/// Physical memory (Linux: /proc/meminfo's MemTotal); `None` elsewhere.
-fn physical_memory() -> Option<u64> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemTotal:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib << 10)
-}
-
-/// Peak resident set size from /proc (Linux); `None` elsewhere.
-pub fn peak_rss_mib() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib / 1024.0)
 }
