@@ -3,7 +3,7 @@
 use shutter::lab::metrics::{changed_region, rmse};
 use shutter::lab::truth::render::{render_passes, render_reference, Reference, RenderSettings};
 use shutter::lab::truth::scenes::{build, SCENES};
-use shutter::lab::truth::write::{write_scene, SceneOptions, DEFAULT_SAMPLES};
+use shutter::lab::truth::write::{write_scene, write_scene_of, SceneOptions, DEFAULT_SAMPLES};
 
 use crate::support::*;
 
@@ -326,6 +326,7 @@ fn scene_command_writes_the_passes_and_references() {
             "{role}"
         );
     }
+    assert!(!dir.path().join("layers.0002.exr").exists());
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("scene.json")).unwrap())
             .unwrap();
@@ -333,4 +334,144 @@ fn scene_command_writes_the_passes_and_references() {
     let o = shutter(&["scene", "nope", "-o", &s(dir.path())]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("rotor"));
+}
+
+/// `--layers` adds `layers.####.exr`, Blender's naming of a multilayer render with the view
+/// layers FG and BG, and scene.json names it.
+#[test]
+fn scene_command_writes_the_view_layers_with_layers() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = shutter(&[
+        "scene",
+        "crossing",
+        "-o",
+        &s(dir.path()),
+        "--size",
+        "40x24",
+        "--samples",
+        "4",
+        "--frames",
+        "2",
+        "--layers",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let file = read_exr_reference(&dir.path().join("layers.0002.exr"));
+    let mut names: Vec<&str> = file.iter().map(|(n, _)| n.as_str()).collect();
+    names.sort();
+    let mut expected = Vec::new();
+    for layer in ["BG", "FG"] {
+        for pass in [
+            "Combined.A",
+            "Combined.B",
+            "Combined.G",
+            "Combined.R",
+            "Depth.Z",
+            "Vector.W",
+            "Vector.X",
+            "Vector.Y",
+            "Vector.Z",
+        ] {
+            expected.push(format!("{layer}.{pass}"));
+        }
+    }
+    assert_eq!(names, expected);
+    // The background is opaque and 50 away; FG pixels that see nothing are transparent, at
+    // Blender's 1e10, still.
+    assert!(channel(&file, "BG.Combined.A").iter().all(|&a| a == 1.0));
+    assert!(channel(&file, "BG.Depth.Z").iter().all(|&z| z == 50.0));
+    let (a, z, x) = (
+        channel(&file, "FG.Combined.A"),
+        channel(&file, "FG.Depth.Z"),
+        channel(&file, "FG.Vector.X"),
+    );
+    let empty: Vec<usize> = (0..a.len()).filter(|&k| a[k] == 0.0).collect();
+    assert!(!empty.is_empty() && empty.len() < a.len());
+    assert!(empty.iter().all(|&k| z[k] == 1e10 && x[k] == 0.0));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("scene.json")).unwrap())
+            .unwrap();
+    assert!(
+        json["files"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|f| f[0] == "layers" && f[1] == "layers.####.exr"),
+        "{json}"
+    );
+}
+
+/// The BG layer, read through `--preset blender --layer BG`, blurs as the canonical
+/// single-layer passes of the same scene with no FG at all: so Blender's Vector (y up,
+/// `p(−1) − p(0)` in X, Y and `p(0) − p(+1)` in Z, W) is written the way the preset reads
+/// it. The camera pans diagonally and zooms, so a wrong sign of either y, or Z, W taken for
+/// X, Y (the zoom makes p(+1) − p(0) longer than p(0) − p(−1)), changes the blur; every
+/// algorithm runs, scatter with the curves through p(−1) and p(+1).
+#[test]
+fn blender_bg_layer_blurs_as_the_canonical_passes_of_a_scene_without_fg() {
+    let (w, h) = (96, 54);
+    let mut scene = build("pan", w, h, 1).unwrap();
+    scene.shapes.clear();
+    scene.camera.pan = glam::DVec2::new(4.0, -3.0);
+    scene.camera.zoom = 0.06;
+    let dir = tempfile::tempdir().unwrap();
+    let options = SceneOptions {
+        samples: 4,
+        layers: true,
+        ..SceneOptions::default()
+    };
+    write_scene_of(&scene, dir.path(), &options, &mut |_, _| {}).unwrap();
+    let file = |role: &str| s(&dir.path().join(format!("{role}.0001.exr")));
+    for algorithm in ["reconstruct", "scatter", "stretch"] {
+        let canonical = dir.path().join(format!("{algorithm}_canonical.exr"));
+        let o = shutter(&[
+            "blur",
+            "--algorithm",
+            algorithm,
+            "--color",
+            &file("color"),
+            "--depth",
+            &file("depth"),
+            "--velocity",
+            &file("velocity"),
+            "--prev",
+            &file("prev"),
+            "--next",
+            &file("next"),
+            "-o",
+            &s(&canonical),
+        ]);
+        assert!(o.status.success(), "{algorithm}: {}", stderr(&o));
+        let blender = dir.path().join(format!("{algorithm}_bg.exr"));
+        let o = shutter(&[
+            "blur",
+            "--preset",
+            "blender",
+            "--layer",
+            "BG",
+            "--algorithm",
+            algorithm,
+            "--color",
+            &file("layers"),
+            "--beauty-only",
+            "-o",
+            &s(&blender),
+        ]);
+        assert!(o.status.success(), "{algorithm}: {}", stderr(&o));
+        let (canonical, blender) = (read_exr_reference(&canonical), read_exr_reference(&blender));
+        // The sharp frame, to be sure that the blur moved something.
+        let sharp = read_exr_reference(&dir.path().join("color.0001.exr"));
+        let mut moved = 0.0f32;
+        for c in ["R", "G", "B", "A"] {
+            let got = channel(&blender, &format!("BG.Combined.{c}"));
+            assert_close(
+                got,
+                channel(&canonical, c),
+                1e-4,
+                &format!("{algorithm} {c}"),
+            );
+            let changed = got.iter().zip(channel(&sharp, c));
+            moved = changed.fold(moved, |m, (a, b)| m.max((a - b).abs()));
+        }
+        assert!(moved > 0.05, "{algorithm}: the blur moved at most {moved}");
+    }
 }

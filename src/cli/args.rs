@@ -340,7 +340,7 @@ pub struct SceneArgs {
     pub name: String,
 
     /// Output folder: color, depth, velocity, prev, next and reference(_dof, _both)
-    /// .####.exr, and scene.json.
+    /// .####.exr (and layers.####.exr with --layers), and scene.json.
     #[arg(short, long, value_name = "DIR")]
     pub output: PathBuf,
 
@@ -373,6 +373,12 @@ pub struct SceneArgs {
     /// Seed of the sample patterns (and of the layout of random scenes).
     #[arg(long, value_name = "S", default_value_t = 1)]
     pub seed: u64,
+
+    /// Also write layers.####.exr: the scene as a Blender multilayer render of two view
+    /// layers, BG (the background, the farthest object) and FG (every shape, alpha =
+    /// coverage), read with --preset blender --layer FG or --layer BG.
+    #[arg(long)]
+    pub layers: bool,
 }
 
 #[derive(Debug, Args)]

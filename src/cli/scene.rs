@@ -20,6 +20,7 @@ pub fn scene(args: SceneArgs) -> Result<()> {
         shutter: args.shutter,
         shutter_offset: super::parse_shutter_offset(&args.shutter_offset)?,
         seed: args.seed,
+        layers: args.layers,
     };
     let verbose = std::io::stderr().is_terminal();
     let description = crate::lab::truth::write::write_scene(

@@ -2,6 +2,7 @@
 //! brute-force references to measure every algorithm against (docs/DESIGN.md, "Measuring
 //! accuracy").
 
+pub mod layers;
 pub mod model;
 pub mod render;
 pub mod sample;

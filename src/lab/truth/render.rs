@@ -14,7 +14,7 @@
 use glam::DVec2;
 use rayon::prelude::*;
 
-use super::model::{Posed, Scene};
+use super::model::{Hit, Posed, Scene};
 use super::sample::{concentric_disk, kronecker, pixel_shift, DIMENSIONS};
 use crate::frame::{Color, Frame, Plane, Positions, Velocity};
 
@@ -47,7 +47,7 @@ pub enum Reference {
 
 /// Evaluates `pixel(i, j)` for every pixel, rows in parallel, and returns the `K` values as
 /// `K` planes.
-fn render_planes<const K: usize>(
+pub(super) fn render_planes<const K: usize>(
     width: usize,
     height: usize,
     pixel: impl Fn(usize, usize) -> [f32; K] + Sync,
@@ -65,22 +65,23 @@ fn render_planes<const K: usize>(
     planes
 }
 
-/// The mean colour of `samples` rays through pixel (i, j): sample k uses point k of the
-/// pixel's shifted Kronecker sequence, `trace(u, p)` gets it and its sub-pixel position.
-fn pixel_mean(
+/// The mean of `samples` rays through pixel (i, j), `K` values each (a colour, or a layer's
+/// colour and coverage): sample k uses point k of the pixel's shifted Kronecker sequence,
+/// `trace(u, p)` gets it and its sub-pixel position.
+pub(super) fn pixel_mean<const K: usize>(
     i: usize,
     j: usize,
     width: usize,
     samples: usize,
     seed: u64,
-    trace: impl Fn(&[f64; DIMENSIONS], DVec2) -> [f32; 3],
-) -> [f32; 3] {
+    trace: impl Fn(&[f64; DIMENSIONS], DVec2) -> [f32; K],
+) -> [f32; K] {
     let shift = pixel_shift(seed, (j * width + i) as u64);
-    let mut sum = [0.0f64; 3];
+    let mut sum = [0.0f64; K];
     for k in 0..samples {
         let u = kronecker(k, &shift);
-        let color = trace(&u, DVec2::new(i as f64 + u[0], j as f64 + u[1]));
-        for (s, c) in sum.iter_mut().zip(color) {
+        let value = trace(&u, DVec2::new(i as f64 + u[0], j as f64 + u[1]));
+        for (s, c) in sum.iter_mut().zip(value) {
             *s += c as f64;
         }
     }
@@ -90,6 +91,23 @@ fn pixel_mean(
 /// Offsets below this many pixels are rounding in the closed-form transforms, not motion:
 /// they are written as exactly zero so that still surfaces are exactly still.
 const STILL: f64 = 1e-6;
+
+/// Where the surface `hit` at the pixel centre `centre` at frame time `t` is one frame
+/// earlier and one frame later, p(−1) and p(+1), screen pixels y down; offsets below
+/// [`STILL`] are snapped to the centre.
+pub(super) fn prev_next(scene: &Scene, hit: &Hit, centre: DVec2, t: f64) -> (DVec2, DVec2) {
+    let settle = |p: DVec2| {
+        if (p - centre).length() < STILL {
+            centre
+        } else {
+            p
+        }
+    };
+    (
+        settle(scene.screen_position(hit, t - 1.0)),
+        settle(scene.screen_position(hit, t + 1.0)),
+    )
+}
 
 /// The passes of frame time `t` (colour, depth, velocity, prev, next). Colour is
 /// antialiased with `samples` sub-pixel samples at the same positions as the references use,
@@ -106,15 +124,7 @@ pub fn render_passes(scene: &Scene, t: f64, samples: usize, seed: u64) -> Frame 
         });
         let centre = DVec2::new(i as f64 + 0.5, j as f64 + 0.5);
         let hit = scene.trace(&posed, &order, centre, DVec2::ZERO);
-        let settle = |p: DVec2| {
-            if (p - centre).length() < STILL {
-                centre
-            } else {
-                p
-            }
-        };
-        let prev = settle(scene.screen_position(&hit, t - 1.0));
-        let next = settle(scene.screen_position(&hit, t + 1.0));
+        let (prev, next) = prev_next(scene, &hit, centre, t);
         [
             r,
             g,

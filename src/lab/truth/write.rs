@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use super::layers::render_layers;
 use super::model::Scene;
 use super::render::{render_passes, render_reference, Reference, RenderSettings};
 use super::scenes::build;
@@ -30,6 +31,9 @@ pub struct SceneOptions {
     /// frame, −½ closing at it; `motion::Shutter`).
     pub shutter_offset: f64,
     pub seed: u64,
+    /// Also write `layers.####.exr`: the scene as Blender's multilayer render of two view
+    /// layers, `FG` and `BG` ([`super::layers`]).
+    pub layers: bool,
 }
 
 impl Default for SceneOptions {
@@ -42,6 +46,7 @@ impl Default for SceneOptions {
             shutter: 0.5,
             shutter_offset: 0.0,
             seed: 1,
+            layers: false,
         }
     }
 }
@@ -92,6 +97,11 @@ fn write(path: &Path, scene: &Scene, channels: Vec<(&str, Plane)>) -> Result<()>
         .into_iter()
         .map(|(n, p)| (n.to_string(), p))
         .collect();
+    write_channels(path, scene, channels)
+}
+
+/// Writes named planes of the scene's size as one single-part float EXR.
+fn write_channels(path: &Path, scene: &Scene, channels: Vec<(String, Plane)>) -> Result<()> {
     write_exr_atomic(
         path,
         scene.width,
@@ -164,13 +174,20 @@ pub fn write_resampled_references(
     })
 }
 
-/// Writes every frame of the scene into `dir`; calls `on_frame` after each.
+/// Writes every frame of the named scene into `dir`; calls `on_frame` after each.
 pub fn write_scene(
     name: &str,
     dir: &Path,
     options: &SceneOptions,
     on_frame: &mut dyn FnMut(usize, &Path),
 ) -> Result<SceneDescription> {
+    check(options)?;
+    let scene = scene_by_name(name, options)?;
+    write_scene_of(&scene, dir, options, on_frame)
+}
+
+/// Whether the options can be written: shutter, offset, frames and samples in range.
+fn check(options: &SceneOptions) -> Result<()> {
     if !(0.0..=1.0).contains(&options.shutter) {
         return Err(Error::usage(format!(
             "--shutter {} is outside 0..1",
@@ -186,7 +203,19 @@ pub fn write_scene(
     if options.frames == 0 || options.samples == 0 {
         return Err(Error::usage("--frames and --samples must be at least 1"));
     }
-    let scene = scene_by_name(name, options)?;
+    Ok(())
+}
+
+/// Writes every frame of `scene` (one built by [`scene_by_name`], or changed after, as a
+/// test does) into `dir`, as [`write_scene`] does: the size is the scene's (`options`' is not
+/// read), `options.seed` seeds the samples. Calls `on_frame` after each frame.
+pub fn write_scene_of(
+    scene: &Scene,
+    dir: &Path,
+    options: &SceneOptions,
+    on_frame: &mut dyn FnMut(usize, &Path),
+) -> Result<SceneDescription> {
+    check(options)?;
     std::fs::create_dir_all(dir).map_err(|e| {
         Problem::new(
             ProblemKind::Output,
@@ -204,18 +233,28 @@ pub fn write_scene(
     if scene.lens.is_some() {
         roles.extend(["reference_dof", "reference_both"]);
     }
+    if options.layers {
+        roles.push("layers");
+    }
     let file = |role: &str, frame: usize| -> PathBuf { dir.join(format!("{role}.{frame:04}.exr")) };
     for frame in 1..=options.frames {
         let t = (frame - 1) as f64;
-        let passes = render_passes(&scene, t, options.samples, options.seed);
+        let passes = render_passes(scene, t, options.samples, options.seed);
         write_passes(passes, |role| file(role, frame))?;
-        write_frame_references(&scene, t, &settings, &mut |role| file(role, frame))?;
+        if options.layers {
+            let channels = render_layers(scene, t, options.samples, options.seed)
+                .into_iter()
+                .flat_map(|layer| layer.channels())
+                .collect();
+            write_channels(&file("layers", frame), scene, channels)?;
+        }
+        write_frame_references(scene, t, &settings, &mut |role| file(role, frame))?;
         on_frame(frame, &file("color", frame));
     }
     let description = SceneDescription {
-        scene: name.to_string(),
-        width: options.width,
-        height: options.height,
+        scene: scene.name.clone(),
+        width: scene.width,
+        height: scene.height,
         frames: options.frames,
         samples: options.samples,
         shutter: options.shutter,
