@@ -89,3 +89,64 @@ fn bench_runs_end_to_end_and_writes_its_reports() {
     let svg = std::fs::read_to_string(out.join("pareto.svg")).unwrap();
     assert!(svg.contains("sparse") && svg.contains("RMSE"));
 }
+
+/// `bench --layers`: every CPU setting gets a `[layers]` row (the stack, end to end too) and
+/// a `[hand merge]` row on the scene's view layers, scored against the same reference; with
+/// nothing blurred (`none`) both are FG over BG, which is the colour pass but where an FG
+/// edge and a background edge share a pixel.
+#[test]
+fn bench_with_layers_adds_a_stack_and_a_hand_merge_row_for_every_cpu_setting() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bench");
+    let o = shutter(&[
+        "bench",
+        "--scenes",
+        "sparse",
+        "--size",
+        "64x36",
+        "--samples",
+        "16",
+        "--layers",
+        "--out",
+        &s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.join("scenes/sparse/layers.0001.exr").exists());
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
+    let rows: Vec<&serde_json::Value> = (report["rows"].as_array().unwrap().iter())
+        .filter(|r| r["backend"] == "cpu")
+        .collect();
+    let settings = shutter::lab::bench::sweep().len();
+    assert_eq!(rows.len(), 3 * settings);
+    let rmse = |label: &str| {
+        let row = rows
+            .iter()
+            .find(|r| r["setting"] == label)
+            .unwrap_or_else(|| panic!("{label}"));
+        row["region"]["rmse"].as_f64().unwrap()
+    };
+    for setting in shutter::lab::bench::sweep() {
+        let stack = rows
+            .iter()
+            .find(|r| r["setting"] == format!("{} [layers]", setting.label))
+            .unwrap_or_else(|| panic!("{} [layers]", setting.label));
+        assert!(stack["end_to_end_ms"].as_f64().is_some(), "{stack}");
+        rmse(&format!("{} [hand merge]", setting.label));
+    }
+    assert_eq!(rmse("none [layers]"), rmse("none [hand merge]"));
+    // And what `none [layers]` wrote is FG over BG, worked out here from the layers.
+    let layers = read_exr_reference(&out.join("scenes/sparse/layers.0001.exr"));
+    let written = read_exr_reference(&out.join("runs/sparse/none_[layers].0001.exr"));
+    let fg_alpha = channel(&layers, "FG.Combined.A");
+    for c in ["R", "G", "B"] {
+        let (fg, bg) = (
+            channel(&layers, &format!("FG.Combined.{c}")),
+            channel(&layers, &format!("BG.Combined.{c}")),
+        );
+        let over: Vec<f32> = (0..fg.len())
+            .map(|i| fg[i] + (1.0 - fg_alpha[i]) * bg[i])
+            .collect();
+        assert_close(channel(&written, c), &over, 1e-6, c);
+    }
+}

@@ -611,7 +611,10 @@ fn a_stack_of_one_file_per_layer_merges_as_one_file_of_view_layers_does() {
 fn one_view_layer_of_several_leaves_the_others_as_they_came() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("layers.exr");
-    write(&input, vec![foreground_moving(-8.0, 1e10, 0.0), background()]);
+    write(
+        &input,
+        vec![foreground_moving(-8.0, 1e10, 0.0), background()],
+    );
     let out = run(
         "blur",
         &input,
@@ -619,7 +622,12 @@ fn one_view_layer_of_several_leaves_the_others_as_they_came() {
         &["--algorithm", "reconstruct", "--layer", "FG"],
     );
     let stored = read_exr_reference(&input);
-    for name in ["BG.Combined.R", "BG.Combined.A", "BG.Depth.Z", "BG.Vector.X"] {
+    for name in [
+        "BG.Combined.R",
+        "BG.Combined.A",
+        "BG.Depth.Z",
+        "BG.Vector.X",
+    ] {
         assert_same_bits(channel(&out, name), channel(&stored, name), name);
     }
     assert_ne!(

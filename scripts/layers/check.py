@@ -115,6 +115,8 @@ MOTION = [
             ("single layer", "single_{alg}"),
             ("FG over BG, BG holdout in FG", "merged_{alg}"),
             ("FG over BG, BG excluded from FG", "merged_exclude_{alg}"),
+            ("`--layers FG,BG` (BG holdout in FG)", "stack_{alg}"),
+            ("`--layers FG,BG`, FG with BG excluded (`--color` twice)", "stack_exclude_{alg}"),
         ],
     ),
     (
@@ -133,6 +135,8 @@ DOF = [
     ("FG over BG, gather", "dof_merged_gather"),
     ("single layer, blend", "dof_single_blend"),
     ("FG over BG, blend", "dof_merged_blend"),
+    ("`--layers FG,BG`, gather", "dof_stack_gather"),
+    ("`--layers FG,BG`, blend", "dof_stack_blend"),
 ]
 
 

@@ -122,6 +122,10 @@ for alg in reconstruct scatter stretch; do
     rgba "$blur/${fg}_$alg.%04d.exr" "$score/${fg}_$alg.%04d.exr" FG
   done
   rgba "$blur/single_$alg.%04d.exr" "$score/single_$alg.%04d.exr" ViewLayer
+  # The stack: each layer blurred alone and merged by shutter (the merge is R, G, B, A).
+  "$shutter" "${b[@]}" --layers FG,BG --color "$layers" -o "$score/stack_$alg.####.exr"
+  "$shutter" "${b[@]}" --layers FG,BG --color "$OUT/fg_exclude.####.exr" --color "$layers" \
+    -o "$score/stack_exclude_$alg.####.exr"
 done
 # diff NAME REFERENCE [SHARP]: region RMSE (the pixels where the reference differs from the
 # sharp frame, default none: the single layer's beauty) into score/NAME.json.
@@ -137,7 +141,7 @@ mv "$score/reference_fg_seed2.json" "$score/fg_noise.json"
 diff_ none reference
 diff_ fg_none reference_fg fg_none
 for alg in reconstruct scatter stretch; do
-  for name in single merged merged_exclude; do diff_ "${name}_$alg" reference; done
+  for name in single merged merged_exclude stack stack_exclude; do diff_ "${name}_$alg" reference; done
   for name in fg fg_exclude; do diff_ "${name}_$alg" reference_fg fg_none; done
 done
 
@@ -155,10 +159,12 @@ if [ "$DOF" = 1 ]; then
     over "$blur/dof_fg_$m.%04d.exr" "$blur/dof_bg_$m.%04d.exr" "$blur/dof_merged_$m.%04d.exr"
     rgba "$blur/dof_single_$m.%04d.exr" "$score/dof_single_$m.%04d.exr" ViewLayer
     rgba "$blur/dof_merged_$m.%04d.exr" "$score/dof_merged_$m.%04d.exr" FG
+    "$shutter" "${d[@]}" --layers FG,BG --color "$layers" -o "$score/dof_stack_$m.####.exr"
   done
   diff_ reference_dof_seed2 reference_dof
   mv "$score/reference_dof_seed2.json" "$score/dof_noise.json"
-  for name in dof_none dof_single_gather dof_merged_gather dof_single_blend dof_merged_blend; do
+  for name in dof_none dof_single_gather dof_merged_gather dof_single_blend dof_merged_blend \
+    dof_stack_gather dof_stack_blend; do
     diff_ "$name" reference_dof
   done
 fi

@@ -525,4 +525,10 @@ pub struct BenchArgs {
     /// on the bench's scene files, scored beside shutter's settings.
     #[arg(long, value_name = "DIR")]
     pub peers: Option<PathBuf>,
+
+    /// Also run each CPU setting on the scenes' view layers (FG: every shape, BG: the
+    /// background), as `--layers FG,BG` ([layers] rows) and as each layer blurred alone and
+    /// merged by hand ([hand merge] rows), against the same references.
+    #[arg(long)]
+    pub layers: bool,
 }

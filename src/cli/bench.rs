@@ -30,6 +30,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         shutter_offset: super::parse_shutter_offset(&args.shutter_offset)? as f32,
         binary,
         peers: args.peers.clone(),
+        layers: args.layers,
     };
     let started = std::time::Instant::now();
     let report = crate::lab::bench::run(&options, &mut |line| eprintln!("shutter: bench: {line}"))?;

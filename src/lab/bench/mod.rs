@@ -16,6 +16,7 @@
 //! - [`noise`], [`peers`], [`plot`] as above; this file holds the options and [`run`], the loop
 //!   over scenes, targets, settings and backends.
 
+mod layers;
 pub mod noise;
 mod options;
 pub mod peers;
@@ -126,7 +127,14 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                     output,
                     end_to_end_ms,
                     peak_rss_mib,
-                } = timing::end_to_end(options, name, &label, setting, on_gpu.is_some(), &inputs)?;
+                } = timing::end_to_end(
+                    options,
+                    name,
+                    &label,
+                    setting,
+                    on_gpu.is_some(),
+                    &timing::input_flags(&inputs),
+                )?;
                 let blurred = read_rgb(&output)?;
                 let whole = metrics::compare(&rgb(&reference), &rgb(&blurred), None);
                 let scored = metrics::compare(&rgb(&reference), &rgb(&blurred), Some(&region));
@@ -151,6 +159,40 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                     region_rmse_corrected: noise::corrected_rmse(scored.rmse, noise_variance),
                 });
                 outputs.push((label, blurred));
+                if options.layers && on_gpu.is_none() {
+                    for layered in layers::rows(options, &dir, name, setting)? {
+                        let blurred = match &layered.end_to_end {
+                            Some(ended) => read_rgb(&ended.output)?,
+                            None => layered.frame,
+                        };
+                        let whole = metrics::compare(&rgb(&reference), &rgb(&blurred), None);
+                        let scored =
+                            metrics::compare(&rgb(&reference), &rgb(&blurred), Some(&region));
+                        progress(format!(
+                            "{name}: {} compute {:.2} ms, region RMSE {:.5}",
+                            layered.label, layered.compute_ms, scored.rmse
+                        ));
+                        rows.push(Row {
+                            scene: name.clone(),
+                            setting: layered.label.clone(),
+                            backend: "cpu".to_string(),
+                            gpu_stages: None,
+                            stages_on_cpu: None,
+                            peer: None,
+                            peer_settings: serde_json::Value::Null,
+                            compute_ms: layered.compute_ms,
+                            end_to_end_ms: layered.end_to_end.as_ref().map(|e| e.end_to_end_ms),
+                            peak_rss_mib: layered.end_to_end.as_ref().and_then(|e| e.peak_rss_mib),
+                            whole,
+                            region: scored,
+                            region_rmse_corrected: noise::corrected_rmse(
+                                scored.rmse,
+                                noise_variance,
+                            ),
+                        });
+                        outputs.push((layered.label, blurred));
+                    }
+                }
             }
             for peer in peers
                 .iter()

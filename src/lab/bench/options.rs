@@ -22,4 +22,7 @@ pub struct BenchOptions {
     pub binary: PathBuf,
     /// A folder with a peers.json ([`super::peers`]) whose outputs are scored too.
     pub peers: Option<PathBuf>,
+    /// Each CPU setting run on the scenes' view layers too, as a stack and as a hand-made
+    /// merge ([`super::layers`]).
+    pub layers: bool,
 }

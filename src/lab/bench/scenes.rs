@@ -23,6 +23,7 @@ fn scene_options(options: &BenchOptions) -> SceneOptions {
         frames: 1,
         samples: options.samples,
         shutter_offset: options.shutter_offset as f64,
+        layers: options.layers,
         ..SceneOptions::default()
     }
 }
@@ -49,7 +50,9 @@ pub(super) fn ensure_scene(name: &str, dir: &Path, options: &BenchOptions) -> Re
         "samples": options.samples, "shutter": scene_options.shutter, "seed": scene_options.seed,
         "shutter_offset": scene_options.shutter_offset,
     });
-    if recorded(&dir.join("scene.json"), &wanted) {
+    // A scene without its view layers is made again when they are asked for.
+    let layers_there = !options.layers || dir.join("layers.0001.exr").exists();
+    if layers_there && recorded(&dir.join("scene.json"), &wanted) {
         return Ok(());
     }
     write_scene(name, dir, &scene_options, &mut |_, _| {})?;

@@ -105,15 +105,23 @@ pub(super) struct EndToEnd {
     pub peak_rss_mib: Option<f64>,
 }
 
-/// Runs the shutter binary with `setting` on `inputs` (with `--backend wgpu` when `wgpu`),
-/// `options.runs` times, writing under the bench's runs folder by target `name` and `label`.
+/// The `shutter blur` flags that read `inputs`.
+pub(super) fn input_flags(inputs: &Inputs) -> Vec<String> {
+    (inputs.all().into_iter())
+        .flat_map(|(flag, pattern)| [format!("--{flag}"), pattern.raw.clone()])
+        .collect()
+}
+
+/// Runs the shutter binary with `setting` on the inputs `input_flags` name (with `--backend
+/// wgpu` when `wgpu`), `options.runs` times, writing under the bench's runs folder by target
+/// `name` and `label`.
 pub(super) fn end_to_end(
     options: &BenchOptions,
     name: &str,
     label: &str,
     setting: &Setting,
     wgpu: bool,
-    inputs: &Inputs,
+    input_flags: &[String],
 ) -> Result<EndToEnd> {
     // End to end: the shutter binary on the frame, median of `runs`.
     let out_dir = options.out.join("runs").join(name.replace(' ', "_"));
@@ -127,9 +135,7 @@ pub(super) fn end_to_end(
         if wgpu {
             command.args(["--backend", "wgpu"]);
         }
-        for (flag, pattern) in inputs.all() {
-            command.arg(format!("--{flag}")).arg(&pattern.raw);
-        }
+        command.args(input_flags);
         command
             .args(["--frames", "1", "--json", "-o"])
             .arg(out_dir.join(format!("{file_stem}.####.exr")));
