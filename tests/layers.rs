@@ -717,3 +717,70 @@ fn interpenetrating_layers_merge_in_the_stacks_order() {
         );
     }
 }
+
+/// Depth of field: each layer gets its own circle of confusion. A near box (depth 0.5, about
+/// 8 px across at f/1.4 focused at 3) spreads over the in-focus layer behind it, which stays
+/// sharp beyond the box's reach: the merge is the spread box over the background exactly.
+#[test]
+fn a_defocused_near_layer_spreads_over_a_sharp_one_behind() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("near.exr");
+    let n = W * H;
+    let mut fg = foreground(1e10, 0.0);
+    for (name, plane) in &mut fg {
+        if name == "FG.Depth.Z" {
+            for (i, z) in plane.iter_mut().enumerate() {
+                if in_box(i) {
+                    *z = 0.5;
+                }
+            }
+        }
+    }
+    let mut bg = background();
+    for (name, plane) in &mut bg {
+        if name == "BG.Depth.Z" {
+            *plane = vec![3.0; n];
+        }
+    }
+    let stored = [fg.clone(), bg.clone()].concat();
+    write(&input, vec![fg, bg]);
+    for method in ["gather", "blend"] {
+        let out = run(
+            "dof",
+            &input,
+            dir.path().join(format!("{method}.exr")),
+            &[&["--method", method][..], &LENS, &["--layers", "FG,BG"]].concat(),
+        );
+        let fg_a = channel(&out, "FG.Combined.A");
+        // Two pixels outside the box's left edge: the box's blur reaches there.
+        let beside = 2 * W + BOX.0 - 2;
+        assert!(
+            fg_a[beside] > 0.05,
+            "{method}: FG alpha {} beside the box",
+            fg_a[beside]
+        );
+        for c in ["R", "G", "B"] {
+            let (merged, front) = (channel(&out, c), channel(&out, &format!("FG.Combined.{c}")));
+            let sharp = channel(&stored, &format!("BG.Combined.{c}"));
+            let behind = channel(&out, &format!("BG.Combined.{c}"));
+            for i in 0..n {
+                // Beyond the box's reach the background is as it was: in focus.
+                let x = i % W;
+                if x + 8 < BOX.0 || x >= BOX.1 + 8 {
+                    assert!(
+                        (merged[i] - sharp[i]).abs() <= 1e-5,
+                        "{method} {c} at ({x}, {}): {} where the sharp {}",
+                        i / W,
+                        merged[i],
+                        sharp[i]
+                    );
+                }
+                let over = front[i] + (1.0 - fg_a[i].clamp(0.0, 1.0)) * behind[i];
+                assert!(
+                    (merged[i] - over).abs() <= 1e-6,
+                    "{method} {c} at {i}: not FG over BG"
+                );
+            }
+        }
+    }
+}
