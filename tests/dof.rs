@@ -314,7 +314,7 @@ fn depth_of_field_then_motion_blur_beats_either_alone_on_layers() {
     assert!(both < 0.5 * none, "both {both} vs none {none}");
 }
 
-fn lens_flags() -> Vec<&'static str> {
+pub(crate) fn lens_flags() -> Vec<&'static str> {
     vec![
         "--focal-length",
         "50",

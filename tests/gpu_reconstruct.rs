@@ -52,6 +52,8 @@ pub(crate) const MAX: f32 = 0.25;
 pub(crate) const FLIPS: f64 = 0.002;
 /// The mean absolute difference, relative to the range.
 pub(crate) const MEAN: f64 = 1e-5;
+/// The four above as one bound (agree, max, share outside, mean), for parity tests elsewhere.
+pub(crate) const BOUND: (f32, f32, f64, f64) = (AGREE, MAX, FLIPS, MEAN);
 
 /// This file's [`parity_within`]: pixels outside [`AGREE`] counted.
 fn parity(got: &[f32], cpu: &[f32]) -> Parity {

@@ -73,6 +73,8 @@ pub(crate) const MAX: f32 = 1.0;
 pub(crate) const FLIPS: f64 = 0.01;
 /// The mean absolute difference, relative to the range.
 pub(crate) const MEAN: f64 = 3e-5;
+/// The four above as one bound (agree, max, share outside, mean), for parity tests elsewhere.
+pub(crate) const BOUND: (f32, f32, f64, f64) = (AGREE, MAX, FLIPS, MEAN);
 /// The share outside [`AGREE`] and the mean on stress frames.
 const STRESS: (f64, f64) = (0.02, 5e-3);
 

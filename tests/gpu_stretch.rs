@@ -49,6 +49,8 @@ pub(crate) const AGREE: f32 = 1e-4;
 pub(crate) const FLIPS: f64 = 0.001;
 /// The mean absolute difference, relative to the range.
 pub(crate) const MEAN: f64 = 1e-5;
+/// The four above as one bound (agree, max, share outside, mean), for parity tests elsewhere.
+pub(crate) const BOUND: (f32, f32, f64, f64) = (AGREE, MAX, FLIPS, MEAN);
 /// The largest difference at any pixel: a flipped fragment can move a pixel across the range.
 pub(crate) const MAX: f32 = 1.0;
 

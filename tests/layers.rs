@@ -5,6 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::dof::lens_flags;
 use crate::support::*;
 
 const W: usize = 96;
@@ -135,15 +136,6 @@ fn run(command: &str, input: &Path, out: PathBuf, args: &[&str]) -> Vec<(String,
     read_exr_reference(&out)
 }
 
-const LENS: [&str; 6] = [
-    "--focal-length",
-    "50",
-    "--f-stop",
-    "1.4",
-    "--focus-distance",
-    "3",
-];
-
 /// An empty pixel of a layer (alpha 0) neither moves nor hides anything, whatever its
 /// passes say: here the foreground's empty pixels claim to be nearer than its box and to
 /// move 30 px a frame (or, for depth of field, to lie far out of focus in front of it). The
@@ -158,8 +150,8 @@ fn an_empty_layer_pixel_neither_moves_nor_darkens_what_is_behind_it() {
         ("blur", vec!["--algorithm", "reconstruct"]),
         ("blur", vec!["--algorithm", "scatter"]),
         ("blur", vec!["--algorithm", "stretch"]),
-        ("dof", [&["--method", "gather"][..], &LENS].concat()),
-        ("dof", [&["--method", "blend"][..], &LENS].concat()),
+        ("dof", [&["--method", "gather"][..], &lens_flags()].concat()),
+        ("dof", [&["--method", "blend"][..], &lens_flags()].concat()),
     ];
     for (command, args) in cases {
         let what = format!("{command} {}", args[1]);
@@ -420,41 +412,26 @@ fn a_stack_on_wgpu_equals_the_cpu_within_each_pass_s_tolerance() {
         (
             "blur",
             vec!["--algorithm", "reconstruct"],
-            (
-                crate::gpu_reconstruct::AGREE,
-                crate::gpu_reconstruct::MAX,
-                crate::gpu_reconstruct::FLIPS,
-                crate::gpu_reconstruct::MEAN,
-            ),
+            crate::gpu_reconstruct::BOUND,
         ),
         (
             "blur",
             vec!["--algorithm", "scatter"],
-            (
-                crate::gpu_scatter::AGREE,
-                crate::gpu_scatter::MAX,
-                crate::gpu_scatter::FLIPS,
-                crate::gpu_scatter::MEAN,
-            ),
+            crate::gpu_scatter::BOUND,
         ),
         (
             "blur",
             vec!["--algorithm", "stretch"],
-            (
-                crate::gpu_stretch::AGREE,
-                crate::gpu_stretch::MAX,
-                crate::gpu_stretch::FLIPS,
-                crate::gpu_stretch::MEAN,
-            ),
+            crate::gpu_stretch::BOUND,
         ),
         (
             "dof",
-            [&["--method", "gather"][..], &LENS].concat(),
+            [&["--method", "gather"][..], &lens_flags()].concat(),
             (1e-3, 1e-3, 0.0, 1e-3),
         ),
         (
             "dof",
-            [&["--method", "blend"][..], &LENS].concat(),
+            [&["--method", "blend"][..], &lens_flags()].concat(),
             (1e-3, 1e-3, 0.0, 1e-3),
         ),
     ];
@@ -749,7 +726,12 @@ fn a_defocused_near_layer_spreads_over_a_sharp_one_behind() {
             "dof",
             &input,
             dir.path().join(format!("{method}.exr")),
-            &[&["--method", method][..], &LENS, &["--layers", "FG,BG"]].concat(),
+            &[
+                &["--method", method][..],
+                &lens_flags(),
+                &["--layers", "FG,BG"],
+            ]
+            .concat(),
         );
         let fg_a = channel(&out, "FG.Combined.A");
         // Two pixels outside the box's left edge: the box's blur reaches there.
