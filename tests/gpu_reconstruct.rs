@@ -433,6 +433,57 @@ fn blur_on_wgpu_equals_the_cpu_within_the_tolerance() {
     }
 }
 
+/// One view layer of a stack (issue 33): a disc of colour (0.9, 0.6, 0.3), premultiplied,
+/// with an anti-aliased rim (coverage of 4×4 samples), moving over empty space (colour and
+/// alpha 0, still and far); a rim pixel moves with the disc where the disc covers its centre.
+/// The exposure variant's mattes pair the rim with the disc and the empty space, and unmix
+/// its alpha with its colour.
+fn layer_over_empty_space(w: usize, h: usize, speed: f32) -> Frame {
+    let n = w * h;
+    let (cx, cy, radius) = (w as f32 * 0.4, h as f32 * 0.5, h as f32 * 0.3);
+    let cover = |i: usize| {
+        let (x, y) = ((i % w) as f32, (i / w) as f32);
+        let inside = (0..16)
+            .filter(|s| {
+                let (sx, sy) = ((s % 4) as f32 + 0.5, (s / 4) as f32 + 0.5);
+                (x + sx / 4.0 - cx).hypot(y + sy / 4.0 - cy) < radius
+            })
+            .count();
+        inside as f32 / 16.0
+    };
+    let a: Vec<f32> = (0..n).map(cover).collect();
+    let centre = |i: usize| {
+        let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+        (x - cx).hypot(y - cy) < radius
+    };
+    let color = [
+        a.iter().map(|a| 0.9 * a).collect(),
+        a.iter().map(|a| 0.6 * a).collect(),
+        a.iter().map(|a| 0.3 * a).collect(),
+        a,
+    ];
+    let depth = (0..n).map(|i| if centre(i) { 3.0 } else { 1e6 }).collect();
+    let moving = |i: usize, v: f32| if centre(i) { v } else { 0.0 };
+    let v = [
+        (0..n).map(|i| moving(i, speed)).collect(),
+        (0..n).map(|i| moving(i, 0.4 * speed)).collect(),
+    ];
+    frame(w, h, color, depth, v)
+}
+
+#[test]
+fn reconstruct_gather_matches_the_cpu_on_a_layer_over_empty_space() {
+    for params in variants() {
+        compare(
+            "layer over empty space",
+            &layer_over_empty_space(61, 37, 9.0),
+            &params,
+            0.5,
+            8,
+        );
+    }
+}
+
 /// A frame without alpha: the gather's alpha is dropped, as on the CPU.
 #[test]
 fn reconstruct_gather_matches_the_cpu_without_alpha() {

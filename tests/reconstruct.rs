@@ -358,3 +358,72 @@ fn still_pixels_beside_a_moving_disc_do_not_count_its_fringe_twice() {
     );
     assert!(still < 0.034, "{still}");
 }
+
+#[test]
+fn a_layer_over_empty_space_keeps_its_surface_s_colour_at_its_rim() {
+    // Issue 33: one view layer of a stack, premultiplied. A flat surface of colour
+    // (0.9, 0.6, 0.3) moves 6 px a frame over empty space (colour and alpha 0, still and far,
+    // as `shutter::stack` makes it). Its rim pixels are partly covered: coverage a gives
+    // a·(0.9, 0.6, 0.3, 1), and a rim pixel whose centre the surface covers (a ≥ ½) moves
+    // with it while one it misses is empty. So every pixel is some share of the surface and
+    // nothing else, and any weighted mix of them too: R, G and B are 0.9, 0.6 and 0.3 times
+    // alpha everywhere. When the exposure variant's matte unmixed R, G and B at the rim but
+    // not alpha, a moving rim pixel's surface came out with the surface's colour at the
+    // pixel's fractional alpha (too bright: colour over alpha) and a still one's with no
+    // colour at its alpha (a dark fringe).
+    let (w, h) = (48, 24);
+    let cover = |x: usize, y: usize| {
+        let across = match x {
+            15 => 0.3,
+            16..=27 => 1.0,
+            28 => 0.7,
+            _ => 0.0,
+        };
+        let down = match y {
+            7 => 0.6,
+            8..=15 => 1.0,
+            16 => 0.4,
+            _ => 0.0,
+        };
+        across * down
+    };
+    let surface = [0.9f32, 0.6, 0.3];
+    let mut f = Frame::new(w, h);
+    let at = |g: &dyn Fn(f32) -> f32| -> Vec<f32> {
+        (0..w * h).map(|i| g(cover(i % w, i / w))).collect()
+    };
+    f.color = Some(shutter::frame::Color {
+        r: at(&|a| a * surface[0]),
+        g: at(&|a| a * surface[1]),
+        b: at(&|a| a * surface[2]),
+        a: Some(at(&|a| a)),
+    });
+    f.depth = Some(at(&|a| if a >= 0.5 { 5.0 } else { 1e6 }));
+    f.velocity = Some(Velocity {
+        x: at(&|a| if a >= 0.5 { 6.0 } else { 0.0 }),
+        y: vec![0.0; w * h],
+    });
+    for params in variants() {
+        let variant = params.reconstruct.variant;
+        let out = apply(Algorithm::Reconstruct, &params, f.clone(), 1);
+        let c = out.color.unwrap();
+        let alpha = c.a.as_ref().unwrap();
+        let mut partly = 0;
+        for i in 0..w * h {
+            let a = alpha[i];
+            for (plane, want) in [&c.r, &c.g, &c.b].into_iter().zip(surface) {
+                assert!(
+                    close(plane[i], want * a, 1e-5),
+                    "{variant:?}: ({}, {}) has {} where alpha {a} wants {}",
+                    i % w,
+                    i / w,
+                    plane[i],
+                    want * a
+                );
+            }
+            partly += (a > 0.05 && a < 0.95) as usize;
+        }
+        // The streaks' ends are partly covered: more pixels than the rim's 28.
+        assert!(partly > 60, "{variant:?}: {partly} partly covered pixels");
+    }
+}

@@ -31,7 +31,7 @@ use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
 use crate::frame::Color;
-use crate::motion::reconstruct::matte::Matte;
+use crate::motion::reconstruct::matte::{self, Matte};
 use crate::motion::reconstruct::pack::pack_tiles;
 #[cfg(doc)]
 use crate::motion::reconstruct::reconstruct_with;
@@ -242,7 +242,11 @@ impl ReconstructPass {
             U::MAP_READ | U::COPY_DST,
         );
         // Other variants do not read it: a word, to fill the binding.
-        let matte_floats = if shape.mattes { 6 * shape.pixels } else { 1 };
+        let matte_floats = if shape.mattes {
+            matte::WORDS * shape.pixels
+        } else {
+            1
+        };
         let mattes = buffer("reconstruct mattes", floats(matte_floats), input);
         // The plain gather does not read it: one RGBA (its element), to fill the binding.
         let carried = buffer(
@@ -552,6 +556,9 @@ mod tests {
             "const COVER_SLOPE: f32 = {:?};",
             cpu::gather_2014::COVER_SLOPE
         ));
+        // The mattes travel as a flat array of words, MATTE_WORDS a pixel.
+        has(format!("const MATTE_WORDS: u32 = {}u;", cpu::matte::WORDS));
+        assert_eq!(std::mem::size_of::<Matte>(), 4 * cpu::matte::WORDS);
         has(format!(
             "const SALT_TILE: u32 = {:#x}u;",
             cpu::gather_2014::SALT_TILE

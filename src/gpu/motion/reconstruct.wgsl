@@ -9,12 +9,12 @@
 // the 2014 filter). In and out: the premultiplied colour, written in place.
 //
 // Bindings, in the CPU functions' argument order: 0 the config, 1 texels, 2 velocity, 3
-// tiles, 4 colour, 5 the exposure variant's mattes (`gather_2014`'s third argument; six words
-// a pixel, src/motion/reconstruct/matte.rs; one unread word otherwise), and 6 the colours the
-// 2014 gather carries beside the beauty (`gather_2014_carrying`'s; one unread word
-// otherwise). Planar buffers hold their planes one after the other, as the CPU's structs do:
-// velocity x then y, tiles x then y, colour r, g, b, a (of each colour in turn when the
-// gather carries several).
+// tiles, 4 colour, 5 the exposure variant's mattes (`gather_2014`'s third argument;
+// MATTE_WORDS a pixel, src/motion/reconstruct/matte.rs; one unread word otherwise), and 6
+// the colours the 2014 gather carries beside the beauty (`gather_2014_carrying`'s; one
+// unread word otherwise). Planar buffers hold their planes one after the other, as the
+// CPU's structs do: velocity x then y, tiles x then y, colour r, g, b, a (of each colour in
+// turn when the gather carries several).
 //
 // The 2014 gather's tap reading (`around`, `bilinear`, `split`, `split_by_cover`,
 // `surfaces`) is in reconstruct_taps.wgsl, concatenated after this file.
@@ -59,8 +59,9 @@ struct ReconstructConfig {
 @group(0) @binding(2) var<storage, read> velocity: array<f32>;
 @group(0) @binding(3) var<storage, read> tiles: array<f32>;
 @group(0) @binding(4) var<storage, read_write> color: array<f32>;
-// Per pixel: α, then the indices (as the bits of a float) of the pixels whose colours are its
-// moving and still partners, then its unmixing's extrapolation in R, G and B (`Matte`).
+// Per pixel (MATTE_WORDS apart): α, then the indices (as the bits of a float) of the pixels
+// whose colours are its moving and still partners, then its unmixing's extrapolation in R, G,
+// B and A (`Matte`).
 @group(0) @binding(5) var<storage, read> mattes: array<f32>;
 // The 2014 gather's colours when it carries several (COLOURS ≥ 1), packed as the CPU packs
 // them (zero off the packed tiles): colour g of pixel j at g·width·height + j. One unread
@@ -76,6 +77,7 @@ const MOVING_SQUARED_BITS: u32 = 0x3e852bd3u;
 const MAX_TAPS_PER_SIDE: u32 = 64u;
 const TAP_SPACING: f32 = 2.0;
 const COVER_SLOPE: f32 = 1.25;
+const MATTE_WORDS: u32 = 7u;
 const SALT_TILE: u32 = 0x54494c45u;
 const SALT_TAPS: u32 = 0x54415053u;
 const SALT_PAPER: u32 = 0x5245434fu;
@@ -536,7 +538,7 @@ fn gather_pixel_2014(x: u32, y: u32) -> Colours {
             // A still centre's own surface: its colour less the moving surface's fringe.
             var own_colour = colour(g, i);
             if own_length < HALF_PIXEL {
-                own_colour = vec4<f32>(surfaces(g, i).still, own_colour.w);
+                own_colour = surfaces(g, i).still;
             }
             var background = own_colour;
             if w_bg > 0.0 {

@@ -126,26 +126,27 @@ fn split(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>) -> Split {
     return out;
 }
 
-// `matte::surfaces_of` for colour g: pixel i's coverage by the moving surface, and the RGB of
-// its moving and still surfaces, unmixed with the beauty's matte.
+// `matte::surfaces_of` for colour g: pixel i's coverage by the moving surface, and the RGBA
+// of its moving and still surfaces, unmixed with the beauty's matte.
 struct Surfaces {
     alpha: f32,
-    moving: vec3<f32>,
-    still: vec3<f32>,
+    moving: vec4<f32>,
+    still: vec4<f32>,
 }
 
 fn surfaces(g: u32, i: u32) -> Surfaces {
-    let alpha = mattes[6u * i];
-    let c = colour(g, i).xyz;
-    let fi = bitcast<u32>(mattes[6u * i + 1u]);
-    let bi = bitcast<u32>(mattes[6u * i + 2u]);
+    let m = MATTE_WORDS * i;
+    let alpha = mattes[m];
+    let c = colour(g, i);
+    let fi = bitcast<u32>(mattes[m + 1u]);
+    let bi = bitcast<u32>(mattes[m + 2u]);
     if fi == i && bi == i {
         // No pair: α is the label, and both surfaces are the colour itself.
         return Surfaces(alpha, c, c);
     }
-    let f = colour(g, fi).xyz;
-    let b = colour(g, bi).xyz;
-    let e = vec3<f32>(mattes[6u * i + 3u], mattes[6u * i + 4u], mattes[6u * i + 5u]);
+    let f = colour(g, fi);
+    let b = colour(g, bi);
+    let e = vec4<f32>(mattes[m + 3u], mattes[m + 4u], mattes[m + 5u], mattes[m + 6u]);
     if texel8(i).length >= HALF_PIXEL {
         return Surfaces(alpha, c + e * (c - b), b);
     }
@@ -167,7 +168,8 @@ fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>, s
     var plain = true;
     for (var q = 0u; q < 4u; q++) {
         let j = corners.index[q];
-        if bitcast<u32>(mattes[6u * j + 1u]) != j || bitcast<u32>(mattes[6u * j + 2u]) != j {
+        let m = MATTE_WORDS * j;
+        if bitcast<u32>(mattes[m + 1u]) != j || bitcast<u32>(mattes[m + 2u]) != j {
             plain = false;
         }
     }
@@ -202,23 +204,24 @@ fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>, s
         let j = corners.index[q];
         let w = corners.weight[q];
         let t = texel8(j);
-        let alpha = mattes[6u * j];
+        let m = MATTE_WORDS * j;
+        let alpha = mattes[m];
         let w_m = w * alpha;
         let w_s = w * (1.0 - alpha);
         let t_moves = t.length >= HALF_PIXEL;
         var fg_texel = t;
         var bg_index = j;
         if t_moves {
-            bg_index = bitcast<u32>(mattes[6u * j + 2u]);
+            bg_index = bitcast<u32>(mattes[m + 2u]);
         } else {
-            fg_texel = texel8(bitcast<u32>(mattes[6u * j + 1u]));
+            fg_texel = texel8(bitcast<u32>(mattes[m + 1u]));
         }
         let heavier = w_s > heavy_s;
         for (var g = 0u; g < colours(); g++) {
             let s = surfaces(g, j);
-            moving.colour.c[g] += vec4<f32>(w_m * s.moving, w_m * colour(g, j).w);
+            moving.colour.c[g] += w_m * s.moving;
             if heavier {
-                still_colour.c[g] = vec4<f32>(s.still, colour(g, bg_index).w);
+                still_colour.c[g] = s.still;
             }
         }
         share_m += w_m;
@@ -251,7 +254,7 @@ fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>, s
     }
     if !moves {
         for (var g = 0u; g < colours(); g++) {
-            still_colour.c[g] = vec4<f32>(surfaces(g, nearest).still, colour(g, nearest).w);
+            still_colour.c[g] = surfaces(g, nearest).still;
         }
         still.texel = near;
     }

@@ -447,10 +447,7 @@ fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>>(
         // (the matte's; the taps bring the moving surface back for as long as it covers).
         let mut own_colour = centre_colour;
         if own_length < HALF_PIXEL && !mattes.is_empty() {
-            let (_, _, still) = matte::surfaces_of(texels, mattes, i, colour);
-            for g in 0..G {
-                own_colour[g][..3].copy_from_slice(&still[g]);
-            }
+            own_colour = matte::surfaces_of(texels, mattes, i, colour).2;
         }
         for g in 0..G {
             for ch in 0..4 {

@@ -13,10 +13,11 @@
 //! The matte takes each pixel where moving and still pixels meet, with the moving ones in
 //! front, and finds the pair of colours, one from a moving pixel and one from a still pixel
 //! of its 5×5 neighbourhood (those whose own 3×3 is all of one kind first), whose line passes
-//! nearest to its colour (a local colour-line model, as in matting): its coverage α is where
-//! its colour projects on that line, kept on its own side of one half (a pixel whose centre
-//! the surface covers is at least half covered), and the two colours are remembered by the
-//! pixels they came from. Where no pair explains the colour (the residual over 2 % of the
+//! nearest to its colour (a local colour-line model, as in matting; the colour is RGBA,
+//! premultiplied, alpha a fourth channel mixed by coverage as R, G and B are): its coverage α
+//! is where its colour projects on that line, kept on its own side of one half (a pixel whose
+//! centre the surface covers is at least half covered), and the two colours are remembered by
+//! the pixels they came from. Where no pair explains the colour (the residual over 2 % of the
 //! pair's squared distance, or two colours too alike to tell apart), the pixel keeps its
 //! label: α 1 moving, 0 still. Everywhere else α is the label.
 //!
@@ -24,6 +25,17 @@
 //! moving surface, in the surface's colour (a moving pixel's own colour with the still
 //! pair's taken out, a still pixel's moving partner's), and 1 − α to the still one (the
 //! other way round). Measured in BENCHMARKS.md ("the matte").
+//!
+//! Why alpha is a channel of the fit and of the unmixing (issue 33): in an opaque frame
+//! alpha is 1 everywhere and adds nothing to either (the same bits as an RGB fit). In a view
+//! layer over empty space (still neighbours transparent: colour and alpha 0) a surface's edge
+//! pixel is premultiplied colour and alpha in the same proportion; unmixing R, G and B alone
+//! pushed the colour to the surface's while its alpha stayed the pixel's fraction, so
+//! colour came out above alpha (on `pan`'s FG layer, a still rim pixel (0.627, 0.627, 0.627,
+//! α 0.660) became (0.884, 0.884, 0.916, α 0.661): 1.39 unpremultiplied). Fitted and unmixed
+//! as a fourth channel, a surface's colour and alpha stay one premultiplied colour, and a
+//! dark surface over empty space, whose RGB does not tell it from nothing, is told apart by
+//! its alpha.
 
 use rayon::prelude::*;
 
@@ -32,15 +44,19 @@ use super::config::{ReconstructConfig, Texel2014, HALF_PIXEL, LENGTH, Z};
 /// Per pixel: α (the moving surface's coverage), then the pixels the moving and the still
 /// colours of its pair come from, as `f32::from_bits` of their indices (the pixel's own
 /// index where it has no pair), then how far its own surface's colour is extrapolated from
-/// its partner's through its own in each of R, G and B ([`surfaces`], [`extrapolation`]; 0
-/// without a pair). The GPU reads the same six words.
+/// its partner's through its own in each of R, G, B and A ([`surfaces`], [`extrapolation`];
+/// 0 without a pair). The GPU reads the same [`WORDS`] words.
 ///
-/// All six are fitted on the beauty's colour and given as they are to every light layer
+/// All seven are fitted on the beauty's colour and given as they are to every light layer
 /// (issue 29): with the unmixing's clamp to the colours' range turned into a factor per
 /// channel, a tap's colour is linear in the colour it is read from, so light layers that
 /// add up to the beauty channel by channel still do after the gather (a layer's R, G and B
 /// take the beauty's R, G and B factors; `crate::process` places them so).
-pub type Matte = [f32; 6];
+pub type Matte = [f32; WORDS];
+
+/// The words of a [`Matte`]: α, the two partners, and the extrapolation of R, G, B and A
+/// (`MATTE_WORDS` in reconstruct.wgsl, which a unit test holds to this).
+pub const WORDS: usize = 7;
 
 /// Where a matte's pair points: pixel `i` itself when it has none.
 #[inline]
@@ -81,14 +97,22 @@ pub fn mattes(
 ) -> Vec<Matte> {
     let (width, height) = (config.width as usize, config.height as usize);
     let size = config.tile as usize;
-    let mut out = vec![[0.0f32; 6]; width * height];
+    let mut out = vec![[0.0f32; WORDS]; width * height];
     out.par_chunks_mut(width.max(1))
         .enumerate()
         .for_each(|(y, row)| {
             for (x, m) in row.iter_mut().enumerate() {
                 let i = y * width + x;
                 let own = f32::from_bits(i as u32);
-                *m = [moves(&texels[i]) as u32 as f32, own, own, 0.0, 0.0, 0.0];
+                *m = [
+                    moves(&texels[i]) as u32 as f32,
+                    own,
+                    own,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ];
                 if selected(x / size, y / size) {
                     if let Some(found) = matte(config, texels, &selected, x, y) {
                         *m = found;
@@ -180,7 +204,7 @@ fn matte(
         alpha.min(0.5)
     };
     let (fc, bc) = (&texels[f as usize], &texels[b as usize]);
-    let [er, eg, eb] = extrapolation(centre, fc, bc, alpha, moving);
+    let [er, eg, eb, ea] = extrapolation(centre, fc, bc, alpha, moving);
     Some([
         alpha,
         f32::from_bits(f as u32),
@@ -188,31 +212,32 @@ fn matte(
         er,
         eg,
         eb,
+        ea,
     ])
 }
 
 /// How far a pixel of colour `c` with coverage α by the moving surface (pair `f` moving, `b`
 /// still) extrapolates its own surface's colour from its partner's through its own, channel
-/// by channel: a moving pixel's surface is `c + e·(c − b)`, a still one's `c + e·(c − f)`,
-/// with `e` the unmixing's (1 − α)/α or α/(1 − α) (at most 1: α ≥ ½ on a moving pixel, ≤ ½
-/// on a still one). A pair explains the colour only within its residual, so each channel's
-/// `e` is cut to the most that keeps it within the three colours' range (the clamp of the
-/// unmixed colour, as a factor): every output stays within its inputs' range, as the
-/// gather's convex weights promise, and the same factors applied to a light layer's colours
-/// are linear in them. Finite and in [0, 1] whatever the colours.
+/// by channel (R, G, B and A): a moving pixel's surface is `c + e·(c − b)`, a still one's
+/// `c + e·(c − f)`, with `e` the unmixing's (1 − α)/α or α/(1 − α) (at most 1: α ≥ ½ on a
+/// moving pixel, ≤ ½ on a still one). A pair explains the colour only within its residual,
+/// so each channel's `e` is cut to the most that keeps it within the three colours' range
+/// (the clamp of the unmixed colour, as a factor): every output stays within its inputs'
+/// range, as the gather's convex weights promise, and the same factors applied to a light
+/// layer's colours are linear in them. Finite and in [0, 1] whatever the colours.
 pub fn extrapolation(
     c: &Texel2014,
     f: &Texel2014,
     b: &Texel2014,
     alpha: f32,
     moving: bool,
-) -> [f32; 3] {
+) -> [f32; 4] {
     let (partner, most) = if moving {
         (b, (1.0 - alpha) / alpha)
     } else {
         (f, alpha / (1.0 - alpha))
     };
-    [0, 1, 2].map(|ch| {
+    [0, 1, 2, 3].map(|ch| {
         let low = c[ch].min(f[ch]).min(b[ch]);
         let high = c[ch].max(f[ch]).max(b[ch]);
         let d = c[ch] - partner[ch];
@@ -234,31 +259,40 @@ pub fn extrapolation(
 }
 
 /// Where colour `c` projects on the line from `b` (α 0) to `f` (α 1), clamped to [0, 1]; the
-/// squared distance from `c` to that point; and the squared distance between `f` and `b`.
-/// Non-finite sums (colours near the numeric policy's bound) give a NaN residual, which no
-/// test passes.
+/// squared distance from `c` to that point; and the squared distance between `f` and `b`, all
+/// in RGBA, alpha's term added last. Where the three alphas are equal (an opaque frame) its
+/// terms are zero and every number keeps the bits of R, G and B's alone: a zero added to a
+/// sum of squares changes nothing, and alpha's term in the projection is added only where it
+/// is not zero (+0 added to a −0 would flip its sign). Non-finite sums (colours near the
+/// numeric policy's bound) give a NaN residual, which no test passes.
 #[inline]
 pub fn fit(c: &Texel2014, f: &Texel2014, b: &Texel2014) -> (f32, f32, f32) {
-    let d = [f[0] - b[0], f[1] - b[1], f[2] - b[2]];
-    let e = [c[0] - b[0], c[1] - b[1], c[2] - b[2]];
-    let spread = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    let alpha = ((e[0] * d[0] + e[1] * d[1] + e[2] * d[2]) / spread).clamp(0.0, 1.0);
+    let d = [f[0] - b[0], f[1] - b[1], f[2] - b[2], f[3] - b[3]];
+    let e = [c[0] - b[0], c[1] - b[1], c[2] - b[2], c[3] - b[3]];
+    let spread = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + d[3] * d[3];
+    let mut along = e[0] * d[0] + e[1] * d[1] + e[2] * d[2];
+    if e[3] * d[3] != 0.0 {
+        along += e[3] * d[3];
+    }
+    let alpha = (along / spread).clamp(0.0, 1.0);
     let r = [
         e[0] - alpha * d[0],
         e[1] - alpha * d[1],
         e[2] - alpha * d[2],
+        e[3] - alpha * d[3],
     ];
-    (alpha, r[0] * r[0] + r[1] * r[1] + r[2] * r[2], spread)
+    let residual = r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3];
+    (alpha, residual, spread)
 }
 
-/// Pixel `i`'s coverage and its two surfaces' colours (RGB): the moving surface's and the
-/// still one's. A moving pixel's own is its colour extrapolated away from its still
-/// partner's by the matte's fourth word ([`extrapolation`]), a still pixel's likewise from
-/// its moving partner's; the other is its partner's colour. A pixel with no pair gives its
-/// own colour to both. Linear in the texels' colours: the matte, fitted on the beauty, holds
-/// every number that depends on colour.
+/// Pixel `i`'s coverage and its two surfaces' colours (RGBA, premultiplied): the moving
+/// surface's and the still one's. A moving pixel's own is its colour extrapolated away from
+/// its still partner's by the matte's last four words ([`extrapolation`]), a still pixel's
+/// likewise from its moving partner's; the other is its partner's colour. A pixel with no
+/// pair gives its own colour to both. Linear in the texels' colours: the matte, fitted on the
+/// beauty, holds every number that depends on colour.
 #[inline]
-pub fn surfaces(texels: &[Texel2014], mattes: &[Matte], i: usize) -> (f32, [f32; 3], [f32; 3]) {
+pub fn surfaces(texels: &[Texel2014], mattes: &[Matte], i: usize) -> (f32, [f32; 4], [f32; 4]) {
     let colour = |j: usize| {
         let t = &texels[j];
         [[t[0], t[1], t[2], t[3]]]
@@ -268,31 +302,30 @@ pub fn surfaces(texels: &[Texel2014], mattes: &[Matte], i: usize) -> (f32, [f32;
 }
 
 /// [`surfaces`] of `G` colours at once (the beauty's and carried layers', `colour(j)` those
-/// of pixel j, R, G, B in the beauty's places): each unmixed with the beauty's matte, channel
-/// by channel, as the beauty is.
+/// of pixel j, R, G, B in the beauty's places, each with the beauty's alpha): each unmixed
+/// with the beauty's matte, channel by channel, as the beauty is.
 #[inline(always)]
 pub fn surfaces_of<const G: usize>(
     texels: &[Texel2014],
     mattes: &[Matte],
     i: usize,
     colour: &impl Fn(usize) -> [[f32; 4]; G],
-) -> (f32, [[f32; 3]; G], [[f32; 3]; G]) {
+) -> (f32, [[f32; 4]; G], [[f32; 4]; G]) {
     let m = &mattes[i];
-    let [alpha, f, b, er, eg, eb] = *m;
-    let e = [er, eg, eb];
+    let [alpha, f, b, er, eg, eb, ea] = *m;
+    let e = [er, eg, eb, ea];
     let c = colour(i);
     if unpaired(m, i) {
         // No pair: α is the label (0 or 1), and the colour is both surfaces'.
-        let own = c.map(|c| [c[0], c[1], c[2]]);
-        return (alpha, own, own);
+        return (alpha, c, c);
     }
     let f = colour(f.to_bits() as usize);
     let b = colour(b.to_bits() as usize);
-    let mut moving = [[0.0f32; 3]; G];
-    let mut still = [[0.0f32; 3]; G];
+    let mut moving = [[0.0f32; 4]; G];
+    let mut still = [[0.0f32; 4]; G];
     let own_moves = moves(&texels[i]);
     for g in 0..G {
-        for ch in 0..3 {
+        for ch in 0..4 {
             if own_moves {
                 moving[g][ch] = c[g][ch] + e[ch] * (c[g][ch] - b[g][ch]);
                 still[g][ch] = b[g][ch];
@@ -344,10 +377,10 @@ mod tests {
         let m = mattes(&config, &texels, |_, _| true);
         let (alpha, moving, still) = surfaces(&texels, &m, 2 * 12 + 5);
         assert!(close(alpha, 0.3, 1e-5), "{alpha}");
-        for (got, want) in moving.iter().zip([0.9, 0.5, 0.1]) {
+        for (got, want) in moving.iter().zip([0.9, 0.5, 0.1, 1.0]) {
             assert!(close(*got, want, 1e-5), "{moving:?}");
         }
-        for (got, want) in still.iter().zip([0.1, 0.2, 0.6]) {
+        for (got, want) in still.iter().zip([0.1, 0.2, 0.6, 1.0]) {
             assert!(close(*got, want, 1e-5), "{still:?}");
         }
         // Away from the edge, and on the moving side, the labels.
@@ -376,8 +409,38 @@ mod tests {
         let m = mattes(&config, &texels, |_, _| true);
         assert_eq!(m[2 * 12 + 5][0], 0.0);
         let (_, moving, still) = surfaces(&texels, &m, 2 * 12 + 5);
-        assert_eq!(moving, [0.0, 1.0, 0.0]);
-        assert_eq!(still, [0.0, 1.0, 0.0]);
+        assert_eq!(moving, [0.0, 1.0, 0.0, 1.0]);
+        assert_eq!(still, [0.0, 1.0, 0.0, 1.0]);
+    }
+
+    #[test]
+    fn alpha_is_a_channel_of_the_fit_and_of_the_unmixing() {
+        // A view layer: the surface (alpha 1) moves over empty space (colour and alpha 0), and
+        // the still row 2 holds 0.3 of it, premultiplied: 0.3 × (colour, 1). Checked by hand:
+        // the pixel is 0.3 of the way from nothing to the surface s in each of R, G, B and A,
+        // so α is 0.3, its moving surface is s (alpha 1), and its still one is
+        // 0.3·s + (0.3/0.7)·(0.3·s − s) = 0 in every channel, alpha included. A black surface
+        // is told from nothing by its alpha alone.
+        for fg in [[0.9, 0.5, 0.1], [0.0, 0.0, 0.0]] {
+            let (config, mut texels) = edge(fg, [0.0; 3], 0.3, 1.0);
+            for (i, t) in texels.iter_mut().enumerate() {
+                t[3] = match i / 12 {
+                    0 | 1 => 0.0,
+                    2 => 0.3,
+                    _ => 1.0,
+                };
+            }
+            let m = mattes(&config, &texels, |_, _| true);
+            let (alpha, moving, still) = surfaces(&texels, &m, 2 * 12 + 5);
+            assert!(close(alpha, 0.3, 1e-5), "{fg:?}: {alpha}");
+            let want_moving = [fg[0], fg[1], fg[2], 1.0];
+            for (got, want) in moving.iter().zip(want_moving) {
+                assert!(close(*got, want, 1e-5), "{fg:?}: {moving:?}");
+            }
+            for got in still {
+                assert!(close(got, 0.0, 1e-5), "{fg:?}: {still:?}");
+            }
+        }
     }
 
     #[test]

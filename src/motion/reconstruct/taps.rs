@@ -251,13 +251,11 @@ pub(crate) fn split_by_cover<const G: usize>(
     for (j, w) in corners {
         let t = &texels[j];
         let (alpha, fg, bg) = matte::surfaces_of(texels, mattes, j, colour);
-        let own = colour(j);
         let (w_m, w_s) = (w * alpha, w * (1.0 - alpha));
         for g in 0..G {
-            for ch in 0..3 {
+            for ch in 0..4 {
                 moving_colour[g][ch] += w_m * fg[g][ch];
             }
-            moving_colour[g][3] += w_m * own[g][3];
         }
         share_m += w_m;
         share_s += w_s;
@@ -279,10 +277,7 @@ pub(crate) fn split_by_cover<const G: usize>(
         if w_s > heavy_s {
             heavy_s = w_s;
             still[4..].copy_from_slice(&texels[bg_index][4..]);
-            let behind = colour(bg_index);
-            for g in 0..G {
-                still_colour[g] = [bg[g][0], bg[g][1], bg[g][2], behind[g][3]];
-            }
+            still_colour = bg;
         }
     }
     // At a still centre, the coverage read between pixels is steepened about its half level:
@@ -310,10 +305,7 @@ pub(crate) fn split_by_cover<const G: usize>(
     }
     if !moves {
         let (_, _, bg) = matte::surfaces_of(texels, mattes, nearest, colour);
-        let own = colour(nearest);
-        for g in 0..G {
-            still_colour[g] = [bg[g][0], bg[g][1], bg[g][2], own[g][3]];
-        }
+        still_colour = bg;
         still[4..].copy_from_slice(&near[4..]);
     }
     let mut colour_s = [[0.0f32; 4]; G];
