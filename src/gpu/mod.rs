@@ -8,8 +8,8 @@
 //!   pyramid), and `impl crate::dof::Stages for Gpu`;
 //! - [`motion`]: reconstruct's `tile_max`, `neighbor_max`, `dilate` and its gather
 //!   (`reconstruct`, every variant), `scatter` (reach → accumulate → resolve) and `stretch`
-//!   (texture_blur, move_vertices, rasterise as a render pipeline), and the `Stages` impls of
-//!   the three passes;
+//!   (texture_blur, move_vertices, rasterise as a render pipeline, cover), and the `Stages`
+//!   impls of the three passes;
 //! - `context`: [`Gpu`], its one fallback ([`Gpu`]`::or_cpu`) and what the twins compiled;
 //!   `stage`: what most twins share (bindings config → inputs → outputs, buffers kept per
 //!   size, readback, error scopes); `times`: [`GpuTimes`]; `prelude.wgsl`: what every shader

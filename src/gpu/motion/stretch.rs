@@ -1,9 +1,10 @@
-//! stretch on the GPU (`stretch.wgsl`): the twin of [`crate::motion::stretch`], its three
+//! stretch on the GPU (`stretch.wgsl`): the twin of [`crate::motion::stretch`], its four
 //! stages under their CPU names — `texture_blur` and `move_vertices` as compute dispatches,
-//! `rasterise` as a render pipeline — over the same buffers: the [`StretchConfig`] uniform, the
-//! colour planes (R, G, B, A one after the other; an opaque alpha where the frame has none),
-//! depth and velocity (interleaved x, y as the CPU's `[[f32; 2]]`) in; the pre-blurred planes,
-//! the vertices (shift x, shift y, alpha: the CPU's `([f32; 2], f32)`) and the drawn colour out.
+//! `rasterise` as a render pipeline, `cover` as a compute dispatch over its targets — over
+//! the same buffers: the [`StretchConfig`] uniform, the colour planes (R, G, B, A one after
+//! the other; an opaque alpha where the frame has none), depth and velocity (interleaved x, y
+//! as the CPU's `[[f32; 2]]`) in; the pre-blurred planes, the vertices (shift x, shift y,
+//! alpha: the CPU's `([f32; 2], f32)`), `swept` and the covered colour out.
 //!
 //! **rasterise: a render pipeline, not a compute rasteriser.** The CPU draws every untorn
 //! triangle with a moved vertex over the sharp frame, farthest first (the depth of its
@@ -57,6 +58,17 @@
 //! it, or for a frame over the device's texture or binding limits, the CPU stages run
 //! (counted in [`Gpu::stages_on_cpu`], with the first reason kept for the run's warning).
 //!
+//! Where the frame is not wholly covered (an alpha below 1), the CPU's fragments are not
+//! blended there but leave `swept` (motion x, y, depth, 1; the last fragment's) to `cover`.
+//! `draw_fragment` discards those; the same triangles are drawn a second time, in the same
+//! order, into a third `Rgba32Float` target by `sweep_fragment`, unblended, so the last
+//! fragment stays as on the CPU. A second pass rather than a third target in the first:
+//! WebGPU's least limit on a pass's colour bytes per sample is 32, which the two blended
+//! targets fill (asking for more would send stretch to the CPU on devices that have only
+//! that). Where every pixel is wholly covered (the host sees the alpha plane), the second
+//! pass only clears. `cover` then reads the three targets as textures and writes the four
+//! planes into one buffer, which is read back.
+//!
 //! Where the two sides differ, and by how much, is the business of tests/gpu_stretch.rs:
 //! rounding (f32 edge functions against f64, the blend's form, WGSL's `sqrt` and division,
 //! fused multiply-adds), and in rare pixels a decision that rounding moves.
@@ -85,7 +97,8 @@ const TILE: u32 = 8;
 const ROW: u32 = 65535;
 /// The key of a triangle that is not drawn (`NOT_DRAWN` in stretch.wgsl).
 pub const NOT_DRAWN: u32 = 0;
-/// The render targets: R, G, B and the blend alpha; the alpha plane and the blend alpha.
+/// The render targets: R, G, B and the blend alpha; the alpha plane and the blend alpha;
+/// `swept` (velocity x, y, depth, 1 where swept).
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 /// What the buffers of one frame depend on: its size.
@@ -103,11 +116,6 @@ impl Shape {
     fn triangles(self) -> u64 {
         2 * (self.width.max(1) as u64 - 1) * (self.height.max(1) as u64 - 1)
     }
-
-    /// Bytes per row of a target read back (WebGPU copies rows at 256-byte steps).
-    fn row_bytes(self) -> u32 {
-        (self.width * 16).next_multiple_of(256)
-    }
 }
 
 /// The buffers and targets of one frame size.
@@ -122,12 +130,15 @@ struct Buffers {
     keys: wgpu::Buffer,
     range: wgpu::Buffer,
     order: wgpu::Buffer,
-    targets: [wgpu::Texture; 2],
-    views: [wgpu::TextureView; 2],
+    /// The drawn colour, the drawn alpha plane, `swept` (read through `views`).
+    _targets: [wgpu::Texture; 3],
+    views: [wgpu::TextureView; 3],
+    covered: wgpu::Buffer,
     keys_readback: wgpu::Buffer,
     color_readback: wgpu::Buffer,
     compute: wgpu::BindGroup,
     render: wgpu::BindGroup,
+    cover: wgpu::BindGroup,
 }
 
 /// The compiled stages and their buffers, kept in the context.
@@ -138,8 +149,11 @@ pub(crate) struct StretchPass {
     select_triangles: wgpu::ComputePipeline,
     sharp: wgpu::RenderPipeline,
     draw: wgpu::RenderPipeline,
+    sweep: wgpu::RenderPipeline,
+    cover: wgpu::ComputePipeline,
     compute_layout: wgpu::BindGroupLayout,
     render_layout: wgpu::BindGroupLayout,
+    cover_layout: wgpu::BindGroupLayout,
     buffers: Mutex<HashMap<Shape, Buffers>>,
 }
 
@@ -189,9 +203,32 @@ impl StretchPass {
                 entry(0, S::VERTEX_FRAGMENT, Uniform),
                 entry(1, S::FRAGMENT, read),
                 entry(2, S::FRAGMENT, read),
+                entry(3, S::FRAGMENT, read),
                 entry(11, S::VERTEX_FRAGMENT, read),
                 entry(12, S::FRAGMENT, read),
                 entry(13, S::VERTEX, read),
+            ],
+        });
+        let texture = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: S::COMPUTE,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let cover_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("stretch cover"),
+            entries: &[
+                entry(0, S::COMPUTE, Uniform),
+                entry(1, S::COMPUTE, read),
+                entry(2, S::COMPUTE, read),
+                texture(20),
+                texture(21),
+                texture(22),
+                entry(23, S::COMPUTE, write),
             ],
         });
         let layout = |label, group: &wgpu::BindGroupLayout| {
@@ -203,10 +240,11 @@ impl StretchPass {
         };
         let compute = layout("stretch compute", &compute_layout);
         let render = layout("stretch rasterise", &render_layout);
-        let pipeline = |entry: &str| {
+        let covering = layout("stretch cover", &cover_layout);
+        let pipeline = |entry: &str, layout: &wgpu::PipelineLayout| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(entry),
-                layout: Some(&compute),
+                layout: Some(layout),
                 module: &module,
                 entry_point: Some(entry),
                 compilation_options: Default::default(),
@@ -227,12 +265,14 @@ impl StretchPass {
                 operation: wgpu::BlendOperation::Add,
             },
         };
-        let drawing = |label, vertex: &str, fragment: &str, blend: Option<wgpu::BlendState>| {
-            let target = Some(wgpu::ColorTargetState {
+        let target = |blend| {
+            Some(wgpu::ColorTargetState {
                 format: FORMAT,
                 blend,
                 write_mask: wgpu::ColorWrites::ALL,
-            });
+            })
+        };
+        let drawing = |label, vertex: &str, fragment: &str, targets: &[_]| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&render),
@@ -253,26 +293,40 @@ impl StretchPass {
                     module: &module,
                     entry_point: Some(fragment),
                     compilation_options: Default::default(),
-                    targets: &[target.clone(), target],
+                    targets,
                 }),
                 multiview_mask: None,
                 cache: None,
             })
         };
         StretchPass {
-            frame_range: pipeline("frame_range"),
-            texture_blur: pipeline("texture_blur"),
-            move_vertices: pipeline("move_vertices"),
-            select_triangles: pipeline("select_triangles"),
-            sharp: drawing("stretch sharp", "sharp_vertex", "sharp_fragment", None),
+            frame_range: pipeline("frame_range", &compute),
+            texture_blur: pipeline("texture_blur", &compute),
+            move_vertices: pipeline("move_vertices", &compute),
+            select_triangles: pipeline("select_triangles", &compute),
+            cover: pipeline("cover", &covering),
+            sharp: drawing(
+                "stretch sharp",
+                "sharp_vertex",
+                "sharp_fragment",
+                &[target(None), target(None)],
+            ),
             draw: drawing(
                 "stretch rasterise",
                 "draw_vertex",
                 "draw_fragment",
-                Some(blend),
+                &[target(Some(blend)), target(Some(blend))],
+            ),
+            // Unblended: the last fragment of a pixel in primitive order stays.
+            sweep: drawing(
+                "stretch rasterise, swept",
+                "draw_vertex",
+                "sweep_fragment",
+                &[target(None)],
             ),
             compute_layout,
             render_layout,
+            cover_layout,
             buffers: Mutex::new(HashMap::new()),
         }
     }
@@ -312,12 +366,13 @@ impl StretchPass {
             words(shape.triangles()),
             U::MAP_READ | U::COPY_DST,
         );
+        let covered = buffer("stretch covered", words(4 * n), U::STORAGE | U::COPY_SRC);
         let color_readback = buffer(
             "stretch colour readback",
-            2 * shape.row_bytes() as u64 * shape.height as u64,
+            words(4 * n),
             U::MAP_READ | U::COPY_DST,
         );
-        let targets = [0, 1].map(|_| {
+        let targets = [0, 1, 2].map(|_| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("stretch target"),
                 size: wgpu::Extent3d {
@@ -329,11 +384,12 @@ impl StretchPass {
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
                 format: FORMAT,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
             })
         });
-        let views = [0, 1].map(|k| targets[k].create_view(&Default::default()));
+        let views = [0, 1, 2].map(|k| targets[k].create_view(&Default::default()));
         let group = |label, layout, bound: &[(u32, &wgpu::Buffer)]| {
             let entries: Vec<wgpu::BindGroupEntry> = bound
                 .iter()
@@ -369,11 +425,41 @@ impl StretchPass {
                 (0, &config),
                 (1, &planes),
                 (2, &z),
+                (3, &v),
                 (11, &vertices),
                 (12, &blurred),
                 (13, &order),
             ],
         );
+        let view = |binding, view| wgpu::BindGroupEntry {
+            binding,
+            resource: wgpu::BindingResource::TextureView(view),
+        };
+        let cover = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("stretch cover"),
+            layout: &self.cover_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: config.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: planes.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: z.as_entire_binding(),
+                },
+                view(20, &views[0]),
+                view(21, &views[1]),
+                view(22, &views[2]),
+                wgpu::BindGroupEntry {
+                    binding: 23,
+                    resource: covered.as_entire_binding(),
+                },
+            ],
+        });
         Buffers {
             config,
             planes,
@@ -384,12 +470,14 @@ impl StretchPass {
             keys,
             range,
             order,
-            targets,
+            _targets: targets,
             views,
+            covered,
             keys_readback,
             color_readback,
             compute,
             render,
+            cover,
         }
     }
 }
@@ -544,25 +632,24 @@ impl Gpu {
             queue.write_buffer(&buffers.order, 0, bytemuck::cast_slice(&order));
         }
 
-        // rasterise: the sharp frame, then the triangles in order, then both targets copied
-        // out.
+        // rasterise: the sharp frame, then the triangles in order.
         let mut encoder = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("stretch rasterise"),
             });
+        let attachment = |view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
         {
-            let attachment = |view| {
-                Some(wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })
-            };
             let mut render = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("stretch rasterise"),
                 color_attachments: &[attachment(&buffers.views[0]), attachment(&buffers.views[1])],
@@ -576,59 +663,40 @@ impl Gpu {
                 render.draw(0..6 * order.len() as u32, 0..1);
             }
         }
-        self.computed(&mut encoder, "stretch readback", &mut clock)?;
-        let row_bytes = shape.row_bytes();
-        let target_bytes = row_bytes as u64 * shape.height as u64;
-        for (k, target) in buffers.targets.iter().enumerate() {
-            encoder.copy_texture_to_buffer(
-                wgpu::TexelCopyTextureInfo {
-                    texture: target,
-                    mip_level: 0,
-                    origin: wgpu::Origin3d::ZERO,
-                    aspect: wgpu::TextureAspect::All,
-                },
-                wgpu::TexelCopyBufferInfo {
-                    buffer: &buffers.color_readback,
-                    layout: wgpu::TexelCopyBufferLayout {
-                        offset: k as u64 * target_bytes,
-                        bytes_per_row: Some(row_bytes),
-                        rows_per_image: Some(shape.height),
-                    },
-                },
-                wgpu::Extent3d {
-                    width: shape.width,
-                    height: shape.height,
-                    depth_or_array_layers: 1,
-                },
+        {
+            // The same triangles into `swept`, where a pixel is not wholly covered (cleared
+            // alone where every pixel is).
+            let mut render = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("stretch rasterise, swept"),
+                color_attachments: &[attachment(&buffers.views[2])],
+                ..Default::default()
+            });
+            if !order.is_empty() && planes[3].par_iter().any(|&a| a < 1.0) {
+                render.set_bind_group(0, &buffers.render, &[]);
+                render.set_pipeline(&pass.sweep);
+                render.draw(0..6 * order.len() as u32, 0..1);
+            }
+        }
+        // cover, over the drawn targets, into `covered`, copied out.
+        {
+            let mut compute = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("stretch cover"),
+                timestamp_writes: None,
+            });
+            compute.set_bind_group(0, &buffers.cover, &[]);
+            compute.set_pipeline(&pass.cover);
+            compute.dispatch_workgroups(
+                config.width.div_ceil(TILE),
+                config.height.div_ceil(TILE),
+                1,
             );
         }
+        self.computed(&mut encoder, "stretch readback", &mut clock)?;
+        encoder.copy_buffer_to_buffer(&buffers.covered, 0, &buffers.color_readback, 0, 16 * n);
         queue.submit([encoder.finish()]);
-        let texels = floats(read_back(
-            &self.device,
-            &buffers.color_readback,
-            2 * target_bytes,
-        )?);
-        // Rows of RGBA texels, padded to `row_bytes`, back into planes.
-        let width = shape.width as usize;
-        let row = row_bytes as usize / 4;
-        let (color, alpha) = texels.split_at(target_bytes as usize / 4);
-        let plane = |source: &[f32], channel: usize| -> Vec<f32> {
-            let mut out = vec![0.0f32; n as usize];
-            out.par_chunks_mut(width)
-                .zip(source.par_chunks(row))
-                .for_each(|(out, texels)| {
-                    for (x, value) in out.iter_mut().enumerate() {
-                        *value = texels[4 * x + channel];
-                    }
-                });
-            out
-        };
-        let out = [
-            plane(color, 0),
-            plane(color, 1),
-            plane(color, 2),
-            plane(alpha, 0),
-        ];
+        let values = floats(read_back(&self.device, &buffers.color_readback, 16 * n)?);
+        let plane = |c: usize| values[c * n as usize..][..n as usize].to_vec();
+        let out = [plane(0), plane(1), plane(2), plane(3)];
         self.mark(|t| &mut t.readback_ms, &mut clock)?;
         Ok(out)
     }

@@ -1,12 +1,13 @@
 // stretch on the GPU: the twin of src/motion/stretch/ (texture_blur → move_vertices →
-// rasterise), read side by side with it. src/gpu/motion/stretch.rs says how the stages are run and
+// rasterise → cover), read side by side with it. src/gpu/motion/stretch.rs says how the stages are run and
 // why rasterise is a render pipeline.
 //
 // Compute bindings (group 0), the CPU stages' arguments in order: config, planes (R, G, B, A
 // one after the other), z, v (interleaved x, y: the CPU's [[f32; 2]]), then the outputs:
 // blurred (four planes), vertices (shift x, shift y, alpha per pixel: the CPU's
 // ([f32; 2], f32)), keys (one per triangle) and range (the frame's range per channel).
-// Render bindings (group 0, read-only): config, planes, z, blurred, vertices, order.
+// Render bindings (group 0, read-only): config, planes, z, v, blurred, vertices, order.
+// Cover bindings (group 0): config, planes, z, the three render targets (read), covered.
 
 // Keep in sync with StretchConfig in src/motion/stretch/config.rs (ten 4-byte words; a test in
 // src/gpu/motion/stretch.rs compares the fields).
@@ -396,34 +397,41 @@ fn corner(i: u32, x: u32, y: u32) -> vec2<f32> {
     return vec2<f32>(f32(i32(cx) - i32(x)) + sx, f32(i32(cy) - i32(y)) + sy);
 }
 
+// A fragment the CPU draws: its pixel, barycentric weights and interpolated depth.
+struct Fragment {
+    i: u32,
+    corners: vec3<u32>,
+    w1: f32,
+    w2: f32,
+    depth: f32,
+}
+
 // Each fragment of the box is tested by the CPU's rule (edge functions at the pixel centre,
 // ties to the CPU's top-left edges), which also gives the barycentric weights as the CPU
-// computes them; then it is depth-tested against the frame (`z ≤ depth · (1 + tolerance)`), and its colour and alpha
-// are interpolated from the corners' input colour and alpha.
-@fragment
-fn draw_fragment(in: Corner) -> Drawn {
+// computes them; then it is depth-tested against the frame (`z ≤ depth · (1 + tolerance)`).
+// Whether the CPU draws it, and the fragment in `fragment`.
+fn drawn(in: Corner, fragment: ptr<function, Fragment>) -> bool {
     let i = pixel(in.position);
     let x = i % config.width;
     let y = i / config.width;
-    let n = pixels();
     let corners = triangle_corners(in.triangle);
-    var v = array<vec2<f32>, 3>(corner(corners.x, x, y), corner(corners.y, x, y), corner(corners.z, x, y));
+    var points = array<vec2<f32>, 3>(corner(corners.x, x, y), corner(corners.y, x, y), corner(corners.z, x, y));
     let p = vec2<f32>(0.0, 0.0);
-    var area = edge(v[0], v[1], v[2]);
+    var area = edge(points[0], points[1], points[2]);
     // Positive orientation, as the CPU swaps corners 1 and 2 (the weights follow).
     var swapped = false;
     if area < 0.0 {
-        let t = v[1];
-        v[1] = v[2];
-        v[2] = t;
+        let t = points[1];
+        points[1] = points[2];
+        points[2] = t;
         area = -area;
         swapped = true;
     }
-    let e = vec3<f32>(edge(v[1], v[2], p), edge(v[2], v[0], p), edge(v[0], v[1], p));
-    let bias = vec3<bool>(top_left(v[1], v[2]), top_left(v[2], v[0]), top_left(v[0], v[1]));
+    let e = vec3<f32>(edge(points[1], points[2], p), edge(points[2], points[0], p), edge(points[0], points[1], p));
+    let bias = vec3<bool>(top_left(points[1], points[2]), top_left(points[2], points[0]), top_left(points[0], points[1]));
     let inside = (e > vec3<f32>(0.0)) | ((e == vec3<f32>(0.0)) & bias);
     if !all(inside) || !(area > 0.0) {
-        discard;
+        return false;
     }
     var w1 = e.y / area;
     var w2 = e.z / area;
@@ -434,20 +442,189 @@ fn draw_fragment(in: Corner) -> Drawn {
     }
     let depth = interpolate(vec3<f32>(z[corners.x], z[corners.y], z[corners.z]), w1, w2);
     if depth > z[i] * config.depth_limit {
+        return false;
+    }
+    *fragment = Fragment(i, corners, w1, w2, depth);
+    return true;
+}
+
+// Whether pixel i is wholly covered (alpha 1 or more): fragments blend there; elsewhere they
+// leave their motion and depth to cover (the CPU's test in rasterise).
+fn wholly_covered(i: u32) -> bool {
+    return planes[3u * pixels() + i] >= 1.0;
+}
+
+// A drawn fragment over a wholly covered pixel: its colour and alpha interpolated from the
+// corners' input colour and alpha.
+@fragment
+fn draw_fragment(in: Corner) -> Drawn {
+    var f: Fragment;
+    if !drawn(in, &f) || !wholly_covered(f.i) {
         discard;
     }
+    let n = pixels();
+    let corners = f.corners;
     let alpha = interpolate(
         vec3<f32>(moves[3u * corners.x + 2u], moves[3u * corners.y + 2u], moves[3u * corners.z + 2u]),
-        w1,
-        w2,
+        f.w1,
+        f.w2,
     );
     var c: array<f32, 4>;
     for (var k = 0u; k < 4u; k++) {
         c[k] = interpolate(
             vec3<f32>(planes[k * n + corners.x], planes[k * n + corners.y], planes[k * n + corners.z]),
-            w1,
-            w2,
+            f.w1,
+            f.w2,
         );
     }
     return Drawn(vec4<f32>(c[0], c[1], c[2], alpha), vec4<f32>(c[3], 0.0, 0.0, alpha));
+}
+
+// The motion a vertex gives the fragments that sweep a pixel: its velocity, cut so that it
+// moves at most MAX_SHIFT px over the longer part of the exposure (the CPU's swept_motion).
+fn swept_motion(w: vec2<f32>) -> vec2<f32> {
+    let reach = sqrt(w.x * w.x + w.y * w.y) * max(abs(config.t0), abs(config.t1));
+    if reach > MAX_SHIFT {
+        let cut = MAX_SHIFT / reach;
+        return vec2<f32>(w.x * cut, w.y * cut);
+    }
+    return w;
+}
+
+// A drawn fragment over a pixel not wholly covered: what shows behind the smear there is
+// (partly) nothing, and cover gives the pixel the smear's coverage, along the nearest
+// fragment's motion. Into `swept` (velocity x, y, depth, 1), unblended: the triangles are
+// drawn in the same order a second time, into that target alone, and the last fragment of a
+// pixel, the nearest, is what stays (WebGPU's least limit on a pass's target bytes per
+// sample, 32, holds the two drawn targets and not a third).
+@fragment
+fn sweep_fragment(in: Corner) -> @location(0) vec4<f32> {
+    var f: Fragment;
+    if !drawn(in, &f) || wholly_covered(f.i) {
+        discard;
+    }
+    let a = swept_motion(v[f.corners.x]);
+    let b = swept_motion(v[f.corners.y]);
+    let c = swept_motion(v[f.corners.z]);
+    let motion = vec2<f32>(
+        interpolate(vec3<f32>(a.x, b.x, c.x), f.w1, f.w2),
+        interpolate(vec3<f32>(a.y, b.y, c.y), f.w1, f.w2),
+    );
+    return vec4<f32>(motion, f.depth, 1.0);
+}
+
+// ---- cover: a compute stage over the drawn targets ------------------------------------------
+
+@group(0) @binding(20) var drawn_color: texture_2d<f32>;
+@group(0) @binding(21) var drawn_alpha: texture_2d<f32>;
+@group(0) @binding(22) var swept: texture_2d<f32>;
+// The result: R, G, B, A one after the other (the CPU's `out` after cover).
+@group(0) @binding(23) var<storage, read_write> covered: array<f32>;
+
+fn swept_at(x: i32, y: i32) -> vec4<f32> {
+    return textureLoad(swept, vec2<i32>(x, y), 0);
+}
+
+// The sweep pixel (x, y) takes: its own where a fragment came, else of its eight neighbours'
+// the nearest whose depth passes the pixel's depth test, the first of equals in reading
+// order; w = 0 where none (the CPU's sweep_at).
+fn sweep_at(x: i32, y: i32, i: u32) -> vec4<f32> {
+    let own = swept_at(x, y);
+    if own.w != 0.0 {
+        return own;
+    }
+    var best = vec4<f32>(0.0);
+    for (var k = 0; k < 9; k++) {
+        let nx = x + k % 3 - 1;
+        let ny = y + k / 3 - 1;
+        if k == 4 {
+            continue;
+        }
+        if nx < 0 || ny < 0 || nx >= i32(config.width) || ny >= i32(config.height) {
+            continue;
+        }
+        let sweep = swept_at(nx, ny);
+        if sweep.w != 0.0 && sweep.z <= z[i] * config.depth_limit && (best.w == 0.0 || sweep.z < best.z) {
+            best = sweep;
+        }
+    }
+    return best;
+}
+
+// Stage 4: each pixel the frame does not wholly cover that a smear swept takes the average of
+// the sharp frame along the sweep's motion over the exposure, over the samples not nearer than
+// the sweep's depth (texture_blur's samples), clamped to the least and greatest tap; every
+// other pixel what was drawn.
+@compute @workgroup_size(8, 8)
+fn cover(@builtin(global_invocation_id) id: vec3<u32>) {
+    let width = config.width;
+    let height = config.height;
+    if id.x >= width || id.y >= height {
+        return;
+    }
+    let n = pixels();
+    let x = id.x;
+    let y = id.y;
+    let i = y * width + x;
+    let color = textureLoad(drawn_color, vec2<i32>(i32(x), i32(y)), 0);
+    var out = array<f32, 4>(color.x, color.y, color.z, textureLoad(drawn_alpha, vec2<i32>(i32(x), i32(y)), 0).x);
+    let sweep = sweep_at(i32(x), i32(y), i);
+    if !wholly_covered(i) && sweep.w != 0.0 {
+        let t0 = config.t0;
+        let t1 = config.t1;
+        let vx = sweep.x;
+        let vy = sweep.y;
+        let length = sqrt(vx * vx + vy * vy) * (t1 - t0);
+        let samples = clamp(u32(min(ceil(length), 1.0e6)) + 1u, 2u, MOST_SAMPLES);
+        var own: array<f32, 4>;
+        var sum = array<f32, 4>(0.0, 0.0, 0.0, 0.0);
+        var lo: array<f32, 4>;
+        var hi: array<f32, 4>;
+        for (var c = 0u; c < 4u; c++) {
+            own[c] = planes[c * n + i];
+            lo[c] = infinity();
+            hi[c] = -infinity();
+        }
+        var total = 0.0;
+        for (var k = 0u; k < samples; k++) {
+            let t = t0 + (t1 - t0) * (f32(k) + 0.5) / f32(samples);
+            let px = f32(x) - vx * t;
+            let py = f32(y) - vy * t;
+            let fx = floor(px);
+            let fy = floor(py);
+            let ax = px - fx;
+            let ay = py - fy;
+            for (var corner = 0u; corner < 4u; corner++) {
+                let dx = corner & 1u;
+                let dy = corner >> 1u;
+                let wx = select(1.0 - ax, ax, dx == 1u);
+                let wy = select(1.0 - ay, ay, dy == 1u);
+                let w = wx * wy;
+                let sx = fx + f32(dx);
+                let sy = fy + f32(dy);
+                if !(w > 0.0 && sx >= 0.0 && sy >= 0.0 && sx < f32(width) && sy < f32(height)) {
+                    continue;
+                }
+                let j = u32(sy) * width + u32(sx);
+                if z[j] * config.tear < sweep.z {
+                    continue;
+                }
+                for (var c = 0u; c < 4u; c++) {
+                    let value = planes[c * n + j];
+                    sum[c] += w * (value - own[c]);
+                    lo[c] = min(lo[c], value);
+                    hi[c] = max(hi[c], value);
+                }
+                total += w;
+            }
+        }
+        if total > 0.0 {
+            for (var c = 0u; c < 4u; c++) {
+                out[c] = clamp(own[c] + sum[c] / total, lo[c], hi[c]);
+            }
+        }
+    }
+    for (var c = 0u; c < 4u; c++) {
+        covered[c * n + i] = out[c];
+    }
 }

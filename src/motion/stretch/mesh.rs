@@ -1,6 +1,7 @@
 //! stretch's mesh: its second and third stages, the vertices' moves and the triangles drawn
 //! over the sharp frame, for the beauty and, with the same fragments and alphas, the light
-//! layers carried beside it.
+//! layers carried beside it; where the frame is not wholly covered, what the fragments leave
+//! for the fourth stage, [`cover`](super::cover).
 
 use rayon::prelude::*;
 
@@ -63,16 +64,38 @@ pub fn move_vertices(config: &StretchConfig, z: &[f32], v: &[[f32; 2]]) -> Vec<(
     (0..width * height).into_par_iter().map(move_of).collect()
 }
 
+/// The motion a vertex gives the fragments that sweep a pixel (px per frame): its velocity,
+/// cut as its move is, so that over the longer part of the exposure on either side of the
+/// frame it covers at most [`MAX_SHIFT`] px, direction kept. A smear reaches no farther, and
+/// the fragments interpolate the motion between corners: a corner at the numeric policy's
+/// 1e7 px beside one at 9 px made the motion of a fragment near the slow corner hang on the
+/// last bits of its weights (f64 here, f32 in the GPU twin: 1 px apart).
+pub fn swept_motion(config: &StretchConfig, [vx, vy]: [f32; 2]) -> [f32; 2] {
+    let reach = (vx * vx + vy * vy).sqrt() * config.t0.abs().max(config.t1.abs());
+    if reach > MAX_SHIFT {
+        let cut = MAX_SHIFT / reach;
+        [vx * cut, vy * cut]
+    } else {
+        [vx, vy]
+    }
+}
+
 /// Stage 3: every untorn triangle with a moved vertex drawn over `out`, farthest first, alpha
-/// blended, each fragment depth-tested against the frame.
+/// blended, each fragment depth-tested against the frame. A fragment over a pixel the frame
+/// does not wholly cover (alpha below 1) is not blended: it writes its motion and depth into
+/// `swept` (per pixel: velocity x, y, depth, and 1 where a fragment came; the nearest
+/// fragment's, as it is drawn last), for [`cover`](super::cover) to turn into the smear's
+/// coverage.
 pub fn rasterise(
     config: &StretchConfig,
     planes: &[Vec<f32>; 4],
     z: &[f32],
+    v: &[[f32; 2]],
     vertices: &[([f32; 2], f32)],
     out: &mut [Vec<f32>; 4],
+    swept: &mut [[f32; 4]],
 ) {
-    draw_all::<false>(config, planes, z, vertices, out, &[], &mut [], 0);
+    draw_all::<false>(config, planes, z, v, vertices, out, swept, &[], &mut [], 0);
 }
 
 /// [`rasterise`], and the light layers' `channels` carried planes (`carried`, pixel-major, as
@@ -85,21 +108,25 @@ pub fn rasterise_carrying(
     config: &StretchConfig,
     planes: &[Vec<f32>; 4],
     z: &[f32],
+    v: &[[f32; 2]],
     vertices: &[([f32; 2], f32)],
     out: &mut [Vec<f32>; 4],
+    swept: &mut [[f32; 4]],
     carried: &[f32],
     carried_out: &mut [f32],
     channels: usize,
 ) {
     if channels == 0 {
-        draw_all::<false>(config, planes, z, vertices, out, &[], &mut [], 0);
+        draw_all::<false>(config, planes, z, v, vertices, out, swept, &[], &mut [], 0);
     } else {
         draw_all::<true>(
             config,
             planes,
             z,
+            v,
             vertices,
             out,
+            swept,
             carried,
             carried_out,
             channels,
@@ -114,8 +141,10 @@ fn draw_all<const CARRY: bool>(
     config: &StretchConfig,
     planes: &[Vec<f32>; 4],
     z: &[f32],
+    v: &[[f32; 2]],
     vertices: &[([f32; 2], f32)],
     out: &mut [Vec<f32>; 4],
+    swept: &mut [[f32; 4]],
     carried: &[f32],
     carried_out: &mut [f32],
     channels: usize,
@@ -170,8 +199,9 @@ fn draw_all<const CARRY: bool>(
         .zip(b.par_chunks_mut(strip))
         .zip(a.par_chunks_mut(strip))
         .zip(carried_bands)
+        .zip(swept.par_chunks_mut(strip))
         .enumerate()
-        .for_each(|(band, ((((r, g), b), a), carried_band))| {
+        .for_each(|(band, (((((r, g), b), a), carried_band), swept_band))| {
             let mut rows = [r, g, b, a];
             let rect = Rect {
                 x0: 0,
@@ -199,8 +229,16 @@ fn draw_all<const CARRY: bool>(
                     if depth > z[i] * config.depth_limit {
                         return;
                     }
-                    let alpha = interpolate(corners.map(|k| vertices[k].1));
                     let o = i - band * strip;
+                    if planes[3][i] < 1.0 {
+                        // (cover's test, `alpha >= 1`, turned round.) What shows behind the smear here is (partly) nothing: cover gives
+                        // the pixel the smear's coverage, along the nearest one's motion.
+                        let motions = corners.map(|k| swept_motion(config, v[k]));
+                        let motion = [0, 1].map(|d| interpolate(motions.map(|m| m[d])));
+                        swept_band[o] = [motion[0], motion[1], depth, 1.0];
+                        return;
+                    }
+                    let alpha = interpolate(corners.map(|k| vertices[k].1));
                     for c in 0..4 {
                         let source = interpolate(corners.map(|k| planes[c][k]));
                         rows[c][o] = mix(rows[c][o], source, alpha);

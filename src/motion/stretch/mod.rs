@@ -21,6 +21,15 @@
 //! (farthest vertex first), alpha blended, each fragment depth-tested against the frame
 //! (`z ≤ depth · (1 + depth_tolerance)`) so nearer still surfaces stay in front.
 //!
+//! Beyond the talk, for frames with transparency (a view layer of a stack, premultiplied,
+//! alpha 0 and infinitely far where empty): the talk's translucency is a look over a
+//! background, and where a pixel is not wholly covered (alpha below 1) there is (partly) no
+//! background, so it would be the output's alpha. There a fragment is not blended; the
+//! fourth stage, [`cover`], gives the pixel the coverage and colour the exposure gives it,
+//! the sharp frame averaged along the nearest smear's motion (cover.rs says what the talk's
+//! blend did on a Cycles render's FG layer). An opaque frame has no such pixel: it is drawn
+//! as the talk draws it, bit for bit.
+//!
 //! Beyond the talk, and from its own list of cons ("per-vertex operation: no texture
 //! blurring … pre-process textures in motion-directions"): with `texture_blur`, each moving
 //! pixel's colour is first averaged along its own motion over the exposure (bilinear
@@ -32,14 +41,17 @@
 //! Numerics: inputs obey the numeric policy ([`crate::numeric`]: finite colour, velocity
 //! within ±[`VELOCITY_LIMIT`](crate::numeric::VELOCITY_LIMIT), depth in [0, +∞]). Every
 //! output value is a convex combination of input colours, clamped against rounding (to the
-//! frame's range for the pre-blur, to what it combines for interpolation and blending), so
+//! frame's range for the pre-blur, to what it combines for interpolation, blending and
+//! cover's averages), so
 //! it is finite and within the input range; a uniform colour stays exactly uniform
 //! (averages, interpolation and blending all work on differences).
 //!
 //! Determinism: triangles are ordered by depth with their index as the tie-break, and drawn
-//! into fixed bands of rows, each band taking every triangle that reaches it in that order.
+//! into fixed bands of rows, each band taking every triangle that reaches it in that order;
+//! of the fragments that sweep a pixel, the last drawn stays.
 
 mod config;
+mod cover;
 mod mesh;
 mod texture_blur;
 
@@ -49,10 +61,11 @@ use crate::frame::{Color, Frame};
 use crate::motion::shutter::Shutter;
 use crate::stages::Cpu;
 pub use config::{Anchor, StretchConfig, StretchParams, MAX_SHIFT, MOST_SAMPLES, STILL};
-pub use mesh::{move_vertices, rasterise, rasterise_carrying, triangle_corners};
+pub use cover::{cover, cover_carrying, sweep_at};
+pub use mesh::{move_vertices, rasterise, rasterise_carrying, swept_motion, triangle_corners};
 pub use texture_blur::{texture_blur, texture_blur_carrying};
 
-/// Applies the filter: [`texture_blur`] → [`move_vertices`] → [`rasterise`]. The frame must
+/// Applies the filter: [`texture_blur`] → [`move_vertices`] → [`rasterise`] → [`cover`]. The frame must
 /// hold colour, depth and velocity; the output holds colour alone. A frame in which nothing
 /// moves keeps its colour untouched.
 pub fn stretch(frame: Frame, params: &StretchParams, shutter: impl Into<Shutter>) -> Frame {
@@ -60,8 +73,8 @@ pub fn stretch(frame: Frame, params: &StretchParams, shutter: impl Into<Shutter>
 }
 
 /// Stretch's stages that a backend may run elsewhere: texture_blur → move_vertices →
-/// rasterise, as one (the GPU keeps the vertices and the drawn frame on the device between
-/// them). The default is the CPU's [`stages`], the reference; [`Cpu`] takes it, and the GPU
+/// rasterise → cover, as one (the GPU keeps the vertices, the drawn frame and what the
+/// fragments swept on the device between them). The default is the CPU's [`stages`], the reference; [`Cpu`] takes it, and the GPU
 /// (`crate::gpu::motion`) overrides it with its twin, which must return the same planes
 /// within the tolerance its parity test states (tests/gpu_stretch.rs).
 pub trait Stages {
@@ -93,7 +106,7 @@ pub trait Stages {
 
 impl Stages for Cpu {}
 
-/// The three stages on the CPU: the colour planes (R, G, B, A) drawn over the sharp frame.
+/// The four stages on the CPU: the colour planes (R, G, B, A) drawn over the sharp frame.
 pub fn stages(
     config: &StretchConfig,
     planes: &[Vec<f32>; 4],
@@ -104,9 +117,9 @@ pub fn stages(
 }
 
 /// [`stages`], carrying the R, G and B planes of `layers` (light layers) through the same
-/// work: every weight stretch gives a colour is a function of depth, motion and the
-/// vertices alone (the pre-blur's taps, each fragment's depth test, barycentric weights and
-/// alpha), so they are found once, with the beauty's, and applied to each layer's channels
+/// work: every weight stretch gives a colour is a function of depth, motion, the beauty's
+/// alpha and the vertices alone (the pre-blur's taps, each fragment's depth test,
+/// barycentric weights and alpha, cover's taps), so they are found once, with the beauty's, and applied to each layer's channels
 /// in the order they are applied to the beauty's. A layer comes out with the bits it would
 /// get in the beauty's place (its alpha is the beauty's, which is left as it came), and the
 /// triangles are chosen, sorted and walked once. The layers travel pixel-major (a pixel's
@@ -128,11 +141,25 @@ pub fn stages_carrying(
         (planes.clone(), carried.clone())
     };
     let vertices = move_vertices(config, z, v);
+    let mut swept = vec![[0.0f32; 4]; n];
     rasterise_carrying(
         config,
         planes,
         z,
+        v,
         &vertices,
+        &mut out,
+        &mut swept,
+        &carried,
+        &mut carried_out,
+        channels,
+    );
+    drop(vertices);
+    cover_carrying(
+        config,
+        planes,
+        z,
+        &swept,
         &mut out,
         &carried,
         &mut carried_out,

@@ -57,7 +57,6 @@ fn blur<const CARRY: bool>(
 ) -> ([Vec<f32>; 4], Vec<f32>) {
     let (width, height) = (config.width as usize, config.height as usize);
     let n = width * height;
-    let (t0, t1) = (config.t0, config.t1);
     // Colour and depth together, so a tap reads one cache line.
     let texels: Vec<[f32; 5]> = (0..n)
         .into_par_iter()
@@ -103,52 +102,23 @@ fn blur<const CARRY: bool>(
                 if !config.moving(v[i]) {
                     continue;
                 }
-                let [vx, vy] = v[i];
-                let length = (vx * vx + vy * vy).sqrt() * (t1 - t0);
-                let samples = (length.ceil() as usize + 1).clamp(2, MOST_SAMPLES);
-                // Sample points are pixel-centre coordinates: pixel (x, y) sits at (x, y).
                 let own: [f32; 4] = std::array::from_fn(|c| planes[c][i]);
                 let mut sum = [0.0f32; 4];
                 let mut total = 0.0f32;
                 if CARRY {
                     taps.clear();
                 }
-                for k in 0..samples {
-                    let t = t0 + (t1 - t0) * (k as f32 + 0.5) / samples as f32;
-                    // Bilinear between the four nearest centres, over those of the same
-                    // surface (so a sub-pixel streak still blurs).
-                    let (px, py) = (x as f32 - vx * t, y as f32 - vy * t);
-                    let (fx, fy) = (px.floor(), py.floor());
-                    let (ax, ay) = (px - fx, py - fy);
-                    for (dx, dy, w) in [
-                        (0, 0, (1.0 - ax) * (1.0 - ay)),
-                        (1, 0, ax * (1.0 - ay)),
-                        (0, 1, (1.0 - ax) * ay),
-                        (1, 1, ax * ay),
-                    ] {
-                        let (sx, sy) = (fx + dx as f32, fy + dy as f32);
-                        if !(w > 0.0
-                            && sx >= 0.0
-                            && sy >= 0.0
-                            && sx < width as f32
-                            && sy < height as f32)
-                        {
-                            continue;
-                        }
-                        let j = sy as usize * width + sx as usize;
-                        let texel = &texels[j];
-                        if texel[4] * config.tear < z[i] {
-                            continue;
-                        }
-                        for c in 0..4 {
-                            sum[c] += w * (texel[c] - own[c]);
-                        }
-                        total += w;
-                        if CARRY {
-                            taps.push((j, w));
-                        }
+                let depth_of = |j: usize| texels[j][4];
+                for_each_tap(config, (x, y), v[i], z[i], depth_of, |j, w| {
+                    let texel = &texels[j];
+                    for c in 0..4 {
+                        sum[c] += w * (texel[c] - own[c]);
                     }
-                }
+                    total += w;
+                    if CARRY {
+                        taps.push((j, w));
+                    }
+                });
                 if total > 0.0 {
                     for c in 0..4 {
                         let value = own[c] + sum[c] / total;
@@ -174,6 +144,53 @@ fn blur<const CARRY: bool>(
             }
         });
     (blurred, carried_blurred)
+}
+
+/// The samples along a motion, which the pre-blur and [`cover`](super::cover) average:
+/// for pixel (x, y) moving at `v` px per frame, `samples` times spread evenly over the
+/// exposure [t0, t1] (the midpoints of equal parts, one more than the streak is pixels long,
+/// 2 to [`MOST_SAMPLES`]), and at each time t the bilinear taps of the four pixel centres
+/// around x − v·t (pixel (x, y) sits at (x, y)) that lie in the frame with a weight above 0
+/// and are not nearer than `depth` beyond the tear (`depth_of(j) · tear < depth` leaves tap
+/// j out): `tap(j, w)` for each, in that order. At time t the pixel shows the point of the
+/// moving surface that was at x − v·t at the frame.
+#[inline(always)]
+pub(super) fn for_each_tap(
+    config: &StretchConfig,
+    (x, y): (usize, usize),
+    [vx, vy]: [f32; 2],
+    depth: f32,
+    depth_of: impl Fn(usize) -> f32,
+    mut tap: impl FnMut(usize, f32),
+) {
+    let (width, height) = (config.width as usize, config.height as usize);
+    let (t0, t1) = (config.t0, config.t1);
+    let length = (vx * vx + vy * vy).sqrt() * (t1 - t0);
+    let samples = (length.ceil() as usize + 1).clamp(2, MOST_SAMPLES);
+    for k in 0..samples {
+        let t = t0 + (t1 - t0) * (k as f32 + 0.5) / samples as f32;
+        // Bilinear between the four nearest centres, over those not nearer (so a sub-pixel
+        // streak still blurs).
+        let (px, py) = (x as f32 - vx * t, y as f32 - vy * t);
+        let (fx, fy) = (px.floor(), py.floor());
+        let (ax, ay) = (px - fx, py - fy);
+        for (dx, dy, w) in [
+            (0, 0, (1.0 - ax) * (1.0 - ay)),
+            (1, 0, ax * (1.0 - ay)),
+            (0, 1, (1.0 - ax) * ay),
+            (1, 1, ax * ay),
+        ] {
+            let (sx, sy) = (fx + dx as f32, fy + dy as f32);
+            if !(w > 0.0 && sx >= 0.0 && sy >= 0.0 && sx < width as f32 && sy < height as f32) {
+                continue;
+            }
+            let j = sy as usize * width + sx as usize;
+            if depth_of(j) * config.tear < depth {
+                continue;
+            }
+            tap(j, w);
+        }
+    }
 }
 
 /// The least and greatest value of each of the `channels` carried planes (`carried`, pixel-major).
