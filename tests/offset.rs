@@ -208,8 +208,8 @@ fn offset_exposures_err_like_the_centred_shutter_on_truth_scenes() {
 }
 
 /// How much higher an offset error may be than the centred one, each as a share of the
-/// unblurred frame's error (measured up to 1.53 for reconstruct, 1.08 for scatter, 1.04 for
-/// stretch).
+/// unblurred frame's error (measured up to 1.53 for reconstruct, 1.08 for scatter, 1.29 for
+/// stretch: rotor, whose centred error halved when its smears left their own surface alone).
 const LEVEL_TOLERANCE: f64 = 1.65;
 
 /// An 8×8 square at x ∈ [28, 36), y ∈ [8, 16) textured along x (a sine of 8 px period),
@@ -310,7 +310,11 @@ fn with_nothing_hidden_an_offset_errs_as_the_centred_shutter() {
                 "offset: square {offset:+} {label}: {err:.5} (centred {centred:.5}, ratio {:.2})",
                 err / centred
             );
-            if err > OFFSET_TOLERANCE * centred + 1e-4 {
+            let tolerance = match algorithm {
+                Algorithm::Stretch => STRETCH_OFFSET_TOLERANCE,
+                _ => OFFSET_TOLERANCE,
+            };
+            if err > tolerance * centred + 1e-4 {
                 worse.push(format!(
                     "{label}, offset {offset}: {err} against {centred} centred"
                 ));
@@ -326,8 +330,18 @@ fn with_nothing_hidden_an_offset_errs_as_the_centred_shutter() {
 /// border), reconstruct paper and dual 1.16–1.25, exposure 1.14–1.15, 2014 0.33–0.34 (an
 /// offset gather looks up its own tile where the jittered lookup finds a still one; the
 /// exposure variant does so centred too, Blender's 2014 form does not and misses the square's
-/// corners), stretch 1.05–1.30 (3.5–3.7 with its texture blur reading x + v·t).
+/// corners), stretch: [`STRETCH_OFFSET_TOLERANCE`].
 const OFFSET_TOLERANCE: f64 = 1.35;
+
+/// [`OFFSET_TOLERANCE`] for stretch, measured 2.09–2.30 (0.0179 and 0.0196 against 0.0085
+/// centred): with its texture blur the inside of the square is right either way (within 0.01
+/// of the exposure on the rows measured), and what errs is the smears beside it, the talk's
+/// opacity and the sharp colour of the silhouette stretched: one 4-px smear at the front (or
+/// back) for an offset exposure against 2 px at each side centred. It was 1.05–1.30 while the
+/// smears were drawn over the square's own pre-blurred pixels too, which cost the centred
+/// exposure as much as the offset ones (0.0172 centred, 0.0181 and 0.0225 offset); 3.5–3.7
+/// with its texture blur reading x + v·t, the fault this guards.
+const STRETCH_OFFSET_TOLERANCE: f64 = 2.5;
 
 #[test]
 fn the_exposure_variant_keeps_a_small_fast_squares_corners_centred() {

@@ -454,12 +454,21 @@ fn wholly_covered(i: u32) -> bool {
     return planes[3u * pixels() + i] >= 1.0;
 }
 
-// A drawn fragment over a wholly covered pixel: its colour and alpha interpolated from the
+// Whether, with the pre-blur, a fragment lies over its own surface (a depth within the tear
+// of its own), which the pre-blur has averaged along its motion already: not drawn (the CPU's
+// test in rasterise).
+fn own_surface(f: Fragment) -> bool {
+    let a = z[f.i];
+    let b = f.depth;
+    return config.texture_blur != 0u && !(max(a, b) > min(a, b) * config.tear);
+}
+
+// A drawn fragment over a wholly covered pixel, not of its own surface: its colour and alpha interpolated from the
 // corners' input colour and alpha.
 @fragment
 fn draw_fragment(in: Corner) -> Drawn {
     var f: Fragment;
-    if !drawn(in, &f) || !wholly_covered(f.i) {
+    if !drawn(in, &f) || !wholly_covered(f.i) || own_surface(f) {
         discard;
     }
     let n = pixels();

@@ -81,7 +81,11 @@ pub fn swept_motion(config: &StretchConfig, [vx, vy]: [f32; 2]) -> [f32; 2] {
 }
 
 /// Stage 3: every untorn triangle with a moved vertex drawn over `out`, farthest first, alpha
-/// blended, each fragment depth-tested against the frame. A fragment over a pixel the frame
+/// blended, each fragment depth-tested against the frame. With the pre-blur, a fragment over
+/// a pixel of its own surface (a depth within the tear of its own) is not drawn: the pre-blur
+/// has averaged that pixel along its motion already, and the talk's interpolated sharp colour
+/// at up to alpha 1 hid that (a sharp line along the inside of every silhouette, beside a seam
+/// where the pre-blur had shown what lies behind). A fragment over a pixel the frame
 /// does not wholly cover (alpha below 1) is not blended: it writes its motion and depth into
 /// `swept` (per pixel: velocity x, y, depth, and 1 where a fragment came; the nearest
 /// fragment's, as it is drawn last), for [`cover`](super::cover) to turn into the smear's
@@ -236,6 +240,10 @@ fn draw_all<const CARRY: bool>(
                         let motions = corners.map(|k| swept_motion(config, v[k]));
                         let motion = [0, 1].map(|d| interpolate(motions.map(|m| m[d])));
                         swept_band[o] = [motion[0], motion[1], depth, 1.0];
+                        return;
+                    }
+                    if config.texture_blur() && !config.torn(z[i], depth) {
+                        // The smear's own surface, which the pre-blur has averaged already.
                         return;
                     }
                     let alpha = interpolate(corners.map(|k| vertices[k].1));

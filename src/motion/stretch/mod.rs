@@ -36,7 +36,9 @@
 //! samples), leaving out samples of nearer surfaces: a moving surface smears over itself and
 //! reveals what lies behind it, but never pulls a nearer surface over itself. Without it, a
 //! textured surface moving as a whole (a camera pan) is not blurred at all, only silhouettes
-//! are.
+//! are. With it, a smear is not drawn over its own surface (the pixels within the tear of a
+//! fragment's depth): the pre-blur has averaged those along their motion, and redrawing them
+//! with the sharp colour at up to alpha 1 put a sharp line inside every moving silhouette.
 //!
 //! Numerics: inputs obey the numeric policy ([`crate::numeric`]: finite colour, velocity
 //! within ±[`VELOCITY_LIMIT`](crate::numeric::VELOCITY_LIMIT), depth in [0, +∞]). Every
