@@ -31,6 +31,22 @@ pub const SCENES: &[(&str, &str)] = &[
         "layers",
         "objects at many depths, with a lens, for depth of field",
     ),
+    (
+        "border",
+        "85 mm f/1.2: a fine far texture meeting every frame edge, a near disc, a card in focus",
+    ),
+    (
+        "border-coarse",
+        "the same lens over a coarse spotted wall, the near disc cut by the frame's corner",
+    ),
+    (
+        "follow",
+        "the camera follows a still subject before stripes streaming 36 px a frame",
+    ),
+    (
+        "follow-wall",
+        "the camera follows a still disc diagonally before the spotted wall",
+    ),
 ];
 
 const WALL_A: Rgb = [0.18, 0.17, 0.15];
@@ -436,6 +452,86 @@ pub fn build(name: &str, width: usize, height: usize, seed: u64) -> Option<Scene
                 ));
             }
             scene.background_depth = 40.0;
+        }
+        "border" | "border-coarse" => {
+            // 85 mm f/1.2 focused at 9 m: the background at 50 m takes a circle of
+            // confusion about 10 px across at 640 wide, the near disc at 2.5 m about 31 px.
+            scene.lens = Some(Lens {
+                focal_mm: 85.0,
+                f_number: 1.2,
+                focus: 9.0,
+                sensor_mm: 36.0,
+            });
+            let coarse = name == "border-coarse";
+            if !coarse {
+                // Cells of a few pixels: blurred, they average to mid-grey everywhere,
+                // the frame's edges included.
+                scene.background = Texture::Checker {
+                    a: [0.9, 0.9, 0.9],
+                    b: [0.1, 0.1, 0.1],
+                    size: 4.0 * u,
+                };
+            }
+            shapes.push(shape(
+                Geometry::Rect {
+                    half: DVec2::new(60.0 * u, 45.0 * u),
+                },
+                Texture::Checker {
+                    a: [0.8, 0.5, 0.2],
+                    b: [0.2, 0.3, 0.6],
+                    size: 10.0 * u,
+                },
+                9.0,
+                Motion::at(DVec2::new(w * 0.68, h * 0.45)),
+            ));
+            // Inside the frame over the fine texture; cut by the bottom-left corner over
+            // the coarse wall.
+            let at = if coarse {
+                DVec2::new(25.0 * u, h - 30.0 * u)
+            } else {
+                DVec2::new(w * 0.3, h * 0.55)
+            };
+            shapes.push(shape(
+                Geometry::Disc { radius: 55.0 * u },
+                Texture::Checker {
+                    a: [0.95, 0.3, 0.3],
+                    b: [0.6, 0.1, 0.1],
+                    size: 14.0 * u,
+                },
+                2.5,
+                Motion::at(at),
+            ));
+        }
+        "follow" | "follow-wall" => {
+            // The camera moves with the subject: it is still on screen while what is
+            // behind it streams past, wholly hidden behind it at the frame's instant.
+            let wall = name == "follow-wall";
+            let pan = if wall {
+                DVec2::new(-24.0 * u, 16.0 * u)
+            } else {
+                DVec2::new(-36.0 * u, 0.0)
+            };
+            scene.camera.pan = pan;
+            if !wall {
+                scene.background = stripes([0.6, 0.6, 0.6], [0.3, 0.3, 0.3], 18.0 * u, 0.0);
+            }
+            let geometry = if wall {
+                Geometry::Disc { radius: 70.0 * u }
+            } else {
+                Geometry::Rect {
+                    half: DVec2::new(45.0 * u, 100.0 * u),
+                }
+            };
+            shapes.push(shape(
+                geometry,
+                Texture::Checker {
+                    a: [0.9, 0.6, 0.2],
+                    b: [0.15, 0.1, 0.05],
+                    size: 15.0 * u,
+                },
+                5.0,
+                Motion::at(centre).moving(-pan),
+            ));
         }
         _ => return None,
     }
