@@ -128,6 +128,44 @@ fn a_blender_multilayer_file_suggests_blender() {
     )));
 }
 
+/// A render of two view layers is what `--layers FG,BG` reads: info names the preset, the
+/// layers and the two ways to read them (it said "none match" before).
+#[test]
+fn a_blender_file_of_two_view_layers_suggests_blender_and_names_the_layers() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("layers.exr");
+    let names: Vec<String> = ["FG", "BG"]
+        .iter()
+        .flat_map(|l| {
+            [
+                "Combined.R",
+                "Combined.G",
+                "Combined.B",
+                "Combined.A",
+                "Depth.Z",
+            ]
+            .iter()
+            .chain(&["Vector.X", "Vector.Y", "Vector.Z", "Vector.W"])
+            .map(move |n| format!("{l}.{n}"))
+        })
+        .collect();
+    exr(&path, &names.iter().map(String::as_str).collect::<Vec<_>>());
+    let suggestion = &info(&path)["suggestion"];
+    assert_eq!(suggestion["preset"], "blender");
+    assert_eq!(suggestion["matched"], 18);
+    assert_eq!(suggestion["view_layers"], serde_json::json!(["BG", "FG"]));
+    assert!(found(suggestion).contains(&pair("depth", &["BG.Depth.Z", "FG.Depth.Z"])));
+    let text = info_text(&path);
+    assert!(
+        text.contains("presets:        blender (color, depth"),
+        "{text}"
+    );
+    assert!(
+        text.contains("view layers BG, FG: --layer NAME reads one, --layers"),
+        "{text}"
+    );
+}
+
 #[test]
 fn nuke_files_suggest_nuke_single_and_multi_part() {
     let dir = tempfile::tempdir().unwrap();

@@ -684,13 +684,46 @@ pub(super) type PassesRead = Vec<(&'static str, Vec<usize>)>;
 /// A file with no colour channel the preset names but a `Y` is read both ways, `Y` as grey
 /// colour and not, and the reading that takes more of the file's channels is kept: a
 /// luminance image is colour, a file of `X`, `Y` vectors is not.
+///
+/// A file of several view layers (`{layer}` in the colour's names matching more than one) is
+/// read layer by layer, as `--layers` reads it, and each pass lists every layer's channels.
 pub(super) fn passes_read(info: &FileInfo, preset: &Preset) -> PassesRead {
-    match find_channels(info, &preset.color.channels, 3, &[], None) {
+    let layers = view_layers(info, preset);
+    if layers.len() < 2 {
+        return passes_read_in(info, preset, None);
+    }
+    let mut all: PassesRead = Vec::new();
+    for layer in &layers {
+        for (pass, channels) in passes_read_in(info, preset, Some(layer)) {
+            match all.iter_mut().find(|(p, _)| *p == pass) {
+                Some((_, seen)) => seen.extend(channels),
+                None => all.push((pass, channels)),
+            }
+        }
+    }
+    all
+}
+
+/// The view layers a preset's colour channels find in the file (the values `{layer}` takes
+/// in any of its colour alternatives), sorted; empty when it names none by layer.
+pub fn view_layers(info: &FileInfo, preset: &Preset) -> Vec<String> {
+    let mut layers: Vec<String> = (preset.color.channels.iter())
+        .filter_map(|alternative| alternative.first())
+        .flat_map(|template| find_layers(info, template))
+        .collect();
+    layers.sort();
+    layers.dedup();
+    layers
+}
+
+/// [`passes_read`] in one view layer (`None`: the one the file holds, if any).
+fn passes_read_in(info: &FileInfo, preset: &Preset, layer: Option<&str>) -> PassesRead {
+    match find_channels(info, &preset.color.channels, 3, &[], layer) {
         Ok(None) => {
-            let without = passes_after(info, preset, None);
+            let without = passes_after(info, preset, None, layer);
             match luminance(info) {
                 Some(grey) => {
-                    let with = passes_after(info, preset, Some(grey));
+                    let with = passes_after(info, preset, Some(grey), layer);
                     let count = |read: &[(&str, Vec<usize>)]| {
                         let mut all: Vec<usize> =
                             read.iter().flat_map(|(_, c)| c.iter().copied()).collect();
@@ -707,12 +740,17 @@ pub(super) fn passes_read(info: &FileInfo, preset: &Preset) -> PassesRead {
                 None => without,
             }
         }
-        color => passes_after(info, preset, color.ok().flatten()),
+        color => passes_after(info, preset, color.ok().flatten(), layer),
     }
 }
 
 /// The passes a preset finds once colour has taken `color`'s channels (see [`passes_read`]).
-fn passes_after(info: &FileInfo, preset: &Preset, color: Option<Vec<Option<usize>>>) -> PassesRead {
+fn passes_after(
+    info: &FileInfo,
+    preset: &Preset,
+    color: Option<Vec<Option<usize>>>,
+    layer: Option<&str>,
+) -> PassesRead {
     let mut found = Vec::new();
     let mut claimed: Vec<usize> = Vec::new();
     if let Some(color) = color {
@@ -729,7 +767,7 @@ fn passes_after(info: &FileInfo, preset: &Preset, color: Option<Vec<Option<usize
         .iter()
         .map(|c| vec![c.clone()])
         .collect();
-    if let Ok(Some(channels)) = find_channels(info, &depth, 1, &claimed, None) {
+    if let Ok(Some(channels)) = find_channels(info, &depth, 1, &claimed, layer) {
         found.push(("depth", channels.into_iter().flatten().collect()));
     }
     for (name, spec) in [
@@ -737,7 +775,7 @@ fn passes_after(info: &FileInfo, preset: &Preset, color: Option<Vec<Option<usize
         ("prev", &preset.prev),
         ("next", &preset.next),
     ] {
-        if let Ok(Some(channels)) = find_channels(info, &spec.channels, 2, &claimed, None) {
+        if let Ok(Some(channels)) = find_channels(info, &spec.channels, 2, &claimed, layer) {
             let read = if spec.meaning.is_position() { 3 } else { 2 };
             let channels: Vec<usize> = channels.into_iter().take(read).flatten().collect();
             if decodes(spec, name, info.channels[channels[0]].sample_type) {

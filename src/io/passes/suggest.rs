@@ -31,7 +31,7 @@ use serde::Serialize;
 use crate::io::file::{FileInfo, FileKind};
 use crate::io::preset::{Encoding, Meaning, Preset, Units, VectorSpec};
 
-use super::plan::{decodes, find_channels, passes_read, PassesRead};
+use super::plan::{decodes, find_channels, passes_read, view_layers, PassesRead};
 
 /// A pass a preset finds, and the channels it reads (as `shutter info` names them).
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -66,6 +66,9 @@ pub struct Suggestion {
     pub reason: String,
     /// For integer images the header cannot tell apart: other readings, with their reasons.
     pub candidates: Vec<Candidate>,
+    /// The view layers the preset found (two or more: a run reads one with `--layer`, or
+    /// stacks them with `--layers`); empty otherwise.
+    pub view_layers: Vec<String>,
 }
 
 /// The name `shutter info` shows for a channel.
@@ -119,6 +122,7 @@ pub fn suggest(info: &FileInfo, presets: &[Preset]) -> Suggestion {
                 info.channel_list()
             ),
             candidates,
+            view_layers: Vec::new(),
         };
     };
     let (score, read) = &scored[best];
@@ -157,7 +161,18 @@ pub fn suggest(info: &FileInfo, presets: &[Preset]) -> Suggestion {
             order.join(", ")
         ));
     }
+    let mut view_layers = view_layers(info, &presets[best]);
+    if view_layers.len() < 2 {
+        view_layers.clear();
+    } else {
+        reason.push_str(&format!(
+            "; view layers {}: --layer NAME reads one, --layers NAME,NAME,... stacks them \
+             front first",
+            view_layers.join(", ")
+        ));
+    }
     Suggestion {
+        view_layers,
         preset: Some(name),
         found,
         matched: *score,
