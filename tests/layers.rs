@@ -332,6 +332,17 @@ fn three_layers_merge_in_order() {
         }
         // Each layer goes out beside the merge, as it was (nothing moves).
         assert!(channel(&out, "Green.Combined.G").iter().all(|&v| v == 0.5));
+        // What made it says which layers, in which order.
+        let meta = exr::meta::MetaData::read_from_file(dir.path().join("o.exr"), false).unwrap();
+        let record = meta.headers[0]
+            .own_attributes
+            .other
+            .get(&exr::prelude::Text::from("shutter/settings"));
+        assert!(
+            matches!(record, Some(exr::prelude::AttributeValue::Text(t))
+                if t.to_string().ends_with(&format!("--layers {order}"))),
+            "{record:?}"
+        );
     }
 }
 

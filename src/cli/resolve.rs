@@ -228,6 +228,14 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         max_memory: defaults.max_memory,
         ..settings.clone()
     }));
+    // Which view layers made it: one read alone, or a stack, front first.
+    if let Some(layer) = &args.layer {
+        record.push(format!("--layer {layer}"));
+    }
+    if stack.len() > 1 {
+        let names: Vec<&str> = stack.iter().map(|l| l.name.as_str()).collect();
+        record.push(format!("--layers {}", names.join(",")));
+    }
     let output_options = OutputOptions {
         srgb: preset.color.transfer == Transfer::Srgb,
         record: record.join(" "),

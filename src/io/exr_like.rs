@@ -17,7 +17,8 @@
 //! the same size (a tiled plate stays tiled, so the tools that read it by tiles still can),
 //! and each channel's pixel type (half stays half; `half` writes every float channel half,
 //! u32 stays u32). Added: `shutter/version` and `shutter/settings` (the settings that differ
-//! from the defaults, as flags), as Nuke records `nuke/node_hash`.
+//! from the defaults, as flags, and the view layers read: `--layer X`, `--layers FG,BG`), as
+//! Nuke records `nuke/node_hash`.
 //!
 //! The exr crate writes custom attributes in the order of a `HashMap`, which differs from
 //! run to run; [`sort_attributes`] then puts each header's attributes in name order (as
