@@ -49,6 +49,52 @@ pub fn process_stack(
     merge(blurred)
 }
 
+/// A note when the stack's order looks reversed: a layer that is nearer than the layer given
+/// before it over most of the pixels both cover wholly (at least [`ORDER_PIXELS`] of them).
+/// The stack merges in the order given, whatever the depths say (README, View layers), so a
+/// reversed `--layers` hides the foreground; interpenetration over a few pixels (a ground
+/// plane under a figure's feet) is legitimate and says nothing.
+pub fn order_note(layers: &[Frame], names: &[String]) -> Option<String> {
+    let solid = |f: &Frame, i: usize| {
+        let a = f
+            .color
+            .as_ref()
+            .and_then(|c| c.a.as_ref())
+            .map_or(1.0, |a| a[i]);
+        let z = f.depth.as_ref().map_or(f32::NAN, |d| d[i]);
+        (a >= SOLID && z.is_finite() && z < NO_SURFACE).then_some(z)
+    };
+    for (k, pair) in layers.windows(2).enumerate() {
+        let (front, back) = (&pair[0], &pair[1]);
+        if front.pixel_count() != back.pixel_count() {
+            continue;
+        }
+        let (mut both, mut nearer) = (0usize, 0usize);
+        for i in 0..front.pixel_count() {
+            if let (Some(zf), Some(zb)) = (solid(front, i), solid(back, i)) {
+                both += 1;
+                nearer += usize::from(zb < zf);
+            }
+        }
+        if both >= ORDER_PIXELS && 2 * nearer > both {
+            let name = |j: usize| names.get(j).map_or("?", String::as_str);
+            return Some(format!(
+                "view layer {} is nearer than {} in {} of the {both} pixels both cover: \
+                 --layers takes the layers front first, and {} is merged behind; is the order \
+                 reversed?",
+                name(k + 1),
+                name(k),
+                nearer,
+                name(k + 1)
+            ));
+        }
+    }
+    None
+}
+
+/// The fewest pixels two layers must both cover for [`order_note`] to judge their order.
+pub const ORDER_PIXELS: usize = 64;
+
 /// One layer through the effects: depth of field with its empty pixels at their nearest
 /// surface's depth, then the motion blur with them still and far.
 pub fn blur_layer(

@@ -777,3 +777,41 @@ fn a_defocused_near_layer_spreads_over_a_sharp_one_behind() {
         }
     }
 }
+
+/// `--layers` merges in the order given, whatever the depths say; a stack whose later layer
+/// is nearer over most of what both cover (the box at depth 3 given behind the background at
+/// 30) is named in a warning, and the right order says nothing.
+#[test]
+fn a_reversed_stack_is_named_in_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("layers.exr");
+    write(&input, vec![foreground(1e10, 0.0), background()]);
+    let out = dir.path().join("o.exr");
+    let run = |order: &str| {
+        let o = shutter(&[
+            "blur",
+            "--preset",
+            "blender",
+            "--algorithm",
+            "reconstruct",
+            "--layers",
+            order,
+            "--color",
+            input.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o)
+    };
+    let reversed = run("BG,FG");
+    let pixels = BOX.1 - BOX.0;
+    assert!(
+        reversed.contains(&format!(
+            "view layer FG is nearer than BG in {0} of the {0} pixels both cover",
+            pixels * H
+        )) && reversed.contains("is the order reversed?"),
+        "{reversed}"
+    );
+    assert!(!run("FG,BG").contains("reversed"));
+}

@@ -607,7 +607,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                 let mut seconds = 0.0;
                 for (frame_number, frame) in frames.into_iter().zip(read_rx) {
                     let message = match frame {
-                        Ok((frames, replaced, notes)) => {
+                        Ok((frames, replaced, mut notes)) => {
                             let t = Instant::now();
                             let number = frame_number.unwrap_or(0);
                             let out = if job.stack.is_empty() {
@@ -619,6 +619,12 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                             } else {
                                 // A layer of a file of its own goes out under its name.
                                 let mut frames = frames;
+                                let names: Vec<String> =
+                                    job.stack.iter().map(|l| l.name.clone()).collect();
+                                if let Some(note) = crate::stack::order_note(&frames, &names) {
+                                    let at = frame_number.map(|n| format!("frame {n}: "));
+                                    notes.push(format!("{}{note}", at.unwrap_or_default()));
+                                }
                                 for (frame, layer) in frames.iter_mut().zip(&job.stack) {
                                     if layer.inputs.is_some() {
                                         crate::stack::name_layer(frame, &layer.name);
