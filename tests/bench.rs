@@ -88,6 +88,51 @@ fn bench_runs_end_to_end_and_writes_its_reports() {
     assert!(sheet.height() > rows * 36 && sheet.height().is_multiple_of(rows));
     let svg = std::fs::read_to_string(out.join("pareto.svg")).unwrap();
     assert!(svg.contains("sparse") && svg.contains("RMSE"));
+    // The defaults, marked in bench.json and bench.md: one a motion-blur algorithm.
+    let defaults: Vec<&str> = (all.iter())
+        .filter(|r| r["scene"] == "sparse" && r["backend"] == "cpu" && r["default"] == true)
+        .map(|r| r["setting"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        defaults,
+        [
+            "reconstruct exposure S31 k128",
+            "scatter exposure bezier box Δ10",
+            "stretch centre extent2"
+        ]
+    );
+    let md = std::fs::read_to_string(out.join("bench.md")).unwrap();
+    assert!(md.contains("| sparse | stretch centre extent2 **(default)** |"));
+    assert!(!md.contains("stretch rear extent2 **(default)**"));
+}
+
+/// Each depth-of-field method's default, and each with a motion blur after it, are the
+/// defaults of a lens scene's targets; nothing else is.
+#[test]
+fn the_defaults_of_a_lens_scene_are_marked() {
+    let lens = shutter::lab::truth::scenes::build("layers", 64, 36, 1)
+        .unwrap()
+        .lens;
+    let defaults: Vec<String> = (shutter::lab::bench::targets("layers", lens).iter())
+        .flat_map(|t| t.settings.iter().map(move |s| (t, s)))
+        .filter(|(_, s)| s.is_default())
+        .map(|(t, s)| format!("{}: {}", t.label, s.label))
+        .collect();
+    assert_eq!(
+        defaults,
+        [
+            "layers: reconstruct exposure S31 k128",
+            "layers: scatter exposure bezier box Δ10",
+            "layers: stretch centre extent2",
+            "layers dof: gather R6",
+            "layers dof: blend",
+            "layers dof+motion: scatter",
+            "layers dof+motion: gather",
+            "layers dof+motion: gather + scatter",
+            "layers dof+motion: gather + reconstruct",
+            "layers dof+motion: blend + scatter",
+        ]
+    );
 }
 
 /// `bench --layers`: every CPU setting gets a `[layers]` row (the stack, end to end too) and

@@ -146,6 +146,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                 rows.push(Row {
                     scene: name.clone(),
                     setting: label.clone(),
+                    default: setting.is_default(),
                     backend: if on_gpu.is_some() { "wgpu" } else { "cpu" }.to_string(),
                     gpu_stages,
                     stages_on_cpu,
@@ -175,6 +176,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                         rows.push(Row {
                             scene: name.clone(),
                             setting: layered.label.clone(),
+                            default: setting.is_default(),
                             backend: "cpu".to_string(),
                             gpu_stages: None,
                             stages_on_cpu: None,
@@ -219,6 +221,7 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                 rows.push(Row {
                     scene: name.clone(),
                     setting: peer.label.clone(),
+                    default: false,
                     backend: String::new(),
                     gpu_stages: None,
                     stages_on_cpu: None,

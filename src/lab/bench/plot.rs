@@ -81,6 +81,15 @@ fn draw<DB: DrawingBackend>(
                     + Text::new(row.setting.clone(), (6, -6), ("sans-serif", 11))
             }))
             .map_err(|e| e.to_string())?;
+        // The defaults, what a user gets: a green square around the point.
+        chart
+            .draw_series(points.iter().zip(&rows).filter(|(_, row)| row.default).map(
+                |(&(x, y), _)| {
+                    EmptyElement::at((x, y))
+                        + Rectangle::new([(-7, -7), (7, 7)], GREEN.stroke_width(2))
+                },
+            ))
+            .map_err(|e| e.to_string())?;
         let front: Vec<(f64, f64)> = pareto_front(&points).iter().map(|&i| points[i]).collect();
         chart
             .draw_series(LineSeries::new(front.clone(), RED.stroke_width(2)))
@@ -104,7 +113,8 @@ fn plot_size(report: &BenchReport) -> (u32, u32) {
     (PANEL.0 * cols, PANEL.1 * rows)
 }
 
-/// The time-versus-error plot as SVG: a panel per scene, the Pareto front in red.
+/// The time-versus-error plot as SVG: a panel per scene, the Pareto front in red, the
+/// defaults in green squares.
 pub fn pareto_svg(report: &BenchReport) -> String {
     ensure_font();
     let mut svg = String::new();

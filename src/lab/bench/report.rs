@@ -12,6 +12,9 @@ use crate::lab::metrics::Scores;
 pub struct Row {
     pub scene: String,
     pub setting: String,
+    /// Whether the setting is a default ([`super::sweep::Setting::is_default`]): marked in
+    /// bench.md and the plot.
+    pub default: bool,
     /// Where shutter's stages ran: cpu, or wgpu (the stages with a GPU twin on the GPU, the
     /// rest on the CPU; the setting's label ends in "[wgpu]"); empty for a peer's row.
     pub backend: String,
@@ -97,9 +100,10 @@ pub fn markdown(report: &BenchReport) -> String {
     );
     for row in &report.rows {
         text.push_str(&format!(
-            "| {} | {} | {} | {:.2} | {} | {} | {} | {:.5} | {:.5} | {:.2} | {:.4} | {:.4} | {:.5} |\n",
+            "| {} | {}{} | {} | {:.2} | {} | {} | {} | {:.5} | {:.5} | {:.2} | {:.4} | {:.4} | {:.5} |\n",
             row.scene,
             row.setting,
+            if row.default { " **(default)**" } else { "" },
             row.peer.as_deref().unwrap_or("-"),
             row.compute_ms,
             row.end_to_end_ms

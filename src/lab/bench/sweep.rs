@@ -27,6 +27,32 @@ impl Setting {
     }
 }
 
+impl Setting {
+    /// Whether this is what a user gets without setting anything but the algorithm (and,
+    /// for depth of field, the lens and the method): each algorithm's default, gather's and
+    /// blend's, and their pairs. The bench's rows and plot mark these.
+    pub fn is_default(&self) -> bool {
+        let motion = Params {
+            shutter_offset: 0.0,
+            dof: None,
+            ..self.params
+        } == Params::default();
+        let dof = match self.params.dof {
+            None => true,
+            Some(d) => {
+                let gather = DofParams::new(d.source);
+                d == gather
+                    || d == DofParams {
+                        method: Method::Blend,
+                        ..gather
+                    }
+            }
+        };
+        let any = self.algorithm != Algorithm::None || self.params.dof.is_some();
+        motion && dof && any
+    }
+}
+
 /// The sweep: every algorithm that exists, with its settings. Later issues add theirs here.
 pub fn sweep() -> Vec<Setting> {
     let mut settings = vec![Setting {
