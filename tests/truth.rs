@@ -400,6 +400,33 @@ fn scene_command_writes_the_view_layers_with_layers() {
             .any(|f| f[0] == "layers" && f[1] == "layers.####.exr"),
         "{json}"
     );
+    // The FG layer's own reference: premultiplied over nothing; where every sample hit a
+    // shape, the very colour of the scene's reference (the same samples), and empty where
+    // none did.
+    let fg = read_exr_reference(&dir.path().join("reference_fg.0002.exr"));
+    let whole = read_exr_reference(&dir.path().join("reference.0002.exr"));
+    let a = channel(&fg, "A");
+    assert!(a.contains(&0.0) && a.contains(&1.0));
+    for c in ["R", "G", "B"] {
+        let (fg, whole) = (channel(&fg, c), channel(&whole, c));
+        for k in 0..a.len() {
+            assert!(
+                (0.0..=1.0).contains(&a[k]) && fg[k] <= a[k] + 1e-6,
+                "{c} at {k}"
+            );
+            assert!(
+                a[k] < 1.0 || fg[k] == whole[k],
+                "{c} at {k}: {} {}",
+                fg[k],
+                whole[k]
+            );
+        }
+    }
+    assert!(json["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|f| f[0] == "reference_fg"));
 }
 
 /// The BG layer, read through `--preset blender --layer BG`, blurs as the canonical

@@ -209,3 +209,33 @@ pub fn render_reference(
     let mut take = || it.next().expect("three planes");
     [take(), take(), take()]
 }
+
+/// The motion-blur reference of the `FG` view layer alone ([`super::layers`]): every shape
+/// over a transparent film, premultiplied RGBA (a sample that reaches the background adds
+/// nothing, alpha the share of samples that hit a shape), over the same shutter, with the
+/// same samples as [`render_reference`]. What a layer blurred alone should come out as.
+pub fn render_layer_reference(scene: &Scene, t: f64, settings: &RenderSettings) -> [Plane; 4] {
+    let (width, height) = (scene.width, scene.height);
+    let samples = settings.samples.max(1);
+    let poses: Vec<Posed> = (0..TIME_STEPS)
+        .into_par_iter()
+        .map(|s| {
+            let phase = (s as f64 + 0.5) / TIME_STEPS as f64 - 0.5 + settings.shutter_offset;
+            scene.pose(t + settings.shutter * phase)
+        })
+        .collect();
+    let order = scene.front_to_back();
+    let planes = render_planes(width, height, |i, j| {
+        pixel_mean(i, j, width, samples, settings.seed, |u, p| {
+            let posed = &poses[((u[2] * TIME_STEPS as f64) as usize).min(TIME_STEPS - 1)];
+            let hit = scene.trace(posed, &order, p, DVec2::ZERO);
+            match hit.shape {
+                Some(_) => [hit.color[0], hit.color[1], hit.color[2], 1.0],
+                None => [0.0; 4],
+            }
+        })
+    });
+    let mut it = planes.into_iter();
+    let mut take = || it.next().expect("four planes");
+    [take(), take(), take(), take()]
+}
