@@ -422,11 +422,22 @@ fn scene_command_writes_the_view_layers_with_layers() {
             );
         }
     }
-    assert!(json["files"]
-        .as_array()
-        .unwrap()
+    // The BG layer's own reference: opaque, and where no sample hit a shape (the FG's is
+    // empty) the very colour of the scene's reference.
+    let bg = read_exr_reference(&dir.path().join("reference_bg.0002.exr"));
+    assert!(channel(&bg, "A").iter().all(|&v| v == 1.0));
+    for c in ["R", "G", "B"] {
+        let (bg, whole) = (channel(&bg, c), channel(&whole, c));
+        assert!((0..a.len()).all(|k| a[k] > 0.0 || bg[k] == whole[k]), "{c}");
+        assert!(
+            (0..a.len()).any(|k| a[k] == 1.0 && bg[k] != whole[k]),
+            "{c}"
+        );
+    }
+    let files = json["files"].as_array().unwrap();
+    assert!(["reference_fg", "reference_bg"]
         .iter()
-        .any(|f| f[0] == "reference_fg"));
+        .all(|role| files.iter().any(|f| f[0] == *role)));
 }
 
 /// The BG layer, read through `--preset blender --layer BG`, blurs as the canonical

@@ -210,11 +210,13 @@ pub fn render_reference(
     [take(), take(), take()]
 }
 
-/// The motion-blur reference of the `FG` view layer alone ([`super::layers`]): every shape
-/// over a transparent film, premultiplied RGBA (a sample that reaches the background adds
-/// nothing, alpha the share of samples that hit a shape), over the same shutter, with the
-/// same samples as [`render_reference`]. What a layer blurred alone should come out as.
-pub fn render_layer_reference(scene: &Scene, t: f64, settings: &RenderSettings) -> [Plane; 4] {
+/// The motion-blur references of the two view layers alone ([`super::layers`]): `FG`, every
+/// shape over a transparent film, premultiplied RGBA (a sample that reaches the background
+/// adds nothing, alpha the share of samples that hit a shape), and `BG`, the background
+/// plane with no shape before it, RGB; over the same shutter, with the same samples as
+/// [`render_reference`]. What each layer blurred alone should come out as; `FG over BG` of
+/// the two is the best a merge of separately blurred layers can do.
+pub fn render_layer_references(scene: &Scene, t: f64, settings: &RenderSettings) -> [Plane; 7] {
     let (width, height) = (scene.width, scene.height);
     let samples = settings.samples.max(1);
     let poses: Vec<Posed> = (0..TIME_STEPS)
@@ -225,17 +227,20 @@ pub fn render_layer_reference(scene: &Scene, t: f64, settings: &RenderSettings) 
         })
         .collect();
     let order = scene.front_to_back();
+    let nothing: [usize; 0] = [];
     let planes = render_planes(width, height, |i, j| {
         pixel_mean(i, j, width, samples, settings.seed, |u, p| {
             let posed = &poses[((u[2] * TIME_STEPS as f64) as usize).min(TIME_STEPS - 1)];
             let hit = scene.trace(posed, &order, p, DVec2::ZERO);
-            match hit.shape {
+            let [r, g, b, a] = match hit.shape {
                 Some(_) => [hit.color[0], hit.color[1], hit.color[2], 1.0],
                 None => [0.0; 4],
-            }
+            };
+            let [br, bg, bb] = scene.trace(posed, &nothing, p, DVec2::ZERO).color;
+            [r, g, b, a, br, bg, bb]
         })
     });
     let mut it = planes.into_iter();
-    let mut take = || it.next().expect("four planes");
-    [take(), take(), take(), take()]
+    let mut take = || it.next().expect("seven planes");
+    [take(), take(), take(), take(), take(), take(), take()]
 }

@@ -8,7 +8,7 @@ use serde::Serialize;
 use super::layers::render_layers;
 use super::model::Scene;
 use super::render::{
-    render_layer_reference, render_passes, render_reference, Reference, RenderSettings,
+    render_layer_references, render_passes, render_reference, Reference, RenderSettings,
 };
 use super::scenes::build;
 use crate::error::{Error, Problem, ProblemKind, Result};
@@ -34,8 +34,9 @@ pub struct SceneOptions {
     pub shutter_offset: f64,
     pub seed: u64,
     /// Also write `layers.####.exr`: the scene as Blender's multilayer render of two view
-    /// layers, `FG` and `BG` ([`super::layers`]), and `reference_fg.####.exr`, the `FG`
-    /// layer's own motion-blur reference over a transparent film (premultiplied RGBA).
+    /// layers, `FG` and `BG` ([`super::layers`]), and `reference_fg.####.exr` and
+    /// `reference_bg.####.exr`, each layer's own motion-blur reference (FG over a transparent
+    /// film, premultiplied RGBA).
     pub layers: bool,
 }
 
@@ -237,7 +238,7 @@ pub fn write_scene_of(
         roles.extend(["reference_dof", "reference_both"]);
     }
     if options.layers {
-        roles.extend(["layers", "reference_fg"]);
+        roles.extend(["layers", "reference_fg", "reference_bg"]);
     }
     let file = |role: &str, frame: usize| -> PathBuf { dir.join(format!("{role}.{frame:04}.exr")) };
     for frame in 1..=options.frames {
@@ -250,10 +251,15 @@ pub fn write_scene_of(
                 .flat_map(|layer| layer.channels())
                 .collect();
             write_channels(&file("layers", frame), scene, channels)?;
-            let [r, g, b, a] = render_layer_reference(scene, t, &settings);
-            let channels = [("R", r), ("G", g), ("B", b), ("A", a)];
-            let channels = channels.map(|(n, p)| (n.to_string(), p)).into();
-            write_channels(&file("reference_fg", frame), scene, channels)?;
+            let [r, g, b, a, br, bg, bb] = render_layer_references(scene, t, &settings);
+            let name = |(n, p): (&str, Plane)| (n.to_string(), p);
+            let fg = [("R", r), ("G", g), ("B", b), ("A", a)].map(name).into();
+            write_channels(&file("reference_fg", frame), scene, fg)?;
+            let opaque = vec![1.0; scene.width * scene.height];
+            let bg = [("R", br), ("G", bg), ("B", bb), ("A", opaque)]
+                .map(name)
+                .into();
+            write_channels(&file("reference_bg", frame), scene, bg)?;
         }
         write_frame_references(scene, t, &settings, &mut |role| file(role, frame))?;
         on_frame(frame, &file("color", frame));
