@@ -49,11 +49,13 @@ pub fn process_stack(
     merge(blurred)
 }
 
-/// A note when the stack's order looks reversed: a layer that is nearer than the layer given
-/// before it over most of the pixels both cover wholly (at least [`ORDER_PIXELS`] of them).
-/// The stack merges in the order given, whatever the depths say (README, View layers), so a
-/// reversed `--layers` hides the foreground; interpenetration over a few pixels (a ground
-/// plane under a figure's feet) is legitimate and says nothing.
+/// A note when the stack's order looks reversed: a layer that is nearer than a layer given
+/// before it (any pair, not only neighbours) over most of the pixels both cover wholly (at
+/// least [`ORDER_PIXELS`] of them; nearer by more than [`ORDER_MARGIN`] of the depth, so a
+/// surface rendered into both layers is no reversal). The stack merges in the order given,
+/// whatever the depths say (README, View layers), so a reversed order hides the foreground;
+/// interpenetration over a few pixels (a ground plane under a figure's feet) says nothing.
+/// Layers without depth (an algorithm that reads none) are not judged.
 pub fn order_note(layers: &[Frame], names: &[String]) -> Option<String> {
     let solid = |f: &Frame, i: usize| {
         let a = f
@@ -64,29 +66,28 @@ pub fn order_note(layers: &[Frame], names: &[String]) -> Option<String> {
         let z = f.depth.as_ref().map_or(f32::NAN, |d| d[i]);
         (a >= SOLID && z.is_finite() && z < NO_SURFACE).then_some(z)
     };
-    for (k, pair) in layers.windows(2).enumerate() {
-        let (front, back) = (&pair[0], &pair[1]);
-        if front.pixel_count() != back.pixel_count() {
-            continue;
-        }
-        let (mut both, mut nearer) = (0usize, 0usize);
-        for i in 0..front.pixel_count() {
-            if let (Some(zf), Some(zb)) = (solid(front, i), solid(back, i)) {
-                both += 1;
-                nearer += usize::from(zb < zf);
+    let name = |j: usize| names.get(j).map_or("?", String::as_str);
+    for (k, front) in layers.iter().enumerate() {
+        for (j, back) in layers.iter().enumerate().skip(k + 1) {
+            if front.pixel_count() != back.pixel_count() {
+                continue;
             }
-        }
-        if both >= ORDER_PIXELS && 2 * nearer > both {
-            let name = |j: usize| names.get(j).map_or("?", String::as_str);
-            return Some(format!(
-                "view layer {} is nearer than {} in {} of the {both} pixels both cover: \
-                 --layers takes the layers front first, and {} is merged behind; is the order \
-                 reversed?",
-                name(k + 1),
-                name(k),
-                nearer,
-                name(k + 1)
-            ));
+            let (mut both, mut nearer) = (0usize, 0usize);
+            for i in 0..front.pixel_count() {
+                if let (Some(zf), Some(zb)) = (solid(front, i), solid(back, i)) {
+                    both += 1;
+                    nearer += usize::from(zb < zf * (1.0 - ORDER_MARGIN));
+                }
+            }
+            if both >= ORDER_PIXELS && 2 * nearer > both {
+                return Some(format!(
+                    "view layer {} is nearer than {} in {nearer} of the {both} pixels both \
+                     cover, but the stack (front first) merges it behind; is the order \
+                     reversed?",
+                    name(j),
+                    name(k),
+                ));
+            }
         }
     }
     None
@@ -94,6 +95,9 @@ pub fn order_note(layers: &[Frame], names: &[String]) -> Option<String> {
 
 /// The fewest pixels two layers must both cover for [`order_note`] to judge their order.
 pub const ORDER_PIXELS: usize = 64;
+
+/// How much nearer, as a share of the depth, a later layer must be to count as in front.
+pub const ORDER_MARGIN: f32 = 1e-3;
 
 /// One layer through the effects: depth of field with its empty pixels at their nearest
 /// surface's depth, then the motion blur with them still and far.

@@ -780,13 +780,37 @@ fn a_defocused_near_layer_spreads_over_a_sharp_one_behind() {
 
 /// `--layers` merges in the order given, whatever the depths say; a stack whose later layer
 /// is nearer over most of what both cover (the box at depth 3 given behind the background at
-/// 30) is named in a warning, and the right order says nothing.
+/// 30) is named in a warning, once a run, also when another layer stands between them; the
+/// right order, and a surface rendered at the same depth into two layers, say nothing.
 #[test]
 fn a_reversed_stack_is_named_in_a_warning() {
     let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("layers.exr");
-    write(&input, vec![foreground(1e10, 0.0), background()]);
-    let out = dir.path().join("o.exr");
+    let rename = |layer: Vec<(String, Vec<f32>)>, to: &str| -> Vec<(String, Vec<f32>)> {
+        (layer.into_iter())
+            .map(|(n, p)| (n.replacen("FG", to, 1), p))
+            .collect()
+    };
+    let n = W * H;
+    // A layer that covers nothing, and the box again under another name.
+    let empty = layer_channels(
+        "X",
+        [0.0; 3].map(|v| vec![v; n]),
+        vec![0.0; n],
+        vec![1e10; n],
+        vec![0.0; n],
+    );
+    let same = rename(foreground(1e10, 0.0), "Same");
+    for frame in 1..=3 {
+        write(
+            &dir.path().join(format!("layers.{frame:04}.exr")),
+            vec![
+                foreground(1e10, 0.0),
+                background(),
+                empty.clone(),
+                same.clone(),
+            ],
+        );
+    }
     let run = |order: &str| {
         let o = shutter(&[
             "blur",
@@ -797,21 +821,24 @@ fn a_reversed_stack_is_named_in_a_warning() {
             "--layers",
             order,
             "--color",
-            input.to_str().unwrap(),
+            &format!("{}/layers.####.exr", dir.path().display()),
             "-o",
-            out.to_str().unwrap(),
+            &format!("{}/o.####.exr", dir.path().display()),
         ]);
         assert!(o.status.success(), "{}", stderr(&o));
         stderr(&o)
     };
-    let reversed = run("BG,FG");
-    let pixels = BOX.1 - BOX.0;
-    assert!(
-        reversed.contains(&format!(
-            "view layer FG is nearer than BG in {0} of the {0} pixels both cover",
-            pixels * H
-        )) && reversed.contains("is the order reversed?"),
-        "{reversed}"
-    );
-    assert!(!run("FG,BG").contains("reversed"));
+    let pixels = (BOX.1 - BOX.0) * H;
+    for order in ["BG,FG", "BG,X,FG"] {
+        let reversed = run(order);
+        let named = format!("view layer FG is nearer than BG in {pixels} of the {pixels} pixels");
+        assert_eq!(reversed.matches(&named).count(), 1, "{order}: {reversed}");
+        assert!(
+            reversed.contains("is the order reversed? (first in frame 1)"),
+            "{reversed}"
+        );
+    }
+    for order in ["FG,BG", "FG,X,BG", "FG,Same,BG"] {
+        assert!(!run(order).contains("reversed"), "{order}");
+    }
 }

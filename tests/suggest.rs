@@ -166,6 +166,30 @@ fn a_blender_file_of_two_view_layers_suggests_blender_and_names_the_layers() {
     );
 }
 
+/// Blender adds its compositor's result, `Composite.Combined.RGBA`, beside the view layers:
+/// colour alone, not a layer to blur or stack; nor is a name with part of a colour.
+#[test]
+fn blenders_composite_result_is_no_view_layer() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("render.exr");
+    let mut names: Vec<String> = ["Combined.R", "Combined.G", "Combined.B", "Combined.A"]
+        .iter()
+        .chain(&["Depth.Z", "Vector.X", "Vector.Y", "Vector.Z", "Vector.W"])
+        .map(|n| format!("ViewLayer.{n}"))
+        .collect();
+    names.extend(["R", "G", "B", "A"].map(|c| format!("Composite.Combined.{c}")));
+    names.push("Junk.Combined.R".to_string());
+    exr(&path, &names.iter().map(String::as_str).collect::<Vec<_>>());
+    let suggestion = &info(&path)["suggestion"];
+    assert_eq!(suggestion["preset"], "blender");
+    assert_eq!(suggestion["matched"], 9);
+    assert_eq!(suggestion["view_layers"], serde_json::json!(["ViewLayer"]));
+    let text = info_text(&path);
+    let hint = "; view layer ViewLayer (Composite, Junk hold no passes to blur): --layer \
+                ViewLayer reads it";
+    assert!(text.contains(hint), "{text}");
+}
+
 #[test]
 fn nuke_files_suggest_nuke_single_and_multi_part() {
     let dir = tempfile::tempdir().unwrap();

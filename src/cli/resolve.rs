@@ -228,13 +228,21 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         max_memory: defaults.max_memory,
         ..settings.clone()
     }));
-    // Which view layers made it: one read alone, or a stack, front first.
+    // Which view layers made it: one read alone, or a stack, front first (a name with a
+    // space quoted, as a shell would need it: Blender's "View Layer").
+    let quoted = |v: String| {
+        if v.contains(char::is_whitespace) {
+            format!("'{v}'")
+        } else {
+            v
+        }
+    };
     if let Some(layer) = &args.layer {
-        record.push(format!("--layer {layer}"));
+        record.push(format!("--layer {}", quoted(layer.clone())));
     }
     if stack.len() > 1 {
         let names: Vec<&str> = stack.iter().map(|l| l.name.as_str()).collect();
-        record.push(format!("--layers {}", names.join(",")));
+        record.push(format!("--layers {}", quoted(names.join(","))));
     }
     let output_options = OutputOptions {
         srgb: preset.color.transfer == Transfer::Srgb,

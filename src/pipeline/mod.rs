@@ -605,6 +605,8 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             let frames: Vec<Option<i64>> = todo.clone();
             let processor = scope.spawn(move || {
                 let mut seconds = 0.0;
+                // A reversed stack is named once a run, at its first frame.
+                let mut order_named = false;
                 for (frame_number, frame) in frames.into_iter().zip(read_rx) {
                     let message = match frame {
                         Ok((frames, replaced, mut notes)) => {
@@ -621,9 +623,13 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                                 let mut frames = frames;
                                 let names: Vec<String> =
                                     job.stack.iter().map(|l| l.name.clone()).collect();
-                                if let Some(note) = crate::stack::order_note(&frames, &names) {
-                                    let at = frame_number.map(|n| format!("frame {n}: "));
-                                    notes.push(format!("{}{note}", at.unwrap_or_default()));
+                                let note = (!order_named)
+                                    .then(|| crate::stack::order_note(&frames, &names))
+                                    .flatten();
+                                if let Some(note) = note {
+                                    order_named = true;
+                                    let at = frame_number.map(|n| format!(" (first in frame {n})"));
+                                    notes.push(format!("{note}{}", at.unwrap_or_default()));
                                 }
                                 for (frame, layer) in frames.iter_mut().zip(&job.stack) {
                                     if layer.inputs.is_some() {

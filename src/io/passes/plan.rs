@@ -646,7 +646,7 @@ pub(super) fn luminance(info: &FileInfo) -> Option<Vec<Option<usize>>> {
 }
 
 /// The values `{layer}` can take in `template` for the channels of this file.
-fn find_layers(info: &FileInfo, template: &str) -> Vec<String> {
+pub(super) fn find_layers(info: &FileInfo, template: &str) -> Vec<String> {
     let Some((prefix, suffix)) = template.split_once("{layer}") else {
         return Vec::new();
     };
@@ -667,7 +667,7 @@ fn find_layers(info: &FileInfo, template: &str) -> Vec<String> {
 /// The passes a preset finds in one file on its own (for `shutter info`): colour first, then
 /// the other passes among the channels colour did not take.
 pub fn passes_found(info: &FileInfo, preset: &Preset) -> Vec<&'static str> {
-    passes_read(info, preset)
+    super::suggest::passes_read(info, preset)
         .into_iter()
         .map(|(pass, _)| pass)
         .collect()
@@ -684,40 +684,9 @@ pub(super) type PassesRead = Vec<(&'static str, Vec<usize>)>;
 /// A file with no colour channel the preset names but a `Y` is read both ways, `Y` as grey
 /// colour and not, and the reading that takes more of the file's channels is kept: a
 /// luminance image is colour, a file of `X`, `Y` vectors is not.
-///
-/// A file of several view layers (`{layer}` in the colour's names matching more than one) is
-/// read layer by layer, as `--layers` reads it, and each pass lists every layer's channels.
-pub(super) fn passes_read(info: &FileInfo, preset: &Preset) -> PassesRead {
-    let layers = view_layers(info, preset);
-    if layers.len() < 2 {
-        return passes_read_in(info, preset, None);
-    }
-    let mut all: PassesRead = Vec::new();
-    for layer in &layers {
-        for (pass, channels) in passes_read_in(info, preset, Some(layer)) {
-            match all.iter_mut().find(|(p, _)| *p == pass) {
-                Some((_, seen)) => seen.extend(channels),
-                None => all.push((pass, channels)),
-            }
-        }
-    }
-    all
-}
-
-/// The view layers a preset's colour channels find in the file (the values `{layer}` takes
-/// in any of its colour alternatives), sorted; empty when it names none by layer.
-pub fn view_layers(info: &FileInfo, preset: &Preset) -> Vec<String> {
-    let mut layers: Vec<String> = (preset.color.channels.iter())
-        .filter_map(|alternative| alternative.first())
-        .flat_map(|template| find_layers(info, template))
-        .collect();
-    layers.sort();
-    layers.dedup();
-    layers
-}
-
-/// [`passes_read`] in one view layer (`None`: the one the file holds, if any).
-fn passes_read_in(info: &FileInfo, preset: &Preset, layer: Option<&str>) -> PassesRead {
+/// In view layer `layer` (`None`: the one the file holds, if any); a file of several is read
+/// layer by layer by [`passes_read`](super::suggest::passes_read).
+pub(super) fn passes_read_in(info: &FileInfo, preset: &Preset, layer: Option<&str>) -> PassesRead {
     match find_channels(info, &preset.color.channels, 3, &[], layer) {
         Ok(None) => {
             let without = passes_after(info, preset, None, layer);
@@ -744,7 +713,7 @@ fn passes_read_in(info: &FileInfo, preset: &Preset, layer: Option<&str>) -> Pass
     }
 }
 
-/// The passes a preset finds once colour has taken `color`'s channels (see [`passes_read`]).
+/// The passes a preset finds once colour has taken `color`'s channels (see [`passes_read_in`]).
 fn passes_after(
     info: &FileInfo,
     preset: &Preset,

@@ -31,7 +31,7 @@ use serde::Serialize;
 use crate::io::file::{FileInfo, FileKind};
 use crate::io::preset::{Encoding, Meaning, Preset, Units, VectorSpec};
 
-use super::plan::{decodes, find_channels, passes_read, view_layers, PassesRead};
+use super::plan::{decodes, find_channels, find_layers, passes_read_in, PassesRead};
 
 /// A pass a preset finds, and the channels it reads (as `shutter info` names them).
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -69,6 +69,47 @@ pub struct Suggestion {
     /// The view layers the preset found (two or more: a run reads one with `--layer`, or
     /// stacks them with `--layers`); empty otherwise.
     pub view_layers: Vec<String>,
+}
+
+/// A file of several view layers ([`view_layers`]) is read layer by layer, as `--layers`
+/// reads it, and each pass lists every layer's channels; a file whose one view layer stands
+/// beside colour-only ones (Blender's `Composite`) is read in that layer.
+pub(super) fn passes_read(info: &FileInfo, preset: &Preset) -> PassesRead {
+    let layers = view_layers(info, preset);
+    match layers.len() {
+        0 => return passes_read_in(info, preset, None),
+        1 => return passes_read_in(info, preset, Some(&layers[0])),
+        _ => {}
+    }
+    let mut all: PassesRead = Vec::new();
+    for layer in &layers {
+        for (pass, channels) in passes_read_in(info, preset, Some(layer)) {
+            match all.iter_mut().find(|(p, _)| *p == pass) {
+                Some((_, seen)) => seen.extend(channels),
+                None => all.push((pass, channels)),
+            }
+        }
+    }
+    all
+}
+
+/// The view layers of the file for a preset that names channels by `{layer}`, sorted: the
+/// values `{layer}` takes where the preset finds the whole colour and a pass besides
+/// (depth or motion). A name with colour alone, as Blender's `Composite` result beside the
+/// render's view layer, or with part of a colour, is not a layer to blur; empty when the
+/// preset names no channel by layer.
+pub fn view_layers(info: &FileInfo, preset: &Preset) -> Vec<String> {
+    let mut layers: Vec<String> = (preset.color.channels.iter())
+        .filter_map(|alternative| alternative.first())
+        .flat_map(|template| find_layers(info, template))
+        .collect();
+    layers.sort();
+    layers.dedup();
+    layers.retain(|layer| {
+        let read = passes_read_in(info, preset, Some(layer));
+        read.iter().any(|(pass, _)| *pass == "color") && read.len() > 1
+    });
+    layers
 }
 
 /// The name `shutter info` shows for a channel.
@@ -161,16 +202,36 @@ pub fn suggest(info: &FileInfo, presets: &[Preset]) -> Suggestion {
             order.join(", ")
         ));
     }
-    let mut view_layers = view_layers(info, &presets[best]);
-    if view_layers.len() < 2 {
-        view_layers.clear();
-    } else {
-        reason.push_str(&format!(
+    let view_layers = view_layers(info, &presets[best]);
+    // Names with colour alone beside the view layers (Blender's Composite result).
+    let colour_alone: Vec<String> = (presets[best].color.channels.iter())
+        .filter_map(|alternative| alternative.first())
+        .flat_map(|template| find_layers(info, template))
+        .filter(|l| !view_layers.contains(l))
+        .fold(Vec::new(), |mut seen, l| {
+            if !seen.contains(&l) {
+                seen.push(l);
+            }
+            seen
+        });
+    match view_layers.as_slice() {
+        [] => {}
+        [_] if colour_alone.is_empty() => {}
+        [one] => reason.push_str(&format!(
+            "; view layer {one} ({} hold no passes to blur): --layer {one} reads it",
+            colour_alone.join(", ")
+        )),
+        _ => reason.push_str(&format!(
             "; view layers {}: --layer NAME reads one, --layers NAME,NAME,... stacks them \
              front first",
             view_layers.join(", ")
-        ));
+        )),
     }
+    let view_layers = if view_layers.len() > 1 || !colour_alone.is_empty() {
+        view_layers
+    } else {
+        Vec::new()
+    };
     Suggestion {
         view_layers,
         preset: Some(name),

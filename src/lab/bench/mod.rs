@@ -146,7 +146,8 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                 rows.push(Row {
                     scene: name.clone(),
                     setting: label.clone(),
-                    default: setting.is_default(),
+                    // What a user gets without choosing: the CPU (the default backend).
+                    default: setting.is_default() && on_gpu.is_none(),
                     backend: if on_gpu.is_some() { "wgpu" } else { "cpu" }.to_string(),
                     gpu_stages,
                     stages_on_cpu,
@@ -176,7 +177,9 @@ pub fn run(options: &BenchOptions, progress: &mut dyn FnMut(String)) -> Result<B
                         rows.push(Row {
                             scene: name.clone(),
                             setting: layered.label.clone(),
-                            default: setting.is_default(),
+                            // The stack is what `--layers` gives; a hand merge is no output
+                            // of shutter's.
+                            default: setting.is_default() && layered.end_to_end.is_some(),
                             backend: "cpu".to_string(),
                             gpu_stages: None,
                             stages_on_cpu: None,

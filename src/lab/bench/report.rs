@@ -12,8 +12,9 @@ use crate::lab::metrics::Scores;
 pub struct Row {
     pub scene: String,
     pub setting: String,
-    /// Whether the setting is a default ([`super::sweep::Setting::is_default`]): marked in
-    /// bench.md and the plot.
+    /// Whether the row is what a user gets without choosing: a default setting
+    /// ([`super::sweep::Setting::is_default`]) on the CPU, alone or as a `[layers]` stack (not
+    /// `[wgpu]`, not `[hand merge]`); marked in bench.md and the plot.
     pub default: bool,
     /// Where shutter's stages ran: cpu, or wgpu (the stages with a GPU twin on the GPU, the
     /// rest on the CPU; the setting's label ends in "[wgpu]"); empty for a peer's row.
