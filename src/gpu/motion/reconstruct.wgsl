@@ -386,6 +386,7 @@ struct Form {
     split_taps: bool,
     either_way: bool,
     exposure_fill: bool,
+    slide_hidden: bool,
 }
 
 fn form() -> Form {
@@ -401,7 +402,41 @@ fn form() -> Form {
         ours,
         ours,
         ours,
+        ours,
     );
+}
+
+// The pixel nearest to the point `offset` from pixel (x, y), clamped to the frame (the CPU's
+// `nearest_to`).
+fn nearest_to(x: u32, y: u32, offset: vec2<f32>) -> u32 {
+    let px = u32(max(f32(x) + 0.5 + offset.x, 0.0));
+    let py = u32(max(f32(y) + 0.5 + offset.y, 0.0));
+    return min(py, config.height - 1u) * config.width + min(px, config.width - 1u);
+}
+
+// Whether the point `offset` from pixel (x, y) lies in the frame (the CPU's `inside`).
+fn inside(x: u32, y: u32, offset: vec2<f32>) -> bool {
+    let px = f32(x) + 0.5 + offset.x;
+    let py = f32(y) + 0.5 + offset.y;
+    return px >= 0.0 && py >= 0.0 && px < f32(config.width) && py < f32(config.height);
+}
+
+// Whether texel j is still and nearer than depth z by the soft extent's half.
+fn nearer_still(j: u32, z: f32) -> bool {
+    let t = texel8(j);
+    return t.length < HALF_PIXEL && 0.5 + config.inv_soft_z * (t.z - z) <= 0.0;
+}
+
+// Whether pixel (x, y) lies beside (a 4-neighbour of) a still surface nearer than it: the
+// rim of a still subject (the CPU's `beside_nearer`).
+fn beside_nearer(x: u32, y: u32) -> bool {
+    let width = config.width;
+    let i = y * width + x;
+    let z = texel8(i).z;
+    return (x > 0u && nearer_still(i - 1u, z))
+        || (x + 1u < width && nearer_still(i + 1u, z))
+        || (y > 0u && nearer_still(i - width, z))
+        || (y + 1u < config.height && nearer_still(i + width, z));
 }
 
 fn gather_pixel_2014(x: u32, y: u32) -> Colours {
@@ -457,6 +492,9 @@ fn gather_pixel_2014(x: u32, y: u32) -> Colours {
         directions = 1u;
     }
     let centre_z = centre.z;
+    // A streak that runs behind a nearer surface is slid back a streak's length where it is
+    // hidden (`Form::slide_hidden`; the CPU twin says why and where not).
+    let slides = f.slide_hidden && own_length >= HALF_PIXEL && !beside_nearer(x, y);
     for (var s = 0u; s < 2u; s++) {
         let side = select(1.0, -1.0, s == 1u);
         for (var d = 0u; d < directions; d++) {
@@ -477,10 +515,30 @@ fn gather_pixel_2014(x: u32, y: u32) -> Colours {
             let step = extent / f32(k_side);
             for (var tap = 0u; tap < k_side; tap++) {
                 let t = (f32(tap) + tap_offset) * step;
-                let px = u32(max(f32(x) + 0.5 + sx * t, 0.0));
-                let py = u32(max(f32(y) + 0.5 + sy * t, 0.0));
-                let nearest_index = min(py, height - 1u) * width + min(px, width - 1u);
-                let at = vec2<f32>(sx * t, sy * t);
+                var at = vec2<f32>(sx * t, sy * t);
+                var nearest_index = nearest_to(x, y, at);
+                if slides && length * t < own_length * extent + edge {
+                    let near = texel8(nearest_index);
+                    let dz = near.z - centre_z;
+                    let away = select(-side, side, dv.x * near.vx + dv.y * near.vy > 0.0);
+                    let share = 1.0 - shift * away;
+                    var reach = 1.0;
+                    if near.length < HALF_PIXEL {
+                        reach = f.still_reach;
+                    }
+                    let reaches = near.length * share - length * t + reach > 0.0;
+                    if 0.5 + scale * dz <= 0.0 && !reaches && inside(x, y, at) {
+                        let back = 2.0 * own_length / length;
+                        let slid = vec2<f32>(at.x - sx * back, at.y - sy * back);
+                        let j = nearest_to(x, y, slid);
+                        let tj = texel8(j);
+                        if inside(x, y, slid) && tj.length >= HALF_PIXEL
+                            && abs((tj.z - centre_z) * scale) < 1.0 {
+                            at = slid;
+                            nearest_index = j;
+                        }
+                    }
+                }
                 var parts: Split;
                 if f.split_taps {
                     let cover = split_by_cover(nearest_index, scale, x, y, at, own_length < HALF_PIXEL);

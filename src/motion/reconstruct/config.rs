@@ -212,6 +212,13 @@ pub struct Form {
     /// shutter it covers the pixel, 1/(2|V|), and the background taps' average for the rest;
     /// Blender's the background average with a little of the centre mixed in.
     pub exposure_fill: bool,
+    /// Whether a moving centre's taps that fall on a nearer surface which does not reach it
+    /// (the background its streak runs behind, hidden at the frame's instant) read the
+    /// background a whole streak's length (2|V|) back along the line instead, where it is
+    /// visible: ours, except at a pixel beside such a surface (its rim, which holds part of
+    /// that surface in its colour); Blender's fills them with the background taps' average.
+    /// See [`super::gather_2014`].
+    pub slide_hidden: bool,
 }
 
 impl Form {
@@ -227,6 +234,7 @@ impl Form {
         split_taps: true,
         either_way: true,
         exposure_fill: true,
+        slide_hidden: true,
     };
 
     /// Blender's, under a centred exposure (offset, it looks up its own tile too).
@@ -241,6 +249,7 @@ impl Form {
         split_taps: false,
         either_way: false,
         exposure_fill: false,
+        slide_hidden: false,
     };
 
     /// The form `config` runs (paper and dual, which do not read it, get Blender's).

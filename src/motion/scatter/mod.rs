@@ -20,7 +20,9 @@
 //!   pixel is covered by moving surfaces. A pixel covered less than the whole interval shows
 //!   what lies behind for the rest: its own colour where it does not move, and where it does
 //!   (a moving surface revealing what was behind it), the colour of the nearest farther
-//!   surface along its motion, or its own colour if none is found. Covered more than once
+//!   surface along its motion, or, if none is found, the part of its streak hidden behind a
+//!   nearer surface read a streak's length back and the part past the frame's edge read on
+//!   the border ([`resolve`]'s `unseen`), else its own colour. Covered more than once
 //!   (overlapping moving surfaces), the deposits are averaged.
 //!
 //! Weights along the curve, by s ∈ [0, 1] (s = ½ at the frame): the paper's Gaussian

@@ -1,7 +1,7 @@
 //! Stage 3, `resolve`: each pixel's output from its accumulated cell, by the normalisation
 //! (the paper's eq. 4, or the exposure shares with the uncovered rest filled from behind).
 
-use crate::motion::curve::length;
+use crate::motion::curve::{length, Point};
 
 use super::config::{Normalize, BLOCK, COVERED};
 use super::job::{Moving, Scatter};
@@ -98,6 +98,79 @@ impl Scatter<'_> {
         }
     }
 
+    /// What stands for the part of moving pixel i's streak that no curve brought, where
+    /// nothing farther lies along its motion: walking along the motion (`dir`, unit) up to its
+    /// half-length `q` either way, the part hidden behind a nearer surface on one side (the
+    /// background streaming behind a still subject) is read a whole streak's length back on
+    /// the other side, where it is visible (two pixels, at a quarter and three quarters of
+    /// the slid span, that lie on the pixel's surface: within the depth tolerance); the part
+    /// past the frame's edge on one side is read on the frame's border there (the streak's
+    /// points clamped to the frame, as reconstruct's taps read them). Else its own colour.
+    /// Not at a pixel beside the nearer surface (its rim, whose colour holds part of it).
+    /// Measured in BENCHMARKS.md ("A still subject before a pan").
+    fn unseen(&self, i: usize, now: Point, dir: Point, q: f64) -> Behind {
+        let tolerance = 1.0 + self.config.depth_tolerance;
+        let (near, far) = (self.depth[i] / tolerance, self.depth[i] * tolerance);
+        let at = |d: f64| -> Option<usize> {
+            let x = now[0] + d * dir[0];
+            let y = now[1] + d * dir[1];
+            (x >= 0.0 && y >= 0.0 && x < self.width as f64 && y < self.height as f64)
+                .then(|| y as usize * self.width + x as usize)
+        };
+        // Per side: where the streak goes behind a nearer surface, or off the frame.
+        let mut hidden = [None; 2];
+        let mut off = [None; 2];
+        for (s, side) in [1.0, -1.0].into_iter().enumerate() {
+            let mut k = 1.0;
+            while k <= q.ceil() {
+                match at(side * k) {
+                    None => {
+                        off[s] = Some((side, k - 0.5));
+                        break;
+                    }
+                    Some(j) if self.depth[j] < near => {
+                        hidden[s] = Some((side, k - 0.5));
+                        break;
+                    }
+                    _ => {}
+                }
+                k += 1.0;
+            }
+        }
+        let mut pixels = [0; 2];
+        let mut count = 0;
+        match (hidden, off) {
+            ([Some((side, b)), None] | [None, Some((side, b))], _) => {
+                if b >= q || b < 1.0 {
+                    return Behind::Own;
+                }
+                for f in [0.25, 0.75] {
+                    if let Some(j) = at(-side * (q + (q - b) * f)) {
+                        if (near..=far).contains(&self.depth[j]) {
+                            pixels[count] = j;
+                            count += 1;
+                        }
+                    }
+                }
+            }
+            ([None, None], [Some((side, b)), None] | [None, Some((side, b))]) => {
+                for f in [0.25, 0.75] {
+                    let d = side * (b + (q - b) * f);
+                    let x = (now[0] + d * dir[0]).clamp(0.0, self.width as f64 - 0.5);
+                    let y = (now[1] + d * dir[1]).clamp(0.0, self.height as f64 - 0.5);
+                    pixels[count] = y as usize * self.width + x as usize;
+                    count += 1;
+                }
+            }
+            _ => {}
+        }
+        if count == 0 {
+            Behind::Own
+        } else {
+            Behind::Found { pixels, count }
+        }
+    }
+
     /// What lies behind moving pixel (x, y): the nearest farther surface along its motion
     /// (either way; the average if both), else its own colour.
     fn behind(&self, x: usize, y: usize, reach: &Reach) -> Behind {
@@ -129,8 +202,11 @@ impl Scatter<'_> {
         let bx1 = ((x + steps) / BLOCK).min(reach.across - 1);
         let by1 = ((y + steps) / BLOCK).min(reach.down - 1);
         let deepest = |bx: usize, by: usize| reach.deepest[by * reach.across + bx];
+        let q = self
+            .extent(prev, now, next)
+            .min(self.config.max_curve as f64);
         if (by0..=by1).all(|by| (bx0..=bx1).all(|bx| deepest(bx, by) <= limit)) {
-            return Behind::Own;
+            return self.unseen(i, now, dir, q);
         }
         let mut pixels = [0; 2];
         let mut found = 0;
@@ -150,7 +226,7 @@ impl Scatter<'_> {
             }
         }
         if found == 0 {
-            Behind::Own
+            self.unseen(i, now, dir, q)
         } else {
             Behind::Found {
                 pixels,

@@ -619,6 +619,71 @@ fn behind(p: u32) -> Behind {
             }
         }
     }
+    if found.count == 0u {
+        return unseen(p, now, dir, min(e, config.max_curve));
+    }
+    return found;
+}
+
+// The pixel at `d` px along `dir` from `now`; OFF_FRAME past the frame's edge.
+const OFF_FRAME: u32 = 0xffffffffu;
+fn along(now: vec2<f32>, dir: vec2<f32>, d: f32) -> u32 {
+    let at = now + d * dir;
+    if !(at.x >= 0.0 && at.y >= 0.0 && at.x < f32(config.width) && at.y < f32(config.height)) {
+        return OFF_FRAME;
+    }
+    return u32(at.y) * config.width + u32(at.x);
+}
+
+// `Scatter::unseen`: for the part of moving pixel p's streak no curve brought (nothing
+// farther along its motion), the part behind a nearer surface on one side read a streak's
+// length back on the other, else the part past the frame's edge read on its border.
+fn unseen(p: u32, now: vec2<f32>, dir: vec2<f32>, q: f32) -> Behind {
+    var found = Behind(vec2<u32>(0u), 0u);
+    let near = depth[p] / (1.0 + config.depth_tolerance);
+    let far = depth[p] * (1.0 + config.depth_tolerance);
+    // Per side (along dir, against it): where the streak goes behind a nearer surface, or
+    // off the frame (-1: neither).
+    var hidden = vec2<f32>(-1.0);
+    var off = vec2<f32>(-1.0);
+    for (var s = 0u; s < 2u; s++) {
+        let side = select(-1.0, 1.0, s == 0u);
+        for (var k = 1.0; k <= ceil(q); k += 1.0) {
+            let j = along(now, dir, side * k);
+            if j == OFF_FRAME {
+                off[s] = k - 0.5;
+                break;
+            }
+            if depth[j] < near {
+                hidden[s] = k - 0.5;
+                break;
+            }
+        }
+    }
+    if (hidden.x >= 0.0) != (hidden.y >= 0.0) {
+        let side = select(-1.0, 1.0, hidden.x >= 0.0);
+        let b = max(hidden.x, hidden.y);
+        if b >= q || b < 1.0 {
+            return found;
+        }
+        for (var f = 0.25; f < 1.0; f += 0.5) {
+            let j = along(now, dir, -side * (q + (q - b) * f));
+            if j != OFF_FRAME && depth[j] >= near && depth[j] <= far {
+                found.pixels[found.count] = j;
+                found.count += 1u;
+            }
+        }
+    } else if hidden.x < 0.0 && (off.x >= 0.0) != (off.y >= 0.0) {
+        let side = select(-1.0, 1.0, off.x >= 0.0);
+        let b = max(off.x, off.y);
+        for (var f = 0.25; f < 1.0; f += 0.5) {
+            let at = now + side * (b + (q - b) * f) * dir;
+            let x = clamp(at.x, 0.0, f32(config.width) - 0.5);
+            let y = clamp(at.y, 0.0, f32(config.height) - 0.5);
+            found.pixels[found.count] = u32(y) * config.width + u32(x);
+            found.count += 1u;
+        }
+    }
     return found;
 }
 
