@@ -22,7 +22,10 @@
 //!    n-blade diaphragm shapes the bokeh. A tile's taps are the same for all its pixels, so
 //!    the loop runs taps outside and the tile's 16 pixels of a row inside, on padded planes
 //!    (structure of arrays, no bounds checks): one AVX-512 vector per tap where the CPU has
-//!    it. The padding mirrors the frame about its edges ([`mirror`]).
+//!    it. What lies beyond the frame is unknown, and the gather does not make it up: a tap
+//!    outside the frame weighs nothing (its 1 / bokeh area is 0 in the padding), so the far
+//!    field is the average of the in-frame taps, renormalised, and the near field counts
+//!    the near pixels the frame holds ([`Padded`] says what was measured against mirroring).
 //!
 //!    Where a larger bokeh than the tile's own sets its radius (a near field reaching over
 //!    it), the far field is gathered apart over the taps of the tile's own largest radius:
@@ -115,15 +118,17 @@ fn ring_taps(radius: f32, rings: &[Tap], aperture: &Aperture, stride: isize) -> 
 }
 
 /// Index `i` of a row or column of `n` pixels reflected into it about its edges (the edge
-/// pixel repeated: …, 1, 0 | 0, 1, …, n − 1 | n − 1, n − 2, …), for any i. On `layers` this
-/// erred 3 % less than reflecting about the edge pixel itself (…, 1 | 0, 1, …).
+/// pixel repeated: …, 1, 0 | 0, 1, …, n − 1 | n − 1, n − 2, …), for any i: where the padding
+/// takes its colour and CoC from. Outside the frame those only fill the planes (every
+/// weight there is 0); the bits of the padding are then the same whatever the reflection.
 fn mirror(i: isize, n: usize) -> usize {
     let period = 2 * n as isize;
     let m = i.rem_euclid(period);
     (if m >= n as isize { period - 1 - m } else { m }) as usize
 }
 
-/// How the padded planes are made (the padding is [`mirror`]'s).
+/// How the padded planes are made: colour and CoC [`mirror`]ed, 1 / bokeh area 0 outside the
+/// frame (a tap there weighs nothing in either field).
 impl Padded {
     fn new(
         color: &Color,
@@ -140,7 +145,8 @@ impl Padded {
         let columns: Vec<usize> = (0..stride)
             .map(|px| mirror(px as isize - pad as isize, width))
             .collect();
-        let padded = |value: &(dyn Fn(usize) -> f32 + Sync)| {
+        // `inside`: whether the plane is 0 outside the frame rather than mirrored.
+        let padded = |value: &(dyn Fn(usize) -> f32 + Sync), inside: bool| {
             let mut out = vec![0.0f32; stride * rows];
             out.par_chunks_mut(stride)
                 .enumerate()
@@ -149,18 +155,29 @@ impl Padded {
                     for (v, &x) in row.iter_mut().zip(&columns) {
                         *v = value(y * width + x);
                     }
+                    if inside {
+                        if py < pad || py >= pad + height {
+                            row.fill(0.0);
+                        } else {
+                            row[..pad].fill(0.0);
+                            row[pad + width..].fill(0.0);
+                        }
+                    }
                 });
             out
         };
         let planes = [
-            padded(&|i| color.r[i]),
-            padded(&|i| color.g[i]),
-            padded(&|i| color.b[i]),
-            padded(&|i| color.a.as_ref().map_or(0.0, |a| a[i])),
-            padded(&|i| 0.5 * coc[i]),
-            padded(&|i| inverse_area(coc[i], unit_area)),
+            padded(&|i| color.r[i], false),
+            padded(&|i| color.g[i], false),
+            padded(&|i| color.b[i], false),
+            padded(&|i| color.a.as_ref().map_or(0.0, |a| a[i]), false),
+            padded(&|i| 0.5 * coc[i], false),
+            padded(&|i| inverse_area(coc[i], unit_area), true),
         ];
-        let extra = extra.iter().map(|plane| padded(&|i| plane[i])).collect();
+        let extra = extra
+            .iter()
+            .map(|plane| padded(&|i| plane[i], false))
+            .collect();
         Padded {
             stride,
             pad,
@@ -647,6 +664,44 @@ mod field_tests {
             let want = gather(&config, &alone, &coc, &t).r;
             assert_ne!(bits(&want), bits(plane));
             assert_eq!(bits(got), bits(&want));
+        }
+    }
+
+    /// A checker of `cell` px, 0.1 and 0.9 (mean 0.5), from the frame's top-left corner, so
+    /// that whole cells meet every edge.
+    fn checker(cell: usize) -> impl Fn(usize, usize) -> f32 {
+        move |x, y| 0.1 + 0.8 * ((x / cell + y / cell) % 2) as f32
+    }
+
+    #[test]
+    fn a_fine_checker_meeting_the_frame_edge_keeps_its_mean_within_the_first_coc_radius() {
+        // Issue 34: a fine far texture meeting the frame's edges, in both orientations (the
+        // checker meets the top and bottom rows and the left and right columns alike).
+        // Blurred, it is its mean, 0.5, up to the edge: what lies beyond is unknown, and the
+        // gather must not make structure of it. Mirroring the frame about its edge doubled
+        // the edge cell, and within the first CoC radius (corners included) the output swung
+        // to 0.304 off the mean (4 px cells, CoC 9) and 0.260 (5 px, CoC 12); with the taps
+        // outside weighing nothing it stays within 0.213 and 0.181. Inside, the discrete
+        // bokeh's own ripple over such cells is up to 0.07.
+        let (w, h) = (160, 96);
+        for (cell, coc) in [(4, 9.0f32), (5, 12.0)] {
+            let out = run(w, h, &checker(cell), &vec![coc; w * h]);
+            let radius = (0.5 * coc).ceil() as usize;
+            let mut checked = 0;
+            for y in 0..h {
+                for x in 0..w {
+                    if x.min(w - 1 - x).min(y).min(h - 1 - y) >= radius {
+                        continue;
+                    }
+                    let v = out[y * w + x];
+                    assert!(
+                        (v - 0.5).abs() <= 0.25,
+                        "cell {cell}, CoC {coc}: ({x}, {y}): {v}"
+                    );
+                    checked += 1;
+                }
+            }
+            assert_eq!(checked, w * h - (w - 2 * radius) * (h - 2 * radius));
         }
     }
 

@@ -27,14 +27,24 @@ pub(super) enum Fields {
 }
 
 /// The planes the gather reads, padded by `pad` pixels on every side (and a tile more on the
-/// right) with the frame mirrored about its edges, so taps never need bounds checks.
+/// right), so taps never need bounds checks: colour and CoC mirrored about the frame's
+/// edges, 1 / bokeh area 0 outside it, so a tap there weighs nothing. The far field is then
+/// the renormalised average of the taps inside the frame, and the near field's opacity
+/// counts the near pixels the frame holds.
 ///
-/// Beyond the frame the world goes on and a post-process cannot see it. Of the three ways
-/// to stand in for it, mirroring erred least on `layers` at 640×360 (region RMSE 0.0178,
-/// against 0.0186 clamping to the edge and 0.0185 renormalising over the taps inside):
-/// clamping smears the border row across the whole bokeh, renormalising leaves a border
-/// pixel's far field one-sided and its near field's opacity short, while a mirrored
-/// neighbourhood keeps the texture's local statistics and its edges.
+/// Beyond the frame the world goes on and a post-process cannot see it; the estimate must
+/// not invent structure. Measured (issue 34, BENCHMARKS.md "Frame borders"), by the worst
+/// case: mirroring (today's before) doubles the edge cell of a fine texture, so within a
+/// CoC radius of the border the pattern no longer averages out (a 4 px checker under a 9 px
+/// CoC: 0.30 off its mean at the corners; first 12 px against the texture continued,
+/// RMSE 0.0278 where this errs 0.0115, worst case over the fine and coarse frames 0.0412
+/// against 0.0358); clamping smears the border row (worst 0.0516); reflecting about the
+/// edge pixel itself breaks the texture's period too (worst 0.0480). Mirroring the near
+/// field while renormalising the far one changed 271 pixels of `border-coarse` (its disc cut
+/// by the corner) at 640×360 by an RMSE of 4e-5 there, and scaling the near field's opacity
+/// by the share of its taps inside raised their error by a quarter: neither is kept. What
+/// this costs: on the coarse truth scenes a few percent of region RMSE (`border-coarse`
+/// 0.0108 → 0.0116, `layers` 0.0218 → 0.0222 at 320×180), within the references' noise.
 pub(super) struct Padded {
     pub(super) stride: usize,
     pub(super) pad: usize,

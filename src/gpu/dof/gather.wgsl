@@ -52,7 +52,15 @@ struct Tile {
 const TILE: u32 = 16u;
 
 // Index i of a row or column of n pixels reflected into it about its edges, the edge pixel
-// repeated (`mirror` in gather/mod.rs).
+// repeated (`mirror` in gather/mod.rs): where a tap outside the frame reads, with weight 0.
+
+// Whether the tap at offset (dx, dy) from pixel (x, y) lies inside the frame: outside it, its
+// 1 / bokeh area is 0 (the CPU's padding), so it weighs nothing in either field.
+fn inside(x: u32, y: u32, dx: i32, dy: i32) -> bool {
+    let sx = i32(x) + dx;
+    let sy = i32(y) + dy;
+    return sx >= 0 && sx < i32(config.width) && sy >= 0 && sy < i32(config.height);
+}
 fn mirror(i: i32, n: u32) -> u32 {
     let period = 2 * i32(n);
     var m = i % period;
@@ -81,7 +89,7 @@ fn sample(x: u32, y: u32, dx: i32, dy: i32, centre: vec4<f32>) -> Sample {
     var s: Sample;
     s.d = vec4<f32>(color[i], color[n + i], color[2u * n + i], color[3u * n + i]) - centre;
     s.c = 0.5 * coc[i];
-    s.ia = coc[n + i];
+    s.ia = select(0.0, coc[n + i], inside(x, y, dx, dy));
     return s;
 }
 
@@ -219,13 +227,14 @@ fn gather_carrying(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoc
             for (var k = 0u; k < tile.far_count; k++) {
                 let tap = taps[tile.far_start + k];
                 let i = tap_index(x, y, tap.dx, tap.dy);
+                let ia = select(0.0, coc[n + i], inside(x, y, tap.dx, tap.dy));
                 let sc = 0.5 * coc[i];
                 let rs = abs(sc);
                 let is_far = tile.fields == 1u || sc > split;
                 let cover_far = clamp(min(rs, rp) - tap.norm_far + 0.5, 0.0, 1.0);
                 var wf = 0.0;
                 if (is_far) {
-                    wf = cover_far * coc[n + i];
+                    wf = cover_far * ia;
                 }
                 for (var g = 0u; g < colours; g++) {
                     far[g] += wf * (colour_at(g, i, n) - centre[g]);
@@ -237,12 +246,13 @@ fn gather_carrying(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoc
             for (var k = 0u; k < tile.taps_count; k++) {
                 let tap = taps[tile.taps_start + k];
                 let i = tap_index(x, y, tap.dx, tap.dy);
+                let ia = select(0.0, coc[n + i], inside(x, y, tap.dx, tap.dy));
                 let sc = 0.5 * coc[i];
                 let rs = abs(sc);
                 let cover_near = clamp(rs - tap.norm_near + 0.5, 0.0, 1.0);
                 var wn = 0.0;
                 if (!(sc > split)) {
-                    wn = cover_near * tap.area * coc[n + i];
+                    wn = cover_near * tap.area * ia;
                 }
                 for (var g = 0u; g < colours; g++) {
                     near[g] += wn * (colour_at(g, i, n) - centre[g]);
@@ -254,6 +264,7 @@ fn gather_carrying(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoc
             for (var k = 0u; k < tile.taps_count; k++) {
                 let tap = taps[tile.taps_start + k];
                 let i = tap_index(x, y, tap.dx, tap.dy);
+                let ia = select(0.0, coc[n + i], inside(x, y, tap.dx, tap.dy));
                 let sc = 0.5 * coc[i];
                 let rs = abs(sc);
                 let is_far = sc > split;
@@ -262,9 +273,9 @@ fn gather_carrying(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoc
                 var wf = 0.0;
                 var wn = 0.0;
                 if (is_far) {
-                    wf = cover_far * coc[n + i];
+                    wf = cover_far * ia;
                 } else {
-                    wn = cover_near * tap.area * coc[n + i];
+                    wn = cover_near * tap.area * ia;
                 }
                 for (var g = 0u; g < colours; g++) {
                     let d = colour_at(g, i, n) - centre[g];
