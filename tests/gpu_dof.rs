@@ -474,6 +474,59 @@ mod with_gpu {
         }
     }
 
+    /// A near disc's rim over a fine far checker (disc CoC −14: its tiles take the rings of
+    /// 7 px; the checker's 4 px bokeh reads the dense grid there): the twin picks the dense
+    /// grid per pixel as the CPU picks it per lane, within the gather's tolerance (1e-5 of
+    /// the range), beauty and carried alike.
+    #[test]
+    fn dof_gather_reads_the_dense_grid_in_a_near_rim_s_tiles_as_the_cpu_does() {
+        let Some(gpu) = gpu() else { return };
+        use shutter::dof::gather::{gather, gather_carrying, plan};
+        use shutter::dof::DofConfig;
+        let (w, h) = (96, 64);
+        let disc = |x: usize, y: usize| {
+            let (dx, dy) = (x as f32 + 0.5 - 14.0, y as f32 + 0.5 - 14.0);
+            dx * dx + dy * dy < 8.0 * 8.0
+        };
+        let plane: Vec<f32> = (0..w * h)
+            .map(|i| {
+                if disc(i % w, i / w) {
+                    0.3
+                } else {
+                    ((i % w + i / w) % 2) as f32
+                }
+            })
+            .collect();
+        let color = shutter::frame::Color {
+            r: plane.clone(),
+            g: plane.iter().map(|v| 1.0 - v).collect(),
+            b: plane,
+            a: Some(vec![1.0; w * h]),
+        };
+        let coc: Vec<f32> = (0..w * h)
+            .map(|i| if disc(i % w, i / w) { -14.0 } else { 8.0 })
+            .collect();
+        let config = DofConfig::new(w, h, &DofParams::default());
+        let t = tiles(&TilesConfig::new(w, h, config.epsilon), &coc);
+        assert!(plan(&config, &t).tiles.iter().any(|t| t.dense_count > 0));
+        let cpu = gather(&config, &color, &coc, &t);
+        let got = gpu
+            .try_dof_gather(&config, &color, &coc, &t)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let carried = gpu
+            .try_dof_gather_carrying(&config, &[&color, &color], &coc, &t)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let (cpu_carried, _) = gather_carrying(&config, &color, &coc, &t, vec![color.r.clone()]);
+        assert_eq!(cpu_carried, cpu);
+        for out in [&got, &carried[0], &carried[1]] {
+            for (name, g, c) in [("r", &out.r, &cpu.r), ("g", &out.g, &cpu.g)] {
+                for (i, (g, c)) in g.iter().zip(c.iter()).enumerate() {
+                    assert!((g - c).abs() <= 1e-5, "{name} at {i}: GPU {g}, CPU {c}");
+                }
+            }
+        }
+    }
+
     /// The gather carrying light layers (`gather_carrying`): ten colours (two dispatches of at
     /// most eight) against the CPU's carried gather, each colour within the tolerance the
     /// gather's own parity test states (1e-5 of its range per pixel, mean 1e-7), on two

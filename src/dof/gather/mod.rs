@@ -30,7 +30,13 @@
 //!    Where a larger bokeh than the tile's own sets its radius (a near field reaching over
 //!    it), the far field is gathered apart over the taps of the tile's own largest radius:
 //!    a far sample counts only within the pixel's own bokeh, and the large radius's rings
-//!    are too sparse there (a fine far texture would come out as a grid of marks).
+//!    are too sparse there (a fine far texture would come out as a grid of marks). Where
+//!    the tile's far taps are rings still (a strongly defocused near object's rim inside
+//!    the tile, over fine far detail), a pixel whose own bokeh fits the whole-pixel grid
+//!    (radius up to `rings` px) gathers its far field over that grid instead
+//!    ([`TileTaps::dense_start`]): the rings of the near object's radius left a 5 px far
+//!    bokeh a few dozen scattered taps, and on `border` the fine checker under the disc's
+//!    tiles erred 2.5× the references' noise up to a tile from its rim.
 //! 3. **Far field** (s no nearer than p, within 1 px of CoC): s counts where its bokeh and
 //!    p's both cover the tap, `min(r_s, r_p)` — so an in-focus pixel takes nothing from the
 //!    blurred background behind it, and a blurred background takes nothing from an in-focus
@@ -219,6 +225,12 @@ struct Choice {
     far_radius: Option<f32>,
 }
 
+/// Whether a tile's far taps are the rings (its far radius beyond the `rings` px the grids
+/// go to): then its pixels whose own bokeh fits the grid gather their far field over it.
+fn far_rings(choice: &Choice, rings: usize) -> bool {
+    choice.far_radius.unwrap_or(choice.radius).ceil() as usize > rings
+}
+
 /// How a tile with gather radius `reach`, own largest radius `own` and no near field
 /// (`far_only`) gathers; `None` where nothing out of focus reaches it (it is copied).
 fn choose(reach: f32, own: f32, far_only: bool, half_focus: f32) -> Option<Choice> {
@@ -263,7 +275,10 @@ pub struct GatherConfig {
     /// The colours the twin's buffers hold, RGBA each (its `gather_carrying`: the beauty and
     /// light layers; 1 for `gather`).
     pub colours: u32,
-    pub _pad: [u32; 2],
+    /// The largest bokeh radius (px) that gathers its far field over a tile's dense grid
+    /// ([`TileTaps::dense_start`]): `rings`, the grid's radius.
+    pub small: f32,
+    pub _pad: u32,
 }
 
 impl GatherConfig {
@@ -276,7 +291,8 @@ impl GatherConfig {
             has_alpha: has_alpha as u32,
             layer: LAYER,
             colours: 1,
-            _pad: [0; 2],
+            small: config.rings as f32,
+            _pad: 0,
         }
     }
 }
@@ -299,7 +315,7 @@ pub struct OffsetTap {
 /// How one tile gathers, as the GPU twin reads it (`Tile` in src/gpu/dof/gather.wgsl; a test
 /// there holds the layouts together): `fields` 0 copy, 1 the far field alone, 2 both fields
 /// over the same taps, 3 the far field over its own taps then the near field; the taps (start
-/// and count in [`TilePlan::taps`]) and the far field's own taps.
+/// and count in [`TilePlan::taps`]), the far field's own taps, and the dense grid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]
 #[repr(C)]
@@ -309,6 +325,11 @@ pub struct TileTaps {
     pub taps_count: u32,
     pub far_start: u32,
     pub far_count: u32,
+    /// Where the far taps are rings (a radius beyond `rings` px): the whole-pixel grid of
+    /// radius `rings`, over which a pixel whose own bokeh radius is at most
+    /// [`GatherConfig::small`] gathers its far field instead (count 0 elsewhere).
+    pub dense_start: u32,
+    pub dense_count: u32,
 }
 
 /// What [`gather`] decides per tile, as the GPU twin reads it: every tile's choice and the
@@ -372,6 +393,8 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
                 taps_count: 0,
                 far_start: 0,
                 far_count: 0,
+                dense_start: 0,
+                dense_count: 0,
             },
             Some(choice) => {
                 let main = list(choice.radius, &mut plan);
@@ -385,12 +408,19 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
                     Fields::Both => 2,
                     Fields::Apart => 3,
                 };
+                let dense = if far_rings(&choice, rings_count) {
+                    list(rings_count as f32, &mut plan)
+                } else {
+                    [0, 0]
+                };
                 TileTaps {
                     fields,
                     taps_start: main[0],
                     taps_count: main[1],
                     far_start: far[0],
                     far_count: far[1],
+                    dense_start: dense[0],
+                    dense_count: dense[1],
                 }
             }
         };
@@ -507,6 +537,7 @@ pub fn gather_carrying(
                         }
                     };
                     let mode = choice.fields;
+                    let dense = far_rings(&choice, rings_count);
                     for row in 0..rows {
                         let start = padded.index(x0, ty * TILE + row);
                         let run = Row {
@@ -515,6 +546,8 @@ pub fn gather_carrying(
                             far_taps,
                             taps,
                             fields: mode,
+                            grids: if dense { &grids } else { &[] },
+                            small: rings_count as f32,
                         };
                         let mut result = [[0.0f32; TILE]; 4];
                         gather_run(&padded, &run, &mut result, &mut weights);
@@ -619,6 +652,57 @@ mod field_tests {
                 assert!(close(v, 0.5, 0.05), "({x}, {y}): {v}");
             }
         }
+    }
+
+    #[test]
+    fn a_fine_far_texture_in_a_near_rim_s_tiles_keeps_its_own_blur() {
+        // A one-pixel checker far behind (CoC 8 px: a 4 px bokeh) and a disc in front (CoC
+        // −14: a 7 px bokeh, beyond the 6 px the grids go to, so the four tiles it lies in
+        // take the rings of 7 px) of radius 8 px. In those tiles the far checker's pixels
+        // beyond the disc's bokeh must come out as they do with no disc at all: their far
+        // field over every pixel of their 4 px bokeh. With the rings of the disc's radius, a
+        // 4 px bokeh kept a few scattered taps and the pattern came out as marks.
+        let (w, h) = (96, 64);
+        let checker = |x: usize, y: usize| ((x + y) % 2) as f32;
+        let (cx, cy) = (14.0, 14.0);
+        let disc = |x: usize, y: usize| {
+            let (dx, dy) = (x as f32 + 0.5 - cx, y as f32 + 0.5 - cy);
+            dx * dx + dy * dy < 8.0 * 8.0
+        };
+        let paint = |x: usize, y: usize| if disc(x, y) { 0.3 } else { checker(x, y) };
+        let coc: Vec<f32> = (0..w * h)
+            .map(|i| if disc(i % w, i / w) { -14.0 } else { 8.0 })
+            .collect();
+        let with = run(w, h, &paint, &coc);
+        let without = run(w, h, &checker, &vec![8.0; w * h]);
+        let tile_of = |x: usize, y: usize| (x / TILE, y / TILE);
+        let disc_tiles: std::collections::BTreeSet<_> = (0..w * h)
+            .filter(|&i| disc(i % w, i / w))
+            .map(|i| tile_of(i % w, i / w))
+            .collect();
+        let mut checked = 0;
+        for y in 0..h {
+            for x in 0..w {
+                let (dx, dy) = (x as f32 + 0.5 - cx, y as f32 + 0.5 - cy);
+                // Beyond the disc's edge (8 px) plus its bokeh (7) and the far bokeh (4)
+                // plus a pixel, inside a tile the disc lies in.
+                if (dx * dx + dy * dy).sqrt() < 8.0 + 7.0 + 4.0 + 1.0
+                    || !disc_tiles.contains(&tile_of(x, y))
+                {
+                    continue;
+                }
+                let i = y * w + x;
+                assert!(
+                    close(with[i], without[i], 1e-5),
+                    "({x}, {y}): {} with the disc, {} without",
+                    with[i],
+                    without[i]
+                );
+                checked += 1;
+            }
+        }
+        assert_eq!(disc_tiles.len(), 4);
+        assert!(checked > 40, "{checked}");
     }
 
     #[test]

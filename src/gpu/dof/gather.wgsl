@@ -15,7 +15,8 @@ struct GatherConfig {
     layer: f32,
     // The colours in `color` and `out` (`gather_carrying`): the beauty's, light layers'.
     colours: u32,
-    _pad1: u32,
+    // The largest bokeh radius (px) that gathers its far field over a tile's dense grid.
+    small: f32,
     _pad2: u32,
 }
 
@@ -28,13 +29,30 @@ struct Tap {
     area: f32,
 }
 
-// Keep in sync with `TileTaps` in src/dof/gather/mod.rs: fields 0 copy, 1 far, 2 both, 3 apart.
+// Keep in sync with `TileTaps` in src/dof/gather/mod.rs: fields 0 copy, 1 far, 2 both, 3 apart;
+// where the far taps are rings, the dense grid (count 0 elsewhere).
 struct Tile {
     fields: u32,
     taps_start: u32,
     taps_count: u32,
     far_start: u32,
     far_count: u32,
+    dense_start: u32,
+    dense_count: u32,
+}
+
+// The far taps of a pixel of radius rp in `tile` (start, count): the dense grid where the
+// tile's far taps are rings and the pixel's own bokeh fits the grid (the CPU's lanes that
+// take it: a tap beyond the bokeh weighs 0, so the CPU's smaller grid sums the same), else
+// the tile's far taps (its main taps when both fields share them).
+fn far_list(tile: Tile, rp: f32) -> vec2<u32> {
+    if (tile.dense_count > 0u && rp <= config.small) {
+        return vec2<u32>(tile.dense_start, tile.dense_count);
+    }
+    if (tile.fields == 2u) {
+        return vec2<u32>(tile.taps_start, tile.taps_count);
+    }
+    return vec2<u32>(tile.far_start, tile.far_count);
 }
 
 @group(0) @binding(0) var<uniform> config: GatherConfig;
@@ -119,9 +137,13 @@ fn gather(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id)
     var far_weight = coc[n + p];
     var near = vec4<f32>(0.0);
     var opacity = 0.0;
-    if (tile.fields == 1u || tile.fields == 3u) {
-        for (var k = 0u; k < tile.far_count; k++) {
-            let tap = taps[tile.far_start + k];
+    let far_taps = far_list(tile, rp);
+    // Both fields over the same taps in one loop, unless the far field reads the dense grid:
+    // then as apart (the same sums in the same order).
+    let fused = tile.fields == 2u && !(tile.dense_count > 0u && rp <= config.small);
+    if (!fused) {
+        for (var k = 0u; k < far_taps.y; k++) {
+            let tap = taps[far_taps.x + k];
             let s = sample(x, y, tap.dx, tap.dy, centre);
             let rs = abs(s.c);
             let is_far = tile.fields == 1u || s.c > split;
@@ -134,7 +156,7 @@ fn gather(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id)
             far_weight += wf;
         }
     }
-    if (tile.fields == 3u) {
+    if (tile.fields == 3u || (tile.fields == 2u && !fused)) {
         for (var k = 0u; k < tile.taps_count; k++) {
             let tap = taps[tile.taps_start + k];
             let s = sample(x, y, tap.dx, tap.dy, centre);
@@ -148,7 +170,7 @@ fn gather(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id)
             opacity += wn;
         }
     }
-    if (tile.fields == 2u) {
+    if (fused) {
         for (var k = 0u; k < tile.taps_count; k++) {
             let tap = taps[tile.taps_start + k];
             let s = sample(x, y, tap.dx, tap.dy, centre);
@@ -223,9 +245,11 @@ fn gather_carrying(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoc
         let cc = 0.5 * coc[p];
         let rp = abs(cc);
         let split = cc - 0.5 * config.layer;
-        if (tile.fields == 1u || tile.fields == 3u) {
-            for (var k = 0u; k < tile.far_count; k++) {
-                let tap = taps[tile.far_start + k];
+        let far_taps = far_list(tile, rp);
+        let fused = tile.fields == 2u && !(tile.dense_count > 0u && rp <= config.small);
+        if (!fused) {
+            for (var k = 0u; k < far_taps.y; k++) {
+                let tap = taps[far_taps.x + k];
                 let i = tap_index(x, y, tap.dx, tap.dy);
                 let ia = select(0.0, coc[n + i], inside(x, y, tap.dx, tap.dy));
                 let sc = 0.5 * coc[i];
@@ -242,7 +266,7 @@ fn gather_carrying(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoc
                 far_weight += wf;
             }
         }
-        if (tile.fields == 3u) {
+        if (tile.fields == 3u || (tile.fields == 2u && !fused)) {
             for (var k = 0u; k < tile.taps_count; k++) {
                 let tap = taps[tile.taps_start + k];
                 let i = tap_index(x, y, tap.dx, tap.dy);
@@ -260,7 +284,7 @@ fn gather_carrying(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoc
                 opacity += wn;
             }
         }
-        if (tile.fields == 2u) {
+        if (fused) {
             for (var k = 0u; k < tile.taps_count; k++) {
                 let tap = taps[tile.taps_start + k];
                 let i = tap_index(x, y, tap.dx, tap.dy);
