@@ -62,10 +62,8 @@ use super::bokeh::{grid, taps, Aperture, Tap};
 use super::tiles::{Tiles, LAYER, TILE};
 use super::DofConfig;
 use crate::frame::Color;
-use run::{carry_run, gather_run, Fields, Padded, PixelTap, Row, RowWeights};
-
-/// Smallest bokeh radius a weight divides by (px): a pixel's own footprint.
-const SMALLEST_RADIUS: f32 = 0.5;
+pub use run::inverse_area;
+use run::{carry_run, gather_run, Fields, Padded, PixelTap, Row, RowWeights, SMALLEST_RADIUS};
 
 /// A whole-pixel offset with the area it stands for, as a tap of a tile's pattern: its index
 /// step in the padded planes and the aperture norms of the offset (of −offset for the far
@@ -121,80 +119,6 @@ fn ring_taps(radius: f32, rings: &[Tap], aperture: &Aperture, stride: isize) -> 
         .filter(|(key, _)| *key != (0, 0))
         .map(|(key, area)| pixel_tap(key, area, aperture, stride))
         .collect()
-}
-
-/// Index `i` of a row or column of `n` pixels reflected into it about its edges (the edge
-/// pixel repeated: …, 1, 0 | 0, 1, …, n − 1 | n − 1, n − 2, …), for any i: where the padding
-/// takes its colour and CoC from. Outside the frame those only fill the planes (every
-/// weight there is 0); the bits of the padding are then the same whatever the reflection.
-fn mirror(i: isize, n: usize) -> usize {
-    let period = 2 * n as isize;
-    let m = i.rem_euclid(period);
-    (if m >= n as isize { period - 1 - m } else { m }) as usize
-}
-
-/// How the padded planes are made: colour and CoC [`mirror`]ed, 1 / bokeh area 0 outside the
-/// frame (a tap there weighs nothing in either field).
-impl Padded {
-    fn new(
-        color: &Color,
-        coc: &[f32],
-        extra: &[Vec<f32>],
-        (width, height): (usize, usize),
-        pad: usize,
-        unit_area: f32,
-    ) -> Self {
-        // A tile's last run reads a whole TILE of lanes: room for that on the right.
-        let stride = width + 2 * pad + TILE;
-        let rows = height + 2 * pad;
-        // Each padded column's source column, found once for every row and plane.
-        let columns: Vec<usize> = (0..stride)
-            .map(|px| mirror(px as isize - pad as isize, width))
-            .collect();
-        // `inside`: whether the plane is 0 outside the frame rather than mirrored.
-        let padded = |value: &(dyn Fn(usize) -> f32 + Sync), inside: bool| {
-            let mut out = vec![0.0f32; stride * rows];
-            out.par_chunks_mut(stride)
-                .enumerate()
-                .for_each(|(py, row)| {
-                    let y = mirror(py as isize - pad as isize, height);
-                    for (v, &x) in row.iter_mut().zip(&columns) {
-                        *v = value(y * width + x);
-                    }
-                    if inside {
-                        if py < pad || py >= pad + height {
-                            row.fill(0.0);
-                        } else {
-                            row[..pad].fill(0.0);
-                            row[pad + width..].fill(0.0);
-                        }
-                    }
-                });
-            out
-        };
-        let planes = [
-            padded(&|i| color.r[i], false),
-            padded(&|i| color.g[i], false),
-            padded(&|i| color.b[i], false),
-            padded(&|i| color.a.as_ref().map_or(0.0, |a| a[i]), false),
-            padded(&|i| 0.5 * coc[i], false),
-            padded(&|i| inverse_area(coc[i], unit_area), true),
-        ];
-        let extra = extra
-            .iter()
-            .map(|plane| padded(&|i| plane[i], false))
-            .collect();
-        Padded {
-            stride,
-            pad,
-            planes,
-            extra,
-        }
-    }
-
-    fn index(&self, x: usize, y: usize) -> usize {
-        (y + self.pad) * self.stride + x + self.pad
-    }
 }
 
 /// The taps of a gather radius: the whole-pixel grid up to `rings` px, the snapped rings
@@ -427,14 +351,6 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
         plan.tiles.push(tile);
     }
     plan
-}
-
-/// 1 / bokeh area (px⁻²) of a pixel of signed CoC `coc` (diameter, px): the weight of its
-/// light per pixel it covers.
-#[inline(always)]
-pub fn inverse_area(coc: f32, unit_area: f32) -> f32 {
-    let r = (0.5 * coc).abs().max(SMALLEST_RADIUS);
-    1.0 / (unit_area * r * r)
 }
 
 /// Depth of field by gathering; `coc` is the signed CoC plane (px, diameter), `tiles` its

@@ -1,9 +1,25 @@
 //! The bokeh gather's inner loops ([`super`]): one tile row of up to [`TILE`] pixels over a
 //! tile's taps, for the beauty ([`gather_run`], which also keeps each tap's weights and the
 //! composite's scales when planes are carried beside it) and for each carried plane
-//! ([`carry_run`], which applies those weights: no weight is computed twice).
+//! ([`carry_run`], which applies those weights: no weight is computed twice); the far field
+//! of small bokehs over the dense grid ([`dense_far`]); and the padded planes they read
+//! ([`Padded`]: what counts outside the frame).
+
+use rayon::prelude::*;
 
 use crate::dof::tiles::{LAYER, TILE};
+use crate::frame::Color;
+
+/// Smallest bokeh radius a weight divides by (px): a pixel's own footprint.
+pub(super) const SMALLEST_RADIUS: f32 = 0.5;
+
+/// 1 / bokeh area (px⁻²) of a pixel of signed CoC `coc` (diameter, px): the weight of its
+/// light per pixel it covers.
+#[inline(always)]
+pub fn inverse_area(coc: f32, unit_area: f32) -> f32 {
+    let r = (0.5 * coc).abs().max(SMALLEST_RADIUS);
+    1.0 / (unit_area * r * r)
+}
 
 /// One tap of a tile's pattern: a whole-pixel offset (as an index step in the padded
 /// planes), the aperture norms of the offset, and the area it stands for (px²).
@@ -52,6 +68,80 @@ pub(super) struct Padded {
     pub(super) planes: [Vec<f32>; 6],
     /// The carried planes (light layers), padded alike.
     pub(super) extra: Vec<Vec<f32>>,
+}
+
+/// Index `i` of a row or column of `n` pixels reflected into it about its edges (the edge
+/// pixel repeated: …, 1, 0 | 0, 1, …, n − 1 | n − 1, n − 2, …), for any i: where the padding
+/// takes its colour and CoC from. Outside the frame those only fill the planes (every
+/// weight there is 0); the bits of the padding are then the same whatever the reflection.
+pub(super) fn mirror(i: isize, n: usize) -> usize {
+    let period = 2 * n as isize;
+    let m = i.rem_euclid(period);
+    (if m >= n as isize { period - 1 - m } else { m }) as usize
+}
+
+/// How the padded planes are made: colour and CoC [`mirror`]ed, 1 / bokeh area 0 outside the
+/// frame (a tap there weighs nothing in either field).
+impl Padded {
+    pub(super) fn new(
+        color: &Color,
+        coc: &[f32],
+        extra: &[Vec<f32>],
+        (width, height): (usize, usize),
+        pad: usize,
+        unit_area: f32,
+    ) -> Self {
+        // A tile's last run reads a whole TILE of lanes: room for that on the right.
+        let stride = width + 2 * pad + TILE;
+        let rows = height + 2 * pad;
+        // Each padded column's source column, found once for every row and plane.
+        let columns: Vec<usize> = (0..stride)
+            .map(|px| mirror(px as isize - pad as isize, width))
+            .collect();
+        // `inside`: whether the plane is 0 outside the frame rather than mirrored.
+        let padded = |value: &(dyn Fn(usize) -> f32 + Sync), inside: bool| {
+            let mut out = vec![0.0f32; stride * rows];
+            out.par_chunks_mut(stride)
+                .enumerate()
+                .for_each(|(py, row)| {
+                    let y = mirror(py as isize - pad as isize, height);
+                    for (v, &x) in row.iter_mut().zip(&columns) {
+                        *v = value(y * width + x);
+                    }
+                    if inside {
+                        if py < pad || py >= pad + height {
+                            row.fill(0.0);
+                        } else {
+                            row[..pad].fill(0.0);
+                            row[pad + width..].fill(0.0);
+                        }
+                    }
+                });
+            out
+        };
+        let planes = [
+            padded(&|i| color.r[i], false),
+            padded(&|i| color.g[i], false),
+            padded(&|i| color.b[i], false),
+            padded(&|i| color.a.as_ref().map_or(0.0, |a| a[i]), false),
+            padded(&|i| 0.5 * coc[i], false),
+            padded(&|i| inverse_area(coc[i], unit_area), true),
+        ];
+        let extra = extra
+            .iter()
+            .map(|plane| padded(&|i| plane[i], false))
+            .collect();
+        Padded {
+            stride,
+            pad,
+            planes,
+            extra,
+        }
+    }
+
+    pub(super) fn index(&self, x: usize, y: usize) -> usize {
+        (y + self.pad) * self.stride + x + self.pad
+    }
 }
 
 /// One tile row's run: `span` (≤ [`TILE`]) consecutive pixels from padded index `start`, the
