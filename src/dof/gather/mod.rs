@@ -22,12 +22,21 @@
 //!    n-blade diaphragm shapes the bokeh. A tile's taps are the same for all its pixels, so
 //!    the loop runs taps outside and the tile's 16 pixels of a row inside, on padded planes
 //!    (structure of arrays, no bounds checks): one AVX-512 vector per tap where the CPU has
-//!    it. The padding mirrors the frame about its edges ([`mirror`]).
+//!    it. What lies beyond the frame is unknown, and the gather does not make it up: a tap
+//!    outside the frame weighs nothing (its 1 / bokeh area is 0 in the padding), so the far
+//!    field is the average of the in-frame taps, renormalised, and the near field counts
+//!    the near pixels the frame holds ([`Padded`] says what was measured against mirroring).
 //!
 //!    Where a larger bokeh than the tile's own sets its radius (a near field reaching over
 //!    it), the far field is gathered apart over the taps of the tile's own largest radius:
 //!    a far sample counts only within the pixel's own bokeh, and the large radius's rings
-//!    are too sparse there (a fine far texture would come out as a grid of marks).
+//!    are too sparse there (a fine far texture would come out as a grid of marks). Where
+//!    the tile's far taps are rings still (a strongly defocused near object's rim inside
+//!    the tile, over fine far detail), a pixel whose own bokeh fits the whole-pixel grid
+//!    (radius up to `rings` px) gathers its far field over that grid instead
+//!    ([`TileTaps::dense_start`]): the rings of the near object's radius left a 5 px far
+//!    bokeh a few dozen scattered taps, and on `border` the fine checker under the disc's
+//!    tiles erred 2.5× the references' noise up to a tile from its rim.
 //! 3. **Far field** (s no nearer than p, within 1 px of CoC): s counts where its bokeh and
 //!    p's both cover the tap, `min(r_s, r_p)` — so an in-focus pixel takes nothing from the
 //!    blurred background behind it, and a blurred background takes nothing from an in-focus
@@ -53,10 +62,8 @@ use super::bokeh::{grid, taps, Aperture, Tap};
 use super::tiles::{Tiles, LAYER, TILE};
 use super::DofConfig;
 use crate::frame::Color;
-use run::{carry_run, gather_run, Fields, Padded, PixelTap, Row, RowWeights};
-
-/// Smallest bokeh radius a weight divides by (px): a pixel's own footprint.
-const SMALLEST_RADIUS: f32 = 0.5;
+pub use run::inverse_area;
+use run::{carry_run, gather_run, Fields, Padded, PixelTap, Row, RowWeights, SMALLEST_RADIUS};
 
 /// A whole-pixel offset with the area it stands for, as a tap of a tile's pattern: its index
 /// step in the padded planes and the aperture norms of the offset (of −offset for the far
@@ -114,66 +121,6 @@ fn ring_taps(radius: f32, rings: &[Tap], aperture: &Aperture, stride: isize) -> 
         .collect()
 }
 
-/// Index `i` of a row or column of `n` pixels reflected into it about its edges (the edge
-/// pixel repeated: …, 1, 0 | 0, 1, …, n − 1 | n − 1, n − 2, …), for any i. On `layers` this
-/// erred 3 % less than reflecting about the edge pixel itself (…, 1 | 0, 1, …).
-fn mirror(i: isize, n: usize) -> usize {
-    let period = 2 * n as isize;
-    let m = i.rem_euclid(period);
-    (if m >= n as isize { period - 1 - m } else { m }) as usize
-}
-
-/// How the padded planes are made (the padding is [`mirror`]'s).
-impl Padded {
-    fn new(
-        color: &Color,
-        coc: &[f32],
-        extra: &[Vec<f32>],
-        (width, height): (usize, usize),
-        pad: usize,
-        unit_area: f32,
-    ) -> Self {
-        // A tile's last run reads a whole TILE of lanes: room for that on the right.
-        let stride = width + 2 * pad + TILE;
-        let rows = height + 2 * pad;
-        // Each padded column's source column, found once for every row and plane.
-        let columns: Vec<usize> = (0..stride)
-            .map(|px| mirror(px as isize - pad as isize, width))
-            .collect();
-        let padded = |value: &(dyn Fn(usize) -> f32 + Sync)| {
-            let mut out = vec![0.0f32; stride * rows];
-            out.par_chunks_mut(stride)
-                .enumerate()
-                .for_each(|(py, row)| {
-                    let y = mirror(py as isize - pad as isize, height);
-                    for (v, &x) in row.iter_mut().zip(&columns) {
-                        *v = value(y * width + x);
-                    }
-                });
-            out
-        };
-        let planes = [
-            padded(&|i| color.r[i]),
-            padded(&|i| color.g[i]),
-            padded(&|i| color.b[i]),
-            padded(&|i| color.a.as_ref().map_or(0.0, |a| a[i])),
-            padded(&|i| 0.5 * coc[i]),
-            padded(&|i| inverse_area(coc[i], unit_area)),
-        ];
-        let extra = extra.iter().map(|plane| padded(&|i| plane[i])).collect();
-        Padded {
-            stride,
-            pad,
-            planes,
-            extra,
-        }
-    }
-
-    fn index(&self, x: usize, y: usize) -> usize {
-        (y + self.pad) * self.stride + x + self.pad
-    }
-}
-
 /// The taps of a gather radius: the whole-pixel grid up to `rings` px, the snapped rings
 /// beyond (made into `made`).
 fn taps_for<'a>(
@@ -200,6 +147,12 @@ struct Choice {
     fields: Fields,
     radius: f32,
     far_radius: Option<f32>,
+}
+
+/// Whether a tile's far taps are the rings (its far radius beyond the `rings` px the grids
+/// go to): then its pixels whose own bokeh fits the grid gather their far field over it.
+fn far_rings(choice: &Choice, rings: usize) -> bool {
+    choice.far_radius.unwrap_or(choice.radius).ceil() as usize > rings
 }
 
 /// How a tile with gather radius `reach`, own largest radius `own` and no near field
@@ -246,7 +199,10 @@ pub struct GatherConfig {
     /// The colours the twin's buffers hold, RGBA each (its `gather_carrying`: the beauty and
     /// light layers; 1 for `gather`).
     pub colours: u32,
-    pub _pad: [u32; 2],
+    /// The largest bokeh radius (px) that gathers its far field over a tile's dense grid
+    /// ([`TileTaps::dense_start`]): `rings`, the grid's radius.
+    pub small: f32,
+    pub _pad: u32,
 }
 
 impl GatherConfig {
@@ -259,7 +215,8 @@ impl GatherConfig {
             has_alpha: has_alpha as u32,
             layer: LAYER,
             colours: 1,
-            _pad: [0; 2],
+            small: config.rings as f32,
+            _pad: 0,
         }
     }
 }
@@ -282,7 +239,7 @@ pub struct OffsetTap {
 /// How one tile gathers, as the GPU twin reads it (`Tile` in src/gpu/dof/gather.wgsl; a test
 /// there holds the layouts together): `fields` 0 copy, 1 the far field alone, 2 both fields
 /// over the same taps, 3 the far field over its own taps then the near field; the taps (start
-/// and count in [`TilePlan::taps`]) and the far field's own taps.
+/// and count in [`TilePlan::taps`]), the far field's own taps, and the dense grid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "gpu", derive(bytemuck::Pod, bytemuck::Zeroable))]
 #[repr(C)]
@@ -292,6 +249,11 @@ pub struct TileTaps {
     pub taps_count: u32,
     pub far_start: u32,
     pub far_count: u32,
+    /// Where the far taps are rings (a radius beyond `rings` px): the whole-pixel grid of
+    /// radius `rings`, over which a pixel whose own bokeh radius is at most
+    /// [`GatherConfig::small`] gathers its far field instead (count 0 elsewhere).
+    pub dense_start: u32,
+    pub dense_count: u32,
 }
 
 /// What [`gather`] decides per tile, as the GPU twin reads it: every tile's choice and the
@@ -355,6 +317,8 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
                 taps_count: 0,
                 far_start: 0,
                 far_count: 0,
+                dense_start: 0,
+                dense_count: 0,
             },
             Some(choice) => {
                 let main = list(choice.radius, &mut plan);
@@ -368,26 +332,25 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
                     Fields::Both => 2,
                     Fields::Apart => 3,
                 };
+                let dense = if far_rings(&choice, rings_count) {
+                    list(rings_count as f32, &mut plan)
+                } else {
+                    [0, 0]
+                };
                 TileTaps {
                     fields,
                     taps_start: main[0],
                     taps_count: main[1],
                     far_start: far[0],
                     far_count: far[1],
+                    dense_start: dense[0],
+                    dense_count: dense[1],
                 }
             }
         };
         plan.tiles.push(tile);
     }
     plan
-}
-
-/// 1 / bokeh area (px⁻²) of a pixel of signed CoC `coc` (diameter, px): the weight of its
-/// light per pixel it covers.
-#[inline(always)]
-pub fn inverse_area(coc: f32, unit_area: f32) -> f32 {
-    let r = (0.5 * coc).abs().max(SMALLEST_RADIUS);
-    1.0 / (unit_area * r * r)
 }
 
 /// Depth of field by gathering; `coc` is the signed CoC plane (px, diameter), `tiles` its
@@ -490,6 +453,7 @@ pub fn gather_carrying(
                         }
                     };
                     let mode = choice.fields;
+                    let dense = far_rings(&choice, rings_count);
                     for row in 0..rows {
                         let start = padded.index(x0, ty * TILE + row);
                         let run = Row {
@@ -498,6 +462,8 @@ pub fn gather_carrying(
                             far_taps,
                             taps,
                             fields: mode,
+                            grids: if dense { &grids } else { &[] },
+                            small: rings_count as f32,
                         };
                         let mut result = [[0.0f32; TILE]; 4];
                         gather_run(&padded, &run, &mut result, &mut weights);
@@ -605,6 +571,57 @@ mod field_tests {
     }
 
     #[test]
+    fn a_fine_far_texture_in_a_near_rim_s_tiles_keeps_its_own_blur() {
+        // A one-pixel checker far behind (CoC 8 px: a 4 px bokeh) and a disc in front (CoC
+        // −14: a 7 px bokeh, beyond the 6 px the grids go to, so the four tiles it lies in
+        // take the rings of 7 px) of radius 8 px. In those tiles the far checker's pixels
+        // beyond the disc's bokeh must come out as they do with no disc at all: their far
+        // field over every pixel of their 4 px bokeh. With the rings of the disc's radius, a
+        // 4 px bokeh kept a few scattered taps and the pattern came out as marks.
+        let (w, h) = (96, 64);
+        let checker = |x: usize, y: usize| ((x + y) % 2) as f32;
+        let (cx, cy) = (14.0, 14.0);
+        let disc = |x: usize, y: usize| {
+            let (dx, dy) = (x as f32 + 0.5 - cx, y as f32 + 0.5 - cy);
+            dx * dx + dy * dy < 8.0 * 8.0
+        };
+        let paint = |x: usize, y: usize| if disc(x, y) { 0.3 } else { checker(x, y) };
+        let coc: Vec<f32> = (0..w * h)
+            .map(|i| if disc(i % w, i / w) { -14.0 } else { 8.0 })
+            .collect();
+        let with = run(w, h, &paint, &coc);
+        let without = run(w, h, &checker, &vec![8.0; w * h]);
+        let tile_of = |x: usize, y: usize| (x / TILE, y / TILE);
+        let disc_tiles: std::collections::BTreeSet<_> = (0..w * h)
+            .filter(|&i| disc(i % w, i / w))
+            .map(|i| tile_of(i % w, i / w))
+            .collect();
+        let mut checked = 0;
+        for y in 0..h {
+            for x in 0..w {
+                let (dx, dy) = (x as f32 + 0.5 - cx, y as f32 + 0.5 - cy);
+                // Beyond the disc's edge (8 px) plus its bokeh (7) and the far bokeh (4)
+                // plus a pixel, inside a tile the disc lies in.
+                if (dx * dx + dy * dy).sqrt() < 8.0 + 7.0 + 4.0 + 1.0
+                    || !disc_tiles.contains(&tile_of(x, y))
+                {
+                    continue;
+                }
+                let i = y * w + x;
+                assert!(
+                    close(with[i], without[i], 1e-5),
+                    "({x}, {y}): {} with the disc, {} without",
+                    with[i],
+                    without[i]
+                );
+                checked += 1;
+            }
+        }
+        assert_eq!(disc_tiles.len(), 4);
+        assert!(checked > 40, "{checked}");
+    }
+
+    #[test]
     fn carried_planes_get_the_bits_they_get_in_the_beautys_place() {
         // A near disc over a far texture with a band in focus: tiles of every kind (far field
         // alone, both fields, fields apart, copied). Five carried planes (a group of four and
@@ -647,6 +664,44 @@ mod field_tests {
             let want = gather(&config, &alone, &coc, &t).r;
             assert_ne!(bits(&want), bits(plane));
             assert_eq!(bits(got), bits(&want));
+        }
+    }
+
+    /// A checker of `cell` px, 0.1 and 0.9 (mean 0.5), from the frame's top-left corner, so
+    /// that whole cells meet every edge.
+    fn checker(cell: usize) -> impl Fn(usize, usize) -> f32 {
+        move |x, y| 0.1 + 0.8 * ((x / cell + y / cell) % 2) as f32
+    }
+
+    #[test]
+    fn a_fine_checker_meeting_the_frame_edge_keeps_its_mean_within_the_first_coc_radius() {
+        // Issue 34: a fine far texture meeting the frame's edges, in both orientations (the
+        // checker meets the top and bottom rows and the left and right columns alike).
+        // Blurred, it is its mean, 0.5, up to the edge: what lies beyond is unknown, and the
+        // gather must not make structure of it. Mirroring the frame about its edge doubled
+        // the edge cell, and within the first CoC radius (corners included) the output swung
+        // to 0.304 off the mean (4 px cells, CoC 9) and 0.260 (5 px, CoC 12); with the taps
+        // outside weighing nothing it stays within 0.213 and 0.181. Inside, the discrete
+        // bokeh's own ripple over such cells is up to 0.07.
+        let (w, h) = (160, 96);
+        for (cell, coc) in [(4, 9.0f32), (5, 12.0)] {
+            let out = run(w, h, &checker(cell), &vec![coc; w * h]);
+            let radius = (0.5 * coc).ceil() as usize;
+            let mut checked = 0;
+            for y in 0..h {
+                for x in 0..w {
+                    if x.min(w - 1 - x).min(y).min(h - 1 - y) >= radius {
+                        continue;
+                    }
+                    let v = out[y * w + x];
+                    assert!(
+                        (v - 0.5).abs() <= 0.25,
+                        "cell {cell}, CoC {coc}: ({x}, {y}): {v}"
+                    );
+                    checked += 1;
+                }
+            }
+            assert_eq!(checked, w * h - (w - 2 * radius) * (h - 2 * radius));
         }
     }
 

@@ -1,9 +1,25 @@
 //! The bokeh gather's inner loops ([`super`]): one tile row of up to [`TILE`] pixels over a
 //! tile's taps, for the beauty ([`gather_run`], which also keeps each tap's weights and the
 //! composite's scales when planes are carried beside it) and for each carried plane
-//! ([`carry_run`], which applies those weights: no weight is computed twice).
+//! ([`carry_run`], which applies those weights: no weight is computed twice); the far field
+//! of small bokehs over the dense grid ([`dense_far`]); and the padded planes they read
+//! ([`Padded`]: what counts outside the frame).
+
+use rayon::prelude::*;
 
 use crate::dof::tiles::{LAYER, TILE};
+use crate::frame::Color;
+
+/// Smallest bokeh radius a weight divides by (px): a pixel's own footprint.
+pub(super) const SMALLEST_RADIUS: f32 = 0.5;
+
+/// 1 / bokeh area (px⁻²) of a pixel of signed CoC `coc` (diameter, px): the weight of its
+/// light per pixel it covers.
+#[inline(always)]
+pub fn inverse_area(coc: f32, unit_area: f32) -> f32 {
+    let r = (0.5 * coc).abs().max(SMALLEST_RADIUS);
+    1.0 / (unit_area * r * r)
+}
 
 /// One tap of a tile's pattern: a whole-pixel offset (as an index step in the padded
 /// planes), the aperture norms of the offset, and the area it stands for (px²).
@@ -27,14 +43,24 @@ pub(super) enum Fields {
 }
 
 /// The planes the gather reads, padded by `pad` pixels on every side (and a tile more on the
-/// right) with the frame mirrored about its edges, so taps never need bounds checks.
+/// right), so taps never need bounds checks: colour and CoC mirrored about the frame's
+/// edges, 1 / bokeh area 0 outside it, so a tap there weighs nothing. The far field is then
+/// the renormalised average of the taps inside the frame, and the near field's opacity
+/// counts the near pixels the frame holds.
 ///
-/// Beyond the frame the world goes on and a post-process cannot see it. Of the three ways
-/// to stand in for it, mirroring erred least on `layers` at 640×360 (region RMSE 0.0178,
-/// against 0.0186 clamping to the edge and 0.0185 renormalising over the taps inside):
-/// clamping smears the border row across the whole bokeh, renormalising leaves a border
-/// pixel's far field one-sided and its near field's opacity short, while a mirrored
-/// neighbourhood keeps the texture's local statistics and its edges.
+/// Beyond the frame the world goes on and a post-process cannot see it; the estimate must
+/// not invent structure. Measured (issue 34, BENCHMARKS.md "Frame borders"), by the worst
+/// case: mirroring (today's before) doubles the edge cell of a fine texture, so within a
+/// CoC radius of the border the pattern no longer averages out (a 4 px checker under a 9 px
+/// CoC: 0.30 off its mean at the corners; first 12 px against the texture continued,
+/// RMSE 0.0278 where this errs 0.0115, worst case over the fine and coarse frames 0.0412
+/// against 0.0358); clamping smears the border row (worst 0.0516); reflecting about the
+/// edge pixel itself breaks the texture's period too (worst 0.0480). Mirroring the near
+/// field while renormalising the far one changed 271 pixels of `border-coarse` (its disc cut
+/// by the corner) at 640×360 by an RMSE of 4e-5 there, and scaling the near field's opacity
+/// by the share of its taps inside raised their error by a quarter: neither is kept. What
+/// this costs: on the coarse truth scenes a few percent of region RMSE (`border-coarse`
+/// 0.0108 → 0.0116, `layers` 0.0218 → 0.0222 at 320×180), within the references' noise.
 pub(super) struct Padded {
     pub(super) stride: usize,
     pub(super) pad: usize,
@@ -42,6 +68,80 @@ pub(super) struct Padded {
     pub(super) planes: [Vec<f32>; 6],
     /// The carried planes (light layers), padded alike.
     pub(super) extra: Vec<Vec<f32>>,
+}
+
+/// Index `i` of a row or column of `n` pixels reflected into it about its edges (the edge
+/// pixel repeated: …, 1, 0 | 0, 1, …, n − 1 | n − 1, n − 2, …), for any i: where the padding
+/// takes its colour and CoC from. Outside the frame those only fill the planes (every
+/// weight there is 0); the bits of the padding are then the same whatever the reflection.
+pub(super) fn mirror(i: isize, n: usize) -> usize {
+    let period = 2 * n as isize;
+    let m = i.rem_euclid(period);
+    (if m >= n as isize { period - 1 - m } else { m }) as usize
+}
+
+/// How the padded planes are made: colour and CoC [`mirror`]ed, 1 / bokeh area 0 outside the
+/// frame (a tap there weighs nothing in either field).
+impl Padded {
+    pub(super) fn new(
+        color: &Color,
+        coc: &[f32],
+        extra: &[Vec<f32>],
+        (width, height): (usize, usize),
+        pad: usize,
+        unit_area: f32,
+    ) -> Self {
+        // A tile's last run reads a whole TILE of lanes: room for that on the right.
+        let stride = width + 2 * pad + TILE;
+        let rows = height + 2 * pad;
+        // Each padded column's source column, found once for every row and plane.
+        let columns: Vec<usize> = (0..stride)
+            .map(|px| mirror(px as isize - pad as isize, width))
+            .collect();
+        // `inside`: whether the plane is 0 outside the frame rather than mirrored.
+        let padded = |value: &(dyn Fn(usize) -> f32 + Sync), inside: bool| {
+            let mut out = vec![0.0f32; stride * rows];
+            out.par_chunks_mut(stride)
+                .enumerate()
+                .for_each(|(py, row)| {
+                    let y = mirror(py as isize - pad as isize, height);
+                    for (v, &x) in row.iter_mut().zip(&columns) {
+                        *v = value(y * width + x);
+                    }
+                    if inside {
+                        if py < pad || py >= pad + height {
+                            row.fill(0.0);
+                        } else {
+                            row[..pad].fill(0.0);
+                            row[pad + width..].fill(0.0);
+                        }
+                    }
+                });
+            out
+        };
+        let planes = [
+            padded(&|i| color.r[i], false),
+            padded(&|i| color.g[i], false),
+            padded(&|i| color.b[i], false),
+            padded(&|i| color.a.as_ref().map_or(0.0, |a| a[i]), false),
+            padded(&|i| 0.5 * coc[i], false),
+            padded(&|i| inverse_area(coc[i], unit_area), true),
+        ];
+        let extra = extra
+            .iter()
+            .map(|plane| padded(&|i| plane[i], false))
+            .collect();
+        Padded {
+            stride,
+            pad,
+            planes,
+            extra,
+        }
+    }
+
+    pub(super) fn index(&self, x: usize, y: usize) -> usize {
+        (y + self.pad) * self.stride + x + self.pad
+    }
 }
 
 /// One tile row's run: `span` (≤ [`TILE`]) consecutive pixels from padded index `start`, the
@@ -53,6 +153,12 @@ pub(super) struct Row<'a> {
     pub(super) far_taps: &'a [PixelTap],
     pub(super) taps: &'a [PixelTap],
     pub(super) fields: Fields,
+    /// Where the tile's far taps are rings: the whole-pixel grids by radius (0 ..= `rings`),
+    /// over which the lanes whose own bokeh radius is at most `small` gather their far field
+    /// instead (the rings of a larger radius are too sparse for a small bokeh); empty
+    /// elsewhere.
+    pub(super) grids: &'a [Vec<PixelTap>],
+    pub(super) small: f32,
 }
 
 /// One tile row's weights as [`gather_run`] computed them, for [`carry_run`]: each far tap's
@@ -66,6 +172,11 @@ pub(super) struct RowWeights {
     pub(super) near: Vec<[f32; TILE]>,
     pub(super) near_scale: [f32; TILE],
     pub(super) far_scale: [f32; TILE],
+    /// The dense grid's far weights (lane by lane, in tap order), its radius, and the lanes
+    /// whose far field it gave.
+    pub(super) dense: Vec<[f32; TILE]>,
+    pub(super) dense_radius: usize,
+    pub(super) dense_lanes: [bool; TILE],
 }
 
 /// Gathers one tile row ([`Row`]) over its tile's taps: taps outside, pixels inside, so the
@@ -88,10 +199,13 @@ pub(super) fn gather_run(
         far_taps,
         taps,
         fields,
+        grids,
+        small,
     } = *row;
     let keep = weights.keep;
     weights.far.clear();
     weights.near.clear();
+    weights.dense.clear();
     let [pr, pg, pb, pa, pc, pia] = &padded.planes;
     let centre = |plane: &[f32]| -> [f32; TILE] {
         let mut v = [0.0f32; TILE];
@@ -218,6 +332,35 @@ pub(super) fn gather_run(
             }
         }
     }
+    // Lanes whose own bokeh fits the grids, in a tile whose far taps are rings: their far
+    // field over every pixel of their bokeh instead ([`dense_far`]). A lane whose radius is
+    // half a pixel or less takes no tap whichever the taps (its sums stay 0).
+    let mut lanes = [false; TILE];
+    let mut need = 0.0f32;
+    if !grids.is_empty() {
+        for x in 0..span {
+            if rp[x] > 0.5 && rp[x] <= small {
+                lanes[x] = true;
+                need = need.max(rp[x]);
+            }
+        }
+    }
+    weights.dense_lanes = lanes;
+    if need > 0.0 {
+        let radius = (need.ceil() as usize).min(grids.len() - 1);
+        weights.dense_radius = radius;
+        let centre = [cr, cg, cb, ca, cc, cia];
+        dense_far(
+            padded,
+            row,
+            &grids[radius],
+            &centre,
+            &lanes,
+            &mut far,
+            &mut far_weight,
+            weights,
+        );
+    }
     let base = [cr, cg, cb, ca];
     for x in 0..span {
         let (near_scale, rest) = if opacity[x] > 1.0 {
@@ -231,6 +374,68 @@ pub(super) fn gather_run(
         }
         weights.near_scale[x] = near_scale;
         weights.far_scale[x] = far_scale;
+    }
+}
+
+/// The far field of the lanes in `lanes` over the whole-pixel grid `grid` (the far half of
+/// [`gather_run`]'s loops), written over their sums in `far` and `far_weight`; the weights
+/// kept when they are asked for. Apart from the main loops, which it would otherwise slow
+/// down where it does not run (the 1080p bench: +25 % with it inline).
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn dense_far(
+    padded: &Padded,
+    row: &Row,
+    grid: &[PixelTap],
+    centre: &[[f32; TILE]; 6],
+    lanes: &[bool; TILE],
+    far: &mut [[f32; TILE]; 4],
+    far_weight: &mut [f32; TILE],
+    weights: &mut RowWeights,
+) {
+    let [pr, pg, pb, pa, pc, pia] = &padded.planes;
+    let [cr, cg, cb, ca, cc, cia] = centre;
+    let start = row.start;
+    let mut rp = [0.0f32; TILE];
+    let mut split = [0.0f32; TILE];
+    for x in 0..TILE {
+        rp[x] = cc[x].abs();
+        split[x] = cc[x] - 0.5 * LAYER;
+    }
+    let mut dense_far = [[0.0f32; TILE]; 4];
+    let mut dense_weight = *cia;
+    let mut kept_far = [0.0f32; TILE];
+    for tap in grid {
+        let base = (start as isize + tap.step) as usize;
+        let sr = &pr[base..base + TILE];
+        let sg = &pg[base..base + TILE];
+        let sb = &pb[base..base + TILE];
+        let sa = &pa[base..base + TILE];
+        let sc = &pc[base..base + TILE];
+        let sia = &pia[base..base + TILE];
+        for x in 0..TILE {
+            let rs = sc[x].abs();
+            let is_far = row.fields == Fields::Far || sc[x] > split[x];
+            let cover_far = (rs.min(rp[x]) - tap.norm_far + 0.5).clamp(0.0, 1.0);
+            let wf = if is_far { cover_far * sia[x] } else { 0.0 };
+            let d = [sr[x] - cr[x], sg[x] - cg[x], sb[x] - cb[x], sa[x] - ca[x]];
+            for k in 0..4 {
+                dense_far[k][x] += wf * d[k];
+            }
+            dense_weight[x] += wf;
+            kept_far[x] = wf;
+        }
+        if weights.keep {
+            weights.dense.push(kept_far);
+        }
+    }
+    for x in 0..TILE {
+        if lanes[x] {
+            for k in 0..4 {
+                far[k][x] = dense_far[k][x];
+            }
+            far_weight[x] = dense_weight[x];
+        }
     }
 }
 
@@ -252,6 +457,8 @@ pub(super) fn carry_run(
         far_taps,
         taps,
         fields,
+        grids,
+        small: _,
     } = *row;
     let [p0, p1, p2, p3] = planes;
     let centre = |plane: &[f32]| -> [f32; TILE] {
@@ -304,6 +511,29 @@ pub(super) fn carry_run(
                 for k in 0..4 {
                     far[k][x] += wf[x] * d[k];
                     near[k][x] += wn[x] * d[k];
+                }
+            }
+        }
+    }
+    if weights.dense_lanes.contains(&true) {
+        let mut dense_far = [[0.0f32; TILE]; 4];
+        for (tap, wf) in grids[weights.dense_radius].iter().zip(&weights.dense) {
+            let base = (start as isize + tap.step) as usize;
+            let s0 = &p0[base..base + TILE];
+            let s1 = &p1[base..base + TILE];
+            let s2 = &p2[base..base + TILE];
+            let s3 = &p3[base..base + TILE];
+            for x in 0..TILE {
+                let d = [s0[x] - c0[x], s1[x] - c1[x], s2[x] - c2[x], s3[x] - c3[x]];
+                for k in 0..4 {
+                    dense_far[k][x] += wf[x] * d[k];
+                }
+            }
+        }
+        for x in 0..TILE {
+            if weights.dense_lanes[x] {
+                for k in 0..4 {
+                    far[k][x] = dense_far[k][x];
                 }
             }
         }

@@ -178,14 +178,14 @@ mod tests {
 
     #[test]
     fn the_shared_structs_are_the_shader_s() {
-        // The uniform is eight 4-byte fields (a multiple of 16), a tap and a tile five each
+        // The uniform is eight 4-byte fields (a multiple of 16), a tap five and a tile seven
         // (their array stride in a storage buffer).
         assert_eq!(std::mem::align_of::<OffsetTap>(), 4);
         crate::gpu::layout::assert_same_layout!(
             GatherConfig,
             SHADER,
             "GatherConfig",
-            [width, height, columns, has_alpha, layer, colours]
+            [width, height, columns, has_alpha, layer, colours, small]
         );
         crate::gpu::layout::assert_same_layout!(
             OffsetTap,
@@ -197,7 +197,15 @@ mod tests {
             TileTaps,
             SHADER,
             "Tile",
-            [fields, taps_start, taps_count, far_start, far_count]
+            [
+                fields,
+                taps_start,
+                taps_count,
+                far_start,
+                far_count,
+                dense_start,
+                dense_count
+            ]
         );
     }
 }

@@ -15,7 +15,8 @@ struct GatherConfig {
     layer: f32,
     // The colours in `color` and `out` (`gather_carrying`): the beauty's, light layers'.
     colours: u32,
-    _pad1: u32,
+    // The largest bokeh radius (px) that gathers its far field over a tile's dense grid.
+    small: f32,
     _pad2: u32,
 }
 
@@ -28,13 +29,30 @@ struct Tap {
     area: f32,
 }
 
-// Keep in sync with `TileTaps` in src/dof/gather/mod.rs: fields 0 copy, 1 far, 2 both, 3 apart.
+// Keep in sync with `TileTaps` in src/dof/gather/mod.rs: fields 0 copy, 1 far, 2 both, 3 apart;
+// where the far taps are rings, the dense grid (count 0 elsewhere).
 struct Tile {
     fields: u32,
     taps_start: u32,
     taps_count: u32,
     far_start: u32,
     far_count: u32,
+    dense_start: u32,
+    dense_count: u32,
+}
+
+// The far taps of a pixel of radius rp in `tile` (start, count): the dense grid where the
+// tile's far taps are rings and the pixel's own bokeh fits the grid (the CPU's lanes that
+// take it: a tap beyond the bokeh weighs 0, so the CPU's smaller grid sums the same), else
+// the tile's far taps (its main taps when both fields share them).
+fn far_list(tile: Tile, rp: f32) -> vec2<u32> {
+    if (tile.dense_count > 0u && rp <= config.small) {
+        return vec2<u32>(tile.dense_start, tile.dense_count);
+    }
+    if (tile.fields == 2u) {
+        return vec2<u32>(tile.taps_start, tile.taps_count);
+    }
+    return vec2<u32>(tile.far_start, tile.far_count);
 }
 
 @group(0) @binding(0) var<uniform> config: GatherConfig;
@@ -52,7 +70,15 @@ struct Tile {
 const TILE: u32 = 16u;
 
 // Index i of a row or column of n pixels reflected into it about its edges, the edge pixel
-// repeated (`mirror` in gather/mod.rs).
+// repeated (`mirror` in gather/mod.rs): where a tap outside the frame reads, with weight 0.
+
+// Whether the tap at offset (dx, dy) from pixel (x, y) lies inside the frame: outside it, its
+// 1 / bokeh area is 0 (the CPU's padding), so it weighs nothing in either field.
+fn inside(x: u32, y: u32, dx: i32, dy: i32) -> bool {
+    let sx = i32(x) + dx;
+    let sy = i32(y) + dy;
+    return sx >= 0 && sx < i32(config.width) && sy >= 0 && sy < i32(config.height);
+}
 fn mirror(i: i32, n: u32) -> u32 {
     let period = 2 * i32(n);
     var m = i % period;
@@ -81,7 +107,7 @@ fn sample(x: u32, y: u32, dx: i32, dy: i32, centre: vec4<f32>) -> Sample {
     var s: Sample;
     s.d = vec4<f32>(color[i], color[n + i], color[2u * n + i], color[3u * n + i]) - centre;
     s.c = 0.5 * coc[i];
-    s.ia = coc[n + i];
+    s.ia = select(0.0, coc[n + i], inside(x, y, dx, dy));
     return s;
 }
 
@@ -111,9 +137,13 @@ fn gather(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id)
     var far_weight = coc[n + p];
     var near = vec4<f32>(0.0);
     var opacity = 0.0;
-    if (tile.fields == 1u || tile.fields == 3u) {
-        for (var k = 0u; k < tile.far_count; k++) {
-            let tap = taps[tile.far_start + k];
+    let far_taps = far_list(tile, rp);
+    // Both fields over the same taps in one loop, unless the far field reads the dense grid:
+    // then as apart (the same sums in the same order).
+    let fused = tile.fields == 2u && !(tile.dense_count > 0u && rp <= config.small);
+    if (!fused) {
+        for (var k = 0u; k < far_taps.y; k++) {
+            let tap = taps[far_taps.x + k];
             let s = sample(x, y, tap.dx, tap.dy, centre);
             let rs = abs(s.c);
             let is_far = tile.fields == 1u || s.c > split;
@@ -126,7 +156,7 @@ fn gather(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id)
             far_weight += wf;
         }
     }
-    if (tile.fields == 3u) {
+    if (tile.fields == 3u || (tile.fields == 2u && !fused)) {
         for (var k = 0u; k < tile.taps_count; k++) {
             let tap = taps[tile.taps_start + k];
             let s = sample(x, y, tap.dx, tap.dy, centre);
@@ -140,7 +170,7 @@ fn gather(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id)
             opacity += wn;
         }
     }
-    if (tile.fields == 2u) {
+    if (fused) {
         for (var k = 0u; k < tile.taps_count; k++) {
             let tap = taps[tile.taps_start + k];
             let s = sample(x, y, tap.dx, tap.dy, centre);
@@ -215,17 +245,20 @@ fn gather_carrying(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoc
         let cc = 0.5 * coc[p];
         let rp = abs(cc);
         let split = cc - 0.5 * config.layer;
-        if (tile.fields == 1u || tile.fields == 3u) {
-            for (var k = 0u; k < tile.far_count; k++) {
-                let tap = taps[tile.far_start + k];
+        let far_taps = far_list(tile, rp);
+        let fused = tile.fields == 2u && !(tile.dense_count > 0u && rp <= config.small);
+        if (!fused) {
+            for (var k = 0u; k < far_taps.y; k++) {
+                let tap = taps[far_taps.x + k];
                 let i = tap_index(x, y, tap.dx, tap.dy);
+                let ia = select(0.0, coc[n + i], inside(x, y, tap.dx, tap.dy));
                 let sc = 0.5 * coc[i];
                 let rs = abs(sc);
                 let is_far = tile.fields == 1u || sc > split;
                 let cover_far = clamp(min(rs, rp) - tap.norm_far + 0.5, 0.0, 1.0);
                 var wf = 0.0;
                 if (is_far) {
-                    wf = cover_far * coc[n + i];
+                    wf = cover_far * ia;
                 }
                 for (var g = 0u; g < colours; g++) {
                     far[g] += wf * (colour_at(g, i, n) - centre[g]);
@@ -233,16 +266,17 @@ fn gather_carrying(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoc
                 far_weight += wf;
             }
         }
-        if (tile.fields == 3u) {
+        if (tile.fields == 3u || (tile.fields == 2u && !fused)) {
             for (var k = 0u; k < tile.taps_count; k++) {
                 let tap = taps[tile.taps_start + k];
                 let i = tap_index(x, y, tap.dx, tap.dy);
+                let ia = select(0.0, coc[n + i], inside(x, y, tap.dx, tap.dy));
                 let sc = 0.5 * coc[i];
                 let rs = abs(sc);
                 let cover_near = clamp(rs - tap.norm_near + 0.5, 0.0, 1.0);
                 var wn = 0.0;
                 if (!(sc > split)) {
-                    wn = cover_near * tap.area * coc[n + i];
+                    wn = cover_near * tap.area * ia;
                 }
                 for (var g = 0u; g < colours; g++) {
                     near[g] += wn * (colour_at(g, i, n) - centre[g]);
@@ -250,10 +284,11 @@ fn gather_carrying(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoc
                 opacity += wn;
             }
         }
-        if (tile.fields == 2u) {
+        if (fused) {
             for (var k = 0u; k < tile.taps_count; k++) {
                 let tap = taps[tile.taps_start + k];
                 let i = tap_index(x, y, tap.dx, tap.dy);
+                let ia = select(0.0, coc[n + i], inside(x, y, tap.dx, tap.dy));
                 let sc = 0.5 * coc[i];
                 let rs = abs(sc);
                 let is_far = sc > split;
@@ -262,9 +297,9 @@ fn gather_carrying(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invoc
                 var wf = 0.0;
                 var wn = 0.0;
                 if (is_far) {
-                    wf = cover_far * coc[n + i];
+                    wf = cover_far * ia;
                 } else {
-                    wn = cover_near * tap.area * coc[n + i];
+                    wn = cover_near * tap.area * ia;
                 }
                 for (var g = 0u; g < colours; g++) {
                     let d = colour_at(g, i, n) - centre[g];
