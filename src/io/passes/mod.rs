@@ -39,12 +39,12 @@ mod window;
 pub use carried::stack_problem;
 pub use check::{luma, CheckReport, VectorCheck};
 pub use fit::{describe as describe_reading, fit, Fit, FitInput, Reading, FIT_POINTS};
-pub use plan::{passes_found, plan_frame, FramePlan, PlanOptions};
+pub use plan::{plan_frame, FramePlan, PlanOptions};
 pub use preflight::{output_folder_problems, preflight};
 pub use read::{
     plan_color, read_color, read_frame, read_frame_keeping, read_frame_noted, StoredVectors,
 };
-pub use suggest::{suggest, Candidate, Found, Suggestion};
+pub use suggest::{passes_found, suggest, Candidate, Found, Suggestion};
 
 use crate::io::sequence::PathPattern;
 

@@ -664,15 +664,6 @@ pub(super) fn find_layers(info: &FileInfo, template: &str) -> Vec<String> {
     layers
 }
 
-/// The passes a preset finds in one file on its own (for `shutter info`): colour first, then
-/// the other passes among the channels colour did not take.
-pub fn passes_found(info: &FileInfo, preset: &Preset) -> Vec<&'static str> {
-    super::suggest::passes_read(info, preset)
-        .into_iter()
-        .map(|(pass, _)| pass)
-        .collect()
-}
-
 /// Passes found, each with the channels (indices into a file's channels) it reads.
 pub(super) type PassesRead = Vec<(&'static str, Vec<usize>)>;
 
@@ -685,7 +676,7 @@ pub(super) type PassesRead = Vec<(&'static str, Vec<usize>)>;
 /// colour and not, and the reading that takes more of the file's channels is kept: a
 /// luminance image is colour, a file of `X`, `Y` vectors is not.
 /// In view layer `layer` (`None`: the one the file holds, if any); a file of several is read
-/// layer by layer by [`passes_read`](super::suggest::passes_read).
+/// layer by layer by `suggest::passes_read`.
 pub(super) fn passes_read_in(info: &FileInfo, preset: &Preset, layer: Option<&str>) -> PassesRead {
     match find_channels(info, &preset.color.channels, 3, &[], layer) {
         Ok(None) => {

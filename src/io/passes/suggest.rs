@@ -112,6 +112,15 @@ pub fn view_layers(info: &FileInfo, preset: &Preset) -> Vec<String> {
     layers
 }
 
+/// The passes a preset finds in one file on its own (for `shutter info`): colour first, then
+/// the other passes among the channels colour did not take; every view layer's.
+pub fn passes_found(info: &FileInfo, preset: &Preset) -> Vec<&'static str> {
+    passes_read(info, preset)
+        .into_iter()
+        .map(|(pass, _)| pass)
+        .collect()
+}
+
 /// The name `shutter info` shows for a channel.
 fn shown(info: &FileInfo, channel: usize) -> String {
     let c = &info.channels[channel];
