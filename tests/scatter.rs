@@ -283,18 +283,7 @@ fn a_still_subject_before_a_pan_keeps_its_sides_at_the_exposure_of_the_hidden_ba
             (q.x[i], q.y[i]) = (x as f32 + 0.5 + v, y as f32 + 0.5);
         }
     }
-    let exact = |x: usize| {
-        let n = 400;
-        let mut sum = 0.0;
-        for a in 0..n {
-            let u = x as f64 + (a as f64 + 0.5) / n as f64;
-            for b in 0..n {
-                let t = -0.25 + 0.5 * (b as f64 + 0.5) / n as f64;
-                sum += stripes(u - 32.0 * t);
-            }
-        }
-        sum / (n * n) as f64
-    };
+    let exact = |x: usize| exposure_of_column(&stripes, x, 32.0);
     let params = Params {
         shutter: 0.5,
         ..Params::default()

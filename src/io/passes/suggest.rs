@@ -213,16 +213,13 @@ pub fn suggest(info: &FileInfo, presets: &[Preset]) -> Suggestion {
     }
     let view_layers = view_layers(info, &presets[best]);
     // Names with colour alone beside the view layers (Blender's Composite result).
-    let colour_alone: Vec<String> = (presets[best].color.channels.iter())
+    let mut colour_alone: Vec<String> = (presets[best].color.channels.iter())
         .filter_map(|alternative| alternative.first())
         .flat_map(|template| find_layers(info, template))
         .filter(|l| !view_layers.contains(l))
-        .fold(Vec::new(), |mut seen, l| {
-            if !seen.contains(&l) {
-                seen.push(l);
-            }
-            seen
-        });
+        .collect();
+    colour_alone.sort();
+    colour_alone.dedup();
     match view_layers.as_slice() {
         [] => {}
         [_] if colour_alone.is_empty() => {}

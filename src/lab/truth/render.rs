@@ -168,6 +168,18 @@ pub fn render_passes(scene: &Scene, t: f64, samples: usize, seed: u64) -> Frame 
     frame
 }
 
+/// The scene posed at [`TIME_STEPS`] times over the shutter about frame time `t` (the
+/// midpoints of equal steps), which a sample's time coordinate picks among.
+fn shutter_poses(scene: &Scene, t: f64, settings: &RenderSettings) -> Vec<Posed> {
+    (0..TIME_STEPS)
+        .into_par_iter()
+        .map(|s| {
+            let phase = (s as f64 + 0.5) / TIME_STEPS as f64 - 0.5 + settings.shutter_offset;
+            scene.pose(t + settings.shutter * phase)
+        })
+        .collect()
+}
+
 /// A brute-force reference of frame time `t`: RGB planes.
 pub fn render_reference(
     scene: &Scene,
@@ -178,20 +190,12 @@ pub fn render_reference(
     let (width, height) = (scene.width, scene.height);
     let samples = settings.samples.max(1);
     let moving = kind != Reference::DepthOfField;
-    let steps = if moving { TIME_STEPS } else { 1 };
-    let poses: Vec<Posed> = (0..steps)
-        .into_par_iter()
-        .map(|s| {
-            if moving {
-                scene.pose(
-                    t + settings.shutter
-                        * ((s as f64 + 0.5) / steps as f64 - 0.5 + settings.shutter_offset),
-                )
-            } else {
-                scene.pose(t)
-            }
-        })
-        .collect();
+    let poses = if moving {
+        shutter_poses(scene, t, settings)
+    } else {
+        vec![scene.pose(t)]
+    };
+    let steps = poses.len();
     let order = scene.front_to_back();
     let lens = kind != Reference::MotionBlur && scene.lens.is_some();
     let planes = render_planes(width, height, |i, j| {
@@ -219,18 +223,12 @@ pub fn render_reference(
 pub fn render_layer_references(scene: &Scene, t: f64, settings: &RenderSettings) -> [Plane; 7] {
     let (width, height) = (scene.width, scene.height);
     let samples = settings.samples.max(1);
-    let poses: Vec<Posed> = (0..TIME_STEPS)
-        .into_par_iter()
-        .map(|s| {
-            let phase = (s as f64 + 0.5) / TIME_STEPS as f64 - 0.5 + settings.shutter_offset;
-            scene.pose(t + settings.shutter * phase)
-        })
-        .collect();
+    let poses = shutter_poses(scene, t, settings);
     let order = scene.front_to_back();
     let nothing: [usize; 0] = [];
     let planes = render_planes(width, height, |i, j| {
         pixel_mean(i, j, width, samples, settings.seed, |u, p| {
-            let posed = &poses[((u[2] * TIME_STEPS as f64) as usize).min(TIME_STEPS - 1)];
+            let posed = &poses[((u[2] * poses.len() as f64) as usize).min(poses.len() - 1)];
             let hit = scene.trace(posed, &order, p, DVec2::ZERO);
             let [r, g, b, a] = match hit.shape {
                 Some(_) => [hit.color[0], hit.color[1], hit.color[2], 1.0],
