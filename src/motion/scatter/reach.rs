@@ -1,6 +1,7 @@
 //! Stage 1, `reach`: for each block of pixels, how far its curves can deposit (a cheap bound
 //! from the three positions; no curve is built), each pixel's own bound, and each block's
-//! deepest depth (so `resolve` can skip a search behind a pixel). A frame whose `most` is 0
+//! deepest and nearest depths (so `resolve` can skip a search behind a pixel and the walk
+//! over its unseen part). A frame whose `most` is 0
 //! does not move.
 
 use rayon::prelude::*;
@@ -19,6 +20,8 @@ pub(super) struct Reach {
     pub(super) most: f32,
     /// The deepest depth in each block.
     pub(super) deepest: Vec<f32>,
+    /// The nearest depth in each block (NaN never lowers it: a NaN depth is never nearer).
+    pub(super) nearest: Vec<f32>,
 }
 
 impl Reach {
@@ -28,26 +31,30 @@ impl Reach {
         let mut pixel = vec![0.0f32; width * height];
         let mut block = vec![0.0f32; across * down];
         let mut deepest = vec![0.0f32; across * down];
+        let mut nearest = vec![f32::INFINITY; across * down];
         // One row of blocks at a time: its pixels' reach (rounded up with a margin, so the f32
         // never falls short of the f64), then its blocks' largest reach and deepest depth.
         pixel
             .par_chunks_mut(BLOCK * width.max(1))
             .zip(block.par_chunks_mut(across.max(1)))
             .zip(deepest.par_chunks_mut(across.max(1)))
+            .zip(nearest.par_chunks_mut(across.max(1)))
             .enumerate()
-            .for_each(|(by, ((pixel, block), deepest))| {
+            .for_each(|(by, (((pixel, block), deepest), nearest))| {
                 let y0 = by * BLOCK;
                 for (y, row) in (y0..).zip(pixel.chunks_mut(width)) {
                     for (x, r) in row.iter_mut().enumerate() {
                         *r = job.motion(x, y).map_or(0.0, |m| (m.reach + 0.01) as f32);
                     }
                 }
-                for (bx, (most, deepest)) in block.iter_mut().zip(deepest).enumerate() {
+                let blocks = block.iter_mut().zip(deepest).zip(nearest);
+                for (bx, ((most, deepest), nearest)) in blocks.enumerate() {
                     for y in 0..BLOCK.min(height - y0) {
                         let row = y * width + bx * BLOCK..y * width + ((bx + 1) * BLOCK).min(width);
                         *most = pixel[row.clone()].iter().fold(*most, |m, &r| m.max(r));
                         let depth = &job.depth[y0 * width + row.start..y0 * width + row.end];
                         *deepest = depth.iter().fold(*deepest, |d, &z| d.max(z));
+                        *nearest = depth.iter().fold(*nearest, |d, &z| d.min(z));
                     }
                 }
             });
@@ -59,6 +66,7 @@ impl Reach {
             block,
             most,
             deepest,
+            nearest,
         }
     }
 }
