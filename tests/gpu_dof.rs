@@ -428,46 +428,56 @@ mod with_gpu {
         );
     }
 
-    /// Issue 34 on the twin: a fine checker (4 px cells under a 9 px CoC, 5 px under 12,
-    /// 0.1 and 0.9 from the top-left corner, so whole cells meet every edge) keeps its mean,
-    /// 0.5, within 0.25 in the first CoC radius of every edge, corners included, as the CPU's
-    /// gather does (src/dof/gather/mod.rs states the figures: mirroring the frame about its
-    /// edge reached 0.304 and 0.260 off the mean there), and matches the CPU within the
-    /// gather's tolerance (1e-5 of the range).
+    /// Issue 34 on the twins: the fine checkers of the CPU's edge test (src: tests/dof.rs,
+    /// `EDGE_CHECKERS`: 4 px cells under a 9 px CoC, 5 px under 12, meeting the edges whole,
+    /// cut in half and as a 1 px sliver) keep their mean, 0.5, within 0.25 in the first CoC
+    /// radius of every edge, corners included, through the gather's twin and the blend's, as
+    /// the CPU's do (mirroring the frame about its edge reached 0.304 and 0.260 in the
+    /// gather), and each twin matches its CPU pass within its parity tests' tolerance (1e-5
+    /// of the range, 0.8 here).
     #[test]
-    fn dof_gather_keeps_a_fine_checker_s_mean_at_the_frame_edge() {
+    fn dof_twins_keep_a_fine_checker_s_mean_at_the_frame_edge() {
         let Some(gpu) = gpu() else { return };
+        use crate::dof::{edge_checker, EDGE_CHECKERS};
+        use shutter::dof::blend::blend;
         use shutter::dof::gather::gather;
         use shutter::dof::DofConfig;
         let (w, h) = (160, 96);
-        for (cell, coc) in [(4usize, 9.0f32), (5, 12.0)] {
-            let plane: Vec<f32> = (0..w * h)
-                .map(|i| 0.1 + 0.8 * ((i % w / cell + i / w / cell) % 2) as f32)
-                .collect();
-            let color = shutter::frame::Color {
-                r: plane.clone(),
-                g: plane.clone(),
-                b: plane,
-                a: None,
-            };
-            let coc_plane = vec![coc; w * h];
-            let config = DofConfig::new(w, h, &DofParams::default());
-            let t = tiles(&TilesConfig::new(w, h, config.epsilon), &coc_plane);
-            let got = gpu
-                .try_dof_gather(&config, &color, &coc_plane, &t)
-                .unwrap_or_else(|e| panic!("{e}"));
-            let cpu = gather(&config, &color, &coc_plane, &t);
-            let radius = (0.5 * coc).ceil() as usize;
-            for y in 0..h {
-                for x in 0..w {
-                    let i = y * w + x;
-                    let (g, c) = (got.r[i], cpu.r[i]);
-                    assert!((g - c).abs() <= 1e-5 * 0.8, "({x}, {y}): GPU {g}, CPU {c}");
-                    if x.min(w - 1 - x).min(y).min(h - 1 - y) < radius {
-                        assert!(
-                            (g - 0.5).abs() <= 0.25,
-                            "cell {cell}, CoC {coc}: ({x}, {y}): {g}"
-                        );
+        for (cell, coc, shifts) in EDGE_CHECKERS {
+            for shift in shifts {
+                let color = edge_checker(w, h, cell, shift);
+                let coc_plane = vec![coc; w * h];
+                let config = DofConfig::new(w, h, &DofParams::default());
+                let t = tiles(&TilesConfig::new(w, h, config.epsilon), &coc_plane);
+                let pairs = [
+                    (
+                        "gather",
+                        gpu.try_dof_gather(&config, &color, &coc_plane, &t)
+                            .unwrap_or_else(|e| panic!("{e}")),
+                        gather(&config, &color, &coc_plane, &t),
+                    ),
+                    (
+                        "blend",
+                        gpu.try_dof_blend(&config, &color, &coc_plane)
+                            .unwrap_or_else(|e| panic!("{e}")),
+                        blend(&config, color.clone(), &coc_plane),
+                    ),
+                ];
+                let radius = (0.5 * coc).ceil() as usize;
+                for (method, got, cpu) in pairs {
+                    let what = format!("{method}, cell {cell} shift {shift}, CoC {coc}");
+                    for y in 0..h {
+                        for x in 0..w {
+                            let i = y * w + x;
+                            let (g, c) = (got.r[i], cpu.r[i]);
+                            assert!(
+                                (g - c).abs() <= 1e-5 * 0.8,
+                                "{what}: ({x}, {y}): GPU {g}, CPU {c}"
+                            );
+                            if x.min(w - 1 - x).min(y).min(h - 1 - y) < radius {
+                                assert!((g - 0.5).abs() <= 0.25, "{what}: ({x}, {y}): {g}");
+                            }
+                        }
                     }
                 }
             }
