@@ -303,3 +303,71 @@ fn a_still_subject_before_a_pan_keeps_its_sides_at_the_exposure_of_the_hidden_ba
     eprintln!("scatter: beside a still card before a pan, worst error {worst:.4}");
     assert!(worst < 0.03, "worst error beside the card: {worst}");
 }
+
+#[test]
+fn a_spot_in_the_frame_s_corner_is_not_frozen_where_its_streak_runs_off_both_edges() {
+    // A uniform background (0.1, depth 10) with an HDR spot (10.0) on the top-left pixel,
+    // everything moving (−12, 8) px a frame: at 180° a pixel's streak runs ±(3, 2) px, so at
+    // the corner it leaves the frame through the left edge one way and the top edge the
+    // other. The exact exposure, the world outside the frame being the same background, is
+    // worked out below by midpoint sums over the pixel and the shutter. Before, a streak off
+    // the frame on both sides kept the pixel's own colour for its uncovered part (the spot
+    // frozen at the corner: 9.45 where the exact exposure is 1.38); now both sides are read
+    // on the frame's border, 2.71 (the clamped streak reads the spot's own pixel, as
+    // reconstruct's clamped taps and Blender's do: what lies outside is unknown). Bounds:
+    // the corner within 1.5 of the exact exposure, its three neighbours within 0.25 (0.18
+    // at worst, before and after).
+    let (w, h) = (48, 32);
+    let mut f = frame(w, h, 5, 0.0);
+    let v = [-12.0f32, 8.0];
+    let spot = |x: f64, y: f64| {
+        if (0.0..1.0).contains(&x) && (0.0..1.0).contains(&y) {
+            10.0
+        } else {
+            0.1
+        }
+    };
+    {
+        let c = f.color.as_mut().unwrap();
+        c.a = None;
+        let d = f.depth.as_mut().unwrap();
+        let (p, q) = (f.prev.as_mut().unwrap(), f.next.as_mut().unwrap());
+        for i in 0..w * h {
+            let (x, y) = (i % w, i / w);
+            let value = spot(x as f64 + 0.5, y as f64 + 0.5) as f32;
+            (c.r[i], c.g[i], c.b[i]) = (value, value, value);
+            d[i] = 10.0;
+            (p.x[i], p.y[i]) = (x as f32 + 0.5 - v[0], y as f32 + 0.5 - v[1]);
+            (q.x[i], q.y[i]) = (x as f32 + 0.5 + v[0], y as f32 + 0.5 + v[1]);
+        }
+    }
+    let exact = |x: usize, y: usize| {
+        let n = 64;
+        let mut sum = 0.0;
+        for a in 0..n * n {
+            let (u, w) = (
+                x as f64 + ((a % n) as f64 + 0.5) / n as f64,
+                y as f64 + ((a / n) as f64 + 0.5) / n as f64,
+            );
+            for b in 0..n {
+                let t = -0.25 + 0.5 * (b as f64 + 0.5) / n as f64;
+                sum += spot(u - v[0] as f64 * t, w - v[1] as f64 * t);
+            }
+        }
+        sum / (n * n * n) as f64
+    };
+    let params = Params {
+        shutter: 0.5,
+        ..Params::default()
+    };
+    let out = apply(Algorithm::Scatter, &params, f, 1);
+    let c = out.color.as_ref().unwrap();
+    for (x, y) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+        let (got, want) = (c.r[y * w + x] as f64, exact(x, y));
+        let bound = if (x, y) == (0, 0) { 1.5 } else { 0.25 };
+        assert!(
+            (got - want).abs() <= bound,
+            "corner ({x}, {y}): {got:.4}, exact {want:.4}"
+        );
+    }
+}

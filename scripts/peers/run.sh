@@ -24,7 +24,7 @@ SIZE=${SIZE:-320x180}
 SAMPLES=${SAMPLES:-1024}
 RUNS=${RUNS:-5}
 BPY=${BPY:-5.2.3}
-SCENES=${SCENES:-rotor,orbit,figure,crossing,pan,zoom,gears,static,sparse,huge,layers,border,border-coarse,follow,follow-wall}
+SCENES=${SCENES:-rotor,orbit,figure,crossing,pan,zoom,gears,static,sparse,huge,layers,border,border-coarse,border-cut,follow,follow-wall}
 venv=target/peers/venv
 
 cargo build --release

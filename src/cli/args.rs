@@ -336,7 +336,7 @@ pub enum PresetsCommand {
 #[derive(Debug, Args)]
 pub struct SceneArgs {
     /// Scene name: rotor, orbit, figure, crossing, pan, zoom, gears, static, sparse, huge,
-    /// layers.
+    /// layers, border, border-coarse, border-cut, follow, follow-wall.
     pub name: String,
 
     /// Output folder: color, depth, velocity, prev, next and reference(_dof, _both)

@@ -119,6 +119,12 @@ pub enum Texture {
         from: DVec2,
         to: DVec2,
     },
+    /// A base texture moved by `by` (so a checker's cells can meet the frame's edges
+    /// part-way).
+    Shifted {
+        base: Box<Texture>,
+        by: DVec2,
+    },
     /// A base texture with HDR spots (values above 1) centred on a grid of `period`.
     Spots {
         base: Box<Texture>,
@@ -162,6 +168,7 @@ impl Texture {
                     a[2] + (b[2] - a[2]) * s,
                 ]
             }
+            Texture::Shifted { base, by } => base.color(p - *by),
             Texture::Spots {
                 base,
                 hot,

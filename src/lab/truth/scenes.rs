@@ -40,6 +40,10 @@ pub const SCENES: &[(&str, &str)] = &[
         "the same lens over a coarse spotted wall, the near disc cut by the frame's corner",
     ),
     (
+        "border-cut",
+        "the fine far texture meeting the frame's edges part-way, the near disc cut by the right edge",
+    ),
+    (
         "follow",
         "the camera follows a still subject before stripes streaming 36 px a frame",
     ),
@@ -453,7 +457,7 @@ pub fn build(name: &str, width: usize, height: usize, seed: u64) -> Option<Scene
             }
             scene.background_depth = 40.0;
         }
-        "border" | "border-coarse" => {
+        "border" | "border-coarse" | "border-cut" => {
             // 85 mm f/1.2 focused at 9 m: the background at 50 m takes a circle of
             // confusion about 10 px across at 640 wide, the near disc at 2.5 m about 31 px.
             scene.lens = Some(Lens {
@@ -463,13 +467,24 @@ pub fn build(name: &str, width: usize, height: usize, seed: u64) -> Option<Scene
                 sensor_mm: 36.0,
             });
             let coarse = name == "border-coarse";
+            let cut = name == "border-cut";
             if !coarse {
                 // Cells of a few pixels: blurred, they average to mid-grey everywhere,
-                // the frame's edges included.
-                scene.background = Texture::Checker {
+                // the frame's edges included. `border-cut` moves them by 1.5/4 of a cell,
+                // so they meet every edge part-way rather than whole: 1.5/4 of a cell along
+                // the top and left edges, 2.5/4 along the others (at 640x360 and 320x180).
+                let checker = Texture::Checker {
                     a: [0.9, 0.9, 0.9],
                     b: [0.1, 0.1, 0.1],
                     size: 4.0 * u,
+                };
+                scene.background = if cut {
+                    Texture::Shifted {
+                        base: Box::new(checker),
+                        by: DVec2::new(1.5 * u, 1.5 * u),
+                    }
+                } else {
+                    checker
                 };
             }
             shapes.push(shape(
@@ -488,6 +503,10 @@ pub fn build(name: &str, width: usize, height: usize, seed: u64) -> Option<Scene
             // the coarse wall.
             let at = if coarse {
                 DVec2::new(25.0 * u, h - 30.0 * u)
+            } else if cut {
+                // Cut by the right edge: the near rim over the fine texture at the frame's
+                // edge.
+                DVec2::new(w - 20.0 * u, h * 0.4)
             } else {
                 DVec2::new(w * 0.3, h * 0.55)
             };

@@ -22,12 +22,23 @@ pub(super) enum Resolution {
     Mean { total: f64 },
 }
 
-/// What lies behind a pixel not wholly covered: its own colour, or the average of the first
-/// farther pixel found along its motion either way.
+/// What lies behind a pixel not wholly covered: its own colour, or the average of the pixels
+/// found (the first farther pixel along its motion either way, or what `unseen` reads).
 pub(super) enum Behind {
     Own,
-    Found { pixels: [usize; 2], count: usize },
+    Found {
+        pixels: [usize; BEHIND_PIXELS],
+        count: usize,
+    },
 }
+
+/// Points read on the frame's border for each side of a streak that runs off the frame,
+/// spread evenly over the part past the edge (the clamped streak's mean; two left an HDR spot
+/// on the edge column over-weighted: BENCHMARKS.md, "A still subject before a pan").
+pub(super) const OFF_FRAME_TAPS: usize = 4;
+
+/// The most pixels a [`Behind`] averages: the off-frame taps of both sides.
+pub(super) const BEHIND_PIXELS: usize = 2 * OFF_FRAME_TAPS;
 
 impl Scatter<'_> {
     /// The output of pixel (x, y) from its accumulated `cell`.
@@ -104,8 +115,9 @@ impl Scatter<'_> {
     /// background streaming behind a still subject) is read a whole streak's length back on
     /// the other side, where it is visible (two pixels, at a quarter and three quarters of
     /// the slid span, that lie on the pixel's surface: within the depth tolerance); the part
-    /// past the frame's edge on one side is read on the frame's border there (the streak's
-    /// points clamped to the frame, as reconstruct's taps read them). Else its own colour.
+    /// past the frame's edge, on one side or both (a corner), is read on the frame's border
+    /// there (`OFF_FRAME_TAPS` of the streak's points on each such side, clamped to the frame,
+    /// as reconstruct's taps read them). Else its own colour.
     /// Not at a pixel beside the nearer surface (its rim, whose colour holds part of it).
     /// Measured in BENCHMARKS.md ("A still subject before a pan").
     fn unseen(&self, i: usize, now: Point, dir: Point, q: f64) -> Behind {
@@ -137,7 +149,7 @@ impl Scatter<'_> {
                 k += 1.0;
             }
         }
-        let mut pixels = [0; 2];
+        let mut pixels = [0; BEHIND_PIXELS];
         let mut count = 0;
         match (hidden, off) {
             ([Some((side, b)), None] | [None, Some((side, b))], _) => {
@@ -153,13 +165,16 @@ impl Scatter<'_> {
                     }
                 }
             }
-            ([None, None], [Some((side, b)), None] | [None, Some((side, b))]) => {
-                for f in [0.25, 0.75] {
-                    let d = side * (b + (q - b) * f);
-                    let x = (now[0] + d * dir[0]).clamp(0.0, self.width as f64 - 0.5);
-                    let y = (now[1] + d * dir[1]).clamp(0.0, self.height as f64 - 0.5);
-                    pixels[count] = y as usize * self.width + x as usize;
-                    count += 1;
+            ([None, None], _) => {
+                for (side, b) in off.into_iter().flatten() {
+                    for t in 0..OFF_FRAME_TAPS {
+                        let f = (t as f64 + 0.5) / OFF_FRAME_TAPS as f64;
+                        let d = side * (b + (q - b) * f);
+                        let x = (now[0] + d * dir[0]).clamp(0.0, self.width as f64 - 0.5);
+                        let y = (now[1] + d * dir[1]).clamp(0.0, self.height as f64 - 0.5);
+                        pixels[count] = y as usize * self.width + x as usize;
+                        count += 1;
+                    }
                 }
             }
             _ => {}
@@ -226,7 +241,7 @@ impl Scatter<'_> {
         if (by0..=by1).all(|by| (bx0..=bx1).all(|bx| deepest(bx, by) <= limit)) {
             return unseen();
         }
-        let mut pixels = [0; 2];
+        let mut pixels = [0; BEHIND_PIXELS];
         let mut found = 0;
         for side in [1.0, -1.0] {
             for k in 1..steps + 1 {

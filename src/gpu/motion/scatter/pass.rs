@@ -17,6 +17,7 @@ use crate::gpu::stage::{floats, kept, read_back, Caught, StageError};
 pub const SHADER: &str = concat!(
     include_str!("../../prelude.wgsl"),
     include_str!("scatter.wgsl"),
+    include_str!("behind.wgsl"),
     include_str!("../curve.wgsl"),
     include_str!("alone.wgsl")
 );
@@ -26,6 +27,7 @@ pub const SHADER: &str = concat!(
 pub const SHADER_CARRYING: &str = concat!(
     include_str!("../../prelude.wgsl"),
     include_str!("scatter.wgsl"),
+    include_str!("behind.wgsl"),
     include_str!("../curve.wgsl"),
     include_str!("carrying.wgsl")
 );
