@@ -537,6 +537,29 @@ pub(crate) fn edge_checker(w: usize, h: usize, cell: usize, shift: usize) -> Col
     }
 }
 
+/// Issue 34's edge case at 160×96: the frame's DoF settings, the checker of `cell` px cells
+/// moved by `shift`, a uniform CoC plane of `coc` px and its tiles.
+pub(crate) fn edge_case(
+    cell: usize,
+    coc: f32,
+    shift: usize,
+) -> (
+    shutter::dof::DofConfig,
+    Color,
+    Vec<f32>,
+    shutter::dof::tiles::Tiles,
+) {
+    use shutter::dof::tiles::{tiles, TilesConfig};
+    let (w, h) = EDGE_FRAME;
+    let coc_plane = vec![coc; w * h];
+    let config = shutter::dof::DofConfig::new(w, h, &DofParams::default());
+    let t = tiles(&TilesConfig::new(w, h, config.epsilon), &coc_plane);
+    (config, edge_checker(w, h, cell, shift), coc_plane, t)
+}
+
+/// The size of the edge tests' frame.
+pub(crate) const EDGE_FRAME: (usize, usize) = (160, 96);
+
 /// The fine checkers and CoCs of issue 34's edge tests: 4 px cells under a 9 px CoC, 5 px
 /// under 12, each meeting the edges whole, cut in half and as a 1 px sliver.
 pub(crate) const EDGE_CHECKERS: [(usize, f32, [usize; 3]); 2] =
@@ -557,15 +580,10 @@ pub(crate) const EDGE_CHECKERS: [(usize, f32, [usize; 3]); 2] =
 fn a_fine_checker_keeps_its_mean_at_the_frame_edge_through_both_methods() {
     use shutter::dof::blend::blend;
     use shutter::dof::gather::gather;
-    use shutter::dof::tiles::{tiles, TilesConfig};
-    use shutter::dof::DofConfig;
-    let (w, h) = (160, 96);
+    let (w, h) = EDGE_FRAME;
     for (cell, coc, shifts) in EDGE_CHECKERS {
         for shift in shifts {
-            let color = edge_checker(w, h, cell, shift);
-            let coc_plane = vec![coc; w * h];
-            let config = DofConfig::new(w, h, &DofParams::default());
-            let t = tiles(&TilesConfig::new(w, h, config.epsilon), &coc_plane);
+            let (config, color, coc_plane, t) = edge_case(cell, coc, shift);
             let outputs = [
                 ("gather", gather(&config, &color, &coc_plane, &t)),
                 ("blend", blend(&config, color.clone(), &coc_plane)),

@@ -438,17 +438,13 @@ mod with_gpu {
     #[test]
     fn dof_twins_keep_a_fine_checker_s_mean_at_the_frame_edge() {
         let Some(gpu) = gpu() else { return };
-        use crate::dof::{edge_checker, EDGE_CHECKERS};
+        use crate::dof::{edge_case, EDGE_CHECKERS, EDGE_FRAME};
         use shutter::dof::blend::blend;
         use shutter::dof::gather::gather;
-        use shutter::dof::DofConfig;
-        let (w, h) = (160, 96);
+        let (w, h) = EDGE_FRAME;
         for (cell, coc, shifts) in EDGE_CHECKERS {
             for shift in shifts {
-                let color = edge_checker(w, h, cell, shift);
-                let coc_plane = vec![coc; w * h];
-                let config = DofConfig::new(w, h, &DofParams::default());
-                let t = tiles(&TilesConfig::new(w, h, config.epsilon), &coc_plane);
+                let (config, color, coc_plane, t) = edge_case(cell, coc, shift);
                 let pairs = [
                     (
                         "gather",

@@ -245,6 +245,24 @@ fn the_tracked_object_in_pan_stays_sharp() {
     assert!(worst < 1e-4, "tracked object changed by {worst}");
 }
 
+/// Paints every pixel (x, y) of `f` with `pixel(x, y)`: its colour (alpha dropped), depth,
+/// and motion per frame, the previous and next positions that far either side.
+fn paint(f: &mut Frame, pixel: impl Fn(usize, usize) -> ([f32; 3], f32, [f32; 2])) {
+    let w = f.width;
+    let c = f.color.as_mut().unwrap();
+    c.a = None;
+    let d = f.depth.as_mut().unwrap();
+    let (p, q) = (f.prev.as_mut().unwrap(), f.next.as_mut().unwrap());
+    for i in 0..d.len() {
+        let (x, y) = (i % w, i / w);
+        let (colour, z, v) = pixel(x, y);
+        (c.r[i], c.g[i], c.b[i]) = (colour[0], colour[1], colour[2]);
+        d[i] = z;
+        (p.x[i], p.y[i]) = (x as f32 + 0.5 - v[0], y as f32 + 0.5 - v[1]);
+        (q.x[i], q.y[i]) = (x as f32 + 0.5 + v[0], y as f32 + 0.5 + v[1]);
+    }
+}
+
 #[test]
 fn a_still_subject_before_a_pan_keeps_its_sides_at_the_exposure_of_the_hidden_background() {
     // As tests/reconstruct.rs's: stripes of 0.6 and 0.3, 8 px each, far behind (depth 10)
@@ -265,24 +283,13 @@ fn a_still_subject_before_a_pan_keeps_its_sides_at_the_exposure_of_the_hidden_ba
         }
     };
     let card = |x: usize| (64..96).contains(&x);
-    {
-        let c = f.color.as_mut().unwrap();
-        c.a = None;
-        let d = f.depth.as_mut().unwrap();
-        let (p, q) = (f.prev.as_mut().unwrap(), f.next.as_mut().unwrap());
-        for i in 0..w * h {
-            let (x, y) = (i % w, i / w);
-            let (v, colour, z) = if card(x) {
-                (0.0, [0.9, 0.2, 0.1], 1.0)
-            } else {
-                (32.0, [stripes(x as f64) as f32; 3], 10.0)
-            };
-            (c.r[i], c.g[i], c.b[i]) = (colour[0], colour[1], colour[2]);
-            d[i] = z;
-            (p.x[i], p.y[i]) = (x as f32 + 0.5 - v, y as f32 + 0.5);
-            (q.x[i], q.y[i]) = (x as f32 + 0.5 + v, y as f32 + 0.5);
+    paint(&mut f, |x, _| {
+        if card(x) {
+            ([0.9, 0.2, 0.1], 1.0, [0.0, 0.0])
+        } else {
+            ([stripes(x as f64) as f32; 3], 10.0, [32.0, 0.0])
         }
-    }
+    });
     let exact = |x: usize| exposure_of_column(&stripes, x, 32.0);
     let params = Params {
         shutter: 0.5,
@@ -327,20 +334,10 @@ fn a_spot_in_the_frame_s_corner_is_not_frozen_where_its_streak_runs_off_both_edg
             0.1
         }
     };
-    {
-        let c = f.color.as_mut().unwrap();
-        c.a = None;
-        let d = f.depth.as_mut().unwrap();
-        let (p, q) = (f.prev.as_mut().unwrap(), f.next.as_mut().unwrap());
-        for i in 0..w * h {
-            let (x, y) = (i % w, i / w);
-            let value = spot(x as f64 + 0.5, y as f64 + 0.5) as f32;
-            (c.r[i], c.g[i], c.b[i]) = (value, value, value);
-            d[i] = 10.0;
-            (p.x[i], p.y[i]) = (x as f32 + 0.5 - v[0], y as f32 + 0.5 - v[1]);
-            (q.x[i], q.y[i]) = (x as f32 + 0.5 + v[0], y as f32 + 0.5 + v[1]);
-        }
-    }
+    paint(&mut f, |x, y| {
+        let value = spot(x as f64 + 0.5, y as f64 + 0.5) as f32;
+        ([value; 3], 10.0, v)
+    });
     let exact = |x: usize, y: usize| {
         let n = 64;
         let mut sum = 0.0;
