@@ -1,8 +1,7 @@
 //! Stage 1, `reach`: for each block of pixels, how far its curves can deposit (a cheap bound
 //! from the three positions; no curve is built), each pixel's own bound, and each block's
 //! deepest and nearest depths (so `resolve` can skip a search behind a pixel and the walk
-//! over its unseen part). A frame whose `most` is 0
-//! does not move.
+//! over its unseen part). A frame whose `most` is 0 does not move.
 
 use rayon::prelude::*;
 
@@ -33,7 +32,8 @@ impl Reach {
         let mut deepest = vec![0.0f32; across * down];
         let mut nearest = vec![f32::INFINITY; across * down];
         // One row of blocks at a time: its pixels' reach (rounded up with a margin, so the f32
-        // never falls short of the f64), then its blocks' largest reach and deepest depth.
+        // never falls short of the f64), then its blocks' largest reach, deepest and nearest
+        // depths.
         pixel
             .par_chunks_mut(BLOCK * width.max(1))
             .zip(block.par_chunks_mut(across.max(1)))

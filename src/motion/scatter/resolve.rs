@@ -119,8 +119,11 @@ impl Scatter<'_> {
     /// there (`OFF_FRAME_TAPS` of the streak's points on each such side, clamped to the frame,
     /// as reconstruct's taps read them). Else its own colour.
     /// Not at a pixel beside the nearer surface (its rim, whose colour holds part of it).
-    /// Measured in BENCHMARKS.md ("A still subject before a pan").
-    fn unseen(&self, i: usize, now: Point, dir: Point, q: f64) -> Behind {
+    /// Measured in BENCHMARKS.md ("A still subject before a pan"). `nearer`: whether any
+    /// block the streak crosses holds a surface nearer than the pixel's (from [`Reach`]);
+    /// where none does and both ends of the streak lie in the frame (which is convex, so
+    /// every point does), the walk would find nothing and is skipped: the same output.
+    fn unseen(&self, i: usize, now: Point, dir: Point, q: f64, nearer: bool) -> Behind {
         let tolerance = 1.0 + self.config.depth_tolerance;
         let (near, far) = (self.depth[i] / tolerance, self.depth[i] * tolerance);
         let at = |d: f64| -> Option<usize> {
@@ -129,6 +132,9 @@ impl Scatter<'_> {
             (x >= 0.0 && y >= 0.0 && x < self.width as f64 && y < self.height as f64)
                 .then(|| y as usize * self.width + x as usize)
         };
+        if !nearer && at(q.ceil()).is_some() && at(-q.ceil()).is_some() {
+            return Behind::Own;
+        }
         // Per side: where the streak goes behind a nearer surface, or off the frame.
         let mut hidden = [None; 2];
         let mut off = [None; 2];
@@ -202,13 +208,14 @@ impl Scatter<'_> {
             return Behind::Own;
         }
         let dir = [v[0] / l, v[1] / l];
-        let limit = self.depth[i] * (1.0 + self.config.depth_tolerance);
-        let steps = (self
+        let tolerance = 1.0 + self.config.depth_tolerance;
+        let limit = self.depth[i] * tolerance;
+        let q = self
             .extent(prev, now, next)
-            .min(self.config.max_curve as f64)
-            + 2.0)
-            .ceil() as usize;
-        // Nothing farther within the search: its blocks' deepest depth tells without a walk.
+            .min(self.config.max_curve as f64);
+        let steps = (q + 2.0).ceil() as usize;
+        // Nothing farther within the search: its blocks' deepest depth tells without a walk
+        // (and their nearest whether `unseen` need walk).
         let (x, y) = (now[0] as usize, now[1] as usize);
         let (bx0, by0) = (
             x.saturating_sub(steps) / BLOCK,
@@ -217,29 +224,12 @@ impl Scatter<'_> {
         let bx1 = ((x + steps) / BLOCK).min(reach.across - 1);
         let by1 = ((y + steps) / BLOCK).min(reach.down - 1);
         let deepest = |bx: usize, by: usize| reach.deepest[by * reach.across + bx];
-        let q = self
-            .extent(prev, now, next)
-            .min(self.config.max_curve as f64);
-        // What `unseen` would find without its walk: nothing, where the streak stays in the
-        // frame (both its ends do, the frame being convex) and no block it crosses holds a
-        // nearer surface. Exact: the same output, only cheaper (most partly covered pixels of
-        // a moving frame have nothing nearer beside them).
-        let unseen = || {
-            let near = self.depth[i] / (1.0 + self.config.depth_tolerance);
-            let inside = |d: f64| {
-                let (x, y) = (now[0] + d * dir[0], now[1] + d * dir[1]);
-                x >= 0.0 && y >= 0.0 && x < self.width as f64 && y < self.height as f64
-            };
-            let nearer = (by0..=by1)
-                .any(|by| (bx0..=bx1).any(|bx| reach.nearest[by * reach.across + bx] < near));
-            if !nearer && inside(q.ceil()) && inside(-q.ceil()) {
-                Behind::Own
-            } else {
-                self.unseen(i, now, dir, q)
-            }
+        let near = self.depth[i] / tolerance;
+        let nearer = || {
+            (by0..=by1).any(|by| (bx0..=bx1).any(|bx| reach.nearest[by * reach.across + bx] < near))
         };
         if (by0..=by1).all(|by| (bx0..=bx1).all(|bx| deepest(bx, by) <= limit)) {
-            return unseen();
+            return self.unseen(i, now, dir, q, nearer());
         }
         let mut pixels = [0; BEHIND_PIXELS];
         let mut found = 0;
@@ -259,7 +249,7 @@ impl Scatter<'_> {
             }
         }
         if found == 0 {
-            unseen()
+            self.unseen(i, now, dir, q, nearer())
         } else {
             Behind::Found {
                 pixels,
