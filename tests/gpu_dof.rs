@@ -480,6 +480,49 @@ mod with_gpu {
         }
     }
 
+    /// blend's discs below level 3 (issue 34): a noise frame under a CoC that runs across
+    /// the frame from 1 to 24 px, behind the focus plane on the left half and in front on
+    /// the right, so every pixel's kernel is met (the frame's disc, its mix into level 1's,
+    /// level 1's, its mix into the pyramid, the pyramid alone) as are the near field's
+    /// spread and the frame's edges: the twin within 1e-5 of the range of the CPU.
+    #[test]
+    fn blend_twin_gathers_the_discs_as_the_cpu_does() {
+        let Some(gpu) = gpu() else { return };
+        use crate::dof::{edge_case, EDGE_FRAME};
+        use shutter::dof::blend::blend;
+        let (w, h) = EDGE_FRAME;
+        let (config, mut color, mut coc_plane, _) = edge_case(2, 5.0, 1);
+        let noise = |i: usize, k: usize| ((i * 7919 + k * 104_729) % 1000) as f32 / 1000.0;
+        for (k, plane) in [&mut color.r, &mut color.g, &mut color.b]
+            .into_iter()
+            .enumerate()
+        {
+            for (i, v) in plane.iter_mut().enumerate() {
+                *v = noise(i, k);
+            }
+        }
+        for (i, c) in coc_plane.iter_mut().enumerate() {
+            let x = i % w;
+            let size = 1.0 + 23.0 * x as f32 / (w - 1) as f32;
+            *c = if x < w / 2 { size } else { -size };
+        }
+        let got = gpu
+            .try_dof_blend(&config, &color, &coc_plane)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let cpu = blend(&config, color.clone(), &coc_plane);
+        for y in 0..h {
+            for x in 0..w {
+                let i = y * w + x;
+                let (g, c) = (got.r[i], cpu.r[i]);
+                assert!(
+                    (g - c).abs() <= 1e-5 * 0.8,
+                    "({x}, {y}), CoC {}: GPU {g}, CPU {c}",
+                    coc_plane[i]
+                );
+            }
+        }
+    }
+
     /// A near disc's rim over a fine far checker (disc CoC −14: its tiles take the rings of
     /// 7 px; the checker's 4 px bokeh reads the dense grid there): the twin picks the dense
     /// grid per pixel as the CPU picks it per lane, within the gather's tolerance (1e-5 of

@@ -16,10 +16,10 @@
 //!   CoCs of ε or less, the most blurred image for E.
 //! - **The blurred images**, in one of two forms ([`BlendForm`]):
 //!   1. [`pyramid`], the default: the levels of a binomial pyramid, each half the size of the
-//!      one before (the talk's "resolution reduction" variation), as many as E needs, and a
-//!      half step at full resolution between the sharp frame and level 1. Each image is
-//!      placed at the CoC it actually shows, and a pixel mixes the two that bracket its CoC,
-//!      linearly in CoC.
+//!      one before (the talk's "resolution reduction" variation), as many as E needs. Each
+//!      image is placed at the CoC it actually shows, and a pixel mixes the two that bracket
+//!      its CoC, linearly in CoC; below level 3's CoC (18 px) a pixel blurred by its own CoC
+//!      takes the lens's disc over the sharp frame or level 1 instead (`pyramid::disc`).
 //!   2. [`talk`]: the talk's own form, the sharp frame and two copies made by n and 2n
 //!      passes of its 3×3 filter blit ("Render to Backbuffer": texture 0, n and 2n), each
 //!      placed at the CoC it shows, mixed along CoC = ε + T·(E − ε).

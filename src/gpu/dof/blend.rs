@@ -5,16 +5,17 @@
 //! In: the colour and the signed CoC plane. Out: the colour with depth of field. Bindings, in
 //! order: the [`BlendConfig`] uniform; the colour planes r, g, b, a one after the other (a
 //! zero without alpha); the CoC plane; each level's geometry (width, height, first texel);
-//! the two ladders' CoCs and inverse gaps; then the output planes and, not read back, every
+//! the ladder's CoCs and inverse gaps; then the output planes and, not read back, every
 //! level's texels.
 //!
 //! What a frame needs decided before any pixel is blurred — E, the number of levels, both
 //! ladders, whether and where T_near is read, the reference colour — is the CPU's own
 //! `crate::dof::blend::pyramid::plan`, made on the host. Three entry points run in order in
 //! one compute pass: level 1 from the frame, each further level from the one before, then one
-//! invocation per pixel. What may differ from the CPU is rounding: WGSL's division is not
-//! correctly rounded (a level's colour divided by its w, the half step's normalisation) and
-//! a driver may fuse a product into a sum; the tolerance in tests/gpu_dof.rs says how much.
+//! invocation per pixel (the discs below level 3's CoC, the levels' mix above). What may
+//! differ from the CPU is rounding: WGSL's division and square root are not correctly
+//! rounded (a level's colour divided by its w, the discs' normalisation and coverage) and a
+//! driver may fuse a product into a sum; the tolerance in tests/gpu_dof.rs says how much.
 
 use crate::dof::blend::pyramid::{plan, BlendConfig};
 use crate::dof::DofConfig;
@@ -69,17 +70,11 @@ impl Gpu {
             first += w * h;
         }
         let texels = first;
-        let [half, plain] = &plan.ladders;
-        let ladders: Vec<f32> = [
-            &half.cocs,
-            &half.inverse_gaps,
-            &plain.cocs,
-            &plain.inverse_gaps,
-        ]
-        .into_iter()
-        .flatten()
-        .copied()
-        .collect();
+        let ladder: Vec<f32> = [&plan.ladder.cocs, &plan.ladder.inverse_gaps]
+            .into_iter()
+            .flatten()
+            .copied()
+            .collect();
         let mut planes = Vec::with_capacity(4 * n);
         planes.extend_from_slice(&color.r[..n]);
         planes.extend_from_slice(&color.g[..n]);
@@ -118,7 +113,7 @@ impl Gpu {
                 bytemuck::cast_slice(&planes),
                 bytemuck::cast_slice(&coc[..n]),
                 bytemuck::cast_slice(&geometry),
-                bytemuck::cast_slice(&ladders),
+                bytemuck::cast_slice(&ladder),
             ],
             &[(4 * n * 4) as u64, (texels * 32) as u64],
             &[],
@@ -157,7 +152,9 @@ mod tests {
                 largest,
                 near,
                 near_k,
-                near_f
+                near_f,
+                disc_level_2,
+                disc_level_3
             ]
         );
     }

@@ -3,8 +3,8 @@
 // w = max(T, 1/64), w, T_near), the same [1 3 3 1]/8 halvings (across, then down, the same
 // sums in the same order, indices clamped to the level), the same ladder and bracket, the
 // same bilinear read of a level (down first, colour divided by w, then across) and the same
-// mix. What the host decides is the CPU's own: E, the number of levels, both ladders' CoCs,
-// whether and where T_near is read (`blend::Plan`).
+// mix, and the same discs below level 3's CoC. What the host decides is the CPU's own: E,
+// the number of levels, the ladder's CoCs, whether and where T_near is read (`blend::Plan`).
 //
 // Three entry points, dispatched in order over the same bindings:
 // - `first_level`: level 1 from the frame, one invocation per texel;
@@ -32,8 +32,9 @@ struct BlendConfig {
     // mixed by near_f.
     near_k: u32,
     near_f: f32,
-    _pad0: u32,
-    _pad1: u32,
+    // Levels 2 and 3's CoCs, where the discs end (`disc_bounds`).
+    disc_level_2: f32,
+    disc_level_3: f32,
 }
 
 @group(0) @binding(0) var<uniform> config: BlendConfig;
@@ -43,9 +44,9 @@ struct BlendConfig {
 @group(0) @binding(2) var<storage, read> coc: array<f32>;
 // Per level L = 1 ..= levels: width, height, first texel, at 3 (L − 1).
 @group(0) @binding(3) var<storage, read> geometry: array<u32>;
-// The ladder with the half step: levels + 2 CoCs, then levels + 1 inverse gaps; then the
-// plain ladder: levels + 1 CoCs, then levels inverse gaps.
-@group(0) @binding(4) var<storage, read> ladders: array<f32>;
+// The ladder: levels + 1 CoCs (the sharp frame's, 0, then each level's), then levels
+// inverse gaps.
+@group(0) @binding(4) var<storage, read> ladder: array<f32>;
 // r, g, b, a planes one after the other.
 @group(0) @binding(5) var<storage, read_write> out: array<f32>;
 // Every level's texels, two vec4 each: (r, g, b, a) and (w, T_near, 0, 0).
@@ -55,6 +56,10 @@ const IN_FOCUS_WEIGHT: f32 = 0.015625;
 const MIN_POSITIVE: f32 = 1.17549435e-38;
 // SPREAD_MARGIN in src/dof/blend/pyramid/compose.rs.
 const SPREAD_MARGIN: f32 = 1e-3;
+// FRAME_UNTIL, LEVEL_UNTIL and LEVEL_1_VARIANCE in src/dof/blend/pyramid/disc.rs.
+const FRAME_UNTIL: f32 = 0.75;
+const LEVEL_UNTIL: f32 = 0.9;
+const LEVEL_1_VARIANCE: f32 = 0.75;
 
 struct Texel {
     c: vec4<f32>,
@@ -270,18 +275,61 @@ fn sharp(i: u32) -> vec4<f32> {
     return s;
 }
 
-// The half step at (x, y): the 3×3 filter over the premultiplied neighbourhood, normalised
-// (colour offset by the reference), as `half` sums it.
-fn half_step(x: u32, y: u32) -> vec4<f32> {
-    let taps = array<f32, 3>(0.25, 0.5, 0.25);
-    let xs = array<u32, 3>(u32(max(i32(x) - 1, 0)), x, min(x + 1u, config.width - 1u));
-    let ys = array<u32, 3>(u32(max(i32(y) - 1, 0)), y, min(y + 1u, config.height - 1u));
+struct Bracket {
+    k: u32,
+    f: f32,
+}
+
+// Where c sits in the ladder (`Ladder::bracket`): k counts the CoCs of images
+// 1 ..= levels − 1 that c reaches.
+fn bracket(c: f32) -> Bracket {
+    let count = config.levels + 1u;
+    var k = 0u;
+    for (var i = 1u; i + 1u < count; i++) {
+        if c >= ladder[i] {
+            k += 1u;
+        }
+    }
+    var b: Bracket;
+    b.k = k;
+    b.f = clamp((c - ladder[k]) * ladder[count + k], 0.0, 1.0);
+    return b;
+}
+
+// Image j of the ladder (level j, the sharp frame for 0) at pixel (x, y), offset by the
+// reference.
+fn image(j: u32, x: u32, y: u32) -> vec4<f32> {
+    if j >= 1u {
+        return level_at(j, x, y).c;
+    }
+    var s = sharp(y * config.width + x) - config.reference;
+    if config.has_alpha == 0u {
+        s.w = 0.0;
+    }
+    return s;
+}
+
+// The disc of diameter c about pixel (x, y) over the sharp frame, normalised (`frame_disc`):
+// each tap weighs its coverage times its w; rows top to bottom, each left to right; taps
+// outside the frame left out.
+fn frame_disc(x: u32, y: u32, c: f32) -> vec4<f32> {
+    let reach = 0.5 * c + 0.5;
+    let n = i32(floor(reach));
     var sum = vec4<f32>(0.0);
     var weights = 0.0;
-    for (var r = 0u; r < 3u; r++) {
-        for (var c = 0u; c < 3u; c++) {
-            let i = ys[r] * config.width + xs[c];
-            let w = taps[r] * taps[c] * max(interpolator(coc[i]), IN_FOCUS_WEIGHT);
+    for (var dy = -n; dy <= n; dy++) {
+        let sy = i32(y) + dy;
+        if sy < 0 || sy >= i32(config.height) {
+            continue;
+        }
+        let across = i32(floor(sqrt(max(reach * reach - f32(dy * dy), 0.0))));
+        let first_tap = max(i32(x) - across, 0);
+        let last_tap = min(i32(x) + across, i32(config.width) - 1);
+        for (var sx = first_tap; sx <= last_tap; sx++) {
+            let dx = sx - i32(x);
+            let cover = clamp(reach - sqrt(f32(dx * dx + dy * dy)), 0.0, 1.0);
+            let i = u32(sy) * config.width + u32(sx);
+            let w = cover * max(interpolator(coc[i]), IN_FOCUS_WEIGHT);
             var d = sharp(i) - config.reference;
             if config.has_alpha == 0u {
                 d.w = 0.0;
@@ -293,40 +341,34 @@ fn half_step(x: u32, y: u32) -> vec4<f32> {
     return sum / weights;
 }
 
-struct Bracket {
-    k: u32,
-    f: f32,
-}
-
-// The ladder starting at `base` in `ladders` with `count` CoCs (`Ladder::bracket`): k counts
-// the CoCs of images 1 ..= count − 2 that c reaches.
-fn bracket(base: u32, count: u32, c: f32) -> Bracket {
-    var k = 0u;
-    for (var i = 1u; i + 1u < count; i++) {
-        if c >= ladders[base + i] {
-            k += 1u;
+// The disc of diameter c about pixel (x, y) over level 1, its colour divided by its w
+// (`level_disc`, then `normalised`).
+fn level_disc(x: u32, y: u32, c: f32) -> vec4<f32> {
+    let lw = geometry[0];
+    let lh = geometry[1];
+    let first = geometry[2];
+    let diameter = sqrt(max(c * c - 16.0 * LEVEL_1_VARIANCE, 0.0));
+    let reach = 0.25 * diameter + 0.5;
+    let px = (f32(x) + 0.5) * 0.5 - 0.5;
+    let py = (f32(y) + 0.5) * 0.5 - 0.5;
+    let top = i32(max(ceil(py - reach), 0.0));
+    let bottom = min(i32(floor(py + reach)), i32(lh) - 1);
+    var sum = vec4<f32>(0.0);
+    var w = 0.0;
+    for (var j = top; j <= bottom; j++) {
+        let dy = f32(j) - py;
+        let across = sqrt(max(reach * reach - dy * dy, 0.0));
+        let first_tap = i32(max(ceil(px - across), 0.0));
+        let last_tap = min(i32(floor(px + across)), i32(lw) - 1);
+        for (var i = first_tap; i <= last_tap; i++) {
+            let dx = f32(i) - px;
+            let cover = clamp(reach - sqrt(dx * dx + dy * dy), 0.0, 1.0);
+            let t = load(first, u32(j) * lw + u32(i));
+            sum += cover * t.c;
+            w += cover * t.e.x;
         }
     }
-    var b: Bracket;
-    b.k = k;
-    b.f = clamp((c - ladders[base + k]) * ladders[base + count + k], 0.0, 1.0);
-    return b;
-}
-
-// Image j of a ladder whose level 1 is image `first` at pixel (x, y), offset by the
-// reference.
-fn image(j: u32, first: u32, x: u32, y: u32) -> vec4<f32> {
-    if j >= first {
-        return level_at(j - first + 1u, x, y).c;
-    }
-    if j == 0u {
-        var s = sharp(y * config.width + x) - config.reference;
-        if config.has_alpha == 0u {
-            s.w = 0.0;
-        }
-        return s;
-    }
-    return half_step(x, y);
+    return sum / max(w, MIN_POSITIVE);
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -362,20 +404,34 @@ fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
         out[3u * n + i] = color[3u * n + i];
         return;
     }
-    let levels = config.levels;
-    // The ladder with the half step, or the plain one for the near field's spread.
-    var base = 0u;
-    var count = levels + 2u;
-    var first = 2u;
-    if t < 0.0 {
-        base = 2u * levels + 3u;
-        count = levels + 1u;
-        first = 1u;
+    let cc = config.epsilon + abs(t) * (config.largest - config.epsilon);
+    // Below level 3's CoC a pixel's own blur is the lens's disc (`disc::kernel`); the near
+    // field's spread mixes levels only.
+    let level_2 = config.disc_level_2;
+    let level_3 = config.disc_level_3;
+    let frame_until = FRAME_UNTIL * level_2;
+    let level_until = LEVEL_UNTIL * level_3;
+    var blurred: vec4<f32>;
+    if t > 0.0 && cc <= frame_until {
+        blurred = frame_disc(x, y, cc);
+    } else if t > 0.0 && cc <= level_2 {
+        let a = frame_disc(x, y, cc);
+        let f = (cc - frame_until) / (level_2 - frame_until);
+        blurred = a + f * (level_disc(x, y, cc) - a);
+    } else if t > 0.0 && cc <= level_until {
+        blurred = level_disc(x, y, cc);
+    } else {
+        let b = bracket(cc);
+        let lower = image(b.k, x, y);
+        let upper = image(b.k + 1u, x, y);
+        blurred = lower + b.f * (upper - lower);
+        if t > 0.0 && cc < level_3 {
+            let a = level_disc(x, y, cc);
+            let f = (cc - level_until) / (level_3 - level_until);
+            blurred = a + f * (blurred - a);
+        }
     }
-    let b = bracket(base, count, config.epsilon + abs(t) * (config.largest - config.epsilon));
-    let lower = image(b.k, first, x, y);
-    let upper = image(b.k + 1u, first, x, y);
-    let mixed = config.reference + (lower + b.f * (upper - lower));
+    let mixed = config.reference + blurred;
     out[i] = mixed.x;
     out[n + i] = mixed.y;
     out[2u * n + i] = mixed.z;

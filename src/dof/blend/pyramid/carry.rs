@@ -9,8 +9,8 @@
 //!
 //! Everything that depends on the CoC alone is the beauty's, made once: the plan (E, the
 //! levels, the ladders, where T_near is read), each texel's w and T_near, each pixel's
-//! blurriness and the near field's spread, the levels a row needs, each pixel's bracket and
-//! mix, the half step's weights and the divisor of each level row. A plane adds only its own
+//! blurriness and the near field's spread, the levels a row needs, each pixel's bracket,
+//! disc and mix, and the divisor of each level row and of each level disc. A plane adds only its own
 //! lanes: premultiplied by w and halved into its levels, divided by the beauty's w, and
 //! mixed. The planes go eight to a texel (a [`Group`]), so every level of theirs is made by
 //! the beauty's own halving code, lane for lane. Each lane sees the operations it would see
@@ -21,6 +21,7 @@
 use rayon::prelude::*;
 
 use super::compose::{lerp, Sampler, Scratch};
+use super::disc::{frame_disc, kernel, level_disc, Kernel};
 use super::levels::{halve_levels, halve_plane_row, Ladder, Level, Source, Texel, BAND, ZERO};
 use crate::dof::blend::IN_FOCUS_WEIGHT;
 
@@ -173,11 +174,9 @@ fn first_level_band(
 pub(super) struct CarriedScratch {
     /// Group g's row of level l at [g][l − 1].
     made: Vec<Vec<Vec<Texel>>>,
-    /// Per pixel: the lower image of its mix, the ladder's first level image, and f (the
-    /// image is u8::MAX where the pixel is left sharp).
-    picks: Vec<(u8, u8, f32)>,
-    /// Per pixel that reads the half step: its nine taps' weights and their sum.
-    halves: Vec<([f32; 9], f32)>,
+    /// Per pixel: the lower image of its mix and f (the image is u8::MAX where the pixel is
+    /// left sharp), and where its blur comes from.
+    picks: Vec<(u8, f32, Kernel)>,
 }
 
 /// Copies of frame rows y − 1, y and y + 1 (clamped to the frame), as they were before the
@@ -192,7 +191,12 @@ pub(super) struct CarriedRows<'a> {
 pub(super) struct Shared<'a> {
     pub(super) source: &'a Source<'a>,
     pub(super) samplers: &'a [Sampler<'a>],
-    pub(super) ladders: &'a [Ladder; 2],
+    pub(super) ladder: &'a Ladder,
+    /// Every plane as it was before the compose stage, the beauty's first (empty where no
+    /// pixel reads the frame's disc).
+    pub(super) sharp: &'a [&'a [f32]],
+    /// Levels 2 and 3's CoCs (`super::disc::disc_bounds`).
+    pub(super) bounds: [f32; 2],
 }
 
 /// The carried planes' compose stage for frame row y, after the beauty's ([`Scratch`] holds
@@ -215,15 +219,13 @@ pub(super) fn compose_carried_row(
     let Shared {
         source,
         samplers,
-        ladders,
+        ladder,
+        sharp,
+        bounds,
     } = shared;
     let width = out[0].len();
     let height = source.coc.len() / width;
-    let CarriedScratch {
-        made,
-        picks,
-        halves,
-    } = scratch;
+    let CarriedScratch { made, picks } = scratch;
     made.resize_with(groups.len(), Vec::new);
     for (group, made) in groups.iter().zip(made.iter_mut()) {
         made.resize_with(group.levels.len(), Vec::new);
@@ -240,21 +242,20 @@ pub(super) fn compose_carried_row(
     // Each pixel's images and mix, as the beauty's (`compose::compose_row`).
     let (epsilon, largest) = (source.epsilon, source.largest);
     let to_coc = |t: f32| epsilon + t * (largest - epsilon);
-    let [ladder, plain] = ladders;
     picks.clear();
-    halves.resize(width, ([0.0; 9], 0.0));
-    for (x, &t) in beauty.blur.iter().enumerate() {
+    for &t in beauty.blur.iter() {
         if t == 0.0 {
-            picks.push((u8::MAX, 0, 0.0));
+            picks.push((u8::MAX, 0.0, Kernel::Pyramid));
             continue;
         }
-        let ladder = if t < 0.0 { plain } else { ladder };
-        let (k, f) = ladder.bracket(to_coc(t.abs()));
-        // Image 1 of the ladder with the half step is the half step.
-        if ladder.first == 2 && k <= 1 {
-            halves[x] = half_weights(source, width, height, x, y);
-        }
-        picks.push((k as u8, ladder.first as u8, f));
+        let c = to_coc(t.abs());
+        let kernel = if t > 0.0 {
+            kernel(c, *bounds)
+        } else {
+            Kernel::Pyramid
+        };
+        let (k, f) = ladder.bracket(c);
+        picks.push((k as u8, f, kernel));
     }
 
     let mut planes = out.iter_mut();
@@ -265,7 +266,6 @@ pub(super) fn compose_carried_row(
             group,
             samplers,
             made: &made[g],
-            halves,
             width,
         };
         // Each blurred pixel mixed, into the planes (a pixel left sharp is not touched).
@@ -274,12 +274,42 @@ pub(super) fn compose_carried_row(
             .take(group.lanes)
             .map(|p| &mut p[..width])
             .collect();
-        for (x, &(k, first, f)) in picks.iter().enumerate() {
+        let base = rows.first + g * GROUP;
+        let planes_as_were = sharp.get(base..base + group.lanes).unwrap_or(&[]);
+        for (x, &(k, f, kernel)) in picks.iter().enumerate() {
             if k == u8::MAX {
                 continue;
             }
-            let (k, first) = (k as usize, first as usize);
-            let m = lerp(&images.at(k, first, x), &images.at(k + 1, first, x), f);
+            let k = k as usize;
+            let c = to_coc(beauty.blur[x].abs());
+            let pyramid = || lerp(&images.at(k, x), &images.at(k + 1, x), f);
+            let frame = || {
+                frame_disc(
+                    source,
+                    planes_as_were,
+                    &group.reference,
+                    width,
+                    height,
+                    x,
+                    y,
+                    c,
+                )
+            };
+            // Level 1's disc of the group, divided by the beauty's w for the same disc.
+            let level = || {
+                let mut sum = level_disc(&group.levels[0], x, y, c);
+                for v in sum.iter_mut() {
+                    *v /= beauty.level_w[x];
+                }
+                sum
+            };
+            let m = match kernel {
+                Kernel::Frame => frame(),
+                Kernel::FrameToLevel(f) => lerp(&frame(), &level(), f),
+                Kernel::Level => level(),
+                Kernel::LevelToPyramid(f) => lerp(&level(), &pyramid(), f),
+                Kernel::Pyramid => pyramid(),
+            };
             for ((plane, m), reference) in lanes.iter_mut().zip(m).zip(&group.reference) {
                 plane[x] = reference + m;
             }
@@ -287,8 +317,8 @@ pub(super) fn compose_carried_row(
     }
 }
 
-/// What a group's mix reads for frame row y: the sharp rows, the half step's weights, the
-/// levels' rows made for the row.
+/// What a group's mix reads for frame row y: the sharp rows and the levels' rows made for
+/// the row.
 struct Images<'a> {
     rows: &'a CarriedRows<'a>,
     /// The group's first plane among the copied rows' planes.
@@ -296,91 +326,25 @@ struct Images<'a> {
     group: &'a Group,
     samplers: &'a [Sampler<'a>],
     made: &'a [Vec<Texel>],
-    halves: &'a [([f32; 9], f32)],
     width: usize,
 }
 
 impl Images<'_> {
-    /// Image j of a ladder whose level 1 is image `first`, at frame pixel x (a method, not a
-    /// closure, as `compose::Images::at`).
+    /// Image j of the ladder (level j, the sharp frame for 0) at frame pixel x (a method,
+    /// not a closure, as `compose::Images::at`).
     #[inline(always)]
-    fn at(&self, j: usize, first: usize, x: usize) -> Texel {
-        if j >= first {
-            self.samplers[j - first].at(&self.made[j - first], x)
-        } else if j == 0 {
+    fn at(&self, j: usize, x: usize) -> Texel {
+        if j >= 1 {
+            self.samplers[j - 1].at(&self.made[j - 1], x)
+        } else {
             let mut offset = ZERO;
             let row = self.rows.rows[1];
             for (lane, v) in offset.iter_mut().enumerate().take(self.group.lanes) {
                 *v = row[(self.base + lane) * self.width + x] - self.group.reference[lane];
             }
             offset
-        } else {
-            half(
-                self.rows,
-                self.base,
-                self.group,
-                &self.halves[x],
-                self.width,
-                x,
-            )
         }
     }
-}
-
-/// The half step's nine weights at pixel (x, y) and their sum, in `compose::half`'s order.
-#[inline(always)]
-fn half_weights(
-    source: &Source,
-    width: usize,
-    height: usize,
-    x: usize,
-    y: usize,
-) -> ([f32; 9], f32) {
-    const TAPS: [f32; 3] = [0.25, 0.5, 0.25];
-    let ys = [y.saturating_sub(1), y, (y + 1).min(height - 1)];
-    let xs = [x.saturating_sub(1), x, (x + 1).min(width - 1)];
-    let (mut taps, mut weights) = ([0.0; 9], 0.0f32);
-    for (r, (ky, &sy)) in TAPS.iter().zip(&ys).enumerate() {
-        for (c, (kx, &sx)) in TAPS.iter().zip(&xs).enumerate() {
-            let i = sy * width + sx;
-            let w = ky * kx * source.interpolator(source.coc[i]).max(IN_FOCUS_WEIGHT);
-            taps[3 * r + c] = w;
-            weights += w;
-        }
-    }
-    (taps, weights)
-}
-
-/// The half step of a group at pixel x with the weights [`half_weights`] gave: each lane's
-/// sums in `compose::half`'s order.
-#[inline(always)]
-fn half(
-    rows: &CarriedRows,
-    base: usize,
-    group: &Group,
-    (taps, weights): &([f32; 9], f32),
-    width: usize,
-    x: usize,
-) -> Texel {
-    let xs = [x.saturating_sub(1), x, (x + 1).min(width - 1)];
-    let mut sum = ZERO;
-    for (r, row) in rows.rows.iter().enumerate() {
-        for (c, &sx) in xs.iter().enumerate() {
-            let w = taps[3 * r + c];
-            for (lane, (v, reference)) in sum
-                .iter_mut()
-                .zip(&group.reference)
-                .enumerate()
-                .take(group.lanes)
-            {
-                *v += w * (row[(base + lane) * width + sx] - reference);
-            }
-        }
-    }
-    for v in sum.iter_mut() {
-        *v /= weights;
-    }
-    sum
 }
 
 #[cfg(test)]

@@ -5,18 +5,18 @@
 //! In: the frame (written in place, a band of rows per task, with copies of the rows around
 //! the one written: a [`Window`]), its signed CoC and constants ([`Source`]), the levels
 //! ([`super::levels::build`]) each read through a [`Sampler`], and the frame's [`super::Plan`]
-//! (the two [`Ladder`]s, where T_near is read). Out: each pixel's colour, where it is blurred.
+//! (its [`Ladder`], where T_near is read). Out: each pixel's colour, where it is blurred.
 //!
 //! Per frame row ([`compose_row`]): each pixel's blurriness T, raised to the near field's
 //! blurred T_near where that spreads over it by more than [`SPREAD_MARGIN`]; the level rows
 //! the row needs, each made once (two texel rows mixed, colour divided by w); then each
-//! blurred pixel mixed from the two images its ladder brackets it between: the sharp pixel,
-//! the half step (the 3×3 filter at full resolution, [`half`]) or a level sampled
-//! bilinearly. The GPU twin's `compose` entry point (`crate::gpu::dof::blend`) runs the same
+//! blurred pixel: below level 3's CoC, blurred by its own CoC, the lens's disc
+//! ([`super::disc`]); otherwise mixed from the two images the ladder brackets it between,
+//! the sharp pixel or a level sampled bilinearly. The GPU twin's `compose` entry point (`crate::gpu::dof::blend`) runs the same
 //! sums per pixel.
 
+use super::disc::{frame_disc, kernel, level_disc, normalised, Kernel};
 use super::levels::{Ladder, Level, Source, Texel, MAX_LEVELS, NEAR, W, ZERO};
-use crate::dof::blend::IN_FOCUS_WEIGHT;
 
 /// Where pixel centres of a frame axis of `size` land in a level 2^L times smaller: for each
 /// pixel, the texel before it and the one after (clamped to the level) and the weight of the
@@ -163,6 +163,11 @@ impl<'a> Sampler<'a> {
         carried_normalised_row(a, b, f, beauty, row);
     }
 
+    /// The level this sampler reads.
+    pub(super) fn level_ref(&self) -> &'a Level {
+        self.level
+    }
+
     /// The level at frame pixel x, from the row [`Sampler::row`] made.
     #[inline(always)]
     pub(super) fn at(&self, row: &[Texel], x: usize) -> Texel {
@@ -195,6 +200,8 @@ pub(super) struct Scratch {
     /// T_near of the two levels that bracket E, as planes.
     near_lower: Vec<f32>,
     near_upper: Vec<f32>,
+    /// Per pixel that reads level 1's disc, its w (the carried planes divide by it).
+    pub(super) level_w: Vec<f32>,
 }
 
 /// The compose stage for frame row y: each pixel's blurriness, the levels the row needs,
@@ -212,8 +219,10 @@ pub(super) fn compose_row(
     let Pyramid {
         source,
         samplers,
-        ladders,
+        ladder,
         near,
+        sharp,
+        bounds,
     } = pyramid;
     let near = *near;
     let width = out[0].len();
@@ -227,6 +236,7 @@ pub(super) fn compose_row(
         mixed,
         near_lower,
         near_upper,
+        level_w,
     } = scratch;
     made.resize(samplers.len(), Vec::new());
     let mut ready = [false; MAX_LEVELS + 1];
@@ -297,13 +307,11 @@ pub(super) fn compose_row(
     }
     let (epsilon, largest) = (source.epsilon, source.largest);
     let to_coc = |t: f32| epsilon + t * (largest - epsilon);
-    // Image k of the ladder without the half step is level k, and either ladder brackets a
-    // CoC between the same levels from level 1 up.
-    let [ladder, plain] = ladders;
+    // Image k of the ladder is level k.
     *mixing = None;
     if most > 0.0 {
-        let (lo, _) = plain.bracket(to_coc(least));
-        let (hi, _) = plain.bracket(to_coc(most));
+        let (lo, _) = ladder.bracket(to_coc(least));
+        let (hi, _) = ladder.bracket(to_coc(most));
         for l in lo.max(1)..=hi + 1 {
             make(l, made);
         }
@@ -315,28 +323,48 @@ pub(super) fn compose_row(
     // `out` holds the sharp row: pixels left sharp are not touched.
     let channels = out.len();
     let images = Images {
-        source,
         window,
         channels,
         reference: &reference,
-        width,
-        height,
-        y,
         samplers,
         made,
     };
     mixed.resize(width, ZERO);
-    for (x, (&t, m)) in blur.iter().zip(mixed.iter_mut()).enumerate() {
+    level_w.resize(width, 0.0);
+    for (x, ((&t, m), level_w)) in blur
+        .iter()
+        .zip(mixed.iter_mut())
+        .zip(level_w.iter_mut())
+        .enumerate()
+    {
         if t == 0.0 {
             continue;
         }
-        // A pixel blurred by the near field's spread mixes levels only: the half step shows
-        // its own neighbourhood, which the near field's blur reaches farther than.
-        let ladder = if t < 0.0 { plain } else { ladder };
-        let (k, f) = ladder.bracket(to_coc(t.abs()));
-        let lower = images.at(k, ladder.first, x);
-        let upper = images.at(k + 1, ladder.first, x);
-        *m = lerp(&lower, &upper, f);
+        let c = to_coc(t.abs());
+        let pyramid = || {
+            let (k, f) = ladder.bracket(c);
+            lerp(&images.at(k, x), &images.at(k + 1, x), f)
+        };
+        // Below level 3's CoC a pixel's own blur is the lens's disc (`super::disc`); the
+        // near field's spread mixes levels only (T_near is the levels' own).
+        let frame = || frame_disc(source, sharp, &reference, width, height, x, y, c);
+        let mut level = || {
+            let (disc, w) = normalised(level_disc(samplers[0].level_ref(), x, y, c));
+            *level_w = w;
+            disc
+        };
+        let kernel = if t > 0.0 {
+            kernel(c, *bounds)
+        } else {
+            Kernel::Pyramid
+        };
+        *m = match kernel {
+            Kernel::Frame => frame(),
+            Kernel::FrameToLevel(f) => lerp(&frame(), &level(), f),
+            Kernel::Level => level(),
+            Kernel::LevelToPyramid(f) => lerp(&level(), &pyramid(), f),
+            Kernel::Pyramid => pyramid(),
+        };
     }
     // Then into the planes (the match gives the loop each plane's own iterator, so no
     // store checks its bounds).
@@ -380,10 +408,11 @@ fn near_lane(row: &[Texel], lane: &mut Vec<f32>) {
 
 /// How far the near field's spread must exceed a pixel's own blurriness (in T) to take
 /// over. Inside a uniformly blurred foreground the spread is the pixel's own T blurred, equal
-/// to it but for rounding, and the two ladders (with and without the half step) give
-/// different mixes there: compared bare, the last bit decided between them pixel by pixel,
-/// a pattern of dots over the foreground (seen between the CPU and the GPU twin on `layers`
-/// with ε = 3 px, up to 0.04 apart). 1e-3 of the blur range is 0.03 px of CoC at E = 32.
+/// to it but for rounding, and the two give different images there (the pixel's own blur
+/// the disc of its CoC, the spread the levels' mix): compared bare, the last bit decided
+/// between them pixel by pixel, a pattern of dots over the foreground (seen between the CPU
+/// and the GPU twin on `layers` with ε = 3 px, up to 0.04 apart, when the two were the
+/// ladders with and without a half step). 1e-3 of the blur range is 0.03 px of CoC at E = 32.
 const SPREAD_MARGIN: f32 = 1e-3;
 
 /// A pixel's blurriness `t` given the near field's T_near read at the two levels that
@@ -396,93 +425,49 @@ fn spread(t: &mut f32, lower: f32, upper: f32, f: f32) {
     }
 }
 
-/// What the compose stage mixes for frame row y: the sharp frame (offset by the reference),
-/// the half step, and the levels' rows made for the row.
+/// What the compose stage mixes for frame row y: the sharp frame (offset by the reference)
+/// and the levels' rows made for the row.
 struct Images<'a> {
-    source: &'a Source<'a>,
     window: &'a Window<'a>,
     channels: usize,
     reference: &'a Texel,
-    width: usize,
-    height: usize,
-    y: usize,
     samplers: &'a [Sampler<'a>],
     made: &'a [Vec<Texel>],
 }
 
 impl Images<'_> {
-    /// Image j of a ladder whose level 1 is image `first`, at frame pixel x (a method, not
-    /// a closure: `multiversion` would leave a closure compiled for the baseline CPU, out
+    /// Image j of the ladder (level j, the sharp frame for 0) at frame pixel x (a method,
+    /// not a closure: `multiversion` would leave a closure compiled for the baseline CPU, out
     /// of line).
     #[inline(always)]
-    fn at(&self, j: usize, first: usize, x: usize) -> Texel {
-        if j >= first {
-            self.samplers[j - first].at(&self.made[j - first], x)
-        } else if j == 0 {
+    fn at(&self, j: usize, x: usize) -> Texel {
+        if j >= 1 {
+            self.samplers[j - 1].at(&self.made[j - 1], x)
+        } else {
             let mut offset = ZERO;
             for (lane, rows) in self.window.iter().take(self.channels).enumerate() {
                 offset[lane] = rows[1][x] - self.reference[lane];
             }
             offset
-        } else {
-            half(
-                self.source,
-                self.window,
-                self.channels,
-                self.reference,
-                self.width,
-                self.height,
-                x,
-                self.y,
-            )
         }
     }
 }
 
 /// What every compose task reads: the frame's constants and CoC, the levels' samplers, the
-/// two ladders (with and without the half step), and where T_near is read (in levels, if any
-/// pixel is in front of the focus plane).
+/// ladder, and where T_near is read (in levels, if any pixel is in front of the focus
+/// plane).
 pub(super) struct Pyramid<'a> {
     pub(super) source: &'a Source<'a>,
     pub(super) samplers: &'a [Sampler<'a>],
-    pub(super) ladders: &'a [Ladder; 2],
+    pub(super) ladder: &'a Ladder,
     pub(super) near: Option<(usize, f32)>,
+    /// The colour's planes as they were before the compose stage (the discs read them;
+    /// empty where no pixel reads the frame's disc).
+    pub(super) sharp: &'a [&'a [f32]],
+    /// Levels 2 and 3's CoCs (`super::disc::disc_bounds`).
+    pub(super) bounds: [f32; 2],
 }
 
 /// Frame rows y − 1, y and y + 1 (clamped to the frame) of each colour plane, as they were
 /// before the compose stage wrote any of them: the compose stage writes in place.
 pub(super) type Window<'a> = [[&'a [f32]; 3]; 4];
-
-/// The half step at pixel (x, y): the 3×3 filter over the premultiplied neighbourhood,
-/// normalised (colour offset by the reference).
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn half(
-    source: &Source,
-    window: &Window,
-    channels: usize,
-    reference: &Texel,
-    width: usize,
-    height: usize,
-    x: usize,
-    y: usize,
-) -> Texel {
-    const TAPS: [f32; 3] = [0.25, 0.5, 0.25];
-    let ys = [y.saturating_sub(1), y, (y + 1).min(height - 1)];
-    let xs = [x.saturating_sub(1), x, (x + 1).min(width - 1)];
-    let (mut sum, mut weights) = (ZERO, 0.0f32);
-    for (r, (ky, &sy)) in TAPS.iter().zip(&ys).enumerate() {
-        for (kx, &sx) in TAPS.iter().zip(&xs) {
-            let i = sy * width + sx;
-            let w = ky * kx * source.interpolator(source.coc[i]).max(IN_FOCUS_WEIGHT);
-            for ((v, rows), reference) in sum.iter_mut().zip(window).zip(reference).take(channels) {
-                *v += w * (rows[r][sx] - reference);
-            }
-            weights += w;
-        }
-    }
-    for v in sum.iter_mut() {
-        *v /= weights;
-    }
-    sum
-}

@@ -72,21 +72,16 @@ pub fn level_variance(level: usize) -> f64 {
 /// 3.2σ (BENCHMARKS.md).
 pub const COC_PER_SIGMA: f64 = 2.0 * 2.926_846 / 1.665_109;
 
-/// Per-axis variance (px²) of the half step between the sharp frame and level 1: one pass of
-/// the 3×3 filter, [1 2 1]/4 across and down, at full resolution. Level 1 stands for a CoC of
-/// 4.3 px; without this step a pixel of CoC 2 would mix the sharp frame with it, and at
-/// 240×135 on `layers` (CoCs up to 6 px) the pyramid erred more than the talk's copies.
-pub(super) const HALF_VARIANCE: f64 = 0.5;
-
 /// The CoC diameter (px) that level L stands for (level 0, the sharp frame, for 0).
 pub fn level_coc(level: usize) -> f32 {
     (COC_PER_SIGMA * level_variance(level).sqrt()) as f32
 }
 
-/// The CoC each blurred image stands for, and where a CoC sits between them. Image 0 is the
-/// sharp frame (CoC 0); with `half`, image 1 is the frame under one pass of the 3×3 filter
-/// (made where a pixel asks for it) and image j ≥ 2 is level j − 1; without, image j is
-/// level j.
+/// The CoC each image stands for, and where a CoC sits between them: image 0 is the sharp
+/// frame (CoC 0), image j ≥ 1 level j. (Pixels blurred by their own CoC below level 3's read
+/// the lens's disc instead, `super::disc`; the ladder serves the rest and the near field's
+/// spread. Until then a half step, one pass of the 3×3 filter at full resolution, sat between
+/// the sharp frame and level 1; the discs left it unread.)
 pub(crate) struct Ladder {
     pub cocs: Vec<f32>,
     /// 1 / (CoC of image k + 1 − CoC of image k).
@@ -94,21 +89,16 @@ pub(crate) struct Ladder {
     /// The CoCs of images 1 ..= top − 1 (then +∞): a CoC's image below is the count of
     /// these it reaches, found without a branch.
     bounds: [f32; BOUNDS],
-    /// The image that is level 1.
-    pub(super) first: usize,
 }
 
-/// Room in [`Ladder::bounds`]: the sharp frame, the half step and every level.
+/// Room in [`Ladder::bounds`]: the sharp frame and every level.
 const BOUNDS: usize = 16;
 const _: () = assert!(MAX_LEVELS <= BOUNDS);
 
 impl Ladder {
-    /// The sharp frame, the half step if asked for, and levels 1 ..= `top`.
-    pub(super) fn new(top: usize, half: bool) -> Self {
+    /// The sharp frame and levels 1 ..= `top`.
+    pub(super) fn new(top: usize) -> Self {
         let mut cocs = vec![0.0];
-        if half {
-            cocs.push((COC_PER_SIGMA * HALF_VARIANCE.sqrt()) as f32);
-        }
         cocs.extend((1..=top).map(level_coc));
         let inverse_gaps = cocs.windows(2).map(|c| 1.0 / (c[1] - c[0])).collect();
         let mut bounds = [f32::INFINITY; BOUNDS];
@@ -118,7 +108,6 @@ impl Ladder {
             cocs,
             inverse_gaps,
             bounds,
-            first: if half { 2 } else { 1 },
         }
     }
 
@@ -446,7 +435,7 @@ mod tests {
 
     #[test]
     fn the_ladder_mixes_continuously_between_levels() {
-        let ladder = Ladder::new(5, false);
+        let ladder = Ladder::new(5);
         // Level CoCs grow about twofold a level (3.5155 σ; level 1: σ² = 3/4 + 2/3 + 1/12).
         assert!(close(level_coc(1), 4.305, 0.01), "{}", level_coc(1));
         for l in 1..5 {

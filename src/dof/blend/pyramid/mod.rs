@@ -1,39 +1,44 @@
 //! blend's pyramid form, the default (seed 004, "Depth of Field: Technique Overview" to
 //! "Render to Backbuffer", with the talk's "resolution reduction" variation taken all the
 //! way): the blurred images are the levels of a binomial pyramid, and each pixel mixes the
-//! two whose blur brackets its CoC.
+//! two whose blur brackets its CoC; below level 3's CoC (18.1 px), where the pyramid cannot
+//! show a disc, a pixel blurred by its own CoC takes the lens's disc directly (`disc`).
 //!
 //! Inputs: colour and the signed CoC plane (px, diameter). Output: the colour with depth of
 //! field, written in place. Its GPU twin is `crate::gpu::dof::blend`, which runs the same
 //! `plan` and reads a [`BlendConfig`].
 //!
 //! - **What a frame decides first** (`plan`, the twin's too): E; how many levels it needs
-//!   (the last at least as blurred as E); two ladders that place each image at the CoC it
-//!   shows, one with the half step and one without (for pixels the near field's spread
-//!   blurs); where T_near is read (at the blur of E); and the reference colour the texels are
+//!   (the last at least as blurred as E); the ladder that places each image at the CoC it
+//!   shows; where T_near is read (at the blur of E); and the reference colour the texels are
 //!   offset by (a uniform frame stays exact).
 //! - **The levels** (`levels`): each halving filters with [1 3 3 1]/8 across and down;
 //!   level L stands for a CoC of [`level_coc`]`(L)`, about twice the one before (4.3 px for
-//!   level 1). Between the sharp frame and level 1 sits the half step, one pass of the talk's
-//!   3×3 filter at full resolution (CoC 2.5 px), made only where a pixel asks for it.
-//! - **Compose** (`compose`): per row, each pixel mixed from the two images that bracket its
-//!   CoC, linearly in CoC. The near field's spread (the blend's second ghosting fix) takes
+//!   level 1).
+//! - **The discs** (`disc`): below level 2's CoC (9.0 px) the disc of the pixel's CoC over
+//!   the sharp frame, up to level 3's over level 1's texels, each tap weighed by its coverage
+//!   and its w, with short mixes between the three (which the pyramid's Gaussian-like images
+//!   cannot: a disc passes a texture near its size inverted, and the fine levels alias).
+//! - **Compose** (`compose`): per row, each pixel its disc, or mixed from the two images
+//!   that bracket its CoC, linearly in CoC. The near field's spread (the blend's second ghosting fix) takes
 //!   over only where it exceeds the pixel's own T by `SPREAD_MARGIN`: inside a uniform
 //!   foreground the two are equal but for rounding.
 //! - **Skip**: the levels a row needs are made for it and no others, and pixels with T = 0
 //!   and no near blur reaching them are not touched.
 //! - **Light layers** (`carry`, [`blend_carrying`]): planes carried beside the colour get
-//!   its plan, w, T_near, blurriness, brackets and half-step weights, made once; each adds
-//!   only its lanes of the levels and the mixes, eight planes a texel, with the bits it gets
+//!   its plan, w, T_near, blurriness, brackets and the discs' w, made once; each adds only
+//!   its lanes of the levels, the discs and the mixes, eight planes a texel, with the bits it gets
 //!   alone in the colour's place. At 1080p with six RGB layers the pass took 0.18–0.20 s
 //!   where each layer run alone took 0.28–0.29 s, the beauty alone 0.04 s (BENCHMARKS.md,
 //!   "Light layers"): the pyramid's per-pixel work is mostly each layer's own.
 //!
 //! Against the talk's two copies (BENCHMARKS.md, issue 14): on `layers` at 640×360 it errs
-//! less (region RMSE 0.0296 against 0.0478 in one run), and at 1080p it is 14–22× faster.
+//! less (region RMSE 0.0296 against 0.0478 in one run, before the discs), and at 1080p it is
+//! 14–22× faster.
 
 mod carry;
 mod compose;
+mod disc;
 mod levels;
 
 use rayon::prelude::*;
@@ -43,6 +48,7 @@ use crate::dof::DofConfig;
 use crate::frame::Color;
 use carry::{compose_carried_row, CarriedRows, CarriedScratch, Group, Shared, GROUP};
 use compose::{compose_row, Pyramid, Sampler, Scratch, Window};
+pub use disc::{disc_bounds, FRAME_UNTIL, LEVEL_UNTIL};
 use levels::{build, Ladder, Source, BAND, MAX_LEVELS};
 pub use levels::{level_coc, level_variance, COC_PER_SIGMA};
 
@@ -72,7 +78,9 @@ pub struct BlendConfig {
     /// T_near is read at levels `near_k` and `near_k` + 1, mixed by `near_f`.
     pub near_k: u32,
     pub near_f: f32,
-    pub _pad: [u32; 2],
+    /// Levels 2 and 3's CoCs, where the discs end ([`disc_bounds`]).
+    pub disc_level_2: f32,
+    pub disc_level_3: f32,
 }
 
 // Only the twin builds it (the CPU reads the plan itself).
@@ -93,7 +101,8 @@ impl BlendConfig {
             near: plan.near.is_some() as u32,
             near_k: near_k as u32,
             near_f,
-            _pad: [0; 2],
+            disc_level_2: disc_bounds()[0],
+            disc_level_3: disc_bounds()[1],
         }
     }
 }
@@ -104,8 +113,8 @@ pub(crate) struct Plan {
     pub largest: f32,
     /// Levels 1 ..= `levels` are made.
     pub levels: usize,
-    /// The ladder with the half step, and the plain one (the near field's spread).
-    pub ladders: [Ladder; 2],
+    /// Where each image of the pyramid stands in CoC.
+    pub ladder: Ladder,
     /// Where T_near is read: the plain ladder's bracket of E, if any pixel is in front of
     /// the focus plane.
     pub near: Option<(usize, f32)>,
@@ -130,17 +139,17 @@ pub(crate) fn plan(config: &DofConfig, color: &Color, coc: &[f32]) -> Plan {
     while levels < MAX_LEVELS && level_coc(levels) < largest {
         levels += 1;
     }
-    let ladders = [Ladder::new(levels, true), Ladder::new(levels, false)];
+    let ladder = Ladder::new(levels);
     let interpolator = |c: f32| ((c.abs() - epsilon) * inverse_span).clamp(0.0, 1.0);
     // T_near is read at the blur of E, where any pixel is in front of the focus plane.
     let near = coc
         .par_iter()
         .any(|&c| c < 0.0 && interpolator(c) > 0.0)
-        .then(|| ladders[1].bracket(largest));
+        .then(|| ladder.bracket(largest));
     Plan {
         largest,
         levels,
-        ladders,
+        ladder,
         near,
         reference,
         inverse_span,
@@ -168,7 +177,7 @@ pub fn blend_carrying(
     let Plan {
         largest,
         levels: count,
-        ladders,
+        ladder,
         near,
         reference,
         inverse_span,
@@ -199,6 +208,26 @@ pub fn blend_carrying(
     let bands = height.div_ceil(BAND);
     // The colour's planes, then the carried ones.
     let channels = source.planes.len();
+    // Copies of every plane as it was, where some pixel reads the frame's disc (the compose
+    // stage writes in place).
+    let bounds = disc_bounds();
+    let to_coc = |t: f32| epsilon + t * (largest - epsilon);
+    let frame_disc = coc.par_iter().any(|&c| {
+        let t = source.interpolator(c);
+        t > 0.0 && to_coc(t) <= bounds[0]
+    });
+    let sharp: Vec<Vec<f32>> = if frame_disc {
+        source
+            .planes
+            .iter()
+            .copied()
+            .chain(carried.iter().map(Vec::as_slice))
+            .map(<[f32]>::to_vec)
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let sharp: Vec<&[f32]> = sharp.iter().map(Vec::as_slice).collect();
     let copy = |y: usize| -> Vec<f32> {
         source
             .planes
@@ -247,13 +276,17 @@ pub fn blend_carrying(
     let pyramid = Pyramid {
         source: &source,
         samplers: &samplers,
-        ladders: &ladders,
+        ladder: &ladder,
         near,
+        sharp: &sharp[..sharp.len().min(channels)],
+        bounds,
     };
     let shared = Shared {
         source: &source,
         samplers: &samplers,
-        ladders: &ladders,
+        ladder: &ladder,
+        sharp: &sharp,
+        bounds,
     };
     band_planes
         .into_par_iter()
@@ -336,16 +369,17 @@ pub fn blend_carrying(
 
 #[cfg(test)]
 mod tests {
-    use super::levels::HALF_VARIANCE;
     use super::*;
     use crate::numeric::close;
 
     #[test]
-    fn the_half_step_reads_the_frame_as_it_was_across_bands() {
-        // Every pixel at CoC 2 (E = 2, so T = 1 and w = 1 everywhere): each output is the
-        // sharp pixel mixed with the 3×3 filter [1 2 1]/4 × [1 2 1]/4 of the input (clamped
-        // to the frame) by f = 2 / (the half step's CoC). The frame is taller than two bands,
-        // so rows next to a band's edge read rows another task writes in place.
+    fn the_disc_reads_the_frame_as_it_was_across_bands() {
+        // Every pixel at CoC 3 (E = 3, so T = 1 and w = 1 everywhere): each output is the
+        // disc of diameter 3 over the input, each tap weighted by the share of it inside the
+        // disc, clamp(2 − d, 0, 1) (d its distance: the 5 × 5 neighbourhood but its corners
+        // and the taps at d = 2), renormalised over the taps inside the frame. The frame is
+        // taller than two bands, so rows next to a band's edge read rows another task writes
+        // in place.
         let (width, height) = (7, 2 * BAND + 5);
         let n = width * height;
         let value = |i: usize, k: usize| ((i * 7919 + k * 104_729) % 1000) as f32 / 1000.0;
@@ -358,25 +392,23 @@ mod tests {
             b: planes[2].clone(),
             a: Some(planes[3].clone()),
         };
-        let coc = vec![2.0f32; n];
+        let coc = vec![3.0f32; n];
         let config = DofConfig::new(width, height, &crate::dof::DofParams::default());
         let out = blend(&config, color, &coc);
-        let f = 2.0 / (COC_PER_SIGMA * HALF_VARIANCE.sqrt());
-        let taps = [0.25, 0.5, 0.25];
         for (k, got) in out.planes().iter().enumerate() {
-            for y in 0..height {
-                for x in 0..width {
-                    let mut filtered = 0.0f64;
-                    for (dy, ky) in taps.iter().enumerate() {
-                        for (dx, kx) in taps.iter().enumerate() {
-                            let sy = (y + dy).saturating_sub(1).min(height - 1);
-                            let sx = (x + dx).saturating_sub(1).min(width - 1);
-                            filtered += ky * kx * planes[k][sy * width + sx] as f64;
+            for y in 0..height as i64 {
+                for x in 0..width as i64 {
+                    let (mut sum, mut weights) = (0.0f64, 0.0f64);
+                    for sy in (y - 2).max(0)..=(y + 2).min(height as i64 - 1) {
+                        for sx in (x - 2).max(0)..=(x + 2).min(width as i64 - 1) {
+                            let d = (((sx - x).pow(2) + (sy - y).pow(2)) as f64).sqrt();
+                            let cover = (2.0 - d).clamp(0.0, 1.0);
+                            sum += cover * planes[k][sy as usize * width + sx as usize] as f64;
+                            weights += cover;
                         }
                     }
-                    let sharp = planes[k][y * width + x] as f64;
-                    let expected = sharp + f * (filtered - sharp);
-                    let got = got[y * width + x] as f64;
+                    let expected = sum / weights;
+                    let got = got[y as usize * width + x as usize] as f64;
                     assert!(
                         close(got, expected, 1e-5),
                         "plane {k} ({x}, {y}): {got} against {expected}"

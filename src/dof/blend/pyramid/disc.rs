@@ -1,0 +1,193 @@
+//! The lens's disc, gathered directly where the pyramid cannot show it: a pixel blurred by
+//! its own CoC below level 3's (18.1 px) takes the disc of that CoC over the sharp frame, or
+//! over level 1, instead of the levels' mix.
+//!
+//! Why: the pyramid's images are Gaussian-like, and a disc is not. A disc passes a texture
+//! whose period is near its diameter inverted (its first side lobe, −13 % of the texture's
+//! contrast); no Gaussian of any width does, and the half step and level 1 alias a texture of
+//! a few pixels besides (a 2 px checker under a 5 px CoC came out upright: `border`,
+//! BENCHMARKS.md "Frame borders and the near rim"). Below level 2's CoC (9.0 px) the pyramid
+//! mixed the sharp frame, a half step and levels 1 and 2, where both faults are largest; a
+//! disc there is at most 64 taps (the half step is gone: nothing reads it now).
+//!
+//! Which image a pixel of CoC c reads ([`kernel`]), L2 and L3 being levels 2 and 3's CoCs:
+//! - c ≤ ¾·L2: the disc over the sharp frame ([`frame_disc`]);
+//! - ¾·L2 < c ≤ L2: that disc mixed into the disc over level 1, linearly in c;
+//! - L2 < c ≤ 0.9·L3: the disc over level 1 ([`level_disc`]): level 1's texels (premultiplied
+//!   by w, already filtered) sampled over a disc of c/2 texels across, narrowed by the
+//!   texels' own blur (variance ¾ px², so the diameter is √(c² − 16·¾));
+//! - 0.9·L3 < c < L3: that disc mixed into the pyramid's mix;
+//! - c ≥ L3, or a pixel the near field's spread blurs: the pyramid's mix alone.
+//!
+//! Both discs weigh a tap by its coverage (the share of the pixel or texel inside the disc,
+//! `clamp(r + ½ − d, 0, 1)`, so the disc grows smoothly with c) times its w, as the levels
+//! do (an in-focus pixel lends almost nothing), and renormalise over the taps inside the frame
+//! (what lies outside is unknown). The GPU twin (`disc` and `level_disc` in
+//! src/gpu/dof/blend.wgsl) sums the same taps in the same order. Measured (BENCHMARKS.md,
+//! "blend: the disc below level 3"): region RMSE on `border` 0.06213 → 0.02952 and on
+//! `layers dof` at 640×360 0.03278 → 0.02171; every level's disc (the pyramid kept only for
+//! the near field) erred a little less still but took 0.3 s at 1080p, twice the gather.
+
+use super::levels::{level_coc, Level, Source, Texel, W, ZERO};
+use crate::dof::blend::IN_FOCUS_WEIGHT;
+
+/// Per-axis variance (px² of the frame) of level 1's texels: one [1 3 3 1]/8 halving.
+const LEVEL_1_VARIANCE: f32 = 0.75;
+
+/// Where, as a share of level 2's CoC, the frame's disc starts to give way to level 1's.
+pub const FRAME_UNTIL: f32 = 0.75;
+/// Where, as a share of level 3's CoC, level 1's disc starts to give way to the pyramid.
+pub const LEVEL_UNTIL: f32 = 0.9;
+
+/// The image a pixel blurred by its own CoC reads.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Kernel {
+    /// The disc over the sharp frame.
+    Frame,
+    /// The frame's disc mixed with level 1's by f.
+    FrameToLevel(f32),
+    /// The disc over level 1.
+    Level,
+    /// Level 1's disc mixed with the pyramid's mix by f.
+    LevelToPyramid(f32),
+    /// The pyramid's mix.
+    Pyramid,
+}
+
+/// Levels 2 and 3's CoCs, where the discs end (the GPU twin's uniform carries them).
+pub fn disc_bounds() -> [f32; 2] {
+    [level_coc(2), level_coc(3)]
+}
+
+/// The image a pixel of own CoC `c` (px, diameter) reads; `bounds` is [`disc_bounds`].
+#[inline(always)]
+pub(super) fn kernel(c: f32, [level_2, level_3]: [f32; 2]) -> Kernel {
+    let frame_until = FRAME_UNTIL * level_2;
+    let level_until = LEVEL_UNTIL * level_3;
+    if c <= frame_until {
+        Kernel::Frame
+    } else if c <= level_2 {
+        Kernel::FrameToLevel((c - frame_until) / (level_2 - frame_until))
+    } else if c <= level_until {
+        Kernel::Level
+    } else if c < level_3 {
+        Kernel::LevelToPyramid((c - level_until) / (level_3 - level_until))
+    } else {
+        Kernel::Pyramid
+    }
+}
+
+/// The disc of diameter `c` about frame pixel (x, y) over `planes` (each offset by its
+/// `reference`), normalised: each tap weighs its coverage times its w. Rows top to bottom,
+/// each left to right; taps outside the frame are left out.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(super) fn frame_disc(
+    source: &Source,
+    planes: &[&[f32]],
+    reference: &Texel,
+    width: usize,
+    height: usize,
+    x: usize,
+    y: usize,
+    c: f32,
+) -> Texel {
+    let reach = 0.5 * c + 0.5;
+    let n = reach.floor() as isize;
+    let (mut sum, mut weights) = (ZERO, 0.0f32);
+    for dy in -n..=n {
+        let sy = y as isize + dy;
+        if sy < 0 || sy >= height as isize {
+            continue;
+        }
+        let across = (reach * reach - (dy * dy) as f32).max(0.0).sqrt().floor() as isize;
+        let from = (x as isize - across).max(0);
+        let to = (x as isize + across).min(width as isize - 1);
+        let row = sy as usize * width;
+        for sx in from..=to {
+            let dx = sx - x as isize;
+            let cover = (reach - ((dx * dx + dy * dy) as f32).sqrt()).clamp(0.0, 1.0);
+            let i = row + sx as usize;
+            let w = cover * source.interpolator(source.coc[i]).max(IN_FOCUS_WEIGHT);
+            for ((v, plane), r) in sum.iter_mut().zip(planes).zip(reference) {
+                *v += w * (plane[i] - r);
+            }
+            weights += w;
+        }
+    }
+    // The centre is always covered (reach > ½), and its w is at least IN_FOCUS_WEIGHT.
+    for v in sum.iter_mut().take(planes.len()) {
+        *v /= weights;
+    }
+    sum
+}
+
+/// The disc of diameter `c` about frame pixel (x, y) over `level` (level 1, a texel per
+/// 2 × 2 pixels), not normalised: each lane's sum of the texels times their coverage (lane
+/// [`W`] is the weight to divide by). Rows top to bottom, each left to right; texels outside
+/// the level are left out.
+#[inline(always)]
+pub(super) fn level_disc(level: &Level, x: usize, y: usize, c: f32) -> Texel {
+    let diameter = (c * c - 16.0 * LEVEL_1_VARIANCE).max(0.0).sqrt();
+    let reach = 0.25 * diameter + 0.5;
+    let (px, py) = ((x as f32 + 0.5) * 0.5 - 0.5, (y as f32 + 0.5) * 0.5 - 0.5);
+    let top = ((py - reach).ceil().max(0.0)) as usize;
+    let bottom = (((py + reach).floor()) as isize).min(level.height as isize - 1);
+    let mut sum = ZERO;
+    for j in top as isize..=bottom {
+        let dy = j as f32 - py;
+        let across = (reach * reach - dy * dy).max(0.0).sqrt();
+        let from = ((px - across).ceil().max(0.0)) as usize;
+        let to = (((px + across).floor()) as isize).min(level.width as isize - 1);
+        let row = j as usize * level.width;
+        for i in from as isize..=to {
+            let dx = i as f32 - px;
+            let cover = (reach - (dx * dx + dy * dy).sqrt()).clamp(0.0, 1.0);
+            let t = &level.texels[row + i as usize];
+            for (v, t) in sum.iter_mut().zip(t) {
+                *v += cover * t;
+            }
+        }
+    }
+    sum
+}
+
+/// A [`level_disc`]'s colour lanes divided by its w (as a level's row is: at least the
+/// smallest positive float), and the w.
+#[inline(always)]
+pub(super) fn normalised(mut sum: Texel) -> (Texel, f32) {
+    let w = if sum[W] > f32::MIN_POSITIVE {
+        sum[W]
+    } else {
+        f32::MIN_POSITIVE
+    };
+    for v in sum.iter_mut().take(4) {
+        *v /= w;
+    }
+    (sum, w)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_kernel_runs_from_the_frame_to_the_pyramid_continuously() {
+        let bounds = disc_bounds();
+        let [l2, l3] = bounds;
+        assert!(
+            (l2 - 8.96).abs() < 0.01 && (l3 - 18.1).abs() < 0.05,
+            "{l2} {l3}"
+        );
+        assert_eq!(kernel(1.5, bounds), Kernel::Frame);
+        assert_eq!(kernel(0.75 * l2, bounds), Kernel::Frame);
+        assert_eq!(kernel(l2, bounds), Kernel::FrameToLevel(1.0));
+        assert_eq!(kernel(12.0, bounds), Kernel::Level);
+        match kernel(0.95 * l3, bounds) {
+            Kernel::LevelToPyramid(f) => assert!((f - 0.5).abs() < 1e-4, "{f}"),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(kernel(l3, bounds), Kernel::Pyramid);
+        assert_eq!(kernel(40.0, bounds), Kernel::Pyramid);
+    }
+}
