@@ -309,36 +309,70 @@ fn image(j: u32, x: u32, y: u32) -> vec4<f32> {
     return s;
 }
 
-// The disc of diameter c about pixel (x, y) over the sharp frame, normalised (`frame_disc`):
-// each tap weighs its coverage times its w; rows top to bottom, each left to right; taps
-// outside the frame left out.
+// A disc's texels of a row at distance dy from its centre px, reach `reach` (`disc_sum`):
+// those covered, [first, last] within [0, n − 1], and those wholly inside (d ≤ reach − 1,
+// weighing 1), [inner_first, inner_last], empty where inner_first > inner_last.
+struct Span {
+    first: i32,
+    last: i32,
+    inner_first: i32,
+    inner_last: i32,
+}
+
+fn span(px: f32, dy2: f32, reach: f32, n: u32) -> Span {
+    var s: Span;
+    let across = sqrt(max(reach * reach - dy2, 0.0));
+    s.first = i32(max(ceil(px - across), 0.0));
+    s.last = min(i32(floor(px + across)), i32(n) - 1);
+    let inner = reach - 1.0;
+    if inner > 0.0 && inner * inner > dy2 {
+        let half = sqrt(inner * inner - dy2);
+        s.inner_first = max(i32(ceil(px - half)), s.first);
+        s.inner_last = min(i32(floor(px + half)), s.last);
+    } else {
+        s.inner_first = s.last + 1;
+        s.inner_last = s.last;
+    }
+    return s;
+}
+
+// The coverage of a texel at (dx, dy2) of a disc of reach `reach`, 1 inside the inner span.
+fn cover(i: i32, s: Span, px: f32, dy2: f32, reach: f32) -> f32 {
+    if i >= s.inner_first && i <= s.inner_last {
+        return 1.0;
+    }
+    let dx = f32(i) - px;
+    return clamp(reach - sqrt(dx * dx + dy2), 0.0, 1.0);
+}
+
+// The disc of diameter c about pixel (x, y) over the sharp frame premultiplied by w,
+// normalised (`frame_disc`, then `normalised`): rows top to bottom, each left to right,
+// taps outside the frame left out.
 fn frame_disc(x: u32, y: u32, c: f32) -> vec4<f32> {
     let reach = 0.5 * c + 0.5;
-    let n = i32(floor(reach));
+    let px = f32(x);
+    let py = f32(y);
+    let top = i32(max(ceil(py - reach), 0.0));
+    let bottom = min(i32(floor(py + reach)), i32(config.height) - 1);
     var sum = vec4<f32>(0.0);
     var weights = 0.0;
-    for (var dy = -n; dy <= n; dy++) {
-        let sy = i32(y) + dy;
-        if sy < 0 || sy >= i32(config.height) {
-            continue;
-        }
-        let across = i32(floor(sqrt(max(reach * reach - f32(dy * dy), 0.0))));
-        let first_tap = max(i32(x) - across, 0);
-        let last_tap = min(i32(x) + across, i32(config.width) - 1);
-        for (var sx = first_tap; sx <= last_tap; sx++) {
-            let dx = sx - i32(x);
-            let cover = clamp(reach - sqrt(f32(dx * dx + dy * dy)), 0.0, 1.0);
-            let i = u32(sy) * config.width + u32(sx);
-            let w = cover * max(interpolator(coc[i]), IN_FOCUS_WEIGHT);
-            var d = sharp(i) - config.reference;
+    for (var j = top; j <= bottom; j++) {
+        let dy = f32(j) - py;
+        let dy2 = dy * dy;
+        let s = span(px, dy2, reach, config.width);
+        for (var i = s.first; i <= s.last; i++) {
+            let k = cover(i, s, px, dy2, reach);
+            let index = u32(j) * config.width + u32(i);
+            let w = max(interpolator(coc[index]), IN_FOCUS_WEIGHT);
+            var d = sharp(index) - config.reference;
             if config.has_alpha == 0u {
                 d.w = 0.0;
             }
-            sum += w * d;
-            weights += w;
+            sum += k * (d * w);
+            weights += k * w;
         }
     }
-    return sum / weights;
+    return sum / max(weights, MIN_POSITIVE);
 }
 
 // The disc of diameter c about pixel (x, y) over level 1, its colour divided by its w
@@ -357,15 +391,13 @@ fn level_disc(x: u32, y: u32, c: f32) -> vec4<f32> {
     var w = 0.0;
     for (var j = top; j <= bottom; j++) {
         let dy = f32(j) - py;
-        let across = sqrt(max(reach * reach - dy * dy, 0.0));
-        let first_tap = i32(max(ceil(px - across), 0.0));
-        let last_tap = min(i32(floor(px + across)), i32(lw) - 1);
-        for (var i = first_tap; i <= last_tap; i++) {
-            let dx = f32(i) - px;
-            let cover = clamp(reach - sqrt(dx * dx + dy * dy), 0.0, 1.0);
+        let dy2 = dy * dy;
+        let s = span(px, dy2, reach, lw);
+        for (var i = s.first; i <= s.last; i++) {
+            let k = cover(i, s, px, dy2, reach);
             let t = load(first, u32(j) * lw + u32(i));
-            sum += cover * t.c;
-            w += cover * t.e.x;
+            sum += k * t.c;
+            w += k * t.e.x;
         }
     }
     return sum / max(w, MIN_POSITIVE);

@@ -37,6 +37,11 @@ pub(super) struct Group {
 }
 
 impl Group {
+    /// Each plane's reference (its first sample), a lane each.
+    pub(super) fn reference(&self) -> &Texel {
+        &self.reference
+    }
+
     /// The group of `planes` (at most [`GROUP`]), its `count` levels made.
     pub(super) fn new(
         source: &Source,
@@ -192,9 +197,9 @@ pub(super) struct Shared<'a> {
     pub(super) source: &'a Source<'a>,
     pub(super) samplers: &'a [Sampler<'a>],
     pub(super) ladder: &'a Ladder,
-    /// Every plane as it was before the compose stage, the beauty's first (empty where no
-    /// pixel reads the frame's disc).
-    pub(super) sharp: &'a [&'a [f32]],
+    /// Each group's frame as texels (`super::disc::frame_texels`; empty where no pixel
+    /// reads the frame's disc).
+    pub(super) frames: &'a [Vec<Texel>],
     /// Levels 2 and 3's CoCs (`super::disc::disc_bounds`).
     pub(super) bounds: [f32; 2],
 }
@@ -220,7 +225,7 @@ pub(super) fn compose_carried_row(
         source,
         samplers,
         ladder,
-        sharp,
+        frames,
         bounds,
     } = shared;
     let width = out[0].len();
@@ -274,8 +279,7 @@ pub(super) fn compose_carried_row(
             .take(group.lanes)
             .map(|p| &mut p[..width])
             .collect();
-        let base = rows.first + g * GROUP;
-        let planes_as_were = sharp.get(base..base + group.lanes).unwrap_or(&[]);
+        let texels = frames.get(g).map_or(&[][..], Vec::as_slice);
         for (x, &(k, f, kernel)) in picks.iter().enumerate() {
             if k == u8::MAX {
                 continue;
@@ -283,19 +287,14 @@ pub(super) fn compose_carried_row(
             let k = k as usize;
             let c = to_coc(beauty.blur[x].abs());
             let pyramid = || lerp(&images.at(k, x), &images.at(k + 1, x), f);
+            // Each disc of the group, divided by the beauty's w for the same disc.
             let frame = || {
-                frame_disc(
-                    source,
-                    planes_as_were,
-                    &group.reference,
-                    width,
-                    height,
-                    x,
-                    y,
-                    c,
-                )
+                let mut sum = frame_disc(texels, width, height, x, y, c);
+                for v in sum.iter_mut() {
+                    *v /= beauty.frame_w[x];
+                }
+                sum
             };
-            // Level 1's disc of the group, divided by the beauty's w for the same disc.
             let level = || {
                 let mut sum = level_disc(&group.levels[0], x, y, c);
                 for v in sum.iter_mut() {

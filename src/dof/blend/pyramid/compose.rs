@@ -200,7 +200,9 @@ pub(super) struct Scratch {
     /// T_near of the two levels that bracket E, as planes.
     near_lower: Vec<f32>,
     near_upper: Vec<f32>,
-    /// Per pixel that reads level 1's disc, its w (the carried planes divide by it).
+    /// Per pixel that reads a disc, its w: the frame's and level 1's (the carried planes
+    /// divide by them).
+    pub(super) frame_w: Vec<f32>,
     pub(super) level_w: Vec<f32>,
 }
 
@@ -221,7 +223,7 @@ pub(super) fn compose_row(
         samplers,
         ladder,
         near,
-        sharp,
+        frame: frame_texels,
         bounds,
     } = pyramid;
     let near = *near;
@@ -236,6 +238,7 @@ pub(super) fn compose_row(
         mixed,
         near_lower,
         near_upper,
+        frame_w,
         level_w,
     } = scratch;
     made.resize(samplers.len(), Vec::new());
@@ -328,12 +331,18 @@ pub(super) fn compose_row(
         reference: &reference,
         samplers,
         made,
+        frame: frame_texels,
+        width,
+        height,
+        y,
     };
     mixed.resize(width, ZERO);
+    frame_w.resize(width, 0.0);
     level_w.resize(width, 0.0);
-    for (x, ((&t, m), level_w)) in blur
+    for (x, (((&t, m), frame_w), level_w)) in blur
         .iter()
         .zip(mixed.iter_mut())
+        .zip(frame_w.iter_mut())
         .zip(level_w.iter_mut())
         .enumerate()
     {
@@ -341,29 +350,38 @@ pub(super) fn compose_row(
             continue;
         }
         let c = to_coc(t.abs());
-        let pyramid = || {
-            let (k, f) = ladder.bracket(c);
-            lerp(&images.at(k, x), &images.at(k + 1, x), f)
-        };
         // Below level 3's CoC a pixel's own blur is the lens's disc (`super::disc`); the
-        // near field's spread mixes levels only (T_near is the levels' own).
-        let frame = || frame_disc(source, sharp, &reference, width, height, x, y, c);
-        let mut level = || {
-            let (disc, w) = normalised(level_disc(samplers[0].level_ref(), x, y, c));
-            *level_w = w;
-            disc
-        };
+        // near field's spread mixes levels only (T_near is the levels' own). (Methods, not
+        // closures: `multiversion` compiles a closure for the baseline CPU, and there the
+        // discs' rounding became calls to `ceilf` and `floorf`.)
         let kernel = if t > 0.0 {
             kernel(c, *bounds)
         } else {
             Kernel::Pyramid
         };
         *m = match kernel {
-            Kernel::Frame => frame(),
-            Kernel::FrameToLevel(f) => lerp(&frame(), &level(), f),
-            Kernel::Level => level(),
-            Kernel::LevelToPyramid(f) => lerp(&level(), &pyramid(), f),
-            Kernel::Pyramid => pyramid(),
+            Kernel::Frame => {
+                let frame;
+                (frame, *frame_w) = images.frame_disc(x, c);
+                frame
+            }
+            Kernel::FrameToLevel(f) => {
+                let (frame, level);
+                (frame, *frame_w) = images.frame_disc(x, c);
+                (level, *level_w) = images.level_disc(x, c);
+                lerp(&frame, &level, f)
+            }
+            Kernel::Level => {
+                let level;
+                (level, *level_w) = images.level_disc(x, c);
+                level
+            }
+            Kernel::LevelToPyramid(f) => {
+                let level;
+                (level, *level_w) = images.level_disc(x, c);
+                lerp(&level, &images.mix(ladder, c, x), f)
+            }
+            Kernel::Pyramid => images.mix(ladder, c, x),
         };
     }
     // Then into the planes (the match gives the loop each plane's own iterator, so no
@@ -433,9 +451,40 @@ struct Images<'a> {
     reference: &'a Texel,
     samplers: &'a [Sampler<'a>],
     made: &'a [Vec<Texel>],
+    /// The frame as texels, for the frame's disc.
+    frame: &'a [Texel],
+    width: usize,
+    height: usize,
+    y: usize,
 }
 
 impl Images<'_> {
+    /// The ladder's mix of the two images that bracket CoC c at frame pixel x.
+    #[inline(always)]
+    fn mix(&self, ladder: &Ladder, c: f32, x: usize) -> Texel {
+        let (k, f) = ladder.bracket(c);
+        lerp(&self.at(k, x), &self.at(k + 1, x), f)
+    }
+
+    /// The frame's disc of diameter c about frame pixel x, normalised, and its w.
+    #[inline(always)]
+    fn frame_disc(&self, x: usize, c: f32) -> (Texel, f32) {
+        normalised(frame_disc(
+            self.frame,
+            self.width,
+            self.height,
+            x,
+            self.y,
+            c,
+        ))
+    }
+
+    /// Level 1's disc of diameter c about frame pixel x, normalised, and its w.
+    #[inline(always)]
+    fn level_disc(&self, x: usize, c: f32) -> (Texel, f32) {
+        normalised(level_disc(self.samplers[0].level_ref(), x, self.y, c))
+    }
+
     /// Image j of the ladder (level j, the sharp frame for 0) at frame pixel x (a method,
     /// not a closure: `multiversion` would leave a closure compiled for the baseline CPU, out
     /// of line).
@@ -461,9 +510,9 @@ pub(super) struct Pyramid<'a> {
     pub(super) samplers: &'a [Sampler<'a>],
     pub(super) ladder: &'a Ladder,
     pub(super) near: Option<(usize, f32)>,
-    /// The colour's planes as they were before the compose stage (the discs read them;
-    /// empty where no pixel reads the frame's disc).
-    pub(super) sharp: &'a [&'a [f32]],
+    /// The frame as texels, premultiplied by w (`super::disc::frame_texels`; empty where no
+    /// pixel reads the frame's disc).
+    pub(super) frame: &'a [Texel],
     /// Levels 2 and 3's CoCs (`super::disc::disc_bounds`).
     pub(super) bounds: [f32; 2],
 }

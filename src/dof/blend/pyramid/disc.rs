@@ -77,79 +77,119 @@ pub(super) fn kernel(c: f32, [level_2, level_3]: [f32; 2]) -> Kernel {
     }
 }
 
-/// The disc of diameter `c` about frame pixel (x, y) over `planes` (each offset by its
-/// `reference`), normalised: each tap weighs its coverage times its w. Rows top to bottom,
-/// each left to right; taps outside the frame are left out.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-pub(super) fn frame_disc(
+/// Every pixel of the frame as a texel, as level 1's are made before their halving: each of
+/// `planes` offset by its `reference` and premultiplied by the pixel's w (w itself in lane
+/// [`W`] when `with_w`; the carried planes' lanes fill all eight and divide by the beauty's).
+pub(super) fn frame_texels(
     source: &Source,
     planes: &[&[f32]],
     reference: &Texel,
+    with_w: bool,
+) -> Vec<Texel> {
+    use rayon::prelude::*;
+    let mut texels = vec![ZERO; source.coc.len()];
+    texels.par_iter_mut().enumerate().for_each(|(i, t)| {
+        let w = source.interpolator(source.coc[i]).max(IN_FOCUS_WEIGHT);
+        for ((v, plane), r) in t.iter_mut().zip(planes).zip(reference) {
+            *v = (plane[i] - r) * w;
+        }
+        if with_w {
+            t[W] = w;
+        }
+    });
+    texels
+}
+
+/// The disc of diameter `c` about frame pixel (x, y) over the frame's texels
+/// ([`frame_texels`]), not normalised: each lane's sum of the texels times their coverage
+/// (lane [`W`], the weight to divide by, where the texels carry w).
+#[inline(always)]
+pub(super) fn frame_disc(
+    texels: &[Texel],
     width: usize,
     height: usize,
     x: usize,
     y: usize,
     c: f32,
 ) -> Texel {
-    let reach = 0.5 * c + 0.5;
-    let n = reach.floor() as isize;
-    let (mut sum, mut weights) = (ZERO, 0.0f32);
-    for dy in -n..=n {
-        let sy = y as isize + dy;
-        if sy < 0 || sy >= height as isize {
-            continue;
-        }
-        let across = (reach * reach - (dy * dy) as f32).max(0.0).sqrt().floor() as isize;
-        let from = (x as isize - across).max(0);
-        let to = (x as isize + across).min(width as isize - 1);
-        let row = sy as usize * width;
-        for sx in from..=to {
-            let dx = sx - x as isize;
-            let cover = (reach - ((dx * dx + dy * dy) as f32).sqrt()).clamp(0.0, 1.0);
-            let i = row + sx as usize;
-            let w = cover * source.interpolator(source.coc[i]).max(IN_FOCUS_WEIGHT);
-            for ((v, plane), r) in sum.iter_mut().zip(planes).zip(reference) {
-                *v += w * (plane[i] - r);
-            }
-            weights += w;
-        }
-    }
-    // The centre is always covered (reach > ½), and its w is at least IN_FOCUS_WEIGHT.
-    for v in sum.iter_mut().take(planes.len()) {
-        *v /= weights;
-    }
-    sum
+    disc_sum(texels, width, height, (x as f32, y as f32), 0.5 * c + 0.5)
 }
 
 /// The disc of diameter `c` about frame pixel (x, y) over `level` (level 1, a texel per
 /// 2 × 2 pixels), not normalised: each lane's sum of the texels times their coverage (lane
-/// [`W`] is the weight to divide by). Rows top to bottom, each left to right; texels outside
-/// the level are left out.
+/// [`W`] is the weight to divide by).
 #[inline(always)]
 pub(super) fn level_disc(level: &Level, x: usize, y: usize, c: f32) -> Texel {
     let diameter = (c * c - 16.0 * LEVEL_1_VARIANCE).max(0.0).sqrt();
-    let reach = 0.25 * diameter + 0.5;
-    let (px, py) = ((x as f32 + 0.5) * 0.5 - 0.5, (y as f32 + 0.5) * 0.5 - 0.5);
-    let top = ((py - reach).ceil().max(0.0)) as usize;
-    let bottom = (((py + reach).floor()) as isize).min(level.height as isize - 1);
+    let centre = ((x as f32 + 0.5) * 0.5 - 0.5, (y as f32 + 0.5) * 0.5 - 0.5);
+    disc_sum(
+        &level.texels,
+        level.width,
+        level.height,
+        centre,
+        0.25 * diameter + 0.5,
+    )
+}
+
+/// The sum of a grid's texels over a disc about `centre` (in texels) whose coverage of a
+/// texel at distance d is `clamp(reach − d, 0, 1)`: rows top to bottom, each left to right,
+/// texels outside the grid left out. A texel with d ≤ reach − 1 is wholly inside and weighs
+/// 1, added without a square root (most of a disc's taps; eight lanes at once).
+#[inline(always)]
+fn disc_sum(
+    texels: &[Texel],
+    width: usize,
+    height: usize,
+    (px, py): (f32, f32),
+    reach: f32,
+) -> Texel {
     let mut sum = ZERO;
-    for j in top as isize..=bottom {
+    let top = (py - reach).ceil().max(0.0) as isize;
+    let bottom = ((py + reach).floor() as isize).min(height as isize - 1);
+    let inner = reach - 1.0;
+    for j in top..=bottom {
         let dy = j as f32 - py;
-        let across = (reach * reach - dy * dy).max(0.0).sqrt();
-        let from = ((px - across).ceil().max(0.0)) as usize;
-        let to = (((px + across).floor()) as isize).min(level.width as isize - 1);
-        let row = j as usize * level.width;
-        for i in from as isize..=to {
-            let dx = i as f32 - px;
-            let cover = (reach - (dx * dx + dy * dy).sqrt()).clamp(0.0, 1.0);
-            let t = &level.texels[row + i as usize];
-            for (v, t) in sum.iter_mut().zip(t) {
-                *v += cover * t;
+        let dy2 = dy * dy;
+        let across = (reach * reach - dy2).max(0.0).sqrt();
+        let from = (px - across).ceil().max(0.0) as isize;
+        let to = ((px + across).floor() as isize).min(width as isize - 1);
+        // The texels wholly inside: [inner_from, inner_to], within [from, to].
+        let (inner_from, inner_to) = if inner > 0.0 && inner * inner > dy2 {
+            let half = (inner * inner - dy2).sqrt();
+            (
+                ((px - half).ceil() as isize).max(from),
+                ((px + half).floor() as isize).min(to),
+            )
+        } else {
+            (to + 1, to)
+        };
+        let row = &texels[j as usize * width..(j as usize + 1) * width];
+        for i in from..inner_from.min(to + 1) {
+            rim(&mut sum, row, i, px, dy2, reach);
+        }
+        if inner_from <= inner_to {
+            for t in &row[inner_from as usize..=inner_to as usize] {
+                for (v, t) in sum.iter_mut().zip(t) {
+                    *v += t;
+                }
             }
+        }
+        for i in (inner_to + 1).max(from)..=to {
+            rim(&mut sum, row, i, px, dy2, reach);
         }
     }
     sum
+}
+
+/// A texel on a disc's rim added by its coverage (a function, not a closure, so that it is
+/// compiled with its caller's instructions: `multiversion`).
+#[inline(always)]
+fn rim(sum: &mut Texel, row: &[Texel], i: isize, px: f32, dy2: f32, reach: f32) {
+    let dx = i as f32 - px;
+    let cover = (reach - (dx * dx + dy2).sqrt()).clamp(0.0, 1.0);
+    for (v, t) in sum.iter_mut().zip(&row[i as usize]) {
+        *v += cover * t;
+    }
 }
 
 /// A [`level_disc`]'s colour lanes divided by its w (as a level's row is: at least the

@@ -49,7 +49,7 @@ use crate::frame::Color;
 use carry::{compose_carried_row, CarriedRows, CarriedScratch, Group, Shared, GROUP};
 use compose::{compose_row, Pyramid, Sampler, Scratch, Window};
 pub use disc::{disc_bounds, FRAME_UNTIL, LEVEL_UNTIL};
-use levels::{build, Ladder, Source, BAND, MAX_LEVELS};
+use levels::{build, Ladder, Source, Texel, BAND, MAX_LEVELS, ZERO};
 pub use levels::{level_coc, level_variance, COC_PER_SIGMA};
 
 /// The pyramid's uniform, as its GPU twin reads it (`BlendConfig` in
@@ -202,32 +202,39 @@ pub fn blend_carrying(
         .map(|(l, level)| Sampler::new(level, l + 1, width, height))
         .collect();
 
-    // The compose stage writes the frame in place, a band of rows per task. The half step
-    // reads a pixel's neighbours as they were: each task keeps copies of the rows around the
-    // one it writes, and the rows just outside each band are copied before any task starts.
+    // The compose stage writes the frame in place, a band of rows per task, and reads each
+    // row as it was: each task keeps copies of the rows around the one it writes, and the
+    // rows just outside each band are copied before any task starts.
     let bands = height.div_ceil(BAND);
     // The colour's planes, then the carried ones.
     let channels = source.planes.len();
-    // Copies of every plane as it was, where some pixel reads the frame's disc (the compose
-    // stage writes in place).
+    // The frame as texels (premultiplied by w, as the levels' are), where some pixel reads
+    // the frame's disc: the beauty's with w, each carried group's (the compose stage writes
+    // the planes in place, and the discs read them as they were).
     let bounds = disc_bounds();
     let to_coc = |t: f32| epsilon + t * (largest - epsilon);
     let frame_disc = coc.par_iter().any(|&c| {
         let t = source.interpolator(c);
         t > 0.0 && to_coc(t) <= bounds[0]
     });
-    let sharp: Vec<Vec<f32>> = if frame_disc {
-        source
-            .planes
-            .iter()
-            .copied()
-            .chain(carried.iter().map(Vec::as_slice))
-            .map(<[f32]>::to_vec)
-            .collect()
+    let (frame, carried_frames) = if frame_disc {
+        let mut beauty = ZERO;
+        beauty[..4].copy_from_slice(&reference);
+        let groups: Vec<Vec<Texel>> = carried
+            .chunks(GROUP)
+            .zip(&groups)
+            .map(|(planes, group)| {
+                let planes: Vec<&[f32]> = planes.iter().map(Vec::as_slice).collect();
+                disc::frame_texels(&source, &planes, group.reference(), false)
+            })
+            .collect();
+        (
+            disc::frame_texels(&source, &source.planes, &beauty, true),
+            groups,
+        )
     } else {
-        Vec::new()
+        (Vec::new(), Vec::new())
     };
-    let sharp: Vec<&[f32]> = sharp.iter().map(Vec::as_slice).collect();
     let copy = |y: usize| -> Vec<f32> {
         source
             .planes
@@ -278,14 +285,14 @@ pub fn blend_carrying(
         samplers: &samplers,
         ladder: &ladder,
         near,
-        sharp: &sharp[..sharp.len().min(channels)],
+        frame: &frame,
         bounds,
     };
     let shared = Shared {
         source: &source,
         samplers: &samplers,
         ladder: &ladder,
-        sharp: &sharp,
+        frames: &carried_frames,
         bounds,
     };
     band_planes
