@@ -309,8 +309,8 @@ fn image(j: u32, x: u32, y: u32) -> vec4<f32> {
     return s;
 }
 
-// A disc's texels of a row at distance dy from its centre px, reach `reach` (`disc_sum`):
-// those covered, [first, last] within [0, n − 1], and those wholly inside (d ≤ reach − 1,
+// A disc's texels of a row at dy² from its centre cx + fx (cx whole), as offsets from cx
+// (`DiscRows`): those covered, [first, last], and those wholly inside (d ≤ reach − 1,
 // weighing 1), [inner_first, inner_last], empty where inner_first > inner_last.
 struct Span {
     first: i32,
@@ -319,16 +319,16 @@ struct Span {
     inner_last: i32,
 }
 
-fn span(px: f32, dy2: f32, reach: f32, n: u32) -> Span {
+fn span(fx: f32, dy2: f32, reach: f32) -> Span {
     var s: Span;
     let across = sqrt(max(reach * reach - dy2, 0.0));
-    s.first = i32(max(ceil(px - across), 0.0));
-    s.last = min(i32(floor(px + across)), i32(n) - 1);
+    s.first = i32(ceil(fx - across));
+    s.last = i32(floor(fx + across));
     let inner = reach - 1.0;
     if inner > 0.0 && inner * inner > dy2 {
         let half = sqrt(inner * inner - dy2);
-        s.inner_first = max(i32(ceil(px - half)), s.first);
-        s.inner_last = min(i32(floor(px + half)), s.last);
+        s.inner_first = max(i32(ceil(fx - half)), s.first);
+        s.inner_last = min(i32(floor(fx + half)), s.last);
     } else {
         s.inner_first = s.last + 1;
         s.inner_last = s.last;
@@ -336,71 +336,83 @@ fn span(px: f32, dy2: f32, reach: f32, n: u32) -> Span {
     return s;
 }
 
-// The coverage of a texel at (dx, dy2) of a disc of reach `reach`, 1 inside the inner span.
-fn cover(i: i32, s: Span, px: f32, dy2: f32, reach: f32) -> f32 {
-    if i >= s.inner_first && i <= s.inner_last {
-        return 1.0;
-    }
-    let dx = f32(i) - px;
-    return clamp(reach - sqrt(dx * dx + dy2), 0.0, 1.0);
+// The sum of a grid's texels over a disc about (cx + fx, cy + fy) (`disc_sum`): rows top to
+// bottom, each left to right, texels outside the grid left out; colour, then w. The grid is
+// the frame (`level` 0: texels made from the colour and CoC as `frame_texels` makes them) or
+// level 1.
+struct DiscSum {
+    c: vec4<f32>,
+    w: f32,
 }
 
-// The disc of diameter c about pixel (x, y) over the sharp frame premultiplied by w,
-// normalised (`frame_disc`, then `normalised`): rows top to bottom, each left to right,
-// taps outside the frame left out.
-fn frame_disc(x: u32, y: u32, c: f32) -> vec4<f32> {
-    let reach = 0.5 * c + 0.5;
-    let px = f32(x);
-    let py = f32(y);
-    let top = i32(max(ceil(py - reach), 0.0));
-    let bottom = min(i32(floor(py + reach)), i32(config.height) - 1);
-    var sum = vec4<f32>(0.0);
-    var weights = 0.0;
-    for (var j = top; j <= bottom; j++) {
-        let dy = f32(j) - py;
-        let dy2 = dy * dy;
-        let s = span(px, dy2, reach, config.width);
-        for (var i = s.first; i <= s.last; i++) {
-            let k = cover(i, s, px, dy2, reach);
-            let index = u32(j) * config.width + u32(i);
-            let w = max(interpolator(coc[index]), IN_FOCUS_WEIGHT);
-            var d = sharp(index) - config.reference;
-            if config.has_alpha == 0u {
-                d.w = 0.0;
+fn disc_sum(level: u32, cx: i32, cy: i32, fx: f32, fy: f32, reach: f32) -> DiscSum {
+    var n = vec2<i32>(i32(config.width), i32(config.height));
+    if level == 1u {
+        n = vec2<i32>(i32(geometry[0]), i32(geometry[1]));
+    }
+    var out: DiscSum;
+    out.c = vec4<f32>(0.0);
+    out.w = 0.0;
+    let top = i32(ceil(fy - reach));
+    let bottom = i32(floor(fy + reach));
+    for (var dy = top; dy <= bottom; dy++) {
+        let j = cy + dy;
+        let d = f32(dy) - fy;
+        let dy2 = d * d;
+        let s = span(fx, dy2, reach);
+        if j < 0 || j >= n.y || s.last < s.first {
+            continue;
+        }
+        let first = max(cx + s.first, 0);
+        let last = min(cx + s.last, n.x - 1);
+        let inner_first = max(cx + s.inner_first, first);
+        let inner_last = min(cx + s.inner_last, last);
+        let inside = s.inner_first <= s.inner_last && inner_first <= inner_last;
+        for (var i = first; i <= last; i++) {
+            var k = 1.0;
+            if !(inside && i >= inner_first && i <= inner_last) {
+                let dx = f32(i - cx) - fx;
+                k = clamp(reach - sqrt(dx * dx + dy2), 0.0, 1.0);
             }
-            sum += k * (d * w);
-            weights += k * w;
+            var c: vec4<f32>;
+            var w: f32;
+            if level == 0u {
+                let index = u32(j) * config.width + u32(i);
+                w = max(interpolator(coc[index]), IN_FOCUS_WEIGHT);
+                var e = sharp(index) - config.reference;
+                if config.has_alpha == 0u {
+                    e.w = 0.0;
+                }
+                c = e * w;
+            } else {
+                let t = load(geometry[2], u32(j) * geometry[0] + u32(i));
+                c = t.c;
+                w = t.e.x;
+            }
+            out.c += k * c;
+            out.w += k * w;
         }
     }
-    return sum / max(weights, MIN_POSITIVE);
+    return out;
 }
 
-// The disc of diameter c about pixel (x, y) over level 1, its colour divided by its w
-// (`level_disc`, then `normalised`).
+// The disc of diameter c about pixel (x, y) over the frame, normalised (`frame_disc`, then
+// `normalised`).
+fn frame_disc(x: u32, y: u32, c: f32) -> vec4<f32> {
+    let s = disc_sum(0u, i32(x), i32(y), 0.0, 0.0, 0.5 * c + 0.5);
+    return s.c / max(s.w, MIN_POSITIVE);
+}
+
+// The disc of diameter c about pixel (x, y) over level 1, normalised (`level_disc`, then
+// `normalised`).
 fn level_disc(x: u32, y: u32, c: f32) -> vec4<f32> {
-    let lw = geometry[0];
-    let lh = geometry[1];
-    let first = geometry[2];
     let diameter = sqrt(max(c * c - 16.0 * LEVEL_1_VARIANCE, 0.0));
-    let reach = 0.25 * diameter + 0.5;
     let px = (f32(x) + 0.5) * 0.5 - 0.5;
     let py = (f32(y) + 0.5) * 0.5 - 0.5;
-    let top = i32(max(ceil(py - reach), 0.0));
-    let bottom = min(i32(floor(py + reach)), i32(lh) - 1);
-    var sum = vec4<f32>(0.0);
-    var w = 0.0;
-    for (var j = top; j <= bottom; j++) {
-        let dy = f32(j) - py;
-        let dy2 = dy * dy;
-        let s = span(px, dy2, reach, lw);
-        for (var i = s.first; i <= s.last; i++) {
-            let k = cover(i, s, px, dy2, reach);
-            let t = load(first, u32(j) * lw + u32(i));
-            sum += k * t.c;
-            w += k * t.e.x;
-        }
-    }
-    return sum / max(w, MIN_POSITIVE);
+    let cx = floor(px);
+    let cy = floor(py);
+    let s = disc_sum(1u, i32(cx), i32(cy), px - cx, py - cy, 0.25 * diameter + 0.5);
+    return s.c / max(s.w, MIN_POSITIVE);
 }
 
 @compute @workgroup_size(8, 8, 1)

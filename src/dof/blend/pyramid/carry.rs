@@ -21,7 +21,7 @@
 use rayon::prelude::*;
 
 use super::compose::{lerp, Sampler, Scratch};
-use super::disc::{frame_disc, kernel, level_disc, Kernel};
+use super::disc::{frame_disc, kernel, level_disc, DiscRows, Kernel};
 use super::levels::{halve_levels, halve_plane_row, Ladder, Level, Source, Texel, BAND, ZERO};
 use crate::dof::blend::IN_FOCUS_WEIGHT;
 
@@ -182,6 +182,9 @@ pub(super) struct CarriedScratch {
     /// Per pixel: the lower image of its mix and f (the image is u8::MAX where the pixel is
     /// left sharp), and where its blur comes from.
     picks: Vec<(u8, f32, Kernel)>,
+    /// The last discs' rows, as the beauty's (`compose::Scratch`).
+    frame_rows: DiscRows,
+    level_rows: [DiscRows; 2],
 }
 
 /// Copies of frame rows y − 1, y and y + 1 (clamped to the frame), as they were before the
@@ -230,7 +233,12 @@ pub(super) fn compose_carried_row(
     } = shared;
     let width = out[0].len();
     let height = source.coc.len() / width;
-    let CarriedScratch { made, picks } = scratch;
+    let CarriedScratch {
+        made,
+        picks,
+        frame_rows,
+        level_rows,
+    } = scratch;
     made.resize_with(groups.len(), Vec::new);
     for (group, made) in groups.iter().zip(made.iter_mut()) {
         made.resize_with(group.levels.len(), Vec::new);
@@ -286,34 +294,52 @@ pub(super) fn compose_carried_row(
             }
             let k = k as usize;
             let c = to_coc(beauty.blur[x].abs());
-            let pyramid = || lerp(&images.at(k, x), &images.at(k + 1, x), f);
-            // Each disc of the group, divided by the beauty's w for the same disc.
-            let frame = || {
-                let mut sum = frame_disc(texels, width, height, x, y, c);
-                for v in sum.iter_mut() {
-                    *v /= beauty.frame_w[x];
-                }
-                sum
-            };
-            let level = || {
-                let mut sum = level_disc(&group.levels[0], x, y, c);
-                for v in sum.iter_mut() {
-                    *v /= beauty.level_w[x];
-                }
-                sum
-            };
+            // Each disc of the group divided by the beauty's w for the same disc (no
+            // closures: `multiversion`, as in `compose::compose_row`).
             let m = match kernel {
-                Kernel::Frame => frame(),
-                Kernel::FrameToLevel(f) => lerp(&frame(), &level(), f),
-                Kernel::Level => level(),
-                Kernel::LevelToPyramid(f) => lerp(&level(), &pyramid(), f),
-                Kernel::Pyramid => pyramid(),
+                Kernel::Frame => divided(
+                    frame_disc(texels, width, height, x, y, c, frame_rows),
+                    beauty.frame_w[x],
+                ),
+                Kernel::FrameToLevel(f) => lerp(
+                    &divided(
+                        frame_disc(texels, width, height, x, y, c, frame_rows),
+                        beauty.frame_w[x],
+                    ),
+                    &divided(
+                        level_disc(&group.levels[0], x, y, c, level_rows),
+                        beauty.level_w[x],
+                    ),
+                    f,
+                ),
+                Kernel::Level => divided(
+                    level_disc(&group.levels[0], x, y, c, level_rows),
+                    beauty.level_w[x],
+                ),
+                Kernel::LevelToPyramid(g) => lerp(
+                    &divided(
+                        level_disc(&group.levels[0], x, y, c, level_rows),
+                        beauty.level_w[x],
+                    ),
+                    &lerp(&images.at(k, x), &images.at(k + 1, x), f),
+                    g,
+                ),
+                Kernel::Pyramid => lerp(&images.at(k, x), &images.at(k + 1, x), f),
             };
             for ((plane, m), reference) in lanes.iter_mut().zip(m).zip(&group.reference) {
                 plane[x] = reference + m;
             }
         }
     }
+}
+
+/// Every lane of a disc's sum divided by `w`.
+#[inline(always)]
+fn divided(mut sum: Texel, w: f32) -> Texel {
+    for v in sum.iter_mut() {
+        *v /= w;
+    }
+    sum
 }
 
 /// What a group's mix reads for frame row y: the sharp rows and the levels' rows made for

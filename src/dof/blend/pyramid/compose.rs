@@ -15,7 +15,7 @@
 //! the sharp pixel or a level sampled bilinearly. The GPU twin's `compose` entry point (`crate::gpu::dof::blend`) runs the same
 //! sums per pixel.
 
-use super::disc::{frame_disc, kernel, level_disc, normalised, Kernel};
+use super::disc::{frame_disc, kernel, level_disc, normalised, DiscRows, Kernel};
 use super::levels::{Ladder, Level, Source, Texel, MAX_LEVELS, NEAR, W, ZERO};
 
 /// Where pixel centres of a frame axis of `size` land in a level 2^L times smaller: for each
@@ -204,6 +204,10 @@ pub(super) struct Scratch {
     /// divide by them).
     pub(super) frame_w: Vec<f32>,
     pub(super) level_w: Vec<f32>,
+    /// The last discs' rows (`super::disc::DiscRows`): the frame's, level 1's per column
+    /// parity.
+    frame_rows: DiscRows,
+    level_rows: [DiscRows; 2],
 }
 
 /// The compose stage for frame row y: each pixel's blurriness, the levels the row needs,
@@ -240,6 +244,8 @@ pub(super) fn compose_row(
         near_upper,
         frame_w,
         level_w,
+        frame_rows,
+        level_rows,
     } = scratch;
     made.resize(samplers.len(), Vec::new());
     let mut ready = [false; MAX_LEVELS + 1];
@@ -362,23 +368,23 @@ pub(super) fn compose_row(
         *m = match kernel {
             Kernel::Frame => {
                 let frame;
-                (frame, *frame_w) = images.frame_disc(x, c);
+                (frame, *frame_w) = images.frame_disc(x, c, frame_rows);
                 frame
             }
             Kernel::FrameToLevel(f) => {
                 let (frame, level);
-                (frame, *frame_w) = images.frame_disc(x, c);
-                (level, *level_w) = images.level_disc(x, c);
+                (frame, *frame_w) = images.frame_disc(x, c, frame_rows);
+                (level, *level_w) = images.level_disc(x, c, level_rows);
                 lerp(&frame, &level, f)
             }
             Kernel::Level => {
                 let level;
-                (level, *level_w) = images.level_disc(x, c);
+                (level, *level_w) = images.level_disc(x, c, level_rows);
                 level
             }
             Kernel::LevelToPyramid(f) => {
                 let level;
-                (level, *level_w) = images.level_disc(x, c);
+                (level, *level_w) = images.level_disc(x, c, level_rows);
                 lerp(&level, &images.mix(ladder, c, x), f)
             }
             Kernel::Pyramid => images.mix(ladder, c, x),
@@ -468,7 +474,7 @@ impl Images<'_> {
 
     /// The frame's disc of diameter c about frame pixel x, normalised, and its w.
     #[inline(always)]
-    fn frame_disc(&self, x: usize, c: f32) -> (Texel, f32) {
+    fn frame_disc(&self, x: usize, c: f32, rows: &mut DiscRows) -> (Texel, f32) {
         normalised(frame_disc(
             self.frame,
             self.width,
@@ -476,13 +482,14 @@ impl Images<'_> {
             x,
             self.y,
             c,
+            rows,
         ))
     }
 
     /// Level 1's disc of diameter c about frame pixel x, normalised, and its w.
     #[inline(always)]
-    fn level_disc(&self, x: usize, c: f32) -> (Texel, f32) {
-        normalised(level_disc(self.samplers[0].level_ref(), x, self.y, c))
+    fn level_disc(&self, x: usize, c: f32, rows: &mut [DiscRows; 2]) -> (Texel, f32) {
+        normalised(level_disc(self.samplers[0].level_ref(), x, self.y, c, rows))
     }
 
     /// Image j of the ladder (level j, the sharp frame for 0) at frame pixel x (a method,

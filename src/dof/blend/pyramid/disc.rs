@@ -104,6 +104,7 @@ pub(super) fn frame_texels(
 /// ([`frame_texels`]), not normalised: each lane's sum of the texels times their coverage
 /// (lane [`W`], the weight to divide by, where the texels carry w).
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 pub(super) fn frame_disc(
     texels: &[Texel],
     width: usize,
@@ -111,61 +112,141 @@ pub(super) fn frame_disc(
     x: usize,
     y: usize,
     c: f32,
+    rows: &mut DiscRows,
 ) -> Texel {
-    disc_sum(texels, width, height, (x as f32, y as f32), 0.5 * c + 0.5)
+    let spans = rows.about(0.5 * c + 0.5, 0.0, 0.0);
+    disc_sum(texels, width, height, (x as isize, y as isize), 0.0, spans)
 }
 
 /// The disc of diameter `c` about frame pixel (x, y) over `level` (level 1, a texel per
 /// 2 × 2 pixels), not normalised: each lane's sum of the texels times their coverage (lane
-/// [`W`] is the weight to divide by).
+/// [`W`] is the weight to divide by). `rows` is kept per column parity (the centre's
+/// fraction alternates).
 #[inline(always)]
-pub(super) fn level_disc(level: &Level, x: usize, y: usize, c: f32) -> Texel {
+pub(super) fn level_disc(
+    level: &Level,
+    x: usize,
+    y: usize,
+    c: f32,
+    rows: &mut [DiscRows; 2],
+) -> Texel {
     let diameter = (c * c - 16.0 * LEVEL_1_VARIANCE).max(0.0).sqrt();
-    let centre = ((x as f32 + 0.5) * 0.5 - 0.5, (y as f32 + 0.5) * 0.5 - 0.5);
+    // The pixel's centre in level 1's texels, (x + ½)/2 − ½: a whole texel and ¼ or ¾.
+    let (px, py) = ((x as f32 + 0.5) * 0.5 - 0.5, (y as f32 + 0.5) * 0.5 - 0.5);
+    let (cx, cy) = (px.floor(), py.floor());
+    let (fx, fy) = (px - cx, py - cy);
+    let spans = rows[x % 2].about(0.25 * diameter + 0.5, fx, fy);
     disc_sum(
         &level.texels,
         level.width,
         level.height,
-        centre,
-        0.25 * diameter + 0.5,
+        (cx as isize, cy as isize),
+        fx,
+        spans,
     )
 }
 
-/// The sum of a grid's texels over a disc about `centre` (in texels) whose coverage of a
-/// texel at distance d is `clamp(reach − d, 0, 1)`: rows top to bottom, each left to right,
-/// texels outside the grid left out. A texel with d ≤ reach − 1 is wholly inside and weighs
-/// 1, added without a square root (most of a disc's taps; eight lanes at once).
+/// A disc's rows about a centre (cx + fx, cy + fy), cx and cy whole, as offsets from
+/// (cx, cy): the texels each covers and those wholly inside (d ≤ reach − 1, weight 1),
+/// worked out once per reach and fraction (neighbouring pixels mostly share both).
+#[derive(Default)]
+pub(super) struct DiscRows {
+    key: Option<(f32, f32, f32)>,
+    rows: Vec<Span>,
+    reach: f32,
+}
+
+/// One row of a disc, as offsets from its centre's whole texel.
+#[derive(Clone, Copy)]
+struct Span {
+    dy: isize,
+    dy2: f32,
+    from: isize,
+    to: isize,
+    /// Wholly inside: [inner_from, inner_to] (empty where inner_from > inner_to).
+    inner_from: isize,
+    inner_to: isize,
+}
+
+impl DiscRows {
+    /// The rows of the disc of `reach` about a centre whose fractions are (fx, fy).
+    #[inline(always)]
+    fn about(&mut self, reach: f32, fx: f32, fy: f32) -> &DiscRows {
+        if self.key != Some((reach, fx, fy)) {
+            self.key = Some((reach, fx, fy));
+            self.reach = reach;
+            self.rows.clear();
+            let inner = reach - 1.0;
+            let top = (fy - reach).ceil() as isize;
+            let bottom = (fy + reach).floor() as isize;
+            for dy in top..=bottom {
+                let d = dy as f32 - fy;
+                let dy2 = d * d;
+                let across = (reach * reach - dy2).max(0.0).sqrt();
+                let from = (fx - across).ceil() as isize;
+                let to = (fx + across).floor() as isize;
+                if to < from {
+                    continue;
+                }
+                let (inner_from, inner_to) = if inner > 0.0 && inner * inner > dy2 {
+                    let half = (inner * inner - dy2).sqrt();
+                    (
+                        ((fx - half).ceil() as isize).max(from),
+                        ((fx + half).floor() as isize).min(to),
+                    )
+                } else {
+                    (to + 1, to)
+                };
+                self.rows.push(Span {
+                    dy,
+                    dy2,
+                    from,
+                    to,
+                    inner_from,
+                    inner_to,
+                });
+            }
+        }
+        self
+    }
+}
+
+/// The sum of a grid's texels over the disc `spans` about (cx + fx, cy + ·) whose coverage of
+/// a texel at distance d is `clamp(reach − d, 0, 1)`: rows top to bottom, each left to
+/// right, texels outside the grid left out. The texels wholly inside (d ≤ reach − 1) weigh
+/// 1 and are added without a square root (most of a disc's taps; eight lanes at once).
 #[inline(always)]
 fn disc_sum(
     texels: &[Texel],
     width: usize,
     height: usize,
-    (px, py): (f32, f32),
-    reach: f32,
+    (cx, cy): (isize, isize),
+    fx: f32,
+    spans: &DiscRows,
 ) -> Texel {
     let mut sum = ZERO;
-    let top = (py - reach).ceil().max(0.0) as isize;
-    let bottom = ((py + reach).floor() as isize).min(height as isize - 1);
-    let inner = reach - 1.0;
-    for j in top..=bottom {
-        let dy = j as f32 - py;
-        let dy2 = dy * dy;
-        let across = (reach * reach - dy2).max(0.0).sqrt();
-        let from = (px - across).ceil().max(0.0) as isize;
-        let to = ((px + across).floor() as isize).min(width as isize - 1);
-        // The texels wholly inside: [inner_from, inner_to], within [from, to].
-        let (inner_from, inner_to) = if inner > 0.0 && inner * inner > dy2 {
-            let half = (inner * inner - dy2).sqrt();
-            (
-                ((px - half).ceil() as isize).max(from),
-                ((px + half).floor() as isize).min(to),
-            )
-        } else {
+    let (last_column, last_row) = (width as isize - 1, height as isize - 1);
+    for span in &spans.rows {
+        let j = cy + span.dy;
+        if j < 0 || j > last_row {
+            continue;
+        }
+        let from = (cx + span.from).max(0);
+        let to = (cx + span.to).min(last_column);
+        if to < from {
+            continue;
+        }
+        let inner_from = (cx + span.inner_from).max(from);
+        let inner_to = (cx + span.inner_to).min(to);
+        let (inner_from, inner_to) = if span.inner_from > span.inner_to || inner_from > inner_to {
             (to + 1, to)
+        } else {
+            (inner_from, inner_to)
         };
         let row = &texels[j as usize * width..(j as usize + 1) * width];
+        let at = |i: isize| (i - cx) as f32 - fx;
         for i in from..inner_from.min(to + 1) {
-            rim(&mut sum, row, i, px, dy2, reach);
+            rim(&mut sum, &row[i as usize], at(i), span.dy2, spans.reach);
         }
         if inner_from <= inner_to {
             for t in &row[inner_from as usize..=inner_to as usize] {
@@ -175,19 +256,18 @@ fn disc_sum(
             }
         }
         for i in (inner_to + 1).max(from)..=to {
-            rim(&mut sum, row, i, px, dy2, reach);
+            rim(&mut sum, &row[i as usize], at(i), span.dy2, spans.reach);
         }
     }
     sum
 }
 
-/// A texel on a disc's rim added by its coverage (a function, not a closure, so that it is
-/// compiled with its caller's instructions: `multiversion`).
+/// A texel on a disc's rim, at (dx, dy) from its centre, added by its coverage (a function,
+/// not a closure, so that it is compiled with its caller's instructions: `multiversion`).
 #[inline(always)]
-fn rim(sum: &mut Texel, row: &[Texel], i: isize, px: f32, dy2: f32, reach: f32) {
-    let dx = i as f32 - px;
+fn rim(sum: &mut Texel, t: &Texel, dx: f32, dy2: f32, reach: f32) {
     let cover = (reach - (dx * dx + dy2).sqrt()).clamp(0.0, 1.0);
-    for (v, t) in sum.iter_mut().zip(&row[i as usize]) {
+    for (v, t) in sum.iter_mut().zip(t) {
         *v += cover * t;
     }
 }
