@@ -462,14 +462,10 @@ mod with_gpu {
                 let radius = (0.5 * coc).ceil() as usize;
                 for (method, got, cpu) in pairs {
                     let what = format!("{method}, cell {cell} shift {shift}, CoC {coc}");
+                    twin_within_checker_range(&got.r, &cpu.r, w, |_| what.clone());
                     for y in 0..h {
                         for x in 0..w {
-                            let i = y * w + x;
-                            let (g, c) = (got.r[i], cpu.r[i]);
-                            assert!(
-                                (g - c).abs() <= 1e-5 * 0.8,
-                                "{what}: ({x}, {y}): GPU {g}, CPU {c}"
-                            );
+                            let g = got.r[y * w + x];
                             if x.min(w - 1 - x).min(y).min(h - 1 - y) < radius {
                                 assert!((g - 0.5).abs() <= 0.25, "{what}: ({x}, {y}): {g}");
                             }
@@ -490,7 +486,7 @@ mod with_gpu {
         let Some(gpu) = gpu() else { return };
         use crate::dof::{edge_case, EDGE_FRAME};
         use shutter::dof::blend::blend;
-        let (w, h) = EDGE_FRAME;
+        let (w, _) = EDGE_FRAME;
         let (config, mut color, mut coc_plane, _) = edge_case(2, 5.0, 1);
         let noise = |i: usize, k: usize| ((i * 7919 + k * 104_729) % 1000) as f32 / 1000.0;
         for (k, plane) in [&mut color.r, &mut color.g, &mut color.b]
@@ -510,16 +506,25 @@ mod with_gpu {
             .try_dof_blend(&config, &color, &coc_plane)
             .unwrap_or_else(|e| panic!("{e}"));
         let cpu = blend(&config, color.clone(), &coc_plane);
-        for y in 0..h {
-            for x in 0..w {
-                let i = y * w + x;
-                let (g, c) = (got.r[i], cpu.r[i]);
-                assert!(
-                    (g - c).abs() <= 1e-5 * 0.8,
-                    "({x}, {y}), CoC {}: GPU {g}, CPU {c}",
-                    coc_plane[i]
-                );
-            }
+        twin_within_checker_range(&got.r, &cpu.r, w, |i| format!("CoC {}", coc_plane[i]));
+    }
+
+    /// Every sample of a twin's plane within 1e-5 of the range (0.8, the edge checker's)
+    /// of the CPU's; `what(i)` names sample i's case.
+    fn twin_within_checker_range(
+        got: &[f32],
+        cpu: &[f32],
+        w: usize,
+        what: impl Fn(usize) -> String,
+    ) {
+        for (i, (g, c)) in got.iter().zip(cpu).enumerate() {
+            assert!(
+                (g - c).abs() <= 1e-5 * 0.8,
+                "{}: ({}, {}): GPU {g}, CPU {c}",
+                what(i),
+                i % w,
+                i / w
+            );
         }
     }
 
