@@ -713,13 +713,13 @@ mod with_gpu {
 
     /// Depth of field's blend twin (the pyramid) against `blend`, on the stress depth frames
     /// under the gather test's three lenses (E from 48 to 512 px: from four levels to
-    /// eight, the half step, the near field's spread read at levels 0 to 7), with and
+    /// eight, the discs below level 3's CoC, the near field's spread read at levels 0 to 7), with and
     /// without alpha, over a colour of fine noise (under one lens with stress values, made
     /// finite first as the pipeline does), and on frames one and two pixels wide or high.
     ///
     /// Tolerance: the twin runs the CPU's plan (E, levels, ladders, where T_near is read) and
     /// the same sums in the same order, so what differs is rounding: the divisions (a level's
-    /// colour by its w, the half step by its weights; WGSL allows 2.5 ULP) and products a
+    /// colour by its w, the discs by theirs; WGSL allows 2.5 ULP) and products a
     /// driver may fuse into the sums (the lerps, the [1 3 3 1]/8 taps). Each is a few
     /// 2⁻²⁴ of the values it combines, which are within the frame's range r of the
     /// reference; the pyramid's levels add a rounding per halving, at most a dozen. Bound: max
@@ -776,7 +776,8 @@ mod with_gpu {
                 let params = DofParams {
                     max_coc,
                     method: shutter::dof::Method::Blend,
-                    // ε above the half step's CoC (2.5 px) under one lens.
+                    // ε of 3 px under one lens: the discs' smallest CoCs and the spread's
+                    // margin over a wider in-focus band.
                     epsilon: if j == 1 { 3.0 } else { 1.0 },
                     ..DofParams::new(CocSource::Lens(lens))
                 };

@@ -8,8 +8,8 @@
 //! the ladder's CoCs and inverse gaps; then the output planes and, not read back, every
 //! level's texels.
 //!
-//! What a frame needs decided before any pixel is blurred — E, the number of levels, both
-//! ladders, whether and where T_near is read, the reference colour — is the CPU's own
+//! What a frame needs decided before any pixel is blurred — E, the number of levels, the
+//! ladder, whether and where T_near is read, the reference colour — is the CPU's own
 //! `crate::dof::blend::pyramid::plan`, made on the host. Three entry points run in order in
 //! one compute pass: level 1 from the frame, each further level from the one before, then one
 //! invocation per pixel (the discs below level 3's CoC, the levels' mix above). What may
@@ -30,7 +30,7 @@ pub const SHADER: &str = concat!(include_str!("../prelude.wgsl"), include_str!("
 /// Workgroups are 8 × 8 invocations.
 const GROUP: usize = 8;
 
-/// The compiled stage: bindings config, color, coc, geometry, ladders, then out and the
+/// The compiled stage: bindings config, color, coc, geometry, ladder, then out and the
 /// levels' texels (scratch).
 pub(crate) fn stage(device: &wgpu::Device) -> Stage {
     Stage::new(

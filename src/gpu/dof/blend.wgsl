@@ -28,7 +28,7 @@ struct BlendConfig {
     largest: f32,
     // 1 where T_near is read (some pixel is in front of the focus plane).
     near: u32,
-    // The plain ladder's bracket of E: T_near is read at levels near_k and near_k + 1,
+    // The ladder's bracket of E: T_near is read at levels near_k and near_k + 1,
     // mixed by near_f.
     near_k: u32,
     near_f: f32,

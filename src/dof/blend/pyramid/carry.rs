@@ -174,7 +174,7 @@ fn first_level_band(
 }
 
 /// A compose task's buffers for the carried planes: each group's level rows, each pixel's
-/// images, the half step's weights.
+/// images and the discs' rows.
 #[derive(Default)]
 pub(super) struct CarriedScratch {
     /// Group g's row of level l at [g][l − 1].
@@ -392,7 +392,7 @@ mod tests {
     }
 
     /// A signed CoC plane with a near field (left), an in-focus band, a far field rising to
-    /// `largest` px (right), and pixels between that read the half step and each level.
+    /// `largest` px (right), and pixels between that read each disc and each level.
     fn coc(width: usize, height: usize, largest: f32) -> Vec<f32> {
         let jitter = plane(width, height, 99, -0.5, 1.0);
         (0..width * height)

@@ -8,22 +8,23 @@
 //! a few pixels besides (a 2 px checker under a 5 px CoC came out upright: `border`,
 //! BENCHMARKS.md "Frame borders and the near rim"). Below level 2's CoC (9.0 px) the pyramid
 //! mixed the sharp frame, a half step and levels 1 and 2, where both faults are largest; a
-//! disc there is at most 64 taps (the half step is gone: nothing reads it now).
+//! disc there is about 70 taps at most, 89 in the mix of the two discs (the half step is
+//! gone: nothing reads it now).
 //!
 //! Which image a pixel of CoC c reads ([`kernel`]), L2 and L3 being levels 2 and 3's CoCs:
 //! - c ≤ ¾·L2: the disc over the sharp frame ([`frame_disc`]);
 //! - ¾·L2 < c ≤ L2: that disc mixed into the disc over level 1, linearly in c;
 //! - L2 < c ≤ 0.9·L3: the disc over level 1 ([`level_disc`]): level 1's texels (premultiplied
-//!   by w, already filtered) sampled over a disc of c/2 texels across, narrowed by the
-//!   texels' own blur (variance ¾ px², so the diameter is √(c² − 16·¾));
+//!   by w, already filtered) sampled over a disc narrowed by the texels' own blur (variance
+//!   ¾ px²): √(c² − 16·¾) px across, half that in texels;
 //! - 0.9·L3 < c < L3: that disc mixed into the pyramid's mix;
 //! - c ≥ L3, or a pixel the near field's spread blurs: the pyramid's mix alone.
 //!
 //! Both discs weigh a tap by its coverage (the share of the pixel or texel inside the disc,
 //! `clamp(r + ½ − d, 0, 1)`, so the disc grows smoothly with c) times its w, as the levels
 //! do (an in-focus pixel lends almost nothing), and renormalise over the taps inside the frame
-//! (what lies outside is unknown). The GPU twin (`disc` and `level_disc` in
-//! src/gpu/dof/blend.wgsl) sums the same taps in the same order. Measured (BENCHMARKS.md,
+//! (what lies outside is unknown). The GPU twin (`frame_disc`, `level_disc`, `disc_sum` and
+//! `span` in src/gpu/dof/blend.wgsl) sums the same taps in the same order. Measured (BENCHMARKS.md,
 //! "blend: the disc below level 3"): region RMSE on `border` 0.06213 → 0.02952 and on
 //! `layers dof` at 640×360 0.03278 → 0.02171; every level's disc (the pyramid kept only for
 //! the near field) erred a little less still but took 0.3 s at 1080p, twice the gather.

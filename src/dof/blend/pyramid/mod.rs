@@ -33,8 +33,8 @@
 //!   "Light layers"): the pyramid's per-pixel work is mostly each layer's own.
 //!
 //! Against the talk's two copies (BENCHMARKS.md, issue 14): on `layers` at 640×360 it errs
-//! less (region RMSE 0.0296 against 0.0478 in one run, before the discs), and at 1080p it is
-//! 14–22× faster.
+//! less (region RMSE 0.0296 against 0.0478 in one run, before the discs), and at 1080p it was
+//! 14–22× faster before them (BENCHMARKS.md has the discs' cost).
 
 mod carry;
 mod compose;
@@ -115,8 +115,8 @@ pub(crate) struct Plan {
     pub levels: usize,
     /// Where each image of the pyramid stands in CoC.
     pub ladder: Ladder,
-    /// Where T_near is read: the plain ladder's bracket of E, if any pixel is in front of
-    /// the focus plane.
+    /// Where T_near is read: the ladder's bracket of E, if any pixel is in front of the focus
+    /// plane.
     pub near: Option<(usize, f32)>,
     /// The colour the texels are offset by: each plane's first sample (0 without alpha).
     pub reference: [f32; 4],
@@ -203,8 +203,10 @@ pub fn blend_carrying(
         .collect();
 
     // The compose stage writes the frame in place, a band of rows per task, and reads each
-    // row as it was: each task keeps copies of the rows around the one it writes, and the
-    // rows just outside each band are copied before any task starts.
+    // row as it was (the sharp image; the discs read texels made before it): each task keeps
+    // copies of the rows around the one it writes, and the rows just outside each band are
+    // copied before any task starts. (Only the row itself is read since the half step went;
+    // the copies of the rows above and below are left for a later change.)
     let bands = height.div_ceil(BAND);
     // The colour's planes, then the carried ones.
     let channels = source.planes.len();
