@@ -502,11 +502,23 @@ mod with_gpu {
             let size = 1.0 + 23.0 * x as f32 / (w - 1) as f32;
             *c = if x < w / 2 { size } else { -size };
         }
-        let got = gpu
-            .try_dof_blend(&config, &color, &coc_plane)
-            .unwrap_or_else(|e| panic!("{e}"));
-        let cpu = blend(&config, color.clone(), &coc_plane);
-        twin_within_checker_range(&got.r, &cpu.r, w, |i| format!("CoC {}", coc_plane[i]));
+        // Without alpha, and with an alpha of its own noise.
+        let with_alpha = shutter::frame::Color {
+            a: Some((0..color.r.len()).map(|i| noise(i, 3)).collect()),
+            ..color.clone()
+        };
+        for color in [color, with_alpha] {
+            let got = gpu
+                .try_dof_blend(&config, &color, &coc_plane)
+                .unwrap_or_else(|e| panic!("{e}"));
+            let cpu = blend(&config, color.clone(), &coc_plane);
+            for (k, (got, cpu)) in got.planes().iter().zip(cpu.planes()).enumerate() {
+                twin_within_checker_range(got, cpu, w, |i| {
+                    format!("plane {k}, CoC {}", coc_plane[i])
+                });
+            }
+            assert_eq!(got.a.is_some(), cpu.a.is_some());
+        }
     }
 
     /// Every sample of a twin's plane within 1e-5 of the range (0.8, the edge checker's)
