@@ -23,7 +23,6 @@ use rayon::prelude::*;
 use super::compose::{lerp, Sampler, Scratch};
 use super::disc::{frame_disc, kernel, level_disc, DiscRows, Kernel};
 use super::levels::{halve_levels, halve_plane_row, Ladder, Level, Source, Texel, BAND, ZERO};
-use crate::dof::blend::IN_FOCUS_WEIGHT;
 
 /// Carried planes a texel holds.
 pub(super) const GROUP: usize = 8;
@@ -112,7 +111,7 @@ fn first_row(rows: &Rows, y: usize, out: &mut [f32], s: &mut FirstScratch) {
     s.w.resize(width, 0.0);
     s.channel.resize(width, 0.0);
     for (w, &c) in s.w.iter_mut().zip(coc) {
-        *w = rows.source.interpolator(c).max(IN_FOCUS_WEIGHT);
+        *w = rows.source.weight(c);
     }
     for (lane, out) in out.chunks_mut(w2).enumerate() {
         match rows.planes.get(lane) {

@@ -16,7 +16,7 @@
 //! sums per pixel.
 
 use super::disc::{frame_disc, kernel, level_disc, normalised, DiscRows, Kernel};
-use super::levels::{Ladder, Level, Source, Texel, MAX_LEVELS, NEAR, W, ZERO};
+use super::levels::{divisor, Ladder, Level, Source, Texel, MAX_LEVELS, NEAR, W, ZERO};
 
 /// Where pixel centres of a frame axis of `size` land in a level 2^L times smaller: for each
 /// pixel, the texel before it and the one after (clamped to the level) and the weight of the
@@ -59,12 +59,7 @@ fn normalised_row(a: &[Texel], b: &[Texel], f: f32, out: &mut [Texel]) {
         *o = a + f * (b - a);
     }
     for t in out.iter_mut() {
-        // max(w, MIN_POSITIVE), NaN included, in one comparison.
-        let w = if t[W] > f32::MIN_POSITIVE {
-            t[W]
-        } else {
-            f32::MIN_POSITIVE
-        };
+        let w = divisor(t[W]);
         let divisor = [w, w, w, w, 1.0, 1.0, 1.0, 1.0];
         for (v, d) in t.iter_mut().zip(divisor) {
             *v /= d;
@@ -86,11 +81,7 @@ fn carried_normalised_row(a: &[Texel], b: &[Texel], f: f32, beauty: &[Texel], ou
         *o = a + f * (b - a);
     }
     for (t, u) in out.iter_mut().zip(beauty) {
-        let w = if u[W] > f32::MIN_POSITIVE {
-            u[W]
-        } else {
-            f32::MIN_POSITIVE
-        };
+        let w = divisor(u[W]);
         for v in t.iter_mut() {
             *v /= w;
         }

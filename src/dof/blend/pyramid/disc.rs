@@ -29,8 +29,7 @@
 //! `layers dof` at 640×360 0.03278 → 0.02171; every level's disc (the pyramid kept only for
 //! the near field) erred a little less still but took 0.3 s at 1080p, twice the gather.
 
-use super::levels::{level_coc, Level, Source, Texel, W, ZERO};
-use crate::dof::blend::IN_FOCUS_WEIGHT;
+use super::levels::{divisor, level_coc, Level, Source, Texel, W, ZERO};
 
 /// Per-axis variance (px² of the frame) of level 1's texels: one [1 3 3 1]/8 halving.
 const LEVEL_1_VARIANCE: f32 = 0.75;
@@ -90,7 +89,7 @@ pub(super) fn frame_texels(
     use rayon::prelude::*;
     let mut texels = vec![ZERO; source.coc.len()];
     texels.par_iter_mut().enumerate().for_each(|(i, t)| {
-        let w = source.interpolator(source.coc[i]).max(IN_FOCUS_WEIGHT);
+        let w = source.weight(source.coc[i]);
         for ((v, plane), r) in t.iter_mut().zip(planes).zip(reference) {
             *v = (plane[i] - r) * w;
         }
@@ -277,11 +276,7 @@ fn rim(sum: &mut Texel, t: &Texel, dx: f32, dy2: f32, reach: f32) {
 /// smallest positive float), and the w.
 #[inline(always)]
 pub(super) fn normalised(mut sum: Texel) -> (Texel, f32) {
-    let w = if sum[W] > f32::MIN_POSITIVE {
-        sum[W]
-    } else {
-        f32::MIN_POSITIVE
-    };
+    let w = divisor(sum[W]);
     for v in sum.iter_mut().take(4) {
         *v /= w;
     }

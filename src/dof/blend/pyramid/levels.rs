@@ -209,6 +209,23 @@ impl Source<'_> {
     pub(super) fn interpolator(&self, c: f32) -> f32 {
         ((c.abs() - self.epsilon) * self.inverse_span).clamp(0.0, 1.0)
     }
+
+    /// A pixel's weight in the blurred images, w = max(T, [`IN_FOCUS_WEIGHT`]).
+    #[inline(always)]
+    pub(super) fn weight(&self, c: f32) -> f32 {
+        self.interpolator(c).max(IN_FOCUS_WEIGHT)
+    }
+}
+
+/// What a sum of weights w is divided by: w, or the smallest positive float where w is
+/// below it (NaN included, in one comparison).
+#[inline(always)]
+pub(super) fn divisor(w: f32) -> f32 {
+    if w > f32::MIN_POSITIVE {
+        w
+    } else {
+        f32::MIN_POSITIVE
+    }
 }
 
 /// Lanes of a texel that carry something: colour (4), w, T_near.
