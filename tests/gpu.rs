@@ -500,17 +500,14 @@ pub(crate) mod with_gpu {
     /// Tolerance: exact. dilate selects, per tile, one of the grid's vectors by the reach
     /// test and |M|²; |M|², the spans and the line's normal come from the CPU's own
     /// `Source::new` (the host computes them), and |M|² is compared by bits. What remains on
-    /// the GPU is n·(dx, dy) against √2, two products and a sum: a driver may fuse one product
-    /// into an fma, which changes the sum only where a product is inexact and only by a
-    /// rounding. So a tile may differ only where some source holding the GPU's or the CPU's
-    /// vector has |n·d| within 10⁻⁶ of √2 from that tile with an inexact product (checked
-    /// here: never for diagonal or axis-aligned motion one tile over, whose products are
-    /// exact and whose test meets √2 exactly), and at most 1 % of tiles; every other tile must
-    /// be the CPU's, bit for bit. Measured on lavapipe: none differ.
+    /// the GPU is n·(dx, dy) against √2, two products and a sum, and the normal's 11
+    /// significant bits make both products exact, so a driver that fuses one into the sum
+    /// (an fma) rounds it as the CPU does. Before the normal was cut, NVIDIA's driver (H200)
+    /// fused them and 62 of these 5125 tiles, on the threshold, differed; lavapipe none.
     #[test]
     fn dilate_matches_the_cpu_exactly_on_generated_and_stress_grids() {
         let Some(gpu) = gpu() else { return };
-        use shutter::motion::dilate::{dilate, Source, REACH};
+        use shutter::motion::dilate::dilate;
         use shutter::motion::reconstruct::{spread_2014, ReconstructConfig, ReconstructParams};
         let mut grids = Vec::new();
         for (k, &(columns, rows)) in [(1, 1), (3, 1), (17, 9), (40, 33), (70, 12)]
@@ -535,39 +532,25 @@ pub(crate) mod with_gpu {
             }
             grids.push(grid);
         }
-        let (mut tiles, mut ties) = (0, 0);
+        let mut tiles = 0;
         for grid in &grids {
             let cpu = dilate(grid);
             let got = gpu.try_dilate(grid).expect("the GPU stage runs");
-            let size = grid.size as f32;
             let mut tiles_differing = differing(&got.x, &cpu.x);
             tiles_differing.extend(differing(&got.y, &cpu.y));
             tiles_differing.sort_unstable();
             tiles_differing.dedup();
-            for &t in &tiles_differing {
-                let (c, r) = ((t % grid.columns) as isize, (t / grid.columns) as isize);
-                let (g, want) = (at(&got, t), at(&cpu, t));
-                let bits = |v: (f32, f32)| (v.0.to_bits(), v.1.to_bits());
-                let on_threshold = (0..grid.x.len()).any(|s| {
-                    let m = at(grid, s);
-                    if bits(m) != bits(g) && bits(m) != bits(want) {
-                        return false;
-                    }
-                    let source = Source::new(m, size);
-                    let (sc, sr) = ((s % grid.columns) as isize, (s / grid.columns) as isize);
-                    let (dx, dy) = ((c - sc) as f64, (r - sr) as f64);
-                    let (px, py) = (source.nx as f64 * dx, source.ny as f64 * dy);
-                    // An fma changes the sum only when a product is inexact in f32.
-                    let inexact = |p: f64| p as f32 as f64 != p;
-                    let dot = (px + py).abs();
-                    (inexact(px) || inexact(py)) && (dot - REACH as f64).abs() < 1e-6
-                });
-                assert!(
-                    on_threshold,
-                    "dilate {}x{}: tile ({c}, {r}): GPU {g:?}, CPU {want:?}",
-                    grid.columns, grid.rows
+            if let Some(&t) = tiles_differing.first() {
+                panic!(
+                    "dilate {}x{}: {} tiles differ; tile ({}, {}): GPU {:?}, CPU {:?}",
+                    grid.columns,
+                    grid.rows,
+                    tiles_differing.len(),
+                    t % grid.columns,
+                    t / grid.columns,
+                    at(&got, t),
+                    at(&cpu, t)
                 );
-                ties += 1;
             }
             tiles += cpu.x.len();
             // The dilation did something: some tile took a vector not its own.
@@ -575,11 +558,7 @@ pub(crate) mod with_gpu {
                 assert!(differing(&cpu.x, &grid.x).len() > 10);
             }
         }
-        let _ = writeln!(
-            std::io::stderr(),
-            "gpu: dilate: {ties} tiles on the reach threshold of {tiles}, the rest bit for bit"
-        );
-        assert!(ties * 100 <= tiles, "{ties} of {tiles} tiles");
+        let _ = writeln!(std::io::stderr(), "gpu: dilate: {tiles} tiles, bit for bit");
     }
 
     /// Reconstruct's tile stages at 1920×1080 with its defaults (the 2014 variants' tiles of

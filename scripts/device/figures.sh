@@ -3,8 +3,9 @@
 # device tool: one chip, 15 minutes of device time a session, no network, so nothing is built
 # or downloaded there).
 #
-#   scripts/device/figures.sh --prepare     # here: build, strip into target/device/ (~40 MiB)
-#   OUT=$OUT scripts/device/figures.sh      # there, with carry ["target/device"]
+#   scripts/device/figures.sh --prepare     # here: build, strip into target/device/ (~60 MiB)
+#                                           # and pack it as target/device.tar.xz (~14 MiB)
+#   OUT=$OUT scripts/device/figures.sh      # there, with carry ["target/device.tar.xz"]
 #
 # Records, under OUT (default target/device-figures):
 # - hardware.txt: nvidia-smi, the CPU, the adapter wgpu picks;
@@ -13,7 +14,11 @@
 # - sequence.tsv and sequence/*.json: a 1920×1080 sequence (`shutter scene layers`, FRAMES
 #   frames) through `shutter blur`/`dof` with every algorithm on --backend wgpu and cpu, against
 #   --algorithm none (the I/O floor: decode, copy, encode), each run's --json kept;
-# - figures.md: the tables BENCHMARKS.md takes, with this command.
+# - parity.txt: the GPU parity tests (the integration tests whose names hold `gpu`, built with
+#   `cargo test --release --no-run`) run on that machine's adapter, GPU required: the twins
+#   were tested on lavapipe alone until the first hardware run (2026-12-04) found NVIDIA's
+#   driver fusing products that lavapipe rounds apart (docs/history/device-parity-2026-12-04.md);
+# - figures.md: the tables BENCHMARKS.md takes, with this command, and the parity summary.
 #
 # Environment: OUT; FRAMES (24); SIZE (1920x1080); BENCHES (the benches to run, default
 # "reconstruct dof scatter stretch"; empty: none); SHUTTER (the binary; target/device/shutter,
@@ -37,8 +42,19 @@ if [ "${1:-}" = "--prepare" ]; then
     path=$(sed -n "s/.*Executable benches\/$b.rs (\(.*\))/\1/p" target/device-prepare.log | tail -1)
     strip -o "target/device/bench-$b" "$path"
   done
+  cargo test --release --no-run 2>&1 | tee target/device-tests.log
+  path=$(sed -n "s/.*Executable tests\/main.rs (\(.*\))/\1/p" target/device-tests.log | tail -1)
+  strip -o target/device/test-integration "$path"
+  # The tests read their fixtures under the folder they were built in.
+  echo "$root" >target/device/root.txt
   du -sh target/device
+  tar cJf target/device.tar.xz -C target device
+  du -sh target/device.tar.xz
   exit 0
+fi
+
+if [ ! -d target/device ] && [ -f target/device.tar.xz ]; then
+  tar xJf target/device.tar.xz -C target
 fi
 
 OUT=${OUT:-target/device-figures}
@@ -69,6 +85,21 @@ for b in $BENCHES; do
   timeout 150 "$bin" --bench "${filter[@]}" >"$OUT/bench-$b.txt" 2>&1 ||
     echo "(exit $?: stopped at its time limit or failed)" >>"$OUT/bench-$b.txt"
 done
+
+# The parity tests, on this machine's adapter, from the folder they were built in.
+tests=target/device/test-integration
+if [ -x "$tests" ]; then
+  built=$(cat target/device/root.txt 2>/dev/null || echo "$root")
+  if [ ! -e "$built" ]; then
+    mkdir -p "$(dirname "$built")" && ln -s "$root" "$built" || log "cannot place $built"
+  fi
+  # Tests that spawn the binary find it where cargo built it.
+  mkdir -p target/release && [ -x target/release/shutter ] || cp "$shutter" target/release/shutter
+  log "parity tests"
+  (cd "$built" && SHUTTER_REQUIRE_GPU=1 timeout 240 "$root/$tests" gpu --test-threads 8) \
+    >"$OUT/parity.txt" 2>&1
+  echo "(exit $?)" >>"$OUT/parity.txt"
+fi
 
 # The sequence: every algorithm on each backend against the I/O floor.
 seq=$OUT/scene
@@ -137,6 +168,13 @@ rm -rf "$OUT/out" "$seq"
     cat "$OUT/bench-$b.txt"
     echo '```'
   done
+  if [ -f "$OUT/parity.txt" ]; then
+    echo
+    echo '## The GPU parity tests'
+    echo '```'
+    grep -E '^test result|^    [a-z_:]+$|^\(exit' "$OUT/parity.txt"
+    echo '```'
+  fi
   echo
   echo "## A $SIZE sequence of $FRAMES frames, end to end (two rounds)"
   echo

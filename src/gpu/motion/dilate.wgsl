@@ -19,11 +19,10 @@
 // normal is not finite (|M| infinite) reaches nothing on the CPU (its test compares a NaN);
 // the host marks it not `live`.
 //
-// Rounding: the test's n·(dx, dy) is two products and a sum, correctly rounded as in Rust; a
-// driver may fuse one product into an fma, which can change the result only where |n·d| is
-// within a rounding of √2 and a product is inexact (an offset of 3, 5, 6, 7… tiles on both
-// axes). Diagonal and axis-aligned motion, where the test meets its threshold exactly, have
-// exact products. tests/gpu.rs states the tolerance.
+// Rounding: the test's n·(dx, dy) is two products and a sum. The host's normal keeps 11
+// significant bits (`short` in src/motion/dilate.rs), so each product is exact for offsets
+// under 2^13 tiles and the sum is rounded once, whether or not a driver fuses a product into
+// it (NVIDIA's does; lavapipe's does not): the result is the CPU's, bit for bit.
 
 // Keep in sync with `DilateConfig` in src/gpu/motion/dilate.rs (a size test guards the layout).
 struct DilateConfig {
