@@ -339,13 +339,14 @@ fn span(fx: f32, dy2: f32, reach: f32) -> Span {
 // The sum of a grid's texels over a disc about (cx + fx, cy + fy) (`disc_sum`): rows top to
 // bottom, each left to right, texels outside the grid left out; colour, then w. The grid is
 // the frame (`level` 0: texels made from the colour and CoC as `frame_texels` makes them) or
-// level 1.
+// level 1. `plain` (the frame's disc of a pixel in front of the focus plane): each tap also
+// weighed by its 1/w, so that every tap counts alike.
 struct DiscSum {
     c: vec4<f32>,
     w: f32,
 }
 
-fn disc_sum(level: u32, cx: i32, cy: i32, fx: f32, fy: f32, reach: f32) -> DiscSum {
+fn disc_sum(level: u32, cx: i32, cy: i32, fx: f32, fy: f32, reach: f32, plain: bool) -> DiscSum {
     var n = vec2<i32>(i32(config.width), i32(config.height));
     if level == 1u {
         n = vec2<i32>(i32(geometry[0]), i32(geometry[1]));
@@ -384,6 +385,9 @@ fn disc_sum(level: u32, cx: i32, cy: i32, fx: f32, fy: f32, reach: f32) -> DiscS
                     e.w = 0.0;
                 }
                 c = e * w;
+                if plain {
+                    k = k * (1.0 / w);
+                }
             } else {
                 let t = load(geometry[2], u32(j) * geometry[0] + u32(i));
                 c = t.c;
@@ -397,9 +401,10 @@ fn disc_sum(level: u32, cx: i32, cy: i32, fx: f32, fy: f32, reach: f32) -> DiscS
 }
 
 // The disc of diameter c about pixel (x, y) over the frame, normalised (`frame_disc`, then
-// `normalised`).
+// `normalised`); every tap alike where the pixel is in front of the focus plane.
 fn frame_disc(x: u32, y: u32, c: f32) -> vec4<f32> {
-    let s = disc_sum(0u, i32(x), i32(y), 0.0, 0.0, 0.5 * c + 0.5);
+    let plain = coc[y * config.width + x] < 0.0;
+    let s = disc_sum(0u, i32(x), i32(y), 0.0, 0.0, 0.5 * c + 0.5, plain);
     return s.c / max(s.w, MIN_POSITIVE);
 }
 
@@ -411,7 +416,7 @@ fn level_disc(x: u32, y: u32, c: f32) -> vec4<f32> {
     let py = (f32(y) + 0.5) * 0.5 - 0.5;
     let cx = floor(px);
     let cy = floor(py);
-    let s = disc_sum(1u, i32(cx), i32(cy), px - cx, py - cy, 0.25 * diameter + 0.5);
+    let s = disc_sum(1u, i32(cx), i32(cy), px - cx, py - cy, 0.25 * diameter + 0.5, false);
     return s.c / max(s.w, MIN_POSITIVE);
 }
 

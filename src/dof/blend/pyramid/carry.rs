@@ -202,6 +202,8 @@ pub(super) struct Shared<'a> {
     /// Each group's frame as texels (`super::disc::frame_texels`; empty where no pixel
     /// reads the frame's disc).
     pub(super) frames: &'a [Vec<Texel>],
+    /// The beauty's frame as texels (their 1/w weighs a near pixel's taps).
+    pub(super) frame: &'a [Texel],
     /// Levels 2 and 3's CoCs (`super::disc::disc_bounds`).
     pub(super) bounds: [f32; 2],
 }
@@ -228,10 +230,12 @@ pub(super) fn compose_carried_row(
         samplers,
         ladder,
         frames,
+        frame,
         bounds,
     } = shared;
     let width = out[0].len();
     let height = source.coc.len() / width;
+    let coc = &source.coc[y * width..(y + 1) * width];
     let CarriedScratch {
         made,
         picks,
@@ -287,6 +291,9 @@ pub(super) fn compose_carried_row(
             .map(|p| &mut p[..width])
             .collect();
         let texels = frames.get(g).map_or(&[][..], Vec::as_slice);
+        // A near pixel's frame disc weighs each tap by the beauty's 1/w, as the beauty's
+        // did (`super::disc::frame_disc`).
+        let plain = |x: usize| (coc[x] < 0.0).then_some(*frame);
         for (x, &(k, f, kernel)) in picks.iter().enumerate() {
             if k == u8::MAX {
                 continue;
@@ -297,12 +304,12 @@ pub(super) fn compose_carried_row(
             // closures: `multiversion`, as in `compose::compose_row`).
             let m = match kernel {
                 Kernel::Frame => divided(
-                    frame_disc(texels, width, height, x, y, c, frame_rows),
+                    frame_disc(texels, width, height, x, y, c, frame_rows, plain(x)),
                     beauty.frame_w[x],
                 ),
                 Kernel::FrameToLevel(f) => lerp(
                     &divided(
-                        frame_disc(texels, width, height, x, y, c, frame_rows),
+                        frame_disc(texels, width, height, x, y, c, frame_rows, plain(x)),
                         beauty.frame_w[x],
                     ),
                     &divided(

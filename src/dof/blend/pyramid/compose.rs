@@ -329,6 +329,7 @@ pub(super) fn compose_row(
         samplers,
         made,
         frame: frame_texels,
+        coc,
         width,
         height,
         y,
@@ -450,6 +451,8 @@ struct Images<'a> {
     made: &'a [Vec<Texel>],
     /// The frame as texels, for the frame's disc.
     frame: &'a [Texel],
+    /// The row's signed CoC.
+    coc: &'a [f32],
     width: usize,
     height: usize,
     y: usize,
@@ -463,9 +466,11 @@ impl Images<'_> {
         lerp(&self.at(k, x), &self.at(k + 1, x), f)
     }
 
-    /// The frame's disc of diameter c about frame pixel x, normalised, and its w.
+    /// The frame's disc of diameter c about frame pixel x, normalised, and its w; every tap
+    /// alike where the pixel is in front of the focus plane (`super::disc::frame_disc`).
     #[inline(always)]
     fn frame_disc(&self, x: usize, c: f32, rows: &mut DiscRows) -> (Texel, f32) {
+        let plain = (self.coc[x] < 0.0).then_some(self.frame);
         normalised(frame_disc(
             self.frame,
             self.width,
@@ -474,6 +479,7 @@ impl Images<'_> {
             self.y,
             c,
             rows,
+            plain,
         ))
     }
 

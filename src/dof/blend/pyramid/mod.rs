@@ -295,6 +295,7 @@ pub fn blend_carrying(
         samplers: &samplers,
         ladder: &ladder,
         frames: &carried_frames,
+        frame: &frame,
         bounds,
     };
     band_planes
