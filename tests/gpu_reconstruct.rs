@@ -111,6 +111,13 @@ fn compare(
         .chain(cpu.a.as_ref().zip(got.a.as_ref()).map(|(c, g)| ("A", c, g)))
     {
         let p = parity(g, c);
+        crate::support::diag_pixels(
+            &format!("reconstruct {what} {:?} {name}", params.max_blur),
+            frame,
+            g,
+            c,
+            AGREE,
+        );
         let at = (p.worst % frame.width, p.worst / frame.width);
         assert!(
             p.max <= MAX && p.mean <= MEAN && p.outside <= FLIPS,

@@ -145,6 +145,7 @@ fn compare_within(
         .chain(cpu.a.as_ref().zip(got.a.as_ref()).map(|(c, g)| ("A", c, g)))
     {
         let what = format!("{what}, {params:?}, shutter {shutter:?}, {name}");
+        crate::support::diag_pixels(&what, frame, g, c, AGREE);
         let p = assert_parity(&what, frame.width, g, c, (flips, mean));
         worst = (
             worst.0.max(p.max),

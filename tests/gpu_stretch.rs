@@ -126,6 +126,15 @@ fn compare(what: &str, frame: &Frame, params: &StretchParams, shutter: Shutter) 
         "{what}, {params:?}: two GPU runs differ"
     );
     let p = parity_of(&got, &cpu);
+    for (k, (g, c)) in got.planes().iter().zip(cpu.planes()).enumerate() {
+        crate::support::diag_pixels(
+            &format!("stretch {what} {:?} {k}", params.anchor),
+            frame,
+            g,
+            c,
+            AGREE,
+        );
+    }
     let at = (p.worst % frame.width, p.worst / frame.width);
     let _ = writeln!(
         std::io::stderr(),

@@ -769,3 +769,42 @@ pub fn exposure_of_column(texture: &dyn Fn(f64) -> f64, x: usize, speed: f64) ->
     }
     sum / (n * n) as f64
 }
+
+/// With `SHUTTER_DIAG` set, prints the pixels of a GPU plane outside `agree` (relative to the
+/// CPU plane's largest finite magnitude), the first 25 with the frame's depth and velocity
+/// there, and their count: what a parity failure on a lent GPU needs to be read
+/// (scripts/device/figures.sh passes the variable through; docs/history/device-parity-*.md).
+pub(crate) fn diag_pixels(
+    what: &str,
+    frame: &shutter::frame::Frame,
+    got: &[f32],
+    cpu: &[f32],
+    agree: f32,
+) {
+    if std::env::var_os("SHUTTER_DIAG").is_none() {
+        return;
+    }
+    let w = frame.width;
+    let range = cpu
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold(0.0f32, |m, v| m.max(v.abs()))
+        .max(1e-30);
+    let mut n = 0;
+    for (i, (g, c)) in got.iter().zip(cpu).enumerate() {
+        let d = (g - c).abs() / range;
+        if d.is_nan() || d > agree {
+            n += 1;
+            if n <= 25 {
+                let v = frame.velocity.as_ref().map(|v| (v.x[i], v.y[i]));
+                let z = frame.depth.as_ref().map(|z| z[i]);
+                eprintln!(
+                    "DIAG {what} ({}, {}): GPU {g:e} CPU {c:e} d {d:e} z {z:?} v {v:?}",
+                    i % w,
+                    i / w
+                );
+            }
+        }
+    }
+    eprintln!("DIAG {what}: {n} of {} outside", got.len());
+}
