@@ -62,14 +62,17 @@ impl Gpu {
         }
         let plan = plan(config, color, coc);
         // Each level's geometry, and where its texels start.
-        let mut geometry = Vec::with_capacity(3 * plan.levels);
+        let mut geometry = Vec::with_capacity(3 * plan.levels + 3);
         let (mut w, mut h, mut first) = (width, height, 0usize);
         for _ in 0..plan.levels {
             (w, h) = (w.div_ceil(2), h.div_ceil(2));
             geometry.extend([w as u32, h as u32, first as u32]);
             first += w * h;
         }
-        let texels = first;
+        // The plain level 1 (`first_level`'s z 1: a near pixel's level disc), after them.
+        let (w2, h2) = (width.div_ceil(2), height.div_ceil(2));
+        geometry.extend([w2 as u32, h2 as u32, first as u32]);
+        let texels = first + w2 * h2;
         let ladder: Vec<f32> = [&plan.ladder.cocs, &plan.ladder.inverse_gaps]
             .into_iter()
             .flatten()
@@ -86,14 +89,15 @@ impl Gpu {
         let uniform = BlendConfig::new(config, &plan, has_alpha);
         let groups = |w: usize, h: usize| [w.div_ceil(GROUP) as u32, h.div_ceil(GROUP) as u32];
         let mut dispatches = Vec::with_capacity(plan.levels + 1);
-        for (l, g) in geometry.chunks(3).enumerate() {
+        for (l, g) in geometry.chunks(3).take(plan.levels).enumerate() {
             let [x, y] = groups(g[0] as usize, g[1] as usize);
-            // Level l + 1: level 1 from the frame; the others from the level before, the
-            // level number riding in the z count (blend.wgsl, `halve`).
+            // Level l + 1: level 1 from the frame (and the plain level 1, z 1); the others
+            // from the level before, the level number riding in the z count (blend.wgsl,
+            // `halve`).
             dispatches.push(match l {
                 0 => Dispatch {
                     entry: 0,
-                    groups: [x, y, 1],
+                    groups: [x, y, 2],
                 },
                 _ => Dispatch {
                     entry: 1,

@@ -74,11 +74,15 @@ fn plane(ch: u32, i: u32) -> f32 {
     return color[ch * config.width * config.height + i];
 }
 
-// Frame pixel (x, y) as a texel: colour offset and premultiplied, w, T_near.
-fn frame_texel(x: u32, y: u32) -> Texel {
+// Frame pixel (x, y) as a texel: colour offset and premultiplied, w, T_near; `plain`: as if
+// every pixel were fully blurred (T = 1, w = 1: `Source::plain`).
+fn frame_texel(x: u32, y: u32, plain: bool) -> Texel {
     let i = y * config.width + x;
     let c = coc[i];
-    let t = interpolator(c);
+    var t = interpolator(c);
+    if plain {
+        t = 1.0;
+    }
     let w = max(t, IN_FOCUS_WEIGHT);
     var near = 0.0;
     if c < 0.0 {
@@ -110,14 +114,14 @@ fn clamped(i: i32, n: u32) -> u32 {
 }
 
 // Frame row y halved across at texel i.
-fn first_across(i: u32, y: u32) -> Texel {
+fn first_across(i: u32, y: u32, plain: bool) -> Texel {
     let c = 2 * i32(i);
     let w = config.width;
     return taps4(
-        frame_texel(clamped(c - 1, w), y),
-        frame_texel(clamped(c, w), y),
-        frame_texel(clamped(c + 1, w), y),
-        frame_texel(clamped(c + 2, w), y),
+        frame_texel(clamped(c - 1, w), y, plain),
+        frame_texel(clamped(c, w), y, plain),
+        frame_texel(clamped(c + 1, w), y, plain),
+        frame_texel(clamped(c + 2, w), y, plain),
     );
 }
 
@@ -133,22 +137,26 @@ fn load(level_first: u32, index: u32) -> Texel {
     return t;
 }
 
+// Level 1 (z 0), and the plain level 1 (z 1: every pixel by the filter alone, read by a
+// near pixel's level disc; its geometry follows the levels').
 @compute @workgroup_size(8, 8, 1)
 fn first_level(@builtin(global_invocation_id) id: vec3<u32>) {
-    let w2 = geometry[0];
-    let h2 = geometry[1];
+    let plain = id.z == 1u;
+    let g = select(0u, 3u * config.levels, plain);
+    let w2 = geometry[g];
+    let h2 = geometry[g + 1u];
     if id.x >= w2 || id.y >= h2 {
         return;
     }
     let r = 2 * i32(id.y);
     let h = config.height;
     let t = taps4(
-        first_across(id.x, clamped(r - 1, h)),
-        first_across(id.x, clamped(r, h)),
-        first_across(id.x, clamped(r + 1, h)),
-        first_across(id.x, clamped(r + 2, h)),
+        first_across(id.x, clamped(r - 1, h), plain),
+        first_across(id.x, clamped(r, h), plain),
+        first_across(id.x, clamped(r + 1, h), plain),
+        first_across(id.x, clamped(r + 2, h), plain),
     );
-    store(geometry[2], id.y * w2 + id.x, t);
+    store(geometry[g + 2u], id.y * w2 + id.x, t);
 }
 
 // Texel row y of level `above` halved across at texel i.
@@ -339,8 +347,8 @@ fn span(fx: f32, dy2: f32, reach: f32) -> Span {
 // The sum of a grid's texels over a disc about (cx + fx, cy + fy) (`disc_sum`): rows top to
 // bottom, each left to right, texels outside the grid left out; colour, then w. The grid is
 // the frame (`level` 0: texels made from the colour and CoC as `frame_texels` makes them) or
-// level 1. `plain` (the frame's disc of a pixel in front of the focus plane): each tap also
-// weighed by its 1/w, so that every tap counts alike.
+// level 1. `plain` (the discs of a pixel in front of the focus plane): over the frame, each
+// tap also weighed by its 1/w; over level 1, the plain level 1 (every tap alike either way).
 struct DiscSum {
     c: vec4<f32>,
     w: f32,
@@ -348,8 +356,10 @@ struct DiscSum {
 
 fn disc_sum(level: u32, cx: i32, cy: i32, fx: f32, fy: f32, reach: f32, plain: bool) -> DiscSum {
     var n = vec2<i32>(i32(config.width), i32(config.height));
+    // Level 1's geometry, or the plain level 1's (after the levels') where `plain`.
+    let g = select(0u, 3u * config.levels, plain);
     if level == 1u {
-        n = vec2<i32>(i32(geometry[0]), i32(geometry[1]));
+        n = vec2<i32>(i32(geometry[g]), i32(geometry[g + 1u]));
     }
     var out: DiscSum;
     out.c = vec4<f32>(0.0);
@@ -389,7 +399,7 @@ fn disc_sum(level: u32, cx: i32, cy: i32, fx: f32, fy: f32, reach: f32, plain: b
                     k = k * (1.0 / w);
                 }
             } else {
-                let t = load(geometry[2], u32(j) * geometry[0] + u32(i));
+                let t = load(geometry[g + 2u], u32(j) * geometry[g] + u32(i));
                 c = t.c;
                 w = t.e.x;
             }
@@ -409,14 +419,15 @@ fn frame_disc(x: u32, y: u32, c: f32) -> vec4<f32> {
 }
 
 // The disc of diameter c about pixel (x, y) over level 1, normalised (`level_disc`, then
-// `normalised`).
+// `normalised`); over the plain level 1 where the pixel is in front of the focus plane.
 fn level_disc(x: u32, y: u32, c: f32) -> vec4<f32> {
+    let plain = coc[y * config.width + x] < 0.0;
     let diameter = sqrt(max(c * c - 16.0 * LEVEL_1_VARIANCE, 0.0));
     let px = (f32(x) + 0.5) * 0.5 - 0.5;
     let py = (f32(y) + 0.5) * 0.5 - 0.5;
     let cx = floor(px);
     let cy = floor(py);
-    let s = disc_sum(1u, i32(cx), i32(cy), px - cx, py - cy, 0.25 * diameter + 0.5, false);
+    let s = disc_sum(1u, i32(cx), i32(cy), px - cx, py - cy, 0.25 * diameter + 0.5, plain);
     return s.c / max(s.w, MIN_POSITIVE);
 }
 

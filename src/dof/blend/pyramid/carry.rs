@@ -204,6 +204,9 @@ pub(super) struct Shared<'a> {
     pub(super) frames: &'a [Vec<Texel>],
     /// The beauty's frame as texels (their 1/w weighs a near pixel's taps).
     pub(super) frame: &'a [Texel],
+    /// Each group's plain level 1 (`levels::Source::plain`; empty where no near pixel
+    /// reads level 1's disc).
+    pub(super) plain: &'a [Group],
     /// Levels 2 and 3's CoCs (`super::disc::disc_bounds`).
     pub(super) bounds: [f32; 2],
 }
@@ -231,6 +234,7 @@ pub(super) fn compose_carried_row(
         ladder,
         frames,
         frame,
+        plain: plain_groups,
         bounds,
     } = shared;
     let width = out[0].len();
@@ -294,6 +298,11 @@ pub(super) fn compose_carried_row(
         // A near pixel's frame disc weighs each tap by the beauty's 1/w, as the beauty's
         // did (`super::disc::frame_disc`).
         let plain = |x: usize| (coc[x] < 0.0).then_some(*frame);
+        // And its level disc reads the group's plain level 1, as the beauty's read its own.
+        let level_1 = |x: usize| match plain_groups.get(g) {
+            Some(p) if coc[x] < 0.0 => &p.levels[0],
+            _ => &group.levels[0],
+        };
         for (x, &(k, f, kernel)) in picks.iter().enumerate() {
             if k == u8::MAX {
                 continue;
@@ -313,18 +322,18 @@ pub(super) fn compose_carried_row(
                         beauty.frame_w[x],
                     ),
                     &divided(
-                        level_disc(&group.levels[0], x, y, c, level_rows),
+                        level_disc(level_1(x), x, y, c, level_rows),
                         beauty.level_w[x],
                     ),
                     f,
                 ),
                 Kernel::Level => divided(
-                    level_disc(&group.levels[0], x, y, c, level_rows),
+                    level_disc(level_1(x), x, y, c, level_rows),
                     beauty.level_w[x],
                 ),
                 Kernel::LevelToPyramid(g) => lerp(
                     &divided(
-                        level_disc(&group.levels[0], x, y, c, level_rows),
+                        level_disc(level_1(x), x, y, c, level_rows),
                         beauty.level_w[x],
                     ),
                     &lerp(&images.at(k, x), &images.at(k + 1, x), f),

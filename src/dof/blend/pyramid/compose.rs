@@ -219,6 +219,7 @@ pub(super) fn compose_row(
         ladder,
         near,
         frame: frame_texels,
+        plain,
         bounds,
     } = pyramid;
     let near = *near;
@@ -329,6 +330,7 @@ pub(super) fn compose_row(
         samplers,
         made,
         frame: frame_texels,
+        plain: *plain,
         coc,
         width,
         height,
@@ -451,6 +453,8 @@ struct Images<'a> {
     made: &'a [Vec<Texel>],
     /// The frame as texels, for the frame's disc.
     frame: &'a [Texel],
+    /// The plain level 1, for a near pixel's level disc.
+    plain: Option<&'a Level>,
     /// The row's signed CoC.
     coc: &'a [f32],
     width: usize,
@@ -483,10 +487,16 @@ impl Images<'_> {
         ))
     }
 
-    /// Level 1's disc of diameter c about frame pixel x, normalised, and its w.
+    /// Level 1's disc of diameter c about frame pixel x, normalised, and its w: over the
+    /// plain level 1 where the pixel is in front of the focus plane (every tap alike, as
+    /// its frame disc takes them: `super::disc::frame_disc`).
     #[inline(always)]
     fn level_disc(&self, x: usize, c: f32, rows: &mut [DiscRows; 2]) -> (Texel, f32) {
-        normalised(level_disc(self.samplers[0].level_ref(), x, self.y, c, rows))
+        let level = match self.plain {
+            Some(plain) if self.coc[x] < 0.0 => plain,
+            _ => self.samplers[0].level_ref(),
+        };
+        normalised(level_disc(level, x, self.y, c, rows))
     }
 
     /// Image j of the ladder (level j, the sharp frame for 0) at frame pixel x (a method,
@@ -517,6 +527,9 @@ pub(super) struct Pyramid<'a> {
     /// The frame as texels, premultiplied by w (`super::disc::frame_texels`; empty where no
     /// pixel reads the frame's disc).
     pub(super) frame: &'a [Texel],
+    /// The plain level 1 (`levels::Source::plain`), where a pixel in front of the focus
+    /// plane reads level 1's disc.
+    pub(super) plain: Option<&'a Level>,
     /// Levels 2 and 3's CoCs (`super::disc::disc_bounds`).
     pub(super) bounds: [f32; 2],
 }

@@ -23,8 +23,10 @@
 //! Both discs weigh a tap by its coverage (the share of the pixel or texel inside the disc,
 //! `clamp(r + ½ − d, 0, 1)`, so the disc grows smoothly with c) times its w, as the levels
 //! do (an in-focus pixel lends almost nothing), and renormalise over the taps inside the frame
-//! (what lies outside is unknown); except that the frame's disc of a pixel in front of the
-//! focus plane takes every tap by its coverage alone ([`frame_disc`]'s `plain`). The GPU twin (`frame_disc`, `level_disc`, `disc_sum` and
+//! (what lies outside is unknown); except that a pixel in front of the focus plane takes
+//! every tap by its coverage alone: its frame disc scales each tap by 1/w ([`frame_disc`]'s
+//! `plain`), and its level disc reads the plain level 1, made from the frame with w = 1
+//! (`levels::Source::plain`; 8 bytes a frame pixel, made only where such a pixel reads it). The GPU twin (`frame_disc`, `level_disc`, `disc_sum` and
 //! `span` in src/gpu/dof/blend.wgsl) sums the same taps in the same order. Measured (BENCHMARKS.md,
 //! "blend: the disc below level 3"): region RMSE on `border` 0.06213 → 0.02952 and on
 //! `layers dof` at 640×360 0.03278 → 0.02171; every level's disc (the pyramid kept only for

@@ -215,6 +215,18 @@ impl Source<'_> {
     pub(super) fn weight(&self, c: f32) -> f32 {
         self.interpolator(c).max(IN_FOCUS_WEIGHT)
     }
+
+    /// The same frame with every pixel fully blurred (T = 1 for any finite CoC: ε below 0
+    /// and an infinite 1/(E − ε)), so that a level made from it sums its pixels by the filter
+    /// alone, w = 1: the plain level 1 a near pixel's disc reads (`super::disc`).
+    pub(super) fn plain(&self) -> Self {
+        Source {
+            planes: self.planes.clone(),
+            epsilon: -1.0,
+            inverse_span: f32::INFINITY,
+            ..*self
+        }
+    }
 }
 
 /// What a sum of weights w is divided by: w, or the smallest positive float where w is
@@ -351,6 +363,13 @@ fn first_level_band(
 /// Levels 1 ..= `count` of the pyramid over the frame, each halved from the one above.
 pub(super) fn build(source: &Source, width: usize, height: usize, count: usize) -> Vec<Level> {
     let mut levels: Vec<Level> = Vec::with_capacity(count);
+    levels.push(first_level(source, width, height));
+    halve_levels(&mut levels, count);
+    levels
+}
+
+/// Level 1 over the frame (of [`Source::plain`]: the plain level 1).
+pub(super) fn first_level(source: &Source, width: usize, height: usize) -> Level {
     let (w2, h2) = (width.div_ceil(2), height.div_ceil(2));
     let mut texels = vec![ZERO; w2 * h2];
     texels
@@ -359,13 +378,11 @@ pub(super) fn build(source: &Source, width: usize, height: usize, count: usize) 
         .for_each_init(FirstScratch::default, |s, (band, out)| {
             first_level_band(source, width, height, band, out, s)
         });
-    levels.push(Level {
+    Level {
         width: w2,
         height: h2,
         texels,
-    });
-    halve_levels(&mut levels, count);
-    levels
+    }
 }
 
 /// Levels 2 ..= `count` halved from level 1, the first of `levels` (for the beauty's texels

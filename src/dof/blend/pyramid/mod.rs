@@ -219,6 +219,25 @@ pub fn blend_carrying(
         let t = source.interpolator(c);
         t > 0.0 && to_coc(t) <= bounds[0]
     });
+    // The plain level 1 (every pixel by the filter alone, w = 1), beauty's and each carried
+    // group's, where some pixel in front of the focus plane reads level 1's disc.
+    let plain_disc = coc.par_iter().any(|&c| {
+        let t = source.interpolator(c);
+        c < 0.0 && t > 0.0 && to_coc(t) > disc::FRAME_UNTIL * bounds[0] && to_coc(t) < bounds[1]
+    });
+    let (plain, plain_groups) = if plain_disc {
+        let plain_source = source.plain();
+        let groups: Vec<Group> = carried
+            .chunks(GROUP)
+            .map(|planes| Group::new(&plain_source, planes, width, height, 1))
+            .collect();
+        (
+            Some(levels::first_level(&plain_source, width, height)),
+            groups,
+        )
+    } else {
+        (None, Vec::new())
+    };
     let (frame, carried_frames) = if frame_disc {
         let mut beauty = ZERO;
         beauty[..4].copy_from_slice(&reference);
@@ -288,6 +307,7 @@ pub fn blend_carrying(
         ladder: &ladder,
         near,
         frame: &frame,
+        plain: plain.as_ref(),
         bounds,
     };
     let shared = Shared {
@@ -296,6 +316,7 @@ pub fn blend_carrying(
         ladder: &ladder,
         frames: &carried_frames,
         frame: &frame,
+        plain: &plain_groups,
         bounds,
     };
     band_planes
