@@ -26,9 +26,10 @@ pub const REACH: f32 = std::f32::consts::SQRT_2;
 /// root and division are not correctly rounded, and for diagonal motion the reach test sits
 /// exactly on its threshold (a tile beside the diagonal is √2 tiles from it).
 ///
-/// The normal is kept to [`NORMAL_BITS`] significant bits ([`short`]), so that each product
-/// of the test's n·(dx, dy) is exact for offsets under 2^13 tiles: the sum is then rounded
-/// once whether or not a driver fuses a product into it (an fma). Before, with full normals,
+/// The normal is cut to [`NORMAL_BITS`] significant bits, away from zero ([`short`]), so that
+/// each product of the test's n·(dx, dy) is exact for offsets under 2^13 tiles (a frame under
+/// 8192 tiles across: 65 536 px with 8 px tiles): the sum is then rounded once whether or not
+/// a driver fuses a product into it (an fma). Before, with full normals,
 /// NVIDIA's driver (H200, 580.159) fused them and 1.2 % of the tiles of a generated grid, on
 /// the threshold, went the other way (tests/gpu.rs); lavapipe did not fuse.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -47,15 +48,19 @@ pub struct Source {
 /// products are exact in f32 (11 + 13 = 24 bits).
 pub const NORMAL_BITS: u32 = 11;
 
-/// `v` rounded to [`NORMAL_BITS`] significant bits (to nearest, ties away from zero; a
-/// component of a unit normal cannot overflow); not-finite values as they are.
+/// `v` rounded away from zero to [`NORMAL_BITS`] significant bits (a component of a unit
+/// normal cannot overflow); not-finite values as they are. Away from zero, so that the cut
+/// normal is never shorter than 1 and |n·d| never smaller than in exact arithmetic: a tile
+/// exactly √2 from the line (beside a diagonal, or at (−1, 3) from a vector (10, 70)) stays
+/// out, as it was with the full normal (rounded to nearest, 1/√2 became 0.70703125 and those
+/// tiles came in).
 #[inline]
 pub fn short(v: f32) -> f32 {
     if !v.is_finite() {
         return v;
     }
     let dropped = 24 - NORMAL_BITS;
-    let bits = v.to_bits() + (1 << (dropped - 1));
+    let bits = v.to_bits() + ((1 << dropped) - 1);
     f32::from_bits(bits & !((1u32 << dropped) - 1))
 }
 
@@ -227,6 +232,20 @@ mod tests {
         // (4, 0) is 2·√2 tiles from the line: not crossed.
         assert_eq!(out.get(4, 0), (0.0, 0.0));
         assert_eq!(out.get(0, 4), (0.0, 0.0));
+        // (3, 1) and (1, 3) are exactly √2 from it: not within, with the normal cut
+        // (`short`) as with the full one.
+        assert_eq!(out.get(3, 1), (0.0, 0.0));
+        assert_eq!(out.get(1, 3), (0.0, 0.0));
+        // The same with a line that is not diagonal: (10, 70) px in 10 px tiles reaches
+        // (−1, 3) tiles from its source only if within √2 of its line, and that tile is
+        // exactly √2 from it, as is (1, −3).
+        let mut tiles = grid(9, 9, 10);
+        tiles.x[4 * 9 + 4] = 10.0;
+        tiles.y[4 * 9 + 4] = 70.0;
+        let out = dilate(&tiles);
+        assert_eq!(out.get(4, 8), (10.0, 70.0));
+        assert_eq!(out.get(3, 7), (0.0, 0.0));
+        assert_eq!(out.get(5, 1), (0.0, 0.0));
     }
 
     #[test]
@@ -259,19 +278,14 @@ mod tests {
         // n·d with the normal cut to NORMAL_BITS: each product exact, so fusing either into
         // the sum (what a GPU driver may do) gives the same bits. With full normals, some of
         // these differ (checked below, so the cut is what makes them agree).
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        use crate::lab::truth::sample::hash01;
         let (mut cut_differ, mut full_differ) = (0, 0);
-        for _ in 0..20_000 {
-            let m = (400.0 * next() - 200.0, 400.0 * next() - 200.0);
+        for k in 0..20_000u64 {
+            let next = |stream: u64| hash01(7, stream, k, 0) as f32;
+            let m = (400.0 * next(0) - 200.0, 400.0 * next(1) - 200.0);
             let (dx, dy) = (
-                (16383.0 * next()).floor() - 8191.0,
-                (16383.0 * next()).floor() - 8191.0,
+                (16383.0 * next(2)).floor() - 8191.0,
+                (16383.0 * next(3)).floor() - 8191.0,
             );
             let fused = |nx: f32, ny: f32| {
                 let plain = nx * dx + ny * dy;
@@ -281,8 +295,9 @@ mod tests {
             cut_differ += fused(s.nx, s.ny);
             let length = (m.0 * m.0 + m.1 * m.1).sqrt();
             full_differ += fused(-m.1 / length, m.0 / length);
-            // The cut moves the normal by under 2^-11 of itself.
-            assert!((s.nx + m.1 / length).abs() <= (m.1 / length).abs() / 2048.0);
+            // The cut lengthens the normal by under 2^-10 of itself, never shortens it.
+            let full = (m.1 / length).abs();
+            assert!(s.nx.abs() >= full && s.nx.abs() - full <= full / 1024.0);
         }
         assert_eq!(cut_differ, 0);
         assert!(full_differ > 1000, "{full_differ}");

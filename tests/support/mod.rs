@@ -770,9 +770,9 @@ pub fn exposure_of_column(texture: &dyn Fn(f64) -> f64, x: usize, speed: f64) ->
     sum / (n * n) as f64
 }
 
-/// With `SHUTTER_DIAG` set, prints the pixels of a GPU plane outside `agree` (relative to the
-/// CPU plane's largest finite magnitude), the first 25 with the frame's depth and velocity
-/// there, and their count: what a parity failure on a lent GPU needs to be read
+/// With `SHUTTER_DIAG` set, prints the pixels of a GPU plane that [`parity_within`] counts
+/// outside `agree` (the same range and test), the first 25 with the frame's depth and
+/// velocity there, and their count: what a parity failure on a lent GPU needs to be read
 /// (scripts/device/figures.sh passes the variable through; docs/history/device-parity-*.md).
 pub(crate) fn diag_pixels(
     what: &str,
@@ -785,15 +785,18 @@ pub(crate) fn diag_pixels(
         return;
     }
     let w = frame.width;
-    let range = cpu
+    let (lo, hi) = cpu
         .iter()
-        .filter(|v| v.is_finite())
-        .fold(0.0f32, |m, v| m.max(v.abs()))
-        .max(1e-30);
+        .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+    let range = if hi - lo > 1e-4 * hi.abs().max(lo.abs()).max(1.0) {
+        hi - lo
+    } else {
+        1.0
+    };
     let mut n = 0;
     for (i, (g, c)) in got.iter().zip(cpu).enumerate() {
         let d = (g - c).abs() / range;
-        if d.is_nan() || d > agree {
+        if d > agree {
             n += 1;
             if n <= 25 {
                 let v = frame.velocity.as_ref().map(|v| (v.x[i], v.y[i]));

@@ -7,7 +7,10 @@
 // the number of levels, the ladder's CoCs, whether and where T_near is read (`blend::Plan`).
 //
 // Three entry points, dispatched in order over the same bindings:
-// - `first_level`: level 1 from the frame, one invocation per texel;
+// - `first_level`: level 1 from the frame, one invocation per texel; its z slice 1 makes the
+//   plain level 1 (every pixel weighing 1: `Source::plain`), which a near pixel's level disc
+//   reads (made every frame here, where the CPU makes it only if some pixel reads it: the
+//   same texels either way);
 // - `halve`: level L from level L − 1, one invocation per texel; L rides in the dispatch's
 //   z count (the host dispatches z = L − 1 groups deep and only the last slice works), since
 //   a stage has one uniform for all its dispatches;
@@ -42,7 +45,8 @@ struct BlendConfig {
 @group(0) @binding(1) var<storage, read> color: array<f32>;
 // The signed CoC plane (diameter, px).
 @group(0) @binding(2) var<storage, read> coc: array<f32>;
-// Per level L = 1 ..= levels: width, height, first texel, at 3 (L − 1).
+// Per level L = 1 ..= levels: width, height, first texel, at 3 (L − 1); then the plain
+// level 1's, at 3 levels.
 @group(0) @binding(3) var<storage, read> geometry: array<u32>;
 // The ladder: levels + 1 CoCs (the sharp frame's, 0, then each level's), then levels
 // inverse gaps.

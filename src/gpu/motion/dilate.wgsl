@@ -19,10 +19,11 @@
 // normal is not finite (|M| infinite) reaches nothing on the CPU (its test compares a NaN);
 // the host marks it not `live`.
 //
-// Rounding: the test's n·(dx, dy) is two products and a sum. The host's normal keeps 11
-// significant bits (`short` in src/motion/dilate.rs), so each product is exact for offsets
-// under 2^13 tiles and the sum is rounded once, whether or not a driver fuses a product into
-// it (NVIDIA's does; lavapipe's does not): the result is the CPU's, bit for bit.
+// Rounding: the test's n·(dx, dy) is two products and a sum. The host's normal is cut to 11
+// significant bits, away from zero (`short` in src/motion/dilate.rs), so each product is
+// exact for offsets under 2^13 tiles and the sum is rounded once, whether or not a driver
+// fuses a product into it (NVIDIA's does; lavapipe's does not): the result is the CPU's, bit
+// for bit.
 
 // Keep in sync with `DilateConfig` in src/gpu/motion/dilate.rs (a size test guards the layout).
 struct DilateConfig {

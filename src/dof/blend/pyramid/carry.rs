@@ -295,47 +295,42 @@ pub(super) fn compose_carried_row(
             .map(|p| &mut p[..width])
             .collect();
         let texels = frames.get(g).map_or(&[][..], Vec::as_slice);
-        // A near pixel's frame disc weighs each tap by the beauty's 1/w, as the beauty's
-        // did (`super::disc::frame_disc`).
-        let plain = |x: usize| (coc[x] < 0.0).then_some(*frame);
-        // And its level disc reads the group's plain level 1, as the beauty's read its own.
-        let level_1 = |x: usize| match plain_groups.get(g) {
-            Some(p) if coc[x] < 0.0 => &p.levels[0],
-            _ => &group.levels[0],
-        };
+
         for (x, &(k, f, kernel)) in picks.iter().enumerate() {
             if k == u8::MAX {
                 continue;
             }
             let k = k as usize;
             let c = to_coc(beauty.blur[x].abs());
+            // A near pixel's frame disc weighs each tap by the beauty's 1/w, and its level
+            // disc reads the group's plain level 1, as the beauty's did
+            // (`super::disc::frame_disc`; values, not closures: `multiversion`).
+            let near = coc[x] < 0.0;
+            let plain = near.then_some(*frame);
+            let level_1 = match plain_groups.get(g) {
+                Some(p) if near => &p.levels[0],
+                _ => &group.levels[0],
+            };
             // Each disc of the group divided by the beauty's w for the same disc (no
             // closures: `multiversion`, as in `compose::compose_row`).
             let m = match kernel {
                 Kernel::Frame => divided(
-                    frame_disc(texels, width, height, x, y, c, frame_rows, plain(x)),
+                    frame_disc(texels, width, height, x, y, c, frame_rows, plain),
                     beauty.frame_w[x],
                 ),
                 Kernel::FrameToLevel(f) => lerp(
                     &divided(
-                        frame_disc(texels, width, height, x, y, c, frame_rows, plain(x)),
+                        frame_disc(texels, width, height, x, y, c, frame_rows, plain),
                         beauty.frame_w[x],
                     ),
-                    &divided(
-                        level_disc(level_1(x), x, y, c, level_rows),
-                        beauty.level_w[x],
-                    ),
+                    &divided(level_disc(level_1, x, y, c, level_rows), beauty.level_w[x]),
                     f,
                 ),
-                Kernel::Level => divided(
-                    level_disc(level_1(x), x, y, c, level_rows),
-                    beauty.level_w[x],
-                ),
+                Kernel::Level => {
+                    divided(level_disc(level_1, x, y, c, level_rows), beauty.level_w[x])
+                }
                 Kernel::LevelToPyramid(g) => lerp(
-                    &divided(
-                        level_disc(level_1(x), x, y, c, level_rows),
-                        beauty.level_w[x],
-                    ),
+                    &divided(level_disc(level_1, x, y, c, level_rows), beauty.level_w[x]),
                     &lerp(&images.at(k, x), &images.at(k + 1, x), f),
                     g,
                 ),

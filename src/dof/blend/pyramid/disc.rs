@@ -26,9 +26,11 @@
 //! (what lies outside is unknown); except that a pixel in front of the focus plane takes
 //! every tap by its coverage alone: its frame disc scales each tap by 1/w ([`frame_disc`]'s
 //! `plain`), and its level disc reads the plain level 1, made from the frame with w = 1
-//! (`levels::Source::plain`; 8 bytes a frame pixel, made only where such a pixel reads it). The GPU twin (`frame_disc`, `level_disc`, `disc_sum` and
-//! `span` in src/gpu/dof/blend.wgsl) sums the same taps in the same order. Measured (BENCHMARKS.md,
-//! "blend: the disc below level 3"): region RMSE on `border` 0.06213 → 0.02952 and on
+//! (`levels::Source::plain`; 8 bytes a frame pixel, made only where such a pixel reads it).
+//! The GPU twin (`frame_disc`, `level_disc`, `disc_sum` and `span` in
+//! src/gpu/dof/blend.wgsl) sums the same taps in the same order. Measured (BENCHMARKS.md,
+//! "blend: the disc below level 3" and "blend: the near pixel's disc"): region RMSE on
+//! `border` 0.06213 → 0.02952 → 0.02861 and on
 //! `layers dof` at 640×360 0.03278 → 0.02171; every level's disc (the pyramid kept only for
 //! the near field) erred a little less still but took 0.3 s at 1080p, twice the gather.
 
@@ -245,7 +247,10 @@ impl DiscRows {
 fn disc_sum(grid: Grid, (cx, cy): (isize, isize), fx: f32, spans: &DiscRows) -> Texel {
     let mut sum = ZERO;
     let width = grid.width;
-    for (j, from, to, inner_from, inner_to, span) in grid.rows((cx, cy), spans) {
+    for span in &spans.rows {
+        let Some((j, from, to, inner_from, inner_to)) = grid.clipped((cx, cy), span) else {
+            continue;
+        };
         let row = &grid.texels[j * width..(j + 1) * width];
         let at = |i: isize| (i - cx) as f32 - fx;
         for i in from..inner_from.min(to + 1) {
@@ -274,36 +279,34 @@ struct Grid<'a> {
 }
 
 impl Grid<'_> {
-    /// The rows of a disc about (cx + ·, cy + ·) clipped to the grid, top to bottom: the row,
-    /// the texels covered [from, to] and those wholly inside [inner_from, inner_to] (empty
-    /// where inner_from > inner_to), and the span.
+    /// A row of a disc about (cx + ·, cy + ·) clipped to the grid: the row, the texels
+    /// covered [from, to] and those wholly inside [inner_from, inner_to] (empty where
+    /// inner_from > inner_to); none where the row misses the grid. (A function, not an
+    /// iterator's closure: `multiversion` compiles closures for the baseline CPU.)
     #[inline(always)]
-    fn rows<'s>(
+    fn clipped(
         &self,
         (cx, cy): (isize, isize),
-        spans: &'s DiscRows,
-    ) -> impl Iterator<Item = (usize, isize, isize, isize, isize, &'s Span)> {
+        span: &Span,
+    ) -> Option<(usize, isize, isize, isize, isize)> {
         let (last_column, last_row) = (self.width as isize - 1, self.height as isize - 1);
-        spans.rows.iter().filter_map(move |span| {
-            let j = cy + span.dy;
-            if j < 0 || j > last_row {
-                return None;
-            }
-            let from = (cx + span.from).max(0);
-            let to = (cx + span.to).min(last_column);
-            if to < from {
-                return None;
-            }
-            let inner_from = (cx + span.inner_from).max(from);
-            let inner_to = (cx + span.inner_to).min(to);
-            let (inner_from, inner_to) = if span.inner_from > span.inner_to || inner_from > inner_to
-            {
-                (to + 1, to)
-            } else {
-                (inner_from, inner_to)
-            };
-            Some((j as usize, from, to, inner_from, inner_to, span))
-        })
+        let j = cy + span.dy;
+        if j < 0 || j > last_row {
+            return None;
+        }
+        let from = (cx + span.from).max(0);
+        let to = (cx + span.to).min(last_column);
+        if to < from {
+            return None;
+        }
+        let inner_from = (cx + span.inner_from).max(from);
+        let inner_to = (cx + span.inner_to).min(to);
+        let (inner_from, inner_to) = if span.inner_from > span.inner_to || inner_from > inner_to {
+            (to + 1, to)
+        } else {
+            (inner_from, inner_to)
+        };
+        Some((j as usize, from, to, inner_from, inner_to))
     }
 }
 
@@ -319,16 +322,15 @@ fn plain_disc_sum(
 ) -> Texel {
     let mut sum = ZERO;
     let width = grid.width;
-    for (j, from, to, inner_from, inner_to, span) in grid.rows((cx, cy), spans) {
+    for span in &spans.rows {
+        let Some((j, from, to, inner_from, inner_to)) = grid.clipped((cx, cy), span) else {
+            continue;
+        };
         let row = &grid.texels[j * width..(j + 1) * width];
         let scale = &scales[j * width..(j + 1) * width];
-        let rim = |sum: &mut Texel, i: isize| {
-            let dx = (i - cx) as f32;
-            let cover = (spans.reach - (dx * dx + span.dy2).sqrt()).clamp(0.0, 1.0);
-            add(sum, &row[i as usize], cover * scale[i as usize][INVERSE]);
-        };
         for i in from..inner_from.min(to + 1) {
-            rim(&mut sum, i);
+            let (t, s) = (&row[i as usize], scale[i as usize][INVERSE]);
+            plain_rim(&mut sum, t, s, (i - cx) as f32, span.dy2, spans.reach);
         }
         if inner_from <= inner_to {
             let (a, b) = (inner_from as usize, inner_to as usize + 1);
@@ -337,10 +339,19 @@ fn plain_disc_sum(
             }
         }
         for i in (inner_to + 1).max(from)..=to {
-            rim(&mut sum, i);
+            let (t, s) = (&row[i as usize], scale[i as usize][INVERSE]);
+            plain_rim(&mut sum, t, s, (i - cx) as f32, span.dy2, spans.reach);
         }
     }
     sum
+}
+
+/// A texel on a plain disc's rim, at (dx, dy) from its centre, added by its coverage times
+/// `scale` (its 1/w): [`rim`]'s twin for [`plain_disc_sum`].
+#[inline(always)]
+fn plain_rim(sum: &mut Texel, t: &Texel, scale: f32, dx: f32, dy2: f32, reach: f32) {
+    let cover = (reach - (dx * dx + dy2).sqrt()).clamp(0.0, 1.0);
+    add(sum, t, cover * scale);
 }
 
 /// `sum += k · t`, every lane.

@@ -201,12 +201,17 @@ pub(super) struct Source<'a> {
     pub(super) largest: f32,
     /// 1 / (E − ε).
     pub(super) inverse_span: f32,
+    /// Every pixel fully blurred, T = 1 whatever its CoC ([`Source::plain`]).
+    pub(super) plain: bool,
 }
 
 impl Source<'_> {
     /// The blurriness interpolator T = clamp((|CoC| − ε)/(E − ε), 0, 1).
     #[inline(always)]
     pub(super) fn interpolator(&self, c: f32) -> f32 {
+        if self.plain {
+            return 1.0;
+        }
         ((c.abs() - self.epsilon) * self.inverse_span).clamp(0.0, 1.0)
     }
 
@@ -216,14 +221,13 @@ impl Source<'_> {
         self.interpolator(c).max(IN_FOCUS_WEIGHT)
     }
 
-    /// The same frame with every pixel fully blurred (T = 1 for any finite CoC: ε below 0
-    /// and an infinite 1/(E − ε)), so that a level made from it sums its pixels by the filter
+    /// The same frame with every pixel fully blurred (T = 1 whatever its CoC, as the twin's
+    /// `frame_texel` takes it), so that a level made from it sums its pixels by the filter
     /// alone, w = 1: the plain level 1 a near pixel's disc reads (`super::disc`).
     pub(super) fn plain(&self) -> Self {
         Source {
             planes: self.planes.clone(),
-            epsilon: -1.0,
-            inverse_span: f32::INFINITY,
+            plain: true,
             ..*self
         }
     }
@@ -418,6 +422,7 @@ mod tests {
             epsilon: 1.0,
             largest: 8.0,
             inverse_span: 1.0 / 7.0,
+            plain: false,
         };
         let levels = build(&source, width, height, l);
         let sampler = Sampler::new(&levels[l - 1], l, width, height);

@@ -189,6 +189,7 @@ pub fn blend_carrying(
         epsilon: config.epsilon,
         largest,
         inverse_span,
+        plain: false,
     };
     let epsilon = config.epsilon;
     let levels = build(&source, width, height, count);
@@ -281,6 +282,7 @@ pub fn blend_carrying(
         epsilon,
         largest,
         inverse_span: source.inverse_span,
+        plain: false,
     };
     let mut chunks: Vec<_> = [
         Some(&mut color.r),
