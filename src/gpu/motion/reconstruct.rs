@@ -229,7 +229,8 @@ impl ReconstructPass {
         // The 2014 gather does not read it: a word, to fill the binding.
         let velocity_floats = if shape.velocity { 2 * shape.pixels } else { 1 };
         let velocity = buffer("reconstruct velocity", floats(velocity_floats), input);
-        let tiles = buffer("reconstruct tiles", floats(2 * shape.tiles), input);
+        // x, then y, then |M| as the CPU's gather works it out (`tile_length` in the shader).
+        let tiles = buffer("reconstruct tiles", floats(3 * shape.tiles), input);
         let color_bytes = floats(4 * shape.colours.max(1) * shape.pixels);
         let color = buffer(
             "reconstruct color",
@@ -447,6 +448,24 @@ impl Gpu {
         let tile_plane = (tiles.x.len() * 4) as u64;
         queue.write_buffer(&buffers.tiles, 0, bytemuck::cast_slice(&tiles.x));
         queue.write_buffer(&buffers.tiles, tile_plane, bytemuck::cast_slice(&tiles.y));
+        // |M| of each tile, made here as `gather_2014` makes it: the shader's own
+        // `sqrt(x·x + y·y)` is not the CPU's bits (a driver may fuse a product into the sum,
+        // NVIDIA's does, and WGSL's square root is not correctly rounded), and the gather
+        // compares it with the pixel's own |V| (packed on the CPU) and takes a tap count
+        // from it, so an ulp moved decisions: on an H200, clamped to `max_blur` 13 (many
+        // tiles and pixels at exactly 13 px), a pixel's own vector won over its tile's
+        // where the CPU kept the tile's (docs/history/device-parity-2026-12-04.md).
+        let lengths: Vec<f32> = tiles
+            .x
+            .iter()
+            .zip(&tiles.y)
+            .map(|(x, y)| (x * x + y * y).sqrt())
+            .collect();
+        queue.write_buffer(
+            &buffers.tiles,
+            2 * tile_plane,
+            bytemuck::cast_slice(&lengths),
+        );
         // Alpha, where a colour has none, is not written: the gather's alpha is dropped then.
         for (g, color) in colours.iter().enumerate() {
             let channels = [

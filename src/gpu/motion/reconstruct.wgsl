@@ -13,8 +13,8 @@
 // MATTE_WORDS a pixel, src/motion/reconstruct/matte.rs; one unread word otherwise), and 6
 // the colours the 2014 gather carries beside the beauty (`gather_2014_carrying`'s; one
 // unread word otherwise). Planar buffers hold their planes one after the other, as the
-// CPU's structs do: velocity x then y, tiles x then y, colour r, g, b, a (of each colour in
-// turn when the gather carries several).
+// CPU's structs do: velocity x then y, tiles x then y (then each tile's |M|, made on the
+// host), colour r, g, b, a (of each colour in turn when the gather carries several).
 //
 // The 2014 gather's tap reading (`around`, `bilinear`, `split`, `split_by_cover`,
 // `surfaces`) is in reconstruct_taps.wgsl, concatenated after this file.
@@ -115,6 +115,13 @@ fn tile_at(c: u32, r: u32) -> vec2<f32> {
     let n = columns() * rows();
     let i = r * columns() + c;
     return vec2<f32>(tiles[i], tiles[n + i]);
+}
+
+// |M| of tile (c, r), made on the host as the CPU's gather makes it (the shader's own would
+// differ in its last bits, and the 2014 gather's decisions read it).
+fn tile_length(c: u32, r: u32) -> f32 {
+    let n = columns() * rows();
+    return tiles[2u * n + r * columns() + c];
 }
 
 // Whether a tile blurs: |V|² above (0.5 px + ε)².
@@ -455,12 +462,14 @@ fn gather_pixel_2014(x: u32, y: u32) -> Colours {
     let column = min(u32(max(f32(x) + tile_shift, 0.0)) / config.tile, columns() - 1u);
     let row = min(u32(max(f32(y) + tile_shift, 0.0)) / config.tile, rows() - 1u);
     var m = tile_at(column, row);
-    var m_length = sqrt(m.x * m.x + m.y * m.y);
+    var m_length = tile_length(column, row);
     // Where the jittered lookup lands on a still tile, the pixel's own tile instead: always
     // in the exposure variant, under an offset exposure in the 2014 one (`Form::own_tile`).
     if f.own_tile && m_length < HALF_PIXEL {
-        m = tile_at(min(x / config.tile, columns() - 1u), min(y / config.tile, rows() - 1u));
-        m_length = sqrt(m.x * m.x + m.y * m.y);
+        let c = min(x / config.tile, columns() - 1u);
+        let r = min(y / config.tile, rows() - 1u);
+        m = tile_at(c, r);
+        m_length = tile_length(c, r);
     }
     let own = vec2<f32>(centre.vx, centre.vy);
     let own_length = centre.length;
