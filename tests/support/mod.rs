@@ -675,14 +675,7 @@ impl Parity {
 /// value of `got` must be finite.
 pub fn parity_within(got: &[f32], cpu: &[f32], agree: f32) -> Parity {
     assert_eq!(got.len(), cpu.len());
-    let (lo, hi) = cpu
-        .iter()
-        .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
-    let range = if hi - lo > 1e-4 * hi.abs().max(lo.abs()).max(1.0) {
-        hi - lo
-    } else {
-        1.0
-    };
+    let range = parity_range(cpu);
     let mut p = Parity::default();
     for (i, (&g, &c)) in got.iter().zip(cpu).enumerate() {
         assert!(g.is_finite(), "pixel {i}: GPU gave {g}");
@@ -785,14 +778,7 @@ pub(crate) fn diag_pixels(
         return;
     }
     let w = frame.width;
-    let (lo, hi) = cpu
-        .iter()
-        .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
-    let range = if hi - lo > 1e-4 * hi.abs().max(lo.abs()).max(1.0) {
-        hi - lo
-    } else {
-        1.0
-    };
+    let range = parity_range(cpu);
     let mut n = 0;
     for (i, (g, c)) in got.iter().zip(cpu).enumerate() {
         let d = (g - c).abs() / range;
@@ -810,4 +796,17 @@ pub(crate) fn diag_pixels(
         }
     }
     eprintln!("DIAG {what}: {n} of {} outside", got.len());
+}
+
+/// What [`parity_within`] divides a difference by: the CPU plane's range (its largest value
+/// less its least), or 1 where that is under 1e-4 of its magnitude (a flat plane).
+fn parity_range(cpu: &[f32]) -> f32 {
+    let (lo, hi) = cpu
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+    if hi - lo > 1e-4 * hi.abs().max(lo.abs()).max(1.0) {
+        hi - lo
+    } else {
+        1.0
+    }
 }

@@ -142,10 +142,7 @@ pub(super) fn frame_disc(
         width,
         height,
     };
-    match plain {
-        None => disc_sum(grid, (x as isize, y as isize), 0.0, spans),
-        Some(scales) => plain_disc_sum(grid, scales, (x as isize, y as isize), spans),
-    }
+    disc_sum(grid, plain, (x as isize, y as isize), 0.0, spans)
 }
 
 /// The disc of diameter `c` about frame pixel (x, y) over `level` (level 1, a texel per
@@ -171,7 +168,7 @@ pub(super) fn level_disc(
         width: level.width,
         height: level.height,
     };
-    disc_sum(grid, (cx as isize, cy as isize), fx, spans)
+    disc_sum(grid, None, (cx as isize, cy as isize), fx, spans)
 }
 
 /// A disc's rows about a centre (cx + fx, cy + fy), cx and cy whole, as offsets from
@@ -243,8 +240,16 @@ impl DiscRows {
 /// a texel at distance d is `clamp(reach − d, 0, 1)`: rows top to bottom, each left to
 /// right, texels outside the grid left out. The texels wholly inside (d ≤ reach − 1) weigh
 /// 1 and are added without a square root (most of a disc's taps; eight lanes at once).
+/// `scales` (the beauty's frame texels, for a near pixel's frame disc) weighs each tap by
+/// its lane [`INVERSE`] too: the same taps in the same order, a multiply and add each.
 #[inline(always)]
-fn disc_sum(grid: Grid, (cx, cy): (isize, isize), fx: f32, spans: &DiscRows) -> Texel {
+fn disc_sum(
+    grid: Grid,
+    scales: Option<&[Texel]>,
+    (cx, cy): (isize, isize),
+    fx: f32,
+    spans: &DiscRows,
+) -> Texel {
     let mut sum = ZERO;
     let width = grid.width;
     for span in &spans.rows {
@@ -252,22 +257,48 @@ fn disc_sum(grid: Grid, (cx, cy): (isize, isize), fx: f32, spans: &DiscRows) -> 
             continue;
         };
         let row = &grid.texels[j * width..(j + 1) * width];
-        let at = |i: isize| (i - cx) as f32 - fx;
+        // A match, not `map` with a closure (`multiversion`: see `rim`).
+        #[allow(clippy::manual_map)]
+        let scale = match scales {
+            Some(s) => Some(&s[j * width..(j + 1) * width]),
+            None => None,
+        };
         for i in from..inner_from.min(to + 1) {
-            rim(&mut sum, &row[i as usize], at(i), span.dy2, spans.reach);
+            let (t, k, dx) = (&row[i as usize], factor(scale, i), (i - cx) as f32 - fx);
+            rim(&mut sum, t, k, dx, span.dy2, spans.reach);
         }
         if inner_from <= inner_to {
-            for t in &row[inner_from as usize..=inner_to as usize] {
-                for (v, t) in sum.iter_mut().zip(t) {
-                    *v += t;
+            let (a, b) = (inner_from as usize, inner_to as usize + 1);
+            match scale {
+                None => {
+                    for t in &row[a..b] {
+                        for (v, t) in sum.iter_mut().zip(t) {
+                            *v += t;
+                        }
+                    }
+                }
+                Some(scale) => {
+                    for (t, s) in row[a..b].iter().zip(&scale[a..b]) {
+                        add(&mut sum, t, s[INVERSE]);
+                    }
                 }
             }
         }
         for i in (inner_to + 1).max(from)..=to {
-            rim(&mut sum, &row[i as usize], at(i), span.dy2, spans.reach);
+            let (t, k, dx) = (&row[i as usize], factor(scale, i), (i - cx) as f32 - fx);
+            rim(&mut sum, t, k, dx, span.dy2, spans.reach);
         }
     }
     sum
+}
+
+/// A tap's scale: its lane [`INVERSE`] in `scale`'s row, or 1.
+#[inline(always)]
+fn factor(scale: Option<&[Texel]>, i: isize) -> f32 {
+    match scale {
+        Some(s) => s[i as usize][INVERSE],
+        None => 1.0,
+    }
 }
 
 /// A grid of texels: the frame's or a level's.
@@ -310,50 +341,6 @@ impl Grid<'_> {
     }
 }
 
-/// [`disc_sum`] over the frame's texels about pixel (cx, cy) with each tap weighed by its
-/// coverage times lane [`INVERSE`] of the same pixel of `scales` (the beauty's texels): the
-/// same taps in the same order, each a multiply and add of all eight lanes.
-#[inline(always)]
-fn plain_disc_sum(
-    grid: Grid,
-    scales: &[Texel],
-    (cx, cy): (isize, isize),
-    spans: &DiscRows,
-) -> Texel {
-    let mut sum = ZERO;
-    let width = grid.width;
-    for span in &spans.rows {
-        let Some((j, from, to, inner_from, inner_to)) = grid.clipped((cx, cy), span) else {
-            continue;
-        };
-        let row = &grid.texels[j * width..(j + 1) * width];
-        let scale = &scales[j * width..(j + 1) * width];
-        for i in from..inner_from.min(to + 1) {
-            let (t, s) = (&row[i as usize], scale[i as usize][INVERSE]);
-            plain_rim(&mut sum, t, s, (i - cx) as f32, span.dy2, spans.reach);
-        }
-        if inner_from <= inner_to {
-            let (a, b) = (inner_from as usize, inner_to as usize + 1);
-            for (t, s) in row[a..b].iter().zip(&scale[a..b]) {
-                add(&mut sum, t, s[INVERSE]);
-            }
-        }
-        for i in (inner_to + 1).max(from)..=to {
-            let (t, s) = (&row[i as usize], scale[i as usize][INVERSE]);
-            plain_rim(&mut sum, t, s, (i - cx) as f32, span.dy2, spans.reach);
-        }
-    }
-    sum
-}
-
-/// A texel on a plain disc's rim, at (dx, dy) from its centre, added by its coverage times
-/// `scale` (its 1/w): [`rim`]'s twin for [`plain_disc_sum`].
-#[inline(always)]
-fn plain_rim(sum: &mut Texel, t: &Texel, scale: f32, dx: f32, dy2: f32, reach: f32) {
-    let cover = (reach - (dx * dx + dy2).sqrt()).clamp(0.0, 1.0);
-    add(sum, t, cover * scale);
-}
-
 /// `sum += k · t`, every lane.
 #[inline(always)]
 fn add(sum: &mut Texel, t: &Texel, k: f32) {
@@ -362,14 +349,13 @@ fn add(sum: &mut Texel, t: &Texel, k: f32) {
     }
 }
 
-/// A texel on a disc's rim, at (dx, dy) from its centre, added by its coverage (a function,
-/// not a closure, so that it is compiled with its caller's instructions: `multiversion`).
+/// A texel on a disc's rim, at (dx, dy) from its centre, added by its coverage times `k` (1,
+/// or its 1/w in a near pixel's frame disc; a function, not a closure, so that it is compiled
+/// with its caller's instructions: `multiversion`).
 #[inline(always)]
-fn rim(sum: &mut Texel, t: &Texel, dx: f32, dy2: f32, reach: f32) {
+fn rim(sum: &mut Texel, t: &Texel, k: f32, dx: f32, dy2: f32, reach: f32) {
     let cover = (reach - (dx * dx + dy2).sqrt()).clamp(0.0, 1.0);
-    for (v, t) in sum.iter_mut().zip(t) {
-        *v += cover * t;
-    }
+    add(sum, t, cover * k);
 }
 
 /// A [`level_disc`]'s colour lanes divided by its w (as a level's row is: at least the
