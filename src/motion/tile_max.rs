@@ -23,6 +23,14 @@ impl TileGrid {
         (self.x[i], self.y[i])
     }
 
+    /// |M| of tile (column, row), `sqrt(x·x + y·y)` in f32: what reconstruct's 2014 gather
+    /// compares and counts taps by, on the CPU and (made on the host, the shader's own
+    /// would differ in its last bits) on the GPU.
+    pub fn length(&self, column: usize, row: usize) -> f32 {
+        let (x, y) = self.get(column, row);
+        (x * x + y * y).sqrt()
+    }
+
     /// The tile holding pixel (x, y).
     pub fn at_pixel(&self, x: usize, y: usize) -> (f32, f32) {
         self.get(x / self.size, y / self.size)

@@ -95,9 +95,11 @@ impl Gpu {
             // from the level before, the level number riding in the z count (blend.wgsl,
             // `halve`).
             dispatches.push(match l {
+                // The plain level 1 only where some pixel is in front of the focus plane
+                // (the plan's `near`): only such a pixel reads it.
                 0 => Dispatch {
                     entry: 0,
-                    groups: [x, y, 2],
+                    groups: [x, y, if plan.near.is_some() { 2 } else { 1 }],
                 },
                 _ => Dispatch {
                     entry: 1,

@@ -9,8 +9,8 @@
 // Three entry points, dispatched in order over the same bindings:
 // - `first_level`: level 1 from the frame, one invocation per texel; its z slice 1 makes the
 //   plain level 1 (every pixel weighing 1: `Source::plain`), which a near pixel's level disc
-//   reads (made every frame here, where the CPU makes it only if some pixel reads it: the
-//   same texels either way);
+//   reads (dispatched where any pixel is in front of the focus plane, the plan's `near`; the
+//   CPU makes it only if such a pixel reads level 1's disc: the same texels where read);
 // - `halve`: level L from level L − 1, one invocation per texel; L rides in the dispatch's
 //   z count (the host dispatches z = L − 1 groups deep and only the last slice works), since
 //   a stage has one uniform for all its dispatches;

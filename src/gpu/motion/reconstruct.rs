@@ -448,18 +448,16 @@ impl Gpu {
         let tile_plane = (tiles.x.len() * 4) as u64;
         queue.write_buffer(&buffers.tiles, 0, bytemuck::cast_slice(&tiles.x));
         queue.write_buffer(&buffers.tiles, tile_plane, bytemuck::cast_slice(&tiles.y));
-        // |M| of each tile, made here as `gather_2014` makes it: the shader's own
+        // |M| of each tile, made here by the function `gather_2014` uses
+        // (`TileGrid::length`): the shader's own
         // `sqrt(x·x + y·y)` is not the CPU's bits (a driver may fuse a product into the sum,
         // NVIDIA's does, and WGSL's square root is not correctly rounded), and the gather
         // compares it with the pixel's own |V| (packed on the CPU) and takes a tap count
         // from it, so an ulp moved decisions: on an H200, clamped to `max_blur` 13 (many
         // tiles and pixels at exactly 13 px), a pixel's own vector won over its tile's
         // where the CPU kept the tile's (docs/history/device-parity-2026-12-04.md).
-        let lengths: Vec<f32> = tiles
-            .x
-            .iter()
-            .zip(&tiles.y)
-            .map(|(x, y)| (x * x + y * y).sqrt())
+        let lengths: Vec<f32> = (0..tiles.rows)
+            .flat_map(|r| (0..tiles.columns).map(move |c| tiles.length(c, r)))
             .collect();
         queue.write_buffer(
             &buffers.tiles,

@@ -221,7 +221,7 @@ fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>>(
     let row =
         ((y as f32 + tile_shift).max(0.0) as usize / config.tile as usize).min(tiles.rows - 1);
     let mut m = tiles.get(column, row);
-    let mut m_length = (m.0 * m.0 + m.1 * m.1).sqrt();
+    let mut m_length = tiles.length(column, row);
     // The jittered lookup can land on a tile the dilation left still (it spreads a vector
     // along its line, not across it), beside a small moving object's corners: there the
     // pixel's own tile is looked up instead. Ours does so always; Blender's form (2014) only
@@ -236,7 +236,7 @@ fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>>(
             (y / config.tile as usize).min(tiles.rows - 1),
         );
         m = tiles.get(c, r);
-        m_length = (m.0 * m.0 + m.1 * m.1).sqrt();
+        m_length = tiles.length(c, r);
     }
     let own = (centre[VX], centre[VY]);
     let own_length = centre[LENGTH];

@@ -216,16 +216,21 @@ pub fn blend_carrying(
     // the planes in place, and the discs read them as they were).
     let bounds = disc_bounds();
     let to_coc = |t: f32| epsilon + t * (largest - epsilon);
-    let frame_disc = coc.par_iter().any(|&c| {
-        let t = source.interpolator(c);
-        t > 0.0 && to_coc(t) <= bounds[0]
-    });
-    // The plain level 1 (every pixel by the filter alone, w = 1), beauty's and each carried
-    // group's, where some pixel in front of the focus plane reads level 1's disc.
-    let plain_disc = coc.par_iter().any(|&c| {
-        let t = source.interpolator(c);
-        c < 0.0 && t > 0.0 && to_coc(t) > disc::FRAME_UNTIL * bounds[0] && to_coc(t) < bounds[1]
-    });
+    // And the plain level 1 (every pixel by the filter alone, w = 1), beauty's and each
+    // carried group's, where some pixel in front of the focus plane reads level 1's disc.
+    // One pass over the CoC says whether each is needed.
+    let (frame_disc, plain_disc) = coc
+        .par_iter()
+        .map(|&c| {
+            let t = source.interpolator(c);
+            let own = to_coc(t);
+            let level_disc = own > disc::FRAME_UNTIL * bounds[0] && own < bounds[1];
+            (
+                t > 0.0 && own <= bounds[0],
+                c < 0.0 && t > 0.0 && level_disc,
+            )
+        })
+        .reduce(|| (false, false), |a, b| (a.0 || b.0, a.1 || b.1));
     let (plain, plain_groups) = if plain_disc {
         let plain_source = source.plain();
         let groups: Vec<Group> = carried
