@@ -38,4 +38,14 @@ fn unordered(u: u32) -> f32 {
     return bitcast<f32>(select(~u, u & MAGNITUDE, (u & SIGN) != 0u));
 }
 
+// `a · b` rounded to f32 by itself, never fused into an add; `zero` must be a 0 the compiler
+// cannot see (a word of a uniform the host writes 0). WGSL lets a driver contract `a·b + c`
+// into one fused multiply-add (NVIDIA's does, lavapipe's does not), which rounds once where
+// the CPU rounds twice: where a decision follows the sum (a sample count's ceil, whether a
+// centre lies on an edge), one ulp moves it. The OR on the product's bits stands between the
+// multiply and the add, so no compiler can fuse them.
+fn apart(a: f32, b: f32, zero: u32) -> f32 {
+    return bitcast<f32>(bitcast<u32>(a * b) | zero);
+}
+
 // ---- the shader ----------------------------------------------------------------------------

@@ -708,9 +708,9 @@ mod tests {
     use crate::motion::stretch as cpu;
 
     #[test]
-    fn the_config_is_ten_plain_words_in_both_languages() {
-        // Keep in sync with stretch.wgsl: ten 4-byte fields, no padding.
-        assert_eq!(std::mem::size_of::<StretchConfig>(), 40);
+    fn the_config_is_twelve_plain_words_in_both_languages() {
+        // Keep in sync with stretch.wgsl: eleven 4-byte fields and one of padding.
+        assert_eq!(std::mem::size_of::<StretchConfig>(), 48);
         assert_eq!(std::mem::align_of::<StretchConfig>(), 4);
         crate::gpu::layout::assert_same_layout!(
             StretchConfig,
@@ -726,7 +726,8 @@ mod tests {
                 extent,
                 min_alpha,
                 depth_limit,
-                texture_blur
+                texture_blur,
+                zero
             ]
         );
     }

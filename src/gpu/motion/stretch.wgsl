@@ -9,8 +9,8 @@
 // Render bindings (group 0, read-only): config, planes, z, v, blurred, vertices, order.
 // Cover bindings (group 0): config, planes, z, the three render targets (read), covered.
 
-// Keep in sync with StretchConfig in src/motion/stretch/config.rs (ten 4-byte words; a test in
-// src/gpu/motion/stretch.rs compares the fields).
+// Keep in sync with StretchConfig in src/motion/stretch/config.rs (twelve 4-byte words; a test
+// in src/gpu/motion/stretch.rs compares the fields).
 struct StretchConfig {
     width: u32,
     height: u32,
@@ -22,6 +22,9 @@ struct StretchConfig {
     min_alpha: f32,
     depth_limit: f32,
     texture_blur: u32,
+    // 0: what `mul` ORs into its products (`apart` in the prelude).
+    zero: u32,
+    _pad: u32,
 }
 
 // The CPU's constants (a test checks they match).
@@ -52,8 +55,19 @@ fn pixels() -> u32 {
 }
 
 
+// `a · b` rounded by itself, as the CPU's is: never fused into the add it feeds (NVIDIA's
+// driver fuses `x·x + y·y`, and a sample count or a vertex's move follows the sum's last bit).
+fn mul(a: f32, b: f32) -> f32 {
+    return apart(a, b, config.zero);
+}
+
+// |w|, rounded as the CPU's `(x * x + y * y).sqrt()`.
+fn norm(w: vec2<f32>) -> f32 {
+    return sqrt(mul(w.x, w.x) + mul(w.y, w.y));
+}
+
 fn moving(w: vec2<f32>) -> bool {
-    return sqrt(w.x * w.x + w.y * w.y) * config.shutter >= STILL;
+    return norm(w) * config.shutter >= STILL;
 }
 
 // The flat index of a 1-D invocation dispatched as rows of workgroups.
@@ -127,7 +141,7 @@ fn texture_blur(@builtin(global_invocation_id) id: vec3<u32>) {
     let t1 = config.t1;
     let vx = v[i].x;
     let vy = v[i].y;
-    let length = sqrt(vx * vx + vy * vy) * (t1 - t0);
+    let length = norm(vec2<f32>(vx, vy)) * (t1 - t0);
     let samples = clamp(u32(min(ceil(length), 1.0e6)) + 1u, 2u, MOST_SAMPLES);
     var sum = array<f32, 4>(0.0, 0.0, 0.0, 0.0);
     var total = 0.0;
@@ -135,8 +149,8 @@ fn texture_blur(@builtin(global_invocation_id) id: vec3<u32>) {
         let t = t0 + (t1 - t0) * (f32(k) + 0.5) / f32(samples);
         // Sample points are pixel-centre coordinates: pixel (x, y) sits at (x, y). At time t
         // the pixel shows what was at x − v·t at the frame (as the CPU reads).
-        let px = f32(x) - vx * t;
-        let py = f32(y) - vy * t;
+        let px = f32(x) - mul(vx, t);
+        let py = f32(y) - mul(vy, t);
         let fx = floor(px);
         let fy = floor(py);
         let ax = px - fx;
@@ -219,7 +233,7 @@ fn move_vertices(
         }
         if t != 0.0 {
             shift = vec2<f32>(w.x * t, w.y * t);
-            var length = sqrt(shift.x * shift.x + shift.y * shift.y);
+            var length = norm(shift);
             if length > MAX_SHIFT {
                 let cut = MAX_SHIFT / length;
                 shift = vec2<f32>(shift.x * cut, shift.y * cut);
@@ -358,9 +372,16 @@ fn interpolate(values: vec3<f32>, w1: f32, w2: f32) -> f32 {
     return clamp(v, min(values.x, min(values.y, values.z)), max(values.x, max(values.y, values.z)));
 }
 
-// Twice the signed area of (a, b, p) (the CPU rasteriser's `edge`).
-fn edge(a: vec2<f32>, b: vec2<f32>, p: vec2<f32>) -> f32 {
-    return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+// Twice the signed area of (a, b, p) for p at the origin (the CPU rasteriser's `edge`, whose
+// p is the pixel centre the corners here are relative to): a × b. Written about p, not about
+// a as the CPU's, so that a centre at a corner (a or b the origin) gives exactly 0 however
+// the products round: about a, the centre at b gives a.x·a.y − a.y·a.x, 0 when both products
+// round alike and an ulp of either sign when a driver fuses one of them into the subtraction,
+// and a centre the CPU puts exactly on the edge (where its two products are one product,
+// rounded once) would fall inside or outside by the rounding (the stretch tests failed so
+// on an NVIDIA GPU).
+fn edge(a: vec2<f32>, b: vec2<f32>) -> f32 {
+    return mul(a.x, b.y) - mul(a.y, b.x);
 }
 
 // Whether a centre exactly on edge a → b of a triangle of positive `edge` orientation
@@ -416,18 +437,19 @@ fn drawn(in: Corner, fragment: ptr<function, Fragment>) -> bool {
     let y = i / config.width;
     let corners = triangle_corners(in.triangle);
     var points = array<vec2<f32>, 3>(corner(corners.x, x, y), corner(corners.y, x, y), corner(corners.z, x, y));
-    let p = vec2<f32>(0.0, 0.0);
-    var area = edge(points[0], points[1], points[2]);
     // Positive orientation, as the CPU swaps corners 1 and 2 (the weights follow).
     var swapped = false;
-    if area < 0.0 {
+    if edge(points[1] - points[0], points[2] - points[0]) < 0.0 {
         let t = points[1];
         points[1] = points[2];
         points[2] = t;
-        area = -area;
         swapped = true;
     }
-    let e = vec3<f32>(edge(points[1], points[2], p), edge(points[2], points[0], p), edge(points[0], points[1], p));
+    let e = vec3<f32>(edge(points[1], points[2]), edge(points[2], points[0]), edge(points[0], points[1]));
+    // The area as the sum of the three: at a corner two of them are exactly 0 and the third
+    // is the area, so its weight is exactly 1 (as the CPU's f64 weights are), and the depth
+    // interpolated there is the corner's own, bit for bit (the depth test with no tolerance).
+    let area = e.x + e.y + e.z;
     let bias = vec3<bool>(top_left(points[1], points[2]), top_left(points[2], points[0]), top_left(points[0], points[1]));
     let inside = (e > vec3<f32>(0.0)) | ((e == vec3<f32>(0.0)) & bias);
     if !all(inside) || !(area > 0.0) {
@@ -492,7 +514,7 @@ fn draw_fragment(in: Corner) -> Drawn {
 // The motion a vertex gives the fragments that sweep a pixel: its velocity, cut so that it
 // moves at most MAX_SHIFT px over the longer part of the exposure (the CPU's swept_motion).
 fn swept_motion(w: vec2<f32>) -> vec2<f32> {
-    let reach = sqrt(w.x * w.x + w.y * w.y) * max(abs(config.t0), abs(config.t1));
+    let reach = norm(w) * max(abs(config.t0), abs(config.t1));
     if reach > MAX_SHIFT {
         let cut = MAX_SHIFT / reach;
         return vec2<f32>(w.x * cut, w.y * cut);
@@ -583,7 +605,7 @@ fn cover(@builtin(global_invocation_id) id: vec3<u32>) {
         let t1 = config.t1;
         let vx = sweep.x;
         let vy = sweep.y;
-        let length = sqrt(vx * vx + vy * vy) * (t1 - t0);
+        let length = norm(vec2<f32>(vx, vy)) * (t1 - t0);
         let samples = clamp(u32(min(ceil(length), 1.0e6)) + 1u, 2u, MOST_SAMPLES);
         var own: array<f32, 4>;
         var sum = array<f32, 4>(0.0, 0.0, 0.0, 0.0);
@@ -597,8 +619,8 @@ fn cover(@builtin(global_invocation_id) id: vec3<u32>) {
         var total = 0.0;
         for (var k = 0u; k < samples; k++) {
             let t = t0 + (t1 - t0) * (f32(k) + 0.5) / f32(samples);
-            let px = f32(x) - vx * t;
-            let py = f32(y) - vy * t;
+            let px = f32(x) - mul(vx, t);
+            let py = f32(y) - mul(vy, t);
             let fx = floor(px);
             let fy = floor(py);
             let ax = px - fx;

@@ -87,6 +87,12 @@ pub struct StretchConfig {
     pub depth_limit: f32,
     /// 1 where colour is averaged along the motion first ([`texture_blur`](super::texture_blur)), else 0.
     pub texture_blur: u32,
+    /// 0, always: the GPU twin's products that must round as the CPU's do read it (an OR with
+    /// a word no shader compiler can know is 0 keeps a driver from fusing a product into an
+    /// add: `apart` in src/gpu/prelude.wgsl). The CPU never reads it.
+    pub zero: u32,
+    /// Padding to a whole 16 bytes (a uniform's size on every backend).
+    pub _pad: u32,
 }
 
 impl StretchConfig {
@@ -121,6 +127,8 @@ impl StretchConfig {
             min_alpha: params.min_alpha.clamp(0.0, 1.0),
             depth_limit: 1.0 + params.depth_tolerance.max(0.0),
             texture_blur: params.texture_blur as u32,
+            zero: 0,
+            _pad: 0,
         }
     }
 

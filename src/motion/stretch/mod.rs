@@ -453,10 +453,11 @@ mod tests {
     }
 
     #[test]
-    fn the_config_is_ten_plain_words() {
-        // Uploaded as one uniform by the GPU twin: ten 4-byte fields, no padding.
-        assert_eq!(std::mem::size_of::<StretchConfig>(), 40);
+    fn the_config_is_twelve_plain_words() {
+        // Uploaded as one uniform by the GPU twin: twelve 4-byte fields, no padding.
+        assert_eq!(std::mem::size_of::<StretchConfig>(), 48);
         let c = StretchConfig::new(4, 3, &StretchParams::default(), 0.5);
+        assert_eq!((c.zero, c._pad), (0, 0));
         // The centred anchor splits the exposure about the frame.
         assert_eq!((c.t0, c.t1), (-0.25, 0.25));
         let rear = StretchParams {
