@@ -17,6 +17,13 @@
 //! | positions' depth (z) | as depth | as depth | as depth |
 //! | shutter φ | 0 (no exposure) | clamped to [0, 1] | 0 |
 //!
+//! And in every pass but the shutter, a subnormal value (magnitude below 2⁻¹²⁶, `f32::MIN_POSITIVE`)
+//! is 0: a GPU may flush subnormals to zero in any arithmetic (Vulkan leaves it to the
+//! driver, and NVIDIA's does), so a depth of 1e-40 beside a depth of 0 would be nearer on the
+//! CPU and the same on the GPU. Made 0 here, the two backends read the same numbers; nothing
+//! visible is lost (a subnormal colour is 10⁻³⁸ of white, a subnormal depth is at the camera,
+//! a subnormal velocity is still).
+//!
 //! The jitter of every pass comes from one 32-bit hash, [`hash`] (WGSL has no 64-bit
 //! integers, so the GPU twins compute the same numbers).
 //!
@@ -43,52 +50,75 @@ pub const VELOCITY_LIMIT: f32 = 1e7;
 /// f64's exact integers for the curve arithmetic.
 pub const POSITION_LIMIT: f32 = 1e12;
 
-/// Colour made finite: NaN reads as 0, magnitudes are clamped to [`HUGE`].
+/// Whether `v` is subnormal (nonzero, below the least normal f32).
+#[inline]
+fn subnormal(v: f32) -> bool {
+    v != 0.0 && v.abs() < f32::MIN_POSITIVE
+}
+
+/// Whether `v` is 0 or normal in magnitude (not subnormal; false for NaN), branch-free.
+#[inline]
+fn not_subnormal(v: f32) -> bool {
+    let a = v.abs();
+    a == 0.0 || a >= f32::MIN_POSITIVE
+}
+
+/// Colour made finite: NaN and subnormals read as 0, magnitudes are clamped to [`HUGE`].
 #[inline]
 pub fn color(v: f32) -> f32 {
-    if v.is_nan() {
+    if v.is_nan() || subnormal(v) {
         0.0
     } else {
         v.clamp(-HUGE, HUGE)
     }
 }
 
-/// Depth made comparable: NaN is far (+∞), negative is 0.
+/// Depth made comparable: NaN is far (+∞), negative and subnormal are 0.
 #[inline]
 pub fn depth(z: f32) -> f32 {
     if z.is_nan() {
         f32::INFINITY
+    } else if subnormal(z) {
+        0.0
+    } else if z == 0.0 {
+        // −0 kept, as the clean test keeps it (`max` may make it +0).
+        z
     } else {
         z.max(0.0)
     }
 }
 
-/// A painted CoC map value made usable: NaN is in focus (0), negative is 0. (Depth of field
-/// clamps large values to its largest CoC.)
+/// A painted CoC map value made usable: NaN is in focus (0), negative and subnormal are 0.
+/// (Depth of field clamps large values to its largest CoC.)
 #[inline]
 pub fn coc_map(v: f32) -> f32 {
-    if v.is_nan() {
+    if v.is_nan() || subnormal(v) {
         0.0
     } else {
         v.max(0.0)
     }
 }
 
-/// A velocity component made finite: NaN is still, magnitudes are clamped to
+/// A velocity component made finite: NaN and subnormals are still, magnitudes are clamped to
 /// [`VELOCITY_LIMIT`].
 #[inline]
 pub fn velocity(v: f32) -> f32 {
-    if v.is_nan() {
+    if v.is_nan() || subnormal(v) {
         0.0
     } else {
         v.clamp(-VELOCITY_LIMIT, VELOCITY_LIMIT)
     }
 }
 
-/// A position coordinate made finite (NaN is handled per pixel by [`sanitize`]).
+/// A position coordinate made finite, subnormals 0 (NaN is handled per pixel by
+/// [`sanitize`]).
 #[inline]
 pub fn position(v: f32) -> f32 {
-    v.clamp(-POSITION_LIMIT, POSITION_LIMIT)
+    if subnormal(v) {
+        0.0
+    } else {
+        v.clamp(-POSITION_LIMIT, POSITION_LIMIT)
+    }
 }
 
 /// The shutter fraction made usable: NaN is 0 (no exposure), the rest clamped to [0, 1].
@@ -155,24 +185,25 @@ struct Rule {
 }
 
 const COLOR: Rule = Rule {
-    clean: |v| v.abs() <= HUGE,
+    clean: |v| v.abs() <= HUGE && not_subnormal(v),
     rule: color,
 };
 const DEPTH: Rule = Rule {
-    // +∞ is clean (far); NaN and negatives are not (−0.0 compares equal to 0 and is kept).
-    clean: |z| z >= 0.0,
+    // +∞ is clean (far); NaN, negatives and subnormals are not (−0.0 compares equal to 0 and
+    // is kept).
+    clean: |z| z == 0.0 || z >= f32::MIN_POSITIVE,
     rule: depth,
 };
 const COC_MAP: Rule = Rule {
-    clean: |v| v >= 0.0,
+    clean: |v| v == 0.0 || v >= f32::MIN_POSITIVE,
     rule: coc_map,
 };
 const VELOCITY: Rule = Rule {
-    clean: |v| v.abs() <= VELOCITY_LIMIT,
+    clean: |v| v.abs() <= VELOCITY_LIMIT && not_subnormal(v),
     rule: velocity,
 };
 const POSITION: Rule = Rule {
-    clean: |v| v.abs() <= POSITION_LIMIT,
+    clean: |v| v.abs() <= POSITION_LIMIT && not_subnormal(v),
     rule: position,
 };
 
@@ -509,6 +540,63 @@ mod tests {
         assert_eq!(next.x[2], POSITION_LIMIT);
         // A second pass replaces nothing.
         assert!(!sanitize(&mut f, DepthKind::Depth).any());
+    }
+
+    #[test]
+    fn subnormal_values_read_as_zero_in_every_pass() {
+        // 1e-40 and −1e-40 are subnormal f32: a GPU may flush them to 0 in any arithmetic
+        // (NVIDIA's does), so the policy makes them 0 for both backends; 0, −0 and the least
+        // normal value stay as they are.
+        let tiny = f32::MIN_POSITIVE;
+        let mut f = Frame::new(4, 1);
+        let values = vec![1e-40, -1e-40, -0.0, tiny];
+        f.color = Some(Color {
+            r: values.clone(),
+            g: values.clone(),
+            b: values.clone(),
+            a: Some(values.clone()),
+        });
+        f.depth = Some(values.clone());
+        f.velocity = Some(Velocity {
+            x: values.clone(),
+            y: values.clone(),
+        });
+        let at = || Positions {
+            x: values.clone(),
+            y: values.clone(),
+            z: Some(values.clone()),
+        };
+        f.prev = Some(at());
+        f.next = Some(at());
+        let replaced = sanitize(&mut f, DepthKind::Depth);
+        assert_eq!(
+            replaced,
+            Replaced {
+                color: 8,
+                depth: 2,
+                velocity: 4,
+                positions: 12,
+            }
+        );
+        let bits = |p: &[f32]| p.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        let want = bits(&[0.0, 0.0, -0.0, tiny]);
+        let color = f.color.as_ref().unwrap();
+        for plane in [&color.r, &color.g, &color.b, color.a.as_ref().unwrap()] {
+            assert_eq!(bits(plane), want);
+        }
+        // Depth: −1e-40 is negative (0 by the policy), −0 is kept.
+        assert_eq!(bits(f.depth.as_ref().unwrap()), want);
+        let v = f.velocity.as_ref().unwrap();
+        assert_eq!((bits(&v.x), bits(&v.y)), (want.clone(), want.clone()));
+        for p in [f.prev.as_ref().unwrap(), f.next.as_ref().unwrap()] {
+            assert_eq!(bits(&p.x), want);
+            assert_eq!(bits(&p.y), want);
+            assert_eq!(bits(p.z.as_ref().unwrap()), want);
+        }
+        let mut coc = Frame::new(2, 1);
+        coc.depth = Some(vec![1e-40, 2.0]);
+        sanitize(&mut coc, DepthKind::CocMap);
+        assert_eq!(coc.depth.unwrap(), vec![0.0, 2.0]);
     }
 
     #[test]
