@@ -147,23 +147,24 @@ fn texture_blur(@builtin(global_invocation_id) id: vec3<u32>) {
     var total = 0.0;
     for (var k = 0u; k < samples; k++) {
         let t = t0 + (t1 - t0) * (f32(k) + 0.5) / f32(samples);
-        // Sample points are pixel-centre coordinates: pixel (x, y) sits at (x, y). At time t
-        // the pixel shows what was at x − v·t at the frame (as the CPU reads).
-        let px = f32(x) - mul(vx, t);
-        let py = f32(y) - mul(vy, t);
-        let fx = floor(px);
-        let fy = floor(py);
-        let ax = px - fx;
-        let ay = py - fy;
+        // At time t the pixel shows what was at x − v·t at the frame (as the CPU reads): the
+        // four pixels around the offset −v·t from it, whole part and fraction taken of −v·t
+        // alone (the CPU's for_each_offset: the same weights for every pixel of a motion).
+        let ox = -mul(vx, t);
+        let oy = -mul(vy, t);
+        let fx = floor(ox);
+        let fy = floor(oy);
+        let ax = ox - fx;
+        let ay = oy - fy;
         for (var corner = 0u; corner < 4u; corner++) {
             let dx = corner & 1u;
             let dy = corner >> 1u;
             let wx = select(1.0 - ax, ax, dx == 1u);
             let wy = select(1.0 - ay, ay, dy == 1u);
             let w = wx * wy;
-            let sx = fx + f32(dx);
-            let sy = fy + f32(dy);
-            if !(w > 0.0 && sx >= 0.0 && sy >= 0.0 && sx < f32(width) && sy < f32(height)) {
+            let sx = i32(x) + i32(fx) + i32(dx);
+            let sy = i32(y) + i32(fy) + i32(dy);
+            if !(w > 0.0 && sx >= 0 && sy >= 0 && sx < i32(width) && sy < i32(height)) {
                 continue;
             }
             let j = u32(sy) * width + u32(sx);
@@ -619,21 +620,21 @@ fn cover(@builtin(global_invocation_id) id: vec3<u32>) {
         var total = 0.0;
         for (var k = 0u; k < samples; k++) {
             let t = t0 + (t1 - t0) * (f32(k) + 0.5) / f32(samples);
-            let px = f32(x) - mul(vx, t);
-            let py = f32(y) - mul(vy, t);
-            let fx = floor(px);
-            let fy = floor(py);
-            let ax = px - fx;
-            let ay = py - fy;
+            let ox = -mul(vx, t);
+            let oy = -mul(vy, t);
+            let fx = floor(ox);
+            let fy = floor(oy);
+            let ax = ox - fx;
+            let ay = oy - fy;
             for (var corner = 0u; corner < 4u; corner++) {
                 let dx = corner & 1u;
                 let dy = corner >> 1u;
                 let wx = select(1.0 - ax, ax, dx == 1u);
                 let wy = select(1.0 - ay, ay, dy == 1u);
                 let w = wx * wy;
-                let sx = fx + f32(dx);
-                let sy = fy + f32(dy);
-                if !(w > 0.0 && sx >= 0.0 && sy >= 0.0 && sx < f32(width) && sy < f32(height)) {
+                let sx = i32(x) + i32(fx) + i32(dx);
+                let sy = i32(y) + i32(fy) + i32(dy);
+                if !(w > 0.0 && sx >= 0 && sy >= 0 && sx < i32(width) && sy < i32(height)) {
                     continue;
                 }
                 let j = u32(sy) * width + u32(sx);
