@@ -13,7 +13,7 @@ use super::config::{
 use super::matte::{self, Matte};
 use super::pack::pack_tiles;
 use super::taps::{bilinear, split, split_by_cover, At, Colours};
-use super::tiles::{gather_tiles_of, near_blur, TileMask};
+use super::tiles::{gather_tiles_of, near_blur, plain_tiles, TileMask};
 use crate::frame::Color;
 use crate::motion::tile_max::TileGrid;
 use crate::numeric::unit;
@@ -153,12 +153,20 @@ fn gather_2014_as<const G: usize>(
         colour,
         mattes,
     };
+    let plain = if form().split_taps {
+        plain_tiles(config, texels, mattes, tiles)
+    } else {
+        vec![false; tiles.columns * tiles.rows]
+    };
     gather_tiles_of(
         config,
         tiles.columns,
         out,
         |c, row| near_blur(tiles, c, row, 1),
-        |_, x, y| gather_pixel_2014(config, &form(), &sources, tiles, x, y),
+        |(c, row), x, y| {
+            let plain = plain[row * tiles.columns + c];
+            gather_pixel_2014(config, &form(), &sources, tiles, plain, x, y)
+        },
     );
 }
 
@@ -196,6 +204,7 @@ fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>>(
     form: &Form,
     sources: &Sources<C>,
     tiles: &TileGrid,
+    plain: bool,
     x: usize,
     y: usize,
 ) -> Colours<G> {
@@ -400,7 +409,22 @@ fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>>(
                         pixel: (x, y),
                         offset: point,
                     };
-                    if form.split_taps {
+                    if form.split_taps && plain {
+                        // A plain tile ([`plain_tiles`]): what [`split`] gives where all
+                        // four pixels move, part A the whole tap, in the same order.
+                        let mut colour_a = [[0.0f32; 4]; G];
+                        let mut share_a = 0.0f32;
+                        for (j, w) in at.corners() {
+                            let c = colour(j);
+                            for g in 0..G {
+                                for ch in 0..4 {
+                                    colour_a[g][ch] += w * c[g][ch];
+                                }
+                            }
+                            share_a += w;
+                        }
+                        (sample[l], sample_colour[l], share[l]) = (nearest, colour_a, share_a);
+                    } else if form.split_taps {
                         let still = own_length < HALF_PIXEL;
                         let parts = split_by_cover(texels, colour, mattes, &at, still)
                             .unwrap_or_else(|| split(texels, colour, &at));
@@ -461,7 +485,11 @@ fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>>(
                     let share = |texel: &Texel2014| 1.0 - shift * away(texel);
                     (f[l][0], b[l][0]) =
                         weights(&sample[l], distance, direction, share(&sample[l]));
-                    (f[l][1], b[l][1]) = weights(&other[l], distance, direction, share(&other[l]));
+                    // (Part B is empty in a plain tile: nothing to weigh.)
+                    if !plain {
+                        (f[l][1], b[l][1]) =
+                            weights(&other[l], distance, direction, share(&other[l]));
+                    }
                     count += direction;
                 }
                 for l in 0..LANES {
@@ -643,6 +671,76 @@ mod tests {
                 out
             })
             .collect()
+    }
+
+    /// A textured frame moving (24, 8) px a frame everywhere over one depth, but for the
+    /// still pixels `still`: the exposure gather's plain tiles and its output.
+    fn uniform_pan(still: &[(usize, usize)]) -> (Vec<bool>, usize, Color) {
+        let (w, h) = (80usize, 64usize);
+        let wave = |k: f32| -> Vec<f32> {
+            (0..w * h)
+                .map(|i| (i as f32 * k).sin() * 0.5 + 0.5)
+                .collect()
+        };
+        let mut frame = Frame::new(w, h);
+        let color = Color {
+            r: wave(0.37),
+            g: wave(0.21),
+            b: wave(0.05),
+            a: None,
+        };
+        let mut vx = vec![24.0; w * h];
+        let mut vy = vec![8.0; w * h];
+        for &(x, y) in still {
+            (vx[y * w + x], vy[y * w + x]) = (0.0, 0.0);
+        }
+        let params = ReconstructParams::default();
+        let config = ReconstructConfig::new(w, h, &params, 0.5, 7);
+        let mut tiles = tile_max(&vx, &vy, w, h, config.tile as usize);
+        for (x, y) in tiles.x.iter_mut().zip(tiles.y.iter_mut()) {
+            (*x, *y) = spread_2014(*x, *y, &config);
+        }
+        let dilated = dilate(&tiles);
+        let packed = packed_2014(&config, &dilated);
+        let depth = vec![5.0; w * h];
+        frame.velocity = Some(Velocity { x: vx, y: vy });
+        let velocity = frame.velocity.as_ref().unwrap();
+        let texels = pack_2014(&config, &color, &depth, velocity, &dilated, &packed);
+        let mattes = matte::mattes(&config, &texels, |c, row| packed.get(c, row));
+        let plain = plain_tiles(&config, &texels, &mattes, &dilated);
+        let mut out = color.clone();
+        gather_2014(&config, &texels, &mattes, &dilated, &mut out);
+        (plain, dilated.columns, out)
+    }
+
+    #[test]
+    fn a_plain_tile_s_pixels_come_out_as_they_do_through_the_split_taps() {
+        // Tile (4, 4) (pixels 32–39 both ways; tiles of 8) with every pixel moving, then with
+        // a still pixel 15 px to its right: within the tile's tested reach (|M| = 6.3 px:
+        // 6.3 + 2·6.3 + 2 px), so the tile is no longer plain, but beyond what its pixels'
+        // taps read (6.3 px and a pixel, no tap slid: one depth). Its pixels must not change.
+        let (plain, columns, all_moving) = uniform_pan(&[]);
+        let (plain_with, _, with_still) = uniform_pan(&[(54, 36)]);
+        let tile = 4 * columns + 4;
+        assert!(
+            plain[tile] && !plain_with[tile],
+            "the tile is plain only without the still pixel"
+        );
+        let mut compared = 0;
+        for y in 32..40 {
+            for x in 32..40 {
+                let i = y * 80 + x;
+                for (a, b) in [
+                    (&all_moving.r, &with_still.r),
+                    (&all_moving.g, &with_still.g),
+                    (&all_moving.b, &with_still.b),
+                ] {
+                    assert_eq!(a[i].to_bits(), b[i].to_bits(), "pixel ({x}, {y})");
+                }
+                compared += 1;
+            }
+        }
+        assert_eq!(compared, 64);
     }
 
     #[test]

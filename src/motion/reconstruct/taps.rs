@@ -42,7 +42,7 @@ pub(crate) struct At {
 
 impl At {
     /// The four pixels around the tap's point, with their bilinear weights.
-    fn corners(&self) -> [(usize, f32); 4] {
+    pub(crate) fn corners(&self) -> [(usize, f32); 4] {
         around_index(self.size, self.pixel.0, self.pixel.1, self.offset)
     }
 }
