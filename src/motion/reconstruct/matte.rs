@@ -168,23 +168,35 @@ fn matte(
     // Candidates of the 5×5, nearest first and at most CANDIDATES of each kind: the pure
     // ones, or any when either kind has none pure.
     let mut best: Option<(f32, f32, i64, i64)> = None;
+    // Each kind's candidates listed once (the pairs' loop reads the still ones once per moving
+    // one: listed there, each pure test ran eight times over on a frame of noise).
+    let candidates = |kind: bool, only_pure: bool| {
+        let mut list = [(0i64, 0i64); CANDIDATES];
+        let mut count = 0;
+        for &(dx, dy) in &NEIGHBOURS {
+            let (cx, cy) = (x + dx, y + dy);
+            if at(cx, cy).is_some_and(|t| moves(t) == kind) && (!only_pure || pure(cx, cy, kind)) {
+                list[count] = (cx, cy);
+                count += 1;
+                if count == CANDIDATES {
+                    break;
+                }
+            }
+        }
+        (list, count)
+    };
     for only_pure in [true, false] {
-        let candidates = |kind: bool| {
-            NEIGHBOURS
-                .iter()
-                .map(move |&(dx, dy)| (x + dx, y + dy))
-                .filter(move |&(cx, cy)| {
-                    at(cx, cy).is_some_and(|t| moves(t) == kind)
-                        && (!only_pure || pure(cx, cy, kind))
-                })
-                .take(CANDIDATES)
-        };
-        if only_pure && (candidates(true).next().is_none() || candidates(false).next().is_none()) {
+        let (movers, m) = candidates(true, only_pure);
+        if only_pure && m == 0 {
             continue;
         }
-        for (fx, fy) in candidates(true) {
+        let (stills, s) = candidates(false, only_pure);
+        if only_pure && s == 0 {
+            continue;
+        }
+        for &(fx, fy) in &movers[..m] {
             let f = at(fx, fy).expect("a candidate");
-            for (bx, by) in candidates(false) {
+            for &(bx, by) in &stills[..s] {
                 let b = at(bx, by).expect("a candidate");
                 let (alpha, residual, spread) = fit(centre, f, b);
                 if spread < DISTINCT || residual.is_nan() || residual > RESIDUAL * spread {
