@@ -70,6 +70,38 @@ fn moving(w: vec2<f32>) -> bool {
     return norm(w) * config.shutter >= STILL;
 }
 
+// The offset −v·t of a sample at time t from its pixel: the whole part (x, y) and the
+// fraction (z, w), each taken of −v·t alone, so every pixel of one motion reads the same
+// offsets with the same weights (the CPU's for_each_offset).
+fn sample_offset(v: vec2<f32>, t: f32) -> vec4<f32> {
+    let o = vec2<f32>(-mul(v.x, t), -mul(v.y, t));
+    let whole = floor(o);
+    return vec4<f32>(whole, o - whole);
+}
+
+// One of a sample's four bilinear taps.
+struct Tap {
+    j: u32,
+    w: f32,
+}
+
+// Corner `corner` (dx its bit 0, dy its bit 1) of the sample `offset` (sample_offset's) from
+// pixel (x, y): the pixel there and its bilinear weight; weight 0 where the weight is not
+// above 0 or the pixel lies outside the frame (the CPU leaves those taps out).
+fn corner_tap(offset: vec4<f32>, corner: u32, x: u32, y: u32) -> Tap {
+    let dx = corner & 1u;
+    let dy = corner >> 1u;
+    let wx = select(1.0 - offset.z, offset.z, dx == 1u);
+    let wy = select(1.0 - offset.w, offset.w, dy == 1u);
+    let w = wx * wy;
+    let sx = i32(x) + i32(offset.x) + i32(dx);
+    let sy = i32(y) + i32(offset.y) + i32(dy);
+    if !(w > 0.0 && sx >= 0 && sy >= 0 && sx < i32(config.width) && sy < i32(config.height)) {
+        return Tap(0u, 0.0);
+    }
+    return Tap(u32(sy) * config.width + u32(sx), w);
+}
+
 // The flat index of a 1-D invocation dispatched as rows of workgroups.
 fn flat(id: vec3<u32>, groups: vec3<u32>) -> u32 {
     return id.x + id.y * groups.x * GROUP;
@@ -147,27 +179,15 @@ fn texture_blur(@builtin(global_invocation_id) id: vec3<u32>) {
     var total = 0.0;
     for (var k = 0u; k < samples; k++) {
         let t = t0 + (t1 - t0) * (f32(k) + 0.5) / f32(samples);
-        // At time t the pixel shows what was at x − v·t at the frame (as the CPU reads): the
-        // four pixels around the offset −v·t from it, whole part and fraction taken of −v·t
-        // alone (the CPU's for_each_offset: the same weights for every pixel of a motion).
-        let ox = -mul(vx, t);
-        let oy = -mul(vy, t);
-        let fx = floor(ox);
-        let fy = floor(oy);
-        let ax = ox - fx;
-        let ay = oy - fy;
+        // At time t the pixel shows what was at x − v·t at the frame (as the CPU reads).
+        let offset = sample_offset(vec2<f32>(vx, vy), t);
         for (var corner = 0u; corner < 4u; corner++) {
-            let dx = corner & 1u;
-            let dy = corner >> 1u;
-            let wx = select(1.0 - ax, ax, dx == 1u);
-            let wy = select(1.0 - ay, ay, dy == 1u);
-            let w = wx * wy;
-            let sx = i32(x) + i32(fx) + i32(dx);
-            let sy = i32(y) + i32(fy) + i32(dy);
-            if !(w > 0.0 && sx >= 0 && sy >= 0 && sx < i32(width) && sy < i32(height)) {
+            let tap = corner_tap(offset, corner, x, y);
+            if tap.w == 0.0 {
                 continue;
             }
-            let j = u32(sy) * width + u32(sx);
+            let j = tap.j;
+            let w = tap.w;
             if z[j] * config.tear < z[i] {
                 continue;
             }
@@ -620,24 +640,14 @@ fn cover(@builtin(global_invocation_id) id: vec3<u32>) {
         var total = 0.0;
         for (var k = 0u; k < samples; k++) {
             let t = t0 + (t1 - t0) * (f32(k) + 0.5) / f32(samples);
-            let ox = -mul(vx, t);
-            let oy = -mul(vy, t);
-            let fx = floor(ox);
-            let fy = floor(oy);
-            let ax = ox - fx;
-            let ay = oy - fy;
+            let offset = sample_offset(vec2<f32>(vx, vy), t);
             for (var corner = 0u; corner < 4u; corner++) {
-                let dx = corner & 1u;
-                let dy = corner >> 1u;
-                let wx = select(1.0 - ax, ax, dx == 1u);
-                let wy = select(1.0 - ay, ay, dy == 1u);
-                let w = wx * wy;
-                let sx = i32(x) + i32(fx) + i32(dx);
-                let sy = i32(y) + i32(fy) + i32(dy);
-                if !(w > 0.0 && sx >= 0 && sy >= 0 && sx < i32(width) && sy < i32(height)) {
+                let tap = corner_tap(offset, corner, x, y);
+                if tap.w == 0.0 {
                     continue;
                 }
-                let j = u32(sy) * width + u32(sx);
+                let j = tap.j;
+                let w = tap.w;
                 if z[j] * config.tear < sweep.z {
                     continue;
                 }
