@@ -97,6 +97,7 @@ pub fn mattes(
 ) -> Vec<Matte> {
     let (width, height) = (config.width as usize, config.height as usize);
     let size = config.tile as usize;
+    let kinds = kinds(config, texels, &selected);
     let mut out = vec![[0.0f32; WORDS]; width * height];
     out.par_chunks_mut(width.max(1))
         .enumerate()
@@ -114,7 +115,7 @@ pub fn mattes(
                     0.0,
                 ];
                 if selected(x / size, y / size) {
-                    if let Some(found) = matte(config, texels, &selected, x, y) {
+                    if let Some(found) = matte(config, texels, &selected, &kinds, x, y) {
                         *m = found;
                     }
                 }
@@ -123,11 +124,77 @@ pub fn mattes(
     out
 }
 
+/// [`kinds`]' bits: the pixel is read (in a selected tile), it moves, its 3×3 is all moving,
+/// its 3×3 is all still (pixels not read, beyond the frame or its tiles, count as either).
+const READ: u8 = 1;
+const MOVES: u8 = 2;
+const PURE_MOVING: u8 = 4;
+const PURE_STILL: u8 = 8;
+
+/// Each pixel's kind, found once: the pairs' candidates are tested against these bits (each
+/// pixel is a candidate of up to 24 others, and its purity was its 3×3 read again each time).
+fn kinds(
+    config: &ReconstructConfig,
+    texels: &[Texel2014],
+    selected: &(impl Fn(usize, usize) -> bool + Sync),
+) -> Vec<u8> {
+    let (width, height) = (config.width as usize, config.height as usize);
+    let size = config.tile as usize;
+    // READ and MOVES first (tile by tile: the tiles not selected cost a test each), then
+    // each read pixel's purity from its neighbours' bits.
+    let mut bits = vec![0u8; width * height];
+    bits.par_chunks_mut(width.max(1))
+        .enumerate()
+        .for_each(|(y, row)| {
+            for c in 0..width.div_ceil(size) {
+                if !selected(c, y / size) {
+                    continue;
+                }
+                for x in c * size..((c + 1) * size).min(width) {
+                    row[x] = READ
+                        | if moves(&texels[y * width + x]) {
+                            MOVES
+                        } else {
+                            0
+                        };
+                }
+            }
+        });
+    let mut purity = vec![0u8; width * height];
+    purity
+        .par_chunks_mut(width.max(1))
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (x, p) in row.iter_mut().enumerate() {
+                if bits[y * width + x] & READ == 0 {
+                    continue;
+                }
+                let (mut all_moving, mut all_still) = (true, true);
+                for ny in y.saturating_sub(1)..(y + 2).min(height) {
+                    for nx in x.saturating_sub(1)..(x + 2).min(width) {
+                        let b = bits[ny * width + nx];
+                        if b & READ != 0 {
+                            all_moving &= b & MOVES != 0;
+                            all_still &= b & MOVES == 0;
+                        }
+                    }
+                }
+                *p = if all_moving { PURE_MOVING } else { 0 }
+                    | if all_still { PURE_STILL } else { 0 };
+            }
+        });
+    for (b, p) in bits.iter_mut().zip(purity) {
+        *b |= p;
+    }
+    bits
+}
+
 /// The pixel's matte where it has one (see the module doc), else `None`.
 fn matte(
     config: &ReconstructConfig,
     texels: &[Texel2014],
     selected: &impl Fn(usize, usize) -> bool,
+    kinds: &[u8],
     x: usize,
     y: usize,
 ) -> Option<Matte> {
@@ -162,8 +229,18 @@ fn matte(
         return None;
     }
     // One kind throughout a pixel's 3×3 (the frame's and the tiles' edges leave it out).
-    let pure = |x: i64, y: i64, kind: bool| {
-        (-1..=1).all(|dy| (-1..=1).all(|dx| at(x + dx, y + dy).is_none_or(|t| moves(t) == kind)))
+    // A candidate of kind `kind` (moving or still), pure if `only_pure` ([`kinds`]).
+    let candidate = |x: i64, y: i64, kind: bool, only_pure: bool| {
+        if x < 0 || y < 0 || x >= width || y >= height {
+            return false;
+        }
+        let k = kinds[(y * width + x) as usize];
+        let (wanted, pure) = if kind {
+            (READ | MOVES, PURE_MOVING)
+        } else {
+            (READ, PURE_STILL)
+        };
+        k & (READ | MOVES) == wanted && (!only_pure || k & pure != 0)
     };
     // Candidates of the 5×5, nearest first and at most CANDIDATES of each kind: the pure
     // ones, or any when either kind has none pure.
@@ -175,7 +252,7 @@ fn matte(
         let mut count = 0;
         for &(dx, dy) in &NEIGHBOURS {
             let (cx, cy) = (x + dx, y + dy);
-            if at(cx, cy).is_some_and(|t| moves(t) == kind) && (!only_pure || pure(cx, cy, kind)) {
+            if candidate(cx, cy, kind, only_pure) {
                 list[count] = (cx, cy);
                 count += 1;
                 if count == CANDIDATES {
