@@ -131,13 +131,20 @@ const MOVES: u8 = 2;
 const PURE_MOVING: u8 = 4;
 const PURE_STILL: u8 = 8;
 
+/// [`kinds`]' answer: READ and MOVES per pixel, and apart (so neither is copied into the
+/// other over the whole frame) PURE_MOVING and PURE_STILL, written in the selected tiles only.
+struct Kinds {
+    bits: Vec<u8>,
+    purity: Vec<u8>,
+}
+
 /// Each pixel's kind, found once: the pairs' candidates are tested against these bits (each
 /// pixel is a candidate of up to 24 others, and its purity was its 3×3 read again each time).
 fn kinds(
     config: &ReconstructConfig,
     texels: &[Texel2014],
     selected: &(impl Fn(usize, usize) -> bool + Sync),
-) -> Vec<u8> {
+) -> Kinds {
     let (width, height) = (config.width as usize, config.height as usize);
     let size = config.tile as usize;
     // READ and MOVES first (tile by tile: the tiles not selected cost a test each), then
@@ -165,10 +172,10 @@ fn kinds(
         .par_chunks_mut(width.max(1))
         .enumerate()
         .for_each(|(y, row)| {
-            for (x, p) in row.iter_mut().enumerate() {
-                if bits[y * width + x] & READ == 0 {
-                    continue;
-                }
+            let read = (0..width.div_ceil(size))
+                .filter(|&c| selected(c, y / size))
+                .flat_map(|c| c * size..((c + 1) * size).min(width));
+            for x in read {
                 let (mut all_moving, mut all_still) = (true, true);
                 for ny in y.saturating_sub(1)..(y + 2).min(height) {
                     for nx in x.saturating_sub(1)..(x + 2).min(width) {
@@ -179,14 +186,11 @@ fn kinds(
                         }
                     }
                 }
-                *p = if all_moving { PURE_MOVING } else { 0 }
+                row[x] = if all_moving { PURE_MOVING } else { 0 }
                     | if all_still { PURE_STILL } else { 0 };
             }
         });
-    for (b, p) in bits.iter_mut().zip(purity) {
-        *b |= p;
-    }
-    bits
+    Kinds { bits, purity }
 }
 
 /// The pixel's matte where it has one (see the module doc), else `None`.
@@ -194,7 +198,7 @@ fn matte(
     config: &ReconstructConfig,
     texels: &[Texel2014],
     selected: &impl Fn(usize, usize) -> bool,
-    kinds: &[u8],
+    kinds: &Kinds,
     x: usize,
     y: usize,
 ) -> Option<Matte> {
@@ -234,13 +238,13 @@ fn matte(
         if x < 0 || y < 0 || x >= width || y >= height {
             return false;
         }
-        let k = kinds[(y * width + x) as usize];
+        let i = (y * width + x) as usize;
         let (wanted, pure) = if kind {
             (READ | MOVES, PURE_MOVING)
         } else {
             (READ, PURE_STILL)
         };
-        k & (READ | MOVES) == wanted && (!only_pure || k & pure != 0)
+        kinds.bits[i] & (READ | MOVES) == wanted && (!only_pure || kinds.purity[i] & pure != 0)
     };
     // Candidates of the 5×5, nearest first and at most CANDIDATES of each kind: the pure
     // ones, or any when either kind has none pure.
