@@ -12,7 +12,7 @@ use super::config::{
 };
 use super::matte::{self, Matte};
 use super::pack::pack_tiles;
-use super::taps::{bilinear, split, split_by_cover, At, Colours};
+use super::taps::{bilinear, split, split_by_cover, whole, At, Colours};
 use super::tiles::{gather_tiles_of, near_blur, plain_tiles, TileMask};
 use crate::frame::Color;
 use crate::motion::tile_max::TileGrid;
@@ -414,20 +414,8 @@ fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>, const PLAIN: bo
                         offset: point,
                     };
                     if form.split_taps && PLAIN {
-                        // A plain tile ([`plain_tiles`]): what [`split`] gives where all
-                        // four pixels move, part A the whole tap, in the same order.
-                        let mut colour_a = [[0.0f32; 4]; G];
-                        let mut share_a = 0.0f32;
-                        for (j, w) in at.corners() {
-                            let c = colour(j);
-                            for g in 0..G {
-                                for ch in 0..4 {
-                                    colour_a[g][ch] += w * c[g][ch];
-                                }
-                            }
-                            share_a += w;
-                        }
-                        (sample[l], sample_colour[l], share[l]) = (nearest, colour_a, share_a);
+                        // A plain tile ([`plain_tiles`]): every split is one part.
+                        (sample[l], sample_colour[l], share[l]) = whole(&nearest, colour, &at);
                     } else if form.split_taps {
                         let still = own_length < HALF_PIXEL;
                         let parts = split_by_cover(texels, colour, mattes, &at, still)

@@ -42,7 +42,7 @@ pub(crate) struct At {
 
 impl At {
     /// The four pixels around the tap's point, with their bilinear weights.
-    pub(crate) fn corners(&self) -> [(usize, f32); 4] {
+    fn corners(&self) -> [(usize, f32); 4] {
         around_index(self.size, self.pixel.0, self.pixel.1, self.offset)
     }
 }
@@ -200,6 +200,30 @@ pub(crate) fn split<const G: usize>(
     }
     a[..4].fill(0.0);
     ((a, colour_a, share_a), (b, colour_b, share_b))
+}
+
+/// What [`split`] gives where all four pixels around the point move (so all lie on the
+/// nearest's surface): part A the whole tap, its colours summed with their weights in the
+/// same order, its share the weights' sum; part B empty, so the caller weighs none. The
+/// gather reads taps so in its plain tiles ([`super::tiles::plain_tiles`]), without the tests.
+#[inline(always)]
+pub(crate) fn whole<const G: usize>(
+    near: &Texel2014,
+    colour: &impl Fn(usize) -> Colours<G>,
+    at: &At,
+) -> Part<G> {
+    let mut colour_a = [[0.0f32; 4]; G];
+    let mut share_a = 0.0f32;
+    for (j, w) in at.corners() {
+        let c = colour(j);
+        for g in 0..G {
+            for ch in 0..4 {
+                colour_a[g][ch] += w * c[g][ch];
+            }
+        }
+        share_a += w;
+    }
+    (*near, colour_a, share_a)
 }
 
 /// The exposure variant's tap at `at`, split by coverage ([`matte`]):

@@ -100,7 +100,6 @@ fn blur<const CARRY: bool>(
             // pixel, so a frame of motions all different pays nothing for them).
             let mut kernel: Option<Kernel> = None;
             let mut scratch = Vec::new();
-            let (w, h) = (width as i64, height as i64);
             #[allow(clippy::needless_range_loop)] // x indexes four rows and the frame
             for x in 0..width {
                 let i = y * width + x;
@@ -131,17 +130,12 @@ fn blur<const CARRY: bool>(
                 }
                 match &kernel {
                     Some(k) if k.serves(v[i]) => {
-                        let depth = z[i];
                         for &(ox, oy, weight) in &k.taps {
-                            let (sx, sy) = (x as i64 + ox, y as i64 + oy);
-                            if sx < 0 || sy < 0 || sx >= w || sy >= h {
-                                continue;
+                            if let Some(j) =
+                                tap_at(config, (x, y), (ox, oy), z[i], |j| texels[j][4])
+                            {
+                                add(j, weight);
                             }
-                            let j = sy as usize * width + sx as usize;
-                            if texels[j][4] * config.tear < depth {
-                                continue;
-                            }
-                            add(j, weight);
                         }
                     }
                     _ => for_each_tap(config, (x, y), v[i], z[i], |j| texels[j][4], add),
@@ -190,18 +184,32 @@ pub(super) fn for_each_tap(
     depth_of: impl Fn(usize) -> f32,
     mut tap: impl FnMut(usize, f32),
 ) {
-    let (width, height) = (config.width as i64, config.height as i64);
-    for_each_offset(config, v, |(ox, oy), w| {
-        let (sx, sy) = (x as i64 + ox, y as i64 + oy);
-        if sx < 0 || sy < 0 || sx >= width || sy >= height {
-            return;
+    for_each_offset(config, v, |offset, w| {
+        if let Some(j) = tap_at(config, (x, y), offset, depth, &depth_of) {
+            tap(j, w);
         }
-        let j = sy as usize * width as usize + sx as usize;
-        if depth_of(j) * config.tear < depth {
-            return;
-        }
-        tap(j, w);
     });
+}
+
+/// The pixel at `offset` from pixel (x, y), where it lies in the frame and is not nearer than
+/// `depth` beyond the tear (a tap [`for_each_tap`] and the kernels read).
+#[inline(always)]
+fn tap_at(
+    config: &StretchConfig,
+    (x, y): (usize, usize),
+    (ox, oy): (i64, i64),
+    depth: f32,
+    depth_of: impl Fn(usize) -> f32,
+) -> Option<usize> {
+    let (sx, sy) = (x as i64 + ox, y as i64 + oy);
+    if sx < 0 || sy < 0 || sx >= config.width as i64 || sy >= config.height as i64 {
+        return None;
+    }
+    let j = sy as usize * config.width as usize + sx as usize;
+    if depth_of(j) * config.tear < depth {
+        return None;
+    }
+    Some(j)
 }
 
 /// The samples' corners as offsets from the pixel, whatever the pixel: `corner((dx, dy), w)`
