@@ -287,6 +287,31 @@ fn reconstruct_gather_matches_the_cpu_on_stripes_and_edges() {
     }
 }
 
+/// Noise over two depths moving as one smooth flow: a pan (`zoom` 0) or a zoom about the
+/// centre (`zoom` px a frame per px) on top of it. The exposure gather reads such tiles by
+/// the box (src/motion/reconstruct/uniform.rs).
+fn flow(w: usize, h: usize, pan: (f32, f32), zoom: f32) -> Frame {
+    let mut f = noise_frame(w, h, 9);
+    let (cx, cy) = (w as f32 / 2.0, h as f32 / 2.0);
+    f.velocity = Some(Velocity {
+        x: (0..w * h)
+            .map(|i| pan.0 + zoom * ((i % w) as f32 - cx))
+            .collect(),
+        y: (0..w * h)
+            .map(|i| pan.1 + zoom * ((i / w) as f32 - cy))
+            .collect(),
+    });
+    f
+}
+
+#[test]
+fn reconstruct_gather_matches_the_cpu_on_uniform_tiles() {
+    for params in variants() {
+        compare("pan", &flow(67, 41, (13.0, -5.0), 0.0), &params, 0.5, 4);
+        compare("zoom", &flow(67, 41, (3.0, 2.0), 0.01), &params, 0.5, 5);
+    }
+}
+
 #[test]
 fn reconstruct_gather_matches_the_cpu_with_the_shutter_offset() {
     // Opening at the frame, closing at it, and between: the offset line of taps, each side's

@@ -3,7 +3,7 @@ sideways (collection FG) in front of a textured wall and three boxes (collection
 camera trucking left, so the foreground uncovers background during the exposure.
 
     python scene.py OUT KIND [--others holdout|exclude|indirect] [--size WxH] [--samples N]
-                            [--seed S] [--frames A-B] [--name NAME]
+                            [--seed S] [--frames A-B] [--name NAME] [--camera truck|pan]
 
 KIND, each written as Blender writes an OpenEXR MultiLayer file (one part per pass, channels
 `<ViewLayer>.Combined.RGBA`, `.Depth.Z`, `.Vector.XYZW`), 32-bit float, ZIP:
@@ -18,6 +18,10 @@ KIND, each written as Blender writes an OpenEXR MultiLayer file (one part per pa
                  `reference` (to score the FG layer's blur alone, alpha included)
   reference_dof  OUT/reference_dof.####.exr: `ViewLayer`, the lens's depth of field, no
                  motion blur
+
+--camera pan turns the camera about its vertical axis (PAN_SPIN degrees a frame) where it
+trucks by default: every surface's motion then a smooth field across the frame (perspective
+makes it faster towards the sides) with no parallax between the wall and the boxes.
 
 Everything is emission-shaded (no lights, no bounces): the only noise is the pixel filter's,
 the shutter's and the lens's sampling. Denoiser off, adaptive sampling off, fixed seed.
@@ -38,6 +42,8 @@ CAMERA_Z = 1.0
 # Metres per frame: the camera trucks left, the cube flies right; degrees per frame.
 CAMERA_SPEED = -0.025
 CUBE_SPEED = 0.06
+# Degrees per frame the camera turns with --camera pan.
+PAN_SPIN = 1.5
 FAN_SPIN = 40.0
 # Keys from frame -2 to 6: frames 1 to 5 have their neighbours (the Vector pass) keyed too.
 KEY_FRAMES = range(-2, 7)
@@ -60,6 +66,7 @@ def arguments():
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--frames", default="1-1")
     p.add_argument("--name", help="file name before .####.exr (default: KIND, fg_OTHERS)")
+    p.add_argument("--camera", choices=["truck", "pan"], default="truck")
     return p.parse_args()
 
 
@@ -172,7 +179,7 @@ def fan_fill(radius, width, thickness, blades):
     return fill
 
 
-def build(width, height):
+def build(width, height, pan=False):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     # Keys with linear interpolation: constant speeds, so Cycles' shutter (which interpolates
     # each object's transform between its motion steps) and the Vector pass (frames -1, +1)
@@ -256,7 +263,12 @@ def build(width, height):
     scene.collection.objects.link(camera)
     scene.camera = camera
     for frame in KEY_FRAMES:
-        camera.location = (CAMERA_SPEED * (frame - 1), 0.0, CAMERA_Z)
+        if pan:
+            camera.location = (0.0, 0.0, CAMERA_Z)
+            camera.rotation_euler = (0.0, math.radians(PAN_SPIN * (frame - 1)), 0.0)
+            camera.keyframe_insert("rotation_euler", frame=frame)
+        else:
+            camera.location = (CAMERA_SPEED * (frame - 1), 0.0, CAMERA_Z)
         camera.keyframe_insert("location", frame=frame)
 
     # Three view layers: everything, the foreground alone, the background alone.
@@ -278,7 +290,7 @@ def main():
     args = arguments()
     width, height = (int(v) for v in args.size.split("x"))
     first, last = (int(v) for v in args.frames.split("-"))
-    scene, layers = build(width, height)
+    scene, layers = build(width, height, pan=args.camera == "pan")
     scene.cycles.samples = args.samples
     scene.cycles.seed = args.seed
     scene.frame_start, scene.frame_end = first, last

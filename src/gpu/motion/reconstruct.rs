@@ -35,7 +35,8 @@ use crate::motion::reconstruct::matte::{self, Matte};
 use crate::motion::reconstruct::pack::pack_tiles;
 #[cfg(doc)]
 use crate::motion::reconstruct::reconstruct_with;
-use crate::motion::reconstruct::{GatherInputs, ReconstructConfig, Texel2014, TileMask};
+use crate::motion::reconstruct::tiles::plain_tiles;
+use crate::motion::reconstruct::{uniform, GatherInputs, ReconstructConfig, Texel2014, TileMask};
 use crate::motion::tile_max::TileGrid;
 
 use crate::gpu::context::Gpu;
@@ -229,8 +230,9 @@ impl ReconstructPass {
         // The 2014 gather does not read it: a word, to fill the binding.
         let velocity_floats = if shape.velocity { 2 * shape.pixels } else { 1 };
         let velocity = buffer("reconstruct velocity", floats(velocity_floats), input);
-        // x, then y, then |M| as the CPU's gather works it out (`tile_length` in the shader).
-        let tiles = buffer("reconstruct tiles", floats(3 * shape.tiles), input);
+        // x, then y, then |M| as the CPU's gather works it out (`tile_length` in the shader),
+        // then whether each is uniform (`uniform_tile`).
+        let tiles = buffer("reconstruct tiles", floats(4 * shape.tiles), input);
         let color_bytes = floats(4 * shape.colours.max(1) * shape.pixels);
         let color = buffer(
             "reconstruct color",
@@ -285,14 +287,35 @@ impl ReconstructPass {
 }
 
 /// What one gather dispatch uploads besides the config: the texels, the pixel velocity
-/// (paper and dual), the tiles, the mattes (exposure), the colours carried (the 2014 gather
-/// carrying layers: each colour's packed texels, colour after colour).
+/// (paper and dual), the tiles, which of them are uniform (1 or 0 each, the 2014 gather's:
+/// [`uniform_flags`]), the mattes (exposure), the colours carried (the 2014 gather carrying
+/// layers: each colour's packed texels, colour after colour).
 struct Upload<'a> {
     texels: &'a [f32],
     velocity: Option<&'a crate::frame::Velocity>,
     tiles: &'a TileGrid,
+    uniform: Vec<f32>,
     mattes: &'a [f32],
     carried: &'a [[f32; 4]],
+}
+
+/// Which tiles the 2014 gather reads as uniform, 1 or 0 each, tile by tile: the CPU's
+/// classification ([`uniform::uniform_tiles`] of [`plain_tiles`]), run here for the GPU as
+/// the pack and the matte are, so both backends take the box on the same tiles.
+fn uniform_flags(
+    config: &ReconstructConfig,
+    texels: &[Texel2014],
+    mattes: &[Matte],
+    tiles: &TileGrid,
+) -> Vec<f32> {
+    if !uniform::runs(config) {
+        return vec![0.0; tiles.columns * tiles.rows];
+    }
+    let plain = plain_tiles(config, texels, mattes, tiles);
+    uniform::uniform_tiles(config, texels, &plain, tiles)
+        .into_iter()
+        .map(|u| u as u32 as f32)
+        .collect()
 }
 
 impl Gpu {
@@ -313,6 +336,7 @@ impl Gpu {
                 texels: bytemuck::cast_slice(texels),
                 velocity: Some(velocity),
                 tiles: neighbors,
+                uniform: vec![0.0; neighbors.columns * neighbors.rows],
                 mattes: &[],
                 carried: &[],
             },
@@ -324,6 +348,7 @@ impl Gpu {
                 texels: bytemuck::cast_slice(texels),
                 velocity: None,
                 tiles,
+                uniform: uniform_flags(config, texels, mattes, tiles),
                 mattes: bytemuck::cast_slice(mattes),
                 carried: &[],
             },
@@ -377,6 +402,7 @@ impl Gpu {
             texels: bytemuck::cast_slice(texels),
             velocity: None,
             tiles,
+            uniform: uniform_flags(config, texels, mattes, tiles),
             mattes: bytemuck::cast_slice(mattes),
             carried: &carried,
         };
@@ -463,6 +489,11 @@ impl Gpu {
             &buffers.tiles,
             2 * tile_plane,
             bytemuck::cast_slice(&lengths),
+        );
+        queue.write_buffer(
+            &buffers.tiles,
+            3 * tile_plane,
+            bytemuck::cast_slice(&upload.uniform),
         );
         // Alpha, where a colour has none, is not written: the gather's alpha is dropped then.
         for (g, color) in colours.iter().enumerate() {

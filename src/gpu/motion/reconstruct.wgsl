@@ -627,15 +627,91 @@ fn gather_pixel_2014(x: u32, y: u32) -> Colours {
     return out;
 }
 
-// 2014 and exposure: pixels of the tiles within one tile of a blurring (dilated) tile. Its
-// pipelines set COLOURS: 0 for `gather_2014`, the count for `gather_2014_carrying`.
+// Whether tile (c, r) is uniform (the tiles' fourth plane, 1 or 0, found on the host by the
+// CPU's `uniform_tiles`, src/motion/reconstruct/uniform.rs).
+fn uniform_tile(c: u32, r: u32) -> bool {
+    let n = columns() * rows();
+    return tiles[3u * n + r * columns() + c] != 0.0;
+}
+
+// The CPU's `shortened` (src/motion/reconstruct/uniform.rs): the factor the box shortens a
+// half-spread of `length` by, to sqrt(|V|² − 1/4), at least |V|/2.
+fn shortened(length: f32) -> f32 {
+    return sqrt(max(length * length - 0.25, 0.25 * length * length)) / length;
+}
+
+// The four pixels around (x, y) + offset with their bilinear weights, the point clamped into
+// the frame first (the CPU's `corners` in uniform.rs; `around` clamps the pixels instead).
+fn box_corners(x: u32, y: u32, offset: vec2<f32>) -> Around {
+    let width = config.width;
+    let height = config.height;
+    let fx = clamp(f32(x) + offset.x, 0.0, f32(width - 1u));
+    let fy = clamp(f32(y) + offset.y, 0.0, f32(height - 1u));
+    let x0 = u32(fx);
+    let y0 = u32(fy);
+    let wx = fx - f32(x0);
+    let wy = fy - f32(y0);
+    let x1 = min(x0 + 1u, width - 1u);
+    let y1 = min(y0 + 1u, height - 1u);
+    return Around(
+        array<u32, 4>(y0 * width + x0, y0 * width + x1, y1 * width + x0, y1 * width + x1),
+        array<f32, 4>((1.0 - wx) * (1.0 - wy), wx * (1.0 - wy), (1.0 - wx) * wy, wx * wy),
+    );
+}
+
+// Adds to `sum` the colours read bilinearly at (x, y) + offset, the four corners added in
+// pairs (the CPU's `add_tap`, which leaves out the corners of weight 0 on a row's or a
+// column's line: the same sums).
+fn add_tap(sum: ptr<function, Colours>, x: u32, y: u32, offset: vec2<f32>) {
+    let a = box_corners(x, y, offset);
+    for (var g = 0u; g < colours(); g++) {
+        (*sum).c[g] += (a.weight[0] * colour(g, a.index[0]) + a.weight[1] * colour(g, a.index[1]))
+            + (a.weight[2] * colour(g, a.index[2]) + a.weight[3] * colour(g, a.index[3]));
+    }
+}
+
+// The uniform tiles' box (the CPU's `box_pixel`): n = 4k taps at the midpoints of n equal
+// parts of the line along the pixel's own V (shortened), read bilinearly, the even and odd
+// taps summed apart, then together over n.
+fn box_pixel(x: u32, y: u32) -> Colours {
+    let centre = texel8(y * config.width + x);
+    let length = centre.length;
+    let k = max(max((config.taps + 3u) / 4u, 1u), min(u32(ceil(length / TAP_SPACING)), MAX_TAPS_PER_SIDE));
+    let n = 4u * k;
+    let step = 2.0 / f32(n);
+    let v = vec2<f32>(centre.vx, centre.vy) * shortened(length);
+    var even: Colours;
+    var odd: Colours;
+    for (var pair = 0u; pair < n / 2u; pair++) {
+        let u0 = (f32(2u * pair) + 0.5) * step - 1.0;
+        add_tap(&even, x, y, v * u0);
+        let u1 = (f32(2u * pair + 1u) + 0.5) * step - 1.0;
+        add_tap(&odd, x, y, v * u1);
+    }
+    let count = f32(n);
+    for (var g = 0u; g < colours(); g++) {
+        even.c[g] = (even.c[g] + odd.c[g]) / count;
+    }
+    return even;
+}
+
+// 2014 and exposure: pixels of the tiles within one tile of a blurring (dilated) tile, the
+// uniform ones by the box. Its pipelines set COLOURS: 0 for `gather_2014`, the count for
+// `gather_2014_carrying`.
 @compute @workgroup_size(8, 8)
 fn gather_2014(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= config.width || id.y >= config.height {
         return;
     }
-    if !near_blur(id.x / config.tile, id.y / config.tile, 1u) {
+    let c = id.x / config.tile;
+    let r = id.y / config.tile;
+    if !near_blur(c, r, 1u) {
         return;
     }
-    write_colours(id.y * config.width + id.x, gather_pixel_2014(id.x, id.y));
+    let i = id.y * config.width + id.x;
+    if uniform_tile(c, r) {
+        write_colours(i, box_pixel(id.x, id.y));
+        return;
+    }
+    write_colours(i, gather_pixel_2014(id.x, id.y));
 }

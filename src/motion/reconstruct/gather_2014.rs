@@ -14,6 +14,7 @@ use super::matte::{self, Matte};
 use super::pack::pack_tiles;
 use super::taps::{bilinear, split, split_by_cover, whole, At, Colours};
 use super::tiles::{gather_tiles_of, near_blur, plain_tiles, TileMask};
+use super::uniform::{box_pixel, uniform_tiles};
 use crate::frame::Color;
 use crate::motion::tile_max::TileGrid;
 use crate::numeric::unit;
@@ -158,6 +159,7 @@ fn gather_2014_as<const G: usize>(
     } else {
         vec![false; tiles.columns * tiles.rows]
     };
+    let uniform = uniform_tiles(config, texels, &plain, tiles);
     gather_tiles_of(
         config,
         tiles.columns,
@@ -166,7 +168,10 @@ fn gather_2014_as<const G: usize>(
         |(c, row), x, y| {
             // A copy of the gather for each kind of tile, so neither pays for the other's
             // branches (one copy with the flag read per tap ran the noise frame 10 % slower).
-            if plain[row * tiles.columns + c] {
+            let t = row * tiles.columns + c;
+            if uniform[t] {
+                box_pixel(config, texels, colour, x, y)
+            } else if plain[t] {
                 gather_pixel_2014::<G, _, true>(config, &form(), &sources, tiles, x, y)
             } else {
                 gather_pixel_2014::<G, _, false>(config, &form(), &sources, tiles, x, y)
@@ -665,8 +670,8 @@ mod tests {
             .collect()
     }
 
-    /// A textured frame moving (24, 8) px a frame everywhere over one depth, but for the
-    /// still pixels `still`: the exposure gather's plain tiles and its output.
+    /// A textured frame moving (24, 8) or (22, 8) px a frame everywhere over one depth, but for
+    /// the still pixels `still`: the exposure gather's plain tiles and its output.
     fn uniform_pan(still: &[(usize, usize)]) -> (Vec<bool>, usize, Color) {
         let (w, h) = (80usize, 64usize);
         let wave = |k: f32| -> Vec<f32> {
@@ -681,7 +686,11 @@ mod tests {
             b: wave(0.05),
             a: None,
         };
-        let mut vx = vec![24.0; w * h];
+        // Two motions in a checker, 2 px a frame apart: every pixel moves, but the flow is not
+        // smooth, so no tile takes the uniform tiles' box (super::uniform).
+        let mut vx: Vec<f32> = (0..w * h)
+            .map(|i| if (i % w + i / w) % 2 == 0 { 24.0 } else { 22.0 })
+            .collect();
         let mut vy = vec![8.0; w * h];
         for &(x, y) in still {
             (vx[y * w + x], vy[y * w + x]) = (0.0, 0.0);
@@ -700,6 +709,7 @@ mod tests {
         let texels = pack_2014(&config, &color, &depth, velocity, &dilated, &packed);
         let mattes = matte::mattes(&config, &texels, |c, row| packed.get(c, row));
         let plain = plain_tiles(&config, &texels, &mattes, &dilated);
+        assert!(!uniform_tiles(&config, &texels, &plain, &dilated).contains(&true));
         let mut out = color.clone();
         gather_2014(&config, &texels, &mattes, &dilated, &mut out);
         (plain, dilated.columns, out)

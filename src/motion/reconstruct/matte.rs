@@ -114,7 +114,10 @@ pub fn mattes(
                     0.0,
                     0.0,
                 ];
-                if selected(x / size, y / size) {
+                // A pixel whose 3×3 is of one kind (all moving or all still, as read) is no
+                // silhouette: `matte` would find no depth step there and return None.
+                let pure = kinds.purity[i] & (PURE_MOVING | PURE_STILL) != 0;
+                if !pure && selected(x / size, y / size) {
                     if let Some(found) = matte(config, texels, &selected, &kinds, x, y) {
                         *m = found;
                     }

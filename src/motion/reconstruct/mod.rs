@@ -52,6 +52,7 @@ pub mod matte;
 pub mod pack;
 pub mod taps;
 pub mod tiles;
+pub mod uniform;
 
 pub use config::{
     half_spread, reach_factor, spread_2014, Form, ReconstructConfig, ReconstructParams, Texel,
