@@ -309,6 +309,23 @@ fn reconstruct_gather_matches_the_cpu_on_uniform_tiles() {
     for params in variants() {
         compare("pan", &flow(67, 41, (13.0, -5.0), 0.0), &params, 0.5, 4);
         compare("zoom", &flow(67, 41, (3.0, 2.0), 0.01), &params, 0.5, 5);
+        for offset in [0.5, -0.3] {
+            let shutter = Shutter { open: 0.5, offset };
+            compare(
+                "pan offset",
+                &flow(67, 41, (0.0, 11.0), 0.0),
+                &params,
+                shutter,
+                6,
+            );
+            compare(
+                "zoom offset",
+                &flow(67, 41, (-3.0, 2.0), 0.02),
+                &params,
+                shutter,
+                7,
+            );
+        }
     }
 }
 

@@ -671,8 +671,8 @@ fn add_tap(sum: ptr<function, Colours>, x: u32, y: u32, offset: vec2<f32>) {
 }
 
 // The uniform tiles' box (the CPU's `box_pixel`): n = 4k taps at the midpoints of n equal
-// parts of the line along the pixel's own V (shortened), read bilinearly, the even and odd
-// taps summed apart, then together over n.
+// parts of the line along the pixel's own V (shortened, centred 2·offset·V back), read
+// bilinearly, the even and odd taps summed apart, then together over n.
 fn box_pixel(x: u32, y: u32) -> Colours {
     let centre = texel8(y * config.width + x);
     let length = centre.length;
@@ -680,13 +680,15 @@ fn box_pixel(x: u32, y: u32) -> Colours {
     let n = 4u * k;
     let step = 2.0 / f32(n);
     let v = vec2<f32>(centre.vx, centre.vy) * shortened(length);
+    // An offset exposure's line is centred 2·offset·V back along the motion.
+    let middle = vec2<f32>(centre.vx, centre.vy) * (-2.0 * config.offset);
     var even: Colours;
     var odd: Colours;
     for (var pair = 0u; pair < n / 2u; pair++) {
         let u0 = (f32(2u * pair) + 0.5) * step - 1.0;
-        add_tap(&even, x, y, v * u0);
+        add_tap(&even, x, y, middle + v * u0);
         let u1 = (f32(2u * pair + 1u) + 0.5) * step - 1.0;
-        add_tap(&odd, x, y, v * u1);
+        add_tap(&odd, x, y, middle + v * u1);
     }
     let count = f32(n);
     for (var g = 0u; g < colours(); g++) {

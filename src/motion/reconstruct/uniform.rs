@@ -7,7 +7,8 @@
 //! pixel changes smoothly (a camera pan, a translating plate, a zoom, the inside of a large
 //! moving surface), nothing uncovers or covers anything during the exposure, whatever the
 //! depths, and the pixel integrates the frame's image along its own motion:
-//! `(1/2) ∫ I(x + u·V) du` over u ∈ [−1, 1] (V the half-spread, a centred exposure). The
+//! `(1/2) ∫ I(x + u·V) du` over u ∈ [−1, 1] (V the half-spread, a centred exposure; an
+//! offset one moves the line 2·offset·V back along the motion). The
 //! gather approximates that through its weights (every tap then weighs one, foreground or
 //! background, but at the streak's ends, where its weights ramp and the centre fills in);
 //! here the integral is read directly: as many taps as the gather takes, at the midpoints of
@@ -22,7 +23,8 @@
 use rayon::prelude::*;
 
 use super::config::{
-    Form, ReconstructConfig, Texel2014, HALF_PIXEL, LENGTH, MAX_TAPS_PER_SIDE, TAP_SPACING, VX, VY,
+    reach_factor, Form, ReconstructConfig, Texel2014, HALF_PIXEL, LENGTH, MAX_TAPS_PER_SIDE,
+    TAP_SPACING, VX, VY,
 };
 #[cfg(doc)]
 use super::taps::around_index;
@@ -39,11 +41,10 @@ use crate::motion::tile_max::TileGrid;
 /// 640×360 (1/16: 0.01379, the rest 0.01370); an eighth of a pixel keeps the margin.
 pub const UNIFORM_SPREAD: f32 = 0.125;
 
-/// Whether the frame's config takes the fast path at all: ours (the exposure variant) under a
-/// centred exposure. Blender's form is kept as Blender runs it; an offset exposure's streaks
-/// are not centred on the pixel (not built: the line's ends would move by 2·offset·V).
+/// Whether the frame's config takes the fast path at all: ours (the exposure variant), at any
+/// shutter offset. Blender's form is kept as Blender runs it.
 pub fn runs(config: &ReconstructConfig) -> bool {
-    config.form() == Form::OURS && config.offset == 0.0
+    config.form() == Form::OURS
 }
 
 /// Which tiles are uniform: plain (`plain_tiles` in [`super::tiles`]: every texel its taps read
@@ -111,7 +112,7 @@ pub fn uniform_tiles(
                     m = m.max(tiles.length(cc, rr));
                 }
             }
-            let reach = m + 2.0;
+            let reach = m * reach_factor(config) + 2.0;
             if !reach.is_finite() || reach > (width + height) as f32 {
                 return false;
             }
@@ -129,7 +130,8 @@ pub fn uniform_tiles(
 
 /// The box shutter's integral of the colours along pixel (x, y)'s own motion V (its texel's),
 /// with n = 4k taps at the midpoints u = −1 + (i + ½)·2/n, i < n, of n equal parts of the
-/// line, each the colours read bilinearly at (x, y) + u·V', summed (even and odd taps apart,
+/// line, each the colours read bilinearly at (x, y) − 2·offset·V + u·V' (the line centred
+/// where the exposure's middle saw the surface), summed (even and odd taps apart,
 /// then together) and divided by n. k is the gather's taps a side for the pixel (at least
 /// S/4, one every [`TAP_SPACING`] px of |V|, at most [`MAX_TAPS_PER_SIDE`]), so the line is
 /// read as densely as the gather reads it. V' is V shortened by [`shortened`]. Only for a
@@ -156,15 +158,19 @@ pub fn box_pixel<const G: usize>(
     let n = 4 * k;
     let factor = shortened(length);
     let v = (centre[VX] * factor, centre[VY] * factor);
+    // An offset exposure's streak is the centred one moved by 2·offset·V against the motion
+    // (opening at the frame, the pixel sees what was behind it along V): the line's centre.
+    let shift = -2.0 * config.offset;
+    let centre_offset = (centre[VX] * shift, centre[VY] * shift);
     // A line along a row (or a column) reads every tap at a whole row (column): two of its
     // four corners weigh exactly 0 and are not read (the same sums: a zero product adds
     // nothing), half the reads of a sideways pan.
     if v.1 == 0.0 {
-        box_sums::<G, ROW>(colour, (width, height), (x, y), v, n)
+        box_sums::<G, ROW>(colour, (width, height), (x, y), (centre_offset, v), n)
     } else if v.0 == 0.0 {
-        box_sums::<G, COLUMN>(colour, (width, height), (x, y), v, n)
+        box_sums::<G, COLUMN>(colour, (width, height), (x, y), (centre_offset, v), n)
     } else {
-        box_sums::<G, ANY>(colour, (width, height), (x, y), v, n)
+        box_sums::<G, ANY>(colour, (width, height), (x, y), (centre_offset, v), n)
     }
 }
 
@@ -173,13 +179,14 @@ const ANY: u8 = 0;
 const ROW: u8 = 1;
 const COLUMN: u8 = 2;
 
-/// [`box_pixel`]'s mean of its `n` taps along `v` from pixel (x, y), for lines of kind `LINE`.
+/// [`box_pixel`]'s mean of its `n` taps along `v` about `centre` from pixel (x, y), for lines
+/// of kind `LINE`. (Centred, `centre` is ±0: the same sums as without it.)
 #[inline(always)]
 fn box_sums<const G: usize, const LINE: u8>(
     colour: &impl Fn(usize) -> Colours<G>,
     size: (usize, usize),
     (x, y): (usize, usize),
-    v: (f32, f32),
+    (centre, v): ((f32, f32), (f32, f32)),
     n: usize,
 ) -> Colours<G> {
     let step = 2.0 / n as f32;
@@ -188,9 +195,11 @@ fn box_sums<const G: usize, const LINE: u8>(
     let (mut even, mut odd) = ([[0.0f32; 4]; G], [[0.0f32; 4]; G]);
     for pair in 0..n / 2 {
         let u = ((2 * pair) as f32 + 0.5) * step - 1.0;
-        add_tap::<G, LINE>(&mut even, colour, size, (x, y), (v.0 * u, v.1 * u));
+        let at = (centre.0 + v.0 * u, centre.1 + v.1 * u);
+        add_tap::<G, LINE>(&mut even, colour, size, (x, y), at);
         let u = ((2 * pair + 1) as f32 + 0.5) * step - 1.0;
-        add_tap::<G, LINE>(&mut odd, colour, size, (x, y), (v.0 * u, v.1 * u));
+        let at = (centre.0 + v.0 * u, centre.1 + v.1 * u);
+        add_tap::<G, LINE>(&mut odd, colour, size, (x, y), at);
     }
     let count = n as f32;
     for g in 0..G {
@@ -355,15 +364,21 @@ mod tests {
             }
         };
         let colour = |j: usize| [[texels[j][0], texels[j][1], texels[j][2], texels[j][3]]];
-        for x in 24..36 {
-            let length = texels[8 * 64 + x][LENGTH];
-            let a = (length * length - 0.25).sqrt();
-            let expected = (integral(x as f32 + a) - integral(x as f32 - a)) / (2.0 * a);
-            let got = box_pixel(&config, &texels, &colour, x, 8)[0];
-            assert!(
-                (got[0] - expected).abs() < 1e-3 && got[1] == got[0] && got[3] == 1.0,
-                "x = {x}: {got:?} against {expected}"
-            );
+        // Centred, the line about the pixel; opening at the frame (offset ½), about the
+        // point |V| behind it along the motion (it sees what was there).
+        for offset in [0.0, 0.5] {
+            let config = ReconstructConfig { offset, ..config };
+            for x in 24..40 {
+                let length = texels[8 * 64 + x][LENGTH];
+                let a = (length * length - 0.25).sqrt();
+                let middle = x as f32 - 2.0 * offset * length;
+                let expected = (integral(middle + a) - integral(middle - a)) / (2.0 * a);
+                let got = box_pixel(&config, &texels, &colour, x, 8)[0];
+                assert!(
+                    (got[0] - expected).abs() < 1e-3 && got[1] == got[0] && got[3] == 1.0,
+                    "offset {offset}, x = {x}: {got:?} against {expected}"
+                );
+            }
         }
     }
 
@@ -423,15 +438,20 @@ mod tests {
             }
         });
         assert!(!still[3 * 12 + 5] && still[7 * 12]);
-        // Blender's form, and ours under an offset exposure: never.
+        // Blender's form: never. Ours under an offset exposure: as centred, its reach
+        // grown by the offset (|M| × 2 + 2 px: tile 9's reach, 12 px, now holds the jump).
         let blender = ReconstructParams {
             variant: Variant::Stable,
             ..params
         };
         let (.., none) = frame(size, &blender, texture, |_, _| (12.0, 0.0));
         assert!(!none.contains(&true));
-        let (mut config, texels, tiles, _) = frame(size, &params, texture, |_, _| (12.0, 0.0));
-        config.offset = 0.25;
-        assert!(!uniform_tiles(&config, &texels, &[true; 96], &tiles).contains(&true));
+        let (mut config, texels, tiles, _) = frame(size, &params, texture, |x, _| {
+            (if x < 64 { 12.0 } else { 20.0 }, 0.0)
+        });
+        config.offset = 0.5;
+        let offset = uniform_tiles(&config, &texels, &[true; 96], &tiles);
+        assert!((0..6).chain(10..12).all(|c| column(&offset, c)));
+        assert!(!(6..10).any(|c| (0..8).any(|r| offset[r * 12 + c])));
     }
 }
