@@ -165,12 +165,16 @@ pub fn box_pixel<const G: usize>(
     // A line along a row (or a column) reads every tap at a whole row (column): two of its
     // four corners weigh exactly 0 and are not read (the same sums: a zero product adds
     // nothing), half the reads of a sideways pan.
-    if v.1 == 0.0 {
-        box_sums::<G, ROW>(colour, (width, height), (x, y), (centre_offset, v), n)
-    } else if v.0 == 0.0 {
-        box_sums::<G, COLUMN>(colour, (width, height), (x, y), (centre_offset, v), n)
-    } else {
-        box_sums::<G, ANY>(colour, (width, height), (x, y), (centre_offset, v), n)
+    let line = (centre_offset, v);
+    // Centred, the line's centre is the pixel: a copy without its add (10 % of the pan's
+    // time).
+    match (v.1 == 0.0, v.0 == 0.0, config.offset == 0.0) {
+        (true, _, true) => box_sums::<G, ROW, true>(colour, (width, height), (x, y), line, n),
+        (true, _, false) => box_sums::<G, ROW, false>(colour, (width, height), (x, y), line, n),
+        (_, true, true) => box_sums::<G, COLUMN, true>(colour, (width, height), (x, y), line, n),
+        (_, true, false) => box_sums::<G, COLUMN, false>(colour, (width, height), (x, y), line, n),
+        (_, _, true) => box_sums::<G, ANY, true>(colour, (width, height), (x, y), line, n),
+        (_, _, false) => box_sums::<G, ANY, false>(colour, (width, height), (x, y), line, n),
     }
 }
 
@@ -180,9 +184,9 @@ const ROW: u8 = 1;
 const COLUMN: u8 = 2;
 
 /// [`box_pixel`]'s mean of its `n` taps along `v` about `centre` from pixel (x, y), for lines
-/// of kind `LINE`. (Centred, `centre` is ±0: the same sums as without it.)
+/// of kind `LINE` (`CENTRED`: `centre` is ±0, not added: the same sums).
 #[inline(always)]
-fn box_sums<const G: usize, const LINE: u8>(
+fn box_sums<const G: usize, const LINE: u8, const CENTRED: bool>(
     colour: &impl Fn(usize) -> Colours<G>,
     size: (usize, usize),
     (x, y): (usize, usize),
@@ -194,12 +198,17 @@ fn box_sums<const G: usize, const LINE: u8>(
     // in pairs: one chain of adds through every tap held the path back.
     let (mut even, mut odd) = ([[0.0f32; 4]; G], [[0.0f32; 4]; G]);
     for pair in 0..n / 2 {
+        let at = |u: f32| {
+            if CENTRED {
+                (v.0 * u, v.1 * u)
+            } else {
+                (centre.0 + v.0 * u, centre.1 + v.1 * u)
+            }
+        };
         let u = ((2 * pair) as f32 + 0.5) * step - 1.0;
-        let at = (centre.0 + v.0 * u, centre.1 + v.1 * u);
-        add_tap::<G, LINE>(&mut even, colour, size, (x, y), at);
+        add_tap::<G, LINE>(&mut even, colour, size, (x, y), at(u));
         let u = ((2 * pair + 1) as f32 + 0.5) * step - 1.0;
-        let at = (centre.0 + v.0 * u, centre.1 + v.1 * u);
-        add_tap::<G, LINE>(&mut odd, colour, size, (x, y), at);
+        add_tap::<G, LINE>(&mut odd, colour, size, (x, y), at(u));
     }
     let count = n as f32;
     for g in 0..G {
