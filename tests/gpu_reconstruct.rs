@@ -11,6 +11,7 @@ use std::io::Write;
 
 use shutter::frame::{Color, Frame, Velocity};
 use shutter::gpu::Gpu;
+use shutter::motion::reconstruct::classify::{classify, TileKind};
 use shutter::motion::reconstruct::matte::Matte;
 use shutter::motion::reconstruct::{
     reconstruct, reconstruct_layers_with, reconstruct_with, GatherInputs, ReconstructConfig,
@@ -390,6 +391,97 @@ fn reconstruct_gather_matches_the_cpu_on_stress_frames() {
     }
 }
 
+/// reconstruct's stages with the classification run on both backends: the GPU's (which must
+/// run) must equal the CPU's tile for tile; `seen` counts the kinds compared.
+struct ClassifyOnBoth<'a> {
+    gpu: &'a Gpu,
+    seen: std::cell::Cell<[usize; 3]>,
+}
+
+impl Stages for ClassifyOnBoth<'_> {
+    fn classify(
+        &self,
+        config: &ReconstructConfig,
+        texels: &[Texel2014],
+        mattes: &[Matte],
+        tiles: &TileGrid,
+    ) -> Vec<TileKind> {
+        let cpu = classify(config, texels, mattes, tiles);
+        let got = self
+            .gpu
+            .try_classify(config, texels, mattes, tiles)
+            .expect("the GPU's classification runs");
+        for (t, (g, c)) in got.iter().zip(&cpu).enumerate() {
+            assert_eq!(
+                g, c,
+                "tile {t} ({} columns), variant {}, offset {}",
+                tiles.columns, config.variant, config.offset
+            );
+        }
+        assert_eq!(got.len(), cpu.len());
+        let mut seen = self.seen.get();
+        for kind in &cpu {
+            seen[*kind as usize] += 1;
+        }
+        self.seen.set(seen);
+        cpu
+    }
+}
+
+/// The classification's twin (src/gpu/motion/classify.wgsl) finds every tile's kind as the
+/// CPU does (its tolerance: none, the kinds are decisions), on frames with every kind: a
+/// pan and a zoom (uniform), a jump between two motions (plain beside it), a still subject,
+/// edges, noise and stress frames (full), centred and under offset exposures, each variant
+/// (the 2014 filter's tiles are all full).
+#[test]
+fn classify_on_the_gpu_finds_the_cpu_s_kinds() {
+    let Some(gpu) = gpu() else { return };
+    let both = ClassifyOnBoth {
+        gpu,
+        seen: std::cell::Cell::new([0; 3]),
+    };
+    // Jumps between two motions and zooms, each at speeds and rates in steps, so that some
+    // tile's reach or steepness lies close to where its kind changes.
+    let jump = |speed: f32| {
+        let mut f = flow(90, 50, (speed, 0.0), 0.0);
+        let v = f.velocity.as_mut().unwrap();
+        for i in 0..90 * 50 {
+            v.x[i] = if i % 90 < 45 { speed } else { speed + 8.0 };
+        }
+        f
+    };
+    // A fast pan with one still pixel: the tiles whose plain reach holds it are full, and
+    // that reach spans several tiles (a reach a tile shorter or longer moves kinds).
+    let mut dot = flow(120, 64, (40.0, 3.0), 0.0);
+    let v = dot.velocity.as_mut().unwrap();
+    (v.x[30 * 120 + 70], v.y[30 * 120 + 70]) = (0.0, 0.0);
+    let frames = [
+        dot,
+        flow(67, 41, (13.0, -5.0), 0.0),
+        flow(67, 41, (3.0, 2.0), 0.01),
+        flow(80, 45, (0.0, 9.0), 0.002),
+        still_subject(70, 50, 12.0),
+        stripes(61, 37, 9.0),
+        noisy(53, 41, 7, 30.0),
+        stress(50, 40, 9),
+    ]
+    .into_iter()
+    .chain((8..24).map(|speed| jump(speed as f32)))
+    .chain((1..16).map(|z| flow(72, 40, (6.0, 2.0), 0.01 * z as f32)))
+    .collect::<Vec<_>>();
+    for params in variants().into_iter().filter(|p| p.variant.is_2014()) {
+        for frame in &frames {
+            for offset in [0.0, 0.5, -0.3] {
+                let shutter = Shutter { open: 0.5, offset };
+                reconstruct_with(frame.clone(), &params, shutter, 3, &both);
+            }
+        }
+    }
+    let [full, plain, uniform] = both.seen.get();
+    eprintln!("classify: {full} full, {plain} plain, {uniform} uniform tiles compared");
+    assert!(full > 0 && plain > 0 && uniform > 0, "every kind compared");
+}
+
 /// The tolerance is not vacuous: a gather that misses one tap per pixel (a hash that is not
 /// the CPU's would do worse) fails it. Here the GPU's output is compared with the CPU's for
 /// another frame number, i.e. another jitter.
@@ -586,7 +678,7 @@ impl Stages for CarryingOnGpu<'_> {
     fn gather_2014_carrying(
         &self,
         config: &ReconstructConfig,
-        inputs: (&[Texel2014], &[Matte], &TileGrid),
+        inputs: (&[Texel2014], &[Matte], &TileGrid, &[TileKind]),
         packed: &TileMask,
         colours: &mut [&mut Color],
     ) {

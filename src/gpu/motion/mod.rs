@@ -1,9 +1,10 @@
 //! Motion blur's GPU twins, mirroring [`crate::motion`]: reconstruct's tile stages
-//! (`tile_max`, `neighbor_max`, `dilate`) and its gather (`reconstruct`), `scatter` and
-//! `stretch`.
+//! (`tile_max`, `neighbor_max`, `dilate`), its tile classification (`classify`) and its gather
+//! (`reconstruct`), `scatter` and `stretch`.
 
 use crate::frame::{Color, Positions};
 use crate::gpu::context::Gpu;
+use crate::motion::reconstruct::classify::TileKind;
 use crate::motion::reconstruct::matte::Matte;
 use crate::motion::reconstruct::{self as reconstruct_cpu, GatherInputs, ReconstructConfig};
 use crate::motion::reconstruct::{Texel2014, TileMask};
@@ -11,6 +12,7 @@ use crate::motion::scatter::{self as scatter_cpu, ScatterConfig};
 use crate::motion::stretch::{self as stretch_cpu, StretchConfig};
 use crate::motion::tile_max::TileGrid;
 
+pub mod classify;
 pub mod dilate;
 pub mod neighbor_max;
 pub mod reconstruct;
@@ -28,8 +30,8 @@ pub const SHADERS: &[(&str, &str)] = &[
     ("stretch", stretch::SHADER),
 ];
 
-/// Reconstruct's stages with a twin run here: the tile stages and the gather (the pack and
-/// the matte run on the CPU in the same run).
+/// Reconstruct's stages with a twin run here: the tile stages, the classification and the
+/// gather (the pack and the matte run on the CPU in the same run).
 impl reconstruct_cpu::Stages for Gpu {
     fn tile_max(
         &self,
@@ -62,6 +64,20 @@ impl reconstruct_cpu::Stages for Gpu {
         )
     }
 
+    fn classify(
+        &self,
+        config: &ReconstructConfig,
+        texels: &[Texel2014],
+        mattes: &[Matte],
+        tiles: &TileGrid,
+    ) -> Vec<TileKind> {
+        self.or_cpu(
+            "classify",
+            || self.try_classify(config, texels, mattes, tiles),
+            || reconstruct_cpu::classify::classify(config, texels, mattes, tiles),
+        )
+    }
+
     fn gather(&self, config: &ReconstructConfig, inputs: GatherInputs<'_>, color: &mut Color) {
         // In place: a gather that could not run has left the colour untouched.
         let tried = self.try_reconstruct_gather(config, &inputs, color);
@@ -79,15 +95,20 @@ impl reconstruct_cpu::Stages for Gpu {
     fn gather_2014_carrying(
         &self,
         config: &ReconstructConfig,
-        inputs: (&[Texel2014], &[Matte], &TileGrid),
+        inputs: (&[Texel2014], &[Matte], &TileGrid, &[TileKind]),
         packed: &TileMask,
         colours: &mut [&mut Color],
     ) {
         let pixels = config.width as usize * config.height as usize;
-        let (texels, mattes, tiles) = inputs;
+        let (texels, mattes, tiles, kinds) = inputs;
         let cpu = |group: &mut [&mut Color]| {
             reconstruct_cpu::gather_2014::gather_2014_carrying(
-                config, texels, mattes, tiles, packed, group,
+                config,
+                texels,
+                mattes,
+                (tiles, kinds),
+                packed,
+                group,
             )
         };
         let most = self.reconstruct_colours_per_dispatch(pixels);

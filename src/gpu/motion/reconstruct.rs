@@ -4,12 +4,13 @@
 //! motion-blur reconstruction.
 //!
 //! In: what [`reconstruct_with`] hands its gather ([`GatherInputs`]): the packed texels, the
-//! pixel velocity (paper and dual), the tile grid and the exposure variant's mattes
-//! ([`crate::motion::reconstruct::matte`]), all built on the CPU (tile_max, neighbor_max, dilate, pack and
-//! matte stay there). In and out: the premultiplied colour, written in place where the CPU
-//! writes it. Bindings, in order: the [`ReconstructConfig`] uniform, texels, velocity, tiles,
-//! colour, mattes — the CPU functions' arguments; planar structs travel as their planes one
-//! after the other.
+//! pixel velocity (paper and dual), the tile grid, its kinds ([`Stages::classify`], whose twin
+//! runs in the same module: src/gpu/motion/classify.rs) and the exposure variant's mattes
+//! ([`crate::motion::reconstruct::matte`]), built by the tile stages (or their twins) and on
+//! the CPU (pack and matte). In and out: the premultiplied colour, written in place where the
+//! CPU writes it. Bindings, in order: the [`ReconstructConfig`] uniform, texels, velocity,
+//! tiles, colour, mattes, carried colours, kinds, the classification's summaries — the CPU
+//! functions' arguments; planar structs travel as their planes one after the other.
 //!
 //! Both sides compute in f32 with the same operations in the same order and the same hash
 //! ([`crate::numeric::hash`]); what can differ is the rounding of `sqrt` and division (WGSL
@@ -31,12 +32,14 @@ use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
 use crate::frame::Color;
+use crate::motion::reconstruct::classify::TileKind;
 use crate::motion::reconstruct::matte::{self, Matte};
 use crate::motion::reconstruct::pack::pack_tiles;
 #[cfg(doc)]
 use crate::motion::reconstruct::reconstruct_with;
-use crate::motion::reconstruct::tiles::plain_tiles;
-use crate::motion::reconstruct::{uniform, GatherInputs, ReconstructConfig, Texel2014, TileMask};
+#[cfg(doc)]
+use crate::motion::reconstruct::Stages;
+use crate::motion::reconstruct::{GatherInputs, ReconstructConfig, Texel2014, TileMask};
 use crate::motion::tile_max::TileGrid;
 
 use crate::gpu::context::Gpu;
@@ -47,6 +50,7 @@ pub const SHADER: &str = concat!(
     include_str!("../prelude.wgsl"),
     include_str!("reconstruct.wgsl"),
     include_str!("reconstruct_taps.wgsl"),
+    include_str!("classify.wgsl"),
     "const MOST_COLOURS: u32 = 1u;\n"
 );
 
@@ -56,6 +60,7 @@ pub const SHADER_CARRYING: &str = concat!(
     include_str!("../prelude.wgsl"),
     include_str!("reconstruct.wgsl"),
     include_str!("reconstruct_taps.wgsl"),
+    include_str!("classify.wgsl"),
     "const MOST_COLOURS: u32 = 8u;\n"
 );
 
@@ -68,21 +73,21 @@ const WORKGROUP: u32 = 8;
 
 /// What the buffers of one frame depend on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-struct Shape {
-    pixels: usize,
-    tiles: usize,
+pub(super) struct Shape {
+    pub(super) pixels: usize,
+    pub(super) tiles: usize,
     /// Floats per texel: 6 (paper, dual) or 8 (2014, exposure).
-    texel: usize,
+    pub(super) texel: usize,
     /// Whether the gather reads the pixel velocity (paper, dual).
-    velocity: bool,
+    pub(super) velocity: bool,
     /// Whether the gather reads the mattes (exposure).
-    mattes: bool,
+    pub(super) mattes: bool,
     /// The colours the 2014 gather carries (0: the beauty alone, from the texels).
-    colours: usize,
+    pub(super) colours: usize,
 }
 
 /// The buffers of one frame shape.
-struct Buffers {
+pub(super) struct Buffers {
     config: wgpu::Buffer,
     texels: wgpu::Buffer,
     velocity: wgpu::Buffer,
@@ -90,8 +95,9 @@ struct Buffers {
     color: wgpu::Buffer,
     mattes: wgpu::Buffer,
     carried: wgpu::Buffer,
-    readback: wgpu::Buffer,
-    bind_group: wgpu::BindGroup,
+    pub(super) kinds: wgpu::Buffer,
+    pub(super) readback: wgpu::Buffer,
+    pub(super) bind_group: wgpu::BindGroup,
 }
 
 /// The compiled stage (both entry points; the 2014 gather's carrying pipelines as each count
@@ -102,10 +108,13 @@ pub(crate) struct ReconstructPass {
     pipeline_layout: wgpu::PipelineLayout,
     gather: wgpu::ComputePipeline,
     gather_2014: wgpu::ComputePipeline,
+    /// The classification's two entries (classify.wgsl).
+    pub(super) classify_tiles: wgpu::ComputePipeline,
+    pub(super) classify_kinds: wgpu::ComputePipeline,
     /// `gather_2014` with COLOURS = n + 1 at n.
     carrying: [OnceLock<wgpu::ComputePipeline>; MOST_COLOURS],
     layout: wgpu::BindGroupLayout,
-    buffers: Mutex<HashMap<Shape, Buffers>>,
+    pub(super) buffers: Mutex<HashMap<Shape, Buffers>>,
 }
 
 /// The 2014 gather's pipeline for `colours` colours (0: the beauty alone, from the texels).
@@ -167,6 +176,8 @@ impl ReconstructPass {
                 storage(4, false),
                 storage(5, true),
                 storage(6, true),
+                storage(7, false),
+                storage(8, false),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -177,6 +188,8 @@ impl ReconstructPass {
         ReconstructPass {
             gather: pipeline(device, &module, &pipeline_layout, "gather", 0),
             gather_2014: pipeline(device, &module, &pipeline_layout, "gather_2014", 0),
+            classify_tiles: pipeline(device, &module, &pipeline_layout, "classify_tiles", 0),
+            classify_kinds: pipeline(device, &module, &pipeline_layout, "classify_kinds", 0),
             carrying: Default::default(),
             carrying_module: OnceLock::new(),
             pipeline_layout,
@@ -205,7 +218,7 @@ impl ReconstructPass {
         })
     }
 
-    fn make_buffers(&self, device: &wgpu::Device, shape: Shape) -> Buffers {
+    pub(super) fn make_buffers(&self, device: &wgpu::Device, shape: Shape) -> Buffers {
         let floats = |n: usize| (n.max(1) * 4) as u64;
         let buffer = |label, size, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
@@ -230,9 +243,20 @@ impl ReconstructPass {
         // The 2014 gather does not read it: a word, to fill the binding.
         let velocity_floats = if shape.velocity { 2 * shape.pixels } else { 1 };
         let velocity = buffer("reconstruct velocity", floats(velocity_floats), input);
-        // x, then y, then |M| as the CPU's gather works it out (`tile_length` in the shader),
-        // then whether each is uniform (`uniform_tile`).
-        let tiles = buffer("reconstruct tiles", floats(4 * shape.tiles), input);
+        // x, then y, then |M| as the CPU's gather works it out (`tile_length` in the shader).
+        let tiles = buffer("reconstruct tiles", floats(3 * shape.tiles), input);
+        // Each tile's kind (classify.wgsl), written by the classification or uploaded, and
+        // read back by the classification's twin; and its two summary words.
+        let kinds = buffer(
+            "reconstruct tile kinds",
+            floats(shape.tiles),
+            U::STORAGE | U::COPY_DST | U::COPY_SRC,
+        );
+        let summaries = buffer(
+            "reconstruct tile summaries",
+            floats(2 * shape.tiles),
+            U::STORAGE,
+        );
         let color_bytes = floats(4 * shape.colours.max(1) * shape.pixels);
         let color = buffer(
             "reconstruct color",
@@ -258,7 +282,7 @@ impl ReconstructPass {
             input,
         );
         let entries: Vec<wgpu::BindGroupEntry> = [
-            &config, &texels, &velocity, &tiles, &color, &mattes, &carried,
+            &config, &texels, &velocity, &tiles, &color, &mattes, &carried, &kinds, &summaries,
         ]
         .into_iter()
         .enumerate()
@@ -280,6 +304,7 @@ impl ReconstructPass {
             color,
             mattes,
             carried,
+            kinds,
             readback,
             bind_group,
         }
@@ -287,35 +312,57 @@ impl ReconstructPass {
 }
 
 /// What one gather dispatch uploads besides the config: the texels, the pixel velocity
-/// (paper and dual), the tiles, which of them are uniform (1 or 0 each, the 2014 gather's:
-/// [`uniform_flags`]), the mattes (exposure), the colours carried (the 2014 gather carrying
-/// layers: each colour's packed texels, colour after colour).
+/// (paper and dual), the tiles, their kinds (the 2014 gather's, [`Stages::classify`]'s; all
+/// [`TileKind::Full`] otherwise), the mattes (exposure), the colours carried (the 2014 gather
+/// carrying layers: each colour's packed texels, colour after colour).
 struct Upload<'a> {
     texels: &'a [f32],
     velocity: Option<&'a crate::frame::Velocity>,
     tiles: &'a TileGrid,
-    uniform: Vec<f32>,
+    kinds: Vec<u32>,
     mattes: &'a [f32],
     carried: &'a [[f32; 4]],
 }
 
-/// Which tiles the 2014 gather reads as uniform, 1 or 0 each, tile by tile: the CPU's
-/// classification ([`uniform::uniform_tiles`] of [`plain_tiles`]), run here for the GPU as
-/// the pack and the matte are, so both backends take the box on the same tiles.
-fn uniform_flags(
+/// The kinds as the shader's words.
+fn words(kinds: &[TileKind]) -> Vec<u32> {
+    kinds.iter().map(|&kind| kind as u32).collect()
+}
+
+/// Writes what the classification and the gather both read: the config, the texels, the
+/// mattes (none: not written) and the tiles (x, y, then |M| made here as the CPU's gather makes
+/// it).
+pub(super) fn write_frame(
+    queue: &wgpu::Queue,
+    buffers: &Buffers,
     config: &ReconstructConfig,
-    texels: &[Texel2014],
-    mattes: &[Matte],
-    tiles: &TileGrid,
-) -> Vec<f32> {
-    if !uniform::runs(config) {
-        return vec![0.0; tiles.columns * tiles.rows];
+    (texels, mattes, tiles): (&[f32], &[f32], &TileGrid),
+) {
+    queue.write_buffer(&buffers.config, 0, bytemuck::bytes_of(config));
+    queue.write_buffer(&buffers.texels, 0, bytemuck::cast_slice(texels));
+    if !mattes.is_empty() {
+        queue.write_buffer(&buffers.mattes, 0, bytemuck::cast_slice(mattes));
     }
-    let plain = plain_tiles(config, texels, mattes, tiles);
-    uniform::uniform_tiles(config, texels, &plain, tiles)
-        .into_iter()
-        .map(|u| u as u32 as f32)
-        .collect()
+    let tile_plane = (tiles.x.len() * 4) as u64;
+    queue.write_buffer(&buffers.tiles, 0, bytemuck::cast_slice(&tiles.x));
+    queue.write_buffer(&buffers.tiles, tile_plane, bytemuck::cast_slice(&tiles.y));
+    // |M| of each tile, made here by the function `gather_2014` uses
+    // (`TileGrid::length`): the shader's own
+    // `sqrt(x·x + y·y)` is not the CPU's bits (a driver may fuse a product into the sum,
+    // NVIDIA's does, and WGSL's square root is not correctly rounded), and the gather
+    // compares it with the pixel's own |V| (packed on the CPU) and takes a tap count
+    // from it, so an ulp moved decisions: on an H200, clamped to `max_blur` 13 (many
+    // tiles and pixels at exactly 13 px), a pixel's own vector won over its tile's
+    // where the CPU kept the tile's (docs/history/device-parity-2026-12-04.md). The
+    // classification reads it too.
+    let lengths: Vec<f32> = (0..tiles.rows)
+        .flat_map(|r| (0..tiles.columns).map(move |c| tiles.length(c, r)))
+        .collect();
+    queue.write_buffer(
+        &buffers.tiles,
+        2 * tile_plane,
+        bytemuck::cast_slice(&lengths),
+    );
 }
 
 impl Gpu {
@@ -336,7 +383,7 @@ impl Gpu {
                 texels: bytemuck::cast_slice(texels),
                 velocity: Some(velocity),
                 tiles: neighbors,
-                uniform: vec![0.0; neighbors.columns * neighbors.rows],
+                kinds: vec![TileKind::Full as u32; neighbors.columns * neighbors.rows],
                 mattes: &[],
                 carried: &[],
             },
@@ -344,11 +391,12 @@ impl Gpu {
                 texels,
                 mattes,
                 tiles,
+                kinds,
             } => Upload {
                 texels: bytemuck::cast_slice(texels),
                 velocity: None,
                 tiles,
-                uniform: uniform_flags(config, texels, mattes, tiles),
+                kinds: words(kinds),
                 mattes: bytemuck::cast_slice(mattes),
                 carried: &[],
             },
@@ -375,7 +423,7 @@ impl Gpu {
     pub fn try_reconstruct_gather_carrying(
         &self,
         config: &ReconstructConfig,
-        (texels, mattes, tiles): (&[Texel2014], &[Matte], &TileGrid),
+        (texels, mattes, tiles, kinds): (&[Texel2014], &[Matte], &TileGrid, &[TileKind]),
         packed: &TileMask,
         colours: &mut [&mut Color],
     ) -> Result<(), StageError> {
@@ -402,7 +450,7 @@ impl Gpu {
             texels: bytemuck::cast_slice(texels),
             velocity: None,
             tiles,
-            uniform: uniform_flags(config, texels, mattes, tiles),
+            kinds: words(kinds),
             mattes: bytemuck::cast_slice(mattes),
             carried: &carried,
         };
@@ -458,11 +506,9 @@ impl Gpu {
 
         let mut clock = std::time::Instant::now();
         let queue = &self.queue;
-        queue.write_buffer(&buffers.config, 0, bytemuck::bytes_of(config));
-        queue.write_buffer(&buffers.texels, 0, bytemuck::cast_slice(upload.texels));
-        if !upload.mattes.is_empty() {
-            queue.write_buffer(&buffers.mattes, 0, bytemuck::cast_slice(upload.mattes));
-        }
+        let frame = (upload.texels, upload.mattes, upload.tiles);
+        write_frame(queue, buffers, config, frame);
+        queue.write_buffer(&buffers.kinds, 0, bytemuck::cast_slice(&upload.kinds));
         if carrying {
             queue.write_buffer(&buffers.carried, 0, bytemuck::cast_slice(upload.carried));
         }
@@ -470,31 +516,6 @@ impl Gpu {
             queue.write_buffer(&buffers.velocity, 0, bytemuck::cast_slice(&velocity.x));
             queue.write_buffer(&buffers.velocity, plane, bytemuck::cast_slice(&velocity.y));
         }
-        let tiles = upload.tiles;
-        let tile_plane = (tiles.x.len() * 4) as u64;
-        queue.write_buffer(&buffers.tiles, 0, bytemuck::cast_slice(&tiles.x));
-        queue.write_buffer(&buffers.tiles, tile_plane, bytemuck::cast_slice(&tiles.y));
-        // |M| of each tile, made here by the function `gather_2014` uses
-        // (`TileGrid::length`): the shader's own
-        // `sqrt(x·x + y·y)` is not the CPU's bits (a driver may fuse a product into the sum,
-        // NVIDIA's does, and WGSL's square root is not correctly rounded), and the gather
-        // compares it with the pixel's own |V| (packed on the CPU) and takes a tap count
-        // from it, so an ulp moved decisions: on an H200, clamped to `max_blur` 13 (many
-        // tiles and pixels at exactly 13 px), a pixel's own vector won over its tile's
-        // where the CPU kept the tile's (docs/history/device-parity-2026-12-04.md).
-        let lengths: Vec<f32> = (0..tiles.rows)
-            .flat_map(|r| (0..tiles.columns).map(move |c| tiles.length(c, r)))
-            .collect();
-        queue.write_buffer(
-            &buffers.tiles,
-            2 * tile_plane,
-            bytemuck::cast_slice(&lengths),
-        );
-        queue.write_buffer(
-            &buffers.tiles,
-            3 * tile_plane,
-            bytemuck::cast_slice(&upload.uniform),
-        );
         // Alpha, where a colour has none, is not written: the gather's alpha is dropped then.
         for (g, color) in colours.iter().enumerate() {
             let channels = [

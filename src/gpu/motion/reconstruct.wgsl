@@ -12,9 +12,11 @@
 // tiles, 4 colour, 5 the exposure variant's mattes (`gather_2014`'s third argument;
 // MATTE_WORDS a pixel, src/motion/reconstruct/matte.rs; one unread word otherwise), and 6
 // the colours the 2014 gather carries beside the beauty (`gather_2014_carrying`'s; one
-// unread word otherwise). Planar buffers hold their planes one after the other, as the
-// CPU's structs do: velocity x then y, tiles x then y (then each tile's |M|, made on the
-// host), colour r, g, b, a (of each colour in turn when the gather carries several).
+// unread word otherwise); 7 and 8, the tiles' kinds and the classification's summaries, are
+// declared in classify.wgsl, concatenated after this file and reconstruct_taps.wgsl. Planar
+// buffers hold their planes one after the other, as the CPU's structs do: velocity x then
+// y, tiles x then y (then each tile's |M|, made on the host), colour r, g, b, a (of each
+// colour in turn when the gather carries several).
 //
 // The 2014 gather's tap reading (`around`, `bilinear`, `split`, `split_by_cover`,
 // `surfaces`) is in reconstruct_taps.wgsl, concatenated after this file.
@@ -627,13 +629,6 @@ fn gather_pixel_2014(x: u32, y: u32) -> Colours {
     return out;
 }
 
-// Whether tile (c, r) is uniform (the tiles' fourth plane, 1 or 0, found on the host by the
-// CPU's `uniform_tiles`, src/motion/reconstruct/uniform.rs).
-fn uniform_tile(c: u32, r: u32) -> bool {
-    let n = columns() * rows();
-    return tiles[3u * n + r * columns() + c] != 0.0;
-}
-
 // The CPU's `shortened` (src/motion/reconstruct/uniform.rs): the factor the box shortens a
 // half-spread of `length` by, to sqrt(|V|² − 1/4), at least |V|/2.
 fn shortened(length: f32) -> f32 {
@@ -698,7 +693,7 @@ fn box_pixel(x: u32, y: u32) -> Colours {
 }
 
 // 2014 and exposure: pixels of the tiles within one tile of a blurring (dilated) tile, the
-// uniform ones by the box. Its pipelines set COLOURS: 0 for `gather_2014`, the count for
+// uniform ones (`kinds`, classify.wgsl) by the box. Its pipelines set COLOURS: 0 for `gather_2014`, the count for
 // `gather_2014_carrying`.
 @compute @workgroup_size(8, 8)
 fn gather_2014(@builtin(global_invocation_id) id: vec3<u32>) {

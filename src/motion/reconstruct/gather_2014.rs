@@ -7,14 +7,15 @@
 //! 2014 filter), the dilated tile grid. Out: the colour of the tiles near a blurring one, in
 //! place. Twin: `gather_2014` in src/gpu/motion/reconstruct.wgsl.
 
+use super::classify::TileKind;
 use super::config::{
     Form, ReconstructConfig, Texel2014, HALF_PIXEL, LANES, LENGTH, MAX_TAPS_PER_SIDE, VX, VY, Z,
 };
 use super::matte::{self, Matte};
 use super::pack::pack_tiles;
 use super::taps::{bilinear, split, split_by_cover, whole, At, Colours};
-use super::tiles::{gather_tiles_of, near_blur, plain_tiles, TileMask};
-use super::uniform::{box_pixel, uniform_tiles};
+use super::tiles::{gather_tiles_of, near_blur, TileMask};
+use super::uniform::box_pixel;
 use crate::frame::Color;
 use crate::motion::tile_max::TileGrid;
 use crate::numeric::unit;
@@ -25,22 +26,34 @@ pub use super::taps::COVER_SLOPE;
 pub const SALT_TILE: u32 = 0x5449_4c45;
 pub const SALT_TAPS: u32 = 0x5441_5053;
 
+/// The dilated tiles and each one's kind ([`super::classify::classify`]'s), as the gather
+/// reads them.
+pub type Tiles<'a> = (&'a TileGrid, &'a [TileKind]);
+
 /// Most colours [`gather_2014_carrying`] gathers in one pass (the GPU twin: in one dispatch).
 pub const MOST_COLOURS: usize = 8;
 
-/// The 2014 filter's gather, in place, over the tiles within one tile of a blurring one.
+/// The 2014 filter's gather, in place, over the tiles within one tile of a blurring one,
+/// each tile's pixels by the copy its kind names (`kinds`, [`super::classify::classify`]'s).
 pub fn gather_2014(
     config: &ReconstructConfig,
     texels: &[Texel2014],
     mattes: &[Matte],
-    tiles: &TileGrid,
+    (tiles, kinds): Tiles<'_>,
     color: &mut Color,
 ) {
     let beauty = |j: usize| {
         let t = &texels[j];
         [[t[0], t[1], t[2], t[3]]]
     };
-    gather_2014_of(config, texels, &beauty, mattes, tiles, &mut [color]);
+    gather_2014_of(
+        config,
+        texels,
+        &beauty,
+        mattes,
+        (tiles, kinds),
+        &mut [color],
+    );
 }
 
 /// [`gather_2014`] of several colours at once, each in place: the beauty (first) and light
@@ -63,7 +76,7 @@ pub fn gather_2014_carrying(
     config: &ReconstructConfig,
     texels: &[Texel2014],
     mattes: &[Matte],
-    tiles: &TileGrid,
+    (tiles, kinds): Tiles<'_>,
     packed: &TileMask,
     colours: &mut [&mut Color],
 ) {
@@ -71,7 +84,7 @@ pub fn gather_2014_carrying(
         return;
     }
     let size = colours.len().div_ceil(colours.len().div_ceil(MOST_COLOURS));
-    let inputs = (texels, mattes, tiles, packed);
+    let inputs = (texels, mattes, (tiles, kinds), packed);
     for chunk in colours.chunks_mut(size) {
         match chunk.len() {
             1 => gather_packed::<1>(config, inputs, chunk),
@@ -89,7 +102,7 @@ pub fn gather_2014_carrying(
 /// `G` `colours` packed pixel by pixel on the packed tiles, then gathered together.
 fn gather_packed<const G: usize>(
     config: &ReconstructConfig,
-    (texels, mattes, tiles, packed): (&[Texel2014], &[Matte], &TileGrid, &TileMask),
+    (texels, mattes, (tiles, kinds), packed): (&[Texel2014], &[Matte], Tiles<'_>, &TileMask),
     colours: &mut [&mut Color],
 ) {
     let values: Vec<Colours<G>> = {
@@ -103,7 +116,7 @@ fn gather_packed<const G: usize>(
         )
     };
     let colour = |j: usize| values[j];
-    gather_2014_of(config, texels, &colour, mattes, tiles, colours);
+    gather_2014_of(config, texels, &colour, mattes, (tiles, kinds), colours);
 }
 
 /// The gather of `G` colours, `colour(j)` those of pixel j, written into `out` (the first
@@ -113,7 +126,7 @@ fn gather_2014_of<const G: usize>(
     texels: &[Texel2014],
     colour: &(impl Fn(usize) -> Colours<G> + Sync),
     mattes: &[Matte],
-    tiles: &TileGrid,
+    (tiles, kinds): Tiles<'_>,
     out: &mut [&mut Color],
 ) {
     // Each of the two forms a run meets almost always (ours, and Blender's centred) is given
@@ -125,7 +138,7 @@ fn gather_2014_of<const G: usize>(
     // form (Blender's offset) runs as read. Carrying layers (G > 1), only ours, the default, has
     // its own copy.
     let form = config.form();
-    let inputs = (texels, colour, mattes, tiles);
+    let inputs = (texels, colour, mattes, (tiles, kinds));
     if form == Form::OURS {
         gather_2014_as(config, || Form::OURS, inputs, out);
     } else if G == 1 && form == Form::BLENDER {
@@ -141,11 +154,11 @@ fn gather_2014_of<const G: usize>(
 fn gather_2014_as<const G: usize>(
     config: &ReconstructConfig,
     form: impl Fn() -> Form + Sync,
-    (texels, colour, mattes, tiles): (
+    (texels, colour, mattes, (tiles, kinds)): (
         &[Texel2014],
         &(impl Fn(usize) -> Colours<G> + Sync),
         &[Matte],
-        &TileGrid,
+        Tiles<'_>,
     ),
     out: &mut [&mut Color],
 ) {
@@ -154,12 +167,6 @@ fn gather_2014_as<const G: usize>(
         colour,
         mattes,
     };
-    let plain = if form().split_taps {
-        plain_tiles(config, texels, mattes, tiles)
-    } else {
-        vec![false; tiles.columns * tiles.rows]
-    };
-    let uniform = uniform_tiles(config, texels, &plain, tiles);
     gather_tiles_of(
         config,
         tiles.columns,
@@ -168,13 +175,14 @@ fn gather_2014_as<const G: usize>(
         |(c, row), x, y| {
             // A copy of the gather for each kind of tile, so neither pays for the other's
             // branches (one copy with the flag read per tap ran the noise frame 10 % slower).
-            let t = row * tiles.columns + c;
-            if uniform[t] {
-                box_pixel(config, texels, colour, x, y)
-            } else if plain[t] {
-                gather_pixel_2014::<G, _, true>(config, &form(), &sources, tiles, x, y)
-            } else {
-                gather_pixel_2014::<G, _, false>(config, &form(), &sources, tiles, x, y)
+            match kinds[row * tiles.columns + c] {
+                TileKind::Uniform => box_pixel(config, texels, colour, x, y),
+                TileKind::Plain => {
+                    gather_pixel_2014::<G, _, true>(config, &form(), &sources, tiles, x, y)
+                }
+                TileKind::Full => {
+                    gather_pixel_2014::<G, _, false>(config, &form(), &sources, tiles, x, y)
+                }
             }
         },
     );
@@ -419,7 +427,7 @@ fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>, const PLAIN: bo
                         offset: point,
                     };
                     if form.split_taps && PLAIN {
-                        // A plain tile ([`plain_tiles`]): every split is one part.
+                        // A plain tile ([`TileKind::Plain`]): every split is one part.
                         (sample[l], sample_colour[l], share[l]) = whole(&nearest, colour, &at);
                     } else if form.split_taps {
                         let still = own_length < HALF_PIXEL;
@@ -571,6 +579,7 @@ fn beside_nearer(texels: &[Texel2014], config: &ReconstructConfig, x: usize, y: 
 mod tests {
     use super::*;
     use crate::frame::{Frame, Velocity};
+    use crate::motion::reconstruct::classify::classify;
     use crate::motion::reconstruct::{
         matte, pack_2014, packed_2014, reconstruct_layers_with, spread_2014, ReconstructParams,
         Variant,
@@ -664,7 +673,8 @@ mod tests {
             .map(|layer| {
                 let texels = pack_2014(&config, layer, depth, velocity, &dilated, &packed);
                 let mut out = layer.clone();
-                gather_2014(&config, &texels, &mattes, &dilated, &mut out);
+                let kinds = classify(&config, &texels, &mattes, &dilated);
+                gather_2014(&config, &texels, &mattes, (&dilated, &kinds), &mut out);
                 out
             })
             .collect()
@@ -708,10 +718,11 @@ mod tests {
         let velocity = frame.velocity.as_ref().unwrap();
         let texels = pack_2014(&config, &color, &depth, velocity, &dilated, &packed);
         let mattes = matte::mattes(&config, &texels, |c, row| packed.get(c, row));
-        let plain = plain_tiles(&config, &texels, &mattes, &dilated);
-        assert!(!uniform_tiles(&config, &texels, &plain, &dilated).contains(&true));
+        let kinds = classify(&config, &texels, &mattes, &dilated);
+        assert!(!kinds.contains(&TileKind::Uniform));
+        let plain = kinds.iter().map(|&k| k == TileKind::Plain).collect();
         let mut out = color.clone();
-        gather_2014(&config, &texels, &mattes, &dilated, &mut out);
+        gather_2014(&config, &texels, &mattes, (&dilated, &kinds), &mut out);
         (plain, dilated.columns, out)
     }
 

@@ -36,15 +36,18 @@
 //! - [`tiles`]: which tiles each later stage works on, and the loop over them;
 //! - [`pack`]: each pixel's texel, for the tiles that blur;
 //! - [`matte`]: the exposure variant's coverage at silhouettes;
+//! - [`classify`]: which form of the gather each tile takes (the full one, its plain copy,
+//!   or the uniform tiles' box, [`uniform`]);
 //! - [`gather_2014`]: the 2014 filter's gather, in both its forms (Blender's and ours, told
 //!   apart by the numbers of [`config::Form`]), of the beauty and any light layers carried
 //!   beside it; [`taps`]: how it reads a tap between pixels;
 //! - [`gather_2012`]: the 2012 paper's gather (paper and dual).
 //!
 //! This file holds the pass: [`reconstruct`], and [`reconstruct_with`] with the stages a
-//! backend may run elsewhere ([`Stages`]: the tile stages and the gather; the GPU's twins
-//! are `crate::gpu::motion`).
+//! backend may run elsewhere ([`Stages`]: the tile stages, the classification and the
+//! gather; the GPU's twins are `crate::gpu::motion`).
 
+pub mod classify;
 pub mod config;
 pub mod gather_2012;
 pub mod gather_2014;
@@ -68,6 +71,7 @@ use crate::motion::shutter::Shutter;
 use crate::motion::tile_max::{self, TileGrid};
 use crate::motion::{dilate, neighbor_max};
 use crate::stages::Cpu;
+use classify::TileKind;
 use config::MOVING_SQUARED;
 use matte::Matte;
 
@@ -84,7 +88,8 @@ pub fn reconstruct(
 }
 
 /// Reconstruct's stages that a backend may run elsewhere: the tile stages (`tile_max`, then
-/// `neighbor_max` for paper and dual or `dilate` for the 2014 variants) and the gather. Each
+/// `neighbor_max` for paper and dual or `dilate` for the 2014 variants), the 2014 variants'
+/// classification of the tiles (`classify`) and the gather. Each
 /// default method is the CPU stage, the reference; [`Cpu`] takes them all, and the GPU
 /// (`crate::gpu::motion`) overrides each with its twin, which must return what the CPU stage
 /// returns within the tolerance its parity test states (tests/gpu.rs,
@@ -112,6 +117,18 @@ pub trait Stages {
         dilate::dilate(tiles)
     }
 
+    /// [`classify::classify`]: each dilated tile's [`TileKind`], once a frame, for the 2014
+    /// gather of the beauty and of every colour carried beside it.
+    fn classify(
+        &self,
+        config: &ReconstructConfig,
+        texels: &[Texel2014],
+        mattes: &[Matte],
+        tiles: &TileGrid,
+    ) -> Vec<TileKind> {
+        classify::classify(config, texels, mattes, tiles)
+    }
+
     /// The gather, in place: [`GatherInputs::gather`] ([`gather`] or [`gather_2014`]). Runs
     /// only when something moves.
     fn gather(&self, config: &ReconstructConfig, inputs: GatherInputs<'_>, color: &mut Color) {
@@ -121,15 +138,15 @@ pub trait Stages {
     /// The 2014 gather of the beauty and light layers beside it (`colours`, the beauty
     /// first), each in place with the beauty's weights: on the CPU, computed once for up to
     /// eight colours at a time ([`gather_2014::gather_2014_carrying`]). `texels` are the
-    /// beauty's, packed on `packed`.
+    /// beauty's, packed on `packed`; `kinds` the tiles' ([`Stages::classify`]).
     fn gather_2014_carrying(
         &self,
         config: &ReconstructConfig,
-        (texels, mattes, tiles): (&[Texel2014], &[Matte], &TileGrid),
+        (texels, mattes, tiles, kinds): (&[Texel2014], &[Matte], &TileGrid, &[TileKind]),
         packed: &TileMask,
         colours: &mut [&mut Color],
     ) {
-        gather_2014::gather_2014_carrying(config, texels, mattes, tiles, packed, colours)
+        gather_2014::gather_2014_carrying(config, texels, mattes, (tiles, kinds), packed, colours)
     }
 }
 
@@ -144,12 +161,13 @@ pub enum GatherInputs<'a> {
         velocity: &'a Velocity,
         neighbors: &'a TileGrid,
     },
-    /// 2014 and exposure: the dilated tiles, and the exposure variant's mattes (empty for
-    /// the 2014 filter).
+    /// 2014 and exposure: the dilated tiles and their kinds ([`Stages::classify`]), and the
+    /// exposure variant's mattes (empty for the 2014 filter).
     Stable {
         texels: &'a [Texel2014],
         mattes: &'a [Matte],
         tiles: &'a TileGrid,
+        kinds: &'a [TileKind],
     },
 }
 
@@ -166,7 +184,8 @@ impl GatherInputs<'_> {
                 texels,
                 mattes,
                 tiles,
-            } => gather_2014(config, texels, mattes, tiles, color),
+                kinds,
+            } => gather_2014(config, texels, mattes, (tiles, kinds), color),
         }
     }
 }
@@ -254,18 +273,20 @@ pub fn reconstruct_layers_with(
             Vec::new()
         };
         drop(depth);
+        let kinds = stages.classify(&config, &texels, &mattes, &dilated);
         if layers.is_empty() {
             let inputs = GatherInputs::Stable {
                 texels: &texels,
                 mattes: &mattes,
                 tiles: &dilated,
+                kinds: &kinds,
             };
             stages.gather(&config, inputs, &mut color);
         } else {
             let mut colours: Vec<&mut Color> = std::iter::once(&mut color)
                 .chain(layers.iter_mut())
                 .collect();
-            let inputs = (&texels[..], &mattes[..], &dilated);
+            let inputs = (&texels[..], &mattes[..], &dilated, &kinds[..]);
             stages.gather_2014_carrying(&config, inputs, &packed, &mut colours);
         }
     } else {

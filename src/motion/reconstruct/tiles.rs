@@ -2,14 +2,10 @@
 //! over them: the paper's gather over the tiles whose NeighborMax blurs, the 2014 gather over
 //! those within one tile of a blurring one, and the 2014 pack over those within its taps'
 //! reach ([`packed_2014`]). Every other pixel keeps its colour, so still tiles cost nothing.
-//! And which of the 2014 gather's tiles are plain ([`plain_tiles`]: every tap one surface).
 
 use rayon::prelude::*;
 
-use super::config::{
-    reach_factor, ReconstructConfig, Texel2014, HALF_PIXEL, LENGTH, MOVING_SQUARED,
-};
-use super::matte::{self, Matte};
+use super::config::{reach_factor, ReconstructConfig, MOVING_SQUARED};
 use crate::frame::Color;
 use crate::motion::tile_max::TileGrid;
 
@@ -140,86 +136,4 @@ pub(crate) fn gather_tiles_of<const G: usize>(
     for ((color, alpha), has) in colours.iter_mut().zip(alphas).zip(has_alpha) {
         color.a = has.then_some(alpha);
     }
-}
-
-/// Which tiles are plain: every texel a tap of any of their pixels can read moves and has no
-/// matte pair, so [`split_by_cover`](super::taps::split_by_cover) finds no matte there and
-/// [`split`](super::taps::split) puts all four of a tap's pixels in one part, the nearest's
-/// (part B empty): the gather then reads each tap as that part alone, without the tests, and
-/// weighs no second part, with the same bits (most of a camera pan: the 1080p `pan`'s whole
-/// process 1.21–1.23 → 0.94–0.96 s). A tap of a pixel of tile (c, r) reads within
-/// `reach_factor · |M|` of the pixel along the vector it looks up (|M| at most the largest of
-/// the 3×3 dilated tiles around, which the jittered lookup reaches, or the pixel's own |V|,
-/// at most its tile's largest), a slid tap `2·|V|` further, and a bilinear read one pixel
-/// more: the tile is plain where no tile within that reach, plus one pixel, holds a pixel
-/// that fails. Each tile is read once, in parallel, up to its first failing pixel (a tile
-/// the pack left out fails at its first: its texels are zero), and the reach is counted in
-/// whole tiles on a summed-area table of the failing ones, so a sparse frame pays a read a
-/// tile (a table of pixels, made on one thread, had cost the 1080p `sparse` 5 to 20 ms of 45).
-pub(crate) fn plain_tiles(
-    config: &ReconstructConfig,
-    texels: &[Texel2014],
-    mattes: &[Matte],
-    tiles: &TileGrid,
-) -> Vec<bool> {
-    let (width, height) = (config.width as usize, config.height as usize);
-    let size = config.tile as usize;
-    let (columns, rows) = (tiles.columns, tiles.rows);
-    // Pixels a plain tile's taps must not read: still ones, and any with a matte pair.
-    let fails = |j: usize| {
-        texels[j][LENGTH] < HALF_PIXEL || (!mattes.is_empty() && !matte::unpaired(&mattes[j], j))
-    };
-    // Per tile: whether a pixel of it fails, else its largest own |V|.
-    let per_tile: Vec<Option<f32>> = (0..columns * rows)
-        .into_par_iter()
-        .map(|t| {
-            let (c, r) = (t % columns, t / columns);
-            let mut own = 0.0f32;
-            for y in r * size..((r + 1) * size).min(height) {
-                for x in c * size..((c + 1) * size).min(width) {
-                    let j = y * width + x;
-                    if fails(j) {
-                        return None;
-                    }
-                    own = own.max(texels[j][LENGTH]);
-                }
-            }
-            Some(own)
-        })
-        .collect();
-    // table[r·(columns + 1) + c]: the failing tiles above and left of tile (c, r).
-    let stride = columns + 1;
-    let mut table = vec![0u32; stride * (rows + 1)];
-    for r in 0..rows {
-        let mut row = 0u32;
-        for c in 0..columns {
-            row += per_tile[r * columns + c].is_none() as u32;
-            table[(r + 1) * stride + c + 1] = table[r * stride + c + 1] + row;
-        }
-    }
-    (0..columns * rows)
-        .map(|t| {
-            let (c, r) = (t % columns, t / columns);
-            let Some(mut m) = per_tile[t] else {
-                return false;
-            };
-            for rr in r.saturating_sub(1)..(r + 2).min(rows) {
-                for cc in c.saturating_sub(1)..(c + 2).min(columns) {
-                    m = m.max(tiles.length(cc, rr));
-                }
-            }
-            let reach = m * reach_factor(config) + 2.0 * m + 2.0;
-            if !reach.is_finite() || reach > (width + height) as f32 {
-                return false;
-            }
-            // The reach in whole tiles beyond the tile's own.
-            let across = (reach / size as f32).ceil() as usize;
-            let (c0, r0) = (c.saturating_sub(across), r.saturating_sub(across));
-            let (c1, r1) = ((c + across + 1).min(columns), (r + across + 1).min(rows));
-            let count = table[r1 * stride + c1] + table[r0 * stride + c0]
-                - table[r0 * stride + c1]
-                - table[r1 * stride + c0];
-            count == 0
-        })
-        .collect()
 }

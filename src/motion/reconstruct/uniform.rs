@@ -1,5 +1,5 @@
 //! The exposure variant's fast path: tiles where everything a pixel's exposure can see moves
-//! as one smooth flow ([`uniform_tiles`]), whose pixels take the box shutter's line integral
+//! as one smooth flow ([`TileKind::Uniform`], found by [`super::classify`]), whose pixels take the box shutter's line integral
 //! of the colour ([`box_pixel`]) instead of the depth-weighted gather (issue 35: Jimenez's
 //! fast-path tiles are the precedent).
 //!
@@ -17,116 +17,16 @@
 //! No depth, no weights, no matte: at 1080p on a camera pan the whole process 0.94 → 0.4 s,
 //! and every truth scene's error the same or lower (BENCHMARKS.md, "Uniform tiles").
 //!
-//! Twin: `box_pixel` and the tiles' fourth plane in src/gpu/motion/reconstruct.wgsl (the
-//! classification runs here for every backend, as the pack and the matte do).
+//! Twin: `box_pixel` in src/gpu/motion/reconstruct.wgsl.
 
-use rayon::prelude::*;
-
+#[cfg(doc)]
+use super::classify::TileKind;
 use super::config::{
-    reach_factor, Form, ReconstructConfig, Texel2014, HALF_PIXEL, LENGTH, MAX_TAPS_PER_SIDE,
-    TAP_SPACING, VX, VY,
+    ReconstructConfig, Texel2014, HALF_PIXEL, LENGTH, MAX_TAPS_PER_SIDE, TAP_SPACING, VX, VY,
 };
 #[cfg(doc)]
 use super::taps::around_index;
 use super::taps::Colours;
-use super::tiles::near_blur;
-use crate::motion::tile_max::TileGrid;
-
-/// How much (px) a uniform tile lets the motion change across a reach: the largest change of
-/// either component of V from a pixel to its right or lower neighbour, times the reach (the
-/// longest streak that can arrive plus two pixels), at most this. A smooth flow passes (a
-/// pan's perspective, a zoom); an edge between two motions (a jump of a pixel or more) does
-/// not. Measured on the truth scenes and the two real renders (BENCHMARKS.md, "Uniform
-/// tiles"), every value from 1/16 to 1 px errs the same to the fourth digit but `zoom` at
-/// 640×360 (1/16: 0.01379, the rest 0.01370); an eighth of a pixel keeps the margin.
-pub const UNIFORM_SPREAD: f32 = 0.125;
-
-/// Whether the frame's config takes the fast path at all: ours (the exposure variant), at any
-/// shutter offset. Blender's form is kept as Blender runs it.
-pub fn runs(config: &ReconstructConfig) -> bool {
-    config.form() == Form::OURS
-}
-
-/// Which tiles are uniform: plain (`plain_tiles` in [`super::tiles`]: every texel its taps read
-/// moves, none has a matte pair) and the motion within reach of the tile's pixels smooth: the
-/// largest step of V between neighbouring pixels there, times the reach (the longest vector
-/// that can reach the tile, |M| of the 3×3 dilated tiles around or its own longest |V|, plus
-/// two pixels for the bilinear read), at most [`UNIFORM_SPREAD`]. Each tile's steps are found
-/// once (in parallel), the reach is read in whole tiles. All false where the fast path does
-/// not run ([`runs`]).
-pub fn uniform_tiles(
-    config: &ReconstructConfig,
-    texels: &[Texel2014],
-    plain: &[bool],
-    tiles: &TileGrid,
-) -> Vec<bool> {
-    let (columns, rows) = (tiles.columns, tiles.rows);
-    if !runs(config) || texels.is_empty() {
-        return vec![false; columns * rows];
-    }
-    let (width, height) = (config.width as usize, config.height as usize);
-    let size = config.tile as usize;
-    // Per tile: the largest change of V (either component) from any of its pixels to the
-    // pixel right of it or below it, and its longest |V|.
-    // Only the tiles the gather works on: any within a plain tile's reach is one of them (its
-    // pixels move, so its dilated tile blurs); the others count as steep.
-    let steps: Vec<(f32, f32)> = (0..columns * rows)
-        .into_par_iter()
-        .map(|t| {
-            let (c, r) = (t % columns, t / columns);
-            if !near_blur(tiles, c, r, 1) {
-                return (f32::INFINITY, 0.0);
-            }
-            let (mut step, mut longest) = (0.0f32, 0.0f32);
-            for y in r * size..((r + 1) * size).min(height) {
-                for x in c * size..((c + 1) * size).min(width) {
-                    let texel = &texels[y * width + x];
-                    longest = longest.max(texel[LENGTH]);
-                    for j in [
-                        (x + 1 < width).then_some(y * width + x + 1),
-                        (y + 1 < height).then_some((y + 1) * width + x),
-                    ]
-                    .into_iter()
-                    .flatten()
-                    {
-                        let other = &texels[j];
-                        step = step
-                            .max((other[VX] - texel[VX]).abs())
-                            .max((other[VY] - texel[VY]).abs());
-                    }
-                }
-            }
-            (step, longest)
-        })
-        .collect();
-    (0..columns * rows)
-        .into_par_iter()
-        .map(|t| {
-            if !plain[t] {
-                return false;
-            }
-            let (c, r) = (t % columns, t / columns);
-            let mut m = steps[t].1;
-            for rr in r.saturating_sub(1)..(r + 2).min(rows) {
-                for cc in c.saturating_sub(1)..(c + 2).min(columns) {
-                    m = m.max(tiles.length(cc, rr));
-                }
-            }
-            let reach = m * reach_factor(config) + 2.0;
-            if !reach.is_finite() || reach > (width + height) as f32 {
-                return false;
-            }
-            let across = (reach / size as f32).ceil() as usize;
-            let mut step = 0.0f32;
-            for rr in r.saturating_sub(across)..(r + across + 1).min(rows) {
-                for cc in c.saturating_sub(across)..(c + across + 1).min(columns) {
-                    step = step.max(steps[rr * columns + cc].0);
-                }
-            }
-            step * reach <= UNIFORM_SPREAD
-        })
-        .collect()
-}
 
 /// The box shutter's integral of the colours along pixel (x, y)'s own motion V (its texel's),
 /// with n = 4k taps at the midpoints u = −1 + (i + ½)·2/n, i < n, of n equal parts of the
@@ -307,21 +207,29 @@ fn add_tap<const G: usize, const LINE: u8>(
 mod tests {
     use super::*;
     use crate::frame::{Color, Velocity};
-    use crate::motion::reconstruct::tiles::plain_tiles;
+    use crate::motion::reconstruct::classify::{classify, TileKind};
+    use crate::motion::reconstruct::matte::Matte;
     use crate::motion::reconstruct::{
         matte, pack_2014, packed_2014, spread_2014, ReconstructParams, Variant,
     };
+    use crate::motion::tile_max::TileGrid;
     use crate::motion::{dilate::dilate, tile_max::tile_max};
 
     /// A `w`×`h` frame of one depth whose colour is `grey(x)` and whose motion (px a frame)
     /// is `motion(x, y)`, under `params` and a 0.5 shutter: its config, texels, dilated tiles
-    /// and uniform tiles.
+    /// and uniform tiles, and its mattes.
     fn frame(
         (w, h): (usize, usize),
         params: &ReconstructParams,
         grey: impl Fn(usize) -> f32,
         motion: impl Fn(usize, usize) -> (f32, f32),
-    ) -> (ReconstructConfig, Vec<Texel2014>, TileGrid, Vec<bool>) {
+    ) -> (
+        ReconstructConfig,
+        Vec<Texel2014>,
+        TileGrid,
+        Vec<bool>,
+        Vec<Matte>,
+    ) {
         let plane: Vec<f32> = (0..w * h).map(|i| grey(i % w)).collect();
         let color = Color {
             r: plane.clone(),
@@ -341,9 +249,21 @@ mod tests {
         let depth = vec![4.0; w * h];
         let texels = pack_2014(&config, &color, &depth, &velocity, &dilated, &packed);
         let mattes = matte::mattes(&config, &texels, |c, row| packed.get(c, row));
-        let plain = plain_tiles(&config, &texels, &mattes, &dilated);
-        let uniform = uniform_tiles(&config, &texels, &plain, &dilated);
-        (config, texels, dilated, uniform)
+        let uniform = uniform_of(&config, &texels, &mattes, &dilated);
+        (config, texels, dilated, uniform, mattes)
+    }
+
+    /// Which tiles [`classify`] finds uniform.
+    fn uniform_of(
+        config: &ReconstructConfig,
+        texels: &[Texel2014],
+        mattes: &[Matte],
+        tiles: &TileGrid,
+    ) -> Vec<bool> {
+        classify(config, texels, mattes, tiles)
+            .into_iter()
+            .map(|kind| kind == TileKind::Uniform)
+            .collect()
     }
 
     #[test]
@@ -353,7 +273,7 @@ mod tests {
         // line the box's mean is (F(x + a) − F(x − a)) / 2a, F the ramp's integral and
         // a = sqrt(|V|² − 1/4) the shortened half-spread.
         let params = ReconstructParams::default();
-        let (config, texels, _, uniform) = frame(
+        let (config, texels, _, uniform, _) = frame(
             (64, 16),
             &params,
             |x| (x >= 30) as u8 as f32,
@@ -398,7 +318,7 @@ mod tests {
         let params = ReconstructParams::default();
         let texture = |x: usize| (x as f32 * 0.37).sin() * 2.0 + 2.1;
         for motion in [(9.0, 0.0), (0.0, -7.0), (6.0, 5.0)] {
-            let (config, texels, _, uniform) = frame((40, 24), &params, texture, |_, _| motion);
+            let (config, texels, _, uniform, _) = frame((40, 24), &params, texture, |_, _| motion);
             assert!(uniform.iter().all(|&u| u));
             let beauty = |j: usize| texels[j][..4].try_into().unwrap();
             let other = |j: usize| -> [f32; 4] { [(j % 7) as f32, 0.5, -1.0, (j % 3) as f32] };
@@ -420,26 +340,26 @@ mod tests {
         let texture = |x: usize| (x as f32 * 0.7).sin();
         let column = |uniform: &[bool], c: usize| (0..8).all(|r| uniform[r * 12 + c]);
         // A gentle zoom (the motion grows 0.004 px a frame per px): smooth everywhere.
-        let (.., gentle) = frame(size, &params, texture, |x, y| {
+        let (.., gentle, _) = frame(size, &params, texture, |x, y| {
             (12.0 + 0.004 * x as f32, 4.0 + 0.004 * y as f32)
         });
         assert!(gentle.iter().all(|&u| u));
         // Steeper (0.2 px a frame per px: a half-spread step of 0.05 px, over a reach of 5 px
         // and more above an eighth of a pixel): nowhere.
-        let (.., steep) = frame(size, &params, texture, |x, y| {
+        let (.., steep, _) = frame(size, &params, texture, |x, y| {
             (12.0 + 0.2 * x as f32, 4.0 + 0.004 * y as f32)
         });
         assert!(!steep.contains(&true));
         // A jump between columns 63 and 64 (12 → 20 px a frame; |V| 3 and 5 px, reach 7 px):
         // the tiles whose reach holds it (columns 6 to 8) are not uniform, the others are
         // (tile 9's pixels read back to x = 67 at most, all of one motion).
-        let (.., jump) = frame(size, &params, texture, |x, _| {
+        let (.., jump, _) = frame(size, &params, texture, |x, _| {
             (if x < 64 { 12.0 } else { 20.0 }, 0.0)
         });
         assert!((0..6).chain(9..12).all(|c| column(&jump, c)));
         assert!(!(6..9).any(|c| (0..8).any(|r| jump[r * 12 + c])));
         // One still pixel at (40, 30): the tiles that reach it are not plain, so not uniform.
-        let (.., still) = frame(size, &params, texture, |x, y| {
+        let (.., still, _) = frame(size, &params, texture, |x, y| {
             if (x, y) == (40, 30) {
                 (0.0, 0.0)
             } else {
@@ -453,13 +373,13 @@ mod tests {
             variant: Variant::Stable,
             ..params
         };
-        let (.., none) = frame(size, &blender, texture, |_, _| (12.0, 0.0));
+        let (.., none, _) = frame(size, &blender, texture, |_, _| (12.0, 0.0));
         assert!(!none.contains(&true));
-        let (mut config, texels, tiles, _) = frame(size, &params, texture, |x, _| {
+        let (mut config, texels, tiles, _, mattes) = frame(size, &params, texture, |x, _| {
             (if x < 64 { 12.0 } else { 20.0 }, 0.0)
         });
         config.offset = 0.5;
-        let offset = uniform_tiles(&config, &texels, &[true; 96], &tiles);
+        let offset = uniform_of(&config, &texels, &mattes, &tiles);
         assert!((0..6).chain(10..12).all(|c| column(&offset, c)));
         assert!(!(6..10).any(|c| (0..8).any(|r| offset[r * 12 + c])));
     }

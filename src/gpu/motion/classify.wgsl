@@ -1,0 +1,162 @@
+// reconstruct's tile classification on the GPU: the twin of `classify` and `summary` in
+// src/motion/reconstruct/classify.rs, the CPU reference (read the two side by side: the
+// names and the order of the operations are the CPU's). Concatenated after reconstruct.wgsl
+// (its bindings, `texel8`, `near_blur`, `tile_length`); run as two dispatches of one
+// invocation a tile: `classify_tiles` (each tile's `Summary`), then `classify_kinds` (each
+// tile's kind from the summaries within its reach), which `gather_2014` reads.
+//
+// The kinds are decisions, so they must be the CPU's exactly: every quantity compared is a
+// max (exact), a difference of two floats (correctly rounded in WGSL), a product or a sum
+// (correctly rounded), or a whole number of tiles found by exact products (`tiles_across`),
+// never a quotient or a square root of the shader's own (|M| comes from the host, as the
+// gather's). What can still move a kind: a driver that fuses the reach's product into its
+// sum (`m·reach_factor + 2m`), which changes nothing centred (the factor is 1, the product
+// exact) and can move a tile whose reach lies within an ulp of a whole tile under an offset
+// exposure; that tile then takes the full gather where the CPU boxes it, or the reverse, both
+// estimates of the same pixels.
+
+// Per tile, row by row: the gather its pixels take (FULL, PLAIN or UNIFORM, the CPU's
+// `TileKind`), written by `classify_kinds` or uploaded from the host.
+@group(0) @binding(7) var<storage, read_write> kinds: array<u32>;
+// Per tile, two words (the CPU's `Summary`): its longest |V|, or -1 where a pixel fails; its
+// steepest step of V, or -1 where no tile within one of it blurs.
+@group(0) @binding(8) var<storage, read_write> summaries: array<f32>;
+
+// `TileKind`'s numbers and `UNIFORM_SPREAD` (a unit test in src/gpu/motion/classify.rs checks
+// each against the Rust value).
+const FULL: u32 = 0u;
+const PLAIN: u32 = 1u;
+const UNIFORM: u32 = 2u;
+const UNIFORM_SPREAD: f32 = 0.125;
+
+// Whether tile (c, r) is uniform (the gather's box).
+fn uniform_tile(c: u32, r: u32) -> bool {
+    return kinds[r * columns() + c] == UNIFORM;
+}
+
+// Whether pixel j fails a plain tile: still, or paired by its matte (the mattes are bound
+// only under the exposure variant; otherwise one word).
+fn fails(j: u32) -> bool {
+    if texel8(j).length < HALF_PIXEL {
+        return true;
+    }
+    if arrayLength(&mattes) < MATTE_WORDS * config.width * config.height {
+        return false;
+    }
+    let o = MATTE_WORDS * j;
+    return !(bitcast<u32>(mattes[o + 1u]) == j && bitcast<u32>(mattes[o + 2u]) == j);
+}
+
+// The CPU's `summary`: tile t's pixels read once, up to the first that fails.
+@compute @workgroup_size(64)
+fn classify_tiles(@builtin(global_invocation_id) id: vec3<u32>) {
+    let t = id.x;
+    if t >= columns() * rows() {
+        return;
+    }
+    let c = t % columns();
+    let r = t / columns();
+    let width = config.width;
+    let height = config.height;
+    let steep = !near_blur(c, r, 1u);
+    var own = 0.0;
+    var step = 0.0;
+    let x_end = min((c + 1u) * config.tile, width);
+    let y_end = min((r + 1u) * config.tile, height);
+    for (var y = r * config.tile; y < y_end; y++) {
+        for (var x = c * config.tile; x < x_end; x++) {
+            let j = y * width + x;
+            if fails(j) {
+                summaries[2u * t] = -1.0;
+                summaries[2u * t + 1u] = -1.0;
+                return;
+            }
+            let texel = texel8(j);
+            own = max(own, texel.length);
+            if steep {
+                continue;
+            }
+            if x + 1u < width {
+                let other = texel8(j + 1u);
+                step = max(max(step, abs(other.vx - texel.vx)), abs(other.vy - texel.vy));
+            }
+            if y + 1u < height {
+                let other = texel8(j + width);
+                step = max(max(step, abs(other.vx - texel.vx)), abs(other.vy - texel.vy));
+            }
+        }
+    }
+    summaries[2u * t] = own;
+    summaries[2u * t + 1u] = select(step, -1.0, steep);
+}
+
+// The CPU's `tiles_across`: ⌈reach / tile⌉, the quotient's rounding corrected by exact
+// products.
+fn tiles_across(reach: f32) -> u32 {
+    let size = f32(config.tile);
+    var across = max(ceil(reach / size), 0.0);
+    if across > 0.0 && (across - 1.0) * size >= reach {
+        across -= 1.0;
+    }
+    if across * size < reach {
+        across += 1.0;
+    }
+    return u32(across);
+}
+
+// The CPU's `classify`, tile t's kind: plain where no tile within its tap reach fails,
+// uniform where, too, every step within its streaks' reach times that reach is at most
+// UNIFORM_SPREAD.
+@compute @workgroup_size(64)
+fn classify_kinds(@builtin(global_invocation_id) id: vec3<u32>) {
+    let t = id.x;
+    if t >= columns() * rows() {
+        return;
+    }
+    kinds[t] = kind_of(t);
+}
+
+fn kind_of(t: u32) -> u32 {
+    // Ours only (`Form::OURS`: the exposure variant).
+    if config.variant != EXPOSURE {
+        return FULL;
+    }
+    let own = summaries[2u * t];
+    if own < 0.0 {
+        return FULL;
+    }
+    let c = t % columns();
+    let r = t / columns();
+    var m = own;
+    for (var rr = select(r - 1u, 0u, r < 1u); rr < min(r + 2u, rows()); rr++) {
+        for (var cc = select(c - 1u, 0u, c < 1u); cc < min(c + 2u, columns()); cc++) {
+            m = max(m, tile_length(cc, rr));
+        }
+    }
+    let streak = m * (1.0 + 2.0 * abs(config.offset));
+    let reach = streak + 2.0 * m + 2.0;
+    if reach > f32(config.width + config.height) {
+        return FULL;
+    }
+    let a = tiles_across(reach);
+    for (var rr = select(r - a, 0u, r < a); rr < min(r + a + 1u, rows()); rr++) {
+        for (var cc = select(c - a, 0u, c < a); cc < min(c + a + 1u, columns()); cc++) {
+            if summaries[2u * (rr * columns() + cc)] < 0.0 {
+                return FULL;
+            }
+        }
+    }
+    let near = streak + 2.0;
+    let b = tiles_across(near);
+    var step = 0.0;
+    for (var rr = select(r - b, 0u, r < b); rr < min(r + b + 1u, rows()); rr++) {
+        for (var cc = select(c - b, 0u, c < b); cc < min(c + b + 1u, columns()); cc++) {
+            let s = summaries[2u * (rr * columns() + cc) + 1u];
+            if s < 0.0 {
+                return PLAIN;
+            }
+            step = max(step, s);
+        }
+    }
+    return select(PLAIN, UNIFORM, step * near <= UNIFORM_SPREAD);
+}
