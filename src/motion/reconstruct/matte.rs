@@ -278,11 +278,21 @@ fn matte(
         if only_pure && s == 0 {
             continue;
         }
+        // The still candidates' colours a channel a row, so each moving candidate is fitted
+        // against all of them at once ([`fits`]).
+        let mut lanes = [[0.0f32; CANDIDATES]; 4];
+        for (l, &(bx, by)) in stills[..s].iter().enumerate() {
+            let b = at(bx, by).expect("a candidate");
+            for (ch, row) in lanes.iter_mut().enumerate() {
+                row[l] = b[ch];
+            }
+        }
+        let c = [centre[0], centre[1], centre[2], centre[3]];
         for &(fx, fy) in &movers[..m] {
             let f = at(fx, fy).expect("a candidate");
-            for &(bx, by) in &stills[..s] {
-                let b = at(bx, by).expect("a candidate");
-                let (alpha, residual, spread) = fit(centre, f, b);
+            let [alphas, residuals, spreads] = fits(&c, &[f[0], f[1], f[2], f[3]], &lanes);
+            for (l, &(bx, by)) in stills[..s].iter().enumerate() {
+                let (alpha, residual, spread) = (alphas[l], residuals[l], spreads[l]);
                 if spread < DISTINCT || residual.is_nan() || residual > RESIDUAL * spread {
                     continue;
                 }
@@ -379,6 +389,44 @@ pub fn fit(c: &Texel2014, f: &Texel2014, b: &Texel2014) -> (f32, f32, f32) {
     ];
     let residual = r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3];
     (alpha, residual, spread)
+}
+
+/// [`fit`] of colour `c` between the moving colour `f` and each of [`CANDIDATES`] still colours
+/// at once (`b[channel][candidate]`): each candidate's α, residual and spread, the same
+/// operations in the same order as [`fit`]'s, so the same bits, in lanes (on a frame of noise,
+/// every pixel a silhouette, the pairs' fits were most of the matte).
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn fits(c: &[f32; 4], f: &[f32; 4], b: &[[f32; CANDIDATES]; 4]) -> [[f32; CANDIDATES]; 3] {
+    let mut out = [[0.0f32; CANDIDATES]; 3];
+    for l in 0..CANDIDATES {
+        let d = [
+            f[0] - b[0][l],
+            f[1] - b[1][l],
+            f[2] - b[2][l],
+            f[3] - b[3][l],
+        ];
+        let e = [
+            c[0] - b[0][l],
+            c[1] - b[1][l],
+            c[2] - b[2][l],
+            c[3] - b[3][l],
+        ];
+        let spread = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + d[3] * d[3];
+        let along = e[0] * d[0] + e[1] * d[1] + e[2] * d[2];
+        let last = e[3] * d[3];
+        let along = if last != 0.0 { along + last } else { along };
+        let alpha = (along / spread).clamp(0.0, 1.0);
+        let r = [
+            e[0] - alpha * d[0],
+            e[1] - alpha * d[1],
+            e[2] - alpha * d[2],
+            e[3] - alpha * d[3],
+        ];
+        out[0][l] = alpha;
+        out[1][l] = r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3];
+        out[2][l] = spread;
+    }
+    out
 }
 
 /// Pixel `i`'s coverage and its two surfaces' colours (RGBA, premultiplied): the moving
@@ -537,6 +585,50 @@ mod tests {
                 assert!(close(got, 0.0, 1e-5), "{fg:?}: {still:?}");
             }
         }
+    }
+
+    #[test]
+    fn the_fits_in_lanes_are_fit_s_bits() {
+        // Colours of every sign and scale, alphas equal (an opaque frame: alpha's term zero,
+        // not added) and not, signed zeros, and values past the numeric policy's bound (NaN
+        // residuals): each lane the bits `fit` gives its pair.
+        let values = [
+            0.0, -0.0, 1.0, 0.25, -0.7, 3.5, 1e-20, 2e19, 0.333, 1.0, 0.5, -2.0, 7e-3, 1e30,
+        ];
+        let colour = |k: usize| -> Texel2014 {
+            let v = |n: usize| values[(k * 7 + n * 3) % values.len()];
+            [
+                v(0),
+                v(1),
+                v(2),
+                if k.is_multiple_of(3) { 1.0 } else { v(3) },
+                1.0,
+                0.0,
+                0.0,
+                0.0,
+            ]
+        };
+        let mut checked = 0;
+        for ci in 0..40 {
+            for fi in 0..40 {
+                let (c, f) = (colour(ci), colour(fi + 5));
+                let mut lanes = [[0.0f32; CANDIDATES]; 4];
+                let stills: Vec<Texel2014> = (0..CANDIDATES).map(|l| colour(ci + fi + l)).collect();
+                for (l, b) in stills.iter().enumerate() {
+                    for ch in 0..4 {
+                        lanes[ch][l] = b[ch];
+                    }
+                }
+                let got = fits(&[c[0], c[1], c[2], c[3]], &[f[0], f[1], f[2], f[3]], &lanes);
+                for (l, b) in stills.iter().enumerate() {
+                    let (alpha, residual, spread) = fit(&c, &f, b);
+                    let want = [alpha, residual, spread].map(f32::to_bits);
+                    assert_eq!([got[0][l], got[1][l], got[2][l]].map(f32::to_bits), want);
+                    checked += 1;
+                }
+            }
+        }
+        assert_eq!(checked, 40 * 40 * CANDIDATES);
     }
 
     #[test]
