@@ -136,12 +136,14 @@ impl scatter_cpu::Stages for Gpu {
         color: Color,
         depth: &[f32],
         positions: [&Positions; 2],
+        fringe: &scatter_cpu::Fringe,
     ) -> Color {
-        let tried = self.try_scatter(config, &color, depth, positions, scatter::Order::default());
+        let order = scatter::Order::default();
+        let tried = self.try_scatter(config, &color, depth, positions, fringe, order);
         self.or_cpu(
             "scatter",
             || tried,
-            || scatter_cpu::stages(config, color, depth, positions),
+            || scatter_cpu::stages(config, color, depth, positions, fringe),
         )
     }
 
@@ -154,15 +156,16 @@ impl scatter_cpu::Stages for Gpu {
         color: Color,
         depth: &[f32],
         positions: [&Positions; 2],
+        fringe: &scatter_cpu::Fringe,
         layers: &mut [Color],
     ) -> Color {
         let order = scatter::Order::default();
-        match self.try_scatter_carrying(config, &color, depth, positions, layers, order) {
+        match self.try_scatter_carrying(config, &color, depth, positions, fringe, layers, order) {
             Ok(beauty) => beauty,
             Err(why) => {
                 // The layers are as they came.
                 self.note_cpu_stage("scatter", &why);
-                scatter_cpu::stages_carrying(config, color, depth, positions, layers)
+                scatter_cpu::stages_carrying(config, color, depth, positions, fringe, layers)
             }
         }
     }

@@ -114,17 +114,69 @@ pub fn mattes(
                     0.0,
                     0.0,
                 ];
-                // A pixel whose 3×3 is of one kind (all moving or all still, as read) is no
-                // silhouette: `matte` would find no depth step there and return None.
-                let pure = kinds.purity[i] & (PURE_MOVING | PURE_STILL) != 0;
-                if !pure && selected(x / size, y / size) {
-                    if let Some(found) = matte(config, texels, &selected, &kinds, x, y) {
+                if selected(x / size, y / size) {
+                    if let Some(found) = silhouette(config, texels, &selected, &kinds, x, y) {
                         *m = found;
                     }
                 }
             }
         });
     out
+}
+
+/// [`mattes`]' pairs alone: each pixel of the tiles `selected(column, row)` picks that has
+/// a pair and that `wanted(index)` asks for, in index order, with its matte (every other
+/// pixel's is its label). For a pass that needs some silhouettes only (scatter's fringe: the
+/// still pixels), without a matte for every pixel.
+pub fn pairs(
+    config: &ReconstructConfig,
+    texels: &[Texel2014],
+    selected: impl Fn(usize, usize) -> bool + Sync,
+    wanted: impl Fn(usize) -> bool + Sync,
+) -> Vec<(usize, Matte)> {
+    let (width, height) = (config.width as usize, config.height as usize);
+    let size = config.tile as usize;
+    let kinds = kinds(config, texels, &selected);
+    let rows: Vec<Vec<(usize, Matte)>> = (0..height)
+        .into_par_iter()
+        .map(|y| {
+            let mut row = Vec::new();
+            for c in (0..width.div_ceil(size)).filter(|&c| selected(c, y / size)) {
+                for x in c * size..((c + 1) * size).min(width) {
+                    let i = y * width + x;
+                    if !wanted(i) {
+                        continue;
+                    }
+                    if let Some(found) = silhouette(config, texels, &selected, &kinds, x, y) {
+                        if !unpaired(&found, i) {
+                            row.push((i, found));
+                        }
+                    }
+                }
+            }
+            row
+        })
+        .collect();
+    rows.concat()
+}
+
+/// The matte of pixel (x, y) of a selected tile where it is at a silhouette.
+#[inline]
+fn silhouette(
+    config: &ReconstructConfig,
+    texels: &[Texel2014],
+    selected: &impl Fn(usize, usize) -> bool,
+    kinds: &Kinds,
+    x: usize,
+    y: usize,
+) -> Option<Matte> {
+    // A pixel whose 3×3 is of one kind (all moving or all still, as read) is no
+    // silhouette: `matte` would find no depth step there and return None.
+    let i = y * config.width as usize + x;
+    if kinds.purity[i] & (PURE_MOVING | PURE_STILL) != 0 {
+        return None;
+    }
+    matte(config, texels, selected, kinds, x, y)
 }
 
 /// [`kinds`]' bits: the pixel is read (in a selected tile), it moves, its 3×3 is all moving,

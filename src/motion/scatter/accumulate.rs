@@ -42,7 +42,16 @@ impl Path {
 
 impl Scatter<'_> {
     /// The curve of moving pixel `i` inside the shutter, into `path`; false if it has none.
-    pub(super) fn path(&self, i: usize, motion: &Moving, path: &mut Path) -> bool {
+    /// A fringe pixel's ([`super::fringe`]) is its partner's (`fringe`: the partner and its
+    /// coverage): the partner's colours and depths, along `motion` from the pixel's own
+    /// centre, its weights times the coverage.
+    pub(super) fn path(
+        &self,
+        i: usize,
+        motion: &Moving,
+        path: &mut Path,
+        fringe: Option<(usize, f32)>,
+    ) -> bool {
         let Moving {
             prev, now, next, ..
         } = *motion;
@@ -61,6 +70,7 @@ impl Scatter<'_> {
             None => bezier.segments(0.5 * (t1 - t0), tolerance, most),
         };
         path.segments = segments;
+        let (i, cover) = fringe.map_or((i, 1.0), |(m, alpha)| (m, alpha as f64));
         path.color = self.color(i).map(f64::from);
         path.extra.clear();
         path.extra
@@ -125,7 +135,8 @@ impl Scatter<'_> {
             if !(sum > 0.0 && sum.is_finite()) {
                 return false;
             }
-            let inverse = 1.0 / sum;
+            // (A fringe's weights times its coverage: α of a curve.)
+            let inverse = cover / sum;
             for w in &mut path.weights[..=segments] {
                 *w *= inverse;
             }
@@ -227,13 +238,19 @@ impl Scatter<'_> {
                 for y in by * BLOCK..((by + 1) * BLOCK).min(self.height) {
                     for x in bx * BLOCK..((bx + 1) * BLOCK).min(width) {
                         let e = y * width + x;
+                        // A fringe pixel's reach is negative ([`Reach`]).
                         let r = reach.pixel[e] as f64;
-                        if r == 0.0 || !touches(x as f64 + 0.5, y as f64 + 0.5, r) {
+                        if r == 0.0 || !touches(x as f64 + 0.5, y as f64 + 0.5, r.abs()) {
                             continue;
                         }
-                        // Moving (its reach is not 0), so its positions are not NaN.
-                        let motion = self.positions(x, y, r);
-                        if !self.path(e, &motion, &mut path) {
+                        // Moving (its reach is not 0), so its positions are not NaN; or a
+                        // fringe pixel, drawn with its partner's motion.
+                        let fringe = if r < 0.0 { self.fringe.get(e) } else { None };
+                        let motion = match fringe {
+                            Some((m, _)) => self.fringe_positions(x, y, m, -r),
+                            None => self.positions(x, y, r),
+                        };
+                        if !self.path(e, &motion, &mut path, fringe) {
                             continue;
                         }
                         reached = true;

@@ -17,6 +17,12 @@ pub(super) struct Moving {
     pub(super) reach: f64,
 }
 
+static NO_FRINGE: super::fringe::Fringe = super::fringe::Fringe {
+    pixels: Vec::new(),
+    partners: Vec::new(),
+    cover: Vec::new(),
+};
+
 /// One frame's scatter: its input buffers and config.
 pub(super) struct Scatter<'a> {
     pub(super) width: usize,
@@ -24,6 +30,8 @@ pub(super) struct Scatter<'a> {
     pub(super) color: &'a Color,
     /// Colour planes carried beside the beauty (light layers), blurred with its weights.
     pub(super) extra: Vec<&'a [f32]>,
+    /// The still pixels at a silhouette, each with the moving surface's share of it.
+    pub(super) fringe: &'a super::fringe::Fringe,
     pub(super) depth: &'a [f32],
     pub(super) prev: &'a Positions,
     pub(super) next: &'a Positions,
@@ -57,6 +65,7 @@ impl<'a> Scatter<'a> {
             height: config.height as usize,
             color,
             extra: Vec::new(),
+            fringe: &NO_FRINGE,
             depth,
             prev,
             next,

@@ -7,7 +7,9 @@
 //! against the frame's depth (no depth writes) lets curves pass behind nearer surfaces. A
 //! final pass normalises each pixel.
 //!
-//! Stages, in the order a GPU would dispatch them: [`reach`] (how far each block's curves can
+//! Stages, in the order a GPU would dispatch them: [`fringe`] (the still pixels at a
+//! silhouette: their still surface unmixed, the moving surface's sliver of them given a curve
+//! of its own; on the CPU for every backend) → [`reach`] (how far each block's curves can
 //! deposit) → [`accumulate`] (each tile draws the curves that reach it into f64 cells) →
 //! [`resolve`] (each pixel's output from its cell, by the normalisation).
 //!
@@ -49,6 +51,7 @@
 
 mod accumulate;
 pub mod config;
+pub mod fringe;
 mod job;
 mod reach;
 mod resolve;
@@ -62,6 +65,7 @@ pub use config::{
     CurveKind, Normalize, ScatterConfig, ScatterParams, Weight, MOST_SEGMENTS, STILL,
 };
 use config::{TILE_H, TILE_W};
+pub use fringe::{fringe, Fringe};
 use job::Scatter;
 use reach::Reach;
 
@@ -85,8 +89,9 @@ pub trait Stages {
         color: Color,
         depth: &[f32],
         positions: [&Positions; 2],
+        fringe: &Fringe,
     ) -> Color {
-        stages(config, color, depth, positions)
+        stages(config, color, depth, positions, fringe)
     }
 
     /// [`stages`] with `layers` (light layers beside the beauty) blurred in place with the
@@ -97,9 +102,10 @@ pub trait Stages {
         color: Color,
         depth: &[f32],
         positions: [&Positions; 2],
+        fringe: &Fringe,
         layers: &mut [Color],
     ) -> Color {
-        stages_carrying(config, color, depth, positions, layers)
+        stages_carrying(config, color, depth, positions, fringe, layers)
     }
 }
 
@@ -128,7 +134,7 @@ pub fn scatter_layers_with(
 ) -> Frame {
     let (width, height) = (frame.width, frame.height);
     frame.velocity = None;
-    let (Some(color), Some(depth), Some(prev), Some(next)) = (
+    let (Some(mut color), Some(depth), Some(prev), Some(next)) = (
         frame.color.take(),
         frame.depth.take(),
         frame.prev.take(),
@@ -140,23 +146,29 @@ pub fn scatter_layers_with(
     // Colour alone, as on every path.
     frame.color = Some(if width * height == 0 {
         color
-    } else if layers.is_empty() {
-        stages.stages(&config, color, &depth, [&prev, &next])
     } else {
-        stages.stages_carrying(&config, color, &depth, [&prev, &next], layers)
+        // The fringe's stage runs here for every backend (its matte on the CPU).
+        let fringe = fringe(&config, &mut color, layers, &depth, [&prev, &next]);
+        if layers.is_empty() {
+            stages.stages(&config, color, &depth, [&prev, &next], &fringe)
+        } else {
+            stages.stages_carrying(&config, color, &depth, [&prev, &next], &fringe, layers)
+        }
     });
     frame
 }
 
-/// The three stages on the CPU: [`reach`], then where anything moves [`accumulate`] and
-/// [`resolve`] tile by tile into new planes; the colour as it came where nothing moves.
+/// The three stages on the CPU after [`fringe`] (whose colour and fringe they take): [`reach`],
+/// then where anything moves [`accumulate`] and [`resolve`] tile by tile into new planes;
+/// the colour as it came where nothing moves.
 pub fn stages(
     config: &ScatterConfig,
     color: Color,
     depth: &[f32],
     positions: [&Positions; 2],
+    fringe: &Fringe,
 ) -> Color {
-    stages_carrying(config, color, depth, positions, &mut [])
+    stages_carrying(config, color, depth, positions, fringe, &mut [])
 }
 
 /// [`stages`], carrying the R, G and B planes of `layers` (light layers) through the same
@@ -170,6 +182,7 @@ pub fn stages_carrying(
     color: Color,
     depth: &[f32],
     [prev, next]: [&Positions; 2],
+    fringe: &Fringe,
     layers: &mut [Color],
 ) -> Color {
     let (width, height) = (config.width as usize, config.height as usize);
@@ -180,6 +193,7 @@ pub fn stages_carrying(
         .collect();
     let mut job = Scatter::new(*config, &color, depth, prev, next);
     job.extra = inputs.iter().map(Vec::as_slice).collect();
+    job.fringe = fringe;
     let n = width * height;
     let columns = width.div_ceil(TILE_W);
 
@@ -461,10 +475,22 @@ mod tests {
                 let got = carried.color.unwrap();
                 assert_eq!(bits(&got.r), bits(&beauty.r), "{normalize:?}");
                 assert_eq!(bits(&got.b), bits(&beauty.b), "{normalize:?}");
-                for (k, carried) in [0.11, 0.07].into_iter().zip(&layers) {
-                    let mut alone = f.clone();
-                    alone.color = Some(layer(k, &alpha));
-                    let want = scatter(alone, &params, 1.0).color.unwrap();
+                // Each layer alone in the beauty's place, with the beauty's fringe (its
+                // matte is the beauty's: the layers unmixed with its factors).
+                let config = ScatterConfig::new(w, h, &params, 1.0);
+                let depth = f.depth.as_ref().unwrap();
+                let positions = [f.prev.as_ref().unwrap(), f.next.as_ref().unwrap()];
+                let mut colour = f.color.clone().unwrap();
+                let mut unmixed = [layer(0.11, &alpha), layer(0.07, &alpha)];
+                let found = fringe(&config, &mut colour, &mut unmixed, depth, positions);
+                assert_eq!(found.is_empty(), normalize == Normalize::Paper);
+                let inputs = unmixed.into_iter().zip(&layers);
+                for (k, (input, carried)) in [0.11, 0.07].into_iter().zip(inputs) {
+                    let input = Color {
+                        a: colour.a.clone(),
+                        ..input
+                    };
+                    let want = stages(&config, input, depth, positions, &found);
                     // The layer moved: the comparison is not of a copy.
                     assert_ne!(bits(&want.r), bits(&layer(k, &alpha).r));
                     assert_eq!(bits(&carried.r), bits(&want.r), "{normalize:?} {k}");

@@ -13,7 +13,8 @@ use super::job::Scatter;
 pub(super) struct Reach {
     pub(super) across: usize,
     pub(super) down: usize,
-    /// Per pixel (0 where still), so tiles test it without rebuilding the motion.
+    /// Per pixel (0 where still, negative at a fringe pixel: its partner's), so tiles test
+    /// it without rebuilding the motion.
     pub(super) pixel: Vec<f32>,
     pub(super) block: Vec<f32>,
     pub(super) most: f32,
@@ -47,11 +48,23 @@ impl Reach {
                         *r = job.motion(x, y).map_or(0.0, |m| (m.reach + 0.01) as f32);
                     }
                 }
+                // A fringe pixel reaches as far as its partner, which moves: marked negative.
+                let rows = y0 * width..((y0 + BLOCK) * width).min(width * height);
+                for k in job.fringe.within(rows) {
+                    let (i, m) = (
+                        job.fringe.pixels[k] as usize,
+                        job.fringe.partners[k] as usize,
+                    );
+                    let reach = job.motion(m % width, m / width).map_or(0.0, |m| m.reach);
+                    pixel[i - y0 * width] = -((reach + 0.01) as f32);
+                }
                 let blocks = block.iter_mut().zip(deepest).zip(nearest);
                 for (bx, ((most, deepest), nearest)) in blocks.enumerate() {
                     for y in 0..BLOCK.min(height - y0) {
                         let row = y * width + bx * BLOCK..y * width + ((bx + 1) * BLOCK).min(width);
-                        *most = pixel[row.clone()].iter().fold(*most, |m, &r| m.max(r));
+                        *most = pixel[row.clone()]
+                            .iter()
+                            .fold(*most, |m, &r| m.max(r.abs()));
                         let depth = &job.depth[y0 * width + row.start..y0 * width + row.end];
                         *deepest = depth.iter().fold(*deepest, |d, &z| d.max(z));
                         *nearest = depth.iter().fold(*nearest, |d, &z| d.min(z));

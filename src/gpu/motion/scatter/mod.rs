@@ -17,7 +17,14 @@
 //!
 //! Bindings, in order: the [`ScatterConfig`] uniform (the CPU's own struct), colour, depth,
 //! prev, next (the CPU's inputs, planes one after the other), then `state`, the moving list,
-//! the five sums and the output colour.
+//! the five sums, the output colour and the fringe's entries.
+//!
+//! **The fringe** ([`crate::motion::scatter::fringe`]) is found on the CPU for both backends
+//! (its matte is reconstruct's, which runs there too): the colour uploaded is its unmixed
+//! one, and its entries (still pixel, moving partner, coverage) go to a binding of their own.
+//! `reach_fringe` appends each entry to the moving list, marked by its top bit; `accumulate`
+//! draws a marked entry as its partner's curve (the motion relative to the pixel's corner is
+//! the same) from the entry's own pixel, its weights times the coverage, as the CPU does.
 //!
 //! **Light layers** (RGB colours beside the beauty, sharing its alpha: issue 29) are carried
 //! through the same dispatches, as the CPU's [`stages_carrying`] carries them through the
@@ -120,6 +127,11 @@ use crate::motion::scatter::ScatterConfig;
 use crate::motion::scatter::{stages_carrying, STILL};
 
 use crate::gpu::context::Gpu;
+use crate::motion::scatter::Fringe;
+
+/// What a run reads beside the colours: depth, the prev and next positions, and the fringe
+/// ([`crate::motion::scatter::fringe`], found on the CPU).
+type Inputs<'a> = (&'a [f32], [&'a Positions; 2], &'a Fringe);
 use crate::gpu::stage::StageError;
 use pass::carried_sum_bytes;
 pub use pass::{
@@ -136,12 +148,14 @@ impl Gpu {
         color: &Color,
         depth: &[f32],
         positions: [&Positions; 2],
+        fringe: &Fringe,
         order: Order,
     ) -> Result<Color, StageError> {
         if config.width == 0 || config.height == 0 {
             return Ok(color.clone());
         }
-        let (beauty, _) = self.run_scatter(config, color, depth, positions, order, &[])?;
+        let inputs = (depth, positions, fringe);
+        let (beauty, _) = self.run_scatter(config, color, inputs, order, &[])?;
         Ok(beauty)
     }
 
@@ -150,25 +164,28 @@ impl Gpu {
     /// with the beauty's weights, carried through the same dispatches in runs of at most
     /// [`Gpu::scatter_layers_per_run`] (each layer alone in the beauty's place where that is
     /// 0); or why they could not run, the layers then untouched.
+    #[allow(clippy::too_many_arguments)]
     pub fn try_scatter_carrying(
         &self,
         config: &ScatterConfig,
         color: &Color,
         depth: &[f32],
         positions: [&Positions; 2],
+        fringe: &Fringe,
         layers: &mut [Color],
         order: Order,
     ) -> Result<Color, StageError> {
         let pixels = config.width as usize * config.height as usize;
         if pixels == 0 || layers.is_empty() {
-            return self.try_scatter(config, color, depth, positions, order);
+            return self.try_scatter(config, color, depth, positions, fringe, order);
         }
+        let inputs = (depth, positions, fringe);
         // A run that fails on the device (out of memory, a driver refusing the carrying
         // module) is tried again with half as many layers a run, down to each layer alone in
         // the beauty's place, before the frame goes to the CPU.
         let mut per_run = self.scatter_layers_per_run(pixels, order);
         let (beauty, planes) = loop {
-            match self.scatter_runs(config, color, depth, positions, layers, order, per_run) {
+            match self.scatter_runs(config, color, inputs, layers, order, per_run) {
                 Ok(done) => break done,
                 Err(why) if per_run == 0 || !order.retry => return Err(why),
                 Err(_) => per_run /= 2,
@@ -186,13 +203,11 @@ impl Gpu {
     /// The beauty's output and every layer's R, G and B planes through runs of at most
     /// `per_run` layers (each layer alone in the beauty's place where that is 0), kept until
     /// every run has run: a failure leaves the layers as they came.
-    #[allow(clippy::too_many_arguments)]
     fn scatter_runs(
         &self,
         config: &ScatterConfig,
         color: &Color,
-        depth: &[f32],
-        positions: [&Positions; 2],
+        inputs: Inputs,
         layers: &[Color],
         order: Order,
         per_run: usize,
@@ -200,10 +215,10 @@ impl Gpu {
         let mut planes = Vec::with_capacity(3 * layers.len());
         if per_run == 0 {
             for layer in layers {
-                let (out, _) = self.run_scatter(config, layer, depth, positions, order, &[])?;
+                let (out, _) = self.run_scatter(config, layer, inputs, order, &[])?;
                 planes.extend([out.r, out.g, out.b]);
             }
-            let beauty = self.try_scatter(config, color, depth, positions, order)?;
+            let (beauty, _) = self.run_scatter(config, color, inputs, order, &[])?;
             return Ok((beauty, planes));
         }
         // Runs as even as they can be (as many as the most a run carries needs): the buffers
@@ -213,7 +228,7 @@ impl Gpu {
         let mut beauty = None;
         for run in layers.chunks(size) {
             let run: Vec<&Color> = run.iter().collect();
-            let (out, carried) = self.run_scatter(config, color, depth, positions, order, &run)?;
+            let (out, carried) = self.run_scatter(config, color, inputs, order, &run)?;
             beauty.get_or_insert(out);
             planes.extend(carried);
         }
@@ -274,7 +289,9 @@ mod tests {
 
     #[test]
     fn the_shader_s_constants_are_the_cpu_s() {
-        use super::pass::{CARRIED_BOUND, DISPATCH, FLAGS, HAS_Z, LAYERS, MOST_GROUPS, OPAQUE};
+        use super::pass::{
+            CARRIED_BOUND, DISPATCH, FLAGS, FRINGES, HAS_Z, LAYERS, MOST_GROUPS, OPAQUE,
+        };
         // scatter.wgsl and curve.wgsl go into both modules alike.
         assert!(SHADER_CARRYING.starts_with(SHADER.trim_end_matches(ALONE)));
         let has = |line: String| assert!(SHADER.contains(&line), "scatter.wgsl lacks {line}");
@@ -304,8 +321,13 @@ mod tests {
         has(format!("const MOST_GROUPS: u32 = {MOST_GROUPS}u;"));
         has(format!("const LAYERS: u32 = {LAYERS}u;"));
         has(format!("const CARRIED_BOUND: u32 = {CARRIED_BOUND}u;"));
+        has(format!("const FRINGES: u32 = {FRINGES}u;"));
         has(format!(
-            "@binding({STORAGE_BUFFERS}) var<storage, read_write> out"
+            "@binding({}) var<storage, read_write> out",
+            STORAGE_BUFFERS - 1
+        ));
+        has(format!(
+            "@binding({STORAGE_BUFFERS}) var<storage, read_write> fringe"
         ));
         // The carrying module: its bindings, and as many layers as the host gives a run.
         let carries = |line: String| {

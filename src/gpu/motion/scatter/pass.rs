@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
-use crate::frame::{Color, Positions};
+use crate::frame::Color;
 use crate::motion::scatter::ScatterConfig;
 
 use crate::gpu::context::Gpu;
@@ -33,7 +33,7 @@ pub const SHADER_CARRYING: &str = concat!(
 );
 
 /// Storage buffers the beauty alone binds (every binding but the uniform).
-pub const STORAGE_BUFFERS: u32 = 12;
+pub const STORAGE_BUFFERS: u32 = 13;
 /// Storage buffers a run carrying layers binds: the beauty's and the layers' three (their
 /// input, sums and output, group 1).
 pub const CARRYING_STORAGE_BUFFERS: u32 = STORAGE_BUFFERS + 3;
@@ -45,11 +45,12 @@ pub const MOST_LAYERS: usize = 8;
 
 /// Words of the `state` buffer (keep in sync with scatter.wgsl): the moving count, the
 /// accumulate dispatch (x, y, z), the colour bounds (R, G, B, A), the host's flags, the
-/// layers carried, and from [`CARRIED_BOUND`] the carried channels' colour bounds.
+/// layers carried, the fringe's entries, and from [`CARRIED_BOUND`] the carried channels' colour bounds.
 const STATE_WORDS: usize = CARRIED_BOUND + 3 * MOST_LAYERS;
 pub(super) const DISPATCH: u64 = 1;
 pub(super) const FLAGS: usize = 8;
 pub(super) const LAYERS: usize = 9;
+pub(super) const FRINGES: usize = 10;
 pub(super) const CARRIED_BOUND: usize = 16;
 pub(super) const OPAQUE: u32 = 1;
 pub(super) const HAS_Z: u32 = 2;
@@ -106,6 +107,8 @@ struct Buffers {
     indirect: wgpu::Buffer,
     sums: Vec<wgpu::Buffer>,
     out: wgpu::Buffer,
+    /// The fringe's entries, three words each (at most one a pixel).
+    fringe: wgpu::Buffer,
     readback: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
 }
@@ -124,6 +127,7 @@ struct CarriedBuffers {
 /// One module's stages, one pipeline per entry point.
 struct Pipelines {
     reach: wgpu::ComputePipeline,
+    reach_fringe: wgpu::ComputePipeline,
     prepare: wgpu::ComputePipeline,
     accumulate: wgpu::ComputePipeline,
     resolve: wgpu::ComputePipeline,
@@ -166,6 +170,7 @@ impl Pipelines {
         };
         Pipelines {
             reach: pipeline("reach"),
+            reach_fringe: pipeline("reach_fringe"),
             prepare: pipeline("prepare"),
             accumulate: pipeline("accumulate"),
             resolve: pipeline("resolve"),
@@ -302,10 +307,11 @@ impl ScatterPass {
             bytes(4 * pixels),
             U::MAP_READ | U::COPY_DST,
         );
+        let fringe = plane("scatter fringe", 3 * pixels);
         let bound: Vec<&wgpu::Buffer> = [&config, &color, &depth, &prev, &next, &state, &moving]
             .into_iter()
             .chain(&sums)
-            .chain([&out])
+            .chain([&out, &fringe])
             .collect();
         let bind_group = bind_group(device, "scatter", &self.layout, &bound);
         Buffers {
@@ -318,12 +324,13 @@ impl ScatterPass {
             indirect,
             sums,
             out,
+            fringe,
             readback,
             bind_group,
         }
     }
 
-    /// Workgroups for one invocation per pixel: x × y with x ≤ [`MOST_GROUPS`].
+    /// Workgroups for one invocation per pixel (or any item): x × y with x ≤ [`MOST_GROUPS`].
     fn groups(&self, pixels: usize) -> (u32, u32) {
         let groups = (pixels as u64).div_ceil(self.order.workgroup as u64) as u32;
         let x = groups.min(MOST_GROUPS);
@@ -422,8 +429,7 @@ impl Gpu {
         &self,
         config: &ScatterConfig,
         color: &Color,
-        depth: &[f32],
-        positions: [&Positions; 2],
+        (depth, positions, fringe): super::Inputs,
         order: Order,
         layers: &[&Color],
     ) -> Result<(Color, Vec<Vec<f32>>), StageError> {
@@ -525,6 +531,17 @@ impl Gpu {
         let mut state = [0u32; STATE_WORDS];
         state[FLAGS] = if opaque { OPAQUE } else { 0 } | if has_z { HAS_Z } else { 0 };
         state[LAYERS] = layers.len() as u32;
+        let fringes = fringe.pixels.len();
+        state[FRINGES] = fringes as u32;
+        if fringes > 0 {
+            let entries: Vec<u32> = (0..fringes)
+                .flat_map(|k| {
+                    let cover = fringe.cover[k].to_bits();
+                    [fringe.pixels[k], fringe.partners[k], cover]
+                })
+                .collect();
+            queue.write_buffer(&buffers.fringe, 0, bytemuck::cast_slice(&entries));
+        }
         queue.write_buffer(&buffers.state, 0, bytemuck::cast_slice(&state));
         self.uploaded(&mut clock)?;
         let mut encoder = self
@@ -557,6 +574,11 @@ impl Gpu {
             }
             compute.set_pipeline(&stages.reach);
             compute.dispatch_workgroups(x, y, 1);
+            if fringes > 0 {
+                let (x, y) = pass.groups(fringes);
+                compute.set_pipeline(&stages.reach_fringe);
+                compute.dispatch_workgroups(x, y, 1);
+            }
             compute.set_pipeline(&stages.prepare);
             compute.dispatch_workgroups(1, 1, 1);
         }

@@ -8,7 +8,11 @@
 // Bindings, in order: the ScatterConfig uniform; colour (R, G, B, A planes), depth, prev and
 // next (x, y, z planes each) — the CPU's inputs; then `state` (the moving count, the
 // accumulate dispatch, the colour bounds, the host's flags), the list of moving pixels, the
-// five sums (R, G, B, A, weight; two words per pixel) and the output colour (four planes).
+// five sums (R, G, B, A, weight; two words per pixel), the output colour (four planes), and
+// the fringe (src/motion/scatter/fringe.rs, found on the CPU: three words an entry, the
+// still pixel, its moving partner and the partner's coverage of it; `reach_fringe` lists
+// them after the moving pixels and `accumulate` draws each as its partner's curve from the
+// pixel's own centre, its weights times the coverage).
 //
 // Light layers: this file goes into two modules. Its stages call four hooks, `carry_bound`,
 // `carry_pen`, `carry_deposit` and `carry_resolve`, at the points where the CPU handles its
@@ -47,6 +51,7 @@ struct ScatterConfig {
 @group(0) @binding(10) var<storage, read_write> sum_a: array<atomic<u32>>;
 @group(0) @binding(11) var<storage, read_write> sum_w: array<atomic<u32>>;
 @group(0) @binding(12) var<storage, read_write> out: array<f32>;
+@group(0) @binding(13) var<storage, read_write> fringe: array<u32>;
 
 // Invocations per workgroup of every stage but `prepare`, and whether `accumulate` walks the
 // moving list backwards: test hooks (the output must not depend on either).
@@ -61,6 +66,10 @@ const FLAGS: u32 = 8u;
 // The light layers carried (the host's; 0 for the beauty alone) and their channels' colour
 // bounds (carrying.wgsl), as BOUND holds the beauty's.
 const LAYERS: u32 = 9u;
+// The fringe's entries (the host's).
+const FRINGES: u32 = 10u;
+// A fringe entry in the moving list: its index with this bit set.
+const FRINGE: u32 = 0x80000000u;
 const CARRIED_BOUND: u32 = 16u;
 // Flags the host sets: every alpha is 1 (alpha sums are the weight sums), and the positions
 // carry depth (z planes).
@@ -181,11 +190,32 @@ fn reach(
     carry_bound(i);
 }
 
+// Stage 1, the fringe: each entry joins the moving list, marked (its partner moves, so its
+// colour already raised the bounds).
+@compute @workgroup_size(WORKGROUP)
+fn reach_fringe(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let k = flat(group, groups, lane);
+    if k >= atomicLoad(&state[FRINGES]) {
+        return;
+    }
+    // The fringe's pixels are still, so the list holds them and the moving ones; but where
+    // the f32 motion test calls one moving that the CPU's called still, a full list drops
+    // the entry (`prepare` and `accumulate` read at most a pixel's worth).
+    let slot = atomicAdd(&state[COUNT], 1u);
+    if slot < pixels() {
+        moving[slot] = FRINGE | k;
+    }
+}
+
 // Between reach and accumulate: one workgroup of `WORKGROUP` invocations per moving pixel, in
 // rows of at most MOST_GROUPS.
 @compute @workgroup_size(1)
 fn prepare() {
-    let count = atomicLoad(&state[COUNT]);
+    let count = min(atomicLoad(&state[COUNT]), pixels());
     let groups = (count + WORKGROUP - 1u) / WORKGROUP;
     let x = min(groups, MOST_GROUPS);
     var y = 0u;
@@ -207,8 +237,9 @@ var<private> weights: array<f32, 65>;
 var<private> depths: array<f32, 65>;
 var<private> lengths: array<f32, 64>;
 
-// `Scatter::path` for moving pixel i: its segment count, 0 if it has no curve.
-fn path(i: u32, m: Motion) -> u32 {
+// `Scatter::path` for moving pixel i (its depths; a fringe entry's, its partner's), its
+// weights times `cover` (1, or a fringe's coverage): its segment count, 0 if it has no curve.
+fn path(i: u32, m: Motion, cover: f32) -> u32 {
     let now = vec2<f32>(0.5, 0.5);
     let t01 = interval();
     let t0 = t01.x;
@@ -276,7 +307,7 @@ fn path(i: u32, m: Motion) -> u32 {
         if !(sum > 0.0 && is_finite(sum)) {
             return 0u;
         }
-        let inverse = 1.0 / sum;
+        let inverse = cover / sum;
         for (var k = 0u; k <= segments; k++) {
             weights[k] *= inverse;
         }
@@ -505,7 +536,7 @@ fn accumulate(
     @builtin(local_invocation_index) lane: u32,
 ) {
     let k = flat(group, groups, lane);
-    let count = atomicLoad(&state[COUNT]);
+    let count = min(atomicLoad(&state[COUNT]), pixels());
     if k >= count {
         return;
     }
@@ -513,8 +544,19 @@ fn accumulate(
     if REVERSED {
         item = count - 1u - k;
     }
-    let i = moving[item];
-    let segments = path(i, motion_of(i));
+    // A moving pixel draws its own curve; a fringe entry its partner's (the motion relative
+    // to the corner, so the same), from its own pixel, times its coverage.
+    let entry = moving[item];
+    var i = entry;
+    var own = entry;
+    var cover = 1.0;
+    if (entry & FRINGE) != 0u {
+        let f = 3u * (entry & ~FRINGE);
+        own = fringe[f];
+        i = fringe[f + 1u];
+        cover = bitcast<f32>(fringe[f + 2u]);
+    }
+    let segments = path(i, motion_of(i), cover);
     if segments == 0u {
         return;
     }
@@ -526,7 +568,7 @@ fn accumulate(
     }
     let pen = Pen(
         c,
-        vec2<i32>(i32(i % config.width), i32(i / config.width)),
+        vec2<i32>(i32(own % config.width), i32(own / config.width)),
         opaque,
         1.0 + config.depth_tolerance,
     );
