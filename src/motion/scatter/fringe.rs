@@ -29,41 +29,12 @@
 use rayon::prelude::*;
 
 use super::config::{Normalize, ScatterConfig};
-use super::job::{Moving, Scatter};
+use super::job::{Fringe, Scatter};
 use crate::frame::{Color, Positions};
 use crate::motion::reconstruct::config::{finite_depth, Texel2014};
 use crate::motion::reconstruct::matte::{self, Matte};
 use crate::motion::reconstruct::pack::pack_tiles;
 use crate::motion::reconstruct::{ReconstructConfig, ReconstructParams};
-
-/// The still pixels at a silhouette, in index order, each with its moving partner and the
-/// partner's coverage of it.
-#[derive(Default, Debug, Clone, PartialEq)]
-pub struct Fringe {
-    pub pixels: Vec<u32>,
-    pub partners: Vec<u32>,
-    pub cover: Vec<f32>,
-}
-
-impl Fringe {
-    /// Pixel `i`'s partner and its coverage, where `i` is a fringe pixel.
-    #[inline]
-    pub(super) fn get(&self, i: usize) -> Option<(usize, f32)> {
-        let k = self.pixels.binary_search(&(i as u32)).ok()?;
-        Some((self.partners[k] as usize, self.cover[k]))
-    }
-
-    /// The entries of the pixels in `range`, as a range of entries.
-    pub(super) fn within(&self, range: std::ops::Range<usize>) -> std::ops::Range<usize> {
-        let start = self.pixels.partition_point(|&p| (p as usize) < range.start);
-        let end = self.pixels.partition_point(|&p| (p as usize) < range.end);
-        start..end
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.pixels.is_empty()
-    }
-}
 
 /// Finds the fringe of the frame and unmixes its pixels' colour in place: the beauty's and
 /// every carried layer's R, G and B (`layers`).
@@ -74,8 +45,7 @@ pub fn fringe(
     depth: &[f32],
     [prev, next]: [&Positions; 2],
 ) -> Fringe {
-    if config.normalize() != Normalize::Exposure || std::env::var_os("SHUTTER_NO_FRINGE").is_some()
-    {
+    if config.normalize() != Normalize::Exposure {
         return Fringe::default();
     }
     let found = {
@@ -174,20 +144,4 @@ fn find(job: &Scatter) -> Vec<(usize, Matte)> {
     });
     // Still pixels only: a moving one's sliver of what is behind it is drawn with it.
     matte::pairs(&config, &texels, selected, |i| !moves[i])
-}
-
-impl Scatter<'_> {
-    /// Fringe pixel (x, y)'s curve: its partner `m`'s three positions moved to its own
-    /// centre (the same motion, so the same reach).
-    #[inline]
-    pub(super) fn fringe_positions(&self, x: usize, y: usize, m: usize, reach: f64) -> Moving {
-        let (mx, my) = ((m % self.width) as f64, (m / self.width) as f64);
-        let d = [x as f64 - mx, y as f64 - my];
-        Moving {
-            prev: [self.prev.x[m] as f64 + d[0], self.prev.y[m] as f64 + d[1]],
-            now: [x as f64 + 0.5, y as f64 + 0.5],
-            next: [self.next.x[m] as f64 + d[0], self.next.y[m] as f64 + d[1]],
-            reach,
-        }
-    }
 }

@@ -17,7 +17,36 @@ pub(super) struct Moving {
     pub(super) reach: f64,
 }
 
-static NO_FRINGE: super::fringe::Fringe = super::fringe::Fringe {
+/// The still pixels at a silhouette (what the `fringe` stage finds), in index order, each
+/// with its moving partner and the partner's coverage of it.
+#[derive(Default, Debug, Clone, PartialEq)]
+pub struct Fringe {
+    pub pixels: Vec<u32>,
+    pub partners: Vec<u32>,
+    pub cover: Vec<f32>,
+}
+
+impl Fringe {
+    /// Pixel `i`'s partner and its coverage, where `i` is a fringe pixel.
+    #[inline]
+    pub(super) fn get(&self, i: usize) -> Option<(usize, f32)> {
+        let k = self.pixels.binary_search(&(i as u32)).ok()?;
+        Some((self.partners[k] as usize, self.cover[k]))
+    }
+
+    /// The entries of the pixels in `range`, as a range of entries.
+    pub(super) fn within(&self, range: std::ops::Range<usize>) -> std::ops::Range<usize> {
+        let start = self.pixels.partition_point(|&p| (p as usize) < range.start);
+        let end = self.pixels.partition_point(|&p| (p as usize) < range.end);
+        start..end
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.pixels.is_empty()
+    }
+}
+
+static NO_FRINGE: Fringe = Fringe {
     pixels: Vec::new(),
     partners: Vec::new(),
     cover: Vec::new(),
@@ -31,7 +60,7 @@ pub(super) struct Scatter<'a> {
     /// Colour planes carried beside the beauty (light layers), blurred with its weights.
     pub(super) extra: Vec<&'a [f32]>,
     /// The still pixels at a silhouette, each with the moving surface's share of it.
-    pub(super) fringe: &'a super::fringe::Fringe,
+    pub(super) fringe: &'a Fringe,
     pub(super) depth: &'a [f32],
     pub(super) prev: &'a Positions,
     pub(super) next: &'a Positions,
@@ -140,6 +169,22 @@ impl Scatter<'_> {
             let d = 0.5 * (t - self.middle); // s − s(middle), μ at the exposure's middle
             let sigma = self.config.sigma as f64;
             (-d * d / (2.0 * sigma * sigma)).exp()
+        }
+    }
+}
+
+impl Scatter<'_> {
+    /// Fringe pixel (x, y)'s curve: its partner `m`'s three positions moved to its own
+    /// centre (the same motion, so the same reach).
+    #[inline]
+    pub(super) fn fringe_positions(&self, x: usize, y: usize, m: usize, reach: f64) -> Moving {
+        let (mx, my) = ((m % self.width) as f64, (m / self.width) as f64);
+        let d = [x as f64 - mx, y as f64 - my];
+        Moving {
+            prev: [self.prev.x[m] as f64 + d[0], self.prev.y[m] as f64 + d[1]],
+            now: [x as f64 + 0.5, y as f64 + 0.5],
+            next: [self.next.x[m] as f64 + d[0], self.next.y[m] as f64 + d[1]],
+            reach,
         }
     }
 }

@@ -65,7 +65,8 @@ pub use config::{
     CurveKind, Normalize, ScatterConfig, ScatterParams, Weight, MOST_SEGMENTS, STILL,
 };
 use config::{TILE_H, TILE_W};
-pub use fringe::{fringe, Fringe};
+pub use fringe::fringe;
+pub use job::Fringe;
 use job::Scatter;
 use reach::Reach;
 

@@ -127,13 +127,9 @@ use crate::motion::scatter::ScatterConfig;
 use crate::motion::scatter::{stages_carrying, STILL};
 
 use crate::gpu::context::Gpu;
-use crate::motion::scatter::Fringe;
-
-/// What a run reads beside the colours: depth, the prev and next positions, and the fringe
-/// ([`crate::motion::scatter::fringe`], found on the CPU).
-type Inputs<'a> = (&'a [f32], [&'a Positions; 2], &'a Fringe);
 use crate::gpu::stage::StageError;
-use pass::carried_sum_bytes;
+use crate::motion::scatter::Fringe;
+use pass::{carried_sum_bytes, Inputs};
 pub use pass::{
     Order, CARRYING_STORAGE_BUFFERS, MOST_LAYERS, SHADER, SHADER_CARRYING, STORAGE_BUFFERS,
 };

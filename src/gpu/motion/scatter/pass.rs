@@ -6,8 +6,8 @@
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
-use crate::frame::Color;
-use crate::motion::scatter::ScatterConfig;
+use crate::frame::{Color, Positions};
+use crate::motion::scatter::{Fringe, ScatterConfig};
 
 use crate::gpu::context::Gpu;
 use crate::gpu::stage::{floats, kept, read_back, Caught, StageError};
@@ -32,6 +32,10 @@ pub const SHADER_CARRYING: &str = concat!(
     include_str!("carrying.wgsl")
 );
 
+/// What a run reads beside the colours: depth, the prev and next positions, and the fringe
+/// ([`crate::motion::scatter::fringe`], found on the CPU).
+pub(super) type Inputs<'a> = (&'a [f32], [&'a Positions; 2], &'a Fringe);
+
 /// Storage buffers the beauty alone binds (every binding but the uniform).
 pub const STORAGE_BUFFERS: u32 = 13;
 /// Storage buffers a run carrying layers binds: the beauty's and the layers' three (their
@@ -45,7 +49,8 @@ pub const MOST_LAYERS: usize = 8;
 
 /// Words of the `state` buffer (keep in sync with scatter.wgsl): the moving count, the
 /// accumulate dispatch (x, y, z), the colour bounds (R, G, B, A), the host's flags, the
-/// layers carried, the fringe's entries, and from [`CARRIED_BOUND`] the carried channels' colour bounds.
+/// layers carried, the fringe's entries, and from [`CARRIED_BOUND`] the carried channels'
+/// colour bounds.
 const STATE_WORDS: usize = CARRIED_BOUND + 3 * MOST_LAYERS;
 pub(super) const DISPATCH: u64 = 1;
 pub(super) const FLAGS: usize = 8;
@@ -429,7 +434,7 @@ impl Gpu {
         &self,
         config: &ScatterConfig,
         color: &Color,
-        (depth, positions, fringe): super::Inputs,
+        (depth, positions, fringe): Inputs,
         order: Order,
         layers: &[&Color],
     ) -> Result<(Color, Vec<Vec<f32>>), StageError> {
