@@ -83,6 +83,46 @@ const NEIGHBOURS: [(i64, i64); 24] = [
     (2, 0), (-2, 1), (2, 1), (-2, 2), (-1, 2), (0, 2), (1, 2), (2, 2),
 ];
 
+/// Where a pixel's pair may come from when either kind has no pure candidate (a 3×3 all of
+/// its kind) in its 5×5: reconstruct's mattes take `Any` pixel of each kind; scatter's
+/// fringe (`PureStill`) still takes any moving one (a tooth or a strand two pixels wide has
+/// no pure pixel, and its colour is the best the frame has of it) but a still one only if
+/// pure: the still partner is the colour a fringe pixel is unmixed towards, and a still
+/// pixel with a moving neighbour holds a sliver itself. On a frame of noise, where almost
+/// no pixel is pure, this leaves the fringe almost nothing to fit (BENCHMARKS.md).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Fallback {
+    Any,
+    PureStill,
+}
+
+/// What the matte reads of a pixel: its texel (colour, RGBA, then depth at `Z` and the
+/// motion's length at `LENGTH`; nothing else is read). Reconstruct hands its packed texels;
+/// scatter's fringe reads its own buffers in place, with nothing packed.
+pub trait Texels: Sync {
+    fn texel(&self, i: usize) -> Texel2014;
+
+    /// `texel(i)[Z]` alone.
+    #[inline(always)]
+    fn depth(&self, i: usize) -> f32 {
+        self.texel(i)[Z]
+    }
+}
+
+impl Texels for [Texel2014] {
+    #[inline(always)]
+    fn texel(&self, i: usize) -> Texel2014 {
+        self[i]
+    }
+}
+
+impl Texels for Vec<Texel2014> {
+    #[inline(always)]
+    fn texel(&self, i: usize) -> Texel2014 {
+        self[i]
+    }
+}
+
 #[inline]
 fn moves(t: &Texel2014) -> bool {
     t[LENGTH] >= HALF_PIXEL
@@ -92,7 +132,7 @@ fn moves(t: &Texel2014) -> bool {
 /// there; a neighbour in a tile not picked is not read); elsewhere the label.
 pub fn mattes(
     config: &ReconstructConfig,
-    texels: &[Texel2014],
+    texels: &(impl Texels + ?Sized),
     selected: impl Fn(usize, usize) -> bool + Sync,
 ) -> Vec<Matte> {
     let (width, height) = (config.width as usize, config.height as usize);
@@ -106,7 +146,7 @@ pub fn mattes(
                 let i = y * width + x;
                 let own = f32::from_bits(i as u32);
                 *m = [
-                    moves(&texels[i]) as u32 as f32,
+                    moves(&texels.texel(i)) as u32 as f32,
                     own,
                     own,
                     0.0,
@@ -115,7 +155,7 @@ pub fn mattes(
                     0.0,
                 ];
                 if selected(x / size, y / size) {
-                    if let Some(found) = silhouette(config, texels, &selected, &kinds, x, y) {
+                    if let Some(found) = silhouette(config, texels, &kinds, (x, y), Fallback::Any) {
                         *m = found;
                     }
                 }
@@ -130,9 +170,10 @@ pub fn mattes(
 /// still pixels), without a matte for every pixel.
 pub fn pairs(
     config: &ReconstructConfig,
-    texels: &[Texel2014],
+    texels: &(impl Texels + ?Sized),
     selected: impl Fn(usize, usize) -> bool + Sync,
     wanted: impl Fn(usize) -> bool + Sync,
+    fallback: Fallback,
 ) -> Vec<(usize, Matte)> {
     let (width, height) = (config.width as usize, config.height as usize);
     let size = config.tile as usize;
@@ -147,7 +188,7 @@ pub fn pairs(
                     if !wanted(i) {
                         continue;
                     }
-                    if let Some(found) = silhouette(config, texels, &selected, &kinds, x, y) {
+                    if let Some(found) = silhouette(config, texels, &kinds, (x, y), fallback) {
                         if !unpaired(&found, i) {
                             row.push((i, found));
                         }
@@ -164,11 +205,10 @@ pub fn pairs(
 #[inline]
 fn silhouette(
     config: &ReconstructConfig,
-    texels: &[Texel2014],
-    selected: &impl Fn(usize, usize) -> bool,
+    texels: &(impl Texels + ?Sized),
     kinds: &Kinds,
-    x: usize,
-    y: usize,
+    (x, y): (usize, usize),
+    fallback: Fallback,
 ) -> Option<Matte> {
     // A pixel whose 3×3 is of one kind (all moving or all still, as read) is no
     // silhouette: `matte` would find no depth step there and return None.
@@ -176,7 +216,7 @@ fn silhouette(
     if kinds.purity[i] & (PURE_MOVING | PURE_STILL) != 0 {
         return None;
     }
-    matte(config, texels, selected, kinds, x, y)
+    matte(config, texels, kinds, (x, y), fallback)
 }
 
 /// [`kinds`]' bits: the pixel is read (in a selected tile), it moves, its 3×3 is all moving,
@@ -197,7 +237,7 @@ struct Kinds {
 /// pixel is a candidate of up to 24 others, and its purity was its 3×3 read again each time).
 fn kinds(
     config: &ReconstructConfig,
-    texels: &[Texel2014],
+    texels: &(impl Texels + ?Sized),
     selected: &(impl Fn(usize, usize) -> bool + Sync),
 ) -> Kinds {
     let (width, height) = (config.width as usize, config.height as usize);
@@ -212,37 +252,37 @@ fn kinds(
                 if !selected(c, y / size) {
                     continue;
                 }
-                for x in c * size..((c + 1) * size).min(width) {
-                    row[x] = READ
-                        | if moves(&texels[y * width + x]) {
-                            MOVES
-                        } else {
-                            0
-                        };
+                let span = c * size..((c + 1) * size).min(width);
+                for (x, b) in span.clone().zip(&mut row[span]) {
+                    let moving = moves(&texels.texel(y * width + x));
+                    *b = READ | if moving { MOVES } else { 0 };
                 }
             }
         });
+    // Purity: a 3×3 with no read still pixel (bit 1 of `near`) is all moving, one with no read
+    // moving pixel (bit 2) all still; the 3×3 as three rows ORed, then three columns.
     let mut purity = vec![0u8; width * height];
     purity
         .par_chunks_mut(width.max(1))
         .enumerate()
         .for_each(|(y, row)| {
-            let read = (0..width.div_ceil(size))
-                .filter(|&c| selected(c, y / size))
-                .flat_map(|c| c * size..((c + 1) * size).min(width));
-            for x in read {
-                let (mut all_moving, mut all_still) = (true, true);
-                for ny in y.saturating_sub(1)..(y + 2).min(height) {
-                    for nx in x.saturating_sub(1)..(x + 2).min(width) {
-                        let b = bits[ny * width + nx];
-                        if b & READ != 0 {
-                            all_moving &= b & MOVES != 0;
-                            all_still &= b & MOVES == 0;
-                        }
-                    }
+            let ty = y / size;
+            if !(0..width.div_ceil(size)).any(|c| selected(c, ty)) {
+                return;
+            }
+            let mut near = vec![0u8; width];
+            for ny in y.saturating_sub(1)..(y + 2).min(height) {
+                for (n, &b) in near.iter_mut().zip(&bits[ny * width..(ny + 1) * width]) {
+                    *n |= (b == READ) as u8 | ((b == READ | MOVES) as u8) << 1;
                 }
-                row[x] = if all_moving { PURE_MOVING } else { 0 }
-                    | if all_still { PURE_STILL } else { 0 };
+            }
+            for c in (0..width.div_ceil(size)).filter(|&c| selected(c, ty)) {
+                let span = c * size..((c + 1) * size).min(width);
+                for (x, p) in span.clone().zip(&mut row[span]) {
+                    let n = near[x.saturating_sub(1)] | near[x] | near[(x + 1).min(width - 1)];
+                    *p = if n & 1 == 0 { PURE_MOVING } else { 0 }
+                        | if n & 2 == 0 { PURE_STILL } else { 0 };
+                }
             }
         });
     Kinds { bits, purity }
@@ -251,42 +291,21 @@ fn kinds(
 /// The pixel's matte where it has one (see the module doc), else `None`.
 fn matte(
     config: &ReconstructConfig,
-    texels: &[Texel2014],
-    selected: &impl Fn(usize, usize) -> bool,
+    texels: &(impl Texels + ?Sized),
     kinds: &Kinds,
-    x: usize,
-    y: usize,
+    (x, y): (usize, usize),
+    fallback: Fallback,
 ) -> Option<Matte> {
     let (width, height) = (config.width as i64, config.height as i64);
-    let size = config.tile as usize;
-    let at = |x: i64, y: i64| -> Option<&Texel2014> {
-        (x >= 0
-            && y >= 0
-            && x < width
-            && y < height
-            && selected(x as usize / size, y as usize / size))
-        .then(|| &texels[(y * width + x) as usize])
+    // A pixel is read where its tile is selected: its READ bit ([`kinds`]).
+    let at = |x: i64, y: i64| -> Option<Texel2014> {
+        let i = (y * width + x) as usize;
+        (x >= 0 && y >= 0 && x < width && y < height && kinds.bits[i] & READ != 0)
+            .then(|| texels.texel(i))
     };
     let (x, y) = (x as i64, y as i64);
     let centre = at(x, y)?;
-    let moving = moves(centre);
-    // A silhouette: moving and still pixels in the 3×3, the moving ones in front.
-    let (mut front, mut back) = (f32::INFINITY, f32::NEG_INFINITY);
-    for dy in -1..=1 {
-        for dx in -1..=1 {
-            if let Some(t) = at(x + dx, y + dy) {
-                if moves(t) {
-                    front = front.min(t[Z]);
-                } else {
-                    back = back.max(t[Z]);
-                }
-            }
-        }
-    }
-    let separated = (back - front) * config.inv_soft_z >= 1.0;
-    if !separated {
-        return None;
-    }
+    let moving = moves(&centre);
     // One kind throughout a pixel's 3×3 (the frame's and the tiles' edges leave it out).
     // A candidate of kind `kind` (moving or still), pure if `only_pure` ([`kinds`]).
     let candidate = |x: i64, y: i64, kind: bool, only_pure: bool| {
@@ -321,13 +340,48 @@ fn matte(
         }
         (list, count)
     };
+    // The fringe's pairs need a pure still candidate (every pair's still one is): none, no
+    // pair, and no 3×3 read (on a frame of noise, almost every still pixel).
+    // (PURE_STILL is set on read still pixels alone: a moving one is in its own 3×3.)
+    if fallback == Fallback::PureStill {
+        let (x0, x1) = ((x - 2).max(0) as usize, (x + 3).min(width) as usize);
+        let pure = ((y - 2).max(0)..(y + 3).min(height)).any(|ny| {
+            let row = &kinds.purity[ny as usize * width as usize..][x0..x1];
+            row.iter().any(|&p| p & PURE_STILL != 0)
+        });
+        if !pure {
+            return None;
+        }
+    }
+    // A silhouette: moving and still pixels in the 3×3, the moving ones in front (their
+    // kinds from the bits, which say what `moves` of their texels says).
+    let (mut front, mut back) = (f32::INFINITY, f32::NEG_INFINITY);
+    for ny in (y - 1).max(0)..(y + 2).min(height) {
+        for nx in (x - 1).max(0)..(x + 2).min(width) {
+            let i = (ny * width + nx) as usize;
+            let b = kinds.bits[i];
+            if b & READ != 0 {
+                let z = texels.depth(i);
+                if b & MOVES != 0 {
+                    front = front.min(z);
+                } else {
+                    back = back.max(z);
+                }
+            }
+        }
+    }
+    let separated = (back - front) * config.inv_soft_z >= 1.0;
+    if !separated {
+        return None;
+    }
     for only_pure in [true, false] {
+        // (In the second pass as in the first: with no candidate of a kind, no pair.)
         let (movers, m) = candidates(true, only_pure);
-        if only_pure && m == 0 {
+        if m == 0 {
             continue;
         }
-        let (stills, s) = candidates(false, only_pure);
-        if only_pure && s == 0 {
+        let (stills, s) = candidates(false, only_pure || fallback == Fallback::PureStill);
+        if s == 0 {
             continue;
         }
         // The still candidates' colours a channel a row, so each moving candidate is fitted
@@ -361,8 +415,8 @@ fn matte(
     } else {
         alpha.min(0.5)
     };
-    let (fc, bc) = (&texels[f as usize], &texels[b as usize]);
-    let [er, eg, eb, ea] = extrapolation(centre, fc, bc, alpha, moving);
+    let (fc, bc) = (texels.texel(f as usize), texels.texel(b as usize));
+    let [er, eg, eb, ea] = extrapolation(&centre, &fc, &bc, alpha, moving);
     Some([
         alpha,
         f32::from_bits(f as u32),

@@ -20,9 +20,14 @@
 //! add up to the beauty still do.
 //!
 //! The matte is fitted only in the tiles with moving and still pixels in their 3×3 tiles (a
-//! silhouette and every pixel its fit reads lie there), so a frame with no silhouette, or a
-//! pan where everything moves, costs a motion test a pixel. Only under the exposure
-//! normalisation (the default): the paper's eq. 4 is kept as the paper has it.
+//! silhouette and every pixel its fit reads lie there), reading the frame's own buffers in
+//! place ([`Texels`]: nothing is packed), so a frame with no silhouette, or a pan where
+//! everything moves, costs a motion test a pixel, and that test is `reach`'s too (handed on
+//! in [`Fringe::moving`]). A pixel's still partner must be pure (its 3×3 all still,
+//! [`Fallback::PureStill`]): it is the colour the pixel is unmixed towards, and a still pixel
+//! beside a moving one holds a sliver itself; on a frame of noise, where almost no pixel is
+//! pure, the stage then fits almost nothing. Only under the exposure normalisation (the
+//! default): the paper's eq. 4 is kept as the paper has it.
 //!
 //! Measured in BENCHMARKS.md ("scatter: the fringe's own curves").
 
@@ -32,8 +37,7 @@ use super::config::{Normalize, ScatterConfig};
 use super::job::{Fringe, Scatter};
 use crate::frame::{Color, Positions};
 use crate::motion::reconstruct::config::{finite_depth, Texel2014};
-use crate::motion::reconstruct::matte::{self, Matte};
-use crate::motion::reconstruct::pack::pack_tiles;
+use crate::motion::reconstruct::matte::{self, Fallback, Matte, Texels};
 use crate::motion::reconstruct::{ReconstructConfig, ReconstructParams};
 
 /// Finds the fringe of the frame and unmixes its pixels' colour in place: the beauty's and
@@ -48,11 +52,14 @@ pub fn fringe(
     if config.normalize() != Normalize::Exposure {
         return Fringe::default();
     }
-    let found = {
+    let (found, moving) = {
         let job = Scatter::new(*config, color, depth, prev, next);
         find(&job)
     };
-    let mut fringe = Fringe::default();
+    let mut fringe = Fringe {
+        moving,
+        ..Fringe::default()
+    };
     let mut factors = Vec::new();
     for (i, m) in found {
         if m[0] <= 0.0 {
@@ -82,7 +89,7 @@ pub fn fringe(
 
 /// The pairs of the frame's still pixels at a silhouette (reconstruct's matte, fitted with
 /// scatter's motion test).
-fn find(job: &Scatter) -> Vec<(usize, Matte)> {
+fn find(job: &Scatter) -> (Vec<(usize, Matte)>, Vec<bool>) {
     let (width, height) = (job.width, job.height);
     let params = ReconstructParams::default();
     let config = ReconstructConfig::new(width, height, &params, 1.0, 0);
@@ -95,9 +102,7 @@ fn find(job: &Scatter) -> Vec<(usize, Matte)> {
         .par_chunks_mut(width.max(1))
         .enumerate()
         .for_each(|(y, row)| {
-            for (x, m) in row.iter_mut().enumerate() {
-                *m = job.motion(x, y).is_some();
-            }
+            job.moving_row(y, row);
         });
     let mut kinds = vec![0u8; columns * rows];
     kinds
@@ -105,8 +110,10 @@ fn find(job: &Scatter) -> Vec<(usize, Matte)> {
         .enumerate()
         .for_each(|(row, kinds)| {
             for y in row * size..((row + 1) * size).min(height) {
-                for (x, &m) in moves[y * width..(y + 1) * width].iter().enumerate() {
-                    kinds[x / size] |= if m { 1 } else { 2 };
+                let pixels = moves[y * width..(y + 1) * width].chunks(size);
+                for (kind, pixels) in kinds.iter_mut().zip(pixels) {
+                    let moving = pixels.iter().filter(|&&m| m).count();
+                    *kind |= (moving > 0) as u8 | (2 * (moving < pixels.len()) as u8);
                 }
             }
         });
@@ -124,24 +131,115 @@ fn find(job: &Scatter) -> Vec<(usize, Matte)> {
         }
     }
     if !selected.contains(&true) {
-        return Vec::new();
+        return (Vec::new(), moves);
     }
     let selected = |c: usize, row: usize| selected[row * columns + c];
-    let texels: Vec<Texel2014> = pack_tiles(&config, columns, [0.0; 8], selected, |i| {
-        let c = job.color(i);
-        // Depth, and a length that says whether it moves: all the matte reads beside colour.
-        let length = moves[i] as u32 as f32;
-        [
-            c[0],
-            c[1],
-            c[2],
-            c[3],
-            finite_depth(job.depth[i]),
-            0.0,
-            0.0,
-            length,
-        ]
-    });
     // Still pixels only: a moving one's sliver of what is behind it is drawn with it.
-    matte::pairs(&config, &texels, selected, |i| !moves[i])
+    let texels = Pixels { job, moves: &moves };
+    let pairs = matte::pairs(
+        &config,
+        &texels,
+        selected,
+        |i| !moves[i],
+        Fallback::PureStill,
+    );
+    (pairs, moves)
+}
+
+/// The frame as the matte reads it, in place: colour, depth, and a length that says whether
+/// the pixel moves (scatter's test, found once).
+struct Pixels<'a> {
+    job: &'a Scatter<'a>,
+    moves: &'a [bool],
+}
+
+impl Texels for Pixels<'_> {
+    #[inline(always)]
+    fn texel(&self, i: usize) -> Texel2014 {
+        let c = self.job.color(i);
+        let length = self.moves[i] as u32 as f32;
+        let depth = finite_depth(self.job.depth[i]);
+        [c[0], c[1], c[2], c[3], depth, 0.0, 0.0, length]
+    }
+
+    #[inline(always)]
+    fn depth(&self, i: usize) -> f32 {
+        finite_depth(self.job.depth[i])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::scatter::ScatterParams;
+
+    /// A 24×12 frame over a still grey background (depth 10); `moves(x)` says which columns
+    /// move (depth 1, 3 px a frame to the right), in red, and `sliver(x)` how much of the red
+    /// a still column holds.
+    fn columns(moves: impl Fn(usize) -> bool, sliver: impl Fn(usize) -> f32) -> Fringe {
+        let (w, h) = (24usize, 12usize);
+        let n = w * h;
+        let (mut r, mut g, mut depth) = (vec![0.0f32; n], vec![0.0f32; n], vec![10.0f32; n]);
+        let mut prev = Positions {
+            x: vec![0.0; n],
+            y: vec![0.0; n],
+            z: None,
+        };
+        let mut next = prev.clone();
+        for i in 0..n {
+            let (x, y) = (i % w, i / w);
+            let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
+            let a = if moves(x) { 1.0 } else { sliver(x) };
+            (r[i], g[i]) = (a + (1.0 - a) * 0.5, (1.0 - a) * 0.5);
+            let shift = if moves(x) { 3.0 } else { 0.0 };
+            if moves(x) {
+                depth[i] = 1.0;
+            }
+            (prev.x[i], prev.y[i]) = (cx - shift, cy);
+            (next.x[i], next.y[i]) = (cx + shift, cy);
+        }
+        let b = g.clone();
+        let mut color = Color { r, g, b, a: None };
+        let config = ScatterConfig::new(w, h, &ScatterParams::default(), 0.5);
+        fringe(&config, &mut color, &mut [], &depth, [&prev, &next])
+    }
+
+    #[test]
+    fn a_strand_two_pixels_wide_has_a_fringe() {
+        // Columns 10 and 11 move: no moving pixel's 3×3 is all moving, so the partner is
+        // taken from those mixed ones (a tooth, a strand); column 9 holds 0.3 of the strand.
+        let found = columns(|x| x == 10 || x == 11, |x| if x == 9 { 0.3 } else { 0.0 });
+        let at_9: Vec<usize> = (0..found.pixels.len())
+            .filter(|&k| found.pixels[k] as usize % 24 == 9)
+            .collect();
+        // Every row of column 9 but the frame's first and last (whose 5×5 is cut).
+        assert!(at_9.len() >= 10, "{:?}", found.pixels);
+        for k in at_9 {
+            let partner = found.partners[k] as usize % 24;
+            assert!(partner == 10 || partner == 11, "{partner}");
+            assert!((found.cover[k] - 0.3).abs() < 1e-4, "{}", found.cover[k]);
+        }
+    }
+
+    #[test]
+    fn no_fringe_without_a_clean_still_pixel_near() {
+        // Every other column moves: no still pixel's 3×3 is all still, so no still pixel has
+        // a colour of its own surface to be unmixed towards (on a frame of noise, almost
+        // every pixel), though the still columns hold 0.3 of the red.
+        let found = columns(|x| x % 2 == 1, |_| 0.3);
+        assert!(found.is_empty(), "{:?}", found.pixels);
+        // Beside a clean background (columns 0..=9 still and clean), the same stripes have a
+        // fringe where a pure still pixel is within two: column 10, and its coverage. (With
+        // any still pixel as a partner, column 10's still neighbours, holding the same
+        // sliver, explain its colour exactly with no coverage at all, and it has none.)
+        let found = columns(
+            |x| x >= 10 && x % 2 == 1,
+            |x| if x >= 10 { 0.3 } else { 0.0 },
+        );
+        assert!(found.pixels.len() >= 10, "{:?}", found.pixels);
+        for (&p, &cover) in found.pixels.iter().zip(&found.cover) {
+            assert_eq!(p as usize % 24, 10);
+            assert!((cover - 0.3).abs() < 1e-4, "{cover}");
+        }
+    }
 }

@@ -43,8 +43,17 @@ impl Reach {
             .enumerate()
             .for_each(|(by, (((pixel, block), deepest), nearest))| {
                 let y0 = by * BLOCK;
+                // Which pixels move: the fringe's answer where it looked, else the test.
+                let known = job.fringe.moving.len() == width * height;
+                let mut tested = vec![false; if known { 0 } else { width }];
                 for (y, row) in (y0..).zip(pixel.chunks_mut(width)) {
-                    for (x, r) in row.iter_mut().enumerate() {
+                    let moves = if known {
+                        &job.fringe.moving[y * width..(y + 1) * width]
+                    } else {
+                        job.moving_row(y, &mut tested);
+                        &tested[..]
+                    };
+                    for (x, r) in row.iter_mut().enumerate().filter(|&(x, _)| moves[x]) {
                         *r = job.motion(x, y).map_or(0.0, |m| (m.reach + 0.01) as f32);
                     }
                 }
