@@ -155,7 +155,7 @@ pub fn mattes(
                     0.0,
                 ];
                 if selected(x / size, y / size) {
-                    if let Some(found) = silhouette(config, texels, &kinds, (x, y), Fallback::Any) {
+                    if let Some(found) = matte(config, texels, &kinds, (x, y), Fallback::Any) {
                         *m = found;
                     }
                 }
@@ -188,7 +188,7 @@ pub fn pairs(
                     if !wanted(i) {
                         continue;
                     }
-                    if let Some(found) = silhouette(config, texels, &kinds, (x, y), fallback) {
+                    if let Some(found) = matte(config, texels, &kinds, (x, y), fallback) {
                         if !unpaired(&found, i) {
                             row.push((i, found));
                         }
@@ -199,24 +199,6 @@ pub fn pairs(
         })
         .collect();
     rows.concat()
-}
-
-/// The matte of pixel (x, y) of a selected tile where it is at a silhouette.
-#[inline]
-fn silhouette(
-    config: &ReconstructConfig,
-    texels: &(impl Texels + ?Sized),
-    kinds: &Kinds,
-    (x, y): (usize, usize),
-    fallback: Fallback,
-) -> Option<Matte> {
-    // A pixel whose 3×3 is of one kind (all moving or all still, as read) is no
-    // silhouette: `matte` would find no depth step there and return None.
-    let i = y * config.width as usize + x;
-    if kinds.purity[i] & (PURE_MOVING | PURE_STILL) != 0 {
-        return None;
-    }
-    matte(config, texels, kinds, (x, y), fallback)
 }
 
 /// [`kinds`]' bits: the pixel is read (in a selected tile), it moves, its 3×3 is all moving,
@@ -288,7 +270,8 @@ fn kinds(
     Kinds { bits, purity }
 }
 
-/// The pixel's matte where it has one (see the module doc), else `None`.
+/// The matte of pixel (x, y) of a selected tile where it is at a silhouette and has a pair
+/// (see the module doc), else `None`.
 fn matte(
     config: &ReconstructConfig,
     texels: &(impl Texels + ?Sized),
@@ -296,6 +279,12 @@ fn matte(
     (x, y): (usize, usize),
     fallback: Fallback,
 ) -> Option<Matte> {
+    // A pixel whose 3×3 is of one kind (all moving or all still, as read) is no silhouette:
+    // no depth step there, and no pair.
+    let i = y * config.width as usize + x;
+    if kinds.purity[i] & (PURE_MOVING | PURE_STILL) != 0 {
+        return None;
+    }
     let (width, height) = (config.width as i64, config.height as i64);
     // A pixel is read where its tile is selected: its READ bit ([`kinds`]).
     let at = |x: i64, y: i64| -> Option<Texel2014> {
