@@ -40,6 +40,7 @@
 use rayon::prelude::*;
 
 use super::config::{ReconstructConfig, Texel2014, HALF_PIXEL, LENGTH, Z};
+use super::window::{silhouettes, Window};
 
 /// Per pixel: α (the moving surface's coverage), then the pixels the moving and the still
 /// colours of its pair come from, as `f32::from_bits` of their indices (the pixel's own
@@ -107,6 +108,12 @@ pub trait Texels: Sync {
     fn depth(&self, i: usize) -> f32 {
         self.texel(i)[Z]
     }
+
+    /// Whether pixel `i` moves (its motion's length, `texel(i)[LENGTH]`, half a pixel or more).
+    #[inline(always)]
+    fn moves(&self, i: usize) -> bool {
+        moves(&self.texel(i))
+    }
 }
 
 impl Texels for [Texel2014] {
@@ -135,31 +142,25 @@ pub fn mattes(
     texels: &(impl Texels + ?Sized),
     selected: impl Fn(usize, usize) -> bool + Sync,
 ) -> Vec<Matte> {
-    let (width, height) = (config.width as usize, config.height as usize);
-    let size = config.tile as usize;
-    let kinds = kinds(config, texels, &selected);
-    let mut out = vec![[0.0f32; WORDS]; width * height];
-    out.par_chunks_mut(width.max(1))
+    let (width, size) = (config.width as usize, config.tile as usize);
+    let mut out = vec![[0.0f32; WORDS]; width * config.height as usize];
+    let moving = |i: usize| texels.moves(i);
+    // A row of tiles at a time: every pixel's label, then the mattes of the selected tiles'
+    // pixels at a silhouette.
+    out.par_chunks_mut((size * width).max(1))
         .enumerate()
-        .for_each(|(y, row)| {
-            for (x, m) in row.iter_mut().enumerate() {
-                let i = y * width + x;
-                let own = f32::from_bits(i as u32);
-                *m = [
-                    moves(&texels.texel(i)) as u32 as f32,
-                    own,
-                    own,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                ];
-                if selected(x / size, y / size) {
-                    if let Some(found) = matte(config, texels, &kinds, (x, y), Fallback::Any) {
-                        *m = found;
-                    }
-                }
+        .for_each(|(r, rows)| {
+            let first = r * size * width;
+            for (k, m) in rows.iter_mut().enumerate() {
+                let own = f32::from_bits((first + k) as u32);
+                let label = texels.moves(first + k) as u32 as f32;
+                *m = [label, own, own, 0.0, 0.0, 0.0, 0.0];
             }
+            silhouettes(config, &moving, &selected, (r, false), |window, (x, y)| {
+                if let Some(found) = matte(config, texels, window, (x, y), Fallback::Any) {
+                    rows[y * width + x - first] = found;
+                }
+            });
         });
     out
 }
@@ -177,137 +178,73 @@ pub fn pairs(
 ) -> Vec<(usize, Matte)> {
     let (width, height) = (config.width as usize, config.height as usize);
     let size = config.tile as usize;
-    let kinds = kinds(config, texels, &selected);
-    let rows: Vec<Vec<(usize, Matte)>> = (0..height)
+    let moving = |i: usize| texels.moves(i);
+    // A row of tiles at a time, its pairs sorted (block by block they come in no index
+    // order; no two share an index).
+    let rows: Vec<Vec<(usize, Matte)>> = (0..height.div_ceil(size))
         .into_par_iter()
-        .map(|y| {
-            let mut row = Vec::new();
-            for c in (0..width.div_ceil(size)).filter(|&c| selected(c, y / size)) {
-                for x in c * size..((c + 1) * size).min(width) {
+        .map(|r| {
+            let mut found = Vec::new();
+            let near_pure_still = fallback == Fallback::PureStill;
+            silhouettes(
+                config,
+                &moving,
+                &selected,
+                (r, near_pure_still),
+                |window, (x, y)| {
                     let i = y * width + x;
-                    if !wanted(i) {
-                        continue;
-                    }
-                    if let Some(found) = matte(config, texels, &kinds, (x, y), fallback) {
-                        if !unpaired(&found, i) {
-                            row.push((i, found));
+                    if wanted(i) {
+                        if let Some(m) = matte(config, texels, window, (x, y), fallback) {
+                            if !unpaired(&m, i) {
+                                found.push((i, m));
+                            }
                         }
                     }
-                }
-            }
-            row
+                },
+            );
+            found.sort_unstable_by_key(|&(i, _)| i);
+            found
         })
         .collect();
     rows.concat()
 }
 
-/// [`kinds`]' bits: the pixel is read (in a selected tile), it moves, its 3×3 is all moving,
-/// its 3×3 is all still (pixels not read, beyond the frame or its tiles, count as either).
-const READ: u8 = 1;
-const MOVES: u8 = 2;
-const PURE_MOVING: u8 = 4;
-const PURE_STILL: u8 = 8;
-
-/// [`kinds`]' answer: READ and MOVES per pixel, and apart (so neither is copied into the
-/// other over the whole frame) PURE_MOVING and PURE_STILL, written in the selected tiles only.
-struct Kinds {
-    bits: Vec<u8>,
-    purity: Vec<u8>,
-}
-
-/// Each pixel's kind, found once: the pairs' candidates are tested against these bits (each
-/// pixel is a candidate of up to 24 others, and its purity was its 3×3 read again each time).
-fn kinds(
-    config: &ReconstructConfig,
-    texels: &(impl Texels + ?Sized),
-    selected: &(impl Fn(usize, usize) -> bool + Sync),
-) -> Kinds {
-    let (width, height) = (config.width as usize, config.height as usize);
-    let size = config.tile as usize;
-    // READ and MOVES first (tile by tile: the tiles not selected cost a test each), then
-    // each read pixel's purity from its neighbours' bits.
-    let mut bits = vec![0u8; width * height];
-    bits.par_chunks_mut(width.max(1))
-        .enumerate()
-        .for_each(|(y, row)| {
-            for c in 0..width.div_ceil(size) {
-                if !selected(c, y / size) {
-                    continue;
-                }
-                let span = c * size..((c + 1) * size).min(width);
-                for (x, b) in span.clone().zip(&mut row[span]) {
-                    let moving = moves(&texels.texel(y * width + x));
-                    *b = READ | if moving { MOVES } else { 0 };
-                }
-            }
-        });
-    // Purity: a 3×3 with no read still pixel (bit 1 of `near`) is all moving, one with no read
-    // moving pixel (bit 2) all still; the 3×3 as three rows ORed, then three columns.
-    let mut purity = vec![0u8; width * height];
-    purity
-        .par_chunks_mut(width.max(1))
-        .enumerate()
-        .for_each(|(y, row)| {
-            let ty = y / size;
-            if !(0..width.div_ceil(size)).any(|c| selected(c, ty)) {
-                return;
-            }
-            let mut near = vec![0u8; width];
-            for ny in y.saturating_sub(1)..(y + 2).min(height) {
-                for (n, &b) in near.iter_mut().zip(&bits[ny * width..(ny + 1) * width]) {
-                    *n |= (b == READ) as u8 | ((b == READ | MOVES) as u8) << 1;
-                }
-            }
-            for c in (0..width.div_ceil(size)).filter(|&c| selected(c, ty)) {
-                let span = c * size..((c + 1) * size).min(width);
-                for (x, p) in span.clone().zip(&mut row[span]) {
-                    let n = near[x.saturating_sub(1)] | near[x] | near[(x + 1).min(width - 1)];
-                    *p = if n & 1 == 0 { PURE_MOVING } else { 0 }
-                        | if n & 2 == 0 { PURE_STILL } else { 0 };
-                }
-            }
-        });
-    Kinds { bits, purity }
-}
-
-/// The matte of pixel (x, y) of a selected tile where it is at a silhouette and has a pair
-/// (see the module doc), else `None`.
+/// The matte of pixel (x, y) of the block whose [`Window`] is `window`, where it is at a
+/// silhouette and has a pair (see the module doc), else `None`.
 fn matte(
     config: &ReconstructConfig,
     texels: &(impl Texels + ?Sized),
-    kinds: &Kinds,
+    window: &Window,
     (x, y): (usize, usize),
     fallback: Fallback,
 ) -> Option<Matte> {
     // A pixel whose 3×3 is of one kind (all moving or all still, as read) is no silhouette:
     // no depth step there, and no pair.
-    let i = y * config.width as usize + x;
-    if kinds.purity[i] & (PURE_MOVING | PURE_STILL) != 0 {
+    let (x, y) = (x as i64, y as i64);
+    if window.get(&window.pure_moving, x, y) || window.get(&window.pure_still, x, y) {
         return None;
     }
-    let (width, height) = (config.width as i64, config.height as i64);
-    // A pixel is read where its tile is selected: its READ bit ([`kinds`]).
+    let width = config.width as i64;
+    // A pixel is read where it lies in the frame and its tile is selected (every pixel this
+    // reads lies within two of (x, y), in the window).
     let at = |x: i64, y: i64| -> Option<Texel2014> {
-        let i = (y * width + x) as usize;
-        (x >= 0 && y >= 0 && x < width && y < height && kinds.bits[i] & READ != 0)
-            .then(|| texels.texel(i))
+        window
+            .get(&window.read, x, y)
+            .then(|| texels.texel((y * width + x) as usize))
     };
-    let (x, y) = (x as i64, y as i64);
     let centre = at(x, y)?;
     let moving = moves(&centre);
     // One kind throughout a pixel's 3×3 (the frame's and the tiles' edges leave it out).
-    // A candidate of kind `kind` (moving or still), pure if `only_pure` ([`kinds`]).
+    // A candidate of kind `kind` (moving or still), pure if `only_pure`.
     let candidate = |x: i64, y: i64, kind: bool, only_pure: bool| {
-        if x < 0 || y < 0 || x >= width || y >= height {
-            return false;
-        }
-        let i = (y * width + x) as usize;
-        let (wanted, pure) = if kind {
-            (READ | MOVES, PURE_MOVING)
+        let pure = if kind {
+            &window.pure_moving
         } else {
-            (READ, PURE_STILL)
+            &window.pure_still
         };
-        kinds.bits[i] & (READ | MOVES) == wanted && (!only_pure || kinds.purity[i] & pure != 0)
+        window.get(&window.read, x, y)
+            && window.get(&window.moves, x, y) == kind
+            && (!only_pure || window.get(pure, x, y))
     };
     // Candidates of the 5×5, nearest first and at most CANDIDATES of each kind: the pure
     // ones, or any when either kind has none pure.
@@ -333,11 +270,9 @@ fn matte(
     // pair, and no 3×3 read (on a frame of noise, almost every still pixel).
     // (PURE_STILL is set on read still pixels alone: a moving one is in its own 3×3.)
     if fallback == Fallback::PureStill {
-        let (x0, x1) = ((x - 2).max(0) as usize, (x + 3).min(width) as usize);
-        let pure = ((y - 2).max(0)..(y + 3).min(height)).any(|ny| {
-            let row = &kinds.purity[ny as usize * width as usize..][x0..x1];
-            row.iter().any(|&p| p & PURE_STILL != 0)
-        });
+        let shift = x - 2 - window.x0;
+        let pure = (y - 2..y + 3)
+            .any(|ny| (window.pure_still[(ny - window.y0) as usize] >> shift) & 0b11111 != 0);
         if !pure {
             return None;
         }
@@ -345,13 +280,11 @@ fn matte(
     // A silhouette: moving and still pixels in the 3×3, the moving ones in front (their
     // kinds from the bits, which say what `moves` of their texels says).
     let (mut front, mut back) = (f32::INFINITY, f32::NEG_INFINITY);
-    for ny in (y - 1).max(0)..(y + 2).min(height) {
-        for nx in (x - 1).max(0)..(x + 2).min(width) {
-            let i = (ny * width + nx) as usize;
-            let b = kinds.bits[i];
-            if b & READ != 0 {
-                let z = texels.depth(i);
-                if b & MOVES != 0 {
+    for ny in y - 1..y + 2 {
+        for nx in x - 1..x + 2 {
+            if window.get(&window.read, nx, ny) {
+                let z = texels.depth((ny * width + nx) as usize);
+                if window.get(&window.moves, nx, ny) {
                     front = front.min(z);
                 } else {
                     back = back.max(z);
@@ -724,6 +657,103 @@ mod tests {
             }
         }
         assert_eq!(checked, 40 * 40 * CANDIDATES);
+    }
+
+    /// A 70×52 frame of moving blobs (z 1) over a still background (z 10) with fringes and
+    /// specks of one pixel, colours from a hash: silhouettes of every shape.
+    fn blobs() -> (usize, usize, Vec<Texel2014>) {
+        let (w, h) = (70usize, 52usize);
+        let hash = |i: usize, k: usize| {
+            let mut v = (i as u64 * 4 + k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            v ^= v >> 29;
+            (v.wrapping_mul(0xBF58_476D_1CE4_E5B9) >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let texels = (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as f32, (i / w) as f32);
+                let blob = ((x - 20.0).hypot(y - 18.0) < 9.5)
+                    || ((x - 50.0).abs() < 6.0 && y > 25.0)
+                    || hash(i, 3) < 0.03;
+                let rgb = [0, 1, 2].map(|k| hash(i, k));
+                if blob {
+                    texel(rgb, 1.0, 3.0)
+                } else {
+                    texel(rgb.map(|v| 0.2 + 0.1 * v), 10.0, 0.0)
+                }
+            })
+            .collect();
+        (w, h, texels)
+    }
+
+    #[test]
+    fn the_mattes_do_not_depend_on_the_tiles_when_every_tile_is_read() {
+        // Each tile (and each 32 px block of a larger one) is read through a window of its
+        // own: a window too narrow for a candidate's 3×3, or a block cut wrong, shows at the
+        // tiles' seams, which move with the tile size.
+        let (w, h, texels) = blobs();
+        let of = |tile: u32, fallback: Fallback| {
+            let mut config = ReconstructConfig::new(w, h, &ReconstructParams::default(), 0.5, 0);
+            config.tile = tile;
+            let all = mattes(&config, &texels, |_, _| true);
+            let found = pairs(&config, &texels, |_, _| true, |_| true, fallback);
+            (all, found)
+        };
+        let (eight, found) = of(8, Fallback::Any);
+        assert!(found.len() > 100, "{}", found.len());
+        // The pairs are the mattes that have one, in index order.
+        let paired: Vec<(usize, Matte)> = (0..w * h)
+            .filter(|&i| !unpaired(&eight[i], i))
+            .map(|i| (i, eight[i]))
+            .collect();
+        assert_eq!(found, paired);
+        // The fringe's pairs skip, a row of bits at a time, the pixels with no pure still one
+        // in their 5×5: those matte() turns down itself.
+        let config = ReconstructConfig::new(w, h, &ReconstructParams::default(), 0.5, 0);
+        let mut each = Vec::new();
+        for r in 0..h.div_ceil(8) {
+            silhouettes(&config, &|i| moves(&texels[i]), &|_, _| true, (r, false), |window, p| {
+                let found = matte(&config, &texels, window, p, Fallback::PureStill);
+                let i = p.1 * w + p.0;
+                each.extend(found.filter(|m| !unpaired(m, i)).map(|m| (i, m)));
+            });
+        }
+        each.sort_unstable_by_key(|&(i, _)| i);
+        let skipping = pairs(&config, &texels, |_, _| true, |_| true, Fallback::PureStill);
+        assert!(skipping.len() > 50 && skipping != found, "{}", skipping.len());
+        assert!(each == skipping);
+        for tile in [1, 3, 5, 32, 45, 70] {
+            let (all, pairs_any) = of(tile, Fallback::Any);
+            assert!(all == eight, "tile {tile}");
+            assert!(pairs_any == found, "tile {tile}");
+            assert!(
+                of(tile, Fallback::PureStill).1 == of(8, Fallback::PureStill).1,
+                "{tile}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_tile_not_picked_is_not_read() {
+        // Only the tiles of columns 0..16 picked: no pixel of the others is a matte's
+        // candidate, and the mattes there are labels.
+        let (w, h, texels) = blobs();
+        let config = ReconstructConfig::new(w, h, &ReconstructParams::default(), 0.5, 0);
+        assert_eq!(config.tile, 8);
+        let m = mattes(&config, &texels, |c, _| c < 2);
+        let mut paired = 0;
+        for (i, matte) in m.iter().enumerate() {
+            let x = i % w;
+            if x >= 16 {
+                assert_eq!(matte[0], moves(&texels[i]) as u32 as f32, "{i}");
+                assert!(unpaired(matte, i), "{i}");
+            } else if !unpaired(matte, i) {
+                paired += 1;
+                for partner in [matte[1], matte[2]] {
+                    assert!((partner.to_bits() as usize % w) < 16, "{i}: {matte:?}");
+                }
+            }
+        }
+        assert!(paired > 20, "{paired}");
     }
 
     #[test]

@@ -56,6 +56,7 @@ pub mod pack;
 pub mod taps;
 pub mod tiles;
 pub mod uniform;
+mod window;
 
 pub use config::{
     half_spread, reach_factor, spread_2014, Form, ReconstructConfig, ReconstructParams, Texel,

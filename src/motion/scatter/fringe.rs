@@ -96,24 +96,21 @@ fn find(job: &Scatter) -> (Vec<(usize, Matte)>, Vec<bool>) {
     let size = config.tile as usize;
     let (columns, rows) = (width.div_ceil(size), height.div_ceil(size));
     // Which pixels move (scatter's test, once), and which tiles hold moving pixels (bit 1)
-    // and still ones (bit 2).
+    // and still ones (bit 2), a row of tiles at a time.
     let mut moves = vec![false; width * height];
-    moves
-        .par_chunks_mut(width.max(1))
-        .enumerate()
-        .for_each(|(y, row)| {
-            job.moving_row(y, row);
-        });
     let mut kinds = vec![0u8; columns * rows];
-    kinds
-        .par_chunks_mut(columns.max(1))
+    moves
+        .par_chunks_mut((size * width).max(1))
+        .zip(kinds.par_chunks_mut(columns.max(1)))
         .enumerate()
-        .for_each(|(row, kinds)| {
-            for y in row * size..((row + 1) * size).min(height) {
-                let pixels = moves[y * width..(y + 1) * width].chunks(size);
-                for (kind, pixels) in kinds.iter_mut().zip(pixels) {
-                    let moving = pixels.iter().filter(|&&m| m).count();
-                    *kind |= (moving > 0) as u8 | (2 * (moving < pixels.len()) as u8);
+        .for_each(|(row, (moves, kinds))| {
+            for (y, line) in (row * size..).zip(moves.chunks_mut(width)) {
+                job.moving_row(y, line);
+                for (kind, pixels) in kinds.iter_mut().zip(line.chunks(size)) {
+                    let (any, all) = pixels
+                        .iter()
+                        .fold((false, true), |(a, l), &m| (a | m, l & m));
+                    *kind |= any as u8 | (2 * !all as u8);
                 }
             }
         });
@@ -165,6 +162,11 @@ impl Texels for Pixels<'_> {
     #[inline(always)]
     fn depth(&self, i: usize) -> f32 {
         finite_depth(self.job.depth[i])
+    }
+
+    #[inline(always)]
+    fn moves(&self, i: usize) -> bool {
+        self.moves[i]
     }
 }
 
