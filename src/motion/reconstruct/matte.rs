@@ -711,15 +711,25 @@ mod tests {
         let config = ReconstructConfig::new(w, h, &ReconstructParams::default(), 0.5, 0);
         let mut each = Vec::new();
         for r in 0..h.div_ceil(8) {
-            silhouettes(&config, &|i| moves(&texels[i]), &|_, _| true, (r, false), |window, p| {
-                let found = matte(&config, &texels, window, p, Fallback::PureStill);
-                let i = p.1 * w + p.0;
-                each.extend(found.filter(|m| !unpaired(m, i)).map(|m| (i, m)));
-            });
+            silhouettes(
+                &config,
+                &|i| moves(&texels[i]),
+                &|_, _| true,
+                (r, false),
+                |window, p| {
+                    let found = matte(&config, &texels, window, p, Fallback::PureStill);
+                    let i = p.1 * w + p.0;
+                    each.extend(found.filter(|m| !unpaired(m, i)).map(|m| (i, m)));
+                },
+            );
         }
         each.sort_unstable_by_key(|&(i, _)| i);
         let skipping = pairs(&config, &texels, |_, _| true, |_| true, Fallback::PureStill);
-        assert!(skipping.len() > 50 && skipping != found, "{}", skipping.len());
+        assert!(
+            skipping.len() > 50 && skipping != found,
+            "{}",
+            skipping.len()
+        );
         assert!(each == skipping);
         for tile in [1, 3, 5, 32, 45, 70] {
             let (all, pairs_any) = of(tile, Fallback::Any);
