@@ -384,36 +384,7 @@ fn a_moving_edge_s_sliver_in_a_still_pixel_moves_with_its_surface() {
     // streaks of either edge is within 0.025 of the exposure (what is left, 0.021 at
     // columns 18, 22, 34 and 38, is the curves' whole-pixel footprint: 22 and 34 were as far
     // off before).
-    let (w, h) = (60, 8);
-    let mut f = frame(w, h, 7, 0.0);
-    let (left, right) = (20.7, 36.3);
-    let band = |u: f64| if (left..right).contains(&u) { 1.0 } else { 0.2 };
-    paint(&mut f, |x, _| {
-        let (x0, x1) = (x as f64, x as f64 + 1.0);
-        let cover = (x1.min(right) - x0.max(left)).max(0.0);
-        let colour = (cover + (1.0 - cover) * 0.2) as f32;
-        if (left..right).contains(&(x as f64 + 0.5)) {
-            ([colour; 3], 1.0, [8.0, 0.0])
-        } else {
-            ([colour; 3], 10.0, [0.0, 0.0])
-        }
-    });
-    let params = Params {
-        shutter: 0.5,
-        ..Params::default()
-    };
-    let out = apply(Algorithm::Scatter, &params, f, 1);
-    let c = out.color.as_ref().unwrap();
-    let mut worst = (0.0f64, 0);
-    for x in (14..=27).chain(30..=43) {
-        let want = exposure_of_column(&band, x, 8.0);
-        for y in 0..h {
-            let got = c.r[y * w + x] as f64;
-            if (got - want).abs() > worst.0 {
-                worst = ((got - want).abs(), x);
-            }
-        }
-    }
+    let worst = moving_bands(&[(20.7, 36.3)], (14..=27).chain(30..=43));
     eprintln!(
         "scatter: a moving band's edges, worst error {:.4} at column {}",
         worst.0, worst.1
@@ -436,40 +407,7 @@ fn a_narrow_gap_between_moving_bands_keeps_near_its_exposure() {
     // From three pixels on, the gap's middle is pure and its edges are split: within 0.025, as
     // a single edge is (the test above).
     for (left, right, bound) in [(20.3, 21.6, 0.035), (20.3, 22.4, 0.09), (20.3, 23.6, 0.025)] {
-        let (w, h) = (60, 8);
-        let mut f = frame(w, h, 7, 0.0);
-        let bands = [(10.0, left), (right, 34.0)];
-        let inside = |u: f64| bands.iter().any(|&(a, b)| (a..b).contains(&u));
-        let texture = |u: f64| if inside(u) { 1.0 } else { 0.2 };
-        paint(&mut f, |x, _| {
-            let (x0, x1) = (x as f64, x as f64 + 1.0);
-            let cover: f64 = bands
-                .iter()
-                .map(|&(a, b)| (x1.min(b) - x0.max(a)).max(0.0))
-                .sum();
-            let colour = (cover + (1.0 - cover) * 0.2) as f32;
-            if inside(x as f64 + 0.5) {
-                ([colour; 3], 1.0, [8.0, 0.0])
-            } else {
-                ([colour; 3], 10.0, [0.0, 0.0])
-            }
-        });
-        let params = Params {
-            shutter: 0.5,
-            ..Params::default()
-        };
-        let out = apply(Algorithm::Scatter, &params, f, 1);
-        let c = out.color.as_ref().unwrap();
-        let mut worst = (0.0f64, 0);
-        for x in 17..=27 {
-            let want = exposure_of_column(&texture, x, 8.0);
-            for y in 0..h {
-                let got = c.r[y * w + x] as f64;
-                if (got - want).abs() > worst.0 {
-                    worst = ((got - want).abs(), x);
-                }
-            }
-        }
+        let worst = moving_bands(&[(10.0, left), (right, 34.0)], 17..=27);
         let gap = right - left;
         eprintln!(
             "scatter: a gap {gap:.1} px wide, worst error {:.4} at column {}",
@@ -477,4 +415,46 @@ fn a_narrow_gap_between_moving_bands_keeps_near_its_exposure() {
         );
         assert!(worst.0 < bound, "a gap {gap:.1} px wide: {worst:?}");
     }
+}
+
+/// White bands (x from a to b, depth 1) moving 8 px a frame to the right over a still grey
+/// (0.2, depth 10) on a 60×8 frame, rendered as a renderer does (each pixel's colour its
+/// coverage by the bands, its depth and motion those at its centre), blurred by scatter at a
+/// 180° shutter: the largest error over `columns` against the exact exposure
+/// ([`exposure_of_column`]), and its column.
+fn moving_bands(bands: &[(f64, f64)], columns: impl Iterator<Item = usize>) -> (f64, usize) {
+    let (w, h) = (60, 8);
+    let mut f = frame(w, h, 7, 0.0);
+    let inside = |u: f64| bands.iter().any(|&(a, b)| (a..b).contains(&u));
+    let texture = |u: f64| if inside(u) { 1.0 } else { 0.2 };
+    paint(&mut f, |x, _| {
+        let (x0, x1) = (x as f64, x as f64 + 1.0);
+        let cover: f64 = bands
+            .iter()
+            .map(|&(a, b)| (x1.min(b) - x0.max(a)).max(0.0))
+            .sum();
+        let colour = (cover + (1.0 - cover) * 0.2) as f32;
+        if inside(x as f64 + 0.5) {
+            ([colour; 3], 1.0, [8.0, 0.0])
+        } else {
+            ([colour; 3], 10.0, [0.0, 0.0])
+        }
+    });
+    let params = Params {
+        shutter: 0.5,
+        ..Params::default()
+    };
+    let out = apply(Algorithm::Scatter, &params, f, 1);
+    let c = out.color.as_ref().unwrap();
+    let mut worst = (0.0f64, 0);
+    for x in columns {
+        let want = exposure_of_column(&texture, x, 8.0);
+        for y in 0..h {
+            let got = c.r[y * w + x] as f64;
+            if (got - want).abs() > worst.0 {
+                worst = ((got - want).abs(), x);
+            }
+        }
+    }
+    worst
 }
