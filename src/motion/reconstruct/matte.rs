@@ -16,8 +16,10 @@
 //! nearest to its colour (a local colour-line model, as in matting; the colour is RGBA,
 //! premultiplied, alpha a fourth channel mixed by coverage as R, G and B are): its coverage α
 //! is where its colour projects on that line, kept on its own side of one half (a pixel whose
-//! centre the surface covers is at least half covered), and the two colours are remembered by
-//! the pixels they came from. Where no pair explains the colour (the residual over 2 % of the
+//! centre the surface covers is at least half covered) unless the still colour is empty space
+//! (a view layer's pixels beside its surface, alpha 0, where a pixel's alpha is its coverage,
+//! rendered, and its label may be a neighbour's motion given by the stack), and the two
+//! colours are remembered by the pixels they came from. Where no pair explains the colour (the residual over 2 % of the
 //! pair's squared distance, or two colours too alike to tell apart), the pixel keeps its
 //! label: α 1 moving, 0 still. Everywhere else α is the label.
 //!
@@ -40,6 +42,8 @@
 use rayon::prelude::*;
 
 use super::config::{ReconstructConfig, Texel2014, HALF_PIXEL, LENGTH, Z};
+use super::unmix::fits;
+pub use super::unmix::{extrapolation, fit, over_empty, CANDIDATES};
 use super::window::{silhouettes, Window};
 
 /// Per pixel: α (the moving surface's coverage), then the pixels the moving and the still
@@ -69,11 +73,6 @@ pub fn unpaired(m: &Matte, i: usize) -> bool {
 pub const RESIDUAL: f32 = 0.02;
 /// Two colours closer than this (squared distance) do not tell coverage apart.
 pub const DISTINCT: f32 = 1e-4;
-
-/// The most candidates of each kind a pixel's pairs are taken from (so at most 64 pairs a
-/// pixel, whatever the frame: a frame of noise, every pixel a silhouette, costs a bounded
-/// multiple of a clean one).
-pub const CANDIDATES: usize = 8;
 
 /// The 5×5 neighbourhood without its centre, nearest first (the 3×3 ring, then the outer),
 /// each ring in reading order.
@@ -332,12 +331,14 @@ fn matte(
         break;
     }
     let (_, alpha, f, b) = best?;
-    let alpha = if moving {
+    let (fc, bc) = (texels.texel(f as usize), texels.texel(b as usize));
+    let alpha = if over_empty(&fc, &bc) {
+        alpha
+    } else if moving {
         alpha.max(0.5)
     } else {
         alpha.min(0.5)
     };
-    let (fc, bc) = (texels.texel(f as usize), texels.texel(b as usize));
     let [er, eg, eb, ea] = extrapolation(&centre, &fc, &bc, alpha, moving);
     Some([
         alpha,
@@ -348,113 +349,6 @@ fn matte(
         eb,
         ea,
     ])
-}
-
-/// How far a pixel of colour `c` with coverage α by the moving surface (pair `f` moving, `b`
-/// still) extrapolates its own surface's colour from its partner's through its own, channel
-/// by channel (R, G, B and A): a moving pixel's surface is `c + e·(c − b)`, a still one's
-/// `c + e·(c − f)`, with `e` the unmixing's (1 − α)/α or α/(1 − α) (at most 1: α ≥ ½ on a
-/// moving pixel, ≤ ½ on a still one). A pair explains the colour only within its residual,
-/// so each channel's `e` is cut to the most that keeps it within the three colours' range
-/// (the clamp of the unmixed colour, as a factor): every output stays within its inputs'
-/// range, as the gather's convex weights promise, and the same factors applied to a light
-/// layer's colours are linear in them. Finite and in [0, 1] whatever the colours.
-pub fn extrapolation(
-    c: &Texel2014,
-    f: &Texel2014,
-    b: &Texel2014,
-    alpha: f32,
-    moving: bool,
-) -> [f32; 4] {
-    let (partner, most) = if moving {
-        (b, (1.0 - alpha) / alpha)
-    } else {
-        (f, alpha / (1.0 - alpha))
-    };
-    [0, 1, 2, 3].map(|ch| {
-        let low = c[ch].min(f[ch]).min(b[ch]);
-        let high = c[ch].max(f[ch]).max(b[ch]);
-        let d = c[ch] - partner[ch];
-        let room = if d > 0.0 {
-            (high - c[ch]) / d
-        } else if d < 0.0 {
-            (low - c[ch]) / d
-        } else {
-            most
-        };
-        // (A NaN room, from colours near the numeric policy's bound, gives no extrapolation.)
-        let e = if room.is_nan() { 0.0 } else { most.min(room) };
-        if e.is_finite() {
-            e.clamp(0.0, 1.0)
-        } else {
-            0.0
-        }
-    })
-}
-
-/// Where colour `c` projects on the line from `b` (α 0) to `f` (α 1), clamped to [0, 1]; the
-/// squared distance from `c` to that point; and the squared distance between `f` and `b`, all
-/// in RGBA, alpha's term added last. Where the three alphas are equal (an opaque frame) its
-/// terms are zero and every number keeps the bits of R, G and B's alone: a zero added to a
-/// sum of squares changes nothing, and alpha's term in the projection is added only where it
-/// is not zero (+0 added to a −0 would flip its sign). Non-finite sums (colours near the
-/// numeric policy's bound) give a NaN residual, which no test passes.
-#[inline]
-pub fn fit(c: &Texel2014, f: &Texel2014, b: &Texel2014) -> (f32, f32, f32) {
-    let d = [f[0] - b[0], f[1] - b[1], f[2] - b[2], f[3] - b[3]];
-    let e = [c[0] - b[0], c[1] - b[1], c[2] - b[2], c[3] - b[3]];
-    let spread = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + d[3] * d[3];
-    let mut along = e[0] * d[0] + e[1] * d[1] + e[2] * d[2];
-    if e[3] * d[3] != 0.0 {
-        along += e[3] * d[3];
-    }
-    let alpha = (along / spread).clamp(0.0, 1.0);
-    let r = [
-        e[0] - alpha * d[0],
-        e[1] - alpha * d[1],
-        e[2] - alpha * d[2],
-        e[3] - alpha * d[3],
-    ];
-    let residual = r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3];
-    (alpha, residual, spread)
-}
-
-/// [`fit`] of colour `c` between the moving colour `f` and each of [`CANDIDATES`] still colours
-/// at once (`b[channel][candidate]`): each candidate's α, residual and spread, the same
-/// operations in the same order as [`fit`]'s, so the same bits, in lanes (on a frame of noise,
-/// every pixel a silhouette, the pairs' fits were most of the matte).
-#[multiversion::multiversion(targets("x86_64+avx2"))]
-fn fits(c: &[f32; 4], f: &[f32; 4], b: &[[f32; CANDIDATES]; 4]) -> [[f32; CANDIDATES]; 3] {
-    let mut out = [[0.0f32; CANDIDATES]; 3];
-    for l in 0..CANDIDATES {
-        let d = [
-            f[0] - b[0][l],
-            f[1] - b[1][l],
-            f[2] - b[2][l],
-            f[3] - b[3][l],
-        ];
-        let e = [
-            c[0] - b[0][l],
-            c[1] - b[1][l],
-            c[2] - b[2][l],
-            c[3] - b[3][l],
-        ];
-        let spread = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + d[3] * d[3];
-        let along = e[0] * d[0] + e[1] * d[1] + e[2] * d[2];
-        let last = e[3] * d[3];
-        let along = if last != 0.0 { along + last } else { along };
-        let alpha = (along / spread).clamp(0.0, 1.0);
-        let r = [
-            e[0] - alpha * d[0],
-            e[1] - alpha * d[1],
-            e[2] - alpha * d[2],
-            e[3] - alpha * d[3],
-        ];
-        out[0][l] = alpha;
-        out[1][l] = r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3];
-        out[2][l] = spread;
-    }
-    out
 }
 
 /// Pixel `i`'s coverage and its two surfaces' colours (RGBA, premultiplied): the moving
@@ -514,7 +408,7 @@ pub fn surfaces_of<const G: usize>(
 mod tests {
     use super::*;
     use crate::motion::reconstruct::{ReconstructConfig, ReconstructParams};
-    use crate::numeric::close;
+    use crate::numeric::{all_close, close};
 
     fn texel(rgb: [f32; 3], z: f32, v: f32) -> Texel2014 {
         [rgb[0], rgb[1], rgb[2], 1.0, z, v, 0.0, v]
@@ -616,47 +510,42 @@ mod tests {
     }
 
     #[test]
-    fn the_fits_in_lanes_are_fit_s_bits() {
-        // Colours of every sign and scale, alphas equal (an opaque frame: alpha's term zero,
-        // not added) and not, signed zeros, and values past the numeric policy's bound (NaN
-        // residuals): each lane the bits `fit` gives its pair.
-        let values = [
-            0.0, -0.0, 1.0, 0.25, -0.7, 3.5, 1e-20, 2e19, 0.333, 1.0, 0.5, -2.0, 7e-3, 1e30,
-        ];
-        let colour = |k: usize| -> Texel2014 {
-            let v = |n: usize| values[(k * 7 + n * 3) % values.len()];
-            [
-                v(0),
-                v(1),
-                v(2),
-                if k.is_multiple_of(3) { 1.0 } else { v(3) },
-                1.0,
-                0.0,
-                0.0,
-                0.0,
-            ]
-        };
-        let mut checked = 0;
-        for ci in 0..40 {
-            for fi in 0..40 {
-                let (c, f) = (colour(ci), colour(fi + 5));
-                let mut lanes = [[0.0f32; CANDIDATES]; 4];
-                let stills: Vec<Texel2014> = (0..CANDIDATES).map(|l| colour(ci + fi + l)).collect();
-                for (l, b) in stills.iter().enumerate() {
-                    for ch in 0..4 {
-                        lanes[ch][l] = b[ch];
-                    }
-                }
-                let got = fits(&[c[0], c[1], c[2], c[3]], &[f[0], f[1], f[2], f[3]], &lanes);
-                for (l, b) in stills.iter().enumerate() {
-                    let (alpha, residual, spread) = fit(&c, &f, b);
-                    let want = [alpha, residual, spread].map(f32::to_bits);
-                    assert_eq!([got[0][l], got[1][l], got[2][l]].map(f32::to_bits), want);
-                    checked += 1;
-                }
+    fn over_empty_space_a_pixel_s_alpha_is_its_coverage_whatever_its_label() {
+        // A view layer's surface (alpha 1) moving over empty space (colour and alpha 0). Its
+        // edge pixels' alpha is their coverage, rendered: a still pixel 0.8 covered (its
+        // centre missed the surface's rim) is 0.8, not the label's 0.5, and unmixes to
+        // nothing (0.8·s + 4·(0.8·s − s) = 0); a moving pixel 0.3 covered (a layer's pixel
+        // given its surface's motion by the stack) is 0.3, and its moving surface is s
+        // (0.3·s + (7/3)·0.3·s = s), both checked by hand.
+        let fg = [0.9, 0.5, 0.1];
+        let layer = |fringe: f32| {
+            let (config, mut texels) = edge(fg, [0.0; 3], fringe, 1.0);
+            for (i, t) in texels.iter_mut().enumerate() {
+                t[3] = match i / 12 {
+                    0 | 1 => 0.0,
+                    2 => fringe,
+                    _ => 1.0,
+                };
             }
+            (config, texels)
+        };
+        let surface = [fg[0], fg[1], fg[2], 1.0];
+        let (config, texels) = layer(0.8);
+        let m = mattes(&config, &texels, |_, _| true);
+        let (alpha, moving, still) = surfaces(&texels, &m, 2 * 12 + 5);
+        assert!(close(alpha, 0.8, 1e-5), "{alpha}");
+        assert!(all_close(&moving, &surface, 1e-5).is_ok(), "{moving:?}");
+        assert!(all_close(&still, &[0.0; 4], 1e-5).is_ok(), "{still:?}");
+        let (config, mut texels) = layer(0.0);
+        let i = 3 * 12 + 5;
+        for ch in 0..4 {
+            texels[i][ch] = 0.3 * surface[ch];
         }
-        assert_eq!(checked, 40 * 40 * CANDIDATES);
+        let m = mattes(&config, &texels, |_, _| true);
+        let (alpha, moving, still) = surfaces(&texels, &m, i);
+        assert!(close(alpha, 0.3, 1e-5), "{alpha}");
+        assert!(all_close(&moving, &surface, 1e-5).is_ok(), "{moving:?}");
+        assert!(all_close(&still, &[0.0; 4], 1e-5).is_ok(), "{still:?}");
     }
 
     /// A 70×52 frame of moving blobs (z 1) over a still background (z 10) with fringes and

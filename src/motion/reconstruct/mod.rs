@@ -56,6 +56,7 @@ pub mod pack;
 pub mod taps;
 pub mod tiles;
 pub mod uniform;
+pub mod unmix;
 mod window;
 
 pub use config::{
