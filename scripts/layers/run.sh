@@ -38,6 +38,8 @@ fi
 
 if [ ! -x "$venv/bin/python" ]; then
   python=${PYTHON:-$(command -v python3.13 || true)}
+  # (pyenv's shim for python3.13 exists, and fails, while 3.13 is installed but not selected.)
+  if [ -n "$python" ] && ! "$python" -c '' 2>/dev/null; then python=; fi
   if [ -z "$python" ] && command -v pyenv >/dev/null; then
     python=$(pyenv root)/versions/$(pyenv versions --bare | grep '^3\.13' | tail -1)/bin/python
   fi
