@@ -506,6 +506,12 @@ fn gather_pixel_2014(x: u32, y: u32) -> Colours {
     // A streak that runs behind a nearer surface is slid back a streak's length where it is
     // hidden (`Form::slide_hidden`; the CPU twin says why and where not).
     let slides = f.slide_hidden && own_length >= HALF_PIXEL && !beside_nearer(x, y);
+    // The coverage a tap reads is steepened where the centre's own point lies off the moving
+    // surface: a still centre, or a moving one covered less than half (see the CPU twin).
+    var steepen = own_length < HALF_PIXEL;
+    if f.split_taps && !steepen {
+        steepen = mattes[MATTE_WORDS * i] < 0.5;
+    }
     for (var s = 0u; s < 2u; s++) {
         let side = select(1.0, -1.0, s == 1u);
         for (var d = 0u; d < directions; d++) {
@@ -552,7 +558,7 @@ fn gather_pixel_2014(x: u32, y: u32) -> Colours {
                 }
                 var parts: Split;
                 if f.split_taps {
-                    let cover = split_by_cover(nearest_index, scale, x, y, at, own_length < HALF_PIXEL);
+                    let cover = split_by_cover(nearest_index, scale, x, y, at, steepen);
                     if cover.valid {
                         parts = cover.parts;
                     } else {

@@ -235,7 +235,8 @@ fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>, s
             still.texel = texel8(bg_index);
         }
     }
-    // A still centre: the coverage steepened about its half level (see the CPU twin).
+    // A centre off the moving surface (still, or covered under half): the coverage
+    // steepened about its half level (see the CPU twin).
     let total = share_m + share_s;
     if steepen && share_m > 0.0 && share_s > 0.0 {
         let cover = share_m / total;

@@ -12,7 +12,8 @@
 use super::config::{Texel2014, HALF_PIXEL, LENGTH, Z};
 use super::matte::{self, Matte};
 
-/// How much [`split_by_cover`] steepens the coverage it reads for a still centre, about its
+/// How much [`split_by_cover`] steepens the coverage it reads for a centre whose own point
+/// lies off the moving surface (a still one, or a moving one covered under half), about its
 /// half level. A pixel's coverage by an edge ramps from 0 to 1 over one pixel as the edge
 /// crosses it; read between pixel centres (bilinearly), the ramp spreads over two, so a still
 /// pixel just outside a moving surface's rim counted the surface as reaching it. Measured on
@@ -304,7 +305,8 @@ pub(crate) fn split_by_cover<const G: usize>(
             still_colour = bg;
         }
     }
-    // At a still centre, the coverage read between pixels is steepened about its half level:
+    // At a centre off the moving surface (`steepen`: a still one, or a moving one covered
+    // under half), the coverage read between pixels is steepened about its half level:
     // interpolated between pixel centres, coverages ramp over two pixels where an edge's
     // coverage of a pixel ramps over one (see COVER_SLOPE).
     let total = share_m + share_s;
