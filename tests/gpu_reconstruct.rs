@@ -556,21 +556,7 @@ fn blur_on_wgpu_equals_the_cpu_within_the_tolerance() {
     for name in ["R", "G", "B"] {
         let (cpu, got) = (channel(&outputs[0], name), channel(&outputs[1], name));
         assert_ne!(cpu, channel(&input, name), "{name}: nothing was blurred");
-        let p = parity(got, cpu);
-        let _ = writeln!(
-            std::io::stderr(),
-            "gpu: blur sparse {name}: max {:e} mean {:e} outside {:.3}%",
-            p.max,
-            p.mean,
-            p.outside * 100.0
-        );
-        assert!(
-            p.max <= MAX && p.mean <= MEAN && p.outside <= FLIPS,
-            "{name}: max {:e} mean {:e} outside {}",
-            p.max,
-            p.mean,
-            p.outside
-        );
+        assert_twin_within(&format!("blur sparse {name}"), got, cpu, BOUND);
     }
 }
 

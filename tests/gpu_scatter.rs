@@ -576,21 +576,7 @@ fn blur_scatter_on_wgpu_equals_the_cpu_and_falls_back_over_the_limits() {
     for name in ["R", "G", "B"] {
         let (c, g) = (channel(&cpu, name), channel(&got, name));
         assert_ne!(c, channel(&input, name), "{name}: nothing was blurred");
-        let p = parity(g, c);
-        let _ = writeln!(
-            std::io::stderr(),
-            "gpu: blur scatter rotor {name}: max {:e} mean {:e} outside {:.3}%",
-            p.max,
-            p.mean,
-            p.outside * 100.0
-        );
-        assert!(
-            p.max <= MAX && p.mean <= MEAN && p.outside <= FLIPS,
-            "{name}: max {:e} mean {:e} outside {}",
-            p.max,
-            p.mean,
-            p.outside
-        );
+        assert_twin_within(&format!("blur scatter rotor {name}"), g, c, BOUND);
     }
     assert!(
         std::fs::read(&outputs[0]).unwrap() == std::fs::read(&outputs[2]).unwrap(),

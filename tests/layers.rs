@@ -418,8 +418,7 @@ fn a_stack_on_wgpu_equals_the_cpu_within_each_pass_s_tolerance() {
         &input,
         vec![foreground_moving(-8.0, 1e10, 0.0), background()],
     );
-    type Bound = (f32, f32, f64, f64);
-    let cases: Vec<(&str, Vec<&str>, Bound)> = vec![
+    let cases: Vec<(&str, Vec<&str>, ParityBound)> = vec![
         (
             "blur",
             vec!["--algorithm", "reconstruct"],
@@ -446,7 +445,7 @@ fn a_stack_on_wgpu_equals_the_cpu_within_each_pass_s_tolerance() {
             (1e-3, 1e-3, 0.0, 1e-3),
         ),
     ];
-    for (command, args, (agree, max, flips, mean)) in cases {
+    for (command, args, bound) in cases {
         let what = format!("{command} {}", args[1]);
         let mut outputs = Vec::new();
         for backend in ["cpu", "wgpu"] {
@@ -478,20 +477,7 @@ fn a_stack_on_wgpu_equals_the_cpu_within_each_pass_s_tolerance() {
         let input = read_exr_reference(&input);
         for name in ["R", "G", "B", "A"] {
             let (cpu, got) = (channel(&outputs[0], name), channel(&outputs[1], name));
-            let p = parity_within(got, cpu, agree);
-            eprintln!(
-                "gpu: stack {what} {name}: max {:e} mean {:e} outside {:.3}%",
-                p.max,
-                p.mean,
-                p.outside * 100.0
-            );
-            assert!(
-                p.max <= max && p.mean <= mean && p.outside <= flips,
-                "{what} {name}: max {:e} mean {:e} outside {}",
-                p.max,
-                p.mean,
-                p.outside
-            );
+            assert_twin_within(&format!("stack {what} {name}"), got, cpu, bound);
         }
         assert_ne!(
             channel(&outputs[0], "R"),
@@ -987,19 +973,13 @@ fn a_moving_disc_s_rim_on_wgpu_is_the_cpu_s() {
         rms < 0.035 && worst < 0.09,
         "wgpu: RMS {rms}, worst {worst}"
     );
-    let (agree, max, flips, mean) = crate::gpu_reconstruct::BOUND;
     for name in ["R", "G", "B", "A"].map(|c| format!("FG.Combined.{c}")) {
-        let p = parity_within(
-            channel(&outputs[1], &name),
-            channel(&outputs[0], &name),
-            agree,
-        );
-        assert!(
-            p.max <= max && p.mean <= mean && p.outside <= flips,
-            "{name}: max {:e} mean {:e} outside {}",
-            p.max,
-            p.mean,
-            p.outside
+        let (cpu, got) = (channel(&outputs[0], &name), channel(&outputs[1], &name));
+        assert_twin_within(
+            &format!("disc {name}"),
+            got,
+            cpu,
+            crate::gpu_reconstruct::BOUND,
         );
     }
 }

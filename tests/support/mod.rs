@@ -3,6 +3,7 @@
 //! (`shutter::numeric::close`).
 #![allow(dead_code)]
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -693,6 +694,33 @@ pub fn parity_within(got: &[f32], cpu: &[f32], agree: f32) -> Parity {
     p.mean /= n;
     p.outside /= n;
     p
+}
+
+/// A twin's parity bound: the share of the range two values agree within ([`parity_within`]'s
+/// `agree`), then the most the largest difference, the share of pixels outside `agree` and
+/// the mean difference may be.
+pub type ParityBound = (f32, f32, f64, f64);
+
+/// Asserts that channel `got` is `cpu`'s within `bound`, naming `what`, and prints its
+/// [`Parity`] (`gpu: what: …`, to the process's stderr, past the test harness's capture, so
+/// every run's log holds the figures).
+pub fn assert_twin_within(what: &str, got: &[f32], cpu: &[f32], bound: ParityBound) {
+    let (agree, max, flips, mean) = bound;
+    let p = parity_within(got, cpu, agree);
+    let _ = writeln!(
+        std::io::stderr(),
+        "gpu: {what}: max {:e} mean {:e} outside {:.3}%",
+        p.max,
+        p.mean,
+        p.outside * 100.0
+    );
+    assert!(
+        p.max <= max && p.mean <= mean && p.outside <= flips,
+        "{what}: max {:e} mean {:e} outside {}",
+        p.max,
+        p.mean,
+        p.outside
+    );
 }
 
 /// `shutter blur ARGS --backend BACKEND --json -o DIR/STEM.####.exr` on frame files in `dir`
