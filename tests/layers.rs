@@ -401,6 +401,42 @@ fn layers_need_a_preset_of_view_layers_and_each_layer_once() {
     assert!(!Path::new(&out).exists());
 }
 
+/// Runs `shutter <command> --preset blender --color <input> -o <out> --layers FG,BG --backend
+/// <backend> --json <args…>`, checks that it succeeded on that backend (on wgpu with no stage
+/// left to the CPU), and returns the output's channels.
+#[cfg(feature = "gpu")]
+fn stack_on(
+    command: &str,
+    input: &Path,
+    out: PathBuf,
+    backend: &str,
+    args: &[&str],
+) -> Vec<(String, Vec<f32>)> {
+    let mut all = vec![
+        command,
+        "--preset",
+        "blender",
+        "--color",
+        input.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--layers",
+        "FG,BG",
+        "--backend",
+        backend,
+        "--json",
+    ];
+    all.extend(args);
+    let o = shutter(&all);
+    assert!(o.status.success(), "{all:?}: {}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(json["backend"]["used"], backend, "{json}");
+    if backend == "wgpu" {
+        assert_eq!(json["backend"]["stages_on_cpu"], 0, "{all:?}: {json}");
+    }
+    read_exr_reference(&out)
+}
+
 /// A stack on `--backend wgpu` gives the CPU's stack within each pass's own parity bound
 /// (tests/gpu_reconstruct.rs, gpu_scatter.rs, gpu_stretch.rs for the motion blurs, 1e-3 of
 /// the range as tests/gpu_dof.rs for depth of field): each layer runs through the pass's
@@ -447,33 +483,13 @@ fn a_stack_on_wgpu_equals_the_cpu_within_each_pass_s_tolerance() {
     ];
     for (command, args, bound) in cases {
         let what = format!("{command} {}", args[1]);
-        let mut outputs = Vec::new();
-        for backend in ["cpu", "wgpu"] {
-            let out = dir.path().join(format!("{}-{backend}.exr", args[1]));
-            let mut all = vec![
-                command,
-                "--preset",
-                "blender",
-                "--color",
-                input.to_str().unwrap(),
-                "-o",
-                out.to_str().unwrap(),
-                "--layers",
-                "FG,BG",
-                "--backend",
-                backend,
-                "--json",
-            ];
-            all.extend(&args);
-            let o = shutter(&all);
-            assert!(o.status.success(), "{what} {backend}: {}", stderr(&o));
-            let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
-            assert_eq!(json["backend"]["used"], backend, "{json}");
-            if backend == "wgpu" {
-                assert_eq!(json["backend"]["stages_on_cpu"], 0, "{what}: {json}");
-            }
-            outputs.push(read_exr_reference(&out));
-        }
+        let outputs: Vec<_> = ["cpu", "wgpu"]
+            .into_iter()
+            .map(|backend| {
+                let out = dir.path().join(format!("{}-{backend}.exr", args[1]));
+                stack_on(command, &input, out, backend, &args)
+            })
+            .collect();
         let input = read_exr_reference(&input);
         for name in ["R", "G", "B", "A"] {
             let (cpu, got) = (channel(&outputs[0], name), channel(&outputs[1], name));
@@ -952,19 +968,13 @@ fn a_moving_disc_s_rim_on_wgpu_is_the_cpu_s() {
     let outputs: Vec<_> = ["cpu", "wgpu"]
         .into_iter()
         .map(|backend| {
-            let args = [
-                "--algorithm",
-                "reconstruct",
-                "--layers",
-                "FG,BG",
-                "--backend",
-                backend,
-            ];
-            run(
+            let out = dir.path().join(format!("{backend}.exr"));
+            stack_on(
                 "blur",
                 &input,
-                dir.path().join(format!("{backend}.exr")),
-                &args,
+                out,
+                backend,
+                &["--algorithm", "reconstruct"],
             )
         })
         .collect();

@@ -17,11 +17,11 @@
 //! premultiplied, alpha a fourth channel mixed by coverage as R, G and B are): its coverage α
 //! is where its colour projects on that line, kept on its own side of one half (a pixel whose
 //! centre the surface covers is at least half covered) unless the still colour is empty space
-//! (a view layer's pixels beside its surface, alpha 0, where a pixel's alpha is its coverage,
-//! rendered, and its label may be a neighbour's motion given by the stack), and the two
-//! colours are remembered by the pixels they came from. Where no pair explains the colour (the residual over 2 % of the
-//! pair's squared distance, or two colours too alike to tell apart), the pixel keeps its
-//! label: α 1 moving, 0 still. Everywhere else α is the label.
+//! (a view layer's pixels beside its surface, colour and alpha 0, where a pixel's alpha is its
+//! coverage, rendered, and its label may be a neighbour's motion given by the stack), and the
+//! two colours are remembered by the pixels they came from. Where no pair explains the colour
+//! (the residual over 2 % of the pair's squared distance, or two colours too alike to tell
+//! apart), the pixel keeps its label: α 1 moving, 0 still. Everywhere else α is the label.
 //!
 //! The gather then splits a tap's four pixels by coverage: each gives α of its weight to the
 //! moving surface, in the surface's colour (a moving pixel's own colour with the still
@@ -546,6 +546,20 @@ mod tests {
         assert!(close(alpha, 0.3, 1e-5), "{alpha}");
         assert!(all_close(&moving, &surface, 1e-5).is_ok(), "{moving:?}");
         assert!(all_close(&still, &[0.0; 4], 1e-5).is_ok(), "{still:?}");
+        // The opposite case: alpha 0 that holds light (an additive glow beside the surface,
+        // 0.2 in each of R, G, B) is not empty space, and the still pixel 0.8 of the way to
+        // the surface is bounded by its label as in an opaque frame.
+        let (config, mut texels) = layer(0.8);
+        for t in texels.iter_mut().take(2 * 12) {
+            t[..3].copy_from_slice(&[0.2; 3]);
+        }
+        for t in &mut texels[2 * 12..3 * 12] {
+            for ch in 0..3 {
+                t[ch] = 0.8 * surface[ch] + 0.2 * 0.2;
+            }
+        }
+        let m = mattes(&config, &texels, |_, _| true);
+        assert_eq!(m[2 * 12 + 5][0], 0.5);
     }
 
     /// A 70×52 frame of moving blobs (z 1) over a still background (z 10) with fringes and

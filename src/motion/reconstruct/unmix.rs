@@ -11,13 +11,15 @@ use super::config::Texel2014;
 /// multiple of a clean one).
 pub const CANDIDATES: usize = 8;
 
-/// Whether a pair's still colour `b` is empty space (alpha 0: a view layer's pixels beside
-/// its surface) and its moving colour `f` is not: there a pixel's alpha is its coverage,
-/// measured where the frame was rendered, and the fit's α is that coverage (alpha is a
-/// channel of the fit), so the label's half bounds neither α nor the unmixing.
+/// Whether a pair's still colour `b` is empty space (colour and alpha 0: a view layer's pixels
+/// beside its surface) and its moving colour `f` is not: there a pixel's alpha is its
+/// coverage, measured where the frame was rendered, and the fit's α is that coverage (alpha is
+/// a channel of the fit), so the label's half bounds neither α nor the unmixing. A pixel of
+/// alpha 0 that holds light (an additive glow, written with no coverage) is not empty: its
+/// alpha says nothing of coverage.
 #[inline]
 pub fn over_empty(f: &Texel2014, b: &Texel2014) -> bool {
-    b[3] == 0.0 && f[3] > 0.0
+    b[..4].iter().all(|&v| v == 0.0) && f[3] > 0.0
 }
 
 /// How far a pixel of colour `c` with coverage α by the moving surface (pair `f` moving, `b`
