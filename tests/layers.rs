@@ -121,6 +121,16 @@ fn write(path: &Path, layers: Vec<Vec<(String, Vec<f32>)>>) {
 /// Runs `shutter <command> --preset blender --color <input> -o <out> <args…>`, checks it
 /// succeeded, and returns the output's channels.
 fn run(command: &str, input: &Path, out: PathBuf, args: &[&str]) -> Vec<(String, Vec<f32>)> {
+    run_json(command, input, out, args).0
+}
+
+/// [`run`] with `--json`: the output's channels and the run's JSON summary.
+fn run_json(
+    command: &str,
+    input: &Path,
+    out: PathBuf,
+    args: &[&str],
+) -> (Vec<(String, Vec<f32>)>, serde_json::Value) {
     let mut all = vec![
         command,
         "--preset",
@@ -129,11 +139,13 @@ fn run(command: &str, input: &Path, out: PathBuf, args: &[&str]) -> Vec<(String,
         input.to_str().unwrap(),
         "-o",
         out.to_str().unwrap(),
+        "--json",
     ];
     all.extend(args);
     let o = shutter(&all);
     assert!(o.status.success(), "{all:?}: {}", stderr(&o));
-    read_exr_reference(&out)
+    let json = serde_json::from_str(&stdout(&o)).unwrap();
+    (read_exr_reference(&out), json)
 }
 
 /// An empty pixel of a layer (alpha 0) neither moves nor hides anything, whatever its
@@ -402,8 +414,8 @@ fn layers_need_a_preset_of_view_layers_and_each_layer_once() {
 }
 
 /// Runs `shutter <command> --preset blender --color <input> -o <out> --layers FG,BG --backend
-/// <backend> --json <args…>`, checks that it succeeded on that backend (on wgpu with no stage
-/// left to the CPU), and returns the output's channels.
+/// <backend> <args…>` ([`run_json`]), checks that it ran on that backend (on wgpu with no
+/// stage left to the CPU), and returns the output's channels.
 #[cfg(feature = "gpu")]
 fn stack_on(
     command: &str,
@@ -412,29 +424,13 @@ fn stack_on(
     backend: &str,
     args: &[&str],
 ) -> Vec<(String, Vec<f32>)> {
-    let mut all = vec![
-        command,
-        "--preset",
-        "blender",
-        "--color",
-        input.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--layers",
-        "FG,BG",
-        "--backend",
-        backend,
-        "--json",
-    ];
-    all.extend(args);
-    let o = shutter(&all);
-    assert!(o.status.success(), "{all:?}: {}", stderr(&o));
-    let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
-    assert_eq!(json["backend"]["used"], backend, "{json}");
+    let all = [&["--layers", "FG,BG", "--backend", backend][..], args].concat();
+    let (channels, json) = run_json(command, input, out, &all);
+    assert_eq!(json["backend"]["used"], backend, "{all:?}: {json}");
     if backend == "wgpu" {
         assert_eq!(json["backend"]["stages_on_cpu"], 0, "{all:?}: {json}");
     }
-    read_exr_reference(&out)
+    channels
 }
 
 /// A stack on `--backend wgpu` gives the CPU's stack within each pass's own parity bound
