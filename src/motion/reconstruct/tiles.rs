@@ -80,7 +80,7 @@ pub(crate) fn gather_tiles(
     selected: impl Fn(usize, usize) -> bool + Sync,
     pixel: impl Fn((usize, usize), usize, usize) -> [f32; 4] + Sync,
 ) {
-    gather_tiles_of(config, columns, &mut [color], selected, |tile, x, y| {
+    gather_tiles_of(config, columns, &mut [color], selected, &|tile, x, y| {
         [pixel(tile, x, y)]
     });
 }
@@ -92,7 +92,7 @@ pub(crate) fn gather_tiles_of<const G: usize>(
     columns: usize,
     colours: &mut [&mut Color],
     selected: impl Fn(usize, usize) -> bool + Sync,
-    pixel: impl Fn((usize, usize), usize, usize) -> [[f32; 4]; G] + Sync,
+    pixel: &impl Gather<G>,
 ) {
     let width = config.width as usize;
     let size = config.tile as usize;
@@ -120,20 +120,57 @@ pub(crate) fn gather_tiles_of<const G: usize>(
         .into_par_iter()
         .enumerate()
         .for_each(|(row, mut planes)| {
-            for c in (0..columns).filter(|&c| selected(c, row)) {
-                for local_y in 0..planes[0].len() / width {
-                    let y = row * size + local_y;
-                    for x in c * size..((c + 1) * size).min(width) {
-                        let o = local_y * width + x;
-                        let value = pixel((c, row), x, y);
-                        for (k, plane) in planes.iter_mut().enumerate() {
-                            plane[o] = value[k / 4][k % 4];
-                        }
-                    }
-                }
-            }
+            let tiles: Vec<usize> = (0..columns).filter(|&c| selected(c, row)).collect();
+            gather_band((size, width), (row, &tiles), &mut planes, pixel)
         });
     for ((color, alpha), has) in colours.iter_mut().zip(alphas).zip(has_alpha) {
         color.a = has.then_some(alpha);
+    }
+}
+
+/// What [`gather_tiles_of`] runs at each pixel: `G` colours' premultiplied RGBA of pixel
+/// (x, y) of tile (column, row). A closure is one; the 2014 gather is a type of its own
+/// ([`super::gather_2014`]), whose body is inlined into [`gather_band`]'s copies.
+pub(crate) trait Gather<const G: usize>: Sync {
+    fn pixel(&self, tile: (usize, usize), x: usize, y: usize) -> [[f32; 4]; G];
+}
+
+impl<const G: usize, F> Gather<G> for F
+where
+    F: Fn((usize, usize), usize, usize) -> [[f32; 4]; G] + Sync,
+{
+    #[inline(always)]
+    fn pixel(&self, tile: (usize, usize), x: usize, y: usize) -> [[f32; 4]; G] {
+        self(tile, x, y)
+    }
+}
+
+/// One band of tile rows of [`gather_tiles_of`] (`row`, and its `tiles` to gather): every
+/// pixel of those tiles, written into the band's `planes`.
+///
+/// Compiled for the CPU at hand (`multiversion`): a [`Gather`] whose `pixel` is inlined
+/// (the 2014 gather's) runs with AVX2 where there is one. (A closure's body is compiled for
+/// the baseline CPU wherever it is called from, unless the compiler inlines it: the 2014
+/// gather, passed as a closure, stayed a baseline call.) Only the instructions change, never
+/// the operations or their order, and nothing is fused (Rust does not contract a multiply
+/// and an add), so both copies give the same bits.
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn gather_band<const G: usize, P: Gather<G>>(
+    (size, width): (usize, usize),
+    (row, tiles): (usize, &[usize]),
+    planes: &mut [&mut [f32]],
+    pixel: &P,
+) {
+    for &c in tiles {
+        for local_y in 0..planes[0].len() / width {
+            let y = row * size + local_y;
+            for x in c * size..((c + 1) * size).min(width) {
+                let o = local_y * width + x;
+                let value = pixel.pixel((c, row), x, y);
+                for (k, plane) in planes.iter_mut().enumerate() {
+                    plane[o] = value[k / 4][k % 4];
+                }
+            }
+        }
     }
 }
