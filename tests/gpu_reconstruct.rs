@@ -395,7 +395,7 @@ fn reconstruct_gather_matches_the_cpu_on_stress_frames() {
 /// run) must equal the CPU's tile for tile; `seen` counts the kinds compared.
 struct ClassifyOnBoth<'a> {
     gpu: &'a Gpu,
-    seen: std::cell::Cell<[usize; 3]>,
+    seen: std::cell::Cell<[usize; 4]>,
 }
 
 impl Stages for ClassifyOnBoth<'_> {
@@ -438,7 +438,7 @@ fn classify_on_the_gpu_finds_the_cpu_s_kinds() {
     let Some(gpu) = gpu() else { return };
     let both = ClassifyOnBoth {
         gpu,
-        seen: std::cell::Cell::new([0; 3]),
+        seen: std::cell::Cell::new([0; 4]),
     };
     // Jumps between two motions and zooms, each at speeds and rates in steps, so that some
     // tile's reach or steepness lies close to where its kind changes.
@@ -477,9 +477,109 @@ fn classify_on_the_gpu_finds_the_cpu_s_kinds() {
             }
         }
     }
-    let [full, plain, uniform] = both.seen.get();
-    eprintln!("classify: {full} full, {plain} plain, {uniform} uniform tiles compared");
-    assert!(full > 0 && plain > 0 && uniform > 0, "every kind compared");
+    let [full, plain, uniform, hollow] = both.seen.get();
+    eprintln!(
+        "classify: {full} full, {plain} plain, {uniform} uniform, {hollow} hollow tiles compared"
+    );
+    assert!(
+        full > 0 && plain > 0 && uniform > 0 && hollow > 0,
+        "every kind compared"
+    );
+}
+
+/// `flow`'s frame as a view layer: outside the discs (centre, radius) empty (colour, alpha
+/// and motion 0); a ring a pixel wide inside each rim a third covered (colour and alpha a
+/// third, the body's motion), and in each disc the motion `flow` gives plus the disc's own.
+fn layer(
+    w: usize,
+    h: usize,
+    flow_of: (f32, f32, f32),
+    discs: &[(f32, f32, f32, f32, f32)],
+) -> Frame {
+    let mut f = flow(w, h, (flow_of.0, flow_of.1), flow_of.2);
+    let color = f.color.as_mut().unwrap();
+    let v = f.velocity.as_mut().unwrap();
+    for i in 0..w * h {
+        let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+        let inside = discs
+            .iter()
+            .find(|d| (x - d.0).hypot(y - d.1) < d.2)
+            .copied();
+        let Some((cx, cy, radius, dx, dy)) = inside else {
+            color.r[i] = 0.0;
+            color.g[i] = 0.0;
+            color.b[i] = 0.0;
+            color.a.as_mut().unwrap()[i] = 0.0;
+            (v.x[i], v.y[i]) = (0.0, 0.0);
+            continue;
+        };
+        (v.x[i], v.y[i]) = (v.x[i] + dx, v.y[i] + dy);
+        let alpha = color.a.as_mut().unwrap();
+        alpha[i] = 1.0;
+        if (x - cx).hypot(y - cy) > radius - 1.0 {
+            for c in [&mut color.r, &mut color.g, &mut color.b, alpha] {
+                c[i] /= 3.0;
+            }
+        }
+    }
+    f
+}
+
+/// The classification's twin on view layers (issue 33): a disc panning or zooming over empty
+/// space (its tiles hollow), two discs moving apart across an empty gap and a disc beside a
+/// still one (full), under three shutter offsets; the kinds must be the CPU's, hollow ones
+/// among them.
+#[test]
+fn classify_on_the_gpu_finds_the_cpu_s_kinds_on_view_layers() {
+    let Some(gpu) = gpu() else { return };
+    let both = ClassifyOnBoth {
+        gpu,
+        seen: std::cell::Cell::new([0; 4]),
+    };
+    let frames = [
+        layer(96, 64, (9.0, 2.0, 0.0), &[(40.0, 30.0, 22.0, 0.0, 0.0)]),
+        layer(96, 64, (3.0, -2.0, 0.02), &[(50.0, 34.0, 25.0, 0.0, 0.0)]),
+        layer(
+            120,
+            64,
+            (0.0, 0.0, 0.0),
+            &[(30.0, 32.0, 20.0, 7.0, 0.0), (90.0, 32.0, 20.0, -7.0, 0.0)],
+        ),
+        layer(
+            120,
+            64,
+            (0.0, 0.0, 0.0),
+            &[(30.0, 32.0, 20.0, 7.0, 1.0), (90.0, 32.0, 20.0, 0.0, 0.0)],
+        ),
+    ]
+    .into_iter()
+    // Two discs across a gap, their motions apart by steps of a quarter pixel: so that
+    // the range of motions within some tile's reach lies close to where its kind changes.
+    .chain((1..24).map(|d| {
+        layer(
+            112,
+            64,
+            (0.0, 0.0, 0.0),
+            &[
+                (30.0, 32.0, 20.0, 4.0, 0.0),
+                (84.0, 32.0, 20.0, 5.0 + 0.25 * d as f32, 0.0),
+            ],
+        )
+    }))
+    .collect::<Vec<_>>();
+    for params in variants().into_iter().filter(|p| p.variant.is_2014()) {
+        for frame in &frames {
+            for offset in [0.0, 0.5, -0.3] {
+                let shutter = Shutter { open: 0.5, offset };
+                reconstruct_with(frame.clone(), &params, shutter, 3, &both);
+            }
+        }
+    }
+    let [full, plain, uniform, hollow] = both.seen.get();
+    eprintln!(
+        "classify, view layers: {full} full, {plain} plain, {uniform} uniform, {hollow} hollow"
+    );
+    assert!(hollow > 0 && full > 0, "hollow and full tiles compared");
 }
 
 /// The tolerance is not vacuous: a gather that misses one tap per pixel (a hash that is not
@@ -793,4 +893,59 @@ fn reconstruct_carries_light_layers_in_its_dispatches_as_the_cpu_does() {
             }
         }
     }
+}
+
+/// Reconstruct's stages on the CPU, keeping each classification's kinds and tile columns.
+struct KindsKept(std::cell::RefCell<Vec<(usize, Vec<TileKind>)>>);
+
+impl Stages for KindsKept {
+    fn classify(
+        &self,
+        config: &ReconstructConfig,
+        texels: &[Texel2014],
+        mattes: &[Matte],
+        tiles: &TileGrid,
+    ) -> Vec<TileKind> {
+        let kinds = classify(config, texels, mattes, tiles);
+        self.0.borrow_mut().push((tiles.columns, kinds.clone()));
+        kinds
+    }
+}
+
+/// Which tiles are hollow (issue 33), on the CPU: a view layer's disc panning over empty space
+/// has its inside tiles hollow (the box), though empty pixels lie within their reach; two
+/// discs moving apart across an empty gap are not one flow (the tile between them is full,
+/// though each disc alone is smooth); nor is a disc beside a still one (a still surface
+/// within reach). 8 px tiles, the default exposure variant, centred.
+#[test]
+fn hollow_tiles_are_a_layer_s_one_smooth_flow_over_empty_space() {
+    let kinds_of = |frame: Frame| {
+        let kept = KindsKept(std::cell::RefCell::new(Vec::new()));
+        reconstruct_with(frame, &ReconstructParams::default(), 0.5, 1, &kept);
+        let (columns, kinds) = kept.0.into_inner().pop().expect("classified");
+        move |c: usize, r: usize| kinds[r * columns + c]
+    };
+    let panning = kinds_of(layer(
+        96,
+        64,
+        (9.0, 2.0, 0.0),
+        &[(40.0, 30.0, 22.0, 0.0, 0.0)],
+    ));
+    assert_eq!(panning(5, 3), TileKind::Hollow, "inside the panning disc");
+    let apart = kinds_of(layer(
+        120,
+        64,
+        (0.0, 0.0, 0.0),
+        &[(30.0, 32.0, 20.0, 7.0, 0.0), (90.0, 32.0, 20.0, -7.0, 0.0)],
+    ));
+    assert_eq!(apart(3, 4), TileKind::Hollow, "inside the left disc");
+    assert_eq!(apart(7, 4), TileKind::Full, "between discs moving apart");
+    let beside = kinds_of(layer(
+        120,
+        64,
+        (0.0, 0.0, 0.0),
+        &[(30.0, 32.0, 20.0, 7.0, 0.0), (90.0, 32.0, 20.0, 0.0, 0.0)],
+    ));
+    assert_eq!(beside(3, 4), TileKind::Hollow, "inside the moving disc");
+    assert_eq!(beside(8, 4), TileKind::Full, "at the still disc's rim");
 }

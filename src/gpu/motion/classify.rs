@@ -104,6 +104,7 @@ impl Gpu {
                 0 => Ok(TileKind::Full),
                 1 => Ok(TileKind::Plain),
                 2 => Ok(TileKind::Uniform),
+                3 => Ok(TileKind::Hollow),
                 _ => Err(StageError::Device(format!(
                     "the classification wrote {word}, no tile kind"
                 ))),
@@ -115,7 +116,7 @@ impl Gpu {
 #[cfg(test)]
 mod tests {
     use super::super::reconstruct::SHADER;
-    use crate::motion::reconstruct::classify::{TileKind, UNIFORM_SPREAD};
+    use crate::motion::reconstruct::classify::{TileKind, SUMMARY_WORDS, UNIFORM_SPREAD};
 
     #[test]
     fn the_shader_s_kinds_and_spread_are_the_cpu_s() {
@@ -124,9 +125,11 @@ mod tests {
             ("FULL", TileKind::Full),
             ("PLAIN", TileKind::Plain),
             ("UNIFORM", TileKind::Uniform),
+            ("HOLLOW", TileKind::Hollow),
         ] {
             has(format!("const {name}: u32 = {}u;", kind as u32));
         }
         has(format!("const UNIFORM_SPREAD: f32 = {UNIFORM_SPREAD:?};"));
+        has(format!("const SUMMARY_WORDS: u32 = {SUMMARY_WORDS}u;"));
     }
 }

@@ -18,21 +18,37 @@
 // Per tile, row by row: the gather its pixels take (FULL, PLAIN or UNIFORM, the CPU's
 // `TileKind`), written by `classify_kinds` or uploaded from the host.
 @group(0) @binding(7) var<storage, read_write> kinds: array<u32>;
-// Per tile, two words (the CPU's `Summary`): its longest |V|, or -1 where a pixel fails; its
-// steepest step of V, or -1 where no tile within one of it blurs.
+// Per tile, SUMMARY_WORDS words (the CPU's `Summary`): its longest |V|, or -1 where a pixel
+// fails; its steepest step of V, or -1 where no tile within one of it blurs; then its
+// `Hollow`: its body's longest |V| (-1 where a pixel is still and not empty), steepest step,
+// and least and greatest V (x, y).
 @group(0) @binding(8) var<storage, read_write> summaries: array<f32>;
+const SUMMARY_WORDS: u32 = 8u;
 
 // `TileKind`'s numbers and `UNIFORM_SPREAD` (a unit test in src/gpu/motion/classify.rs checks
 // each against the Rust value).
 const FULL: u32 = 0u;
 const PLAIN: u32 = 1u;
 const UNIFORM: u32 = 2u;
+const HOLLOW: u32 = 3u;
 const UNIFORM_SPREAD: f32 = 0.125;
 
-// Whether tile (c, r) is uniform (the gather's box).
-fn uniform_tile(c: u32, r: u32) -> bool {
-    return kinds[r * columns() + c] == UNIFORM;
+// Whether pixel i of tile (c, r) takes the box: its tile uniform, or hollow and the pixel
+// neither still nor paired (the CPU's `hollow_takes_full`, which is `fails`).
+fn boxed(c: u32, r: u32, i: u32) -> bool {
+    let kind = kinds[r * columns() + c];
+    return kind == UNIFORM || (kind == HOLLOW && !fails(i));
 }
+
+// The CPU's `empty`: still, colour and alpha 0 (the texel's first four words).
+fn empty(j: u32) -> bool {
+    let o = 8u * j;
+    let colour = vec4<f32>(texels[o], texels[o + 1u], texels[o + 2u], texels[o + 3u]);
+    return texel8(j).length < HALF_PIXEL && all(colour == vec4<f32>(0.0));
+}
+
+// f32::MAX: the least and greatest V start from it (f32::MIN is its negation).
+const F32_MAX: f32 = 3.40282347e38;
 
 // Whether pixel j fails a plain tile: still, or paired by its matte (the mattes are bound
 // only under the exposure variant; otherwise one word).
@@ -59,20 +75,26 @@ fn classify_tiles(@builtin(global_invocation_id) id: vec3<u32>) {
     let width = config.width;
     let height = config.height;
     let steep = !near_blur(c, r, 1u);
+    let o = SUMMARY_WORDS * t;
     var own = 0.0;
     var step = 0.0;
+    var low = vec2<f32>(F32_MAX);
+    var high = vec2<f32>(-F32_MAX);
     let x_end = min((c + 1u) * config.tile, width);
     let y_end = min((r + 1u) * config.tile, height);
     for (var y = r * config.tile; y < y_end; y++) {
         for (var x = c * config.tile; x < x_end; x++) {
             let j = y * width + x;
             if fails(j) {
-                summaries[2u * t] = -1.0;
-                summaries[2u * t + 1u] = -1.0;
+                summaries[o] = -1.0;
+                summaries[o + 1u] = -1.0;
+                hollow(t);
                 return;
             }
             let texel = texel8(j);
             own = max(own, texel.length);
+            low = min(low, vec2<f32>(texel.vx, texel.vy));
+            high = max(high, vec2<f32>(texel.vx, texel.vy));
             if steep {
                 continue;
             }
@@ -86,8 +108,60 @@ fn classify_tiles(@builtin(global_invocation_id) id: vec3<u32>) {
             }
         }
     }
-    summaries[2u * t] = own;
-    summaries[2u * t + 1u] = select(step, -1.0, steep);
+    summaries[o] = own;
+    summaries[o + 1u] = select(step, -1.0, steep);
+    // (A tile none of whose pixels fails blurs, so its step is the hollow one.)
+    summaries[o + 2u] = select(own, -1.0, steep);
+    summaries[o + 3u] = step;
+    summaries[o + 4u] = low.x;
+    summaries[o + 5u] = low.y;
+    summaries[o + 6u] = high.x;
+    summaries[o + 7u] = high.y;
+}
+
+// The CPU's `hollow`: tile t's `Hollow` summary, for a tile with a failing pixel.
+fn hollow(t: u32) {
+    let c = t % columns();
+    let r = t / columns();
+    let width = config.width;
+    let height = config.height;
+    let o = SUMMARY_WORDS * t;
+    var own = 0.0;
+    var step = 0.0;
+    var low = vec2<f32>(F32_MAX);
+    var high = vec2<f32>(-F32_MAX);
+    let x_end = min((c + 1u) * config.tile, width);
+    let y_end = min((r + 1u) * config.tile, height);
+    for (var y = r * config.tile; y < y_end; y++) {
+        for (var x = c * config.tile; x < x_end; x++) {
+            let j = y * width + x;
+            let texel = texel8(j);
+            if texel.length < HALF_PIXEL && !empty(j) {
+                summaries[o + 2u] = -1.0;
+                return;
+            }
+            if fails(j) {
+                continue;
+            }
+            own = max(own, texel.length);
+            low = min(low, vec2<f32>(texel.vx, texel.vy));
+            high = max(high, vec2<f32>(texel.vx, texel.vy));
+            if x + 1u < width && !fails(j + 1u) {
+                let other = texel8(j + 1u);
+                step = max(max(step, abs(other.vx - texel.vx)), abs(other.vy - texel.vy));
+            }
+            if y + 1u < height && !fails(j + width) {
+                let other = texel8(j + width);
+                step = max(max(step, abs(other.vx - texel.vx)), abs(other.vy - texel.vy));
+            }
+        }
+    }
+    summaries[o + 2u] = own;
+    summaries[o + 3u] = step;
+    summaries[o + 4u] = low.x;
+    summaries[o + 5u] = low.y;
+    summaries[o + 6u] = high.x;
+    summaries[o + 7u] = high.y;
 }
 
 // The CPU's `tiles_across`: ⌈reach / tile⌉, the quotient's rounding corrected by exact
@@ -121,9 +195,9 @@ fn kind_of(t: u32) -> u32 {
     if config.variant != EXPOSURE {
         return FULL;
     }
-    let own = summaries[2u * t];
+    let own = summaries[SUMMARY_WORDS * t];
     if own < 0.0 {
-        return FULL;
+        return hollow_kind(t);
     }
     let c = t % columns();
     let r = t / columns();
@@ -141,8 +215,8 @@ fn kind_of(t: u32) -> u32 {
     let a = tiles_across(reach);
     for (var rr = select(r - a, 0u, r < a); rr < min(r + a + 1u, rows()); rr++) {
         for (var cc = select(c - a, 0u, c < a); cc < min(c + a + 1u, columns()); cc++) {
-            if summaries[2u * (rr * columns() + cc)] < 0.0 {
-                return FULL;
+            if summaries[SUMMARY_WORDS * (rr * columns() + cc)] < 0.0 {
+                return hollow_kind(t);
             }
         }
     }
@@ -151,7 +225,7 @@ fn kind_of(t: u32) -> u32 {
     var step = 0.0;
     for (var rr = select(r - b, 0u, r < b); rr < min(r + b + 1u, rows()); rr++) {
         for (var cc = select(c - b, 0u, c < b); cc < min(c + b + 1u, columns()); cc++) {
-            let s = summaries[2u * (rr * columns() + cc) + 1u];
+            let s = summaries[SUMMARY_WORDS * (rr * columns() + cc) + 1u];
             if s < 0.0 {
                 return PLAIN;
             }
@@ -159,4 +233,47 @@ fn kind_of(t: u32) -> u32 {
         }
     }
     return select(PLAIN, UNIFORM, step * near <= UNIFORM_SPREAD);
+}
+
+// The CPU's `hollow_kind`: a tile with a failing tile in its plain reach is hollow where no
+// tile within its uniform reach holds a still surface, and the steps and the range of its
+// bodies' motions there are within UNIFORM_SPREAD of one smooth flow.
+fn hollow_kind(t: u32) -> u32 {
+    let own = summaries[SUMMARY_WORDS * t + 2u];
+    if own < 0.0 {
+        return FULL;
+    }
+    let c = t % columns();
+    let r = t / columns();
+    var m = own;
+    for (var rr = select(r - 1u, 0u, r < 1u); rr < min(r + 2u, rows()); rr++) {
+        for (var cc = select(c - 1u, 0u, c < 1u); cc < min(c + 2u, columns()); cc++) {
+            m = max(m, tile_length(cc, rr));
+        }
+    }
+    let reach = m * (1.0 + 2.0 * abs(config.offset)) + 2.0;
+    if reach > f32(config.width + config.height) {
+        return FULL;
+    }
+    let a = tiles_across(reach);
+    var step = 0.0;
+    var low = vec2<f32>(F32_MAX);
+    var high = vec2<f32>(-F32_MAX);
+    for (var rr = select(r - a, 0u, r < a); rr < min(r + a + 1u, rows()); rr++) {
+        for (var cc = select(c - a, 0u, c < a); cc < min(c + a + 1u, columns()); cc++) {
+            let o = SUMMARY_WORDS * (rr * columns() + cc);
+            if summaries[o + 2u] < 0.0 {
+                return FULL;
+            }
+            step = max(step, summaries[o + 3u]);
+            low = min(low, vec2<f32>(summaries[o + 4u], summaries[o + 5u]));
+            high = max(high, vec2<f32>(summaries[o + 6u], summaries[o + 7u]));
+        }
+    }
+    let span = f32((2u * a + 1u) * config.tile);
+    let range = max(high.x - low.x, high.y - low.y);
+    if step * reach <= UNIFORM_SPREAD && range * reach <= UNIFORM_SPREAD * span {
+        return HOLLOW;
+    }
+    return FULL;
 }

@@ -32,7 +32,7 @@ use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
 use crate::frame::Color;
-use crate::motion::reconstruct::classify::TileKind;
+use crate::motion::reconstruct::classify::{TileKind, SUMMARY_WORDS};
 use crate::motion::reconstruct::matte::{self, Matte};
 use crate::motion::reconstruct::pack::pack_tiles;
 #[cfg(doc)]
@@ -254,7 +254,7 @@ impl ReconstructPass {
         );
         let summaries = buffer(
             "reconstruct tile summaries",
-            floats(2 * shape.tiles),
+            floats(SUMMARY_WORDS * shape.tiles),
             U::STORAGE,
         );
         let color_bytes = floats(4 * shape.colours.max(1) * shape.pixels);

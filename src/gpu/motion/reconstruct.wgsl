@@ -699,7 +699,7 @@ fn box_pixel(x: u32, y: u32) -> Colours {
 }
 
 // 2014 and exposure: pixels of the tiles within one tile of a blurring (dilated) tile, the
-// uniform ones (`kinds`, classify.wgsl) by the box. Its pipelines set COLOURS: 0 for `gather_2014`, the count for
+// uniform ones (`kinds`, classify.wgsl) and the hollow ones' bodies by the box (`boxed`). Its pipelines set COLOURS: 0 for `gather_2014`, the count for
 // `gather_2014_carrying`.
 @compute @workgroup_size(8, 8)
 fn gather_2014(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -712,7 +712,7 @@ fn gather_2014(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let i = id.y * config.width + id.x;
-    if uniform_tile(c, r) {
+    if boxed(c, r, i) {
         write_colours(i, box_pixel(id.x, id.y));
         return;
     }

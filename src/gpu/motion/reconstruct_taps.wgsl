@@ -200,12 +200,19 @@ fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>, s
     // The still part's colours (RGBA of each), from the heaviest still contributor, as the
     // loop meets it (the CPU's `still_colour`).
     var still_colour: Colours;
+    // The least and greatest coverage of the pixels the tap weighs.
+    var least = 1.0;
+    var most = 0.0;
     for (var q = 0u; q < 4u; q++) {
         let j = corners.index[q];
         let w = corners.weight[q];
         let t = texel8(j);
         let m = MATTE_WORDS * j;
         let alpha = mattes[m];
+        if w > 0.0 {
+            least = min(least, alpha);
+            most = max(most, alpha);
+        }
         let w_m = w * alpha;
         let w_s = w * (1.0 - alpha);
         let t_moves = t.length >= HALF_PIXEL;
@@ -236,11 +243,12 @@ fn split_by_cover(nearest: u32, scale: f32, x: u32, y: u32, offset: vec2<f32>, s
         }
     }
     // A centre off the moving surface (still, or covered under half): the coverage
-    // steepened about its half level (see the CPU twin).
+    // steepened about its half level, never past the coverages the tap reads (see the CPU
+    // twin).
     let total = share_m + share_s;
     if steepen && share_m > 0.0 && share_s > 0.0 {
         let cover = share_m / total;
-        let steeper = clamp((cover - 0.5) * COVER_SLOPE + 0.5, 0.0, 1.0);
+        let steeper = min(max((cover - 0.5) * COVER_SLOPE + 0.5, least), most);
         let factor = steeper / cover;
         for (var g = 0u; g < colours(); g++) {
             moving.colour.c[g] *= factor;

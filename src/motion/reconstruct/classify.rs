@@ -1,6 +1,7 @@
 //! Which form of the exposure gather each tile takes, found once a frame before the gather
 //! (issue 35: "the classification is a stage of its own with a GPU twin"): the full gather,
-//! its plain copy, or the uniform tiles' box ([`TileKind`]). Every backend's gather reads the
+//! its plain copy, the uniform tiles' box, or the hollow tiles' box at their bodies and the
+//! full gather at the rest ([`TileKind`]). Every backend's gather reads the
 //! kinds it is handed, and every colour carried through it is gathered on the same kinds.
 //!
 //! Twin: `classify_tiles` and `classify_kinds` in src/gpu/motion/classify.wgsl, run by
@@ -46,6 +47,16 @@ pub enum TileKind {
     /// Plain, and the motion within reach of its pixels one smooth flow: the box shutter's
     /// line integral ([`super::uniform::box_pixel`]).
     Uniform = 2,
+    /// A view layer's smooth flow over empty space (issue 33): within its streaks' reach
+    /// nothing but empty pixels (still, colour and alpha 0: what a layer does not cover) and
+    /// one smooth flow, which may be failing pixels' (a rim's, paired by the matte) or lie
+    /// beyond a plain tile's longer reach. Its moving pixels without a pair take the box
+    /// (over a layer's empty space the box is still the exposure's integral: the empty
+    /// pixels it reads hold nothing); its still pixels and its rim the full gather, which
+    /// brings the surface's streak over empty space. Before, a layer's whole surface took the
+    /// full gather within reach of its edge, and lost to the one-layer frame on `zoom`
+    /// (BENCHMARKS.md, "Hollow tiles").
+    Hollow = 3,
 }
 
 /// What a tile's own pixels tell its classification (each tile read once, up to its first
@@ -60,13 +71,49 @@ pub enum TileKind {
 pub struct Summary {
     pub own: Option<f32>,
     pub step: Option<f32>,
+    pub hollow: Option<Hollow>,
+}
+
+/// What a tile's pixels tell a [`TileKind::Hollow`] classification, read over its body (its
+/// moving pixels without a matte pair): the longest |V|, the largest change of V (either
+/// component) to a body pixel right of it or below it, and the least and greatest V (x, y).
+/// `None` where a pixel is still and not [`empty`]: a surface that does not move. (A tile
+/// none of whose pixels fails is all body.)
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hollow {
+    pub own: f32,
+    pub step: f32,
+    pub low: [f32; 2],
+    pub high: [f32; 2],
+}
+
+/// The GPU twin's words a tile's [`Summary`]: `own` and `step` (-1 for `None`), then the
+/// [`Hollow`]'s six (its `own` -1 for `None`).
+pub const SUMMARY_WORDS: usize = 8;
+
+/// Whether a texel is empty space: still, and its colour and alpha 0 (what a view layer
+/// does not cover).
+#[inline]
+pub fn empty(texel: &Texel2014) -> bool {
+    texel[LENGTH] < HALF_PIXEL && texel[..4] == [0.0; 4]
+}
+
+/// Whether pixel `j` of a [`TileKind::Hollow`] tile takes the full gather: empty, or with a
+/// matte pair (a rim), or still.
+#[inline]
+pub fn hollow_takes_full(texels: &[Texel2014], mattes: &[Matte], j: usize) -> bool {
+    texels[j][LENGTH] < HALF_PIXEL || (!mattes.is_empty() && !matte::unpaired(&mattes[j], j))
 }
 
 /// The kind of every tile of `tiles` (the dilated grid the gather reads), row by row:
 /// [`TileKind::Full`] everywhere but under ours ([`Form::OURS`]); there, plain where no tile
 /// within the tile's tap reach holds a failing pixel ([`Summary`]), uniform where it is plain
 /// and the steps within its streaks' reach times that reach are at most
-/// [`UNIFORM_SPREAD`].
+/// [`UNIFORM_SPREAD`]; where it is not plain, hollow where no tile within its streaks' reach
+/// holds a still surface and its bodies there are one smooth flow ([`Hollow`]: the steps as
+/// a uniform tile's, and the range of their motions at most UNIFORM_SPREAD per reach of the
+/// tiles' span, which a linear flow that passes the steps passes and two bodies moving apart
+/// across empty space, whose steps see no jump, do not).
 ///
 /// The reaches. A tap of a pixel of tile (c, r) reads within `reach_factor · |M|` of the
 /// pixel along the vector it looks up (|M| at most the largest of the 3×3 dilated tiles
@@ -113,12 +160,55 @@ pub fn classify(
             ((c + across + 1).min(columns), (r + across + 1).min(rows)),
         )
     };
+    // A tile with a failing tile in its plain reach: hollow where every tile within its
+    // uniform reach is (no still surface), the steps between its bodies' pixels within that
+    // reach times the reach are at most UNIFORM_SPREAD, and their motions' range at most
+    // UNIFORM_SPREAD per reach of the tiles' span (a linear flow that passes the steps passes
+    // it; two bodies moving apart across empty space do not).
+    let hollow_kind = |t: usize| {
+        let (c, r) = (t % columns, t / columns);
+        let Some(own) = summaries[t].hollow else {
+            return TileKind::Full;
+        };
+        let mut m = own.own;
+        for rr in r.saturating_sub(1)..(r + 2).min(rows) {
+            for cc in c.saturating_sub(1)..(c + 2).min(columns) {
+                m = m.max(tiles.length(cc, rr));
+            }
+        }
+        let reach = m * reach_factor(config) + 2.0;
+        if !reach.is_finite() || reach > (width + height) as f32 {
+            return TileKind::Full;
+        }
+        let across = tiles_across(reach, size);
+        let ((c0, r0), (c1, r1)) = within((c, r), across);
+        let (mut step, mut low, mut high) = (0.0f32, [f32::MAX; 2], [f32::MIN; 2]);
+        for rr in r0..r1 {
+            for cc in c0..c1 {
+                let Some(h) = summaries[rr * columns + cc].hollow else {
+                    return TileKind::Full;
+                };
+                step = step.max(h.step);
+                for k in 0..2 {
+                    low[k] = low[k].min(h.low[k]);
+                    high[k] = high[k].max(h.high[k]);
+                }
+            }
+        }
+        let span = ((2 * across + 1) * size) as f32;
+        let range = (high[0] - low[0]).max(high[1] - low[1]);
+        if step * reach <= UNIFORM_SPREAD && range * reach <= UNIFORM_SPREAD * span {
+            TileKind::Hollow
+        } else {
+            TileKind::Full
+        }
+    };
     (0..columns * rows)
         .into_par_iter()
         .map(|t| {
             let (c, r) = (t % columns, t / columns);
             let Some(mut m) = summaries[t].own else {
-                return TileKind::Full;
+                return hollow_kind(t);
             };
             for rr in r.saturating_sub(1)..(r + 2).min(rows) {
                 for cc in c.saturating_sub(1)..(c + 2).min(columns) {
@@ -132,7 +222,7 @@ pub fn classify(
             }
             let (start, end) = within((c, r), tiles_across(reach, size));
             if failing(start, end) != 0 {
-                return TileKind::Full;
+                return hollow_kind(t);
             }
             let reach = streak + 2.0;
             let ((c0, r0), (c1, r1)) = within((c, r), tiles_across(reach, size));
@@ -170,6 +260,7 @@ pub fn summary(
     };
     let steep = !near_blur(tiles, c, r, 1);
     let (mut own, mut step) = (0.0f32, 0.0f32);
+    let (mut low, mut high) = ([f32::MAX; 2], [f32::MIN; 2]);
     for y in r * size..((r + 1) * size).min(height) {
         for x in c * size..((c + 1) * size).min(width) {
             let j = y * width + x;
@@ -177,10 +268,15 @@ pub fn summary(
                 return Summary {
                     own: None,
                     step: None,
+                    hollow: hollow(config, texels, mattes, c, r),
                 };
             }
             let texel = &texels[j];
             own = own.max(texel[LENGTH]);
+            for (k, v) in [texel[VX], texel[VY]].into_iter().enumerate() {
+                low[k] = low[k].min(v);
+                high[k] = high[k].max(v);
+            }
             if steep {
                 continue;
             }
@@ -198,10 +294,70 @@ pub fn summary(
             }
         }
     }
+    let step = (!steep).then_some(step);
     Summary {
         own: Some(own),
-        step: (!steep).then_some(step),
+        step,
+        hollow: step.map(|step| Hollow {
+            own,
+            step,
+            low,
+            high,
+        }),
     }
+}
+
+/// Tile (c, r)'s [`Hollow`] summary, for a tile with a failing pixel.
+fn hollow(
+    config: &ReconstructConfig,
+    texels: &[Texel2014],
+    mattes: &[Matte],
+    c: usize,
+    r: usize,
+) -> Option<Hollow> {
+    let (width, height) = (config.width as usize, config.height as usize);
+    let size = config.tile as usize;
+    let body = |j: usize| !hollow_takes_full(texels, mattes, j);
+    let mut h = Hollow {
+        own: 0.0,
+        step: 0.0,
+        low: [f32::MAX; 2],
+        high: [f32::MIN; 2],
+    };
+    for y in r * size..((r + 1) * size).min(height) {
+        for x in c * size..((c + 1) * size).min(width) {
+            let j = y * width + x;
+            let texel = &texels[j];
+            if texel[LENGTH] < HALF_PIXEL && !empty(texel) {
+                return None;
+            }
+            if !body(j) {
+                continue;
+            }
+            h.own = h.own.max(texel[LENGTH]);
+            for (k, v) in [texel[VX], texel[VY]].into_iter().enumerate() {
+                h.low[k] = h.low[k].min(v);
+                h.high[k] = h.high[k].max(v);
+            }
+            for k in [
+                (x + 1 < width).then_some(j + 1),
+                (y + 1 < height).then_some(j + width),
+            ]
+            .into_iter()
+            .flatten()
+            {
+                if !body(k) {
+                    continue;
+                }
+                let other = &texels[k];
+                h.step = h
+                    .step
+                    .max((other[VX] - texel[VX]).abs())
+                    .max((other[VY] - texel[VY]).abs());
+            }
+        }
+    }
+    Some(h)
 }
 
 /// The whole tiles of `size` px a reach of `reach` px spans beyond the tile's own: ⌈reach /

@@ -273,9 +273,15 @@ pub(crate) fn split_by_cover<const G: usize>(
     let (mut share_m, mut share_s) = (0.0f32, 0.0f32);
     let (mut heavy_m, mut heavy_s) = (0.0f32, -1.0f32);
     let mut still_colour = [[0.0f32; 4]; G];
+    // The least and greatest coverage of the pixels the tap reads (those it weighs).
+    let (mut least, mut most) = (1.0f32, 0.0f32);
     for (j, w) in corners {
         let t = &texels[j];
         let (alpha, fg, bg) = matte::surfaces_of(texels, mattes, j, colour);
+        if w > 0.0 {
+            least = least.min(alpha);
+            most = most.max(alpha);
+        }
         let (w_m, w_s) = (w * alpha, w * (1.0 - alpha));
         for g in 0..G {
             for ch in 0..4 {
@@ -308,11 +314,13 @@ pub(crate) fn split_by_cover<const G: usize>(
     // At a centre off the moving surface (`steepen`: a still one, or a moving one covered
     // under half), the coverage read between pixels is steepened about its half level:
     // interpolated between pixel centres, coverages ramp over two pixels where an edge's
-    // coverage of a pixel ramps over one (see COVER_SLOPE).
+    // coverage of a pixel ramps over one (see COVER_SLOPE). Never past the coverages the
+    // tap reads: that corrects the interpolation across an edge, and a tap along a rim (a
+    // row of pixels a tenth covered, moving along itself) reads the rim's own coverage.
     let total = share_m + share_s;
     if steepen && share_m > 0.0 && share_s > 0.0 {
         let cover = share_m / total;
-        let steeper = ((cover - 0.5) * COVER_SLOPE + 0.5).clamp(0.0, 1.0);
+        let steeper = ((cover - 0.5) * COVER_SLOPE + 0.5).max(least).min(most);
         let factor = steeper / cover;
         for c in moving_colour.iter_mut() {
             for v in c.iter_mut() {

@@ -35,7 +35,7 @@ use super::taps::Colours;
 /// then together) and divided by n. k is the gather's taps a side for the pixel (at least
 /// S/4, one every [`TAP_SPACING`] px of |V|, at most [`MAX_TAPS_PER_SIDE`]), so the line is
 /// read as densely as the gather reads it. V' is V shortened by [`shortened`]. Only for a
-/// moving pixel of a uniform tile.
+/// moving pixel of a uniform tile, or of a hollow tile's body ([`TileKind::Hollow`]).
 ///
 /// Midpoints, not the gather's per-pixel jitter: the colours read bilinearly are linear
 /// between pixel centres, and the midpoint rule is exact on a line that is, where a comb
