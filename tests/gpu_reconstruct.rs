@@ -428,6 +428,24 @@ impl Stages for ClassifyOnBoth<'_> {
     }
 }
 
+/// Each frame through both 2014 variants under three shutter offsets, classified on both
+/// backends ([`ClassifyOnBoth`]); how many tiles of each kind were compared.
+fn classify_on_both(gpu: &Gpu, frames: &[Frame]) -> [usize; 4] {
+    let both = ClassifyOnBoth {
+        gpu,
+        seen: std::cell::Cell::new([0; 4]),
+    };
+    for params in variants().into_iter().filter(|p| p.variant.is_2014()) {
+        for frame in frames {
+            for offset in [0.0, 0.5, -0.3] {
+                let shutter = Shutter { open: 0.5, offset };
+                reconstruct_with(frame.clone(), &params, shutter, 3, &both);
+            }
+        }
+    }
+    both.seen.get()
+}
+
 /// The classification's twin (src/gpu/motion/classify.wgsl) finds every tile's kind as the
 /// CPU does (its tolerance: none, the kinds are decisions), on frames with every kind: a
 /// pan and a zoom (uniform), a jump between two motions (plain beside it), a still subject,
@@ -436,10 +454,6 @@ impl Stages for ClassifyOnBoth<'_> {
 #[test]
 fn classify_on_the_gpu_finds_the_cpu_s_kinds() {
     let Some(gpu) = gpu() else { return };
-    let both = ClassifyOnBoth {
-        gpu,
-        seen: std::cell::Cell::new([0; 4]),
-    };
     // Jumps between two motions and zooms, each at speeds and rates in steps, so that some
     // tile's reach or steepness lies close to where its kind changes.
     let jump = |speed: f32| {
@@ -469,15 +483,7 @@ fn classify_on_the_gpu_finds_the_cpu_s_kinds() {
     .chain((8..24).map(|speed| jump(speed as f32)))
     .chain((1..16).map(|z| flow(72, 40, (6.0, 2.0), 0.01 * z as f32)))
     .collect::<Vec<_>>();
-    for params in variants().into_iter().filter(|p| p.variant.is_2014()) {
-        for frame in &frames {
-            for offset in [0.0, 0.5, -0.3] {
-                let shutter = Shutter { open: 0.5, offset };
-                reconstruct_with(frame.clone(), &params, shutter, 3, &both);
-            }
-        }
-    }
-    let [full, plain, uniform, hollow] = both.seen.get();
+    let [full, plain, uniform, hollow] = classify_on_both(gpu, &frames);
     eprintln!(
         "classify: {full} full, {plain} plain, {uniform} uniform, {hollow} hollow tiles compared"
     );
@@ -532,10 +538,6 @@ fn layer(
 #[test]
 fn classify_on_the_gpu_finds_the_cpu_s_kinds_on_view_layers() {
     let Some(gpu) = gpu() else { return };
-    let both = ClassifyOnBoth {
-        gpu,
-        seen: std::cell::Cell::new([0; 4]),
-    };
     let frames = [
         layer(96, 64, (9.0, 2.0, 0.0), &[(40.0, 30.0, 22.0, 0.0, 0.0)]),
         layer(96, 64, (3.0, -2.0, 0.02), &[(50.0, 34.0, 25.0, 0.0, 0.0)]),
@@ -567,15 +569,7 @@ fn classify_on_the_gpu_finds_the_cpu_s_kinds_on_view_layers() {
         )
     }))
     .collect::<Vec<_>>();
-    for params in variants().into_iter().filter(|p| p.variant.is_2014()) {
-        for frame in &frames {
-            for offset in [0.0, 0.5, -0.3] {
-                let shutter = Shutter { open: 0.5, offset };
-                reconstruct_with(frame.clone(), &params, shutter, 3, &both);
-            }
-        }
-    }
-    let [full, plain, uniform, hollow] = both.seen.get();
+    let [full, plain, uniform, hollow] = classify_on_both(gpu, &frames);
     eprintln!(
         "classify, view layers: {full} full, {plain} plain, {uniform} uniform, {hollow} hollow"
     );

@@ -63,105 +63,99 @@ fn fails(j: u32) -> bool {
     return !(bitcast<u32>(mattes[o + 1u]) == j && bitcast<u32>(mattes[o + 2u]) == j);
 }
 
-// The CPU's `summary`: tile t's pixels read once, up to the first that fails.
+// The CPU's `summary`: tile t's pixels read once, up to the first that fails; where one
+// fails, its bodies read again for its `Hollow`.
 @compute @workgroup_size(64)
 fn classify_tiles(@builtin(global_invocation_id) id: vec3<u32>) {
     let t = id.x;
     if t >= columns() * rows() {
         return;
     }
+    let steep = !near_blur(t % columns(), t / columns(), 1u);
+    let o = SUMMARY_WORDS * t;
+    var h = scan(t, false, steep);
+    if h.read {
+        summaries[o] = h.own;
+        summaries[o + 1u] = select(h.step, -1.0, steep);
+        // (A tile none of whose pixels fails blurs, so its `Hollow` is the same reading.)
+        summaries[o + 2u] = select(h.own, -1.0, steep);
+    } else {
+        summaries[o] = -1.0;
+        summaries[o + 1u] = -1.0;
+        h = scan(t, true, false);
+        summaries[o + 2u] = select(-1.0, h.own, h.read);
+    }
+    summaries[o + 3u] = h.step;
+    summaries[o + 4u] = h.low.x;
+    summaries[o + 5u] = h.low.y;
+    summaries[o + 6u] = h.high.x;
+    summaries[o + 7u] = h.high.y;
+}
+
+// What the CPU's `scan` finds: `read` false where it returns `None`.
+struct Scanned {
+    read: bool,
+    own: f32,
+    step: f32,
+    low: vec2<f32>,
+    high: vec2<f32>,
+}
+
+// The CPU's `scan`: tile t's every pixel, none failing (`bodies` false; no steps where
+// `steep`), or its bodies alone (`bodies`: no still pixel that is not empty; steps between
+// bodies only).
+fn scan(t: u32, bodies: bool, steep: bool) -> Scanned {
     let c = t % columns();
     let r = t / columns();
     let width = config.width;
     let height = config.height;
-    let steep = !near_blur(c, r, 1u);
-    let o = SUMMARY_WORDS * t;
-    var own = 0.0;
-    var step = 0.0;
-    var low = vec2<f32>(F32_MAX);
-    var high = vec2<f32>(-F32_MAX);
+    var h = Scanned(true, 0.0, 0.0, vec2<f32>(F32_MAX), vec2<f32>(-F32_MAX));
     let x_end = min((c + 1u) * config.tile, width);
     let y_end = min((r + 1u) * config.tile, height);
     for (var y = r * config.tile; y < y_end; y++) {
         for (var x = c * config.tile; x < x_end; x++) {
             let j = y * width + x;
-            if fails(j) {
-                summaries[o] = -1.0;
-                summaries[o + 1u] = -1.0;
-                hollow(t);
-                return;
-            }
             let texel = texel8(j);
-            own = max(own, texel.length);
-            low = min(low, vec2<f32>(texel.vx, texel.vy));
-            high = max(high, vec2<f32>(texel.vx, texel.vy));
+            if bodies && texel.length < HALF_PIXEL && !empty(j) {
+                h.read = false;
+                return h;
+            }
+            if fails(j) {
+                if bodies {
+                    continue;
+                }
+                h.read = false;
+                return h;
+            }
+            h.own = max(h.own, texel.length);
+            h.low = min(h.low, vec2<f32>(texel.vx, texel.vy));
+            h.high = max(h.high, vec2<f32>(texel.vx, texel.vy));
             if steep {
                 continue;
             }
-            if x + 1u < width {
+            if x + 1u < width && !(bodies && fails(j + 1u)) {
                 let other = texel8(j + 1u);
-                step = max(max(step, abs(other.vx - texel.vx)), abs(other.vy - texel.vy));
+                h.step = max(max(h.step, abs(other.vx - texel.vx)), abs(other.vy - texel.vy));
             }
-            if y + 1u < height {
+            if y + 1u < height && !(bodies && fails(j + width)) {
                 let other = texel8(j + width);
-                step = max(max(step, abs(other.vx - texel.vx)), abs(other.vy - texel.vy));
+                h.step = max(max(h.step, abs(other.vx - texel.vx)), abs(other.vy - texel.vy));
             }
         }
     }
-    summaries[o] = own;
-    summaries[o + 1u] = select(step, -1.0, steep);
-    // (A tile none of whose pixels fails blurs, so its step is the hollow one.)
-    summaries[o + 2u] = select(own, -1.0, steep);
-    summaries[o + 3u] = step;
-    summaries[o + 4u] = low.x;
-    summaries[o + 5u] = low.y;
-    summaries[o + 6u] = high.x;
-    summaries[o + 7u] = high.y;
+    return h;
 }
 
-// The CPU's `hollow`: tile t's `Hollow` summary, for a tile with a failing pixel.
-fn hollow(t: u32) {
-    let c = t % columns();
-    let r = t / columns();
-    let width = config.width;
-    let height = config.height;
-    let o = SUMMARY_WORDS * t;
-    var own = 0.0;
-    var step = 0.0;
-    var low = vec2<f32>(F32_MAX);
-    var high = vec2<f32>(-F32_MAX);
-    let x_end = min((c + 1u) * config.tile, width);
-    let y_end = min((r + 1u) * config.tile, height);
-    for (var y = r * config.tile; y < y_end; y++) {
-        for (var x = c * config.tile; x < x_end; x++) {
-            let j = y * width + x;
-            let texel = texel8(j);
-            if texel.length < HALF_PIXEL && !empty(j) {
-                summaries[o + 2u] = -1.0;
-                return;
-            }
-            if fails(j) {
-                continue;
-            }
-            own = max(own, texel.length);
-            low = min(low, vec2<f32>(texel.vx, texel.vy));
-            high = max(high, vec2<f32>(texel.vx, texel.vy));
-            if x + 1u < width && !fails(j + 1u) {
-                let other = texel8(j + 1u);
-                step = max(max(step, abs(other.vx - texel.vx)), abs(other.vy - texel.vy));
-            }
-            if y + 1u < height && !fails(j + width) {
-                let other = texel8(j + width);
-                step = max(max(step, abs(other.vx - texel.vx)), abs(other.vy - texel.vy));
-            }
+// The CPU's `longest`: the longest |M| a tap of tile (c, r) can be taken along, its own
+// (`own`) or a dilated tile's within one.
+fn longest(c: u32, r: u32, own: f32) -> f32 {
+    var m = own;
+    for (var rr = select(r - 1u, 0u, r < 1u); rr < min(r + 2u, rows()); rr++) {
+        for (var cc = select(c - 1u, 0u, c < 1u); cc < min(c + 2u, columns()); cc++) {
+            m = max(m, tile_length(cc, rr));
         }
     }
-    summaries[o + 2u] = own;
-    summaries[o + 3u] = step;
-    summaries[o + 4u] = low.x;
-    summaries[o + 5u] = low.y;
-    summaries[o + 6u] = high.x;
-    summaries[o + 7u] = high.y;
+    return m;
 }
 
 // The CPU's `tiles_across`: ⌈reach / tile⌉, the quotient's rounding corrected by exact
@@ -201,12 +195,7 @@ fn kind_of(t: u32) -> u32 {
     }
     let c = t % columns();
     let r = t / columns();
-    var m = own;
-    for (var rr = select(r - 1u, 0u, r < 1u); rr < min(r + 2u, rows()); rr++) {
-        for (var cc = select(c - 1u, 0u, c < 1u); cc < min(c + 2u, columns()); cc++) {
-            m = max(m, tile_length(cc, rr));
-        }
-    }
+    let m = longest(c, r, own);
     let streak = m * (1.0 + 2.0 * abs(config.offset));
     let reach = streak + 2.0 * m + 2.0;
     if reach > f32(config.width + config.height) {
@@ -245,12 +234,7 @@ fn hollow_kind(t: u32) -> u32 {
     }
     let c = t % columns();
     let r = t / columns();
-    var m = own;
-    for (var rr = select(r - 1u, 0u, r < 1u); rr < min(r + 2u, rows()); rr++) {
-        for (var cc = select(c - 1u, 0u, c < 1u); cc < min(c + 2u, columns()); cc++) {
-            m = max(m, tile_length(cc, rr));
-        }
-    }
+    let m = longest(c, r, own);
     let reach = m * (1.0 + 2.0 * abs(config.offset)) + 2.0;
     if reach > f32(config.width + config.height) {
         return FULL;

@@ -160,6 +160,17 @@ pub fn classify(
             ((c + across + 1).min(columns), (r + across + 1).min(rows)),
         )
     };
+    // The longest |M| a tap of tile (c, r) can be taken along: its pixels' longest, `own`,
+    // or a dilated tile's within one (the jittered lookup's).
+    let longest = |(c, r): (usize, usize), own: f32| {
+        let mut m = own;
+        for rr in r.saturating_sub(1)..(r + 2).min(rows) {
+            for cc in c.saturating_sub(1)..(c + 2).min(columns) {
+                m = m.max(tiles.length(cc, rr));
+            }
+        }
+        m
+    };
     // A tile with a failing tile in its plain reach: hollow where every tile within its
     // uniform reach is (no still surface), the steps between its bodies' pixels within that
     // reach times the reach are at most UNIFORM_SPREAD, and their motions' range at most
@@ -170,12 +181,7 @@ pub fn classify(
         let Some(own) = summaries[t].hollow else {
             return TileKind::Full;
         };
-        let mut m = own.own;
-        for rr in r.saturating_sub(1)..(r + 2).min(rows) {
-            for cc in c.saturating_sub(1)..(c + 2).min(columns) {
-                m = m.max(tiles.length(cc, rr));
-            }
-        }
+        let m = longest((c, r), own.own);
         let reach = m * reach_factor(config) + 2.0;
         if !reach.is_finite() || reach > (width + height) as f32 {
             return TileKind::Full;
@@ -207,14 +213,10 @@ pub fn classify(
         .into_par_iter()
         .map(|t| {
             let (c, r) = (t % columns, t / columns);
-            let Some(mut m) = summaries[t].own else {
+            let Some(own) = summaries[t].own else {
                 return hollow_kind(t);
             };
-            for rr in r.saturating_sub(1)..(r + 2).min(rows) {
-                for cc in c.saturating_sub(1)..(c + 2).min(columns) {
-                    m = m.max(tiles.length(cc, rr));
-                }
-            }
+            let m = longest((c, r), own);
             let streak = m * reach_factor(config);
             let reach = streak + 2.0 * m + 2.0;
             if !reach.is_finite() || reach > (width + height) as f32 {
@@ -253,71 +255,49 @@ pub fn summary(
     c: usize,
     r: usize,
 ) -> Summary {
-    let (width, height) = (config.width as usize, config.height as usize);
-    let size = config.tile as usize;
-    let fails = |j: usize| {
-        texels[j][LENGTH] < HALF_PIXEL || (!mattes.is_empty() && !matte::unpaired(&mattes[j], j))
-    };
     let steep = !near_blur(tiles, c, r, 1);
-    let (mut own, mut step) = (0.0f32, 0.0f32);
-    let (mut low, mut high) = ([f32::MAX; 2], [f32::MIN; 2]);
-    for y in r * size..((r + 1) * size).min(height) {
-        for x in c * size..((c + 1) * size).min(width) {
-            let j = y * width + x;
-            if fails(j) {
-                return Summary {
-                    own: None,
-                    step: None,
-                    hollow: hollow(config, texels, mattes, c, r),
-                };
-            }
-            let texel = &texels[j];
-            own = own.max(texel[LENGTH]);
-            for (k, v) in [texel[VX], texel[VY]].into_iter().enumerate() {
-                low[k] = low[k].min(v);
-                high[k] = high[k].max(v);
-            }
-            if steep {
-                continue;
-            }
-            for k in [
-                (x + 1 < width).then_some(j + 1),
-                (y + 1 < height).then_some(j + width),
-            ]
-            .into_iter()
-            .flatten()
-            {
-                let other = &texels[k];
-                step = step
-                    .max((other[VX] - texel[VX]).abs())
-                    .max((other[VY] - texel[VY]).abs());
+    match scan(config, texels, mattes, (c, r), Scan::Plain { steep }) {
+        Some(all) => {
+            let step = (!steep).then_some(all.step);
+            Summary {
+                own: Some(all.own),
+                step,
+                hollow: step.map(|_| all),
             }
         }
-    }
-    let step = (!steep).then_some(step);
-    Summary {
-        own: Some(own),
-        step,
-        hollow: step.map(|step| Hollow {
-            own,
-            step,
-            low,
-            high,
-        }),
+        None => Summary {
+            own: None,
+            step: None,
+            hollow: scan(config, texels, mattes, (c, r), Scan::Bodies),
+        },
     }
 }
 
-/// Tile (c, r)'s [`Hollow`] summary, for a tile with a failing pixel.
-fn hollow(
+/// What [`scan`] reads of a tile: every pixel, none failing (`None` at the first that fails;
+/// no steps where the tile is `steep`: no tile within one of it blurs), or its bodies alone
+/// (`None` at the first still pixel that is not empty; steps between bodies only).
+#[derive(Clone, Copy)]
+enum Scan {
+    Plain { steep: bool },
+    Bodies,
+}
+
+/// Tile (c, r)'s pixels read once, as `how` says: the longest |V|, the largest step of V
+/// to the pixel right or below, and the least and greatest V.
+fn scan(
     config: &ReconstructConfig,
     texels: &[Texel2014],
     mattes: &[Matte],
-    c: usize,
-    r: usize,
+    (c, r): (usize, usize),
+    how: Scan,
 ) -> Option<Hollow> {
     let (width, height) = (config.width as usize, config.height as usize);
     let size = config.tile as usize;
-    let body = |j: usize| !hollow_takes_full(texels, mattes, j);
+    let fails = |j: usize| hollow_takes_full(texels, mattes, j);
+    let (bodies, steep) = match how {
+        Scan::Plain { steep } => (false, steep),
+        Scan::Bodies => (true, false),
+    };
     let mut h = Hollow {
         own: 0.0,
         step: 0.0,
@@ -328,16 +308,22 @@ fn hollow(
         for x in c * size..((c + 1) * size).min(width) {
             let j = y * width + x;
             let texel = &texels[j];
-            if texel[LENGTH] < HALF_PIXEL && !empty(texel) {
+            if bodies && texel[LENGTH] < HALF_PIXEL && !empty(texel) {
                 return None;
             }
-            if !body(j) {
-                continue;
+            if fails(j) {
+                if bodies {
+                    continue;
+                }
+                return None;
             }
             h.own = h.own.max(texel[LENGTH]);
             for (k, v) in [texel[VX], texel[VY]].into_iter().enumerate() {
                 h.low[k] = h.low[k].min(v);
                 h.high[k] = h.high[k].max(v);
+            }
+            if steep {
+                continue;
             }
             for k in [
                 (x + 1 < width).then_some(j + 1),
@@ -345,10 +331,8 @@ fn hollow(
             ]
             .into_iter()
             .flatten()
+            .filter(|&k| !(bodies && fails(k)))
             {
-                if !body(k) {
-                    continue;
-                }
                 let other = &texels[k];
                 h.step = h
                     .step
