@@ -255,7 +255,11 @@ fn hollow_kind(t: u32) -> u32 {
         }
     }
     let span = f32((2u * a + 1u) * config.tile);
-    let range = max(high.x - low.x, high.y - low.y);
+    // (No body within reach: no range, and no sentinels subtracted, which would overflow.)
+    var range = 0.0;
+    if high.x >= low.x {
+        range = max(high.x - low.x, high.y - low.y);
+    }
     if step * reach <= UNIFORM_SPREAD && range * reach <= UNIFORM_SPREAD * span {
         return HOLLOW;
     }

@@ -202,7 +202,12 @@ pub fn classify(
             }
         }
         let span = ((2 * across + 1) * size) as f32;
-        let range = (high[0] - low[0]).max(high[1] - low[1]);
+        // (No body within reach: no range, and no sentinels subtracted.)
+        let range = if high[0] >= low[0] {
+            (high[0] - low[0]).max(high[1] - low[1])
+        } else {
+            0.0
+        };
         if step * reach <= UNIFORM_SPREAD && range * reach <= UNIFORM_SPREAD * span {
             TileKind::Hollow
         } else {
