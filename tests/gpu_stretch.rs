@@ -356,13 +356,7 @@ fn stretch_on_the_gpu_matches_the_golden_image() {
         worst = worst.worse(p);
         assert!(p.within(), "{name}: {p:?}");
     }
-    let _ = writeln!(
-        std::io::stderr(),
-        "gpu: stretch golden rotor: max {:e} mean {:e} outside {:.3}%",
-        worst.max,
-        worst.mean,
-        worst.outside * 100.0
-    );
+    worst.report("stretch golden rotor");
 }
 
 /// The tolerance is not vacuous: the GPU's output fails it against a CPU run without the

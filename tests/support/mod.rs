@@ -668,6 +668,18 @@ impl Parity {
             },
         }
     }
+
+    /// Prints `gpu: what: max … mean … outside …%` to the process's stderr, past the test
+    /// harness's capture, so every run's log holds the figures.
+    pub fn report(&self, what: &str) {
+        let _ = writeln!(
+            std::io::stderr(),
+            "gpu: {what}: max {:e} mean {:e} outside {:.3}%",
+            self.max,
+            self.mean,
+            self.outside * 100.0
+        );
+    }
 }
 
 /// The [`Parity`] of channel `got` against `cpu`, counting the pixels that differ by more than
@@ -702,18 +714,11 @@ pub fn parity_within(got: &[f32], cpu: &[f32], agree: f32) -> Parity {
 pub type ParityBound = (f32, f32, f64, f64);
 
 /// Asserts that channel `got` is `cpu`'s within `bound`, naming `what`, and prints its
-/// [`Parity`] (`gpu: what: …`, to the process's stderr, past the test harness's capture, so
-/// every run's log holds the figures).
+/// [`Parity`] ([`Parity::report`]).
 pub fn assert_twin_within(what: &str, got: &[f32], cpu: &[f32], bound: ParityBound) {
     let (agree, max, flips, mean) = bound;
     let p = parity_within(got, cpu, agree);
-    let _ = writeln!(
-        std::io::stderr(),
-        "gpu: {what}: max {:e} mean {:e} outside {:.3}%",
-        p.max,
-        p.mean,
-        p.outside * 100.0
-    );
+    p.report(what);
     assert!(
         p.max <= max && p.mean <= mean && p.outside <= flips,
         "{what}: max {:e} mean {:e} outside {}",

@@ -34,7 +34,7 @@ const HOLLOW: u32 = 3u;
 const UNIFORM_SPREAD: f32 = 0.125;
 
 // Whether pixel i of tile (c, r) takes the box: its tile uniform, or hollow and the pixel
-// neither still nor paired (the CPU's `hollow_takes_full`, which is `fails`).
+// neither still nor paired (`fails`).
 fn boxed(c: u32, r: u32, i: u32) -> bool {
     let kind = kinds[r * columns() + c];
     return kind == UNIFORM || (kind == HOLLOW && !fails(i));

@@ -19,6 +19,7 @@ use rayon::prelude::*;
 use super::config::{reach_factor, Form, ReconstructConfig, Texel2014, HALF_PIXEL, LENGTH, VX, VY};
 use super::matte::{self, Matte};
 use super::tiles::near_blur;
+use super::unmix::transparent;
 use crate::motion::tile_max::TileGrid;
 
 /// How much (px) a uniform tile lets the motion change across a reach: the largest change of
@@ -95,13 +96,14 @@ pub const SUMMARY_WORDS: usize = 8;
 /// does not cover).
 #[inline]
 pub fn empty(texel: &Texel2014) -> bool {
-    texel[LENGTH] < HALF_PIXEL && texel[..4] == [0.0; 4]
+    texel[LENGTH] < HALF_PIXEL && transparent(texel)
 }
 
-/// Whether pixel `j` of a [`TileKind::Hollow`] tile takes the full gather: empty, or with a
-/// matte pair (a rim), or still.
+/// Whether pixel `j` fails a plain tile: still, or paired by its matte (the taps a plain tile
+/// reads must meet neither). In a [`TileKind::Hollow`] tile such a pixel (empty, or a rim)
+/// takes the full gather, the rest the box. (`fails` in classify.wgsl.)
 #[inline]
-pub fn hollow_takes_full(texels: &[Texel2014], mattes: &[Matte], j: usize) -> bool {
+pub fn fails(texels: &[Texel2014], mattes: &[Matte], j: usize) -> bool {
     texels[j][LENGTH] < HALF_PIXEL || (!mattes.is_empty() && !matte::unpaired(&mattes[j], j))
 }
 
@@ -298,7 +300,6 @@ fn scan(
 ) -> Option<Hollow> {
     let (width, height) = (config.width as usize, config.height as usize);
     let size = config.tile as usize;
-    let fails = |j: usize| hollow_takes_full(texels, mattes, j);
     let (bodies, steep) = match how {
         Scan::Plain { steep } => (false, steep),
         Scan::Bodies => (true, false),
@@ -316,7 +317,7 @@ fn scan(
             if bodies && texel[LENGTH] < HALF_PIXEL && !empty(texel) {
                 return None;
             }
-            if fails(j) {
+            if fails(texels, mattes, j) {
                 if bodies {
                     continue;
                 }
@@ -336,7 +337,7 @@ fn scan(
             ]
             .into_iter()
             .flatten()
-            .filter(|&k| !(bodies && fails(k)))
+            .filter(|&k| !(bodies && fails(texels, mattes, k)))
             {
                 let other = &texels[k];
                 h.step = h

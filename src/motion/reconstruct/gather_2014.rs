@@ -7,7 +7,7 @@
 //! 2014 filter), the dilated tile grid. Out: the colour of the tiles near a blurring one, in
 //! place. Twin: `gather_2014` in src/gpu/motion/reconstruct.wgsl.
 
-use super::classify::{hollow_takes_full, TileKind};
+use super::classify::{fails, TileKind};
 use super::config::{
     Form, ReconstructConfig, Texel2014, HALF_PIXEL, LANES, LENGTH, MAX_TAPS_PER_SIDE, VX, VY, Z,
 };
@@ -216,7 +216,7 @@ where
             }
             TileKind::Hollow => {
                 let j = y * config.width as usize + x;
-                if hollow_takes_full(sources.texels, sources.mattes, j) {
+                if fails(sources.texels, sources.mattes, j) {
                     gather_pixel_2014::<G, _, false>(config, &form(), sources, tiles, x, y)
                 } else {
                     box_pixel(config, sources.texels, sources.colour, x, y)

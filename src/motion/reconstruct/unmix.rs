@@ -19,7 +19,14 @@ pub const CANDIDATES: usize = 8;
 /// alpha says nothing of coverage.
 #[inline]
 pub fn over_empty(f: &Texel2014, b: &Texel2014) -> bool {
-    b[..4].iter().all(|&v| v == 0.0) && f[3] > 0.0
+    transparent(b) && f[3] > 0.0
+}
+
+/// Whether a texel's colour and alpha are all 0: what a view layer does not cover (with no
+/// motion, empty space: [`over_empty`]'s still partner, `classify::empty`).
+#[inline]
+pub fn transparent(t: &Texel2014) -> bool {
+    t[..4].iter().all(|&v| v == 0.0)
 }
 
 /// How far a pixel of colour `c` with coverage α by the moving surface (pair `f` moving, `b`
