@@ -115,7 +115,7 @@ pub fn blur_layer(
     let surface = surface_pixels(&layer, &coverage, depth_kind(params));
     let nearest = nearest_surface(layer.width, layer.height, &surface);
     let Some(dof) = params.dof else {
-        prepare_for_motion(&mut layer, &coverage, &surface, &nearest);
+        prepare_for_motion(&mut layer, &coverage, (&surface, &nearest), algorithm);
         return process_on(algorithm, params, layer, frame_number, gpu);
     };
     if algorithm == Algorithm::None {
@@ -141,7 +141,7 @@ pub fn blur_layer(
         defocused.prev,
         defocused.next,
     ) = motion;
-    prepare_for_motion(&mut defocused, &coverage, &surface, &nearest);
+    prepare_for_motion(&mut defocused, &coverage, (&surface, &nearest), algorithm);
     let motion_only = Params {
         dof: None,
         ..*params
@@ -231,7 +231,21 @@ fn within(i: usize, s: u32, width: usize, reach: f32) -> bool {
 /// an edge are an average over the pixel's samples, the misses' (no motion, or a hidden
 /// surface's) among them (Cycles: X, Y of a layer rendered without the background are alpha
 /// times the surface's), and a surface moves as its inside next to it does.
-pub fn prepare_for_motion(layer: &mut Frame, coverage: &[f32], surface: &[bool], nearest: &[u32]) {
+///
+/// For scatter an edge pixel keeps its own motion unless it reads as diluted ([`diluted`]):
+/// scatter draws each pixel's colour along that pixel's own motion and nothing else, and the
+/// colour of an edge pixel whose vector was sampled on the surface (at its centre) moves as
+/// that vector says, which on a rotating or zooming surface is not its neighbour's. The
+/// gathers keep the rule for every edge pixel: there a pixel's motion also decides how the
+/// taps of the surface's inside weigh it, and one motion for the surface's pixels measured
+/// better, vectors sampled on the surface or not (BENCHMARKS.md, "Edge vectors").
+pub fn prepare_for_motion(
+    layer: &mut Frame,
+    coverage: &[f32],
+    (surface, nearest): (&[bool], &[u32]),
+    algorithm: Algorithm,
+) {
+    let own_edges = algorithm == Algorithm::Scatter;
     let (width, n) = (layer.width, coverage.len());
     let solid: Vec<bool> = (0..n).map(|i| surface[i] && coverage[i] >= SOLID).collect();
     let nearest_solid = nearest_surface(width, layer.height, &solid);
@@ -239,7 +253,8 @@ pub fn prepare_for_motion(layer: &mut Frame, coverage: &[f32], surface: &[bool],
         |i: usize, s: u32| (s != u32::MAX && within(i, s, width, EDGE_REACH)).then_some(s as usize);
     // The edges first, from pixels nothing changes; then the rest, from those.
     for i in (0..n).filter(|&i| surface[i] && !solid[i]) {
-        if let Some(s) = near(i, nearest_solid[i]) {
+        let edge = near(i, nearest_solid[i]);
+        if let Some(s) = edge.filter(|&s| !own_edges || diluted(layer, i, s, coverage[i])) {
             copy_motion(layer, i, Some(s), false);
         }
     }
@@ -249,6 +264,41 @@ pub fn prepare_for_motion(layer: &mut Frame, coverage: &[f32], surface: &[bool],
             .flatten();
         copy_motion(layer, i, from, true);
     }
+}
+
+/// Whether the motion of edge pixel `i` (covered `alpha`) reads as diluted by its misses:
+/// nearer `alpha` times the motion of the wholly covered pixel `s` beside it than that motion
+/// itself, summed over the passes it has (velocity, previous and next positions). A renderer
+/// that averages its samples' vectors with the misses' zero writes the former (Cycles'
+/// transparent film); one that samples the surface at the pixel centre (the truth scenes, a
+/// depth-sampled vector pass) writes the pixel's own motion. A still neighbour, or a tie,
+/// says the pixel's own.
+fn diluted(layer: &Frame, i: usize, s: usize, alpha: f32) -> bool {
+    let width = layer.width;
+    let mut motions: Vec<[(f32, f32); 2]> = Vec::new();
+    if let Some(v) = layer.velocity.as_ref() {
+        motions.push([(v.x[i], v.y[i]), (v.x[s], v.y[s])]);
+    }
+    let ((x, y), (sx, sy)) = (pixel_centre(i, width), pixel_centre(s, width));
+    for p in [layer.prev.as_ref(), layer.next.as_ref()]
+        .into_iter()
+        .flatten()
+    {
+        motions.push([(p.x[i] - x, p.y[i] - y), (p.x[s] - sx, p.y[s] - sy)]);
+    }
+    let (mut to_diluted, mut to_own) = (0.0f64, 0.0f64);
+    for [(vx, vy), (ux, uy)] in motions {
+        let off = |k: f32| {
+            let (ex, ey) = (
+                f64::from(vx) - f64::from(k * ux),
+                f64::from(vy) - f64::from(k * uy),
+            );
+            ex * ex + ey * ey
+        };
+        to_diluted += off(alpha);
+        to_own += off(1.0);
+    }
+    to_diluted < to_own
 }
 
 /// Pixels a layer covers at least this much are wholly its surface (alpha 1 to rounding).
@@ -412,6 +462,7 @@ fn beauty_channels(layer: &Frame, color: &Color) -> Vec<CarriedChannel> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frame::Velocity;
 
     #[test]
     fn the_nearest_surface_is_found_across_the_frame_both_ways() {
@@ -430,5 +481,41 @@ mod tests {
         assert!(nearest_surface(2, 2, &[false; 4])
             .iter()
             .all(|&s| s == u32::MAX));
+    }
+
+    /// A 3×1 layer: a solid pixel moving (4, 0) px a frame, an edge pixel 0.6 covered with
+    /// motion `edge`, an empty pixel. The edge pixel's motion after [`prepare_for_motion`].
+    fn edge_motion_after(edge: (f32, f32), algorithm: Algorithm) -> (f32, f32) {
+        let mut layer = Frame::new(3, 1);
+        let coverage = vec![1.0, 0.6, 0.0];
+        layer.depth = Some(vec![2.0, 2.0, NO_SURFACE * 10.0]);
+        layer.velocity = Some(Velocity {
+            x: vec![4.0, edge.0, 0.0],
+            y: vec![0.0, edge.1, 0.0],
+        });
+        let surface = surface_pixels(&layer, &coverage, DepthKind::Depth);
+        let nearest = nearest_surface(3, 1, &surface);
+        prepare_for_motion(&mut layer, &coverage, (&surface, &nearest), algorithm);
+        let v = layer.velocity.unwrap();
+        (v.x[1], v.y[1])
+    }
+
+    #[test]
+    fn scatter_keeps_an_edge_pixel_s_own_motion_unless_its_misses_diluted_it() {
+        // Sampled on the surface (a rotating one: not quite the neighbour's): kept.
+        assert_eq!(
+            edge_motion_after((4.3, 0.5), Algorithm::Scatter),
+            (4.3, 0.5)
+        );
+        // 0.6 of the neighbour's (Cycles' average with the misses' zero): the neighbour's.
+        assert_eq!(
+            edge_motion_after((2.4, 0.0), Algorithm::Scatter),
+            (4.0, 0.0)
+        );
+        // The gathers take the neighbour's either way.
+        for algorithm in [Algorithm::Reconstruct, Algorithm::Stretch] {
+            assert_eq!(edge_motion_after((4.3, 0.5), algorithm), (4.0, 0.0));
+            assert_eq!(edge_motion_after((2.4, 0.0), algorithm), (4.0, 0.0));
+        }
     }
 }
