@@ -274,20 +274,17 @@ pub fn prepare_for_motion(
 /// depth-sampled vector pass) writes the pixel's own motion. A still neighbour, or a tie,
 /// says the pixel's own.
 fn diluted(layer: &Frame, i: usize, s: usize, alpha: f32) -> bool {
-    let width = layer.width;
-    let mut motions: Vec<[(f32, f32); 2]> = Vec::new();
-    if let Some(v) = layer.velocity.as_ref() {
-        motions.push([(v.x[i], v.y[i]), (v.x[s], v.y[s])]);
-    }
-    let ((x, y), (sx, sy)) = (pixel_centre(i, width), pixel_centre(s, width));
-    for p in [layer.prev.as_ref(), layer.next.as_ref()]
+    let ((x, y), (sx, sy)) = (pixel_centre(i, layer.width), pixel_centre(s, layer.width));
+    let velocity = layer
+        .velocity
+        .as_ref()
+        .map(|v| [(v.x[i], v.y[i]), (v.x[s], v.y[s])]);
+    let positions = [layer.prev.as_ref(), layer.next.as_ref()]
         .into_iter()
         .flatten()
-    {
-        motions.push([(p.x[i] - x, p.y[i] - y), (p.x[s] - sx, p.y[s] - sy)]);
-    }
+        .map(|p| [(p.x[i] - x, p.y[i] - y), (p.x[s] - sx, p.y[s] - sy)]);
     let (mut to_diluted, mut to_own) = (0.0f64, 0.0f64);
-    for [(vx, vy), (ux, uy)] in motions {
+    for [(vx, vy), (ux, uy)] in velocity.into_iter().chain(positions) {
         let off = |k: f32| {
             let (ex, ey) = (
                 f64::from(vx) - f64::from(k * ux),
