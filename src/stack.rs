@@ -235,10 +235,12 @@ fn within(i: usize, s: u32, width: usize, reach: f32) -> bool {
 /// For scatter an edge pixel keeps its own motion unless it reads as diluted ([`diluted`]):
 /// scatter draws each pixel's colour along that pixel's own motion and nothing else, and the
 /// colour of an edge pixel whose vector was sampled on the surface (at its centre) moves as
-/// that vector says, which on a rotating or zooming surface is not its neighbour's. The
-/// gathers keep the rule for every edge pixel: there a pixel's motion also decides how the
-/// taps of the surface's inside weigh it, and one motion for the surface's pixels measured
-/// better, vectors sampled on the surface or not (BENCHMARKS.md, "Edge vectors").
+/// that vector says, which on a rotating or zooming surface is not its neighbour's.
+/// reconstruct and stretch keep the rule for every edge pixel: in reconstruct's gather a
+/// pixel's motion also decides how the taps of the surface's inside weigh it, in stretch's
+/// mesh which vertices move and how far its triangles reach, and for both one motion for a
+/// surface's pixels measured better, vectors sampled on the surface or not (BENCHMARKS.md,
+/// "Edge vectors").
 pub fn prepare_for_motion(
     layer: &mut Frame,
     coverage: &[f32],
@@ -509,7 +511,7 @@ mod tests {
             edge_motion_after((2.4, 0.0), Algorithm::Scatter),
             (4.0, 0.0)
         );
-        // The gathers take the neighbour's either way.
+        // reconstruct and stretch take the neighbour's either way.
         for algorithm in [Algorithm::Reconstruct, Algorithm::Stretch] {
             assert_eq!(edge_motion_after((4.3, 0.5), algorithm), (4.0, 0.0));
             assert_eq!(edge_motion_after((2.4, 0.0), algorithm), (4.0, 0.0));
