@@ -232,10 +232,11 @@ fn within(i: usize, s: u32, width: usize, reach: f32) -> bool {
 /// surface's) among them (Cycles: X, Y of a layer rendered without the background are alpha
 /// times the surface's), and a surface moves as its inside next to it does.
 ///
-/// For scatter an edge pixel keeps its own motion unless it reads as diluted ([`diluted`]):
-/// scatter draws each pixel's colour along that pixel's own motion and nothing else, and the
-/// colour of an edge pixel whose vector was sampled on the surface (at its centre) moves as
-/// that vector says, which on a rotating or zooming surface is not its neighbour's.
+/// For an algorithm that moves each pixel's colour along that pixel's own motion and nothing
+/// else ([`Algorithm::moves_each_pixel_alone`]: scatter) an edge pixel keeps its own motion
+/// unless it reads as diluted ([`diluted`]): the colour of an edge pixel whose vector was
+/// sampled on the surface (at its centre) moves as that vector says, which on a rotating or
+/// zooming surface is not its neighbour's.
 /// reconstruct and stretch keep the rule for every edge pixel, because one motion for a
 /// surface's pixels measured better, vectors sampled on the surface or not (BENCHMARKS.md,
 /// "Edge vectors"). In reconstruct the whole difference comes through the tile grid: an edge
@@ -251,7 +252,7 @@ pub fn prepare_for_motion(
     (surface, nearest): (&[bool], &[u32]),
     algorithm: Algorithm,
 ) {
-    let own_edges = algorithm == Algorithm::Scatter;
+    let own_edges = algorithm.moves_each_pixel_alone();
     let (width, n) = (layer.width, coverage.len());
     let solid: Vec<bool> = (0..n).map(|i| surface[i] && coverage[i] >= SOLID).collect();
     let nearest_solid = nearest_surface(width, layer.height, &solid);

@@ -78,6 +78,15 @@ impl Algorithm {
         }
     }
 
+    /// Whether the algorithm moves each pixel's colour along that pixel's own motion and
+    /// nothing else (scatter's curves; reconstruct gathers through a tile grid of its
+    /// neighbours' longest motions, stretch draws a mesh of them), so that a view layer's
+    /// edge pixel keeps its own vector where it is the surface's rather than its misses'
+    /// average (`stack::prepare_for_motion`).
+    pub fn moves_each_pixel_alone(self) -> bool {
+        self == Algorithm::Scatter
+    }
+
     /// The passes this algorithm reads; nothing else is decoded.
     pub fn needs(self) -> Passes {
         match self {
