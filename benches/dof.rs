@@ -10,6 +10,8 @@
 //!   defaults (6 rings) and with 2 and 4 rings and six blades, then blend (the pyramid, its
 //!   default, and the talk's two copies);
 //! - **in focus**: every pixel at 3 m, beside the time of copying the frame;
+//! - **light layers**: the gather at its defaults with six RGB light layers beside the
+//!   beauty, against the beauty alone (issue 29's cost bound: at most 1.5×);
 //! - **wgpu**: the gather at its defaults and blend with their stages on the GPU, where an
 //!   adapter is present (Mesa's software driver included: for the record, not for speed),
 //!   with the GPU stages' upload, dispatch and readback timed apart.
@@ -94,6 +96,14 @@ fn main() {
         println!(
             "1920x1080 out of focus, {label}: {:.1} ms",
             median_ms(&f, dof)
+        );
+    }
+    if chosen("light layers") {
+        common::light_layers_row(
+            "out of focus, gather (6 rings, round)",
+            Algorithm::None,
+            &f,
+            &dof_params(gather),
         );
     }
     // The GPU rows: the gather with its stages (coc, tile min/max, the bokeh gather) and

@@ -10,7 +10,9 @@
 //! - **sparse**: one moving square covering a given share of the tiles;
 //! - the moving frame again at S = 1, 7 and 31, to separate fixed costs from per-tap costs;
 //! - the moving frame through each variant, and the 2014 filters at more taps and larger k;
-//! - the default on the GPU (its tile stages and gather), where an adapter is present.
+//! - the default on the GPU (its tile stages and gather), where an adapter is present;
+//! - the moving frame's default with six RGB light layers beside the beauty, against the
+//!   beauty alone (issue 29's cost bound: at most 1.5×).
 //!
 //! Median of 9 runs after one warm-up run.
 
@@ -87,6 +89,12 @@ fn main() {
     println!(
         "1920x1080 numeric policy scan of the moving frame (read stage): {:.2} ms",
         common::median_policy_ms(&moving, 9)
+    );
+    common::light_layers_row(
+        "every pixel moving, the default",
+        Algorithm::Reconstruct,
+        &moving,
+        &Params::default(),
     );
     let still = frame(|_, _| None);
     println!("1920x1080 static: {:.2} ms", median_ms(&still, 9));

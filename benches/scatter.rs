@@ -14,7 +14,9 @@
 //! - **sparse**: one moving square covering a given share of the pixels;
 //! - the moving frame (default and paper settings) and the static one on the GPU, where an
 //!   adapter is present (`[wgpu]` rows; on a software driver such as lavapipe, far slower
-//!   than a GPU).
+//!   than a GPU);
+//! - the moving frame's default with six RGB light layers beside the beauty, against the
+//!   beauty alone (issue 29's cost bound: at most 1.5×).
 //!
 //! Median of 5 runs after one warm-up run.
 
@@ -68,6 +70,12 @@ fn main() {
             median_ms(&moving, &with(params), 5)
         );
     }
+    common::light_layers_row(
+        "every pixel moving 30 px, default",
+        Algorithm::Scatter,
+        &moving,
+        &with(default),
+    );
     // The GPU rows (reach, accumulate and resolve on the GPU), wherever an adapter is
     // present: the default and the paper's settings on the same frame, and the still frame.
     match common::gpu() {

@@ -5,7 +5,7 @@
 
 use std::time::Instant;
 
-use shutter::frame::{Color, Frame, Positions, Velocity};
+use shutter::frame::{CarriedChannel, Color, Frame, LayerClass, Positions, Velocity};
 use shutter::motion::Algorithm;
 use shutter::numeric;
 use shutter::process::{self, process_clean, Params};
@@ -126,6 +126,55 @@ pub fn lens_frame() -> Frame {
             .collect(),
     );
     f
+}
+
+/// The light layers of issue 29's cost bound: `f` with six RGB layers beside its beauty
+/// (`diffuse`, `specular`, `emission`, `sss`, `transmission`, `volume`), each the beauty's
+/// colour scaled by its own factor per channel, as a renderer's EXR brings them: colour
+/// channels blurred with the beauty's weights.
+pub fn with_light_layers(f: &Frame) -> Frame {
+    let mut out = f.clone();
+    let color = f.color.as_ref().expect("a beauty");
+    let names = [
+        "diffuse",
+        "specular",
+        "emission",
+        "sss",
+        "transmission",
+        "volume",
+    ];
+    for (l, layer) in names.iter().enumerate() {
+        for (c, (channel, plane)) in [("R", &color.r), ("G", &color.g), ("B", &color.b)]
+            .into_iter()
+            .enumerate()
+        {
+            let scale = 0.2 + 0.1 * l as f32 + 0.05 * c as f32;
+            let name = format!("{layer}.{channel}");
+            out.carried.channels.push(CarriedChannel {
+                name: name.clone(),
+                stored: name,
+                shared: false,
+                part: 0,
+                class: LayerClass::Colour,
+                plane: plane.iter().map(|v| v * scale).collect(),
+                exact: None,
+                window: None,
+            });
+        }
+    }
+    out
+}
+
+/// One row of issue 29's cost bound: `label`'s time on the beauty alone and with the six
+/// light layers of [`with_light_layers`], and their ratio (at most 1.5× asked).
+pub fn light_layers_row(label: &str, algorithm: Algorithm, f: &Frame, params: &Params) {
+    let beauty = median_ms(algorithm, f, params, 5);
+    let layered = median_ms(algorithm, &with_light_layers(f), params, 5);
+    println!(
+        "1920x1080 {label}, six RGB light layers: {layered:.1} ms against the beauty's \
+         {beauty:.1} ms ({:.2}x)",
+        layered / beauty
+    );
 }
 
 /// Median processing time (ms) of `runs` runs of `algorithm` on `f`, after a warm-up run:
