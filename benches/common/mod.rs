@@ -166,7 +166,9 @@ pub fn with_light_layers(f: &Frame) -> Frame {
 }
 
 /// One row of issue 29's cost bound: `label`'s time on the beauty alone and with the six
-/// light layers of [`with_light_layers`], and their ratio (at most 1.5× asked).
+/// light layers of [`with_light_layers`], and their ratio (at most 1.5× asked). The beauty is
+/// timed again here rather than taken from an earlier row, so that both times come from the
+/// same minutes of a host whose speed drifts by a quarter or more.
 pub fn light_layers_row(label: &str, algorithm: Algorithm, f: &Frame, params: &Params) {
     let beauty = median_ms(algorithm, f, params, 5);
     let layered = median_ms(algorithm, &with_light_layers(f), params, 5);
