@@ -1532,3 +1532,63 @@ fn parts_of_other_data_windows_come_out_data_as_it_was_and_light_on_the_beautys_
     let report: serde_json::Value = serde_json::from_slice(&printed).unwrap();
     assert_eq!(report["frames_skipped"], 1, "{report}");
 }
+
+/// Each channel's pLinear flag comes back as the input stored it (here off, OpenEXR's
+/// default). Rebuilt from the channel's name (the exr crate's guess: on for all but R, G, B,
+/// L, Y, X and Z), it turned on for `A` and `velocity.X`, and a B44 output encoded them
+/// through B44's perceptual curve: every negative vector came back 0.
+#[test]
+fn b44_keeps_each_channels_plinear_flag_and_negative_vectors() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = W * H;
+    let half = |v: Vec<f32>| FlatSamples::F16(v.into_iter().map(f16::from_f32).collect());
+    let list = vec![
+        AnyChannel::new("R", half(noise(n, 62, 0.0, 1.0))),
+        AnyChannel::new("G", half(noise(n, 63, 0.0, 1.0))),
+        AnyChannel::new("B", half(noise(n, 64, 0.0, 1.0))),
+        AnyChannel::new("A", half(vec![1.0; n])),
+        AnyChannel::new("Z", half(vec![5.0; n])),
+        AnyChannel::new("velocity.X", half(noise(n, 61, -20.0, 20.0))),
+        AnyChannel::new("velocity.Y", half(vec![0.0; n])),
+    ]
+    .into_iter()
+    .map(|c| AnyChannel {
+        quantize_linearly: false,
+        ..c
+    })
+    .collect();
+    let layer = Layer::new(
+        (W, H),
+        LayerAttributes::default(),
+        Encoding {
+            compression: Compression::B44,
+            ..Encoding::FAST_LOSSLESS
+        },
+        AnyChannels::sort(list),
+    );
+    let input = dir.path().join("b44.exr");
+    Image::from_layer(layer).write().to_file(&input).unwrap();
+    let output = dir.path().join("out.exr");
+    let o = shutter(&["blur", "--color", &s(&input), "-o", &s(&output)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let meta = MetaData::read_from_file(&output, false).unwrap();
+    for channel in &meta.headers[0].channels.list {
+        assert!(
+            !channel.quantize_linearly,
+            "{} written with pLinear on",
+            channel.name
+        );
+    }
+    // B44 is lossy: the vectors as the input file holds them.
+    let (read, stored) = (
+        crate::support::read_exr_reference(&output),
+        crate::support::read_exr_reference(&input),
+    );
+    let written = crate::support::channel(&read, "velocity.X");
+    let expected = crate::support::channel(&stored, "velocity.X");
+    assert!(
+        expected.iter().any(|&v| v < -1.0),
+        "the input has negative vectors"
+    );
+    crate::support::assert_same_bits(written, expected, "velocity.X through B44");
+}

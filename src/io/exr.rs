@@ -616,7 +616,12 @@ pub fn write_channels(
             } else {
                 FlatSamples::F32(plane)
             };
-            AnyChannel::new(Text::from(name.as_str()), samples)
+            // OpenEXR's default pLinear (off), not the exr crate's guess from the name (see
+            // `exr_like::channels_like`).
+            AnyChannel {
+                quantize_linearly: false,
+                ..AnyChannel::new(Text::from(name.as_str()), samples)
+            }
         })
         .collect();
     let encoding = Encoding {

@@ -203,15 +203,10 @@ fn channels_like(
     input: Option<&Header>,
     output: &ExrOutput,
 ) -> Vec<AnyChannel<FlatSamples>> {
-    let stored = |name: &str| {
-        input.and_then(|h| {
-            h.channels
-                .list
-                .iter()
-                .find(|c| c.name.to_string() == name)
-                .map(|c| c.sample_type)
-        })
+    let described = |name: &str| {
+        input.and_then(|h| h.channels.list.iter().find(|c| c.name.to_string() == name))
     };
+    let stored = |name: &str| described(name).map(|c| c.sample_type);
     channels
         .into_iter()
         .map(|channel| {
@@ -236,7 +231,15 @@ fn channels_like(
                 }),
                 SampleType::F32 => FlatSamples::F32(plane),
             };
-            AnyChannel::new(Text::from(name.as_str()), samples)
+            // The channel's pLinear flag as the input stored it (OpenEXR's default, off, for
+            // a channel it did not have). The exr crate guesses it from the name, on for all
+            // but R, G, B, L, Y, X and Z: B44 then encodes `A`, `velocity.X` or `diffuse.R`
+            // through its perceptual curve, which writes every negative value as 0.
+            let linear = described(&name).is_some_and(|c| c.quantize_linearly);
+            AnyChannel {
+                quantize_linearly: linear,
+                ..AnyChannel::new(Text::from(name.as_str()), samples)
+            }
         })
         .collect()
 }

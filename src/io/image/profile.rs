@@ -121,7 +121,7 @@ impl Transfer {
         let Some(curves) = &self.curves else { return };
         for (plane, curve) in planes.into_iter().zip(curves) {
             let table: Vec<f32> = (0..=max)
-                .map(|k| curve.evaluate_value(k as f32 / max as f32))
+                .map(|k| unit(curve.evaluate_value(k as f32 / max as f32)))
                 .collect();
             for v in plane.iter_mut() {
                 let code = (v.clamp(0.0, 1.0) * max as f32).round() as usize;
@@ -139,11 +139,24 @@ impl Transfer {
                 // of codes k and k + 1), so that each value takes the code nearest to it in
                 // the encoded space, for any increasing curve, without inverting it.
                 (0..max)
-                    .map(|k| curve.evaluate_value((k as f32 + 0.5) / max as f32))
+                    .map(|k| unit(curve.evaluate_value((k as f32 + 0.5) / max as f32)))
                     .collect()
             })
         });
         Encoder { edges, max }
+    }
+}
+
+/// A curve's value held to [0, 1], NaN 0: an ICC tone curve maps [0, 1] onto [0, 1]. moxcms
+/// evaluates a pure gamma (a `curv` of one entry: ProPhoto's and Apple RGB's 1.8) with
+/// pxfm's `dirty_powf`, through log₂ and exp₂, which is within 10⁻⁶ of x^γ everywhere but at
+/// 0: there γ 1.8 gave −1.65·10⁸ and γ 1.5 −5·10¹⁹, the black of every ProPhoto photo, which
+/// then darkened every blur that reached it.
+fn unit(v: f32) -> f32 {
+    if v.is_nan() {
+        0.0
+    } else {
+        v.clamp(0.0, 1.0)
     }
 }
 
@@ -196,6 +209,39 @@ mod tests {
             let half = planes[1][(max / 2) as usize];
             let expected = ((max / 2) as f32 / max as f32).powf(563.0 / 256.0);
             assert!((half - expected).abs() < 1e-5, "{half} {expected}");
+        }
+    }
+
+    /// Pure gamma curves of every common size, ProPhoto's 1.8 (and 1.5, 2.0) among them: code
+    /// 0 is black (moxcms's own evaluator gave −1.65·10⁸ at 1.8), every code is x^γ to f32
+    /// rounding, and every code round-trips.
+    #[test]
+    fn pure_gamma_profiles_are_x_to_the_gamma_from_black_up() {
+        for wanted in [1.5f32, 1.8, 2.0, 2.2, 563.0 / 256.0] {
+            // As the profile stores it: u8Fixed8 (1.8 is 461/256).
+            let fixed = (wanted * 256.0).round() as u16;
+            let gamma = f32::from(fixed) / 256.0;
+            let mut profile = ColorProfile::new_pro_photo_rgb();
+            let curve = ToneReprCurve::Lut(vec![fixed]);
+            profile.red_trc = Some(curve.clone());
+            profile.green_trc = Some(curve.clone());
+            profile.blue_trc = Some(curve);
+            let icc = profile.encode().unwrap();
+            let transfer = Transfer::of(Some(&icc));
+            assert!(transfer.note.is_none(), "{gamma}: {:?}", transfer.note);
+            for max in [255u32, 65535] {
+                let codes: Vec<f32> = (0..=max).map(|k| k as f32 / max as f32).collect();
+                let mut planes = [codes.clone(), codes.clone(), codes.clone()];
+                let [r, g, b] = &mut planes;
+                transfer.linearise([r, g, b], max);
+                assert_eq!(planes[0][0], 0.0, "γ {gamma}: black");
+                let encoder = transfer.encoder(max);
+                for (k, &v) in planes[0].iter().enumerate() {
+                    let expected = (k as f64 / max as f64).powf(gamma as f64) as f32;
+                    assert!((v - expected).abs() <= 1e-6, "γ {gamma} code {k}: {v}");
+                    assert_eq!(encoder.encode(v, 0), k as u32, "γ {gamma}, max {max}");
+                }
+            }
         }
     }
 
