@@ -17,6 +17,10 @@
 //! | positions' depth (z) | as depth | as depth | as depth |
 //! | shutter φ | 0 (no exposure) | clamped to [0, 1] | 0 |
 //!
+//! Written as half (a half plate, `--half`), colour saturates at ±65504, half's largest value
+//! ([`half_saturated`]): a pixel clamped to ±[`HUGE`] and blurred would otherwise overflow to
+//! ±Inf around it. Data channels go back as they came.
+//!
 //! And in every pass but the shutter, a subnormal value (magnitude below 2⁻¹²⁶, `f32::MIN_POSITIVE`)
 //! is 0: a GPU may flush subnormals to zero in any arithmetic (Vulkan leaves it to the
 //! driver, and NVIDIA's does), so a depth of 1e-40 beside a depth of 0 would be nearer on the
@@ -61,6 +65,18 @@ fn subnormal(v: f32) -> bool {
 fn not_subnormal(v: f32) -> bool {
     let a = v.abs();
     a == 0.0 || a >= f32::MIN_POSITIVE
+}
+
+/// A finite colour value as half, saturated at half's largest magnitude (65504) where f16
+/// would overflow to ±Inf; NaN stays NaN (the numeric policy leaves none in colour).
+pub fn half_saturated(v: f32) -> exr::prelude::f16 {
+    use exr::prelude::f16;
+    let limit = f16::MAX.to_f32();
+    if v.is_finite() {
+        f16::from_f32(v.clamp(-limit, limit))
+    } else {
+        f16::from_f32(v)
+    }
 }
 
 /// Colour made finite: NaN and subnormals read as 0, magnitudes are clamped to [`HUGE`].

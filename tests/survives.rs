@@ -1592,3 +1592,133 @@ fn b44_keeps_each_channels_plinear_flag_and_negative_vectors() {
     );
     crate::support::assert_same_bits(written, expected, "velocity.X through B44");
 }
+
+/// A half plate with infinite pixels (read as ±1e30, the numeric policy's clamp) comes back
+/// finite from every algorithm and from depth of field: colour written as half saturates at
+/// half's largest value (65504) where f16 would overflow to ±Inf around the hot pixel.
+#[test]
+fn a_half_plate_with_infinite_pixels_comes_back_finite() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (64usize, 48usize);
+    let n = w * h;
+    let half = |v: Vec<f32>| FlatSamples::F16(v.into_iter().map(f16::from_f32).collect());
+    let mut red = vec![0.2f32; n];
+    red[22 * w + 30] = f32::INFINITY;
+    red[5 * w + 5] = f32::NEG_INFINITY;
+    let square = |inside: f32, outside: f32| -> Vec<f32> {
+        (0..n)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                if (20..36).contains(&x) && (16..32).contains(&y) {
+                    inside
+                } else {
+                    outside
+                }
+            })
+            .collect()
+    };
+    let list = vec![
+        AnyChannel::new("R", half(red)),
+        AnyChannel::new("G", half(vec![0.2; n])),
+        AnyChannel::new("B", half(vec![0.2; n])),
+        AnyChannel::new("A", half(vec![1.0; n])),
+        AnyChannel::new("Z", half(square(2.0, 10.0))),
+        AnyChannel::new("velocity.X", half(square(6.0, 0.0))),
+        AnyChannel::new("velocity.Y", half(vec![0.0; n])),
+    ];
+    let layer = Layer::new(
+        (w, h),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(list.into()),
+    );
+    let input = dir.path().join("inf.exr");
+    Image::from_layer(layer).write().to_file(&input).unwrap();
+    let runs: [&[&str]; 5] = [
+        &["blur", "--algorithm", "reconstruct"],
+        &["blur", "--algorithm", "scatter"],
+        &["blur", "--algorithm", "stretch"],
+        &[
+            "dof",
+            "--focal-length",
+            "50",
+            "--f-stop",
+            "1.4",
+            "--focus-distance",
+            "2",
+        ],
+        &[
+            "dof",
+            "--method",
+            "blend",
+            "--focal-length",
+            "50",
+            "--f-stop",
+            "1.4",
+            "--focus-distance",
+            "2",
+        ],
+    ];
+    for (k, run) in runs.iter().enumerate() {
+        let output = dir.path().join(format!("out{k}.exr"));
+        let mut args = run.to_vec();
+        let (input, output) = (s(&input), s(&output));
+        args.extend(["--color", &input, "-o", &output]);
+        let o = shutter(&args);
+        assert!(o.status.success(), "{run:?}: {}", stderr(&o));
+        for (name, plane) in crate::support::read_exr_reference(Path::new(&output)) {
+            if ["R", "G", "B", "A"].contains(&name.as_str()) {
+                let bad = plane.iter().filter(|v| !v.is_finite()).count();
+                assert_eq!(bad, 0, "{run:?}: {bad} values of {name} not finite");
+            }
+        }
+    }
+}
+
+/// An attribute under a standard name but of another type (`isoSpeed` an int, `owner` an
+/// int, `multiView` one string), as some writers leave them, comes back as it was, as from
+/// `oiiotool`: the exr crate had refused to write it ("reserved and cannot be custom"), and
+/// every run failed at its first write with exit 75, after the preflight said it would write.
+#[test]
+fn attributes_of_odd_types_under_standard_names_come_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = W * H;
+    let list = ["R", "G", "B"]
+        .iter()
+        .map(|c| AnyChannel::new(*c, FlatSamples::F32(noise(n, 70, 0.0, 1.0))))
+        .collect();
+    let odd = [
+        ("isoSpeed", AttributeValue::I32(400)),
+        ("owner", AttributeValue::I32(7)),
+        ("multiView", AttributeValue::Text(Text::from("left"))),
+    ];
+    let mut attributes = LayerAttributes::default();
+    for (name, value) in odd.clone() {
+        attributes.other.insert(Text::from(name), value);
+    }
+    let layer = Layer::new(
+        (W, H),
+        attributes,
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(list),
+    );
+    let input = dir.path().join("odd.exr");
+    Image::from_layer(layer)
+        .write()
+        .skip_compatibility_checks()
+        .to_file(&input)
+        .unwrap();
+    let output = dir.path().join("out.exr");
+    let o = shutter(&["blur", "--color", &s(&input), "-o", &s(&output)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let meta = MetaData::read_from_file(&output, false).unwrap();
+    let header = &meta.headers[0];
+    for (name, value) in odd {
+        let found = header
+            .own_attributes
+            .other
+            .get(&Text::from(name))
+            .or(header.shared_attributes.other.get(&Text::from(name)));
+        assert_eq!(found, Some(&value), "{name}");
+    }
+}

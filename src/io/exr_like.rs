@@ -31,7 +31,7 @@ use exr::compression::Compression;
 use exr::image::{AnyChannel, AnyChannels, Blocks, Encoding, FlatSamples, Image, Layer};
 use exr::math::Vec2;
 use exr::meta::attribute::{AttributeValue, IntegerBounds, SampleType, Text};
-use exr::meta::header::{Header, ImageAttributes, LayerAttributes};
+use exr::meta::header::{standard_names, Header, ImageAttributes, LayerAttributes};
 use exr::meta::BlockDescription;
 use exr::prelude::{f16, LineOrder, WritableImage};
 
@@ -151,10 +151,29 @@ pub fn write_like(
         })
         .collect();
     let image = Image::from_layers(image_attributes, layers);
-    image
-        .write()
-        .to_buffered(&mut *writer)
-        .map_err(|e| e.to_string())?;
+    // An attribute under a standard name but of another type than the standard's (`isoSpeed`
+    // an int, `owner` an int, `multiView` a string), as other writers leave them, is read as
+    // a custom attribute; the exr crate's checks refuse to write a custom attribute under a
+    // reserved name. OpenEXR reads such a file (the attribute keeps its own type), and
+    // `oiiotool` writes it back as it was: so does shutter, with the checks left out for
+    // such a frame alone.
+    let reserved = |other: &std::collections::HashMap<Text, AttributeValue>| {
+        other
+            .keys()
+            .any(|name| standard_names::ALL.contains(&name.bytes()))
+    };
+    let keeps_odd_types = reserved(&image.attributes.other)
+        || image
+            .layer_data
+            .iter()
+            .any(|layer| reserved(&layer.attributes.other));
+    let write = image.write();
+    let write = if keeps_odd_types {
+        write.skip_compatibility_checks()
+    } else {
+        write
+    };
+    write.to_buffered(&mut *writer).map_err(|e| e.to_string())?;
     writer.flush().map_err(|e| e.to_string())?;
     sort_attributes(writer.get_mut()).map_err(|e| format!("sorting its attributes: {e}"))
 }
@@ -211,7 +230,10 @@ fn channels_like(
         .into_iter()
         .map(|channel| {
             let OutChannel {
-                name, plane, exact, ..
+                name,
+                plane,
+                exact,
+                class,
             } = channel;
             // Half for every float channel with `half`; a u32 channel (IDs) stays u32, which
             // half would destroy (every ID over 2048).
@@ -221,6 +243,16 @@ fn channels_like(
                 stored => stored.unwrap_or(SampleType::F32),
             };
             let samples = match kind {
+                // Colour (blurred: finite by the numeric policy) saturates at half's largest
+                // value instead of overflowing to ±Inf: a half plate with an infinite or huge
+                // pixel, clamped to ±1e30 and blurred, must not come back with infinities
+                // around it. Data goes back as it came (an infinite depth stays infinite).
+                SampleType::F16 if class == LayerClass::Colour => FlatSamples::F16(
+                    plane
+                        .into_iter()
+                        .map(crate::numeric::half_saturated)
+                        .collect(),
+                ),
                 SampleType::F16 => FlatSamples::F16(plane.into_iter().map(f16::from_f32).collect()),
                 // Integer channels are ids and counts: they come back as they were read, to
                 // the bit where they were read exactly (IDs over 2²⁴).
