@@ -652,3 +652,58 @@ fn a_part_of_another_data_window_is_named_as_not_compared() {
         stderr(&o)
     );
 }
+
+/// The same pixels at another place are another picture: a data window moved by (5, 3) px, or
+/// another display window, is a size mismatch (exit 3; idiff fails it too). Compared index by
+/// index, a misplacement read as identical (rmse 0, exit 0).
+#[test]
+fn pictures_whose_windows_differ_do_not_pass() {
+    use shutter::frame::{Window, Windows};
+    use shutter::io::exr::{write_channels, ExrOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (40usize, 30usize);
+    let write = |name: &str, windows: Windows| {
+        let path = dir.path().join(name);
+        let file = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
+        let channels = ["R", "G", "B"]
+            .iter()
+            .map(|c| (c.to_string(), noise(w * h, 3, 0.0, 1.0)))
+            .collect();
+        write_channels(file, w, h, windows, channels, ExrOptions::default()).unwrap();
+        s(&path)
+    };
+    let display = Window {
+        x: 0,
+        y: 0,
+        width: w,
+        height: h,
+    };
+    let a = write("a.exr", Windows::full(w, h));
+    let same = write("same.exr", Windows::full(w, h));
+    let moved = write(
+        "moved.exr",
+        Windows {
+            data_origin: (5, 3),
+            display,
+        },
+    );
+    let wider = write(
+        "wider.exr",
+        Windows {
+            data_origin: (0, 0),
+            display: Window {
+                width: 64,
+                height: 48,
+                ..display
+            },
+        },
+    );
+    let o = shutter(&["diff", &a, &same]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    for other in [&moved, &wider] {
+        let o = shutter(&["diff", &a, other]);
+        assert_eq!(o.status.code(), Some(3), "{other}: {}", stderr(&o));
+        assert!(stderr(&o).contains("size mismatch"), "{}", stderr(&o));
+        assert!(stderr(&o).contains("data window at"), "{}", stderr(&o));
+    }
+}

@@ -90,6 +90,12 @@ impl FramePlan {
     pub fn paths(&self) -> Vec<&Path> {
         self.files.iter().map(|f| f.info.path.as_path()).collect()
     }
+
+    /// The colour file's windows (its data window's corner and its display window), where
+    /// it has them (an EXR).
+    pub fn windows(&self) -> Option<crate::frame::Windows> {
+        self.color_windows
+    }
 }
 
 /// Options for planning.

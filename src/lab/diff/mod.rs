@@ -250,6 +250,31 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
                 )
                 .frame(frame));
             }
+            // The same size at another place is another picture (idiff fails it too): the
+            // data windows' corners and the display windows must agree, or the pixels
+            // compared index by index are not the same pixels.
+            if let (Some(wa), Some(wb)) = (a.windows(), b.windows()) {
+                let at = |w: crate::frame::Windows| {
+                    let d = w.display;
+                    format!(
+                        "data window at ({}, {}), display window {}x{} at ({}, {})",
+                        w.data_origin.0, w.data_origin.1, d.width, d.height, d.x, d.y
+                    )
+                };
+                if wa != wb {
+                    return Err(Problem::new(
+                        ProblemKind::SizeMismatch,
+                        job.b.path(frame),
+                        format!(
+                            "{} but {} has its {}",
+                            at(wb),
+                            job.a.path(frame).display(),
+                            at(wa)
+                        ),
+                    )
+                    .frame(frame));
+                }
+            }
             if let (Some(s), Some(path)) = (&sharp, &job.sharp) {
                 let (ws, hs) = (s.width, s.height);
                 if (ws, hs) != (wa, ha) {
