@@ -1722,3 +1722,90 @@ fn attributes_of_odd_types_under_standard_names_come_back() {
         assert_eq!(found, Some(&value), "{name}");
     }
 }
+
+/// Depth and vectors in a part of the colour file rendered with overscan (a data part whose
+/// window reaches 4 px past the beauty's on every side) are placed by that part's window, as
+/// passes in files of their own are: the frame blurs as with the same passes cut to the
+/// beauty's window in a file beside it. They were refused as a "corrupt file" whose parts
+/// holding the wanted channels differ in size.
+#[test]
+fn passes_in_an_overscan_part_of_the_colour_file_are_placed_by_its_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (ow, oh) = (W + 8, H + 8);
+    // The passes at pixel (x, y) of the file's coordinates: a block moving 6 px right, near.
+    let moving = |x: i64, y: i64| (10..26).contains(&x) && (6..18).contains(&y);
+    let at = |w: usize, h: usize, origin: i64, f: &dyn Fn(i64, i64) -> f32| -> Vec<f32> {
+        (0..w * h)
+            .map(|i| f((i % w) as i64 + origin, (i / w) as i64 + origin))
+            .collect()
+    };
+    let depth = |x, y| if moving(x, y) { 2.0 } else { 10.0 };
+    let vx = |x, y| if moving(x, y) { 6.0 } else { 0.0 };
+    let still = |_, _| 0.0;
+    let beauty: Vec<Vec<f32>> = (0..3).map(|c| noise(W * H, 90 + c, 0.0, 1.0)).collect();
+    let channels = |list: Vec<(&str, Vec<f32>)>| -> Vec<AnyChannel<FlatSamples>> {
+        list.into_iter()
+            .map(|(name, plane)| AnyChannel::new(name, FlatSamples::F32(plane)))
+            .collect()
+    };
+    let part = |name: &str, origin: i32, size: (usize, usize), list| {
+        let mut attributes = LayerAttributes::named(name);
+        attributes.layer_position = Vec2(origin, origin);
+        Layer::new(
+            size,
+            attributes,
+            Encoding::FAST_LOSSLESS,
+            AnyChannels::sort(channels(list).into()),
+        )
+    };
+    let rgb = || {
+        vec![
+            ("R", beauty[0].clone()),
+            ("G", beauty[1].clone()),
+            ("B", beauty[2].clone()),
+        ]
+    };
+    let passes = |w, h, origin| {
+        vec![
+            ("Z", at(w, h, origin, &depth)),
+            ("velocity.X", at(w, h, origin, &vx)),
+            ("velocity.Y", at(w, h, origin, &still)),
+        ]
+    };
+    Image::empty(ImageAttributes::new(IntegerBounds::from_dimensions((W, H))))
+        .with_layer(part("rgba", 0, (W, H), rgb()))
+        .with_layer(part("data", -4, (ow, oh), passes(ow, oh, -4)))
+        .write()
+        .to_file(d.join("parts.exr"))
+        .unwrap();
+    crate::support::write_exr(&d.join("beauty.exr"), W, H, rgb());
+    crate::support::write_exr(&d.join("passes.exr"), W, H, passes(W, H, 0));
+    let run = |args: &[&str], out: &str| {
+        let out = s(&d.join(out));
+        let mut all = vec!["blur", "--algorithm", "reconstruct", "-o", &out];
+        all.extend(args);
+        let o = shutter(&all);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        let read = crate::support::read_exr_reference(Path::new(&out));
+        ["R", "G", "B"].map(|c| crate::support::channel(&read, c).to_vec())
+    };
+    let (parts, beside) = (s(&d.join("parts.exr")), s(&d.join("beauty.exr")));
+    let passes = s(&d.join("passes.exr"));
+    let from_parts = run(&["--color", &parts], "a.exr");
+    let from_files = run(
+        &[
+            "--color",
+            &beside,
+            "--depth",
+            &passes,
+            "--velocity",
+            &passes,
+        ],
+        "b.exr",
+    );
+    assert_ne!(from_files[0], beauty[0], "the block blurs");
+    for (c, (a, b)) in from_parts.iter().zip(&from_files).enumerate() {
+        crate::support::assert_same_bits(a, b, &format!("channel {c}"));
+    }
+}

@@ -12,7 +12,7 @@ use crate::io::sequence::PathPattern;
 
 use super::convert::Decode;
 use super::parts::{other_channels, PartApart};
-use super::window::DataWindow;
+use super::window::{part_view, DataWindow};
 use super::Inputs;
 
 /// A channel to read: which planned file, which entry of that file's read list.
@@ -241,8 +241,11 @@ pub fn plan_frame(
             let skip = if own.is_some() { &[][..] } else { &claimed[..] };
             match find_channels(&info, &alts, 1, skip, options.layer) {
                 Ok(Some(found)) => {
-                    let file = planner.add_file(info.clone());
-                    let slot = planner.slot(file, found[0].expect("required"));
+                    let channel = found[0].expect("required");
+                    let info = part_view(&info, channel);
+                    planner.check_size(&info, "depth");
+                    let file = planner.add_file(info);
+                    let slot = planner.slot(file, channel);
                     plan.depth = Some((slot, preset.depth.clone()));
                 }
                 Ok(None) if own.is_some() && info.channels.len() == 1 => {
@@ -293,11 +296,12 @@ pub fn plan_frame(
             let skip = if own.is_some() { &[][..] } else { &claimed[..] };
             match find_channels(&info, &spec.channels, 2, skip, options.layer) {
                 Ok(Some(found)) => {
+                    let x_channel = found[0].expect("required");
+                    let info = part_view(&info, x_channel);
                     if !planner.check_size(&info, name) {
                         fatal = true;
                         break;
                     }
-                    let x_channel = found[0].expect("required");
                     let decode =
                         match Decode::resolve(spec, name, info.channels[x_channel].sample_type) {
                             Ok(decode) => decode,
@@ -541,7 +545,13 @@ impl Planner<'_> {
     }
 
     fn add_file(&mut self, info: FileInfo) -> usize {
-        if let Some(i) = self.files.iter().position(|f| f.info.path == info.path) {
+        // A file is read once per data window: a multi-part file's parts of another window
+        // ([`part_view`]) are read apart.
+        let same = |f: &FileInfo| {
+            f.path == info.path
+                && (f.width, f.height, f.windows) == (info.width, info.height, info.windows)
+        };
+        if let Some(i) = self.files.iter().position(|f| same(&f.info)) {
             return i;
         }
         self.files.push(PlannedFile {

@@ -73,3 +73,27 @@ impl DataWindow {
         out
     }
 }
+
+/// `info` as the part holding its channel `channel` sees it: the size and windows of that
+/// part, where a multi-part file's parts differ (a beauty cut to its bounding box beside a
+/// data part rendered with overscan). A pass read from such a part is then placed by that
+/// part's data window, as a pass in a file of its own is; read with the file's first part's
+/// window, its channels were refused as a "corrupt" file whose parts differ in size.
+pub fn part_view(info: &FileInfo, channel: usize) -> FileInfo {
+    let part = info.channels.get(channel).map_or(0, |c| c.part);
+    if let crate::io::file::FileKind::Exr { headers, .. } = &info.kind {
+        if let Some(header) = headers.get(part) {
+            let windows = crate::io::exr::windows_of(header);
+            let (width, height) = (header.layer_size.0, header.layer_size.1);
+            if (width, height, windows) != (info.width, info.height, info.windows) {
+                return FileInfo {
+                    width,
+                    height,
+                    windows,
+                    ..info.clone()
+                };
+            }
+        }
+    }
+    info.clone()
+}
