@@ -1809,3 +1809,44 @@ fn passes_in_an_overscan_part_of_the_colour_file_are_placed_by_its_window() {
         crate::support::assert_same_bits(a, b, &format!("channel {c}"));
     }
 }
+
+/// `info` shows an EXR's UTF-8 names and texts as the writer wrote them (`lumière.R`, owner
+/// "Zoë 日本"), in text and in JSON; it showed each byte as a char (`lumiÃ¨re.R`), and a tool
+/// reading `--json` got channel names the file does not have. The output still carries the
+/// bytes as they came.
+#[test]
+fn info_shows_utf8_names_and_texts_as_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = W * H;
+    let mut list: Vec<AnyChannel<FlatSamples>> = ["R", "G", "B"]
+        .iter()
+        .map(|c| AnyChannel::new(*c, FlatSamples::F32(noise(n, 95, 0.0, 1.0))))
+        .collect();
+    let utf8 = |t: &str| Text::from_slice_unchecked(t.as_bytes());
+    let name = utf8("lumière.R");
+    list.push(AnyChannel::new(name, FlatSamples::F32(vec![0.5; n])));
+    let attributes = LayerAttributes {
+        owner: Some(utf8("Zoë 日本")),
+        ..LayerAttributes::default()
+    };
+    let path = dir.path().join("utf8.exr");
+    Image::from_layer(Layer::new(
+        (W, H),
+        attributes,
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(list.into()),
+    ))
+    .write()
+    .to_file(&path)
+    .unwrap();
+    let o = shutter(&["info", &s(&path)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = crate::support::stdout(&o);
+    assert!(text.contains("lumière.R"), "{text}");
+    assert!(text.contains("Zoë 日本"), "{text}");
+    let o = shutter(&["info", &s(&path), "--json"]);
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let all = json.to_string();
+    assert!(all.contains("\"lumière.R\""), "{all}");
+    assert!(all.contains("Zoë 日本"), "{all}");
+}

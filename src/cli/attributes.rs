@@ -21,18 +21,30 @@ fn floats(values: &[f32]) -> String {
         .join(", ")
 }
 
+/// An EXR text (bytes, which the exr crate shows one char a byte) as the UTF-8 that writers
+/// put there (OpenEXR's strings are UTF-8 by convention: `owner` "Zoë" came out "ZoÃ«");
+/// bytes that are not UTF-8 shown a char a byte, as before.
+pub fn text_of(t: &exr::meta::attribute::Text) -> String {
+    String::from_utf8(t.bytes().to_vec()).unwrap_or_else(|_| t.to_string())
+}
+
+/// A name as shutter holds it (a char a byte of the file's text, so that it is written back
+/// byte for byte) shown as UTF-8 where its bytes are UTF-8 (`lumière.R`, not `lumiÃ¨re.R`).
+pub fn shown_name(name: &str) -> String {
+    let bytes: Option<Vec<u8>> = name.chars().map(|c| u8::try_from(c).ok()).collect();
+    bytes
+        .and_then(|b| String::from_utf8(b).ok())
+        .unwrap_or_else(|| name.to_string())
+}
+
 /// An attribute's type name, its value in text and in JSON.
 fn value(value: &AttributeValue) -> (&'static str, String, Value) {
     use AttributeValue as A;
     match value {
         // One line in text: a newline shows as \n.
-        A::Text(t) => (
-            "string",
-            format!("{:?}", t.to_string()),
-            json!(t.to_string()),
-        ),
+        A::Text(t) => ("string", format!("{:?}", text_of(t)), json!(text_of(t))),
         A::TextVector(list) => {
-            let texts: Vec<String> = list.iter().map(|t| t.to_string()).collect();
+            let texts: Vec<String> = list.iter().map(text_of).collect();
             ("stringvector", format!("{texts:?}"), json!(texts))
         }
         A::F32(v) => ("float", v.to_string(), json!(v)),

@@ -185,7 +185,7 @@ fn info_text(shown: &Shown) -> String {
     }
     text.push_str("  channels:\n");
     for c in &info.channels {
-        let name = c.alias.clone().unwrap_or_else(|| c.name.clone());
+        let name = super::attributes::shown_name(c.alias.as_ref().unwrap_or(&c.name));
         let in_view = match (&info.views, &c.view) {
             (Some(_), Some(v)) => format!("  view {v}"),
             (Some(_), None) => "  no view".to_string(),
@@ -291,7 +291,7 @@ fn info_json(shown: &Shown) -> serde_json::Value {
             "read": view,
         })),
         "channels": info.channels.iter().map(|c| serde_json::json!({
-            "name": c.alias.clone().unwrap_or_else(|| c.name.clone()),
+            "name": super::attributes::shown_name(c.alias.as_ref().unwrap_or(&c.name)),
             "type": c.sample_type,
             "class": class_of(info, c, layers).name(),
             "part": c.part,
