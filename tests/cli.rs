@@ -865,3 +865,55 @@ fn warnings_are_printed_on_a_pipe_unless_quiet() {
     assert!(stderr(&o).is_empty(), "{}", stderr(&o));
     assert!(stdout(&o).contains("--depth is not read"), "{}", stdout(&o));
 }
+
+/// An RGB frame whose every sample is `value`, written at `path`.
+fn flat_frame(path: &std::path::Path, value: f32) {
+    let plane = vec![value; 8 * 4];
+    write_exr(
+        path,
+        8,
+        4,
+        vec![("R", plane.clone()), ("G", plane.clone()), ("B", plane)],
+    );
+}
+
+/// Negative frames on disk are frames of the sequence, named as shutter's own `####` writes
+/// them (`-002`), so a sequence shutter wrote is found again (QA: discovery took digits only,
+/// and `c.-002.exr` and `c.-001.exr` were left out without a word, frame 0 alone planned).
+#[test]
+fn negative_frames_on_disk_are_discovered_as_shutter_names_them() {
+    let dir = tempfile::tempdir().unwrap();
+    for frame in -2..=0 {
+        flat_frame(
+            &dir.path().join(format!("neg/c.{frame:04}.exr")),
+            frame as f32,
+        );
+    }
+    // Not as shutter writes any frame: left out, as a positive one padded wrongly is.
+    flat_frame(&dir.path().join("neg/c.-02.exr"), 9.0);
+    flat_frame(&dir.path().join("neg/c.-0002.exr"), 9.0);
+    let color = format!("{}/neg/c.####.exr", dir.path().display());
+    let out = format!("{}/out/o.####.exr", dir.path().display());
+    let o = shutter(&["blur", "--color", &color, "-o", &out, "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(report["frames_written"], 3, "{report}");
+    let mut written: Vec<String> = std::fs::read_dir(dir.path().join("out"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    written.sort();
+    assert_eq!(written, ["o.-001.exr", "o.-002.exr", "o.0000.exr"]);
+    // And what it wrote is found again: a second run over its outputs plans all three.
+    let again = format!("{}/again/o.####.exr", dir.path().display());
+    let o = shutter(&["blur", "--dry-run", "--color", &out, "-o", &again, "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let frames: Vec<i64> = report["planned"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["frame"].as_i64().unwrap())
+        .collect();
+    assert_eq!(frames, [-2, -1, 0]);
+}

@@ -107,23 +107,32 @@ impl PathPattern {
         let mut frames = BTreeSet::new();
         for entry in entries.flatten() {
             let name = entry.file_name().to_string_lossy().into_owned();
-            if let Some(digits) = name
+            if let Some(frame) = name
                 .strip_prefix(prefix.as_str())
                 .and_then(|rest| rest.strip_suffix(after.as_str()))
+                .and_then(|number| frame_spelled(number, *width))
             {
-                if digits.len() >= *width
-                    && !digits.is_empty()
-                    && digits.bytes().all(|b| b.is_ascii_digit())
-                    && (digits.len() == *width || !digits.starts_with('0'))
-                {
-                    if let Ok(frame) = digits.parse::<i64>() {
-                        frames.insert(frame);
-                    }
-                }
+                frames.insert(frame);
             }
         }
         Ok(frames.into_iter().collect())
     }
+}
+
+/// The frame `text` names in a placeholder `width` digits wide, when it is spelled exactly as
+/// [`PathPattern::path`] writes that frame (`{frame:0width$}`: `0042`, `-002`, `12345`) and
+/// nothing else: zeros after the sign make up the width and no more (`-02` and `-0002` are
+/// not frames of `####`, as `01` and `00001` are not), no `+`, no sign on zero.
+fn frame_spelled(text: &str, width: usize) -> Option<i64> {
+    let digits = text.strip_prefix('-').unwrap_or(text);
+    let as_written = !digits.is_empty()
+        && digits.bytes().all(|b| b.is_ascii_digit())
+        && (text.len() == width || (text.len() > width && !digits.starts_with('0')))
+        && !(text.starts_with('-') && digits.bytes().all(|b| b == b'0'));
+    if !as_written {
+        return None;
+    }
+    text.parse().ok()
 }
 
 fn find_hashes(raw: &str) -> Option<(usize, usize, usize)> {
@@ -497,5 +506,36 @@ mod tests {
         let pattern = format!("{}/a.####.exr", dir.path().display());
         let p = PathPattern::parse(&pattern).unwrap();
         assert_eq!(p.discover().unwrap(), [1, 3]);
+    }
+
+    /// Negative frames are found as shutter's own `####` writes them (`-002`: the sign takes
+    /// one of the four places), with the same strict padding as positive ones (QA: discovery
+    /// took digits only, so `c.-002.exr` was never a frame, even one shutter had written).
+    #[test]
+    fn discovery_finds_negative_frames_as_shutter_writes_them() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = PathPattern::parse(&format!("{}/c.####.exr", dir.path().display())).unwrap();
+        let frames = [-12345, -2, -1, 0, 1, 12345];
+        for frame in frames {
+            std::fs::write(p.path(Some(frame)), b"").unwrap();
+        }
+        // Not how shutter writes any frame: padded too little or too much, a sign on zero,
+        // a plus sign, two signs.
+        for name in [
+            "c.-02.exr",
+            "c.-0002.exr",
+            "c.-000.exr",
+            "c.+001.exr",
+            "c.--01.exr",
+        ] {
+            std::fs::write(dir.path().join(name), b"").unwrap();
+        }
+        assert_eq!(p.discover().unwrap(), frames);
+        // Unpadded: `%d` writes -2 as `-2`, never `-02` or `-0`.
+        let p = PathPattern::parse(&format!("{}/u.%d.exr", dir.path().display())).unwrap();
+        for name in ["u.-2.exr", "u.-02.exr", "u.-0.exr", "u.0.exr", "u.7.exr"] {
+            std::fs::write(dir.path().join(name), b"").unwrap();
+        }
+        assert_eq!(p.discover().unwrap(), [-2, 0, 7]);
     }
 }
