@@ -917,3 +917,49 @@ fn negative_frames_on_disk_are_discovered_as_shutter_names_them() {
         .collect();
     assert_eq!(frames, [-2, -1, 0]);
 }
+
+/// Files numbered beyond ±999999999 (what `--frames` refuses) are not frames of a sequence
+/// found on disk, and the run says so, naming one and the limit (QA: they were found up to
+/// i64::MAX, two jobs on them shared one lock byte, and the holes warning counted a billion).
+#[test]
+fn frame_numbers_beyond_the_limit_are_named_not_discovered() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in [
+        "c.999999998.exr",
+        "c.999999999.exr",
+        "c.1000000001.exr",
+        "c.9223372036854775807.exr",
+    ] {
+        flat_frame(&dir.path().join(name), 0.5);
+    }
+    let color = format!("{}/c.####.exr", dir.path().display());
+    let out = format!("{}/out/o.####.exr", dir.path().display());
+    let o = shutter(&["blur", "--dry-run", "--color", &color, "-o", &out, "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let frames: Vec<i64> = report["planned"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["frame"].as_i64().unwrap())
+        .collect();
+    assert_eq!(frames, [999999998, 999999999]);
+    let warnings = report["warnings"].to_string();
+    assert!(
+        warnings.contains("c.1000000001.exr") && warnings.contains("999999999"),
+        "{warnings}"
+    );
+    assert!(!warnings.contains("missing"), "{warnings}");
+    // Nothing but such files: no frames, and the error says why.
+    let far = tempfile::tempdir().unwrap();
+    flat_frame(&far.path().join("c.-1000000000.exr"), 0.5);
+    let color = format!("{}/c.####.exr", far.path().display());
+    let o = shutter(&["blur", "--dry-run", "--color", &color, "-o", &out]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("no files match") && err.contains("c.-1000000000.exr"),
+        "{err}"
+    );
+    assert!(err.contains("999999999"), "{err}");
+}

@@ -13,6 +13,16 @@ use crate::settings::{self};
 
 use super::args::BlurArgs;
 
+/// Why a pattern found no frames on disk: none match, or those that do are numbered beyond
+/// the limit (`note`, from [`crate::io::sequence::Discovered::beyond_note`]).
+pub(super) fn no_match(note: Option<String>) -> String {
+    let none = "no files match the pattern; check it, or pass --frames";
+    match note {
+        Some(note) => format!("{none} ({note})"),
+        None => none.to_string(),
+    }
+}
+
 /// Turns the blur arguments into a job: the second phase of argument handling.
 /// Warnings for output flags the chosen format cannot use (given on the command line; a
 /// preset's output section serves every format, so its keys are not warned about).
@@ -173,15 +183,18 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
                 .map(|(_, p)| p)
                 .find(|p| p.is_sequence())
                 .expect("is_sequence");
-            let found = source.discover()?;
+            let discovered = source.discover()?;
+            let beyond = discovered.beyond_note(source);
+            let found = discovered.frames;
             if found.is_empty() {
                 // Bad input (exit 1), not a bad command: the files are not there.
                 return Err(Error::Files(vec![crate::error::Problem::new(
                     crate::error::ProblemKind::MissingFile,
                     std::path::Path::new(&source.raw),
-                    "no files match the pattern; check it, or pass --frames",
+                    no_match(beyond),
                 )]));
             }
+            warnings.extend(beyond);
             // Holes in a sequence found on disk: a render that left frames out.
             let holes = crate::io::sequence::holes(&found);
             if !holes.is_empty() {

@@ -10,6 +10,40 @@ use crate::error::{Error, Result};
 /// typos eating memory before anything useful happens.
 pub const MAX_FRAMES: usize = 1_000_000;
 
+/// What [`PathPattern::discover`] found on disk.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Discovered {
+    /// The frame numbers of the files that match the pattern, sorted.
+    pub frames: Vec<i64>,
+    /// The names of files spelled as frames of the pattern but numbered beyond
+    /// ±[`MAX_FRAME_NUMBER`], sorted: not frames of the sequence (`--frames` refuses such
+    /// numbers too, and the output lock has no byte for them).
+    pub beyond: Vec<String>,
+}
+
+impl Discovered {
+    /// One line on the files numbered beyond the limit, naming one of them; `None` when there
+    /// are none. A warning beside the frames found, or the reason there are none.
+    pub fn beyond_note(&self, pattern: &PathPattern) -> Option<String> {
+        let first = self.beyond.first()?;
+        let more = self.beyond.len() - 1;
+        Some(format!(
+            "'{first}'{} {} numbered beyond ±{MAX_FRAME_NUMBER}, the largest frame number \
+             shutter reads or writes (--frames refuses it too): not {} of '{}'; \
+             renumber the sequence to use {}",
+            match more {
+                0 => String::new(),
+                1 => " and 1 more file".to_string(),
+                n => format!(" and {n} more files"),
+            },
+            if more == 0 { "is" } else { "are" },
+            if more == 0 { "a frame" } else { "frames" },
+            pattern.raw,
+            if more == 0 { "it" } else { "them" },
+        ))
+    }
+}
+
 /// A path that may hold a frame-number placeholder.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct PathPattern {
@@ -72,10 +106,11 @@ impl PathPattern {
         }
     }
 
-    /// The frame numbers of the files on disk that match this pattern, sorted.
-    pub fn discover(&self) -> Result<Vec<i64>> {
+    /// The frames of the files on disk that match this pattern, sorted, and the files
+    /// spelled as frames but numbered beyond ±[`MAX_FRAME_NUMBER`] (left out).
+    pub fn discover(&self) -> Result<Discovered> {
         let Some((before, after, width)) = &self.placeholder else {
-            return Ok(Vec::new());
+            return Ok(Discovered::default());
         };
         let before_path = Path::new(before.as_str());
         // Split the text before the placeholder into the directory and a file-name prefix.
@@ -105,25 +140,36 @@ impl PathPattern {
             ))
         })?;
         let mut frames = BTreeSet::new();
+        let mut beyond = BTreeSet::new();
         for entry in entries.flatten() {
             let name = entry.file_name().to_string_lossy().into_owned();
-            if let Some(frame) = name
+            match name
                 .strip_prefix(prefix.as_str())
                 .and_then(|rest| rest.strip_suffix(after.as_str()))
                 .and_then(|number| frame_spelled(number, *width))
             {
-                frames.insert(frame);
+                Some(Ok(frame)) => {
+                    frames.insert(frame);
+                }
+                Some(Err(Beyond)) => {
+                    beyond.insert(name);
+                }
+                None => {}
             }
         }
-        Ok(frames.into_iter().collect())
+        Ok(Discovered {
+            frames: frames.into_iter().collect(),
+            beyond: beyond.into_iter().collect(),
+        })
     }
 }
 
 /// The frame `text` names in a placeholder `width` digits wide, when it is spelled exactly as
 /// [`PathPattern::path`] writes that frame (`{frame:0width$}`: `0042`, `-002`, `12345`) and
 /// nothing else: zeros after the sign make up the width and no more (`-02` and `-0002` are
-/// not frames of `####`, as `01` and `00001` are not), no `+`, no sign on zero.
-fn frame_spelled(text: &str, width: usize) -> Option<i64> {
+/// not frames of `####`, as `01` and `00001` are not), no `+`, no sign on zero. A number so
+/// spelled beyond ±[`MAX_FRAME_NUMBER`] (whatever its length) is [`Beyond`].
+fn frame_spelled(text: &str, width: usize) -> Option<std::result::Result<i64, Beyond>> {
     let digits = text.strip_prefix('-').unwrap_or(text);
     let as_written = !digits.is_empty()
         && digits.bytes().all(|b| b.is_ascii_digit())
@@ -132,8 +178,17 @@ fn frame_spelled(text: &str, width: usize) -> Option<i64> {
     if !as_written {
         return None;
     }
-    text.parse().ok()
+    Some(
+        text.parse::<i64>()
+            .ok()
+            .filter(|frame| frame.abs() <= MAX_FRAME_NUMBER)
+            .ok_or(Beyond),
+    )
 }
+
+/// A number spelled as a frame but beyond ±[`MAX_FRAME_NUMBER`].
+#[derive(Debug, PartialEq, Eq)]
+struct Beyond;
 
 fn find_hashes(raw: &str) -> Option<(usize, usize, usize)> {
     let start = raw.find('#')?;
@@ -434,6 +489,47 @@ mod tests {
         }
     }
 
+    /// Files numbered beyond ±[`MAX_FRAME_NUMBER`] (what `--frames` refuses) are not frames,
+    /// but are named (QA: they were frames up to i64::MAX).
+    #[test]
+    fn discovery_leaves_out_and_names_numbers_beyond_the_limit() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = PathPattern::parse(&format!("{}/c.####.exr", dir.path().display())).unwrap();
+        for name in [
+            "c.-999999999.exr",
+            "c.999999999.exr",
+            "c.1000000000.exr",
+            "c.-1000000000.exr",
+            "c.9223372036854775807.exr",
+            "c.123456789012345678901234567890.exr",
+            // Not spelled as a frame at all: not named either.
+            "c.01000000000.exr",
+        ] {
+            std::fs::write(dir.path().join(name), b"").unwrap();
+        }
+        let found = p.discover().unwrap();
+        assert_eq!(found.frames, [-999999999, 999999999]);
+        assert_eq!(
+            found.beyond,
+            [
+                "c.-1000000000.exr",
+                "c.1000000000.exr",
+                "c.123456789012345678901234567890.exr",
+                "c.9223372036854775807.exr",
+            ]
+        );
+        let note = found.beyond_note(&p).unwrap();
+        assert!(
+            note.contains("'c.-1000000000.exr' and 3 more files are numbered beyond ±999999999"),
+            "{note}"
+        );
+        let nothing_beyond = Discovered {
+            frames: vec![1],
+            beyond: Vec::new(),
+        };
+        assert_eq!(nothing_beyond.beyond_note(&p), None);
+    }
+
     #[test]
     fn frame_specs() {
         assert_eq!(parse_frames("1001-1004").unwrap(), [1001, 1002, 1003, 1004]);
@@ -505,7 +601,7 @@ mod tests {
         }
         let pattern = format!("{}/a.####.exr", dir.path().display());
         let p = PathPattern::parse(&pattern).unwrap();
-        assert_eq!(p.discover().unwrap(), [1, 3]);
+        assert_eq!(p.discover().unwrap().frames, [1, 3]);
     }
 
     /// Negative frames are found as shutter's own `####` writes them (`-002`: the sign takes
@@ -530,12 +626,12 @@ mod tests {
         ] {
             std::fs::write(dir.path().join(name), b"").unwrap();
         }
-        assert_eq!(p.discover().unwrap(), frames);
+        assert_eq!(p.discover().unwrap().frames, frames);
         // Unpadded: `%d` writes -2 as `-2`, never `-02` or `-0`.
         let p = PathPattern::parse(&format!("{}/u.%d.exr", dir.path().display())).unwrap();
         for name in ["u.-2.exr", "u.-02.exr", "u.-0.exr", "u.0.exr", "u.7.exr"] {
             std::fs::write(dir.path().join(name), b"").unwrap();
         }
-        assert_eq!(p.discover().unwrap(), [-2, 0, 7]);
+        assert_eq!(p.discover().unwrap().frames, [-2, 0, 7]);
     }
 }
