@@ -963,3 +963,42 @@ fn frame_numbers_beyond_the_limit_are_named_not_discovered() {
     );
     assert!(err.contains("999999999"), "{err}");
 }
+
+/// A `#`, `%d`, `$F` or `@@` in a folder's name is part of the name: only the file name holds
+/// a frame placeholder (QA: `take#2/color.0001.exr` was read as a pattern and matched no
+/// file, and `take#2/color.####.exr` held "more than one frame placeholder").
+#[test]
+fn a_placeholder_is_only_looked_for_in_the_file_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let take = dir.path().join("take#2 %d $F @@");
+    for frame in [1, 2] {
+        flat_frame(&take.join(format!("C.{frame:04}.exr")), frame as f32);
+    }
+    let one = s(&take.join("C.0001.exr"));
+    let o = shutter(&["diff", &one, &one]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &one,
+        "-o",
+        &s(&take.join("out/still.exr")),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(take.join("out/still.exr").exists());
+    for (input, output) in [
+        ("C.####.exr", "a/o.####.exr"),
+        ("C.%04d.exr", "b/o.%04d.exr"),
+        ("C.$F4.exr", "c/o.$F4.exr"),
+        ("C.@@@@.exr", "d/o.@@@@.exr"),
+    ] {
+        let input = s(&take.join(input));
+        let output = s(&take.join(output));
+        let o = shutter(&["blur", "--color", &input, "-o", &output, "--json"]);
+        assert!(o.status.success(), "{input}: {}", stderr(&o));
+        let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        assert_eq!(report["frames_written"], 2, "{input}: {report}");
+        let folder = std::path::Path::new(&output).parent().unwrap();
+        assert!(folder.join("o.0001.exr").exists() && folder.join("o.0002.exr").exists());
+    }
+}

@@ -57,7 +57,8 @@ pub struct PathPattern {
 impl PathPattern {
     /// Parses `####` (one `#` per digit), `%0Nd` / `%d`, Houdini's `$F4` / `$F` or `@@@@` (two
     /// or more `@`, one per digit: a single `@` is left alone, as in `icon@2x.png`) in the file
-    /// name part of a path.
+    /// name part of a path: the same characters in a folder's name (`take#2/`) are part of
+    /// that name.
     pub fn parse(raw: &str) -> Result<Self> {
         let find = |raw: &str| {
             find_hashes(raw)
@@ -65,15 +66,15 @@ impl PathPattern {
                 .or_else(|| find_houdini(raw))
                 .or_else(|| find_ats(raw))
         };
-        let placeholder = find(raw);
-        if let Some((start, end, _)) = &placeholder {
-            let rest = &raw[*end..];
-            if find(rest).is_some() {
+        let name = name_start(raw);
+        let placeholder =
+            find(&raw[name..]).map(|(start, end, width)| (name + start, name + end, width));
+        if let Some((_, end, _)) = placeholder {
+            if find(&raw[end..]).is_some() {
                 return Err(Error::usage(format!(
                     "'{raw}' holds more than one frame placeholder; use one '####' or '%04d'"
                 )));
             }
-            let _ = start;
         }
         Ok(PathPattern {
             raw: raw.to_string(),
@@ -112,26 +113,9 @@ impl PathPattern {
         let Some((before, after, width)) = &self.placeholder else {
             return Ok(Discovered::default());
         };
-        let before_path = Path::new(before.as_str());
-        // Split the text before the placeholder into the directory and a file-name prefix.
-        let (dir, prefix) = if before.ends_with('/') || before.is_empty() {
-            (before_path.to_path_buf(), String::new())
-        } else {
-            let dir = before_path
-                .parent()
-                .map(Path::to_path_buf)
-                .unwrap_or_default();
-            let prefix = before_path
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            (dir, prefix)
-        };
-        let read_dir = if dir.as_os_str().is_empty() {
-            Path::new(".")
-        } else {
-            dir.as_path()
-        };
+        // The text before the placeholder is the folder and the file name's start.
+        let (dir, prefix) = before.split_at(name_start(before));
+        let read_dir = Path::new(if dir.is_empty() { "." } else { dir });
         let entries = std::fs::read_dir(read_dir).map_err(|e| {
             Error::usage(format!(
                 "cannot list '{}' to find the frames of '{}': {e}; pass --frames",
@@ -144,7 +128,7 @@ impl PathPattern {
         for entry in entries.flatten() {
             let name = entry.file_name().to_string_lossy().into_owned();
             match name
-                .strip_prefix(prefix.as_str())
+                .strip_prefix(prefix)
                 .and_then(|rest| rest.strip_suffix(after.as_str()))
                 .and_then(|number| frame_spelled(number, *width))
             {
@@ -189,6 +173,11 @@ fn frame_spelled(text: &str, width: usize) -> Option<std::result::Result<i64, Be
 /// A number spelled as a frame but beyond ±[`MAX_FRAME_NUMBER`].
 #[derive(Debug, PartialEq, Eq)]
 struct Beyond;
+
+/// Where the file name starts in `path`: after its last separator.
+fn name_start(path: &str) -> usize {
+    path.rfind(std::path::is_separator).map_or(0, |i| i + 1)
+}
 
 fn find_hashes(raw: &str) -> Option<(usize, usize, usize)> {
     let start = raw.find('#')?;
@@ -528,6 +517,41 @@ mod tests {
             beyond: Vec::new(),
         };
         assert_eq!(nothing_beyond.beyond_note(&p), None);
+    }
+
+    /// Only the file name holds a placeholder: `#`, `%d`, `$F` and `@@` in a folder's name
+    /// are part of it (QA: `take#2/color.0001.exr` was taken for a pattern, and
+    /// `take#2/color.####.exr` for one with two placeholders).
+    #[test]
+    fn a_placeholder_is_only_looked_for_in_the_file_name() {
+        for plain in ["take#2/color.0001.exr", "a%d/$F/@@/c.exr", "x##/y.exr"] {
+            let p = PathPattern::parse(plain).unwrap();
+            assert!(!p.is_sequence(), "{plain}");
+            assert_eq!(p.path(Some(3)), PathBuf::from(plain));
+        }
+        for (raw, frame_7, hashes) in [
+            (
+                "take#2/c.####.exr",
+                "take#2/c.0007.exr",
+                "take#2/c.####.exr",
+            ),
+            ("a%d/c.%04d.exr", "a%d/c.0007.exr", "a%d/c.####.exr"),
+            ("$F/c.$F2.exr", "$F/c.07.exr", "$F/c.##.exr"),
+            ("@@/c.@@@.exr", "@@/c.007.exr", "@@/c.###.exr"),
+        ] {
+            let p = PathPattern::parse(raw).unwrap();
+            assert_eq!(p.path(Some(7)), PathBuf::from(frame_7), "{raw}");
+            assert_eq!(p.with_hashes(), hashes, "{raw}");
+        }
+        // And discovery lists the folder named so.
+        let dir = tempfile::tempdir().unwrap();
+        let take = dir.path().join("take#2");
+        std::fs::create_dir(&take).unwrap();
+        for name in ["c.0001.exr", "c.0002.exr"] {
+            std::fs::write(take.join(name), b"").unwrap();
+        }
+        let p = PathPattern::parse(&format!("{}/c.####.exr", take.display())).unwrap();
+        assert_eq!(p.discover().unwrap().frames, [1, 2]);
     }
 
     #[test]
