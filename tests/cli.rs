@@ -1002,3 +1002,87 @@ fn a_placeholder_is_only_looked_for_in_the_file_name() {
         assert!(folder.join("o.0001.exr").exists() && folder.join("o.0002.exr").exists());
     }
 }
+
+/// A single file given for a pass while the colour is a pattern (or the other way round) is a
+/// usage error naming the flag and the pattern to give (QA: frame 1's depth and velocity were
+/// read for every frame of the sequence, without a word).
+#[test]
+fn a_single_file_pass_beside_a_pattern_is_a_usage_error() {
+    let dir = tempfile::tempdir().unwrap();
+    for frame in [1, 2] {
+        write_canonical_frame(dir.path(), Some(frame), 6, 4);
+    }
+    let at = |name: &str| s(&dir.path().join(name));
+    let out_dir = dir.path().join("out");
+    let out = s(&out_dir.join("o.####.exr"));
+    let before = snapshot(dir.path());
+    let cases: [(&[&str], &str, &str); 4] = [
+        (
+            &[
+                "--depth",
+                &at("Z.0001.exr"),
+                "--velocity",
+                &at("V.####.exr"),
+            ],
+            "--depth",
+            "Z.####.exr",
+        ),
+        (
+            &[
+                "--depth",
+                &at("Z.####.exr"),
+                "--velocity",
+                &at("V.0001.exr"),
+            ],
+            "--velocity",
+            "V.####.exr",
+        ),
+        (&["--coc-map", &at("Z.0002.exr")], "--coc-map", "Z.####.exr"),
+        (
+            &[
+                "--depth",
+                &at("Z.0001.exr"),
+                "--velocity",
+                &at("V.0001.exr"),
+            ],
+            "--depth",
+            "Z.####.exr",
+        ),
+    ];
+    for (passes, flag, suggested) in cases {
+        let color = at("C.####.exr");
+        let mut args = vec!["blur", "--algorithm", "reconstruct", "--color", &color];
+        args.extend_from_slice(passes);
+        args.extend_from_slice(&["-o", &out]);
+        let o = shutter(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{passes:?}: {err}");
+        assert!(
+            err.contains(flag) && err.contains(suggested),
+            "{passes:?}: {err}"
+        );
+    }
+    // A single colour file with a pattern for another pass: the same mix, named.
+    let o = shutter(&[
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &at("C.0001.exr"),
+        "--velocity",
+        &at("V.####.exr"),
+        "-o",
+        &out,
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--color") && err.contains("C.####.exr"),
+        "{err}"
+    );
+    assert_eq!(
+        snapshot(dir.path()),
+        before,
+        "a refused run wrote something"
+    );
+}
