@@ -865,3 +865,224 @@ fn warnings_are_printed_on_a_pipe_unless_quiet() {
     assert!(stderr(&o).is_empty(), "{}", stderr(&o));
     assert!(stdout(&o).contains("--depth is not read"), "{}", stdout(&o));
 }
+
+/// An RGB frame whose every sample is `value`, written at `path`.
+fn flat_frame(path: &std::path::Path, value: f32) {
+    let plane = vec![value; 8 * 4];
+    write_exr(
+        path,
+        8,
+        4,
+        vec![("R", plane.clone()), ("G", plane.clone()), ("B", plane)],
+    );
+}
+
+/// Negative frames on disk are frames of the sequence, named as shutter's own `####` writes
+/// them (`-002`), so a sequence shutter wrote is found again (QA: discovery took digits only,
+/// and `c.-002.exr` and `c.-001.exr` were left out without a word, frame 0 alone planned).
+#[test]
+fn negative_frames_on_disk_are_discovered_as_shutter_names_them() {
+    let dir = tempfile::tempdir().unwrap();
+    for frame in -2..=0 {
+        flat_frame(
+            &dir.path().join(format!("neg/c.{frame:04}.exr")),
+            frame as f32,
+        );
+    }
+    // Not as shutter writes any frame: left out, as a positive one padded wrongly is.
+    flat_frame(&dir.path().join("neg/c.-02.exr"), 9.0);
+    flat_frame(&dir.path().join("neg/c.-0002.exr"), 9.0);
+    let color = format!("{}/neg/c.####.exr", dir.path().display());
+    let out = format!("{}/out/o.####.exr", dir.path().display());
+    let o = shutter(&["blur", "--color", &color, "-o", &out, "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(report["frames_written"], 3, "{report}");
+    let mut written: Vec<String> = std::fs::read_dir(dir.path().join("out"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    written.sort();
+    assert_eq!(written, ["o.-001.exr", "o.-002.exr", "o.0000.exr"]);
+    // And what it wrote is found again: a second run over its outputs plans all three.
+    let again = format!("{}/again/o.####.exr", dir.path().display());
+    let o = shutter(&["blur", "--dry-run", "--color", &out, "-o", &again, "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let frames: Vec<i64> = report["planned"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["frame"].as_i64().unwrap())
+        .collect();
+    assert_eq!(frames, [-2, -1, 0]);
+}
+
+/// Files numbered beyond ±999999999 (what `--frames` refuses) are not frames of a sequence
+/// found on disk, and the run says so, naming one and the limit (QA: they were found up to
+/// i64::MAX, two jobs on them shared one lock byte, and the holes warning counted a billion).
+#[test]
+fn frame_numbers_beyond_the_limit_are_named_not_discovered() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in [
+        "c.999999998.exr",
+        "c.999999999.exr",
+        "c.1000000001.exr",
+        "c.9223372036854775807.exr",
+    ] {
+        flat_frame(&dir.path().join(name), 0.5);
+    }
+    let color = format!("{}/c.####.exr", dir.path().display());
+    let out = format!("{}/out/o.####.exr", dir.path().display());
+    let o = shutter(&["blur", "--dry-run", "--color", &color, "-o", &out, "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let frames: Vec<i64> = report["planned"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["frame"].as_i64().unwrap())
+        .collect();
+    assert_eq!(frames, [999999998, 999999999]);
+    let warnings = report["warnings"].to_string();
+    assert!(
+        warnings.contains("c.1000000001.exr") && warnings.contains("999999999"),
+        "{warnings}"
+    );
+    assert!(!warnings.contains("missing"), "{warnings}");
+    // Nothing but such files: no frames, and the error says why.
+    let far = tempfile::tempdir().unwrap();
+    flat_frame(&far.path().join("c.-1000000000.exr"), 0.5);
+    let color = format!("{}/c.####.exr", far.path().display());
+    let o = shutter(&["blur", "--dry-run", "--color", &color, "-o", &out]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("no files match") && err.contains("c.-1000000000.exr"),
+        "{err}"
+    );
+    assert!(err.contains("999999999"), "{err}");
+}
+
+/// A `#`, `%d`, `$F` or `@@` in a folder's name is part of the name: only the file name holds
+/// a frame placeholder (QA: `take#2/color.0001.exr` was read as a pattern and matched no
+/// file, and `take#2/color.####.exr` held "more than one frame placeholder").
+#[test]
+fn a_placeholder_is_only_looked_for_in_the_file_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let take = dir.path().join("take#2 %d $F @@");
+    for frame in [1, 2] {
+        flat_frame(&take.join(format!("C.{frame:04}.exr")), frame as f32);
+    }
+    let one = s(&take.join("C.0001.exr"));
+    let o = shutter(&["diff", &one, &one]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &one,
+        "-o",
+        &s(&take.join("out/still.exr")),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(take.join("out/still.exr").exists());
+    for (input, output) in [
+        ("C.####.exr", "a/o.####.exr"),
+        ("C.%04d.exr", "b/o.%04d.exr"),
+        ("C.$F4.exr", "c/o.$F4.exr"),
+        ("C.@@@@.exr", "d/o.@@@@.exr"),
+    ] {
+        let input = s(&take.join(input));
+        let output = s(&take.join(output));
+        let o = shutter(&["blur", "--color", &input, "-o", &output, "--json"]);
+        assert!(o.status.success(), "{input}: {}", stderr(&o));
+        let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        assert_eq!(report["frames_written"], 2, "{input}: {report}");
+        let folder = std::path::Path::new(&output).parent().unwrap();
+        assert!(folder.join("o.0001.exr").exists() && folder.join("o.0002.exr").exists());
+    }
+}
+
+/// A single file given for a pass while the colour is a pattern (or the other way round) is a
+/// usage error naming the flag and the pattern to give (QA: frame 1's depth and velocity were
+/// read for every frame of the sequence, without a word).
+#[test]
+fn a_single_file_pass_beside_a_pattern_is_a_usage_error() {
+    let dir = tempfile::tempdir().unwrap();
+    for frame in [1, 2] {
+        write_canonical_frame(dir.path(), Some(frame), 6, 4);
+    }
+    let at = |name: &str| s(&dir.path().join(name));
+    let out_dir = dir.path().join("out");
+    let out = s(&out_dir.join("o.####.exr"));
+    let before = snapshot(dir.path());
+    let cases: [(&[&str], &str, &str); 4] = [
+        (
+            &[
+                "--depth",
+                &at("Z.0001.exr"),
+                "--velocity",
+                &at("V.####.exr"),
+            ],
+            "--depth",
+            "Z.####.exr",
+        ),
+        (
+            &[
+                "--depth",
+                &at("Z.####.exr"),
+                "--velocity",
+                &at("V.0001.exr"),
+            ],
+            "--velocity",
+            "V.####.exr",
+        ),
+        (&["--coc-map", &at("Z.0002.exr")], "--coc-map", "Z.####.exr"),
+        (
+            &[
+                "--depth",
+                &at("Z.0001.exr"),
+                "--velocity",
+                &at("V.0001.exr"),
+            ],
+            "--depth",
+            "Z.####.exr",
+        ),
+    ];
+    for (passes, flag, suggested) in cases {
+        let color = at("C.####.exr");
+        let mut args = vec!["blur", "--algorithm", "reconstruct", "--color", &color];
+        args.extend_from_slice(passes);
+        args.extend_from_slice(&["-o", &out]);
+        let o = shutter(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{passes:?}: {err}");
+        assert!(
+            err.contains(flag) && err.contains(suggested),
+            "{passes:?}: {err}"
+        );
+    }
+    // A single colour file with a pattern for another pass: the same mix, named.
+    let o = shutter(&[
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &at("C.0001.exr"),
+        "--velocity",
+        &at("V.####.exr"),
+        "-o",
+        &out,
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--color") && err.contains("C.####.exr"),
+        "{err}"
+    );
+    assert_eq!(
+        snapshot(dir.path()),
+        before,
+        "a refused run wrote something"
+    );
+}

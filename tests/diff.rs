@@ -707,3 +707,36 @@ fn pictures_whose_windows_differ_do_not_pass() {
         assert!(stderr(&o).contains("data window at"), "{}", stderr(&o));
     }
 }
+
+/// Negative frames on disk are compared, named as shutter writes them (`-002`); files numbered
+/// beyond ±999999999 are not frames, and the warning names one (QA: `diff` compared frame 0
+/// alone of frames -2 to 0, and took `a.1000000001.exr` as a frame).
+#[test]
+fn negative_frames_are_compared_and_numbers_beyond_the_limit_named() {
+    let dir = tempfile::tempdir().unwrap();
+    for n in [-2i64, -1, 0] {
+        let seed = (n + 10) as u32;
+        pair(dir.path(), &format!("a.{n:04}.exr"), 8, 8, seed, 0.0);
+        pair(dir.path(), &format!("b.{n:04}.exr"), 8, 8, seed, 0.0);
+    }
+    pair(dir.path(), "a.1000000001.exr", 8, 8, 1, 0.0);
+    let (a, b) = (
+        s(&dir.path().join("a.####.exr")),
+        s(&dir.path().join("b.####.exr")),
+    );
+    let o = shutter(&["diff", &a, &b, "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let frames: Vec<i64> = report["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["frame"].as_i64().unwrap())
+        .collect();
+    assert_eq!(frames, [-2, -1, 0]);
+    let err = stderr(&o);
+    assert!(
+        err.contains("a.1000000001.exr") && err.contains("999999999"),
+        "{err}"
+    );
+}

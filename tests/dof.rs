@@ -359,8 +359,13 @@ fn dof_needs_a_lens_or_a_map_and_says_so() {
 #[test]
 fn dof_reads_colour_and_depth_only() {
     let dir = small_scene("layers", 32, 18, 1, 4);
-    let broken = dir.path().join("broken.exr");
-    std::fs::write(&broken, b"not an exr at all").unwrap();
+    // A velocity sequence that is not EXR at all (a pattern, as the colour is: a single file
+    // beside a colour pattern is a usage error): never opened.
+    for frame in 0..=2 {
+        let broken = dir.path().join(format!("broken.{frame:04}.exr"));
+        std::fs::write(&broken, b"not an exr at all").unwrap();
+    }
+    let broken = role_pattern(dir.path(), "broken");
     let out = format!("{}/o.####.exr", dir.path().display());
     let color = role_pattern(dir.path(), "color");
     let depth = role_pattern(dir.path(), "depth");
@@ -371,7 +376,7 @@ fn dof_reads_colour_and_depth_only() {
         "--depth",
         &depth,
         "--velocity",
-        broken.to_str().unwrap(),
+        &broken,
         "-o",
         &out,
         "--verbose",

@@ -27,20 +27,21 @@ fn frames_for(
             Vec::new(),
         )),
         (None, true) => {
-            let found = first.discover()?;
+            let discovered = first.discover()?;
+            let beyond = discovered.beyond_note(first);
+            let found = discovered.frames;
             if found.is_empty() {
                 // Nothing to compare: the files are not there (not a bad command line).
                 return Err(Error::Files(vec![crate::error::Problem::new(
                     crate::error::ProblemKind::MissingFile,
                     std::path::Path::new(&first.raw),
-                    "no files match the pattern; check it, or pass --frames",
+                    super::resolve::no_match(beyond),
                 )]));
             }
             let holes = crate::io::sequence::holes(&found);
-            let warnings = if holes.is_empty() {
-                Vec::new()
-            } else {
-                vec![format!(
+            let mut warnings: Vec<String> = beyond.into_iter().collect();
+            if !holes.is_empty() {
+                warnings.push(format!(
                     "'{}' has no frame{} {} between {} and {}: not compared (--frames names \
                      every frame wanted and makes a missing one an error)",
                     first.raw,
@@ -48,8 +49,8 @@ fn frames_for(
                     crate::io::sequence::format_frames(&holes),
                     found[0],
                     found[found.len() - 1]
-                )]
-            };
+                ));
+            }
             Ok((found.into_iter().map(Some).collect(), warnings))
         }
         (None, false) => Ok((vec![None], Vec::new())),

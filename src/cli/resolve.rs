@@ -13,6 +13,74 @@ use crate::settings::{self};
 
 use super::args::BlurArgs;
 
+/// Why a pattern found no frames on disk: none match, or those that do are numbered beyond
+/// the limit (`note`, from [`crate::io::sequence::Discovered::beyond_note`]).
+pub(super) fn no_match(note: Option<String>) -> String {
+    let none = "no files match the pattern; check it, or pass --frames";
+    match note {
+        Some(note) => format!("{none} ({note})"),
+        None => none.to_string(),
+    }
+}
+
+/// Every pass a pattern when the colour is one, and a file when it is a file (README,
+/// "Sequences": inputs and output are all patterns or all files): a single file beside a
+/// colour pattern would be read for every frame of it, and a colour file beside a pass
+/// pattern for every frame of that. `coc_map`: the depth given is `--coc-map`.
+fn one_form(inputs: &Inputs, coc_map: bool) -> Result<()> {
+    let sequence = inputs.color.is_sequence();
+    let Some((pass, mixed)) = inputs
+        .all()
+        .into_iter()
+        .find(|(_, p)| p.is_sequence() != sequence)
+    else {
+        return Ok(());
+    };
+    let flag = if pass == "depth" && coc_map {
+        "coc-map"
+    } else {
+        pass
+    };
+    Err(Error::usage(if sequence {
+        format!(
+            "--{flag} '{}' is one file but --color '{}' is a sequence, and one file is not \
+             read for every frame: give --{flag} as a pattern too, {}",
+            mixed.raw,
+            inputs.color.raw,
+            as_pattern(&mixed.raw)
+        )
+    } else {
+        format!(
+            "--color '{}' is one file but --{flag} '{}' is a sequence: give --color as a \
+             pattern too, {} (or --{flag} as one file)",
+            inputs.color.raw,
+            mixed.raw,
+            as_pattern(&inputs.color.raw)
+        )
+    }))
+}
+
+/// A pattern to suggest for the file `path`: the last run of digits in its file name as `#`s
+/// (`seq/depth.0001.exr` → `seq/depth.####.exr`).
+fn as_pattern(path: &str) -> String {
+    let name = path.rfind(std::path::is_separator).map_or(0, |i| i + 1);
+    match path[name..].rfind(|c: char| c.is_ascii_digit()) {
+        Some(last) => {
+            let end = name + last + 1;
+            let start = path[..end]
+                .trim_end_matches(|c: char| c.is_ascii_digit())
+                .len();
+            format!(
+                "e.g. '{}{}{}'",
+                &path[..start],
+                "#".repeat(end - start),
+                &path[end..]
+            )
+        }
+        None => "with #### or %04d for the frame number".to_string(),
+    }
+}
+
 /// Turns the blur arguments into a job: the second phase of argument handling.
 /// Warnings for output flags the chosen format cannot use (given on the command line; a
 /// preset's output section serves every format, so its keys are not warned about).
@@ -129,6 +197,9 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
             next: pattern(args.next.get(k))?,
         });
     }
+    for inputs in &layer_inputs {
+        one_form(inputs, args.coc_map.is_some())?;
+    }
     if layer_inputs
         .iter()
         .any(|i| i.is_sequence() != layer_inputs[0].is_sequence())
@@ -173,15 +244,18 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
                 .map(|(_, p)| p)
                 .find(|p| p.is_sequence())
                 .expect("is_sequence");
-            let found = source.discover()?;
+            let discovered = source.discover()?;
+            let beyond = discovered.beyond_note(source);
+            let found = discovered.frames;
             if found.is_empty() {
                 // Bad input (exit 1), not a bad command: the files are not there.
                 return Err(Error::Files(vec![crate::error::Problem::new(
                     crate::error::ProblemKind::MissingFile,
                     std::path::Path::new(&source.raw),
-                    "no files match the pattern; check it, or pass --frames",
+                    no_match(beyond),
                 )]));
             }
+            warnings.extend(beyond);
             // Holes in a sequence found on disk: a render that left frames out.
             let holes = crate::io::sequence::holes(&found);
             if !holes.is_empty() {

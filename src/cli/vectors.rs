@@ -127,7 +127,7 @@ pub fn vectors(args: VectorsArgs) -> Result<i32> {
         Some(v) => PathPattern::parse(v)?,
         None => color.clone(),
     };
-    let found = color.discover()?;
+    let found = color.discover()?.frames;
     let has = |f: i64| found.contains(&f);
     let frame = match args.frame {
         Some(f) => f,

@@ -30,21 +30,13 @@ use std::sync::{Mutex, MutexGuard, PoisonError};
 use crate::error::{Problem, ProblemKind};
 use crate::io::sequence::{PathPattern, MAX_FRAME_NUMBER};
 
-/// The lock file of an output sequence: hidden, in the output folder (the deepest folder
-/// above any frame placeholder), named after the pattern with `####` for the frame number,
-/// so that `o.####.exr` and `o.%04d.exr` share it.
+/// The lock file of an output sequence: hidden, in the output folder, named after the
+/// pattern with `####` for the frame number, so that `o.####.exr` and `o.%04d.exr` share it
+/// (a placeholder is only ever in the file name: [`PathPattern::parse`]).
 pub fn lock_path(output: &PathPattern) -> PathBuf {
     let pattern = output.with_hashes();
-    let placeholder = pattern.find('#').unwrap_or(pattern.len());
-    let split = pattern[..placeholder]
-        .rfind(std::path::is_separator)
-        .map_or(0, |i| i + 1);
+    let split = pattern.rfind(std::path::is_separator).map_or(0, |i| i + 1);
     let (folder, name) = pattern.split_at(split);
-    // A placeholder in a folder name: the rest of the path folds into one file name.
-    let name: String = name
-        .chars()
-        .map(|c| if std::path::is_separator(c) { '_' } else { c })
-        .collect();
     let folder = if folder.is_empty() { "." } else { folder };
     Path::new(folder).join(format!(".{name}.lock"))
 }
@@ -397,7 +389,12 @@ mod tests {
             PathBuf::from("out/.o.####.exr.lock")
         );
         assert_eq!(lock("o.exr"), PathBuf::from("./.o.exr.lock"));
-        assert_eq!(lock("/a/s_##/o.exr"), PathBuf::from("/a/.s_##_o.exr.lock"));
+        // A `#` in a folder's name is part of the name, not a placeholder.
+        assert_eq!(lock("/a/s_##/o.exr"), PathBuf::from("/a/s_##/.o.exr.lock"));
+        assert_eq!(
+            lock("take#2/o.%04d.exr"),
+            PathBuf::from("take#2/.o.####.exr.lock")
+        );
     }
 
     #[test]

@@ -10,6 +10,40 @@ use crate::error::{Error, Result};
 /// typos eating memory before anything useful happens.
 pub const MAX_FRAMES: usize = 1_000_000;
 
+/// What [`PathPattern::discover`] found on disk.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Discovered {
+    /// The frame numbers of the files that match the pattern, sorted.
+    pub frames: Vec<i64>,
+    /// The names of files spelled as frames of the pattern but numbered beyond
+    /// ±[`MAX_FRAME_NUMBER`], sorted: not frames of the sequence (`--frames` refuses such
+    /// numbers too, and the output lock has no byte for them).
+    pub beyond: Vec<String>,
+}
+
+impl Discovered {
+    /// One line on the files numbered beyond the limit, naming one of them; `None` when there
+    /// are none. A warning beside the frames found, or the reason there are none.
+    pub fn beyond_note(&self, pattern: &PathPattern) -> Option<String> {
+        let first = self.beyond.first()?;
+        let more = self.beyond.len() - 1;
+        Some(format!(
+            "'{first}'{} {} numbered beyond ±{MAX_FRAME_NUMBER}, the largest frame number \
+             shutter reads or writes (--frames refuses it too): not {} of '{}'; \
+             renumber the sequence to use {}",
+            match more {
+                0 => String::new(),
+                1 => " and 1 more file".to_string(),
+                n => format!(" and {n} more files"),
+            },
+            if more == 0 { "is" } else { "are" },
+            if more == 0 { "a frame" } else { "frames" },
+            pattern.raw,
+            if more == 0 { "it" } else { "them" },
+        ))
+    }
+}
+
 /// A path that may hold a frame-number placeholder.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct PathPattern {
@@ -23,7 +57,8 @@ pub struct PathPattern {
 impl PathPattern {
     /// Parses `####` (one `#` per digit), `%0Nd` / `%d`, Houdini's `$F4` / `$F` or `@@@@` (two
     /// or more `@`, one per digit: a single `@` is left alone, as in `icon@2x.png`) in the file
-    /// name part of a path.
+    /// name part of a path: the same characters in a folder's name (`take#2/`) are part of
+    /// that name.
     pub fn parse(raw: &str) -> Result<Self> {
         let find = |raw: &str| {
             find_hashes(raw)
@@ -31,15 +66,15 @@ impl PathPattern {
                 .or_else(|| find_houdini(raw))
                 .or_else(|| find_ats(raw))
         };
-        let placeholder = find(raw);
-        if let Some((start, end, _)) = &placeholder {
-            let rest = &raw[*end..];
-            if find(rest).is_some() {
+        let name = name_start(raw);
+        let placeholder =
+            find(&raw[name..]).map(|(start, end, width)| (name + start, name + end, width));
+        if let Some((_, end, _)) = placeholder {
+            if find(&raw[end..]).is_some() {
                 return Err(Error::usage(format!(
                     "'{raw}' holds more than one frame placeholder; use one '####' or '%04d'"
                 )));
             }
-            let _ = start;
         }
         Ok(PathPattern {
             raw: raw.to_string(),
@@ -72,31 +107,15 @@ impl PathPattern {
         }
     }
 
-    /// The frame numbers of the files on disk that match this pattern, sorted.
-    pub fn discover(&self) -> Result<Vec<i64>> {
+    /// The frames of the files on disk that match this pattern, sorted, and the files
+    /// spelled as frames but numbered beyond ±[`MAX_FRAME_NUMBER`] (left out).
+    pub fn discover(&self) -> Result<Discovered> {
         let Some((before, after, width)) = &self.placeholder else {
-            return Ok(Vec::new());
+            return Ok(Discovered::default());
         };
-        let before_path = Path::new(before.as_str());
-        // Split the text before the placeholder into the directory and a file-name prefix.
-        let (dir, prefix) = if before.ends_with('/') || before.is_empty() {
-            (before_path.to_path_buf(), String::new())
-        } else {
-            let dir = before_path
-                .parent()
-                .map(Path::to_path_buf)
-                .unwrap_or_default();
-            let prefix = before_path
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            (dir, prefix)
-        };
-        let read_dir = if dir.as_os_str().is_empty() {
-            Path::new(".")
-        } else {
-            dir.as_path()
-        };
+        // The text before the placeholder is the folder and the file name's start.
+        let (dir, prefix) = before.split_at(name_start(before));
+        let read_dir = Path::new(if dir.is_empty() { "." } else { dir });
         let entries = std::fs::read_dir(read_dir).map_err(|e| {
             Error::usage(format!(
                 "cannot list '{}' to find the frames of '{}': {e}; pass --frames",
@@ -105,25 +124,59 @@ impl PathPattern {
             ))
         })?;
         let mut frames = BTreeSet::new();
+        let mut beyond = BTreeSet::new();
         for entry in entries.flatten() {
             let name = entry.file_name().to_string_lossy().into_owned();
-            if let Some(digits) = name
-                .strip_prefix(prefix.as_str())
+            match name
+                .strip_prefix(prefix)
                 .and_then(|rest| rest.strip_suffix(after.as_str()))
+                .and_then(|number| frame_spelled(number, *width))
             {
-                if digits.len() >= *width
-                    && !digits.is_empty()
-                    && digits.bytes().all(|b| b.is_ascii_digit())
-                    && (digits.len() == *width || !digits.starts_with('0'))
-                {
-                    if let Ok(frame) = digits.parse::<i64>() {
-                        frames.insert(frame);
-                    }
+                Some(Ok(frame)) => {
+                    frames.insert(frame);
                 }
+                Some(Err(Beyond)) => {
+                    beyond.insert(name);
+                }
+                None => {}
             }
         }
-        Ok(frames.into_iter().collect())
+        Ok(Discovered {
+            frames: frames.into_iter().collect(),
+            beyond: beyond.into_iter().collect(),
+        })
     }
+}
+
+/// The frame `text` names in a placeholder `width` digits wide, when it is spelled exactly as
+/// [`PathPattern::path`] writes that frame (`{frame:0width$}`: `0042`, `-002`, `12345`) and
+/// nothing else: zeros after the sign make up the width and no more (`-02` and `-0002` are
+/// not frames of `####`, as `01` and `00001` are not), no `+`, no sign on zero. A number so
+/// spelled beyond ±[`MAX_FRAME_NUMBER`] (whatever its length) is [`Beyond`].
+fn frame_spelled(text: &str, width: usize) -> Option<std::result::Result<i64, Beyond>> {
+    let digits = text.strip_prefix('-').unwrap_or(text);
+    let as_written = !digits.is_empty()
+        && digits.bytes().all(|b| b.is_ascii_digit())
+        && (text.len() == width || (text.len() > width && !digits.starts_with('0')))
+        && !(text.starts_with('-') && digits.bytes().all(|b| b == b'0'));
+    if !as_written {
+        return None;
+    }
+    Some(
+        text.parse::<i64>()
+            .ok()
+            .filter(|frame| frame.abs() <= MAX_FRAME_NUMBER)
+            .ok_or(Beyond),
+    )
+}
+
+/// A number spelled as a frame but beyond ±[`MAX_FRAME_NUMBER`].
+#[derive(Debug, PartialEq, Eq)]
+struct Beyond;
+
+/// Where the file name starts in `path`: after its last separator.
+fn name_start(path: &str) -> usize {
+    path.rfind(std::path::is_separator).map_or(0, |i| i + 1)
 }
 
 fn find_hashes(raw: &str) -> Option<(usize, usize, usize)> {
@@ -425,6 +478,82 @@ mod tests {
         }
     }
 
+    /// Files numbered beyond ±[`MAX_FRAME_NUMBER`] (what `--frames` refuses) are not frames,
+    /// but are named (QA: they were frames up to i64::MAX).
+    #[test]
+    fn discovery_leaves_out_and_names_numbers_beyond_the_limit() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = PathPattern::parse(&format!("{}/c.####.exr", dir.path().display())).unwrap();
+        for name in [
+            "c.-999999999.exr",
+            "c.999999999.exr",
+            "c.1000000000.exr",
+            "c.-1000000000.exr",
+            "c.9223372036854775807.exr",
+            "c.123456789012345678901234567890.exr",
+            // Not spelled as a frame at all: not named either.
+            "c.01000000000.exr",
+        ] {
+            std::fs::write(dir.path().join(name), b"").unwrap();
+        }
+        let found = p.discover().unwrap();
+        assert_eq!(found.frames, [-999999999, 999999999]);
+        assert_eq!(
+            found.beyond,
+            [
+                "c.-1000000000.exr",
+                "c.1000000000.exr",
+                "c.123456789012345678901234567890.exr",
+                "c.9223372036854775807.exr",
+            ]
+        );
+        let note = found.beyond_note(&p).unwrap();
+        assert!(
+            note.contains("'c.-1000000000.exr' and 3 more files are numbered beyond ±999999999"),
+            "{note}"
+        );
+        let nothing_beyond = Discovered {
+            frames: vec![1],
+            beyond: Vec::new(),
+        };
+        assert_eq!(nothing_beyond.beyond_note(&p), None);
+    }
+
+    /// Only the file name holds a placeholder: `#`, `%d`, `$F` and `@@` in a folder's name
+    /// are part of it (QA: `take#2/color.0001.exr` was taken for a pattern, and
+    /// `take#2/color.####.exr` for one with two placeholders).
+    #[test]
+    fn a_placeholder_is_only_looked_for_in_the_file_name() {
+        for plain in ["take#2/color.0001.exr", "a%d/$F/@@/c.exr", "x##/y.exr"] {
+            let p = PathPattern::parse(plain).unwrap();
+            assert!(!p.is_sequence(), "{plain}");
+            assert_eq!(p.path(Some(3)), PathBuf::from(plain));
+        }
+        for (raw, frame_7, hashes) in [
+            (
+                "take#2/c.####.exr",
+                "take#2/c.0007.exr",
+                "take#2/c.####.exr",
+            ),
+            ("a%d/c.%04d.exr", "a%d/c.0007.exr", "a%d/c.####.exr"),
+            ("$F/c.$F2.exr", "$F/c.07.exr", "$F/c.##.exr"),
+            ("@@/c.@@@.exr", "@@/c.007.exr", "@@/c.###.exr"),
+        ] {
+            let p = PathPattern::parse(raw).unwrap();
+            assert_eq!(p.path(Some(7)), PathBuf::from(frame_7), "{raw}");
+            assert_eq!(p.with_hashes(), hashes, "{raw}");
+        }
+        // And discovery lists the folder named so.
+        let dir = tempfile::tempdir().unwrap();
+        let take = dir.path().join("take#2");
+        std::fs::create_dir(&take).unwrap();
+        for name in ["c.0001.exr", "c.0002.exr"] {
+            std::fs::write(take.join(name), b"").unwrap();
+        }
+        let p = PathPattern::parse(&format!("{}/c.####.exr", take.display())).unwrap();
+        assert_eq!(p.discover().unwrap().frames, [1, 2]);
+    }
+
     #[test]
     fn frame_specs() {
         assert_eq!(parse_frames("1001-1004").unwrap(), [1001, 1002, 1003, 1004]);
@@ -496,6 +625,37 @@ mod tests {
         }
         let pattern = format!("{}/a.####.exr", dir.path().display());
         let p = PathPattern::parse(&pattern).unwrap();
-        assert_eq!(p.discover().unwrap(), [1, 3]);
+        assert_eq!(p.discover().unwrap().frames, [1, 3]);
+    }
+
+    /// Negative frames are found as shutter's own `####` writes them (`-002`: the sign takes
+    /// one of the four places), with the same strict padding as positive ones (QA: discovery
+    /// took digits only, so `c.-002.exr` was never a frame, even one shutter had written).
+    #[test]
+    fn discovery_finds_negative_frames_as_shutter_writes_them() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = PathPattern::parse(&format!("{}/c.####.exr", dir.path().display())).unwrap();
+        let frames = [-12345, -2, -1, 0, 1, 12345];
+        for frame in frames {
+            std::fs::write(p.path(Some(frame)), b"").unwrap();
+        }
+        // Not how shutter writes any frame: padded too little or too much, a sign on zero,
+        // a plus sign, two signs.
+        for name in [
+            "c.-02.exr",
+            "c.-0002.exr",
+            "c.-000.exr",
+            "c.+001.exr",
+            "c.--01.exr",
+        ] {
+            std::fs::write(dir.path().join(name), b"").unwrap();
+        }
+        assert_eq!(p.discover().unwrap().frames, frames);
+        // Unpadded: `%d` writes -2 as `-2`, never `-02` or `-0`.
+        let p = PathPattern::parse(&format!("{}/u.%d.exr", dir.path().display())).unwrap();
+        for name in ["u.-2.exr", "u.-02.exr", "u.-0.exr", "u.0.exr", "u.7.exr"] {
+            std::fs::write(dir.path().join(name), b"").unwrap();
+        }
+        assert_eq!(p.discover().unwrap().frames, [-2, 0, 7]);
     }
 }

@@ -180,7 +180,7 @@ fn missing_in_bulk(color: &PathPattern, frames: &[Option<i64>]) -> Option<Proble
     if !color.is_sequence() || frames.len() <= MISSING_IN_BULK {
         return None;
     }
-    let found: std::collections::HashSet<i64> = color.discover().ok()?.into_iter().collect();
+    let found: std::collections::HashSet<i64> = color.discover().ok()?.frames.into_iter().collect();
     let mut missing: Vec<i64> = frames
         .iter()
         .flatten()
