@@ -248,7 +248,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
     let mut report = crate::lab::diff::run(&job)?;
     report.warnings.splice(0..0, hole_warnings);
     if args.json {
-        super::out_json(&report);
+        super::out_json(&report)?;
     } else {
         let mut text = String::new();
         for f in &report.frames {
@@ -304,7 +304,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
                 report.frames.len()
             );
         }
-        out(&text);
+        out(&text)?;
     }
     if let Some(dir) = &args.report {
         crate::lab::diff::report::write(dir, &report)?;

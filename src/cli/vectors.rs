@@ -276,7 +276,7 @@ pub fn vectors(args: VectorsArgs) -> Result<i32> {
             "why": result.why,
             "readings": result.readings,
             "preset": text,
-        }));
+        }))?;
     } else {
         let mut out = format!(
             "frame {frame}: motion measured at {} points ({:.2} s); no motion fits to {} px\n",
@@ -297,7 +297,7 @@ pub fn vectors(args: VectorsArgs) -> Result<i32> {
             (None, Some(why)) => out += &format!("undecided: {why}\n"),
             (None, None) => {}
         }
-        super::out(&out);
+        super::out(&out)?;
     }
     match (&args.write_preset, &text) {
         (Some(file), Some(text)) => {
