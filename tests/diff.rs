@@ -740,3 +740,112 @@ fn negative_frames_are_compared_and_numbers_beyond_the_limit_named() {
         "{err}"
     );
 }
+
+/// A small 8-bit PNG of noise, as a candidate or reference frame.
+fn png(path: &std::path::Path, seed: u32) {
+    let values = noise(12 * 8 * 3, seed, 0.0, 255.0);
+    let bytes: Vec<u8> = values.iter().map(|v| *v as u8).collect();
+    image::RgbImage::from_raw(12, 8, bytes)
+        .unwrap()
+        .save(path)
+        .unwrap();
+}
+
+/// `--heatmap` naming an input (QA): `--heatmap a.exr` replaced the reference with PNG bytes
+/// and exited 0, and a heatmap pattern over the candidate's replaced every candidate frame.
+/// Refused before anything is written, as blur refuses an `-o` that names an input (the same
+/// check: the same path, another spelling, a symbolic or a hard link), with diff's code for
+/// an output that cannot be written (3); a name that is not `.png` is a usage error (2).
+#[test]
+fn a_heatmap_that_names_an_input_is_refused_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = pair(dir.path(), "a.exr", 12, 8, 1, 0.0);
+    let b = pair(dir.path(), "b.exr", 12, 8, 2, 0.0);
+    let before = std::fs::read(&a).unwrap();
+    let o = shutter(&["diff", &a, &b, "--heatmap", &a]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains(".png"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&a).unwrap(), before);
+    let elsewhere = s(&dir.path().join("heat.exr"));
+    let o = shutter(&["diff", &a, &b, "--heatmap", &elsewhere]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(!dir.path().join("heat.exr").exists());
+
+    // PNG inputs, where the extension alone does not tell.
+    let (pa, pb) = (dir.path().join("a.png"), dir.path().join("b.png"));
+    png(&pa, 3);
+    png(&pb, 4);
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink(&pa, dir.path().join("soft.png")).unwrap();
+        std::fs::hard_link(&pb, dir.path().join("hard.png")).unwrap();
+    }
+    let mut targets = vec![
+        s(&pa),
+        s(&pb),
+        format!("{}/./b.png", dir.path().display()),
+        format!("{}/sub/../a.png", dir.path().display()),
+    ];
+    std::fs::create_dir(dir.path().join("sub")).unwrap();
+    if cfg!(unix) {
+        targets.push(s(&dir.path().join("soft.png")));
+        targets.push(s(&dir.path().join("hard.png")));
+    }
+    let originals = (std::fs::read(&pa).unwrap(), std::fs::read(&pb).unwrap());
+    for target in &targets {
+        for idiff in [false, true] {
+            let mut args = vec!["diff", pa.to_str().unwrap(), pb.to_str().unwrap()];
+            args.extend(["--heatmap", target]);
+            if idiff {
+                args.push("--idiff");
+            }
+            let o = shutter(&args);
+            let code = if idiff { 4 } else { 3 };
+            assert_eq!(o.status.code(), Some(code), "{target}: {}", stderr(&o));
+            assert!(
+                stderr(&o).contains("overwrite the input"),
+                "{target}: {}",
+                stderr(&o)
+            );
+            assert!(stderr(&o).contains("--heatmap"), "{}", stderr(&o));
+            let now = (std::fs::read(&pa).unwrap(), std::fs::read(&pb).unwrap());
+            assert!(now == originals, "{target} replaced an input");
+        }
+    }
+
+    // Sequences: a heatmap pattern over the candidate's frames, or over the reference's
+    // another way spelt; none of them is written.
+    let seq = dir.path().join("seq");
+    std::fs::create_dir(&seq).unwrap();
+    for frame in 1..=3 {
+        png(&seq.join(format!("r.{frame:04}.png")), 10 + frame);
+        png(&seq.join(format!("t.{frame:04}.png")), 20 + frame);
+    }
+    let before = snapshot(&seq);
+    let bytes: Vec<Vec<u8>> = (1..=3)
+        .map(|f| std::fs::read(seq.join(format!("t.{f:04}.png"))).unwrap())
+        .collect();
+    let (r, t) = (
+        format!("{}/r.####.png", seq.display()),
+        format!("{}/t.####.png", seq.display()),
+    );
+    for heat in [t.clone(), format!("{}/./r.%04d.png", seq.display())] {
+        let o = shutter(&["diff", &r, &t, "--heatmap", &heat, "--json"]);
+        assert_eq!(o.status.code(), Some(3), "{heat}: {}", stderr(&o));
+        assert!(stderr(&o).contains("overwrite the input"), "{}", stderr(&o));
+        let error: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(error["error"]["problems"][0]["kind"], "output", "{error}");
+        assert_eq!(snapshot(&seq), before, "{heat}");
+    }
+    for (f, expected) in (1..=3).zip(&bytes) {
+        assert_eq!(
+            &std::fs::read(seq.join(format!("t.{f:04}.png"))).unwrap(),
+            expected
+        );
+    }
+    // A heatmap elsewhere is written as before.
+    let heat = format!("{}/h.####.png", dir.path().display());
+    let o = shutter(&["diff", &r, &t, "--heatmap", &heat]);
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
+    assert!(dir.path().join("h.0002.png").exists());
+}

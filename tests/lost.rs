@@ -682,3 +682,100 @@ fn a_full_disk_found_by_the_probe_exits_75() {
     assert_eq!(o.status.code(), Some(75), "{err}");
     assert!(err.contains("is full"), "{err}");
 }
+
+/// Runs the binary with its standard output on `/dev/full`: every write fails with ENOSPC.
+fn to_a_full_disk(args: &[&str]) -> std::process::Output {
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .expect("/dev/full");
+    Command::new(env!("CARGO_BIN_EXE_shutter"))
+        .args(args)
+        .stdout(full)
+        .output()
+        .expect("run shutter")
+}
+
+/// Standard output that cannot be written (QA): `blur --json > /dev/full` and `frames … >
+/// /dev/full` exited 0 with the document lost and nothing said. A full disk is ENOSPC
+/// wherever it is found (README: exit 75), stdout included; diff answers by its own table (3,
+/// an output not written). Each says so on stderr.
+#[test]
+fn standard_output_on_a_full_disk_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = sequence(dir.path(), 2, 4, 4);
+    let out = format!("{}/p/o.####.exr", dir.path().display());
+    let frame = dir.path().join("C.0001.exr");
+    let cycles = format!(
+        "{}/fixtures/cycles/shot.####.exr",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let cases: Vec<(Vec<&str>, i32)> = vec![
+        (vec!["blur", "--json", "--color", &color, "-o", &out], 75),
+        (vec!["blur", "--dry-run", "--color", &color, "-o", &out], 75),
+        (vec!["frames", "1-1000000", "--chunk-size", "1"], 75),
+        (vec!["frames", "1-3", "--count"], 75),
+        (vec!["info", frame.to_str().unwrap()], 75),
+        (vec!["info", "--json", frame.to_str().unwrap()], 75),
+        (vec!["presets"], 75),
+        (vec!["presets", "show", "blender"], 75),
+        (
+            vec!["vectors", "--preset", "blender", "--color", &cycles],
+            75,
+        ),
+        (vec!["frames", "--help"], 75),
+        (
+            vec!["diff", frame.to_str().unwrap(), frame.to_str().unwrap()],
+            3,
+        ),
+        (
+            vec![
+                "diff",
+                "--json",
+                frame.to_str().unwrap(),
+                frame.to_str().unwrap(),
+            ],
+            3,
+        ),
+    ];
+    for (args, code) in &cases {
+        let o = to_a_full_disk(args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(*code), "{args:?}: {err}");
+        assert!(err.contains("standard output"), "{args:?}: {err}");
+    }
+    // The frames themselves were written: a rerun with --skip-existing has nothing to do.
+    assert!(dir.path().join("p/o.0002.exr").exists());
+}
+
+/// A reader that closes the pipe early: before, the run exited 0 with nothing on stderr and
+/// the rest of its output lost. README: SIGPIPE does not stop a run, a closed pipe is an
+/// error on the write that meets it, ended as errors are: exit 1 (an output that cannot be
+/// written; diff's 3), named on stderr.
+#[test]
+fn a_closed_pipe_is_an_error_on_the_write_that_meets_it() {
+    let frame = format!(
+        "{}/fixtures/canonical/color.0001.exr",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let cases: [(&[&str], i32); 4] = [
+        (&["frames", "1-1000000", "--chunk-size", "1"], 1),
+        (&["frames", "1-3", "--count"], 1),
+        (&["info", "--json", &frame], 1),
+        (&["diff", &frame, &frame], 3),
+    ];
+    for (args, code) in cases {
+        // The reader is gone before the run starts: the first write meets EPIPE.
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let o = Command::new(env!("CARGO_BIN_EXE_shutter"))
+            .args(args)
+            .stdout(writer)
+            .output()
+            .expect("run shutter");
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(code), "{args:?}: {err}");
+        assert!(err.contains("standard output"), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}

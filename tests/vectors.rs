@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use crate::support::{read_exr_reference, s, shutter, stderr, stdout, write_exr};
+use crate::support::{read_exr_reference, s, shutter, snapshot, stderr, stdout, write_exr};
 
 const W: usize = 96;
 const H: usize = 64;
@@ -542,4 +542,81 @@ fn a_real_cycles_render_fits_the_blender_preset() {
         "{wrong}"
     );
     assert_eq!(outcome, "warned");
+}
+
+/// `--write-preset` naming an input (QA): `--write-preset cyc/shot.0003.exr` replaced frame 3
+/// of the colour with TOML and exited 0. Any input is refused before anything is written, as
+/// blur refuses an `-o` that names one: every frame of the colour pattern (read or not), and
+/// the vector pass, however the name is spelt or linked.
+#[test]
+fn a_preset_written_over_an_input_is_refused() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let dir = tempfile::tempdir().unwrap();
+    let cyc = dir.path().join("cyc");
+    std::fs::create_dir(&cyc).unwrap();
+    for f in 1..=3 {
+        let name = format!("shot.{f:04}.exr");
+        std::fs::copy(format!("{root}/fixtures/cycles/{name}"), cyc.join(&name)).unwrap();
+        std::fs::copy(cyc.join(&name), cyc.join(format!("vec.{f:04}.exr"))).unwrap();
+    }
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(cyc.join("shot.0001.exr"), dir.path().join("link.exr")).unwrap();
+    let color = s(&cyc.join("shot.####.exr"));
+    let velocity = s(&cyc.join("vec.####.exr"));
+    let before = snapshot(&cyc);
+    let mut targets = vec![
+        (s(&cyc.join("shot.0003.exr")), false),
+        (s(&cyc.join("shot.0001.exr")), false),
+        (format!("{}/./shot.0002.exr", cyc.display()), false),
+        (s(&cyc.join("vec.0002.exr")), true),
+    ];
+    if cfg!(unix) {
+        targets.push((s(&dir.path().join("link.exr")), false));
+    }
+    for (target, separate) in &targets {
+        let mut args = vec!["vectors", "--preset", "blender", "--color", &color];
+        if *separate {
+            args.extend(["--velocity", &velocity]);
+        }
+        args.extend(["--write-preset", target]);
+        let o = shutter(&args);
+        assert_eq!(o.status.code(), Some(1), "{target}: {}", stderr(&o));
+        assert!(stderr(&o).contains("overwrite the input"), "{}", stderr(&o));
+        assert!(stderr(&o).contains("--write-preset"), "{}", stderr(&o));
+        assert_eq!(snapshot(&cyc), before, "{target}");
+        // Refused before the fit: nothing printed.
+        assert!(o.stdout.is_empty(), "{}", stdout(&o));
+    }
+    // A preset file the fit reads is an input too.
+    let given = dir.path().join("given.toml");
+    std::fs::write(&given, "[velocity]\n").unwrap();
+    let o = shutter(&[
+        "vectors",
+        "--preset",
+        "blender",
+        "--preset",
+        &s(&given),
+        "--color",
+        &color,
+        "--write-preset",
+        &format!("{}/./given.toml", dir.path().display()),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("overwrite the input"), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&given).unwrap(), "[velocity]\n");
+    // Elsewhere it is written.
+    let preset = dir.path().join("fit.toml");
+    let o = shutter(&[
+        "vectors",
+        "--preset",
+        "blender",
+        "--color",
+        &color,
+        "--write-preset",
+        &s(&preset),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(std::fs::read_to_string(&preset)
+        .unwrap()
+        .contains("[velocity]"));
 }

@@ -34,7 +34,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     };
     let started = std::time::Instant::now();
     let report = crate::lab::bench::run(&options, &mut |line| eprintln!("shutter: bench: {line}"))?;
-    out(&crate::lab::bench::markdown(&report));
+    out(&crate::lab::bench::markdown(&report))?;
     eprintln!(
         "shutter: bench: {} rows in {:.1} s; wrote {}/bench.json, bench.md, pareto.svg, pareto.png, contact/",
         report.rows.len(),

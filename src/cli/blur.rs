@@ -78,7 +78,7 @@ pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
     let mut report = result?;
     report.command = if dof { "dof" } else { "blur" };
     if args.json {
-        super::out_json(&report);
+        super::out_json(&report)?;
     } else if args.dry_run {
         // One line a frame: what it would do, its output, and why a redo.
         let text: String = report
@@ -92,7 +92,7 @@ pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
                 format!("{frame}: {} {}{why}\n", p.action, p.output.display())
             })
             .collect();
-        out(&text);
+        out(&text)?;
     } else if verbose || terminal {
         eprintln!(
             "shutter: {} frames written, {} skipped in {:.2} s (read {:.2} s, process {:.2} s, write {:.2} s)",

@@ -1,6 +1,8 @@
 //! `shutter diff`: compare images or sequences, gate CI on a metric.
 
-use crate::error::{Error, Result};
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Problem, ProblemKind, Result};
 use crate::io::preset::Preset;
 use crate::io::sequence::{parse_frames, PathPattern};
 
@@ -130,6 +132,44 @@ impl Codes {
     }
 }
 
+/// Refuses, before anything is written, a `--heatmap` that would replace an input of any
+/// frame: the same check blur makes of `-o` (the same path, another spelling, a symbolic or
+/// hard link). Every frame concerned is named; diff answers it as an output it cannot write.
+fn refuse_overwriting_inputs(
+    heatmap: &PathPattern,
+    inputs: &[Option<&PathPattern>],
+    frames: &[Option<i64>],
+) -> Result<()> {
+    let outputs: Vec<PathBuf> = frames.iter().map(|&f| heatmap.path(f)).collect();
+    let writes: Vec<(&Path, Vec<PathBuf>)> = frames
+        .iter()
+        .zip(&outputs)
+        .map(|(&f, output)| {
+            let read = inputs.iter().flatten().map(|p| p.path(f)).collect();
+            (output.as_path(), read)
+        })
+        .collect();
+    let problems: Vec<Problem> = crate::io::passes::outputs_over_inputs(&writes)
+        .into_iter()
+        .map(|(i, input)| {
+            Problem::new(
+                ProblemKind::Output,
+                &outputs[i],
+                format!(
+                    "the heatmap would overwrite the input {}; choose another --heatmap",
+                    input.display()
+                ),
+            )
+            .frame(frames[i])
+        })
+        .collect();
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::Files(problems))
+    }
+}
+
 pub fn diff(args: DiffArgs) -> Result<i32> {
     let metric = crate::lab::metrics::Metric::parse(&args.metric).ok_or_else(|| {
         Error::usage(format!(
@@ -166,6 +206,17 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
         .as_deref()
         .map(PathPattern::parse)
         .transpose()?;
+    if let Some(heatmap) = &heatmap {
+        let png = Path::new(&heatmap.raw)
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+        if !png {
+            return Err(Error::usage(format!(
+                "--heatmap {}: the heatmap is written as PNG; give a name ending in .png",
+                heatmap.raw
+            )));
+        }
+    }
     let mut others = vec![&b];
     others.extend(sharp.as_ref());
     let (frames, hole_warnings) = frames_for(&a, &others, args.frames.as_deref())?;
@@ -175,6 +226,8 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
                 "--heatmap must be a pattern with #### or %04d when comparing sequences",
             ));
         }
+        let inputs = [Some(&a), Some(&b), sharp.as_ref()];
+        refuse_overwriting_inputs(heatmap, &inputs, &frames)?;
     }
     let job = crate::lab::diff::DiffJob {
         a,
@@ -196,7 +249,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
     let mut report = crate::lab::diff::run(&job)?;
     report.warnings.splice(0..0, hole_warnings);
     if args.json {
-        super::out_json(&report);
+        super::out_json(&report)?;
     } else {
         let mut text = String::new();
         for f in &report.frames {
@@ -252,7 +305,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
                 report.frames.len()
             );
         }
-        out(&text);
+        out(&text)?;
     }
     if let Some(dir) = &args.report {
         crate::lab::diff::report::write(dir, &report)?;

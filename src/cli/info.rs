@@ -71,7 +71,7 @@ pub fn info(args: InfoArgs) -> Result<()> {
         if args.json {
             documents.push(info_json(&shown));
         } else {
-            out(&info_text(&shown));
+            out(&info_text(&shown))?;
         }
     }
     if args.json {
@@ -90,7 +90,7 @@ pub fn info(args: InfoArgs) -> Result<()> {
             document["files"] = serde_json::Value::Array(documents);
             document
         };
-        super::out_json(&document);
+        super::out_json(&document)?;
     }
     if problems.is_empty() {
         Ok(())

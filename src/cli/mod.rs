@@ -17,16 +17,27 @@ pub use resolve::resolve;
 
 use clap::Parser;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Problem, ProblemKind, Result};
 
 use args::{Cli, Command};
 
-/// Parses the command line, runs it and returns the process exit code.
+/// Parses the command line, runs it and returns the process exit code, stdout flushed.
 pub fn main() -> i32 {
+    flush_stdout(parse_and_run())
+}
+
+fn parse_and_run() -> i32 {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
-            let _ = e.print();
+            // Help and version go to stdout: a failed write there is the run's error.
+            if let Err(error) = e.print() {
+                if !e.use_stderr() {
+                    let error = stdout_error(error);
+                    print_error(&error);
+                    return error.exit_code();
+                }
+            }
             let mut code = e.exit_code();
             let args: Vec<String> = std::env::args().skip(1).collect();
             let command = args.first().map_or("", String::as_str);
@@ -44,7 +55,9 @@ pub fn main() -> i32 {
                     .trim_start_matches("error: ")
                     .to_string();
                 let error = Error::usage(format!("{message} (see shutter {command} --help)"));
-                out_json(&error_json(command, &error, code));
+                if let Err(lost) = out_json(&error_json(command, &error, code)) {
+                    print_error(&lost);
+                }
             }
             return code;
         }
@@ -64,7 +77,9 @@ pub fn main() -> i32 {
         print_error(error);
         // Unless the command printed its own document with the error in it (info).
         if json && !JSON_PRINTED.load(std::sync::atomic::Ordering::Relaxed) {
-            out_json(&error_json(command, error, code));
+            if let Err(lost) = out_json(&error_json(command, error, code)) {
+                print_error(&lost);
+            }
         }
         code
     };
@@ -251,42 +266,74 @@ fn frames(args: args::FramesArgs) -> Result<()> {
     };
     let chunks = chunks(&frames, size);
     if args.count {
-        out(&format!("{}\n", chunks.len()));
-        return Ok(());
+        return out(&format!("{}\n", chunks.len()));
     }
     match args.chunk {
         Some(k) => match chunks.get(k) {
             Some(chunk) => out(&format!("{}\n", format_frames(chunk))),
-            None => {
-                return Err(Error::usage(format!(
-                    "--chunk {k}: the spec makes {} chunks of {size} (0 to {})",
-                    chunks.len(),
-                    chunks.len().saturating_sub(1)
-                )))
-            }
+            None => Err(Error::usage(format!(
+                "--chunk {k}: the spec makes {} chunks of {size} (0 to {})",
+                chunks.len(),
+                chunks.len().saturating_sub(1)
+            ))),
         },
         None => {
             let text: String = chunks.iter().map(|c| format_frames(c) + "\n").collect();
-            out(&text);
+            out(&text)
         }
     }
-    Ok(())
 }
 
-/// Writes `text` to stdout, the one way every command prints its results. A reader that
-/// closed the pipe early (`| head`) is not an error, so nothing panics.
 /// Whether a `--json` document went to stdout (one per run).
 static JSON_PRINTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
-/// Prints a `--json` document on stdout.
-fn out_json(document: &impl serde::Serialize) {
+/// Prints a `--json` document on stdout (see [`out`]).
+fn out_json(document: &impl serde::Serialize) -> Result<()> {
     JSON_PRINTED.store(true, std::sync::atomic::Ordering::Relaxed);
-    out(&(serde_json::to_string_pretty(document).unwrap_or_default() + "\n"));
+    out(&(serde_json::to_string_pretty(document).unwrap_or_default() + "\n"))
 }
 
-fn out(text: &str) {
+/// Writes `text` to stdout and flushes it, the one way every command prints its results. A
+/// write that fails is an error on the write that meets it: a full disk (ENOSPC, exit 75,
+/// as wherever it is found) or a reader that closed the pipe (Rust ignores SIGPIPE, so the
+/// write fails with EPIPE: exit 1, an output that cannot be written).
+fn out(text: &str) -> Result<()> {
     use std::io::Write;
-    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+    let mut stdout = std::io::stdout().lock();
+    stdout
+        .write_all(text.as_bytes())
+        .and_then(|()| stdout.flush())
+        .map_err(stdout_error)
+}
+
+/// A failed write or flush of stdout, as the file problem it is: what was printed there is
+/// lost.
+fn stdout_error(error: std::io::Error) -> Error {
+    Problem::new(
+        ProblemKind::of_output_error(&error),
+        "standard output",
+        format!("{error}: what this run printed there is lost"),
+    )
+    .into()
+}
+
+/// The end of every run: stdout flushed and the flush checked, so nothing printed is lost
+/// without a word. A run that succeeded (`code` 0) fails with the flush's error; one that
+/// failed keeps its code, and the flush's error is said too.
+fn flush_stdout(code: i32) -> i32 {
+    use std::io::Write;
+    match std::io::stdout().lock().flush() {
+        Ok(()) => code,
+        Err(error) => {
+            let error = stdout_error(error);
+            print_error(&error);
+            if code == 0 {
+                error.exit_code()
+            } else {
+                code
+            }
+        }
+    }
 }
 
 /// The most problems printed one by one; the rest are counted.

@@ -18,12 +18,12 @@ pub fn presets(args: PresetsArgs) -> Result<()> {
                     text += &format!("{:<10} expects: {}\n", "", preset.expects);
                 }
             }
-            out(&text);
+            out(&text)?;
             Ok(())
         }
         Some(PresetsCommand::Show { name }) => {
             if let Some((_, text)) = BUILTIN.iter().find(|(n, _)| *n == name) {
-                out(text);
+                out(text)?;
                 return Ok(());
             }
             // A file: check it loads and its settings are valid, then print it as written.
@@ -34,7 +34,7 @@ pub fn presets(args: PresetsArgs) -> Result<()> {
                 crate::io::preset::PRESET_CAP,
             )
             .map_err(|e| Error::usage(format!("cannot read {name}: {e}")))?;
-            out(&text);
+            out(&text)?;
             Ok(())
         }
         Some(PresetsCommand::Keys) => {
@@ -53,7 +53,7 @@ pub fn presets(args: PresetsArgs) -> Result<()> {
                         def.describe()
                     );
                 }
-                out(&(text + "\n"));
+                out(&(text + "\n"))?;
             }
             Ok(())
         }

@@ -3,10 +3,12 @@
 //! no motion, and the preset section that reads it; `--write-preset FILE` writes that
 //! section as a preset file.
 
+use std::path::{Path, PathBuf};
+
 use crate::error::{Error, Problem, ProblemKind, Result};
 use crate::io::file::FileInfo;
 use crate::io::passes::{fit, read_color, FitInput, Reading};
-use crate::io::preset::{Preset, Units};
+use crate::io::preset::{Preset, Units, BUILTIN};
 use crate::io::sequence::PathPattern;
 
 use super::args::VectorsArgs;
@@ -115,6 +117,42 @@ fn round(v: f64) -> f64 {
     (v * 1000.0).round() / 1000.0
 }
 
+/// Refuses, before anything is read or written, a `--write-preset` that would replace an
+/// input: any frame of the colour pattern, the vector pass of any of them, or a preset file
+/// given with `--preset`; the same check blur makes of `-o` (the same path, another spelling,
+/// a symbolic or hard link).
+fn refuse_overwriting_inputs(
+    file: &Path,
+    args: &VectorsArgs,
+    color: &PathPattern,
+    vectors: &PathPattern,
+    found: &[i64],
+) -> Result<()> {
+    let mut inputs: Vec<PathBuf> = found.iter().map(|&f| color.path(Some(f))).collect();
+    if args.velocity.is_some() {
+        inputs.extend(found.iter().map(|&f| vectors.path(Some(f))));
+    }
+    let builtin = |name: &str| BUILTIN.iter().any(|(n, _)| *n == name);
+    inputs.extend(
+        args.preset
+            .iter()
+            .filter(|name| !builtin(name))
+            .map(PathBuf::from),
+    );
+    match crate::io::passes::outputs_over_inputs(&[(file, inputs)]).first() {
+        None => Ok(()),
+        Some((_, input)) => Err(Problem::new(
+            ProblemKind::Output,
+            file,
+            format!(
+                "--write-preset would overwrite the input {}; choose another file",
+                input.display()
+            ),
+        )
+        .into()),
+    }
+}
+
 pub fn vectors(args: VectorsArgs) -> Result<i32> {
     let preset = Preset::load(&args.preset)?;
     let color = PathPattern::parse(&args.color)?;
@@ -128,6 +166,9 @@ pub fn vectors(args: VectorsArgs) -> Result<i32> {
         None => color.clone(),
     };
     let found = color.discover()?.frames;
+    if let Some(file) = &args.write_preset {
+        refuse_overwriting_inputs(file, &args, &color, &vectors, &found)?;
+    }
     let has = |f: i64| found.contains(&f);
     let frame = match args.frame {
         Some(f) => f,
@@ -235,7 +276,7 @@ pub fn vectors(args: VectorsArgs) -> Result<i32> {
             "why": result.why,
             "readings": result.readings,
             "preset": text,
-        }));
+        }))?;
     } else {
         let mut out = format!(
             "frame {frame}: motion measured at {} points ({:.2} s); no motion fits to {} px\n",
@@ -256,7 +297,7 @@ pub fn vectors(args: VectorsArgs) -> Result<i32> {
             (None, Some(why)) => out += &format!("undecided: {why}\n"),
             (None, None) => {}
         }
-        super::out(&out);
+        super::out(&out)?;
     }
     match (&args.write_preset, &text) {
         (Some(file), Some(text)) => {

@@ -3,7 +3,7 @@
 //! input, folders in the way of outputs, output folders that cannot be made or written);
 //! every problem found is returned, each naming its file and frame.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
@@ -63,6 +63,49 @@ fn same_entry(input: &Path, output: &Path) -> bool {
 #[cfg(not(unix))]
 fn same_entry(_input: &Path, _output: &Path) -> bool {
     false
+}
+
+/// What a file is, to tell an input under another name: its device and inode (Unix, through
+/// links, so a hard or symbolic link of an input is the input), else its resolved path.
+fn identity(path: &Path) -> Option<(u64, u64, Option<PathBuf>)> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        let meta = std::fs::metadata(path).ok()?;
+        Some((meta.dev(), meta.ino(), None))
+    }
+    #[cfg(not(unix))]
+    {
+        Some((0, 0, Some(path.canonicalize().ok()?)))
+    }
+}
+
+/// Outputs that would replace an input, for a command that writes files of its own beside
+/// what it reads (`diff --heatmap`, `vectors --write-preset`): `writes` holds each output
+/// with the inputs of its frame. Each output is checked against those by [`same_file`], as
+/// [`preflight`] checks blur's `-o`, and against every other input by what the file is
+/// ([`identity`]): an input that is read exists, so an output that would replace it exists
+/// too, and one look-up per output does for a whole sequence. Returns, for each output that
+/// would replace one, its index in `writes` and the input.
+pub fn outputs_over_inputs(writes: &[(&Path, Vec<PathBuf>)]) -> Vec<(usize, PathBuf)> {
+    let mut inputs = std::collections::HashMap::new();
+    for input in writes.iter().flat_map(|(_, inputs)| inputs) {
+        if let Some(id) = identity(input) {
+            inputs.entry(id).or_insert_with(|| input.clone());
+        }
+    }
+    writes
+        .par_iter()
+        .enumerate()
+        .filter_map(|(i, (output, own))| {
+            let clash = own
+                .iter()
+                .find(|input| same_file(input, output))
+                .cloned()
+                .or_else(|| identity(output).and_then(|id| inputs.get(&id).cloned()));
+            clash.map(|input| (i, input))
+        })
+        .collect()
 }
 
 /// A folder (or anything but a file) where a frame's output would go: it cannot be
