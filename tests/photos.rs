@@ -619,3 +619,48 @@ fn a_jpegs_exif_comes_out_in_a_tiff() {
         assert_tagged(&exiftool(&out).unwrap(), true);
     }
 }
+
+/// Runs `shutter dof` on `color` with a black blurriness map of its size (nothing blurs: the
+/// frame comes back as it was read), writing `out`; the run's output, whatever its exit.
+fn dof_still(color: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let (w, h) = image::image_dimensions(color).unwrap();
+    let coc = color.with_file_name("coc0.png");
+    image::save_buffer(
+        &coc,
+        &vec![0u8; (w * h) as usize],
+        w,
+        h,
+        image::ColorType::L8,
+    )
+    .unwrap();
+    let (color, coc, out) = (s(color), s(&coc), s(out));
+    let mut args = vec!["dof", "--color", &color, "--coc-map", &coc, "-o", &out];
+    args.extend(extra);
+    shutter(&args)
+}
+
+/// A JPEG holds at most 65535 pixels a side: a wider frame is refused by the preflight (bad
+/// settings, exit 1, nothing written), naming its size and the limit, not found at write
+/// time as a transient failure (exit 75).
+#[test]
+fn a_frame_wider_than_a_jpeg_holds_is_refused_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (70000u32, 2u32);
+    let input = dir.path().join("wide.png");
+    image::save_buffer(
+        &input,
+        &vec![90u8; (w * h * 3) as usize],
+        w,
+        h,
+        image::ColorType::Rgb8,
+    )
+    .unwrap();
+    let out = dir.path().join("out").join("wide.jpg");
+    let o = dof_still(&input, &out, &[]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("70000") && err.contains("65535"), "{err}");
+    assert!(!dir.path().join("out").exists(), "nothing written");
+    let o = dof_still(&input, &out, &["--dry-run"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+}
