@@ -24,8 +24,8 @@ use image::{ColorType, DynamicImage, ImageDecoder, ImageReader, Limits};
 use crate::frame::{Photo, Plane};
 
 pub use meta::{exif_orientation, jpeg_sampling, read_photo};
-pub use profile::Transfer;
-pub use write::{jpeg_left_out, write_photo, PhotoOptions};
+pub use profile::{chromaticities, Transfer};
+pub use write::{goes_out_grey, jpeg_left_out, out_of_range, write_photo, PhotoOptions};
 
 /// What the header of an integer image says.
 #[derive(Clone, Debug, PartialEq)]
@@ -424,7 +424,7 @@ pub fn write_color(
     srgb: bool,
 ) -> Result<(), String> {
     let options = PhotoOptions {
-        sixteen_bit,
+        bits: if sixteen_bit { 16 } else { 8 },
         linear: !srgb,
         jpeg_quality: 95,
         photo: None,
