@@ -341,8 +341,11 @@ pub struct Photo {
     /// A PNG's text chunks (tEXt, zTXt, iTXt; XMP's iTXt is `xmp`), in file order: written
     /// again to a PNG output.
     pub texts: Vec<PngText>,
-    /// Bits per sample of the input (8 or 16).
+    /// Bits per sample of the input: 8 or 16, or 32 for a float TIFF (whose values are read
+    /// as linear light, not through a profile's curves).
     pub bits: u8,
+    /// The input is grey (one channel, or grey and alpha): a grey output holds it again.
+    pub grey: bool,
     /// A JPEG's chroma subsampling: its luma sampling factors over its chroma's, (2, 2) for
     /// 4:2:0, (1, 1) for 4:4:4; `None` for other files.
     pub sampling: Option<(u8, u8)>,

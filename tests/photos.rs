@@ -619,3 +619,295 @@ fn a_jpegs_exif_comes_out_in_a_tiff() {
         assert_tagged(&exiftool(&out).unwrap(), true);
     }
 }
+
+/// Runs `shutter dof` on `color` with a black blurriness map of its size (nothing blurs: the
+/// frame comes back as it was read), writing `out`; the run's output, whatever its exit.
+fn dof_still(color: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let (w, h) = image::image_dimensions(color).unwrap();
+    let coc = color.with_file_name("coc0.png");
+    image::save_buffer(
+        &coc,
+        &vec![0u8; (w * h) as usize],
+        w,
+        h,
+        image::ColorType::L8,
+    )
+    .unwrap();
+    let (color, coc, out) = (s(color), s(&coc), s(out));
+    let mut args = vec!["dof", "--color", &color, "--coc-map", &coc, "-o", &out];
+    args.extend(extra);
+    shutter(&args)
+}
+
+/// The `--json` report's warnings of a run, as one string.
+fn json_warnings(o: &std::process::Output) -> String {
+    let report: serde_json::Value = serde_json::from_str(&stdout(o)).unwrap();
+    report["warnings"].to_string()
+}
+
+/// A float TIFF (scene-referred light, R running 0 to 8) comes out a float TIFF, its values
+/// above 1 kept; an 8/16-bit output of it clips them and says so, naming the file; float
+/// PNG, which PNG cannot hold, is refused.
+#[test]
+fn a_float_tiff_comes_out_float_and_an_integer_output_says_what_it_clips() {
+    use tiff::encoder::{colortype, TiffEncoder};
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (96u32, 64u32);
+    let input = dir.path().join("hdr.tif");
+    let red = |x: u32| x as f32 / w as f32 * 8.0;
+    let pixels: Vec<f32> = (0..w * h).flat_map(|i| [red(i % w), 0.5, 0.25]).collect();
+    let mut tiff = TiffEncoder::new(std::fs::File::create(&input).unwrap()).unwrap();
+    tiff.write_image::<colortype::RGB32Float>(w, h, &pixels)
+        .unwrap();
+    for (name, extra) in [
+        ("out.tif", &[][..]),
+        ("out32.tif", &["--bit-depth", "32"][..]),
+    ] {
+        let out = dir.path().join(name);
+        let o = dof_still(&input, &out, extra);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let image = image::open(&out).unwrap();
+        assert_eq!(image.color(), image::ColorType::Rgb32F, "{name}");
+        let image = image.to_rgb32f();
+        for x in [0, 20, 95] {
+            let got = image.get_pixel(x, 5)[0];
+            assert!((got - red(x)).abs() < 1e-4, "{name} x {x}: {got}");
+        }
+        assert!(!stderr(&o).contains("clip"), "{name}: {}", stderr(&o));
+    }
+    for name in ["out.png", "out8.tif"] {
+        let out = dir.path().join(name);
+        let extra: &[&str] = if name == "out8.tif" {
+            &["--json", "--bit-depth", "8"]
+        } else {
+            &["--json"]
+        };
+        let o = dof_still(&input, &out, extra);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let warnings = json_warnings(&o);
+        assert!(
+            warnings.contains(name) && warnings.contains("clipped") && warnings.contains("float"),
+            "{name}: {warnings}"
+        );
+    }
+    let o = dof_still(&input, &dir.path().join("f.png"), &["--bit-depth", "32"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("PNG"), "{}", stderr(&o));
+}
+
+/// A Gray ICC profile (ICC.1 kTRC, a gamma of 2.2, as Photoshop's "Gray Gamma 2.2"), made
+/// by hand as mk.py in QA's repro made it: header, description, white point and curve.
+fn grey_icc() -> Vec<u8> {
+    let s15 = |v: f64| ((v * 65536.0).round() as i32).to_be_bytes();
+    let mut desc = b"desc\0\0\0\0".to_vec();
+    desc.extend(9u32.to_be_bytes());
+    desc.extend(b"Gray 2.2\0");
+    desc.extend([0u8; 79]);
+    let mut wtpt = b"XYZ \0\0\0\0".to_vec();
+    for v in [0.9642, 1.0, 0.8249] {
+        wtpt.extend(s15(v));
+    }
+    let ktrc = [
+        &b"curv\0\0\0\0"[..],
+        &1u32.to_be_bytes(),
+        &563u16.to_be_bytes(),
+    ]
+    .concat();
+    let tags: [(&[u8], Vec<u8>); 3] = [(b"desc", desc), (b"wtpt", wtpt), (b"kTRC", ktrc)];
+    let (mut table, mut data) = (Vec::new(), Vec::new());
+    let start = 132 + 12 * tags.len();
+    for (signature, mut body) in tags {
+        body.resize(body.len().div_ceil(4) * 4, 0);
+        table.extend(signature);
+        table.extend(((start + data.len()) as u32).to_be_bytes());
+        table.extend((body.len() as u32).to_be_bytes());
+        data.extend(body);
+    }
+    let mut icc = ((128 + 4 + table.len() + data.len()) as u32)
+        .to_be_bytes()
+        .to_vec();
+    icc.extend(b"none\x02\x10\0\0mntrGRAYXYZ ");
+    icc.extend([0u8; 12]);
+    icc.extend(b"acspAPPL");
+    icc.extend([0u8; 24]);
+    for v in [0.9642, 1.0, 0.8249] {
+        icc.extend(s15(v));
+    }
+    icc.extend([0u8; 48]);
+    icc.extend(((table.len() / 12) as u32).to_be_bytes());
+    icc.extend(table);
+    icc.extend(data);
+    icc
+}
+
+/// A black-and-white photo with its Gray profile comes out grey with that profile, in a JPEG,
+/// a PNG and a TIFF: what a photographer's grey file is, not RGB with the profile dropped.
+#[test]
+fn a_grey_photo_comes_out_grey_with_its_gray_profile() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (40u32, 24u32);
+    let input = dir.path().join("grey.jpg");
+    let pixels: Vec<u8> = (0..w * h).map(|i| (i % w * 6) as u8).collect();
+    let icc = grey_icc();
+    let mut encoder = jpeg_encoder::Encoder::new_file(&input, 95).unwrap();
+    encoder.add_icc_profile(&icc).unwrap();
+    encoder
+        .encode(&pixels, w as u16, h as u16, jpeg_encoder::ColorType::Luma)
+        .unwrap();
+    assert_eq!(
+        decoder(&input).icc_profile().unwrap().as_deref(),
+        Some(&icc[..])
+    );
+    for name in ["out.jpg", "out.png", "out.tif"] {
+        let out = dir.path().join(name);
+        let o = dof_still(&input, &out, &[]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let mut read = decoder(&out);
+        assert_eq!(read.color_type(), image::ColorType::L8, "{name}");
+        // (The image crate's TIFF reader gives no profile: the tiff crate reads its tag.)
+        let profile = if name.ends_with(".tif") {
+            let file = std::fs::File::open(&out).unwrap();
+            let mut tiff = tiff::decoder::Decoder::new(file).unwrap();
+            tiff.get_tag_u8_vec(tiff::tags::Tag::IccProfile).ok()
+        } else {
+            read.icc_profile().unwrap()
+        };
+        assert_eq!(profile.as_deref(), Some(&icc[..]), "{name}");
+        let result = image::open(&out).unwrap().to_luma8();
+        let original = image::open(&input).unwrap().to_luma8();
+        for (a, b) in result.pixels().zip(original.pixels()) {
+            assert!(
+                (a[0] as i32 - b[0] as i32).abs() <= 3,
+                "{name}: {a:?} {b:?}"
+            );
+        }
+        if let Some(tags) = exiftool(&out) {
+            assert_eq!(tags["ColorSpaceData"], "GRAY", "{name}: {tags}");
+            assert_eq!(tags["ProfileDescription"], "Gray 2.2", "{name}: {tags}");
+        }
+    }
+}
+
+/// A CMYK JPEG with a CMYK profile: the decoder turns its colour into RGB without the
+/// profile, and an RGB output cannot embed a CMYK profile: the note says both, not that the
+/// profile is kept.
+#[test]
+fn a_cmyk_jpegs_note_says_its_profile_is_left_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16u32, 8u32);
+    let input = dir.path().join("cmyk.jpg");
+    // A CMYK output profile: sRGB's, its data colour space said to be CMYK (the note is
+    // about the colour space; moxcms reads no curves for it).
+    let mut icc = moxcms::ColorProfile::new_srgb().encode().unwrap();
+    icc[16..20].copy_from_slice(b"CMYK");
+    icc[12..16].copy_from_slice(b"prtr");
+    let pixels: Vec<u8> = (0..w * h)
+        .flat_map(|i| [(i * 3) as u8, 40, 90, 10])
+        .collect();
+    let mut encoder = jpeg_encoder::Encoder::new_file(&input, 95).unwrap();
+    encoder.add_icc_profile(&icc).unwrap();
+    encoder
+        .encode(&pixels, w as u16, h as u16, jpeg_encoder::ColorType::Cmyk)
+        .unwrap();
+    let out = dir.path().join("out.jpg");
+    let o = dof_still(&input, &out, &["--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let warnings = json_warnings(&o);
+    assert!(!warnings.contains("the profile is kept"), "{warnings}");
+    assert!(
+        warnings.contains("CMYK") && warnings.contains("not embedded"),
+        "{warnings}"
+    );
+    assert!(warnings.contains("without the profile"), "{warnings}");
+    assert_eq!(decoder(&out).icc_profile().unwrap(), None);
+}
+
+/// An RGBA photo written to JPEG, which has no alpha: the JPEG holds its straight colour (a
+/// half-transparent (127, 119, 36) stays (127, 119, 36), not darkened over black), and the
+/// run says that the alpha was left out.
+#[test]
+fn a_jpeg_of_an_rgba_photo_holds_its_straight_colour_and_says_alpha_is_dropped() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (64u32, 16u32);
+    let input = dir.path().join("rgba.png");
+    let pixels: Vec<u8> = (0..w * h)
+        .flat_map(|i| [127, 119, 36, (i % w * 4 + 3) as u8])
+        .collect();
+    image::save_buffer(&input, &pixels, w, h, image::ColorType::Rgba8).unwrap();
+    let out = dir.path().join("a.jpg");
+    let o = dof_still(&input, &out, &["--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let result = image::open(&out).unwrap().to_rgb8();
+    // x = 31: alpha 127.
+    for x in [8, 31, 60] {
+        let p = result.get_pixel(x, 8).0;
+        for (got, want) in p.iter().zip([127, 119, 36]) {
+            assert!((*got as i32 - want).abs() <= 3, "x {x}: {p:?}");
+        }
+    }
+    let warnings = json_warnings(&o);
+    assert!(
+        warnings.contains("alpha") && warnings.contains("a.jpg"),
+        "{warnings}"
+    );
+}
+
+/// A JPEG holds at most 65535 pixels a side: a wider frame is refused by the preflight (bad
+/// settings, exit 1, nothing written), naming its size and the limit, not found at write
+/// time as a transient failure (exit 75).
+#[test]
+fn a_frame_wider_than_a_jpeg_holds_is_refused_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (70000u32, 2u32);
+    let input = dir.path().join("wide.png");
+    image::save_buffer(
+        &input,
+        &vec![90u8; (w * h * 3) as usize],
+        w,
+        h,
+        image::ColorType::Rgb8,
+    )
+    .unwrap();
+    let out = dir.path().join("out").join("wide.jpg");
+    let o = dof_still(&input, &out, &[]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("70000") && err.contains("65535"), "{err}");
+    assert!(!dir.path().join("out").exists(), "nothing written");
+    let o = dof_still(&input, &out, &["--dry-run"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+}
+
+/// An Adobe RGB photo written to EXR: its primaries and white, from the profile's D50-adapted
+/// colorants, go in the EXR's `chromaticities`, as Adobe RGB (1998) gives them.
+#[test]
+fn an_adobe_rgb_photos_exr_carries_its_primaries_as_chromaticities() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16u32, 8u32);
+    let input = dir.path().join("adobe.jpg");
+    let pixels: Vec<u8> = (0..w * h).flat_map(|i| [(i * 2) as u8, 100, 60]).collect();
+    let mut encoder = jpeg_encoder::Encoder::new_file(&input, 95).unwrap();
+    encoder.add_icc_profile(&adobe_icc()).unwrap();
+    encoder
+        .encode(&pixels, w as u16, h as u16, jpeg_encoder::ColorType::Rgb)
+        .unwrap();
+    let out = dir.path().join("out.exr");
+    let o = dof_still(&input, &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let meta = exr::meta::MetaData::read_from_file(&out, false).unwrap();
+    let c = meta.headers[0]
+        .shared_attributes
+        .chromaticities
+        .expect("chromaticities written");
+    let got = [c.red, c.green, c.blue, c.white].map(|v| (v.0, v.1));
+    let adobe = [(0.64, 0.33), (0.21, 0.71), (0.15, 0.06), (0.3127, 0.3290)];
+    for (g, a) in got.iter().zip(adobe) {
+        assert!(
+            (g.0 - a.0).abs() < 1e-3 && (g.1 - a.1).abs() < 1e-3,
+            "{got:?} vs {adobe:?}"
+        );
+    }
+    if let Some(info) = oiiotool_info(&out) {
+        assert!(info.contains("chromaticities"), "{info}");
+    }
+}

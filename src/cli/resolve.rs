@@ -3,6 +3,7 @@
 //! inputs, output and frames listed).
 
 use crate::error::{Error, Result};
+use crate::io::image::ImageFormat;
 use crate::io::output::{OutputFormat, OutputOptions};
 use crate::io::passes::Inputs;
 use crate::io::preset::{Encoding, Preset, Transfer};
@@ -85,7 +86,6 @@ fn as_pattern(path: &str) -> String {
 /// Warnings for output flags the chosen format cannot use (given on the command line; a
 /// preset's output section serves every format, so its keys are not warned about).
 fn output_warnings(given: &settings::Given, format: OutputFormat) -> Vec<String> {
-    use crate::io::image::ImageFormat;
     let typed = |name: &str| given.get(name).is_some();
     let mut warnings = Vec::new();
     let exr = format == OutputFormat::Exr;
@@ -216,6 +216,14 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
             args.output
         )));
     };
+    // (JPEG and EXR outputs ignore a bit depth, with a warning: `output_warnings`.)
+    if settings.output.bit_depth == Some(32) && format == OutputFormat::Image(ImageFormat::Png) {
+        return Err(Error::usage(format!(
+            "bit depth 32 (float) is for TIFF output: -o {} is a PNG, which holds no float \
+             samples; write a .tif or .exr, or use --bit-depth 16",
+            args.output
+        )));
+    }
     let mut warnings = warnings;
     warnings.extend(displace_warning);
     warnings.extend(output_warnings(&args.settings.0, format));

@@ -46,6 +46,9 @@ pub struct ExrOutput {
     /// Every channel as 16-bit half; off: each channel as the input stored it (32-bit float
     /// when the input is not an EXR).
     pub half: bool,
+    /// The `chromaticities` of an output not made like an EXR: a photo's primaries and white,
+    /// from its ICC profile (`io::image::chromaticities`); set per frame.
+    pub chromaticities: Option<exr::meta::attribute::Chromaticities>,
 }
 
 /// The compression when neither the settings nor the input say one: ZIP over 16 lines, what
@@ -104,7 +107,10 @@ pub fn write_like(
             display_window: display,
             ..h.shared_attributes.clone()
         },
-        None => ImageAttributes::new(display),
+        None => ImageAttributes {
+            chromaticities: output.chromaticities,
+            ..ImageAttributes::new(display)
+        },
     };
     // Each part, and the lossless part its data needs under DWA.
     let mut layers = Vec::new();

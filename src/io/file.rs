@@ -325,6 +325,11 @@ impl FileInfo {
         matches!(self.kind, FileKind::Image { float: false, .. })
     }
 
+    /// A PNG, JPEG or TIFF, integer or float (not an EXR).
+    pub fn is_image(&self) -> bool {
+        matches!(self.kind, FileKind::Image { .. })
+    }
+
     /// The problem of a file that is no longer what the preflight checked: `what` changed.
     /// An EXR's `channels` (indices into `channels`, all in parts of one data window),
     /// `bits` as in [`FileInfo::read_bits`], at their parts' window: the colour's, or that of

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use crate::error::{Problem, ProblemKind};
-use crate::frame::{Frame, LayerClass, Plane, Window, Windows};
+use crate::frame::{Frame, LayerClass, Photo, Plane, Window, Windows};
 use crate::io::exr::{self as exr_io, ExrOptions};
 use crate::io::exr_like::{self, ExrOutput};
 use crate::io::file::{FileInfo, FileKind};
@@ -380,6 +380,132 @@ pub fn write_exr_atomic(
     })
 }
 
+/// Bits per sample of a picture output: `--bit-depth`, else the input photo's (a float
+/// TIFF's 32 where the output is a TIFF, 16 in a PNG, the most it holds), else 8; a JPEG's
+/// are 8 whatever is asked.
+pub fn picture_bits(photo: Option<&Photo>, format: ImageFormat, options: &OutputOptions) -> u8 {
+    let bits = options
+        .bit_depth
+        .unwrap_or_else(|| match photo.map_or(8, |p| p.bits) {
+            32 if format != ImageFormat::Tiff => 16,
+            bits => bits,
+        });
+    if format == ImageFormat::Jpeg {
+        8
+    } else {
+        bits
+    }
+}
+
+/// An ICC profile's primaries and white as an EXR's `chromaticities`.
+fn exr_chromaticities(icc: &[u8]) -> Option<exr::meta::attribute::Chromaticities> {
+    let [r, g, b, w] = image_io::chromaticities(icc)?;
+    let xy = |(x, y): (f64, f64)| exr::math::Vec2(x as f32, y as f32);
+    Some(exr::meta::attribute::Chromaticities {
+        red: xy(r),
+        green: xy(g),
+        blue: xy(b),
+        white: xy(w),
+    })
+}
+
+/// What writing `frame` to `path` leaves out or changes, in words for the run's warnings (the
+/// caller names the output): blocks too large for a JPEG's segments, values an integer
+/// output clips (a float input's above all), an alpha a JPEG cannot hold, a profile that
+/// cannot go with what is written, primaries an EXR cannot be told.
+pub fn output_notes(path: &Path, frame: &Frame, options: &OutputOptions) -> Vec<String> {
+    let (Some(format), Some(color)) = (OutputFormat::from_path(path), frame.color.as_ref()) else {
+        return Vec::new();
+    };
+    let photo = frame.carried.photo.as_ref();
+    let icc = photo.and_then(|p| p.icc.as_deref());
+    let mut notes = Vec::new();
+    let format = match format {
+        OutputFormat::Image(format) => format,
+        OutputFormat::Exr => {
+            if icc.is_some_and(|icc| image_io::chromaticities(icc).is_none()) {
+                notes.push(
+                    "the input's ICC profile gives no RGB primaries (not an RGB matrix \
+                     profile): the EXR holds no chromaticities, and readers take Rec. 709's"
+                        .into(),
+                );
+            }
+            return notes;
+        }
+    };
+    if let (ImageFormat::Jpeg, Some(photo)) = (format, photo) {
+        for (block, bytes) in image_io::jpeg_left_out(photo) {
+            notes.push(format!(
+                "the {block} the input holds ({} KB) is larger than a JPEG segment holds \
+                 (64 KB): the JPEG output leaves it out (a PNG or TIFF output keeps it)",
+                bytes.div_ceil(1024)
+            ));
+        }
+    }
+    let bits = picture_bits(photo, format, options);
+    let float_in = photo.is_some_and(|p| p.bits == 32);
+    let float_out = bits == 32 && format == ImageFormat::Tiff;
+    let rgb = [&color.r[..], &color.g[..], &color.b[..]];
+    let alpha = color.a.as_deref();
+    let (above, below) = image_io::out_of_range(rgb, alpha);
+    if !float_out && (above || below || float_in) {
+        let clipped = match (above, below) {
+            (true, true) => "values above 1 and below 0 are clipped",
+            (true, false) => "values above 1 are clipped to 1",
+            (false, true) => "values below 0 are clipped to 0",
+            (false, false) => "its values (all within 0 to 1) are rounded to codes",
+        };
+        notes.push(if float_in {
+            format!(
+                "the colour file holds float values, which this {bits}-bit {} cannot: \
+                 {clipped} (a .tif output, or --bit-depth 32, keeps them float; so does \
+                 .exr)",
+                format.name()
+            )
+        } else {
+            format!(
+                "{clipped} in this {bits}-bit {} (an .exr output keeps them)",
+                format.name()
+            )
+        });
+    }
+    if format == ImageFormat::Jpeg && alpha.is_some_and(|a| a.iter().any(|&a| a < OPAQUE)) {
+        notes.push(
+            "JPEG holds no alpha: the alpha is left out, and the colour written straight (as \
+             a PNG holds it, not composited over any background; black where alpha is 0); a \
+             .png or .tif output keeps the alpha"
+                .into(),
+        );
+    }
+    let transfer = icc.map(|icc| image_io::Transfer::of(Some(icc)));
+    let grey = image_io::goes_out_grey(photo, format, bits, rgb, alpha.is_some());
+    if transfer.as_ref().is_some_and(|t| t.grey) && !grey {
+        let why = if float_out {
+            "a float TIFF is written RGB"
+        } else if photo.is_some_and(|p| !p.grey) {
+            "the colour file is RGB"
+        } else if format == ImageFormat::Tiff && alpha.is_some() {
+            "a TIFF of grey and alpha is not written"
+        } else {
+            "the frame's R, G and B differ"
+        };
+        notes.push(format!(
+            "the input's Gray ICC profile is left out: this output is RGB ({why})"
+        ));
+    }
+    if float_out && icc.is_some() && !float_in {
+        notes.push(
+            "a float TIFF holds linear light: the input's ICC profile, which describes its \
+             8/16-bit codes, is not embedded"
+                .into(),
+        );
+    }
+    notes
+}
+
+/// Alpha below this is not opaque: half an 8-bit code under 1.
+const OPAQUE: f32 = 1.0 - 0.5 / 255.0;
+
 /// Writes the colour of `frame` to `path` atomically. The folder must exist.
 pub fn write_frame(
     path: &Path,
@@ -418,9 +544,19 @@ pub fn write_views(
             };
             let display = views[0].windows.display;
             let headers = views[0].carried.headers.clone();
+            // A photo's primaries, from its profile, where no EXR header says them.
+            let icc = views[0]
+                .carried
+                .photo
+                .as_ref()
+                .and_then(|p| p.icc.as_deref());
+            let exr = ExrOutput {
+                chromaticities: icc.and_then(exr_chromaticities),
+                ..options.exr
+            };
             let parts = exr_parts(views, &headers);
             write_atomic(path, |writer| {
-                exr_like::write_like(writer, display, parts, &options.exr, &options.record, every)
+                exr_like::write_like(writer, display, parts, &exr, &options.record, every)
             })
         }
         OutputFormat::Image(format) => write_atomic(path, |writer| {
@@ -448,11 +584,8 @@ pub fn write_views(
             let alpha = color.a.as_deref().map(on_display);
             // What the input photo held, held again; its bit depth unless told otherwise.
             let photo = frame.carried.photo.as_ref();
-            let bits = options
-                .bit_depth
-                .unwrap_or_else(|| photo.map_or(8, |p| p.bits));
             let photo_options = image_io::PhotoOptions {
-                sixteen_bit: bits == 16,
+                bits: picture_bits(photo, format, options),
                 linear: !options.srgb,
                 jpeg_quality: options.jpeg_quality,
                 photo,

@@ -15,7 +15,8 @@ use crate::frame::Frame;
 use crate::gpu::{Backend, BackendReport};
 use crate::io::lock::OutputLock;
 use crate::io::output::{
-    existing_frame_problem, remove_stale_temporaries, write_views, OutputFormat, OutputOptions,
+    existing_frame_problem, output_notes, remove_stale_temporaries, write_views, OutputFormat,
+    OutputOptions,
 };
 use crate::io::passes::{
     output_folder_problems, preflight, read_frame_keeping, FramePlan, Inputs, PlanOptions,
@@ -667,21 +668,9 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                         warn_replaced(&mut report, on_event, &replaced, frame);
                         report.replaced.add(replaced);
                         let path = job.output.path(frame);
-                        let jpeg = OutputFormat::from_path(&path)
-                            == Some(OutputFormat::Image(crate::io::image::ImageFormat::Jpeg));
-                        if let (true, Some(photo)) = (jpeg, out[0].carried.photo.as_ref()) {
-                            for (block, bytes) in crate::io::image::jpeg_left_out(photo) {
-                                warn(
-                                    &mut report,
-                                    on_event,
-                                    format!(
-                                        "the {block} the input holds ({} KB) is larger than a \
-                                         JPEG segment holds (64 KB): the JPEG output leaves it \
-                                         out (a PNG or TIFF output keeps it)",
-                                        bytes.div_ceil(1024)
-                                    ),
-                                );
-                            }
+                        let notes = output_notes(&path, &out[0], &job.output_options);
+                        for note in notes {
+                            warn(&mut report, on_event, format!("{}: {note}", job.output.raw));
                         }
                         let t = Instant::now();
                         // Folders are made only when a frame is ready to go in them, so a run

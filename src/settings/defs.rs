@@ -665,16 +665,17 @@ pub const DEFS: &[Def] = &[
         section: Section::Output,
         applies: &[],
         value_name: "BITS",
-        help: "bits per channel of PNG and TIFF output (JPEG is always 8)",
+        help: "bits per channel of PNG and TIFF output: 8, 16, or 32 (float, TIFF only; \
+               JPEG is always 8)",
         kind: Kind::Number {
             min: 8.0,
-            max: 16.0,
+            max: 32.0,
             above: false,
             whole: true,
-            valid: Some((|v| v == 8.0 || v == 16.0, "8 or 16")),
+            valid: Some((|v| v == 8.0 || v == 16.0 || v == 32.0, "8, 16 or 32")),
             names: &[],
         },
-        unset: "as the input; 8 for an EXR input",
+        unset: "as the input (a float TIFF: float in a TIFF, 16 in a PNG); 8 for an EXR input",
         get: |s| {
             s.output
                 .bit_depth

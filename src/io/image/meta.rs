@@ -75,6 +75,7 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
         iptc,
         texts,
         bits,
+        grey: color.channel_count() <= 2,
         sampling,
         premultiplied,
     })

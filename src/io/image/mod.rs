@@ -24,8 +24,8 @@ use image::{ColorType, DynamicImage, ImageDecoder, ImageReader, Limits};
 use crate::frame::{Photo, Plane};
 
 pub use meta::{exif_orientation, jpeg_sampling, read_photo};
-pub use profile::Transfer;
-pub use write::{jpeg_left_out, write_photo, PhotoOptions};
+pub use profile::{chromaticities, Transfer};
+pub use write::{goes_out_grey, jpeg_left_out, out_of_range, write_photo, PhotoOptions};
 
 /// What the header of an integer image says.
 #[derive(Clone, Debug, PartialEq)]
@@ -379,6 +379,26 @@ pub enum ImageFormat {
 }
 
 impl ImageFormat {
+    /// The format's name, as a reader knows it.
+    pub fn name(self) -> &'static str {
+        match self {
+            ImageFormat::Png => "PNG",
+            ImageFormat::Tiff => "TIFF",
+            ImageFormat::Jpeg => "JPEG",
+        }
+    }
+
+    /// The most pixels a side the format holds: a JPEG frame header stores each side in 16
+    /// bits (ITU T.81, B.2.2), a PNG's IHDR in 31 (PNG, 11.2.2), a TIFF's ImageWidth and
+    /// ImageLength in a LONG (TIFF 6.0). Only JPEG's is within the pixel limit's reach.
+    pub fn most_a_side(self) -> u64 {
+        match self {
+            ImageFormat::Png => (1 << 31) - 1,
+            ImageFormat::Tiff => u32::MAX as u64,
+            ImageFormat::Jpeg => u16::MAX as u64,
+        }
+    }
+
     pub fn from_path(path: &Path) -> Option<Self> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         match ext.as_str() {
@@ -404,7 +424,7 @@ pub fn write_color(
     srgb: bool,
 ) -> Result<(), String> {
     let options = PhotoOptions {
-        sixteen_bit,
+        bits: if sixteen_bit { 16 } else { 8 },
         linear: !srgb,
         jpeg_quality: 95,
         photo: None,

@@ -9,9 +9,13 @@
 //! profile's 3×3 matrix, so blurring in the profile's linear RGB and in XYZ agree, and the
 //! output, encoded with the same curves, is in the input's colour space and embeds its
 //! profile again. A profile without curves (LUT-based, CMYK, Lab) leaves the colour decoded
-//! with sRGB's curve, with a note saying so.
+//! with sRGB's curve, with a note saying so (and that a profile of another colour space than
+//! the output's is not embedded).
+//!
+//! For an EXR output, which holds no ICC profile, [`chromaticities`] gives the profile's
+//! primaries and white as the EXR `chromaticities` attribute wants them.
 
-use moxcms::{ColorProfile, DataColorSpace, ToneCurveEvaluator, ToneReprCurve};
+use moxcms::{ColorProfile, DataColorSpace, Matrix3d, ToneCurveEvaluator, ToneReprCurve, Xyz};
 
 /// A curve from encoded [0, 1] to linear [0, 1].
 type Curve = Box<dyn ToneCurveEvaluator + Send + Sync>;
@@ -21,6 +25,9 @@ pub struct Transfer {
     curves: Option<[Curve; 3]>,
     /// Whether the profile describes RGB colour, and so may be embedded in an RGB output.
     pub embeds: bool,
+    /// Whether the profile describes grey (a `GRAY` profile's `kTRC`): it may be embedded in a
+    /// grey output, not in an RGB one.
+    pub grey: bool,
     /// What the profile could not give (its curves, or its colour space), for the run's notes.
     pub note: Option<String>,
 }
@@ -30,6 +37,7 @@ impl std::fmt::Debug for Transfer {
         f.debug_struct("Transfer")
             .field("linear", &self.curves.is_none())
             .field("embeds", &self.embeds)
+            .field("grey", &self.grey)
             .field("note", &self.note)
             .finish()
     }
@@ -63,6 +71,7 @@ impl Transfer {
         Transfer {
             curves: None,
             embeds: false,
+            grey: false,
             note: None,
         }
     }
@@ -72,6 +81,7 @@ impl Transfer {
         Transfer {
             curves: Some(srgb_curves()),
             embeds: false,
+            grey: false,
             note: None,
         }
     }
@@ -82,11 +92,20 @@ impl Transfer {
         let Some(icc) = icc else {
             return Transfer::srgb();
         };
+        // A profile of no curves: sRGB's stand in. Whether the profile goes out again is
+        // said as it is: one of RGB colour is embedded in an RGB output, any other is not.
         let fallback = |embeds: bool, why: String| Transfer {
             curves: Some(srgb_curves()),
             embeds,
+            grey: false,
             note: Some(format!(
-                "{why}: the colour is linearised with sRGB's curve; the profile is kept"
+                "{why}: the colour is linearised with sRGB's curve; {}",
+                if embeds {
+                    "the profile is embedded in the output again"
+                } else {
+                    "the profile is not embedded in the output (it does not describe the \
+                     output's RGB)"
+                }
             )),
         };
         let profile = match ColorProfile::new_from_slice(icc) {
@@ -103,8 +122,17 @@ impl Transfer {
             Some(curves) => Transfer {
                 curves: Some(curves),
                 embeds,
+                grey: profile.color_space == DataColorSpace::Gray,
                 note: None,
             },
+            // The decoders turn CMYK into RGB themselves, without the profile: the image
+            // crate (and zune-jpeg under it) as R = (1 − C)(1 − K), and so on.
+            None if profile.color_space == DataColorSpace::Cmyk => fallback(
+                false,
+                "the embedded ICC profile is a CMYK one: the decoder converted the CMYK colour \
+                 to RGB without the profile (naively, R = (1 − C)(1 − K), not colour-managed)"
+                    .into(),
+            ),
             None => fallback(
                 embeds,
                 format!(
@@ -145,6 +173,56 @@ impl Transfer {
         });
         Encoder { edges, max }
     }
+}
+
+/// The PCS illuminant, D50, as ICC.1 (7.2.16) gives it: what a profile's colorants are
+/// adapted to.
+const D50: [f64; 3] = [0.9642, 1.0, 0.8249];
+
+/// How far from the identity a `chad` may be and still be an adaptation between two
+/// daylight-like whites (D65 to D50 by Bradford differs from it by 0.05 at most; D93 or
+/// illuminant A by under 0.25). moxcms before 0.9 writes the Bradford cone matrix itself as
+/// `chad` (its off-diagonal 0.75 and 1.71), which adapts nothing: such a tag is not trusted.
+const CHAD_FROM_IDENTITY: f64 = 0.25;
+
+/// The primaries and white of an RGB matrix profile as CIE xy chromaticities, `[red, green,
+/// blue, white]`, for the EXR `chromaticities` attribute; `None` for a profile that is not
+/// RGB, has no colorants (LUT-based), or cannot be read.
+///
+/// ICC v2 and v4 store the colorants (rXYZ, gXYZ, bXYZ) adapted to D50. The adaptation is
+/// undone by the profile's `chad` (v4, and v2 profiles that carry one) when it is a
+/// plausible adaptation ([`CHAD_FROM_IDENTITY`]); else, where the media white point (`wtpt`,
+/// the actual white in v2 profiles) is not D50, by Bradford's from D50 to it (moxcms's
+/// [`moxcms::adaption_matrix_d`]), as v2 profile makers adapted it; else the colorants are
+/// taken as they are: a v2 profile of a D50 `wtpt` and no `chad` says no other white, and
+/// its D50-adapted primaries with a D50 white give the same RGB-to-XYZ matrix as the
+/// profile's own. The white is the sum of the three primaries' XYZ.
+pub fn chromaticities(icc: &[u8]) -> Option<[(f64, f64); 4]> {
+    let profile = ColorProfile::new_from_slice(icc).ok()?;
+    if profile.color_space != DataColorSpace::Rgb {
+        return None;
+    }
+    let colorants = profile.colorant_matrix();
+    let near_identity = |m: &Matrix3d| {
+        (0..3).all(|i| (0..3).all(|j| (m.v[i][j] - f64::from(i == j)).abs() < CHAD_FROM_IDENTITY))
+    };
+    let xyz = |v: [f64; 3]| Xyz::new(v[0] as f32, v[1] as f32, v[2] as f32);
+    let actual = match (profile.chromatic_adaptation, profile.media_white_point) {
+        (Some(chad), _) if near_identity(&chad) => chad.inverse().mat_mul(colorants),
+        (_, Some(white))
+            if (0..3).any(|i| ([white.x, white.y, white.z][i] - D50[i]).abs() > 1e-3) =>
+        {
+            moxcms::adaption_matrix_d(xyz(D50), xyz([white.x, white.y, white.z])).mat_mul(colorants)
+        }
+        _ => colorants,
+    };
+    let xy = |[x, y, z]: [f64; 3]| {
+        let sum = x + y + z;
+        (sum > 0.0 && sum.is_finite()).then(|| (x / sum, y / sum))
+    };
+    let column = |j: usize| [actual.v[0][j], actual.v[1][j], actual.v[2][j]];
+    let white = [0, 1, 2].map(|i| actual.v[i].iter().sum::<f64>());
+    Some([xy(column(0))?, xy(column(1))?, xy(column(2))?, xy(white)?])
 }
 
 /// A curve's value held to [0, 1], NaN 0: an ICC tone curve maps [0, 1] onto [0, 1]. moxcms
@@ -243,6 +321,48 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Adobe RGB (1998)'s primaries and D65 white (Adobe RGB (1998) Color Image Encoding,
+    /// 4.2.1), from moxcms's profile (a D65 `wtpt` and a `chad` that adapts nothing) and
+    /// from one of the v4 form (a D50 `wtpt` and a true Bradford `chad`).
+    #[test]
+    fn adobe_rgbs_primaries_come_back_from_its_d50_colorants() {
+        let adobe = [(0.64, 0.33), (0.21, 0.71), (0.15, 0.06), (0.3127, 0.3290)];
+        let moxcms_form = ColorProfile::new_adobe_rgb();
+        let mut v4_form = ColorProfile::new_adobe_rgb();
+        let d65 = Xyz::new(0.9504559, 1.0, 1.0890578);
+        v4_form.chromatic_adaptation = Some(moxcms::adaption_matrix_d(
+            d65,
+            Xyz::new(0.9642, 1.0, 0.8249),
+        ));
+        v4_form.media_white_point = Some(moxcms::Xyzd::new(0.9642, 1.0, 0.8249));
+        for profile in [moxcms_form, v4_form] {
+            let got = chromaticities(&profile.encode().unwrap()).unwrap();
+            for (g, a) in got.iter().zip(adobe) {
+                assert!(
+                    (g.0 - a.0).abs() < 1e-3 && (g.1 - a.1).abs() < 1e-3,
+                    "{got:?}"
+                );
+            }
+        }
+        let mut grey = ColorProfile::new_srgb();
+        grey.color_space = DataColorSpace::Gray;
+        assert_eq!(chromaticities(&grey.encode().unwrap_or_default()), None);
+    }
+
+    #[test]
+    fn a_cmyk_profiles_note_says_it_is_not_embedded() {
+        let mut icc = ColorProfile::new_srgb().encode().unwrap();
+        icc[16..20].copy_from_slice(b"CMYK");
+        let transfer = Transfer::of(Some(&icc));
+        let note = transfer.note.unwrap();
+        assert!(!transfer.embeds, "{note}");
+        assert!(
+            note.contains("CMYK") && note.contains("not embedded"),
+            "{note}"
+        );
+        assert!(!note.contains("is kept"), "{note}");
     }
 
     #[test]

@@ -16,7 +16,14 @@
 //!   directories as directories of their own that IFD0 points to.
 //! - JPEG (jpeg-encoder): the quality asked for, the input's chroma subsampling (any of
 //!   4:4:4, 4:4:0, 4:2:2, 4:2:0, 4:1:1, 4:4:1; 4:4:4 for a file that is not a JPEG), the
-//!   profile in APP2 segments, EXIF and XMP in APP1, IPTC in APP13. No alpha, 8 bits only.
+//!   profile in APP2 segments, EXIF and XMP in APP1, IPTC in APP13. No alpha (the colour is
+//!   written straight, as a PNG of it would hold it, not composited over any background; the
+//!   run says the alpha was left out), 8 bits only.
+//!
+//! A grey input (with its Gray profile, if any) goes out grey while its three planes stay
+//! equal ([`goes_out_grey`]). A float TIFF is written by `--bit-depth 32` (the default for a
+//! float TIFF input to a TIFF): linear light, premultiplied, its alpha declared associated, as
+//! float TIFFs are read.
 
 use std::io::{Seek, Write};
 
@@ -29,8 +36,8 @@ use super::ImageFormat;
 /// How a photo is written.
 #[derive(Clone, Copy, Debug)]
 pub struct PhotoOptions<'a> {
-    /// 16 bits per sample (PNG, TIFF), else 8.
-    pub sixteen_bit: bool,
+    /// Bits per sample: 8 or 16 (PNG, TIFF; JPEG is always 8), or 32, float (TIFF only).
+    pub bits: u8,
     /// Write the values as they are (`--linear`), not through the profile's curves.
     pub linear: bool,
     /// JPEG quality, 1 to 100.
@@ -84,11 +91,60 @@ const TIFF_XMP: u16 = 700;
 const TIFF_PHOTOSHOP: u16 = 34377;
 const TIFF_IPTC: u16 = 33723;
 
-/// `ExtraSamples` value for unassociated (straight) alpha (TIFF 6.0, section 18).
+/// `ExtraSamples` values for associated (premultiplied) and unassociated (straight) alpha
+/// (TIFF 6.0, section 18).
+const ASSOCIATED_ALPHA: u16 = 1;
 const UNASSOCIATED_ALPHA: u16 = 2;
 
-/// Writes premultiplied linear colour as an integer image with straight alpha. JPEG has no
-/// alpha and no 16-bit: it is written 8-bit RGB.
+/// Whether a frame goes out grey: its input was grey, the format holds grey with the alpha
+/// that goes out with it (the tiff crate writes no grey with alpha), it is not written float,
+/// and its three planes are still equal (the blur gives each the same weights).
+pub fn goes_out_grey(
+    photo: Option<&Photo>,
+    format: ImageFormat,
+    bits: u8,
+    rgb: [&[f32]; 3],
+    alpha: bool,
+) -> bool {
+    let alpha = alpha && format != ImageFormat::Jpeg;
+    photo.is_some_and(|p| p.grey)
+        && !(bits == 32 && format == ImageFormat::Tiff)
+        && !(alpha && format == ImageFormat::Tiff)
+        && rgb[0] == rgb[1]
+        && rgb[1] == rgb[2]
+}
+
+/// How far beyond [0, 1] straight colour may go and still count as within it: more than
+/// the rounding of the blur's weighted sums (about 10⁻⁶), less than any highlight worth
+/// saying is clipped.
+const CLIP_SLACK: f32 = 1e-3;
+
+/// Whether straight colour (premultiplied colour over its alpha) goes above 1, and below 0,
+/// by more than [`CLIP_SLACK`]: what an integer output clips.
+pub fn out_of_range(rgb: [&[f32]; 3], alpha: Option<&[f32]>) -> (bool, bool) {
+    let (mut above, mut below) = (false, false);
+    for plane in rgb {
+        for (i, &v) in plane.iter().enumerate() {
+            let a = alpha.map_or(1.0, |a| a[i]);
+            if a.is_nan() || a <= 0.0 {
+                continue;
+            }
+            above |= v > (1.0 + CLIP_SLACK) * a;
+            below |= v < -CLIP_SLACK * a;
+        }
+    }
+    (above, below)
+}
+
+/// A TIFF's samples: integer codes (16-bit or not) or float values.
+enum Samples<'a> {
+    Codes(&'a [u16], bool),
+    Float(&'a [f32]),
+}
+
+/// Writes premultiplied linear colour as an integer image with straight alpha (or a float
+/// TIFF, premultiplied). JPEG has no alpha and no 16-bit: it is written 8-bit, its colour
+/// straight.
 #[allow(clippy::too_many_arguments)]
 pub fn write_photo(
     writer: impl Write + Seek,
@@ -100,11 +156,37 @@ pub fn write_photo(
     options: &PhotoOptions,
 ) -> Result<(), String> {
     let jpeg = format == ImageFormat::Jpeg;
-    let alpha = if jpeg { None } else { alpha };
-    let sixteen_bit = options.sixteen_bit && !jpeg;
-    let icc = options.photo.and_then(|p| p.icc.as_deref());
+    let kept_alpha = if jpeg { None } else { alpha };
+    let float = options.bits == 32 && format == ImageFormat::Tiff;
+    let sixteen_bit = options.bits == 16 && !jpeg;
+    let photo = options.photo;
+    let grey = goes_out_grey(photo, format, options.bits, rgb, alpha.is_some());
+    let icc = photo.and_then(|p| p.icc.as_deref());
     let transfer = Transfer::of(icc);
-    let icc = icc.filter(|_| transfer.embeds);
+    // A profile goes out where it describes what is written: an RGB one with RGB, a Gray one
+    // with grey; in a float TIFF, only a float input's own (an 8/16-bit photo's describes
+    // codes, not the linear light a float TIFF holds).
+    let icc = icc.filter(|_| match (float, grey) {
+        (true, _) => transfer.embeds && photo.is_some_and(|p| p.bits == 32),
+        (false, true) => transfer.grey,
+        (false, false) => transfer.embeds,
+    });
+    let (w, h) = (width as u32, height as u32);
+    let n = width * height;
+    if float {
+        let channels = if kept_alpha.is_some() { 4 } else { 3 };
+        let mut samples = vec![0f32; n * channels];
+        for (i, pixel) in samples.chunks_exact_mut(channels).enumerate() {
+            for (sample, plane) in pixel.iter_mut().zip(rgb) {
+                *sample = plane[i];
+            }
+            if let Some(a) = kept_alpha {
+                pixel[3] = a[i];
+            }
+        }
+        let samples = Samples::Float(&samples);
+        return write_tiff(writer, w, h, channels, samples, icc, photo);
+    }
     let transfer = if options.linear {
         Transfer::linear()
     } else {
@@ -112,8 +194,8 @@ pub fn write_photo(
     };
     let max = if sixteen_bit { 65535 } else { 255 };
     let encoder = transfer.encoder(max);
-    let channels = if alpha.is_some() { 4 } else { 3 };
-    let n = width * height;
+    let colours = if grey { 1 } else { 3 };
+    let channels = colours + usize::from(kept_alpha.is_some());
     let mut codes = vec![0u16; n * channels];
     for i in 0..n {
         let a = alpha.map_or(1.0, |a| {
@@ -124,9 +206,10 @@ pub fn write_photo(
                 0.0
             }
         });
-        // Unpremultiply; where alpha is 0 the colour is 0.
+        // Unpremultiply (a JPEG too, which leaves the alpha out); where alpha is 0 the colour
+        // is 0.
         let unpremultiply = if a > 0.0 { 1.0 / a } else { 0.0 };
-        for c in 0..3 {
+        for c in 0..colours {
             let v = if alpha.is_some() {
                 rgb[c][i] * unpremultiply
             } else {
@@ -134,20 +217,35 @@ pub fn write_photo(
             };
             codes[i * channels + c] = encoder.encode(v, c) as u16;
         }
-        if alpha.is_some() {
-            codes[i * channels + 3] = (a * max as f32 + 0.5) as u16;
+        if kept_alpha.is_some() {
+            codes[i * channels + colours] = (a * max as f32 + 0.5) as u16;
         }
     }
-    let (w, h) = (width as u32, height as u32);
-    let photo = options.photo;
     match format {
         ImageFormat::Png => write_png(writer, w, h, channels, sixteen_bit, &codes, icc, photo),
-        ImageFormat::Tiff => write_tiff(writer, w, h, channels, sixteen_bit, &codes, icc, photo),
+        ImageFormat::Tiff => {
+            let samples = Samples::Codes(&codes, sixteen_bit);
+            write_tiff(writer, w, h, channels, samples, icc, photo)
+        }
         ImageFormat::Jpeg => {
             let bytes: Vec<u8> = codes.iter().map(|&c| c as u8).collect();
-            write_jpeg(writer, w, h, &bytes, options.jpeg_quality, icc, photo)
+            let jpeg = JpegImage {
+                width: w,
+                height: h,
+                samples: &bytes,
+                grey,
+            };
+            write_jpeg(writer, jpeg, options.jpeg_quality, icc, photo)
         }
     }
+}
+
+/// A JPEG's pixels: 8-bit RGB, or grey.
+struct JpegImage<'a> {
+    width: u32,
+    height: u32,
+    samples: &'a [u8],
+    grey: bool,
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -162,10 +260,11 @@ fn write_png(
     photo: Option<&Photo>,
 ) -> Result<(), String> {
     let mut info = png::Info::with_size(width, height);
-    info.color_type = if channels == 4 {
-        png::ColorType::Rgba
-    } else {
-        png::ColorType::Rgb
+    info.color_type = match channels {
+        1 => png::ColorType::Grayscale,
+        2 => png::ColorType::GrayscaleAlpha,
+        3 => png::ColorType::Rgb,
+        _ => png::ColorType::Rgba,
     };
     info.bit_depth = if sixteen_bit {
         png::BitDepth::Sixteen
@@ -209,18 +308,30 @@ fn write_tiff(
     width: u32,
     height: u32,
     channels: usize,
-    sixteen_bit: bool,
-    codes: &[u16],
+    samples: Samples,
     icc: Option<&[u8]>,
     photo: Option<&Photo>,
 ) -> Result<(), String> {
     use tiff::encoder::{colortype, Compression, DeflateLevel, Predictor, TiffEncoder};
     use tiff::tags::{Tag, Type};
     let error = |e: tiff::TiffError| e.to_string();
+    let float = matches!(samples, Samples::Float(_));
+    // The horizontal predictor differences integers; floats would need predictor 3, which
+    // the tiff crate does not write: they go deflated as they are.
+    let predictor = if float {
+        Predictor::None
+    } else {
+        Predictor::Horizontal
+    };
+    let alpha_kind = if float {
+        ASSOCIATED_ALPHA
+    } else {
+        UNASSOCIATED_ALPHA
+    };
     let mut encoder = TiffEncoder::new(writer)
         .map_err(error)?
         .with_compression(Compression::Deflate(DeflateLevel::Balanced))
-        .with_predictor(Predictor::Horizontal);
+        .with_predictor(predictor);
     let xmp = photo.and_then(|p| p.xmp.as_deref());
     let iptc = photo.and_then(|p| p.iptc.as_deref());
     // IPTC's datasets in tag 33723, the other Photoshop resources (if any) in 34377.
@@ -240,7 +351,7 @@ fn write_tiff(
             let mut image = encoder.new_image::<$color>(width, height).map_err(error)?;
             let tags = image.encoder();
             if channels == 4 {
-                tags.write_tag(Tag::ExtraSamples, &[UNASSOCIATED_ALPHA][..])
+                tags.write_tag(Tag::ExtraSamples, &[alpha_kind][..])
                     .map_err(error)?;
             }
             for (tag, block) in [
@@ -262,26 +373,30 @@ fn write_tiff(
             image.write_data($data).map_err(error)
         }};
     }
-    let bytes = || codes.iter().map(|&c| c as u8).collect::<Vec<u8>>();
-    match (channels, sixteen_bit) {
-        (3, false) => write_image!(colortype::RGB8, &bytes()),
-        (4, false) => write_image!(colortype::RGBA8, &bytes()),
-        (3, true) => write_image!(colortype::RGB16, codes),
-        _ => write_image!(colortype::RGBA16, codes),
+    let bytes = |codes: &[u16]| codes.iter().map(|&c| c as u8).collect::<Vec<u8>>();
+    match (channels, samples) {
+        (1, Samples::Codes(codes, false)) => write_image!(colortype::Gray8, &bytes(codes)),
+        (1, Samples::Codes(codes, true)) => write_image!(colortype::Gray16, codes),
+        (3, Samples::Codes(codes, false)) => write_image!(colortype::RGB8, &bytes(codes)),
+        (3, Samples::Codes(codes, true)) => write_image!(colortype::RGB16, codes),
+        (3, Samples::Float(values)) => write_image!(colortype::RGB32Float, values),
+        (_, Samples::Codes(codes, false)) => write_image!(colortype::RGBA8, &bytes(codes)),
+        (_, Samples::Codes(codes, true)) => write_image!(colortype::RGBA16, codes),
+        (_, Samples::Float(values)) => write_image!(colortype::RGBA32Float, values),
     }
 }
 
 fn write_jpeg(
     writer: impl Write,
-    width: u32,
-    height: u32,
-    rgb: &[u8],
+    image: JpegImage,
     quality: u8,
     icc: Option<&[u8]>,
     photo: Option<&Photo>,
 ) -> Result<(), String> {
     use jpeg_encoder::{ColorType, Encoder, SamplingFactor};
     let error = |e: jpeg_encoder::EncodingError| e.to_string();
+    let (width, height) = (image.width, image.height);
+    // The preflight refuses a frame larger than this (`ImageFormat::most_a_side`).
     let (Ok(w), Ok(h)) = (u16::try_from(width), u16::try_from(height)) else {
         return Err(format!(
             "{width}x{height} is larger than JPEG allows (65535 a side)"
@@ -321,5 +436,10 @@ fn write_jpeg(
             .add_app_segment(13, [JPEG_IPTC_HEADER, iptc].concat())
             .map_err(error)?;
     }
-    encoder.encode(rgb, w, h, ColorType::Rgb).map_err(error)
+    let color = if image.grey {
+        ColorType::Luma
+    } else {
+        ColorType::Rgb
+    };
+    encoder.encode(image.samples, w, h, color).map_err(error)
 }

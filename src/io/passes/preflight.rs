@@ -254,6 +254,32 @@ fn missing_in_bulk(color: &PathPattern, frames: &[Option<i64>]) -> Option<Proble
     ))
 }
 
+/// A picture output's hard limit on a side, held against the picture a frame makes (its
+/// display window): refused here, naming both, rather than by the encoder once the frame is
+/// blurred (a failure then reads as the moment's, exit 75, and a retry cannot help).
+fn too_large_for_its_format(output: &Path, plan: &FramePlan) -> Option<Problem> {
+    let format = crate::io::image::ImageFormat::from_path(output)?;
+    let (width, height) = plan
+        .color_windows
+        .as_ref()
+        .map_or((plan.width, plan.height), |w| {
+            (w.display.width, w.display.height)
+        });
+    let most = format.most_a_side();
+    (width as u64 > most || height as u64 > most).then(|| {
+        Problem::new(
+            ProblemKind::Output,
+            output,
+            format!(
+                "the frame is {width}x{height}, and {} holds at most {most} pixels a side; \
+                 write a .png, .tif or .exr instead, or crop the frame",
+                format.name()
+            ),
+        )
+        .frame(plan.frame)
+    })
+}
+
 /// Plans every frame of `frames` and checks that each output can be written without
 /// overwriting an input; returns the plans, or all the problems found.
 pub fn preflight(
@@ -275,6 +301,13 @@ pub fn preflight(
                 .into_iter()
                 .map(|(_, p)| p.path(frame))
                 .find(|input| same_file(input, &output));
+            let too_large = plan
+                .as_ref()
+                .ok()
+                .and_then(|p| too_large_for_its_format(&output, p));
+            if let Some(problem) = too_large {
+                plan = Err(vec![problem]);
+            }
             if let Some(problem) = output_in_the_way(&output, frame) {
                 plan = match plan {
                     Ok(_) => Err(vec![problem]),

@@ -210,6 +210,13 @@ pub fn read_frame_keeping(
             })?;
             notes.extend(note);
             frame.carried.photo = Some(photo);
+        } else if colour_file.is_image() {
+            // A float TIFF: its values are linear light already; what it holds besides them
+            // (profile, EXIF) and that it is float go with the frame to the output.
+            let photo = crate::io::image::read_photo(&colour_file.path).map_err(|d| {
+                Problem::new(ProblemKind::Corrupt, &colour_file.path, d).frame(plan.frame)
+            })?;
+            frame.carried.photo = Some(photo);
         }
         if let (true, Some(a)) = (plan_color.premultiply, &a) {
             for plane in [&mut r, &mut g, &mut b] {
