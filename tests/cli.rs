@@ -1086,3 +1086,22 @@ fn a_single_file_pass_beside_a_pattern_is_a_usage_error() {
         "a refused run wrote something"
     );
 }
+
+/// A pattern in a folder that is not there is bad input (exit 1; `diff`: 3, could not
+/// compare), as a pattern that matches no file is, not a usage error (exit 2, which a farm
+/// reads as "fix the command": the command may be right and the folder gone or stale).
+#[test]
+fn a_pattern_in_a_missing_folder_is_bad_input_not_usage() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = s(&dir.path().join("nope/c.####.exr"));
+    let out = s(&dir.path().join("o/o.####.exr"));
+    let o = shutter(&["blur", "--color", &missing, "-o", &out]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("cannot list the folder"),
+        "{}",
+        stderr(&o)
+    );
+    let o = shutter(&["diff", &missing, &missing]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+}

@@ -116,12 +116,18 @@ impl PathPattern {
         // The text before the placeholder is the folder and the file name's start.
         let (dir, prefix) = before.split_at(name_start(before));
         let read_dir = Path::new(if dir.is_empty() { "." } else { dir });
+        // A folder that is not there, or cannot be listed, is bad input (exit 1, as a pattern
+        // that matches no file is), not a usage error: a farm reads exit 2 as "fix the
+        // command", and the command may be right with the folder gone or its share stale.
         let entries = std::fs::read_dir(read_dir).map_err(|e| {
-            Error::usage(format!(
-                "cannot list '{}' to find the frames of '{}': {e}; pass --frames",
-                read_dir.display(),
-                self.raw
-            ))
+            Error::Files(vec![crate::error::Problem::new(
+                crate::error::ProblemKind::MissingFile,
+                read_dir,
+                format!(
+                    "cannot list the folder to find the frames of '{}': {e}; pass --frames",
+                    self.raw
+                ),
+            )])
         })?;
         let mut frames = BTreeSet::new();
         let mut beyond = BTreeSet::new();
