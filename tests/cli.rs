@@ -908,13 +908,7 @@ fn negative_frames_on_disk_are_discovered_as_shutter_names_them() {
     let again = format!("{}/again/o.####.exr", dir.path().display());
     let o = shutter(&["blur", "--dry-run", "--color", &out, "-o", &again, "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
-    let frames: Vec<i64> = report["planned"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|p| p["frame"].as_i64().unwrap())
-        .collect();
+    let frames = planned_frames(&o);
     assert_eq!(frames, [-2, -1, 0]);
 }
 
@@ -936,14 +930,9 @@ fn frame_numbers_beyond_the_limit_are_named_not_discovered() {
     let out = format!("{}/out/o.####.exr", dir.path().display());
     let o = shutter(&["blur", "--dry-run", "--color", &color, "-o", &out, "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
-    let frames: Vec<i64> = report["planned"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|p| p["frame"].as_i64().unwrap())
-        .collect();
+    let frames = planned_frames(&o);
     assert_eq!(frames, [999999998, 999999999]);
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     let warnings = report["warnings"].to_string();
     assert!(
         warnings.contains("c.1000000001.exr") && warnings.contains("999999999"),
@@ -1104,4 +1093,15 @@ fn a_pattern_in_a_missing_folder_is_bad_input_not_usage() {
     );
     let o = shutter(&["diff", &missing, &missing]);
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+}
+
+/// The frames a `--dry-run --json` run planned, in its order.
+fn planned_frames(o: &std::process::Output) -> Vec<i64> {
+    let report: serde_json::Value = serde_json::from_str(&stdout(o)).unwrap();
+    report["planned"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["frame"].as_i64().unwrap())
+        .collect()
 }

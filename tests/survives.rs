@@ -1634,34 +1634,24 @@ fn a_half_plate_with_infinite_pixels_comes_back_finite() {
     );
     let input = dir.path().join("inf.exr");
     Image::from_layer(layer).write().to_file(&input).unwrap();
-    let runs: [&[&str]; 5] = [
-        &["blur", "--algorithm", "reconstruct"],
-        &["blur", "--algorithm", "scatter"],
-        &["blur", "--algorithm", "stretch"],
-        &[
-            "dof",
-            "--focal-length",
-            "50",
-            "--f-stop",
-            "1.4",
-            "--focus-distance",
-            "2",
-        ],
-        &[
-            "dof",
-            "--method",
-            "blend",
-            "--focal-length",
-            "50",
-            "--f-stop",
-            "1.4",
-            "--focus-distance",
-            "2",
-        ],
+    let lens = [
+        "--focal-length",
+        "50",
+        "--f-stop",
+        "1.4",
+        "--focus-distance",
+        "2",
+    ];
+    let runs: [Vec<&str>; 5] = [
+        vec!["blur", "--algorithm", "reconstruct"],
+        vec!["blur", "--algorithm", "scatter"],
+        vec!["blur", "--algorithm", "stretch"],
+        [&["dof"][..], &lens].concat(),
+        [&["dof", "--method", "blend"][..], &lens].concat(),
     ];
     for (k, run) in runs.iter().enumerate() {
         let output = dir.path().join(format!("out{k}.exr"));
-        let mut args = run.to_vec();
+        let mut args = run.clone();
         let (input, output) = (s(&input), s(&output));
         args.extend(["--color", &input, "-o", &output]);
         let o = shutter(&args);
