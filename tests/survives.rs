@@ -1840,3 +1840,45 @@ fn info_shows_utf8_names_and_texts_as_written() {
     assert!(all.contains("\"lumière.R\""), "{all}");
     assert!(all.contains("Zoë 日本"), "{all}");
 }
+
+/// A luminance file (`Y` alone, read as grey: R = G = B = Y) comes back a luminance file: its
+/// blurred `Y` under its name and no R, G, B it did not have; it came back as R, G and B with
+/// no `Y`, and nothing said so.
+#[test]
+fn a_luminance_file_comes_back_with_its_y() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = W * H;
+    let moving = |i: usize| (8..20).contains(&(i % W)) && (6..16).contains(&(i / W));
+    let plane = |f: &dyn Fn(usize) -> f32| -> Vec<f32> { (0..n).map(f).collect() };
+    let y = noise(n, 97, 0.0, 1.0);
+    let input = dir.path().join("y.exr");
+    crate::support::write_exr(
+        &input,
+        W,
+        H,
+        vec![
+            ("Y", y.clone()),
+            ("Z", plane(&|i| if moving(i) { 2.0 } else { 10.0 })),
+            ("velocity.X", plane(&|i| if moving(i) { 6.0 } else { 0.0 })),
+            ("velocity.Y", vec![0.0; n]),
+        ],
+    );
+    let output = dir.path().join("out.exr");
+    let o = shutter(&[
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &s(&input),
+        "-o",
+        &s(&output),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let read = crate::support::read_exr_reference(&output);
+    let mut names: Vec<&str> = read.iter().map(|(name, _)| name.as_str()).collect();
+    names.sort();
+    assert_eq!(names, ["Y", "Z", "velocity.X", "velocity.Y"]);
+    let blurred = crate::support::channel(&read, "Y");
+    assert!(blurred.iter().all(|v| v.is_finite()));
+    assert_ne!(blurred, &y[..], "the square blurs");
+}

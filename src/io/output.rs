@@ -633,22 +633,30 @@ fn exr_parts(
         } else {
             &carried.beauty
         };
-        // (Grey read as colour names one channel three times: it goes out as R, G, B.)
+        // Grey read as colour (a luminance file's `Y`, R = G = B = Y) names one channel three
+        // times: it goes out as that one channel (the blur, channel by channel in the same
+        // order, keeps R, G and B equal), so a luminance file comes back a luminance file.
         let distinct = |names: &[String]| (1..names.len()).all(|i| !names[..i].contains(&names[i]));
+        let grey = came_as.len() >= 3 && came_as[1] == came_as[0] && came_as[2] == came_as[0];
         let mut names = match came_as.len() {
+            _ if grey => vec![came_as[0].clone()],
             3 | 4 if distinct(came_as) => came_as.clone(),
             _ => ["R", "G", "B"].map(String::from).to_vec(),
         };
         // An alpha the colour file had not goes under the usual name, beside a view's
         // beauty in its layer (`right.A` beside `right.R`).
-        if names.len() == 3 {
+        if names.len() == 3 || grey {
             let alpha = match names[0].rsplit_once('.') {
                 Some((layer, _)) if every => format!("{layer}.A"),
                 _ => "A".to_string(),
             };
             names.push(alpha);
         }
-        let mut planes = vec![color.r, color.g, color.b];
+        let mut planes = if grey {
+            vec![color.r]
+        } else {
+            vec![color.r, color.g, color.b]
+        };
         planes.extend(color.a);
         let part = carried.colour_part.min(count - 1);
         windows[part].get_or_insert(data);
