@@ -785,3 +785,35 @@ fn stretch_counts_its_copy_of_the_light_layers_in_the_memory_a_run_needs() {
     };
     assert_eq!(needs("stretch") - needs("reconstruct"), 30);
 }
+
+/// Memory the system refuses for a frame's planes (an 8000×8000 frame under a 600 MB
+/// address-space cap, with `--max-memory` letting the preflight pass) is "too large" (exit 1)
+/// with what to do, not a "corrupt file": the file is fine.
+#[cfg(unix)]
+#[test]
+fn memory_the_system_refuses_is_too_large_not_corrupt() {
+    use exr::prelude::{f16, Image, SpecificChannels, WritableImage};
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("big.exr");
+    let zero = f16::from_f32(0.0);
+    Image::from_channels((8000, 8000), SpecificChannels::rgb(|_| (zero, zero, zero)))
+        .write()
+        .to_file(&path)
+        .unwrap();
+    let out = s(&dir.path().join("o.exr"));
+    let args = [
+        "blur",
+        "--max-memory",
+        "100000",
+        "--color",
+        &s(&path),
+        "-o",
+        &out,
+    ];
+    let o = shutter_capped(600_000, &[&args[..], &["--json"]].concat());
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let text = report.to_string();
+    assert!(text.contains("\"too_large\""), "{text}");
+    assert!(!text.contains("\"corrupt\""), "{text}");
+}

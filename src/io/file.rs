@@ -360,6 +360,15 @@ impl FileInfo {
                 exr::error::Error::Io(io) if io.kind() == std::io::ErrorKind::NotFound => {
                     Problem::new(ProblemKind::MissingFile, &self.path, io.to_string())
                 }
+                // Memory the system refused for the planes (`frame::try_plane`): the file is
+                // fine, the frame too large for the memory this run has.
+                exr::error::Error::Io(io) if io.kind() == std::io::ErrorKind::OutOfMemory => {
+                    Problem::new(
+                        ProblemKind::TooLarge,
+                        &self.path,
+                        format!("{io}; give the run more memory, or read smaller frames"),
+                    )
+                }
                 other => corrupt(other.to_string()),
             })
     }
