@@ -1105,3 +1105,26 @@ fn planned_frames(o: &std::process::Output) -> Vec<i64> {
         .map(|p| p["frame"].as_i64().unwrap())
         .collect()
 }
+
+/// `--help` lists every preset shutter ships under `--preset` (vray, unreal and arnold were
+/// missing from the list).
+#[test]
+fn help_names_every_builtin_preset() {
+    for command in ["blur", "dof"] {
+        let o = shutter(&[command, "--help"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let help = stdout(&o);
+        let line = help
+            .lines()
+            .skip_while(|l| !l.contains("--preset"))
+            .take(3)
+            .collect::<Vec<_>>()
+            .join(" ");
+        for (name, _) in shutter::io::preset::BUILTIN {
+            assert!(
+                line.contains(name),
+                "{command} --help: {name} not in {line}"
+            );
+        }
+    }
+}

@@ -104,8 +104,8 @@ pub struct FramesArgs {
 
 #[derive(Debug, Args)]
 pub struct BlurArgs {
-    /// Preset name (shutter, blender, nuke, painted, rsmb, preview, final) or path to a .toml file;
-    /// repeat to merge several, later ones winning.
+    /// Preset name (shutter, blender, nuke, painted, rsmb, vray, unreal, arnold, preview, final)
+    /// or path to a .toml file; repeat to merge several, later ones winning.
     #[arg(long, value_name = "P")]
     pub preset: Vec<String>,
 
