@@ -1882,3 +1882,42 @@ fn a_luminance_file_comes_back_with_its_y() {
     assert!(blurred.iter().all(|v| v.is_finite()));
     assert_ne!(blurred, &y[..], "the square blurs");
 }
+
+/// A frame whose display window declares far more pixels than a picture may hold (200000²
+/// around an 8×8 data window) is refused by the preflight when the output is a picture (exit
+/// 1, `--dry-run` too, nothing written): it passed the dry run and failed at write time with
+/// exit 75, which a farm retries for nothing.
+#[test]
+fn a_picture_larger_than_the_limit_is_refused_before_anything_is_written() {
+    use shutter::frame::{Window, Windows};
+    use shutter::io::exr::{write_channels, ExrOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("huge_display.exr");
+    let windows = Windows {
+        data_origin: (0, 0),
+        display: Window {
+            x: 0,
+            y: 0,
+            width: 200_000,
+            height: 200_000,
+        },
+    };
+    let channels = ["R", "G", "B"]
+        .iter()
+        .map(|c| (c.to_string(), vec![0.5f32; 64]))
+        .collect();
+    let file = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
+    write_channels(file, 8, 8, windows, channels, ExrOptions::default()).unwrap();
+    let (input, out) = (s(&path), s(&dir.path().join("out/o.png")));
+    for extra in [&["--dry-run"][..], &[]] {
+        let mut args = vec!["blur", "--color", input.as_str(), "-o", out.as_str()];
+        args.extend(extra);
+        let o = shutter(&args);
+        assert_eq!(o.status.code(), Some(1), "{extra:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains("display window"), "{}", stderr(&o));
+    }
+    assert!(
+        !dir.path().join("out").exists(),
+        "the output folder was made"
+    );
+}

@@ -265,6 +265,24 @@ fn too_large_for_its_format(output: &Path, plan: &FramePlan) -> Option<Problem> 
         .map_or((plan.width, plan.height), |w| {
             (w.display.width, w.display.height)
         });
+    // A picture is made whole in memory: one larger than the pixel limit (a display window
+    // far bigger than the data, as a header may declare) is refused here too; the writer
+    // refused it only once the frame was blurred, as the moment's failure (exit 75).
+    let limit = crate::io::file::DEFAULT_MAX_PIXELS;
+    if (width as u64).saturating_mul(height as u64) > limit as u64 {
+        return Some(
+            Problem::new(
+                ProblemKind::TooLarge,
+                output,
+                format!(
+                    "the picture is the display window, {width}x{height}, more than the \
+                     {limit} pixels a picture may hold; write an .exr (which keeps the data \
+                     window alone) or fix the file's display window"
+                ),
+            )
+            .frame(plan.frame),
+        );
+    }
     let most = format.most_a_side();
     (width as u64 > most || height as u64 > most).then(|| {
         Problem::new(
