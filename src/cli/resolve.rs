@@ -64,7 +64,7 @@ fn one_form(inputs: &Inputs, coc_map: bool) -> Result<()> {
 /// A pattern to suggest for the file `path`: the last run of digits in its file name as `#`s
 /// (`seq/depth.0001.exr` → `seq/depth.####.exr`).
 fn as_pattern(path: &str) -> String {
-    let name = path.rfind(std::path::is_separator).map_or(0, |i| i + 1);
+    let name = crate::io::sequence::name_start(path);
     match path[name..].rfind(|c: char| c.is_ascii_digit()) {
         Some(last) => {
             let end = name + last + 1;

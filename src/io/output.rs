@@ -634,10 +634,15 @@ fn exr_parts(
             &carried.beauty
         };
         // Grey read as colour (a luminance file's `Y`, R = G = B = Y) names one channel three
-        // times: it goes out as that one channel (the blur, channel by channel in the same
-        // order, keeps R, G and B equal), so a luminance file comes back a luminance file.
+        // times: it goes out as that one channel, so a luminance file comes back a luminance
+        // file, where R, G and B are still equal (the blur, channel by channel in the same
+        // order, keeps them so; were they not, R, G and B go out, as a picture's grey does).
         let distinct = |names: &[String]| (1..names.len()).all(|i| !names[..i].contains(&names[i]));
-        let grey = came_as.len() >= 3 && came_as[1] == came_as[0] && came_as[2] == came_as[0];
+        let grey = came_as.len() >= 3
+            && came_as[1] == came_as[0]
+            && came_as[2] == came_as[0]
+            && color.g == color.r
+            && color.b == color.r;
         let mut names = match came_as.len() {
             _ if grey => vec![came_as[0].clone()],
             3 | 4 if distinct(came_as) => came_as.clone(),

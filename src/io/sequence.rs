@@ -181,7 +181,7 @@ fn frame_spelled(text: &str, width: usize) -> Option<std::result::Result<i64, Be
 struct Beyond;
 
 /// Where the file name starts in `path`: after its last separator.
-fn name_start(path: &str) -> usize {
+pub(crate) fn name_start(path: &str) -> usize {
     path.rfind(std::path::is_separator).map_or(0, |i| i + 1)
 }
 
