@@ -1128,3 +1128,70 @@ fn help_names_every_builtin_preset() {
         }
     }
 }
+
+/// A photo run that lacks a pass names the flag that gives it: `--velocity` for every motion
+/// algorithm (scatter's previous and next positions are derived from velocity, so it is the
+/// flag a painted map goes in; QA: scatter said "prev pass" and "give --prev FILE", twice),
+/// `--depth` for depth; one line each, whichever pass the algorithm reads the motion as.
+#[test]
+fn a_missing_pass_names_the_flag_that_gives_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let photo = dir.path().join("photo.png");
+    let depth = dir.path().join("depth.png");
+    image::save_buffer(&photo, &[90u8; 8 * 6 * 3], 8, 6, image::ColorType::Rgb8).unwrap();
+    image::save_buffer(&depth, &[128u8; 8 * 6], 8, 6, image::ColorType::L8).unwrap();
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    let out = s(&out_dir.join("o.png"));
+    let (photo, depth) = (s(&photo), s(&depth));
+    for algorithm in ["reconstruct", "scatter", "stretch"] {
+        let args = [
+            "blur",
+            "--preset",
+            "painted",
+            "--algorithm",
+            algorithm,
+            "--color",
+            &photo,
+            "--depth",
+            &depth,
+            "-o",
+            &out,
+        ];
+        let err = assert_fails_cleanly(
+            &args,
+            &out_dir,
+            &["photo.png", "velocity pass", "--velocity FILE"],
+        );
+        let problems = err
+            .lines()
+            .filter(|l| l.contains("missing channel"))
+            .count();
+        assert_eq!(problems, 1, "{algorithm}: one problem: {err}");
+        assert!(
+            !err.contains("prev pass") && !err.contains("next pass"),
+            "{algorithm}: {err}"
+        );
+    }
+    // Depth of field with no depth: the flag is --depth.
+    let args = [
+        "dof",
+        "--preset",
+        "painted",
+        "--color",
+        &photo,
+        "--focal-length",
+        "50",
+        "--f-stop",
+        "2",
+        "--focus-distance",
+        "3",
+        "-o",
+        &out,
+    ];
+    assert_fails_cleanly(
+        &args,
+        &out_dir,
+        &["photo.png", "depth pass", "--depth FILE"],
+    );
+}

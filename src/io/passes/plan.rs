@@ -254,7 +254,15 @@ pub fn plan_frame(
                     let slot = planner.slot(file, 0);
                     plan.depth = Some((slot, preset.depth.clone()));
                 }
-                Ok(None) => planner.missing(&info, "depth", &preset.depth.channels.join(" or ")),
+                Ok(None) => {
+                    let wanted = preset.depth.channels.join(" or ");
+                    let mut problem = planner.missing_problem(&info, "depth", &wanted);
+                    if own.is_none() {
+                        // Looked up in the colour file: the flag that gives it apart.
+                        problem.detail.push_str("; or give --depth FILE");
+                    }
+                    planner.problem(problem);
+                }
                 Err(detail) => planner.problem(
                     Problem::new(ProblemKind::MissingChannel, &info.path, detail).pass("depth"),
                 ),
@@ -273,6 +281,7 @@ pub fn plan_frame(
         (needs.prev, 1, [1, 0, 2]),
         (needs.next, 2, [2, 0, 1]),
     ];
+    let mut no_motion = false;
     for (needed, target, order) in wanted {
         if !needed {
             continue;
@@ -377,12 +386,23 @@ pub fn plan_frame(
                 }
             }
         }
-        if chosen.is_none() && !fatal {
-            let (name, spec, _) = sections[target];
+        // No source holds motion. Every target tries the same three, so this is said once,
+        // as the velocity the user gives (a painted map goes in --velocity; the previous and
+        // next positions a pass reads are derived from it), not as the target the algorithm
+        // happens to read first.
+        if chosen.is_none() && !fatal && !no_motion {
+            no_motion = true;
+            let (name, spec, _) = sections[0];
             if let Some(info) = &color_info {
                 let mut problem =
                     planner.missing_problem(info, name, &alternatives(&spec.channels));
-                problem.detail.push_str(&format!("; or give --{name} FILE"));
+                problem.detail.push_str("; or give --velocity FILE");
+                if target != 0 {
+                    problem.detail.push_str(
+                        " (the previous and next positions are derived from it), or --prev \
+                         FILE or --next FILE",
+                    );
+                }
                 planner.problem(problem);
             }
         }
