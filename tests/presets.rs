@@ -1059,3 +1059,78 @@ fn vray_unreal_and_arnold_presets() {
         assert_close(&velocity.y, &vy, 1e-4, &format!("{name} velocity y"));
     }
 }
+
+/// A grey depth map given with `--depth` is read by its only channel under the default
+/// `shutter` preset, as README's `--depth` says ("Z, or the file's only channel"): 8-bit and
+/// 16-bit PNG, grey TIFF and JPEG, and a one-channel EXR alike (QA: a grey PNG was refused,
+/// its aliases R, G, B counted as channels). The values are the grey's codes over their
+/// range, as stored; the run warns that they are taken as depth in scene units, and
+/// names the preset that maps grey to a range of distances. An RGB image is still refused.
+#[test]
+fn a_grey_depth_map_is_read_by_its_only_channel_under_the_shutter_preset() {
+    let preset = Preset::builtin("shutter").unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    let n = W * H;
+    write_png16(
+        &p("photo.png"),
+        &[&vec![0.5; n], &vec![0.5; n], &vec![0.5; n]],
+    );
+    let codes8: Vec<u8> = (0..n).map(|k| (k * 37 % 256) as u8).collect();
+    let codes16: Vec<u16> = (0..n).map(|k| (k * 4099 % 65536) as u16).collect();
+    let bytes16: Vec<u8> = codes16.iter().flat_map(|c| c.to_ne_bytes()).collect();
+    let (w, h) = (W as u32, H as u32);
+    let grey8 = image::ColorType::L8;
+    image::save_buffer(p("d8.png"), &codes8, w, h, grey8).unwrap();
+    image::save_buffer(p("d8.tif"), &codes8, w, h, grey8).unwrap();
+    image::save_buffer(p("d16.png"), &bytes16, w, h, image::ColorType::L16).unwrap();
+    let flat = vec![128u8; n];
+    image::save_buffer(p("d8.jpg"), &flat, w, h, grey8).unwrap();
+    let exr: Vec<f32> = (0..n).map(|k| k as f32 * 0.25).collect();
+    write_exr(&p("d.exr"), W, H, vec![("depth", exr.clone())]);
+    let eight: Vec<f32> = codes8.iter().map(|&c| c as f32 / 255.0).collect();
+    let sixteen: Vec<f32> = codes16.iter().map(|&c| c as f32 / 65535.0).collect();
+    let cases = [
+        ("d8.png", eight.clone(), true),
+        ("d8.tif", eight, true),
+        ("d16.png", sixteen, true),
+        ("d8.jpg", vec![128.0 / 255.0; n], true),
+        ("d.exr", exr, false),
+    ];
+    let options = PlanOptions {
+        preset: &preset,
+        layer: None,
+        view: None,
+        needs: Passes {
+            depth: true,
+            ..Passes::COLOR
+        },
+        max_pixels: shutter::io::file::DEFAULT_MAX_PIXELS,
+    };
+    for (name, expected, warned) in cases {
+        let mut i = inputs(&p("photo.png"));
+        i.depth = Some(PathPattern::parse(&s(&p(name))).unwrap());
+        let plan = plan_frame(&i, None, &options).unwrap_or_else(|e| panic!("{name}: {e:?}"));
+        let warning = plan
+            .warnings
+            .iter()
+            .any(|w| w.contains("scene units") && w.contains("painted"));
+        assert_eq!(warning, warned, "{name}: {:?}", plan.warnings);
+        let frame = read_frame(&plan).unwrap();
+        // The JPEG's flat grey decodes to its code within a step.
+        let tolerance = if name.ends_with(".jpg") {
+            1.01 / 255.0
+        } else {
+            0.0
+        };
+        assert_close(frame.depth.as_ref().unwrap(), &expected, tolerance, name);
+    }
+    // Three channels are not one: still refused, naming them.
+    let mut i = inputs(&p("photo.png"));
+    i.depth = Some(PathPattern::parse(&s(&p("photo.png"))).unwrap());
+    let err = plan_frame(&i, None, &options).unwrap_err()[0].to_string();
+    assert!(
+        err.contains("depth pass") && err.contains("R, G, B"),
+        "{err}"
+    );
+}

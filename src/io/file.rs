@@ -308,6 +308,15 @@ impl FileInfo {
         })
     }
 
+    /// Whether the file stores one channel: a one-channel EXR, or a grey image (whose `Y`,
+    /// and the `R`, `G`, `B` that read it too, are one stored plane).
+    pub fn has_one_channel(&self) -> bool {
+        let stored = |c: &ChannelInfo| (c.part, c.index);
+        self.channels
+            .first()
+            .is_some_and(|first| self.channels.iter().all(|c| stored(c) == stored(first)))
+    }
+
     /// All channel names, for messages.
     pub fn channel_list(&self) -> String {
         if self.channels.is_empty() {

@@ -138,6 +138,21 @@ pub struct DepthSpec {
     pub scale: f32,
 }
 
+impl DepthSpec {
+    /// How a grey map's codes (0 to 1) are taken as depth under this preset, for the run's
+    /// warnings: as they are, in scene units, where it gives no `near` and `far` (which a
+    /// painted map rarely means); `None` where it maps them between the two.
+    pub fn grey_note(&self, preset: &str) -> Option<String> {
+        (self.near.is_none() || self.far.is_none()).then(|| {
+            format!(
+                "depth: the grey of an 8/16-bit map is read as depth 0 to 1 in scene units \
+                 (metres for the lens) under preset {preset}; --preset painted reads black to \
+                 white as 1 to 100 m (copy it to set near and far)"
+            )
+        })
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct VectorSpec {

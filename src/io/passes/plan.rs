@@ -248,8 +248,12 @@ pub fn plan_frame(
                     let slot = planner.slot(file, channel);
                     plan.depth = Some((slot, preset.depth.clone()));
                 }
-                Ok(None) if own.is_some() && info.channels.len() == 1 => {
-                    // A file given for depth with one channel: that channel is depth.
+                Ok(None) if own.is_some() && info.has_one_channel() => {
+                    // A file given for depth with one channel (a grey map among them): that
+                    // channel is depth. Without the file's name, so a sequence warns once.
+                    if info.is_integer_image() {
+                        plan.warnings.extend(preset.depth.grey_note(&preset.name));
+                    }
                     let file = planner.add_file(info.clone());
                     let slot = planner.slot(file, 0);
                     plan.depth = Some((slot, preset.depth.clone()));
