@@ -23,6 +23,7 @@ mod layers;
 mod lost;
 mod metrics;
 mod offset;
+mod photo_tags;
 mod photos;
 mod presets;
 mod properties;

@@ -41,14 +41,14 @@ fn exif(orientation: u16) -> Vec<u8> {
 
 /// `exiftool -j -n` of a file, or `None` (with a note) when exiftool is not installed; fails
 /// instead when SHUTTER_REQUIRE_TOOLS=1.
-fn exiftool(path: &Path) -> Option<serde_json::Value> {
+pub(crate) fn exiftool(path: &Path) -> Option<serde_json::Value> {
     tool("exiftool", &["-j", "-n", &s(path)]).map(|out| {
         let all: serde_json::Value = serde_json::from_str(&out).unwrap();
         all[0].clone()
     })
 }
 
-fn tool(name: &str, args: &[&str]) -> Option<String> {
+pub(crate) fn tool(name: &str, args: &[&str]) -> Option<String> {
     match Command::new(name).args(args).output() {
         Ok(o) => Some(String::from_utf8_lossy(&o.stdout).into_owned()),
         Err(_) if std::env::var("SHUTTER_REQUIRE_TOOLS").as_deref() == Ok("1") => {
@@ -63,7 +63,7 @@ fn tool(name: &str, args: &[&str]) -> Option<String> {
 
 /// A painted velocity map (the `painted` preset: (r, g) = v / 64 + 0.5) of `w` × `h`, moving
 /// `dx(x, y)` pixels a frame to the right.
-fn velocity_map(path: &Path, w: u32, h: u32, dx: impl Fn(u32, u32) -> f32) {
+pub(crate) fn velocity_map(path: &Path, w: u32, h: u32, dx: impl Fn(u32, u32) -> f32) {
     let mut bytes = Vec::new();
     for y in 0..h {
         for x in 0..w {
@@ -76,7 +76,12 @@ fn velocity_map(path: &Path, w: u32, h: u32, dx: impl Fn(u32, u32) -> f32) {
 
 /// Blurs through the `painted` preset (a flat depth made beside `velocity`); the run's
 /// output, which succeeded.
-fn blur(color: &Path, velocity: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+pub(crate) fn blur(
+    color: &Path,
+    velocity: &Path,
+    out: &Path,
+    extra: &[&str],
+) -> std::process::Output {
     let mut args = vec![
         "blur",
         "--algorithm",
@@ -469,7 +474,7 @@ fn a_jpeg_output_leaves_out_a_block_too_large_for_its_segment_and_says_so() {
 
 /// Sets tags of `path` with exiftool (`-overwrite_original`); false, with a note, where it is
 /// not installed (a failure where SHUTTER_REQUIRE_TOOLS=1).
-fn exiftool_set(path: &Path, args: &[&str]) -> bool {
+pub(crate) fn exiftool_set(path: &Path, args: &[&str]) -> bool {
     let path = s(path);
     let mut all = vec!["-q", "-q", "-overwrite_original"];
     all.extend(args);
@@ -494,7 +499,7 @@ const TAGGED: [&str; 10] = [
 
 /// A portrait stored on its side, `sw` × `sh`, to be turned 90° clockwise: upright
 /// (`sh` × `sw`) it is bright in its top-left corner, dark elsewhere.
-fn portrait_on_its_side(sw: u32, sh: u32) -> Vec<u8> {
+pub(crate) fn portrait_on_its_side(sw: u32, sh: u32) -> Vec<u8> {
     let uw = sh;
     (0..sw * sh)
         .flat_map(|i| {

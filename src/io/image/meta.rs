@@ -8,7 +8,9 @@
 //! The pixels are turned upright on read (`read_planes`, by the orientation the image crate
 //! reads from EXIF or the TIFF tag), so the frame holds the upright photo and the EXIF and XMP
 //! carried with it say orientation 1: written again as they are, they describe the upright
-//! pixels of the output, and no viewer turns them a second time.
+//! pixels of the output, and no viewer turns them a second time. The EXIF is made true of
+//! the upright pixels besides (`upright`): their size, each axis's resolution, no thumbnail
+//! of the unturned view.
 //!
 //! Not read: a PNG's IPTC (a hex text chunk of no settled form: it comes through as the text
 //! chunk it is). A PNG's text chunks (tEXt, zTXt, iTXt) are read with the png crate, whose
@@ -21,7 +23,8 @@ use image::ImageDecoder;
 use crate::frame::Photo;
 
 /// Reads the profile and metadata of an 8/16-bit image, without decoding its pixels, and sets
-/// the orientation its EXIF and XMP record to 1 (upright, as `read_planes` delivers it).
+/// the orientation its EXIF and XMP record to 1 (upright, as `read_planes` delivers it), its
+/// EXIF made true of the upright pixels (`upright::make_upright`).
 pub fn read_photo(path: &Path) -> Result<Photo, String> {
     let mut reader = crate::io::image::input_reader(path)?
         .with_guessed_format()
@@ -39,6 +42,10 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
         Vec::new()
     };
     let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;
+    // How `read_planes` turns the pixels, and the size it gives them.
+    let turn = super::orientation(&mut decoder);
+    let size = super::upright(decoder.dimensions(), turn);
+    let orientation = turn.to_exif();
     let color = decoder.color_type();
     let bits = (color.bytes_per_pixel() / color.channel_count()) * 8;
     // A block that cannot be read is left out, not a reason to refuse the photo.
@@ -56,7 +63,7 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
         ([icc, exif, xmp, iptc], premultiplied) = tiff_blocks(path);
     }
     if let Some(exif) = &mut exif {
-        set_exif_orientation(exif, 1);
+        super::upright::make_upright(exif, orientation as u16, size);
     }
     if let Some(xmp) = &mut xmp {
         set_xmp_orientation(xmp);
@@ -167,63 +174,6 @@ fn tiff_blocks(path: &Path) -> ([Option<Vec<u8>>; 4], bool) {
     ([icc, exif, xmp, iptc], associated)
 }
 
-/// Where IFD0's orientation (tag 0x0112, a SHORT) sits in an EXIF block (a TIFF structure,
-/// with or without the `Exif\0\0` of a JPEG segment before it), and its byte order.
-fn exif_orientation_at(exif: &[u8]) -> Option<(usize, bool)> {
-    let start = if exif.starts_with(b"Exif\0\0") { 6 } else { 0 };
-    let tiff = exif.get(start..)?;
-    let little = match tiff.get(0..2)? {
-        b"II" => true,
-        b"MM" => false,
-        _ => return None,
-    };
-    let u16_at = |at: usize| {
-        let b = tiff.get(at..at + 2)?;
-        Some(if little {
-            u16::from_le_bytes([b[0], b[1]])
-        } else {
-            u16::from_be_bytes([b[0], b[1]])
-        })
-    };
-    let ifd = {
-        let b = tiff.get(4..8)?;
-        let b = [b[0], b[1], b[2], b[3]];
-        (if little {
-            u32::from_le_bytes(b)
-        } else {
-            u32::from_be_bytes(b)
-        }) as usize
-    };
-    let count = u16_at(ifd)? as usize;
-    (0..count)
-        .map(|e| ifd + 2 + 12 * e)
-        .find(|&at| u16_at(at) == Some(0x0112) && u16_at(at + 2) == Some(3))
-        .map(|at| (start + at + 8, little))
-}
-
-/// The orientation an EXIF block records (1 to 8), if it records one.
-pub fn exif_orientation(exif: &[u8]) -> Option<u16> {
-    let (at, little) = exif_orientation_at(exif)?;
-    let b = [*exif.get(at)?, *exif.get(at + 1)?];
-    Some(if little {
-        u16::from_le_bytes(b)
-    } else {
-        u16::from_be_bytes(b)
-    })
-}
-
-/// Rewrites the orientation an EXIF block records, in place; a block without one is left.
-pub fn set_exif_orientation(exif: &mut [u8], value: u16) {
-    if let Some((at, little)) = exif_orientation_at(exif) {
-        let bytes = if little {
-            value.to_le_bytes()
-        } else {
-            value.to_be_bytes()
-        };
-        exif[at..at + 2].copy_from_slice(&bytes);
-    }
-}
-
 /// Sets XMP's `tiff:Orientation` (as an attribute or an element) to 1.
 fn set_xmp_orientation(xmp: &mut [u8]) {
     for (open, close) in [
@@ -288,28 +238,6 @@ pub fn jpeg_sampling(bytes: &[u8]) -> Option<(u8, u8)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A big-endian EXIF block whose IFD0 holds Make (ASCII, 4 bytes inline) and Orientation.
-    fn exif_with_orientation(orientation: u16) -> Vec<u8> {
-        let mut b = b"MM\0\x2a\0\0\0\x08".to_vec();
-        b.extend(2u16.to_be_bytes());
-        b.extend([0x01, 0x0F, 0, 2, 0, 0, 0, 4]);
-        b.extend(b"ABC\0");
-        b.extend([0x01, 0x12, 0, 3, 0, 0, 0, 1]);
-        b.extend(orientation.to_be_bytes());
-        b.extend([0, 0, 0, 0, 0, 0]);
-        b
-    }
-
-    #[test]
-    fn exif_orientation_is_read_and_rewritten_in_place() {
-        let mut exif = exif_with_orientation(6);
-        assert_eq!(exif_orientation(&exif), Some(6));
-        let before = exif.len();
-        set_exif_orientation(&mut exif, 1);
-        assert_eq!((exif_orientation(&exif), exif.len()), (Some(1), before));
-        assert_eq!(exif_orientation(b"MM\0\x2a\0\0\0\x08\0\0"), None);
-    }
 
     #[test]
     fn xmp_orientation_becomes_1_in_both_forms() {

@@ -13,6 +13,7 @@
 mod meta;
 mod profile;
 mod tiff_meta;
+mod upright;
 mod write;
 
 use std::io::{Seek, Write};
@@ -23,8 +24,9 @@ use image::{ColorType, DynamicImage, ImageDecoder, ImageReader, Limits};
 
 use crate::frame::{Photo, Plane};
 
-pub use meta::{exif_orientation, jpeg_sampling, read_photo};
+pub use meta::{jpeg_sampling, read_photo};
 pub use profile::{chromaticities, Transfer};
+pub use upright::exif_orientation;
 pub use write::{goes_out_grey, jpeg_left_out, out_of_range, write_photo, PhotoOptions};
 
 /// What the header of an integer image says.

@@ -675,7 +675,7 @@ mod tests {
             prefixed.extend(&block);
             assert_eq!(parse(&prefixed).as_ref(), Some(&exif));
             // The orientation where the JPEG path looks for it.
-            assert_eq!(super::super::meta::exif_orientation(&block), Some(6));
+            assert_eq!(super::super::upright::exif_orientation(&block), Some(6));
         }
     }
 
