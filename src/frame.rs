@@ -327,6 +327,28 @@ pub enum TextKind {
     International,
 }
 
+/// A photo's pixel density, as its file stores it beside the pixels (a JPEG's JFIF density, a
+/// PNG's pHYs, a TIFF's XResolution, YResolution and ResolutionUnit), of the upright pixels:
+/// pixels per unit along x and y, each a ratio (numerator, denominator) as a TIFF stores it
+/// (over 1 from JFIF and pHYs, which store whole numbers).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Resolution {
+    pub x: (u32, u32),
+    pub y: (u32, u32),
+    pub unit: ResolutionUnit,
+}
+
+/// The unit of a [`Resolution`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ResolutionUnit {
+    /// No unit: x and y give the pixels' aspect ratio alone.
+    None,
+    Inch,
+    Centimetre,
+    /// A PNG's unit.
+    Metre,
+}
+
 /// The metadata of an 8/16-bit photo, as its file stores it, so the output holds it again.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Photo {
@@ -349,6 +371,8 @@ pub struct Photo {
     /// A JPEG's chroma subsampling: its luma sampling factors over its chroma's, (2, 2) for
     /// 4:2:0, (1, 1) for 4:4:4; `None` for other files.
     pub sampling: Option<(u8, u8)>,
+    /// Its pixel density, where the file gives one (and not only square pixels).
+    pub resolution: Option<Resolution>,
     /// The file's colour is premultiplied by its alpha (a TIFF whose ExtraSamples says
     /// associated alpha): the read divides it out before anything else. Outputs are written
     /// with straight alpha, declared as such, whatever the input held.

@@ -100,3 +100,135 @@ fn the_exif_of_a_photo_turned_upright_says_the_upright_size_and_holds_no_sideway
     );
     assert_eq!(size, (&32.into(), &48.into()), "{tags}");
 }
+
+/// The resolution each output holds, by exiftool: a JPEG's JFIF density (x, y, unit: 0 none,
+/// 1 inches, 2 cm), a PNG's pHYs (x, y per unit: 0 none, 1 metre), a TIFF's XResolution,
+/// YResolution and ResolutionUnit (1 none, 2 inches, 3 cm).
+fn resolution(tags: &serde_json::Value, out: &str) -> (f64, f64, u64) {
+    let [x, y, unit] = match out {
+        "jpg" => [
+            "JFIF:XResolution",
+            "JFIF:YResolution",
+            "JFIF:ResolutionUnit",
+        ],
+        "png" => [
+            "PNG-pHYs:PixelsPerUnitX",
+            "PNG-pHYs:PixelsPerUnitY",
+            "PNG-pHYs:PixelUnits",
+        ],
+        _ => [
+            "IFD0:XResolution",
+            "IFD0:YResolution",
+            "IFD0:ResolutionUnit",
+        ],
+    };
+    let number = |name: &str| {
+        tags[name]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{out}: no {name}: {tags}"))
+    };
+    (
+        number(x),
+        number(y),
+        tags[unit]
+            .as_u64()
+            .unwrap_or_else(|| panic!("{out}: no {unit}: {tags}")),
+    )
+}
+
+/// A photo's resolution comes out as it went in (QA: a JPEG's JFIF density, a PNG's pHYs and
+/// a TIFF's resolution tags were all written as none, 1:1), in each output format's own
+/// place: the same numbers into the same format; into another, in its unit (inches for a
+/// JPEG or TIFF from a PNG's metres; pixels per metre for a PNG from inches or centimetres,
+/// rounded as pHYs holds integers), x and y apart. Turned upright by a quarter turn, x and y
+/// trade places.
+#[test]
+fn a_photos_resolution_comes_out_in_every_format_as_it_went_in() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    let grey = [120u8; 48 * 32 * 3];
+    let inputs: [(&str, &[&str]); 4] = [
+        (
+            "in.jpg",
+            &[
+                "-JFIF:XResolution=300",
+                "-JFIF:YResolution=150",
+                "-JFIF:ResolutionUnit=inches",
+            ],
+        ),
+        (
+            "in.png",
+            &[
+                "-PNG-pHYs:PixelsPerUnitX=11811",
+                "-PNG-pHYs:PixelsPerUnitY=5906",
+                "-PNG-pHYs:PixelUnits=meters",
+            ],
+        ),
+        (
+            "in.tif",
+            &["-XResolution=72", "-YResolution=144", "-ResolutionUnit=cm"],
+        ),
+        (
+            "side.jpg",
+            &[
+                "-JFIF:XResolution=300",
+                "-JFIF:YResolution=150",
+                "-JFIF:ResolutionUnit=inches",
+                "-Orientation#=6",
+            ],
+        ),
+    ];
+    for (name, tags) in inputs {
+        image::save_buffer(p(name), &grey, 48, 32, image::ColorType::Rgb8).unwrap();
+        if !exiftool_set(&p(name), tags) {
+            return;
+        }
+    }
+    let velocity = p("v.png");
+    velocity_map(&velocity, 48, 32, |_, _| 0.0);
+    let turned = p("v_turned.png");
+    velocity_map(&turned, 32, 48, |_, _| 0.0);
+    // (input, output format, x, y, unit) as exiftool reads them.
+    let inch: f64 = 0.0254;
+    let expected = [
+        ("in.jpg", "jpg", 300.0, 150.0, 1),
+        (
+            "in.jpg",
+            "png",
+            (300.0 / inch).round(),
+            (150.0 / inch).round(),
+            1,
+        ),
+        ("in.jpg", "tif", 300.0, 150.0, 2),
+        ("in.png", "png", 11811.0, 5906.0, 1),
+        ("in.png", "jpg", 300.0, 150.0, 1),
+        ("in.png", "tif", 11811.0 * inch, 5906.0 * inch, 2),
+        ("in.tif", "tif", 72.0, 144.0, 3),
+        ("in.tif", "jpg", 72.0, 144.0, 2),
+        ("in.tif", "png", 7200.0, 14400.0, 1),
+        ("side.jpg", "jpg", 150.0, 300.0, 1),
+        (
+            "side.jpg",
+            "png",
+            (150.0 / inch).round(),
+            (300.0 / inch).round(),
+            1,
+        ),
+        ("side.jpg", "tif", 150.0, 300.0, 2),
+    ];
+    for (input, format, x, y, unit) in expected {
+        let out = p(&format!("{input}.{format}"));
+        let v = if input == "side.jpg" {
+            &turned
+        } else {
+            &velocity
+        };
+        blur(&p(input), v, &out, &[]);
+        let tags = exiftool(&out).unwrap();
+        let (gx, gy, gunit) = resolution(&tags, format);
+        assert!(
+            (gx - x).abs() < 1e-3 && (gy - y).abs() < 1e-3 && gunit == unit,
+            "{input} → {format}: ({gx}, {gy}, {gunit}), not ({x}, {y}, {unit})"
+        );
+    }
+}

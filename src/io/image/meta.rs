@@ -2,8 +2,8 @@
 //! (`frame::Photo`): the ICC profile (JPEG APP2, PNG iCCP, TIFF tag 34675), EXIF (JPEG APP1,
 //! PNG eXIf, a TIFF's IFD0 tags and Exif and GPS directories gathered into that form by
 //! `tiff_meta`), XMP (JPEG APP1, PNG iTXt, TIFF tag 700), IPTC (JPEG APP13 and TIFF tag 34377
-//! as Photoshop resource blocks, a TIFF's bare tag 33723 wrapped as one), the bits per sample
-//! and a JPEG's chroma subsampling.
+//! as Photoshop resource blocks, a TIFF's bare tag 33723 wrapped as one), the resolution
+//! (`resolution`), the bits per sample and a JPEG's chroma subsampling.
 //!
 //! The pixels are turned upright on read (`read_planes`, by the orientation the image crate
 //! reads from EXIF or the TIFF tag), so the frame holds the upright photo and the EXIF and XMP
@@ -20,7 +20,7 @@ use std::path::Path;
 
 use image::ImageDecoder;
 
-use crate::frame::Photo;
+use crate::frame::{Photo, Resolution};
 
 /// Reads the profile and metadata of an 8/16-bit image, without decoding its pixels, and sets
 /// the orientation its EXIF and XMP record to 1 (upright, as `read_planes` delivers it), its
@@ -36,10 +36,10 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
     reader.limits(limits);
     let jpeg = reader.format() == Some(image::ImageFormat::Jpeg);
     let tiff = reader.format() == Some(image::ImageFormat::Tiff);
-    let texts = if reader.format() == Some(image::ImageFormat::Png) {
-        png_texts(path)
+    let (texts, mut resolution) = if reader.format() == Some(image::ImageFormat::Png) {
+        png_chunks(path)
     } else {
-        Vec::new()
+        (Vec::new(), None)
     };
     let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;
     // How `read_planes` turns the pixels, and the size it gives them.
@@ -60,7 +60,7 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
         // The image crate's TIFF reader gives no profile stored as UNDEFINED (as exiftool
         // and Photoshop store it), refuses XMP under its limits and gives no EXIF: the tiff
         // crate reads them.
-        ([icc, exif, xmp, iptc], premultiplied) = tiff_blocks(path);
+        ([icc, exif, xmp, iptc], premultiplied, resolution) = tiff_blocks(path);
     }
     if let Some(exif) = &mut exif {
         super::upright::make_upright(exif, orientation as u16, size);
@@ -68,13 +68,17 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
     if let Some(xmp) = &mut xmp {
         set_xmp_orientation(xmp);
     }
-    let sampling = if jpeg {
-        crate::io::input::read_input(path)
-            .ok()
-            .and_then(|b| jpeg_sampling(&b))
-    } else {
-        None
-    };
+    let bytes = jpeg
+        .then(|| crate::io::input::read_input(path).ok())
+        .flatten();
+    let sampling = bytes.as_deref().and_then(jpeg_sampling);
+    if let Some(bytes) = &bytes {
+        resolution = super::resolution::jfif_density(bytes);
+    }
+    // Each axis's density goes with its axis.
+    if let (Some(r), 5..=8) = (&mut resolution, orientation) {
+        (r.x, r.y) = (r.y, r.x);
+    }
     Ok(Photo {
         icc,
         exif,
@@ -84,24 +88,26 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
         bits,
         grey: color.channel_count() <= 2,
         sampling,
+        resolution,
         premultiplied,
     })
 }
 
 /// A PNG's text chunks before its image data (where writers put them), in file order, each
-/// as its kind: tEXt, zTXt (inflated), iTXt (but XMP's, which is `Photo::xmp`). A chunk that
-/// cannot be read is left out; the decoder's allocations are capped as the header's are.
-fn png_texts(path: &Path) -> Vec<crate::frame::PngText> {
+/// as its kind: tEXt, zTXt (inflated), iTXt (but XMP's, which is `Photo::xmp`); and its pHYs.
+/// A chunk that cannot be read is left out; the decoder's allocations are capped as the
+/// header's are.
+fn png_chunks(path: &Path) -> (Vec<crate::frame::PngText>, Option<Resolution>) {
     use crate::frame::{PngText, TextKind};
     let Ok(file) = crate::io::input::open_input(path) else {
-        return Vec::new();
+        return (Vec::new(), None);
     };
     let limits = png::Limits {
         bytes: crate::io::image::HEADER_ROOM as usize,
     };
     let decoder = png::Decoder::new_with_limits(std::io::BufReader::new(file), limits);
     let Ok(reader) = decoder.read_info() else {
-        return Vec::new();
+        return (Vec::new(), None);
     };
     let info = reader.info();
     // The three lists are kept apart by the decoder: file order within each kind.
@@ -133,15 +139,16 @@ fn png_texts(path: &Path) -> Vec<crate::frame::PngText> {
                 })
             }),
     );
-    texts
+    let resolution = info.pixel_dims.and_then(super::resolution::png_density);
+    (texts, resolution)
 }
 
 /// A TIFF's profile (tag 34675), EXIF (its IFD0's descriptive tags and the directories they
 /// point to, as one block: `tiff_meta`), XMP (tag 700) and Photoshop resource blocks (tag
 /// 34377, where IPTC sits beside its JPEG form; bare IPTC, tag 33723, wrapped as one where
-/// they hold none), each as its bytes; and whether its alpha is associated (ExtraSamples = 1:
-/// the colour is premultiplied).
-fn tiff_blocks(path: &Path) -> ([Option<Vec<u8>>; 4], bool) {
+/// they hold none), each as its bytes; whether its alpha is associated (ExtraSamples = 1:
+/// the colour is premultiplied); and its resolution.
+fn tiff_blocks(path: &Path) -> ([Option<Vec<u8>>; 4], bool, Option<Resolution>) {
     use super::tiff_meta;
     use tiff::tags::{Tag, Type, ValueBuffer};
     let Ok(mut decoder) = crate::io::input::open_input(path)
@@ -149,7 +156,7 @@ fn tiff_blocks(path: &Path) -> ([Option<Vec<u8>>; 4], bool) {
         .map_err(tiff::TiffError::from)
         .and_then(tiff::decoder::Decoder::new)
     else {
-        return ([None, None, None, None], false);
+        return ([None, None, None, None], false, None);
     };
     // Each value's bytes as stored, whatever its type (exiftool types tag 33723 LONG).
     let [icc, xmp, photoshop, bare] = [34675, 700, 34377, 33723].map(|tag| {
@@ -167,11 +174,12 @@ fn tiff_blocks(path: &Path) -> ([Option<Vec<u8>>; 4], bool) {
         }
         (resources, None) => resources,
     };
-    let room = crate::io::image::HEADER_ROOM as usize;
-    let exif = tiff_meta::exif_of_tiff(&mut decoder, room).map(|e| tiff_meta::to_block(&e));
+    let resolution = super::resolution::tiff_density(&mut decoder);
     let extra = decoder.find_tag_unsigned_vec::<u16>(Tag::ExtraSamples);
     let associated = extra.ok().flatten().is_some_and(|e| e.first() == Some(&1));
-    ([icc, exif, xmp, iptc], associated)
+    let room = crate::io::image::HEADER_ROOM as usize;
+    let exif = tiff_meta::exif_of_tiff(&mut decoder, room).map(|e| tiff_meta::to_block(&e));
+    ([icc, exif, xmp, iptc], associated, resolution)
 }
 
 /// Sets XMP's `tiff:Orientation` (as an attribute or an element) to 1.

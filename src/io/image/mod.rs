@@ -12,6 +12,7 @@
 
 mod meta;
 mod profile;
+mod resolution;
 mod tiff_meta;
 mod upright;
 mod write;

@@ -1,6 +1,7 @@
 //! Writing a frame's colour as an 8/16-bit PNG, TIFF or JPEG that holds again what the photo
 //! came with (`frame::Photo`): encoded with its profile's curves, the profile embedded, its
-//! EXIF, XMP and IPTC carried over where the format has a place for them.
+//! EXIF, XMP and IPTC carried over where the format has a place for them, its resolution in
+//! the format's own place (pHYs, the TIFF tags, JFIF's density: `resolution`).
 //!
 //! Each format through its own encoder, for what image's encoders do not pass on:
 //! - PNG (png crate): iCCP, eXIf, XMP as the iTXt chunk `XML:com.adobe.xmp`, and a PNG
@@ -30,8 +31,8 @@ use std::io::{Seek, Write};
 use crate::frame::Photo;
 
 use super::profile::Transfer;
-use super::tiff_meta;
 use super::ImageFormat;
+use super::{resolution, tiff_meta};
 
 /// How a photo is written.
 #[derive(Clone, Copy, Debug)]
@@ -272,6 +273,9 @@ fn write_png(
         png::BitDepth::Eight
     };
     info.icc_profile = icc.map(Into::into);
+    info.pixel_dims = photo
+        .and_then(|p| p.resolution.as_ref())
+        .map(resolution::to_png);
     info.exif_metadata = photo.and_then(|p| p.exif.as_deref()).map(Into::into);
     let mut encoder = png::Encoder::with_info(writer, info).map_err(|e| e.to_string())?;
     if let Some(xmp) = photo.and_then(|p| p.xmp.as_deref()) {
@@ -370,6 +374,15 @@ fn write_tiff(
             if let Some(exif) = &exif {
                 tiff_meta::write_ifd0(tags, exif, &pointers).map_err(error)?;
             }
+            // The photo's own resolution, over the encoder's none and any in its EXIF (a
+            // JPEG's EXIF may say 72 dpi beside the JFIF density it is shown at).
+            if let Some(resolution) = photo.and_then(|p| p.resolution.as_ref()) {
+                let (x, y, unit) = resolution::to_tiff(resolution);
+                tags.write_tag(Tag::XResolution, x).map_err(error)?;
+                tags.write_tag(Tag::YResolution, y).map_err(error)?;
+                tags.write_tag(Tag::ResolutionUnit, unit.to_u16())
+                    .map_err(error)?;
+            }
             image.write_data($data).map_err(error)
         }};
     }
@@ -408,6 +421,9 @@ fn write_jpeg(
         .and_then(|(h, v)| SamplingFactor::from_factors(h, v))
         .unwrap_or(SamplingFactor::R_4_4_4);
     encoder.set_sampling_factor(sampling);
+    if let Some(resolution) = photo.and_then(|p| p.resolution.as_ref()) {
+        encoder.set_density(resolution::to_jfif(resolution));
+    }
     // EXIF first (readers look for it right after the JFIF header), then XMP, the profile
     // and IPTC; a block one segment cannot hold is left out (`jpeg_left_out`: the run warns),
     // not the frame.
