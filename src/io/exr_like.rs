@@ -90,9 +90,10 @@ pub struct OutChannel {
 /// `shutter/settings`' text.
 ///
 /// Under DWAA or DWAB, which compress every channel whose name ends in R, G, B or Y as
-/// colour (`velocity.Y`, `N.R`), a part's data channels go to a part of their own,
-/// `<part>.data`, with ZIP: data is never written lossily, and a layer's channels stay
-/// together.
+/// colour (`velocity.Y`, `N.R`), a part's data channels go to a part of their own, with ZIP:
+/// data is never written lossily, and a layer's channels stay together. That part is named
+/// `data` beside the main part (see [`data_part_name`]); a part that holds data alone stays
+/// itself, under its own name, with ZIP.
 pub fn write_like(
     writer: &mut BufWriter<File>,
     display: Window,
@@ -112,6 +113,12 @@ pub fn write_like(
             ..ImageAttributes::new(display)
         },
     };
+    // The parts' own names, which a data part's name may not take.
+    let mut taken: Vec<String> = parts
+        .iter()
+        .filter_map(|p| p.input?.own_attributes.layer_name.as_ref())
+        .map(|n| n.to_string())
+        .collect();
     // Each part, and the lossless part its data needs under DWA.
     let mut layers = Vec::new();
     for part in parts {
@@ -121,22 +128,25 @@ pub fn write_like(
             .into_iter()
             .partition(|c| !(is_dwa(encoding.compression) && c.class.is_data()));
         let attributes = attributes_like(part.input, part.data, record, views);
+        let data_encoding = Encoding {
+            compression: DEFAULT_COMPRESSION,
+            ..encoding
+        };
+        if kept.is_empty() {
+            // Data alone: the part itself, lossless.
+            if !apart.is_empty() {
+                layers.push((attributes, data_encoding, part.input, part.data, apart));
+            }
+            continue;
+        }
         let data_part = (!apart.is_empty()).then(|| {
             let mut data_attributes = attributes.clone();
-            let name = attributes
-                .layer_name
-                .as_ref()
-                .map_or("rgba".to_string(), |n| n.to_string());
-            data_attributes.layer_name = Some(latin1(&format!("{name}.data")));
-            let data_encoding = Encoding {
-                compression: DEFAULT_COMPRESSION,
-                ..encoding
-            };
+            let name = data_part_name(attributes.layer_name.as_ref(), &taken);
+            taken.push(name.clone());
+            data_attributes.layer_name = Some(latin1(&name));
             (data_attributes, data_encoding, part.input, part.data, apart)
         });
-        if !kept.is_empty() {
-            layers.push((attributes, encoding, part.input, part.data, kept));
-        }
+        layers.push((attributes, encoding, part.input, part.data, kept));
         layers.extend(data_part);
     }
     let several = layers.len() > 1;
@@ -182,6 +192,31 @@ pub fn write_like(
     write.to_buffered(&mut *writer).map_err(|e| e.to_string())?;
     writer.flush().map_err(|e| e.to_string())?;
     sort_attributes(writer.get_mut()).map_err(|e| format!("sorting its attributes: {e}"))
+}
+
+/// The name of the part that takes the data channels of the part named `part` under DWA,
+/// none of `taken`: `data` beside the main part (unnamed, or OpenEXR's and Nuke's `rgba`, or
+/// `beauty`), as a pipeline names a part of data channels (OpenEXR's part helper and Nuke
+/// name a part by what it holds, and a channel keeps its full name in any part); beside
+/// another part `<part>.data`, so each part's data stays told apart (two views' parts, say);
+/// a number after it where even that name is taken. Readers find a channel by its own
+/// name, whatever its part (`shutter diff` and the passes' lookup among them).
+fn data_part_name(part: Option<&Text>, taken: &[String]) -> String {
+    let part = part.map(|n| n.to_string());
+    let main = part
+        .as_deref()
+        .is_none_or(|n| crate::io::file::FileInfo::MAIN_PARTS.contains(&n));
+    let fallback = format!("{}.data", part.as_deref().unwrap_or("rgba"));
+    let first = if main {
+        "data".to_string()
+    } else {
+        fallback.clone()
+    };
+    std::iter::once(first)
+        .chain(std::iter::once(fallback.clone()))
+        .chain((2..).map(|k| format!("{fallback}{k}")))
+        .find(|name| !taken.contains(name))
+        .expect("an endless list of names holds one not taken")
 }
 
 fn is_dwa(compression: Compression) -> bool {
