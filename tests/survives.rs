@@ -278,6 +278,31 @@ fn a_tiled_plate_in_decreasing_line_order_comes_back_tiled_in_that_order() {
 }
 
 #[test]
+fn a_tiled_plate_in_random_line_order_comes_back_declaring_random_order() {
+    // RANDOM_Y (valid for tiles alone) is the plate's; it came back INCREASING_Y (QA).
+    let dir = plate_frame(Blocks::Tiles(Vec2(16, 8)), LineOrder::Unspecified);
+    let plate = MetaData::read_from_file(dir.path().join("color.exr"), false).unwrap();
+    assert_eq!(plate.headers[0].line_order, LineOrder::Unspecified);
+    blur(dir.path(), "a.exr", &[]);
+    blur(dir.path(), "b.exr", &[]);
+    let out = dir.path().join("a.exr");
+    let meta = MetaData::read_from_file(&out, false).unwrap();
+    let header = &meta.headers[0];
+    assert!(
+        matches!(header.blocks, BlockDescription::Tiles(t) if t.tile_size == Vec2(16, 8)),
+        "{:?}",
+        header.blocks
+    );
+    assert_eq!(header.line_order, LineOrder::Unspecified);
+    // Its tiles still go out in one order: the same frame gives the same bytes.
+    let b = std::fs::read(dir.path().join("b.exr")).unwrap();
+    assert!(std::fs::read(&out).unwrap() == b, "two runs differ");
+    if let Some(info) = oiiotool_info(&out) {
+        assert!(info.contains("tile size: 16 x 8"), "{info}");
+    }
+}
+
+#[test]
 fn the_same_frame_gives_the_same_bytes_whatever_order_the_attributes_were_held_in() {
     // The exr crate writes custom attributes in the order of a HashMap, which differs from
     // process to process; with seven custom attributes (five of the plate's, shutter's two)

@@ -13,7 +13,8 @@
 //! the tile levels: only the full-resolution level is read, so a mip-mapped input comes back
 //! as one level), and, where one view of a multi-view file is written, its `multiView` list
 //! and parts' `view` attributes (an output of every view keeps them). Its form follows the
-//! input too: compression (unless `compression` is set), line order, scan lines or tiles of
+//! input too: compression (unless `compression` is set), line order (RANDOM_Y for tiles
+//! alone, where OpenEXR allows it, its tiles written in increasing order), scan lines or tiles of
 //! the same size (a tiled plate stays tiled, so the tools that read it by tiles still can),
 //! and each channel's pixel type (half stays half; `half` writes every float channel half,
 //! u32 stays u32). Added: `shutter/version` and `shutter/settings` (the settings that differ
@@ -150,21 +151,33 @@ pub fn write_like(
         layers.extend(data_part);
     }
     let several = layers.len() > 1;
+    // A part in random order (RANDOM_Y) is written in increasing order, and then declared
+    // random: the exr crate writes a random-order part's blocks as its threads finish them,
+    // which would make the same frame give other bytes on each run.
+    let random_y: Vec<bool> = layers
+        .iter()
+        .map(|l| l.1.line_order == LineOrder::Unspecified)
+        .collect();
     let layers: Vec<_> = layers
         .into_iter()
         .enumerate()
-        .map(|(i, (mut attributes, encoding, input, data, channels))| {
-            // Every part of a multi-part file has a name.
-            if several && attributes.layer_name.is_none() {
-                attributes.layer_name = Some(Text::from(if i == 0 { "rgba" } else { "part" }));
-            }
-            Layer::new(
-                (data.width, data.height),
-                attributes,
-                encoding,
-                AnyChannels::sort(channels_like(channels, input, output).into()),
-            )
-        })
+        .map(
+            |(i, (mut attributes, mut encoding, input, data, channels))| {
+                if random_y[i] {
+                    encoding.line_order = LineOrder::Increasing;
+                }
+                // Every part of a multi-part file has a name.
+                if several && attributes.layer_name.is_none() {
+                    attributes.layer_name = Some(Text::from(if i == 0 { "rgba" } else { "part" }));
+                }
+                Layer::new(
+                    (data.width, data.height),
+                    attributes,
+                    encoding,
+                    AnyChannels::sort(channels_like(channels, input, output).into()),
+                )
+            },
+        )
         .collect();
     let image = Image::from_layers(image_attributes, layers);
     // An attribute under a standard name but of another type than the standard's (`isoSpeed`
@@ -191,7 +204,7 @@ pub fn write_like(
     };
     write.to_buffered(&mut *writer).map_err(|e| e.to_string())?;
     writer.flush().map_err(|e| e.to_string())?;
-    sort_attributes(writer.get_mut()).map_err(|e| format!("sorting its attributes: {e}"))
+    sort_attributes(writer.get_mut(), &random_y).map_err(|e| format!("sorting its attributes: {e}"))
 }
 
 /// The name of the part that takes the data channels of the part named `part` under DWA,
@@ -331,8 +344,10 @@ fn encoding_like(input: Option<&Header>, output: &ExrOutput) -> Encoding {
         Some(BlockDescription::Tiles(tiles)) => Blocks::Tiles(tiles.tile_size),
         _ => Blocks::ScanLines,
     };
-    let line_order = match input.map(|h| h.line_order) {
-        Some(LineOrder::Decreasing) => LineOrder::Decreasing,
+    // RANDOM_Y is valid for tiles alone (a scan-line file declaring it reads as increasing).
+    let line_order = match (input.map(|h| h.line_order), blocks) {
+        (Some(LineOrder::Decreasing), _) => LineOrder::Decreasing,
+        (Some(LineOrder::Unspecified), Blocks::Tiles(_)) => LineOrder::Unspecified,
         _ => LineOrder::Increasing,
     };
     Encoding {
@@ -352,10 +367,14 @@ fn latin1(text: &str) -> Text {
     Text::from_slice_unchecked(&bytes)
 }
 
-/// Puts the attributes of every header of the EXR in `file` in name order, in place. Every
-/// attribute is a self-contained record (name, type, size, value), so reordering them
-/// leaves each header, and so the offset tables after them, the same length.
-pub fn sort_attributes(file: &mut File) -> std::io::Result<()> {
+/// Puts the attributes of every header of the EXR in `file` in name order, in place, and
+/// declares RANDOM_Y the line order of each part `random_y` marks (its blocks are in
+/// increasing order, which a random order allows). Every attribute is a self-contained
+/// record (name, type, size, value), so reordering them, or changing the one byte of a
+/// `lineOrder`, leaves each header, and so the offset tables after them, the same length.
+pub fn sort_attributes(file: &mut File, random_y: &[bool]) -> std::io::Result<()> {
+    /// OpenEXR's `RANDOM_Y` in a `lineOrder` attribute.
+    const RANDOM_Y: u8 = 2;
     const MULTIPART: u32 = 0x1000;
     let invalid = |what: &str| std::io::Error::new(std::io::ErrorKind::InvalidData, what);
     file.seek(SeekFrom::Start(0))?;
@@ -378,8 +397,16 @@ pub fn sort_attributes(file: &mut File) -> std::io::Result<()> {
     let version = u32::from_le_bytes(bytes[4..8].try_into().expect("eight bytes"));
     let mut at = 8;
     let mut sorted = bytes[..8].to_vec();
-    loop {
+    for part in 0.. {
         let records = header_records(&bytes, at)?;
+        if random_y.get(part).copied().unwrap_or(false) {
+            let line_order = records
+                .iter()
+                .find(|r| &bytes[r.start..r.name_end] == b"lineOrder")
+                .ok_or_else(|| invalid("a part has no lineOrder"))?;
+            // The value is the record's last byte (size 1).
+            bytes[line_order.end - 1] = RANDOM_Y;
+        }
         let end = records.last().map_or(at, |r| r.end);
         let mut order: Vec<_> = records.iter().collect();
         order.sort_by_key(|r| &bytes[r.start..r.name_end]);
@@ -531,7 +558,7 @@ mod tests {
         let before = MetaData::read_from_file(&path, false).unwrap();
         let length = std::fs::metadata(&path).unwrap().len();
         let mut file = File::options().read(true).write(true).open(&path).unwrap();
-        sort_attributes(&mut file).unwrap();
+        sort_attributes(&mut file, &[]).unwrap();
         drop(file);
         let bytes = std::fs::read(&path).unwrap();
         assert_eq!(bytes.len() as u64, length);
