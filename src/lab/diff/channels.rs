@@ -30,6 +30,22 @@ pub struct Largest {
     /// The reference's value there, and the tested image's.
     pub a: f64,
     pub b: f64,
+    /// Whether `a` and `b` are a u32 channel's values, compared as stored: integers that
+    /// print as such (an f32 rounds them over 2²⁴: 16777217 would print 16777216).
+    #[serde(skip)]
+    pub integer: bool,
+}
+
+impl Largest {
+    /// `a` or `b` as text: a u32 channel's value as the integer it is, a float channel's as
+    /// the shortest text that reads back as its f32.
+    pub fn value_text(&self, value: f64) -> String {
+        if self.integer {
+            format!("{}", value as u64)
+        } else {
+            format!("{}", value as f32)
+        }
+    }
 }
 
 /// The per-pixel gates.
@@ -332,6 +348,7 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
                         channel: pair.name.clone(),
                         a: x,
                         b: y,
+                        integer: pair.exact.is_some(),
                     };
                 }
             }
