@@ -1128,3 +1128,55 @@ fn help_names_every_builtin_preset() {
         }
     }
 }
+
+/// The exit codes in the first table of README's usage (`Exit codes (what a farm's wrapper
+/// acts on)`), as its first cells write them: `0`, `1`, …, `128 + N`.
+fn readme_exit_codes() -> Vec<String> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md");
+    let text = std::fs::read_to_string(path).unwrap();
+    let table = text
+        .split("Exit codes (what a farm's wrapper acts on):")
+        .nth(1)
+        .expect("README has the exit-code table");
+    table
+        .lines()
+        .skip_while(|l| !l.starts_with('|'))
+        .take_while(|l| l.starts_with('|'))
+        .filter_map(|l| {
+            let cell = l.split('|').nth(1)?.trim();
+            let code = cell.strip_prefix('`')?.strip_suffix('`')?;
+            Some(code.to_string())
+        })
+        .collect()
+}
+
+/// `shutter --help` lists every exit code README's table gives, and no other (75, retry,
+/// and 128 + N, a signal, were missing from it).
+#[test]
+fn help_lists_the_exit_codes_of_the_readme() {
+    let codes = readme_exit_codes();
+    assert!(codes.len() >= 5, "{codes:?}");
+    let o = shutter(&["--help"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let help = stdout(&o);
+    let paragraph = help
+        .split("Exit codes:")
+        .nth(1)
+        .and_then(|rest| rest.split("\n\n").next())
+        .expect("--help has an exit-code paragraph")
+        .replace('\n', " ");
+    // Each entry of the paragraph starts with its code, after `Exit codes:` or a `;`.
+    let listed: Vec<String> = paragraph
+        .split(';')
+        .map(|entry| {
+            let words: Vec<&str> = entry.split_whitespace().collect();
+            match words.as_slice() {
+                ["128", "+", "N", ..] => "128 + N".to_string(),
+                [code, ..] => code.to_string(),
+                [] => String::new(),
+            }
+        })
+        .filter(|code| code.starts_with(|c: char| c.is_ascii_digit()))
+        .collect();
+    assert_eq!(listed, codes, "--help's exit codes: {paragraph}");
+}
