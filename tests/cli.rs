@@ -1180,3 +1180,59 @@ fn help_lists_the_exit_codes_of_the_readme() {
         .collect();
     assert_eq!(listed, codes, "--help's exit codes: {paragraph}");
 }
+
+/// `scene --size` over its limit says the limit, in the error and in `--help` (it said
+/// only "use WxH").
+#[test]
+fn a_scene_size_over_the_limit_names_the_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("scene");
+    let o = shutter(&["scene", "pan", "-o", &s(&out), "--size", "20000x10"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("16384"), "{}", stderr(&o));
+    let help = stdout(&shutter(&["scene", "--help"]));
+    let line = help.lines().find(|l| l.contains("--size")).unwrap();
+    assert!(line.contains("16384"), "{line}");
+}
+
+/// A scene whose planes the memory cannot hold is refused before anything is allocated,
+/// exit 1 with what to do, not aborted by the allocator (SIGABRT, exit 134 from a shell).
+#[cfg(unix)]
+#[test]
+fn a_scene_too_large_for_the_memory_is_refused_not_aborted() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("scene");
+    // 2 GB of address space; a 16384² scene's planes are 1 GiB each.
+    let args = [
+        "scene",
+        "pan",
+        "-o",
+        &s(&out),
+        "--size",
+        "16384x16384",
+        "--samples",
+        "1",
+    ];
+    let o = shutter_capped(2_000_000, &args);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let message = stderr(&o);
+    assert!(
+        message.contains("too large") && message.contains("MiB") && message.contains("--size"),
+        "{message}"
+    );
+    assert!(!out.join("color.0001.exr").exists());
+    // And under a --max-memory of its own.
+    let o = shutter(&[
+        "scene",
+        "gears",
+        "-o",
+        &s(&out),
+        "--size",
+        "2048x2048",
+        "--max-memory",
+        "64",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--max-memory"), "{}", stderr(&o));
+    assert!(!out.join("color.0001.exr").exists());
+}

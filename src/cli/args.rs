@@ -349,9 +349,15 @@ pub struct SceneArgs {
     #[arg(short, long, value_name = "DIR")]
     pub output: PathBuf,
 
-    /// Image size [default: 640x360].
+    /// Image size, each side 1 to 16384 pixels [default: 640x360].
     #[arg(long, value_name = "WxH")]
     pub size: Option<String>,
+
+    /// The most memory the scene may need, in MiB, estimated from its size before anything
+    /// is rendered [default: half the machine's memory, within the process's address-space
+    /// and cgroup limits, as blur's].
+    #[arg(long, value_name = "MIB")]
+    pub max_memory: Option<u64>,
 
     /// Number of frames (frame f is scene time f - 1).
     #[arg(long, value_name = "N", default_value_t = 1)]
@@ -500,7 +506,7 @@ pub struct BenchArgs {
     #[arg(long, value_name = "LIST")]
     pub scenes: Option<String>,
 
-    /// Frame size [default: 320x180].
+    /// Frame size, each side 1 to 16384 pixels [default: 320x180].
     #[arg(long, value_name = "WxH")]
     pub size: Option<String>,
 
