@@ -1195,3 +1195,111 @@ fn a_missing_pass_names_the_flag_that_gives_it() {
         &["photo.png", "depth pass", "--depth FILE"],
     );
 }
+
+/// The exit codes in the first table of README's usage (`Exit codes (what a farm's wrapper
+/// acts on)`), as its first cells write them: `0`, `1`, …, `128 + N`.
+fn readme_exit_codes() -> Vec<String> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md");
+    let text = std::fs::read_to_string(path).unwrap();
+    let table = text
+        .split("Exit codes (what a farm's wrapper acts on):")
+        .nth(1)
+        .expect("README has the exit-code table");
+    table
+        .lines()
+        .skip_while(|l| !l.starts_with('|'))
+        .take_while(|l| l.starts_with('|'))
+        .filter_map(|l| {
+            let cell = l.split('|').nth(1)?.trim();
+            let code = cell.strip_prefix('`')?.strip_suffix('`')?;
+            Some(code.to_string())
+        })
+        .collect()
+}
+
+/// `shutter --help` lists every exit code README's table gives, and no other (75, retry,
+/// and 128 + N, a signal, were missing from it).
+#[test]
+fn help_lists_the_exit_codes_of_the_readme() {
+    let codes = readme_exit_codes();
+    assert!(codes.len() >= 5, "{codes:?}");
+    let o = shutter(&["--help"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let help = stdout(&o);
+    let paragraph = help
+        .split("Exit codes:")
+        .nth(1)
+        .and_then(|rest| rest.split("\n\n").next())
+        .expect("--help has an exit-code paragraph")
+        .replace('\n', " ");
+    // Each entry of the paragraph starts with its code, after `Exit codes:` or a `;`.
+    let listed: Vec<String> = paragraph
+        .split(';')
+        .map(|entry| {
+            let words: Vec<&str> = entry.split_whitespace().collect();
+            match words.as_slice() {
+                ["128", "+", "N", ..] => "128 + N".to_string(),
+                [code, ..] => code.to_string(),
+                [] => String::new(),
+            }
+        })
+        .filter(|code| code.starts_with(|c: char| c.is_ascii_digit()))
+        .collect();
+    assert_eq!(listed, codes, "--help's exit codes: {paragraph}");
+}
+
+/// `scene --size` over its limit says the limit, in the error and in `--help` (it said
+/// only "use WxH").
+#[test]
+fn a_scene_size_over_the_limit_names_the_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("scene");
+    let o = shutter(&["scene", "pan", "-o", &s(&out), "--size", "20000x10"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("16384"), "{}", stderr(&o));
+    let help = stdout(&shutter(&["scene", "--help"]));
+    let line = help.lines().find(|l| l.contains("--size")).unwrap();
+    assert!(line.contains("16384"), "{line}");
+}
+
+/// A scene whose planes the memory cannot hold is refused before anything is allocated,
+/// exit 1 with what to do, not aborted by the allocator (SIGABRT, exit 134 from a shell).
+#[cfg(unix)]
+#[test]
+fn a_scene_too_large_for_the_memory_is_refused_not_aborted() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("scene");
+    // 2 GB of address space; a 16384² scene's planes are 1 GiB each.
+    let args = [
+        "scene",
+        "pan",
+        "-o",
+        &s(&out),
+        "--size",
+        "16384x16384",
+        "--samples",
+        "1",
+    ];
+    let o = shutter_capped(2_000_000, &args);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let message = stderr(&o);
+    assert!(
+        message.contains("too large") && message.contains("MiB") && message.contains("--size"),
+        "{message}"
+    );
+    assert!(!out.join("color.0001.exr").exists());
+    // And under a --max-memory of its own.
+    let o = shutter(&[
+        "scene",
+        "gears",
+        "-o",
+        &s(&out),
+        "--size",
+        "2048x2048",
+        "--max-memory",
+        "64",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--max-memory"), "{}", stderr(&o));
+    assert!(!out.join("color.0001.exr").exists());
+}

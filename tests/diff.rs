@@ -849,3 +849,57 @@ fn a_heatmap_that_names_an_input_is_refused_before_anything_is_written() {
     assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
     assert!(dir.path().join("h.0002.png").exists());
 }
+
+/// An EXR of grey R, G, B (f32) and an object ID `id` (u32) holding `ids`.
+fn ids_exr(path: &std::path::Path, w: usize, h: usize, ids: Vec<u32>) {
+    use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
+    use exr::meta::header::LayerAttributes;
+    use exr::prelude::WritableImage;
+    let grey = |name: &str| AnyChannel::new(name, FlatSamples::F32(vec![0.5; w * h]));
+    let channels = vec![
+        grey("R"),
+        grey("G"),
+        grey("B"),
+        AnyChannel::new("id", FlatSamples::U32(ids)),
+    ];
+    let layer = Layer::new(
+        (w, h),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(channels.into()),
+    );
+    Image::from_layer(layer).write().to_file(path).unwrap();
+}
+
+#[test]
+fn u32_ids_over_2_pow_24_are_compared_and_printed_as_integers() {
+    // 16777217 and 16777216 are one f32 (2²⁴); as IDs they are two objects.
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (8, 4);
+    let mut ids = vec![1000u32; w * h];
+    ids[w + 2] = 16_777_217;
+    ids[2 * w + 3] = 4_000_000_001;
+    let (a, b, c) = (
+        dir.path().join("a.exr"),
+        dir.path().join("b.exr"),
+        dir.path().join("c.exr"),
+    );
+    ids_exr(&a, w, h, ids.clone());
+    ids_exr(&c, w, h, ids.clone());
+    ids[w + 2] = 16_777_216;
+    ids_exr(&b, w, h, ids);
+    let out = shutter(&["diff", &s(&a), &s(&b), "--data-fail-pixel", "0"]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(
+        stdout(&out)
+            .contains("largest difference 1.000000 at (2, 1) id: 16777217 against 16777216"),
+        "{}",
+        stdout(&out)
+    );
+    let report = dir.path().join("report");
+    shutter(&["diff", &s(&a), &s(&b), "--report", &s(&report)]);
+    let page = std::fs::read_to_string(report.join("index.html")).unwrap();
+    assert!(page.contains("id: 16777217 against 16777216"), "{page}");
+    let same = shutter(&["diff", &s(&a), &s(&c), "--data-fail-pixel", "0"]);
+    assert_eq!(same.status.code(), Some(0), "{}", stderr(&same));
+}

@@ -278,6 +278,31 @@ fn a_tiled_plate_in_decreasing_line_order_comes_back_tiled_in_that_order() {
 }
 
 #[test]
+fn a_tiled_plate_in_random_line_order_comes_back_declaring_random_order() {
+    // RANDOM_Y (valid for tiles alone) is the plate's; it came back INCREASING_Y (QA).
+    let dir = plate_frame(Blocks::Tiles(Vec2(16, 8)), LineOrder::Unspecified);
+    let plate = MetaData::read_from_file(dir.path().join("color.exr"), false).unwrap();
+    assert_eq!(plate.headers[0].line_order, LineOrder::Unspecified);
+    blur(dir.path(), "a.exr", &[]);
+    blur(dir.path(), "b.exr", &[]);
+    let out = dir.path().join("a.exr");
+    let meta = MetaData::read_from_file(&out, false).unwrap();
+    let header = &meta.headers[0];
+    assert!(
+        matches!(header.blocks, BlockDescription::Tiles(t) if t.tile_size == Vec2(16, 8)),
+        "{:?}",
+        header.blocks
+    );
+    assert_eq!(header.line_order, LineOrder::Unspecified);
+    // Its tiles still go out in one order: the same frame gives the same bytes.
+    let b = std::fs::read(dir.path().join("b.exr")).unwrap();
+    assert!(std::fs::read(&out).unwrap() == b, "two runs differ");
+    if let Some(info) = oiiotool_info(&out) {
+        assert!(info.contains("tile size: 16 x 8"), "{info}");
+    }
+}
+
+#[test]
 fn the_same_frame_gives_the_same_bytes_whatever_order_the_attributes_were_held_in() {
     // The exr crate writes custom attributes in the order of a HashMap, which differs from
     // process to process; with seven custom attributes (five of the plate's, shutter's two)
@@ -798,6 +823,36 @@ fn a_multi_part_frame_comes_back_part_for_part() {
 }
 
 #[test]
+fn a_part_of_data_alone_keeps_its_name_under_dwa() {
+    // The multi-part frame's `data` part holds data alone: under DWAA it is that same part,
+    // ZIP, not an empty part dropped and its channels moved to a new one (`data.data`).
+    let dir = tempfile::tempdir().unwrap();
+    let color = dir.path().join("color.exr");
+    write_multi_part(&color);
+    write_passes(dir.path());
+    blur(dir.path(), "out.exr", &["--compression", "dwaa"]);
+    let out = dir.path().join("out.exr");
+    let names: Vec<(String, bool)> = parts_of(&out)
+        .into_iter()
+        .map(|(name, compression, _)| (name, matches!(compression, Compression::DWAA(_))))
+        .collect();
+    assert_eq!(
+        names,
+        [
+            ("rgba".to_string(), true),
+            ("diffuse".to_string(), true),
+            ("data".to_string(), false)
+        ]
+    );
+    let compared = shutter(&["diff", &s(&color), &s(&out), "--data-fail-pixel", "0"]);
+    assert!(
+        !stderr(&compared).contains("lacks"),
+        "{}",
+        stderr(&compared)
+    );
+}
+
+#[test]
 fn data_under_a_dwa_output_goes_to_a_lossless_part_of_its_own() {
     use exr::meta::attribute::SampleType;
     let dir = tempfile::tempdir().unwrap();
@@ -809,9 +864,38 @@ fn data_under_a_dwa_output_goes_to_a_lossless_part_of_its_own() {
     let parts = parts_of(&out);
     assert_eq!(parts.len(), 2, "{parts:?}");
     assert!(matches!(parts[0].1, Compression::DWAA(_)), "{parts:?}");
-    assert_eq!(parts[1].0, "rgba.data");
+    // Named `data`, as a pipeline names a part of data channels, not `rgba.data` (a name
+    // that reads as the channel `data` of the layer `rgba`).
+    assert_eq!(parts[1].0, "data");
     assert_eq!(parts[1].1, Compression::ZIP16);
     assert_eq!(parts[1].2, ["Z", "id", "velocity.X", "velocity.Y"]);
+    // `diff` finds each data channel in its new part: the round trip loses none, and they
+    // come back exact (the light, blurred, is not gated here).
+    let compared = shutter(&[
+        "diff",
+        &s(&color),
+        &s(&out),
+        "--data-fail-pixel",
+        "0",
+        "--fail-pixel",
+        "1e30",
+    ]);
+    assert!(
+        compared.status.success() && !stderr(&compared).contains("lacks"),
+        "{}",
+        stderr(&compared)
+    );
+    // And the other way round: the multi-part file as the reference.
+    let reverse = shutter(&[
+        "diff",
+        &s(&out),
+        &s(&color),
+        "--data-fail-pixel",
+        "0",
+        "--fail-pixel",
+        "1e30",
+    ]);
+    assert!(reverse.status.success(), "{}", stderr(&reverse));
     // The data comes back bit for bit.
     use crate::support::{channel, read_exr_reference};
     let (before, after) = (read_exr_reference(&color), read_exr_reference(&out));

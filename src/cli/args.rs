@@ -14,8 +14,13 @@ use crate::settings::{Def, Given, Kind, Section, Value, DEFS};
     about = "Adds motion blur and depth of field to rendered frame sequences",
     long_about = "Adds the camera effects a renderer left out - motion blur and depth of field - \
 to rendered frame sequences, reading colour, depth, velocity and previous/next position passes \
-from OpenEXR or 8/16-bit images.\n\nExit codes: 0 success, 1 a problem with input or output \
-files (or no GPU adapter for --backend wgpu), 2 a usage error."
+from OpenEXR or 8/16-bit images.\n\nExit codes: 0 success; 1 a problem with an input or output \
+file (missing, corrupt, too large, unwritable), found by the preflight or while decoding, or no \
+GPU adapter for --backend wgpu: fix it, a retry fails the same way; 2 a usage error; 75 \
+temporary (EX_TEMPFAIL): another job holds a frame's output lock, or writing a frame failed \
+after the preflight: retry, with --skip-existing; 128 + N stopped by signal N (130 SIGINT, 143 \
+SIGTERM, 129 SIGHUP): frames written before are whole. shutter diff has codes of its own (see \
+its --help)."
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -344,9 +349,15 @@ pub struct SceneArgs {
     #[arg(short, long, value_name = "DIR")]
     pub output: PathBuf,
 
-    /// Image size [default: 640x360].
+    /// Image size, each side 1 to 16384 pixels [default: 640x360].
     #[arg(long, value_name = "WxH")]
     pub size: Option<String>,
+
+    /// The most memory the scene may need, in MiB, estimated from its size before anything
+    /// is rendered [default: half the machine's memory, within the process's address-space
+    /// and cgroup limits, as blur's].
+    #[arg(long, value_name = "MIB")]
+    pub max_memory: Option<u64>,
 
     /// Number of frames (frame f is scene time f - 1).
     #[arg(long, value_name = "N", default_value_t = 1)]
@@ -495,7 +506,7 @@ pub struct BenchArgs {
     #[arg(long, value_name = "LIST")]
     pub scenes: Option<String>,
 
-    /// Frame size [default: 320x180].
+    /// Frame size, each side 1 to 16384 pixels [default: 320x180].
     #[arg(long, value_name = "WxH")]
     pub size: Option<String>,
 

@@ -264,7 +264,12 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
             if m.error > 0.0 {
                 text += &format!(
                     "{label}largest difference {:.6} at ({}, {}) {}: {} against {}\n",
-                    m.error, m.x, m.y, m.channel, m.a as f32, m.b as f32
+                    m.error,
+                    m.x,
+                    m.y,
+                    m.channel,
+                    m.value_text(m.a),
+                    m.value_text(m.b)
                 );
             }
             for layer in f.layers.iter().skip(1) {

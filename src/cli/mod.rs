@@ -362,13 +362,20 @@ fn print_error(error: &Error) {
     }
 }
 
-/// Parses `WxH`.
+/// The largest side `scene --size` and `bench --size` take, in pixels: a 16K frame.
+pub const MAX_SIDE: usize = 16384;
+
+/// Parses `WxH`, each side 1 to [`MAX_SIDE`].
 pub fn parse_size(text: &str) -> Result<(usize, usize)> {
-    let bad = || Error::usage(format!("bad size '{text}': use WxH, e.g. 640x360"));
+    let bad = || {
+        Error::usage(format!(
+            "bad size '{text}': use WxH, each side 1 to {MAX_SIDE} pixels, e.g. 640x360"
+        ))
+    };
     let (w, h) = text.split_once(['x', 'X']).ok_or_else(bad)?;
     let w: usize = w.trim().parse().map_err(|_| bad())?;
     let h: usize = h.trim().parse().map_err(|_| bad())?;
-    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+    if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE {
         return Err(bad());
     }
     Ok((w, h))

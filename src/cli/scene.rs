@@ -21,6 +21,7 @@ pub fn scene(args: SceneArgs) -> Result<()> {
         shutter_offset: super::parse_shutter_offset(&args.shutter_offset)?,
         seed: args.seed,
         layers: args.layers,
+        max_memory: args.max_memory.map(|mib| mib.saturating_mul(1 << 20)),
     };
     let verbose = std::io::stderr().is_terminal();
     let description = crate::lab::truth::write::write_scene(

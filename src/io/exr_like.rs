@@ -13,7 +13,8 @@
 //! the tile levels: only the full-resolution level is read, so a mip-mapped input comes back
 //! as one level), and, where one view of a multi-view file is written, its `multiView` list
 //! and parts' `view` attributes (an output of every view keeps them). Its form follows the
-//! input too: compression (unless `compression` is set), line order, scan lines or tiles of
+//! input too: compression (unless `compression` is set), line order (RANDOM_Y for tiles
+//! alone, where OpenEXR allows it, its tiles written in increasing order), scan lines or tiles of
 //! the same size (a tiled plate stays tiled, so the tools that read it by tiles still can),
 //! and each channel's pixel type (half stays half; `half` writes every float channel half,
 //! u32 stays u32). Added: `shutter/version` and `shutter/settings` (the settings that differ
@@ -90,9 +91,10 @@ pub struct OutChannel {
 /// `shutter/settings`' text.
 ///
 /// Under DWAA or DWAB, which compress every channel whose name ends in R, G, B or Y as
-/// colour (`velocity.Y`, `N.R`), a part's data channels go to a part of their own,
-/// `<part>.data`, with ZIP: data is never written lossily, and a layer's channels stay
-/// together.
+/// colour (`velocity.Y`, `N.R`), a part's data channels go to a part of their own, with ZIP:
+/// data is never written lossily, and a layer's channels stay together. That part is named
+/// `data` beside the main part (see [`data_part_name`]); a part that holds data alone stays
+/// itself, under its own name, with ZIP.
 pub fn write_like(
     writer: &mut BufWriter<File>,
     display: Window,
@@ -112,6 +114,12 @@ pub fn write_like(
             ..ImageAttributes::new(display)
         },
     };
+    // The parts' own names, which a data part's name may not take.
+    let mut taken: Vec<String> = parts
+        .iter()
+        .filter_map(|p| p.input?.own_attributes.layer_name.as_ref())
+        .map(|n| n.to_string())
+        .collect();
     // Each part, and the lossless part its data needs under DWA.
     let mut layers = Vec::new();
     for part in parts {
@@ -121,40 +129,55 @@ pub fn write_like(
             .into_iter()
             .partition(|c| !(is_dwa(encoding.compression) && c.class.is_data()));
         let attributes = attributes_like(part.input, part.data, record, views);
+        let data_encoding = Encoding {
+            compression: DEFAULT_COMPRESSION,
+            ..encoding
+        };
+        if kept.is_empty() {
+            // Data alone: the part itself, lossless.
+            if !apart.is_empty() {
+                layers.push((attributes, data_encoding, part.input, part.data, apart));
+            }
+            continue;
+        }
         let data_part = (!apart.is_empty()).then(|| {
             let mut data_attributes = attributes.clone();
-            let name = attributes
-                .layer_name
-                .as_ref()
-                .map_or("rgba".to_string(), |n| n.to_string());
-            data_attributes.layer_name = Some(latin1(&format!("{name}.data")));
-            let data_encoding = Encoding {
-                compression: DEFAULT_COMPRESSION,
-                ..encoding
-            };
+            let name = data_part_name(attributes.layer_name.as_ref(), &taken);
+            taken.push(name.clone());
+            data_attributes.layer_name = Some(latin1(&name));
             (data_attributes, data_encoding, part.input, part.data, apart)
         });
-        if !kept.is_empty() {
-            layers.push((attributes, encoding, part.input, part.data, kept));
-        }
+        layers.push((attributes, encoding, part.input, part.data, kept));
         layers.extend(data_part);
     }
     let several = layers.len() > 1;
+    // A part in random order (RANDOM_Y) is written in increasing order, and then declared
+    // random: the exr crate writes a random-order part's blocks as its threads finish them,
+    // which would make the same frame give other bytes on each run.
+    let random_y: Vec<bool> = layers
+        .iter()
+        .map(|l| l.1.line_order == LineOrder::Unspecified)
+        .collect();
     let layers: Vec<_> = layers
         .into_iter()
         .enumerate()
-        .map(|(i, (mut attributes, encoding, input, data, channels))| {
-            // Every part of a multi-part file has a name.
-            if several && attributes.layer_name.is_none() {
-                attributes.layer_name = Some(Text::from(if i == 0 { "rgba" } else { "part" }));
-            }
-            Layer::new(
-                (data.width, data.height),
-                attributes,
-                encoding,
-                AnyChannels::sort(channels_like(channels, input, output).into()),
-            )
-        })
+        .map(
+            |(i, (mut attributes, mut encoding, input, data, channels))| {
+                if random_y[i] {
+                    encoding.line_order = LineOrder::Increasing;
+                }
+                // Every part of a multi-part file has a name.
+                if several && attributes.layer_name.is_none() {
+                    attributes.layer_name = Some(Text::from(if i == 0 { "rgba" } else { "part" }));
+                }
+                Layer::new(
+                    (data.width, data.height),
+                    attributes,
+                    encoding,
+                    AnyChannels::sort(channels_like(channels, input, output).into()),
+                )
+            },
+        )
         .collect();
     let image = Image::from_layers(image_attributes, layers);
     // An attribute under a standard name but of another type than the standard's (`isoSpeed`
@@ -181,7 +204,32 @@ pub fn write_like(
     };
     write.to_buffered(&mut *writer).map_err(|e| e.to_string())?;
     writer.flush().map_err(|e| e.to_string())?;
-    sort_attributes(writer.get_mut()).map_err(|e| format!("sorting its attributes: {e}"))
+    sort_attributes(writer.get_mut(), &random_y).map_err(|e| format!("sorting its attributes: {e}"))
+}
+
+/// The name of the part that takes the data channels of the part named `part` under DWA,
+/// none of `taken`: `data` beside the main part (unnamed, or OpenEXR's and Nuke's `rgba`, or
+/// `beauty`), as a pipeline names a part of data channels (OpenEXR's part helper and Nuke
+/// name a part by what it holds, and a channel keeps its full name in any part); beside
+/// another part `<part>.data`, so each part's data stays told apart (two views' parts, say);
+/// a number after it where even that name is taken. Readers find a channel by its own
+/// name, whatever its part (`shutter diff` and the passes' lookup among them).
+fn data_part_name(part: Option<&Text>, taken: &[String]) -> String {
+    let part = part.map(|n| n.to_string());
+    let main = part
+        .as_deref()
+        .is_none_or(|n| crate::io::file::FileInfo::MAIN_PARTS.contains(&n));
+    let fallback = format!("{}.data", part.as_deref().unwrap_or("rgba"));
+    let first = if main {
+        "data".to_string()
+    } else {
+        fallback.clone()
+    };
+    std::iter::once(first)
+        .chain(std::iter::once(fallback.clone()))
+        .chain((2..).map(|k| format!("{fallback}{k}")))
+        .find(|name| !taken.contains(name))
+        .expect("an endless list of names holds one not taken")
 }
 
 fn is_dwa(compression: Compression) -> bool {
@@ -296,8 +344,10 @@ fn encoding_like(input: Option<&Header>, output: &ExrOutput) -> Encoding {
         Some(BlockDescription::Tiles(tiles)) => Blocks::Tiles(tiles.tile_size),
         _ => Blocks::ScanLines,
     };
-    let line_order = match input.map(|h| h.line_order) {
-        Some(LineOrder::Decreasing) => LineOrder::Decreasing,
+    // RANDOM_Y is valid for tiles alone (a scan-line file declaring it reads as increasing).
+    let line_order = match (input.map(|h| h.line_order), blocks) {
+        (Some(LineOrder::Decreasing), _) => LineOrder::Decreasing,
+        (Some(LineOrder::Unspecified), Blocks::Tiles(_)) => LineOrder::Unspecified,
         _ => LineOrder::Increasing,
     };
     Encoding {
@@ -317,10 +367,14 @@ fn latin1(text: &str) -> Text {
     Text::from_slice_unchecked(&bytes)
 }
 
-/// Puts the attributes of every header of the EXR in `file` in name order, in place. Every
-/// attribute is a self-contained record (name, type, size, value), so reordering them
-/// leaves each header, and so the offset tables after them, the same length.
-pub fn sort_attributes(file: &mut File) -> std::io::Result<()> {
+/// Puts the attributes of every header of the EXR in `file` in name order, in place, and
+/// declares RANDOM_Y the line order of each part `random_y` marks (its blocks are in
+/// increasing order, which a random order allows). Every attribute is a self-contained
+/// record (name, type, size, value), so reordering them, or changing the one byte of a
+/// `lineOrder`, leaves each header, and so the offset tables after them, the same length.
+pub fn sort_attributes(file: &mut File, random_y: &[bool]) -> std::io::Result<()> {
+    /// OpenEXR's `RANDOM_Y` in a `lineOrder` attribute.
+    const RANDOM_Y: u8 = 2;
     const MULTIPART: u32 = 0x1000;
     let invalid = |what: &str| std::io::Error::new(std::io::ErrorKind::InvalidData, what);
     file.seek(SeekFrom::Start(0))?;
@@ -343,8 +397,16 @@ pub fn sort_attributes(file: &mut File) -> std::io::Result<()> {
     let version = u32::from_le_bytes(bytes[4..8].try_into().expect("eight bytes"));
     let mut at = 8;
     let mut sorted = bytes[..8].to_vec();
-    loop {
+    for part in 0.. {
         let records = header_records(&bytes, at)?;
+        if random_y.get(part).copied().unwrap_or(false) {
+            let line_order = records
+                .iter()
+                .find(|r| &bytes[r.start..r.name_end] == b"lineOrder")
+                .ok_or_else(|| invalid("a part has no lineOrder"))?;
+            // The value is the record's last byte (size 1).
+            bytes[line_order.end - 1] = RANDOM_Y;
+        }
         let end = records.last().map_or(at, |r| r.end);
         let mut order: Vec<_> = records.iter().collect();
         order.sort_by_key(|r| &bytes[r.start..r.name_end]);
@@ -496,7 +558,7 @@ mod tests {
         let before = MetaData::read_from_file(&path, false).unwrap();
         let length = std::fs::metadata(&path).unwrap().len();
         let mut file = File::options().read(true).write(true).open(&path).unwrap();
-        sort_attributes(&mut file).unwrap();
+        sort_attributes(&mut file, &[]).unwrap();
         drop(file);
         let bytes = std::fs::read(&path).unwrap();
         assert_eq!(bytes.len() as u64, length);

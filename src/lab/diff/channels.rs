@@ -30,6 +30,22 @@ pub struct Largest {
     /// The reference's value there, and the tested image's.
     pub a: f64,
     pub b: f64,
+    /// Whether `a` and `b` are a u32 channel's values, compared as stored: integers that
+    /// print as such (an f32 rounds them over 2²⁴: 16777217 would print 16777216).
+    #[serde(skip)]
+    pub integer: bool,
+}
+
+impl Largest {
+    /// `a` or `b` as text: a u32 channel's value as the integer it is, a float channel's as
+    /// the shortest text that reads back as its f32.
+    pub fn value_text(&self, value: f64) -> String {
+        if self.integer {
+            format!("{}", value as u64)
+        } else {
+            format!("{}", value as f32)
+        }
+    }
 }
 
 /// The per-pixel gates.
@@ -162,7 +178,11 @@ fn pairs<'a>(
         }
     }
     // A channel of a named part of a multi-part file is `part.channel`, as the read and
-    // `shutter info` name it, so parts are matched by name, not by their order.
+    // `shutter info` name it, so parts are matched by name, not by their order. A channel
+    // found so on neither side is then matched by its own name (layer-qualified, as stored),
+    // where that name is one channel's on each side: a channel keeps its full name in any
+    // part (OpenEXR's part helper), so `Z` moved to a part of data (a DWA output's) or a
+    // single-part file's `diffuse.R` written into a part `rgba` is the same channel.
     let key = |f: &Frame, i: usize| {
         let c = &f.carried.channels[i];
         let part = (f.carried.headers.len() > 1)
@@ -175,14 +195,35 @@ fn pairs<'a>(
             _ => c.name.clone(),
         }
     };
+    let keys_a: Vec<String> = (0..a.carried.channels.len()).map(|i| key(a, i)).collect();
     let keys_b: Vec<String> = (0..b.carried.channels.len()).map(|i| key(b, i)).collect();
-    let mut missing = Vec::new();
+    let mut found: Vec<Option<usize>> = keys_a
+        .iter()
+        .map(|k| keys_b.iter().position(|kb| kb == k))
+        .collect();
     let mut matched = vec![false; keys_b.len()];
+    found.iter().flatten().for_each(|&j| matched[j] = true);
+    let name_a = |i: usize| &a.carried.channels[i].name;
+    let name_b = |j: usize| &b.carried.channels[j].name;
+    for i in 0..keys_a.len() {
+        if found[i].is_some() {
+            continue;
+        }
+        let alone_in_a = (0..keys_a.len())
+            .filter(|&k| found[k].is_none() && name_a(k) == name_a(i))
+            .count()
+            == 1;
+        let mut in_b = (0..keys_b.len()).filter(|&j| !matched[j] && name_b(j) == name_a(i));
+        if let (true, Some(j), None) = (alone_in_a, in_b.next(), in_b.next()) {
+            found[i] = Some(j);
+            matched[j] = true;
+        }
+    }
+    let mut missing = Vec::new();
     for (i, channel) in a.carried.channels.iter().enumerate() {
-        let name = key(a, i);
-        match keys_b.iter().position(|k| *k == name) {
+        let name = keys_a[i].clone();
+        match found[i] {
             Some(j) => {
-                matched[j] = true;
                 let layer = crate::io::channels::split(&name).0;
                 out.push(Pair {
                     layer: if layer.is_empty() {
@@ -307,6 +348,7 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
                         channel: pair.name.clone(),
                         a: x,
                         b: y,
+                        integer: pair.exact.is_some(),
                     };
                 }
             }

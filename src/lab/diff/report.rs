@@ -117,6 +117,16 @@ fn escape(text: &str) -> String {
     out
 }
 
+/// One of the largest difference's values as the page shows it: a u32 channel's as the
+/// integer it is, a float's as a [`figure`].
+fn value(largest: &super::channels::Largest, v: f64) -> String {
+    if largest.integer {
+        largest.value_text(v)
+    } else {
+        figure(v)
+    }
+}
+
 /// A figure as the page shows it: six significant places, `inf` for infinity.
 fn figure(v: f64) -> String {
     if v.is_infinite() {
@@ -242,8 +252,8 @@ fn page(report: &DiffReport) -> String {
                     m.x,
                     m.y,
                     escape(&m.channel),
-                    figure(m.a),
-                    figure(m.b)
+                    value(m, m.a),
+                    value(m, m.b)
                 )
             } else {
                 String::new()
