@@ -27,8 +27,10 @@ pub enum ProblemKind {
     View,
     /// Another job holds the output lock on a frame: worth retrying later (exit 75).
     Busy,
-    /// Writing a frame failed after the preflight passed (a full disk, an I/O error): worth
-    /// retrying (exit 75).
+    /// Writing failed after the preflight passed with an error a retry may cure (a full
+    /// disk or quota, an interrupted or timed-out write: [`is_transient_io`]), exit 75. A
+    /// write that fails for good (permissions, a read-only file system, a folder in the
+    /// file's place, a device error) is [`ProblemKind::Output`], exit 1.
     WriteFailed,
     /// An input changed after the preflight checked it (replaced mid-run): the run stops at
     /// the frame that reads it (exit 1: the input is not what was checked).
@@ -59,17 +61,36 @@ impl ProblemKind {
     }
 
     /// The kind of an I/O error met on the output side (making a folder, the lock file, the
-    /// writability probe): a full disk or a quota exceeded (ENOSPC, EDQUOT) is the moment's,
-    /// [`ProblemKind::WriteFailed`] (exit 75) wherever it is found, as when a frame is
-    /// written; any other error is [`ProblemKind::Output`] (exit 1: permissions, a file in
-    /// the way).
+    /// writability probe, writing or renaming a frame, standard output): a transient one
+    /// ([`is_transient_io`]) is the moment's, [`ProblemKind::WriteFailed`] (exit 75)
+    /// wherever it is found; any other is [`ProblemKind::Output`] (exit 1: permissions, a
+    /// read-only file system, a file or folder in the way, a device error).
     pub fn of_output_error(error: &std::io::Error) -> ProblemKind {
-        if is_out_of_space(error) {
+        if is_transient_io(error) {
             ProblemKind::WriteFailed
         } else {
             ProblemKind::Output
         }
     }
+}
+
+/// Whether an I/O error met writing may go away by itself, so that the same job run again
+/// later may succeed (exit 75): a full disk or an exceeded quota (ENOSPC, EDQUOT: a farm's
+/// scratch space is cleaned and quotas are raised without the job changing, and the frames
+/// written before are kept for `--skip-existing`), an interrupted call (EINTR), a resource
+/// busy for now (EAGAIN, EWOULDBLOCK) and a timeout (ETIMEDOUT: a network file system's
+/// server that did not answer). Everything else is for good until someone acts, exit 1:
+/// permissions (EACCES, EPERM), a read-only file system (EROFS), a folder or file in the
+/// way (EISDIR, ENOTDIR, EEXIST), a name too long, a file too large for the file system
+/// (EFBIG), a device error (EIO: the same disk answers the same way; a network file
+/// system's lost server times out instead).
+pub fn is_transient_io(error: &std::io::Error) -> bool {
+    use std::io::ErrorKind;
+    is_out_of_space(error)
+        || matches!(
+            error.kind(),
+            ErrorKind::Interrupted | ErrorKind::WouldBlock | ErrorKind::TimedOut
+        )
 }
 
 /// A full disk or an exceeded quota (ENOSPC, EDQUOT).
@@ -84,6 +105,49 @@ pub fn is_out_of_space(error: &std::io::Error) -> bool {
         error.kind(),
         std::io::ErrorKind::StorageFull | std::io::ErrorKind::QuotaExceeded
     )
+}
+
+/// Why writing a file failed: what to say, and whether a retry may cure it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WriteFailure {
+    pub detail: String,
+    pub transient: bool,
+}
+
+impl WriteFailure {
+    /// A failure that the I/O error `error` caused: transient as [`is_transient_io`] says.
+    pub fn of_io(error: &std::io::Error, detail: impl Into<String>) -> Self {
+        WriteFailure {
+            detail: detail.into(),
+            transient: is_transient_io(error),
+        }
+    }
+
+    /// A failure a retry may cure (another job holds the frame).
+    pub fn transient(detail: impl Into<String>) -> Self {
+        WriteFailure {
+            detail: detail.into(),
+            transient: true,
+        }
+    }
+
+    /// A failure a retry cannot cure (the data cannot be encoded, no I/O error in it).
+    pub fn permanent(detail: impl Into<String>) -> Self {
+        WriteFailure {
+            detail: detail.into(),
+            transient: false,
+        }
+    }
+
+    /// Its kind as a file problem: [`ProblemKind::WriteFailed`] (exit 75) when transient,
+    /// else [`ProblemKind::Output`] (exit 1).
+    pub fn kind(&self) -> ProblemKind {
+        if self.transient {
+            ProblemKind::WriteFailed
+        } else {
+            ProblemKind::Output
+        }
+    }
 }
 
 /// One problem with one file of one frame.
@@ -161,8 +225,8 @@ impl fmt::Display for Problem {
 }
 
 /// The exit code of a failure a retry may cure (another job holds the frames, a write
-/// failed after the preflight): sysexits' EX_TEMPFAIL, which schedulers and wrappers read
-/// as "try again later".
+/// failed with a transient error, [`is_transient_io`]): sysexits' EX_TEMPFAIL, which
+/// schedulers and wrappers read as "try again later".
 pub const TRANSIENT_EXIT: i32 = 75;
 
 /// Everything the library can fail with.
@@ -232,3 +296,42 @@ impl fmt::Display for Error {
 impl std::error::Error for Error {}
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The rule README's exit codes give: errno by errno, which write failures a retry may
+    /// cure (75) and which it cannot (1).
+    #[cfg(unix)]
+    #[test]
+    fn write_errors_are_transient_by_their_kind() {
+        use nix::libc;
+        let kind = |code| ProblemKind::of_output_error(&std::io::Error::from_raw_os_error(code));
+        for code in [
+            libc::ENOSPC,
+            libc::EDQUOT,
+            libc::EINTR,
+            libc::EAGAIN,
+            libc::ETIMEDOUT,
+        ] {
+            assert_eq!(kind(code), ProblemKind::WriteFailed, "errno {code}");
+        }
+        for code in [
+            libc::EACCES,
+            libc::EPERM,
+            libc::EROFS,
+            libc::EISDIR,
+            libc::ENOTDIR,
+            libc::EEXIST,
+            libc::ENAMETOOLONG,
+            libc::EFBIG,
+            libc::EIO,
+        ] {
+            assert_eq!(kind(code), ProblemKind::Output, "errno {code}");
+        }
+        let files = |kind| Error::from(Problem::new(kind, "o.exr", "x")).exit_code();
+        assert_eq!(files(ProblemKind::WriteFailed), TRANSIENT_EXIT);
+        assert_eq!(files(ProblemKind::Output), 1);
+    }
+}

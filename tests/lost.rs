@@ -524,6 +524,33 @@ fn an_input_replaced_after_the_preflight_stops_the_run_at_its_frame() {
     }
 }
 
+/// A write that fails after the preflight for a reason a retry cannot cure (a folder made
+/// where frame 10 goes, mid-run: the rename onto it fails, EISDIR) exits 1, naming the file
+/// and the frame, with the frames before it written; only a transient error (a full disk,
+/// an interrupted or timed-out write) exits 75. Before, every write error after the
+/// preflight exited 75, and a farm retried for nothing.
+#[test]
+fn a_write_that_fails_for_good_after_the_preflight_exits_1_naming_the_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let (child, out_dir) = reconstruct_under_way(dir.path());
+    std::fs::create_dir(out_dir.join("o.0010.exr")).unwrap();
+    let o = child.wait_with_output().unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("cannot write") && err.contains("o.0010.exr, frame 10"),
+        "{err}"
+    );
+    let written: Vec<String> = names(&out_dir)
+        .into_iter()
+        .filter(|n| !n.starts_with('.'))
+        .collect();
+    let mut expected: Vec<String> = (1..10).map(|f| format!("o.{f:04}.exr")).collect();
+    expected.push("o.0010.exr".into());
+    assert_eq!(written, expected);
+    assert!(out_dir.join("o.0010.exr").is_dir());
+}
+
 /// Waits up to `seconds` for `child`; kills it and fails if it is still running then.
 fn finish_within(mut child: Child, seconds: u64, what: &str) -> std::process::Output {
     let start = Instant::now();

@@ -33,7 +33,8 @@
 #       rerunning will not help until the files are fixed.
 #   2   a usage error (a bad setting): fails the task.
 #   75  transient (EX_TEMPFAIL: another job holds a frame's lock, or a write failed with an
-#       I/O error): the task requeues itself with `scontrol requeue` and runs again later,
+#       error a retry may cure: a full disk or quota, an interrupted or timed-out write; one
+#       that cannot, permissions or a read-only file system, is 1): the task requeues itself with `scontrol requeue` and runs again later,
 #       up to SHUTTER_MAX_REQUEUES times, then fails with 75. Slurm holds a requeued job back
 #       for its credential lifetime (AuthInfo cred_expire, 120 s by default) before it can
 #       start again, which gives the other job time to finish. Requeueing from inside the

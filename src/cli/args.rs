@@ -15,10 +15,12 @@ use crate::settings::{Def, Given, Kind, Section, Value, DEFS};
     long_about = "Adds the camera effects a renderer left out - motion blur and depth of field - \
 to rendered frame sequences, reading colour, depth, velocity and previous/next position passes \
 from OpenEXR or 8/16-bit images.\n\nExit codes: 0 success; 1 a problem with an input or output \
-file (missing, corrupt, too large, unwritable), found by the preflight or while decoding, or no \
+file (missing, corrupt, too large; unwritable: permissions, a read-only file system, a folder \
+in the way, a device error), found by the preflight, while decoding or while writing, or no \
 GPU adapter for --backend wgpu: fix it, a retry fails the same way; 2 a usage error; 75 \
-temporary (EX_TEMPFAIL): another job holds a frame's output lock, or writing a frame failed \
-after the preflight: retry, with --skip-existing; 128 + N stopped by signal N (130 SIGINT, 143 \
+temporary (EX_TEMPFAIL): another job holds a frame's output lock, or a write failed with an \
+error a retry may cure (a full disk or quota, an interrupted or timed-out write): retry, with \
+--skip-existing; 128 + N stopped by signal N (130 SIGINT, 143 \
 SIGTERM, 129 SIGHUP): frames written before are whole. shutter diff has codes of its own (see \
 its --help)."
 )]

@@ -25,7 +25,6 @@
 //! run to run; [`sort_attributes`] then puts each header's attributes in name order (as
 //! OpenEXR's own library writes them), in place, so the same frame gives the same bytes.
 
-use std::fs::File;
 use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
 
 use exr::compression::Compression;
@@ -96,7 +95,7 @@ pub struct OutChannel {
 /// `data` beside the main part (see [`data_part_name`]); a part that holds data alone stays
 /// itself, under its own name, with ZIP.
 pub fn write_like(
-    writer: &mut BufWriter<File>,
+    writer: &mut BufWriter<impl Read + Write + Seek>,
     display: Window,
     parts: Vec<OutPart>,
     output: &ExrOutput,
@@ -372,7 +371,10 @@ fn latin1(text: &str) -> Text {
 /// increasing order, which a random order allows). Every attribute is a self-contained
 /// record (name, type, size, value), so reordering them, or changing the one byte of a
 /// `lineOrder`, leaves each header, and so the offset tables after them, the same length.
-pub fn sort_attributes(file: &mut File, random_y: &[bool]) -> std::io::Result<()> {
+pub fn sort_attributes(
+    file: &mut (impl Read + Write + Seek),
+    random_y: &[bool],
+) -> std::io::Result<()> {
     /// OpenEXR's `RANDOM_Y` in a `lineOrder` attribute.
     const RANDOM_Y: u8 = 2;
     const MULTIPART: u32 = 0x1000;
@@ -498,6 +500,7 @@ fn headers_end(bytes: &[u8]) -> std::io::Result<Option<usize>> {
 mod tests {
     use super::*;
     use exr::meta::MetaData;
+    use std::fs::File;
 
     /// A two-part file whose parts carry custom attributes, written by the exr crate.
     fn two_parts(path: &std::path::Path) {

@@ -27,7 +27,7 @@ use std::fs::{File, OpenOptions};
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
-use crate::error::{Problem, ProblemKind};
+use crate::error::{Problem, ProblemKind, WriteFailure};
 use crate::io::sequence::{PathPattern, MAX_FRAME_NUMBER};
 
 /// The lock file of an output sequence: hidden, in the output folder, named after the
@@ -171,13 +171,13 @@ impl Drop for OutputLock {
 /// same path, and when another process holds any of its frames there, this fails, naming
 /// it, so the frame is not written (the run stops with exit 75) and the two jobs do not
 /// write one frame. Without held locks (a library caller) nothing is checked.
-pub fn verify_held() -> Result<(), String> {
+pub fn verify_held() -> Result<(), WriteFailure> {
     let mut held = held();
     for lock in held.iter_mut() {
         if still_named(&lock.file, &lock.path) {
             continue;
         }
-        let lost = |why: String| {
+        let lost = |why: String| -> String {
             format!(
                 "the lock file {} was deleted while this run held it, and {why}; stopping so \
                  that two jobs do not write one frame",
@@ -185,8 +185,9 @@ pub fn verify_held() -> Result<(), String> {
             )
         };
         if let Some(folder) = lock.path.parent() {
-            std::fs::create_dir_all(folder)
-                .map_err(|e| lost(format!("it cannot be made again: {e}")))?;
+            std::fs::create_dir_all(folder).map_err(|e| {
+                WriteFailure::of_io(&e, lost(format!("it cannot be made again: {e}")))
+            })?;
         }
         let file = OpenOptions::new()
             .read(true)
@@ -194,7 +195,7 @@ pub fn verify_held() -> Result<(), String> {
             .create(true)
             .truncate(false)
             .open(&lock.path)
-            .map_err(|e| lost(format!("it cannot be made again: {e}")))?;
+            .map_err(|e| WriteFailure::of_io(&e, lost(format!("it cannot be made again: {e}"))))?;
         for &(start, len) in &lock.ranges {
             match platform::lock_range(&file, start, len) {
                 Ok(true) => {}
@@ -205,13 +206,20 @@ pub fn verify_held() -> Result<(), String> {
                     });
                     let frame = frame_of(frame.unwrap_or(start))
                         .map_or(String::new(), |f| format!(" frame {f}"));
-                    return Err(lost(format!("{who} has since locked{frame}")));
+                    return Err(WriteFailure::transient(lost(format!(
+                        "{who} has since locked{frame}"
+                    ))));
                 }
-                Err(e) => return Err(lost(format!("it cannot be locked again: {e}"))),
+                Err(e) => {
+                    let why = lost(format!("it cannot be locked again: {e}"));
+                    return Err(WriteFailure::of_io(&e, why));
+                }
             }
         }
         if !still_named(&file, &lock.path) {
-            return Err(lost("it keeps being replaced".to_string()));
+            return Err(WriteFailure::transient(lost(
+                "it keeps being replaced".to_string(),
+            )));
         }
         // The old file (unlinked) goes, and our locks on it with it.
         lock.file = file;

@@ -8,11 +8,11 @@
 
 use std::collections::{BTreeMap, HashSet};
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
-use crate::error::{Problem, ProblemKind};
+use crate::error::{Problem, ProblemKind, WriteFailure};
 use crate::frame::{Frame, LayerClass, Photo, Plane, Window, Windows};
 use crate::io::exr::{self as exr_io, ExrOptions};
 use crate::io::exr_like::{self, ExrOutput};
@@ -106,10 +106,12 @@ struct Temporary {
 impl Temporary {
     /// Creates the file. It is created while the registry is held, so a signal handler sees
     /// every temporary file that exists, and none is created once it has run.
-    fn create(path: PathBuf) -> Result<(Temporary, File), String> {
+    fn create(path: PathBuf) -> Result<(Temporary, File), WriteFailure> {
         let mut in_flight = in_flight();
         if in_flight.stopping {
-            return Err("the run is stopping (interrupted); nothing more is written".into());
+            return Err(WriteFailure::transient(
+                "the run is stopping (interrupted); nothing more is written",
+            ));
         }
         // Readable too: an EXR's headers are read back to put its attributes in order.
         let file = File::options()
@@ -118,7 +120,7 @@ impl Temporary {
             .create(true)
             .truncate(true)
             .open(&path)
-            .map_err(|e| e.to_string())?;
+            .map_err(|e| WriteFailure::of_io(&e, e.to_string()))?;
         in_flight.temporaries.push(path.clone());
         Ok((
             Temporary {
@@ -129,8 +131,8 @@ impl Temporary {
         ))
     }
 
-    fn rename_to(mut self, path: &Path) -> Result<(), String> {
-        std::fs::rename(&self.path, path).map_err(|e| e.to_string())?;
+    fn rename_to(mut self, path: &Path) -> Result<(), WriteFailure> {
+        std::fs::rename(&self.path, path).map_err(|e| WriteFailure::of_io(&e, e.to_string()))?;
         self.renamed = true;
         Ok(())
     }
@@ -158,21 +160,83 @@ pub fn abandon_temporaries() -> usize {
         .count()
 }
 
+/// The temporary file a file is written into: a `File` that keeps the I/O error of its
+/// latest call, if it failed. Encoders (the exr crate, png, tiff, jpeg-encoder) hand their
+/// errors on as text; the error kept says whether a failure was the system's, and whether a
+/// retry may cure it ([`crate::error::is_transient_io`]).
+pub struct OutputFile {
+    file: File,
+    error: Option<std::io::Error>,
+}
+
+impl OutputFile {
+    fn kept<T>(&mut self, result: std::io::Result<T>) -> std::io::Result<T> {
+        self.error = result.as_ref().err().map(|e| match e.raw_os_error() {
+            Some(code) => std::io::Error::from_raw_os_error(code),
+            None => std::io::Error::from(e.kind()),
+        });
+        result
+    }
+}
+
+impl Write for OutputFile {
+    fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+        let result = self.file.write(bytes);
+        self.kept(result)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        let result = self.file.flush();
+        self.kept(result)
+    }
+}
+
+impl Read for OutputFile {
+    fn read(&mut self, bytes: &mut [u8]) -> std::io::Result<usize> {
+        let result = self.file.read(bytes);
+        self.kept(result)
+    }
+}
+
+impl Seek for OutputFile {
+    fn seek(&mut self, to: SeekFrom) -> std::io::Result<u64> {
+        let result = self.file.seek(to);
+        self.kept(result)
+    }
+}
+
 /// Writes a file atomically: `write` fills a buffered temporary file beside `path`, which is
 /// flushed and renamed into place; on any failure (or a panic inside `write`) the temporary
-/// file is removed and `path` is untouched. The folder must exist.
-pub fn write_atomic(
+/// file is removed and `path` is untouched. The folder must exist. A failure says whether
+/// a retry may cure it: an I/O error by its kind, the output lock taken by another job
+/// (transient), anything else `write` refuses (permanent).
+pub fn write_atomic_classed(
     path: &Path,
-    write: impl FnOnce(&mut BufWriter<File>) -> Result<(), String>,
-) -> Result<(), String> {
+    write: impl FnOnce(&mut BufWriter<OutputFile>) -> Result<(), String>,
+) -> Result<(), WriteFailure> {
     let (temporary, file) = Temporary::create(temporary_path(path))?;
-    let mut writer = BufWriter::new(file);
-    write(&mut writer).and_then(|()| writer.flush().map_err(|e| e.to_string()))?;
+    let mut writer = BufWriter::new(OutputFile { file, error: None });
+    if let Err(detail) = write(&mut writer).and_then(|()| writer.flush().map_err(|e| e.to_string()))
+    {
+        // Read before the writer is dropped (its drop flushes again).
+        return Err(match &writer.get_ref().error {
+            Some(error) => WriteFailure::of_io(error, detail),
+            None => WriteFailure::permanent(detail),
+        });
+    }
     drop(writer);
     // The output lock must still be ours (someone may have deleted its file): else another
     // job may be writing this frame.
     crate::io::lock::verify_held()?;
     temporary.rename_to(path)
+}
+
+/// [`write_atomic_classed`], the failure as text alone.
+pub fn write_atomic(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<OutputFile>) -> Result<(), String>,
+) -> Result<(), String> {
+    write_atomic_classed(path, write).map_err(|failure| failure.detail)
 }
 
 /// Whether a process with this id is running. Unix: `kill(pid, 0)` (a process of another
@@ -555,11 +619,11 @@ pub fn write_views(
                 ..options.exr
             };
             let parts = exr_parts(views, &headers);
-            write_atomic(path, |writer| {
+            write_atomic_classed(path, |writer| {
                 exr_like::write_like(writer, display, parts, &exr, &options.record, every)
             })
         }
-        OutputFormat::Image(format) => write_atomic(path, |writer| {
+        OutputFormat::Image(format) => write_atomic_classed(path, |writer| {
             let frame = &views[0];
             let color = frame.color.as_ref().expect("checked");
             // A picture is the display window: an EXR's overscan is cut off, and what its
@@ -601,9 +665,10 @@ pub fn write_views(
             )
         }),
     }
-    // The preflight found the place writable: a failure now (a full disk, an I/O error) is
-    // the moment's, and a retry may succeed.
-    .map_err(|detail| Problem::new(ProblemKind::WriteFailed, path, detail).frame(frame_number))
+    // The preflight found the place writable: a failure now is the moment's where its error
+    // says so (a full disk, a timeout: exit 75), else for good (a folder made in the file's
+    // place, permissions changed: exit 1).
+    .map_err(|failure| Problem::new(failure.kind(), path, failure.detail).frame(frame_number))
 }
 
 /// The parts of an EXR output of `views` (see [`write_views`]), made like `headers`, the

@@ -186,6 +186,17 @@ pub fn output_folder_problems(
                     )
                     .frame(frame),
                 ),
+                Err(e) if crate::error::is_transient_io(&e) => problems.push(
+                    Problem::new(
+                        ProblemKind::WriteFailed,
+                        &path,
+                        format!(
+                            "the folder {} could not be checked for now ({e}); rerun",
+                            existing.display()
+                        ),
+                    )
+                    .frame(frame),
+                ),
                 Err(e) => problems.push(problem(format!(
                     "the folder {} is not writable ({e}); change its permissions or write \
                      elsewhere with -o",
