@@ -349,6 +349,17 @@ pub enum ResolutionUnit {
     Metre,
 }
 
+/// A PNG's colour chunks besides iCCP, as stored: gAMA (the encoding gamma × 100000: 45455
+/// for codes that are light^(1/2.2)), cHRM (white, red, green and blue x, y, each × 100000)
+/// and sRGB (its rendering intent). Where the PNG has no iCCP and no sRGB chunk, gAMA and
+/// cHRM say how its codes are coded (`io::image::profile_of`); a PNG output holds them again.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PngColour {
+    pub gamma: Option<u32>,
+    pub chromaticities: Option<[u32; 8]>,
+    pub srgb: Option<u8>,
+}
+
 /// The metadata of an 8/16-bit photo, as its file stores it, so the output holds it again.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Photo {
@@ -371,6 +382,8 @@ pub struct Photo {
     /// A JPEG's chroma subsampling: its luma sampling factors over its chroma's, (2, 2) for
     /// 4:2:0, (1, 1) for 4:4:4; `None` for other files.
     pub sampling: Option<(u8, u8)>,
+    /// A PNG's gAMA, cHRM and sRGB chunks, where it has any.
+    pub png_colour: Option<PngColour>,
     /// Its pixel density, where the file gives one (and not only square pixels).
     pub resolution: Option<Resolution>,
     /// The file's colour is premultiplied by its alpha (a TIFF whose ExtraSamples says

@@ -232,3 +232,220 @@ fn a_photos_resolution_comes_out_in_every_format_as_it_went_in() {
         );
     }
 }
+
+/// An 8-bit RGB PNG of `rgb`, written by the png crate with `icc` as its iCCP and then the
+/// raw `chunks` (name, data) before its image data, in that order.
+fn png_with_chunks(
+    path: &Path,
+    (w, h): (u32, u32),
+    rgb: &[u8],
+    icc: Option<&[u8]>,
+    chunks: &[(&[u8; 4], Vec<u8>)],
+) {
+    let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    let mut info = png::Info::with_size(w, h);
+    info.color_type = png::ColorType::Rgb;
+    info.bit_depth = png::BitDepth::Eight;
+    info.icc_profile = icc.map(|icc| icc.to_vec().into());
+    let encoder = png::Encoder::with_info(file, info).unwrap();
+    let mut writer = encoder.write_header().unwrap();
+    for (name, data) in chunks {
+        writer
+            .write_chunk(png::chunk::ChunkType(**name), data)
+            .unwrap();
+    }
+    writer.write_image_data(rgb).unwrap();
+}
+
+/// gAMA's data: the encoding gamma × 100000.
+fn gama(scaled: u32) -> Vec<u8> {
+    scaled.to_be_bytes().to_vec()
+}
+
+/// Adobe RGB (1998)'s primaries and D65 white as cHRM holds them (× 100000): white x, y,
+/// then red, green, blue.
+const ADOBE_CHRM: [u32; 8] = [31270, 32900, 64000, 33000, 21000, 71000, 15000, 6000];
+
+fn chrm(values: [u32; 8]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_be_bytes()).collect()
+}
+
+/// The pixels of a picture, as 8-bit RGB.
+fn pixels(path: &Path) -> Vec<u8> {
+    image::open(path).unwrap().to_rgb8().into_raw()
+}
+
+/// Two pictures' pixels are the same; else the first that differs is named.
+fn assert_same_pixels(a: &Path, b: &Path, what: &str) {
+    let (a, b) = (pixels(a), pixels(b));
+    let first = a.iter().zip(&b).position(|(x, y)| x != y);
+    assert!(
+        a.len() == b.len() && first.is_none(),
+        "{what}: sample {first:?} differs"
+    );
+}
+
+/// A PNG's gAMA, cHRM and sRGB chunks and whether it holds an iCCP, by the png crate.
+fn png_colour_chunks(path: &Path) -> (Option<u32>, Option<[u32; 8]>, bool, bool) {
+    let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+    let reader = png::Decoder::new(file).read_info().unwrap();
+    let info = reader.info();
+    let chrm = info.chrm_chunk.map(|c| {
+        let [w, r, g, b] = [c.white, c.red, c.green, c.blue];
+        [w.0, w.1, r.0, r.1, g.0, g.1, b.0, b.1].map(|v| v.into_scaled())
+    });
+    let gamma = info.gama_chunk.map(|g| g.into_scaled());
+    (gamma, chrm, info.srgb.is_some(), info.icc_profile.is_some())
+}
+
+/// The ICC profile a file embeds, as exiftool extracts it.
+fn embedded_icc(path: &Path) -> Vec<u8> {
+    let out = std::process::Command::new("exiftool")
+        .args(["-b", "-ICC_Profile", &s(path)])
+        .output()
+        .unwrap();
+    out.stdout
+}
+
+/// A PNG of no iCCP or sRGB chunk is coded as its gAMA and cHRM say (PNG 3rd ed., 4.3 and
+/// 11.3.2: iCCP first, then sRGB, then gAMA and cHRM), not as sRGB (QA: both were ignored on
+/// read and dropped on write): a linear one (gAMA 100000) blurs as the same codes do under
+/// `--linear`; a PNG output holds the same chunks again, and no profile in their place; a
+/// JPEG or TIFF, which have no such chunks, embed an ICC profile of the same curve
+/// (light = code^(100000 / gAMA)) and primaries.
+#[test]
+fn a_pngs_gama_and_chrm_say_how_its_codes_are_coded_and_come_out_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    let (w, h) = (64u32, 8u32);
+    // Black and white columns, which a blur averages in the light the file codes.
+    let stripes: Vec<u8> = (0..w * h)
+        .flat_map(|i| [if i % 2 == 0 { 255u8 } else { 0 }; 3])
+        .collect();
+    let velocity = p("v.png");
+    velocity_map(&velocity, w, h, |_, _| 12.0);
+    png_with_chunks(&p("plain.png"), (w, h), &stripes, None, &[]);
+    let linear = [(b"gAMA", gama(100_000)), (b"cHRM", chrm(ADOBE_CHRM))];
+    png_with_chunks(&p("linear.png"), (w, h), &stripes, None, &linear);
+    blur(
+        &p("plain.png"),
+        &velocity,
+        &p("plain_linear.png"),
+        &["--linear"],
+    );
+    blur(&p("linear.png"), &velocity, &p("linear_out.png"), &[]);
+    let (got, linear) = (p("linear_out.png"), p("plain_linear.png"));
+    assert_same_pixels(&got, &linear, "a gAMA of 1.0 blurs as linear codes");
+    assert_eq!(
+        png_colour_chunks(&p("linear_out.png")),
+        (Some(100_000), Some(ADOBE_CHRM), false, false),
+        "the chunks again, and no iCCP"
+    );
+
+    // 1/2.2, as most gAMA chunks say: in a PNG again, and as a profile in a JPEG and a TIFF.
+    let flat = vec![128u8; (w * h * 3) as usize];
+    let chunks = [(b"gAMA", gama(45455)), (b"cHRM", chrm(ADOBE_CHRM))];
+    png_with_chunks(&p("g22.png"), (w, h), &flat, None, &chunks);
+    blur(&p("g22.png"), &velocity, &p("g22_out.png"), &[]);
+    assert_eq!(
+        png_colour_chunks(&p("g22_out.png")),
+        (Some(45455), Some(ADOBE_CHRM), false, false)
+    );
+    // A flat grey round-trips through its own curve.
+    assert_eq!(pixels(&p("g22_out.png")), flat);
+    let Some(tags) = exiftool(&p("g22_out.png")) else {
+        return;
+    };
+    assert!(
+        (tags["PNG:Gamma"].as_f64().unwrap() - 2.2).abs() < 1e-3,
+        "{tags}"
+    );
+    assert_eq!(tags["PNG:RedX"], 0.64, "{tags}");
+    for out in ["g22_out.jpg", "g22_out.tif"] {
+        blur(&p("g22.png"), &velocity, &p(out), &[]);
+        let icc = embedded_icc(&p(out));
+        let profile = moxcms::ColorProfile::new_from_slice(&icc)
+            .unwrap_or_else(|e| panic!("{out}: no readable profile ({e:?}): {} bytes", icc.len()));
+        for trc in [&profile.red_trc, &profile.green_trc, &profile.blue_trc] {
+            let curve = trc.as_ref().unwrap().make_linear_evaluator().unwrap();
+            for code in [0.25f32, 0.5, 0.75] {
+                let expected = (code as f64).powf(100_000.0 / 45455.0);
+                let got = curve.evaluate_value(code) as f64;
+                assert!(
+                    (got - expected).abs() < 1e-4,
+                    "{out}: {code} → {got}, not {expected}"
+                );
+            }
+        }
+        let got = shutter::io::image::chromaticities(&icc).unwrap();
+        let [wx, wy, rx, ry, gx, gy, bx, by] = ADOBE_CHRM.map(|v| v as f64 / 100_000.0);
+        for ((x, y), (ex, ey)) in got.iter().zip([(rx, ry), (gx, gy), (bx, by), (wx, wy)]) {
+            assert!(
+                (x - ex).abs() < 1e-3 && (y - ey).abs() < 1e-3,
+                "{out}: {got:?}"
+            );
+        }
+        // The flat grey is the same code in the JPEG (within its quantisation).
+        let back = pixels(&p(out));
+        assert!(back.iter().all(|&c| c.abs_diff(128) <= 1), "{out}");
+    }
+    // An EXR holds no profile: cHRM's primaries and white as its chromaticities.
+    blur(&p("g22.png"), &velocity, &p("g22_out.exr"), &[]);
+    let meta = exr::meta::MetaData::read_from_file(p("g22_out.exr"), false).unwrap();
+    let c = meta.headers[0]
+        .shared_attributes
+        .chromaticities
+        .expect("chromaticities");
+    let got = [c.white, c.red, c.green, c.blue]
+        .map(|v| [v.0, v.1])
+        .concat();
+    let expected = ADOBE_CHRM.map(|v| v as f32 / 100_000.0);
+    assert_eq!(got, expected);
+    // A grey PNG: grey out, with a Gray profile of its curve in a JPEG.
+    let grey = p("grey.png");
+    let file = std::io::BufWriter::new(std::fs::File::create(&grey).unwrap());
+    let mut encoder = png::Encoder::new(file, w, h);
+    encoder.set_color(png::ColorType::Grayscale);
+    encoder.set_source_gamma(png::ScaledFloat::from_scaled(45455));
+    let mut writer = encoder.write_header().unwrap();
+    writer
+        .write_image_data(&vec![128u8; (w * h) as usize])
+        .unwrap();
+    writer.finish().unwrap();
+    blur(&grey, &velocity, &p("grey_out.jpg"), &[]);
+    let profile = moxcms::ColorProfile::new_from_slice(&embedded_icc(&p("grey_out.jpg"))).unwrap();
+    assert_eq!(profile.color_space, moxcms::DataColorSpace::Gray);
+    let curve = profile.gray_trc.unwrap().make_linear_evaluator().unwrap();
+    let expected = 0.5f64.powf(100_000.0 / 45455.0);
+    assert!((curve.evaluate_value(0.5) as f64 - expected).abs() < 1e-4);
+}
+
+/// An sRGB chunk, or an iCCP, takes precedence over gAMA (PNG 3rd ed., 4.3): a PNG of either
+/// beside a gAMA of 1.0 blurs as the same PNG without the gAMA, and a PNG output holds its
+/// chunks again (the iCCP as it came).
+#[test]
+fn a_pngs_srgb_or_iccp_chunk_wins_over_its_gama() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    let (w, h) = (64u32, 8u32);
+    let stripes: Vec<u8> = (0..w * h)
+        .flat_map(|i| [if i % 2 == 0 { 255u8 } else { 0 }; 3])
+        .collect();
+    let velocity = p("v.png");
+    velocity_map(&velocity, w, h, |_, _| 12.0);
+    let icc = moxcms::ColorProfile::new_adobe_rgb().encode().unwrap();
+    let srgb: &[(&[u8; 4], Vec<u8>)] = &[(b"sRGB", vec![0])];
+    for (name, icc, chunks) in [("srgb", None, srgb), ("iccp", Some(&icc[..]), &[][..])] {
+        let mut with_gama = chunks.to_vec();
+        with_gama.push((b"gAMA", gama(100_000)));
+        let path = |end: &str| p(&format!("{name}{end}"));
+        png_with_chunks(&path(".png"), (w, h), &stripes, icc, &with_gama);
+        png_with_chunks(&path("_alone.png"), (w, h), &stripes, icc, chunks);
+        blur(&path(".png"), &velocity, &path("_out.png"), &[]);
+        blur(&path("_alone.png"), &velocity, &path("_alone_out.png"), &[]);
+        let what = format!("{name}: the gAMA is not what codes the colour");
+        assert_same_pixels(&path("_out.png"), &path("_alone_out.png"), &what);
+        let (_, _, srgb, iccp) = png_colour_chunks(&path("_out.png"));
+        assert_eq!((srgb, iccp), (name == "srgb", name == "iccp"), "{name}");
+    }
+}

@@ -473,6 +473,24 @@ fn exr_chromaticities(icc: &[u8]) -> Option<exr::meta::attribute::Chromaticities
     })
 }
 
+/// A photo's primaries and white as an EXR's `chromaticities`: its ICC profile's, else a
+/// PNG's cHRM as it stores them (where no sRGB chunk says sRGB's, which are Rec. 709's, the
+/// EXR's own default). A PNG's gAMA alone says no primaries: none.
+fn photo_chromaticities(photo: &Photo) -> Option<exr::meta::attribute::Chromaticities> {
+    if let Some(icc) = &photo.icc {
+        return exr_chromaticities(icc);
+    }
+    let colour = photo.png_colour.filter(|c| c.srgb.is_none())?;
+    let c = colour.chromaticities?.map(|v| v as f32 / 100_000.0);
+    let xy = |i: usize| exr::math::Vec2(c[i], c[i + 1]);
+    Some(exr::meta::attribute::Chromaticities {
+        white: xy(0),
+        red: xy(2),
+        green: xy(4),
+        blue: xy(6),
+    })
+}
+
 /// What writing `frame` to `path` leaves out or changes, in words for the run's warnings (the
 /// caller names the output): blocks too large for a JPEG's segments, values an integer
 /// output clips (a float input's above all), an alpha a JPEG cannot hold, a profile that
@@ -609,13 +627,9 @@ pub fn write_views(
             let display = views[0].windows.display;
             let headers = views[0].carried.headers.clone();
             // A photo's primaries, from its profile, where no EXR header says them.
-            let icc = views[0]
-                .carried
-                .photo
-                .as_ref()
-                .and_then(|p| p.icc.as_deref());
+            let photo = views[0].carried.photo.as_ref();
             let exr = ExrOutput {
-                chromaticities: icc.and_then(exr_chromaticities),
+                chromaticities: photo.and_then(photo_chromaticities),
                 ..options.exr
             };
             let parts = exr_parts(views, &headers);

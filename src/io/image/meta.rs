@@ -20,7 +20,7 @@ use std::path::Path;
 
 use image::ImageDecoder;
 
-use crate::frame::{Photo, Resolution};
+use crate::frame::{Photo, PngColour, Resolution};
 
 /// Reads the profile and metadata of an 8/16-bit image, without decoding its pixels, and sets
 /// the orientation its EXIF and XMP record to 1 (upright, as `read_planes` delivers it), its
@@ -36,10 +36,10 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
     reader.limits(limits);
     let jpeg = reader.format() == Some(image::ImageFormat::Jpeg);
     let tiff = reader.format() == Some(image::ImageFormat::Tiff);
-    let (texts, mut resolution) = if reader.format() == Some(image::ImageFormat::Png) {
+    let (texts, png_colour, mut resolution) = if reader.format() == Some(image::ImageFormat::Png) {
         png_chunks(path)
     } else {
-        (Vec::new(), None)
+        (Vec::new(), None, None)
     };
     let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;
     // How `read_planes` turns the pixels, and the size it gives them.
@@ -88,26 +88,33 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
         bits,
         grey: color.channel_count() <= 2,
         sampling,
+        png_colour,
         resolution,
         premultiplied,
     })
 }
 
 /// A PNG's text chunks before its image data (where writers put them), in file order, each
-/// as its kind: tEXt, zTXt (inflated), iTXt (but XMP's, which is `Photo::xmp`); and its pHYs.
-/// A chunk that cannot be read is left out; the decoder's allocations are capped as the
-/// header's are.
-fn png_chunks(path: &Path) -> (Vec<crate::frame::PngText>, Option<Resolution>) {
+/// as its kind: tEXt, zTXt (inflated), iTXt (but XMP's, which is `Photo::xmp`); its gAMA,
+/// cHRM and sRGB; and its pHYs. A chunk that cannot be read is left out; the decoder's
+/// allocations are capped as the header's are.
+fn png_chunks(
+    path: &Path,
+) -> (
+    Vec<crate::frame::PngText>,
+    Option<PngColour>,
+    Option<Resolution>,
+) {
     use crate::frame::{PngText, TextKind};
     let Ok(file) = crate::io::input::open_input(path) else {
-        return (Vec::new(), None);
+        return (Vec::new(), None, None);
     };
     let limits = png::Limits {
         bytes: crate::io::image::HEADER_ROOM as usize,
     };
     let decoder = png::Decoder::new_with_limits(std::io::BufReader::new(file), limits);
     let Ok(reader) = decoder.read_info() else {
-        return (Vec::new(), None);
+        return (Vec::new(), None, None);
     };
     let info = reader.info();
     // The three lists are kept apart by the decoder: file order within each kind.
@@ -140,7 +147,16 @@ fn png_chunks(path: &Path) -> (Vec<crate::frame::PngText>, Option<Resolution>) {
             }),
     );
     let resolution = info.pixel_dims.and_then(super::resolution::png_density);
-    (texts, resolution)
+    let colour = PngColour {
+        gamma: info.gama_chunk.map(|g| g.into_scaled()),
+        chromaticities: info.chrm_chunk.map(|c| {
+            let [w, r, g, b] = [c.white, c.red, c.green, c.blue];
+            [w.0, w.1, r.0, r.1, g.0, g.1, b.0, b.1].map(|v| v.into_scaled())
+        }),
+        srgb: info.srgb.map(|intent| intent as u8),
+    };
+    let colour = (colour != PngColour::default()).then_some(colour);
+    (texts, colour, resolution)
 }
 
 /// A TIFF's profile (tag 34675), EXIF (its IFD0's descriptive tags and the directories they

@@ -26,7 +26,7 @@ use image::{ColorType, DynamicImage, ImageDecoder, ImageReader, Limits};
 use crate::frame::{Photo, Plane};
 
 pub use meta::{jpeg_sampling, read_photo};
-pub use profile::{chromaticities, Transfer};
+pub use profile::{chromaticities, profile_of, Transfer};
 pub use upright::exif_orientation;
 pub use write::{goes_out_grey, jpeg_left_out, out_of_range, write_photo, PhotoOptions};
 
@@ -438,7 +438,8 @@ pub fn write_color(
 /// Reads what a photo holds besides its pixels ([`read_photo`]) and makes its colour planes
 /// (as [`read_planes`] gave them) straight: a file of associated alpha has its colour divided
 /// by `alpha` as stored, in its encoded values (where the file multiplied it). Then, when
-/// `linearise`, turns them into the linear light of its profile. Returns the photo and a
+/// `linearise`, turns them into the linear light of its profile (or of what a PNG's gAMA and
+/// cHRM say, [`profile_of`]). Returns the photo and a
 /// note when the profile could not give its curves.
 pub fn read_photo_colour(
     path: &Path,
@@ -457,7 +458,7 @@ pub fn read_photo_colour(
     if !linearise {
         return Ok((photo, None));
     }
-    let transfer = Transfer::of(photo.icc.as_deref());
+    let transfer = Transfer::of(profile_of(&photo, photo.grey).as_deref());
     let max = if photo.bits == 16 { 65535 } else { 255 };
     transfer.linearise(planes, max);
     Ok((photo, transfer.note))

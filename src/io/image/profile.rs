@@ -14,8 +14,22 @@
 //!
 //! For an EXR output, which holds no ICC profile, [`chromaticities`] gives the profile's
 //! primaries and white as the EXR `chromaticities` attribute wants them.
+//!
+//! A PNG may say the same without a profile: its gAMA and cHRM chunks, which count where it
+//! has no iCCP and no sRGB chunk (PNG 3rd ed., 4.3: iCCP first, then sRGB, then gAMA and
+//! cHRM). [`profile_of`] turns them into the profile they describe (moxcms builds it), so
+//! that one path reads and writes every photo; a JPEG or TIFF output, which have no such
+//! chunks, embeds it, and a PNG output writes the chunks again instead (`write`).
 
-use moxcms::{ColorProfile, DataColorSpace, Matrix3d, ToneCurveEvaluator, ToneReprCurve, Xyz};
+use std::borrow::Cow;
+use std::ops::RangeInclusive;
+
+use moxcms::{
+    Chromaticity, ColorDateTime, ColorPrimaries, ColorProfile, DataColorSpace, LocalizableString,
+    Matrix3d, ProfileText, ToneCurveEvaluator, ToneReprCurve, XyY, Xyz,
+};
+
+use crate::frame::{Photo, PngColour};
 
 /// A curve from encoded [0, 1] to linear [0, 1].
 type Curve = Box<dyn ToneCurveEvaluator + Send + Sync>;
@@ -178,6 +192,105 @@ impl Transfer {
 /// The PCS illuminant, D50, as ICC.1 (7.2.16) gives it: what a profile's colorants are
 /// adapted to.
 const D50: [f64; 3] = [0.9642, 1.0, 0.8249];
+
+/// The header's PCS illuminant (bytes 68 to 80) as ICC.1 (7.2.16) has it, D50 in
+/// s15Fixed16: moxcms writes a D50 a few units off, which libpng refuses in an iCCP.
+const D50_HEADER: [u8; 12] = [0, 0, 0xF6, 0xD6, 0, 1, 0, 0, 0, 0, 0xD3, 0x2D];
+
+/// The gAMA values libpng accepts (png.c, `png_colorspace_check_gamma`: "gamma value out of
+/// range" outside them), decoding exponents from 0.00016 to 6250. Outside, a gAMA says
+/// nothing a curve can follow, and sRGB's stands in, as for a PNG of none.
+const GAMA_RANGE: RangeInclusive<u32> = 16..=625_000_000;
+
+/// sRGB's primaries and white (IEC 61966-2-1): what a PNG of a gAMA and no cHRM is read with.
+const SRGB_CHRM: [f32; 8] = [0.3127, 0.3290, 0.64, 0.33, 0.30, 0.60, 0.15, 0.06];
+
+/// The ICC profile that says how a photo's codes are coded: the one it embeds; else, for a
+/// PNG, the one its gAMA and cHRM describe ([`png_profile`]); else none (sRGB's curve).
+/// `grey`: a profile made from a PNG's chunks is a Gray one, for a grey output.
+pub fn profile_of(photo: &Photo, grey: bool) -> Option<Cow<'_, [u8]>> {
+    match (&photo.icc, &photo.png_colour) {
+        (Some(icc), _) => Some(Cow::Borrowed(icc)),
+        (None, Some(colour)) => png_profile(colour, grey).map(Cow::Owned),
+        (None, None) => None,
+    }
+}
+
+/// Whether a photo's profile is one [`profile_of`] made from its PNG chunks (which a PNG
+/// output writes as those chunks again, not as an iCCP).
+pub fn profile_is_made(photo: &Photo) -> bool {
+    photo.icc.is_none()
+        && photo
+            .png_colour
+            .is_some_and(|c| png_profile(&c, false).is_some())
+}
+
+/// The ICC profile a PNG's gAMA and cHRM describe, where no sRGB chunk overrides them (PNG
+/// 3rd ed., 11.3.2.2 and 11.3.2.3): the curve light = code^(100000 / gAMA), gAMA holding the
+/// exponent that encoded the light ×100000 (45455 for 1/2.2), sRGB's curve where it has no
+/// gAMA in libpng's range ([`GAMA_RANGE`]); the primaries and white of its cHRM, sRGB's where
+/// it has none (what its readers assume). Built by moxcms: the colorants adapted to D50 by
+/// Bradford, a `chad` that adapts the white to D50 (moxcms's own is its cone matrix), no
+/// CICP, a fixed creation date (the same PNG makes the same bytes). `None` where the chunks
+/// say nothing: an sRGB chunk, or neither a usable gAMA nor a cHRM.
+fn png_profile(colour: &PngColour, grey: bool) -> Option<Vec<u8>> {
+    if colour.srgb.is_some() {
+        return None;
+    }
+    let gamma = colour.gamma.filter(|g| GAMA_RANGE.contains(g));
+    if gamma.is_none() && colour.chromaticities.is_none() {
+        return None;
+    }
+    let mut profile = ColorProfile::new_srgb();
+    let curve = match gamma {
+        Some(g) => ToneReprCurve::Parametric(vec![(100_000.0 / g as f64) as f32]),
+        None => profile.red_trc.clone()?,
+    };
+    let [wx, wy, rx, ry, gx, gy, bx, by] = colour
+        .chromaticities
+        .map_or(SRGB_CHRM, |c| c.map(|v| v as f32 / 100_000.0));
+    let white = XyY::new(wx as f64, wy as f64, 1.0);
+    profile.update_rgb_colorimetry(
+        white,
+        ColorPrimaries {
+            red: Chromaticity::new(rx, ry),
+            green: Chromaticity::new(gx, gy),
+            blue: Chromaticity::new(bx, by),
+        },
+    );
+    let d50 = Xyz::new(D50[0] as f32, D50[1] as f32, D50[2] as f32);
+    profile.chromatic_adaptation = Some(moxcms::adaption_matrix_d(
+        Chromaticity::new(wx, wy).to_xyz(),
+        d50,
+    ));
+    profile.media_white_point = Some(white.to_xyzd());
+    profile.cicp = None;
+    if grey {
+        profile.color_space = DataColorSpace::Gray;
+        (profile.red_trc, profile.green_trc, profile.blue_trc) = (None, None, None);
+        profile.gray_trc = Some(curve);
+    } else {
+        profile.red_trc = Some(curve.clone());
+        profile.green_trc = Some(curve.clone());
+        profile.blue_trc = Some(curve);
+    }
+    let gamma = gamma.map_or("sRGB's curve".into(), |g| format!("gAMA {g}"));
+    let chrm = colour
+        .chromaticities
+        .map_or("sRGB's primaries", |_| "its cHRM");
+    profile.description = Some(ProfileText::Localizable(vec![LocalizableString::new(
+        "en".into(),
+        "US".into(),
+        format!("A PNG's {gamma} and {chrm}"),
+    )]));
+    profile.copyright = None;
+    // 2000-01-01 00:00:00.
+    profile.creation_date_time =
+        ColorDateTime::new_from_slice(&[7, 208, 0, 1, 0, 1, 0, 0, 0, 0, 0, 0]).ok()?;
+    let mut icc = profile.encode().ok()?;
+    icc.get_mut(68..80)?.copy_from_slice(&D50_HEADER);
+    Some(icc)
+}
 
 /// How far from the identity a `chad` may be and still be an adaptation between two
 /// daylight-like whites (D65 to D50 by Bradford differs from it by 0.05 at most; D93 or
@@ -363,6 +476,48 @@ mod tests {
             "{note}"
         );
         assert!(!note.contains("is kept"), "{note}");
+    }
+
+    /// What a PNG's chunks make: nothing beside an sRGB chunk or without a usable gAMA or a
+    /// cHRM; else a profile of light = code^(100000 / gAMA) (sRGB's curve without a gAMA),
+    /// the same bytes each time.
+    #[test]
+    fn a_pngs_gama_and_chrm_make_the_profile_they_describe() {
+        let colour = |gamma, chromaticities, srgb| PngColour {
+            gamma,
+            chromaticities,
+            srgb,
+        };
+        let adobe = Some([31270, 32900, 64000, 33000, 21000, 71000, 15000, 6000]);
+        assert_eq!(
+            png_profile(&colour(Some(45455), adobe, Some(0)), false),
+            None
+        );
+        assert_eq!(png_profile(&colour(Some(15), None, None), false), None);
+        assert_eq!(png_profile(&colour(None, None, None), false), None);
+        let linear = png_profile(&colour(Some(100_000), None, None), false).unwrap();
+        let mut planes = [vec![0.25, 0.5], vec![0.0, 1.0], vec![0.75, 0.5]];
+        let [r, g, b] = &mut planes;
+        Transfer::of(Some(&linear)).linearise([r, g, b], 255);
+        let codes = |v: f32| (v * 255.0).round() / 255.0;
+        assert_eq!(planes[0], [codes(0.25), codes(0.5)]);
+        let made = png_profile(&colour(None, adobe, None), false).unwrap();
+        assert_eq!(
+            made,
+            png_profile(&colour(None, adobe, None), false).unwrap()
+        );
+        let mut plane = vec![128.0 / 255.0];
+        Transfer::of(Some(&made)).linearise([&mut plane, &mut [0.0], &mut [0.0]], 255);
+        assert!(
+            (plane[0] - 0.215_861).abs() < 1e-5,
+            "sRGB's curve: {}",
+            plane[0]
+        );
+        let got = chromaticities(&made).unwrap();
+        assert!(
+            (got[1].0 - 0.21).abs() < 1e-4 && (got[3].1 - 0.329).abs() < 1e-4,
+            "{got:?}"
+        );
     }
 
     #[test]

@@ -5,7 +5,9 @@
 //!
 //! Each format through its own encoder, for what image's encoders do not pass on:
 //! - PNG (png crate): iCCP, eXIf, XMP as the iTXt chunk `XML:com.adobe.xmp`, and a PNG
-//!   input's text chunks (tEXt, zTXt, iTXt) again, each in its kind. IPTC is not written (PNG
+//!   input's gAMA, cHRM and sRGB and text chunks (tEXt, zTXt, iTXt) again, each in its kind
+//!   (a profile made from gAMA and cHRM, `profile::profile_of`, goes out as those chunks, not
+//!   as an iCCP; in a JPEG or TIFF, which have no such chunks, as the profile). IPTC is not written (PNG
 //!   has no settled place for it).
 //! - TIFF (tiff crate): deflate with the horizontal predictor (lossless, and what every TIFF
 //!   reader reads; LZW compresses photos less), `ExtraSamples` = 2 (unassociated alpha: the
@@ -28,9 +30,9 @@
 
 use std::io::{Seek, Write};
 
-use crate::frame::Photo;
+use crate::frame::{Photo, PngColour};
 
-use super::profile::Transfer;
+use super::profile::{profile_is_made, profile_of, Transfer};
 use super::ImageFormat;
 use super::{resolution, tiff_meta};
 
@@ -162,16 +164,19 @@ pub fn write_photo(
     let sixteen_bit = options.bits == 16 && !jpeg;
     let photo = options.photo;
     let grey = goes_out_grey(photo, format, options.bits, rgb, alpha.is_some());
-    let icc = photo.and_then(|p| p.icc.as_deref());
-    let transfer = Transfer::of(icc);
+    let profile = photo.and_then(|p| profile_of(p, grey));
+    let transfer = Transfer::of(profile.as_deref());
     // A profile goes out where it describes what is written: an RGB one with RGB, a Gray one
     // with grey; in a float TIFF, only a float input's own (an 8/16-bit photo's describes
-    // codes, not the linear light a float TIFF holds).
-    let icc = icc.filter(|_| match (float, grey) {
+    // codes, not the linear light a float TIFF holds). One made from a PNG's gAMA and cHRM
+    // goes into a PNG as those chunks again (`write_png`), not as an iCCP.
+    let made = photo.is_some_and(profile_is_made);
+    let icc = profile.as_deref().filter(|_| match (float, grey) {
         (true, _) => transfer.embeds && photo.is_some_and(|p| p.bits == 32),
         (false, true) => transfer.grey,
         (false, false) => transfer.embeds,
     });
+    let icc = icc.filter(|_| !(made && format == ImageFormat::Png));
     let (w, h) = (width as u32, height as u32);
     let n = width * height;
     if float {
@@ -273,6 +278,9 @@ fn write_png(
         png::BitDepth::Eight
     };
     info.icc_profile = icc.map(Into::into);
+    if let Some(colour) = photo.and_then(|p| p.png_colour) {
+        png_colour(&mut info, &colour);
+    }
     info.pixel_dims = photo
         .and_then(|p| p.resolution.as_ref())
         .map(resolution::to_png);
@@ -304,6 +312,37 @@ fn write_png(
     };
     writer.write_image_data(&bytes).map_err(|e| e.to_string())?;
     writer.finish().map_err(|e| e.to_string())
+}
+
+/// A PNG input's gAMA, cHRM and sRGB, as they came, on a PNG output's `info`. The sRGB chunk
+/// goes out only where no iCCP does (the png crate writes no iCCP beside one, and a PNG
+/// should not hold both); beside it, gAMA and cHRM go out where they are sRGB's own values.
+fn png_colour(info: &mut png::Info, colour: &PngColour) {
+    use png::{ScaledFloat, SourceChromaticities};
+    info.source_gamma = colour.gamma.map(ScaledFloat::from_scaled);
+    info.source_chromaticities = colour.chromaticities.map(|c| {
+        let xy = |i: usize| {
+            (
+                ScaledFloat::from_scaled(c[i]),
+                ScaledFloat::from_scaled(c[i + 1]),
+            )
+        };
+        SourceChromaticities {
+            white: xy(0),
+            red: xy(2),
+            green: xy(4),
+            blue: xy(6),
+        }
+    });
+    if info.icc_profile.is_none() {
+        info.srgb = colour.srgb.and_then(|intent| match intent {
+            0 => Some(png::SrgbRenderingIntent::Perceptual),
+            1 => Some(png::SrgbRenderingIntent::RelativeColorimetric),
+            2 => Some(png::SrgbRenderingIntent::Saturation),
+            3 => Some(png::SrgbRenderingIntent::AbsoluteColorimetric),
+            _ => None,
+        });
+    }
 }
 
 #[allow(clippy::too_many_arguments)]
