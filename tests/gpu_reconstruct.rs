@@ -937,3 +937,21 @@ fn hollow_tiles_are_a_layer_s_one_smooth_flow_over_empty_space() {
     assert_eq!(beside(3, 4), TileKind::Hollow, "inside the moving disc");
     assert_eq!(beside(8, 4), TileKind::Full, "at the still disc's rim");
 }
+
+/// An opaque frame comes back exactly opaque with the gather on the GPU too, in every
+/// variant (the twin's normalised weights round as the CPU's).
+#[test]
+fn an_opaque_frame_comes_back_exactly_opaque_on_the_gpu() {
+    let Some(gpu) = gpu() else { return };
+    let (w, h) = (96, 72);
+    let mut opaque = noisy(w, h, 3, 30.0);
+    opaque.color.as_mut().unwrap().a = Some(vec![1.0; w * h]);
+    for params in variants() {
+        let on_gpu = GatherOnGpu::new(gpu);
+        let out = reconstruct_with(opaque.clone(), &params, 0.5, 1, &on_gpu);
+        assert!(on_gpu.ran.get());
+        let a = out.color.unwrap().a.unwrap();
+        let off = a.iter().filter(|&&v| v != 1.0).count();
+        assert_eq!(off, 0, "{:?}: alphas not 1", params.variant);
+    }
+}

@@ -497,3 +497,29 @@ fn a_still_subject_before_a_pan_keeps_its_sides_at_the_exposure_of_the_hidden_ba
     eprintln!("reconstruct: beside a still card before a pan, worst error {worst:.4}");
     assert!(worst < 0.02, "worst error beside the card: {worst}");
 }
+
+/// An opaque frame (every alpha 1) comes back with every alpha exactly 1, in every variant,
+/// and a frame with no alpha with none: the gather's normalised weights summed to
+/// 0.99999994 or 1.0000001 at some pixels (QA: 44 pixels of `gears` at 640×360).
+#[test]
+fn an_opaque_frame_comes_back_exactly_opaque() {
+    let (w, h) = (96, 72);
+    let mut opaque = frame(w, h, 3, 30.0);
+    opaque.color.as_mut().unwrap().a = Some(vec![1.0; w * h]);
+    for params in variants() {
+        let out = apply(Algorithm::Reconstruct, &params, opaque.clone(), 1);
+        let a = out.color.unwrap().a.unwrap();
+        let off: Vec<f32> = a.iter().copied().filter(|&v| v != 1.0).collect();
+        assert!(
+            off.is_empty(),
+            "{:?}: {} alphas not 1, e.g. {:?}",
+            params.reconstruct.variant,
+            off.len(),
+            &off[..off.len().min(4)]
+        );
+    }
+    let mut no_alpha = opaque.clone();
+    no_alpha.color.as_mut().unwrap().a = None;
+    let out = apply(Algorithm::Reconstruct, &Params::default(), no_alpha, 1);
+    assert!(out.color.unwrap().a.is_none());
+}
