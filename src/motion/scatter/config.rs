@@ -13,7 +13,7 @@ pub const MOST_SEGMENTS: usize = 64;
 pub(super) const TILE_W: usize = 256;
 pub(super) const TILE_H: usize = 128;
 /// Reach is kept per block of this many pixels square.
-pub(super) const BLOCK: usize = 16;
+pub(crate) const BLOCK: usize = 16;
 /// Below this uncovered share an exposure-normalised pixel needs no background estimate.
 pub const COVERED: f64 = 1e-3;
 

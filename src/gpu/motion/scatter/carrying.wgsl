@@ -6,14 +6,15 @@
 // are drawn once, by the same dispatches, and every deposit adds each layer channel's value
 // at the curve's pixel, with the weight it gives the beauty, into sums of its own; each
 // pixel is resolved once (`Resolution`) and that applied to every layer channel. Each
-// channel has its own colour bound and fixed-point scale, as each of the beauty's has, so a
-// layer's sums are the bits it would get alone in the beauty's place.
+// layer's R, G and B have a colour bound and fixed-point scale of their own in each tile
+// (fixed.wgsl), as the beauty's R, G and B have, so a layer's sums are the bits it would get
+// alone in the beauty's place, and a firefly in one layer changes no other colour's scale.
 //
 // Bindings, group 1 (group 0 is the beauty's, as scatter.wgsl lists them): the layers'
 // input planes (R, G, B of each layer in turn), their sums (two words per pixel, plane after
 // plane in the same order) and their output planes (the same order). `state[LAYERS]` says
-// how many layers the run carries (at most MOST_LAYERS), `state[CARRIED_BOUND + c]` holds
-// channel c's bound.
+// how many layers the run carries (at most MOST_LAYERS); each block's and tile's words hold
+// the layers' bounds and scales after the beauty's (from FIRST_CARRIED, fixed.wgsl).
 
 @group(1) @binding(0) var<storage, read> carried: array<f32>;
 @group(1) @binding(1) var<storage, read_write> carried_sums: array<atomic<u32>>;
@@ -29,22 +30,22 @@ fn carried_channels() -> u32 {
     return 3u * min(atomicLoad(&state[LAYERS]), MOST_LAYERS);
 }
 
-// The power of two above every |value| of a moving pixel in carried channel c.
-fn carried_exponent(c: u32) -> i32 {
-    return exponent_above(atomicLoad(&state[CARRIED_BOUND + c]));
+// The layers carried in this run.
+fn carried_layers() -> u32 {
+    return min(atomicLoad(&state[LAYERS]), MOST_LAYERS);
 }
 
-// reach: moving pixel i raises each carried channel's bound, as it raises the beauty's.
-fn carry_bound(i: u32) {
+// The largest |value| of layer l's channels at pixel i (`count_curve` bounds each layer's
+// colour as it bounds the beauty's).
+fn carried_magnitude(l: u32, i: u32) -> f32 {
     let n = pixels();
-    let channels = carried_channels();
-    for (var c = 0u; c < channels; c++) {
-        atomicMax(&state[CARRIED_BOUND + c], bitcast<u32>(abs(carried[c * n + i])));
-    }
+    let c = 3u * l;
+    let r = abs(carried[c * n + i]);
+    let g = abs(carried[(c + 1u) * n + i]);
+    return max(max(r, g), abs(carried[(c + 2u) * n + i]));
 }
 
-// The curve's layer values, times 2^−e per channel (the pen's colour for the layers), and
-// how many (read once a curve, not at every deposit).
+// The curve's layer values (read once a curve, not at every deposit), and how many.
 var<private> carried_pen: array<f32, MOST_CARRIED>;
 var<private> pen_channels: u32;
 
@@ -53,16 +54,23 @@ fn carry_pen(i: u32) {
     let n = pixels();
     pen_channels = carried_channels();
     for (var c = 0u; c < pen_channels; c++) {
-        carried_pen[c] = ldexp(carried[c * n + i], -carried_exponent(c));
+        carried_pen[c] = carried[c * n + i];
     }
 }
 
-// accumulate: a deposit of weight d at pixel p that passed the depth test: each carried
-// channel's value times d into its sum (`add` of scatter.wgsl, on the carried sums).
-fn carry_deposit(p: u32, d: f32) {
+// accumulate: a deposit of weight d at pixel p, in the tile whose words start at `tile`,
+// that passed the depth test: each carried channel's value times d, in the units of its
+// layer's colour in the tile (which follow the beauty's), into its sum (`add` of
+// fixed.wgsl, on the carried sums).
+fn carry_deposit(p: u32, tile: u32, d: f32) {
     let n = pixels();
+    var dc = d;
     for (var c = 0u; c < pen_channels; c++) {
-        let f = fixed(d * carried_pen[c]);
+        // Each layer's colour has its own scale in the tile, its channels share it.
+        if c % 3u == 0u {
+            dc = weight_in(d, tile, FIRST_CARRIED + c / 3u);
+        }
+        let f = fixed(dc * carried_pen[c]);
         if f.x == 0u && f.y == 0u {
             continue;
         }
@@ -74,8 +82,9 @@ fn carry_deposit(p: u32, d: f32) {
     }
 }
 
-// resolve: pixel p's carried channels by its resolution, the beauty's.
-fn carry_resolve(p: u32, r: Resolution) {
+// resolve: pixel p's carried channels by its resolution, the beauty's, in the units of its
+// tile (whose words start at `tile`).
+fn carry_resolve(p: u32, tile: u32, r: Resolution) {
     let n = pixels();
     let channels = carried_channels();
     for (var c = 0u; c < channels; c++) {
@@ -84,7 +93,8 @@ fn carry_resolve(p: u32, r: Resolution) {
         var value = own;
         if r.kind != OWN {
             let lo = atomicLoad(&carried_sums[2u * (plane + p)]);
-            let sum = fixed_value(lo, atomicLoad(&carried_sums[2u * (plane + p) + 1u]));
+            let hi = atomicLoad(&carried_sums[2u * (plane + p) + 1u]);
+            let sum = fixed_value(lo, hi, shift_of(tile, FIRST_CARRIED + c / 3u));
             // What lies behind, as `behind_color` finds the beauty's.
             var back = own;
             if r.kind == REST && r.behind.count > 0u {
@@ -94,7 +104,7 @@ fn carry_resolve(p: u32, r: Resolution) {
                 }
                 back = s / f32(r.behind.count);
             }
-            value = resolved(r, sum, carried_exponent(c), own, back);
+            value = resolved(r, sum, exponent_of(tile, FIRST_CARRIED + c / 3u), own, back);
         }
         carried_out[plane + p] = value;
     }

@@ -5,19 +5,23 @@
 //!
 //! 1. `reach`: per pixel, the CPU's motion test (`Scatter::motion`: the curve's extent over
 //!    the exposure against [`STILL`]); moving pixels join a list through an atomic counter
-//!    and raise a per-channel bound on |colour|. `prepare` turns the count into the size of
-//!    the next dispatch (indirect), so a still frame or still pixels cost no curve work.
+//!    and count their curve into their 16×16 block (the CPU's `BLOCK`): the block's curves,
+//!    the farthest they reach, and per channel the largest |colour|. `scales` gathers, for
+//!    each tile (a block's square), the blocks that can reach it: the fixed point of the
+//!    tile's sums (below). `prepare` turns the count into the size of the next dispatch
+//!    (indirect), so a still frame or still pixels cost no curve work.
 //! 2. `accumulate`: one invocation per moving pixel builds its path as `Scatter::path` does
 //!    (segments, weights, depths, scaling to `max_curve`, the exposure share) and walks each
 //!    segment with [`crate::motion::line`]'s coverage model (a column's exact length, split
 //!    linearly between the two nearest pixel centres), depth-tested against the frame, into
-//!    fixed-point sums.
+//!    fixed-point sums, in the units of the tile each deposit lands in.
 //! 3. `resolve`: per pixel, eq. 4 or the exposure normalisation, with `behind` (the search
 //!    along the motion for a farther surface) where a pixel is not wholly covered.
 //!
 //! Bindings, in order: the [`ScatterConfig`] uniform (the CPU's own struct), colour, depth,
-//! prev, next (the CPU's inputs, planes one after the other), then `state`, the moving list,
-//! the five sums, the output colour and the fringe's entries.
+//! prev, next (the CPU's inputs, planes one after the other), then `state` (the host's words,
+//! then the blocks'), the moving list (then the tiles' scales), the five sums, the output
+//! colour and the fringe's entries.
 //!
 //! **The fringe** ([`crate::motion::scatter::fringe`]) is found on the CPU for both backends
 //! (its matte is reconstruct's, which runs there too): the colour uploaded is its unmixed
@@ -33,9 +37,9 @@
 //! into a 64-bit sum of the channel's own (one buffer, a plane of two words a pixel per
 //! channel, bind group 1), and `resolve` finds each pixel's resolution once (which
 //! normalisation, the weight sum, the pixels behind) and applies it to the beauty's channels
-//! and every layer's. Each layer channel has its own colour bound and fixed-point scale, found
-//! by `reach` over the same moving pixels, so a layer's sums are the bits it gets alone in
-//! the beauty's place, and so is its output where the compiler evaluates the two alike
+//! and every layer's. Each layer channel has its own colour bound and fixed-point scale in
+//! each tile, found by `reach` and `scales` over the same curves, so a layer's sums are the
+//! bits it gets alone in the beauty's place, and so is its output where the compiler evaluates the two alike
 //! (tests/gpu_scatter.rs measures it). Up to [`MOST_LAYERS`] layers ride one run, and as many
 //! as their sums fit one storage binding (24 bytes a pixel a layer: two at 1080p under
 //! lavapipe's 128 MiB); more are split into runs as even as they can be, each run drawing the
@@ -48,18 +52,17 @@
 //! budget is one binding; a device's total memory is not asked: 60 bytes a pixel a layer,
 //! about 4 GB for eight layers at 4K.)
 //!
-//! **Why two modules, not a layer count in the config.** The stages call four hooks
-//! (`carry_bound`, `carry_pen`, `carry_deposit`, `carry_resolve`): alone.wgsl defines them
-//! empty, carrying.wgsl carries the layers, and the same scatter.wgsl and curve.wgsl go into
-//! both ([`SHADER`], [`SHADER_CARRYING`]). A layer count in the config, read by one module,
+//! **Why two modules, not a layer count in the config.** The stages call hooks
+//! (`carried_layers`, `carried_magnitude`, `carry_pen`, `carry_deposit`, `carry_resolve`): alone.wgsl defines them empty, carrying.wgsl carries the layers, and the
+//! same scatter.wgsl, fixed.wgsl and curve.wgsl go into both ([`SHADER`], [`SHADER_CARRYING`]). A layer count in the config, read by one module,
 //! would leave a loop and its count's load at every deposit of the beauty alone, and the
 //! layers' bindings in its pipeline layout, needing buffers bound with no layers; an override
 //! constant would still leave the bindings statically used (WGSL has no conditional
 //! compilation) and compile a pipeline per count. The beauty alone's module is instead what
 //! it was, bindings, sums and all (the hooks inline to nothing), and the carrying module is
 //! compiled the first time a frame brings layers. Where a run carries layers its count is a
-//! word of `state`, beside the host's flags, and their channels' bounds follow the beauty's
-//! there.
+//! word of `state`, beside the host's flags, and their channels' bounds and scales follow
+//! the beauty's in each block's and tile's words.
 //!
 //! **Why a compute rasteriser with integer atomics, not the render pipeline's lines.** The
 //! paper draws its segments as GL lines with additive blending into a float target. Measured
@@ -78,18 +81,68 @@
 //! atomics (`SHADER_FLOAT32_ATOMIC`) would be order-dependent; a sort of deposits by pixel
 //! would be deterministic but costs a global sort per frame.
 //!
-//! **The fixed point.** 32 fractional bits, so a sum holds |Σ| < 2³¹ and a deposit is rounded
-//! to 2⁻³² of its channel's scale. Each colour channel is scaled by 2^−e, the power of two
-//! just above the largest |colour| of a moving pixel in that channel (found by `reach` with
-//! `atomicMax` on the bits, so exactly, and the scaling loses nothing): a deposit
-//! (coverage × weight × colour) is then below its weight in magnitude. The weights are at
-//! most ~1.4 per column and pixel, so a pixel's weight sum stays below 2³¹ unless more than
-//! ~10⁹ curve columns cross it (π·max_curve² moving pixels × 64 segments is 1.3·10⁷ at the
-//! default 256 px). Resolution: 2⁻³² ≈ 2.3·10⁻¹⁰ of the channel's bound per deposit, far
-//! below f32 for any real frame; a frame whose bound is huge (the numeric policy's 10³⁰)
-//! loses the small colours of the pixels those huge ones reach, relative to that bound — a
-//! difference of 10⁻¹⁰ of the frame's range, which the parity test bounds. Resolve computes
-//! in the scaled units and scales back at the end, so sums of huge colours stay finite.
+//! **The fixed point** (fixed.wgsl). A sum is a 64-bit two's-complement integer counting
+//! units of its tile (a 16×16 block's square) and colour (the beauty's R, G and B share one;
+//! its alpha has its own; each carried layer's R, G and B share one): 2^(e − G), where 2^e is
+//! the power of two above the largest |value| of any curve that can deposit in the tile (so
+//! value · 2^−e lies in (−1, 1), exactly), and G, the fractional bits, is
+//! min(62 − ⌈log₂ N⌉ − w, 32 + e − l): N the curves that can deposit in the tile, 2^w a bound
+//! on the weight one curve deposits in one pixel (w = 7 for the paper's weights: at most 64
+//! segments, each at most one deposit a pixel, of coverage ≤ √2 times a weight ≤ 1, so
+//! 64·√2 ≈ 90.5 < 2⁷; w = 1 under the exposure normalisation, where a curve's deposits sum
+//! to its coverage of the exposure, ≤ 1 < 2¹, the f32 rounding of that sum far inside the
+//! factor 2), and 2^l the least typical magnitude (a block's mean exponent) among the
+//! blocks whose curves can land there. Where the values landing are of one magnitude, G is
+//! 32, the fixed point one frame-wide scale had, and a typical deposit fits the low word;
+//! where a firefly lands among ordinary values, G grows by as many bits as it is brighter
+//! than they are, so they keep their precision beside it. The weight's unit is the frame's,
+//! 2^−min(32, 62 − ⌈log₂ N_frame⌉ − w) (weights are bounded where colours are not).
+//!
+//! Which curves can deposit in a tile: `reach` counts each into its block with a reach (a
+//! whole number of pixels, along each axis, from the pixel it is drawn from): the Bézier's
+//! extent plus the pixel beside it (the CPU's `Scatter::motion` bound, which the scaling to
+//! `max_curve` only shrinks), and where that is farther than the longest curve or the curve
+//! may be an arc, the farthest point of its path as `accumulate` builds it (an arc turning
+//! past the far side of its circle, or a curve cut short far from p(0), strays beyond the
+//! extent or the longest curve). `scales` adds up the blocks whose reach touches the tile,
+//! and the rare curve that reaches farther than the longest curve can is counted into every
+//! tile (FAR). The reach is kept beside the curve in the moving list and `accumulate` clips
+//! every walk to it, so no deposit lands in a tile that did not count its curve — by
+//! construction, not by trusting the geometry or two stages' roundings to agree.
+//!
+//! *No overflow, by construction.* At a pixel of the tile, in channel c of a colour: each
+//! deposit is (d · 2^(G − e)) · value, with |value · 2^−e| < 1, and the deposits of one
+//! curve there add up to at most 2^w in d, so the exact deposits sum to
+//! |Σ| < N · 2^w · 2^G ≤ 2^(⌈log₂ N⌉ + w + 62 − ⌈log₂ N⌉ − w) = 2⁶²; rounding each deposit
+//! to a unit adds at most ½, and a curve makes at most 64 deposits a pixel (one a segment),
+//! so at most 32·N < 2³⁶ more (N < 2³¹: a curve a moving pixel or fringe entry), and the f32
+//! product's own rounding (2⁻²⁴ of it) a further 2³⁸ at most. |Σ| < 2⁶² + 2⁴⁰ < 2⁶³: the
+//! sum never wraps, whatever the values (the numeric policy's 10³⁰ included). No f32 along
+//! the way is out of range: G lies in 24..=61, e is taken no lower than G − 125 (a value
+//! below 2^(G − 125) ≤ 2⁻⁶⁴ is below a unit anyway), so 2^(G − e) is a normal float and
+//! d · 2^(G − e) ≤ 2 · 2¹²⁵; the weight is scaled by 2^G alone. Decoding converts the
+//! magnitude (a negative sum negated first) in three f32 roundings and scales it back by a
+//! power of two; resolve computes in the tile's scaled units (a weighted mean of values below
+//! 2^e stays below it) and scales back at the end, the paper's eq. 4 adding the pixel's own
+//! colour unscaled (a still pixel, which 2^e need not bound), so the output is finite.
+//!
+//! *The error, bounded locally.* A deposit is rounded to half a unit, 2^(e − G − 1): a
+//! fraction 2^−(G+1) of the largest value that can land in its tile, where the frame's
+//! largest used to set it for every pixel. One firefly of 10⁷ (2²⁴) therefore changes only
+//! the tiles its own curve can reach, and there its deposits get 24 more fractional bits, up
+//! to 62 − ⌈log₂ N⌉ − w (49 for an ordinary frame's few thousand curves a tile under the
+//! exposure normalisation): 2^(24 − 49) ≈ 3·10⁻⁸ of a unit colour for the ordinary deposits
+//! beside it (tests/gpu_scatter.rs's firefly tests measure it against the CPU, on the streak
+//! and off it). A firefly 2^b brighter than its neighbours leaves them 62 − ⌈log₂ N⌉ − w − b
+//! fractional bits of their own magnitude (25 beside 10⁷): only one beyond ~10¹² coarsens
+//! them to a thousandth, and only within its own reach.
+//!
+//! *The cost.* A deposit reads its tile's factor (one word, the beauty's colour and alpha
+//! bytes) and scales its weight by it; `reach` counts each curve into its block, building
+//! its path only for arcs and curves longer than `max_curve`; `scales` runs once per tile.
+//! Measured on lavapipe at 960×540 (the 540p test), about a fifth more time than one
+//! frame-wide scale (which per-deposit lookup of any kind pays on a CPU driver, where every
+//! lane runs every branch).
 //!
 //! **The f32 form.** WGSL has no f64, and the CPU's geometry is absolute f64 (positions may
 //! lie 10¹² px off-screen). Here every position is taken relative to the corner of the
@@ -286,7 +339,8 @@ mod tests {
     #[test]
     fn the_shader_s_constants_are_the_cpu_s() {
         use super::pass::{
-            CARRIED_BOUND, DISPATCH, FLAGS, FRINGES, HAS_Z, LAYERS, MOST_GROUPS, OPAQUE,
+            BLOCK, BLOCKS, BLOCK_WORDS, COLOURS, DISPATCH, FLAGS, FRINGES, HAS_Z, LAYERS,
+            MOST_GROUPS, MOST_REACH, OPAQUE, TILE_WORDS,
         };
         // scatter.wgsl and curve.wgsl go into both modules alike.
         assert!(SHADER_CARRYING.starts_with(SHADER.trim_end_matches(ALONE)));
@@ -316,7 +370,14 @@ mod tests {
         has(format!("const HAS_Z: u32 = {HAS_Z}u;"));
         has(format!("const MOST_GROUPS: u32 = {MOST_GROUPS}u;"));
         has(format!("const LAYERS: u32 = {LAYERS}u;"));
-        has(format!("const CARRIED_BOUND: u32 = {CARRIED_BOUND}u;"));
+        has(format!("const MOST_REACH: u32 = {MOST_REACH}u;"));
+        has(format!("const BLOCKS: u32 = {BLOCKS}u;"));
+        has(format!("const COLOURS: u32 = {COLOURS}u;"));
+        has(format!("const BLOCK_WORDS: u32 = {BLOCK_WORDS}u;"));
+        has(format!("const TILE_WORDS: u32 = {TILE_WORDS}u;"));
+        // The tiles are the CPU's blocks.
+        assert_eq!(BLOCK as usize, cpu::config::BLOCK);
+        has(format!("const BLOCK: u32 = {BLOCK}u;"));
         has(format!("const FRINGES: u32 = {FRINGES}u;"));
         has(format!(
             "@binding({}) var<storage, read_write> out",

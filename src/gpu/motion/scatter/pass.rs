@@ -17,6 +17,7 @@ use crate::gpu::stage::{floats, kept, read_back, Caught, StageError};
 pub const SHADER: &str = concat!(
     include_str!("../../prelude.wgsl"),
     include_str!("scatter.wgsl"),
+    include_str!("fixed.wgsl"),
     include_str!("behind.wgsl"),
     include_str!("../curve.wgsl"),
     include_str!("alone.wgsl")
@@ -27,6 +28,7 @@ pub const SHADER: &str = concat!(
 pub const SHADER_CARRYING: &str = concat!(
     include_str!("../../prelude.wgsl"),
     include_str!("scatter.wgsl"),
+    include_str!("fixed.wgsl"),
     include_str!("behind.wgsl"),
     include_str!("../curve.wgsl"),
     include_str!("carrying.wgsl")
@@ -47,16 +49,42 @@ pub const CARRYING_STORAGE_BUFFERS: u32 = STORAGE_BUFFERS + 3;
 /// its cost beside the layers' own deposits.
 pub const MOST_LAYERS: usize = 8;
 
-/// Words of the `state` buffer (keep in sync with scatter.wgsl): the moving count, the
-/// accumulate dispatch (x, y, z), the colour bounds (R, G, B, A), the host's flags, the
-/// layers carried, the fringe's entries, and from [`CARRIED_BOUND`] the carried channels'
-/// colour bounds.
-const STATE_WORDS: usize = CARRIED_BOUND + 3 * MOST_LAYERS;
+/// Words of the `state` buffer the host writes (keep in sync with scatter.wgsl): the moving
+/// count, the accumulate dispatch (x, y, z), the farthest reach, the host's flags, the
+/// layers carried and the fringe's entries; from [`BLOCKS`] each block's words and the far
+/// curves' (fixed.wgsl), which the host clears.
 pub(super) const DISPATCH: u64 = 1;
+pub(super) const MOST_REACH: usize = 4;
 pub(super) const FLAGS: usize = 8;
 pub(super) const LAYERS: usize = 9;
 pub(super) const FRINGES: usize = 10;
-pub(super) const CARRIED_BOUND: usize = 16;
+pub(super) const BLOCKS: usize = 16;
+/// Colours with a scale of their own: the beauty's R, G and B, its alpha, and each carried
+/// layer's R, G and B ([`MOST_LAYERS`]).
+pub(super) const COLOURS: usize = 2 + MOST_LAYERS;
+/// A block's words: its curves, its reach, and per colour its largest |value| and the sum of
+/// its values' exponents.
+pub(super) const BLOCK_WORDS: usize = 2 + 2 * COLOURS;
+/// A tile's words: its curves, and per colour a factor (a byte, four to a word), a shift and
+/// an exponent.
+pub(super) const TILE_WORDS: usize = 1 + COLOURS.div_ceil(4) + 2 * COLOURS;
+/// Words of the `state` buffer for a frame of `width` × `height`: the host's, then a block's
+/// words for each [`BLOCK`]-pixel square and the far curves' (as many).
+fn state_words(width: u32, height: u32) -> usize {
+    BLOCKS + (blocks(width, height) + 1) * BLOCK_WORDS
+}
+/// Words of the `moving` buffer: the moving list (two words an entry, at most one a pixel),
+/// then a tile's words for each [`BLOCK`]-pixel square (`scales` writes every one).
+fn moving_words(width: u32, height: u32) -> usize {
+    2 * width as usize * height as usize + blocks(width, height) * TILE_WORDS
+}
+/// The [`BLOCK`]-pixel squares of a frame of `width` × `height`.
+fn blocks(width: u32, height: u32) -> usize {
+    width.div_ceil(BLOCK) as usize * height.div_ceil(BLOCK) as usize
+}
+/// The pixels square of a block and tile, the CPU's [`crate::motion::scatter::config::BLOCK`]
+/// (`BLOCK` in fixed.wgsl).
+pub(super) const BLOCK: u32 = 16;
 pub(super) const OPAQUE: u32 = 1;
 pub(super) const HAS_Z: u32 = 2;
 /// Most workgroups along one dispatch dimension (WebGPU's limit).
@@ -133,6 +161,7 @@ struct CarriedBuffers {
 struct Pipelines {
     reach: wgpu::ComputePipeline,
     reach_fringe: wgpu::ComputePipeline,
+    scales: wgpu::ComputePipeline,
     prepare: wgpu::ComputePipeline,
     accumulate: wgpu::ComputePipeline,
     resolve: wgpu::ComputePipeline,
@@ -176,6 +205,7 @@ impl Pipelines {
         Pipelines {
             reach: pipeline("reach"),
             reach_fringe: pipeline("reach_fringe"),
+            scales: pipeline("scales"),
             prepare: pipeline("prepare"),
             accumulate: pipeline("accumulate"),
             resolve: pipeline("resolve"),
@@ -226,14 +256,14 @@ fn storage_layout(
     })
 }
 
-/// The compiled stages of the beauty alone, their buffers by pixel count, and the carrying
-/// module, compiled the first time a frame brings light layers (a beauty alone never pays
-/// for it).
+/// The compiled stages of the beauty alone, their buffers by frame size (the blocks' words
+/// follow its width and height), and the carrying module, compiled the first time a frame
+/// brings light layers (a beauty alone never pays for it).
 pub(crate) struct ScatterPass {
     order: Order,
     alone: Pipelines,
     layout: wgpu::BindGroupLayout,
-    buffers: Mutex<HashMap<usize, Buffers>>,
+    buffers: Mutex<HashMap<(u32, u32), Buffers>>,
     carrying: OnceLock<CarryingPass>,
 }
 
@@ -273,8 +303,9 @@ impl ScatterPass {
         })
     }
 
-    fn make_buffers(&self, device: &wgpu::Device, pixels: usize) -> Buffers {
+    fn make_buffers(&self, device: &wgpu::Device, (width, height): (u32, u32)) -> Buffers {
         use wgpu::BufferUsages as U;
+        let pixels = width as usize * height as usize;
         let input = U::STORAGE | U::COPY_DST;
         let config = buffer(
             device,
@@ -290,11 +321,18 @@ impl ScatterPass {
         let state = buffer(
             device,
             "scatter state",
-            bytes(STATE_WORDS),
+            bytes(state_words(width, height)),
             input | U::COPY_SRC,
         );
         let indirect = buffer(device, "scatter dispatch", 12, U::INDIRECT | U::COPY_DST);
-        let moving = buffer(device, "scatter moving", bytes(pixels), U::STORAGE);
+        // Two words an entry (the pixel or fringe entry, and its curve's reach), then the
+        // tiles' scales.
+        let moving = buffer(
+            device,
+            "scatter moving",
+            bytes(moving_words(width, height)),
+            U::STORAGE,
+        );
         let sums: Vec<_> = ["scatter sum r", "scatter sum g", "scatter sum b"]
             .into_iter()
             .chain(["scatter sum a", "scatter sum w"])
@@ -439,7 +477,11 @@ impl Gpu {
         layers: &[&Color],
     ) -> Result<(Color, Vec<Vec<f32>>), StageError> {
         let pixels = config.width as usize * config.height as usize;
-        let largest = (16 * pixels as u64).max(carried_sum_bytes(pixels, layers.len()));
+        let size = (config.width, config.height);
+        let largest = (16 * pixels as u64)
+            .max(carried_sum_bytes(pixels, layers.len()))
+            .max(bytes(state_words(config.width, config.height)))
+            .max(bytes(moving_words(config.width, config.height)));
         if largest > self.max_binding() {
             return Err(StageError::TooLarge {
                 bytes: largest,
@@ -470,9 +512,7 @@ impl Gpu {
             std::sync::Arc::new(ScatterPass::new(&self.device, order))
         };
         let mut cache = pass.buffers.lock().unwrap_or_else(|e| e.into_inner());
-        let buffers = kept(&mut cache, &pixels, || {
-            pass.make_buffers(&self.device, pixels)
-        });
+        let buffers = kept(&mut cache, &size, || pass.make_buffers(&self.device, size));
         // The layers' module and buffers, where there are layers.
         let carrying = (!layers.is_empty()).then(|| pass.carrying(&self.device));
         let mut carried_cache =
@@ -533,7 +573,9 @@ impl Gpu {
         }
         // Where every pixel is opaque, alpha sums equal weight sums: four sums, as the CPU.
         let opaque = color.a.as_ref().is_none_or(|a| a.iter().all(|&v| v == 1.0));
-        let mut state = [0u32; STATE_WORDS];
+        let mut state = [0u32; BLOCKS];
+        // `reach` raises the farthest reach from 0.
+        state[MOST_REACH] = 0;
         state[FLAGS] = if opaque { OPAQUE } else { 0 } | if has_z { HAS_Z } else { 0 };
         state[LAYERS] = layers.len() as u32;
         let fringes = fringe.pixels.len();
@@ -557,6 +599,8 @@ impl Gpu {
         for sum in &buffers.sums {
             encoder.clear_buffer(sum, 0, None);
         }
+        // The blocks' words (the host's, before them, are written above).
+        encoder.clear_buffer(&buffers.state, bytes(BLOCKS), None);
         // The stages and what they bind: the beauty alone's, or the carrying module's with
         // the layers' group.
         let (stages, group) = match (carrying, &carried) {
@@ -584,6 +628,11 @@ impl Gpu {
                 compute.set_pipeline(&stages.reach_fringe);
                 compute.dispatch_workgroups(x, y, 1);
             }
+            // One invocation per tile.
+            let tiles = config.width.div_ceil(BLOCK) * config.height.div_ceil(BLOCK);
+            let (x, y) = pass.groups(tiles as usize);
+            compute.set_pipeline(&stages.scales);
+            compute.dispatch_workgroups(x, y, 1);
             compute.set_pipeline(&stages.prepare);
             compute.dispatch_workgroups(1, 1, 1);
         }
@@ -613,7 +662,7 @@ impl Gpu {
         queue.submit([encoder.finish()]);
         if let Err(error) = caught.check() {
             // Buffers that failed are not kept for the next frame.
-            cache.remove(&pixels);
+            cache.remove(&size);
             if let Some(cache) = carried_cache.as_mut() {
                 cache.remove(&pixels);
             }

@@ -2,23 +2,27 @@
 // Guertin & Nowrouzezahrai, *High Performance Non-linear Motion Blur*, §3), stage for stage:
 // `reach` (which pixels move; a list of them) → `prepare` (the accumulate dispatch's size) →
 // `accumulate` (each moving pixel draws its curve into fixed-point sums) → `resolve` (each
-// pixel's output by the normalisation). Why a compute rasteriser with integer atomics, and
-// the f32 form of the geometry: src/gpu/motion/scatter/mod.rs.
+// pixel's output by the normalisation), with `scales` between reach and accumulate (each
+// tile's fixed-point scale, from the curves that can reach it: fixed.wgsl). Why a compute
+// rasteriser with integer atomics, and the f32 form of the geometry:
+// src/gpu/motion/scatter/mod.rs.
 //
 // Bindings, in order: the ScatterConfig uniform; colour (R, G, B, A planes), depth, prev and
 // next (x, y, z planes each) — the CPU's inputs; then `state` (the moving count, the
-// accumulate dispatch, the colour bounds, the host's flags), the list of moving pixels, the
-// five sums (R, G, B, A, weight; two words per pixel), the output colour (four planes), and
-// the fringe (src/motion/scatter/fringe.rs, found on the CPU: three words an entry, the
+// accumulate dispatch, the farthest reach, the host's flags; then each block's curves, reach
+// and colour bounds: fixed.wgsl), `moving` (the list of moving pixels, two words an entry:
+// the pixel, and how far its curve reaches; then each tile's scales: fixed.wgsl), the five
+// sums (R, G, B, A, weight; two words per pixel), the output colour (four planes), and the
+// fringe (src/motion/scatter/fringe.rs, found on the CPU: three words an entry, the
 // still pixel, its moving partner and the partner's coverage of it; `reach_fringe` lists
 // them after the moving pixels and `accumulate` draws each as its partner's curve from the
 // pixel's own centre, its weights times the coverage).
 //
-// Light layers: this file goes into two modules. Its stages call four hooks, `carry_bound`,
-// `carry_pen`, `carry_deposit` and `carry_resolve`, at the points where the CPU handles its
-// carried planes (`Scatter::extra`): alone.wgsl defines them empty (the beauty alone, whose
-// compiled code is then what it was without them), carrying.wgsl carries light layers
-// through the same dispatches with bindings of their own (group 1).
+// Light layers: this file goes into two modules. Its stages call hooks (`carried_layers`,
+// `carried_magnitude`, `carry_pen`, `carry_deposit`, `carry_resolve`) at the points where
+// the CPU handles its carried planes (`Scatter::extra`): alone.wgsl defines them empty (the
+// beauty alone, whose compiled code is then what it was without them), carrying.wgsl
+// carries light layers through the same dispatches with bindings of their own (group 1).
 
 // Keep in sync with `ScatterConfig` in src/motion/scatter/config.rs (its size test and the test
 // in src/gpu/motion/scatter/mod.rs guard the layout: thirteen 4-byte fields).
@@ -61,16 +65,17 @@ override REVERSED: bool = false;
 // `state`'s words (keep in sync with src/gpu/motion/scatter/pass.rs).
 const COUNT: u32 = 0u;
 const DISPATCH: u32 = 1u;
-const BOUND: u32 = 4u;
+// The farthest any block's curves reach (px), which bounds the blocks `scales` looks at.
+const MOST_REACH: u32 = 4u;
 const FLAGS: u32 = 8u;
-// The light layers carried (the host's; 0 for the beauty alone) and their channels' colour
-// bounds (carrying.wgsl), as BOUND holds the beauty's.
+// The light layers carried (the host's; 0 for the beauty alone).
 const LAYERS: u32 = 9u;
 // The fringe's entries (the host's).
 const FRINGES: u32 = 10u;
 // A fringe entry in the moving list: its index with this bit set.
 const FRINGE: u32 = 0x80000000u;
-const CARRIED_BOUND: u32 = 16u;
+// Each block's words, then FAR's (fixed.wgsl).
+const BLOCKS: u32 = 16u;
 // Flags the host sets: every alpha is 1 (alpha sums are the weight sums), and the positions
 // carry depth (z planes).
 const OPAQUE: u32 = 1u;
@@ -86,8 +91,6 @@ const TAU: f32 = 6.2831855;
 const PI: f32 = 3.1415927;
 // Most workgroups along one dispatch dimension (WebGPU's limit); more go to the second.
 const MOST_GROUPS: u32 = 65535u;
-// 2³²: the sums' fixed point has 32 fractional bits.
-const FIXED: f32 = 4294967296.0;
 
 fn pixels() -> u32 {
     return config.width * config.height;
@@ -166,7 +169,8 @@ fn weight(t: f32) -> f32 {
 
 // Stage 1: each pixel's motion test (`Scatter::motion`); a moving pixel joins the list (in
 // whatever order the invocations arrive: the sums are integers, so the order is immaterial)
-// and raises the per-channel bound on |colour| that scales the fixed point.
+// and counts its curve into its block (`count_curve`: its reach and per-channel |colour|,
+// from which `scales` sets the fixed point of the tiles it reaches).
 @compute @workgroup_size(WORKGROUP)
 fn reach(
     @builtin(workgroup_id) group: vec3<u32>,
@@ -178,20 +182,17 @@ fn reach(
     if i >= n {
         return;
     }
-    if !(extent(motion_of(i)) >= STILL) {
+    let m = motion_of(i);
+    if !(extent(m) >= STILL) {
         return;
     }
     let slot = atomicAdd(&state[COUNT], 1u);
-    moving[slot] = i;
-    for (var ch = 0u; ch < 4u; ch++) {
-        // Non-negative floats order as their bits do.
-        atomicMax(&state[BOUND + ch], bitcast<u32>(abs(color[ch * n + i])));
-    }
-    carry_bound(i);
+    moving[2u * slot] = i;
+    moving[2u * slot + 1u] = count_curve(i, i, m);
 }
 
-// Stage 1, the fringe: each entry joins the moving list, marked (its partner moves, so its
-// colour already raised the bounds).
+// Stage 1, the fringe: each entry joins the moving list, marked, and counts its partner's
+// curve into the block of its own pixel, from which it is drawn.
 @compute @workgroup_size(WORKGROUP)
 fn reach_fringe(
     @builtin(workgroup_id) group: vec3<u32>,
@@ -206,8 +207,11 @@ fn reach_fringe(
     // the f32 motion test calls one moving that the CPU's called still, a full list drops
     // the entry (`prepare` and `accumulate` read at most a pixel's worth).
     let slot = atomicAdd(&state[COUNT], 1u);
+    let partner = fringe[3u * k + 1u];
+    let reach = count_curve(fringe[3u * k], partner, motion_of(partner));
     if slot < pixels() {
-        moving[slot] = FRINGE | k;
+        moving[2u * slot] = FRINGE | k;
+        moving[2u * slot + 1u] = reach;
     }
 }
 
@@ -315,97 +319,16 @@ fn path(i: u32, m: Motion, cover: f32) -> u32 {
     return segments;
 }
 
-// v·2³² as a 64-bit two's-complement number (low word, high word): |v| < 2³¹, its fraction
-// rounded to the nearest 2⁻³² (exact where |v| ≥ 2⁻⁹: then the fraction has no finer bits).
-fn fixed(v: f32) -> vec2<u32> {
-    let m = abs(v);
-    let whole = floor(m);
-    var hi = u32(whole);
-    // Exact: m − ⌊m⌋ loses nothing for m ≥ 0, and 2³² is a power of two.
-    let x = (m - whole) * FIXED;
-    var lo: u32;
-    if x < 8388608.0 {
-        lo = u32(x + 0.5);
-    } else {
-        lo = u32(x);
-    }
-    if v < 0.0 {
-        // Negated: −(hi·2³² + lo) = (~hi + [lo = 0])·2³² + (~lo + 1), modulo 2⁶⁴.
-        hi = ~hi + select(0u, 1u, lo == 0u);
-        lo = ~lo + 1u;
-    }
-    return vec2<u32>(lo, hi);
-}
-
-// The low word takes the low part; where it wraps (the value it returns, plus ours, is below
-// it) the high word takes the carry with the high part. Every wrap carries exactly one, so
-// the 64-bit sum is Σ values modulo 2⁶⁴ in any order.
-fn carry(old: u32, lo: u32, hi: u32) -> u32 {
-    return hi + select(0u, 1u, old + lo < old);
-}
-
-// Adds v (in units of the channel's scale) to sum `channel` (0–3 R, G, B, A; 4 the weight)
-// of pixel p.
-fn add(channel: u32, p: u32, v: f32) {
-    let f = fixed(v);
-    if f.x == 0u && f.y == 0u {
-        return;
-    }
-    let low = 2u * p;
-    var high = 0u;
-    switch channel {
-        case 0u: {
-            high = carry(atomicAdd(&sum_r[low], f.x), f.x, f.y);
-            if high != 0u {
-                atomicAdd(&sum_r[low + 1u], high);
-            }
-        }
-        case 1u: {
-            high = carry(atomicAdd(&sum_g[low], f.x), f.x, f.y);
-            if high != 0u {
-                atomicAdd(&sum_g[low + 1u], high);
-            }
-        }
-        case 2u: {
-            high = carry(atomicAdd(&sum_b[low], f.x), f.x, f.y);
-            if high != 0u {
-                atomicAdd(&sum_b[low + 1u], high);
-            }
-        }
-        case 3u: {
-            high = carry(atomicAdd(&sum_a[low], f.x), f.x, f.y);
-            if high != 0u {
-                atomicAdd(&sum_a[low + 1u], high);
-            }
-        }
-        default: {
-            high = carry(atomicAdd(&sum_w[low], f.x), f.x, f.y);
-            if high != 0u {
-                atomicAdd(&sum_w[low + 1u], high);
-            }
-        }
-    }
-}
-
-// The power of two 2^e above every |colour| of a moving pixel in channel `ch` (1 where the
-// channel is all 0): colours times 2^−e lie in (−1, 1), exactly.
-fn scale_exponent(ch: u32) -> i32 {
-    return exponent_above(atomicLoad(&state[BOUND + ch]));
-}
-
-// e of `scale_exponent` for a bound's bits (a non-negative float's).
-fn exponent_above(bits: u32) -> i32 {
-    if bits == 0u {
-        return 0;
-    }
-    return max(i32(bits >> 23u), 1) - 126;
-}
-
-// The drawing of one curve: its colour (times 2^−e per channel), where its pixel is, and
-// whether alpha sums are kept. (The carried layers' colours: `carry_pen`.)
+// The drawing of one curve: its colour (each deposit puts it in the units of its tile,
+// fixed.wgsl), the weight's unit 2^G, where its pixel is, how far from it the curve may
+// deposit (its reach as `reach` counted it: every walk is clipped to it, so no deposit lands
+// in a tile whose scale did not count the curve), and whether alpha sums are kept. (The
+// carried layers' colours: `carry_pen`.)
 struct Pen {
     color: vec4<f32>,
+    weight: f32,
     corner: vec2<i32>,
+    reach: i32,
     opaque: bool,
     tolerance: f32,
 }
@@ -422,15 +345,18 @@ fn deposit(pen: Pen, px: i32, py: i32, d: f32, z: f32) {
     if !(z <= limit) {
         return;
     }
-    add(0u, p, d * pen.color.x);
-    add(1u, p, d * pen.color.y);
-    add(2u, p, d * pen.color.z);
+    // The colour and weight in the units of p's tile.
+    let tile = tile_at((u32(py) / BLOCK) * blocks_across() + u32(px) / BLOCK);
+    let dc = weight_in(d, tile, 0u);
+    add(0u, p, dc * pen.color.x);
+    add(1u, p, dc * pen.color.y);
+    add(2u, p, dc * pen.color.z);
     if !pen.opaque {
-        add(3u, p, d * pen.color.w);
+        add(3u, p, weight_in(d, tile, ALPHA) * pen.color.w);
     }
-    add(4u, p, d);
+    add(4u, p, d * pen.weight);
     // The carried layers' deposits, with the same weight (`Segment::carry`).
-    carry_deposit(p, d);
+    carry_deposit(p, tile, d);
 }
 
 // Draws the segment a → b (relative to the pixel's corner) with weights w0 → w1 and depths
@@ -451,18 +377,20 @@ fn draw(pen: Pen, a_in: vec2<f32>, b_in: vec2<f32>, w0: f32, w1: f32, z0: f32, z
     let swapped = abs(b_in.x - a_in.x) < abs(b_in.y - a_in.y);
     var a = a_in;
     var b = b_in;
-    // The frame, relative to the pixel's corner: columns x0..x1, rows y0..y1.
-    var x0 = -pen.corner.x;
-    var x1 = i32(config.width) - pen.corner.x;
-    var y0 = -pen.corner.y;
-    var y1 = i32(config.height) - pen.corner.y;
+    // The frame within the curve's reach, relative to the pixel's corner: columns x0..x1,
+    // rows y0..y1.
+    let r = pen.reach;
+    var x0 = max(-pen.corner.x, -r);
+    var x1 = min(i32(config.width) - pen.corner.x, r + 1);
+    var y0 = max(-pen.corner.y, -r);
+    var y1 = min(i32(config.height) - pen.corner.y, r + 1);
     if swapped {
         a = a_in.yx;
         b = b_in.yx;
-        x0 = -pen.corner.y;
-        x1 = i32(config.height) - pen.corner.y;
-        y0 = -pen.corner.x;
-        y1 = i32(config.width) - pen.corner.x;
+        x0 = max(-pen.corner.y, -r);
+        x1 = min(i32(config.height) - pen.corner.y, r + 1);
+        y0 = max(-pen.corner.x, -r);
+        y1 = min(i32(config.width) - pen.corner.x, r + 1);
     }
     let dx = b.x - a.x;
     let dy = b.y - a.y;
@@ -546,7 +474,7 @@ fn accumulate(
     }
     // A moving pixel draws its own curve; a fringe entry its partner's (the motion relative
     // to the corner, so the same), from its own pixel, times its coverage.
-    let entry = moving[item];
+    let entry = moving[2u * item];
     var i = entry;
     var own = entry;
     var cover = 1.0;
@@ -560,15 +488,12 @@ fn accumulate(
     if segments == 0u {
         return;
     }
-    let n = pixels();
     let opaque = (atomicLoad(&state[FLAGS]) & OPAQUE) != 0u;
-    var c = vec4<f32>(0.0);
-    for (var ch = 0u; ch < 4u; ch++) {
-        c[ch] = ldexp(color[ch * n + i], -scale_exponent(ch));
-    }
     let pen = Pen(
-        c,
+        own_color(i),
+        two_to(weight_shift()),
         vec2<i32>(i32(own % config.width), i32(own / config.width)),
+        i32(moving[2u * item + 1u]),
         opaque,
         1.0 + config.depth_tolerance,
     );
@@ -579,40 +504,6 @@ fn accumulate(
 }
 
 // ---- resolve -----------------------------------------------------------------------------
-
-// A sum's value, in units of its channel's scale.
-fn decode(p: u32, channel: u32) -> f32 {
-    var lo: u32;
-    var hi: u32;
-    switch channel {
-        case 0u: {
-            lo = atomicLoad(&sum_r[2u * p]);
-            hi = atomicLoad(&sum_r[2u * p + 1u]);
-        }
-        case 1u: {
-            lo = atomicLoad(&sum_g[2u * p]);
-            hi = atomicLoad(&sum_g[2u * p + 1u]);
-        }
-        case 2u: {
-            lo = atomicLoad(&sum_b[2u * p]);
-            hi = atomicLoad(&sum_b[2u * p + 1u]);
-        }
-        case 3u: {
-            lo = atomicLoad(&sum_a[2u * p]);
-            hi = atomicLoad(&sum_a[2u * p + 1u]);
-        }
-        default: {
-            lo = atomicLoad(&sum_w[2u * p]);
-            hi = atomicLoad(&sum_w[2u * p + 1u]);
-        }
-    }
-    return fixed_value(lo, hi);
-}
-
-// The value of a sum's two words (low, high), in units of its channel's scale.
-fn fixed_value(lo: u32, hi: u32) -> f32 {
-    return f32(bitcast<i32>(hi)) + f32(lo) * (1.0 / FIXED);
-}
 
 fn own_color(p: u32) -> vec4<f32> {
     let n = pixels();
@@ -660,14 +551,19 @@ fn resolution(p: u32, total: f32) -> Resolution {
 }
 
 // `Scatter::channel`: one channel of a pixel by `r`, from `sum`, its deposits in units of
-// the channel's scale 2^e, `own`, its input, and `back`, what lies behind (REST only), in
-// the scaled units (so no sum of huge colours overflows f32) and scaled back at the end.
+// the channel's scale 2^e in the pixel's tile, `own`, its input, and `back`, what lies
+// behind (REST only), in the scaled units (so no sum of huge colours overflows f32) and
+// scaled back at the end.
 fn resolved(r: Resolution, sum: f32, e: i32, own: f32, back: f32) -> f32 {
     switch r.kind {
         case PAPER: {
-            // The paper's eq. 4 (w_b is at least 0).
+            // The paper's eq. 4 (w_b is at least 0), its two terms apart: the deposits'
+            // share (|sum| is at most the weight sum, so it stays below 2^e), and the pixel's
+            // own colour's, which is not one of the tile's curves (a still pixel), so 2^−e
+            // need not bound it and it is not scaled at all.
             let wb = config.background_weight;
-            return ldexp((sum + wb * ldexp(own, -e)) / (r.total + wb), e);
+            let total = r.total + wb;
+            return ldexp(sum / total, e) + own * (wb / total);
         }
         case REST: {
             return ldexp(sum, e) + r.rest * back;
@@ -695,7 +591,9 @@ fn resolve(
         return;
     }
     let own = own_color(p);
-    let r = resolution(p, decode(p, 4u));
+    // p's tile, whose units its sums count.
+    let tile = tile_at(block_of(p));
+    let r = resolution(p, decode(p, 4u, weight_shift()));
     var result = own;
     if r.kind != OWN {
         let opaque = (atomicLoad(&state[FLAGS]) & OPAQUE) != 0u;
@@ -708,7 +606,10 @@ fn resolve(
                 // An opaque frame's alpha sums are its weight sums.
                 result[ch] = resolved(r, r.total, 0, own[ch], back[ch]);
             } else {
-                result[ch] = resolved(r, decode(p, ch), scale_exponent(ch), own[ch], back[ch]);
+                // R, G and B share a scale; alpha has its own.
+                let c = select(0u, ALPHA, ch == 3u);
+                let sum = decode(p, ch, shift_of(tile, c));
+                result[ch] = resolved(r, sum, exponent_of(tile, c), own[ch], back[ch]);
             }
         }
     }
@@ -716,5 +617,5 @@ fn resolve(
     out[n + p] = result.y;
     out[2u * n + p] = result.z;
     out[3u * n + p] = result.w;
-    carry_resolve(p, r);
+    carry_resolve(p, tile, r);
 }
