@@ -225,6 +225,31 @@ fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {
 /// 4:2:0, (2, 1) for 4:2:2, (1, 1) for 4:4:4; `None` for a grey or CMYK JPEG, or chroma
 /// sampled unlike the usual forms (both chroma components at 1×1).
 pub fn jpeg_sampling(bytes: &[u8]) -> Option<(u8, u8)> {
+    jpeg_segment(bytes, |marker, body| {
+        // Start of frame: every SOFn but DHT (C4), JPG (C8) and DAC (CC).
+        if !matches!(marker, 0xC0..=0xCF) || matches!(marker, 0xC4 | 0xC8 | 0xCC) {
+            return None;
+        }
+        if body.get(5) != Some(&3) {
+            return Some(None);
+        }
+        let factors = |c: usize| {
+            let hv = *body.get(6 + 3 * c + 1)?;
+            Some((hv >> 4, hv & 0x0F))
+        };
+        let found = (|| Some((factors(0)?, factors(1)?, factors(2)?)))();
+        Some(found.and_then(|(luma, cb, cr)| (cb == (1, 1) && cr == (1, 1)).then_some(luma)))
+    })
+    .flatten()
+}
+
+/// Walks a JPEG's marker segments up to the start of scan, giving `pick` each one's marker and
+/// body (after its length): the first `Some` it answers ends the walk. `None` where no segment
+/// is picked, or the bytes end or break off first.
+pub(super) fn jpeg_segment<T>(
+    bytes: &[u8],
+    mut pick: impl FnMut(u8, &[u8]) -> Option<T>,
+) -> Option<T> {
     let mut at = 2;
     loop {
         while bytes.get(at) == Some(&0xFF) && bytes.get(at + 1) == Some(&0xFF) {
@@ -235,25 +260,14 @@ pub fn jpeg_sampling(bytes: &[u8]) -> Option<(u8, u8)> {
         }
         let marker = *bytes.get(at + 1)?;
         at += 2;
-        if matches!(marker, 0x01 | 0xD0..=0xD7) {
-            continue;
-        }
-        if matches!(marker, 0xD9 | 0xDA) {
-            return None;
+        match marker {
+            0x01 | 0xD0..=0xD7 => continue,
+            0xD9 | 0xDA => return None,
+            _ => {}
         }
         let length = u16::from_be_bytes([*bytes.get(at)?, *bytes.get(at + 1)?]) as usize;
-        // Start of frame: every SOFn but DHT (C4), JPG (C8) and DAC (CC).
-        if matches!(marker, 0xC0..=0xCF) && !matches!(marker, 0xC4 | 0xC8 | 0xCC) {
-            let frame = bytes.get(at..at + length)?;
-            if *frame.get(7)? != 3 {
-                return None;
-            }
-            let factors = |c: usize| {
-                let hv = *frame.get(8 + 3 * c + 1)?;
-                Some((hv >> 4, hv & 0x0F))
-            };
-            let (luma, cb, cr) = (factors(0)?, factors(1)?, factors(2)?);
-            return (cb == (1, 1) && cr == (1, 1)).then_some(luma);
+        if let Some(found) = pick(marker, bytes.get(at + 2..at + length)?) {
+            return Some(found);
         }
         at += length;
     }

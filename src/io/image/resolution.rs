@@ -31,36 +31,21 @@ pub(super) fn resolution(x: (u32, u32), y: (u32, u32), unit: ResolutionUnit) -> 
 
 /// The density a JPEG's JFIF segment gives, from the file's bytes.
 pub(super) fn jfif_density(bytes: &[u8]) -> Option<Resolution> {
-    let mut at = 2;
-    loop {
-        while bytes.get(at) == Some(&0xFF) && bytes.get(at + 1) == Some(&0xFF) {
-            at += 1;
-        }
-        if *bytes.get(at)? != 0xFF {
+    super::meta::jpeg_segment(bytes, |marker, segment| {
+        if marker != 0xE0 || !segment.starts_with(b"JFIF\0") || segment.len() < 12 {
             return None;
         }
-        let marker = *bytes.get(at + 1)?;
-        at += 2;
-        match marker {
-            0x01 | 0xD0..=0xD7 => continue,
-            0xD9 | 0xDA => return None,
-            _ => {}
-        }
-        let length = u16::from_be_bytes([*bytes.get(at)?, *bytes.get(at + 1)?]) as usize;
-        let segment = bytes.get(at + 2..at + length)?;
-        if marker == 0xE0 && segment.starts_with(b"JFIF\0") && segment.len() >= 12 {
-            let unit = match segment[7] {
-                0 => ResolutionUnit::None,
-                1 => ResolutionUnit::Inch,
-                2 => ResolutionUnit::Centimetre,
-                _ => return None,
-            };
-            let x = u16::from_be_bytes([segment[8], segment[9]]) as u32;
-            let y = u16::from_be_bytes([segment[10], segment[11]]) as u32;
-            return resolution((x, 1), (y, 1), unit);
-        }
-        at += length;
-    }
+        let unit = match segment[7] {
+            0 => ResolutionUnit::None,
+            1 => ResolutionUnit::Inch,
+            2 => ResolutionUnit::Centimetre,
+            _ => return Some(None),
+        };
+        let x = u16::from_be_bytes([segment[8], segment[9]]) as u32;
+        let y = u16::from_be_bytes([segment[10], segment[11]]) as u32;
+        Some(resolution((x, 1), (y, 1), unit))
+    })
+    .flatten()
 }
 
 /// The density a PNG's pHYs chunk gives.
