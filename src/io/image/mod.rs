@@ -10,6 +10,7 @@
 //! (unassociated) alpha; shutter works premultiplied, so colour is premultiplied on read and
 //! divided back on write.
 
+mod jpeg;
 mod meta;
 mod profile;
 mod resolution;
@@ -25,7 +26,8 @@ use image::{ColorType, DynamicImage, ImageDecoder, ImageReader, Limits};
 
 use crate::frame::{Photo, Plane};
 
-pub use meta::{jpeg_sampling, read_photo};
+pub use jpeg::sampling as jpeg_sampling;
+pub use meta::read_photo;
 pub use profile::{chromaticities, profile_of, Transfer};
 pub use upright::exif_orientation;
 pub use write::{goes_out_grey, jpeg_left_out, out_of_range, write_photo, PhotoOptions};

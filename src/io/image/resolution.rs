@@ -31,7 +31,7 @@ pub(super) fn resolution(x: (u32, u32), y: (u32, u32), unit: ResolutionUnit) -> 
 
 /// The density a JPEG's JFIF segment gives, from the file's bytes.
 pub(super) fn jfif_density(bytes: &[u8]) -> Option<Resolution> {
-    super::meta::jpeg_segment(bytes, |marker, segment| {
+    super::jpeg::segment(bytes, |marker, segment| {
         if marker != 0xE0 || !segment.starts_with(b"JFIF\0") || segment.len() < 12 {
             return None;
         }
