@@ -256,6 +256,9 @@ pub struct Carried {
     /// (`io::channels`): colour channels are blurred with the beauty's weights, data channels
     /// come back as they were read.
     pub channels: Vec<CarriedChannel>,
+    /// The beauty is a stack's merge of its layers (`stack::merge`): a multi-part EXR output
+    /// gives it a part of its own (`io::exr_parts`).
+    pub merged: bool,
 }
 
 /// What a carried channel holds ([`crate::io::channels`] sorts them).

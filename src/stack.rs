@@ -388,6 +388,7 @@ pub fn merge(layers: Vec<Frame>) -> Frame {
     merged.color = Some(color);
     merged.carried.beauty = MERGED.map(String::from).to_vec();
     merged.carried.beauty_stored = merged.carried.beauty.clone();
+    merged.carried.merged = true;
     // A channel of the file under the merged beauty's names is the one it replaces.
     channels.retain(|c| !MERGED.contains(&c.name.as_str()));
     merged.carried.channels = channels;

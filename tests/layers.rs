@@ -623,6 +623,77 @@ fn one_view_layer_of_several_leaves_the_others_as_they_came() {
     );
 }
 
+/// Blender 5 writes view layers as a multi-part file, a part a pass (`FG.Combined` holding
+/// `FG.Combined.R`, …), and reads a part's channels that lack a layer name as the part's
+/// (its reader puts the part's name before them). The merged beauty (`R`, `G`, `B`, `A`) in the
+/// `FG.Combined` part made Blender 5.2 see an eight-channel Combined pass in FG and lose FG's
+/// Combined altogether; it goes out in a part of its own, first, under Blender's name for the
+/// composite (`Composite.Combined`), and comes out the same as from the single-part file.
+#[test]
+fn a_multi_part_stack_gives_the_merged_beauty_a_part_of_its_own() {
+    let dir = tempfile::tempdir().unwrap();
+    let single = dir.path().join("single.exr");
+    let layers = vec![foreground_moving(-8.0, 1e10, 0.0), background()];
+    write(&single, layers.clone());
+    let multi = dir.path().join("multi.exr");
+    let mut parts = Vec::new();
+    for (layer, name) in layers.into_iter().zip(["FG", "BG"]) {
+        for pass in ["Combined", "Depth", "Vector"] {
+            let prefix = format!("{name}.{pass}.");
+            let channels: Vec<_> = (layer.iter())
+                .filter(|(n, _)| n.starts_with(&prefix))
+                .cloned()
+                .collect();
+            let part = format!("{name}.{pass}");
+            parts.push(Part {
+                name: Some(Box::leak(part.into_boxed_str())),
+                view: None,
+                multi_view: None,
+                channels,
+            });
+        }
+    }
+    write_parts(&multi, (W, H), parts);
+    let args = ["--algorithm", "reconstruct", "--layers", "FG,BG"];
+    let from_single = run("blur", &single, dir.path().join("s.exr"), &args);
+    let out = dir.path().join("m.exr");
+    run("blur", &multi, out.clone(), &args);
+    let stored = read_exr_layers(&out);
+    let names = |l: &exr::image::Layer<exr::image::AnyChannels<exr::image::FlatSamples>>| {
+        let part = l.attributes.layer_name.as_ref().map(|t| t.to_string());
+        let channels: Vec<String> = (l.channel_data.list.iter())
+            .map(|c| c.name.to_string())
+            .collect();
+        (part.unwrap_or_default(), channels)
+    };
+    let (first, channels) = names(&stored[0]);
+    assert_eq!(first, "Composite.Combined");
+    assert_eq!(channels, ["A", "B", "G", "R"]);
+    let (_, fg) = names(part_named(&stored, "FG.Combined"));
+    assert_eq!(
+        fg,
+        [
+            "FG.Combined.A",
+            "FG.Combined.B",
+            "FG.Combined.G",
+            "FG.Combined.R"
+        ]
+    );
+    // Every other part as it came: a part a pass, each named as its channels are.
+    for layer in &stored[1..] {
+        let (part, channels) = names(layer);
+        assert!(
+            channels.iter().all(|c| c.starts_with(&format!("{part}."))),
+            "{part}: {channels:?}"
+        );
+    }
+    assert_eq!(stored.len(), 7);
+    let merged = read_exr_reference(&out);
+    for c in ["R", "G", "B", "A", "FG.Combined.R", "BG.Combined.G"] {
+        assert_same_bits(channel(&merged, c), channel(&from_single, c), c);
+    }
+}
+
 /// Each layer's light AOVs are blurred with that layer's own weights (issue 29 per layer): an
 /// AOV equal to its layer's colour comes out equal to its layer's blurred colour, for each
 /// layer, and the merge is made of the layers' colours alone.

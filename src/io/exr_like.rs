@@ -59,6 +59,8 @@ pub const DEFAULT_COMPRESSION: Compression = Compression::ZIP16;
 /// its data window (in the file's coordinates) and its channels, each of the window's size.
 pub struct OutPart<'a> {
     pub input: Option<&'a Header>,
+    /// The part's name where it is not the input part's.
+    pub name: Option<String>,
     pub data: Window,
     pub channels: Vec<OutChannel>,
 }
@@ -116,8 +118,10 @@ pub fn write_like(
     // The parts' own names, which a data part's name may not take.
     let mut taken: Vec<String> = parts
         .iter()
-        .filter_map(|p| p.input?.own_attributes.layer_name.as_ref())
-        .map(|n| n.to_string())
+        .filter_map(|p| {
+            (p.name.clone())
+                .or_else(|| Some(p.input?.own_attributes.layer_name.as_ref()?.to_string()))
+        })
         .collect();
     // Each part, and the lossless part its data needs under DWA.
     let mut layers = Vec::new();
@@ -127,7 +131,10 @@ pub fn write_like(
             .channels
             .into_iter()
             .partition(|c| !(is_dwa(encoding.compression) && c.class.is_data()));
-        let attributes = attributes_like(part.input, part.data, record, views);
+        let mut attributes = attributes_like(part.input, part.data, record, views);
+        if let Some(name) = &part.name {
+            attributes.layer_name = Some(latin1(name));
+        }
         let data_encoding = Encoding {
             compression: DEFAULT_COMPRESSION,
             ..encoding

@@ -4,6 +4,7 @@
 pub mod channels;
 pub mod exr;
 pub mod exr_like;
+pub mod exr_parts;
 pub mod file;
 pub mod image;
 pub mod input;

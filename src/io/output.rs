@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use crate::error::{Problem, ProblemKind, WriteFailure};
-use crate::frame::{Frame, LayerClass, Photo, Plane, Window, Windows};
+use crate::frame::{Frame, Photo, Plane, Windows};
 use crate::io::exr::{self as exr_io, ExrOptions};
 use crate::io::exr_like::{self, ExrOutput};
 use crate::io::file::{FileInfo, FileKind};
@@ -632,7 +632,7 @@ pub fn write_views(
                 chromaticities: photo.and_then(photo_chromaticities),
                 ..options.exr
             };
-            let parts = exr_parts(views, &headers);
+            let parts = crate::io::exr_parts::exr_parts(views, &headers);
             write_atomic_classed(path, |writer| {
                 exr_like::write_like(writer, display, parts, &exr, &options.record, every)
             })
@@ -683,114 +683,4 @@ pub fn write_views(
     // says so (a full disk, a timeout: exit 75), else for good (a folder made in the file's
     // place, permissions changed: exit 1).
     .map_err(|failure| Problem::new(failure.kind(), path, failure.detail).frame(frame_number))
-}
-
-/// The parts of an EXR output of `views` (see [`write_views`]), made like `headers`, the
-/// colour file's (one part when it is not an EXR); a part none of whose channels were
-/// carried is left out.
-fn exr_parts(
-    views: Vec<Frame>,
-    headers: &[exr::meta::header::Header],
-) -> Vec<exr_like::OutPart<'_>> {
-    let every = views.len() > 1;
-    let count = headers.len().max(1);
-    let mut parts: Vec<Vec<exr_like::OutChannel>> = vec![Vec::new(); count];
-    let mut windows: Vec<Option<Window>> = vec![None; count];
-    for (v, frame) in views.into_iter().enumerate() {
-        let carried = frame.carried;
-        let color = frame.color.expect("checked");
-        let data = Window {
-            x: frame.windows.data_origin.0,
-            y: frame.windows.data_origin.1,
-            width: frame.width,
-            height: frame.height,
-        };
-        // The beauty under the names it came with (as stored, view and all, beside other
-        // views), then every channel carried beside it.
-        let came_as = if every {
-            &carried.beauty_stored
-        } else {
-            &carried.beauty
-        };
-        // Grey read as colour (a luminance file's `Y`, R = G = B = Y) names one channel three
-        // times: it goes out as that one channel, so a luminance file comes back a luminance
-        // file, where R, G and B are still equal (the blur, channel by channel in the same
-        // order, keeps them so; were they not, R, G and B go out, as a picture's grey does).
-        let distinct = |names: &[String]| (1..names.len()).all(|i| !names[..i].contains(&names[i]));
-        let grey = came_as.len() >= 3
-            && came_as[1] == came_as[0]
-            && came_as[2] == came_as[0]
-            && color.g == color.r
-            && color.b == color.r;
-        let mut names = match came_as.len() {
-            _ if grey => vec![came_as[0].clone()],
-            3 | 4 if distinct(came_as) => came_as.clone(),
-            _ => ["R", "G", "B"].map(String::from).to_vec(),
-        };
-        // An alpha the colour file had not goes under the usual name, beside a view's
-        // beauty in its layer (`right.A` beside `right.R`).
-        if names.len() == 3 || grey {
-            let alpha = match names[0].rsplit_once('.') {
-                Some((layer, _)) if every => format!("{layer}.A"),
-                _ => "A".to_string(),
-            };
-            names.push(alpha);
-        }
-        let mut planes = if grey {
-            vec![color.r]
-        } else {
-            vec![color.r, color.g, color.b]
-        };
-        planes.extend(color.a);
-        let part = carried.colour_part.min(count - 1);
-        windows[part].get_or_insert(data);
-        parts[part].extend(names.into_iter().zip(planes).map(|(name, plane)| {
-            exr_like::OutChannel {
-                name,
-                plane,
-                class: LayerClass::Colour,
-                exact: None,
-            }
-        }));
-        for c in carried.channels {
-            // The channels of no view are each view's: written once.
-            if every && c.shared && v > 0 {
-                continue;
-            }
-            let part = c.part.min(count - 1);
-            // (A part passed through at its own window holds no channel of the frame's.)
-            windows[part].get_or_insert(c.window.unwrap_or(data));
-            parts[part].push(exr_like::OutChannel {
-                name: if every { c.stored } else { c.name },
-                plane: c.plane,
-                class: c.class,
-                exact: c.exact,
-            });
-        }
-    }
-    let mut out: Vec<exr_like::OutPart> = parts
-        .into_iter()
-        .zip(windows)
-        .enumerate()
-        .filter_map(|(p, (channels, data))| {
-            Some(exr_like::OutPart {
-                input: headers.get(p),
-                data: data?,
-                channels,
-            })
-        })
-        .collect();
-    // A part of no view may not come first in a multi-view file: the first part of a view
-    // goes first (its view is the default).
-    if every {
-        let viewed = |p: &exr_like::OutPart| {
-            p.input
-                .is_some_and(|h| h.own_attributes.view_name.is_some())
-        };
-        if let Some(first) = out.iter().position(viewed) {
-            let part = out.remove(first);
-            out.insert(0, part);
-        }
-    }
-    out
 }

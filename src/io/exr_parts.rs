@@ -1,0 +1,157 @@
+//! Which part of an EXR output each channel of a frame goes to (`output` writes them through
+//! [`exr_like`]): a part for each part of the colour file, holding what came from it, the
+//! beauty in the colour's part. A stack's merged beauty (`Carried::merged`) in a multi-part
+//! file goes in a part of its own, first, named `Composite.Combined` (Blender's name for the
+//! composite): Blender 5 writes a view layer's passes a part each (`FG.Combined` holding
+//! `FG.Combined.R`, …) and reads a part's channels that lack a layer name as the part's, so
+//! `R`, `G`, `B`, `A` beside `FG.Combined.R` made it see an eight-channel Combined pass in FG
+//! (and drop FG's Combined). A one-part output keeps them beside the layers, as before: there
+//! Blender reads the bare channels as no layer's.
+
+use crate::frame::{Frame, LayerClass, Window};
+use crate::io::exr_like;
+
+/// The name of a stack's merged beauty's own part.
+pub const MERGED_PART: &str = "Composite.Combined";
+
+/// The parts of an EXR output of `views` (see `output::write_views`), made like `headers`, the
+/// colour file's (one part when it is not an EXR); a part none of whose channels were
+/// carried is left out.
+pub fn exr_parts(
+    views: Vec<Frame>,
+    headers: &[exr::meta::header::Header],
+) -> Vec<exr_like::OutPart<'_>> {
+    let every = views.len() > 1;
+    let count = headers.len().max(1);
+    // A stack's merged beauty in a multi-part file: a part of its own, kept at `count` until
+    // it is put first.
+    let own_part = count > 1 && views.first().is_some_and(|f| f.carried.merged);
+    let colour_part = views
+        .first()
+        .map_or(0, |f| f.carried.colour_part.min(count - 1));
+    let mut parts: Vec<Vec<exr_like::OutChannel>> = vec![Vec::new(); count + own_part as usize];
+    let mut windows: Vec<Option<Window>> = vec![None; count + own_part as usize];
+    for (v, frame) in views.into_iter().enumerate() {
+        let carried = frame.carried;
+        let color = frame.color.expect("checked");
+        let data = Window {
+            x: frame.windows.data_origin.0,
+            y: frame.windows.data_origin.1,
+            width: frame.width,
+            height: frame.height,
+        };
+        // The beauty under the names it came with (as stored, view and all, beside other
+        // views), then every channel carried beside it.
+        let came_as = if every {
+            &carried.beauty_stored
+        } else {
+            &carried.beauty
+        };
+        // Grey read as colour (a luminance file's `Y`, R = G = B = Y) names one channel three
+        // times: it goes out as that one channel, so a luminance file comes back a luminance
+        // file, where R, G and B are still equal (the blur, channel by channel in the same
+        // order, keeps them so; were they not, R, G and B go out, as a picture's grey does).
+        let distinct = |names: &[String]| (1..names.len()).all(|i| !names[..i].contains(&names[i]));
+        let grey = came_as.len() >= 3
+            && came_as[1] == came_as[0]
+            && came_as[2] == came_as[0]
+            && color.g == color.r
+            && color.b == color.r;
+        let mut names = match came_as.len() {
+            _ if grey => vec![came_as[0].clone()],
+            3 | 4 if distinct(came_as) => came_as.clone(),
+            _ => ["R", "G", "B"].map(String::from).to_vec(),
+        };
+        // An alpha the colour file had not goes under the usual name, beside a view's
+        // beauty in its layer (`right.A` beside `right.R`).
+        if names.len() == 3 || grey {
+            let alpha = match names[0].rsplit_once('.') {
+                Some((layer, _)) if every => format!("{layer}.A"),
+                _ => "A".to_string(),
+            };
+            names.push(alpha);
+        }
+        let mut planes = if grey {
+            vec![color.r]
+        } else {
+            vec![color.r, color.g, color.b]
+        };
+        planes.extend(color.a);
+        let part = if own_part {
+            count
+        } else {
+            carried.colour_part.min(count - 1)
+        };
+        windows[part].get_or_insert(data);
+        parts[part].extend(names.into_iter().zip(planes).map(|(name, plane)| {
+            exr_like::OutChannel {
+                name,
+                plane,
+                class: LayerClass::Colour,
+                exact: None,
+            }
+        }));
+        for c in carried.channels {
+            // The channels of no view are each view's: written once.
+            if every && c.shared && v > 0 {
+                continue;
+            }
+            let part = c.part.min(count - 1);
+            // (A part passed through at its own window holds no channel of the frame's.)
+            windows[part].get_or_insert(c.window.unwrap_or(data));
+            parts[part].push(exr_like::OutChannel {
+                name: if every { c.stored } else { c.name },
+                plane: c.plane,
+                class: c.class,
+                exact: c.exact,
+            });
+        }
+    }
+    let mut out: Vec<exr_like::OutPart> = parts
+        .into_iter()
+        .zip(windows)
+        .enumerate()
+        .filter_map(|(p, (channels, data))| {
+            let merged = p == count;
+            Some(exr_like::OutPart {
+                // The merged part is made like the beauty's, under a name of its own.
+                input: headers.get(if merged { colour_part } else { p }),
+                name: merged.then(|| merged_part_name(headers)),
+                data: data?,
+                channels,
+            })
+        })
+        .collect();
+    if own_part {
+        if let Some(merged) = out.pop() {
+            out.insert(0, merged);
+        }
+    }
+    // A part of no view may not come first in a multi-view file: the first part of a view
+    // goes first (its view is the default).
+    if every {
+        let viewed = |p: &exr_like::OutPart| {
+            p.input
+                .is_some_and(|h| h.own_attributes.view_name.is_some())
+        };
+        if let Some(first) = out.iter().position(viewed) {
+            let part = out.remove(first);
+            out.insert(0, part);
+        }
+    }
+    out
+}
+
+/// [`MERGED_PART`], or where the file has a part of that name already, the first of
+/// `Composite.Combined2`, … it has not.
+fn merged_part_name(headers: &[exr::meta::header::Header]) -> String {
+    let taken = |name: &str| {
+        headers
+            .iter()
+            .any(|h| (h.own_attributes.layer_name.as_ref()).is_some_and(|n| n == name))
+    };
+    std::iter::once(MERGED_PART.to_string())
+        .chain((2..).map(|k| format!("{MERGED_PART}{k}")))
+        .find(|name| !taken(name))
+        .expect("an endless list of names holds one not taken")
+}
