@@ -694,6 +694,67 @@ fn a_multi_part_stack_gives_the_merged_beauty_a_part_of_its_own() {
     }
 }
 
+/// Under DWA the data goes to lossless parts of its own. Blender reads a part's channels as
+/// named by the part unless their names begin with it (`rgba` + `FG.Combined.R` is its layer
+/// `rgba.FG`), so from a one-part file of view layers (Blender 4 and before) each part is
+/// named by what its channels' names begin with: the beauty's `FG.Combined`, and a data part a
+/// view layer (`FG`: its depth and vectors; `BG`, another layer as it came) — not `rgba` and
+/// `data`, which made Blender 5.2 list the layers `rgba.FG`, `data.FG` and `data.BG`.
+#[test]
+fn a_dwa_output_of_view_layers_names_each_part_as_its_channels_begin() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("layers.exr");
+    write(
+        &input,
+        vec![foreground_moving(-8.0, 1e10, 0.0), background()],
+    );
+    let out = dir.path().join("dwa.exr");
+    let args = ["--layer", "FG", "--compression", "dwaa"];
+    run("blur", &input, out.clone(), &args);
+    let stored = read_exr_layers(&out);
+    let parts: Vec<(String, Vec<String>)> = (stored.iter())
+        .map(|l| {
+            let part = l.attributes.layer_name.as_ref().map(|t| t.to_string());
+            let channels = (l.channel_data.list.iter())
+                .map(|c| c.name.to_string())
+                .collect();
+            (part.unwrap_or_default(), channels)
+        })
+        .collect();
+    let names: Vec<&str> = parts.iter().map(|(p, _)| p.as_str()).collect();
+    // The data parts in the order of their first channels in the file (sorted by name).
+    assert_eq!(names, ["FG.Combined", "BG", "FG"], "{parts:?}");
+    for (part, channels) in &parts {
+        assert!(
+            channels.iter().all(|c| c.starts_with(&format!("{part}."))),
+            "{part}: {channels:?}"
+        );
+    }
+    // The data as it came, bit for bit.
+    let (came, went) = (read_exr_reference(&input), read_exr_reference(&out));
+    for c in ["FG.Depth.Z", "FG.Vector.X", "BG.Combined.R", "BG.Vector.W"] {
+        assert_same_bits(channel(&went, c), channel(&came, c), c);
+    }
+    // A stack: the merged beauty in a part of its own, named as from a multi-part file, then
+    // each layer's beauty, then each layer's data.
+    let out = dir.path().join("stack.exr");
+    let args = ["--layers", "FG,BG", "--compression", "dwaa"];
+    run("blur", &input, out.clone(), &args);
+    let names: Vec<String> = (read_exr_layers(&out).iter())
+        .map(|l| l.attributes.layer_name.as_ref().unwrap().to_string())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "Composite.Combined",
+            "FG.Combined",
+            "BG.Combined",
+            "FG",
+            "BG"
+        ]
+    );
+}
+
 /// Each layer's light AOVs are blurred with that layer's own weights (issue 29 per layer): an
 /// AOV equal to its layer's colour comes out equal to its layer's blurred colour, for each
 /// layer, and the merge is made of the layers' colours alone.

@@ -61,6 +61,9 @@ pub struct OutPart<'a> {
     pub input: Option<&'a Header>,
     /// The part's name where it is not the input part's.
     pub name: Option<String>,
+    /// The name of the part its channels of no view layer go to where it is split by view
+    /// layer (a multi-part output from a part of no name), when not the usual `rgba`.
+    pub bare: Option<&'static str>,
     pub data: Window,
     pub channels: Vec<OutChannel>,
 }
@@ -124,6 +127,17 @@ pub fn write_like(
         })
         .collect();
     // Each part, and the lossless part its data needs under DWA.
+    let goes_apart = |part: &OutPart, c: &OutChannel| {
+        is_dwa(encoding_like(part.input, output).compression) && c.class.is_data()
+    };
+    // Whether the file will have several parts: then a part that has no name of its own and
+    // holds channels of several view layers is split by layer, so each part can be named by
+    // what its channels begin with (see `common_prefix`).
+    let multi_part = parts.len() > 1
+        || parts.iter().any(|p| {
+            p.channels.iter().any(|c| goes_apart(p, c))
+                && p.channels.iter().any(|c| !goes_apart(p, c))
+        });
     let mut layers = Vec::new();
     for part in parts {
         let encoding = encoding_like(part.input, output);
@@ -146,15 +160,36 @@ pub fn write_like(
             }
             continue;
         }
-        let data_part = (!apart.is_empty()).then(|| {
+        // The kept channels' parts are named first (a colour group `FG` before a data part of
+        // the same name), each by what its channels begin with where the file will have
+        // several parts.
+        if multi_part && attributes.layer_name.is_none() {
+            for (layer, group) in by_view_layer(kept) {
+                let usual = match part.bare {
+                    Some(bare) if layer.is_none() => bare,
+                    _ if layers.is_empty() => "rgba",
+                    _ => "part",
+                };
+                let name = fresh(common_prefix(&group).as_deref().unwrap_or(usual), &taken);
+                taken.push(name.clone());
+                let mut attributes = attributes.clone();
+                attributes.layer_name = Some(latin1(&name));
+                layers.push((attributes, encoding, part.input, part.data, group));
+            }
+        } else {
+            layers.push((attributes.clone(), encoding, part.input, part.data, kept));
+        }
+        for (layer, group) in by_view_layer(apart) {
             let mut data_attributes = attributes.clone();
-            let name = data_part_name(attributes.layer_name.as_ref(), &taken);
+            let prefix = layer.and_then(|_| common_prefix(&group));
+            let name = match prefix {
+                Some(prefix) if !taken.contains(&prefix) => prefix,
+                _ => data_part_name(attributes.layer_name.as_ref(), &taken),
+            };
             taken.push(name.clone());
             data_attributes.layer_name = Some(latin1(&name));
-            (data_attributes, data_encoding, part.input, part.data, apart)
-        });
-        layers.push((attributes, encoding, part.input, part.data, kept));
-        layers.extend(data_part);
+            layers.push((data_attributes, data_encoding, part.input, part.data, group));
+        }
     }
     let several = layers.len() > 1;
     // A part in random order (RANDOM_Y) is written in increasing order, and then declared
@@ -172,7 +207,8 @@ pub fn write_like(
                 if random_y[i] {
                     encoding.line_order = LineOrder::Increasing;
                 }
-                // Every part of a multi-part file has a name.
+                // Every part of a multi-part file has a name (given above to every part that
+                // had none, but a file's one part of data alone under DWA).
                 if several && attributes.layer_name.is_none() {
                     attributes.layer_name = Some(Text::from(if i == 0 { "rgba" } else { "part" }));
                 }
@@ -236,6 +272,49 @@ fn data_part_name(part: Option<&Text>, taken: &[String]) -> String {
         .chain((2..).map(|k| format!("{fallback}{k}")))
         .find(|name| !taken.contains(name))
         .expect("an endless list of names holds one not taken")
+}
+
+/// Channels in groups, one for those of no view layer (first), then one a view layer in
+/// the order of its first channel: Blender names a channel `layer.pass.channel`, so a name
+/// of three parts or more is of the layer its first part names.
+fn by_view_layer(channels: Vec<OutChannel>) -> Vec<(Option<String>, Vec<OutChannel>)> {
+    let mut groups: Vec<(Option<String>, Vec<OutChannel>)> = Vec::new();
+    for channel in channels {
+        let parts: Vec<&str> = channel.name.split('.').collect();
+        let layer = (parts.len() >= 3).then(|| parts[0].to_string());
+        match groups.iter_mut().find(|(l, _)| *l == layer) {
+            Some((_, group)) => group.push(channel),
+            None if layer.is_none() => groups.insert(0, (None, vec![channel])),
+            None => groups.push((layer, vec![channel])),
+        }
+    }
+    groups
+}
+
+/// `name`, or where a part has it already, the first of `name2`, `name3`, … none has.
+fn fresh(name: &str, taken: &[String]) -> String {
+    std::iter::once(name.to_string())
+        .chain((2..).map(|k| format!("{name}{k}")))
+        .find(|n| !taken.contains(n))
+        .expect("an endless list of names holds one not taken")
+}
+
+/// The longest run of whole leading name parts every channel's name begins with, before a
+/// part of its own (`FG.Combined` of `FG.Combined.R` and `FG.Combined.A`; `FG` of those and
+/// `FG.Depth.Z`); `None` where they share none.
+fn common_prefix(channels: &[OutChannel]) -> Option<String> {
+    let mut names = channels.iter().map(|c| c.name.as_str());
+    let first = names.next()?;
+    let mut prefix: Vec<&str> = first.split('.').collect();
+    prefix.pop();
+    for name in names {
+        let parts: Vec<&str> = name.split('.').collect();
+        let shared = (prefix.iter().zip(&parts[..parts.len() - 1]))
+            .take_while(|(a, b)| a == b)
+            .count();
+        prefix.truncate(shared);
+    }
+    (!prefix.is_empty()).then(|| prefix.join("."))
 }
 
 fn is_dwa(compression: Compression) -> bool {

@@ -6,7 +6,9 @@
 //! `FG.Combined.R`, …) and reads a part's channels that lack a layer name as the part's, so
 //! `R`, `G`, `B`, `A` beside `FG.Combined.R` made it see an eight-channel Combined pass in FG
 //! (and drop FG's Combined). A one-part output keeps them beside the layers, as before: there
-//! Blender reads the bare channels as no layer's.
+//! Blender reads the bare channels as no layer's; where DWA's lossless data parts make that
+//! output multi-part, `exr_like` splits its one part by view layer and the merged beauty's
+//! part is named the same (`OutPart::bare`).
 
 use crate::frame::{Frame, LayerClass, Window};
 use crate::io::exr_like;
@@ -25,7 +27,8 @@ pub fn exr_parts(
     let count = headers.len().max(1);
     // A stack's merged beauty in a multi-part file: a part of its own, kept at `count` until
     // it is put first.
-    let own_part = count > 1 && views.first().is_some_and(|f| f.carried.merged);
+    let merged_beauty = views.first().is_some_and(|f| f.carried.merged);
+    let own_part = count > 1 && merged_beauty;
     let colour_part = views
         .first()
         .map_or(0, |f| f.carried.colour_part.min(count - 1));
@@ -117,6 +120,9 @@ pub fn exr_parts(
                 // The merged part is made like the beauty's, under a name of its own.
                 input: headers.get(if merged { colour_part } else { p }),
                 name: merged.then(|| merged_part_name(headers)),
+                // A merged beauty in a one-part file's one part: its own name should the part
+                // be split (DWA, its data apart).
+                bare: (count == 1 && merged_beauty).then_some(MERGED_PART),
                 data: data?,
                 channels,
             })
