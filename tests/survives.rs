@@ -2005,3 +2005,37 @@ fn a_picture_larger_than_the_limit_is_refused_before_anything_is_written() {
         "the output folder was made"
     );
 }
+
+/// `info` names a tiled part's RANDOM_Y line order `random`, on the plate and on the output
+/// that keeps it, in text and JSON (QA: it said `unspecified`, the exr crate's name for it,
+/// which reads as "not given").
+#[test]
+fn info_names_a_random_line_order_random() {
+    let dir = plate_frame(Blocks::Tiles(Vec2(16, 8)), LineOrder::Unspecified);
+    blur(dir.path(), "out.exr", &[]);
+    for file in ["color.exr", "out.exr"] {
+        let path = s(&dir.path().join(file));
+        let o = shutter(&["info", &path]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let text = crate::support::stdout(&o);
+        let line = text
+            .lines()
+            .find(|l| l.trim_start().starts_with("lineOrder"))
+            .unwrap_or_else(|| panic!("{file}: no lineOrder in:\n{text}"));
+        assert_eq!(
+            line.split_whitespace().collect::<Vec<_>>(),
+            ["lineOrder", "lineOrder", "random"],
+            "{file}"
+        );
+        let o = shutter(&["info", &path, "--json"]);
+        let doc: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let attributes = doc["files"][0]["attributes"][0]["attributes"]
+            .as_array()
+            .unwrap();
+        let order = attributes
+            .iter()
+            .find(|a| a["name"] == "lineOrder")
+            .unwrap();
+        assert_eq!(order["value"], "random", "{file}");
+    }
+}

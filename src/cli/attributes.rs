@@ -82,8 +82,15 @@ fn value(value: &AttributeValue) -> (&'static str, String, Value) {
             ("compression", name.to_string(), json!(name))
         }
         A::LineOrder(o) => {
-            let name = format!("{o:?}").to_lowercase();
-            ("lineOrder", name.clone(), json!(name))
+            // OpenEXR's INCREASING_Y, DECREASING_Y and RANDOM_Y (which the exr crate calls
+            // `Unspecified`: a tiled part whose tiles come in any order).
+            use exr::meta::attribute::LineOrder as L;
+            let name = match o {
+                L::Increasing => "increasing",
+                L::Decreasing => "decreasing",
+                L::Unspecified => "random",
+            };
+            ("lineOrder", name.to_string(), json!(name))
         }
         A::TimeCode(t) => {
             let sep = if t.drop_frame { ';' } else { ':' };
