@@ -1,6 +1,6 @@
 //! What a photo's own tags say of the output, read back by exiftool (skipped with a note
-//! where it is not installed, unless SHUTTER_REQUIRE_TOOLS=1): the EXIF of a photo turned
-//! upright describes the upright pixels (its dimensions, its per-axis resolutions, no
+//! where it is not installed, unless SHUTTER_REQUIRE_TOOLS=1): the EXIF and XMP of a photo
+//! turned upright describe the upright pixels (its dimensions, its per-axis resolutions, no
 //! thumbnail of the unturned view).
 
 use std::path::Path;
@@ -447,5 +447,74 @@ fn a_pngs_srgb_or_iccp_chunk_wins_over_its_gama() {
         assert_same_pixels(&path("_out.png"), &path("_alone_out.png"), &what);
         let (_, _, srgb, iccp) = png_colour_chunks(&path("_out.png"));
         assert_eq!((srgb, iccp), (name == "srgb", name == "iccp"), "{name}");
+    }
+}
+
+/// The XMP of a photo turned upright by a quarter turn says the upright size too, as its
+/// EXIF does (QA: after orientation 6 the XMP's `exif:PixelXDimension`/`PixelYDimension` and
+/// `tiff:ImageWidth`/`ImageLength` still gave the stored size): each axis's value goes with
+/// its axis, and so do the XMP's X and Y resolutions. Turned half a turn (orientation 3), the
+/// axes stay where they were. Read back by exiftool from a JPEG, a PNG and a TIFF.
+#[test]
+fn the_xmp_of_a_photo_turned_upright_says_the_upright_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    let (sw, sh) = (48u32, 32u32);
+    let xmp = |orientation: &str| {
+        [
+            format!("-XMP-tiff:Orientation#={orientation}"),
+            // exiftool's names of exif:PixelXDimension, PixelYDimension and tiff:ImageLength.
+            "-XMP-exif:ExifImageWidth=48".into(),
+            "-XMP-exif:ExifImageHeight=32".into(),
+            "-XMP-tiff:ImageWidth=48".into(),
+            "-XMP-tiff:ImageHeight=32".into(),
+            "-XMP-tiff:XResolution=300".into(),
+            "-XMP-tiff:YResolution=150".into(),
+            format!("-Orientation#={orientation}"),
+        ]
+    };
+    // (orientation, the upright size's velocity map, what the XMP then says: width, height,
+    // x and y resolution).
+    let cases = [
+        (6, (32, 48), [32, 48, 150, 300]),
+        (3, (48, 32), [48, 32, 300, 150]),
+    ];
+    for (orientation, (uw, uh), expected) in cases {
+        let input = p(&format!("o{orientation}.jpg"));
+        write_jpeg(&input, &portrait_on_its_side(sw, sh), sw, sh);
+        let tags = xmp(&orientation.to_string());
+        let tags: Vec<&str> = tags.iter().map(String::as_str).collect();
+        if !exiftool_set(&input, &tags) {
+            return;
+        }
+        let before = exiftool(&input).unwrap();
+        assert_eq!(before["XMP-exif:ExifImageWidth"], 48, "{before}");
+        let velocity = p(&format!("v{orientation}.png"));
+        velocity_map(&velocity, uw, uh, |_, _| 0.0);
+        for format in ["jpg", "png", "tif"] {
+            let out = p(&format!("o{orientation}_out.{format}"));
+            blur(&input, &velocity, &out, &[]);
+            let tags = exiftool(&out).unwrap();
+            let got = [
+                "XMP-exif:ExifImageWidth",
+                "XMP-exif:ExifImageHeight",
+                "XMP-tiff:ImageWidth",
+                "XMP-tiff:ImageHeight",
+                "XMP-tiff:XResolution",
+                "XMP-tiff:YResolution",
+            ]
+            .map(|name| {
+                tags[name]
+                    .as_u64()
+                    .unwrap_or_else(|| panic!("no {name}: {tags}"))
+            });
+            let [w, h, x, y] = expected;
+            assert_eq!(
+                got,
+                [w, h, w, h, x, y],
+                "orientation {orientation} → {format}: {tags}"
+            );
+            assert_eq!(tags["XMP-tiff:Orientation"], 1, "{format}: {tags}");
+        }
     }
 }
