@@ -518,3 +518,120 @@ fn the_xmp_of_a_photo_turned_upright_says_the_upright_size() {
         }
     }
 }
+
+/// cICP's data: colour primaries, transfer function, matrix coefficients (0: RGB), full
+/// range (1) or narrow (0), as ITU-T H.273 numbers them.
+fn cicp(primaries: u8, transfer: u8, full: bool) -> Vec<u8> {
+    vec![primaries, transfer, 0, u8::from(full)]
+}
+
+/// A PNG's cICP chunk (PNG 3rd ed., 4.3: it takes precedence over iCCP, sRGB, gAMA and cHRM)
+/// says how its codes are coded (QA: it was ignored): a linear one (BT.709 primaries,
+/// transfer 8) beside an Adobe RGB iCCP and a gAMA of 1/2.2 blurs as the same codes do under
+/// `--linear`; a PNG output holds it again and a JPEG embeds a profile of its linear curve.
+/// PQ and HLG (high dynamic range), and narrow-range codes, are refused
+/// before anything is written, naming the file and why; a cICP of numbers shutter cannot
+/// read (unspecified primaries) is passed over for the chunks after it, with a warning.
+#[test]
+fn a_pngs_cicp_says_how_its_codes_are_coded() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    let (w, h) = (64u32, 8u32);
+    let stripes: Vec<u8> = (0..w * h)
+        .flat_map(|i| [if i % 2 == 0 { 255u8 } else { 0 }; 3])
+        .collect();
+    let velocity = p("v.png");
+    velocity_map(&velocity, w, h, |_, _| 12.0);
+    let icc = moxcms::ColorProfile::new_adobe_rgb().encode().unwrap();
+    png_with_chunks(&p("plain.png"), (w, h), &stripes, None, &[]);
+    let linear = [(b"cICP", cicp(1, 8, true)), (b"gAMA", gama(45455))];
+    png_with_chunks(&p("linear.png"), (w, h), &stripes, Some(&icc), &linear);
+    blur(
+        &p("plain.png"),
+        &velocity,
+        &p("plain_linear.png"),
+        &["--linear"],
+    );
+    blur(&p("linear.png"), &velocity, &p("linear_out.png"), &[]);
+    assert_same_pixels(
+        &p("linear_out.png"),
+        &p("plain_linear.png"),
+        "a linear cICP blurs as linear codes, over its iCCP and gAMA",
+    );
+    let cicp_of = |path: &Path| {
+        let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+        let reader = png::Decoder::new(file).read_info().unwrap();
+        let c = reader.info().coding_independent_code_points?;
+        let full = c.is_video_full_range_image;
+        Some([
+            c.color_primaries,
+            c.transfer_function,
+            c.matrix_coefficients,
+            u8::from(full),
+        ])
+    };
+    assert_eq!(cicp_of(&p("linear_out.png")), Some([1, 8, 0, 1]));
+    // A JPEG has no cICP: it embeds the profile the cICP describes.
+    blur(&p("linear.png"), &velocity, &p("linear_out.jpg"), &[]);
+    if tool("exiftool", &["-ver"]).is_none() {
+        return;
+    }
+    let profile = moxcms::ColorProfile::new_from_slice(&embedded_icc(&p("linear_out.jpg")))
+        .expect("an embedded profile");
+    let curve = profile.red_trc.unwrap().make_linear_evaluator().unwrap();
+    assert!((curve.evaluate_value(0.5) - 0.5).abs() < 1e-3);
+    // High dynamic range and narrow range: refused, naming the file, before any output.
+    let out_dir = p("out");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    for (name, data, why) in [
+        ("pq.png", cicp(9, 16, true), "PQ"),
+        ("hlg.png", cicp(9, 18, true), "HLG"),
+        ("narrow.png", cicp(1, 13, false), "narrow"),
+    ] {
+        png_with_chunks(&p(name), (w, h), &stripes, None, &[(b"cICP", data)]);
+        let depth = p("depth.png");
+        image::save_buffer(
+            &depth,
+            &vec![128u8; (w * h) as usize],
+            w,
+            h,
+            image::ColorType::L8,
+        )
+        .unwrap();
+        let o = shutter(&[
+            "blur",
+            "--algorithm",
+            "reconstruct",
+            "--preset",
+            "painted",
+            "--color",
+            &s(&p(name)),
+            "--velocity",
+            &s(&velocity),
+            "--depth",
+            &s(&depth),
+            "-o",
+            &s(&out_dir.join("o.png")),
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{name}: {err}");
+        assert!(
+            err.contains(name) && err.contains("cICP") && err.contains(why),
+            "{err}"
+        );
+        assert!(!err.contains("panicked"), "{err}");
+        assert_eq!(std::fs::read_dir(&out_dir).unwrap().count(), 0, "{name}");
+    }
+    // Unspecified primaries: the chunks after it code the colour (none here: sRGB).
+    png_with_chunks(
+        &p("odd.png"),
+        (w, h),
+        &stripes,
+        None,
+        &[(b"cICP", cicp(2, 13, true))],
+    );
+    blur(&p("plain.png"), &velocity, &p("plain_out.png"), &[]);
+    let o = blur(&p("odd.png"), &velocity, &p("odd_out.png"), &[]);
+    assert_same_pixels(&p("odd_out.png"), &p("plain_out.png"), "an unreadable cICP");
+    assert!(stderr(&o).contains("cICP"), "{}", stderr(&o));
+}

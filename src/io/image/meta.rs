@@ -96,7 +96,7 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
 
 /// A PNG's text chunks before its image data (where writers put them), in file order, each
 /// as its kind: tEXt, zTXt (inflated), iTXt (but XMP's, which is `Photo::xmp`); its gAMA,
-/// cHRM and sRGB; and its pHYs. A chunk that cannot be read is left out; the decoder's
+/// cHRM, sRGB and cICP; and its pHYs. A chunk that cannot be read is left out; the decoder's
 /// allocations are capped as the header's are.
 fn png_chunks(
     path: &Path,
@@ -154,6 +154,15 @@ fn png_chunks(
             [w.0, w.1, r.0, r.1, g.0, g.1, b.0, b.1].map(|v| v.into_scaled())
         }),
         srgb: info.srgb.map(|intent| intent as u8),
+        cicp: info.coding_independent_code_points.map(|c| {
+            let full = u8::from(c.is_video_full_range_image);
+            [
+                c.color_primaries,
+                c.transfer_function,
+                c.matrix_coefficients,
+                full,
+            ]
+        }),
     };
     let colour = (colour != PngColour::default()).then_some(colour);
     (texts, colour, resolution)
