@@ -519,6 +519,123 @@ fn the_xmp_of_a_photo_turned_upright_says_the_upright_size() {
     }
 }
 
+/// `shutter info`'s rows for one photo: (name, text) from its text output, and the JSON
+/// values by name.
+fn photo_info(path: &Path) -> (Vec<(String, String)>, serde_json::Value) {
+    let o = shutter(&["info", &s(path)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    let rows = text
+        .lines()
+        .skip_while(|l| l.trim() != "attributes:")
+        .skip(1)
+        .take_while(|l| l.starts_with("    "))
+        .map(|l| {
+            let mut words = l.split_whitespace();
+            let name = words.next().unwrap().to_string();
+            let _kind = words.next();
+            (name, words.collect::<Vec<_>>().join(" "))
+        })
+        .collect();
+    let o = shutter(&["info", &s(path), "--json"]);
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let mut values = serde_json::Map::new();
+    for a in doc["files"][0]["attributes"][0]["attributes"]
+        .as_array()
+        .unwrap()
+    {
+        values.insert(a["name"].as_str().unwrap().into(), a["value"].clone());
+    }
+    (rows, values.into())
+}
+
+/// `shutter info` on a photo shows what the reader found of its colour and density (QA: it
+/// showed neither a PNG's gAMA and cHRM nor any resolution, nor a cICP): which of the file's
+/// colour descriptions codes its colour, the gAMA, cHRM, sRGB and cICP chunks as stored, and
+/// the resolution with its unit.
+#[test]
+fn info_shows_a_photos_colour_chunks_and_resolution() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    let flat = vec![128u8; 8 * 4 * 3];
+    let mut phys = 11811u32.to_be_bytes().to_vec();
+    phys.extend(5906u32.to_be_bytes());
+    phys.push(1);
+    let chunks = [
+        (b"gAMA", gama(45455)),
+        (b"cHRM", chrm(ADOBE_CHRM)),
+        (b"pHYs", phys),
+    ];
+    png_with_chunks(&p("g.png"), (8, 4), &flat, None, &chunks);
+    let (rows, json) = photo_info(&p("g.png"));
+    let row = |name: &str| {
+        rows.iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, t)| t.clone())
+            .unwrap_or_else(|| panic!("no {name} in {rows:?}"))
+    };
+    assert!(row("colour").contains("gAMA and cHRM"), "{rows:?}");
+    assert!(row("gAMA").starts_with("45455"), "{rows:?}");
+    assert_eq!(
+        row("cHRM"),
+        "white 0.3127, 0.329; red 0.64, 0.33; green 0.21, 0.71; blue 0.15, 0.06"
+    );
+    assert_eq!(row("resolution"), "11811 x 5906 per metre");
+    assert_eq!(json["colour"], "gama_chrm", "{json}");
+    assert_eq!(json["gAMA"], 45455, "{json}");
+    assert_eq!(
+        json["cHRM"]["red"],
+        serde_json::json!([0.64, 0.33]),
+        "{json}"
+    );
+    assert_eq!(
+        json["resolution"],
+        serde_json::json!({"x": 11811.0, "y": 5906.0, "unit": "metre"}),
+        "{json}"
+    );
+    // An sRGB chunk beside an ICC profile: the profile codes the colour; both are shown.
+    let icc = moxcms::ColorProfile::new_adobe_rgb().encode().unwrap();
+    png_with_chunks(&p("i.png"), (8, 4), &flat, Some(&icc), &[]);
+    let (rows, json) = photo_info(&p("i.png"));
+    assert_eq!(json["colour"], "icc", "{rows:?}");
+    // No chunk at all: sRGB, as readers assume.
+    png_with_chunks(&p("plain.png"), (8, 4), &flat, None, &[(b"sRGB", vec![0])]);
+    let (rows, json) = photo_info(&p("plain.png"));
+    assert_eq!(json["colour"], "srgb", "{rows:?}");
+    assert_eq!(json["sRGB"], 0, "{json}");
+    // A cICP beside the profile: the cICP codes the colour.
+    let chunks = [(b"cICP", cicp(1, 8, true))];
+    png_with_chunks(&p("c.png"), (8, 4), &flat, Some(&icc), &chunks);
+    let (rows, json) = photo_info(&p("c.png"));
+    assert_eq!(json["colour"], "cicp", "{rows:?}");
+    assert_eq!(
+        json["cICP"],
+        serde_json::json!({"primaries": 1, "transfer": 8, "matrix": 0, "full_range": true}),
+        "{rows:?}"
+    );
+    let text = rows
+        .iter()
+        .find(|(n, _)| n == "cICP")
+        .map(|(_, t)| t.as_str());
+    assert_eq!(
+        text,
+        Some("primaries 1 (BT.709), transfer 8 (linear), matrix 0, full range")
+    );
+    // A TIFF's resolution in its own unit.
+    image::save_buffer(p("t.tif"), &flat, 8, 4, image::ColorType::Rgb8).unwrap();
+    let tags = ["-XResolution=72", "-YResolution=144", "-ResolutionUnit=cm"];
+    if !exiftool_set(&p("t.tif"), &tags) {
+        return;
+    }
+    let (rows, json) = photo_info(&p("t.tif"));
+    assert_eq!(json["colour"], "none", "{rows:?}");
+    assert_eq!(
+        json["resolution"],
+        serde_json::json!({"x": 72.0, "y": 144.0, "unit": "centimetre"}),
+        "{rows:?}"
+    );
+}
+
 /// cICP's data: colour primaries, transfer function, matrix coefficients (0: RGB), full
 /// range (1) or narrow (0), as ITU-T H.273 numbers them.
 fn cicp(primaries: u8, transfer: u8, full: bool) -> Vec<u8> {
