@@ -353,14 +353,17 @@ pub enum ResolutionUnit {
 }
 
 /// A PNG's colour chunks besides iCCP, as stored: gAMA (the encoding gamma × 100000: 45455
-/// for codes that are light^(1/2.2)), cHRM (white, red, green and blue x, y, each × 100000)
-/// and sRGB (its rendering intent). Where the PNG has no iCCP and no sRGB chunk, gAMA and
-/// cHRM say how its codes are coded (`io::image::profile_of`); a PNG output holds them again.
+/// for codes that are light^(1/2.2)), cHRM (white, red, green and blue x, y, each × 100000),
+/// sRGB (its rendering intent) and cICP (ITU-T H.273's colour primaries, transfer
+/// characteristics and matrix coefficients, and 1 for full-range codes). A cICP says how
+/// the codes are coded over every other chunk; where the PNG has none, no iCCP and no sRGB
+/// chunk, gAMA and cHRM say it (`io::image::profile_of`); a PNG output holds them again.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PngColour {
     pub gamma: Option<u32>,
     pub chromaticities: Option<[u32; 8]>,
     pub srgb: Option<u8>,
+    pub cicp: Option<[u8; 4]>,
 }
 
 /// The metadata of an 8/16-bit photo, as its file stores it, so the output holds it again.

@@ -1303,3 +1303,73 @@ fn a_scene_too_large_for_the_memory_is_refused_not_aborted() {
     assert!(stderr(&o).contains("--max-memory"), "{}", stderr(&o));
     assert!(!out.join("color.0001.exr").exists());
 }
+
+/// `shutter dof` with no depth names every way to give it (QA: it named `--depth` alone, as
+/// blur's missing motion named `--velocity`): `--depth FILE`, `--coc-map FILE` (a painted
+/// map of the blur, read in place of depth), and a preset: the built-in ones that find depth
+/// in the file, by name and channel, or else one whose `[depth] channels` name it. A motion
+/// blur, which cannot take a CoC map, does not offer one.
+#[test]
+fn dof_without_depth_names_every_way_to_give_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let photo = dir.path().join("photo.png");
+    image::save_buffer(&photo, &[90u8; 8 * 6 * 3], 8, 6, image::ColorType::Rgb8).unwrap();
+    // An EXR whose depth is `depth.Z`, which the painted preset does not name.
+    let exr = dir.path().join("render.exr");
+    let n = 8 * 6;
+    write_exr(
+        &exr,
+        8,
+        6,
+        vec![
+            ("R", vec![0.5; n]),
+            ("G", vec![0.5; n]),
+            ("B", vec![0.5; n]),
+            ("depth.Z", vec![4.0; n]),
+        ],
+    );
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    let out = s(&out_dir.join("o.exr"));
+    let lens = [
+        "--focal-length",
+        "50",
+        "--f-stop",
+        "2",
+        "--focus-distance",
+        "3",
+    ];
+    let run = |color: &std::path::Path, expect: &[&str]| {
+        let color = s(color);
+        let mut args = vec!["dof", "--preset", "painted", "--color", &color, "-o", &out];
+        args.extend(lens);
+        assert_fails_cleanly(&args, &out_dir, expect)
+    };
+    let err = run(
+        &photo,
+        &["photo.png", "depth pass", "--depth FILE", "--coc-map FILE"],
+    );
+    assert!(err.contains("[depth] channels"), "{err}");
+    let err = run(&exr, &["render.exr", "--depth FILE", "--coc-map FILE"]);
+    assert!(
+        err.contains("--preset") && err.contains("shutter (depth.Z)"),
+        "{err}"
+    );
+    // Motion blur needs depth too; a CoC map is no way to give it.
+    let color = s(&photo);
+    let args = [
+        "blur",
+        "--preset",
+        "painted",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &color,
+        "--velocity",
+        &color,
+        "-o",
+        &out,
+    ];
+    let err = assert_fails_cleanly(&args, &out_dir, &["depth pass", "--depth FILE"]);
+    assert!(!err.contains("--coc-map"), "{err}");
+}

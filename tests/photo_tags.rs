@@ -1,6 +1,6 @@
 //! What a photo's own tags say of the output, read back by exiftool (skipped with a note
-//! where it is not installed, unless SHUTTER_REQUIRE_TOOLS=1): the EXIF of a photo turned
-//! upright describes the upright pixels (its dimensions, its per-axis resolutions, no
+//! where it is not installed, unless SHUTTER_REQUIRE_TOOLS=1): the EXIF and XMP of a photo
+//! turned upright describe the upright pixels (its dimensions, its per-axis resolutions, no
 //! thumbnail of the unturned view).
 
 use std::path::Path;
@@ -448,4 +448,307 @@ fn a_pngs_srgb_or_iccp_chunk_wins_over_its_gama() {
         let (_, _, srgb, iccp) = png_colour_chunks(&path("_out.png"));
         assert_eq!((srgb, iccp), (name == "srgb", name == "iccp"), "{name}");
     }
+}
+
+/// The XMP of a photo turned upright by a quarter turn says the upright size too, as its
+/// EXIF does (QA: after orientation 6 the XMP's `exif:PixelXDimension`/`PixelYDimension` and
+/// `tiff:ImageWidth`/`ImageLength` still gave the stored size): each axis's value goes with
+/// its axis, and so do the XMP's X and Y resolutions. Turned half a turn (orientation 3), the
+/// axes stay where they were. Read back by exiftool from a JPEG, a PNG and a TIFF.
+#[test]
+fn the_xmp_of_a_photo_turned_upright_says_the_upright_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    let (sw, sh) = (48u32, 32u32);
+    let xmp = |orientation: &str| {
+        [
+            format!("-XMP-tiff:Orientation#={orientation}"),
+            // exiftool's names of exif:PixelXDimension, PixelYDimension and tiff:ImageLength.
+            "-XMP-exif:ExifImageWidth=48".into(),
+            "-XMP-exif:ExifImageHeight=32".into(),
+            "-XMP-tiff:ImageWidth=48".into(),
+            "-XMP-tiff:ImageHeight=32".into(),
+            "-XMP-tiff:XResolution=300".into(),
+            "-XMP-tiff:YResolution=150".into(),
+            format!("-Orientation#={orientation}"),
+        ]
+    };
+    // (orientation, the upright size's velocity map, what the XMP then says: width, height,
+    // x and y resolution).
+    let cases = [
+        (6, (32, 48), [32, 48, 150, 300]),
+        (3, (48, 32), [48, 32, 300, 150]),
+    ];
+    for (orientation, (uw, uh), expected) in cases {
+        let input = p(&format!("o{orientation}.jpg"));
+        write_jpeg(&input, &portrait_on_its_side(sw, sh), sw, sh);
+        let tags = xmp(&orientation.to_string());
+        let tags: Vec<&str> = tags.iter().map(String::as_str).collect();
+        if !exiftool_set(&input, &tags) {
+            return;
+        }
+        let before = exiftool(&input).unwrap();
+        assert_eq!(before["XMP-exif:ExifImageWidth"], 48, "{before}");
+        let velocity = p(&format!("v{orientation}.png"));
+        velocity_map(&velocity, uw, uh, |_, _| 0.0);
+        for format in ["jpg", "png", "tif"] {
+            let out = p(&format!("o{orientation}_out.{format}"));
+            blur(&input, &velocity, &out, &[]);
+            let tags = exiftool(&out).unwrap();
+            let got = [
+                "XMP-exif:ExifImageWidth",
+                "XMP-exif:ExifImageHeight",
+                "XMP-tiff:ImageWidth",
+                "XMP-tiff:ImageHeight",
+                "XMP-tiff:XResolution",
+                "XMP-tiff:YResolution",
+            ]
+            .map(|name| {
+                tags[name]
+                    .as_u64()
+                    .unwrap_or_else(|| panic!("no {name}: {tags}"))
+            });
+            let [w, h, x, y] = expected;
+            assert_eq!(
+                got,
+                [w, h, w, h, x, y],
+                "orientation {orientation} → {format}: {tags}"
+            );
+            assert_eq!(tags["XMP-tiff:Orientation"], 1, "{format}: {tags}");
+        }
+    }
+}
+
+/// `shutter info`'s rows for one photo: (name, text) from its text output, and the JSON
+/// values by name.
+fn photo_info(path: &Path) -> (Vec<(String, String)>, serde_json::Value) {
+    let o = shutter(&["info", &s(path)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    let rows = text
+        .lines()
+        .skip_while(|l| l.trim() != "attributes:")
+        .skip(1)
+        .take_while(|l| l.starts_with("    "))
+        .map(|l| {
+            let mut words = l.split_whitespace();
+            let name = words.next().unwrap().to_string();
+            let _kind = words.next();
+            (name, words.collect::<Vec<_>>().join(" "))
+        })
+        .collect();
+    let o = shutter(&["info", &s(path), "--json"]);
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let mut values = serde_json::Map::new();
+    for a in doc["files"][0]["attributes"][0]["attributes"]
+        .as_array()
+        .unwrap()
+    {
+        values.insert(a["name"].as_str().unwrap().into(), a["value"].clone());
+    }
+    (rows, values.into())
+}
+
+/// `shutter info` on a photo shows what the reader found of its colour and density (QA: it
+/// showed neither a PNG's gAMA and cHRM nor any resolution, nor a cICP): which of the file's
+/// colour descriptions codes its colour, the gAMA, cHRM, sRGB and cICP chunks as stored, and
+/// the resolution with its unit.
+#[test]
+fn info_shows_a_photos_colour_chunks_and_resolution() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    let flat = vec![128u8; 8 * 4 * 3];
+    let mut phys = 11811u32.to_be_bytes().to_vec();
+    phys.extend(5906u32.to_be_bytes());
+    phys.push(1);
+    let chunks = [
+        (b"gAMA", gama(45455)),
+        (b"cHRM", chrm(ADOBE_CHRM)),
+        (b"pHYs", phys),
+    ];
+    png_with_chunks(&p("g.png"), (8, 4), &flat, None, &chunks);
+    let (rows, json) = photo_info(&p("g.png"));
+    let row = |name: &str| {
+        rows.iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, t)| t.clone())
+            .unwrap_or_else(|| panic!("no {name} in {rows:?}"))
+    };
+    assert!(row("colour").contains("gAMA and cHRM"), "{rows:?}");
+    assert!(row("gAMA").starts_with("45455"), "{rows:?}");
+    assert_eq!(
+        row("cHRM"),
+        "white 0.3127, 0.329; red 0.64, 0.33; green 0.21, 0.71; blue 0.15, 0.06"
+    );
+    assert_eq!(row("resolution"), "11811 x 5906 per metre");
+    assert_eq!(json["colour"], "gama_chrm", "{json}");
+    assert_eq!(json["gAMA"], 45455, "{json}");
+    assert_eq!(
+        json["cHRM"]["red"],
+        serde_json::json!([0.64, 0.33]),
+        "{json}"
+    );
+    assert_eq!(
+        json["resolution"],
+        serde_json::json!({"x": 11811.0, "y": 5906.0, "unit": "metre"}),
+        "{json}"
+    );
+    // An sRGB chunk beside an ICC profile: the profile codes the colour; both are shown.
+    let icc = moxcms::ColorProfile::new_adobe_rgb().encode().unwrap();
+    png_with_chunks(&p("i.png"), (8, 4), &flat, Some(&icc), &[]);
+    let (rows, json) = photo_info(&p("i.png"));
+    assert_eq!(json["colour"], "icc", "{rows:?}");
+    // No chunk at all: sRGB, as readers assume.
+    png_with_chunks(&p("plain.png"), (8, 4), &flat, None, &[(b"sRGB", vec![0])]);
+    let (rows, json) = photo_info(&p("plain.png"));
+    assert_eq!(json["colour"], "srgb", "{rows:?}");
+    assert_eq!(json["sRGB"], 0, "{json}");
+    // A cICP beside the profile: the cICP codes the colour.
+    let chunks = [(b"cICP", cicp(1, 8, true))];
+    png_with_chunks(&p("c.png"), (8, 4), &flat, Some(&icc), &chunks);
+    let (rows, json) = photo_info(&p("c.png"));
+    assert_eq!(json["colour"], "cicp", "{rows:?}");
+    assert_eq!(
+        json["cICP"],
+        serde_json::json!({"primaries": 1, "transfer": 8, "matrix": 0, "full_range": true}),
+        "{rows:?}"
+    );
+    let text = rows
+        .iter()
+        .find(|(n, _)| n == "cICP")
+        .map(|(_, t)| t.as_str());
+    assert_eq!(
+        text,
+        Some("primaries 1 (BT.709), transfer 8 (linear), matrix 0, full range")
+    );
+    // A TIFF's resolution in its own unit.
+    image::save_buffer(p("t.tif"), &flat, 8, 4, image::ColorType::Rgb8).unwrap();
+    let tags = ["-XResolution=72", "-YResolution=144", "-ResolutionUnit=cm"];
+    if !exiftool_set(&p("t.tif"), &tags) {
+        return;
+    }
+    let (rows, json) = photo_info(&p("t.tif"));
+    assert_eq!(json["colour"], "none", "{rows:?}");
+    assert_eq!(
+        json["resolution"],
+        serde_json::json!({"x": 72.0, "y": 144.0, "unit": "centimetre"}),
+        "{rows:?}"
+    );
+}
+
+/// cICP's data: colour primaries, transfer function, matrix coefficients (0: RGB), full
+/// range (1) or narrow (0), as ITU-T H.273 numbers them.
+fn cicp(primaries: u8, transfer: u8, full: bool) -> Vec<u8> {
+    vec![primaries, transfer, 0, u8::from(full)]
+}
+
+/// A PNG's cICP chunk (PNG 3rd ed., 4.3: it takes precedence over iCCP, sRGB, gAMA and cHRM)
+/// says how its codes are coded (QA: it was ignored): a linear one (BT.709 primaries,
+/// transfer 8) beside an Adobe RGB iCCP and a gAMA of 1/2.2 blurs as the same codes do under
+/// `--linear`; a PNG output holds it again and a JPEG embeds a profile of its linear curve.
+/// PQ and HLG (high dynamic range), and narrow-range codes, are refused
+/// before anything is written, naming the file and why; a cICP of numbers shutter cannot
+/// read (unspecified primaries) is passed over for the chunks after it, with a warning.
+#[test]
+fn a_pngs_cicp_says_how_its_codes_are_coded() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    let (w, h) = (64u32, 8u32);
+    let stripes: Vec<u8> = (0..w * h)
+        .flat_map(|i| [if i % 2 == 0 { 255u8 } else { 0 }; 3])
+        .collect();
+    let velocity = p("v.png");
+    velocity_map(&velocity, w, h, |_, _| 12.0);
+    let icc = moxcms::ColorProfile::new_adobe_rgb().encode().unwrap();
+    png_with_chunks(&p("plain.png"), (w, h), &stripes, None, &[]);
+    let linear = [(b"cICP", cicp(1, 8, true)), (b"gAMA", gama(45455))];
+    png_with_chunks(&p("linear.png"), (w, h), &stripes, Some(&icc), &linear);
+    blur(
+        &p("plain.png"),
+        &velocity,
+        &p("plain_linear.png"),
+        &["--linear"],
+    );
+    blur(&p("linear.png"), &velocity, &p("linear_out.png"), &[]);
+    assert_same_pixels(
+        &p("linear_out.png"),
+        &p("plain_linear.png"),
+        "a linear cICP blurs as linear codes, over its iCCP and gAMA",
+    );
+    let cicp_of = |path: &Path| {
+        let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+        let reader = png::Decoder::new(file).read_info().unwrap();
+        let c = reader.info().coding_independent_code_points?;
+        let full = c.is_video_full_range_image;
+        Some([
+            c.color_primaries,
+            c.transfer_function,
+            c.matrix_coefficients,
+            u8::from(full),
+        ])
+    };
+    assert_eq!(cicp_of(&p("linear_out.png")), Some([1, 8, 0, 1]));
+    // A JPEG has no cICP: it embeds the profile the cICP describes.
+    blur(&p("linear.png"), &velocity, &p("linear_out.jpg"), &[]);
+    if tool("exiftool", &["-ver"]).is_none() {
+        return;
+    }
+    let profile = moxcms::ColorProfile::new_from_slice(&embedded_icc(&p("linear_out.jpg")))
+        .expect("an embedded profile");
+    let curve = profile.red_trc.unwrap().make_linear_evaluator().unwrap();
+    assert!((curve.evaluate_value(0.5) - 0.5).abs() < 1e-3);
+    // High dynamic range and narrow range: refused, naming the file, before any output.
+    let out_dir = p("out");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    for (name, data, why) in [
+        ("pq.png", cicp(9, 16, true), "PQ"),
+        ("hlg.png", cicp(9, 18, true), "HLG"),
+        ("narrow.png", cicp(1, 13, false), "narrow"),
+    ] {
+        png_with_chunks(&p(name), (w, h), &stripes, None, &[(b"cICP", data)]);
+        let depth = p("depth.png");
+        image::save_buffer(
+            &depth,
+            &vec![128u8; (w * h) as usize],
+            w,
+            h,
+            image::ColorType::L8,
+        )
+        .unwrap();
+        let o = shutter(&[
+            "blur",
+            "--algorithm",
+            "reconstruct",
+            "--preset",
+            "painted",
+            "--color",
+            &s(&p(name)),
+            "--velocity",
+            &s(&velocity),
+            "--depth",
+            &s(&depth),
+            "-o",
+            &s(&out_dir.join("o.png")),
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{name}: {err}");
+        assert!(
+            err.contains(name) && err.contains("cICP") && err.contains(why),
+            "{err}"
+        );
+        assert!(!err.contains("panicked"), "{err}");
+        assert_eq!(std::fs::read_dir(&out_dir).unwrap().count(), 0, "{name}");
+    }
+    // Unspecified primaries: the chunks after it code the colour (none here: sRGB).
+    png_with_chunks(
+        &p("odd.png"),
+        (w, h),
+        &stripes,
+        None,
+        &[(b"cICP", cicp(2, 13, true))],
+    );
+    blur(&p("plain.png"), &velocity, &p("plain_out.png"), &[]);
+    let o = blur(&p("odd.png"), &velocity, &p("odd_out.png"), &[]);
+    assert_same_pixels(&p("odd_out.png"), &p("plain_out.png"), "an unreadable cICP");
+    assert!(stderr(&o).contains("cICP"), "{}", stderr(&o));
 }

@@ -2005,3 +2005,192 @@ fn a_picture_larger_than_the_limit_is_refused_before_anything_is_written() {
         "the output folder was made"
     );
 }
+
+/// `info` names a tiled part's RANDOM_Y line order `random`, on the plate and on the output
+/// that keeps it, in text and JSON (QA: it said `unspecified`, the exr crate's name for it,
+/// which reads as "not given").
+#[test]
+fn info_names_a_random_line_order_random() {
+    let dir = plate_frame(Blocks::Tiles(Vec2(16, 8)), LineOrder::Unspecified);
+    blur(dir.path(), "out.exr", &[]);
+    for file in ["color.exr", "out.exr"] {
+        let path = s(&dir.path().join(file));
+        let o = shutter(&["info", &path]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let text = crate::support::stdout(&o);
+        let line = text
+            .lines()
+            .find(|l| l.trim_start().starts_with("lineOrder"))
+            .unwrap_or_else(|| panic!("{file}: no lineOrder in:\n{text}"));
+        assert_eq!(
+            line.split_whitespace().collect::<Vec<_>>(),
+            ["lineOrder", "lineOrder", "random"],
+            "{file}"
+        );
+        let o = shutter(&["info", &path, "--json"]);
+        let doc: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let attributes = doc["files"][0]["attributes"][0]["attributes"]
+            .as_array()
+            .unwrap();
+        let order = attributes
+            .iter()
+            .find(|a| a["name"] == "lineOrder")
+            .unwrap();
+        assert_eq!(order["value"], "random", "{file}");
+    }
+}
+
+/// Each part's attributes as the file stores them, in file order: (name, type, value bytes).
+/// Read from the bytes (OpenEXR's file layout), not through the exr crate, which keeps one
+/// value per name and files the layout attributes away from the others.
+fn raw_headers(bytes: &[u8]) -> Vec<Vec<(String, String, Vec<u8>)>> {
+    let text = |at: usize| {
+        let end = at + bytes[at..].iter().position(|&b| b == 0).unwrap();
+        (
+            String::from_utf8_lossy(&bytes[at..end]).into_owned(),
+            end + 1,
+        )
+    };
+    // The version field's bit 12: several parts, each header ended by a null byte and the
+    // list of headers by another.
+    let multi_part = bytes[5] & 0x10 != 0;
+    let (mut at, mut parts) = (8, Vec::new());
+    loop {
+        let mut part = Vec::new();
+        while bytes[at] != 0 {
+            let (name, next) = text(at);
+            let (kind, next) = text(next);
+            let size = i32::from_le_bytes(bytes[next..next + 4].try_into().unwrap()) as usize;
+            part.push((name, kind, bytes[next + 4..next + 4 + size].to_vec()));
+            at = next + 4 + size;
+        }
+        at += 1;
+        parts.push(part);
+        if !multi_part || bytes[at] == 0 {
+            return parts;
+        }
+    }
+}
+
+/// The attributes that say how a part is laid out in its file are the output's own, never
+/// the input's: a custom attribute under one of their names, as OpenImageIO writes them
+/// (`openexr:chunkCount`, a stale count from the file oiiotool read: QA found its 4 carried
+/// into a part of 6 chunks, which `iinfo -v` then reports) or under the bare name with
+/// another type than the standard's, is not carried; each standard one is written once, with
+/// the output's value. A multi-part frame of a scan-line PIZ part and a tiled ZIP part.
+#[test]
+fn the_layout_attributes_of_every_part_are_the_outputs_own() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = W * H;
+    let stale = [
+        ("openexr:chunkCount", AttributeValue::I32(99)),
+        ("openexr:lineOrder", AttributeValue::I32(2)),
+        ("chunkCount", AttributeValue::F32(99.0)),
+        (
+            "dataWindow",
+            AttributeValue::Text(Text::from("(0, 0) - (1, 1)")),
+        ),
+        ("tiles", AttributeValue::Text(Text::from("64x64"))),
+        ("type", AttributeValue::I32(3)),
+    ];
+    let part = |name: &str, compression, blocks, seed: u32| {
+        let mut attributes = LayerAttributes::named(name);
+        for (key, value) in stale.clone() {
+            attributes.other.insert(Text::from(key), value);
+        }
+        attributes
+            .other
+            .insert(Text::from("pipeline/shot"), AttributeValue::I32(20));
+        let channels = ["R", "G", "B"]
+            .iter()
+            .enumerate()
+            .map(|(c, name)| {
+                let plane = noise(n, seed + c as u32, 0.0, 1.0);
+                AnyChannel::new(*name, FlatSamples::F32(plane))
+            })
+            .collect::<Vec<_>>();
+        Layer::new(
+            (W, H),
+            attributes,
+            Encoding {
+                compression,
+                blocks,
+                line_order: LineOrder::Increasing,
+            },
+            AnyChannels::sort(channels.into()),
+        )
+    };
+    let image = Image::empty(ImageAttributes::new(IntegerBounds::from_dimensions((W, H))))
+        .with_layer(part("rgba", Compression::PIZ, Blocks::ScanLines, 60))
+        .with_layer(part(
+            "diffuse",
+            Compression::ZIP16,
+            Blocks::Tiles(Vec2(16, 8)),
+            63,
+        ));
+    image
+        .write()
+        .skip_compatibility_checks()
+        .to_file(dir.path().join("color.exr"))
+        .unwrap();
+    write_passes(dir.path());
+    blur(dir.path(), "out.exr", &[]);
+    let out = dir.path().join("out.exr");
+    let headers = raw_headers(&std::fs::read(&out).unwrap());
+    assert_eq!(headers.len(), 2);
+    // Chunks: PIZ holds 32 scan lines a chunk (24 lines, one chunk); 40×24 in 16×8 tiles is
+    // 3 × 3 tiles.
+    let expected = [
+        ("rgba", 1, "scanlineimage", None),
+        ("diffuse", 9, "tiledimage", Some((16, 8))),
+    ];
+    for (part, (name, chunks, kind, tiles)) in headers.iter().zip(expected) {
+        let named = |key: &str| -> Vec<&(String, String, Vec<u8>)> {
+            part.iter().filter(|(n, _, _)| n == key).collect()
+        };
+        // Nothing under OpenImageIO's names for the layout.
+        for (key, _, _) in part {
+            assert!(!key.starts_with("openexr:"), "{name}: {key} was carried");
+        }
+        assert_eq!(
+            named("pipeline/shot").len(),
+            1,
+            "{name}: custom attributes stay"
+        );
+        let one = |key: &str, kind: &str| -> Vec<u8> {
+            let found = named(key);
+            assert_eq!(found.len(), 1, "{name}: {key} {found:?}");
+            assert_eq!(found[0].1, kind, "{name}: {key}'s type");
+            found[0].2.clone()
+        };
+        let int = |b: Vec<u8>| i32::from_le_bytes(b[..4].try_into().unwrap());
+        assert_eq!(int(one("chunkCount", "int")), chunks, "{name}: chunkCount");
+        assert_eq!(one("type", "string"), kind.as_bytes(), "{name}: type");
+        assert_eq!(one("name", "string"), name.as_bytes(), "{name}: name");
+        let window = one("dataWindow", "box2i");
+        let corners: Vec<i32> = window.chunks(4).map(|c| int(c.to_vec())).collect();
+        assert_eq!(corners, [0, 0, W as i32 - 1, H as i32 - 1], "{name}");
+        one("displayWindow", "box2i");
+        one("lineOrder", "lineOrder");
+        one("compression", "compression");
+        one("channels", "chlist");
+        match tiles {
+            Some((w, h)) => {
+                let t = one("tiles", "tiledesc");
+                assert_eq!((int(t[..4].to_vec()), int(t[4..8].to_vec())), (w, h));
+            }
+            None => assert!(named("tiles").is_empty(), "{name}: tiles"),
+        }
+    }
+    // Our reader reads it, checking the chunk counts (pedantic), and so does OpenImageIO,
+    // whose `openexr:chunkCount` is then the part's own.
+    let meta = MetaData::read_from_file(&out, true).unwrap();
+    assert!(matches!(meta.headers[1].blocks, BlockDescription::Tiles(_)));
+    if let Some(info) = oiiotool_info(&out) {
+        let counts: Vec<&str> = info
+            .lines()
+            .filter_map(|l| l.trim().strip_prefix("openexr:chunkCount: "))
+            .collect();
+        assert!(counts.iter().all(|c| *c != "99"), "{info}");
+    }
+}

@@ -82,8 +82,15 @@ fn value(value: &AttributeValue) -> (&'static str, String, Value) {
             ("compression", name.to_string(), json!(name))
         }
         A::LineOrder(o) => {
-            let name = format!("{o:?}").to_lowercase();
-            ("lineOrder", name.clone(), json!(name))
+            // OpenEXR's INCREASING_Y, DECREASING_Y and RANDOM_Y (which the exr crate calls
+            // `Unspecified`: a tiled part whose tiles come in any order).
+            use exr::meta::attribute::LineOrder as L;
+            let name = match o {
+                L::Increasing => "increasing",
+                L::Decreasing => "decreasing",
+                L::Unspecified => "random",
+            };
+            ("lineOrder", name.to_string(), json!(name))
         }
         A::TimeCode(t) => {
             let sep = if t.drop_frame { ';' } else { ':' };
@@ -175,6 +182,7 @@ pub fn of_header(header: &exr::meta::header::Header) -> Vec<Shown> {
 /// The metadata blocks of a photo, as [`Shown`] rows.
 pub fn of_photo(photo: &crate::frame::Photo) -> Vec<Shown> {
     let mut shown = Vec::new();
+    colour_rows(photo, &mut shown);
     let mut block = |name: &str, bytes: &Option<Vec<u8>>, extra: String| {
         if let Some(bytes) = bytes {
             let text = format!("{} bytes{extra}", bytes.len());
@@ -192,4 +200,138 @@ pub fn of_photo(photo: &crate::frame::Photo) -> Vec<Shown> {
     block("xmp", &photo.xmp, String::new());
     block("iptc", &photo.iptc, String::new());
     shown
+}
+
+/// What a photo's reader found of its colour and density: which of its descriptions codes
+/// the colour (`colour`: the cICP, the ICC profile, the sRGB chunk, gAMA and cHRM, or
+/// nothing, sRGB's then), a PNG's gAMA, cHRM, sRGB and cICP as stored, and the resolution in
+/// its unit, as the output writes them again.
+fn colour_rows(photo: &crate::frame::Photo, shown: &mut Vec<Shown>) {
+    use crate::io::image::ColourSource as S;
+    let mut row = |name: &str, kind: &'static str, text: String, json: Value| {
+        shown.push(Shown {
+            name: name.to_string(),
+            kind,
+            text,
+            json,
+        })
+    };
+    let source = crate::io::image::colour_source(photo);
+    let refused = crate::io::image::cicp_refused(photo);
+    let text = match (source, &refused) {
+        (S::Cicp, Some(why)) => format!("cICP, refused: {why}"),
+        (S::Cicp, None) => "cICP (over any iCCP, sRGB, gAMA and cHRM)".into(),
+        (S::Icc, _) => "ICC profile".into(),
+        (S::Srgb, _) => "sRGB chunk".into(),
+        (S::PngChunks, _) => "gAMA and cHRM (no iCCP or sRGB chunk)".into(),
+        (S::None, _) => "none: sRGB's, as readers take it".into(),
+    };
+    row("colour", "source", text, json!(source.name()));
+    let colour = photo.png_colour.unwrap_or_default();
+    if let Some(g) = colour.gamma {
+        let text = format!("{g} (light = code^{})", round(100_000.0 / f64::from(g)));
+        row("gAMA", "chunk", text, json!(g));
+    }
+    if let Some(c) = colour.chromaticities {
+        let xy = |i: usize| [c[i], c[i + 1]].map(|v| round(f64::from(v) / 100_000.0));
+        let names = ["white", "red", "green", "blue"];
+        let text = (0..4)
+            .map(|k| format!("{} {}, {}", names[k], xy(2 * k)[0], xy(2 * k)[1]))
+            .collect::<Vec<_>>()
+            .join("; ");
+        let json = json!({"white": xy(0), "red": xy(2), "green": xy(4), "blue": xy(6)});
+        row("cHRM", "chunk", text, json);
+    }
+    if let Some(intent) = colour.srgb {
+        let name = [
+            "perceptual",
+            "relative colorimetric",
+            "saturation",
+            "absolute colorimetric",
+        ]
+        .get(usize::from(intent))
+        .unwrap_or(&"unknown");
+        row(
+            "sRGB",
+            "chunk",
+            format!("rendering intent {intent} ({name})"),
+            json!(intent),
+        );
+    }
+    if let Some([p, t, m, f]) = colour.cicp {
+        let text = format!(
+            "primaries {p} ({}), transfer {t} ({}), matrix {m}, {} range",
+            cicp_primaries(p),
+            cicp_transfer(t),
+            if f == 1 { "full" } else { "narrow" }
+        );
+        let json = json!({"primaries": p, "transfer": t, "matrix": m, "full_range": f == 1});
+        row("cICP", "chunk", text, json);
+    }
+    if let Some(r) = &photo.resolution {
+        use crate::frame::ResolutionUnit as U;
+        let unit = match r.unit {
+            U::None => "none",
+            U::Inch => "inch",
+            U::Centimetre => "centimetre",
+            U::Metre => "metre",
+        };
+        let value = |(n, d): (u32, u32)| round(f64::from(n) / f64::from(d.max(1)));
+        let (x, y) = (value(r.x), value(r.y));
+        let text = match r.unit {
+            U::None => format!("{x} x {y} (no unit: the pixels' aspect)"),
+            _ => format!("{x} x {y} per {unit}"),
+        };
+        row(
+            "resolution",
+            "density",
+            text,
+            json!({"x": x, "y": y, "unit": unit}),
+        );
+    }
+}
+
+/// ITU-T H.273's names of its colour primaries (table 2).
+fn cicp_primaries(code: u8) -> &'static str {
+    match code {
+        1 => "BT.709",
+        4 => "BT.470 M",
+        5 => "BT.470 BG",
+        6 => "BT.601",
+        7 => "SMPTE 240M",
+        8 => "generic film",
+        9 => "BT.2020",
+        10 => "XYZ",
+        11 => "DCI-P3",
+        12 => "Display P3",
+        22 => "EBU 3213",
+        2 => "unspecified",
+        _ => "reserved",
+    }
+}
+
+/// ITU-T H.273's names of its transfer characteristics (table 3).
+fn cicp_transfer(code: u8) -> &'static str {
+    match code {
+        1 | 6 | 14 | 15 => "BT.709",
+        4 => "gamma 2.2",
+        5 => "gamma 2.8",
+        7 => "SMPTE 240M",
+        8 => "linear",
+        9 => "log 100:1",
+        10 => "log 316:1",
+        11 => "IEC 61966-2-4",
+        12 => "BT.1361",
+        13 => "sRGB",
+        16 => "PQ",
+        17 => "SMPTE 428",
+        18 => "HLG",
+        2 => "unspecified",
+        _ => "reserved",
+    }
+}
+
+/// A value to six significant places, as `info` prints it (0.3127, not 0.31270000000000003).
+fn round(v: f64) -> f64 {
+    format!("{v:.6e}").parse().unwrap_or(v)
 }

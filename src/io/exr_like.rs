@@ -11,7 +11,9 @@
 //! any type), the display window, the pixel aspect; the data window is the frame's. Not kept:
 //! the preview (it shows the pixels before the blur), and the layout (channels, chunk count,
 //! the tile levels: only the full-resolution level is read, so a mip-mapped input comes back
-//! as one level), and, where one view of a multi-view file is written, its `multiView` list
+//! as one level; nor a custom attribute under a layout name (`is_layout`), such as the
+//! stale `openexr:chunkCount` oiiotool leaves), and, where one view of a multi-view file is
+//! written, its `multiView` list
 //! and parts' `view` attributes (an output of every view keeps them). Its form follows the
 //! input too: compression (unless `compression` is set), line order (RANDOM_Y for tiles
 //! alone, where OpenEXR allows it, its tiles written in increasing order), scan lines or tiles of
@@ -109,10 +111,14 @@ pub fn write_like(
 ) -> Result<(), String> {
     let display = IntegerBounds::new((display.x, display.y), (display.width, display.height));
     let image_attributes = match parts.first().and_then(|p| p.input) {
-        Some(h) => ImageAttributes {
-            display_window: display,
-            ..h.shared_attributes.clone()
-        },
+        Some(h) => {
+            let mut shared = ImageAttributes {
+                display_window: display,
+                ..h.shared_attributes.clone()
+            };
+            shared.other.retain(|name, _| !is_layout(name));
+            shared
+        }
         None => ImageAttributes {
             chromaticities: output.chromaticities,
             ..ImageAttributes::new(display)
@@ -317,6 +323,41 @@ fn common_prefix(channels: &[OutChannel]) -> Option<String> {
     (!prefix.is_empty()).then(|| prefix.join("."))
 }
 
+/// The attributes that say how a part is laid out in its file, which the writer gives the
+/// output's own values: OpenEXR's, and the DWA level that goes with the compression.
+const LAYOUT: [&str; 12] = [
+    "channels",
+    "chunkCount",
+    "compression",
+    "dataWindow",
+    "displayWindow",
+    "dwaCompressionLevel",
+    "lineOrder",
+    "maxSamplesPerPixel",
+    "name",
+    "tiles",
+    "type",
+    "version",
+];
+
+/// Whether a custom attribute of the input names the layout, and so is not carried: under
+/// a layout name but of another type than the standard's (which the exr crate reads as a
+/// custom attribute and would write beside its own: OpenEXR 3.1 then refuses the file,
+/// "Unexpected type for image attribute chunkCount"), or under OpenImageIO's name for it
+/// (`openexr:chunkCount`, `openexr:lineOrder`, `openexr:roundingmode`: oiiotool 2.4 writes
+/// the count of the file it read, stale in the file it writes, and `iinfo -v` reports it as
+/// the part's).
+fn is_layout(name: &Text) -> bool {
+    let name = String::from_utf8_lossy(name.bytes());
+    match name.strip_prefix("openexr:") {
+        Some(oiio) => LAYOUT
+            .iter()
+            .chain(&["roundingmode", "levelmode"])
+            .any(|l| l.eq_ignore_ascii_case(oiio)),
+        None => LAYOUT.contains(&&*name),
+    }
+}
+
 fn is_dwa(compression: Compression) -> bool {
     matches!(compression, Compression::DWAA(_) | Compression::DWAB(_))
 }
@@ -332,6 +373,7 @@ fn attributes_like(
     let mut attributes = input.map_or_else(LayerAttributes::default, |h| {
         let mut kept = h.own_attributes.clone();
         kept.preview = None;
+        kept.other.retain(|name, _| !is_layout(name));
         if views == Views::One {
             // One view is written (the one read): a multiView list would name views the
             // file does not hold, and make its channels the default view's.

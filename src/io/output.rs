@@ -473,12 +473,12 @@ fn exr_chromaticities(icc: &[u8]) -> Option<exr::meta::attribute::Chromaticities
     })
 }
 
-/// A photo's primaries and white as an EXR's `chromaticities`: its ICC profile's, else a
-/// PNG's cHRM as it stores them (where no sRGB chunk says sRGB's, which are Rec. 709's, the
-/// EXR's own default). A PNG's gAMA alone says no primaries: none.
+/// A photo's primaries and white as an EXR's `chromaticities`: its PNG's cICP's or its ICC
+/// profile's, else a PNG's cHRM as it stores them (where no sRGB chunk says sRGB's, which
+/// are Rec. 709's, the EXR's own default). A PNG's gAMA alone says no primaries: none.
 fn photo_chromaticities(photo: &Photo) -> Option<exr::meta::attribute::Chromaticities> {
-    if let Some(icc) = &photo.icc {
-        return exr_chromaticities(icc);
+    if let Some(icc) = image_io::cicp_profile_of(photo, false).or_else(|| photo.icc.clone()) {
+        return exr_chromaticities(&icc);
     }
     let colour = photo.png_colour.filter(|c| c.srgb.is_none())?;
     let c = colour.chromaticities?.map(|v| v as f32 / 100_000.0);

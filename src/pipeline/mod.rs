@@ -251,19 +251,27 @@ fn existing_output(
 }
 
 /// A painted CoC map is read through the depth pass: its problems name it as the user gave
-/// it (`coc-map`), not as `depth`.
+/// it (`coc-map`), not as `depth`. Depth looked up in the colour file and not found: the
+/// problem names every other way to give it (`suggest::other_ways_to_depth`).
 fn name_pass(job: &Job, error: crate::Error) -> crate::Error {
-    match (error, depth_kind(&job.params)) {
-        (crate::Error::Files(mut problems), crate::numeric::DepthKind::CocMap) => {
-            for problem in &mut problems {
-                if problem.pass == Some("depth") {
-                    problem.pass = Some("coc-map");
-                }
+    let crate::Error::Files(mut problems) = error else {
+        return error;
+    };
+    let coc_map = depth_kind(&job.params) == crate::numeric::DepthKind::CocMap;
+    for problem in problems.iter_mut().filter(|p| p.pass == Some("depth")) {
+        if coc_map {
+            problem.pass = Some("coc-map");
+        } else if problem.kind == ProblemKind::MissingChannel
+            && problem.detail.ends_with("or give --depth FILE")
+        {
+            if let Ok(info) = crate::io::file::FileInfo::probe(&problem.path) {
+                let dof = job.params.dof.is_some();
+                let ways = crate::io::passes::other_ways_to_depth(&info, &job.preset, dof);
+                problem.detail.push_str(&ways);
             }
-            crate::Error::Files(problems)
         }
-        (error, _) => error,
     }
+    crate::Error::Files(problems)
 }
 
 /// Runs the job: preflight (every input header, every output place), the output lock and

@@ -8,9 +8,9 @@
 //! The pixels are turned upright on read (`read_planes`, by the orientation the image crate
 //! reads from EXIF or the TIFF tag), so the frame holds the upright photo and the EXIF and XMP
 //! carried with it say orientation 1: written again as they are, they describe the upright
-//! pixels of the output, and no viewer turns them a second time. The EXIF is made true of
-//! the upright pixels besides (`upright`): their size, each axis's resolution, no thumbnail
-//! of the unturned view.
+//! pixels of the output, and no viewer turns them a second time. The EXIF and XMP are made
+//! true of the upright pixels besides (`upright`): their size, each axis's resolution, no
+//! thumbnail of the unturned view.
 //!
 //! Not read: a PNG's IPTC (a hex text chunk of no settled form: it comes through as the text
 //! chunk it is). A PNG's text chunks (tEXt, zTXt, iTXt) are read with the png crate, whose
@@ -66,7 +66,7 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
         super::upright::make_upright(exif, orientation as u16, size);
     }
     if let Some(xmp) = &mut xmp {
-        set_xmp_orientation(xmp);
+        super::upright::make_xmp_upright(xmp, orientation as u16);
     }
     let bytes = jpeg
         .then(|| crate::io::input::read_input(path).ok())
@@ -96,7 +96,7 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
 
 /// A PNG's text chunks before its image data (where writers put them), in file order, each
 /// as its kind: tEXt, zTXt (inflated), iTXt (but XMP's, which is `Photo::xmp`); its gAMA,
-/// cHRM and sRGB; and its pHYs. A chunk that cannot be read is left out; the decoder's
+/// cHRM, sRGB and cICP; and its pHYs. A chunk that cannot be read is left out; the decoder's
 /// allocations are capped as the header's are.
 fn png_chunks(
     path: &Path,
@@ -154,6 +154,15 @@ fn png_chunks(
             [w.0, w.1, r.0, r.1, g.0, g.1, b.0, b.1].map(|v| v.into_scaled())
         }),
         srgb: info.srgb.map(|intent| intent as u8),
+        cicp: info.coding_independent_code_points.map(|c| {
+            let full = u8::from(c.is_video_full_range_image);
+            [
+                c.color_primaries,
+                c.transfer_function,
+                c.matrix_coefficients,
+                full,
+            ]
+        }),
     };
     let colour = (colour != PngColour::default()).then_some(colour);
     (texts, colour, resolution)
@@ -196,42 +205,4 @@ fn tiff_blocks(path: &Path) -> ([Option<Vec<u8>>; 4], bool, Option<Resolution>) 
     let room = crate::io::image::HEADER_ROOM as usize;
     let exif = tiff_meta::exif_of_tiff(&mut decoder, room).map(|e| tiff_meta::to_block(&e));
     ([icc, exif, xmp, iptc], associated, resolution)
-}
-
-/// Sets XMP's `tiff:Orientation` (as an attribute or an element) to 1.
-fn set_xmp_orientation(xmp: &mut [u8]) {
-    for (open, close) in [
-        (&b"tiff:Orientation=\""[..], b'"'),
-        (&b"tiff:Orientation='"[..], b'\''),
-        (&b"<tiff:Orientation>"[..], b'<'),
-    ] {
-        let mut from = 0;
-        while let Some(found) = find(&xmp[from..], open) {
-            let value = from + found + open.len();
-            // A single digit 1-8: overwritten in place, so no length changes.
-            if xmp.get(value + 1) == Some(&close) && xmp[value].is_ascii_digit() {
-                xmp[value] = b'1';
-            }
-            from = value;
-        }
-    }
-}
-
-fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {
-    haystack.windows(needle.len()).position(|w| w == needle)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn xmp_orientation_becomes_1_in_both_forms() {
-        let mut xmp = b"<x tiff:Orientation=\"6\"/><tiff:Orientation>8</tiff:Orientation>".to_vec();
-        set_xmp_orientation(&mut xmp);
-        assert_eq!(
-            xmp,
-            b"<x tiff:Orientation=\"1\"/><tiff:Orientation>1</tiff:Orientation>"
-        );
-    }
 }

@@ -28,7 +28,9 @@ use crate::frame::{Photo, Plane};
 
 pub use jpeg::sampling as jpeg_sampling;
 pub use meta::read_photo;
-pub use profile::{chromaticities, profile_of, Transfer};
+pub use profile::{
+    chromaticities, cicp_profile_of, colour_source, profile_of, ColourSource, Transfer,
+};
 pub use upright::exif_orientation;
 pub use write::{goes_out_grey, jpeg_left_out, out_of_range, write_photo, PhotoOptions};
 
@@ -440,9 +442,10 @@ pub fn write_color(
 /// Reads what a photo holds besides its pixels ([`read_photo`]) and makes its colour planes
 /// (as [`read_planes`] gave them) straight: a file of associated alpha has its colour divided
 /// by `alpha` as stored, in its encoded values (where the file multiplied it). Then, when
-/// `linearise`, turns them into the linear light of its profile (or of what a PNG's gAMA and
-/// cHRM say, [`profile_of`]). Returns the photo and a
-/// note when the profile could not give its curves.
+/// `linearise`, turns them into the linear light of its profile (or of what a PNG's cICP, or
+/// its gAMA and cHRM, say: [`profile_of`]), refusing a cICP it cannot honour
+/// ([`cicp_refused`], the error [`NOT_SUPPORTED`] first). Returns the photo and a note when
+/// the profile could not give its curves, or a cICP was passed over.
 pub fn read_photo_colour(
     path: &Path,
     mut planes: [&mut [f32]; 3],
@@ -460,10 +463,23 @@ pub fn read_photo_colour(
     if !linearise {
         return Ok((photo, None));
     }
+    if let Some(why) = cicp_refused(&photo) {
+        return Err(format!("{NOT_SUPPORTED}{why}"));
+    }
     let transfer = Transfer::of(profile_of(&photo, photo.grey).as_deref());
     let max = if photo.bits == 16 { 65535 } else { 255 };
     transfer.linearise(planes, max);
-    Ok((photo, transfer.note))
+    let notes: Vec<String> = profile::cicp_note(&photo)
+        .into_iter()
+        .chain(transfer.note)
+        .collect();
+    Ok((photo, (!notes.is_empty()).then(|| notes.join("; "))))
+}
+
+/// Why a photo's colour cannot be read as its PNG's cICP says it is coded (high dynamic
+/// range, narrow range: [`profile::cicp_refusal`]), where it cannot.
+pub fn cicp_refused(photo: &Photo) -> Option<String> {
+    profile::cicp_refusal(photo.png_colour?.cicp?)
 }
 
 #[cfg(test)]

@@ -25,8 +25,9 @@ use std::borrow::Cow;
 use std::ops::RangeInclusive;
 
 use moxcms::{
-    Chromaticity, ColorDateTime, ColorPrimaries, ColorProfile, DataColorSpace, LocalizableString,
-    Matrix3d, ProfileText, ToneCurveEvaluator, ToneReprCurve, XyY, Xyz,
+    Chromaticity, CicpColorPrimaries, ColorDateTime, ColorPrimaries, ColorProfile, DataColorSpace,
+    LocalizableString, Matrix3d, ProfileText, ToneCurveEvaluator, ToneReprCurve,
+    TransferCharacteristics, XyY, Xyz,
 };
 
 use crate::frame::{Photo, PngColour};
@@ -205,10 +206,15 @@ const GAMA_RANGE: RangeInclusive<u32> = 16..=625_000_000;
 /// sRGB's primaries and white (IEC 61966-2-1): what a PNG of a gAMA and no cHRM is read with.
 const SRGB_CHRM: [f32; 8] = [0.3127, 0.3290, 0.64, 0.33, 0.30, 0.60, 0.15, 0.06];
 
-/// The ICC profile that says how a photo's codes are coded: the one it embeds; else, for a
-/// PNG, the one its gAMA and cHRM describe ([`png_profile`]); else none (sRGB's curve).
-/// `grey`: a profile made from a PNG's chunks is a Gray one, for a grey output.
+/// The ICC profile that says how a photo's codes are coded, in the order PNG 3rd ed. (4.3)
+/// gives: a PNG's cICP where shutter can make its profile ([`cicp_profile_of`]); else the one
+/// it embeds; else, for a PNG, the one its gAMA and cHRM describe ([`png_profile`]); else
+/// none (sRGB's curve). `grey`: a profile made from a PNG's chunks is a Gray one, for a grey
+/// output.
 pub fn profile_of(photo: &Photo, grey: bool) -> Option<Cow<'_, [u8]>> {
+    if let Some(made) = cicp_profile_of(photo, grey) {
+        return Some(Cow::Owned(made));
+    }
     match (&photo.icc, &photo.png_colour) {
         (Some(icc), _) => Some(Cow::Borrowed(icc)),
         (None, Some(colour)) => png_profile(colour, grey).map(Cow::Owned),
@@ -219,20 +225,151 @@ pub fn profile_of(photo: &Photo, grey: bool) -> Option<Cow<'_, [u8]>> {
 /// Whether a photo's profile is one [`profile_of`] made from its PNG chunks (which a PNG
 /// output writes as those chunks again, not as an iCCP).
 pub fn profile_is_made(photo: &Photo) -> bool {
-    photo.icc.is_none()
-        && photo
-            .png_colour
-            .is_some_and(|c| png_profile(&c, false).is_some())
+    cicp_profile_of(photo, false).is_some()
+        || photo.icc.is_none()
+            && photo
+                .png_colour
+                .is_some_and(|c| png_profile(&c, false).is_some())
+}
+
+/// What says how a photo's codes are coded, as [`profile_of`] chooses (`shutter info`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ColourSource {
+    /// A PNG's cICP (one shutter refuses, [`cicp_refusal`], among them).
+    Cicp,
+    /// The embedded ICC profile.
+    Icc,
+    /// A PNG's sRGB chunk.
+    Srgb,
+    /// A PNG's gAMA and cHRM, or either.
+    PngChunks,
+    /// Nothing: the codes are taken as sRGB's, as readers take them.
+    None,
+}
+
+impl ColourSource {
+    /// Its name in `--json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ColourSource::Cicp => "cicp",
+            ColourSource::Icc => "icc",
+            ColourSource::Srgb => "srgb",
+            ColourSource::PngChunks => "gama_chrm",
+            ColourSource::None => "none",
+        }
+    }
+}
+
+/// What codes a photo's colour ([`ColourSource`]).
+pub fn colour_source(photo: &Photo) -> ColourSource {
+    let colour = photo.png_colour.unwrap_or_default();
+    let cicp = colour
+        .cicp
+        .filter(|&c| cicp_refusal(c).is_some() || curve_of(c).is_some());
+    if cicp.is_some() {
+        ColourSource::Cicp
+    } else if photo.icc.is_some() {
+        ColourSource::Icc
+    } else if colour.srgb.is_some() {
+        ColourSource::Srgb
+    } else if png_profile(&colour, false).is_some() {
+        ColourSource::PngChunks
+    } else {
+        ColourSource::None
+    }
+}
+
+/// The transfer characteristics of H.273 that are high dynamic range: PQ (SMPTE ST 2084)
+/// and HLG (ARIB STD-B67).
+const PQ: u8 = 16;
+const HLG: u8 = 18;
+
+/// Why a PNG's cICP (primaries, transfer, matrix, full range) cannot be honoured, where it
+/// cannot: a high dynamic range transfer, or narrow-range codes. moxcms makes PQ's and HLG's
+/// curves, but as tables of 1024 16-bit values (`build_trc_table`): PQ's light reaches 1 at
+/// 10000 cd/m², so its darkest tenth of codes (up to 0.3 cd/m²) lands on three values of the
+/// table, HLG's darkest twentieth on fourteen (and its curve bakes in one display's system
+/// gamma, 1.2), and the blur would flatten those shadows into bands. Narrow
+/// range puts black at 16 and white at 235 (× 2^(bits − 8)), which no curve here reads.
+pub fn cicp_refusal([_, transfer, _, full]: [u8; 4]) -> Option<String> {
+    let hdr = match transfer {
+        PQ => Some("PQ (SMPTE ST 2084)"),
+        HLG => Some("HLG (ARIB STD-B67)"),
+        _ => None,
+    };
+    if let Some(name) = hdr {
+        return Some(format!(
+            "its cICP says its codes are high dynamic range, transfer {transfer}, {name}, which \
+             an 8/16-bit photo's read cannot hold without flattening its shadows; convert it to \
+             linear light in a float EXR first, or give --linear to blur its codes as they are"
+        ));
+    }
+    (full == 0).then(|| {
+        "its cICP says its codes are narrow range (black at 16, white at 235), which shutter \
+         cannot read; convert it to full range first"
+            .to_string()
+    })
+}
+
+/// The curve of a cICP's transfer and the white and primaries of its colour primaries (CIE
+/// x, y: white, red, green, blue), where moxcms knows both: `None` for numbers it does not
+/// (unspecified, reserved, unknown).
+fn curve_of([primaries, transfer, _, _]: [u8; 4]) -> Option<(ToneReprCurve, [f32; 8])> {
+    let curve = ToneReprCurve::try_from(TransferCharacteristics::try_from(transfer).ok()?).ok()?;
+    let cicp = CicpColorPrimaries::try_from(primaries).ok()?;
+    let p = ColorPrimaries::try_from(cicp).ok()?;
+    // H.273, table 2: every white is D65 but these.
+    let (wx, wy) = match primaries {
+        4 | 8 => (0.310, 0.316),
+        10 => (1.0 / 3.0, 1.0 / 3.0),
+        11 => (0.314, 0.351),
+        _ => (0.3127, 0.3290),
+    };
+    let [r, g, b] = [p.red, p.green, p.blue];
+    Some((curve, [wx, wy, r.x, r.y, g.x, g.y, b.x, b.y]))
+}
+
+/// The ICC profile a PNG's cICP describes, where shutter honours it: not refused
+/// ([`cicp_refusal`]) and of numbers moxcms knows (`curve_of`).
+pub fn cicp_profile_of(photo: &Photo, grey: bool) -> Option<Vec<u8>> {
+    let cicp = photo.png_colour?.cicp?;
+    if cicp_refusal(cicp).is_some() {
+        return None;
+    }
+    let (curve, xy) = curve_of(cicp)?;
+    let [p, t, ..] = cicp;
+    made_profile(curve, xy, grey, format!("A PNG's cICP {p}/{t}/0/1"))
+}
+
+/// The note of a PNG whose cICP is passed over: its numbers are ones moxcms has no curve or
+/// primaries for, so the chunks after it in PNG's order say how the codes are coded.
+pub fn cicp_note(photo: &Photo) -> Option<String> {
+    let cicp = photo.png_colour?.cicp?;
+    if cicp_refusal(cicp).is_some() || curve_of(cicp).is_some() {
+        return None;
+    }
+    let [p, t, m, f] = cicp;
+    let then = match colour_source(&Photo {
+        png_colour: photo.png_colour.map(|c| PngColour { cicp: None, ..c }),
+        ..photo.clone()
+    }) {
+        ColourSource::Icc => "its ICC profile",
+        ColourSource::Srgb => "its sRGB chunk",
+        ColourSource::PngChunks => "its gAMA and cHRM",
+        _ => "sRGB's curve, as for a PNG of none",
+    };
+    Some(format!(
+        "the PNG's cICP {p}/{t}/{m}/{f} names primaries or a transfer shutter has no curve \
+         for: its colour is read by {then}"
+    ))
 }
 
 /// The ICC profile a PNG's gAMA and cHRM describe, where no sRGB chunk overrides them (PNG
 /// 3rd ed., 11.3.2.2 and 11.3.2.3): the curve light = code^(100000 / gAMA), gAMA holding the
 /// exponent that encoded the light ×100000 (45455 for 1/2.2), sRGB's curve where it has no
 /// gAMA in libpng's range ([`GAMA_RANGE`]); the primaries and white of its cHRM, sRGB's where
-/// it has none (what its readers assume). Built by moxcms: the colorants adapted to D50 by
-/// Bradford, a `chad` that adapts the white to D50 (moxcms's own is its cone matrix), no
-/// CICP, a fixed creation date (the same PNG makes the same bytes). `None` where the chunks
-/// say nothing: an sRGB chunk, or neither a usable gAMA nor a cHRM.
+/// it has none (what its readers assume). `None` where the chunks say nothing: an sRGB
+/// chunk, or neither a usable gAMA nor a cHRM.
 fn png_profile(colour: &PngColour, grey: bool) -> Option<Vec<u8>> {
     if colour.srgb.is_some() {
         return None;
@@ -241,14 +378,32 @@ fn png_profile(colour: &PngColour, grey: bool) -> Option<Vec<u8>> {
     if gamma.is_none() && colour.chromaticities.is_none() {
         return None;
     }
-    let mut profile = ColorProfile::new_srgb();
     let curve = match gamma {
         Some(g) => ToneReprCurve::Parametric(vec![(100_000.0 / g as f64) as f32]),
-        None => profile.red_trc.clone()?,
+        None => ColorProfile::new_srgb().red_trc?,
     };
-    let [wx, wy, rx, ry, gx, gy, bx, by] = colour
+    let xy = colour
         .chromaticities
         .map_or(SRGB_CHRM, |c| c.map(|v| v as f32 / 100_000.0));
+    let gamma = gamma.map_or("sRGB's curve".into(), |g| format!("gAMA {g}"));
+    let chrm = colour
+        .chromaticities
+        .map_or("sRGB's primaries", |_| "its cHRM");
+    made_profile(curve, xy, grey, format!("A PNG's {gamma} and {chrm}"))
+}
+
+/// An ICC profile of one `curve` for every channel and the white and primaries `xy` (x, y
+/// of white, red, green, blue), described as `description`. Built by moxcms: the colorants
+/// adapted to D50 by Bradford, a `chad` that adapts the white to D50 (moxcms's own is its
+/// cone matrix), no CICP, a fixed creation date (the same chunks make the same bytes), the
+/// header's D50 as ICC gives it. `grey`: a Gray profile of the curve.
+fn made_profile(
+    curve: ToneReprCurve,
+    [wx, wy, rx, ry, gx, gy, bx, by]: [f32; 8],
+    grey: bool,
+    description: String,
+) -> Option<Vec<u8>> {
+    let mut profile = ColorProfile::new_srgb();
     let white = XyY::new(wx as f64, wy as f64, 1.0);
     profile.update_rgb_colorimetry(
         white,
@@ -274,14 +429,10 @@ fn png_profile(colour: &PngColour, grey: bool) -> Option<Vec<u8>> {
         profile.green_trc = Some(curve.clone());
         profile.blue_trc = Some(curve);
     }
-    let gamma = gamma.map_or("sRGB's curve".into(), |g| format!("gAMA {g}"));
-    let chrm = colour
-        .chromaticities
-        .map_or("sRGB's primaries", |_| "its cHRM");
     profile.description = Some(ProfileText::Localizable(vec![LocalizableString::new(
         "en".into(),
         "US".into(),
-        format!("A PNG's {gamma} and {chrm}"),
+        description,
     )]));
     profile.copyright = None;
     // 2000-01-01 00:00:00.
@@ -487,6 +638,7 @@ mod tests {
             gamma,
             chromaticities,
             srgb,
+            cicp: None,
         };
         let adobe = Some([31270, 32900, 64000, 33000, 21000, 71000, 15000, 6000]);
         assert_eq!(

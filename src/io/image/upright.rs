@@ -13,6 +13,14 @@
 //! Every edit is made in place, in the block's own byte order, and no value moves: a maker
 //! note that locates its parts from the start of the block still finds them (rebuilding the
 //! block, as `tiff_meta` does for a TIFF, could not promise that).
+//!
+//! The XMP packet says the same things in its own words ([`make_xmp_upright`]):
+//! `tiff:Orientation` becomes 1, and after a quarter turn each axis's size and resolution
+//! (`exif:PixelXDimension` and `exif:PixelYDimension`, `tiff:ImageWidth` and
+//! `tiff:ImageLength`, `tiff:XResolution` and `tiff:YResolution`, the focal plane's) trade
+//! places. The packet is text that each output writes whole, so its values may change length.
+
+use std::ops::Range;
 
 /// Tags edited here (TIFF 6.0; EXIF 2.32, 4.6.4 and 4.6.5).
 const ORIENTATION: u16 = 0x0112;
@@ -203,9 +211,139 @@ pub fn make_upright(exif: &mut [u8], orientation: u16, (width, height): (u32, u3
     }
 }
 
+/// The XMP properties that hold one axis's value each, in pairs (x, y), which trade values
+/// where the turn swapped the axes: the size (Exif's PixelXDimension and PixelYDimension,
+/// TIFF's ImageWidth and ImageLength) and the resolution, as the EXIF's are.
+const XMP_AXES: [(&str, &str); 4] = [
+    ("exif:PixelXDimension", "exif:PixelYDimension"),
+    ("tiff:ImageWidth", "tiff:ImageLength"),
+    ("tiff:XResolution", "tiff:YResolution"),
+    ("exif:FocalPlaneXResolution", "exif:FocalPlaneYResolution"),
+];
+
+/// Makes an XMP packet true of the photo turned upright by `orientation` (1 to 8), as
+/// [`make_upright`] does its EXIF: `tiff:Orientation` 1, and where the turn swapped the axes
+/// (5 to 8) each pair of [`XMP_AXES`] trades values, in the attribute form
+/// (`exif:PixelXDimension="4000"`, either quote) and the element form
+/// (`<tiff:ImageWidth>4000</tiff:ImageWidth>`) alike. A property whose pair is missing is
+/// left as it is; the packet's length changes where the two values differ in length (it is
+/// written whole again, framed by each output).
+pub fn make_xmp_upright(xmp: &mut Vec<u8>, orientation: u16) {
+    set_xmp_orientation(xmp);
+    if !(5..=8).contains(&orientation) {
+        return;
+    }
+    for (x, y) in XMP_AXES {
+        let (xs, ys) = (xmp_values(xmp, x), xmp_values(xmp, y));
+        let mut edits: Vec<(Range<usize>, Vec<u8>)> = xs
+            .iter()
+            .zip(&ys)
+            .flat_map(|(a, b)| {
+                [
+                    (a.clone(), xmp[b.clone()].to_vec()),
+                    (b.clone(), xmp[a.clone()].to_vec()),
+                ]
+            })
+            .collect();
+        // From the end back, so each edit leaves the ranges before it where they were.
+        edits.sort_by_key(|(range, _)| std::cmp::Reverse(range.start));
+        for (range, value) in edits {
+            xmp.splice(range, value);
+        }
+    }
+}
+
+/// Where the values of the XMP property `name` (`tiff:ImageWidth`) are, in its attribute
+/// and element forms, in the packet's order.
+fn xmp_values(xmp: &[u8], name: &str) -> Vec<Range<usize>> {
+    let mut spans = Vec::new();
+    for (open, close) in [
+        (format!("{name}=\""), b'"'),
+        (format!("{name}='"), b'\''),
+        (format!("<{name}>"), b'<'),
+    ] {
+        let open = open.as_bytes();
+        let mut from = 0;
+        while let Some(found) = find(&xmp[from..], open) {
+            let start = from + found + open.len();
+            let Some(length) = xmp[start..].iter().position(|&b| b == close) else {
+                break;
+            };
+            spans.push(start..start + length);
+            from = start + length;
+        }
+    }
+    spans.sort_by_key(|span| span.start);
+    spans
+}
+
+/// Sets XMP's `tiff:Orientation` (as an attribute or an element) to 1.
+fn set_xmp_orientation(xmp: &mut [u8]) {
+    for (open, close) in [
+        (&b"tiff:Orientation=\""[..], b'"'),
+        (&b"tiff:Orientation='"[..], b'\''),
+        (&b"<tiff:Orientation>"[..], b'<'),
+    ] {
+        let mut from = 0;
+        while let Some(found) = find(&xmp[from..], open) {
+            let value = from + found + open.len();
+            // A single digit 1-8: overwritten in place, so no length changes.
+            if xmp.get(value + 1) == Some(&close) && xmp[value].is_ascii_digit() {
+                xmp[value] = b'1';
+            }
+            from = value;
+        }
+    }
+}
+
+fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {
+    haystack.windows(needle.len()).position(|w| w == needle)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn xmp_orientation_becomes_1_in_both_forms() {
+        let mut xmp = b"<x tiff:Orientation=\"6\"/><tiff:Orientation>8</tiff:Orientation>".to_vec();
+        set_xmp_orientation(&mut xmp);
+        assert_eq!(
+            xmp,
+            b"<x tiff:Orientation=\"1\"/><tiff:Orientation>1</tiff:Orientation>"
+        );
+    }
+
+    /// Both forms, both quotes, values of different lengths; an unpaired property and a
+    /// longer name that starts with a paired one left alone; nothing swapped by a half turn.
+    #[test]
+    fn a_quarter_turn_swaps_each_axis_pair_of_the_xmp() {
+        let packet = "<d exif:PixelXDimension='4000' exif:PixelYDimension='300' \
+             tiff:Orientation=\"6\"/><tiff:ImageWidth>640</tiff:ImageWidth>\
+             <tiff:ImageLength>1000</tiff:ImageLength><tiff:ImageWidthX>7</tiff:ImageWidthX>\
+             <tiff:XResolution>300/1</tiff:XResolution><tiff:YResolution>72/1</tiff:YResolution>\
+             <exif:FocalPlaneXResolution>9/2</exif:FocalPlaneXResolution>";
+        let mut xmp = packet.as_bytes().to_vec();
+        make_xmp_upright(&mut xmp, 6);
+        let expected = packet
+            .replace("'4000'", "'T'")
+            .replace("'300'", "'4000'")
+            .replace("'T'", "'300'")
+            .replace("\"6\"", "\"1\"")
+            .replace(">640<", ">T<")
+            .replace(">1000<", ">640<")
+            .replace(">T<", ">1000<")
+            .replace(">300/1<", ">T<")
+            .replace(">72/1<", ">300/1<")
+            .replace(">T<", ">72/1<");
+        assert_eq!(String::from_utf8(xmp).unwrap(), expected);
+        let mut xmp = packet.as_bytes().to_vec();
+        make_xmp_upright(&mut xmp, 3);
+        assert_eq!(
+            String::from_utf8(xmp).unwrap(),
+            packet.replace("\"6\"", "\"1\"")
+        );
+    }
 
     /// A big-endian EXIF block whose IFD0 holds Make (ASCII, 4 bytes inline) and Orientation.
     fn exif_with_orientation(orientation: u16) -> Vec<u8> {

@@ -5,10 +5,10 @@
 //!
 //! Each format through its own encoder, for what image's encoders do not pass on:
 //! - PNG (png crate): iCCP, eXIf, XMP as the iTXt chunk `XML:com.adobe.xmp`, and a PNG
-//!   input's gAMA, cHRM and sRGB and text chunks (tEXt, zTXt, iTXt) again, each in its kind
-//!   (a profile made from gAMA and cHRM, `profile::profile_of`, goes out as those chunks, not
-//!   as an iCCP; in a JPEG or TIFF, which have no such chunks, as the profile). IPTC is not written (PNG
-//!   has no settled place for it).
+//!   input's gAMA, cHRM, sRGB and cICP and text chunks (tEXt, zTXt, iTXt) again, each in its
+//!   kind (a profile made from a cICP, or from gAMA and cHRM, `profile::profile_of`, goes
+//!   out as those chunks, not as an iCCP; in a JPEG or TIFF, which have no such chunks, as
+//!   the profile). IPTC is not written (PNG has no settled place for it).
 //! - TIFF (tiff crate): deflate with the horizontal predictor (lossless, and what every TIFF
 //!   reader reads; LZW compresses photos less), `ExtraSamples` = 2 (unassociated alpha: the
 //!   file holds straight alpha), the profile in tag 34675, XMP in tag 700, IPTC's datasets
@@ -176,7 +176,21 @@ pub fn write_photo(
         (false, true) => transfer.grey,
         (false, false) => transfer.embeds,
     });
-    let icc = icc.filter(|_| !(made && format == ImageFormat::Png));
+    // Into a PNG, a made profile goes out as the chunks it was made from; beside a cICP,
+    // the iCCP the PNG came with goes out again as it came, where it describes what is
+    // written (one from gAMA and cHRM had none).
+    let icc = if made && format == ImageFormat::Png {
+        photo.and_then(|p| p.icc.as_deref()).filter(|own| {
+            let own = Transfer::of(Some(own));
+            if grey {
+                own.grey
+            } else {
+                own.embeds
+            }
+        })
+    } else {
+        icc
+    };
     let (w, h) = (width as u32, height as u32);
     let n = width * height;
     if float {
@@ -304,6 +318,13 @@ fn write_png(
         };
     }
     let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+    // The input's cICP as it came, before the image data (PNG 3rd ed., 5.6): the png crate
+    // reads it but does not write it.
+    if let Some(cicp) = photo.and_then(|p| p.png_colour?.cicp) {
+        writer
+            .write_chunk(png::chunk::cICP, &cicp)
+            .map_err(|e| e.to_string())?;
+    }
     // PNG stores 16-bit samples big-endian.
     let bytes: Vec<u8> = if sixteen_bit {
         codes.iter().flat_map(|c| c.to_be_bytes()).collect()

@@ -45,7 +45,7 @@ pub use preflight::{output_folder_problems, outputs_over_inputs, preflight};
 pub use read::{
     plan_color, read_color, read_frame, read_frame_keeping, read_frame_noted, StoredVectors,
 };
-pub use suggest::{passes_found, suggest, Candidate, Found, Suggestion};
+pub use suggest::{other_ways_to_depth, passes_found, suggest, Candidate, Found, Suggestion};
 
 use crate::io::sequence::PathPattern;
 

@@ -311,6 +311,24 @@ fn too_large_for_its_format(output: &Path, plan: &FramePlan) -> Option<Problem> 
 
 /// Plans every frame of `frames` and checks that each output can be written without
 /// overwriting an input; returns the plans, or all the problems found.
+/// The problem of a colour PNG whose read would refuse its colour (a cICP of high dynamic
+/// range or narrow range: `image::cicp_refused`), found before any frame is read; none where
+/// its codes are taken as they are (`--linear`).
+fn colour_refused(plan: &FramePlan) -> Option<Problem> {
+    let color = plan.color.as_ref().filter(|c| c.decode_srgb)?;
+    let info = &plan.files[color.rgb[0].file].info;
+    if !matches!(
+        info.kind,
+        crate::io::file::FileKind::Image { format: "PNG", .. }
+    ) {
+        return None;
+    }
+    let photo = crate::io::image::read_photo(&info.path).ok()?;
+    let why = crate::io::image::cicp_refused(&photo)?;
+    let problem = Problem::new(ProblemKind::Unsupported, &info.path, why);
+    Some(problem.frame(plan.frame).pass("color"))
+}
+
 pub fn preflight(
     inputs: &Inputs,
     output: &PathPattern,
@@ -335,6 +353,9 @@ pub fn preflight(
                 .ok()
                 .and_then(|p| too_large_for_its_format(&output, p));
             if let Some(problem) = too_large {
+                plan = Err(vec![problem]);
+            }
+            if let Some(problem) = plan.as_ref().ok().and_then(colour_refused) {
                 plan = Err(vec![problem]);
             }
             if let Some(problem) = output_in_the_way(&output, frame) {

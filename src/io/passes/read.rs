@@ -206,7 +206,11 @@ pub fn read_frame_keeping(
                 plan_color.decode_srgb,
             )
             .map_err(|d| {
-                Problem::new(ProblemKind::Corrupt, &colour_file.path, d).frame(plan.frame)
+                let (kind, d) = match d.strip_prefix(crate::io::image::NOT_SUPPORTED) {
+                    Some(what) => (ProblemKind::Unsupported, what.to_string()),
+                    None => (ProblemKind::Corrupt, d),
+                };
+                Problem::new(kind, &colour_file.path, d).frame(plan.frame)
             })?;
             notes.extend(note);
             frame.carried.photo = Some(photo);

@@ -121,6 +121,42 @@ pub fn passes_found(info: &FileInfo, preset: &Preset) -> Vec<&'static str> {
         .collect()
 }
 
+/// The ways besides `--depth FILE` to give the depth a colour file (`info`, read with
+/// `preset`) does not hold, as a missing depth pass's problem ends with them: with depth of
+/// field (`dof`), `--coc-map FILE`; the convention presets that find depth in the file, each
+/// with the channel it reads; else a preset of one's own whose `[depth] channels` name it.
+pub fn other_ways_to_depth(info: &FileInfo, preset: &Preset, dof: bool) -> String {
+    let mut ways = String::new();
+    if dof {
+        ways.push_str(
+            ", or --coc-map FILE (a painted map of each pixel's blur, read in place of depth)",
+        );
+    }
+    let finding: Vec<String> = crate::io::preset::BUILTIN
+        .iter()
+        .filter(|(name, _)| crate::io::preset::is_convention(name) && *name != preset.name)
+        .filter_map(|(name, _)| Preset::builtin(name).ok())
+        .filter_map(|other| {
+            let read = passes_read(info, &other);
+            let (_, channels) = read.into_iter().find(|(pass, _)| *pass == "depth")?;
+            let channels: Vec<String> = channels.iter().map(|&c| shown(info, c)).collect();
+            Some(format!("{} ({})", other.name, channels.join(", ")))
+        })
+        .collect();
+    if finding.is_empty() {
+        ways.push_str(
+            ", or a preset whose [depth] channels name the file's depth channel \
+             (--preset FILE)",
+        );
+    } else {
+        ways.push_str(&format!(
+            ", or --preset NAME, one that finds depth in it: {}",
+            finding.join(", ")
+        ));
+    }
+    ways
+}
+
 /// The name `shutter info` shows for a channel.
 fn shown(info: &FileInfo, channel: usize) -> String {
     let c = &info.channels[channel];
