@@ -429,6 +429,26 @@ fn scatter_matches_the_cpu_with_other_segments_flatness_and_curve_lengths() {
     }
 }
 
+#[test]
+fn scatter_matches_the_cpu_where_arcs_turn_past_their_circles_far_side() {
+    // Arcs sweeping past their circle's far side into the next tile (tests/scatter.rs's
+    // `far_arcs`), the shutter opening at the frame: the CPU's reach once stopped at the
+    // parabola's bound and left those pixels empty (0.207 apart on a frame like this).
+    for normalize in [Normalize::Paper, Normalize::Exposure] {
+        let params = ScatterParams {
+            normalize,
+            curve: CurveKind::Arc,
+            max_curve: 2000.0,
+            ..ScatterParams::default()
+        };
+        let start = Shutter {
+            open: 1.0,
+            offset: 0.5,
+        };
+        compare("far arcs", &crate::scatter::far_arcs(), &params, start);
+    }
+}
+
 /// A still frame comes back as it went, bit for bit, on both sides.
 #[test]
 fn scatter_of_a_still_frame_on_the_gpu_is_its_input() {

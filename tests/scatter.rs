@@ -458,3 +458,90 @@ fn moving_bands(bands: &[(f64, f64)], columns: impl Iterator<Item = usize>) -> (
     }
     worst
 }
+
+/// An arc of radius `R_ARC` px per moving pixel of a 3×3 square at (200, 100) on a black,
+/// far (depth 10) 300×200 frame: the angle about its centre runs from −20° (at t = −1)
+/// through 0° (the frame) to 300° (t = +1), θ(t) = 160°·t + 140°·t², p(0) the circle's
+/// leftmost point, so between t ≈ 0.70 and 1 it turns past the circle's far side, 2·`R_ARC`
+/// px to the right (x ≈ 260, in the next 256-px tile): farther than the parabola through the
+/// same three positions says (about `R_ARC` over t ∈ [0, 1]). The square is (4, 1, 0.5) at
+/// depth 1.
+pub fn far_arcs() -> Frame {
+    let (w, h) = (300, 200);
+    let n = w * h;
+    let mut f = Frame::new(w, h);
+    let inside = |i: usize| (200..203).contains(&(i % w)) && (100..103).contains(&(i / w));
+    let plane = |v: f32| (0..n).map(|i| if inside(i) { v } else { 0.0 }).collect();
+    f.color = Some(shutter::frame::Color {
+        r: plane(4.0),
+        g: plane(1.0),
+        b: plane(0.5),
+        a: None,
+    });
+    f.depth = Some((0..n).map(|i| if inside(i) { 1.0 } else { 10.0 }).collect());
+    let mut prev = Positions {
+        x: (0..n).map(|i| (i % w) as f32 + 0.5).collect(),
+        y: (0..n).map(|i| (i / w) as f32 + 0.5).collect(),
+        z: None,
+    };
+    let mut next = prev.clone();
+    for i in (0..n).filter(|&i| inside(i)) {
+        let (p, q) = (far_arc(-1.0), far_arc(1.0));
+        (prev.x[i], prev.y[i]) = (prev.x[i] + p[0] as f32, prev.y[i] + p[1] as f32);
+        (next.x[i], next.y[i]) = (next.x[i] + q[0] as f32, next.y[i] + q[1] as f32);
+    }
+    f.prev = Some(prev);
+    f.next = Some(next);
+    f
+}
+
+/// [`far_arcs`]'s radius, px.
+const R_ARC: f64 = 30.0;
+
+/// Where [`far_arcs`]'s moving pixels are at time t, relative to p(0).
+fn far_arc(t: f64) -> [f64; 2] {
+    let angle = (180.0 + 160.0 * t + 140.0 * t * t).to_radians();
+    [R_ARC + R_ARC * angle.cos(), R_ARC * angle.sin()]
+}
+
+#[test]
+fn an_arc_deposits_past_its_circle_s_far_side() {
+    // The shutter opening at the frame (t ∈ [0, 1]), arcs, each normalisation (over black,
+    // any deposit shows), curves up to 2000 px. Sampled here from the circle itself,
+    // every point of the arc more than 1.5·R from p(0) must lie on a pixel that got colour.
+    let f = far_arcs();
+    for normalize in [Normalize::Paper, Normalize::Exposure] {
+        let params = Params {
+            shutter: 1.0,
+            shutter_offset: 0.5,
+            scatter: ScatterParams {
+                normalize,
+                curve: CurveKind::Arc,
+                max_curve: 2000.0,
+                // Chords within 0.1 px of the circle (ten would cut 1 px inside it).
+                segments: 64,
+                ..ScatterParams::default()
+            },
+            ..Params::default()
+        };
+        let out = apply(Algorithm::Scatter, &params, f.clone(), 1);
+        let r = &out.color.as_ref().unwrap().r;
+        let mut far = 0;
+        for k in 0..=1000 {
+            let d = far_arc(k as f64 / 1000.0);
+            if d[0].hypot(d[1]) < 1.5 * R_ARC {
+                continue;
+            }
+            far += 1;
+            // From the middle pixel of the square.
+            let (x, y) = ((201.5 + d[0]) as usize, (101.5 + d[1]) as usize);
+            assert!(
+                r[y * 300 + x] > 0.0,
+                "{normalize:?}: ({x}, {y}), {:.1} px from p(0) along the arc, got nothing",
+                d[0].hypot(d[1])
+            );
+        }
+        // Both ways past the far side (x = 260).
+        assert!(far > 300, "{far}");
+    }
+}

@@ -1,6 +1,6 @@
 //! One frame's scatter as its stages see it ([`Scatter`]): the input buffers, the config and
-//! the exposure, with each pixel's motion (its three positions and how far its curve can
-//! reach) and the weight along a curve. [`super::reach`], [`super::accumulate`] and
+//! the exposure, with each pixel's motion (its three positions, and the parabola's bound on
+//! how far its curve strays) and the weight along a curve. [`super::reach`], [`super::accumulate`] and
 //! [`super::resolve`] add the stages' own methods.
 
 use super::config::{ScatterConfig, Weight, STILL};
@@ -8,13 +8,12 @@ use crate::frame::{Color, Positions};
 use crate::motion::curve::{length, Point};
 use crate::motion::shutter::Shutter;
 
-/// A moving pixel's three positions, and how far from p(0) its curve can deposit.
+/// A moving pixel's three positions.
 #[derive(Clone, Copy)]
 pub(super) struct Moving {
     pub(super) prev: Point,
     pub(super) now: Point,
     pub(super) next: Point,
-    pub(super) reach: f64,
 }
 
 /// The still pixels at a silhouette (what the `fringe` stage finds), in index order, each
@@ -124,18 +123,18 @@ impl Scatter<'_> {
     /// The motion of a moving pixel; `None` where it is still.
     #[inline]
     pub(super) fn motion(&self, x: usize, y: usize) -> Option<Moving> {
+        self.moving(x, y).map(|(motion, _)| motion)
+    }
+
+    /// [`Scatter::motion`], with its [`Scatter::extent`] (the parabola's bound, which decided).
+    #[inline]
+    pub(super) fn moving(&self, x: usize, y: usize) -> Option<(Moving, f64)> {
         let i = y * self.width + x;
         let now = [x as f64 + 0.5, y as f64 + 0.5];
         let prev = [self.prev.x[i] as f64, self.prev.y[i] as f64];
         let next = [self.next.x[i] as f64, self.next.y[i] as f64];
         let extent = self.extent(prev, now, next);
-        (extent >= STILL).then_some(Moving {
-            prev,
-            now,
-            next,
-            // What the scaling to max_curve leaves, and the pixel a segment reaches beside it.
-            reach: extent.min(self.config.max_curve as f64) + 1.0,
-        })
+        (extent >= STILL).then_some((Moving { prev, now, next }, extent))
     }
 
     /// Which pixels of row `y` move (`out[x]`, as [`Scatter::motion`] decides it): a bound in
@@ -181,22 +180,22 @@ impl Scatter<'_> {
         }
     }
 
-    /// The positions of a pixel known to move, with its reach `r` from the reach pass
-    /// (skips [`Scatter::motion`]'s bound).
+    /// The positions of a pixel known to move (skips [`Scatter::motion`]'s test).
     #[inline]
-    pub(super) fn positions(&self, x: usize, y: usize, reach: f64) -> Moving {
+    pub(super) fn positions(&self, x: usize, y: usize) -> Moving {
         let i = y * self.width + x;
         Moving {
             prev: [self.prev.x[i] as f64, self.prev.y[i] as f64],
             now: [x as f64 + 0.5, y as f64 + 0.5],
             next: [self.next.x[i] as f64, self.next.y[i] as f64],
-            reach,
         }
     }
 
-    /// A bound on how far the curve strays from p(0) during the exposure: with
-    /// p(t) = p0 + t·v + t²·a, at most h·|v| + h²·|a| for |t| ≤ h (h = `half`, the farthest
-    /// the exposure gets from the frame).
+    /// A bound on how far the parabola through the three positions strays from p(0) during
+    /// the exposure: with p(t) = p0 + t·v + t²·a, at most h·|v| + h²·|a| for |t| ≤ h (h =
+    /// `half`, the farthest the exposure gets from the frame). The Bézier's, not the arc's
+    /// (which may turn past its circle's far side): [`Scatter::reach`] says when it bounds
+    /// where a curve deposits.
     #[inline]
     pub(super) fn extent(&self, prev: Point, now: Point, next: Point) -> f64 {
         let v = [0.5 * (next[0] - prev[0]), 0.5 * (next[1] - prev[1])];
@@ -221,16 +220,15 @@ impl Scatter<'_> {
 
 impl Scatter<'_> {
     /// Fringe pixel (x, y)'s curve: its partner `m`'s three positions moved to its own
-    /// centre (the same motion, so the same reach).
+    /// centre (the same motion).
     #[inline]
-    pub(super) fn fringe_positions(&self, x: usize, y: usize, m: usize, reach: f64) -> Moving {
+    pub(super) fn fringe_positions(&self, x: usize, y: usize, m: usize) -> Moving {
         let (mx, my) = ((m % self.width) as f64, (m / self.width) as f64);
         let d = [x as f64 - mx, y as f64 - my];
         Moving {
             prev: [self.prev.x[m] as f64 + d[0], self.prev.y[m] as f64 + d[1]],
             now: [x as f64 + 0.5, y as f64 + 0.5],
             next: [self.next.x[m] as f64 + d[0], self.next.y[m] as f64 + d[1]],
-            reach,
         }
     }
 }

@@ -32,11 +32,13 @@
 //! Weights are linear between segment ends.
 //!
 //! Determinism and work: output pixels are accumulated tile by tile, in f64. A first pass
-//! records, per 16×16 block of pixels, how far its curves can reach (a cheap bound, no curve
-//! is built); each tile then visits the blocks that can reach it, and in them the pixels
+//! records, per 16×16 block of pixels, how far its curves can reach (a cheap bound where it
+//! holds, the Bézier within `max_curve`; else the farthest point of the curve as it is drawn);
+//! each tile then visits the blocks that can reach it, and in them the pixels
 //! whose own bound reaches it, always in the same order, and draws only those curves, clipped
 //! to the tile. So the sums run in the same order for any thread count, no list of curves is
-//! stored, and a curve is built about 1.4 times on average (30 px streaks, 256×128 tiles).
+//! stored, and a curve is built about 1.4 times on average (30 px streaks, 256×128 tiles;
+//! an arc, or a Bézier longer than `max_curve`, once more, by `reach`).
 //! f64 also keeps a million overlapping deposits of one colour at that colour (f32 would drift
 //! by ~1e-4). A tile's cells (four sums where the frame is opaque, five with alpha) carry a
 //! border where a walk's unclipped rows land, with a depth limit of −∞ there, and live in a
@@ -53,6 +55,7 @@ mod accumulate;
 pub mod config;
 pub mod fringe;
 mod job;
+mod path;
 mod reach;
 mod resolve;
 

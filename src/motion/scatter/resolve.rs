@@ -210,6 +210,9 @@ impl Scatter<'_> {
         let dir = [v[0] / l, v[1] / l];
         let tolerance = 1.0 + self.config.depth_tolerance;
         let limit = self.depth[i] * tolerance;
+        // How far the search looks either way: the streak's half-length along its motion as
+        // the parabola gives it, as the GPU twin's behind.wgsl takes it (where to look for
+        // what lies behind, not a bound on where the curve deposits: `Scatter::reach`).
         let q = self
             .extent(prev, now, next)
             .min(self.config.max_curve as f64);
