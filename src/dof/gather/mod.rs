@@ -420,6 +420,8 @@ pub fn gather_carrying(
                     keep: !padded.extra.is_empty(),
                     ..RowWeights::default()
                 };
+                // A tile row of each carried plane.
+                let mut carried = vec![[0.0f32; TILE]; padded.extra.len()];
                 for tx in 0..tiles_x {
                     let t = ty * tiles_x + tx;
                     let x0 = tx * TILE;
@@ -471,15 +473,9 @@ pub fn gather_carrying(
                             band[row * width + x0..row * width + x0 + span]
                                 .copy_from_slice(&result[k][..span]);
                         }
-                        // Four planes at a time, the last group's empty places filled with its
-                        // last plane (computed, not kept).
-                        for (bands, planes) in extra_bands.chunks_mut(4).zip(padded.extra.chunks(4))
-                        {
-                            let last = planes.len() - 1;
-                            let group = [0, 1, 2, 3].map(|k| &planes[k.min(last)][..]);
-                            let mut carried = [[0.0f32; TILE]; 4];
-                            carry_run(group, &run, &weights, &mut carried);
-                            for (band, plane) in bands.iter_mut().zip(&carried) {
+                        if !padded.extra.is_empty() {
+                            carry_run(&padded.extra, &run, &weights, &mut carried);
+                            for (band, plane) in extra_bands.iter_mut().zip(&carried) {
                                 band[row * width + x0..row * width + x0 + span]
                                     .copy_from_slice(&plane[..span]);
                             }
@@ -624,9 +620,9 @@ mod field_tests {
     #[test]
     fn carried_planes_get_the_bits_they_get_in_the_beautys_place() {
         // A near disc over a far texture with a band in focus: tiles of every kind (far field
-        // alone, both fields, fields apart, copied). Five carried planes (a group of four and
-        // one of one) must come out bit for bit as each does gathered alone as the beauty's
-        // red, and the beauty as it does with nothing carried.
+        // alone, both fields, fields apart, copied). Carried planes, from one to thirteen (one
+        // group to three), must come out bit for bit as each does gathered alone as the
+        // beauty's red, and the beauty as it does with nothing carried.
         let (w, h) = (192, 96);
         let disc = |x: usize, y: usize| {
             let (dx, dy) = (x as f32 - 40.0, y as f32 - 48.0);
@@ -651,19 +647,35 @@ mod field_tests {
         let kinds: std::collections::BTreeSet<u32> =
             plan(&config, &t).tiles.iter().map(|t| t.fields).collect();
         assert_eq!(kinds, [0, 1, 2, 3].into());
-        let extra: Vec<Vec<f32>> = [0.11, 0.07, 0.5, 0.9, 0.003].map(wave).into();
-        let (beauty, carried) = gather_carrying(&config, &color, &coc, &t, extra.clone());
+        let extra: Vec<Vec<f32>> = [
+            0.11, 0.07, 0.5, 0.9, 0.003, 0.23, 0.61, 0.019, 0.33, 0.8, 0.041, 0.17, 0.29,
+        ]
+        .map(wave)
+        .into();
         let bits = |plane: &[f32]| plane.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
-        assert_eq!(beauty, gather(&config, &color, &coc, &t));
-        assert_eq!(carried.len(), 5);
-        for (plane, got) in extra.iter().zip(&carried) {
-            let alone = Color {
-                r: plane.clone(),
-                ..color.clone()
-            };
-            let want = gather(&config, &alone, &coc, &t).r;
-            assert_ne!(bits(&want), bits(plane));
-            assert_eq!(bits(got), bits(&want));
+        let alone: Vec<Vec<u32>> = extra
+            .iter()
+            .map(|plane| {
+                let alone = Color {
+                    r: plane.clone(),
+                    ..color.clone()
+                };
+                let want = bits(&gather(&config, &alone, &coc, &t).r);
+                assert_ne!(want, bits(plane));
+                want
+            })
+            .collect();
+        let beauty_alone = gather(&config, &color, &coc, &t);
+        // Every group size `run::carry_run` has a loop for: one to six planes in one group,
+        // seven in groups of four and three, thirteen in five, four and four.
+        for count in [1, 2, 3, 4, 5, 6, 7, 13] {
+            let planes = extra[..count].to_vec();
+            let (beauty, carried) = gather_carrying(&config, &color, &coc, &t, planes);
+            assert_eq!(beauty, beauty_alone);
+            assert_eq!(carried.len(), count);
+            for (k, (got, want)) in carried.iter().zip(&alone).enumerate() {
+                assert_eq!(&bits(got), want, "{count} planes: plane {k}");
+            }
         }
     }
 

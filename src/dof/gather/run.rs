@@ -119,18 +119,35 @@ impl Padded {
                 });
             out
         };
+        // A plane mirrored as it is: each row's inside copied whole, only its borders
+        // through `columns` (the same values as `padded`, without a call a value: with
+        // six light layers, eighteen such planes).
+        let mirrored = |plane: &[f32]| {
+            let mut out = vec![0.0f32; stride * rows];
+            out.par_chunks_mut(stride)
+                .enumerate()
+                .for_each(|(py, row)| {
+                    let y = mirror(py as isize - pad as isize, height);
+                    let source = &plane[y * width..(y + 1) * width];
+                    row[pad..pad + width].copy_from_slice(source);
+                    for px in (0..pad).chain(pad + width..stride) {
+                        row[px] = source[columns[px]];
+                    }
+                });
+            out
+        };
         let planes = [
-            padded(&|i| color.r[i], false),
-            padded(&|i| color.g[i], false),
-            padded(&|i| color.b[i], false),
-            padded(&|i| color.a.as_ref().map_or(0.0, |a| a[i]), false),
+            mirrored(&color.r),
+            mirrored(&color.g),
+            mirrored(&color.b),
+            match &color.a {
+                Some(a) => mirrored(a),
+                None => vec![0.0f32; stride * rows],
+            },
             padded(&|i| 0.5 * coc[i], false),
             padded(&|i| inverse_area(coc[i], unit_area), true),
         ];
-        let extra = extra
-            .iter()
-            .map(|plane| padded(&|i| plane[i], false))
-            .collect();
+        let extra = extra.iter().map(|plane| mirrored(plane)).collect();
         Padded {
             stride,
             pad,
@@ -439,17 +456,83 @@ fn dense_far(
     }
 }
 
-/// Four carried planes (padded as the beauty's; a group of fewer repeats one) over the same
-/// tile row as [`gather_run`], with the weights it kept: the same sums in the same order, so
-/// each plane comes out with the bits it would get in the beauty's place. Four at a time, in
-/// the beauty's own loop shape: one plane at a time, LLVM left the loop mostly scalar (its
-/// sums spilled lane by lane), and it cost 5× more.
-#[multiversion::multiversion(targets("x86_64+avx512f+avx512vl"))]
-pub(super) fn carry_run(
-    planes: [&[f32]; 4],
+/// Most carried planes [`carry_run`] sums in one pass over a tile row's taps: their sums (a
+/// far and a near one each) and centres then fill 18 of AVX-512's 32 registers, beside the
+/// sample and the weights.
+const MOST_PLANES: usize = 6;
+
+/// A tile row's lanes.
+type Lanes = [f32; TILE];
+
+/// `acc + w × (s − c)`, lane by lane, taken and given back by value so that a loop's sums
+/// live in registers; the beauty's order of operations (its `far[k][x] += wf * d[k]`).
+#[inline(always)]
+fn mad(acc: Lanes, w: &Lanes, s: &Lanes, c: &Lanes) -> Lanes {
+    let mut out = acc;
+    for x in 0..TILE {
+        out[x] += w[x] * (s[x] - c[x]);
+    }
+    out
+}
+
+/// The tile row's lanes of `plane` from padded index `base`.
+#[inline(always)]
+fn lanes(plane: &[f32], base: usize) -> &Lanes {
+    plane[base..]
+        .first_chunk::<TILE>()
+        .expect("the padding holds every tap of a tile row")
+}
+
+/// The sums of weight × (sample − centre) of N planes over `taps` with their kept weights,
+/// in tap order.
+#[inline(always)]
+fn sums<const N: usize>(
+    planes: &[&[f32]; N],
+    centre: &[Lanes; N],
+    start: usize,
+    taps: &[PixelTap],
+    weights: &[Lanes],
+) -> [Lanes; N] {
+    let mut acc = [[0.0f32; TILE]; N];
+    for (tap, w) in taps.iter().zip(weights) {
+        let base = (start as isize + tap.step) as usize;
+        for k in 0..N {
+            acc[k] = mad(acc[k], w, lanes(planes[k], base), &centre[k]);
+        }
+    }
+    acc
+}
+
+/// [`sums`] of the far and the near field over the same taps (`Fields::Both`).
+#[inline(always)]
+fn both_sums<const N: usize>(
+    planes: &[&[f32]; N],
+    centre: &[Lanes; N],
+    start: usize,
+    taps: &[PixelTap],
+    (far_weights, near_weights): (&[Lanes], &[Lanes]),
+) -> ([Lanes; N], [Lanes; N]) {
+    let mut far = [[0.0f32; TILE]; N];
+    let mut near = [[0.0f32; TILE]; N];
+    for ((tap, wf), wn) in taps.iter().zip(far_weights).zip(near_weights) {
+        let base = (start as isize + tap.step) as usize;
+        for k in 0..N {
+            let s = lanes(planes[k], base);
+            far[k] = mad(far[k], wf, s, &centre[k]);
+            near[k] = mad(near[k], wn, s, &centre[k]);
+        }
+    }
+    (far, near)
+}
+
+/// N carried planes over one tile row, with the weights [`gather_run`] kept: each plane's
+/// sums in the beauty's order, then its composite.
+#[inline(always)]
+fn carry_group<const N: usize>(
+    planes: [&[f32]; N],
     row: &Row,
     weights: &RowWeights,
-    out: &mut [[f32; TILE]; 4],
+    out: &mut [Lanes],
 ) {
     let Row {
         start,
@@ -460,89 +543,68 @@ pub(super) fn carry_run(
         grids,
         small: _,
     } = *row;
-    let [p0, p1, p2, p3] = planes;
-    let centre = |plane: &[f32]| -> [f32; TILE] {
+    let centre = planes.map(|plane| {
         let mut v = [0.0f32; TILE];
         v[..span].copy_from_slice(&plane[start..start + span]);
         v
+    });
+    let (mut far, near) = match fields {
+        Fields::Far => (
+            sums(&planes, &centre, start, far_taps, &weights.far),
+            [[0.0f32; TILE]; N],
+        ),
+        Fields::Apart => (
+            sums(&planes, &centre, start, far_taps, &weights.far),
+            sums(&planes, &centre, start, taps, &weights.near),
+        ),
+        Fields::Both => both_sums(&planes, &centre, start, taps, (&weights.far, &weights.near)),
     };
-    let (c0, c1, c2, c3) = (centre(p0), centre(p1), centre(p2), centre(p3));
-    let mut far = [[0.0f32; TILE]; 4];
-    let mut near = [[0.0f32; TILE]; 4];
-    if fields == Fields::Far || fields == Fields::Apart {
-        for (tap, wf) in far_taps.iter().zip(&weights.far) {
-            let base = (start as isize + tap.step) as usize;
-            let s0 = &p0[base..base + TILE];
-            let s1 = &p1[base..base + TILE];
-            let s2 = &p2[base..base + TILE];
-            let s3 = &p3[base..base + TILE];
-            for x in 0..TILE {
-                let d = [s0[x] - c0[x], s1[x] - c1[x], s2[x] - c2[x], s3[x] - c3[x]];
-                for k in 0..4 {
-                    far[k][x] += wf[x] * d[k];
-                }
-            }
-        }
-    }
-    if fields == Fields::Apart {
-        for (tap, wn) in taps.iter().zip(&weights.near) {
-            let base = (start as isize + tap.step) as usize;
-            let s0 = &p0[base..base + TILE];
-            let s1 = &p1[base..base + TILE];
-            let s2 = &p2[base..base + TILE];
-            let s3 = &p3[base..base + TILE];
-            for x in 0..TILE {
-                let d = [s0[x] - c0[x], s1[x] - c1[x], s2[x] - c2[x], s3[x] - c3[x]];
-                for k in 0..4 {
-                    near[k][x] += wn[x] * d[k];
-                }
-            }
-        }
-    }
-    if fields == Fields::Both {
-        for ((tap, wf), wn) in taps.iter().zip(&weights.far).zip(&weights.near) {
-            let base = (start as isize + tap.step) as usize;
-            let s0 = &p0[base..base + TILE];
-            let s1 = &p1[base..base + TILE];
-            let s2 = &p2[base..base + TILE];
-            let s3 = &p3[base..base + TILE];
-            for x in 0..TILE {
-                let d = [s0[x] - c0[x], s1[x] - c1[x], s2[x] - c2[x], s3[x] - c3[x]];
-                for k in 0..4 {
-                    far[k][x] += wf[x] * d[k];
-                    near[k][x] += wn[x] * d[k];
-                }
-            }
-        }
-    }
     if weights.dense_lanes.contains(&true) {
-        let mut dense_far = [[0.0f32; TILE]; 4];
-        for (tap, wf) in grids[weights.dense_radius].iter().zip(&weights.dense) {
-            let base = (start as isize + tap.step) as usize;
-            let s0 = &p0[base..base + TILE];
-            let s1 = &p1[base..base + TILE];
-            let s2 = &p2[base..base + TILE];
-            let s3 = &p3[base..base + TILE];
-            for x in 0..TILE {
-                let d = [s0[x] - c0[x], s1[x] - c1[x], s2[x] - c2[x], s3[x] - c3[x]];
-                for k in 0..4 {
-                    dense_far[k][x] += wf[x] * d[k];
-                }
-            }
-        }
+        let grid = &grids[weights.dense_radius];
+        let dense = sums(&planes, &centre, start, grid, &weights.dense);
         for x in 0..TILE {
             if weights.dense_lanes[x] {
-                for k in 0..4 {
-                    far[k][x] = dense_far[k][x];
+                for k in 0..N {
+                    far[k][x] = dense[k][x];
                 }
             }
         }
     }
-    let base = [c0, c1, c2, c3];
     for x in 0..span {
         let (near_scale, far_scale) = (weights.near_scale[x], weights.far_scale[x]);
-        for k in 0..4 {
-            out[k][x] = base[k][x] + near[k][x] * near_scale + far[k][x] * far_scale;
+        for k in 0..N {
+            out[k][x] = centre[k][x] + near[k][x] * near_scale + far[k][x] * far_scale;
         }
+    }
+}
+
+/// The carried planes (padded as the beauty's) over the same tile row as [`gather_run`],
+/// with the weights it kept, into `out` (a tile row a plane): the same sums in the same
+/// order, so each plane comes out with the bits it would get in the beauty's place. The
+/// planes go in groups of at most [`MOST_PLANES`], as even as they split (eighteen: three
+/// of six), each group one pass over the taps with a copy of the loop for its size.
+///
+/// The sums are values handed from tap to tap ([`mad`]), not arrays written in place: with
+/// `far[k][x] += …` on arrays (four planes a group, as before), LLVM kept the sums on the
+/// stack, and each tap waited on a store and a reload of every sum (3.9× the beauty for six
+/// RGB layers at 1080p; BENCHMARKS.md, "Light layers").
+#[multiversion::multiversion(targets("x86_64+avx512f+avx512vl"))]
+pub(super) fn carry_run(planes: &[Vec<f32>], row: &Row, weights: &RowWeights, out: &mut [Lanes]) {
+    let groups = planes.len().div_ceil(MOST_PLANES);
+    let mut from = 0;
+    for g in 0..groups {
+        // The first `planes.len() % groups` groups take one plane more.
+        let size = planes.len() / groups + usize::from(g < planes.len() % groups);
+        let (group, outs) = (&planes[from..from + size], &mut out[from..from + size]);
+        let plane = |k: usize| &group[k][..];
+        match size {
+            1 => carry_group([plane(0)], row, weights, outs),
+            2 => carry_group(std::array::from_fn::<_, 2, _>(plane), row, weights, outs),
+            3 => carry_group(std::array::from_fn::<_, 3, _>(plane), row, weights, outs),
+            4 => carry_group(std::array::from_fn::<_, 4, _>(plane), row, weights, outs),
+            5 => carry_group(std::array::from_fn::<_, 5, _>(plane), row, weights, outs),
+            _ => carry_group(std::array::from_fn::<_, 6, _>(plane), row, weights, outs),
+        }
+        from += size;
     }
 }
