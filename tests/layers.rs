@@ -623,6 +623,19 @@ fn one_view_layer_of_several_leaves_the_others_as_they_came() {
     );
 }
 
+/// Each part of an EXR: its name (empty where it has none) and its channels' names.
+fn parts_of(path: &Path) -> Vec<(String, Vec<String>)> {
+    (read_exr_layers(path).iter())
+        .map(|l| {
+            let part = l.attributes.layer_name.as_ref().map(|t| t.to_string());
+            let channels = (l.channel_data.list.iter())
+                .map(|c| c.name.to_string())
+                .collect();
+            (part.unwrap_or_default(), channels)
+        })
+        .collect()
+}
+
 /// Blender 5 writes view layers as a multi-part file, a part a pass (`FG.Combined` holding
 /// `FG.Combined.R`, …), and reads a part's channels that lack a layer name as the part's
 /// (its reader puts the part's name before them). The merged beauty (`R`, `G`, `B`, `A`) in the
@@ -658,20 +671,13 @@ fn a_multi_part_stack_gives_the_merged_beauty_a_part_of_its_own() {
     let from_single = run("blur", &single, dir.path().join("s.exr"), &args);
     let out = dir.path().join("m.exr");
     run("blur", &multi, out.clone(), &args);
-    let stored = read_exr_layers(&out);
-    let names = |l: &exr::image::Layer<exr::image::AnyChannels<exr::image::FlatSamples>>| {
-        let part = l.attributes.layer_name.as_ref().map(|t| t.to_string());
-        let channels: Vec<String> = (l.channel_data.list.iter())
-            .map(|c| c.name.to_string())
-            .collect();
-        (part.unwrap_or_default(), channels)
-    };
-    let (first, channels) = names(&stored[0]);
+    let stored = parts_of(&out);
+    let (first, channels) = &stored[0];
     assert_eq!(first, "Composite.Combined");
-    assert_eq!(channels, ["A", "B", "G", "R"]);
-    let (_, fg) = names(part_named(&stored, "FG.Combined"));
+    assert_eq!(channels, &["A", "B", "G", "R"]);
+    let fg = stored.iter().find(|(p, _)| p == "FG.Combined").unwrap();
     assert_eq!(
-        fg,
+        fg.1,
         [
             "FG.Combined.A",
             "FG.Combined.B",
@@ -680,8 +686,7 @@ fn a_multi_part_stack_gives_the_merged_beauty_a_part_of_its_own() {
         ]
     );
     // Every other part as it came: a part a pass, each named as its channels are.
-    for layer in &stored[1..] {
-        let (part, channels) = names(layer);
+    for (part, channels) in &stored[1..] {
         assert!(
             channels.iter().all(|c| c.starts_with(&format!("{part}."))),
             "{part}: {channels:?}"
@@ -711,16 +716,7 @@ fn a_dwa_output_of_view_layers_names_each_part_as_its_channels_begin() {
     let out = dir.path().join("dwa.exr");
     let args = ["--layer", "FG", "--compression", "dwaa"];
     run("blur", &input, out.clone(), &args);
-    let stored = read_exr_layers(&out);
-    let parts: Vec<(String, Vec<String>)> = (stored.iter())
-        .map(|l| {
-            let part = l.attributes.layer_name.as_ref().map(|t| t.to_string());
-            let channels = (l.channel_data.list.iter())
-                .map(|c| c.name.to_string())
-                .collect();
-            (part.unwrap_or_default(), channels)
-        })
-        .collect();
+    let parts = parts_of(&out);
     let names: Vec<&str> = parts.iter().map(|(p, _)| p.as_str()).collect();
     // The data parts in the order of their first channels in the file (sorted by name).
     assert_eq!(names, ["FG.Combined", "BG", "FG"], "{parts:?}");
@@ -740,9 +736,7 @@ fn a_dwa_output_of_view_layers_names_each_part_as_its_channels_begin() {
     let out = dir.path().join("stack.exr");
     let args = ["--layers", "FG,BG", "--compression", "dwaa"];
     run("blur", &input, out.clone(), &args);
-    let names: Vec<String> = (read_exr_layers(&out).iter())
-        .map(|l| l.attributes.layer_name.as_ref().unwrap().to_string())
-        .collect();
+    let names: Vec<String> = parts_of(&out).into_iter().map(|(p, _)| p).collect();
     assert_eq!(
         names,
         [
