@@ -170,13 +170,9 @@ impl Arc {
         ]
     }
 
-    /// Segments over t ∈ [t0, t1] so no chord's sagitta r·(1 − cos(δ/2)) ≈ r·δ²/8 exceeds
-    /// `tolerance` pixels, at least 1 and at most `most` (`most` for a tolerance of 0).
-    pub fn segments(&self, t0: f64, t1: f64, tolerance: f64, most: usize) -> usize {
-        if tolerance <= 0.0 {
-            return most.max(1);
-        }
-        // The angle is monotonic or turns once; bound its sweep by the ends and the vertex.
+    /// The angles the arc sweeps over t ∈ [t0, t1], lowest and highest: the angle is
+    /// monotonic or turns once, so the ends and the vertex bound it.
+    fn sweep(&self, t0: f64, t1: f64) -> (f64, f64) {
         let mut lo = self.angle(t0).min(self.angle(t1));
         let mut hi = self.angle(t0).max(self.angle(t1));
         if self.alpha != 0.0 {
@@ -186,6 +182,32 @@ impl Arc {
                 hi = hi.max(self.angle(vertex));
             }
         }
+        (lo, hi)
+    }
+
+    /// How far the arc over t ∈ [t0, t1] strays from its point at t = 0 (`now`, at angle
+    /// θ): the chord 2r·|sin((a − θ)/2)| to its swept angle `a` farthest round the circle,
+    /// 2r where the sweep passes the far side (θ + π). That chord grows up to the far side
+    /// and shrinks past it, so elsewhere the farthest is at an end of the sweep. Chords drawn
+    /// between points of the arc lie within it too, and so does the arc scaled about `now`.
+    pub fn farthest(&self, t0: f64, t1: f64) -> f64 {
+        let (lo, hi) = self.sweep(t0, t1);
+        let far_side = self.theta + PI;
+        let passes = far_side + ((lo - far_side) / TAU).ceil() * TAU <= hi;
+        if passes || hi - lo >= TAU {
+            return 2.0 * self.radius;
+        }
+        let chord = |a: f64| 2.0 * self.radius * (0.5 * (a - self.theta)).sin().abs();
+        chord(lo).max(chord(hi))
+    }
+
+    /// Segments over t ∈ [t0, t1] so no chord's sagitta r·(1 − cos(δ/2)) ≈ r·δ²/8 exceeds
+    /// `tolerance` pixels, at least 1 and at most `most` (`most` for a tolerance of 0).
+    pub fn segments(&self, t0: f64, t1: f64, tolerance: f64, most: usize) -> usize {
+        if tolerance <= 0.0 {
+            return most.max(1);
+        }
+        let (lo, hi) = self.sweep(t0, t1);
         let sweep = (hi - lo).min(2.0 * PI * 4.0);
         let needed = (sweep * (self.radius / (8.0 * tolerance)).sqrt()).ceil();
         if needed.is_finite() {
@@ -202,6 +224,32 @@ mod tests {
 
     fn close(a: Point, b: Point, tolerance: f64) -> bool {
         length(sub(a, b)) <= tolerance
+    }
+
+    /// `Arc::farthest` is the farthest of the arc's points from its p(0), sampled finely:
+    /// sweeps short of the far side, past it, turning back (a vertex inside the exposure),
+    /// and shutters opening at the frame and centred on it.
+    #[test]
+    fn an_arcs_farthest_point_is_the_sampled_arcs() {
+        let arcs = [
+            ([-3.0, 0.0], [0.0, 2.0], [3.0, 0.0]),
+            ([10.0, 0.0], [0.0, 10.0], [-10.0, 0.5]),
+            ([0.0, -4.0], [4.0, 0.0], [0.0, 4.5]),
+            ([5.0, 0.0], [0.0, 5.0], [1.0, 4.9]),
+        ];
+        for (prev, now, next) in arcs {
+            let arc = Arc::fit(prev, now, next).unwrap();
+            for (t0, t1) in [(-0.25, 0.25), (0.0, 1.0), (-1.0, 1.0), (0.3, 0.9)] {
+                let sampled = (0..=100_000)
+                    .map(|k| arc.at_time(t0 + (t1 - t0) * k as f64 / 100_000.0))
+                    .fold(0.0f64, |r, q| r.max(length(sub(q, now))));
+                let far = arc.farthest(t0, t1);
+                assert!(
+                    far >= sampled - 1e-9 && far <= sampled + 1e-3,
+                    "{prev:?} {now:?} {next:?} over [{t0}, {t1}]: {far} against {sampled}"
+                );
+            }
+        }
     }
 
     #[test]

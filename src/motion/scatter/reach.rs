@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use super::config::{CurveKind, BLOCK};
 use super::job::{Moving, Scatter};
 use super::path::Path;
+use crate::motion::curve::Arc;
 
 /// For each BLOCK×BLOCK block of pixels, how far from its pixels their curves can deposit
 /// (0 where none moves): lets a tile find the pixels whose curves can reach it.
@@ -119,6 +120,17 @@ impl Scatter<'_> {
         let longest = self.config.max_curve as f64;
         if self.config.curve() == CurveKind::Bezier && extent <= longest {
             return extent + 1.0;
+        }
+        // An arc's farthest point has a closed form (`Arc::farthest`), which bounds the
+        // built curve's (its points lie on the arc, scaled about p(0) at most); a millionth
+        // of a pixel a pixel of radius for the rounding of the built points.
+        if self.config.curve() == CurveKind::Arc {
+            if let Some(arc) = Arc::fit(motion.prev, motion.now, motion.next) {
+                let far = arc.farthest(self.t0, self.t1);
+                if far.is_finite() {
+                    return far + 1.0 + 1e-6 * (1.0 + arc.radius);
+                }
+            }
         }
         if self.path(i, motion, path, None) {
             path.farthest(motion.now) + 1.0
