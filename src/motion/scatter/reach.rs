@@ -60,8 +60,7 @@ impl Reach {
                     };
                     for (x, r) in row.iter_mut().enumerate().filter(|&(x, _)| moves[x]) {
                         *r = job.moving(x, y).map_or(0.0, |(motion, extent)| {
-                            let reach = job.reach(y * width + x, &motion, extent, &mut path);
-                            (reach + 0.01) as f32
+                            stored(job.reach(y * width + x, &motion, extent, &mut path))
                         });
                     }
                 }
@@ -77,7 +76,7 @@ impl Reach {
                         let motion = job.fringe_positions(i % width, i / width, m);
                         job.reach(m, &motion, extent, &mut path)
                     });
-                    pixel[i - y0 * width] = -((reach + 0.01) as f32);
+                    pixel[i - y0 * width] = -stored(reach);
                 }
                 let blocks = block.iter_mut().zip(deepest).zip(nearest);
                 for (bx, ((most, deepest), nearest)) in blocks.enumerate() {
@@ -102,6 +101,17 @@ impl Reach {
             deepest,
             nearest,
         }
+    }
+}
+
+/// A reach as stored (f32), a hundredth of a pixel over it, and never under it: past 2¹⁷ px
+/// (a huge `--max-curve`) an f32's rounding to the nearest exceeds the hundredth.
+fn stored(reach: f64) -> f32 {
+    let r = (reach + 0.01) as f32;
+    if (r as f64) < reach {
+        r.next_up()
+    } else {
+        r
     }
 }
 
@@ -149,6 +159,27 @@ mod tests {
     use crate::motion::scatter::fringe::fringe;
     use crate::motion::scatter::{CurveKind, Normalize, ScatterConfig, ScatterParams};
     use crate::motion::shutter::Shutter;
+
+    /// A stored reach is never under the reach: rounding to f32 past 2¹⁷ px loses more than
+    /// the hundredth it is given (2¹⁸ + 0.005 went in as 2¹⁸, 10⁷ + 0.3 as 10⁷).
+    #[test]
+    fn a_stored_reach_is_never_under_the_reach() {
+        for reach in [
+            0.5,
+            17.25,
+            131_071.99,
+            262_144.005,
+            1e7 + 0.3,
+            3.0e9 + 100.7,
+        ] {
+            let r = stored(reach);
+            assert!(r as f64 >= reach, "{reach} stored as {r}");
+            assert!(
+                (r as f64) <= reach + 0.01 + 1e-7 * reach,
+                "{reach} stored as {r}"
+            );
+        }
+    }
 
     /// A 300×150 frame (four tiles) of grey at depth 10 with a 6×6 red square at depth 1 at
     /// (`left`, 60), the column left of it holding 0.3 of the red (a silhouette's sliver, for
