@@ -268,16 +268,10 @@ fn data_part_name(part: Option<&Text>, taken: &[String]) -> String {
         .as_deref()
         .is_none_or(|n| crate::io::file::FileInfo::MAIN_PARTS.contains(&n));
     let fallback = format!("{}.data", part.as_deref().unwrap_or("rgba"));
-    let first = if main {
-        "data".to_string()
-    } else {
-        fallback.clone()
-    };
-    std::iter::once(first)
-        .chain(std::iter::once(fallback.clone()))
-        .chain((2..).map(|k| format!("{fallback}{k}")))
-        .find(|name| !taken.contains(name))
-        .expect("an endless list of names holds one not taken")
+    if main && !taken.iter().any(|n| n == "data") {
+        return "data".to_string();
+    }
+    fresh(&fallback, taken)
 }
 
 /// Channels in groups, one for those of no view layer (first), then one a view layer in
@@ -298,7 +292,7 @@ fn by_view_layer(channels: Vec<OutChannel>) -> Vec<(Option<String>, Vec<OutChann
 }
 
 /// `name`, or where a part has it already, the first of `name2`, `name3`, … none has.
-fn fresh(name: &str, taken: &[String]) -> String {
+pub(crate) fn fresh(name: &str, taken: &[String]) -> String {
     std::iter::once(name.to_string())
         .chain((2..).map(|k| format!("{name}{k}")))
         .find(|n| !taken.contains(n))

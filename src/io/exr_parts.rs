@@ -151,13 +151,8 @@ pub fn exr_parts(
 /// [`MERGED_PART`], or where the file has a part of that name already, the first of
 /// `Composite.Combined2`, … it has not.
 fn merged_part_name(headers: &[exr::meta::header::Header]) -> String {
-    let taken = |name: &str| {
-        headers
-            .iter()
-            .any(|h| (h.own_attributes.layer_name.as_ref()).is_some_and(|n| n == name))
-    };
-    std::iter::once(MERGED_PART.to_string())
-        .chain((2..).map(|k| format!("{MERGED_PART}{k}")))
-        .find(|name| !taken(name))
-        .expect("an endless list of names holds one not taken")
+    let taken: Vec<String> = (headers.iter())
+        .filter_map(|h| Some(h.own_attributes.layer_name.as_ref()?.to_string()))
+        .collect();
+    exr_like::fresh(MERGED_PART, &taken)
 }
