@@ -364,6 +364,9 @@ pub struct PngColour {
     pub chromaticities: Option<[u32; 8]>,
     pub srgb: Option<u8>,
     pub cicp: Option<[u8; 4]>,
+    /// The matrix coefficients the file's cICP gave where they were not 0 (PNG's samples are
+    /// RGB: 0), which shutter reads as 0 (`cicp` holds 0; `io::image::png_mend`).
+    pub cicp_matrix_read_as_0: Option<u8>,
 }
 
 /// The metadata of an 8/16-bit photo, as its file stores it, so the output holds it again.

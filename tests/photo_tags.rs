@@ -752,3 +752,96 @@ fn a_pngs_cicp_says_how_its_codes_are_coded() {
     assert_same_pixels(&p("odd_out.png"), &p("plain_out.png"), "an unreadable cICP");
     assert!(stderr(&o).contains("cICP"), "{}", stderr(&o));
 }
+
+/// A cICP whose matrix coefficients are 1, as PNG's drafts called the default and tools
+/// written to them wrote it (PNG's samples are RGB: the 3rd edition says 0): the png crate
+/// refuses such a file as invalid data, where libpng reads it. shutter reads it as the drafts
+/// told readers to, the matrix taken as 0 and the rest of the chunk honoured (a linear cICP
+/// blurs as the same codes do under `--linear`), says so, writes a valid cICP (matrix 0) and
+/// leaves the file as it was; `shutter info` shows the 1. A PQ one is refused as PQ, not as
+/// damage.
+#[test]
+fn a_pngs_cicp_with_matrix_coefficients_1_is_read_as_0_and_said_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    let (w, h) = (64u32, 8u32);
+    let stripes: Vec<u8> = (0..w * h)
+        .flat_map(|i| [if i % 2 == 0 { 255u8 } else { 0 }; 3])
+        .collect();
+    let velocity = p("v.png");
+    velocity_map(&velocity, w, h, |_, _| 12.0);
+    png_with_chunks(&p("plain.png"), (w, h), &stripes, None, &[]);
+    png_with_chunks(
+        &p("matrix.png"),
+        (w, h),
+        &stripes,
+        None,
+        &[(b"cICP", vec![1, 8, 1, 1])],
+    );
+    let before = std::fs::read(p("matrix.png")).unwrap();
+    blur(
+        &p("plain.png"),
+        &velocity,
+        &p("plain_linear.png"),
+        &["--linear"],
+    );
+    let o = blur(&p("matrix.png"), &velocity, &p("matrix_out.png"), &[]);
+    let err = stderr(&o);
+    assert!(
+        err.contains("matrix coefficients 1") && err.contains("read as 0"),
+        "{err}"
+    );
+    assert_same_pixels(
+        &p("matrix_out.png"),
+        &p("plain_linear.png"),
+        "a linear cICP of matrix 1 blurs as linear codes",
+    );
+    let file = std::io::BufReader::new(std::fs::File::open(p("matrix_out.png")).unwrap());
+    let reader = png::Decoder::new(file).read_info().unwrap();
+    let c = reader.info().coding_independent_code_points.unwrap();
+    assert_eq!(
+        (
+            c.color_primaries,
+            c.transfer_function,
+            c.matrix_coefficients
+        ),
+        (1, 8, 0)
+    );
+    assert_eq!(std::fs::read(p("matrix.png")).unwrap(), before, "the input");
+    let info = shutter(&["info", &s(&p("matrix.png"))]);
+    assert!(info.status.success(), "{}", stderr(&info));
+    assert!(
+        stdout(&info).contains("matrix 1, read as 0"),
+        "{}",
+        stdout(&info)
+    );
+    // High dynamic range: refused as such, naming the file.
+    png_with_chunks(
+        &p("pq.png"),
+        (w, h),
+        &stripes,
+        None,
+        &[(b"cICP", vec![9, 16, 1, 1])],
+    );
+    let out = p("pq_out.png");
+    let o = shutter(&[
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "--preset",
+        "painted",
+        "--color",
+        &s(&p("pq.png")),
+        "--velocity",
+        &s(&velocity),
+        "--depth",
+        &s(&p("depth.png")),
+        "-o",
+        &s(&out),
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("pq.png") && err.contains("PQ"), "{err}");
+    assert!(!err.contains("corrupt"), "{err}");
+    assert!(!out.exists());
+}

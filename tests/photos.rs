@@ -916,3 +916,103 @@ fn an_adobe_rgb_photos_exr_carries_its_primaries_as_chromaticities() {
         assert!(info.contains("chromaticities"), "{info}");
     }
 }
+
+/// A grey float TIFF (32-bit IEEE floats, one sample a pixel: what a depth estimator or an
+/// editor's 32-bit grey writes), which the image crate's decoder refuses, is read as a map: a
+/// painted depth map stored so gives the bytes the same map gives as a 16-bit PNG of the same
+/// values, and one stored sideways (Orientation 6, the upright map turned back a quarter)
+/// gives them too, turned upright once.
+#[test]
+fn a_grey_float_tiff_depth_map_reads_as_the_same_map_in_a_png() {
+    use tiff::encoder::{colortype::Gray32Float, TiffEncoder};
+    use tiff::tags::Tag;
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (24u32, 16u32);
+    let code = |x: u32, y: u32| ((x * 2731 + y * 4099) % 65536) as u16;
+    // The upright map as a 16-bit grey PNG, and its values as the PNG's reader makes them.
+    let codes: Vec<u16> = (0..w * h).map(|i| code(i % w, i / w)).collect();
+    let bytes: Vec<u8> = codes.iter().flat_map(|c| c.to_ne_bytes()).collect();
+    let png = dir.path().join("depth.png");
+    image::save_buffer(&png, &bytes, w, h, image::ColorType::L16).unwrap();
+    let value = |x: u32, y: u32| code(x, y) as f32 / 65535.0;
+    let write =
+        |name: &str, (sw, sh): (u32, u32), orientation: u16, at: &dyn Fn(u32, u32) -> f32| {
+            let path = dir.path().join(name);
+            let mut encoder = TiffEncoder::new(std::fs::File::create(&path).unwrap()).unwrap();
+            let mut image = encoder.new_image::<Gray32Float>(sw, sh).unwrap();
+            image
+                .encoder()
+                .write_tag(Tag::Orientation, orientation)
+                .unwrap();
+            let samples: Vec<f32> = (0..sw * sh).map(|i| at(i % sw, i / sw)).collect();
+            image.write_data(&samples).unwrap();
+            path
+        };
+    let upright = write("upright.tif", (w, h), 1, &|x, y| value(x, y));
+    // Orientation 6: the stored row 0 is the upright image's right column, read top down, so
+    // stored (x, y) is upright (w − 1 − y, x).
+    let sideways = write("sideways.tif", (h, w), 6, &|x, y| value(w - 1 - y, x));
+    let colour = dir.path().join("photo.png");
+    write_png(&colour, w, h, None, |_| {});
+    let run = |depth: &Path, out: &str| {
+        let out = dir.path().join(out);
+        let o = shutter(&[
+            "dof",
+            "--preset",
+            "painted",
+            "--color",
+            &s(&colour),
+            "--depth",
+            &s(depth),
+            "--focal-length",
+            "85",
+            "--f-stop",
+            "1.4",
+            "--focus-distance",
+            "20",
+            "-o",
+            &s(&out),
+        ]);
+        assert!(o.status.success(), "{}: {}", depth.display(), stderr(&o));
+        std::fs::read(out).unwrap()
+    };
+    let from_png = run(&png, "png.png");
+    assert_eq!(
+        run(&upright, "upright.png"),
+        from_png,
+        "the upright float TIFF"
+    );
+    assert_eq!(
+        run(&sideways, "sideways.png"),
+        from_png,
+        "the sideways float TIFF"
+    );
+    // As colour, it goes out as it came: a grey float TIFF, upright.
+    let out = dir.path().join("grey.tif");
+    let o = shutter(&[
+        "dof",
+        "--color",
+        &s(&sideways),
+        "--coc-map",
+        &s(&png),
+        "--coc-scale",
+        "0",
+        "-o",
+        &s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut decoder = tiff::decoder::Decoder::new(std::fs::File::open(&out).unwrap()).unwrap();
+    assert_eq!(decoder.colortype().unwrap(), tiff::ColorType::Gray(32));
+    assert_eq!(decoder.dimensions().unwrap(), (w, h));
+    let tiff::decoder::DecodingResult::F32(values) = decoder.read_image().unwrap() else {
+        panic!("not floats")
+    };
+    let want: Vec<f32> = (0..w * h).map(|i| value(i % w, i / w)).collect();
+    assert_eq!(
+        values, want,
+        "an in-focus grey float TIFF comes out as it went in"
+    );
+    if let Some(info) = tool("iinfo", &[&s(&out)]) {
+        assert!(info.contains("1 channel, float tiff"), "{info}");
+    }
+}

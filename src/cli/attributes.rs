@@ -259,13 +259,15 @@ fn colour_rows(photo: &crate::frame::Photo, shown: &mut Vec<Shown>) {
         );
     }
     if let Some([p, t, m, f]) = colour.cicp {
+        let stored = colour.cicp_matrix_read_as_0;
+        let matrix = stored.map_or(format!("{m}"), |s| format!("{s}, read as 0 (PNG is RGB)"));
         let text = format!(
-            "primaries {p} ({}), transfer {t} ({}), matrix {m}, {} range",
+            "primaries {p} ({}), transfer {t} ({}), matrix {matrix}, {} range",
             cicp_primaries(p),
             cicp_transfer(t),
             if f == 1 { "full" } else { "narrow" }
         );
-        let json = json!({"primaries": p, "transfer": t, "matrix": m, "full_range": f == 1});
+        let json = json!({"primaries": p, "transfer": t, "matrix": stored.unwrap_or(m), "full_range": f == 1});
         row("cICP", "chunk", text, json);
     }
     if let Some(r) = &photo.resolution {

@@ -560,11 +560,9 @@ pub fn output_notes(path: &Path, frame: &Frame, options: &OutputOptions) -> Vec<
         );
     }
     let transfer = icc.map(|icc| image_io::Transfer::of(Some(icc)));
-    let grey = image_io::goes_out_grey(photo, format, bits, rgb, alpha.is_some());
+    let grey = image_io::goes_out_grey(photo, format, rgb, alpha.is_some());
     if transfer.as_ref().is_some_and(|t| t.grey) && !grey {
-        let why = if float_out {
-            "a float TIFF is written RGB"
-        } else if photo.is_some_and(|p| !p.grey) {
+        let why = if photo.is_some_and(|p| !p.grey) {
             "the colour file is RGB"
         } else if format == ImageFormat::Tiff && alpha.is_some() {
             "a TIFF of grey and alpha is not written"

@@ -41,7 +41,16 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
     } else {
         (Vec::new(), None, None)
     };
-    let mut decoder = reader.into_decoder().map_err(|e| e.to_string())?;
+    let decoder = match reader.into_decoder() {
+        Ok(decoder) => decoder,
+        Err(e) => {
+            let header = tiff.then(|| super::tiff_float::header(path)).flatten();
+            return header
+                .map(|header| grey_float_photo(path, &header))
+                .ok_or_else(|| e.to_string());
+        }
+    };
+    let mut decoder = decoder;
     // How `read_planes` turns the pixels, and the size it gives them.
     let turn = super::orientation(&mut decoder);
     let size = super::upright(decoder.dimensions(), turn);
@@ -94,6 +103,37 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
     })
 }
 
+/// What a grey float TIFF ([`super::tiff_float`]) holds besides its pixels, as [`read_photo`]
+/// reads a TIFF's: its profile, EXIF, XMP and IPTC (the EXIF made true of the upright
+/// pixels), its resolution, and whether its alpha is associated.
+fn grey_float_photo(path: &Path, header: &super::tiff_float::Header) -> Photo {
+    let ([icc, mut exif, mut xmp, iptc], premultiplied, mut resolution) = tiff_blocks(path);
+    let orientation = header.orientation.to_exif();
+    let size = super::tiff_float::upright_size(header);
+    if let Some(exif) = &mut exif {
+        super::upright::make_upright(exif, orientation as u16, size);
+    }
+    if let Some(xmp) = &mut xmp {
+        super::upright::make_xmp_upright(xmp, orientation as u16);
+    }
+    if let (Some(r), 5..=8) = (&mut resolution, orientation) {
+        (r.x, r.y) = (r.y, r.x);
+    }
+    Photo {
+        icc,
+        exif,
+        xmp,
+        iptc,
+        texts: Vec::new(),
+        bits: 32,
+        grey: true,
+        sampling: None,
+        png_colour: None,
+        resolution,
+        premultiplied,
+    }
+}
+
 /// A PNG's text chunks before its image data (where writers put them), in file order, each
 /// as its kind: tEXt, zTXt (inflated), iTXt (but XMP's, which is `Photo::xmp`); its gAMA,
 /// cHRM, sRGB and cICP; and its pHYs. A chunk that cannot be read is left out; the decoder's
@@ -106,13 +146,13 @@ fn png_chunks(
     Option<Resolution>,
 ) {
     use crate::frame::{PngText, TextKind};
-    let Ok(file) = crate::io::input::open_input(path) else {
+    let Ok(source) = super::png_mend::source(path) else {
         return (Vec::new(), None, None);
     };
     let limits = png::Limits {
         bytes: crate::io::image::HEADER_ROOM as usize,
     };
-    let decoder = png::Decoder::new_with_limits(std::io::BufReader::new(file), limits);
+    let decoder = png::Decoder::new_with_limits(source, limits);
     let Ok(reader) = decoder.read_info() else {
         return (Vec::new(), None, None);
     };
@@ -163,6 +203,10 @@ fn png_chunks(
                 full,
             ]
         }),
+        cicp_matrix_read_as_0: crate::io::input::open_input(path)
+            .ok()
+            .map(std::io::BufReader::new)
+            .and_then(|mut file| super::png_mend::cicp_matrix(&mut file)),
     };
     let colour = (colour != PngColour::default()).then_some(colour);
     (texts, colour, resolution)

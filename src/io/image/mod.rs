@@ -12,8 +12,10 @@
 
 mod jpeg;
 mod meta;
+mod png_mend;
 mod profile;
 mod resolution;
+mod tiff_float;
 mod tiff_meta;
 mod upright;
 mod write;
@@ -49,8 +51,8 @@ pub struct ImageHeader {
 
 /// Channel names and the decoded plane each reads. A grey image also answers to R, G and B
 /// (all reading its Y plane), so it works as a colour pass as well as a data map.
-fn channel_names(color: ColorType) -> Vec<(&'static str, usize)> {
-    match color.channel_count() {
+fn channel_names(count: u8) -> Vec<(&'static str, usize)> {
+    match count {
         1 => vec![("Y", 0), ("R", 0), ("G", 0), ("B", 0)],
         2 => vec![("Y", 0), ("R", 0), ("G", 0), ("B", 0), ("A", 1)],
         3 => vec![("R", 0), ("G", 1), ("B", 2)],
@@ -60,9 +62,8 @@ fn channel_names(color: ColorType) -> Vec<(&'static str, usize)> {
 
 /// An image reader on an input file ([`crate::io::input::open_input`]: a regular file, opened
 /// without waiting), its format guessed from the name until the content says otherwise.
-pub fn input_reader(path: &Path) -> Result<ImageReader<std::io::BufReader<std::fs::File>>, String> {
-    let file = crate::io::input::open_input(path).map_err(|e| e.to_string())?;
-    let mut reader = ImageReader::new(std::io::BufReader::new(file));
+pub fn input_reader(path: &Path) -> Result<ImageReader<png_mend::Source>, String> {
+    let mut reader = ImageReader::new(png_mend::source(path)?);
     if let Ok(format) = image::ImageFormat::from_path(path) {
         reader.set_format(format);
     }
@@ -158,7 +159,10 @@ pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
     } else {
         None
     };
-    let mut decoder = reader.into_decoder().map_err(image_error)?;
+    let mut decoder = match reader.into_decoder() {
+        Ok(decoder) => decoder,
+        Err(e) => return grey_float_header(path, format).ok_or_else(|| image_error(e)),
+    };
     let (width, height) = upright(decoder.dimensions(), orientation(&mut decoder));
     // Past the pixel limit the caller's size check speaks first.
     let within = (width as u64).saturating_mul(height as u64) <= max_pixels as u64;
@@ -171,9 +175,26 @@ pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
     Ok(ImageHeader {
         width: width as usize,
         height: height as usize,
-        channels: channel_names(color),
+        channels: channel_names(color.channel_count()),
         bits,
         float,
+        format,
+    })
+}
+
+/// The header of a grey float TIFF, which the image crate refuses ([`tiff_float`]); `None`
+/// for any other file.
+fn grey_float_header(path: &Path, format: &'static str) -> Option<ImageHeader> {
+    let header = (format == "tiff")
+        .then(|| tiff_float::header(path))
+        .flatten()?;
+    let (width, height) = tiff_float::upright_size(&header);
+    Some(ImageHeader {
+        width: width as usize,
+        height: height as usize,
+        channels: channel_names(header.samples as u8),
+        bits: 32,
+        float: true,
         format,
     })
 }
@@ -229,7 +250,21 @@ pub fn read_planes(
             .saturating_add(DECODER_ROOM),
     );
     reader.limits(limits);
-    let mut decoder = reader.into_decoder().map_err(image_error)?;
+    let tiff = reader.format() == Some(image::ImageFormat::Tiff);
+    let mut decoder = match reader.into_decoder() {
+        Ok(decoder) => decoder,
+        Err(e) => {
+            // A grey float TIFF, read by the tiff crate within the same allowance.
+            let header = tiff.then(|| tiff_float::header(path)).flatten();
+            let Some(header) = header else {
+                return Err(image_error(e));
+            };
+            let allowed = (declared.0 as u64)
+                .saturating_mul(declared.1 as u64)
+                .saturating_mul(LARGEST_PIXEL);
+            return tiff_float::read(path, &header, allowed);
+        }
+    };
     let orientation = orientation(&mut decoder);
     let mut image = DynamicImage::from_decoder(decoder).map_err(image_error)?;
     image.apply_orientation(orientation);

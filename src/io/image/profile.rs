@@ -345,8 +345,14 @@ pub fn cicp_profile_of(photo: &Photo, grey: bool) -> Option<Vec<u8>> {
 /// primaries for, so the chunks after it in PNG's order say how the codes are coded.
 pub fn cicp_note(photo: &Photo) -> Option<String> {
     let cicp = photo.png_colour?.cicp?;
+    let matrix = photo.png_colour?.cicp_matrix_read_as_0.map(|m| {
+        format!(
+            "the PNG's cICP gives matrix coefficients {m}, which PNG does not use (its samples \
+             are RGB: 0); read as 0"
+        )
+    });
     if cicp_refusal(cicp).is_some() || curve_of(cicp).is_some() {
-        return None;
+        return matrix;
     }
     let [p, t, m, f] = cicp;
     let then = match colour_source(&Photo {
@@ -358,10 +364,11 @@ pub fn cicp_note(photo: &Photo) -> Option<String> {
         ColourSource::PngChunks => "its gAMA and cHRM",
         _ => "sRGB's curve, as for a PNG of none",
     };
-    Some(format!(
+    let passed = format!(
         "the PNG's cICP {p}/{t}/{m}/{f} names primaries or a transfer shutter has no curve \
          for: its colour is read by {then}"
-    ))
+    );
+    Some(matrix.map_or(passed.clone(), |matrix| format!("{matrix}; {passed}")))
 }
 
 /// The ICC profile a PNG's gAMA and cHRM describe, where no sRGB chunk overrides them (PNG
@@ -638,7 +645,7 @@ mod tests {
             gamma,
             chromaticities,
             srgb,
-            cicp: None,
+            ..PngColour::default()
         };
         let adobe = Some([31270, 32900, 64000, 33000, 21000, 71000, 15000, 6000]);
         assert_eq!(

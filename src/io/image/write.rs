@@ -100,18 +100,16 @@ const ASSOCIATED_ALPHA: u16 = 1;
 const UNASSOCIATED_ALPHA: u16 = 2;
 
 /// Whether a frame goes out grey: its input was grey, the format holds grey with the alpha
-/// that goes out with it (the tiff crate writes no grey with alpha), it is not written float,
-/// and its three planes are still equal (the blur gives each the same weights).
+/// that goes out with it (the tiff crate writes no grey with alpha, integer or float), and
+/// its three planes are still equal (the blur gives each the same weights).
 pub fn goes_out_grey(
     photo: Option<&Photo>,
     format: ImageFormat,
-    bits: u8,
     rgb: [&[f32]; 3],
     alpha: bool,
 ) -> bool {
     let alpha = alpha && format != ImageFormat::Jpeg;
     photo.is_some_and(|p| p.grey)
-        && !(bits == 32 && format == ImageFormat::Tiff)
         && !(alpha && format == ImageFormat::Tiff)
         && rgb[0] == rgb[1]
         && rgb[1] == rgb[2]
@@ -163,7 +161,7 @@ pub fn write_photo(
     let float = options.bits == 32 && format == ImageFormat::Tiff;
     let sixteen_bit = options.bits == 16 && !jpeg;
     let photo = options.photo;
-    let grey = goes_out_grey(photo, format, options.bits, rgb, alpha.is_some());
+    let grey = goes_out_grey(photo, format, rgb, alpha.is_some());
     let profile = photo.and_then(|p| profile_of(p, grey));
     let transfer = Transfer::of(profile.as_deref());
     // A profile goes out where it describes what is written: an RGB one with RGB, a Gray one
@@ -172,7 +170,8 @@ pub fn write_photo(
     // goes into a PNG as those chunks again (`write_png`), not as an iCCP.
     let made = photo.is_some_and(profile_is_made);
     let icc = profile.as_deref().filter(|_| match (float, grey) {
-        (true, _) => transfer.embeds && photo.is_some_and(|p| p.bits == 32),
+        (true, true) => transfer.grey && photo.is_some_and(|p| p.bits == 32),
+        (true, false) => transfer.embeds && photo.is_some_and(|p| p.bits == 32),
         (false, true) => transfer.grey,
         (false, false) => transfer.embeds,
     });
@@ -194,14 +193,16 @@ pub fn write_photo(
     let (w, h) = (width as u32, height as u32);
     let n = width * height;
     if float {
-        let channels = if kept_alpha.is_some() { 4 } else { 3 };
+        // Grey (one channel: a grey input goes out with no alpha in a TIFF), or RGB(A).
+        let colours = if grey { 1 } else { 3 };
+        let channels = colours + usize::from(kept_alpha.is_some());
         let mut samples = vec![0f32; n * channels];
         for (i, pixel) in samples.chunks_exact_mut(channels).enumerate() {
-            for (sample, plane) in pixel.iter_mut().zip(rgb) {
+            for (sample, plane) in pixel[..colours].iter_mut().zip(rgb) {
                 *sample = plane[i];
             }
             if let Some(a) = kept_alpha {
-                pixel[3] = a[i];
+                pixel[colours] = a[i];
             }
         }
         let samples = Samples::Float(&samples);
@@ -452,6 +453,7 @@ fn write_tiff(
         (1, Samples::Codes(codes, true)) => write_image!(colortype::Gray16, codes),
         (3, Samples::Codes(codes, false)) => write_image!(colortype::RGB8, &bytes(codes)),
         (3, Samples::Codes(codes, true)) => write_image!(colortype::RGB16, codes),
+        (1, Samples::Float(values)) => write_image!(colortype::Gray32Float, values),
         (3, Samples::Float(values)) => write_image!(colortype::RGB32Float, values),
         (_, Samples::Codes(codes, false)) => write_image!(colortype::RGBA8, &bytes(codes)),
         (_, Samples::Codes(codes, true)) => write_image!(colortype::RGBA16, codes),

@@ -1,0 +1,166 @@
+//! Grey float TIFFs: one IEEE float sample a pixel (16, 32 or 64 bits), or grey and alpha.
+//! The image crate's TIFF decoder reads floats only as 32-bit RGB or RGBA and refuses these as
+//! an unknown colour type, yet a depth map written by a depth estimator, or a 32-bit grey
+//! image saved from an editor, is such a file. The tiff crate (the image crate's own TIFF
+//! codec) reads them here; their planes are turned upright by their Orientation tag, as
+//! [`super::read_planes`] turns what the image crate reads. Every other TIFF the image crate
+//! refuses keeps its error.
+
+use std::path::Path;
+
+use image::imageops;
+use image::metadata::Orientation;
+use image::{ImageBuffer, Luma};
+use tiff::decoder::{Decoder, DecodingResult, Limits};
+use tiff::tags::Tag;
+use tiff::ColorType;
+
+/// A grey float TIFF's header.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Header {
+    /// The size as stored (before it is turned upright).
+    pub(super) stored: (u32, u32),
+    /// 1 (grey) or 2 (grey and alpha).
+    pub(super) samples: usize,
+    pub(super) orientation: Orientation,
+}
+
+/// The TIFF's first image, its decoder limited as the caller says.
+fn open(path: &Path, limits: Limits) -> Option<Decoder<std::io::BufReader<std::fs::File>>> {
+    let file = crate::io::input::open_input(path).ok()?;
+    let decoder = Decoder::new(std::io::BufReader::new(file)).ok()?;
+    Some(decoder.with_limits(limits))
+}
+
+/// The header of a grey float TIFF; `None` for any other TIFF, and for one whose header the
+/// tiff crate cannot read (the image crate's error about it then stands).
+pub(super) fn header(path: &Path) -> Option<Header> {
+    let mut limits = Limits::default();
+    limits.ifd_value_size = super::HEADER_ROOM as usize;
+    let mut decoder = open(path, limits)?;
+    let samples = match decoder.colortype().ok()? {
+        ColorType::Gray(16 | 32 | 64) => 1,
+        ColorType::GrayA(16 | 32 | 64) => 2,
+        _ => return None,
+    };
+    // SampleFormat 3: IEEE floating point, for every sample.
+    let formats = decoder
+        .find_tag_unsigned_vec::<u16>(Tag::SampleFormat)
+        .ok()??;
+    if formats.is_empty() || formats.iter().any(|&f| f != 3) {
+        return None;
+    }
+    let orientation = decoder
+        .find_tag_unsigned::<u8>(Tag::Orientation)
+        .ok()
+        .flatten()
+        .and_then(Orientation::from_exif)
+        .unwrap_or(Orientation::NoTransforms);
+    Some(Header {
+        stored: decoder.dimensions().ok()?,
+        samples,
+        orientation,
+    })
+}
+
+/// The size of `header`'s image once turned upright.
+pub(super) fn upright_size(header: &Header) -> (u32, u32) {
+    super::upright(header.stored, header.orientation)
+}
+
+/// The planes of the grey float TIFF `header` describes (grey, then alpha), as stored (a half
+/// or a double as the nearest f32), turned upright. The decoder holds at most `max_bytes` of
+/// samples.
+pub(super) fn read(
+    path: &Path,
+    header: &Header,
+    max_bytes: u64,
+) -> Result<(usize, usize, Vec<Vec<f32>>), String> {
+    let mut limits = Limits::default();
+    limits.ifd_value_size = super::HEADER_ROOM as usize;
+    limits.decoding_buffer_size = usize::try_from(max_bytes).unwrap_or(usize::MAX);
+    limits.intermediate_buffer_size = limits.decoding_buffer_size;
+    let mut decoder =
+        open(path, limits).ok_or_else(|| "the TIFF could not be opened again".to_string())?;
+    let values: Vec<f32> = match decoder.read_image().map_err(|e| e.to_string())? {
+        DecodingResult::F16(v) => v.iter().map(|x| x.to_f32()).collect(),
+        DecodingResult::F32(v) => v,
+        DecodingResult::F64(v) => v.iter().map(|&x| x as f32).collect(),
+        _ => return Err("the TIFF's samples are not the floats its header declares".into()),
+    };
+    let (width, height) = (header.stored.0 as usize, header.stored.1 as usize);
+    let count = header.samples;
+    let n = width * height;
+    if values.len() < n * count {
+        return Err(format!(
+            "the TIFF holds {} samples where its {width}×{height} pixels need {}",
+            values.len(),
+            n * count
+        ));
+    }
+    let mut planes: Vec<Vec<f32>> = (0..count).map(|_| Vec::with_capacity(n)).collect();
+    for (i, &v) in values[..n * count].iter().enumerate() {
+        planes[i % count].push(v);
+    }
+    let mut size = (width, height);
+    for plane in &mut planes {
+        let (turned, w, h) =
+            upright_plane(std::mem::take(plane), header.stored, header.orientation);
+        *plane = turned;
+        size = (w, h);
+    }
+    Ok((size.0, size.1, planes))
+}
+
+/// One plane of size `(width, height)` turned as `orientation` says (the image crate's
+/// `DynamicImage::apply_orientation`, for a grey float plane, which it has no variant for).
+fn upright_plane(
+    plane: Vec<f32>,
+    (width, height): (u32, u32),
+    orientation: Orientation,
+) -> (Vec<f32>, usize, usize) {
+    let Some(mut image) = ImageBuffer::<Luma<f32>, Vec<f32>>::from_raw(width, height, plane) else {
+        return (Vec::new(), 0, 0);
+    };
+    image = match orientation {
+        Orientation::NoTransforms => image,
+        Orientation::Rotate90 => imageops::rotate90(&image),
+        Orientation::Rotate180 => imageops::rotate180(&image),
+        Orientation::Rotate270 => imageops::rotate270(&image),
+        Orientation::FlipHorizontal => imageops::flip_horizontal(&image),
+        Orientation::FlipVertical => imageops::flip_vertical(&image),
+        Orientation::Rotate90FlipH => imageops::flip_horizontal(&imageops::rotate90(&image)),
+        Orientation::Rotate270FlipH => imageops::flip_horizontal(&imageops::rotate270(&image)),
+    };
+    let (w, h) = (image.width() as usize, image.height() as usize);
+    (image.into_raw(), w, h)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 3×2 plane numbered in reading order, turned each way, against the pixels that
+    /// orientation's EXIF meaning puts where (written out by hand).
+    #[test]
+    fn a_plane_turns_as_its_orientation_says() {
+        // 0 1 2
+        // 3 4 5
+        let plane: Vec<f32> = (0..6).map(|v| v as f32).collect();
+        let cases: [(Orientation, usize, usize, [f32; 6]); 8] = [
+            (Orientation::NoTransforms, 3, 2, [0., 1., 2., 3., 4., 5.]),
+            (Orientation::FlipHorizontal, 3, 2, [2., 1., 0., 5., 4., 3.]),
+            (Orientation::Rotate180, 3, 2, [5., 4., 3., 2., 1., 0.]),
+            (Orientation::FlipVertical, 3, 2, [3., 4., 5., 0., 1., 2.]),
+            (Orientation::Rotate90, 2, 3, [3., 0., 4., 1., 5., 2.]),
+            (Orientation::Rotate270, 2, 3, [2., 5., 1., 4., 0., 3.]),
+            (Orientation::Rotate90FlipH, 2, 3, [0., 3., 1., 4., 2., 5.]),
+            (Orientation::Rotate270FlipH, 2, 3, [5., 2., 4., 1., 3., 0.]),
+        ];
+        for (orientation, w, h, want) in cases {
+            let (got, gw, gh) = upright_plane(plane.clone(), (3, 2), orientation);
+            assert_eq!((gw, gh), (w, h), "{orientation:?}");
+            assert_eq!(got, want, "{orientation:?}");
+        }
+    }
+}
