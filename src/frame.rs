@@ -399,6 +399,9 @@ pub struct Photo {
     /// associated alpha): the read divides it out before anything else. Outputs are written
     /// with straight alpha, declared as such, whatever the input held.
     pub premultiplied: bool,
+    /// A TIFF holding more images after its first (pages, or a reduced-size preview): only
+    /// the first is read and written, and the run says so.
+    pub more_images: bool,
 }
 
 impl Frame {

@@ -1016,3 +1016,61 @@ fn a_grey_float_tiff_depth_map_reads_as_the_same_map_in_a_png() {
         assert!(info.contains("1 channel, float tiff"), "{info}");
     }
 }
+
+/// A TIFF of two images (pages, or a page and its reduced-size preview): the first is read
+/// and written, alone, and the run says the rest was left out; a TIFF of one image says
+/// nothing of the kind.
+#[test]
+fn a_tiffs_images_after_the_first_are_left_out_and_said_so() {
+    use tiff::encoder::{colortype::RGB8, TiffEncoder};
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16u32, 12u32);
+    let first: Vec<u8> = (0..w * h * 3).map(|i| (i * 7 % 256) as u8).collect();
+    let write = |name: &str, pages: usize| {
+        let path = dir.path().join(name);
+        let mut encoder = TiffEncoder::new(std::fs::File::create(&path).unwrap()).unwrap();
+        encoder.write_image::<RGB8>(w, h, &first).unwrap();
+        if pages > 1 {
+            let preview = vec![255u8; (w * h * 3 / 4) as usize];
+            encoder.write_image::<RGB8>(w / 2, h / 2, &preview).unwrap();
+        }
+        path
+    };
+    let coc = dir.path().join("coc.png");
+    image::save_buffer(
+        &coc,
+        &vec![0u8; (w * h) as usize],
+        w,
+        h,
+        image::ColorType::L8,
+    )
+    .unwrap();
+    let run = |input: &Path, out: &str| {
+        let out = dir.path().join(out);
+        let o = shutter(&[
+            "dof",
+            "--color",
+            &s(input),
+            "--coc-map",
+            &s(&coc),
+            "--coc-scale",
+            "0",
+            "-o",
+            &s(&out),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        (stderr(&o), out)
+    };
+    let (said, out) = run(&write("pages.tif", 2), "pages_out.tif");
+    assert!(said.contains("more images after its first"), "{said}");
+    let file = std::fs::File::open(&out).unwrap();
+    let mut decoder = tiff::decoder::Decoder::new(file).unwrap();
+    assert_eq!(decoder.dimensions().unwrap(), (w, h));
+    assert!(!decoder.more_images(), "the output holds one image");
+    let tiff::decoder::DecodingResult::U8(pixels) = decoder.read_image().unwrap() else {
+        panic!("not 8-bit")
+    };
+    assert_eq!(pixels, first, "the first image, in focus, as it came");
+    let (said, _) = run(&write("one.tif", 1), "one_out.tif");
+    assert!(!said.contains("more images"), "{said}");
+}

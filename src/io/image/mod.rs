@@ -496,7 +496,8 @@ pub fn read_photo_colour(
         }
     }
     if !linearise {
-        return Ok((photo, None));
+        let note = more_images_note(&photo);
+        return Ok((photo, note));
     }
     if let Some(why) = cicp_refused(&photo) {
         return Err(format!("{NOT_SUPPORTED}{why}"));
@@ -507,8 +508,19 @@ pub fn read_photo_colour(
     let notes: Vec<String> = profile::cicp_note(&photo)
         .into_iter()
         .chain(transfer.note)
+        .chain(more_images_note(&photo))
         .collect();
     Ok((photo, (!notes.is_empty()).then(|| notes.join("; "))))
+}
+
+/// The note of a TIFF that holds more images after its first (pages, or a reduced-size
+/// preview): shutter reads the first, and the output holds it alone.
+pub fn more_images_note(photo: &Photo) -> Option<String> {
+    photo.more_images.then(|| {
+        "the TIFF holds more images after its first (pages, or a preview): only the first is \
+         read, and the output holds it alone"
+            .to_string()
+    })
 }
 
 /// Why a photo's colour cannot be read as its PNG's cICP says it is coded (high dynamic

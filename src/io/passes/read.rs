@@ -220,6 +220,7 @@ pub fn read_frame_keeping(
             let photo = crate::io::image::read_photo(&colour_file.path).map_err(|d| {
                 Problem::new(ProblemKind::Corrupt, &colour_file.path, d).frame(plan.frame)
             })?;
+            notes.extend(crate::io::image::more_images_note(&photo));
             frame.carried.photo = Some(photo);
         }
         if let (true, Some(a)) = (plan_color.premultiply, &a) {
