@@ -880,3 +880,156 @@ fn views_of_other_windows_and_a_part_of_no_view_first_come_out_each_at_its_windo
         "{report}"
     );
 }
+
+/// One view's passes as Blender names them in a multilayer EXR: `ViewLayer.Combined.R`, ...
+fn blender_view(seed: u32) -> Vec<(String, Vec<f32>)> {
+    let n = W * H;
+    let vector = |v: f32| vec![v; n];
+    let mut passes = vec![("ViewLayer.Combined.A".to_string(), vec![1.0; n])];
+    for (i, c) in ["R", "G", "B"].into_iter().enumerate() {
+        let plane = noise(n, seed + i as u32, 0.0, 1.0);
+        passes.push((format!("ViewLayer.Combined.{c}"), plane));
+    }
+    passes.push(("ViewLayer.Depth.Z".into(), noise(n, seed + 3, 1.0, 5.0)));
+    // Blender's Vector: to the previous frame in X, Y and to the next in Z, W (a steady
+    // sideways motion).
+    for (c, v) in [("X", -4.0), ("Y", 1.0), ("Z", 4.0), ("W", -1.0)] {
+        passes.push((format!("ViewLayer.Vector.{c}"), vector(v)));
+    }
+    passes
+}
+
+/// The channels of `passes` whose names begin with `prefix`.
+fn of_pass(passes: &[(String, Vec<f32>)], prefix: &str) -> Vec<(String, Vec<f32>)> {
+    let prefix = format!("{prefix}.");
+    passes
+        .iter()
+        .filter(|(n, _)| n.starts_with(&prefix))
+        .cloned()
+        .collect()
+}
+
+/// A part of an EXR output: its name, its view and its channels.
+type OutPart = (Option<String>, Option<String>, Vec<(String, Vec<f32>)>);
+
+/// The parts of an EXR output, in order.
+fn parts_of(path: &Path) -> Vec<OutPart> {
+    crate::support::read_exr_layers(path)
+        .into_iter()
+        .map(|l| {
+            let a = &l.attributes;
+            let name = a.layer_name.as_ref().map(|t| t.to_string());
+            let view = a.view_name.as_ref().map(|t| t.to_string());
+            let channels = (l.channel_data.list.into_iter())
+                .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+                .collect();
+            (name, view, channels)
+        })
+        .collect()
+}
+
+/// A stereo render as Blender 5 writes it (a multilayer EXR of views): a part a pass a view,
+/// named `ViewLayer.Combined-left`, its `view` attribute `left`, its channels
+/// `ViewLayer.Combined.R` (which do not begin with the part's name). Read with the `blender`
+/// preset, each view blurs as the same passes in a file of one view do (QA: the part's name
+/// made each channel also `ViewLayer.Combined-left.ViewLayer.Combined.R`, a second view
+/// layer, and the run stopped asking for `--layer`); `--view right` writes a file of one
+/// view whose parts are named as Blender names a mono render's (`ViewLayer.Combined`), so
+/// Blender finds the view layer `ViewLayer` in it again.
+#[test]
+fn blenders_stereo_render_reads_by_view_and_one_view_comes_out_named_as_a_mono_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (left, right) = (blender_view(LEFT), blender_view(RIGHT));
+    let stereo = d.join("stereo.exr");
+    let mut parts = Vec::new();
+    for (pass, name_left, name_right) in [
+        (
+            "ViewLayer.Combined",
+            "ViewLayer.Combined-left",
+            "ViewLayer.Combined-right",
+        ),
+        (
+            "ViewLayer.Depth",
+            "ViewLayer.Depth-left",
+            "ViewLayer.Depth-right",
+        ),
+        (
+            "ViewLayer.Vector",
+            "ViewLayer.Vector-left",
+            "ViewLayer.Vector-right",
+        ),
+    ] {
+        parts.push(part(
+            Some(name_left),
+            Some("left"),
+            None,
+            of_pass(&left, pass),
+        ));
+        parts.push(part(
+            Some(name_right),
+            Some("right"),
+            None,
+            of_pass(&right, pass),
+        ));
+    }
+    write_parts(&stereo, (W, H), parts);
+    let (mono_left, mono_right) = (d.join("mono-left.exr"), d.join("mono-right.exr"));
+    write_parts(&mono_left, (W, H), vec![part(None, None, None, left)]);
+    write_parts(&mono_right, (W, H), vec![part(None, None, None, right)]);
+    let run = |input: &Path, out: &str, extra: &[&str]| {
+        let out = d.join("out").join(out);
+        let mut args = vec!["--preset", "blender"];
+        args.extend(extra);
+        let o = blur(&s(input), &out, &args);
+        assert!(o.status.success(), "{}: {}", out.display(), stderr(&o));
+        parts_of(&out)
+    };
+    let both = run(&stereo, "both.exr", &[]);
+    let one = run(&stereo, "right.exr", &["--view", "right"]);
+    let alone_left = run(&mono_left, "mono-left.exr", &[]);
+    let alone_right = run(&mono_right, "mono-right.exr", &[]);
+    let combined = |parts: &[OutPart], name: Option<&str>| {
+        let found = parts.iter().find(|(n, _, _)| n.as_deref() == name);
+        let (_, _, channels) = found.unwrap_or_else(|| panic!("no part {name:?} in {parts:?}"));
+        of_pass(channels, "ViewLayer.Combined")
+    };
+    // Each view of the stereo output, and the one view, as that view alone gives it.
+    let mono_beauty = |parts: &[OutPart]| of_pass(&parts[0].2, "ViewLayer.Combined");
+    assert_eq!(
+        combined(&both, Some("ViewLayer.Combined-left")),
+        mono_beauty(&alone_left)
+    );
+    assert_eq!(
+        combined(&both, Some("ViewLayer.Combined-right")),
+        mono_beauty(&alone_right)
+    );
+    assert_ne!(
+        mono_beauty(&alone_left),
+        of_pass(&blender_view(LEFT), "ViewLayer.Combined")
+    );
+    let views: Vec<_> = both
+        .iter()
+        .map(|(n, v, _)| (n.clone(), v.clone()))
+        .collect();
+    assert_eq!(views.len(), 6, "{views:?}");
+    assert!(views.iter().all(|(n, v)| n
+        .as_ref()
+        .unwrap()
+        .ends_with(&format!("-{}", v.as_ref().unwrap()))));
+    // One view: a file of one view, its parts named as a mono render's.
+    let names: Vec<_> = one.iter().map(|(n, v, _)| (n.clone(), v.clone())).collect();
+    let plain = |n: &str| (Some(n.to_string()), None);
+    assert_eq!(
+        names,
+        [
+            plain("ViewLayer.Combined"),
+            plain("ViewLayer.Depth"),
+            plain("ViewLayer.Vector")
+        ]
+    );
+    assert_eq!(
+        combined(&one, Some("ViewLayer.Combined")),
+        mono_beauty(&alone_right)
+    );
+}

@@ -374,8 +374,15 @@ fn attributes_like(
             kept.multi_view_names = None;
             // Nor a part's `view`: the output is a file of one view, whose parts are plain
             // (a part of no view may come first in it, which a multi-view file may not
-            // have).
-            kept.view_name = None;
+            // have). A part Blender named for its view (`layer.pass-view`) is named as a
+            // file of one view names it (`layer.pass`): its channels (`layer.pass.X`) begin
+            // with that, and Blender reads the channels of a part whose name they do not
+            // begin with as of a view layer named by the whole part name.
+            if let (Some(view), Some(name)) = (kept.view_name.take(), &kept.layer_name) {
+                if let Some(plain) = name.to_string().strip_suffix(&format!("-{view}")) {
+                    kept.layer_name = Some(latin1(plain));
+                }
+            }
         }
         kept
     });
