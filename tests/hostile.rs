@@ -535,8 +535,8 @@ fn none_and_in_focus_depth_of_field_write_finite_frames_and_count_what_they_repl
 
 /// Valid files of kinds the decoders do not read are "not supported", with what to do, not
 /// "corrupt" with a decoder's text (issue 30): a 12-bit JPEG and an arithmetic-coded one
-/// (a baseline JPEG's frame header changed to say so, as such files carry it), and a TIFF
-/// of 32-bit integers.
+/// (a baseline JPEG's frame header changed to say so, as such files carry it), a TIFF
+/// of 32-bit integers, and a YCbCr and an indexed-colour TIFF, which say what to do.
 #[test]
 fn unsupported_kinds_of_valid_files_are_told_from_damaged_ones() {
     let dir = tempfile::tempdir().unwrap();
@@ -561,7 +561,32 @@ fn unsupported_kinds_of_valid_files_are_told_from_damaged_ones() {
             .write_image::<tiff::encoder::colortype::RGB32>(4, 4, &[7u32; 48])
             .unwrap();
     }
+    // An RGB TIFF told to be YCbCr (as a JPEG-compressed TIFF is) or indexed colour, by its
+    // PhotometricInterpretation (tag 262, SHORT, one value: 2 is RGB).
+    let rgb_tiff = {
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        let mut encoder = tiff::encoder::TiffEncoder::new(&mut bytes).unwrap();
+        encoder
+            .write_image::<tiff::encoder::colortype::RGB8>(4, 4, &[90u8; 48])
+            .unwrap();
+        bytes.into_inner()
+    };
+    let photometric = |value: u8| {
+        let entry = [0x06, 0x01, 0x03, 0x00, 0x01, 0x00, 0x00, 0x00, 0x02, 0x00];
+        let at = (rgb_tiff.windows(10))
+            .position(|w| w == entry)
+            .expect("an RGB PhotometricInterpretation");
+        let mut bytes = rgb_tiff.clone();
+        bytes[at + 8] = value;
+        bytes
+    };
     for (name, bytes, why) in [
+        ("ycbcr.tif", Some(photometric(6)), "a YCbCr TIFF"),
+        (
+            "palette.tif",
+            Some(photometric(3)),
+            "an indexed-colour (palette) TIFF",
+        ),
         ("twelve.jpg", Some(twelve), "a 12-bit JPEG"),
         (
             "arithmetic.jpg",
@@ -578,8 +603,11 @@ fn unsupported_kinds_of_valid_files_are_told_from_damaged_ones() {
         assert_eq!(problem.kind, ProblemKind::Unsupported, "{name}: {problem}");
         assert!(problem.to_string().contains(why), "{name}: {problem}");
     }
-    // The file they were made from is read.
+    // The files they were made from are read.
     assert!(FileInfo::probe(&baseline).is_ok());
+    let rgb = dir.path().join("rgb.tif");
+    std::fs::write(&rgb, &rgb_tiff).unwrap();
+    assert!(FileInfo::probe(&rgb).is_ok());
 }
 
 /// A zlib stream of `n` zero bytes, written by hand (fixed Huffman codes: a literal 0, then

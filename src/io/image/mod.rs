@@ -161,7 +161,15 @@ pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
     };
     let mut decoder = match reader.into_decoder() {
         Ok(decoder) => decoder,
-        Err(e) => return grey_float_header(path, format).ok_or_else(|| image_error(e)),
+        Err(e) => {
+            return grey_float_header(path, format).ok_or_else(|| {
+                let why = (format == "tiff").then(|| tiff_float::unread_kind(path));
+                match why.flatten() {
+                    Some(why) => format!("{NOT_SUPPORTED}{why}"),
+                    None => image_error(e),
+                }
+            })
+        }
     };
     let (width, height) = upright(decoder.dimensions(), orientation(&mut decoder));
     // Past the pixel limit the caller's size check speaks first.

@@ -3,8 +3,9 @@
 //! an unknown colour type, yet a depth map written by a depth estimator, or a 32-bit grey
 //! image saved from an editor, is such a file. The tiff crate (the image crate's own TIFF
 //! codec) reads them here; their planes are turned upright by their Orientation tag, as
-//! [`super::read_planes`] turns what the image crate reads. Every other TIFF the image crate
-//! refuses keeps its error.
+//! [`super::read_planes`] turns what the image crate reads. Of the other TIFFs the image
+//! crate refuses, a YCbCr (JPEG-compressed) or indexed-colour one is named as such, with what
+//! to do ([`unread_kind`]); the rest keep its error.
 
 use std::path::Path;
 
@@ -61,6 +62,28 @@ pub(super) fn header(path: &Path) -> Option<Header> {
         samples,
         orientation,
     })
+}
+
+/// What a TIFF the decoders do not read is, and what to do, in words, for the kinds photos
+/// come in: YCbCr (as a JPEG-compressed TIFF stores its colour) and indexed colour. `None`
+/// for any other TIFF (the image crate's words then stand).
+pub(super) fn unread_kind(path: &Path) -> Option<String> {
+    let mut limits = Limits::default();
+    limits.ifd_value_size = super::HEADER_ROOM as usize;
+    let mut decoder = open(path, limits)?;
+    // PhotometricInterpretation (TIFF 6.0, section 8): 6 YCbCr, 3 palette colour.
+    let photometric = decoder
+        .find_tag_unsigned::<u16>(Tag::PhotometricInterpretation)
+        .ok()??;
+    let what = match photometric {
+        6 => "a YCbCr TIFF (as a JPEG-compressed TIFF stores its colour)",
+        3 => "an indexed-colour (palette) TIFF",
+        _ => return None,
+    };
+    Some(format!(
+        "{what}, which the TIFF decoder does not read: save it as RGB, with LZW, ZIP or no \
+         compression"
+    ))
 }
 
 /// The size of `header`'s image once turned upright.
