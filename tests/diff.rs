@@ -903,3 +903,78 @@ fn u32_ids_over_2_pow_24_are_compared_and_printed_as_integers() {
     let same = shutter(&["diff", &s(&a), &s(&c), "--data-fail-pixel", "0"]);
     assert_eq!(same.status.code(), Some(0), "{}", stderr(&same));
 }
+
+/// Files as Blender writes them, a part a pass: two view layers (`Main`, `Second`), or two
+/// views of one (`ViewLayer.Combined-left`, view `left`). `diff` compares them in the view
+/// layer `--layer` names (QA: it had no `--layer`, and stopped at "choose one with
+/// --layer"), and in the view `--view` names: without it, the default view, with a warning
+/// that says so, so a difference in the other view is not passed over unsaid.
+#[test]
+fn blender_files_of_view_layers_and_views_are_compared_in_the_one_asked_for() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (w, h) = (24, 16);
+    let n = w * h;
+    let pass = |prefix: &str, seed: u32, offset: f32| -> Vec<(String, Vec<f32>)> {
+        let mut channels = vec![(format!("{prefix}.Combined.A"), vec![1.0; n])];
+        for (i, c) in ["R", "G", "B"].into_iter().enumerate() {
+            let plane = noise(n, seed + i as u32, 0.0, 1.0);
+            let plane = plane.iter().map(|v| v + offset).collect();
+            channels.push((format!("{prefix}.Combined.{c}"), plane));
+        }
+        channels
+    };
+    let part = |name: &'static str, view, channels| Part {
+        name: Some(name),
+        view,
+        multi_view: None,
+        channels,
+    };
+    // Two view layers; in b, Main's beauty is brighter.
+    for (file, offset) in [("layers_a.exr", 0.0), ("layers_b.exr", 0.25)] {
+        let parts = vec![
+            part("Main.Combined", None, pass("Main", 1, offset)),
+            part("Second.Combined", None, pass("Second", 9, 0.0)),
+        ];
+        write_parts(&d.join(file), (w, h), parts);
+    }
+    let diff = |a: &str, b: &str, extra: &[&str]| {
+        let (a, b) = (s(&d.join(a)), s(&d.join(b)));
+        let mut args = vec!["diff", "--preset", "blender", "--fail", "0.01", &a, &b];
+        args.extend(extra);
+        shutter(&args)
+    };
+    let o = diff("layers_a.exr", "layers_b.exr", &[]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--layer"), "{}", stderr(&o));
+    let o = diff("layers_a.exr", "layers_b.exr", &["--layer", "Main"]);
+    assert_eq!(o.status.code(), Some(1), "Main differs: {}", stderr(&o));
+    let o = diff("layers_a.exr", "layers_a.exr", &["--layer", "Main"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // Two views; in b, the right view is brighter.
+    for (file, offset) in [("views_a.exr", 0.0), ("views_b.exr", 0.25)] {
+        let parts = vec![
+            part(
+                "ViewLayer.Combined-left",
+                Some("left"),
+                pass("ViewLayer", 1, 0.0),
+            ),
+            part(
+                "ViewLayer.Combined-right",
+                Some("right"),
+                pass("ViewLayer", 5, offset),
+            ),
+        ];
+        write_parts(&d.join(file), (w, h), parts);
+    }
+    let o = diff("views_a.exr", "views_b.exr", &[]);
+    assert_eq!(o.status.code(), Some(0), "left is the same: {}", stderr(&o));
+    let said = stderr(&o);
+    assert!(
+        said.contains("left (default), right") && said.contains("--view"),
+        "{said}"
+    );
+    let o = diff("views_a.exr", "views_b.exr", &["--view", "right"]);
+    assert_eq!(o.status.code(), Some(1), "right differs: {}", stderr(&o));
+    assert!(!stderr(&o).contains("holds the views"), "{}", stderr(&o));
+}

@@ -489,6 +489,16 @@ pub struct DiffArgs {
     #[arg(long, value_name = "P")]
     pub preset: Vec<String>,
 
+    /// View layer whose beauty is scored, substituted for {layer} in preset channel names
+    /// (default: found in the file; every channel is compared either way).
+    #[arg(long, value_name = "NAME")]
+    pub layer: Option<String>,
+
+    /// View of multi-view (stereo) EXRs to compare, e.g. right [default: each file's
+    /// default view].
+    #[arg(long, value_name = "NAME")]
+    pub view: Option<String>,
+
     /// 8/16-bit inputs hold linear values, not sRGB.
     #[arg(long)]
     pub linear: bool,

@@ -239,6 +239,8 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
         fail: args.fail,
         heatmap,
         preset: Preset::load(&args.preset)?,
+        layer: args.layer.clone(),
+        view: args.view.clone(),
         linear: args.linear,
         gates: gates(&args),
         allow_pixels: args.allow_pixels,

@@ -43,7 +43,8 @@ pub use memory::BASE as BASE_MEMORY;
 pub use plan::{plan_frame, FramePlan, PlanOptions};
 pub use preflight::{output_folder_problems, outputs_over_inputs, preflight};
 pub use read::{
-    plan_color, read_color, read_frame, read_frame_keeping, read_frame_noted, StoredVectors,
+    plan_color, plan_color_in, read_color, read_frame, read_frame_keeping, read_frame_noted,
+    StoredVectors,
 };
 pub use suggest::{other_ways_to_depth, passes_found, suggest, Candidate, Found, Suggestion};
 

@@ -322,14 +322,33 @@ pub fn plan_color(
     frame: Option<i64>,
     preset: &Preset,
 ) -> Result<FramePlan, Vec<Problem>> {
+    plan_color_in(pattern, frame, preset, (None, None))
+}
+
+/// [`plan_color`] in the view layer and the view asked for (each found in the file where
+/// `None`, as `blur --layer` and `--view` choose them).
+pub fn plan_color_in(
+    pattern: &PathPattern,
+    frame: Option<i64>,
+    preset: &Preset,
+    (layer, view): (Option<&str>, Option<&str>),
+) -> Result<FramePlan, Vec<Problem>> {
     let options = PlanOptions {
         preset,
-        layer: None,
-        view: None,
+        layer,
+        view,
         needs: Passes::COLOR,
         max_pixels: crate::io::file::DEFAULT_MAX_PIXELS,
     };
     plan_frame(&Inputs::color_only(pattern.clone()), frame, &options)
+}
+
+impl FramePlan {
+    /// The views of the colour file, where it is a multi-view EXR.
+    pub fn colour_views(&self) -> Option<&crate::io::view::Views> {
+        let file = self.color.as_ref()?.rgb[0].file;
+        self.files.get(file)?.info.views.as_ref()
+    }
 }
 
 /// A channel's name as its file stores it (a view's channel seen without its view,

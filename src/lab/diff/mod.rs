@@ -12,7 +12,7 @@ use serde::Serialize;
 
 use crate::error::{Error, Problem, ProblemKind, Result};
 
-use crate::io::passes::{plan_color, read_frame, FramePlan};
+use crate::io::passes::{plan_color_in, read_frame, FramePlan};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::lab::metrics::{self, Metric, Rgb, Scores};
@@ -32,6 +32,10 @@ pub struct DiffJob {
     pub fail: Option<f64>,
     pub heatmap: Option<PathPattern>,
     pub preset: Preset,
+    /// The view layer whose beauty is scored (`--layer`), and the view of multi-view EXRs
+    /// compared (`--view`); found in the files where `None`.
+    pub layer: Option<String>,
+    pub view: Option<String>,
     pub linear: bool,
     /// Per-pixel gates: a pixel with a channel over its class's threshold fails, and a frame
     /// with more failing pixels than `allow_pixels`/`fail_percent` allow fails.
@@ -172,9 +176,15 @@ pub struct DiffReport {
     pub failed: bool,
 }
 
-/// The colour's plan, from its header alone.
-fn plan(pattern: &PathPattern, frame: Option<i64>, preset: &Preset) -> Result<FramePlan, Problem> {
-    plan_color(pattern, frame, preset).map_err(|mut problems| problems.remove(0))
+/// The colour's plan, from its header alone, in the job's view layer and view.
+fn plan(
+    pattern: &PathPattern,
+    frame: Option<i64>,
+    job: &DiffJob,
+    preset: &Preset,
+) -> Result<FramePlan, Problem> {
+    let chosen = (job.layer.as_deref(), job.view.as_deref());
+    plan_color_in(pattern, frame, preset, chosen).map_err(|mut problems| problems.remove(0))
 }
 
 /// The per-pixel error map of the gating metric, in [0, 1] for the heatmap, and the value
@@ -235,11 +245,14 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
         .map(|&frame| {
             // Sizes from the headers, before anything is decoded: two large images of
             // different sizes are told apart in milliseconds.
-            let (a, b) = (plan(&job.a, frame, &preset)?, plan(&job.b, frame, &preset)?);
+            let (a, b) = (
+                plan(&job.a, frame, job, &preset)?,
+                plan(&job.b, frame, job, &preset)?,
+            );
             let sharp = job
                 .sharp
                 .as_ref()
-                .map(|sharp| plan(sharp, frame, &preset))
+                .map(|sharp| plan(sharp, frame, job, &preset))
                 .transpose()?;
             let (wa, ha, wb, hb) = (a.width, a.height, b.width, b.height);
             if (wa, ha) != (wb, hb) {
@@ -302,6 +315,24 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
                     )
                 })
                 .collect();
+            // A multi-view file is compared in one view: say so, and how to compare another.
+            let mut notes = notes;
+            if job.view.is_none() {
+                notes.extend([(&a, &job.a), (&b, &job.b)].into_iter().filter_map(
+                    |(plan, pattern)| {
+                        let views = plan.colour_views()?;
+                        let shown = views.choose(None).ok()?;
+                        (views.names.len() > 1).then(|| {
+                            format!(
+                                "{} holds the views {}: view {shown} is compared (--view \
+                                 NAME compares another)",
+                                pattern.path(frame).display(),
+                                views.list()
+                            )
+                        })
+                    },
+                ));
+            }
             let (a, b) = (read_frame(&a)?, read_frame(&b)?);
             let (ra, rb) = (
                 Rgb::of(&a).expect("colour read"),
