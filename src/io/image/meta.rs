@@ -41,16 +41,16 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
     } else {
         (Vec::new(), None, None)
     };
-    let decoder = match reader.into_decoder() {
+    let mut decoder = match reader.into_decoder() {
         Ok(decoder) => decoder,
         Err(e) => {
+            // A grey float TIFF, which the tiff crate reads (`tiff_float`).
             let header = tiff.then(|| super::tiff_float::header(path)).flatten();
             return header
                 .map(|header| grey_float_photo(path, &header))
                 .ok_or_else(|| e.to_string());
         }
     };
-    let mut decoder = decoder;
     // How `read_planes` turns the pixels, and the size it gives them.
     let turn = super::orientation(&mut decoder);
     let size = super::upright(decoder.dimensions(), turn);
