@@ -233,6 +233,20 @@ fn a_photos_resolution_comes_out_in_every_format_as_it_went_in() {
     }
 }
 
+/// Black and white columns of 64 × 8, which a blur averages in the light the file codes: the
+/// size, the RGB codes, written as `plain.png` in `dir` (no colour chunks), and a velocity map
+/// `v.png` that moves them 12 px.
+fn striped(dir: &Path) -> ((u32, u32), Vec<u8>, std::path::PathBuf) {
+    let (w, h) = (64u32, 8u32);
+    let stripes: Vec<u8> = (0..w * h)
+        .flat_map(|i| [if i % 2 == 0 { 255u8 } else { 0 }; 3])
+        .collect();
+    let velocity = dir.join("v.png");
+    velocity_map(&velocity, w, h, |_, _| 12.0);
+    png_with_chunks(&dir.join("plain.png"), (w, h), &stripes, None, &[]);
+    ((w, h), stripes, velocity)
+}
+
 /// An 8-bit RGB PNG of `rgb`, written by the png crate with `icc` as its iCCP and then the
 /// raw `chunks` (name, data) before its image data, in that order.
 fn png_with_chunks(
@@ -317,14 +331,7 @@ fn embedded_icc(path: &Path) -> Vec<u8> {
 fn a_pngs_gama_and_chrm_say_how_its_codes_are_coded_and_come_out_again() {
     let dir = tempfile::tempdir().unwrap();
     let p = |name: &str| dir.path().join(name);
-    let (w, h) = (64u32, 8u32);
-    // Black and white columns, which a blur averages in the light the file codes.
-    let stripes: Vec<u8> = (0..w * h)
-        .flat_map(|i| [if i % 2 == 0 { 255u8 } else { 0 }; 3])
-        .collect();
-    let velocity = p("v.png");
-    velocity_map(&velocity, w, h, |_, _| 12.0);
-    png_with_chunks(&p("plain.png"), (w, h), &stripes, None, &[]);
+    let ((w, h), stripes, velocity) = striped(dir.path());
     let linear = [(b"gAMA", gama(100_000)), (b"cHRM", chrm(ADOBE_CHRM))];
     png_with_chunks(&p("linear.png"), (w, h), &stripes, None, &linear);
     blur(
@@ -427,12 +434,7 @@ fn a_pngs_gama_and_chrm_say_how_its_codes_are_coded_and_come_out_again() {
 fn a_pngs_srgb_or_iccp_chunk_wins_over_its_gama() {
     let dir = tempfile::tempdir().unwrap();
     let p = |name: &str| dir.path().join(name);
-    let (w, h) = (64u32, 8u32);
-    let stripes: Vec<u8> = (0..w * h)
-        .flat_map(|i| [if i % 2 == 0 { 255u8 } else { 0 }; 3])
-        .collect();
-    let velocity = p("v.png");
-    velocity_map(&velocity, w, h, |_, _| 12.0);
+    let ((w, h), stripes, velocity) = striped(dir.path());
     let icc = moxcms::ColorProfile::new_adobe_rgb().encode().unwrap();
     let srgb: &[(&[u8; 4], Vec<u8>)] = &[(b"sRGB", vec![0])];
     for (name, icc, chunks) in [("srgb", None, srgb), ("iccp", Some(&icc[..]), &[][..])] {
@@ -653,14 +655,8 @@ fn cicp(primaries: u8, transfer: u8, full: bool) -> Vec<u8> {
 fn a_pngs_cicp_says_how_its_codes_are_coded() {
     let dir = tempfile::tempdir().unwrap();
     let p = |name: &str| dir.path().join(name);
-    let (w, h) = (64u32, 8u32);
-    let stripes: Vec<u8> = (0..w * h)
-        .flat_map(|i| [if i % 2 == 0 { 255u8 } else { 0 }; 3])
-        .collect();
-    let velocity = p("v.png");
-    velocity_map(&velocity, w, h, |_, _| 12.0);
+    let ((w, h), stripes, velocity) = striped(dir.path());
     let icc = moxcms::ColorProfile::new_adobe_rgb().encode().unwrap();
-    png_with_chunks(&p("plain.png"), (w, h), &stripes, None, &[]);
     let linear = [(b"cICP", cicp(1, 8, true)), (b"gAMA", gama(45455))];
     png_with_chunks(&p("linear.png"), (w, h), &stripes, Some(&icc), &linear);
     blur(
@@ -764,13 +760,7 @@ fn a_pngs_cicp_says_how_its_codes_are_coded() {
 fn a_pngs_cicp_with_matrix_coefficients_1_is_read_as_0_and_said_so() {
     let dir = tempfile::tempdir().unwrap();
     let p = |name: &str| dir.path().join(name);
-    let (w, h) = (64u32, 8u32);
-    let stripes: Vec<u8> = (0..w * h)
-        .flat_map(|i| [if i % 2 == 0 { 255u8 } else { 0 }; 3])
-        .collect();
-    let velocity = p("v.png");
-    velocity_map(&velocity, w, h, |_, _| 12.0);
-    png_with_chunks(&p("plain.png"), (w, h), &stripes, None, &[]);
+    let ((w, h), stripes, velocity) = striped(dir.path());
     png_with_chunks(
         &p("matrix.png"),
         (w, h),

@@ -379,9 +379,9 @@ fn attributes_like(
             // with that, and Blender reads the channels of a part whose name they do not
             // begin with as of a view layer named by the whole part name.
             if let (Some(view), Some(name)) = (kept.view_name.take(), &kept.layer_name) {
-                if let Some(plain) = name.to_string().strip_suffix(&format!("-{view}")) {
-                    kept.layer_name = Some(latin1(plain));
-                }
+                let view = view.to_string();
+                let plain = crate::io::view::part_name_without_view(&name.to_string(), Some(&view));
+                kept.layer_name = Some(latin1(&plain));
             }
         }
         kept

@@ -544,15 +544,14 @@ fn probe_exr(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
     let views = Views::of(&meta.headers);
     let mut channels = Vec::new();
     for (part, header) in meta.headers.iter().enumerate() {
-        // A multi-view part's name without its view: Blender names the part of a pass of
-        // one view `layer.pass-view` (`ViewLayer.Combined-left`, its `view` attribute
-        // `left`) and its channels `layer.pass.X`, which begin with what is left.
-        let part_name = header.own_attributes.layer_name.as_ref().map(|n| {
-            let n = n.to_string();
-            let view = header.own_attributes.view_name.as_ref();
-            view.and_then(|v| n.strip_suffix(&format!("-{v}")).map(str::to_string))
-                .unwrap_or(n)
-        });
+        // A multi-view part's name without its view (Blender's `ViewLayer.Combined-left`).
+        let view = header
+            .own_attributes
+            .view_name
+            .as_ref()
+            .map(|v| v.to_string());
+        let part_name = (header.own_attributes.layer_name.as_ref())
+            .map(|n| crate::io::view::part_name_without_view(&n.to_string(), view.as_deref()));
         for (index, channel) in header.channels.list.iter().enumerate() {
             let name = channel.name.to_string();
             let alias = match &part_name {

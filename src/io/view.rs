@@ -60,6 +60,15 @@ pub struct Views {
     pub scheme: Scheme,
 }
 
+/// A multi-view part's name without its view: Blender names the part of a pass of one view
+/// `layer.pass-view` (`ViewLayer.Combined-left`, its `view` attribute `left`) and its
+/// channels `layer.pass.X`, which begin with what is left. The name as it is otherwise.
+pub fn part_name_without_view(name: &str, view: Option<&str>) -> String {
+    view.and_then(|v| name.strip_suffix(&format!("-{v}")))
+        .unwrap_or(name)
+        .to_string()
+}
+
 impl Views {
     /// Finds the views of a file from its headers (parts), or `None` for a file of no views.
     pub fn of(headers: &[Header]) -> Option<Views> {
