@@ -576,3 +576,153 @@ fn a_colour_in_two_parts_is_refused_until_a_preset_names_the_part() {
     write_parts(&path, (4, 4), vec![part("first", 0.25), part("rgba", 0.75)]);
     reads_the_second_part(&[]);
 }
+
+/// Whether `idiff -a A B` (OpenImageIO, OpenEXR's decoders) finds every part's pixels equal,
+/// or `None` where idiff is not installed and SHUTTER_REQUIRE_TOOLS does not ask for it.
+fn idiff_equal(a: &Path, b: &Path) -> Option<(bool, String)> {
+    match std::process::Command::new("idiff")
+        .args(["-a", &s(a), &s(b)])
+        .output()
+    {
+        Ok(o) => Some((
+            o.status.success(),
+            String::from_utf8_lossy(&o.stdout).into_owned(),
+        )),
+        Err(_) if std::env::var_os("SHUTTER_REQUIRE_TOOLS").is_some() => {
+            panic!("SHUTTER_REQUIRE_TOOLS is set and idiff is not installed")
+        }
+        Err(_) => {
+            eprintln!("note: idiff is not installed; only the exr crate reads the outputs");
+            None
+        }
+    }
+}
+
+/// ZIP and ZIPS blocks are deflated by libdeflate (src/io/exr_zip.rs), not by the exr crate:
+/// OpenEXR (through `idiff`) and the exr crate must read them as the pixels of the same blur
+/// written uncompressed, in a tiled part at an offset data window with float and half
+/// channels beside a scan-line part, at a size no block height divides.
+#[test]
+fn zip_outputs_read_as_their_uncompressed_twin_in_openexr_and_the_exr_crate() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (67, 45);
+    let n = w * h;
+    let half = |v: Vec<f32>| FlatSamples::F16(v.into_iter().map(f16::from_f32).collect());
+    // Smooth planes, which deflate shrinks (noise it would store raw, deflating nothing).
+    let smooth = |fx: f32, fy: f32, lo: f32, hi: f32| -> Vec<f32> {
+        (0..n)
+            .map(|i| {
+                let (x, y) = ((i % w) as f32, (i / w) as f32);
+                lo + (hi - lo) * (0.5 + 0.5 * (fx * x + fy * y).sin())
+            })
+            .collect()
+    };
+    let mut beauty = layer_with(
+        Some("rgba"),
+        (w, h),
+        Blocks::Tiles(Vec2(16, 16)),
+        Compression::ZIP16,
+        vec![
+            AnyChannel::new("R", FlatSamples::F32(smooth(0.11, 0.03, 0.0, 2.0))),
+            AnyChannel::new("G", FlatSamples::F32(smooth(0.05, 0.07, 0.0, 1.0))),
+            AnyChannel::new("B", FlatSamples::F32(smooth(0.02, 0.13, 0.0, 1.0))),
+            AnyChannel::new("diffuse.R", half(smooth(0.09, 0.01, 0.0, 1.0))),
+            AnyChannel::new("Z", FlatSamples::F32(smooth(0.01, 0.02, 1.0, 9.0))),
+            AnyChannel::new(
+                "velocity.X",
+                FlatSamples::F32(smooth(0.03, 0.01, -6.0, 6.0)),
+            ),
+            AnyChannel::new(
+                "velocity.Y",
+                FlatSamples::F32(smooth(0.01, 0.04, -3.0, 3.0)),
+            ),
+        ],
+    );
+    beauty.attributes.layer_position = Vec2(-5, 7);
+    let mut extra = layer_with(
+        Some("extra"),
+        (w, h),
+        Blocks::ScanLines,
+        Compression::ZIP1,
+        vec![AnyChannel::new(
+            "N.X",
+            FlatSamples::F32(smooth(0.07, 0.05, -1.0, 1.0)),
+        )],
+    );
+    extra.attributes.layer_position = Vec2(-5, 7);
+    let input = dir.path().join("in.exr");
+    Image::from_layers(
+        ImageAttributes::new(IntegerBounds::new((0, 0), (60, 60))),
+        vec![beauty, extra],
+    )
+    .write()
+    .to_file(&input)
+    .unwrap();
+    let blur = |compression: &str| {
+        let out = dir.path().join(format!("{compression}.exr"));
+        let o = shutter(&[
+            "blur",
+            "--algorithm",
+            "reconstruct",
+            "--color",
+            &s(&input),
+            "--compression",
+            compression,
+            "-o",
+            &s(&out),
+        ]);
+        assert!(o.status.success(), "{compression}: {}", stderr(&o));
+        out
+    };
+    let raw = blur("none");
+    for compression in ["zip", "zips"] {
+        let out = blur(compression);
+        let meta = exr::meta::MetaData::read_from_file(&out, false).unwrap();
+        assert_eq!(
+            meta.headers.len(),
+            2,
+            "{compression}: multi-part in, multi-part out"
+        );
+        assert!(matches!(
+            meta.headers[0].blocks,
+            exr::meta::BlockDescription::Tiles(_)
+        ));
+        assert_eq!(meta.headers[0].own_attributes.layer_position, Vec2(-5, 7));
+        let name = if compression == "zip" {
+            Compression::ZIP16
+        } else {
+            Compression::ZIP1
+        };
+        assert!(
+            meta.headers.iter().all(|h| h.compression == name),
+            "{compression}"
+        );
+        // Deflated, not stored raw: the path under test ran.
+        let size = |p: &Path| std::fs::metadata(p).unwrap().len();
+        let (packed, whole) = (size(&out), size(&raw));
+        assert!(
+            packed * 10 < whole * 9,
+            "{compression}: {packed} of {whole} bytes"
+        );
+        // The exr crate's reading, part by part and channel by channel, bit for bit.
+        let (got, expected) = (read_exr_layers(&out), read_exr_layers(&raw));
+        assert_eq!(got.len(), expected.len());
+        for (part, raw_part) in got.iter().zip(&expected) {
+            let (list, raw_list) = (&part.channel_data.list, &raw_part.channel_data.list);
+            assert_eq!(list.len(), raw_list.len());
+            for (channel, raw_channel) in list.iter().zip(raw_list) {
+                assert_eq!(channel.name, raw_channel.name);
+                assert!(
+                    channel.sample_data == raw_channel.sample_data,
+                    "{compression}: {:?} {} differs",
+                    part.attributes.layer_name,
+                    channel.name
+                );
+            }
+        }
+        // OpenEXR's.
+        if let Some((equal, report)) = idiff_equal(&out, &raw) {
+            assert!(equal, "{compression}: OpenEXR reads other pixels: {report}");
+        }
+    }
+}

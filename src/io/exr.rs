@@ -606,7 +606,7 @@ pub fn write_channels(
     options: ExrOptions,
 ) -> exr::error::Result<()> {
     use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
-    use exr::prelude::{Blocks, LineOrder, WritableImage};
+    use exr::prelude::{Blocks, LineOrder};
 
     let list = channels
         .into_iter()
@@ -646,7 +646,7 @@ pub fn write_channels(
         )),
         layer_data: layer,
     };
-    image.write().to_buffered(writer)
+    crate::io::exr_zip::write(&image, writer, true)
 }
 
 fn invalid(message: impl Into<std::borrow::Cow<'static, str>>) -> exr::error::Error {

@@ -35,7 +35,7 @@ use exr::math::Vec2;
 use exr::meta::attribute::{AttributeValue, IntegerBounds, SampleType, Text};
 use exr::meta::header::{standard_names, Header, ImageAttributes, LayerAttributes};
 use exr::meta::BlockDescription;
-use exr::prelude::{f16, LineOrder, WritableImage};
+use exr::prelude::{f16, LineOrder};
 
 use crate::frame::{LayerClass, Plane, Window};
 
@@ -244,13 +244,7 @@ pub fn write_like(
             .layer_data
             .iter()
             .any(|layer| reserved(&layer.attributes.other));
-    let write = image.write();
-    let write = if keeps_odd_types {
-        write.skip_compatibility_checks()
-    } else {
-        write
-    };
-    write.to_buffered(&mut *writer).map_err(|e| e.to_string())?;
+    crate::io::exr_zip::write(&image, &mut *writer, !keeps_odd_types).map_err(|e| e.to_string())?;
     writer.flush().map_err(|e| e.to_string())?;
     sort_attributes(writer.get_mut(), &random_y).map_err(|e| format!("sorting its attributes: {e}"))
 }
@@ -629,6 +623,7 @@ fn headers_end(bytes: &[u8]) -> std::io::Result<Option<usize>> {
 mod tests {
     use super::*;
     use exr::meta::MetaData;
+    use exr::prelude::WritableImage;
     use std::fs::File;
 
     /// A two-part file whose parts carry custom attributes, written by the exr crate.

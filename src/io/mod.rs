@@ -5,6 +5,7 @@ pub mod channels;
 pub mod exr;
 pub mod exr_like;
 pub mod exr_parts;
+pub mod exr_zip;
 pub mod file;
 pub mod image;
 pub mod input;
