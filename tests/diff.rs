@@ -907,8 +907,10 @@ fn u32_ids_over_2_pow_24_are_compared_and_printed_as_integers() {
 /// Files as Blender writes them, a part a pass: two view layers (`Main`, `Second`), or two
 /// views of one (`ViewLayer.Combined-left`, view `left`). `diff` compares them in the view
 /// layer `--layer` names (QA: it had no `--layer`, and stopped at "choose one with
-/// --layer"), and in the view `--view` names: without it, the default view, with a warning
-/// that says so, so a difference in the other view is not passed over unsaid.
+/// --layer"). A stereo file is compared in every view the reference holds, each an entry
+/// of its own named by its view, so a change confined to the right eye fails the gate (it
+/// had passed, with a warning, comparing the default view alone); `--view` compares one; a
+/// candidate without a view of the reference is refused, one with a view more is warned.
 #[test]
 fn blender_files_of_view_layers_and_views_are_compared_in_the_one_asked_for() {
     let dir = tempfile::tempdir().unwrap();
@@ -951,30 +953,209 @@ fn blender_files_of_view_layers_and_views_are_compared_in_the_one_asked_for() {
     assert_eq!(o.status.code(), Some(1), "Main differs: {}", stderr(&o));
     let o = diff("layers_a.exr", "layers_a.exr", &["--layer", "Main"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    // Two views; in b, the right view is brighter.
-    for (file, offset) in [("views_a.exr", 0.0), ("views_b.exr", 0.25)] {
-        let parts = vec![
-            part(
-                "ViewLayer.Combined-left",
-                Some("left"),
-                pass("ViewLayer", 1, 0.0),
-            ),
-            part(
-                "ViewLayer.Combined-right",
-                Some("right"),
-                pass("ViewLayer", 5, offset),
-            ),
-        ];
+    // A file of no views: its entry names none (the JSON as it was).
+    let o = diff(
+        "layers_a.exr",
+        "layers_b.exr",
+        &["--layer", "Main", "--json"],
+    );
+    let report = json(&o);
+    assert_eq!(report["frames"].as_array().unwrap().len(), 1, "{report}");
+    assert!(report["frames"][0].get("view").is_none(), "{report}");
+    assert!(report["frames"][0].get("extra_views").is_none(), "{report}");
+    assert!(!stdout(&diff("layers_a.exr", "layers_b.exr", &["--layer", "Main"])).contains("view"));
+
+    // Two views (a third in views_c); in b and c, the right view is brighter by 0.25.
+    let stereo = |file: &str, offset: f32, views: &[&'static str]| {
+        let parts = views
+            .iter()
+            .map(|&view| {
+                let (name, seed, offset) = match view {
+                    "left" => ("ViewLayer.Combined-left", 1, 0.0),
+                    "right" => ("ViewLayer.Combined-right", 5, offset),
+                    _ => ("ViewLayer.Combined-centre", 13, 0.0),
+                };
+                part(name, Some(view), pass("ViewLayer", seed, offset))
+            })
+            .collect();
         write_parts(&d.join(file), (w, h), parts);
-    }
+    };
+    stereo("views_a.exr", 0.0, &["left", "right"]);
+    stereo("views_b.exr", 0.25, &["left", "right"]);
+    stereo("views_c.exr", 0.25, &["left", "right", "centre"]);
+    stereo("views_left.exr", 0.0, &["left"]);
     let o = diff("views_a.exr", "views_b.exr", &[]);
-    assert_eq!(o.status.code(), Some(0), "left is the same: {}", stderr(&o));
+    assert_eq!(o.status.code(), Some(1), "right differs: {}", stderr(&o));
     let said = stderr(&o);
+    assert!(!said.contains("holds the views"), "{said}");
     assert!(
-        said.contains("left (default), right") && said.contains("--view"),
+        said.contains("FAIL") && said.contains("view right"),
         "{said}"
     );
-    let o = diff("views_a.exr", "views_b.exr", &["--view", "right"]);
-    assert_eq!(o.status.code(), Some(1), "right differs: {}", stderr(&o));
+    // Each line that names an entry names its view: left's figures are 0, right's are not.
+    let text = stdout(&o);
+    assert!(text.contains("view left: rmse 0.000000 "), "{text}");
+    assert!(text.contains("view right: rmse 0.250000 "), "{text}");
+    assert!(text.contains("worst rmse: 0.250000 over 2 views"), "{text}");
+    let o = diff("views_a.exr", "views_b.exr", &["--json"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let report = json(&o);
+    let frames = report["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 2, "{report}");
+    assert_eq!(
+        (&frames[0]["view"], &frames[0]["failed"]),
+        (&serde_json::json!("left"), &serde_json::json!(false)),
+        "{report}"
+    );
+    assert_eq!(
+        (&frames[1]["view"], &frames[1]["failed"]),
+        (&serde_json::json!("right"), &serde_json::json!(true)),
+        "{report}"
+    );
+    assert!(
+        (frames[1]["value"].as_f64().unwrap() - 0.25).abs() < 1e-5,
+        "{report}"
+    );
+    assert!(
+        (report["worst"].as_f64().unwrap() - 0.25).abs() < 1e-5,
+        "{report}"
+    );
+    assert_eq!(report["failed"], true, "{report}");
+    // One view asked for: that view alone, as before.
+    let o = diff("views_a.exr", "views_b.exr", &["--view", "left"]);
+    assert_eq!(o.status.code(), Some(0), "left is the same: {}", stderr(&o));
     assert!(!stderr(&o).contains("holds the views"), "{}", stderr(&o));
+    let o = diff("views_a.exr", "views_b.exr", &["--view", "right", "--json"]);
+    assert_eq!(o.status.code(), Some(1), "right differs: {}", stderr(&o));
+    let report = json(&o);
+    assert_eq!(report["frames"].as_array().unwrap().len(), 1, "{report}");
+    assert_eq!(report["frames"][0]["view"], "right", "{report}");
+    // Each view's heatmap and thumbnails under a name of its own: left's black (no
+    // difference), right's not.
+    let heat = d.join("heat.png");
+    let page = d.join("page");
+    let o = diff(
+        "views_a.exr",
+        "views_b.exr",
+        &["--heatmap", &s(&heat), "--report", &s(&page)],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(!heat.exists());
+    let (left, right) = (
+        std::fs::read(d.join("heat.left.png")).unwrap(),
+        std::fs::read(d.join("heat.right.png")).unwrap(),
+    );
+    assert_ne!(left, right);
+    for view in ["left", "right"] {
+        for image in ["reference", "candidate", "heatmap"] {
+            let thumb = page.join(format!("thumbs/still-{view}-{image}.png"));
+            assert!(thumb.exists(), "{thumb:?}");
+        }
+    }
+    let html = std::fs::read_to_string(page.join("index.html")).unwrap();
+    assert!(html.contains("id=\"frame-still-right\""), "{html}");
+    // A candidate without the right view is refused, naming it, the file and the frame.
+    for frame in ["sa.0007.exr", "sb.0007.exr"] {
+        let from = if frame.starts_with("sa") {
+            "views_a.exr"
+        } else {
+            "views_left.exr"
+        };
+        std::fs::copy(d.join(from), d.join(frame)).unwrap();
+    }
+    let o = diff("sa.####.exr", "sb.####.exr", &[]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let said = stderr(&o);
+    assert!(
+        said.contains("sb.0007.exr") && said.contains("frame 7") && said.contains("right"),
+        "{said}"
+    );
+    // A candidate of no views, its one picture the reference's left view.
+    let mono = vec![part("ViewLayer.Combined", None, pass("ViewLayer", 1, 0.0))];
+    write_parts(&d.join("mono.exr"), (w, h), mono);
+    let o = diff("views_a.exr", "mono.exr", &[]);
+    assert_eq!(o.status.code(), Some(3), "no views at all: {}", stderr(&o));
+    assert!(stderr(&o).contains("mono.exr"), "{}", stderr(&o));
+    // With --idiff: could not compare (idiff's 4).
+    let o = diff("sa.####.exr", "sb.####.exr", &["--idiff"]);
+    assert_eq!(o.status.code(), Some(4), "{}", stderr(&o));
+    // A candidate with a view more: compared in the reference's views, the third warned.
+    let o = diff("views_b.exr", "views_c.exr", &["--warn-exit", "--json"]);
+    assert_eq!(o.status.code(), Some(4), "{}", stderr(&o));
+    let report = json(&o);
+    assert_eq!(report["frames"].as_array().unwrap().len(), 2, "{report}");
+    assert_eq!(
+        report["frames"][0]["extra_views"],
+        serde_json::json!(["centre"])
+    );
+    assert!(stderr(&o).contains("centre"), "{}", stderr(&o));
+    // With --idiff, as channels the candidate adds (idiff -a fails a count that differs).
+    let o = diff("views_b.exr", "views_c.exr", &["--idiff"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let o = diff("views_b.exr", "views_b.exr", &["--idiff"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+/// The single-part scheme (a `multiView` list, the right view's channels `right.R`): every
+/// view compared as in a multi-part file, and a candidate of the left view alone refused.
+#[test]
+fn single_part_multi_view_files_are_compared_in_every_view() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (w, h) = (20, 12);
+    let n = w * h;
+    let write = |file: &str, offset: f32, views: &'static [&'static str]| {
+        let mut channels = Vec::new();
+        for &view in views {
+            let (seed, offset) = if view == "left" {
+                (3, 0.0)
+            } else {
+                (7, offset)
+            };
+            for (i, c) in ["R", "G", "B"].into_iter().enumerate() {
+                let plane = noise(n, seed + i as u32, 0.0, 1.0);
+                let plane = plane.iter().map(|v| v + offset).collect();
+                let name = if view == "left" {
+                    c.to_string()
+                } else {
+                    format!("{view}.{c}")
+                };
+                channels.push((name, plane));
+            }
+        }
+        let path = d.join(file);
+        write_parts(
+            &path,
+            (w, h),
+            vec![Part {
+                name: None,
+                view: None,
+                multi_view: Some(views),
+                channels,
+            }],
+        );
+        s(&path)
+    };
+    let a = write("a.exr", 0.0, &["left", "right"]);
+    let b = write("b.exr", 0.5, &["left", "right"]);
+    let left = write("left.exr", 0.0, &["left"]);
+    let o = shutter(&["diff", &a, &b, "--fail", "0.01", "--json"]);
+    assert_eq!(o.status.code(), Some(1), "right differs: {}", stderr(&o));
+    let report = json(&o);
+    let frames = report["frames"].as_array().unwrap();
+    let seen: Vec<(&str, bool)> = frames
+        .iter()
+        .map(|f| (f["view"].as_str().unwrap(), f["failed"].as_bool().unwrap()))
+        .collect();
+    assert_eq!(seen, [("left", false), ("right", true)], "{report}");
+    // The right view's channels are compared as the view's R, G, B.
+    assert!(
+        (frames[1]["value"].as_f64().unwrap() - 0.5).abs() < 1e-5,
+        "{report}"
+    );
+    let o = shutter(&["diff", &a, &a]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = shutter(&["diff", &a, &left]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(stderr(&o).contains("right"), "{}", stderr(&o));
 }

@@ -494,8 +494,8 @@ pub struct DiffArgs {
     #[arg(long, value_name = "NAME")]
     pub layer: Option<String>,
 
-    /// View of multi-view (stereo) EXRs to compare, e.g. right [default: each file's
-    /// default view].
+    /// View of multi-view (stereo) EXRs to compare alone, e.g. right [default: every view
+    /// of the reference, each apart].
     #[arg(long, value_name = "NAME")]
     pub view: Option<String>,
 

@@ -1,8 +1,8 @@
 //! `shutter diff`: compare images or sequences, gate CI on a metric.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use crate::error::{Error, Problem, ProblemKind, Result};
+use crate::error::{Error, Result};
 use crate::io::preset::Preset;
 use crate::io::sequence::{parse_frames, PathPattern};
 
@@ -132,44 +132,6 @@ impl Codes {
     }
 }
 
-/// Refuses, before anything is written, a `--heatmap` that would replace an input of any
-/// frame: the same check blur makes of `-o` (the same path, another spelling, a symbolic or
-/// hard link). Every frame concerned is named; diff answers it as an output it cannot write.
-fn refuse_overwriting_inputs(
-    heatmap: &PathPattern,
-    inputs: &[Option<&PathPattern>],
-    frames: &[Option<i64>],
-) -> Result<()> {
-    let outputs: Vec<PathBuf> = frames.iter().map(|&f| heatmap.path(f)).collect();
-    let writes: Vec<(&Path, Vec<PathBuf>)> = frames
-        .iter()
-        .zip(&outputs)
-        .map(|(&f, output)| {
-            let read = inputs.iter().flatten().map(|p| p.path(f)).collect();
-            (output.as_path(), read)
-        })
-        .collect();
-    let problems: Vec<Problem> = crate::io::passes::outputs_over_inputs(&writes)
-        .into_iter()
-        .map(|(i, input)| {
-            Problem::new(
-                ProblemKind::Output,
-                &outputs[i],
-                format!(
-                    "the heatmap would overwrite the input {}; choose another --heatmap",
-                    input.display()
-                ),
-            )
-            .frame(frames[i])
-        })
-        .collect();
-    if problems.is_empty() {
-        Ok(())
-    } else {
-        Err(Error::Files(problems))
-    }
-}
-
 pub fn diff(args: DiffArgs) -> Result<i32> {
     let metric = crate::lab::metrics::Metric::parse(&args.metric).ok_or_else(|| {
         Error::usage(format!(
@@ -220,14 +182,14 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
     let mut others = vec![&b];
     others.extend(sharp.as_ref());
     let (frames, hole_warnings) = frames_for(&a, &others, args.frames.as_deref())?;
+    // A heatmap that names an input is refused by the run, before anything is written,
+    // with each view's name (`lab::diff::views`).
     if let Some(heatmap) = &heatmap {
         if frames.len() > 1 && !heatmap.is_sequence() {
             return Err(Error::usage(
                 "--heatmap must be a pattern with #### or %04d when comparing sequences",
             ));
         }
-        let inputs = [Some(&a), Some(&b), sharp.as_ref()];
-        refuse_overwriting_inputs(heatmap, &inputs, &frames)?;
     }
     let job = crate::lab::diff::DiffJob {
         a,
@@ -255,7 +217,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
     } else {
         let mut text = String::new();
         for f in &report.frames {
-            let label = f.frame.map_or(String::new(), |n| format!("frame {n}: "));
+            let label = f.label();
             text += &format!("{label}{}\n", format_scores(&f.whole));
             let e = &f.every_channel;
             let m = &f.largest;
@@ -306,10 +268,11 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
         }
         if report.frames.len() > 1 {
             text += &format!(
-                "worst {}: {:.6} over {} frames\n",
+                "worst {}: {:.6} over {} {}\n",
                 report.metric,
                 report.worst,
-                report.frames.len()
+                report.frames.len(),
+                report.entries()
             );
         }
         out(&text)?;
@@ -323,22 +286,22 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
         }
     }
     let warned = report.frames.iter().any(|f| f.warned);
-    let channels_differ = report
-        .frames
-        .iter()
-        .any(|f| !f.missing_channels.is_empty() || !f.extra_channels.is_empty());
+    let channels_differ = report.frames.iter().any(|f| {
+        !f.missing_channels.is_empty() || !f.extra_channels.is_empty() || !f.extra_views.is_empty()
+    });
     let code = Codes::of(&args).verdict(report.failed, warned, channels_differ);
     if report.failed {
         let failed: Vec<&crate::lab::diff::FrameDiff> =
             report.frames.iter().filter(|f| f.failed).collect();
         let first = failed[0];
         let at = first
-            .frame
-            .map_or(String::new(), |n| format!(" (first: frame {n})"));
+            .name()
+            .map_or(String::new(), |name| format!(" (first: {name})"));
         eprintln!(
-            "shutter: FAIL: {} of {} frames fail{at}: {}",
+            "shutter: FAIL: {} of {} {} fail{at}: {}",
             failed.len(),
             report.frames.len(),
+            report.entries(),
             first.why.as_deref().unwrap_or("")
         );
     }

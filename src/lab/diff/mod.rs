@@ -4,6 +4,7 @@
 
 pub mod channels;
 pub mod report;
+pub mod views;
 
 use std::path::{Path, PathBuf};
 
@@ -123,6 +124,9 @@ fn allowed_pixels(job: &DiffJob, pixels: usize) -> usize {
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameDiff {
     pub frame: Option<i64>,
+    /// The view compared, where the reference is a multi-view file (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub view: Option<String>,
     pub a: PathBuf,
     pub b: PathBuf,
     /// The beauty's RGB (SSIM and FLIP on its display image).
@@ -140,6 +144,10 @@ pub struct FrameDiff {
     /// Channels of the reference the candidate lacks (a failure), and the reverse (warned).
     pub missing_channels: Vec<String>,
     pub extra_channels: Vec<String>,
+    /// The candidate's views the reference lacks, not compared (warned), on the first view's
+    /// entry of the frame.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub extra_views: Vec<String>,
     /// Pixels with a channel over its gate (`--fail-pixel` for colour, `--data-fail-pixel`
     /// for data), and over the warning thresholds.
     pub pixels_over_fail: usize,
@@ -158,6 +166,25 @@ pub struct FrameDiff {
     pub thumbnails: Option<report::Thumbnails>,
 }
 
+impl FrameDiff {
+    /// The entry as lines and messages name it (`frame 12, view right`), or `None` for a
+    /// still of no views.
+    pub fn name(&self) -> Option<String> {
+        match (self.frame, &self.view) {
+            (Some(n), Some(view)) => Some(format!("frame {n}, view {view}")),
+            (Some(n), None) => Some(format!("frame {n}")),
+            (None, Some(view)) => Some(format!("view {view}")),
+            (None, None) => None,
+        }
+    }
+
+    /// [`FrameDiff::name`] as the start of a line: `frame 12, view right: `, or nothing.
+    pub fn label(&self) -> String {
+        self.name()
+            .map_or(String::new(), |name| format!("{name}: "))
+    }
+}
+
 /// The outcome of a diff.
 #[derive(Clone, Debug, Serialize)]
 pub struct DiffReport {
@@ -169,21 +196,35 @@ pub struct DiffReport {
     pub metric: &'static str,
     pub warn: Option<f64>,
     pub fail: Option<f64>,
+    /// One entry a frame, or one a view of a frame where the reference is multi-view.
     pub frames: Vec<FrameDiff>,
-    /// The worst value of the gating metric over the frames.
+    /// The worst value of the gating metric over the entries.
     pub worst: f64,
     pub warnings: Vec<String>,
     pub failed: bool,
 }
 
-/// The colour's plan, from its header alone, in the job's view layer and view.
+impl DiffReport {
+    /// What the entries are, for messages: `frames`, or `views` (of frames) where the
+    /// reference is a multi-view file.
+    pub fn entries(&self) -> &'static str {
+        if self.frames.iter().any(|f| f.view.is_some()) {
+            "views"
+        } else {
+            "frames"
+        }
+    }
+}
+
+/// The colour's plan, from its header alone, in the job's view layer and in `view`.
 fn plan(
     pattern: &PathPattern,
     frame: Option<i64>,
+    view: Option<&str>,
     job: &DiffJob,
     preset: &Preset,
 ) -> Result<FramePlan, Problem> {
-    let chosen = (job.layer.as_deref(), job.view.as_deref());
+    let chosen = (job.layer.as_deref(), view);
     plan_color_in(pattern, frame, preset, chosen).map_err(|mut problems| problems.remove(0))
 }
 
@@ -232,164 +273,50 @@ pub fn write_heatmap(path: &Path, width: usize, height: usize, map: &[f32]) -> R
     crate::lab::bench::plot::write_png(path, width, height, &bytes)
 }
 
-/// Compares every frame. Unreadable inputs and size mismatches are errors (all of them
-/// reported); metric results, warnings and failures are in the report.
+/// Compares every frame, each view of a multi-view reference apart ([`views`]). Unreadable
+/// inputs, views the candidate lacks and size mismatches are errors (all of them reported);
+/// metric results, warnings and failures are in the report.
 pub fn run(job: &DiffJob) -> Result<DiffReport> {
     let mut preset = job.preset.clone();
     if job.linear {
         preset.color.transfer = crate::io::preset::Transfer::Linear;
     }
-    let results: Vec<std::result::Result<FrameDiff, Problem>> = job
+    // The views of each frame, from the headers, and the heatmaps' names with them: a view
+    // the candidate lacks, or a heatmap over an input, stops the run before anything is
+    // decoded or written.
+    let mut problems = Vec::new();
+    let mut planned = Vec::new();
+    for result in job
         .frames
         .par_iter()
-        .map(|&frame| {
-            // Sizes from the headers, before anything is decoded: two large images of
-            // different sizes are told apart in milliseconds.
-            let (a, b) = (
-                plan(&job.a, frame, job, &preset)?,
-                plan(&job.b, frame, job, &preset)?,
-            );
-            let sharp = job
-                .sharp
-                .as_ref()
-                .map(|sharp| plan(sharp, frame, job, &preset))
-                .transpose()?;
-            let (wa, ha, wb, hb) = (a.width, a.height, b.width, b.height);
-            if (wa, ha) != (wb, hb) {
-                return Err(Problem::new(
-                    ProblemKind::SizeMismatch,
-                    job.b.path(frame),
-                    format!("{wb}x{hb} but {} is {wa}x{ha}", job.a.path(frame).display()),
-                )
-                .frame(frame));
-            }
-            // The same size at another place is another picture (idiff fails it too): the
-            // data windows' corners and the display windows must agree, or the pixels
-            // compared index by index are not the same pixels.
-            if let (Some(wa), Some(wb)) = (a.windows(), b.windows()) {
-                let at = |w: crate::frame::Windows| {
-                    let d = w.display;
-                    format!(
-                        "data window at ({}, {}), display window {}x{} at ({}, {})",
-                        w.data_origin.0, w.data_origin.1, d.width, d.height, d.x, d.y
-                    )
-                };
-                if wa != wb {
-                    return Err(Problem::new(
-                        ProblemKind::SizeMismatch,
-                        job.b.path(frame),
-                        format!(
-                            "{} but {} has its {}",
-                            at(wb),
-                            job.a.path(frame).display(),
-                            at(wa)
-                        ),
-                    )
-                    .frame(frame));
-                }
-            }
-            if let (Some(s), Some(path)) = (&sharp, &job.sharp) {
-                let (ws, hs) = (s.width, s.height);
-                if (ws, hs) != (wa, ha) {
-                    return Err(Problem::new(
-                        ProblemKind::SizeMismatch,
-                        path.path(frame),
-                        format!("{ws}x{hs} but the images are {wa}x{ha}"),
-                    )
-                    .frame(frame));
-                }
-            }
-            let (mut a, mut b) = (a, b);
-            a.read_every_channel();
-            b.read_every_channel();
-            // Parts the read leaves out (another data window, deep data) are not compared.
-            let notes: Vec<String> = [(&a, &job.a), (&b, &job.b)]
-                .into_iter()
-                .filter(|(plan, _)| !plan.parts_left_out.is_empty())
-                .map(|(plan, pattern)| {
-                    format!(
-                        "{} of {}: a data window other than the beauty's (or deep data), not \
-                         compared",
-                        plan.parts_left_out.join(", "),
-                        pattern.path(frame).display()
-                    )
-                })
-                .collect();
-            // A multi-view file is compared in one view: say so, and how to compare another.
-            let mut notes = notes;
-            if job.view.is_none() {
-                notes.extend([(&a, &job.a), (&b, &job.b)].into_iter().filter_map(
-                    |(plan, pattern)| {
-                        let views = plan.colour_views()?;
-                        let shown = views.choose(None).ok()?;
-                        (views.names.len() > 1).then(|| {
-                            format!(
-                                "{} holds the views {}: view {shown} is compared (--view \
-                                 NAME compares another)",
-                                pattern.path(frame).display(),
-                                views.list()
-                            )
-                        })
-                    },
-                ));
-            }
-            let (a, b) = (read_frame(&a)?, read_frame(&b)?);
-            let (ra, rb) = (
-                Rgb::of(&a).expect("colour read"),
-                Rgb::of(&b).expect("colour read"),
-            );
-            let whole = metrics::compare(&ra, &rb, None);
-            let region = match &sharp {
-                Some(sharp) => {
-                    let s = read_frame(sharp)?;
-                    let mask =
-                        metrics::changed_region(&Rgb::of(&s).expect("colour read"), &ra, 1e-3);
-                    Some(metrics::compare(&ra, &rb, Some(&mask)))
-                }
-                None => None,
-            };
-            if let Some(heatmap) = &job.heatmap {
-                let (map, _) = error_map(job.metric, &ra, &rb);
-                write_heatmap(&heatmap.path(frame), wa, ha, &map)
-                    .map_err(|e| e.problems()[0].clone())?;
-            }
-            let value = job.metric.of(&whole);
-            // Every channel: the beauty's alpha (a missing alpha reads as opaque), every light
-            // and data layer, each against its class's gate.
-            let compared = channels::compare(&a, &b, &job.gates);
-            let thumbnails = job
-                .report
-                .as_ref()
-                .map(|dir| report::thumbnails(dir, frame, &ra, &rb, &compared.errors))
-                .transpose()?;
-            let why = failure(job, &compared, value, wa * ha);
-            Ok(FrameDiff {
-                frame,
-                a: job.a.path(frame),
-                b: job.b.path(frame),
-                whole,
-                region,
-                value,
-                largest: compared.every.max_error.clone(),
-                pixels_over_fail: compared.pixels_over_fail,
-                pixels_over_warn: compared.pixels_over_warn,
-                samples_over_hard: compared.over_hard,
-                warned: job.warn.is_some_and(|w| job.metric.exceeds(value, w))
-                    || compared.pixels_over_warn > 0
-                    || !compared.extra.is_empty(),
-                every_channel: compared.every,
-                layers: compared.layers,
-                missing_channels: compared.missing,
-                extra_channels: compared.extra,
-                thumbnails,
-                notes,
-                failed: why.is_some(),
-                why,
+        .map(|&frame| views::of_frame(job, frame))
+        .collect::<Vec<_>>()
+    {
+        match result {
+            Ok(frame) => planned.push(frame),
+            Err(problem) => problems.push(problem),
+        }
+    }
+    problems.extend(views::heatmaps_over_inputs(job, &planned));
+    if !problems.is_empty() {
+        return Err(Error::Files(problems));
+    }
+    let entries: Vec<Entry> = planned
+        .iter()
+        .flat_map(|f| {
+            f.views.iter().enumerate().map(move |(i, view)| Entry {
+                frame: f.frame,
+                view: view.as_deref(),
+                output: f.outputs.as_ref().map(|names| names[i].as_str()),
+                extra: if i == 0 { &f.extra[..] } else { &[] },
             })
         })
         .collect();
+    let results: Vec<std::result::Result<FrameDiff, Problem>> = entries
+        .par_iter()
+        .map(|entry| compare(job, &preset, entry))
+        .collect();
     let mut frames = Vec::new();
-    let mut problems = Vec::new();
     for result in results {
         match result {
             Ok(frame) => frames.push(frame),
@@ -413,7 +340,7 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
     let name = job.metric.name();
     let mut warnings = Vec::new();
     for f in &frames {
-        let label = f.frame.map_or(String::new(), |n| format!("frame {n}: "));
+        let label = f.label();
         if job.warn.is_some_and(|w| job.metric.exceeds(f.value, w)) {
             warnings.push(format!(
                 "{label}{name} {:.6} crosses --warn {}",
@@ -429,6 +356,17 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
         }
         for note in &f.notes {
             warnings.push(format!("{label}{note}"));
+        }
+        if !f.extra_views.is_empty() {
+            // The frame's, not its first view's.
+            let label = f.frame.map_or(String::new(), |n| format!("frame {n}: "));
+            warnings.push(format!(
+                "{label}{} holds the view{} {}, which {} lacks: not compared",
+                f.b.display(),
+                if f.extra_views.len() == 1 { "" } else { "s" },
+                f.extra_views.join(", "),
+                f.a.display()
+            ));
         }
         if !f.extra_channels.is_empty() {
             warnings.push(format!(
@@ -448,5 +386,187 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
         frames,
         worst,
         warnings,
+    })
+}
+
+/// One comparison: a frame, or a view of a frame.
+struct Entry<'a> {
+    frame: Option<i64>,
+    /// The view read (`None`: the file's default, or a file of no views).
+    view: Option<&'a str>,
+    /// The view's name in its outputs' names, where every view of the reference is compared.
+    output: Option<&'a str>,
+    /// The candidate's views the reference lacks (the frame's first entry holds them).
+    extra: &'a [String],
+}
+
+/// Compares one entry: sizes and windows from the headers, then every channel.
+fn compare(
+    job: &DiffJob,
+    preset: &Preset,
+    entry: &Entry,
+) -> std::result::Result<FrameDiff, Problem> {
+    let (frame, view) = (entry.frame, entry.view);
+    // Sizes from the headers, before anything is decoded: two large images of
+    // different sizes are told apart in milliseconds.
+    let (a, b) = (
+        plan(&job.a, frame, view, job, preset)?,
+        plan(&job.b, frame, view, job, preset)?,
+    );
+    let sharp = job
+        .sharp
+        .as_ref()
+        .map(|sharp| plan(sharp, frame, view, job, preset))
+        .transpose()?;
+    // The view in the report: each of a multi-view reference's, or the one --view names in
+    // one; none where the reference is not multi-view (its entries as they always were).
+    let multi_view = a.colour_views().is_some_and(|v| v.names.len() > 1);
+    let named = view.filter(|_| entry.output.is_some() || multi_view);
+    let in_view = |detail: String| match named {
+        Some(view) => format!("view {view}: {detail}"),
+        None => detail,
+    };
+    let (wa, ha, wb, hb) = (a.width, a.height, b.width, b.height);
+    if (wa, ha) != (wb, hb) {
+        return Err(Problem::new(
+            ProblemKind::SizeMismatch,
+            job.b.path(frame),
+            in_view(format!(
+                "{wb}x{hb} but {} is {wa}x{ha}",
+                job.a.path(frame).display()
+            )),
+        )
+        .frame(frame));
+    }
+    // The same size at another place is another picture (idiff fails it too): the
+    // data windows' corners and the display windows must agree, or the pixels
+    // compared index by index are not the same pixels.
+    if let (Some(wa), Some(wb)) = (a.windows(), b.windows()) {
+        let at = |w: crate::frame::Windows| {
+            let d = w.display;
+            format!(
+                "data window at ({}, {}), display window {}x{} at ({}, {})",
+                w.data_origin.0, w.data_origin.1, d.width, d.height, d.x, d.y
+            )
+        };
+        if wa != wb {
+            return Err(Problem::new(
+                ProblemKind::SizeMismatch,
+                job.b.path(frame),
+                in_view(format!(
+                    "{} but {} has its {}",
+                    at(wb),
+                    job.a.path(frame).display(),
+                    at(wa)
+                )),
+            )
+            .frame(frame));
+        }
+    }
+    if let (Some(s), Some(path)) = (&sharp, &job.sharp) {
+        let (ws, hs) = (s.width, s.height);
+        if (ws, hs) != (wa, ha) {
+            return Err(Problem::new(
+                ProblemKind::SizeMismatch,
+                path.path(frame),
+                format!("{ws}x{hs} but the images are {wa}x{ha}"),
+            )
+            .frame(frame));
+        }
+    }
+    let (mut a, mut b) = (a, b);
+    a.read_every_channel();
+    b.read_every_channel();
+    // Parts the read leaves out (another data window, deep data) are not compared.
+    let notes: Vec<String> = [(&a, &job.a), (&b, &job.b)]
+        .into_iter()
+        .filter(|(plan, _)| !plan.parts_left_out.is_empty())
+        .map(|(plan, pattern)| {
+            format!(
+                "{} of {}: a data window other than the beauty's (or deep data), not \
+                 compared",
+                plan.parts_left_out.join(", "),
+                pattern.path(frame).display()
+            )
+        })
+        .collect();
+    // A multi-view candidate of a reference of one view or none is compared in its default
+    // view: say so, and how to compare another.
+    let mut notes = notes;
+    if view.is_none() {
+        notes.extend(
+            [(&a, &job.a), (&b, &job.b)]
+                .into_iter()
+                .filter_map(|(plan, pattern)| {
+                    let views = plan.colour_views()?;
+                    let shown = views.choose(None).ok()?;
+                    (views.names.len() > 1).then(|| {
+                        format!(
+                            "{} holds the views {}: view {shown} is compared (--view \
+                         NAME compares another)",
+                            pattern.path(frame).display(),
+                            views.list()
+                        )
+                    })
+                }),
+        );
+    }
+    let (a, b) = (read_frame(&a)?, read_frame(&b)?);
+    let (ra, rb) = (
+        Rgb::of(&a).expect("colour read"),
+        Rgb::of(&b).expect("colour read"),
+    );
+    let whole = metrics::compare(&ra, &rb, None);
+    let region = match &sharp {
+        Some(sharp) => {
+            let s = read_frame(sharp)?;
+            let mask = metrics::changed_region(&Rgb::of(&s).expect("colour read"), &ra, 1e-3);
+            Some(metrics::compare(&ra, &rb, Some(&mask)))
+        }
+        None => None,
+    };
+    if let Some(heatmap) = &job.heatmap {
+        let (map, _) = error_map(job.metric, &ra, &rb);
+        let path = heatmap.path(frame);
+        let path = entry
+            .output
+            .map_or_else(|| path.clone(), |v| views::output_path(&path, v));
+        write_heatmap(&path, wa, ha, &map).map_err(|e| e.problems()[0].clone())?;
+    }
+    let value = job.metric.of(&whole);
+    // Every channel: the beauty's alpha (a missing alpha reads as opaque), every light
+    // and data layer, each against its class's gate.
+    let compared = channels::compare(&a, &b, &job.gates);
+    let thumbnails = job
+        .report
+        .as_ref()
+        .map(|dir| report::thumbnails(dir, frame, entry.output, &ra, &rb, &compared.errors))
+        .transpose()?;
+    let why = failure(job, &compared, value, wa * ha);
+    Ok(FrameDiff {
+        frame,
+        view: named.map(str::to_string),
+        a: job.a.path(frame),
+        b: job.b.path(frame),
+        whole,
+        region,
+        value,
+        largest: compared.every.max_error.clone(),
+        pixels_over_fail: compared.pixels_over_fail,
+        pixels_over_warn: compared.pixels_over_warn,
+        samples_over_hard: compared.over_hard,
+        warned: job.warn.is_some_and(|w| job.metric.exceeds(value, w))
+            || compared.pixels_over_warn > 0
+            || !compared.extra.is_empty()
+            || !entry.extra.is_empty(),
+        every_channel: compared.every,
+        layers: compared.layers,
+        missing_channels: compared.missing,
+        extra_channels: compared.extra,
+        extra_views: entry.extra.to_vec(),
+        thumbnails,
+        notes,
+        failed: why.is_some(),
+        why,
     })
 }

@@ -61,10 +61,13 @@ fn create_dir(dir: &Path) -> Result<()> {
 
 /// Writes one frame's thumbnails under `dir/thumbs`: the two images as a display shows them
 /// (exposure 0, clamped, sRGB) and the heatmap of `errors`, each pixel's largest difference
-/// over every channel (an AOV-only change shows), scaled to the frame's largest.
+/// over every channel (an AOV-only change shows), scaled to the frame's largest. Each view
+/// of a multi-view frame, `view` (as in file names), has its own
+/// (`thumbs/000012-left-reference.png`).
 pub fn thumbnails(
     dir: &Path,
     frame: Option<i64>,
+    view: Option<&str>,
     a: &Rgb,
     b: &Rgb,
     errors: &[f32],
@@ -72,6 +75,10 @@ pub fn thumbnails(
     let thumbs = dir.join("thumbs");
     create_dir(&thumbs).map_err(|e| e.problems()[0].clone())?;
     let stem = frame.map_or("still".to_string(), |n| format!("{n:06}"));
+    let stem = match view {
+        Some(view) => format!("{stem}-{view}"),
+        None => stem,
+    };
     let (w, h) = (a.width, a.height);
     let max = errors
         .iter()
@@ -204,12 +211,13 @@ fn page(report: &DiffReport) -> String {
     } else {
         ("pass", "PASS")
     };
+    let noun = report.entries();
     let mut html = format!(
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
          <title>shutter diff: {word}</title><style>{STYLE}</style></head><body>\n\
          <h1><span class=\"verdict {class}\" id=\"verdict\">{word}</span> shutter diff</h1>\n\
-         <p>{} frames: {failed} fail, {warned} warn, {} pass. Gating metric: {} (worst {}). \
-         Worst frames first.</p>\n",
+         <p>{} {noun}: {failed} fail, {warned} warn, {} pass. Gating metric: {} (worst {}). \
+         Worst {noun} first.</p>\n",
         report.frames.len(),
         report.frames.len() - failed - warned,
         escape(report.metric),
@@ -229,6 +237,17 @@ fn page(report: &DiffReport) -> String {
             ("pass", "PASS")
         };
         let label = f.frame.map_or("still".to_string(), |n| n.to_string());
+        // A view's row: `12 right`, its id `frame-12-right`.
+        let (label, id) = match &f.view {
+            Some(view) => (
+                format!("{label} {}", escape(view)),
+                format!(
+                    "{label}-{}",
+                    escape(&view.replace(char::is_whitespace, "_"))
+                ),
+            ),
+            None => (label.clone(), label),
+        };
         let w = &f.whole;
         let m = &f.largest;
         let mut figures = format!(
@@ -294,7 +313,7 @@ fn page(report: &DiffReport) -> String {
                 .collect()
         });
         html += &format!(
-            "<tr id=\"frame-{label}\"><td>{label}</td><td><span class=\"verdict {class}\">{word}</span></td>\
+            "<tr id=\"frame-{id}\"><td>{label}</td><td><span class=\"verdict {class}\">{word}</span></td>\
              <td>{figures}</td><td class=\"thumbs\">{thumbs}</td></tr>\n"
         );
     }
