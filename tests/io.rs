@@ -712,8 +712,15 @@ fn zip_outputs_read_as_their_uncompressed_twin_in_openexr_and_the_exr_crate() {
             assert_eq!(list.len(), raw_list.len());
             for (channel, raw_channel) in list.iter().zip(raw_list) {
                 assert_eq!(channel.name, raw_channel.name);
+                let bits = |samples: &FlatSamples| -> Vec<u32> {
+                    match samples {
+                        FlatSamples::F16(v) => v.iter().map(|s| u32::from(s.to_bits())).collect(),
+                        FlatSamples::F32(v) => v.iter().map(|s| s.to_bits()).collect(),
+                        FlatSamples::U32(v) => v.clone(),
+                    }
+                };
                 assert!(
-                    channel.sample_data == raw_channel.sample_data,
+                    bits(&channel.sample_data) == bits(&raw_channel.sample_data),
                     "{compression}: {:?} {} differs",
                     part.attributes.layer_name,
                     channel.name

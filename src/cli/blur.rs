@@ -16,8 +16,9 @@ pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
             return Err(Error::usage("--threads must be at least 1"));
         }
         super::check_threads(threads, "--threads ")?;
-        // The exr crate builds its own pool for each parallel write and sizes it from this
-        // variable: set it so --threads bounds every pool. Nothing else runs yet.
+        // The exr crate, where it runs in parallel itself, builds its own pool and sizes it
+        // from this variable (EXR outputs are deflated on ours, src/io/exr_zip.rs): set it
+        // so --threads bounds every pool. Nothing else runs yet.
         std::env::set_var("RAYON_NUM_THREADS", threads.to_string());
         // Fails only if the pool was already built, which cannot happen this early.
         let _ = rayon::ThreadPoolBuilder::new()
