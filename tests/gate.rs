@@ -4,9 +4,8 @@
 //! where `SHUTTER_REQUIRE_TOOLS=1` (as in CI), else skipped with a note.
 
 use std::path::Path;
-use std::process::Command;
 
-use crate::support::{noise, s, shutter, stderr, stdout, write_exr};
+use crate::support::{noise, run_tool as tool, s, shutter, stderr, stdout, write_exr};
 
 const W: usize = 48;
 const H: usize = 32;
@@ -75,21 +74,6 @@ fn frame(dir: &Path, name: &str, n: usize, candidate: bool) {
             ("Z", z),
         ],
     );
-}
-
-/// Runs a real client, or `None` (with a note) where it is not installed and
-/// `SHUTTER_REQUIRE_TOOLS` does not ask for it.
-fn tool(name: &str, args: &[&str]) -> Option<std::process::Output> {
-    match Command::new(name).args(args).output() {
-        Ok(o) => Some(o),
-        Err(_) if std::env::var("SHUTTER_REQUIRE_TOOLS").as_deref() == Ok("1") => {
-            panic!("{name} is not installed and SHUTTER_REQUIRE_TOOLS=1")
-        }
-        Err(_) => {
-            eprintln!("note: {name} is not installed; its part of the test is skipped");
-            None
-        }
-    }
 }
 
 /// The value after `label` on idiff's line that starts with it (`Max error  = 0.5 @ ...`).

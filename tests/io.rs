@@ -577,27 +577,6 @@ fn a_colour_in_two_parts_is_refused_until_a_preset_names_the_part() {
     reads_the_second_part(&[]);
 }
 
-/// Whether `idiff -a A B` (OpenImageIO, OpenEXR's decoders) finds every part's pixels equal,
-/// or `None` where idiff is not installed and SHUTTER_REQUIRE_TOOLS does not ask for it.
-fn idiff_equal(a: &Path, b: &Path) -> Option<(bool, String)> {
-    match std::process::Command::new("idiff")
-        .args(["-a", &s(a), &s(b)])
-        .output()
-    {
-        Ok(o) => Some((
-            o.status.success(),
-            String::from_utf8_lossy(&o.stdout).into_owned(),
-        )),
-        Err(_) if std::env::var_os("SHUTTER_REQUIRE_TOOLS").is_some() => {
-            panic!("SHUTTER_REQUIRE_TOOLS is set and idiff is not installed")
-        }
-        Err(_) => {
-            eprintln!("note: idiff is not installed; only the exr crate reads the outputs");
-            None
-        }
-    }
-}
-
 /// ZIP and ZIPS blocks are deflated by libdeflate (src/io/exr_zip.rs), not by the exr crate:
 /// OpenEXR (through `idiff`) and the exr crate must read them as the pixels of the same blur
 /// written uncompressed, in a tiled part at an offset data window with float and half
@@ -728,8 +707,12 @@ fn zip_outputs_read_as_their_uncompressed_twin_in_openexr_and_the_exr_crate() {
             }
         }
         // OpenEXR's.
-        if let Some((equal, report)) = idiff_equal(&out, &raw) {
-            assert!(equal, "{compression}: OpenEXR reads other pixels: {report}");
+        if let Some(o) = run_tool("idiff", &["-a", &s(&out), &s(&raw)]) {
+            let report = stdout(&o);
+            assert!(
+                o.status.success(),
+                "{compression}: OpenEXR reads other pixels: {report}"
+            );
         }
     }
 }

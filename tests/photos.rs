@@ -8,7 +8,6 @@
 //! SHUTTER_REQUIRE_TOOLS=1), and by the image and tiff crates' decoders.
 
 use std::path::Path;
-use std::process::Command;
 
 use image::{ImageDecoder, ImageEncoder};
 
@@ -49,16 +48,7 @@ pub(crate) fn exiftool(path: &Path) -> Option<serde_json::Value> {
 }
 
 pub(crate) fn tool(name: &str, args: &[&str]) -> Option<String> {
-    match Command::new(name).args(args).output() {
-        Ok(o) => Some(String::from_utf8_lossy(&o.stdout).into_owned()),
-        Err(_) if std::env::var("SHUTTER_REQUIRE_TOOLS").as_deref() == Ok("1") => {
-            panic!("{name} is not installed and SHUTTER_REQUIRE_TOOLS=1")
-        }
-        Err(_) => {
-            eprintln!("note: {name} is not installed; its reading of the output is skipped");
-            None
-        }
-    }
+    run_tool(name, args).map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
 }
 
 /// A painted velocity map (the `painted` preset: (r, g) = v / 64 + 0.5) of `w` × `h`, moving

@@ -754,6 +754,21 @@ pub fn blur_on(
     (json, dir.join(format!("{stem}.0001.exr")))
 }
 
+/// Runs a real client (`idiff`, `exiftool`, …), or `None` (with a note) where it is not
+/// installed and `SHUTTER_REQUIRE_TOOLS=1` does not ask for it.
+pub fn run_tool(name: &str, args: &[&str]) -> Option<Output> {
+    match Command::new(name).args(args).output() {
+        Ok(o) => Some(o),
+        Err(_) if std::env::var("SHUTTER_REQUIRE_TOOLS").as_deref() == Ok("1") => {
+            panic!("{name} is not installed and SHUTTER_REQUIRE_TOOLS=1")
+        }
+        Err(_) => {
+            eprintln!("note: {name} is not installed; its part of the test is skipped");
+            None
+        }
+    }
+}
+
 /// `oiiotool --info -v` of a file, or `None` (with a note) where it is not installed and
 /// `SHUTTER_REQUIRE_TOOLS` does not ask for it.
 pub fn oiiotool_info(path: &Path) -> Option<String> {
