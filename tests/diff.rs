@@ -1159,3 +1159,42 @@ fn single_part_multi_view_files_are_compared_in_every_view() {
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     assert!(stderr(&o).contains("right"), "{}", stderr(&o));
 }
+
+#[test]
+fn what_reading_a_file_took_for_granted_is_warned_naming_the_file() {
+    // `blur` warns when it reads grey from a luminance channel, or is asked for a view of
+    // files that hold none; `diff` read them the same way and said nothing, so a Y-only
+    // golden "matched" an RGB candidate's grey and `--view right` of a file of no views
+    // compared its one image, both silently.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (w, h) = (16, 10);
+    let y = noise(w * h, 5, 0.0, 1.0);
+    let luma = d.join("luma.exr");
+    write_exr(&luma, w, h, vec![("Y", y.clone())]);
+    let grey = d.join("grey.exr");
+    write_exr(
+        &grey,
+        w,
+        h,
+        vec![("R", y.clone()), ("G", y.clone()), ("B", y)],
+    );
+    let o = shutter(&["diff", &s(&luma), &s(&grey), "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let warnings = json(&o)["warnings"].to_string();
+    assert!(
+        warnings.contains("luma.exr: colour read from the luminance channel Y as grey"),
+        "{warnings}"
+    );
+    assert!(!warnings.contains("grey.exr"), "{warnings}");
+
+    let o = shutter(&["diff", &s(&grey), &s(&grey), "--view", "right"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("grey.exr: view right: no input file holds views"),
+        "{err}"
+    );
+    // Once, though both sides are the one file.
+    assert_eq!(err.matches("no input file holds views").count(), 1, "{err}");
+}

@@ -64,6 +64,9 @@ pub(super) struct VectorPlan {
     pub(super) spec: VectorSpec,
 }
 
+/// How the warning about a colour file's unreadable parts ends (`diff` notes those itself).
+pub const NOT_WRITTEN: &str = "not written to the output";
+
 /// Which channels of which files one frame reads, and how they become canonical passes.
 #[derive(Clone, Debug)]
 pub struct FramePlan {
@@ -181,7 +184,7 @@ pub fn plan_frame(
                     if !unread.is_empty() {
                         plan.warnings.push(format!(
                             "{} of the colour file: deep data, or data shutter does not \
-                             decode, not written to the output",
+                             decode, {NOT_WRITTEN}",
                             unread
                                 .iter()
                                 .map(|n| n.as_str())

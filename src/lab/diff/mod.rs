@@ -13,7 +13,7 @@ use serde::Serialize;
 
 use crate::error::{Error, Problem, ProblemKind, Result};
 
-use crate::io::passes::{plan_color_in, read_frame, FramePlan};
+use crate::io::passes::{plan_color_in, read_frame, FramePlan, NOT_WRITTEN};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::lab::metrics::{self, Metric, Rgb, Scores};
@@ -490,9 +490,20 @@ fn compare(
             )
         })
         .collect();
+    // What reading the colour of each file took for granted (grey from a luminance
+    // channel, a --view of a file that holds none), as `blur` warns it; the parts left
+    // out are the note above.
+    let mut notes = notes;
+    for (plan, pattern) in [(&a, &job.a), (&b, &job.b)] {
+        for warning in &plan.warnings {
+            let note = format!("{}: {warning}", pattern.path(frame).display());
+            if !warning.ends_with(NOT_WRITTEN) && !notes.contains(&note) {
+                notes.push(note);
+            }
+        }
+    }
     // A multi-view candidate of a reference of one view or none is compared in its default
     // view: say so, and how to compare another.
-    let mut notes = notes;
     if view.is_none() {
         notes.extend(
             [(&a, &job.a), (&b, &job.b)]
