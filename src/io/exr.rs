@@ -16,7 +16,6 @@ use std::path::Path;
 
 use exr::block::chunk::{Chunk, CompressedBlock};
 use exr::block::lines::LineIndex;
-use exr::block::UncompressedBlock;
 use exr::compression::Compression;
 use exr::math::Vec2;
 use exr::meta::attribute::{IntegerBounds, SampleType, Text};
@@ -516,7 +515,7 @@ pub fn read_channels_checked(
                 ) {
                     return Err(unsupported("deep data"));
                 }
-                let block = UncompressedBlock::decompress_chunk(chunk, meta_ref, false)?;
+                let block = crate::io::exr_zip::decompress_chunk(chunk, meta_ref)?;
                 let header = &meta_ref.headers[block.index.layer];
                 for (range, line) in LineIndex::lines_in_block(block.index, &header.channels) {
                     let target = wanted
