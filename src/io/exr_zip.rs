@@ -393,22 +393,29 @@ mod tests {
         )
     }
 
+    /// Two blocks of `width` × 16 f32 pixels: a smooth ramp, which deflates, and noise
+    /// (`seed`), which does not.
+    fn blocks(width: usize, seed: u32) -> (Vec<u8>, Vec<u8>) {
+        let smooth = (0..width * 16)
+            .flat_map(|i| (i as f32 * 0.01).to_le_bytes())
+            .collect();
+        let mut state = seed;
+        let noise = (0..width * 16 * 4)
+            .map(|_| {
+                state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                (state >> 24) as u8
+            })
+            .collect();
+        (smooth, noise)
+    }
+
     /// A block through [`zip_chunk`], read back by the exr crate's own ZIP decompressor:
     /// deflated where that makes it smaller, raw where it does not (noise), each read as the
     /// bytes it was.
     #[test]
     fn a_zip_chunk_reads_back_through_exr_deflated_or_raw() {
         let width = 64;
-        let smooth: Vec<u8> = (0..width * 16)
-            .flat_map(|i| (i as f32 * 0.01).to_le_bytes())
-            .collect();
-        let mut state = 1u32;
-        let noise: Vec<u8> = (0..width * 16 * 4)
-            .map(|_| {
-                state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                (state >> 24) as u8
-            })
-            .collect();
+        let (smooth, noise) = blocks(width, 1u32);
         let header = part(width);
         for (label, data, deflated) in [("smooth", smooth, true), ("noise", noise, false)] {
             let index = BlockIndex {
@@ -496,16 +503,7 @@ mod tests {
             },
             headers: exr::prelude::SmallVec::from_vec(vec![header.clone()]),
         };
-        let smooth: Vec<u8> = (0..width * 16)
-            .flat_map(|i| (i as f32 * 0.01).to_le_bytes())
-            .collect();
-        let mut state = 9u32;
-        let noise: Vec<u8> = (0..width * 16 * 4)
-            .map(|_| {
-                state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                (state >> 24) as u8
-            })
-            .collect();
+        let (smooth, noise) = blocks(width, 9u32);
         let index = BlockIndex {
             layer: 0,
             pixel_position: exr::math::Vec2(0, 0),
