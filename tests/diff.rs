@@ -1161,40 +1161,58 @@ fn single_part_multi_view_files_are_compared_in_every_view() {
 }
 
 #[test]
-fn what_reading_a_file_took_for_granted_is_warned_naming_the_file() {
+fn what_reading_a_file_took_for_granted_is_warned_once_naming_the_files() {
     // `blur` warns when it reads grey from a luminance channel, or is asked for a view of
     // files that hold none; `diff` read them the same way and said nothing, so a Y-only
-    // golden "matched" an RGB candidate's grey and `--view right` of a file of no views
-    // compared its one image, both silently.
+    // golden "matched" an RGB candidate's grey and `--view right` of files of no views
+    // compared their one image, both silently. Said once a run, not once a frame.
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let (w, h) = (16, 10);
-    let y = noise(w * h, 5, 0.0, 1.0);
-    let luma = d.join("luma.exr");
-    write_exr(&luma, w, h, vec![("Y", y.clone())]);
-    let grey = d.join("grey.exr");
-    write_exr(
-        &grey,
-        w,
-        h,
-        vec![("R", y.clone()), ("G", y.clone()), ("B", y)],
+    for frame in 1..=3 {
+        let y = noise(w * h, 5 + frame, 0.0, 1.0);
+        write_exr(
+            &d.join(format!("luma.{frame:04}.exr")),
+            w,
+            h,
+            vec![("Y", y.clone())],
+        );
+        let rgb = vec![("R", y.clone()), ("G", y.clone()), ("B", y)];
+        write_exr(&d.join(format!("grey.{frame:04}.exr")), w, h, rgb.clone());
+        write_exr(&d.join(format!("copy.{frame:04}.exr")), w, h, rgb);
+    }
+    let (luma, grey, copy) = (
+        s(&d.join("luma.####.exr")),
+        s(&d.join("grey.####.exr")),
+        s(&d.join("copy.####.exr")),
     );
-    let o = shutter(&["diff", &s(&luma), &s(&grey), "--json"]);
+    let o = shutter(&["diff", &luma, &grey, "--json"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let warnings = json(&o)["warnings"].to_string();
-    assert!(
-        warnings.contains("luma.exr: colour read from the luminance channel Y as grey"),
-        "{warnings}"
+    let report = json(&o);
+    let warnings: Vec<&str> = report["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w.as_str().unwrap())
+        .collect();
+    assert_eq!(report["frames"].as_array().unwrap().len(), 3, "{report}");
+    assert_eq!(
+        warnings,
+        [format!(
+            "{luma}: colour read from the luminance channel Y as grey (R = G = B = Y): the \
+             file holds no colour channels the preset names"
+        )],
+        "{report}"
     );
-    assert!(!warnings.contains("grey.exr"), "{warnings}");
 
-    let o = shutter(&["diff", &s(&grey), &s(&grey), "--view", "right"]);
+    let o = shutter(&["diff", &grey, &copy, "--view", "right"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(
-        err.contains("grey.exr: view right: no input file holds views"),
+        err.contains(&format!(
+            "{grey} and {copy}: view right: no input file holds views"
+        )),
         "{err}"
     );
-    // Once, though both sides are the one file.
     assert_eq!(err.matches("no input file holds views").count(), 1, "{err}");
 }

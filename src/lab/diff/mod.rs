@@ -164,6 +164,10 @@ pub struct FrameDiff {
     /// With `--report`: the thumbnails written, relative to the report's folder.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub thumbnails: Option<report::Thumbnails>,
+    /// What reading each file's colour took for granted (the file's pattern, the warning):
+    /// said once a run, in the report's warnings.
+    #[serde(skip)]
+    pub read_warnings: Vec<(String, String)>,
 }
 
 impl FrameDiff {
@@ -338,7 +342,7 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
         })
         .unwrap_or(0.0);
     let name = job.metric.name();
-    let mut warnings = Vec::new();
+    let mut warnings = read_warnings(&frames);
     for f in &frames {
         let label = f.label();
         if job.warn.is_some_and(|w| job.metric.exceeds(f.value, w)) {
@@ -387,6 +391,22 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
         worst,
         warnings,
     })
+}
+
+/// Each warning of the files' reading once, however many frames and files gave it, after the
+/// files that did (`a.####.exr and b.####.exr: view right: …`), in the order first met.
+fn read_warnings(frames: &[FrameDiff]) -> Vec<String> {
+    let mut said: Vec<(&str, Vec<&str>)> = Vec::new();
+    for (pattern, warning) in frames.iter().flat_map(|f| &f.read_warnings) {
+        match said.iter_mut().find(|(w, _)| w == warning) {
+            Some((_, patterns)) if !patterns.contains(&pattern.as_str()) => patterns.push(pattern),
+            Some(_) => {}
+            None => said.push((warning, vec![pattern])),
+        }
+    }
+    said.into_iter()
+        .map(|(warning, patterns)| format!("{}: {warning}", patterns.join(" and ")))
+        .collect()
 }
 
 /// One comparison: a frame, or a view of a frame.
@@ -483,25 +503,28 @@ fn compare(
         .filter(|(plan, _)| !plan.parts_left_out.is_empty())
         .map(|(plan, pattern)| {
             format!(
-                "{} of {}: a data window other than the beauty's (or deep data), not \
-                 compared",
+                "{} of {}: another data window than the beauty's, deep data, or data \
+                 shutter does not decode, not compared",
                 plan.parts_left_out.join(", "),
                 pattern.path(frame).display()
             )
         })
         .collect();
     // What reading the colour of each file took for granted (grey from a luminance
-    // channel, a --view of a file that holds none), as `blur` warns it; the parts left
-    // out are the note above.
-    let mut notes = notes;
-    for (plan, pattern) in [(&a, &job.a), (&b, &job.b)] {
-        for warning in &plan.warnings {
-            let note = format!("{}: {warning}", pattern.path(frame).display());
-            if !warning.ends_with(NOT_WRITTEN) && !notes.contains(&note) {
-                notes.push(note);
+    // channel, a --view of files that hold none), as `blur` warns it: said once a run
+    // ([`read_warnings`]). The parts left out are the note above.
+    let mut read_warnings = Vec::new();
+    for (plan, pattern) in [(Some(&a), &job.a), (Some(&b), &job.b)]
+        .into_iter()
+        .chain([(sharp.as_ref(), job.sharp.as_ref().unwrap_or(&job.a))])
+    {
+        for warning in plan.map_or(&[][..], |p| &p.warnings[..]) {
+            if !warning.ends_with(NOT_WRITTEN) {
+                read_warnings.push((pattern.raw.clone(), warning.clone()));
             }
         }
     }
+    let mut notes = notes;
     // A multi-view candidate of a reference of one view or none is compared in its default
     // view: say so, and how to compare another.
     if view.is_none() {
@@ -577,6 +600,7 @@ fn compare(
         extra_views: entry.extra.to_vec(),
         thumbnails,
         notes,
+        read_warnings,
         failed: why.is_some(),
         why,
     })
