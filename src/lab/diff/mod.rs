@@ -503,8 +503,8 @@ fn compare(
         .filter(|(plan, _)| !plan.parts_left_out.is_empty())
         .map(|(plan, pattern)| {
             format!(
-                "{} of {}: another data window than the beauty's, deep data, or data \
-                 shutter does not decode, not compared",
+                "{} of {}: a data window other than the beauty's, deep data, or data \
+                 shutter does not decode: not compared",
                 plan.parts_left_out.join(", "),
                 pattern.path(frame).display()
             )
