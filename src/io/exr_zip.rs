@@ -165,8 +165,11 @@ fn deflate(bytes: &[u8]) -> Vec<u8> {
 pub fn predict(bytes: &[u8]) -> Vec<u8> {
     let n = bytes.len();
     SPLIT.with_borrow_mut(|split| {
-        split.clear();
-        split.resize(n, 0);
+        // Grown, never cleared: every byte of the block's share is written below.
+        if split.len() < n {
+            split.resize(n, 0);
+        }
+        let split = &mut split[..n];
         let (even, odd) = split.split_at_mut(n.div_ceil(2));
         split_pairs(bytes, even, odd);
         if n % 2 == 1 {

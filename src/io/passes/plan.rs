@@ -64,9 +64,6 @@ pub(super) struct VectorPlan {
     pub(super) spec: VectorSpec,
 }
 
-/// How the warning about a colour file's unreadable parts ends (`diff` notes those itself).
-pub const NOT_WRITTEN: &str = "not written to the output";
-
 /// Which channels of which files one frame reads, and how they become canonical passes.
 #[derive(Clone, Debug)]
 pub struct FramePlan {
@@ -82,8 +79,11 @@ pub struct FramePlan {
     /// Conversions that are approximations (e.g. next positions extrapolated).
     pub warnings: Vec<String>,
     /// Parts of the colour file its other channels are not read from (another data window,
-    /// deep data), by name: named in `warnings`, and by `diff` as not compared.
+    /// deep data), by name: named by `diff` as not compared.
     pub parts_left_out: Vec<String>,
+    /// Those of them that cannot be read at all (deep data, or data shutter does not
+    /// decode): `blur` warns of them ([`FramePlan::unread_warning`]).
+    pub parts_unread: Vec<String>,
     /// The colour file's windows: the frame's (every pass is cut to its data window).
     pub(super) color_windows: Option<crate::frame::Windows>,
 }
@@ -145,6 +145,7 @@ pub fn plan_frame(
         next: None,
         warnings: Vec::new(),
         parts_left_out: Vec::new(),
+        parts_unread: Vec::new(),
     };
     let preset = options.preset;
     let needs = options.needs;
@@ -175,23 +176,12 @@ pub fn plan_frame(
                         .map(|c| c.map(|c| planner.slot(file, c)))
                         .collect();
                     let (others, apart, left) = other_channels(info, &claimed);
-                    let unread: Vec<&String> = left
+                    plan.parts_unread = left
                         .iter()
                         .zip(&apart)
                         .filter(|(_, part)| part.is_none())
-                        .map(|(name, _)| name)
+                        .map(|(name, _)| name.clone())
                         .collect();
-                    if !unread.is_empty() {
-                        plan.warnings.push(format!(
-                            "{} of the colour file: deep data, or data shutter does not \
-                             decode, {NOT_WRITTEN}",
-                            unread
-                                .iter()
-                                .map(|n| n.as_str())
-                                .collect::<Vec<_>>()
-                                .join(", ")
-                        ));
-                    }
                     plan.parts_left_out = left;
                     plan.color = Some(ColorPlan {
                         rgb: [

@@ -344,6 +344,17 @@ pub fn plan_color_in(
 }
 
 impl FramePlan {
+    /// The warning `blur` gives of the colour file's parts it cannot read, where it has any.
+    pub fn unread_warning(&self) -> Option<String> {
+        (!self.parts_unread.is_empty()).then(|| {
+            format!(
+                "{} of the colour file: deep data, or data shutter does not decode, not \
+                 written to the output",
+                self.parts_unread.join(", ")
+            )
+        })
+    }
+
     /// The views of the colour file, where it is a multi-view EXR.
     pub fn colour_views(&self) -> Option<&crate::io::view::Views> {
         let file = self.color.as_ref()?.rgb[0].file;

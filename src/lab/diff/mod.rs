@@ -13,7 +13,7 @@ use serde::Serialize;
 
 use crate::error::{Error, Problem, ProblemKind, Result};
 
-use crate::io::passes::{plan_color_in, read_frame, FramePlan, NOT_WRITTEN};
+use crate::io::passes::{plan_color_in, read_frame, FramePlan};
 use crate::io::preset::Preset;
 use crate::io::sequence::PathPattern;
 use crate::lab::metrics::{self, Metric, Rgb, Scores};
@@ -512,16 +512,15 @@ fn compare(
         .collect();
     // What reading the colour of each file took for granted (grey from a luminance
     // channel, a --view of files that hold none), as `blur` warns it: said once a run
-    // ([`read_warnings`]). The parts left out are the note above.
+    // ([`read_warnings`]). The parts left out, unreadable ones among them, are the note
+    // above.
     let mut read_warnings = Vec::new();
     for (plan, pattern) in [(Some(&a), &job.a), (Some(&b), &job.b)]
         .into_iter()
         .chain([(sharp.as_ref(), job.sharp.as_ref().unwrap_or(&job.a))])
     {
         for warning in plan.map_or(&[][..], |p| &p.warnings[..]) {
-            if !warning.ends_with(NOT_WRITTEN) {
-                read_warnings.push((pattern.raw.clone(), warning.clone()));
-            }
+            read_warnings.push((pattern.raw.clone(), warning.clone()));
         }
     }
     let mut notes = notes;
