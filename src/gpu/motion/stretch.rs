@@ -225,6 +225,7 @@ impl StretchPass {
                 entry(0, S::COMPUTE, Uniform),
                 entry(1, S::COMPUTE, read),
                 entry(2, S::COMPUTE, read),
+                entry(3, S::COMPUTE, read),
                 texture(20),
                 texture(21),
                 texture(22),
@@ -450,6 +451,10 @@ impl StretchPass {
                 wgpu::BindGroupEntry {
                     binding: 2,
                     resource: z.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: v.as_entire_binding(),
                 },
                 view(20, &views[0]),
                 view(21, &views[1]),

@@ -577,25 +577,59 @@ fn swept_at(x: i32, y: i32) -> vec4<f32> {
     return textureLoad(swept, vec2<i32>(x, y), 0);
 }
 
-// The sweep pixel (x, y) takes: its own where a fragment came, else of its eight neighbours'
-// the nearest whose depth passes the pixel's depth test, the first of equals in reading
-// order; w = 0 where none (the CPU's sweep_at).
+// The sweep pixel (x, y) takes (the CPU's sweep_at, in its order): its own where a fragment
+// came; else of its eight neighbours' sweeps, the nearest in depth that passes the pixel's
+// depth test; else of its eight neighbours that move, the nearest so, with its own motion (cut
+// as a fragment's) and depth; else of the sweeps two away, the nearest so; each time the first
+// of equals in the order of RINGS. w = 0 where none.
 fn sweep_at(x: i32, y: i32, i: u32) -> vec4<f32> {
     let own = swept_at(x, y);
     if own.w != 0.0 {
         return own;
     }
+    let swept_near = nearest_sweep(x, y, i, 0, 8, false);
+    if swept_near.w != 0.0 {
+        return swept_near;
+    }
+    let moving_near = nearest_sweep(x, y, i, 0, 8, true);
+    if moving_near.w != 0.0 {
+        return moving_near;
+    }
+    return nearest_sweep(x, y, i, 8, 24, false);
+}
+
+// The offsets sweep_at looks at: the eight neighbours (the four beside, then the four
+// diagonal), then the sixteen two away (the four straight out, the eight beside them, the
+// four corners), each group in reading order (the CPU's NEIGHBOURS and SECOND_RING).
+const RINGS = array<vec2<i32>, 24>(
+    vec2(0, -1), vec2(-1, 0), vec2(1, 0), vec2(0, 1),
+    vec2(-1, -1), vec2(1, -1), vec2(-1, 1), vec2(1, 1),
+    vec2(0, -2), vec2(-2, 0), vec2(2, 0), vec2(0, 2),
+    vec2(-1, -2), vec2(1, -2), vec2(-2, -1), vec2(2, -1), vec2(-2, 1), vec2(2, 1), vec2(-1, 2), vec2(1, 2),
+    vec2(-2, -2), vec2(2, -2), vec2(-2, 2), vec2(2, 2),
+);
+
+// Of the pixels at RINGS[first..last) from (x, y) in the frame, the nearest in depth whose
+// depth passes pixel i's test, the first of equals: of their sweeps, or where `motion` of
+// those that move, their own motion and depth as a sweep.
+fn nearest_sweep(x: i32, y: i32, i: u32, first: i32, last: i32, motion: bool) -> vec4<f32> {
+    var rings = RINGS;
     var best = vec4<f32>(0.0);
-    for (var k = 0; k < 9; k++) {
-        let nx = x + k % 3 - 1;
-        let ny = y + k / 3 - 1;
-        if k == 4 {
-            continue;
-        }
+    for (var k = first; k < last; k++) {
+        let nx = x + rings[k].x;
+        let ny = y + rings[k].y;
         if nx < 0 || ny < 0 || nx >= i32(config.width) || ny >= i32(config.height) {
             continue;
         }
-        let sweep = swept_at(nx, ny);
+        var sweep = vec4<f32>(0.0);
+        if motion {
+            let j = u32(ny) * config.width + u32(nx);
+            if moving(v[j]) {
+                sweep = vec4<f32>(swept_motion(v[j]), z[j], 1.0);
+            }
+        } else {
+            sweep = swept_at(nx, ny);
+        }
         if sweep.w != 0.0 && sweep.z <= z[i] * config.depth_limit && (best.w == 0.0 || sweep.z < best.z) {
             best = sweep;
         }

@@ -160,7 +160,7 @@ pub fn stages_carrying(
     cover_carrying(
         config,
         planes,
-        z,
+        (z, v),
         &swept,
         &mut out,
         &carried,
