@@ -78,7 +78,7 @@ use std::sync::Mutex;
 
 use rayon::prelude::*;
 
-use crate::motion::stretch::StretchConfig;
+use crate::motion::stretch::{partly_covered, StretchConfig};
 
 use crate::gpu::context::Gpu;
 use crate::gpu::stage::{floats, kept, read_back, Caught, StageError};
@@ -676,7 +676,7 @@ impl Gpu {
                 color_attachments: &[attachment(&buffers.views[2])],
                 ..Default::default()
             });
-            if !order.is_empty() && planes[3].par_iter().any(|&a| a < 1.0) {
+            if !order.is_empty() && partly_covered(&planes[3]) {
                 render.set_bind_group(0, &buffers.render, &[]);
                 render.set_pipeline(&pass.sweep);
                 render.draw(0..6 * order.len() as u32, 0..1);

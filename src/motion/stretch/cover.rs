@@ -171,6 +171,13 @@ fn nearest(
     best
 }
 
+/// Whether any pixel of alpha plane `alpha` is not wholly covered (below 1): only then does a
+/// fragment leave a sweep, and cover change anything (the GPU's host asks before it draws
+/// the sweeps).
+pub fn partly_covered(alpha: &[f32]) -> bool {
+    alpha.par_iter().any(|&a| a < 1.0)
+}
+
 /// Whether each pixel has a pixel that a fragment swept or that moves within two of it (the
 /// 5×5 square about it): where not, [`sweep_at`] finds nothing, and [`run`] does not look.
 /// (In a view layer most pixels are empty space far from any streak, and looking took the
@@ -216,7 +223,7 @@ fn run<const CARRY: bool>(
 ) {
     let width = config.width as usize;
     let height = config.height as usize;
-    if planes[3].iter().all(|&a| a >= 1.0) {
+    if !partly_covered(&planes[3]) {
         // Every pixel wholly covered (an opaque frame): nothing to sweep.
         return;
     }

@@ -63,7 +63,7 @@ use crate::frame::{Color, Frame};
 use crate::motion::shutter::Shutter;
 use crate::stages::Cpu;
 pub use config::{Anchor, StretchConfig, StretchParams, MAX_SHIFT, MOST_SAMPLES, STILL};
-pub use cover::{cover, cover_carrying, sweep_at};
+pub use cover::{cover, cover_carrying, partly_covered, sweep_at};
 pub use mesh::{move_vertices, rasterise, rasterise_carrying, swept_motion, triangle_corners};
 pub use texture_blur::{texture_blur, texture_blur_carrying};
 
