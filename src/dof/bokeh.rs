@@ -53,6 +53,10 @@ impl Aperture {
         if length == 0.0 {
             return 0.0;
         }
+        // A round shape's extent is 1 in every direction: no angle to find.
+        if self.round() {
+            return length;
+        }
         length / self.extent(dy.atan2(dx))
     }
 
@@ -127,6 +131,40 @@ pub fn grid(radius: usize, aperture: &Aperture) -> Vec<Tap> {
     taps
 }
 
+/// The aperture's norms of the whole-pixel offsets within `half` px each way, made once a
+/// frame: every tile takes two a tap (of −offset and of the offset), and a polygon's each
+/// took an arc tangent (with six blades, 4.5 % of the instructions of the bench's 1080p
+/// frame out of focus, by cachegrind). Offsets beyond are normed as they come.
+pub struct Norms {
+    pub aperture: Aperture,
+    half: isize,
+    table: Vec<f32>,
+}
+
+impl Norms {
+    pub fn new(aperture: Aperture, half: usize) -> Self {
+        let half = half as isize;
+        let table = (-half..=half)
+            .flat_map(|dy| (-half..=half).map(move |dx| aperture.norm(dx as f32, dy as f32)))
+            .collect();
+        Norms {
+            aperture,
+            half,
+            table,
+        }
+    }
+
+    /// [`Aperture::norm`] of the offset (dx, dy): the same value.
+    pub fn of(&self, dx: isize, dy: isize) -> f32 {
+        let h = self.half;
+        if dx.abs() <= h && dy.abs() <= h {
+            self.table[((dy + h) * (2 * h + 1) + dx + h) as usize]
+        } else {
+            self.aperture.norm(dx as f32, dy as f32)
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -182,5 +220,26 @@ mod tests {
         // Rotating the blades turns the shape.
         let turned = Aperture::new(6, 30.0);
         assert!(close(turned.extent(PI / 6.0), (PI / 6.0).cos(), 1e-5));
+    }
+
+    #[test]
+    fn the_table_s_norms_are_the_aperture_s_inside_it_and_beyond() {
+        for aperture in [
+            Aperture::new(0, 0.0),
+            Aperture::new(6, 15.0),
+            Aperture::new(5, 0.0),
+        ] {
+            let norms = Norms::new(aperture, 4);
+            for dy in -7isize..=7 {
+                for dx in -7isize..=7 {
+                    let expected = aperture.norm(dx as f32, dy as f32);
+                    assert_eq!(
+                        norms.of(dx, dy).to_bits(),
+                        expected.to_bits(),
+                        "({dx}, {dy})"
+                    );
+                }
+            }
+        }
     }
 }

@@ -58,7 +58,7 @@ mod run;
 
 use rayon::prelude::*;
 
-use super::bokeh::{grid, taps, Aperture, Tap};
+use super::bokeh::{grid, taps, Aperture, Norms, Tap};
 use super::tiles::{Tiles, LAYER, TILE};
 use super::DofConfig;
 use crate::frame::Color;
@@ -68,21 +68,32 @@ use run::{carry_run, gather_run, Fields, Padded, PixelTap, Row, RowWeights, SMAL
 /// A whole-pixel offset with the area it stands for, as a tap of a tile's pattern: its index
 /// step in the padded planes and the aperture norms of the offset (of −offset for the far
 /// field, whose bokeh is the aperture; of the offset for the near field, turned over).
-fn pixel_tap((dx, dy): (isize, isize), area: f32, aperture: &Aperture, stride: isize) -> PixelTap {
+fn pixel_tap((dx, dy): (isize, isize), area: f32, norms: &Norms, stride: isize) -> PixelTap {
     PixelTap {
         step: dy * stride + dx,
-        norm_far: aperture.norm(-dx as f32, -dy as f32),
-        norm_near: aperture.norm(dx as f32, dy as f32),
+        norm_far: norms.of(-dx, -dy),
+        norm_near: norms.of(dx, dy),
         area,
     }
 }
 
+/// How far (whole px) a tap of `tiles` may lie from its pixel each way (a ring scaled to the
+/// largest reach and snapped lands within a pixel of it), for [`Norms`]' table: at most
+/// [`MOST_TABULATED`] (a quarter of a MiB).
+fn reach_of(tiles: &Tiles) -> usize {
+    let largest = tiles.reach.iter().fold(0.0f32, |m, &r| m.max(r));
+    (largest.min(MOST_TABULATED as f32).ceil() as usize + 1).min(MOST_TABULATED)
+}
+
+/// The largest offset [`Norms`] tabulates; taps farther out are normed as they come.
+const MOST_TABULATED: usize = 128;
+
 /// The whole-pixel neighbourhood of radius `radius` px as taps, the centre left out (p counts
 /// itself). The same for every tile with that whole radius, so made once per radius.
-fn grid_taps(radius: usize, aperture: &Aperture, stride: isize) -> Vec<PixelTap> {
-    grid(radius, aperture)[1..]
+fn grid_taps(radius: usize, norms: &Norms, stride: isize) -> Vec<PixelTap> {
+    grid(radius, &norms.aperture)[1..]
         .iter()
-        .map(|t| pixel_tap((t.dx as isize, t.dy as isize), t.area, aperture, stride))
+        .map(|t| pixel_tap((t.dx as isize, t.dy as isize), t.area, norms, stride))
         .collect()
 }
 
@@ -90,7 +101,7 @@ fn grid_taps(radius: usize, aperture: &Aperture, stride: isize) -> Vec<PixelTap>
 /// scaled to the radius and snapped to whole pixels, taps landing on the same pixel merged
 /// (their areas summed). Norms are those of the whole-pixel offset, so distances are exact.
 /// The centre is left out (p counts itself).
-fn ring_taps(radius: f32, rings: &[Tap], aperture: &Aperture, stride: isize) -> Vec<PixelTap> {
+fn ring_taps(radius: f32, rings: &[Tap], norms: &Norms, stride: isize) -> Vec<PixelTap> {
     let whole = radius.ceil() as usize;
     let mut offsets: Vec<((isize, isize), f32)> = Vec::new();
     // Which entry of `offsets` each whole-pixel offset went to, on a square a pixel wider
@@ -117,7 +128,7 @@ fn ring_taps(radius: f32, rings: &[Tap], aperture: &Aperture, stride: isize) -> 
     offsets
         .into_iter()
         .filter(|(key, _)| *key != (0, 0))
-        .map(|(key, area)| pixel_tap(key, area, aperture, stride))
+        .map(|(key, area)| pixel_tap(key, area, norms, stride))
         .collect()
 }
 
@@ -127,14 +138,14 @@ fn taps_for<'a>(
     radius: f32,
     grids: &'a [Vec<PixelTap>],
     rings: &[Tap],
-    aperture: &Aperture,
+    norms: &Norms,
     stride: isize,
     made: &'a mut Vec<PixelTap>,
 ) -> &'a [PixelTap] {
     match grids.get(radius.ceil() as usize) {
         Some(grid) => grid,
         None => {
-            *made = ring_taps(radius, rings, aperture, stride);
+            *made = ring_taps(radius, rings, norms, stride);
             made
         }
     }
@@ -276,8 +287,9 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
         let dy = (step + STRIDE / 2).div_euclid(STRIDE);
         ((step - dy * STRIDE) as i32, dy as i32)
     };
+    let norms = Norms::new(aperture, reach_of(tiles));
     let grids: Vec<Vec<PixelTap>> = (0..=rings_count)
-        .map(|r| grid_taps(r, &aperture, STRIDE))
+        .map(|r| grid_taps(r, &norms, STRIDE))
         .collect();
     let half_focus = (0.5 * config.epsilon).max(SMALLEST_RADIUS);
     let mut plan = TilePlan {
@@ -294,7 +306,7 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
         };
         *lists.entry(key).or_insert_with(|| {
             let mut made = Vec::new();
-            let found = taps_for(radius, &grids, &rings, &aperture, STRIDE, &mut made);
+            let found = taps_for(radius, &grids, &rings, &norms, STRIDE, &mut made);
             let start = plan.taps.len() as u32;
             plan.taps.extend(found.iter().map(|t| {
                 let (dx, dy) = offset(t.step);
@@ -387,8 +399,9 @@ pub fn gather_carrying(
     let pad = largest.ceil() as usize + 2;
     let padded = Padded::new(color, coc, &extra, (width, height), pad, unit_area);
     let stride = padded.stride as isize;
+    let norms = Norms::new(aperture, reach_of(tiles));
     let grids: Vec<Vec<PixelTap>> = (0..=rings_count)
-        .map(|r| grid_taps(r, &aperture, stride))
+        .map(|r| grid_taps(r, &norms, stride))
         .collect();
     let tiles_x = width.div_ceil(TILE);
     let half_focus = (0.5 * config.epsilon).max(SMALLEST_RADIUS);
@@ -444,15 +457,12 @@ pub fn gather_carrying(
                         continue;
                     };
                     let mut made = Vec::new();
-                    let taps =
-                        taps_for(choice.radius, &grids, &rings, &aperture, stride, &mut made);
+                    let taps = taps_for(choice.radius, &grids, &rings, &norms, stride, &mut made);
                     let mut made_far = Vec::new();
                     let far_taps = match choice.far_radius {
                         None => taps,
                         Some(0.0) => &[][..],
-                        Some(own) => {
-                            taps_for(own, &grids, &rings, &aperture, stride, &mut made_far)
-                        }
+                        Some(own) => taps_for(own, &grids, &rings, &norms, stride, &mut made_far),
                     };
                     let mode = choice.fields;
                     let dense = far_rings(&choice, rings_count);
