@@ -4,22 +4,30 @@
 # into target/peers/venv, as scripts/peers/run.sh does. See README.md beside this file.
 #
 #   scripts/layers/run.sh
+#   SCENE=gear-spin scripts/layers/run.sh     # or gear-slide: the gear, README.md
 #
-# Environment: OUT (default target/layers/real), SIZE (480x270), SAMPLES (128, the sharp
-# renders), REF_SAMPLES (1024, the references), FRAMES (1-1, a range A-B), DOF (1: also the
-# lens reference and `shutter dof`; 0 skips), FRESH (1: render again what is on disk),
-# SHUTTER_BIN (a shutter binary; default: cargo build --release), PYTHON, BPY (as peers).
+# Environment: SCENE (fan, gear-spin or gear-slide: scene.py's --scene; default fan), OUT
+# (default target/layers/real for the fan, target/layers/real-SCENE for a gear), SIZE
+# (480x270), SAMPLES (128, the sharp renders), REF_SAMPLES (1024, the references), FRAMES
+# (1-1, a range A-B), DOF (1: also the lens reference and `shutter dof`; 0 skips; default 1
+# for the fan, 0 for the gears, whose lens was focused for the fan's cube), FRESH (1: render
+# again what is on disk), SHUTTER_BIN (a shutter binary; default: cargo build --release),
+# PYTHON, BPY (as peers).
 set -euo pipefail
 
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
 cd "$root"
-OUT=${OUT:-target/layers/real}
+SCENE=${SCENE:-fan}
+case $SCENE in
+  fan) OUT=${OUT:-target/layers/real} DOF=${DOF:-1} ;;
+  gear-spin | gear-slide) OUT=${OUT:-target/layers/real-$SCENE} DOF=${DOF:-0} ;;
+  *) echo "layers: SCENE is fan, gear-spin or gear-slide, not $SCENE" >&2; exit 1 ;;
+esac
 SIZE=${SIZE:-480x270}
 SAMPLES=${SAMPLES:-128}
 REF_SAMPLES=${REF_SAMPLES:-1024}
 FRAMES=${FRAMES:-1-1}
-DOF=${DOF:-1}
 FRESH=${FRESH:-0}
 BPY=${BPY:-5.2.3}
 venv=target/peers/venv
@@ -62,7 +70,8 @@ render() {
   fi
   echo "layers: rendering $name" >&2
   local t0=$SECONDS
-  "$py" "$here/scene.py" "$OUT" "$@" --name "$name" --size "$SIZE" --frames "$FRAMES" >/dev/null
+  "$py" "$here/scene.py" "$OUT" "$@" --scene "$SCENE" --name "$name" --size "$SIZE" \
+    --frames "$FRAMES" >/dev/null
   echo "$name $* $((SECONDS - t0)) s" | tee -a "$OUT/times.txt" >&2
 }
 render layers layers --others holdout --samples "$SAMPLES"

@@ -1,9 +1,15 @@
-"""A real Cycles render with view layers (issue 33): a fan spinning and a cube flying
-sideways (collection FG) in front of a textured wall and three boxes (collection BG), the
-camera trucking left, so the foreground uncovers background during the exposure.
+"""A real Cycles render with view layers (issue 33). --scene fan (the default): a fan spinning
+and a cube flying sideways (collection FG) in front of a textured wall and three boxes
+(collection BG), the camera trucking left, so the foreground uncovers background during the
+exposure. --scene gear-spin and gear-slide, the opposite case: a ten-toothed gear (FG) before
+the same wall (BG), the camera still. The gear turns in place, its rim sliding along itself
+(the tips' arcs keep to their own path; only the flanks cover and uncover wall, in the gaps
+between the teeth), or slides sideways, the same rim moving across itself (its leading side
+covers the wall, its trailing side uncovers it).
 
-    python scene.py OUT KIND [--others holdout|exclude|indirect] [--size WxH] [--samples N]
-                            [--seed S] [--frames A-B] [--name NAME] [--camera truck|pan]
+    python scene.py OUT KIND [--scene fan|gear-spin|gear-slide] [--others holdout|exclude|indirect]
+                            [--size WxH] [--samples N] [--seed S] [--frames A-B] [--name NAME]
+                            [--camera truck|pan|still]
 
 KIND, each written as Blender writes an OpenEXR MultiLayer file (one part per pass, channels
 `<ViewLayer>.Combined.RGBA`, `.Depth.Z`, `.Vector.XYZW`), 32-bit float, ZIP:
@@ -19,9 +25,10 @@ KIND, each written as Blender writes an OpenEXR MultiLayer file (one part per pa
   reference_dof  OUT/reference_dof.####.exr: `ViewLayer`, the lens's depth of field, no
                  motion blur
 
---camera pan turns the camera about its vertical axis (PAN_SPIN degrees a frame) where it
-trucks by default: every surface's motion then a smooth field across the frame (perspective
-makes it faster towards the sides) with no parallax between the wall and the boxes.
+--camera pan turns the camera about its vertical axis (PAN_SPIN degrees a frame) where the
+fan's camera trucks by default: every surface's motion then a smooth field across the frame
+(perspective makes it faster towards the sides) with no parallax between the wall and the
+boxes. The gears' camera is still by default, so that only the gear moves.
 
 Everything is emission-shaded (no lights, no bounces): the only noise is the pixel filter's,
 the shutter's and the lens's sampling. Denoiser off, adaptive sampling off, fixed seed.
@@ -45,6 +52,17 @@ CUBE_SPEED = 0.06
 # Degrees per frame the camera turns with --camera pan.
 PAN_SPIN = 1.5
 FAN_SPIN = 40.0
+# The gear, 0.6 m away (about 780 px a metre there): radii in metres; degrees a frame turning
+# in place (45 px on the tips); metres a frame sliding right (20 px, a little under a tooth's
+# width).
+GEAR_OUTER = 0.11
+GEAR_ROOT = 0.085
+GEAR_TEETH = 10
+GEAR_SPIN = 30.0
+GEAR_SLIDE = 0.026
+# Turned off square, so that no flank of the sliding gear lies along the scanlines.
+GEAR_SLIDE_ANGLE = 7.0
+SCENES = ("fan", "gear-spin", "gear-slide")
 # Keys from frame -2 to 6: frames 1 to 5 have their neighbours (the Vector pass) keyed too.
 KEY_FRAMES = range(-2, 7)
 
@@ -66,7 +84,12 @@ def arguments():
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--frames", default="1-1")
     p.add_argument("--name", help="file name before .####.exr (default: KIND, fg_OTHERS)")
-    p.add_argument("--camera", choices=["truck", "pan"], default="truck")
+    p.add_argument("--scene", choices=SCENES, default="fan")
+    p.add_argument(
+        "--camera",
+        choices=["truck", "pan", "still"],
+        help="how the camera moves (default: truck for the fan, still for the gears)",
+    )
     return p.parse_args()
 
 
@@ -179,7 +202,41 @@ def fan_fill(radius, width, thickness, blades):
     return fill
 
 
-def build(width, height, pan=False):
+def gear_fill(outer, root, thickness, teeth, tip=0.45, base=0.6):
+    """A gear in the XY plane, `thickness` deep along Z: `teeth` teeth whose tips span `tip` of
+    a tooth's period on the outer circle and whose bases span `base` of it on the root circle
+    (slanted flanks, as a spur gear's)."""
+
+    def fill(bm):
+        period = 2.0 * math.pi / teeth
+        # Six segments an arc: at 0.6 m a tip's straight chords stay within a tenth of a pixel
+        # of the circle.
+        arc = 6
+        points = []
+        for i in range(teeth):
+            centre = i * period
+            t0, t1 = centre - tip * period / 2, centre + tip * period / 2
+            b1, next_b0 = centre + base * period / 2, centre + period - base * period / 2
+            for k in range(arc + 1):
+                a = t0 + (t1 - t0) * k / arc
+                points.append((outer * math.cos(a), outer * math.sin(a)))
+            for k in range(arc + 1):
+                a = b1 + (next_b0 - b1) * k / arc
+                points.append((root * math.cos(a), root * math.sin(a)))
+        face = bm.faces.new([bm.verts.new((x, y, -thickness / 2)) for x, y in points])
+        extruded = bmesh.ops.extrude_face_region(bm, geom=[face])["geom"]
+        moved = [v for v in extruded if isinstance(v, bmesh.types.BMVert)]
+        bmesh.ops.translate(bm, verts=moved, vec=(0.0, 0.0, thickness))
+        bmesh.ops.recalc_face_normals(bm, faces=bm.faces[:])
+        # The caps are concave polygons of 140 corners: triangles here, so that no renderer
+        # has a polygon of its own to split.
+        bmesh.ops.triangulate(bm, faces=bm.faces[:])
+
+    return fill
+
+
+def setup(width, height):
+    """An empty Cycles scene writing float multilayer EXR, with collections FG and BG."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     # Keys with linear interpolation: constant speeds, so Cycles' shutter (which interpolates
     # each object's transform between its motion steps) and the Vector pass (frames -1, +1)
@@ -208,15 +265,23 @@ def build(width, height, pan=False):
     bg = bpy.data.collections.new("BG")
     scene.collection.children.link(fg)
     scene.collection.children.link(bg)
+    return scene, fg, bg
 
-    # Background: a checkered wall 1.8 m from the camera and three boxes before it.
-    wall = mesh_object(
+
+def wall(bg):
+    """Every scene's backdrop: a checkered wall 1.8 m from the camera."""
+    obj = mesh_object(
         "wall",
         bg,
         emission("wall", checker((0.85, 0.8, 0.65), (0.12, 0.18, 0.3), 40.0, 6.0, 0.3)),
         box(4.0, 3.0, 0.01),
     )
-    wall.location = (0.0, 0.0, -0.8)
+    obj.location = (0.0, 0.0, -0.8)
+
+
+def fan_scene(fg, bg):
+    """The fan's scene before the wall: three boxes (BG), the fan and the cube (FG)."""
+    # The boxes give the background parallax of its own as the camera trucks.
     boxes = [
         ((-0.45, 0.12, -0.35), (0.22, 0.16, 0.1), noise(5.0, 1.1)),
         ((0.05, -0.18, -0.45), (0.28, 0.14, 0.1), noise(7.0, 2.3)),
@@ -251,6 +316,31 @@ def build(width, height, pan=False):
         cube.keyframe_insert("location", frame=frame)
         cube.keyframe_insert("rotation_euler", frame=frame)
 
+
+def gear(fg, motion):
+    """The gear 0.6 m away, square to the view axis and centred on it at frame 1: turning about
+    that axis (`spin`) or sliding right (`slide`)."""
+    obj = mesh_object(
+        "gear",
+        fg,
+        emission("gear", checker((0.9, 0.35, 0.08), (1.0, 0.9, 0.35), 6.0, 14.0, 2.2)),
+        gear_fill(GEAR_OUTER, GEAR_ROOT, 0.01, GEAR_TEETH),
+    )
+    for frame in KEY_FRAMES:
+        t = frame - 1
+        if motion == "spin":
+            obj.location = (0.0, 0.0, 0.4)
+            obj.rotation_euler = (0.0, 0.0, math.radians(GEAR_SPIN * t))
+            obj.keyframe_insert("rotation_euler", frame=frame)
+        else:
+            obj.location = (GEAR_SLIDE * t, 0.0, 0.4)
+            obj.rotation_euler = (0.0, 0.0, math.radians(GEAR_SLIDE_ANGLE))
+        obj.keyframe_insert("location", frame=frame)
+
+
+def camera(scene, motion):
+    """The camera CAMERA_Z above the origin looking down -Z, LENS's lens, its depth of field
+    off (a kind turns it on); `motion` truck, pan or still."""
     data = bpy.data.cameras.new("camera")
     data.lens = LENS["focal_length"]
     data.sensor_fit = "HORIZONTAL"
@@ -259,19 +349,23 @@ def build(width, height, pan=False):
     data.dof.aperture_fstop = LENS["f_stop"]
     data.dof.aperture_blades = 0
     data.dof.use_dof = False
-    camera = bpy.data.objects.new("camera", data)
-    scene.collection.objects.link(camera)
-    scene.camera = camera
+    obj = bpy.data.objects.new("camera", data)
+    scene.collection.objects.link(obj)
+    scene.camera = obj
     for frame in KEY_FRAMES:
-        if pan:
-            camera.location = (0.0, 0.0, CAMERA_Z)
-            camera.rotation_euler = (0.0, math.radians(PAN_SPIN * (frame - 1)), 0.0)
-            camera.keyframe_insert("rotation_euler", frame=frame)
+        if motion == "pan":
+            obj.location = (0.0, 0.0, CAMERA_Z)
+            obj.rotation_euler = (0.0, math.radians(PAN_SPIN * (frame - 1)), 0.0)
+            obj.keyframe_insert("rotation_euler", frame=frame)
+        elif motion == "truck":
+            obj.location = (CAMERA_SPEED * (frame - 1), 0.0, CAMERA_Z)
         else:
-            camera.location = (CAMERA_SPEED * (frame - 1), 0.0, CAMERA_Z)
-        camera.keyframe_insert("location", frame=frame)
+            obj.location = (0.0, 0.0, CAMERA_Z)
+        obj.keyframe_insert("location", frame=frame)
 
-    # Three view layers: everything, the foreground alone, the background alone.
+
+def view_layers(scene):
+    """Three view layers: everything, the foreground alone, the background alone."""
     everything = scene.view_layers[0]
     everything.name = "ViewLayer"
     layers = {"ViewLayer": everything}
@@ -283,14 +377,29 @@ def build(width, height, pan=False):
         layer.use_pass_combined = True
         layer.use_pass_z = True
         layer.use_pass_vector = True
-    return scene, layers
+    return layers
+
+
+def build(width, height, name, moves):
+    """Scene `name` (one of SCENES), the camera moving as `moves` says (truck, pan, still)."""
+    scene, fg, bg = setup(width, height)
+    # The objects in the order the fan's scene always made them (the wall, the boxes, the
+    # foreground, the camera), so its renders keep their bits.
+    wall(bg)
+    if name == "fan":
+        fan_scene(fg, bg)
+    else:
+        gear(fg, name.removeprefix("gear-"))
+    camera(scene, moves)
+    return scene, view_layers(scene)
 
 
 def main():
     args = arguments()
     width, height = (int(v) for v in args.size.split("x"))
     first, last = (int(v) for v in args.frames.split("-"))
-    scene, layers = build(width, height, pan=args.camera == "pan")
+    moves = args.camera or ("truck" if args.scene == "fan" else "still")
+    scene, layers = build(width, height, args.scene, moves)
     scene.cycles.samples = args.samples
     scene.cycles.seed = args.seed
     scene.frame_start, scene.frame_end = first, last
