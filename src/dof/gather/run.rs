@@ -181,7 +181,7 @@ pub(super) struct Row<'a> {
 /// One tile row's weights as [`gather_run`] computed them, for [`carry_run`]: each far tap's
 /// far weights and each near tap's near weights (lane by lane, in tap order, each with its
 /// tap's step), and the composite's scales of the near and the far sums. A tap whose weights
-/// are 0 in every lane is not kept ([`RowWeights::keep`]).
+/// are 0 in every lane is not kept ([`counts`]).
 #[derive(Default)]
 pub(super) struct RowWeights {
     /// Whether [`gather_run`] keeps them (only when planes are carried).
@@ -190,10 +190,9 @@ pub(super) struct RowWeights {
     pub(super) near: Vec<Kept>,
     pub(super) near_scale: [f32; TILE],
     pub(super) far_scale: [f32; TILE],
-    /// The dense grid's far weights (lane by lane, in tap order), its radius, and the lanes
-    /// whose far field it gave.
+    /// The dense grid's far weights (lane by lane, in tap order) and the lanes whose far
+    /// field it gave.
     pub(super) dense: Vec<Kept>,
-    pub(super) dense_radius: usize,
     pub(super) dense_lanes: [bool; TILE],
 }
 
@@ -379,7 +378,6 @@ pub(super) fn gather_run(
     weights.dense_lanes = lanes;
     if need > 0.0 {
         let radius = (need.ceil() as usize).min(grids.len() - 1);
-        weights.dense_radius = radius;
         let centre = [cr, cg, cb, ca, cc, cia];
         dense_far(
             padded,
