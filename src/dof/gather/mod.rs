@@ -77,12 +77,17 @@ fn pixel_tap((dx, dy): (isize, isize), area: f32, norms: &Norms, stride: isize) 
     }
 }
 
-/// How far (whole px) a tap of `tiles` may lie from its pixel each way (a ring scaled to the
-/// largest reach and snapped lands within a pixel of it), for [`Norms`]' table: at most
-/// [`MOST_TABULATED`] (a quarter of a MiB).
-fn reach_of(tiles: &Tiles) -> usize {
-    let largest = tiles.reach.iter().fold(0.0f32, |m, &r| m.max(r));
-    (largest.min(MOST_TABULATED as f32).ceil() as usize + 1).min(MOST_TABULATED)
+/// The largest of `tiles`' reaches (px).
+fn largest_reach(tiles: &Tiles) -> f32 {
+    tiles.reach.iter().fold(0.0f32, |m, &r| m.max(r))
+}
+
+/// [`Norms`] for taps of tiles reaching at most `largest` px: a ring scaled to it and snapped
+/// lands within a pixel of it, so the table goes a pixel further, up to [`MOST_TABULATED`]
+/// (a quarter of a MiB).
+fn norms_for(aperture: Aperture, largest: f32) -> Norms {
+    let half = (largest.min(MOST_TABULATED as f32).ceil() as usize + 1).min(MOST_TABULATED);
+    Norms::new(aperture, half)
 }
 
 /// The largest offset [`Norms`] tabulates; taps farther out are normed as they come.
@@ -287,7 +292,7 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
         let dy = (step + STRIDE / 2).div_euclid(STRIDE);
         ((step - dy * STRIDE) as i32, dy as i32)
     };
-    let norms = Norms::new(aperture, reach_of(tiles));
+    let norms = norms_for(aperture, largest_reach(tiles));
     let grids: Vec<Vec<PixelTap>> = (0..=rings_count)
         .map(|r| grid_taps(r, &norms, STRIDE))
         .collect();
@@ -395,11 +400,11 @@ pub fn gather_carrying(
     let unit_area = aperture.unit_area();
     let has_alpha = color.a.is_some();
     let reach = &tiles.reach;
-    let largest = reach.iter().fold(0.0f32, |m, &r| m.max(r));
+    let largest = largest_reach(tiles);
     let pad = largest.ceil() as usize + 2;
     let padded = Padded::new(color, coc, &extra, (width, height), pad, unit_area);
     let stride = padded.stride as isize;
-    let norms = Norms::new(aperture, reach_of(tiles));
+    let norms = norms_for(aperture, largest);
     let grids: Vec<Vec<PixelTap>> = (0..=rings_count)
         .map(|r| grid_taps(r, &norms, stride))
         .collect();
