@@ -31,80 +31,108 @@ fn median_ms_with(f: &shutter::frame::Frame, runs: usize, params: &Params) -> f6
 }
 
 fn main() {
+    // `cargo bench` passes `--bench`; other words choose rows (`cargo bench --bench
+    // reconstruct -- "light layers"`).
+    let words: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with('-'))
+        .collect();
+    let chosen = |label: &str| words.is_empty() || words.iter().any(|w| label.contains(w.as_str()));
     println!("threads: {}", rayon::current_num_threads());
     let moving = frame(common::rotating);
-    println!(
-        "1920x1080 every pixel moving, the default (exposure k=128 S=31): {:.1} ms",
-        median_ms(&moving, 9)
-    );
+    if chosen("the default") {
+        println!(
+            "1920x1080 every pixel moving, the default (exposure k=128 S=31): {:.1} ms",
+            median_ms(&moving, 9)
+        );
+    }
     // The GPU row: the default with its tile stages and gather on the GPU (pack on the CPU),
     // wherever an adapter is present.
-    match common::gpu() {
-        Some(gpu) => {
-            let (ms, t) =
-                common::median_ms_on(&gpu, Algorithm::Reconstruct, &moving, &Params::default(), 5);
-            println!(
-                "1920x1080 every pixel moving, the default [wgpu on {}]: {ms:.1} ms (GPU stages \
-                 per run: upload {:.1} ms, compute {:.1} ms, readback {:.1} ms)",
-                gpu.adapter(),
-                t.upload_ms,
-                t.compute_ms,
-                t.readback_ms
-            );
+    if chosen("the default [wgpu]") {
+        match common::gpu() {
+            Some(gpu) => {
+                let (ms, t) = common::median_ms_on(
+                    &gpu,
+                    Algorithm::Reconstruct,
+                    &moving,
+                    &Params::default(),
+                    5,
+                );
+                println!(
+                    "1920x1080 every pixel moving, the default [wgpu on {}]: {ms:.1} ms (GPU stages \
+                     per run: upload {:.1} ms, compute {:.1} ms, readback {:.1} ms)",
+                    gpu.adapter(),
+                    t.upload_ms,
+                    t.compute_ms,
+                    t.readback_ms
+                );
+            }
+            None => println!("wgpu row skipped: no GPU adapter"),
         }
-        None => println!("wgpu row skipped: no GPU adapter"),
     }
     // The profile: cost against taps. S = 1 takes no taps (TileMax, NeighborMax, texel
     // packing and per-pixel set-up only); the slope is the cost per tap.
-    for taps in [1, 7, 31] {
-        let mut params = Params::default();
-        params.reconstruct.taps = taps;
-        println!(
-            "1920x1080 every pixel moving, exposure k=128 S={taps}: {:.1} ms",
-            median_ms_with(&moving, 5, &params)
-        );
+    if chosen("taps") {
+        for taps in [1, 7, 31] {
+            let mut params = Params::default();
+            params.reconstruct.taps = taps;
+            println!(
+                "1920x1080 every pixel moving, exposure k=128 S={taps}: {:.1} ms",
+                median_ms_with(&moving, 5, &params)
+            );
+        }
     }
     // The variants side by side (paper is the default above), and the 2014 filters' time
     // against taps and k: BENCHMARKS.md sets these against their errors.
-    for (variant, taps, max_blur) in [
-        (Variant::Paper, 15, 20),
-        (Variant::Stable, 15, 20),
-        (Variant::Exposure, 15, 20),
-        (Variant::Stable, 15, 128),
-        (Variant::Exposure, 15, 128),
-        (Variant::Exposure, 31, 128),
-        (Variant::Exposure, 63, 128),
-        (Variant::Paper, 15, 20),
-    ] {
-        let mut params = Params::default();
-        params.reconstruct.variant = variant;
-        params.reconstruct.taps = taps;
-        params.reconstruct.max_blur = max_blur;
-        let name = Variant::ALL.iter().find(|(_, v)| *v == variant).unwrap().0;
+    if chosen("variants") {
+        for (variant, taps, max_blur) in [
+            (Variant::Paper, 15, 20),
+            (Variant::Stable, 15, 20),
+            (Variant::Exposure, 15, 20),
+            (Variant::Stable, 15, 128),
+            (Variant::Exposure, 15, 128),
+            (Variant::Exposure, 31, 128),
+            (Variant::Exposure, 63, 128),
+            (Variant::Paper, 15, 20),
+        ] {
+            let mut params = Params::default();
+            params.reconstruct.variant = variant;
+            params.reconstruct.taps = taps;
+            params.reconstruct.max_blur = max_blur;
+            let name = Variant::ALL.iter().find(|(_, v)| *v == variant).unwrap().0;
+            println!(
+                "1920x1080 every pixel moving, {name} k={max_blur} S={taps}: {:.1} ms",
+                median_ms_with(&moving, 5, &params)
+            );
+        }
+    }
+    if chosen("numeric policy scan") {
         println!(
-            "1920x1080 every pixel moving, {name} k={max_blur} S={taps}: {:.1} ms",
-            median_ms_with(&moving, 5, &params)
+            "1920x1080 numeric policy scan of the moving frame (read stage): {:.2} ms",
+            common::median_policy_ms(&moving, 9)
         );
     }
-    println!(
-        "1920x1080 numeric policy scan of the moving frame (read stage): {:.2} ms",
-        common::median_policy_ms(&moving, 9)
-    );
-    common::light_layers_row(
-        "every pixel moving, the default",
-        Algorithm::Reconstruct,
-        &moving,
-        &Params::default(),
-    );
-    let still = frame(|_, _| None);
-    println!("1920x1080 static: {:.2} ms", median_ms(&still, 9));
-    for share in [0.01f32, 0.05, 0.25] {
-        let side = ((W * H) as f32 * share).sqrt() as usize;
-        let sparse = frame(|x, y| (x < side && y < side).then_some((24.0, 8.0)));
-        println!(
-            "1920x1080 sparse, a {side}x{side} square moving ({:.0}% of pixels): {:.1} ms",
-            share * 100.0,
-            median_ms(&sparse, 9)
+    if chosen("light layers") {
+        common::light_layers_row(
+            "every pixel moving, the default",
+            Algorithm::Reconstruct,
+            &moving,
+            &Params::default(),
         );
+    }
+    if chosen("static") {
+        let still = frame(|_, _| None);
+        println!("1920x1080 static: {:.2} ms", median_ms(&still, 9));
+    }
+    if chosen("sparse") {
+        for share in [0.01f32, 0.05, 0.25] {
+            let side = ((W * H) as f32 * share).sqrt() as usize;
+            let sparse = frame(|x, y| (x < side && y < side).then_some((24.0, 8.0)));
+            println!(
+                "1920x1080 sparse, a {side}x{side} square moving ({:.0}% of pixels): {:.1} ms",
+                share * 100.0,
+                median_ms(&sparse, 9)
+            );
+        }
     }
 }

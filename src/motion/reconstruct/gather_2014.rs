@@ -13,7 +13,9 @@ use super::config::{
 };
 use super::matte::{self, Matte};
 use super::pack::pack_tiles;
-use super::taps::{bilinear, split, split_by_cover, whole, At, Colours};
+use super::taps::{
+    bilinear, split, split_by_cover, whole_colour, whole_share, At, Colours, Recipe,
+};
 use super::tiles::{gather_tiles_of, near_blur, Gather, TileMask};
 use super::uniform::box_pixel;
 use crate::frame::Color;
@@ -437,6 +439,11 @@ fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>, const PLAIN: bo
                 let mut other_share = [0.0f32; LANES];
                 let mut sample_colour = [[[0.0f32; 4]; G]; LANES];
                 let mut other_colour = [[[0.0f32; 4]; G]; LANES];
+                // A plain tile's taps keep their corners; their colours are read once the
+                // weights are known, and only where a weight is not 0 (`whole_colour`).
+                let mut corners = [[(0usize, 0.0f32); 4]; LANES];
+                // A tap [`split`] read keeps how its parts' colours are made, read likewise.
+                let mut recipes: [Option<Recipe>; LANES] = [None; LANES];
                 for l in 0..LANES.min(k - first) {
                     t[l] = ((first + l) as f32 + offset) * step;
                     let mut point = (sx * t[l], sy * t[l]);
@@ -474,12 +481,21 @@ fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>, const PLAIN: bo
                     };
                     if form.split_taps && PLAIN {
                         // A plain tile ([`TileKind::Plain`]): every split is one part.
-                        (sample[l], sample_colour[l], share[l]) = whole(&nearest, colour, &at);
+                        corners[l] = at.corners();
+                        (sample[l], share[l]) = (nearest, whole_share(&corners[l]));
                     } else if form.split_taps {
-                        let parts = split_by_cover(texels, colour, mattes, &at, steepen)
-                            .unwrap_or_else(|| split(texels, colour, &at));
-                        (sample[l], sample_colour[l], share[l]) = parts.0;
-                        (other[l], other_colour[l], other_share[l]) = parts.1;
+                        match split_by_cover(texels, colour, mattes, &at, steepen) {
+                            Some(parts) => {
+                                (sample[l], sample_colour[l], share[l]) = parts.0;
+                                (other[l], other_colour[l], other_share[l]) = parts.1;
+                            }
+                            None => {
+                                let parts;
+                                ((sample[l], share[l]), (other[l], other_share[l]), parts) =
+                                    split(texels, &at);
+                                recipes[l] = Some(parts);
+                            }
+                        }
                     } else {
                         // Colour is read between pixels (bilinear, as a GPU's filtered
                         // texture read, which Blender's runs), depth and motion at the
@@ -543,11 +559,43 @@ fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>, const PLAIN: bo
                     count += direction;
                 }
                 for l in 0..LANES {
-                    let (s, o) = (&sample_colour[l], &other_colour[l]);
-                    for g in 0..G {
-                        for ch in 0..4 {
-                            fg[g][ch] += f[l][0] * s[g][ch] + f[l][1] * o[g][ch];
-                            bg[g][ch] += b[l][0] * s[g][ch] + b[l][1] * o[g][ch];
+                    if form.split_taps && PLAIN {
+                        // One part: its colour only where it weighs. A weight of 0 adds
+                        // 0 × colour, ±0, to a sum that is never −0 (it starts at +0, and
+                        // x + (−x) rounds to +0): skipping it leaves the same bits, as does
+                        // leaving out part B's 0 × 0.
+                        if f[l][0] != 0.0 || b[l][0] != 0.0 {
+                            let s = whole_colour(colour, &corners[l]);
+                            for g in 0..G {
+                                for ch in 0..4 {
+                                    fg[g][ch] += f[l][0] * s[g][ch];
+                                    bg[g][ch] += b[l][0] * s[g][ch];
+                                }
+                            }
+                        }
+                    } else {
+                        // As above, a part that weighs nothing adds ±0 whatever its colour.
+                        let none = [[0.0f32; 4]; G];
+                        let (s, o) = match &recipes[l] {
+                            Some(parts) => (
+                                if f[l][0] != 0.0 || b[l][0] != 0.0 {
+                                    parts.part_a(colour)
+                                } else {
+                                    none
+                                },
+                                if f[l][1] != 0.0 || b[l][1] != 0.0 {
+                                    parts.part_b(colour)
+                                } else {
+                                    none
+                                },
+                            ),
+                            None => (sample_colour[l], other_colour[l]),
+                        };
+                        for g in 0..G {
+                            for ch in 0..4 {
+                                fg[g][ch] += f[l][0] * s[g][ch] + f[l][1] * o[g][ch];
+                                bg[g][ch] += b[l][0] * s[g][ch] + b[l][1] * o[g][ch];
+                            }
                         }
                     }
                     w_fg += f[l][0] * share[l] + f[l][1] * other_share[l];

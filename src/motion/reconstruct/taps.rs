@@ -43,7 +43,7 @@ pub(crate) struct At {
 
 impl At {
     /// The four pixels around the tap's point, with their bilinear weights.
-    fn corners(&self) -> [(usize, f32); 4] {
+    pub(crate) fn corners(&self) -> [(usize, f32); 4] {
         around_index(self.size, self.pixel.0, self.pixel.1, self.offset)
     }
 }
@@ -135,96 +135,165 @@ pub(crate) fn bilinear<const G: usize>(
 /// the default's error from 0.0255 to 0.0206, and no truth scene gets worse. Where any of
 /// the four pixels has a matte, [`split_by_cover`] reads the tap instead, with the edge
 /// where the pixels' colours put it.
+///
+/// The parts' colours are not read here: [`Recipe`] says how each is made, and the gather
+/// reads them once it knows what each part weighs, only for a part that weighs something
+/// (at silhouettes, where taps split, four in ten parts weigh nothing).
 #[inline(always)]
-pub(crate) fn split<const G: usize>(
-    texels: &[Texel2014],
-    colour: &impl Fn(usize) -> Colours<G>,
-    at: &At,
-) -> (Part<G>, Part<G>) {
+pub(crate) fn split(texels: &[Texel2014], at: &At) -> (Shape, Shape, Recipe) {
     let At { nearest, scale, .. } = *at;
     let corners = at.corners();
     let near = &texels[nearest];
     let moves = near[LENGTH] >= HALF_PIXEL;
     let mut a = *near;
     let mut b = [0.0f32; 8];
-    let mut colour_a = [[0.0f32; 4]; G];
-    let mut colour_b = [[0.0f32; 4]; G];
+    let mut on_a = [false; 4];
     let (mut share_a, mut share_b, mut heaviest) = (0.0f32, 0.0f32, 0.0f32);
-    let mut heaviest_colour = [[0.0f32; 4]; G];
-    for (j, w) in corners {
+    let mut heaviest_index = NONE;
+    for (k, &(j, w)) in corners.iter().enumerate() {
         let texel = &texels[j];
         let same = (texel[Z] - near[Z]).abs() * scale < 1.0;
         let texel_moves = texel[LENGTH] >= HALF_PIXEL;
-        let on_surface = if moves {
+        on_a[k] = if moves {
             same || texel_moves
         } else {
             same && !texel_moves
         };
-        let c = colour(j);
-        if on_surface {
-            for g in 0..G {
-                for ch in 0..4 {
-                    colour_a[g][ch] += w * c[g][ch];
-                }
-            }
+        if on_a[k] {
             share_a += w;
         } else {
-            for g in 0..G {
-                for ch in 0..4 {
-                    colour_b[g][ch] += w * c[g][ch];
-                }
-            }
             share_b += w;
             if w > heaviest {
                 heaviest = w;
                 b[4..].copy_from_slice(&texel[4..]);
-                heaviest_colour = c;
-            }
-        }
-    }
-    // A still surface does not blur: its part takes one pixel's colour (the nearest's, or
-    // the heaviest of part B), not a mix of its neighbours'.
-    if !moves {
-        let c = colour(nearest);
-        for g in 0..G {
-            for ch in 0..4 {
-                colour_a[g][ch] = share_a * c[g][ch];
-            }
-        }
-    }
-    if b[LENGTH] < HALF_PIXEL {
-        for g in 0..G {
-            for ch in 0..4 {
-                colour_b[g][ch] = share_b * heaviest_colour[g][ch];
+                heaviest_index = j;
             }
         }
     }
     a[..4].fill(0.0);
-    ((a, colour_a, share_a), (b, colour_b, share_b))
+    let recipe = Recipe {
+        corners,
+        on_a,
+        // A still surface does not blur: its part takes one pixel's colour (the nearest's,
+        // or the heaviest of part B), not a mix of its neighbours'.
+        a_from: if moves { NONE } else { nearest },
+        b_from: if b[LENGTH] < HALF_PIXEL {
+            heaviest_index
+        } else {
+            NONE
+        },
+        b_still: b[LENGTH] < HALF_PIXEL,
+        shares: (share_a, share_b),
+    };
+    ((a, share_a), (b, share_b), recipe)
 }
 
-/// What [`split`] gives where all four pixels around the point move (so all lie on the
-/// nearest's surface): part A the whole tap, its colours summed with their weights in the
-/// same order, its share the weights' sum; part B empty, so the caller weighs none. The
-/// gather reads taps so in its plain tiles ([`super::tiles::plain_tiles`]), without the tests.
+/// A part's geometry (a texel whose depth and motion are the part's; its colour words unused)
+/// and its share of the tap.
+pub(crate) type Shape = (Texel2014, f32);
+
+/// No pixel.
+const NONE: usize = usize::MAX;
+
+/// How the colours of [`split`]'s two parts are made from the four pixels around the point.
+#[derive(Clone, Copy)]
+pub(crate) struct Recipe {
+    corners: [(usize, f32); 4],
+    /// Which corners lie on part A (the nearest's surface); the rest are part B's.
+    on_a: [bool; 4],
+    /// Part A's one pixel where it is still ([`NONE`]: its corners' colours summed).
+    a_from: usize,
+    /// Part B's one pixel (its heaviest) where it is still; [`NONE`] with `b_still`: no pixel
+    /// of B weighs, and its colour is 0.
+    b_from: usize,
+    b_still: bool,
+    shares: (f32, f32),
+}
+
+impl Recipe {
+    /// Part A's colours, as [`split`] summed them before it left them to the caller: each
+    /// corner's weight times its colour, in order, or a still part's share times one pixel's.
+    #[inline(always)]
+    pub(crate) fn part_a<const G: usize>(
+        &self,
+        colour: &impl Fn(usize) -> Colours<G>,
+    ) -> Colours<G> {
+        self.part(colour, true, self.a_from, false, self.shares.0)
+    }
+
+    /// Part B's colours (as [`Recipe::part_a`]).
+    #[inline(always)]
+    pub(crate) fn part_b<const G: usize>(
+        &self,
+        colour: &impl Fn(usize) -> Colours<G>,
+    ) -> Colours<G> {
+        self.part(colour, false, self.b_from, self.b_still, self.shares.1)
+    }
+
+    #[inline(always)]
+    fn part<const G: usize>(
+        &self,
+        colour: &impl Fn(usize) -> Colours<G>,
+        a: bool,
+        from: usize,
+        still: bool,
+        share: f32,
+    ) -> Colours<G> {
+        let mut out = [[0.0f32; 4]; G];
+        if from != NONE {
+            let c = colour(from);
+            for g in 0..G {
+                for ch in 0..4 {
+                    out[g][ch] = share * c[g][ch];
+                }
+            }
+        } else if !still {
+            for (k, &(j, w)) in self.corners.iter().enumerate() {
+                if self.on_a[k] == a {
+                    let c = colour(j);
+                    for g in 0..G {
+                        for ch in 0..4 {
+                            out[g][ch] += w * c[g][ch];
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Where all four pixels around the point move (so all lie on the nearest's surface), what
+/// [`split`] gives is one part, the whole tap: its share the corners' weights summed
+/// (this), its colours summed with their weights in the same order ([`whole_colour`]); part
+/// B empty, so the caller weighs none. The gather reads taps so in its plain tiles
+/// ([`super::tiles::plain_tiles`]), without the tests, and reads the colours only of a tap
+/// that weighs.
 #[inline(always)]
-pub(crate) fn whole<const G: usize>(
-    near: &Texel2014,
-    colour: &impl Fn(usize) -> Colours<G>,
-    at: &At,
-) -> Part<G> {
-    let mut colour_a = [[0.0f32; 4]; G];
+pub(crate) fn whole_share(corners: &[(usize, f32); 4]) -> f32 {
     let mut share_a = 0.0f32;
-    for (j, w) in at.corners() {
+    for &(_, w) in corners {
+        share_a += w;
+    }
+    share_a
+}
+
+/// The whole tap's colours ([`whole_share`]), from the corners it read ([`At::corners`]).
+#[inline(always)]
+pub(crate) fn whole_colour<const G: usize>(
+    colour: &impl Fn(usize) -> Colours<G>,
+    corners: &[(usize, f32); 4],
+) -> Colours<G> {
+    let mut colour_a = [[0.0f32; 4]; G];
+    for &(j, w) in corners {
         let c = colour(j);
         for g in 0..G {
             for ch in 0..4 {
                 colour_a[g][ch] += w * c[g][ch];
             }
         }
-        share_a += w;
     }
-    (*near, colour_a, share_a)
+    colour_a
 }
 
 /// The exposure variant's tap at `at`, split by coverage ([`matte`]):
@@ -355,4 +424,61 @@ pub(crate) fn split_by_cover<const G: usize>(
     } else {
         (still, moving)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 4×4 frame: columns 0 and 1 a surface at depth 1 moving 5 px a frame, columns 2 and 3
+    /// a still one at depth 9; pixel (x, y)'s colour x + 10y in every channel, and twice that
+    /// in a second set.
+    fn frame() -> (Vec<Texel2014>, impl Fn(usize) -> Colours<2>) {
+        let texels = (0..16)
+            .map(|i| {
+                let c = (i % 4 + 10 * (i / 4)) as f32;
+                let (z, v) = if i % 4 < 2 { (1.0, 5.0) } else { (9.0, 0.0) };
+                let mut t: Texel2014 = [c, c, c, c, 0.0, 0.0, 0.0, 0.0];
+                (t[Z], t[LENGTH]) = (z, v);
+                t
+            })
+            .collect();
+        let colour = |j: usize| {
+            let c = (j % 4 + 10 * (j / 4)) as f32;
+            [[c; 4], [2.0 * c; 4]]
+        };
+        (texels, colour)
+    }
+
+    #[test]
+    fn a_split_tap_s_parts_take_their_colours_as_its_recipe_says() {
+        // The point (1.25, 1.5): corners (1, 1), (2, 1), (1, 2), (2, 2) weighing 0.375, 0.125,
+        // 0.375, 0.125; the nearest pixel (1, 2) moves. Part A: the moving corners summed,
+        // 0.375 · 11 + 0.375 · 21 = 12; part B: still, so its heaviest pixel's colour (the
+        // first of the two equal, (2, 1): 12) times its share, 0.25 · 12 = 3.
+        let (texels, colour) = frame();
+        let at = At {
+            size: (4, 4),
+            nearest: 9,
+            scale: 1.0,
+            pixel: (1, 1),
+            offset: (0.25, 0.5),
+        };
+        let ((a, share_a), (b, share_b), parts) = split(&texels, &at);
+        assert_eq!((share_a, share_b), (0.75, 0.25));
+        assert_eq!((a[Z], a[LENGTH], b[Z], b[LENGTH]), (1.0, 5.0, 9.0, 0.0));
+        assert_eq!(parts.part_a(&colour), [[12.0; 4], [24.0; 4]]);
+        assert_eq!(parts.part_b(&colour), [[3.0; 4], [6.0; 4]]);
+        // Seen from the still side, nearest (2, 2): part A is the still surface, one pixel's
+        // colour (the nearest's, 22) times its share; part B the moving corners summed.
+        let at = At { nearest: 10, ..at };
+        let ((_, share_a), (_, share_b), parts) = split(&texels, &at);
+        assert_eq!((share_a, share_b), (0.25, 0.75));
+        assert_eq!(parts.part_a(&colour), [[5.5; 4], [11.0; 4]]);
+        assert_eq!(parts.part_b(&colour), [[12.0; 4], [24.0; 4]]);
+        // The whole tap: every corner summed, 0.375 · 11 + 0.125 · 12 + 0.375 · 21 + 0.125 · 22.
+        let corners = at.corners();
+        assert_eq!(whole_share(&corners), 1.0);
+        assert_eq!(whole_colour(&colour, &corners), [[16.25; 4], [32.5; 4]]);
+    }
 }
