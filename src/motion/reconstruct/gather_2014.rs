@@ -51,7 +51,7 @@ pub fn gather_2014(
     gather_2014_of(
         config,
         texels,
-        &beauty,
+        (&beauty, &matte::RGBA),
         mattes,
         (tiles, kinds),
         &mut [color],
@@ -74,6 +74,13 @@ pub fn gather_2014(
 /// less than the tap's weights, but a colour carried for nothing costs its share. On
 /// `sparse`, where few pixels move, seven in one pass took 0.25–0.28 s and four and three
 /// 0.33–0.35 s.
+///
+/// Where every layer's alpha is the beauty's (as `process_with` gives them), the layers'
+/// alphas are not gathered again: their R, G and B go four to a colour beside the beauty
+/// (six layers: five colours and the beauty, not seven; nine: one pass of eight, not two of
+/// five), each value unmixed with the extrapolation of its own channel ([`matte::Kinds`]),
+/// and each layer's alpha comes back as the beauty's gathered alpha, which is the bits its
+/// own would get. Layers with alphas of their own go one to a colour.
 pub fn gather_2014_carrying(
     config: &ReconstructConfig,
     texels: &[Texel2014],
@@ -85,18 +92,80 @@ pub fn gather_2014_carrying(
     if colours.is_empty() {
         return;
     }
-    let size = colours.len().div_ceil(colours.len().div_ceil(MOST_COLOURS));
     let inputs = (texels, mattes, (tiles, kinds), packed);
-    for chunk in colours.chunks_mut(size) {
+    let (beauty, layers) = colours.split_at_mut(1);
+    if layers.is_empty() || layers.iter().any(|layer| layer.a != beauty[0].a) {
+        let rgba = vec![[0, 1, 2, 3]; colours.len()];
+        return gather_chunks(config, inputs, colours, &rgba);
+    }
+    // The layers' alphas are the beauty's: their channels go four to a colour (kinds R, G,
+    // B in turn), and each layer's alpha comes back as the beauty's.
+    let n = texels.len();
+    let mut stream: Vec<(Vec<f32>, u8)> = Vec::with_capacity(3 * layers.len() + 3);
+    for layer in layers.iter_mut() {
+        for (kind, plane) in [&mut layer.r, &mut layer.g, &mut layer.b]
+            .into_iter()
+            .enumerate()
+        {
+            stream.push((std::mem::take(plane), kind as u8));
+        }
+    }
+    while !stream.len().is_multiple_of(4) {
+        stream.push((vec![0.0; n], 0));
+    }
+    let mut kinds = vec![[0, 1, 2, 3]];
+    let mut packed_colours = Vec::with_capacity(stream.len() / 4);
+    let mut planes = stream.into_iter();
+    while let (Some(r), Some(g), Some(b), Some(a)) =
+        (planes.next(), planes.next(), planes.next(), planes.next())
+    {
+        kinds.push([r.1, g.1, b.1, a.1]);
+        packed_colours.push(Color {
+            r: r.0,
+            g: g.0,
+            b: b.0,
+            a: Some(a.0),
+        });
+    }
+    let mut all: Vec<&mut Color> = std::iter::once(&mut *beauty[0])
+        .chain(packed_colours.iter_mut())
+        .collect();
+    gather_chunks(config, inputs, &mut all, &kinds);
+    let mut planes = packed_colours.into_iter().flat_map(|c| {
+        [
+            c.r,
+            c.g,
+            c.b,
+            c.a.expect("each packed colour holds four channels"),
+        ]
+    });
+    for layer in layers.iter_mut() {
+        for plane in [&mut layer.r, &mut layer.g, &mut layer.b] {
+            *plane = planes.next().expect("three channels a layer");
+        }
+        layer.a.clone_from(&beauty[0].a);
+    }
+}
+
+/// `colours` (each value's kind in `kinds`, colour by colour) in chunks of at most
+/// [`MOST_COLOURS`], as even as they can be.
+fn gather_chunks(
+    config: &ReconstructConfig,
+    inputs: (&[Texel2014], &[Matte], Tiles<'_>, &TileMask),
+    colours: &mut [&mut Color],
+    kinds: &[[u8; 4]],
+) {
+    let size = colours.len().div_ceil(colours.len().div_ceil(MOST_COLOURS));
+    for (chunk, kinds) in colours.chunks_mut(size).zip(kinds.chunks(size)) {
         match chunk.len() {
-            1 => gather_packed::<1>(config, inputs, chunk),
-            2 => gather_packed::<2>(config, inputs, chunk),
-            3 => gather_packed::<3>(config, inputs, chunk),
-            4 => gather_packed::<4>(config, inputs, chunk),
-            5 => gather_packed::<5>(config, inputs, chunk),
-            6 => gather_packed::<6>(config, inputs, chunk),
-            7 => gather_packed::<7>(config, inputs, chunk),
-            _ => gather_packed::<8>(config, inputs, chunk),
+            1 => gather_packed::<1>(config, inputs, chunk, kinds),
+            2 => gather_packed::<2>(config, inputs, chunk, kinds),
+            3 => gather_packed::<3>(config, inputs, chunk, kinds),
+            4 => gather_packed::<4>(config, inputs, chunk, kinds),
+            5 => gather_packed::<5>(config, inputs, chunk, kinds),
+            6 => gather_packed::<6>(config, inputs, chunk, kinds),
+            7 => gather_packed::<7>(config, inputs, chunk, kinds),
+            _ => gather_packed::<8>(config, inputs, chunk, kinds),
         }
     }
 }
@@ -106,7 +175,9 @@ fn gather_packed<const G: usize>(
     config: &ReconstructConfig,
     (texels, mattes, (tiles, kinds), packed): (&[Texel2014], &[Matte], Tiles<'_>, &TileMask),
     colours: &mut [&mut Color],
+    channels: &[[u8; 4]],
 ) {
+    let channels: matte::Kinds<G> = channels.try_into().expect("a kind for each colour");
     let values: Vec<Colours<G>> = {
         let sources: [&Color; G] = std::array::from_fn(|g| &*colours[g]);
         pack_tiles(
@@ -118,7 +189,14 @@ fn gather_packed<const G: usize>(
         )
     };
     let colour = |j: usize| values[j];
-    gather_2014_of(config, texels, &colour, mattes, (tiles, kinds), colours);
+    gather_2014_of(
+        config,
+        texels,
+        (&colour, &channels),
+        mattes,
+        (tiles, kinds),
+        colours,
+    );
 }
 
 /// The gather of `G` colours, `colour(j)` those of pixel j, written into `out` (the first
@@ -126,7 +204,7 @@ fn gather_packed<const G: usize>(
 fn gather_2014_of<const G: usize>(
     config: &ReconstructConfig,
     texels: &[Texel2014],
-    colour: &(impl Fn(usize) -> Colours<G> + Sync),
+    colour: (&(impl Fn(usize) -> Colours<G> + Sync), &matte::Kinds<G>),
     mattes: &[Matte],
     (tiles, kinds): Tiles<'_>,
     out: &mut [&mut Color],
@@ -156,9 +234,9 @@ fn gather_2014_of<const G: usize>(
 fn gather_2014_as<const G: usize>(
     config: &ReconstructConfig,
     form: impl Fn() -> Form + Sync,
-    (texels, colour, mattes, (tiles, kinds)): (
+    (texels, (colour, channels), mattes, (tiles, kinds)): (
         &[Texel2014],
-        &(impl Fn(usize) -> Colours<G> + Sync),
+        (&(impl Fn(usize) -> Colours<G> + Sync), &matte::Kinds<G>),
         &[Matte],
         Tiles<'_>,
     ),
@@ -171,6 +249,7 @@ fn gather_2014_as<const G: usize>(
             texels,
             colour,
             mattes,
+            channels,
         },
         tiles: (tiles, kinds),
     };
@@ -186,14 +265,14 @@ fn gather_2014_as<const G: usize>(
 /// The 2014 gather at a pixel, as [`gather_tiles_of`] runs it: a type, not a closure, so its
 /// body is inlined into the band loop's copy for the CPU at hand (AVX2 where there is one:
 /// [`super::tiles::Gather`]).
-struct Pixel2014<'a, F, C> {
+struct Pixel2014<'a, F, C, const G: usize> {
     config: &'a ReconstructConfig,
     form: F,
-    sources: Sources<'a, C>,
+    sources: Sources<'a, C, G>,
     tiles: Tiles<'a>,
 }
 
-impl<const G: usize, F, C> Gather<G> for Pixel2014<'_, F, C>
+impl<const G: usize, F, C> Gather<G> for Pixel2014<'_, F, C, G>
 where
     F: Fn() -> Form + Sync,
     C: Fn(usize) -> Colours<G> + Sync,
@@ -230,10 +309,12 @@ where
 
 /// What a pixel's gather reads: the texels (depth and motion), the colours carried
 /// (`colour(j)`, pixel j's) and the mattes.
-struct Sources<'a, C> {
+struct Sources<'a, C, const G: usize> {
     texels: &'a [Texel2014],
     colour: &'a C,
     mattes: &'a [Matte],
+    /// Which of the beauty's channels each colour value is ([`matte::surfaces_of`]).
+    channels: &'a matte::Kinds<G>,
 }
 
 /// The 2014 filter at pixel (x, y), as Blender's compositor runs it (Jimenez's version of
@@ -260,7 +341,7 @@ struct Sources<'a, C> {
 fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>, const PLAIN: bool>(
     config: &ReconstructConfig,
     form: &Form,
-    sources: &Sources<C>,
+    sources: &Sources<C, G>,
     tiles: &TileGrid,
     x: usize,
     y: usize,
@@ -269,6 +350,7 @@ fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>, const PLAIN: bo
         texels,
         colour,
         mattes,
+        channels,
     } = *sources;
     let (width, height) = (config.width as usize, config.height as usize);
     let size = config.tile as f32;
@@ -490,7 +572,7 @@ fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>, const PLAIN: bo
                             sample_colour[l] = whole_colour(colour, &corners[l]);
                         }
                     } else if form.split_taps {
-                        match split_by_cover(texels, colour, mattes, &at, steepen) {
+                        match split_by_cover(texels, colour, (mattes, channels), &at, steepen) {
                             Some(parts) => {
                                 (sample[l], sample_colour[l], share[l]) = parts.0;
                                 (other[l], other_colour[l], other_share[l]) = parts.1;
@@ -631,7 +713,7 @@ fn gather_pixel_2014<const G: usize, C: Fn(usize) -> Colours<G>, const PLAIN: bo
         // (the matte's; the taps bring the moving surface back for as long as it covers).
         let mut own_colour = centre_colour;
         if own_length < HALF_PIXEL && !mattes.is_empty() {
-            own_colour = matte::surfaces_of(texels, mattes, i, colour).2;
+            own_colour = matte::surfaces_of(texels, mattes, i, colour, channels).2;
         }
         for g in 0..G {
             for ch in 0..4 {

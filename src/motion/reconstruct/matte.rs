@@ -357,25 +357,35 @@ fn matte(
 /// likewise from its moving partner's; the other is its partner's colour. A pixel with no
 /// pair gives its own colour to both. Linear in the texels' colours: the matte, fitted on the
 /// beauty, holds every number that depends on colour.
+/// Which of the beauty's channels (0 to 3: R, G, B, A) each value of `G` colours is, for
+/// [`surfaces_of`]'s extrapolation.
+pub type Kinds<const G: usize> = [[u8; 4]; G];
+
+/// Every colour RGBA: the beauty's kinds.
+pub const RGBA: Kinds<1> = [[0, 1, 2, 3]];
+
 #[inline]
 pub fn surfaces(texels: &[Texel2014], mattes: &[Matte], i: usize) -> (f32, [f32; 4], [f32; 4]) {
     let colour = |j: usize| {
         let t = &texels[j];
         [[t[0], t[1], t[2], t[3]]]
     };
-    let (alpha, [moving], [still]) = surfaces_of(texels, mattes, i, &colour);
+    let (alpha, [moving], [still]) = surfaces_of(texels, mattes, i, &colour, &RGBA);
     (alpha, moving, still)
 }
 
 /// [`surfaces`] of `G` colours at once (the beauty's and carried layers', `colour(j)` those
-/// of pixel j, R, G, B in the beauty's places, each with the beauty's alpha): each unmixed
-/// with the beauty's matte, channel by channel, as the beauty is.
+/// of pixel j): each unmixed with the beauty's matte, channel by channel, as the beauty is,
+/// each value with the extrapolation of the beauty's channel `kinds` names for it (0 to 3:
+/// R, G, B, A; [`RGBA`] for colours that are RGBA each, the light layers' channels packed
+/// four to a colour otherwise).
 #[inline(always)]
 pub fn surfaces_of<const G: usize>(
     texels: &[Texel2014],
     mattes: &[Matte],
     i: usize,
     colour: &impl Fn(usize) -> [[f32; 4]; G],
+    kinds: &Kinds<G>,
 ) -> (f32, [[f32; 4]; G], [[f32; 4]; G]) {
     let m = &mattes[i];
     let [alpha, f, b, er, eg, eb, ea] = *m;
@@ -392,12 +402,13 @@ pub fn surfaces_of<const G: usize>(
     let own_moves = moves(&texels[i]);
     for g in 0..G {
         for ch in 0..4 {
+            let e = e[usize::from(kinds[g][ch] & 3)];
             if own_moves {
-                moving[g][ch] = c[g][ch] + e[ch] * (c[g][ch] - b[g][ch]);
+                moving[g][ch] = c[g][ch] + e * (c[g][ch] - b[g][ch]);
                 still[g][ch] = b[g][ch];
             } else {
                 moving[g][ch] = f[g][ch];
-                still[g][ch] = c[g][ch] + e[ch] * (c[g][ch] - f[g][ch]);
+                still[g][ch] = c[g][ch] + e * (c[g][ch] - f[g][ch]);
             }
         }
     }

@@ -309,7 +309,7 @@ pub(crate) fn whole_colour<const G: usize>(
 pub(crate) fn split_by_cover<const G: usize>(
     texels: &[Texel2014],
     colour: &impl Fn(usize) -> Colours<G>,
-    mattes: &[Matte],
+    (mattes, kinds): (&[Matte], &matte::Kinds<G>),
     at: &At,
     steepen: bool,
 ) -> Option<(Part<G>, Part<G>)> {
@@ -346,7 +346,7 @@ pub(crate) fn split_by_cover<const G: usize>(
     let (mut least, mut most) = (1.0f32, 0.0f32);
     for (j, w) in corners {
         let t = &texels[j];
-        let (alpha, fg, bg) = matte::surfaces_of(texels, mattes, j, colour);
+        let (alpha, fg, bg) = matte::surfaces_of(texels, mattes, j, colour, kinds);
         if w > 0.0 {
             least = least.min(alpha);
             most = most.max(alpha);
@@ -407,7 +407,7 @@ pub(crate) fn split_by_cover<const G: usize>(
         moving_colour = [[0.0; 4]; G];
     }
     if !moves {
-        let (_, _, bg) = matte::surfaces_of(texels, mattes, nearest, colour);
+        let (_, _, bg) = matte::surfaces_of(texels, mattes, nearest, colour, kinds);
         still_colour = bg;
         still[4..].copy_from_slice(&near[4..]);
     }

@@ -204,6 +204,29 @@ fn carried_layers_get_the_bits_they_get_in_the_beautys_place() {
                 "{variant:?} {k}: the layer moved"
             );
             assert_eq!(bits(got), bits(want), "{variant:?} layer {k}");
+            // Each layer's alpha comes back as the beauty's.
+            assert_eq!(got.a, out.color.as_ref().unwrap().a, "{variant:?} layer {k}");
         }
+    }
+}
+
+#[test]
+fn a_layer_with_an_alpha_of_its_own_gets_the_bits_it_gets_in_the_beautys_place() {
+    // The layers' channels go four to a colour only where every layer's alpha is the
+    // beauty's; here the second layer's is not, and every layer goes one to a colour.
+    let bits = |c: &Color| {
+        [&c.r, &c.g, &c.b, c.a.as_ref().unwrap()]
+            .map(|p| p.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
+    };
+    let params = ReconstructParams::default();
+    let (frame, mut layers) = scene(64, 48, 3);
+    let own: Vec<f32> = (0..64 * 48).map(|i| (i % 7) as f32 / 6.0).collect();
+    layers[1].a = Some(own);
+    let want = alone(&frame, &layers, &params);
+    let mut carried = layers.clone();
+    let out = reconstruct_layers_with(frame, &mut carried, &params, 0.5, 7, &Cpu);
+    assert_ne!(carried[1].a, out.color.as_ref().unwrap().a);
+    for (k, (got, want)) in carried.iter().zip(&want).enumerate() {
+        assert_eq!(bits(got), bits(want), "layer {k}");
     }
 }
