@@ -47,12 +47,7 @@ fn median_ms(f: &shutter::frame::Frame, dof: DofParams) -> f64 {
 }
 
 fn main() {
-    // `cargo bench` passes `--bench`; other words choose rows.
-    let words: Vec<String> = std::env::args()
-        .skip(1)
-        .filter(|a| !a.starts_with('-'))
-        .collect();
-    let chosen = |label: &str| words.is_empty() || words.iter().any(|w| label.contains(w.as_str()));
+    let chosen = common::chosen_rows();
     println!("threads: {}", rayon::current_num_threads());
     let f = common::lens_frame();
     let gather = DofParams {

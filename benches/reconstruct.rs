@@ -18,7 +18,7 @@
 
 mod common;
 
-use common::{frame, H, W};
+use common::frame;
 use shutter::motion::{Algorithm, Variant};
 use shutter::process::Params;
 
@@ -31,13 +31,7 @@ fn median_ms_with(f: &shutter::frame::Frame, runs: usize, params: &Params) -> f6
 }
 
 fn main() {
-    // `cargo bench` passes `--bench`; other words choose rows (`cargo bench --bench
-    // reconstruct -- "light layers"`).
-    let words: Vec<String> = std::env::args()
-        .skip(1)
-        .filter(|a| !a.starts_with('-'))
-        .collect();
-    let chosen = |label: &str| words.is_empty() || words.iter().any(|w| label.contains(w.as_str()));
+    let chosen = common::chosen_rows();
     println!("threads: {}", rayon::current_num_threads());
     let moving = frame(common::rotating);
     if chosen("the default") {
@@ -125,14 +119,6 @@ fn main() {
         println!("1920x1080 static: {:.2} ms", median_ms(&still, 9));
     }
     if chosen("sparse") {
-        for share in [0.01f32, 0.05, 0.25] {
-            let side = ((W * H) as f32 * share).sqrt() as usize;
-            let sparse = frame(|x, y| (x < side && y < side).then_some((24.0, 8.0)));
-            println!(
-                "1920x1080 sparse, a {side}x{side} square moving ({:.0}% of pixels): {:.1} ms",
-                share * 100.0,
-                median_ms(&sparse, 9)
-            );
-        }
+        common::sparse_rows(|f| median_ms(f, 9));
     }
 }

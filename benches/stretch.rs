@@ -68,13 +68,5 @@ fn main() {
     }
     let still = frame(|_, _| None);
     println!("1920x1080 static: {:.2} ms", median_ms(&still, &default, 5));
-    for share in [0.01f32, 0.05, 0.25] {
-        let side = ((W * H) as f32 * share).sqrt() as usize;
-        let sparse = frame(|x, y| (x < side && y < side).then_some((24.0, 8.0)));
-        println!(
-            "1920x1080 sparse, a {side}x{side} square moving ({:.0}% of pixels): {:.1} ms",
-            share * 100.0,
-            median_ms(&sparse, &default, 5)
-        );
-    }
+    common::sparse_rows(|f| median_ms(f, &default, 5));
 }

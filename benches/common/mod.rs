@@ -250,3 +250,30 @@ fn median(runs: usize, mut time: impl FnMut() -> f64) -> f64 {
     times.sort_by(f64::total_cmp);
     times[runs / 2]
 }
+
+/// Which rows a bench runs: those whose label contains a word given after `--` (`cargo bench
+/// --bench reconstruct -- "light layers"`), every row when none is (`cargo bench` passes
+/// `--bench`, which is not a word).
+#[allow(dead_code)]
+pub fn chosen_rows() -> impl Fn(&str) -> bool {
+    let words: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with('-'))
+        .collect();
+    move |label: &str| words.is_empty() || words.iter().any(|w| label.contains(w.as_str()))
+}
+
+/// The sparse rows: one moving square covering 1 %, 5 % and 25 % of a 1080p frame, each
+/// timed by `time`.
+#[allow(dead_code)]
+pub fn sparse_rows(time: impl Fn(&Frame) -> f64) {
+    for share in [0.01f32, 0.05, 0.25] {
+        let side = ((W * H) as f32 * share).sqrt() as usize;
+        let sparse = frame(|x, y| (x < side && y < side).then_some((24.0, 8.0)));
+        println!(
+            "1920x1080 sparse, a {side}x{side} square moving ({:.0}% of pixels): {:.1} ms",
+            share * 100.0,
+            time(&sparse)
+        );
+    }
+}

@@ -248,16 +248,7 @@ impl Recipe {
                 }
             }
         } else if !still {
-            for (k, &(j, w)) in self.corners.iter().enumerate() {
-                if self.on_a[k] == a {
-                    let c = colour(j);
-                    for g in 0..G {
-                        for ch in 0..4 {
-                            out[g][ch] += w * c[g][ch];
-                        }
-                    }
-                }
-            }
+            out = summed(colour, &self.corners, |k| self.on_a[k] == a);
         }
         out
     }
@@ -284,16 +275,29 @@ pub(crate) fn whole_colour<const G: usize>(
     colour: &impl Fn(usize) -> Colours<G>,
     corners: &[(usize, f32); 4],
 ) -> Colours<G> {
-    let mut colour_a = [[0.0f32; 4]; G];
-    for &(j, w) in corners {
-        let c = colour(j);
-        for g in 0..G {
-            for ch in 0..4 {
-                colour_a[g][ch] += w * c[g][ch];
+    summed(colour, corners, |_| true)
+}
+
+/// The colours of the corners `keep` takes (by their place in `corners`), each times its
+/// weight, summed in order.
+#[inline(always)]
+fn summed<const G: usize>(
+    colour: &impl Fn(usize) -> Colours<G>,
+    corners: &[(usize, f32); 4],
+    keep: impl Fn(usize) -> bool,
+) -> Colours<G> {
+    let mut sum = [[0.0f32; 4]; G];
+    for (k, &(j, w)) in corners.iter().enumerate() {
+        if keep(k) {
+            let c = colour(j);
+            for g in 0..G {
+                for ch in 0..4 {
+                    sum[g][ch] += w * c[g][ch];
+                }
             }
         }
     }
-    colour_a
+    sum
 }
 
 /// The exposure variant's tap at `at`, split by coverage ([`matte`]):

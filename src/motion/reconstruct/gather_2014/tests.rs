@@ -205,7 +205,11 @@ fn carried_layers_get_the_bits_they_get_in_the_beautys_place() {
             );
             assert_eq!(bits(got), bits(want), "{variant:?} layer {k}");
             // Each layer's alpha comes back as the beauty's.
-            assert_eq!(got.a, out.color.as_ref().unwrap().a, "{variant:?} layer {k}");
+            assert_eq!(
+                got.a,
+                out.color.as_ref().unwrap().a,
+                "{variant:?} layer {k}"
+            );
         }
     }
 }
