@@ -116,14 +116,7 @@ fn main() {
                 ] {
                     let (ms, t) =
                         common::median_ms_on(&gpu, Algorithm::None, &f, &dof_params(dof), 5);
-                    println!(
-                        "1920x1080 out of focus, {label} [wgpu on {}]: {ms:.1} ms (GPU stages \
-                         per run: upload {:.1} ms, compute {:.1} ms, readback {:.1} ms)",
-                        gpu.adapter(),
-                        t.upload_ms,
-                        t.compute_ms,
-                        t.readback_ms
-                    );
+                    common::print_gpu_row(&format!("out of focus, {label}"), &gpu, (ms, t));
                 }
             }
             None => println!("wgpu rows skipped: no GPU adapter"),

@@ -52,14 +52,7 @@ fn main() {
                     &Params::default(),
                     5,
                 );
-                println!(
-                    "1920x1080 every pixel moving, the default [wgpu on {}]: {ms:.1} ms (GPU stages \
-                     per run: upload {:.1} ms, compute {:.1} ms, readback {:.1} ms)",
-                    gpu.adapter(),
-                    t.upload_ms,
-                    t.compute_ms,
-                    t.readback_ms
-                );
+                common::print_gpu_row("every pixel moving, the default", &gpu, (ms, t));
             }
             None => println!("wgpu row skipped: no GPU adapter"),
         }

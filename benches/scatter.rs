@@ -92,14 +92,7 @@ fn main() {
                 ("static, default", &still, default),
             ] {
                 let (ms, t) = common::median_ms_on(&gpu, Algorithm::Scatter, f, &with(params), 3);
-                println!(
-                    "1920x1080 {label} [wgpu on {}]: {ms:.1} ms (GPU stages per run: upload \
-                     {:.1} ms, compute {:.1} ms, readback {:.1} ms)",
-                    gpu.adapter(),
-                    t.upload_ms,
-                    t.compute_ms,
-                    t.readback_ms
-                );
+                common::print_gpu_row(label, &gpu, (ms, t));
             }
         }
         None => println!("wgpu rows skipped: no GPU adapter"),

@@ -277,3 +277,17 @@ pub fn sparse_rows(time: impl Fn(&Frame) -> f64) {
         );
     }
 }
+
+/// Prints a GPU row: `label`'s median time on `gpu` and its GPU stages' upload, compute and
+/// readback per run ([`median_ms_on`]'s).
+#[allow(dead_code)]
+pub fn print_gpu_row(label: &str, gpu: &shutter::gpu::Gpu, (ms, t): (f64, shutter::gpu::GpuTimes)) {
+    println!(
+        "1920x1080 {label} [wgpu on {}]: {ms:.1} ms (GPU stages per run: upload {:.1} ms, \
+         compute {:.1} ms, readback {:.1} ms)",
+        gpu.adapter(),
+        t.upload_ms,
+        t.compute_ms,
+        t.readback_ms
+    );
+}
