@@ -18,7 +18,8 @@
 //! - the moving frame's default with six RGB light layers beside the beauty, against the
 //!   beauty alone (issue 29's cost bound: at most 1.5×).
 //!
-//! Median of 5 runs after one warm-up run.
+//! Median of 5 runs after one warm-up run. Words after `--` choose the rows whose label holds
+//! one of them (`cargo bench --bench scatter -- "light layers"`); none, every row.
 
 mod common;
 
@@ -33,6 +34,7 @@ fn median_ms(f: &Frame, params: &Params, runs: usize) -> f64 {
 
 fn main() {
     println!("threads: {}", rayon::current_num_threads());
+    let chosen = common::chosen_rows();
     let with = |scatter: ScatterParams| Params {
         shutter: 1.0,
         scatter,
@@ -65,20 +67,27 @@ fn main() {
             },
         ),
     ] {
-        println!(
-            "1920x1080 every pixel moving 30 px, {label}: {:.1} ms",
-            median_ms(&moving, &with(params), 5)
+        let label = format!("1920x1080 every pixel moving 30 px, {label}");
+        if chosen(&label) {
+            println!("{label}: {:.1} ms", median_ms(&moving, &with(params), 5));
+        }
+    }
+    if chosen("1920x1080 every pixel moving 30 px, default, six RGB light layers") {
+        common::light_layers_row(
+            "every pixel moving 30 px, default",
+            Algorithm::Scatter,
+            &moving,
+            &with(default),
         );
     }
-    common::light_layers_row(
-        "every pixel moving 30 px, default",
-        Algorithm::Scatter,
-        &moving,
-        &with(default),
-    );
     // The GPU rows (reach, accumulate and resolve on the GPU), wherever an adapter is
     // present: the default and the paper's settings on the same frame, and the still frame.
-    match common::gpu() {
+    let gpu = if chosen("[wgpu]") {
+        common::gpu()
+    } else {
+        None
+    };
+    match gpu {
         Some(gpu) => {
             let paper = ScatterParams {
                 normalize: Normalize::Paper,
@@ -95,17 +104,20 @@ fn main() {
                 common::print_gpu_row(label, &gpu, (ms, t));
             }
         }
-        None => println!("wgpu rows skipped: no GPU adapter"),
+        None if chosen("[wgpu]") => println!("wgpu rows skipped: no GPU adapter"),
+        None => {}
     }
     // The same motion under the default 180° shutter: 15 px streaks.
     let half = Params {
         shutter: 0.5,
         ..with(default)
     };
-    println!(
-        "1920x1080 every pixel moving 30 px, default settings, shutter 0.5 (15 px streaks): {:.1} ms",
-        median_ms(&moving, &half, 5)
-    );
+    if chosen("shutter 0.5") {
+        println!(
+            "1920x1080 every pixel moving 30 px, default settings, shutter 0.5 (15 px streaks): {:.1} ms",
+            median_ms(&moving, &half, 5)
+        );
+    }
     let fixed = Params {
         shutter: 0.5,
         ..with(ScatterParams {
@@ -113,16 +125,23 @@ fn main() {
             ..default
         })
     };
-    println!(
-        "1920x1080 every pixel moving 30 px, fixed 10 segments, shutter 0.5: {:.1} ms",
-        median_ms(&moving, &fixed, 5)
-    );
+    if chosen("fixed 10 segments, shutter 0.5") {
+        println!(
+            "1920x1080 every pixel moving 30 px, fixed 10 segments, shutter 0.5: {:.1} ms",
+            median_ms(&moving, &fixed, 5)
+        );
+    }
     let still = frame(|_, _| None);
-    println!(
-        "1920x1080 static: {:.2} ms",
-        median_ms(&still, &with(default), 5)
-    );
-    for share in [0.01f32, 0.05, 0.25] {
+    if chosen("static") {
+        println!(
+            "1920x1080 static: {:.2} ms",
+            median_ms(&still, &with(default), 5)
+        );
+    }
+    for share in [0.01f32, 0.05, 0.25]
+        .into_iter()
+        .filter(|_| chosen("sparse"))
+    {
         let side = ((W * H) as f32 * share).sqrt() as usize;
         let sparse = frame(|x, y| (x < side && y < side).then_some(([24.0, 8.0], [0.0, 2.0])));
         println!(
