@@ -54,6 +54,7 @@
 //! combination of input pixels (within their range), computed per pixel in a fixed order
 //! (the same bits for any thread count).
 
+mod carry;
 mod run;
 
 use rayon::prelude::*;
@@ -62,8 +63,9 @@ use super::bokeh::{grid, taps, Aperture, Norms, Tap};
 use super::tiles::{Tiles, LAYER, TILE};
 use super::DofConfig;
 use crate::frame::Color;
+use carry::{carry_tile, fold, Folded, TileCopy};
 pub use run::inverse_area;
-use run::{carry_run, gather_run, Fields, Padded, PixelTap, Row, RowWeights, SMALLEST_RADIUS};
+use run::{gather_run, Fields, Padded, PixelTap, Row, RowWeights, SMALLEST_RADIUS};
 
 /// A whole-pixel offset with the area it stands for, as a tap of a tile's pattern: its index
 /// step in the padded planes and the aperture norms of the offset (of −offset for the far
@@ -71,10 +73,19 @@ use run::{carry_run, gather_run, Fields, Padded, PixelTap, Row, RowWeights, SMAL
 fn pixel_tap((dx, dy): (isize, isize), area: f32, norms: &Norms, stride: isize) -> PixelTap {
     PixelTap {
         step: dy * stride + dx,
+        offset: (dx as i32, dy as i32),
         norm_far: norms.of(-dx, -dy),
         norm_near: norms.of(dx, dy),
         area,
     }
+}
+
+/// The largest offset of `taps` in either direction (px).
+fn extent(taps: &[PixelTap]) -> usize {
+    taps.iter().fold(0, |m, t| {
+        m.max(t.offset.0.unsigned_abs() as usize)
+            .max(t.offset.1.unsigned_abs() as usize)
+    })
 }
 
 /// The largest of `tiles`' reaches (px).
@@ -377,12 +388,14 @@ pub fn gather(config: &DofConfig, color: &Color, coc: &[f32], tiles: &Tiles) -> 
 }
 
 /// [`gather`], carrying `extra` (colour planes beside the beauty: light layers) through the
-/// beauty's taps: each tile row's weights are computed once, by the beauty's loop, and
-/// applied to every carried plane in the same order (`run::carry_run`), so each comes out
-/// with the bits it would get in the beauty's place at the cost of its sums alone. Returns
-/// the colour and the carried planes, in order, each written over its input once its padded
-/// copy is made (so the planes are held twice, not three times: at 1080p with twenty RGB
-/// layers a three-frame run peaked at 2919 MiB that way, against 2153 estimated).
+/// beauty's taps: each tile row's weights are computed once, by the beauty's loop, folded into
+/// one weight a tap and lane and applied to every carried plane ([`carry`]), so each gets the
+/// beauty's weights at the cost of a multiply-add a tap. A carried plane comes out within
+/// rounding of what it gets gathered in the beauty's place (the same weighted average, summed
+/// in another form; a few ulps of the plane's magnitude), and the beauty with the same bits
+/// as without planes carried. Returns the colour and the carried planes, in order (new
+/// planes: the carried ones are read where they are, not padded, so they are held twice, as
+/// when their padded copies replaced them).
 pub fn gather_carrying(
     config: &DofConfig,
     color: &Color,
@@ -402,7 +415,7 @@ pub fn gather_carrying(
     let reach = &tiles.reach;
     let largest = largest_reach(tiles);
     let pad = largest.ceil() as usize + 2;
-    let padded = Padded::new(color, coc, &extra, (width, height), pad, unit_area);
+    let padded = Padded::new(color, coc, (width, height), pad, unit_area);
     let stride = padded.stride as isize;
     let norms = norms_for(aperture, largest);
     let grids: Vec<Vec<PixelTap>> = (0..=rings_count)
@@ -413,8 +426,7 @@ pub fn gather_carrying(
 
     // Output planes r, g, b, a, and the carried planes, filled a band of tile rows at a time.
     let mut out = [0, 1, 2, 3].map(|_| vec![0.0f32; width * height]);
-    // Every pixel of a carried plane is written below, copied or gathered.
-    let mut out_extra = extra;
+    let mut out_extra: Vec<Vec<f32>> = extra.iter().map(|_| vec![0.0f32; width * height]).collect();
     let mut extra_bands: Vec<Vec<&mut [f32]>> = (0..height.div_ceil(TILE))
         .map(|_| Vec::with_capacity(out_extra.len()))
         .collect();
@@ -423,6 +435,7 @@ pub fn gather_carrying(
             bands.push(band);
         }
     }
+    let carrying = !extra.is_empty();
     let [out_r, out_g, out_b, out_a] = &mut out;
     out_r
         .par_chunks_mut(TILE * width)
@@ -435,11 +448,14 @@ pub fn gather_carrying(
             |(ty, ((((band_r, band_g), band_b), band_a), mut extra_bands))| {
                 let mut bands = [band_r, band_g, band_b, band_a];
                 let mut weights = RowWeights {
-                    keep: !padded.extra.is_empty(),
+                    keep: carrying,
                     ..RowWeights::default()
                 };
-                // A tile row of each carried plane.
-                let mut carried = vec![[0.0f32; TILE]; padded.extra.len()];
+                // Each tile row's weights for the carried planes, their tile copies, and
+                // their results (a tile a plane).
+                let mut folded: Vec<Folded> = (0..TILE).map(|_| Folded::default()).collect();
+                let mut scratch = Vec::new();
+                let mut carried = vec![vec![[0.0f32; TILE]; TILE]; extra.len()];
                 for tx in 0..tiles_x {
                     let t = ty * tiles_x + tx;
                     let x0 = tx * TILE;
@@ -454,9 +470,10 @@ pub fn gather_carrying(
                                 band[row * width + x0..row * width + x0 + span]
                                     .copy_from_slice(&padded.planes[k][start..start + span]);
                             }
-                            for (band, plane) in extra_bands.iter_mut().zip(&padded.extra) {
+                            let from = (ty * TILE + row) * width + x0;
+                            for (band, plane) in extra_bands.iter_mut().zip(&extra) {
                                 band[row * width + x0..row * width + x0 + span]
-                                    .copy_from_slice(&plane[start..start + span]);
+                                    .copy_from_slice(&plane[from..from + span]);
                             }
                         }
                         continue;
@@ -471,6 +488,19 @@ pub fn gather_carrying(
                     };
                     let mode = choice.fields;
                     let dense = far_rings(&choice, rings_count);
+                    let mut copy = TileCopy {
+                        x0,
+                        y0: ty * TILE,
+                        rows,
+                        reach: extent(taps).max(extent(far_taps)).max(if dense {
+                            rings_count
+                        } else {
+                            0
+                        }),
+                        direct: false,
+                    };
+                    copy.direct = copy.inside((width, height));
+                    let copy_stride = copy.origin(width).1;
                     for row in 0..rows {
                         let start = padded.index(x0, ty * TILE + row);
                         let run = Row {
@@ -488,11 +518,23 @@ pub fn gather_carrying(
                             band[row * width + x0..row * width + x0 + span]
                                 .copy_from_slice(&result[k][..span]);
                         }
-                        if !padded.extra.is_empty() {
-                            carry_run(&padded.extra, &run, &weights, &mut carried);
-                            for (band, plane) in extra_bands.iter_mut().zip(&carried) {
+                        if carrying {
+                            fold(&padded, &run, &weights, copy_stride, &mut folded[row]);
+                        }
+                    }
+                    if carrying {
+                        carry_tile(
+                            &extra,
+                            (width, height),
+                            &copy,
+                            &folded[..rows],
+                            &mut scratch,
+                            &mut carried,
+                        );
+                        for (band, plane) in extra_bands.iter_mut().zip(&carried) {
+                            for row in 0..rows {
                                 band[row * width + x0..row * width + x0 + span]
-                                    .copy_from_slice(&plane[..span]);
+                                    .copy_from_slice(&plane[row][..span]);
                             }
                         }
                     }
@@ -630,68 +672,6 @@ mod field_tests {
         }
         assert_eq!(disc_tiles.len(), 4);
         assert!(checked > 40, "{checked}");
-    }
-
-    #[test]
-    fn carried_planes_get_the_bits_they_get_in_the_beautys_place() {
-        // A near disc over a far texture with a band in focus: tiles of every kind (far field
-        // alone, both fields, fields apart, copied). Carried planes, from one to thirteen (one
-        // group to three), must come out bit for bit as each does gathered alone as the
-        // beauty's red, and the beauty as it does with nothing carried.
-        let (w, h) = (192, 96);
-        let disc = |x: usize, y: usize| {
-            let (dx, dy) = (x as f32 - 40.0, y as f32 - 48.0);
-            dx * dx + dy * dy < 18.0 * 18.0
-        };
-        let coc: Vec<f32> = (0..w * h)
-            .map(|i| match (i % w, i / w) {
-                (x, y) if disc(x, y) => -40.0,
-                (x, _) if x > 150 => 0.2,
-                _ => 9.0,
-            })
-            .collect();
-        let wave = |k: f32| -> Vec<f32> { (0..w * h).map(|i| (i as f32 * k).sin()).collect() };
-        let color = Color {
-            r: wave(0.37),
-            g: wave(0.21),
-            b: wave(0.05),
-            a: Some(wave(0.013)),
-        };
-        let config = DofConfig::new(w, h, &DofParams::default());
-        let t = tiles(&TilesConfig::new(w, h, config.epsilon), &coc);
-        let kinds: std::collections::BTreeSet<u32> =
-            plan(&config, &t).tiles.iter().map(|t| t.fields).collect();
-        assert_eq!(kinds, [0, 1, 2, 3].into());
-        let extra: Vec<Vec<f32>> = [
-            0.11, 0.07, 0.5, 0.9, 0.003, 0.23, 0.61, 0.019, 0.33, 0.8, 0.041, 0.17, 0.29,
-        ]
-        .map(wave)
-        .into();
-        let bits = |plane: &[f32]| plane.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
-        let alone: Vec<Vec<u32>> = extra
-            .iter()
-            .map(|plane| {
-                let alone = Color {
-                    r: plane.clone(),
-                    ..color.clone()
-                };
-                let want = bits(&gather(&config, &alone, &coc, &t).r);
-                assert_ne!(want, bits(plane));
-                want
-            })
-            .collect();
-        let beauty_alone = gather(&config, &color, &coc, &t);
-        // Every group size `run::carry_run` has a loop for: one to six planes in one group,
-        // seven in groups of four and three, thirteen in five, four and four.
-        for count in [1, 2, 3, 4, 5, 6, 7, 13] {
-            let planes = extra[..count].to_vec();
-            let (beauty, carried) = gather_carrying(&config, &color, &coc, &t, planes);
-            assert_eq!(beauty, beauty_alone);
-            assert_eq!(carried.len(), count);
-            for (k, (got, want)) in carried.iter().zip(&alone).enumerate() {
-                assert_eq!(&bits(got), want, "{count} planes: plane {k}");
-            }
-        }
     }
 
     /// A checker of `cell` px, 0.1 and 0.9 (mean 0.5), from the frame's top-left corner, so

@@ -1,7 +1,6 @@
 //! The bokeh gather's inner loops ([`super`]): one tile row of up to [`TILE`] pixels over a
 //! tile's taps, for the beauty ([`gather_run`], which also keeps each tap's weights and the
-//! composite's scales when planes are carried beside it) and for each carried plane
-//! ([`carry_run`], which applies those weights: no weight is computed twice); the far field
+//! composite's scales when planes are carried beside it, for [`super::carry`]); the far field
 //! of small bokehs over the dense grid ([`dense_far`]); and the padded planes they read
 //! ([`Padded`]: what counts outside the frame).
 
@@ -26,6 +25,9 @@ pub fn inverse_area(coc: f32, unit_area: f32) -> f32 {
 #[derive(Clone, Copy, Debug)]
 pub(super) struct PixelTap {
     pub(super) step: isize,
+    /// The offset itself (dx, dy), for the carried planes ([`super::carry`]), which read
+    /// planes of other row lengths.
+    pub(super) offset: (i32, i32),
     pub(super) norm_far: f32,
     pub(super) norm_near: f32,
     pub(super) area: f32,
@@ -66,8 +68,6 @@ pub(super) struct Padded {
     pub(super) pad: usize,
     /// r, g, b, a (zero without alpha), signed bokeh radius, 1 / bokeh area.
     pub(super) planes: [Vec<f32>; 6],
-    /// The carried planes (light layers), padded alike.
-    pub(super) extra: Vec<Vec<f32>>,
 }
 
 /// Index `i` of a row or column of `n` pixels reflected into it about its edges (the edge
@@ -86,7 +86,6 @@ impl Padded {
     pub(super) fn new(
         color: &Color,
         coc: &[f32],
-        extra: &[Vec<f32>],
         (width, height): (usize, usize),
         pad: usize,
         unit_area: f32,
@@ -147,12 +146,10 @@ impl Padded {
             padded(&|i| 0.5 * coc[i], false),
             padded(&|i| inverse_area(coc[i], unit_area), true),
         ];
-        let extra = extra.iter().map(|plane| mirrored(plane)).collect();
         Padded {
             stride,
             pad,
             planes,
-            extra,
         }
     }
 
@@ -178,7 +175,8 @@ pub(super) struct Row<'a> {
     pub(super) small: f32,
 }
 
-/// One tile row's weights as [`gather_run`] computed them, for [`carry_run`]: each far tap's
+/// One tile row's weights as [`gather_run`] computed them, for [`super::carry::fold`]: each
+/// far tap's
 /// far weights and each near tap's near weights (lane by lane, in tap order, each with its
 /// tap's step), and the composite's scales of the near and the far sums. A tap whose weights
 /// are 0 in every lane is not kept ([`counts`]).
@@ -196,15 +194,15 @@ pub(super) struct RowWeights {
     pub(super) dense_lanes: [bool; TILE],
 }
 
-/// A kept tap: its step in the padded planes and its weights, lane by lane.
-pub(super) type Kept = (isize, [f32; TILE]);
+/// A kept tap: its offset (dx, dy) and its weights, lane by lane.
+pub(super) type Kept = ((i32, i32), [f32; TILE]);
 
 /// Whether a tap's weights `w` count for the carried planes: a tap whose weight is 0 in every
-/// lane adds w × (s − c) = ±0 to each carried sum, which leaves it as it was (a sum starts at
-/// +0 and is never −0; the planes are finite, by the numeric policy), so the carried loops
-/// skip it and give the same bits. On the `dof` bench frame out of focus 43 % of the kept
-/// taps were such (26.96 M of them, 11.51 M all 0).
-fn counts(w: &[f32; TILE]) -> bool {
+/// lane adds w × s = ±0 to each carried sum, which leaves it as it was (a sum starts at the
+/// centre's share, and the samples are finite, by the numeric policy), so the carried loops
+/// skip it. On the `dof` bench frame out of focus 43 % of the kept taps were such (26.96 M of
+/// them, 11.51 M all 0).
+pub(super) fn counts(w: &[f32; TILE]) -> bool {
     w.iter().any(|&v| v != 0.0)
 }
 
@@ -291,7 +289,7 @@ pub(super) fn gather_run(
                 kept_far[x] = wf;
             }
             if keep && counts(&kept_far) {
-                weights.far.push((tap.step, kept_far));
+                weights.far.push((tap.offset, kept_far));
             }
         }
     }
@@ -321,7 +319,7 @@ pub(super) fn gather_run(
                 kept_near[x] = wn;
             }
             if keep && counts(&kept_near) {
-                weights.near.push((tap.step, kept_near));
+                weights.near.push((tap.offset, kept_near));
             }
         }
     }
@@ -357,8 +355,8 @@ pub(super) fn gather_run(
             }
             // Both fields' sums run over one list of taps: kept where either counts.
             if keep && (counts(&kept_far) || counts(&kept_near)) {
-                weights.far.push((tap.step, kept_far));
-                weights.near.push((tap.step, kept_near));
+                weights.far.push((tap.offset, kept_far));
+                weights.near.push((tap.offset, kept_near));
             }
         }
     }
@@ -455,7 +453,7 @@ fn dense_far(
             kept_far[x] = wf;
         }
         if weights.keep && counts(&kept_far) {
-            weights.dense.push((tap.step, kept_far));
+            weights.dense.push((tap.offset, kept_far));
         }
     }
     for x in 0..TILE {
@@ -465,152 +463,5 @@ fn dense_far(
             }
             far_weight[x] = dense_weight[x];
         }
-    }
-}
-
-/// Most carried planes [`carry_run`] sums in one pass over a tile row's taps: their sums (a
-/// far and a near one each) and centres then fill 18 of AVX-512's 32 registers, beside the
-/// sample and the weights.
-const MOST_PLANES: usize = 6;
-
-/// A tile row's lanes.
-type Lanes = [f32; TILE];
-
-/// `acc + w × (s − c)`, lane by lane, taken and given back by value so that a loop's sums
-/// live in registers; the beauty's order of operations (its `far[k][x] += wf * d[k]`).
-#[inline(always)]
-fn mad(acc: Lanes, w: &Lanes, s: &Lanes, c: &Lanes) -> Lanes {
-    let mut out = acc;
-    for x in 0..TILE {
-        out[x] += w[x] * (s[x] - c[x]);
-    }
-    out
-}
-
-/// The tile row's lanes of `plane` from padded index `base`.
-#[inline(always)]
-fn lanes(plane: &[f32], base: usize) -> &Lanes {
-    plane[base..]
-        .first_chunk::<TILE>()
-        .expect("the padding holds every tap of a tile row")
-}
-
-/// The sums of weight × (sample − centre) of N planes over the kept taps (each its step and
-/// weights), in tap order.
-#[inline(always)]
-fn sums<const N: usize>(
-    planes: &[&[f32]; N],
-    centre: &[Lanes; N],
-    start: usize,
-    kept: &[Kept],
-) -> [Lanes; N] {
-    let mut acc = [[0.0f32; TILE]; N];
-    for (step, w) in kept {
-        let base = (start as isize + step) as usize;
-        for k in 0..N {
-            acc[k] = mad(acc[k], w, lanes(planes[k], base), &centre[k]);
-        }
-    }
-    acc
-}
-
-/// [`sums`] of the far and the near field over the same kept taps (`Fields::Both`).
-#[inline(always)]
-fn both_sums<const N: usize>(
-    planes: &[&[f32]; N],
-    centre: &[Lanes; N],
-    start: usize,
-    (far_weights, near_weights): (&[Kept], &[Kept]),
-) -> ([Lanes; N], [Lanes; N]) {
-    let mut far = [[0.0f32; TILE]; N];
-    let mut near = [[0.0f32; TILE]; N];
-    for ((step, wf), (_, wn)) in far_weights.iter().zip(near_weights) {
-        let base = (start as isize + step) as usize;
-        for k in 0..N {
-            let s = lanes(planes[k], base);
-            far[k] = mad(far[k], wf, s, &centre[k]);
-            near[k] = mad(near[k], wn, s, &centre[k]);
-        }
-    }
-    (far, near)
-}
-
-/// N carried planes over one tile row, with the weights [`gather_run`] kept: each plane's
-/// sums in the beauty's order, then its composite.
-#[inline(always)]
-fn carry_group<const N: usize>(
-    planes: [&[f32]; N],
-    row: &Row,
-    weights: &RowWeights,
-    out: &mut [Lanes],
-) {
-    let Row {
-        start,
-        span,
-        fields,
-        ..
-    } = *row;
-    let centre = planes.map(|plane| {
-        let mut v = [0.0f32; TILE];
-        v[..span].copy_from_slice(&plane[start..start + span]);
-        v
-    });
-    let (mut far, near) = match fields {
-        Fields::Far => (
-            sums(&planes, &centre, start, &weights.far),
-            [[0.0f32; TILE]; N],
-        ),
-        Fields::Apart => (
-            sums(&planes, &centre, start, &weights.far),
-            sums(&planes, &centre, start, &weights.near),
-        ),
-        Fields::Both => both_sums(&planes, &centre, start, (&weights.far, &weights.near)),
-    };
-    if weights.dense_lanes.contains(&true) {
-        let dense = sums(&planes, &centre, start, &weights.dense);
-        for x in 0..TILE {
-            if weights.dense_lanes[x] {
-                for k in 0..N {
-                    far[k][x] = dense[k][x];
-                }
-            }
-        }
-    }
-    for x in 0..span {
-        let (near_scale, far_scale) = (weights.near_scale[x], weights.far_scale[x]);
-        for k in 0..N {
-            out[k][x] = centre[k][x] + near[k][x] * near_scale + far[k][x] * far_scale;
-        }
-    }
-}
-
-/// The carried planes (padded as the beauty's) over the same tile row as [`gather_run`],
-/// with the weights it kept, into `out` (a tile row a plane): the same sums in the same
-/// order, so each plane comes out with the bits it would get in the beauty's place. The
-/// planes go in groups of at most [`MOST_PLANES`], as even as they split (eighteen: three
-/// of six), each group one pass over the taps with a copy of the loop for its size.
-///
-/// The sums are values handed from tap to tap ([`mad`]), not arrays written in place: with
-/// `far[k][x] += …` on arrays (four planes a group, as before), LLVM kept the sums on the
-/// stack, and each tap waited on a store and a reload of every sum (3.9× the beauty for six
-/// RGB layers at 1080p; BENCHMARKS.md, "Light layers").
-#[multiversion::multiversion(targets("x86_64+avx512f+avx512vl"))]
-pub(super) fn carry_run(planes: &[Vec<f32>], row: &Row, weights: &RowWeights, out: &mut [Lanes]) {
-    let groups = planes.len().div_ceil(MOST_PLANES);
-    let mut from = 0;
-    for g in 0..groups {
-        // The first `planes.len() % groups` groups take one plane more.
-        let size = planes.len() / groups + usize::from(g < planes.len() % groups);
-        let (group, outs) = (&planes[from..from + size], &mut out[from..from + size]);
-        let plane = |k: usize| &group[k][..];
-        match size {
-            1 => carry_group([plane(0)], row, weights, outs),
-            2 => carry_group(std::array::from_fn::<_, 2, _>(plane), row, weights, outs),
-            3 => carry_group(std::array::from_fn::<_, 3, _>(plane), row, weights, outs),
-            4 => carry_group(std::array::from_fn::<_, 4, _>(plane), row, weights, outs),
-            5 => carry_group(std::array::from_fn::<_, 5, _>(plane), row, weights, outs),
-            _ => carry_group(std::array::from_fn::<_, 6, _>(plane), row, weights, outs),
-        }
-        from += size;
     }
 }
