@@ -168,7 +168,7 @@ fn carry_group<const N: usize>(
     planes: [&[f32]; N],
     (origin, stride): (usize, usize),
     folded: &[Folded],
-    out: &mut [&mut [Lanes]],
+    out: &mut [Vec<Lanes>],
 ) {
     for (ly, row) in folded.iter().enumerate() {
         let start = origin + ly * stride;
@@ -197,7 +197,10 @@ fn carry_group<const N: usize>(
 /// Most carried planes [`carry_tile`] sums in one pass over a tile's taps. Fewer planes a
 /// pass read a tile's weights more often but keep their samples nearer: on the `dof` bench
 /// frame with six RGB light layers, passes of two, three, four, six and nine planes, three of
-/// them was the fastest (BENCHMARKS.md, "Light layers").
+/// them was the fastest; and by the worst case over that frame, the same at f/5.6 (CoCs a
+/// quarter as large) and one with a single column of blocks out of focus, three again
+/// (worst 3.12× the beauty, against 3.22× for two and 3.75× for four; BENCHMARKS.md,
+/// "Light layers").
 const MOST_PLANES: usize = 3;
 
 /// The carried planes (the frame's own, `width` × `height`) over one tile ([`TileCopy`]),
@@ -225,21 +228,24 @@ pub(super) fn carry_tile(
     for g in 0..groups {
         // The first `planes.len() % groups` groups take one plane more.
         let n = planes.len() / groups + usize::from(g < planes.len() % groups);
-        let read: Vec<&[f32]> = if tile.direct {
-            planes[from..from + n].iter().map(|p| &p[..]).collect()
-        } else {
+        if !tile.direct {
             scratch.resize(n * len, 0.0);
             for (k, copy) in scratch.chunks_exact_mut(len).enumerate() {
                 tile.copy(&planes[from + k], size, copy);
             }
-            scratch.chunks_exact(len).collect()
+        }
+        let read = |k: usize| -> &[f32] {
+            if tile.direct {
+                &planes[from + k]
+            } else {
+                &scratch[k * len..(k + 1) * len]
+            }
         };
-        let mut outs: Vec<&mut [Lanes]> =
-            out[from..from + n].iter_mut().map(|o| &mut o[..]).collect();
+        let outs = &mut out[from..from + n];
         match n {
-            1 => carry_group([read[0]], at, folded, &mut outs),
-            2 => carry_group([read[0], read[1]], at, folded, &mut outs),
-            _ => carry_group([read[0], read[1], read[2]], at, folded, &mut outs),
+            1 => carry_group([read(0)], at, folded, outs),
+            2 => carry_group([read(0), read(1)], at, folded, outs),
+            _ => carry_group([read(0), read(1), read(2)], at, folded, outs),
         }
         from += n;
     }
