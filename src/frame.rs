@@ -320,6 +320,10 @@ pub struct PngText {
     pub text: String,
     /// tEXt (Latin-1), zTXt (Latin-1, compressed) or iTXt (UTF-8).
     pub kind: TextKind,
+    /// An iTXt's language tag (`en`, `de-CH`) and its keyword translated into that language
+    /// (empty where none, and for tEXt and zTXt).
+    pub language: String,
+    pub translated: String,
 }
 
 /// The chunk a PNG text came in, and goes out in.

@@ -1064,3 +1064,154 @@ fn a_tiffs_images_after_the_first_are_left_out_and_said_so() {
     let (said, _) = run(&write("one.tif", 1), "one_out.tif");
     assert!(!said.contains("more images"), "{said}");
 }
+
+/// A painted map is the picture it was painted on: one of another size than the photo is
+/// refused, larger as well as smaller, naming the map, before any output is written (an 8/16-bit
+/// file has no data window to be placed by, so a map made at twice the photo's size was cut
+/// to its top-left corner and blurred the wrong places without a word).
+#[test]
+fn a_map_of_another_size_than_the_photo_is_refused_larger_as_well_as_smaller() {
+    let dir = tempfile::tempdir().unwrap();
+    let photo = dir.path().join("photo.png");
+    write_png(&photo, 16, 12, None, |_| {});
+    for (w, h) in [(32u32, 24u32), (17, 12), (16, 13), (15, 12)] {
+        let map = dir.path().join(format!("coc_{w}x{h}.png"));
+        image::save_buffer(
+            &map,
+            &vec![255u8; (w * h) as usize],
+            w,
+            h,
+            image::ColorType::L8,
+        )
+        .unwrap();
+        let out = dir.path().join("out.png");
+        let o = shutter(&[
+            "dof",
+            "--color",
+            &s(&photo),
+            "--coc-map",
+            &s(&map),
+            "-o",
+            &s(&out),
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{w}x{h}: {err}");
+        assert!(
+            err.contains("size mismatch")
+                && err.contains(&format!("coc_{w}x{h}.png"))
+                && err.contains(&format!("{w}x{h} but the color pass is 16x12")),
+            "{w}x{h}: {err}"
+        );
+        assert!(!out.exists(), "{w}x{h}: nothing is written");
+    }
+}
+
+/// A PNG chunk: its length, kind, data and CRC (PNG 3rd ed., 5.3).
+fn png_chunk(kind: &[u8; 4], data: &[u8]) -> Vec<u8> {
+    let mut crc = 0xFFFF_FFFFu32;
+    for &b in kind.iter().chain(data) {
+        crc ^= b as u32;
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    let mut chunk = (data.len() as u32).to_be_bytes().to_vec();
+    chunk.extend(kind);
+    chunk.extend(data);
+    chunk.extend((!crc).to_be_bytes());
+    chunk
+}
+
+/// `png`'s bytes with `early` spliced in after its IHDR and `late` before its IEND.
+fn splice_png(png: &Path, early: &[u8], late: &[u8]) {
+    let bytes = std::fs::read(png).unwrap();
+    // The signature (8) and IHDR (25) first; IEND, the last 12 bytes.
+    let (head, rest) = bytes.split_at(33);
+    let (body, end) = rest.split_at(rest.len() - 12);
+    assert_eq!(&end[4..8], b"IEND");
+    std::fs::write(png, [head, early, body, late, end].concat()).unwrap();
+}
+
+/// An eXIf and text after a PNG's image data (where libpng writes them, and where exiftool and
+/// Pillow read them) are read as those before it: the photo is turned as its orientation says
+/// (so a map painted on the upright photo lines up), and its EXIF and text come out again.
+#[test]
+fn a_pngs_exif_and_text_after_its_image_data_are_read() {
+    let dir = tempfile::tempdir().unwrap();
+    // Stored 12 wide and 16 high, orientation 6 (turn 90° clockwise to view): upright 16 × 12.
+    let photo = dir.path().join("late.png");
+    write_png(&photo, 12, 16, None, |_| {});
+    let late = [
+        png_chunk(b"eXIf", &exif(6)),
+        png_chunk(b"tEXt", b"Comment\0written late"),
+    ]
+    .concat();
+    splice_png(&photo, &[], &late);
+    let map = dir.path().join("coc.png");
+    image::save_buffer(&map, &[0u8; 16 * 12], 16, 12, image::ColorType::L8).unwrap();
+    let out = dir.path().join("out.png");
+    let o = shutter(&[
+        "dof",
+        "--color",
+        &s(&photo),
+        "--coc-map",
+        &s(&map),
+        "-o",
+        &s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let reader = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&out).unwrap()))
+        .read_info()
+        .unwrap();
+    let info = reader.info();
+    assert_eq!((info.width, info.height), (16, 12), "turned upright");
+    let exif = info.exif_metadata.as_ref().expect("the EXIF comes out");
+    assert!(exif.windows(4).any(|w| w == b"ShTs"), "its Make is kept");
+    let texts: Vec<(&str, &str)> = info
+        .uncompressed_latin1_text
+        .iter()
+        .map(|t| (t.keyword.as_str(), t.text.as_str()))
+        .collect();
+    assert_eq!(texts, [("Comment", "written late")]);
+    if let Some(tags) = exiftool(&out) {
+        assert_eq!(tags["Make"], "ShTs", "{tags}");
+        assert!(
+            tags.get("Orientation").is_none() || tags["Orientation"] == 1,
+            "not turned twice: {tags}"
+        );
+    }
+}
+
+/// An iTXt's language tag and translated keyword come out with it.
+#[test]
+fn a_pngs_international_text_keeps_its_language() {
+    let dir = tempfile::tempdir().unwrap();
+    let photo = dir.path().join("lang.png");
+    write_png(&photo, 16, 12, None, |_| {});
+    let itxt = png_chunk(
+        b"iTXt",
+        "Description\0\0\0de-CH\0Beschreibung\0Été ✓".as_bytes(),
+    );
+    splice_png(&photo, &itxt, &[]);
+    let out = dir.path().join("out.png");
+    let o = dof_still(&photo, &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let reader = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&out).unwrap()))
+        .read_info()
+        .unwrap();
+    let utf8 = &reader.info().utf8_text;
+    assert_eq!(utf8.len(), 1);
+    assert_eq!(
+        (
+            utf8[0].keyword.as_str(),
+            utf8[0].language_tag.as_str(),
+            utf8[0].translated_keyword.as_str(),
+            utf8[0].get_text().unwrap().as_str()
+        ),
+        ("Description", "de-CH", "Beschreibung", "Été ✓")
+    );
+}

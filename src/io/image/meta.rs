@@ -14,7 +14,8 @@
 //!
 //! Not read: a PNG's IPTC (a hex text chunk of no settled form: it comes through as the text
 //! chunk it is). A PNG's text chunks (tEXt, zTXt, iTXt) are read with the png crate, whose
-//! decoder the image crate does not expose for them.
+//! decoder the image crate does not expose for them; so are an eXIf and an XMP iTXt after the
+//! image data, where the image crate does not look ([`png_info`]).
 
 use std::path::Path;
 
@@ -36,7 +37,8 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
     reader.limits(limits);
     let jpeg = reader.format() == Some(image::ImageFormat::Jpeg);
     let tiff = reader.format() == Some(image::ImageFormat::Tiff);
-    let (texts, png_colour, mut resolution) = if reader.format() == Some(image::ImageFormat::Png) {
+    let png = reader.format() == Some(image::ImageFormat::Png);
+    let (texts, png_colour, mut resolution) = if png {
         png_chunks(path)
     } else {
         (Vec::new(), None, None)
@@ -52,7 +54,7 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
         }
     };
     // How `read_planes` turns the pixels, and the size it gives them.
-    let turn = super::orientation(&mut decoder);
+    let turn = super::orientation(&mut decoder, path, png);
     let size = super::upright(decoder.dimensions(), turn);
     let orientation = turn.to_exif();
     let color = decoder.color_type();
@@ -64,6 +66,22 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
     let (mut premultiplied, mut more_images) = (false, false);
     if jpeg {
         iptc = decoder.iptc_metadata().ok().flatten();
+    }
+    if png && (exif.is_none() || xmp.is_none()) {
+        // An eXIf or an XMP iTXt after the image data, where the image crate does not look.
+        if let Some(info) = png_info(path, false) {
+            if exif.is_none() {
+                exif = info.exif_metadata.map(|e| e.into_owned());
+            }
+            if xmp.is_none() {
+                xmp = info
+                    .utf8_text
+                    .iter()
+                    .find(|t| t.keyword == super::write::PNG_XMP_KEYWORD)
+                    .and_then(|t| t.get_text().ok())
+                    .map(String::into_bytes);
+            }
+        }
     }
     if tiff {
         // The image crate's TIFF reader gives no profile stored as UNDEFINED (as exiftool
@@ -142,7 +160,7 @@ fn grey_float_photo(path: &Path, header: &super::tiff_float::Header) -> Photo {
     }
 }
 
-/// A PNG's text chunks before its image data (where writers put them), in file order, each
+/// A PNG's text chunks (before its image data, where writers put them, and after it), in file order, each
 /// as its kind: tEXt, zTXt (inflated), iTXt (but XMP's, which is `Photo::xmp`); its gAMA,
 /// cHRM, sRGB and cICP; and its pHYs. A chunk that cannot be read is left out; the decoder's
 /// allocations are capped as the header's are.
@@ -154,17 +172,10 @@ fn png_chunks(
     Option<Resolution>,
 ) {
     use crate::frame::{PngText, TextKind};
-    let Ok(source) = super::png_mend::source(path) else {
+    let Some(info) = png_info(path, false) else {
         return (Vec::new(), None, None);
     };
-    let limits = png::Limits {
-        bytes: crate::io::image::HEADER_ROOM as usize,
-    };
-    let decoder = png::Decoder::new_with_limits(source, limits);
-    let Ok(reader) = decoder.read_info() else {
-        return (Vec::new(), None, None);
-    };
-    let info = reader.info();
+    let info = &info;
     // The three lists are kept apart by the decoder: file order within each kind.
     let mut texts: Vec<PngText> = info
         .uncompressed_latin1_text
@@ -173,6 +184,8 @@ fn png_chunks(
             keyword: t.keyword.clone(),
             text: t.text.clone(),
             kind: TextKind::Latin1,
+            language: String::new(),
+            translated: String::new(),
         })
         .collect();
     texts.extend(info.compressed_latin1_text.iter().filter_map(|t| {
@@ -180,6 +193,8 @@ fn png_chunks(
             keyword: t.keyword.clone(),
             text: t.get_text().ok()?,
             kind: TextKind::Compressed,
+            language: String::new(),
+            translated: String::new(),
         })
     }));
     texts.extend(
@@ -191,6 +206,8 @@ fn png_chunks(
                     keyword: t.keyword.clone(),
                     text: t.get_text().ok()?,
                     kind: TextKind::International,
+                    language: t.language_tag.clone(),
+                    translated: t.translated_keyword.clone(),
                 })
             }),
     );
@@ -260,4 +277,71 @@ fn tiff_blocks(path: &Path) -> ([Option<Vec<u8>>; 4], bool, Option<Resolution>, 
     let exif = tiff_meta::exif_of_tiff(&mut decoder, room).map(|e| tiff_meta::to_block(&e));
     let more = decoder.more_images();
     ([icc, exif, xmp, iptc], associated, resolution, more)
+}
+
+/// A PNG's header chunks as the png crate reads them (`Info`): those before its image data,
+/// and, where an eXIf, tEXt, zTXt or iTXt chunk follows the image data (libpng and exiftool
+/// write them there; PNG allows text after IDAT, and readers take eXIf there too), those after
+/// it as well, the image data read through and dropped. With `exif_only`, only an eXIf after
+/// the image data is worth reading the file through for. `None` for a file that is not a
+/// readable PNG. The decoder's allocations are capped as the header's are.
+pub(super) fn png_info(path: &Path, exif_only: bool) -> Option<png::Info<'static>> {
+    let late = late_chunks(path)?;
+    let worth = if exif_only {
+        late.contains(b"eXIf")
+    } else {
+        !late.is_empty()
+    };
+    let source = super::png_mend::source(path).ok()?;
+    let limits = png::Limits {
+        bytes: crate::io::image::HEADER_ROOM as usize,
+    };
+    let mut reader = png::Decoder::new_with_limits(source, limits)
+        .read_info()
+        .ok()?;
+    let before = reader.info().clone();
+    if !worth {
+        return Some(before);
+    }
+    // A chunk after the image data that cannot be read (a second eXIf, a broken zTXt) leaves
+    // those before it as they were read.
+    match reader.finish() {
+        Ok(()) => Some(reader.info().clone()),
+        Err(_) => Some(before),
+    }
+}
+
+/// The kinds of the metadata chunks (eXIf, tEXt, zTXt, iTXt) that follow a PNG's image data,
+/// read from the chunks' heads alone (seeking past their data); `None` for a file that is not
+/// a PNG or whose chunks cannot be walked.
+fn late_chunks(path: &Path) -> Option<Vec<[u8; 4]>> {
+    use std::io::{Read, Seek, SeekFrom};
+    let mut file = std::io::BufReader::new(crate::io::input::open_input(path).ok()?);
+    let mut head = [0u8; 8];
+    file.read_exact(&mut head).ok()?;
+    if head != *b"\x89PNG\r\n\x1a\n" {
+        return None;
+    }
+    let (mut seen_data, mut late) = (false, Vec::new());
+    loop {
+        if file.read_exact(&mut head).is_err() {
+            return Some(late);
+        }
+        let length = u32::from_be_bytes(head[..4].try_into().ok()?);
+        let kind: [u8; 4] = head[4..].try_into().ok()?;
+        match &kind {
+            b"IEND" => return Some(late),
+            b"IDAT" => seen_data = true,
+            b"eXIf" | b"tEXt" | b"zTXt" | b"iTXt" if seen_data => late.push(kind),
+            _ => {}
+        }
+        file.seek(SeekFrom::Current(i64::from(length) + 4)).ok()?;
+    }
+}
+
+/// The EXIF block of a PNG whose only eXIf chunk follows its image data (the image crate
+/// reads the chunks before it alone); `None` for any other file.
+pub(super) fn late_png_exif(path: &Path) -> Option<Vec<u8>> {
+    let info = png_info(path, true)?;
+    info.exif_metadata.map(|e| e.into_owned())
 }

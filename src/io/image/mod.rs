@@ -171,7 +171,8 @@ pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
             })
         }
     };
-    let (width, height) = upright(decoder.dimensions(), orientation(&mut decoder));
+    let turn = orientation(&mut decoder, path, format == "png");
+    let (width, height) = upright(decoder.dimensions(), turn);
     // Past the pixel limit the caller's size check speaks first.
     let within = (width as u64).saturating_mul(height as u64) <= max_pixels as u64;
     if let (Some(bytes), true) = (&jpeg, within) {
@@ -209,10 +210,25 @@ fn grey_float_header(path: &Path, format: &'static str) -> Option<ImageHeader> {
 
 /// The orientation an image records (EXIF, or a TIFF's tag); upright when it records none or
 /// one that cannot be read.
-fn orientation(decoder: &mut impl ImageDecoder) -> image::metadata::Orientation {
-    decoder
-        .orientation()
-        .unwrap_or(image::metadata::Orientation::NoTransforms)
+///
+/// A PNG's eXIf may follow its image data (libpng writes it there, and readers take it there),
+/// where the image crate does not look: a PNG with no eXIf before its image data is turned as
+/// one after it says ([`meta::late_png_exif`]), so a photo turned by its viewer is turned here
+/// too.
+fn orientation(
+    decoder: &mut impl ImageDecoder,
+    path: &Path,
+    png: bool,
+) -> image::metadata::Orientation {
+    use image::metadata::Orientation;
+    let own = decoder.orientation().unwrap_or(Orientation::NoTransforms);
+    if !png || own != Orientation::NoTransforms || decoder.exif_metadata().ok().flatten().is_some()
+    {
+        return own;
+    }
+    meta::late_png_exif(path)
+        .and_then(|exif| Orientation::from_exif_chunk(&exif))
+        .unwrap_or(own)
 }
 
 /// The size of an image of stored size `(width, height)` once turned upright.
@@ -259,6 +275,7 @@ pub fn read_planes(
     );
     reader.limits(limits);
     let tiff = reader.format() == Some(image::ImageFormat::Tiff);
+    let png = reader.format() == Some(image::ImageFormat::Png);
     let mut decoder = match reader.into_decoder() {
         Ok(decoder) => decoder,
         Err(e) => {
@@ -273,7 +290,7 @@ pub fn read_planes(
             return tiff_float::read(path, &header, allowed);
         }
     };
-    let orientation = orientation(&mut decoder);
+    let orientation = orientation(&mut decoder, path, png);
     let mut image = DynamicImage::from_decoder(decoder).map_err(image_error)?;
     image.apply_orientation(orientation);
     let (width, height) = (image.width() as usize, image.height() as usize);

@@ -309,16 +309,27 @@ fn write_png(
     }
     // The input PNG's text chunks, each in its own kind (one the encoder refuses, a keyword
     // over 79 bytes say, is left out rather than losing the frame).
+    let mut international = Vec::new();
     for t in photo.map_or(&[][..], |p| &p.texts[..]) {
         use crate::frame::TextKind;
         let (keyword, text) = (t.keyword.clone(), t.text.clone());
         let _ = match t.kind {
             TextKind::Latin1 => encoder.add_text_chunk(keyword, text),
             TextKind::Compressed => encoder.add_ztxt_chunk(keyword, text),
-            TextKind::International => encoder.add_itxt_chunk(keyword, text),
+            TextKind::International => {
+                // With its language tag and translated keyword, as it came.
+                let mut chunk = png::text_metadata::ITXtChunk::new(keyword, text);
+                chunk.language_tag = t.language.clone();
+                chunk.translated_keyword = t.translated.clone();
+                international.push(chunk);
+                Ok(())
+            }
         };
     }
     let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+    for chunk in &international {
+        let _ = writer.write_text_chunk(chunk);
+    }
     // The input's cICP as it came, before the image data (PNG 3rd ed., 5.6): the png crate
     // reads it but does not write it.
     if let Some(cicp) = photo.and_then(|p| p.png_colour?.cicp) {

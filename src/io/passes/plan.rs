@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use crate::error::{Problem, ProblemKind};
 use crate::frame::Passes;
 use crate::io::exr as exr_io;
-use crate::io::file::FileInfo;
+use crate::io::file::{FileInfo, FileKind};
 use crate::io::preset::{Preset, Transfer, VectorSpec};
 use crate::io::sequence::PathPattern;
 
@@ -542,10 +542,20 @@ impl Planner<'_> {
         // colour's is read and cropped to it (depth rendered with overscan); one that does not
         // is an error naming what it leaves out.
         let own = DataWindow::of(info);
-        if own.covers(&colour) {
+        // Only an EXR has a data window to be placed by: an 8/16-bit map (a painted depth or
+        // CoC map, a velocity map) is the picture it was painted on, so one of another size
+        // is a mismatch, larger as well as smaller (cutting a depth map made at twice the
+        // photo's size to its top-left corner would blur the wrong places without a word).
+        let placed = matches!(info.kind, FileKind::Exr { .. });
+        if if placed {
+            own.covers(&colour)
+        } else {
+            own == colour
+        } {
             return true;
         }
-        let detail = if own.origin == colour.origin || (own.width, own.height) == (0, 0) {
+        let detail = if !placed || own.origin == colour.origin || (own.width, own.height) == (0, 0)
+        {
             format!(
                 "{}x{} but the color pass is {}x{}",
                 info.width, info.height, colour.width, colour.height
