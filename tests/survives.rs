@@ -2194,3 +2194,96 @@ fn the_layout_attributes_of_every_part_are_the_outputs_own() {
         assert!(counts.iter().all(|c| *c != "99"), "{info}");
     }
 }
+
+/// Attributes the exr crate reads but would write otherwise than it read them come back as
+/// they went in, readable by every client: a film scan's key code (the crate writes six of
+/// its seven numbers, and every reader then refused the file, ours included), a time code of
+/// frame 38 (48 or 60 fps: the crate's writer refuses frames over 29; OpenEXR reads and
+/// writes it) and an empty string vector (OpenEXR reads `[]`; the crate refuses to write it).
+/// The input is written with them as raw custom values, as OpenEXR stores them.
+#[test]
+fn a_key_code_a_time_code_of_frame_38_and_an_empty_string_vector_come_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = W * H;
+    let raw = |kind: &str, bytes: Vec<u8>| AttributeValue::Custom {
+        kind: Text::from(kind),
+        bytes: bytes.into(),
+    };
+    let le = |v: &[u32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    // 12:34:56:38 in TV60 packing, each field binary-coded decimal; no user data.
+    let time = 0x38 | 0x56 << 8 | 0x34 << 16 | 0x12 << 24;
+    let mut layer_attributes = LayerAttributes::default();
+    for (name, value) in [
+        // Under stand-in names of the same length (the crate refuses to write a standard
+        // name as a custom value), renamed in the file's bytes below.
+        ("keyCodX", raw("keycode", le(&[1, 2, 3, 4, 5, 4, 64]))),
+        ("timeCodX", raw("timecode", le(&[time, 0]))),
+        ("pipeline/tags", raw("stringvector", Vec::new())),
+    ] {
+        layer_attributes.other.insert(Text::from(name), value);
+    }
+    let channel = |name: &str, seed: u32| {
+        AnyChannel::new(Text::from(name), FlatSamples::F32(noise(n, seed, 0.0, 1.0)))
+    };
+    let image = Image {
+        attributes: ImageAttributes::new(IntegerBounds::from_dimensions((W, H))),
+        layer_data: Layer::new(
+            (W, H),
+            layer_attributes,
+            Encoding::SMALL_LOSSLESS,
+            AnyChannels::sort(vec![channel("R", 1), channel("G", 2), channel("B", 3)].into()),
+        ),
+    };
+    let color = dir.path().join("color.exr");
+    image.write().to_file(&color).unwrap();
+    let mut bytes = std::fs::read(&color).unwrap();
+    for (from, to) in [
+        (&b"keyCodX\0keycode\0"[..], &b"keyCode\0keycode\0"[..]),
+        (b"timeCodX\0timecode\0", b"timeCode\0timecode\0"),
+    ] {
+        let at = bytes.windows(from.len()).position(|w| w == from).unwrap();
+        bytes[at..at + to.len()].copy_from_slice(to);
+    }
+    std::fs::write(&color, bytes).unwrap();
+    write_passes(dir.path());
+    blur(dir.path(), "out.exr", &[]);
+    let out = dir.path().join("out.exr");
+    let meta = MetaData::read_from_file(&out, false).unwrap();
+    let header = &meta.headers[0];
+    let key = header.own_attributes.film_key_code.expect("the key code");
+    assert_eq!(
+        [
+            key.film_manufacturer_code,
+            key.film_type,
+            key.film_roll_prefix,
+            key.count,
+            key.perforation_offset,
+            key.perforations_per_frame,
+            key.perforations_per_count
+        ],
+        [1, 2, 3, 4, 5, 4, 64]
+    );
+    let code = header.shared_attributes.time_code.expect("the time code");
+    assert_eq!(
+        (code.hours, code.minutes, code.seconds, code.frame),
+        (12, 34, 56, 38)
+    );
+    assert_eq!(
+        header
+            .own_attributes
+            .other
+            .get(&Text::from("pipeline/tags")),
+        Some(&AttributeValue::TextVector(Vec::new()))
+    );
+    if let Some(info) = oiiotool_info(&out) {
+        for line in [
+            "smpte:KeyCode: 1, 2, 3, 4, 5, 4, 64",
+            "smpte:TimeCode: 12:34:56:38",
+        ] {
+            assert!(
+                info.contains(line),
+                "oiiotool does not show {line:?}:\n{info}"
+            );
+        }
+    }
+}

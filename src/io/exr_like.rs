@@ -117,6 +117,15 @@ pub fn write_like(
                 ..h.shared_attributes.clone()
             };
             shared.other.retain(|name, _| !is_layout(name));
+            // The time code among the rest, written as it was read (see `as_read`).
+            if let Some(time) = shared.time_code.take() {
+                shared
+                    .other
+                    .insert(Text::from("timeCode"), AttributeValue::TimeCode(time));
+            }
+            for value in shared.other.values_mut() {
+                as_read(value);
+            }
             shared
         }
         None => ImageAttributes {
@@ -381,6 +390,14 @@ fn attributes_like(
         kept
     });
     attributes.layer_position = Vec2(data.x, data.y);
+    if let Some(key) = attributes.film_key_code.take() {
+        attributes
+            .other
+            .insert(Text::from("keyCode"), AttributeValue::KeyCode(key));
+    }
+    for value in attributes.other.values_mut() {
+        as_read(value);
+    }
     for (name, value) in [
         ("shutter/version", env!("CARGO_PKG_VERSION")),
         ("shutter/settings", record),
@@ -390,6 +407,65 @@ fn attributes_like(
             .insert(Text::from(name), AttributeValue::Text(latin1(value)));
     }
     attributes
+}
+
+/// An attribute value the exr crate reads but would write otherwise than it was read, made
+/// the bytes it was read from (a custom value of the same type name, which the crate writes
+/// as it is): a key code (the crate writes six of its seven numbers, and every reader then
+/// refuses the file, shutter's own included), a time code whose fields the crate's writer
+/// refuses (a frame number over 29, as 38 at 48 or 60 fps: OpenEXR reads and writes it), and
+/// an empty string vector (which OpenEXR reads as `[]` and the crate refuses to write).
+/// Found by an outside probe: the output of a film scan with a key code was unreadable, and
+/// a frame with a time code of frame 38 failed only once it was blurred.
+fn as_read(value: &mut AttributeValue) {
+    let custom = |kind: &str, bytes: Vec<u8>| AttributeValue::Custom {
+        kind: Text::from(kind),
+        bytes: bytes.into(),
+    };
+    let le = |values: &[u32]| values.iter().flat_map(|v| v.to_le_bytes()).collect();
+    match value {
+        AttributeValue::KeyCode(k) => {
+            let numbers = [
+                k.film_manufacturer_code,
+                k.film_type,
+                k.film_roll_prefix,
+                k.count,
+                k.perforation_offset,
+                k.perforations_per_frame,
+                k.perforations_per_count,
+            ];
+            *value = custom("keycode", le(&numbers.map(|n| n as u32)));
+        }
+        AttributeValue::TimeCode(t) => {
+            // SMPTE 12M's TV60 packing (OpenEXR's ImfTimeCode), each field in binary-coded
+            // decimal within its bits, as read.
+            let bcd = |n: u8, bits: u32| {
+                let v = u32::from(n % 10) | (u32::from(n / 10 % 10) << 4);
+                v & ((1 << bits) - 1)
+            };
+            let flag = |b: bool, bit: u32| u32::from(b) << bit;
+            let time = bcd(t.frame, 6)
+                | flag(t.drop_frame, 6)
+                | flag(t.color_frame, 7)
+                | bcd(t.seconds, 7) << 8
+                | flag(t.field_phase, 15)
+                | bcd(t.minutes, 7) << 16
+                | flag(t.binary_group_flags[0], 23)
+                | bcd(t.hours, 6) << 24
+                | flag(t.binary_group_flags[1], 30)
+                | flag(t.binary_group_flags[2], 31);
+            let user = t
+                .binary_groups
+                .iter()
+                .enumerate()
+                .fold(0u32, |u, (i, &g)| u | (u32::from(g) & 15) << (4 * i));
+            *value = custom("timecode", le(&[time, user]));
+        }
+        AttributeValue::TextVector(texts) if texts.is_empty() => {
+            *value = custom("stringvector", Vec::new());
+        }
+        _ => {}
+    }
 }
 
 /// Each channel's samples in the pixel type its input part stored it in (half with `half`).
