@@ -593,19 +593,98 @@ fn parts_are_matched_by_name() {
     );
 }
 
-/// --allow-nonfinite lets a NaN through every gate, the per-pixel and hard ones included,
-/// while it is still counted.
+/// --allow-nonfinite lets through a NaN written alike in both images, past every gate (the
+/// per-pixel and hard ones included), while it is still counted; a value that became NaN is a
+/// difference larger than any gate, whatever the allowances, so it fails the per-pixel and
+/// hard gates though the non-finite gate is off (it passed them all before: a NaN let
+/// through).
 #[test]
-fn allowed_nonfinite_values_pass_every_gate() {
+fn allowed_nonfinite_values_alike_pass_every_gate_and_a_changed_one_fails_them() {
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = edited(dir.path(), |p| p[0][10] = f32::NAN);
+    let both = dir.path().join("both.exr");
+    std::fs::copy(&b, &both).unwrap();
+    let both = s(&both);
     for gate in [["--fail-pixel", "0.1"], ["--hard-fail", "1"]] {
-        let mut args = vec!["diff", &a, &b, "--allow-nonfinite", "--json"];
+        let mut args = vec!["diff", &b, &both, "--allow-nonfinite", "--json"];
         args.extend(gate);
         let o = shutter(&args);
         assert_eq!(o.status.code(), Some(0), "{gate:?}: {}", stderr(&o));
         assert_eq!(json(&o)["frames"][0]["whole"]["non_finite"], 1);
+        let mut args = vec!["diff", &a, &b, "--allow-nonfinite", "--json"];
+        args.extend(gate);
+        let o = shutter(&args);
+        assert_eq!(o.status.code(), Some(1), "{gate:?}: {}", stderr(&o));
+        assert_eq!(json(&o)["frames"][0]["whole"]["non_finite"], 1);
     }
+    // No value gate asked for, and the non-finite one off: nothing fails it.
+    let o = shutter(&["diff", &a, &b, "--allow-nonfinite"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+/// A NaN fails a diff wherever it is: in a data channel though both images hold it alike
+/// (an infinite depth written alike is no change, a NaN never is), and in a channel only
+/// the candidate has (which is not compared, but is the candidate's). Both passed before.
+#[test]
+fn a_nan_in_a_data_channel_of_both_or_a_channel_only_the_candidate_has_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (8, 6);
+    let n = w * h;
+    let write = |name: &str, extra: Vec<(&str, Vec<f32>)>| {
+        let path = dir.path().join(name);
+        let mut channels = vec![
+            ("R", vec![0.5; n]),
+            ("G", vec![0.5; n]),
+            ("B", vec![0.5; n]),
+        ];
+        channels.extend(extra);
+        write_exr(&path, w, h, channels);
+        s(&path)
+    };
+    let mut z = vec![2.0f32; n];
+    z[5] = f32::NAN;
+    z[6] = f32::INFINITY;
+    let (za, zb) = (
+        write("za.exr", vec![("Z", z.clone())]),
+        write("zb.exr", vec![("Z", z)]),
+    );
+    let o = shutter(&["diff", &za, &zb]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("1 non-finite samples"),
+        "{}",
+        stderr(&o)
+    );
+    // The infinity alone, alike in both, is no change.
+    let mut z = vec![2.0f32; n];
+    z[6] = f32::INFINITY;
+    let (ia, ib) = (
+        write("ia.exr", vec![("Z", z.clone())]),
+        write("ib.exr", vec![("Z", z)]),
+    );
+    let o = shutter(&["diff", &ia, &ib]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // A light layer only the candidate has, with a NaN.
+    let plain = write("plain.exr", vec![]);
+    let mut spec = vec![0.1f32; n];
+    spec[3] = f32::NAN;
+    let more = write(
+        "more.exr",
+        vec![
+            ("spec.R", spec),
+            ("spec.G", vec![0.1; n]),
+            ("spec.B", vec![0.1; n]),
+        ],
+    );
+    let o = shutter(&["diff", &plain, &more]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("1 non-finite samples in spec.R"),
+        "{}",
+        stderr(&o)
+    );
+    let o = shutter(&["diff", &plain, &more, "--allow-nonfinite"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
 
 /// A part the read cannot place (its data window is not the beauty's) is named as not

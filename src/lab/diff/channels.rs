@@ -123,6 +123,9 @@ pub struct Compared {
     /// Channels of the reference the candidate lacks, and the reverse.
     pub missing: Vec<String>,
     pub extra: Vec<String>,
+    /// The channels only the candidate has that hold a NaN (or, in a colour channel, an
+    /// infinity), with how many: counted in `non_finite`.
+    pub extra_non_finite: Vec<(String, usize)>,
 }
 
 /// The beauty's layer name in the figures: no channel's layer is named so (a channel name
@@ -147,7 +150,7 @@ fn pairs<'a>(
     a: &'a Frame,
     b: &'a Frame,
     ones: &'a [f32],
-) -> (Vec<Pair<'a>>, Vec<String>, Vec<String>) {
+) -> (Vec<Pair<'a>>, Vec<String>, Vec<(String, usize)>) {
     let mut out = Vec::new();
     let names = |f: &Frame| -> Vec<String> {
         if f.carried.beauty.is_empty() {
@@ -247,8 +250,9 @@ fn pairs<'a>(
     let extra = keys_b
         .into_iter()
         .zip(matched)
-        .filter(|(_, m)| !m)
-        .map(|(k, _)| k)
+        .enumerate()
+        .filter(|(_, (_, m))| !m)
+        .map(|(j, (k, _))| (k, j))
         .collect();
     // Group by layer, keeping the order in which layers first appear.
     let mut order: Vec<String> = Vec::new();
@@ -272,6 +276,22 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
     let n = a.width * a.height;
     let ones = vec![1.0f32; n];
     let (pairs, missing, extra) = pairs(a, b, &ones);
+    // A channel only the candidate has is not compared, but a NaN in it (or an infinity in
+    // a colour channel: an infinite depth is a depth) is the candidate's fault all the same.
+    let extra_non_finite: Vec<(String, usize)> = extra
+        .iter()
+        .filter_map(|(name, j)| {
+            let c = &b.carried.channels[*j];
+            let data = c.class.is_data();
+            let bad = c
+                .plane
+                .iter()
+                .filter(|v| v.is_nan() || (!data && v.is_infinite()))
+                .count();
+            (c.exact.is_none() && bad > 0).then(|| (name.clone(), bad))
+        })
+        .collect();
+    let extra: Vec<String> = extra.into_iter().map(|(name, _)| name).collect();
     // Per pixel: bit 0 fails, bit 1 warns (any layer).
     let mut flags = vec![0u8; n];
     let mut errors = vec![0.0f32; n];
@@ -299,12 +319,17 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
             for i in 0..n {
                 let (x, y) = (pair.a[i], pair.b[i]);
                 if pair.exact.is_none() && (!x.is_finite() || !y.is_finite()) {
-                    let same = x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan());
-                    if data && same {
+                    // An infinity written alike in both is no change in a data channel (a
+                    // depth of the sky); a NaN never is, in either image.
+                    let alike = x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan());
+                    if data && alike && !x.is_nan() {
                         continue;
                     }
                     l_non_finite += 1;
-                    if !gates.allow_nonfinite {
+                    // `--allow-nonfinite` lets through what is alike in both; a value that
+                    // became NaN or infinite (or stopped being so) differs from it by more
+                    // than any gate, whatever the allowances.
+                    if !gates.allow_nonfinite || !alike {
                         errors[i] = f32::INFINITY;
                         layer_flags[i] |=
                             u8::from(fail.is_some()) | (u8::from(warn.is_some()) << 1);
@@ -403,10 +428,11 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
         pixels_over_fail: flags.iter().filter(|&&f| f & 1 != 0).count(),
         pixels_over_warn: flags.iter().filter(|&&f| f & 2 != 0).count(),
         over_hard,
-        non_finite: non_finite_total,
+        non_finite: non_finite_total + extra_non_finite.iter().map(|(_, n)| n).sum::<usize>(),
         layers,
         errors,
         missing,
         extra,
+        extra_non_finite,
     }
 }

@@ -63,6 +63,7 @@ fn failure(
             .iter()
             .filter(|l| l.non_finite > 0)
             .map(|l| l.layer.as_str())
+            .chain(compared.extra_non_finite.iter().map(|(c, _)| c.as_str()))
             .collect();
         return Some(format!(
             "{} non-finite samples in {} (NaN or infinite; --allow-nonfinite lets them through)",
