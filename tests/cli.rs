@@ -373,6 +373,25 @@ fn size_mismatch_between_passes_is_an_error() {
             && p.to_string().contains("5x5 but the color pass is 6x5")));
 }
 
+/// An argument that is not UTF-8 (a path from a Latin-1 share) is a usage error, said in one
+/// line, with `--json`'s error object: it panicked (exit 101) once clap had refused it.
+#[cfg(unix)]
+#[test]
+fn an_argument_that_is_not_utf8_is_a_usage_error_not_a_panic() {
+    use std::os::unix::ffi::OsStrExt;
+    let path = std::ffi::OsStr::from_bytes(b"nu\xff8/c.####.exr");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_shutter"))
+        .args(["blur", "--json", "--color"])
+        .arg(path)
+        .args(["-o", "out.####.exr"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(report["ok"], false, "{report}");
+}
+
 #[test]
 fn output_equal_to_input_is_refused() {
     let dir = tempfile::tempdir().unwrap();

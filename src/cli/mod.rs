@@ -39,7 +39,12 @@ fn parse_and_run() -> i32 {
                 }
             }
             let mut code = e.exit_code();
-            let args: Vec<String> = std::env::args().skip(1).collect();
+            // (Lossily: an argument that is not UTF-8, a path from a Latin-1 share, is what
+            // clap refused, and `std::env::args` would panic on it.)
+            let args: Vec<String> = std::env::args_os()
+                .skip(1)
+                .map(|a| a.to_string_lossy().into_owned())
+                .collect();
             let command = args.first().map_or("", String::as_str);
             // A command line clap cannot parse is a comparison not made: idiff's 4.
             if code == 2 && command == "diff" && args.iter().any(|a| a == "--idiff") {
