@@ -806,3 +806,60 @@ fn a_closed_pipe_is_an_error_on_the_write_that_meets_it() {
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
 }
+
+/// A job that starts while another job of the same sequence is releasing the lock file (the
+/// whole-file lock it takes for the moment of the unlink) waits for it and runs: it was told
+/// its frame was busy (exit 75), about one run in a hundred of four chunks started one after
+/// another, and a farm requeued it. The releasing job is played by perl (which exiftool, a
+/// client the tests use, brings), holding a whole-file `fcntl` lock on the lock file for
+/// 300 ms before it unlinks the file, as shutter's release does.
+#[cfg(all(
+    target_os = "linux",
+    any(target_arch = "x86_64", target_arch = "aarch64")
+))]
+#[test]
+fn a_job_waits_for_another_releasing_the_lock_file_instead_of_calling_its_frame_busy() {
+    use std::io::BufRead;
+    let dir = tempfile::tempdir().unwrap();
+    let color = sequence(dir.path(), 2, 32, 24);
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    let lock = out_dir.join(".o.####.exr.lock");
+    // struct flock on 64-bit Linux: l_type, l_whence, (padding), l_start, l_len, l_pid.
+    let script = r#"
+        use Fcntl;
+        open(my $f, '+>>', $ARGV[0]) or die "open: $!";
+        my $l = pack('s s x4 q q l x4', F_WRLCK, 0, 0, 0, 0);
+        fcntl($f, F_SETLK, $l) or die "lock: $!";
+        $| = 1; print "locked\n";
+        select(undef, undef, undef, 0.3);
+        unlink $ARGV[0];
+    "#;
+    let Some(mut releasing) = std::process::Command::new("perl")
+        .args(["-e", script, &s(&lock)])
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .map(Some)
+        .unwrap_or_else(|_| {
+            assert!(
+                std::env::var("SHUTTER_REQUIRE_TOOLS").as_deref() != Ok("1"),
+                "perl is not installed and SHUTTER_REQUIRE_TOOLS=1"
+            );
+            eprintln!("note: perl is not installed; the test is skipped");
+            None
+        })
+    else {
+        return;
+    };
+    let mut line = String::new();
+    std::io::BufReader::new(releasing.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    assert_eq!(line, "locked\n");
+    let out = format!("{}/o.####.exr", out_dir.display());
+    let o = shutter(&["blur", "--color", &color, "-o", &out, "--frames", "1"]);
+    assert!(releasing.wait().unwrap().success());
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(out_dir.join("o.0001.exr").exists());
+    assert!(!lock.exists(), "the lock file is removed");
+}

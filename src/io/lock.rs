@@ -68,6 +68,10 @@ fn held() -> MutexGuard<'static, Vec<Held>> {
 /// How many times a lock file unlinked under us is reopened before giving up.
 const ATTEMPTS: usize = 20;
 
+/// How many times, 2 ms apart, a job waits for a job releasing the lock file (a whole-file
+/// lock, held for the moment of its unlink) before it calls the frames busy.
+const PASSING_WAITS: usize = 1000;
+
 impl OutputLock {
     /// Locks `frames` of `output` for this process, making the output folder if needed.
     /// Fails, naming the frame and the process, when another process holds one of them.
@@ -86,7 +90,10 @@ impl OutputLock {
         })?;
         let ranges = byte_ranges(frames);
         let result = (|| {
-            for _ in 0..ATTEMPTS {
+            // Waits on a passing conflict (below), a few milliseconds each.
+            let mut waits = 0;
+            let mut attempt = 0;
+            'attempts: while attempt < ATTEMPTS {
                 let file = OpenOptions::new()
                     .read(true)
                     .write(true)
@@ -98,7 +105,17 @@ impl OutputLock {
                     match platform::lock_range(&file, start, len) {
                         Ok(true) => {}
                         Ok(false) => {
-                            let (frame, pid) = platform::holder(&file, start, len);
+                            let (frame, pid, passing) = platform::holder(&file, start, len);
+                            if passing && waits < PASSING_WAITS {
+                                waits += 1;
+                                // A job releasing the file (the whole-file lock it takes
+                                // to unlink it), or a lock already gone: not a job on this
+                                // frame. Once it has unlinked the file, the next attempt
+                                // opens a new one. (Reported as busy before: one run in a
+                                // hundred of four chunks started one after another.)
+                                std::thread::sleep(std::time::Duration::from_millis(2));
+                                continue 'attempts;
+                            }
                             let frame = frame_of(frame.unwrap_or(start));
                             let who = match pid {
                                 Some(pid) => format!("another process (pid {pid})"),
@@ -122,6 +139,7 @@ impl OutputLock {
                 if still_named(&file, &path) {
                     return Ok(file);
                 }
+                attempt += 1;
             }
             Err(fail(
                 "the lock file keeps being replaced by other jobs; try again".to_string(),
@@ -200,7 +218,7 @@ pub fn verify_held() -> Result<(), WriteFailure> {
             match platform::lock_range(&file, start, len) {
                 Ok(true) => {}
                 Ok(false) => {
-                    let (frame, pid) = platform::holder(&file, start, len);
+                    let (frame, pid, _) = platform::holder(&file, start, len);
                     let who = pid.map_or("another process".to_string(), |pid| {
                         format!("another process (pid {pid})")
                     });
@@ -348,16 +366,19 @@ mod platform {
         }
     }
 
-    /// The first byte another process holds in the range, and its pid (unknown on some
-    /// network file systems).
-    pub fn holder(file: &File, start: u64, len: u64) -> (Option<u64>, Option<i32>) {
+    /// The first byte another process holds in the range, its pid (unknown on some network
+    /// file systems), and whether the conflict is passing: the lock is gone by now, or it is
+    /// on the whole file, which only a job releasing the file takes ([`super::release`]).
+    pub fn holder(file: &File, start: u64, len: u64) -> (Option<u64>, Option<i32>, bool) {
         let mut query = flock(libc::F_WRLCK as _, start, len);
         match fcntl(file, FcntlArg::F_GETLK(&mut query)) {
             Ok(_) if query.l_type != libc::F_UNLCK as libc::c_short => (
                 Some((query.l_start as u64).max(start)),
                 (query.l_pid > 0).then_some(query.l_pid),
+                query.l_start == 0 && query.l_len == 0,
             ),
-            _ => (None, None),
+            Ok(_) => (None, None, true),
+            Err(_) => (None, None, false),
         }
     }
 }
@@ -376,8 +397,8 @@ mod platform {
         }
     }
 
-    pub fn holder(_file: &File, _start: u64, _len: u64) -> (Option<u64>, Option<i32>) {
-        (None, None)
+    pub fn holder(_file: &File, _start: u64, _len: u64) -> (Option<u64>, Option<i32>, bool) {
+        (None, None, false)
     }
 }
 
