@@ -1033,3 +1033,83 @@ fn blenders_stereo_render_reads_by_view_and_one_view_comes_out_named_as_a_mono_r
         mono_beauty(&alone_right)
     );
 }
+
+/// A view written as a file of one view (`--view right`) keeps each of its channels' pixel
+/// types as stored in that view: `right.Z` half (the default view's `Z` is float), and
+/// `id.right.v` u32 with every ID exact. Each output channel's type was looked up by its output
+/// name (`Z`, `id.v`) in the input header: `Z` came out float as the other view's, and the
+/// IDs, a name no input channel has, as float, every ID over 2²⁴ rounded.
+#[test]
+fn a_view_written_alone_keeps_its_own_channels_pixel_types() {
+    use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
+    use exr::meta::attribute::{IntegerBounds, Text};
+    use exr::meta::header::{ImageAttributes, LayerAttributes};
+    use exr::prelude::{f16, WritableImage};
+    let dir = tempfile::tempdir().unwrap();
+    let n = W * H;
+    let ids: Vec<u32> = (0..n as u32).map(|i| (1 << 24) + 1 + i).collect();
+    let f32s = |name: &str, seed: u32, lo: f32, hi: f32| {
+        AnyChannel::new(Text::from(name), FlatSamples::F32(noise(n, seed, lo, hi)))
+    };
+    let halves = |name: &str, seed: u32, lo: f32, hi: f32| {
+        let values = noise(n, seed, lo, hi)
+            .into_iter()
+            .map(f16::from_f32)
+            .collect();
+        AnyChannel::new(Text::from(name), FlatSamples::F16(values))
+    };
+    let channels = vec![
+        f32s("R", 1, 0.0, 1.0),
+        f32s("G", 2, 0.0, 1.0),
+        f32s("B", 3, 0.0, 1.0),
+        f32s("Z", 4, 1.0, 5.0),
+        f32s("right.R", 5, 0.0, 1.0),
+        f32s("right.G", 6, 0.0, 1.0),
+        f32s("right.B", 7, 0.0, 1.0),
+        halves("right.Z", 8, 1.0, 5.0),
+        AnyChannel::new(Text::from("id.right.v"), FlatSamples::U32(ids.clone())),
+    ];
+    let attributes = LayerAttributes {
+        multi_view_names: Some(vec![Text::from("left"), Text::from("right")]),
+        ..LayerAttributes::default()
+    };
+    let image = Image {
+        attributes: ImageAttributes::new(IntegerBounds::from_dimensions((W, H))),
+        layer_data: Layer::new(
+            (W, H),
+            attributes,
+            Encoding::SMALL_LOSSLESS,
+            AnyChannels::sort(channels.into()),
+        ),
+    };
+    let stereo = dir.path().join("stereo.exr");
+    image.write().to_file(&stereo).unwrap();
+    let out = dir.path().join("right.exr");
+    let o = shutter(&[
+        "blur",
+        "--algorithm",
+        "none",
+        "--color",
+        &s(&stereo),
+        "--view",
+        "right",
+        "-o",
+        &s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let layers = crate::support::read_exr_layers(&out);
+    let channel = |name: &str| {
+        layers
+            .iter()
+            .flat_map(|l| l.channel_data.list.iter())
+            .find(|c| c.name.to_string() == name)
+            .unwrap_or_else(|| panic!("{name} in the output"))
+            .sample_data
+            .clone()
+    };
+    assert!(matches!(channel("Z"), FlatSamples::F16(_)), "Z stays half");
+    match channel("id.v") {
+        FlatSamples::U32(values) => assert_eq!(values, ids, "every ID exact"),
+        other => panic!("id.v is not u32: {other:?}"),
+    }
+}

@@ -90,6 +90,11 @@ pub struct OutChannel {
     /// A u32 channel's values as read, exactly (`CarriedChannel::exact`): written when the
     /// channel goes out as u32.
     pub exact: Option<Vec<u32>>,
+    /// Its name as the input part stores it, where that is not `name` (a view's channel
+    /// written as a file of one view: `id.right.v` written `id.v`): its pixel type and
+    /// pLinear flag are that channel's, not those of a channel of another view (or none)
+    /// that the output name happens to match.
+    pub source: Option<String>,
 }
 
 /// Writes `parts` as one EXR over the display window `display`, each part made like its
@@ -486,10 +491,13 @@ fn channels_like(
                 plane,
                 exact,
                 class,
+                source,
             } = channel;
+            let read_as = source.as_deref().unwrap_or(&name);
             // Half for every float channel with `half`; a u32 channel (IDs) stays u32, which
-            // half would destroy (every ID over 2048).
-            let kind = match stored(&name) {
+            // half would destroy (every ID over 2048), and so does one read exactly as u32.
+            let kind = match stored(read_as) {
+                _ if exact.is_some() => SampleType::U32,
                 Some(SampleType::U32) => SampleType::U32,
                 _ if output.half => SampleType::F16,
                 stored => stored.unwrap_or(SampleType::F32),
@@ -519,7 +527,7 @@ fn channels_like(
             // a channel it did not have). The exr crate guesses it from the name, on for all
             // but R, G, B, L, Y, X and Z: B44 then encodes `A`, `velocity.X` or `diffuse.R`
             // through its perceptual curve, which writes every negative value as 0.
-            let linear = described(&name).is_some_and(|c| c.quantize_linearly);
+            let linear = described(read_as).is_some_and(|c| c.quantize_linearly);
             AnyChannel {
                 quantize_linearly: linear,
                 ..AnyChannel::new(Text::from(name.as_str()), samples)

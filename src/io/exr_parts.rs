@@ -92,6 +92,7 @@ pub fn exr_parts(
                 plane,
                 class: LayerClass::Colour,
                 exact: None,
+                source: None,
             }
         }));
         for c in carried.channels {
@@ -102,11 +103,17 @@ pub fn exr_parts(
             let part = c.part.min(count - 1);
             // (A part passed through at its own window holds no channel of the frame's.)
             windows[part].get_or_insert(c.window.unwrap_or(data));
+            let (name, source) = if every || c.stored == c.name {
+                (c.stored, None)
+            } else {
+                (c.name, Some(c.stored))
+            };
             parts[part].push(exr_like::OutChannel {
-                name: if every { c.stored } else { c.name },
+                name,
                 plane: c.plane,
                 class: c.class,
                 exact: c.exact,
+                source,
             });
         }
     }
