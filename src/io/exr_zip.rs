@@ -227,7 +227,57 @@ fn differences(bytes: &[u8]) -> Vec<u8> {
 pub fn decompress_chunk(chunk: Chunk, meta: &MetaData) -> exr::error::Result<UncompressedBlock> {
     match inflated_here(&chunk, meta) {
         Some(block) => Ok(block),
-        None => UncompressedBlock::decompress_chunk(chunk, meta, false),
+        None => {
+            dwa_counts_fit(&chunk, meta)?;
+            UncompressedBlock::decompress_chunk(chunk, meta, false)
+        }
+    }
+}
+
+/// Refuses a DWAA/DWAB block whose header gives sizes no block of its part can have: the exr
+/// crate allocates what the header's counts say before it reads the data (a damaged count
+/// asked for 140 TB, and the process aborted where it should refuse the file). Each
+/// uncompressed size and count is within a few times the part's largest block, each
+/// compressed size at most the chunk's bytes.
+/// The header is OpenEXR's (ImfDwaCompressor): eleven little-endian 64-bit counters.
+fn dwa_counts_fit(chunk: &Chunk, meta: &MetaData) -> exr::error::Result<()> {
+    use exr::compression::Compression;
+    let Some(header) = meta.headers.get(chunk.layer_index) else {
+        return Ok(());
+    };
+    if !matches!(
+        header.compression,
+        Compression::DWAA(_) | Compression::DWAB(_)
+    ) {
+        return Ok(());
+    }
+    let bytes = match &chunk.compressed_block {
+        CompressedBlock::ScanLine(block) => &block.compressed_pixels_le,
+        CompressedBlock::Tile(block) => &block.compressed_pixels_le,
+        _ => return Ok(()),
+    };
+    let largest = header.max_block_byte_size() as u64;
+    // A block stored raw (no smaller compressed) is the block's bytes, no header.
+    if bytes.len() as u64 >= largest || bytes.len() < 88 {
+        return Ok(());
+    }
+    let counter =
+        |k: usize| u64::from_le_bytes(bytes[8 * k..8 * k + 8].try_into().expect("eight bytes"));
+    let length = bytes.len() as u64;
+    // 1 unknown uncompressed, 6 RLE uncompressed, 7 RLE raw, 8 AC count, 9 DC count;
+    // 2 unknown compressed, 3 AC compressed, 4 DC compressed, 5 RLE compressed.
+    // (Counts run over 8 × 8 blocks padded past the block's edge, and a lossy channel
+    // read as half may be stored float: a bound four times the largest block's bytes leaves
+    // room for both, and refuses the counts a damaged header gives, of many gigabytes.)
+    let most = largest.saturating_mul(4).saturating_add(1 << 16);
+    let fits = [1, 6, 7, 8, 9].iter().all(|&k| counter(k) <= most)
+        && [2, 3, 4, 5].iter().all(|&k| counter(k) <= length);
+    if fits {
+        Ok(())
+    } else {
+        Err(exr::error::Error::Invalid(
+            "a DWA block's header gives sizes larger than its part's blocks".into(),
+        ))
     }
 }
 

@@ -17,6 +17,11 @@ const H: usize = 12;
 /// really compresses it: EXR stores a chunk raw when compression would not shrink it, and
 /// damage to raw samples is undetectable by any reader.
 pub fn exr(compression: exr::compression::Compression) -> Vec<u8> {
+    exr_stored(compression, false)
+}
+
+/// [`exr`], its channels stored half where `half`.
+pub fn exr_stored(compression: exr::compression::Compression, half: bool) -> Vec<u8> {
     let n = W * H;
     let channels = ["R", "G", "B", "A"]
         .iter()
@@ -33,10 +38,7 @@ pub fn exr(compression: exr::compression::Compression) -> Vec<u8> {
         H,
         Windows::full(W, H),
         channels,
-        ExrOptions {
-            compression,
-            half: false,
-        },
+        ExrOptions { compression, half },
     )
     .unwrap();
     bytes.into_inner()
@@ -210,6 +212,15 @@ pub fn corpus() -> Vec<(&'static str, Vec<u8>)> {
         *b ^= 0x5A;
     }
     files.push(("exr-zip-data-damaged.exr", damaged));
+    // A DWAB block (half RGB: DWA's lossy sections) whose header counts 2⁴⁶ DC coefficients,
+    // more than any block holds: the exr crate allocated what it said, and the process
+    // aborted (exit 134) where it should refuse the file.
+    let mut dwa = exr_stored(Compression::DWAB(None), true);
+    let first = entry(&dwa, offset_table(&dwa, 1), 0);
+    // The chunk's line and size, then the DWA header's eleven counters; the DC count is the
+    // tenth.
+    dwa[first + 8 + 72..first + 8 + 80].copy_from_slice(&(1u64 << 46).to_le_bytes());
+    files.push(("exr-dwa-count-beyond-the-block.exr", dwa));
     files.push(("png-declares-20000x20000.png", png_declaring(20000)));
     let png = image(ImageFormat::Png);
     files.push(("png-cut-short.png", png[..png.len() * 2 / 3].to_vec()));
