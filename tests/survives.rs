@@ -2287,3 +2287,53 @@ fn a_key_code_a_time_code_of_frame_38_and_an_empty_string_vector_come_back() {
         }
     }
 }
+
+/// `--half` writes a data channel that half cannot hold as float, not as ±∞: Blender's depth
+/// of 1e10 for empty pixels and a world position of −7e4 came back infinite (and `shutter
+/// diff` then failed the frame on them); colour still goes half, and data within half's range
+/// too.
+#[test]
+fn half_keeps_data_that_half_cannot_hold_as_float() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = W * H;
+    let mut z: Vec<f32> = noise(n, 5, 1.0, 9.0);
+    z[3] = 1e10;
+    write_exr(
+        &dir.path().join("color.exr"),
+        W,
+        H,
+        vec![
+            ("R", noise(n, 1, 0.0, 1.0)),
+            ("G", noise(n, 2, 0.0, 1.0)),
+            ("B", noise(n, 3, 0.0, 1.0)),
+            ("Z", z.clone()),
+            ("P.X", vec![-7e4; n]),
+            ("N.X", noise(n, 6, -1.0, 1.0)),
+        ],
+    );
+    write_passes(dir.path());
+    blur(dir.path(), "out.exr", &["--half"]);
+    let out = dir.path().join("out.exr");
+    let meta = MetaData::read_from_file(&out, false).unwrap();
+    let kind = |name: &str| {
+        meta.headers
+            .iter()
+            .flat_map(|h| h.channels.list.iter())
+            .find(|c| c.name.to_string() == name)
+            .unwrap_or_else(|| panic!("{name}"))
+            .sample_type
+    };
+    use exr::meta::attribute::SampleType;
+    for (name, want) in [
+        ("R", SampleType::F16),
+        ("Z", SampleType::F32),
+        ("P.X", SampleType::F32),
+        ("N.X", SampleType::F16),
+    ] {
+        assert_eq!(kind(name), want, "{name}");
+    }
+    let read = crate::support::read_exr_reference(&out);
+    let plane = |name: &str| &read.iter().find(|(n, _)| n == name).unwrap().1;
+    assert_eq!(plane("Z")[3], 1e10);
+    assert!(plane("P.X").iter().all(|&v| v == -7e4));
+}

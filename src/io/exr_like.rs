@@ -414,14 +414,10 @@ fn attributes_like(
     attributes
 }
 
-/// An attribute value the exr crate reads but would write otherwise than it was read, made
-/// the bytes it was read from (a custom value of the same type name, which the crate writes
-/// as it is): a key code (the crate writes six of its seven numbers, and every reader then
-/// refuses the file, shutter's own included), a time code whose fields the crate's writer
-/// refuses (a frame number over 29, as 38 at 48 or 60 fps: OpenEXR reads and writes it), and
-/// an empty string vector (which OpenEXR reads as `[]` and the crate refuses to write).
-/// Found by an outside probe: the output of a film scan with a key code was unreadable, and
-/// a frame with a time code of frame 38 failed only once it was blurred.
+/// An attribute value the exr crate reads but would write otherwise, made the bytes it was
+/// read from (a custom value of the same type name, written as it is): a key code (the crate
+/// writes six of its seven numbers: every reader then refused the file), a time code its
+/// writer refuses (frame 38 at 48 or 60 fps; OpenEXR writes it), an empty string vector.
 fn as_read(value: &mut AttributeValue) {
     let custom = |kind: &str, bytes: Vec<u8>| AttributeValue::Custom {
         kind: Text::from(kind),
@@ -473,6 +469,14 @@ fn as_read(value: &mut AttributeValue) {
     }
 }
 
+/// Whether every finite value of `plane` is within half's range (its infinities are half's
+/// too).
+fn fits_half(plane: &[f32]) -> bool {
+    plane
+        .iter()
+        .all(|v| !v.is_finite() || v.abs() <= f32::from(f16::MAX))
+}
+
 /// Each channel's samples in the pixel type its input part stored it in (half with `half`).
 fn channels_like(
     channels: Vec<OutChannel>,
@@ -499,6 +503,12 @@ fn channels_like(
             let kind = match stored(read_as) {
                 _ if exact.is_some() => SampleType::U32,
                 Some(SampleType::U32) => SampleType::U32,
+                // A data channel that half cannot hold (a depth of 1e10 for empty pixels, a
+                // world position of −7e4) stays float: half would make it ±∞, where colour
+                // saturates (below).
+                _ if output.half && class != LayerClass::Colour && !fits_half(&plane) => {
+                    SampleType::F32
+                }
                 _ if output.half => SampleType::F16,
                 stored => stored.unwrap_or(SampleType::F32),
             };
