@@ -845,3 +845,49 @@ fn memory_the_system_refuses_is_too_large_not_corrupt() {
     assert!(text.contains("\"too_large\""), "{text}");
     assert!(!text.contains("\"corrupt\""), "{text}");
 }
+
+/// Under an address-space limit (`ulimit -v`, as SGE's `h_vmem` sets it) of 300 MB, the
+/// default `max-memory` leaves room for a small frame, which runs: the room kept for the
+/// program (768 MiB) was taken whole from any limit, so every job under 1.2 GB was refused
+/// ("over the 0 MiB max-memory allows"). Under a limit too tight for the frame, the message
+/// names the limit that set the default.
+#[cfg(unix)]
+#[test]
+fn a_small_frame_runs_under_a_tight_address_space_limit_and_a_refusal_names_the_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (64, 48);
+    let n = w * h;
+    let color = dir.path().join("color.exr");
+    write_exr(
+        &color,
+        w,
+        h,
+        vec![
+            ("R", noise(n, 1, 0.0, 1.0)),
+            ("G", noise(n, 2, 0.0, 1.0)),
+            ("B", noise(n, 3, 0.0, 1.0)),
+            ("Z", vec![3.0; n]),
+            ("velocity.X", vec![4.0; n]),
+            ("velocity.Y", vec![0.0; n]),
+        ],
+    );
+    let out = s(&dir.path().join("o.exr"));
+    let args = [
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &s(&color),
+        "-o",
+        &out,
+    ];
+    let o = shutter_capped(300_000, &args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = shutter_capped(120_000, &args);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("too large") && err.contains("address-space limit (ulimit -v)"),
+        "{err}"
+    );
+}

@@ -6,20 +6,41 @@
 /// less room for code, thread stacks and the allocator's reservations; a cgroup's
 /// `memory.max`, as containers and farm schedulers set it). 8 GiB where none can be read.
 pub fn memory_limit() -> u64 {
+    memory_limit_said().0
+}
+
+/// [`memory_limit`], and which limit set it, in words (for a message that refuses a frame).
+pub fn memory_limit_said() -> (u64, String) {
+    let mib = |bytes: u64| bytes >> 20;
     let mut limit = physical_memory().map_or(8 << 30, |total| total / 2);
+    let mut said = "half the machine's memory".to_string();
     #[cfg(unix)]
     if let Ok((soft, _)) = nix::sys::resource::getrlimit(nix::sys::resource::Resource::RLIMIT_AS) {
         if soft != nix::sys::resource::RLIM_INFINITY {
-            limit = limit.min(soft.saturating_sub(ADDRESS_SPACE_ROOM));
+            // Under a tight limit the room shrinks with it (the allocator then reserves
+            // less): all of 768 MiB under a limit of 700 MB left 0 MiB for frames that fit.
+            let room = ADDRESS_SPACE_ROOM.min(soft / 3);
+            if soft.saturating_sub(room) < limit {
+                limit = soft.saturating_sub(room);
+                said = format!(
+                    "the process's address-space limit (ulimit -v) of {} MiB, less {} MiB \
+                     for the program",
+                    mib(soft),
+                    mib(room)
+                );
+            }
         }
     }
     if let Some(cgroup) = std::fs::read_to_string("/sys/fs/cgroup/memory.max")
         .ok()
         .and_then(|t| t.trim().parse::<u64>().ok())
     {
-        limit = limit.min(cgroup);
+        if cgroup < limit {
+            limit = cgroup;
+            said = format!("the cgroup's memory.max of {} MiB", mib(cgroup));
+        }
     }
-    limit
+    (limit, said)
 }
 
 /// What the address space holds besides the frames' memory: the program, thread stacks, the

@@ -384,7 +384,13 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         }
     }
     // What the frames need in memory, from their headers, against the limit.
-    let limit = job.max_memory.unwrap_or_else(memory_limit);
+    let (limit, said) = match job.max_memory {
+        Some(limit) => (limit, String::new()),
+        None => {
+            let (limit, said) = memory::memory_limit_said();
+            (limit, format!(" (by default {said})"))
+        }
+    };
     let gpu = job.backend != Backend::Cpu;
     // The vector check holds a few planes of one frame besides.
     let checks = job.check_vectors && VectorCheck::applies(&job.inputs.color, options.needs);
@@ -419,11 +425,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                     mib(decoded),
                     mib(plan.decoder_bytes()),
                     mib(limit),
-                    if job.max_memory.is_none() {
-                        " (by default half the machine's memory, within its limits)"
-                    } else {
-                        ""
-                    }
+                    said
                 ),
             )
             .frame(plan.frame)]));
