@@ -342,6 +342,10 @@ fn a_tiff_comes_out_compressed_with_its_alpha_declared() {
     if let Some(tags) = exiftool(&out) {
         assert_eq!(tags["ProfileDescription"], "Adobe RGB 1998", "{tags}");
         assert_eq!(tags["ExtraSamples"], 2, "{tags}");
+        // The profile's tag of the type the ICC's TIFF embedding gives (UNDEFINED): stored
+        // BYTE, exiftool's validation called it non-standard.
+        let warnings = tool("exiftool", &["-validate", "-warning", "-a", &s(&out)]).unwrap();
+        assert!(!warnings.contains("ICC_Profile"), "{warnings}");
     }
 }
 

@@ -430,13 +430,15 @@ fn write_tiff(
                 tags.write_tag(Tag::ExtraSamples, &[alpha_kind][..])
                     .map_err(error)?;
             }
-            for (tag, block) in [
-                (TIFF_ICC, icc),
-                (TIFF_XMP, xmp),
-                (TIFF_PHOTOSHOP, resources.as_deref()),
+            // The profile UNDEFINED, as the ICC's TIFF embedding gives it (written BYTE,
+            // `exiftool -validate` called it non-standard); XMP and the Photoshop blocks BYTE.
+            for (tag, kind, block) in [
+                (TIFF_ICC, Type::UNDEFINED, icc),
+                (TIFF_XMP, Type::BYTE, xmp),
+                (TIFF_PHOTOSHOP, Type::BYTE, resources.as_deref()),
             ] {
                 if let Some(block) = block {
-                    tiff_meta::write_raw(tags, tag, Type::BYTE, block).map_err(error)?;
+                    tiff_meta::write_raw(tags, tag, kind, block).map_err(error)?;
                 }
             }
             if let Some(records) = records {
