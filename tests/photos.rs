@@ -398,9 +398,7 @@ fn a_pngs_text_chunks_come_out_again() {
     velocity_map(&velocity, w, h, |_, _| 3.0);
     let out = dir.path().join("out.png");
     blur(&input, &velocity, &out, &[]);
-    let reader = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&out).unwrap()))
-        .read_info()
-        .unwrap();
+    let reader = png_header(&out);
     let info = reader.info();
     let latin1: Vec<(&str, &str)> = info
         .uncompressed_latin1_text
@@ -1112,22 +1110,19 @@ fn a_map_of_another_size_than_the_photo_is_refused_larger_as_well_as_smaller() {
 
 /// A PNG chunk: its length, kind, data and CRC (PNG 3rd ed., 5.3).
 fn png_chunk(kind: &[u8; 4], data: &[u8]) -> Vec<u8> {
-    let mut crc = 0xFFFF_FFFFu32;
-    for &b in kind.iter().chain(data) {
-        crc ^= b as u32;
-        for _ in 0..8 {
-            crc = if crc & 1 != 0 {
-                (crc >> 1) ^ 0xEDB8_8320
-            } else {
-                crc >> 1
-            };
-        }
-    }
+    let crc = crate::support::malformed::crc32(&[&kind[..], data].concat());
     let mut chunk = (data.len() as u32).to_be_bytes().to_vec();
     chunk.extend(kind);
     chunk.extend(data);
-    chunk.extend((!crc).to_be_bytes());
+    chunk.extend(crc.to_be_bytes());
     chunk
+}
+
+/// A PNG's header chunks as the png crate reads them.
+fn png_header(path: &Path) -> png::Reader<std::io::BufReader<std::fs::File>> {
+    png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()))
+        .read_info()
+        .unwrap()
 }
 
 /// `png`'s bytes with `early` spliced in after its IHDR and `late` before its IEND.
@@ -1168,9 +1163,7 @@ fn a_pngs_exif_and_text_after_its_image_data_are_read() {
         &s(&out),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let reader = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&out).unwrap()))
-        .read_info()
-        .unwrap();
+    let reader = png_header(&out);
     let info = reader.info();
     assert_eq!((info.width, info.height), (16, 12), "turned upright");
     let exif = info.exif_metadata.as_ref().expect("the EXIF comes out");
@@ -1204,9 +1197,7 @@ fn a_pngs_international_text_keeps_its_language() {
     let out = dir.path().join("out.png");
     let o = dof_still(&photo, &out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let reader = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&out).unwrap()))
-        .read_info()
-        .unwrap();
+    let reader = png_header(&out);
     let utf8 = &reader.info().utf8_text;
     assert_eq!(utf8.len(), 1);
     assert_eq!(

@@ -38,10 +38,12 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
     let jpeg = reader.format() == Some(image::ImageFormat::Jpeg);
     let tiff = reader.format() == Some(image::ImageFormat::Tiff);
     let png = reader.format() == Some(image::ImageFormat::Png);
-    let (texts, png_colour, mut resolution) = if png {
-        png_chunks(path)
-    } else {
-        (Vec::new(), None, None)
+    // A PNG's chunks read once (those after its image data too), for its texts, colour
+    // chunks, resolution, and an eXIf or XMP the image crate does not see.
+    let png_header = png.then(|| png_info(path, false)).flatten();
+    let (texts, png_colour, mut resolution) = match &png_header {
+        Some(info) => png_chunks(path, info),
+        None => (Vec::new(), None, None),
     };
     let mut decoder = match reader.into_decoder() {
         Ok(decoder) => decoder,
@@ -67,9 +69,9 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
     if jpeg {
         iptc = decoder.iptc_metadata().ok().flatten();
     }
-    if png && (exif.is_none() || xmp.is_none()) {
+    if png_header.is_some() && (exif.is_none() || xmp.is_none()) {
         // An eXIf or an XMP iTXt after the image data, where the image crate does not look.
-        if let Some(info) = png_info(path, false) {
+        if let Some(info) = png_header {
             if exif.is_none() {
                 exif = info.exif_metadata.map(|e| e.into_owned());
             }
@@ -166,16 +168,13 @@ fn grey_float_photo(path: &Path, header: &super::tiff_float::Header) -> Photo {
 /// allocations are capped as the header's are.
 fn png_chunks(
     path: &Path,
+    info: &png::Info<'static>,
 ) -> (
     Vec<crate::frame::PngText>,
     Option<PngColour>,
     Option<Resolution>,
 ) {
     use crate::frame::{PngText, TextKind};
-    let Some(info) = png_info(path, false) else {
-        return (Vec::new(), None, None);
-    };
-    let info = &info;
     // The three lists are kept apart by the decoder: file order within each kind.
     let mut texts: Vec<PngText> = info
         .uncompressed_latin1_text
