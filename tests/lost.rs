@@ -444,7 +444,7 @@ fn a_deleted_lock_file_stops_the_job_that_lost_it() {
     let out = format!("{}/o.####.exr", out_dir.display());
     let args = ["blur", "--color", &color, "-o", &out, "--threads", "1"];
     let mut first = spawn(&args);
-    let lock = out_dir.join(".o.####.exr.lock");
+    let lock = out_dir.join(".shutter.lock");
     assert!(
         wait_for_name(&mut first, &out_dir, |n| n.ends_with(".tmp")),
         "the first run ended before it wrote a frame"
@@ -824,7 +824,7 @@ fn a_job_waits_for_another_releasing_the_lock_file_instead_of_calling_its_frame_
     let color = sequence(dir.path(), 2, 32, 24);
     let out_dir = dir.path().join("out");
     std::fs::create_dir_all(&out_dir).unwrap();
-    let lock = out_dir.join(".o.####.exr.lock");
+    let lock = out_dir.join(".shutter.lock");
     // struct flock on 64-bit Linux: l_type, l_whence, (padding), l_start, l_len, l_pid.
     let script = r#"
         use Fcntl;
@@ -862,4 +862,115 @@ fn a_job_waits_for_another_releasing_the_lock_file_instead_of_calling_its_frame_
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(out_dir.join("o.0001.exr").exists());
     assert!(!lock.exists(), "the lock file is removed");
+}
+
+/// A file is locked by its name, whatever pattern names it: `o.####.exr`, `o.#.exr` and a
+/// still's `o.1002.exr` all write `o.1002.exr` (an outside probe: keyed by the pattern's
+/// spelling, such jobs wrote one file side by side, each exiting 0). `o.%05d.exr` writes
+/// `o.01002.exr`, another file: it runs alongside.
+#[test]
+fn jobs_naming_one_file_by_other_patterns_exclude_each_other() {
+    let dir = tempfile::tempdir().unwrap();
+    for frame in 1000..=1005 {
+        write_canonical_frame(dir.path(), Some(frame), 320, 240);
+    }
+    let color = format!("{}/C.####.exr", dir.path().display());
+    let out_dir = dir.path().join("out");
+    let out = |pattern: &str| format!("{}/{pattern}", out_dir.display());
+    let first_out = out("o.####.exr");
+    let first = [
+        "blur",
+        "--color",
+        &color,
+        "-o",
+        &first_out,
+        "--frames",
+        "1000-1005",
+        "--threads",
+        "1",
+    ];
+    let mut first = spawn(&first);
+    assert!(
+        wait_for_name(&mut first, &out_dir, |n| n.ends_with(".tmp")
+            || n.starts_with("o.")),
+        "the first job ended before it wrote anything"
+    );
+    signal(&first, "STOP");
+    assert!(first.try_wait().unwrap().is_none(), "the first job ended");
+    let before = names(&out_dir);
+
+    let unpadded = out("o.#.exr");
+    let still_in = format!("{}/C.1004.exr", dir.path().display());
+    let still_out = out("o.1004.exr");
+    for (args, file) in [
+        (
+            vec![
+                "blur", "--color", &color, "-o", &unpadded, "--frames", "1005",
+            ],
+            "o.1005.exr, frame 1005",
+        ),
+        (
+            vec!["blur", "--color", &still_in, "-o", &still_out],
+            "o.1004.exr",
+        ),
+    ] {
+        let o = shutter(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(75), "{args:?}: {err}");
+        assert!(
+            err.starts_with("shutter: error: busy: ")
+                && err.contains(&format!("(pid {})", first.id()))
+                && err.contains(file),
+            "{err}"
+        );
+        assert_eq!(names(&out_dir), before, "{args:?} wrote something");
+    }
+    let wider = out("o.%05d.exr");
+    let o = shutter(&["blur", "--color", &color, "-o", &wider, "--frames", "1005"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+
+    signal(&first, "CONT");
+    let o = first.wait_with_output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut expected: Vec<String> = (1000..=1005).map(|f| format!("o.{f}.exr")).collect();
+    expected.insert(0, "o.01005.exr".to_string());
+    assert_eq!(
+        names(&out_dir),
+        expected,
+        "no lock or temporary file is left"
+    );
+}
+
+/// An output name of 250 bytes, near the 255 a file name may have: its temporary name
+/// (`.NAME.PID.tmp`) is shortened to fit, the frames are written, and what a killed run left
+/// is removed by the next (an outside probe: the temporary file could not be made, "File
+/// name too long", and no such frame could be written).
+#[test]
+fn an_output_name_near_the_longest_a_file_may_have_is_written_and_its_leftovers_removed() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = sequence(dir.path(), 12, 320, 240);
+    let out_dir = dir.path().join("out");
+    let stem = "o".repeat(241);
+    let out = format!("{}/{stem}.####.exr", out_dir.display());
+    let args = ["blur", "--color", &color, "-o", &out, "--threads", "1"];
+    let mut killed = spawn(&args);
+    assert!(
+        wait_for_name(&mut killed, &out_dir, |n| n.ends_with(".tmp")),
+        "the run ended before it wrote a frame"
+    );
+    signal(&killed, "KILL");
+    killed.wait().unwrap();
+    let left = names(&out_dir);
+    assert!(left.iter().any(|n| n.ends_with(".tmp")), "{left:?}");
+    assert!(left.iter().all(|n| n.len() <= 255));
+
+    let mut resumed = args.to_vec();
+    resumed.extend(["--skip-existing", "--json"]);
+    let o = shutter(&resumed);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let warnings = report["warnings"].to_string();
+    assert!(warnings.contains("removed 1 temporary file"), "{warnings}");
+    let expected: Vec<String> = (1..=12).map(|f| format!("{stem}.{f:04}.exr")).collect();
+    assert_eq!(names(&out_dir), expected);
 }

@@ -1,18 +1,23 @@
-//! The output lock: one hidden file per output sequence, beside the outputs and named after
-//! the pattern (`out/.o.####.exr.lock` for `-o out/o.####.exr`), in which each job holds an
-//! advisory lock on the frames it writes. A second job on any of the same frames fails at
-//! once, naming the process that holds them; jobs on other frames of the same sequence (a
-//! farm's chunks) run side by side. The kernel releases a dead holder's locks, so a lock file
-//! a killed run left behind is simply taken over.
+//! The output lock: one hidden file per output folder (`out/.shutter.lock` for
+//! `-o out/o.####.exr`), in which each job holds an advisory lock on the files it writes. A
+//! second job on any of the same files fails at once, naming the process that holds them;
+//! jobs on other files of the folder (a farm's chunks, other sequences) run side by side. The
+//! kernel releases a dead holder's locks, so a lock file a killed run left behind is simply
+//! taken over.
 //!
-//! On Unix these are `fcntl` byte-range locks, byte `frame + 1e9` for a frame and byte 0 for a
-//! single still: `F_GETLK` names the conflicting process and its frame. Whole-file locks
-//! (`flock`, std's `File::lock`, fs4) were the simpler choice, rejected because they make
-//! chunks of one sequence refuse each other. Elsewhere the whole file is locked (std).
+//! A file's lock is keyed by its name, not by the pattern or frame number that made it:
+//! `o.#.exr` and `o.####.exr` both write `o.1234.exr` for frame 1234, and a still written as
+//! `-o o.1234.exr` is that file too, so each of them must exclude the others (keyed by the
+//! pattern's spelling before, two such jobs wrote one file side by side, both exiting 0). On
+//! Unix these are `fcntl` byte-range locks, one byte per file ([`name_byte`]): consecutive
+//! frames of a sequence have consecutive bytes, so a chunk's frames lock as one range, and
+//! `F_GETLK` says which of them another process holds. Whole-file locks (`flock`, std's
+//! `File::lock`, fs4) were the simpler choice, rejected because they make chunks of one
+//! sequence refuse each other. Elsewhere the whole file is locked (std).
 //!
 //! The lock file is removed when the run ends (normally, with an error, or by a caught
-//! signal through [`abandon_locks`]) by the last job holding any frame of it: a job first
-//! takes a lock on the whole file, which succeeds only when no other process holds a frame,
+//! signal through [`abandon_locks`]) by the last job holding any file of it: a job first
+//! takes a lock on the whole file, which succeeds only when no other process holds a file,
 //! and unlinks while holding it. A job that opened the file just before that unlink finds,
 //! once locked, that the path names another file (or none) and starts again.
 //!
@@ -20,7 +25,7 @@
 //! job lock a new file at the same path and write the same frames: before each frame is
 //! renamed into place the job checks that its lock is still the file its path names
 //! ([`verify_held`]), takes it again on a new file when it is not, and stops (exit 75)
-//! without writing the frame when another job holds any of its frames there. It never
+//! without writing the frame when another job holds any of its files there. It never
 //! removes a lock file that is not its own.
 
 use std::fs::{File, OpenOptions};
@@ -28,17 +33,17 @@ use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use crate::error::{Problem, ProblemKind, WriteFailure};
-use crate::io::sequence::{PathPattern, MAX_FRAME_NUMBER};
+use crate::io::sequence::{name_start, PathPattern};
 
-/// The lock file of an output sequence: hidden, in the output folder, named after the
-/// pattern with `####` for the frame number, so that `o.####.exr` and `o.%04d.exr` share it
+/// The name of the lock file in an output folder.
+pub const LOCK_NAME: &str = ".shutter.lock";
+
+/// The lock file of an output: hidden, in the output folder, one for every file written there
 /// (a placeholder is only ever in the file name: [`PathPattern::parse`]).
 pub fn lock_path(output: &PathPattern) -> PathBuf {
-    let pattern = output.with_hashes();
-    let split = pattern.rfind(std::path::is_separator).map_or(0, |i| i + 1);
-    let (folder, name) = pattern.split_at(split);
+    let folder = &output.raw[..name_start(&output.raw)];
     let folder = if folder.is_empty() { "." } else { folder };
-    Path::new(folder).join(format!(".{name}.lock"))
+    Path::new(folder).join(LOCK_NAME)
 }
 
 /// A held output lock; released (and the lock file removed when no other job holds a frame
@@ -53,8 +58,8 @@ pub struct OutputLock {
 struct Held {
     path: PathBuf,
     file: File,
-    /// The byte ranges of its frames ([`byte_ranges`]).
-    ranges: Vec<(u64, u64)>,
+    /// The bytes of its files.
+    keys: Keys,
     /// Folders made for the lock file, deepest first: removed again if still empty.
     created: Vec<PathBuf>,
 }
@@ -88,7 +93,7 @@ impl OutputLock {
                 format!("cannot create the output folder {}: {e}", folder.display()),
             )
         })?;
-        let ranges = byte_ranges(frames);
+        let keys = Keys::of(output, frames);
         let result = (|| {
             // Waits on a passing conflict (below), a few milliseconds each.
             let mut waits = 0;
@@ -101,11 +106,11 @@ impl OutputLock {
                     .truncate(false)
                     .open(&path)
                     .map_err(|e| fail_with(&e, format!("cannot open the lock file: {e}")))?;
-                for &(start, len) in &ranges {
+                for &(start, len) in &keys.ranges {
                     match platform::lock_range(&file, start, len) {
                         Ok(true) => {}
                         Ok(false) => {
-                            let (frame, pid, passing) = platform::holder(&file, start, len);
+                            let (byte, pid, passing) = platform::holder(&file, start, len);
                             if passing && waits < PASSING_WAITS {
                                 waits += 1;
                                 // A job releasing the file (the whole-file lock it takes
@@ -116,7 +121,7 @@ impl OutputLock {
                                 std::thread::sleep(std::time::Duration::from_millis(2));
                                 continue 'attempts;
                             }
-                            let frame = frame_of(frame.unwrap_or(start));
+                            let frame = keys.frame_at(byte.unwrap_or(start));
                             let who = match pid {
                                 Some(pid) => format!("another process (pid {pid})"),
                                 None => "another process".to_string(),
@@ -125,9 +130,8 @@ impl OutputLock {
                                 ProblemKind::Busy,
                                 output.path(frame),
                                 format!(
-                                    "{who} is writing this frame of {} (lock {}); wait for it \
-                                     to finish, or stop it, or write elsewhere with -o",
-                                    output.raw,
+                                    "{who} is writing this file (lock {}); wait for it to \
+                                     finish, or stop it, or write elsewhere with -o",
                                     path.display()
                                 ),
                             )
@@ -150,7 +154,7 @@ impl OutputLock {
                 held().push(Held {
                     path: path.clone(),
                     file,
-                    ranges,
+                    keys,
                     created,
                 });
                 Ok(OutputLock { path })
@@ -214,15 +218,17 @@ pub fn verify_held() -> Result<(), WriteFailure> {
             .truncate(false)
             .open(&lock.path)
             .map_err(|e| WriteFailure::of_io(&e, lost(format!("it cannot be made again: {e}"))))?;
-        for &(start, len) in &lock.ranges {
+        for &(start, len) in &lock.keys.ranges {
             match platform::lock_range(&file, start, len) {
                 Ok(true) => {}
                 Ok(false) => {
-                    let (frame, pid, _) = platform::holder(&file, start, len);
+                    let (byte, pid, _) = platform::holder(&file, start, len);
                     let who = pid.map_or("another process".to_string(), |pid| {
                         format!("another process (pid {pid})")
                     });
-                    let frame = frame_of(frame.unwrap_or(start))
+                    let frame = lock
+                        .keys
+                        .frame_at(byte.unwrap_or(start))
                         .map_or(String::new(), |f| format!(" frame {f}"));
                     return Err(WriteFailure::transient(lost(format!(
                         "{who} has since locked{frame}"
@@ -268,30 +274,98 @@ fn release(held: Held) {
     remove_empty(&held.created);
 }
 
-/// Byte ranges `(start, length)` to lock for `frames`: byte 0 for a still, `frame + 1e9` for a
-/// frame, runs of consecutive frames merged.
-fn byte_ranges(frames: &[Option<i64>]) -> Vec<(u64, u64)> {
-    let mut bytes: Vec<u64> = frames.iter().map(|f| f.map_or(0, frame_byte)).collect();
-    bytes.sort_unstable();
-    bytes.dedup();
-    let mut ranges: Vec<(u64, u64)> = Vec::new();
-    for byte in bytes {
-        match ranges.last_mut() {
-            Some((start, len)) if *start + *len == byte => *len += 1,
-            _ => ranges.push((byte, 1)),
+/// The lock bytes of a job's files.
+#[derive(Debug)]
+struct Keys {
+    /// Byte ranges `(start, length)` to lock: runs of consecutive bytes merged.
+    ranges: Vec<(u64, u64)>,
+    /// Each file's byte and frame, sorted by byte.
+    frames: Vec<(u64, Option<i64>)>,
+}
+
+impl Keys {
+    fn of(output: &PathPattern, frames: &[Option<i64>]) -> Keys {
+        let mut keyed: Vec<(u64, Option<i64>)> = frames
+            .iter()
+            .map(|&frame| {
+                let path = output.path(frame);
+                let name = path.file_name().unwrap_or(path.as_os_str());
+                (name_byte(&name_bytes(name)), frame)
+            })
+            .collect();
+        keyed.sort_unstable();
+        keyed.dedup_by_key(|k| k.0);
+        let mut ranges: Vec<(u64, u64)> = Vec::new();
+        for &(byte, _) in &keyed {
+            match ranges.last_mut() {
+                Some((start, len)) if *start + *len == byte => *len += 1,
+                _ => ranges.push((byte, 1)),
+            }
+        }
+        Keys {
+            ranges,
+            frames: keyed,
         }
     }
-    ranges
+
+    /// The frame whose file has `byte` (none for a still, or a byte not ours).
+    fn frame_at(&self, byte: u64) -> Option<i64> {
+        let at = self.frames.binary_search_by_key(&byte, |k| k.0).ok()?;
+        self.frames[at].1
+    }
 }
 
-/// Frame numbers lie within ±[`MAX_FRAME_NUMBER`]: shifted by it (and one, byte 0 being a
-/// still's), each has a byte of its own at a plain, positive offset.
-fn frame_byte(frame: i64) -> u64 {
-    (frame.clamp(-MAX_FRAME_NUMBER, MAX_FRAME_NUMBER) + MAX_FRAME_NUMBER) as u64 + 1
+#[cfg(unix)]
+fn name_bytes(name: &std::ffi::OsStr) -> Vec<u8> {
+    use std::os::unix::ffi::OsStrExt;
+    name.as_bytes().to_vec()
 }
 
-fn frame_of(byte: u64) -> Option<i64> {
-    byte.checked_sub(1).map(|b| b as i64 - MAX_FRAME_NUMBER)
+#[cfg(not(unix))]
+fn name_bytes(name: &std::ffi::OsStr) -> Vec<u8> {
+    name.to_string_lossy().into_owned().into_bytes()
+}
+
+/// The lock byte of the file named `name` (one byte per name; byte 0 is left for the whole
+/// file's lock of a job releasing it). The name's last run of digits (the frame number of
+/// every pattern whose placeholder comes last) is kept as its number and length, the rest of
+/// the name hashed (64-bit FNV-1a, 28 bits kept), so that one sequence's consecutive frames
+/// have consecutive bytes; a name without such a number (none, or one longer than 15 digits
+/// or over 2^30) is hashed whole. `[hash: 28 bits][digits: 4][number: 30]`, plus one: below
+/// 2^62, inside any `off_t`. Two names share a byte only when they are the same name, or by
+/// a hash collision (one chance in 2^28 for two sequences in one folder, and then only on
+/// frames of the same number), which makes a job wait, never two jobs write one file.
+fn name_byte(name: &[u8]) -> u64 {
+    const NUMBER: u64 = (1 << 30) - 1;
+    let number = name.iter().rposition(u8::is_ascii_digit).and_then(|last| {
+        let end = last + 1;
+        let start = name[..end]
+            .iter()
+            .rposition(|b| !b.is_ascii_digit())
+            .map_or(0, |i| i + 1);
+        let digits = &name[start..end];
+        let value = std::str::from_utf8(digits).ok()?.parse::<u64>().ok()?;
+        (digits.len() <= 15 && value <= NUMBER).then(|| {
+            let rest = fnv1a(&[&name[..start], &[0xFF], &name[end..]]);
+            (rest, (digits.len() as u64) << 30 | value)
+        })
+    });
+    let (hash, low) = number.unwrap_or_else(|| {
+        let hash = fnv1a(&[name]);
+        (hash, hash & NUMBER)
+    });
+    1 + ((hash >> 36) << 34 | low)
+}
+
+/// 64-bit FNV-1a over the parts, one after another (stable across runs and machines, as
+/// names on disk must be).
+pub(crate) fn fnv1a(parts: &[&[u8]]) -> u64 {
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    for &byte in parts.iter().flat_map(|p| p.iter()) {
+        hash ^= u64::from(byte);
+        hash = hash.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    hash
 }
 
 /// Makes `folder` and any missing folder above it; returns those it made, deepest first.
@@ -407,36 +481,69 @@ mod tests {
     use super::*;
 
     #[test]
-    fn lock_files_are_hidden_and_named_after_the_pattern() {
+    fn one_hidden_lock_file_per_output_folder() {
         let lock = |raw: &str| lock_path(&PathPattern::parse(raw).unwrap());
-        assert_eq!(
-            lock("out/o.####.exr"),
-            PathBuf::from("out/.o.####.exr.lock")
-        );
-        assert_eq!(
-            lock("out/o.%04d.exr"),
-            PathBuf::from("out/.o.####.exr.lock")
-        );
-        assert_eq!(lock("o.exr"), PathBuf::from("./.o.exr.lock"));
+        assert_eq!(lock("out/o.####.exr"), PathBuf::from("out/.shutter.lock"));
+        assert_eq!(lock("out/b.%04d.exr"), PathBuf::from("out/.shutter.lock"));
+        assert_eq!(lock("o.exr"), PathBuf::from("./.shutter.lock"));
         // A `#` in a folder's name is part of the name, not a placeholder.
-        assert_eq!(lock("/a/s_##/o.exr"), PathBuf::from("/a/s_##/.o.exr.lock"));
+        assert_eq!(
+            lock("/a/s_##/o.exr"),
+            PathBuf::from("/a/s_##/.shutter.lock")
+        );
         assert_eq!(
             lock("take#2/o.%04d.exr"),
-            PathBuf::from("take#2/.o.####.exr.lock")
+            PathBuf::from("take#2/.shutter.lock")
         );
     }
 
+    /// A file has one byte whatever pattern names it; other files have other bytes.
     #[test]
-    fn frames_become_merged_byte_ranges() {
-        let frames = [Some(3), Some(1), Some(2), Some(7), Some(2)];
-        let base = MAX_FRAME_NUMBER as u64 + 1;
-        assert_eq!(byte_ranges(&frames), [(base + 1, 3), (base + 7, 1)]);
-        assert_eq!(byte_ranges(&[None]), [(0, 1)]);
-        // Negative frames have bytes of their own, and come back as themselves.
-        let ranges = byte_ranges(&[Some(-2), Some(-1), Some(0)]);
-        assert_eq!(ranges, [(base - 2, 3)]);
-        assert_eq!(frame_of(base - 2), Some(-2));
-        assert_eq!(frame_of(0), None);
+    fn a_file_has_the_same_byte_whatever_pattern_names_it() {
+        let keys = |raw: &str, frames: &[Option<i64>]| {
+            let k = Keys::of(&PathPattern::parse(raw).unwrap(), frames);
+            k.frames.iter().map(|f| f.0).collect::<Vec<_>>()
+        };
+        let four = keys("out/o.####.exr", &[Some(1234)]);
+        assert_eq!(keys("out/o.#.exr", &[Some(1234)]), four);
+        assert_eq!(keys("out/o.%04d.exr", &[Some(1234)]), four);
+        assert_eq!(keys("out/o.$F2.exr", &[Some(1234)]), four);
+        assert_eq!(keys("out/o.1234.exr", &[None]), four);
+        // o.1.exr and o.0001.exr are two files; so are frames 1234 of other sequences.
+        assert_ne!(
+            keys("out/o.#.exr", &[Some(1)]),
+            keys("out/o.####.exr", &[Some(1)])
+        );
+        assert_ne!(keys("out/p.####.exr", &[Some(1234)]), four);
+        assert_ne!(keys("out/o.####.tif", &[Some(1234)]), four);
+        assert_ne!(
+            keys("out/o.-###.exr", &[Some(234)]),
+            keys("out/o.####.exr", &[Some(234)])
+        );
+        // Names without a number, or with one too long to keep, are hashed whole.
+        assert_ne!(keys("o.exr", &[None]), keys("p.exr", &[None]));
+        let long = keys("o.12345678901234567890.exr", &[None]);
+        assert_ne!(long, keys("o.12345678901234567891.exr", &[None]));
+        assert!(long[0] > 0 && long[0] < 1 << 62);
+    }
+
+    #[test]
+    fn consecutive_frames_become_one_byte_range() {
+        let output = PathPattern::parse("o.####.exr").unwrap();
+        let keys = Keys::of(&output, &[Some(3), Some(1), Some(2), Some(7), Some(2)]);
+        let first = keys.frames[0].0;
+        assert_eq!(keys.ranges, [(first, 3), (first + 6, 1)]);
+        assert_eq!(keys.frame_at(first + 1), Some(2));
+        assert_eq!(keys.frame_at(first + 6), Some(7));
+        assert_eq!(keys.frame_at(first + 3), None);
+        // Negative frames (`-002`) and frames past the width (`12345`) have bytes of their
+        // own, and are named back.
+        let keys = Keys::of(&output, &[Some(-2), Some(-1), Some(12345), Some(2)]);
+        assert_eq!(keys.ranges.len(), 3);
+        for frame in [-2, -1, 12345, 2] {
+            let byte = keys.frames.iter().find(|f| f.1 == Some(frame)).unwrap().0;
+            assert_eq!(keys.frame_at(byte), Some(frame));
+        }
     }
 
     #[test]
@@ -460,7 +567,7 @@ mod tests {
         let lock = OutputLock::acquire(&output, &[Some(1), Some(2)]).unwrap();
         assert!(lock.path().exists());
         drop(lock);
-        assert!(!dir.path().join("new/.o.####.exr.lock").exists());
+        assert!(!dir.path().join("new/.shutter.lock").exists());
         // The folder made for the lock was empty, so it went too.
         assert!(!dir.path().join("new").exists());
     }

@@ -71,13 +71,37 @@ impl Default for OutputOptions {
 /// The temporary name a frame is written under before it is renamed into place:
 /// `.NAME.PID.tmp`. Starts with a dot so that sequence discovery and `####` patterns never
 /// mistake it for a frame; carries the writer's process id so that a later run can tell a
-/// dead process's leftovers ([`remove_stale_temporaries`]) from a live one's.
+/// dead process's leftovers ([`remove_stale_temporaries`]) from a live one's. NAME is
+/// shortened where the whole would pass the 255 bytes a file name may have
+/// ([`temporary_stem`]).
 pub fn temporary_path(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+    path.with_file_name(format!(
+        ".{}.{}.tmp",
+        temporary_stem(&name),
+        std::process::id()
+    ))
+}
+
+/// The NAME of an output's temporary file: the output's name, or, where `.NAME.PID.tmp`
+/// could pass 255 bytes (NAME_MAX of every common file system; an output name of 242 bytes
+/// or more), its first 222 bytes and `~` and a 64-bit hash of the whole name (before, such
+/// an output failed to open its temporary file: "File name too long").
+fn temporary_stem(name: &str) -> String {
+    // `.`, `.`, a process id of up to 10 digits, `.tmp`.
+    const ROOM: usize = 255 - 16;
+    if name.len() <= ROOM {
+        return name.to_string();
+    }
+    let mut keep = 222;
+    while !name.is_char_boundary(keep) {
+        keep -= 1;
+    }
+    let hash = crate::io::lock::fnv1a(&[name.as_bytes()]);
+    format!("{}~{hash:016x}", &name[..keep])
 }
 
 /// The temporary files this process is writing now, and whether it is stopping: what a
@@ -264,9 +288,9 @@ fn process_is_running(pid: u32) -> bool {
 }
 
 /// Removes the temporary files that processes no longer running left beside `outputs`
-/// (`.NAME.PID.tmp` for an output named NAME, a SIGKILL or a power cut being what leaves
-/// them); a running process's are kept, whatever it is. Each folder is listed once. Returns
-/// the files removed.
+/// (`.NAME.PID.tmp` for an output named NAME ([`temporary_path`]), a SIGKILL or a power cut
+/// being what leaves them); a running process's are kept, whatever it is. Each folder is
+/// listed once. Returns the files removed.
 pub fn remove_stale_temporaries(outputs: &[PathBuf]) -> Vec<PathBuf> {
     let mut by_folder: BTreeMap<PathBuf, HashSet<String>> = BTreeMap::new();
     for path in outputs {
@@ -276,7 +300,7 @@ pub fn remove_stale_temporaries(outputs: &[PathBuf]) -> Vec<PathBuf> {
         by_folder
             .entry(folder.to_path_buf())
             .or_default()
-            .insert(name.to_string_lossy().into_owned());
+            .insert(temporary_stem(&name.to_string_lossy()));
     }
     let mut removed = Vec::new();
     for (folder, names) in by_folder {

@@ -625,7 +625,7 @@ mod tests {
             "a.01.exr",
             // What a run leaves while it writes: never frames.
             ".a.0005.exr.1234.tmp",
-            ".a.####.exr.lock",
+            ".shutter.lock",
         ] {
             std::fs::write(dir.path().join(name), b"").unwrap();
         }
