@@ -459,6 +459,36 @@ fn an_output_that_is_a_hard_link_of_the_input_is_refused() {
     assert!(stderr(&o).contains("overwrite the input"), "{}", stderr(&o));
 }
 
+/// An output that is another frame's input: frame 3's colour is a link to the file frame 2
+/// writes (an earlier run's output read back). Writing frame 2 would change what frame 3
+/// reads, or has read (an outside probe: it did, with exit 0).
+#[cfg(unix)]
+#[test]
+fn an_output_that_is_another_frames_input_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (inputs, out_dir) = (dir.path().join("in"), dir.path().join("out"));
+    std::fs::create_dir_all(&out_dir).unwrap();
+    for frame in 1..=2 {
+        write_canonical_frame(&inputs, Some(frame), 4, 4);
+    }
+    std::fs::copy(inputs.join("C.0001.exr"), out_dir.join("o.0002.exr")).unwrap();
+    std::os::unix::fs::symlink(out_dir.join("o.0002.exr"), inputs.join("C.0003.exr")).unwrap();
+    let before = std::fs::read(out_dir.join("o.0002.exr")).unwrap();
+    let color = format!("{}/C.####.exr", inputs.display());
+    let out = format!("{}/o.####.exr", out_dir.display());
+    let o = shutter(&["blur", "--color", &color, "-o", &out]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("o.0002.exr, frame 2")
+            && err.contains("overwrite the input")
+            && err.contains("C.0003.exr"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(out_dir.join("o.0002.exr")).unwrap(), before);
+    assert!(!out_dir.join("o.0001.exr").exists(), "a frame was written");
+}
+
 #[test]
 fn skip_existing_resumes_a_run() {
     let dir = tempfile::tempdir().unwrap();

@@ -338,6 +338,23 @@ pub fn preflight(
     if let Some(problem) = missing_in_bulk(&inputs.color, frames) {
         return Err(Error::Files(vec![problem]));
     }
+    // Every input of every frame, by what the file is: an output that is another frame's
+    // input (a link to a file of the outputs, an earlier run's output read back) would change
+    // what that frame reads, or has read (an outside probe: frame 2's output replaced the file
+    // frame 3 read through a link, with exit 0).
+    let every_input: std::collections::HashMap<_, PathBuf> = frames
+        .par_iter()
+        .flat_map_iter(|&frame| {
+            inputs
+                .all()
+                .into_iter()
+                .map(move |(_, p)| p.path(frame))
+                .filter_map(|input| identity(&input).map(|id| (id, input)))
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .rev()
+        .collect();
     let results: Vec<std::result::Result<FramePlan, Vec<Problem>>> = frames
         .par_iter()
         .map(|&frame| {
@@ -347,7 +364,8 @@ pub fn preflight(
                 .all()
                 .into_iter()
                 .map(|(_, p)| p.path(frame))
-                .find(|input| same_file(input, &output));
+                .find(|input| same_file(input, &output))
+                .or_else(|| identity(&output).and_then(|id| every_input.get(&id).cloned()));
             let too_large = plan
                 .as_ref()
                 .ok()
