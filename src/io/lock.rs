@@ -21,11 +21,12 @@
 //! and unlinks while holding it. A job that opened the file just before that unlink finds,
 //! once locked, that the path names another file (or none) and starts again.
 //!
-//! A lock file deleted under a running job (by hand, or with its folder) would let a second
-//! job lock a new file at the same path and write the same frames: before each frame is
-//! renamed into place the job checks that its lock is still the file its path names
-//! ([`verify_held`]), takes it again on a new file when it is not, and stops (exit 75)
-//! without writing the frame when another job holds any of its files there. It never
+//! A lock file deleted under a running job (by hand) would let a second job lock a new file
+//! at the same path and write the same frames: before each frame is renamed into place the
+//! job checks that its lock is still the file its path names ([`verify_held`]), takes it
+//! again on a new file when it is not, and stops (exit 75) without writing the frame when
+//! another job holds any of its files there. Deleted with its folder, it stops (exit 75)
+//! too: the frames it had written went with the folder, and a rerun writes them again. It never
 //! removes a lock file that is not its own.
 
 use std::fs::{File, OpenOptions};
@@ -187,12 +188,13 @@ impl Drop for OutputLock {
 }
 
 /// Checks that every lock this process holds is still on the file its path names, just
-/// before a frame is renamed into place. Someone may have deleted the lock file (or its
-/// folder) under a running job, and a second job on the same frames would then lock a new
-/// file and run beside it: a lock whose file is gone is taken again on a new file at the
-/// same path, and when another process holds any of its frames there, this fails, naming
-/// it, so the frame is not written (the run stops with exit 75) and the two jobs do not
-/// write one frame. Without held locks (a library caller) nothing is checked.
+/// before a frame is renamed into place. Someone may have deleted the lock file under a
+/// running job, and a second job on the same frames would then lock a new file and run
+/// beside it: a lock whose file is gone is taken again on a new file at the same path, and
+/// when another process holds any of its frames there, this fails, naming it, so the frame is
+/// not written (the run stops with exit 75) and the two jobs do not write one frame. A lock
+/// whose folder is gone fails too (transient): the outputs written there went with it.
+/// Without held locks (a library caller) nothing is checked.
 pub fn verify_held() -> Result<(), WriteFailure> {
     let mut held = held();
     for lock in held.iter_mut() {
@@ -206,10 +208,16 @@ pub fn verify_held() -> Result<(), WriteFailure> {
                 lock.path.display()
             )
         };
-        if let Some(folder) = lock.path.parent() {
-            std::fs::create_dir_all(folder).map_err(|e| {
-                WriteFailure::of_io(&e, lost(format!("it cannot be made again: {e}")))
-            })?;
+        // Gone with its folder, the outputs written into it went too: the run stops so that
+        // a rerun writes them again, rather than make the folder again and end well without
+        // them ([`crate::io::output`]'s `folder_gone`).
+        if let Some(folder) = lock.path.parent().filter(|f| !f.is_dir()) {
+            return Err(WriteFailure::transient(format!(
+                "the output folder {} was removed while this run wrote into it, and the \
+                 frames written into it before with it; run again (with --skip-existing) to \
+                 write them",
+                folder.display()
+            )));
         }
         let file = OpenOptions::new()
             .read(true)

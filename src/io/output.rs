@@ -144,7 +144,9 @@ impl Temporary {
             .create(true)
             .truncate(true)
             .open(&path)
-            .map_err(|e| WriteFailure::of_io(&e, e.to_string()))?;
+            .map_err(|e| {
+                folder_gone(&path, &e).unwrap_or_else(|| WriteFailure::of_io(&e, e.to_string()))
+            })?;
         in_flight.temporaries.push(path.clone());
         Ok((
             Temporary {
@@ -156,10 +158,29 @@ impl Temporary {
     }
 
     fn rename_to(mut self, path: &Path) -> Result<(), WriteFailure> {
-        std::fs::rename(&self.path, path).map_err(|e| WriteFailure::of_io(&e, e.to_string()))?;
+        std::fs::rename(&self.path, path).map_err(|e| {
+            folder_gone(path, &e).unwrap_or_else(|| WriteFailure::of_io(&e, e.to_string()))
+        })?;
         self.renamed = true;
         Ok(())
     }
+}
+
+/// A write that failed because the output folder is gone (removed while the run wrote into
+/// it, by hand or by a cleanup): transient, so that a farm reruns the job, which makes the
+/// folder again and, with `--skip-existing`, writes again every frame that went with it.
+/// (An outside probe: exit 1, "No such file or directory", read by a farm as a job to fix.)
+/// Made again and carried on instead, the run would end with exit 0 and the frames it wrote
+/// before gone.
+fn folder_gone(path: &Path, error: &std::io::Error) -> Option<WriteFailure> {
+    let folder = path.parent().filter(|f| !f.as_os_str().is_empty())?;
+    (error.kind() == std::io::ErrorKind::NotFound && !folder.is_dir()).then(|| {
+        WriteFailure::transient(format!(
+            "the output folder {} was removed while this run wrote into it, and the frames \
+             written into it before with it; run again (with --skip-existing) to write them",
+            folder.display()
+        ))
+    })
 }
 
 impl Drop for Temporary {

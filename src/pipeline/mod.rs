@@ -468,17 +468,29 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         );
     }
 
-    // Output folders no file can be created in, tried with a probe file now that nothing
-    // else can fail first (the probe changes the folder's modification time).
-    let unwritable = output_folder_problems(&job.output, &job.frames, true);
-    if !unwritable.is_empty() {
-        return Err(crate::Error::Files(unwritable));
+    // What is there already (`--skip-existing`): a frame found whole stays whole, as
+    // outputs are only ever replaced by whole frames.
+    let existing: Vec<Existing> = plans
+        .iter()
+        .map(|plan| existing_output(job, plan, &job.output.path(plan.frame), &views))
+        .collect();
+    // A finished run run again writes nothing: it needs neither a folder it may write in
+    // (a delivered sequence made read-only) nor the lock (an outside probe: it failed as
+    // "not writable").
+    let (mut _lock, mut stale) = (None, Vec::new());
+    if !existing.iter().all(|e| matches!(e, Existing::Whole)) {
+        // Output folders no file can be created in, tried with a probe file now that
+        // nothing else can fail first (the probe changes the folder's modification time).
+        let unwritable = output_folder_problems(&job.output, &job.frames, true);
+        if !unwritable.is_empty() {
+            return Err(crate::Error::Files(unwritable));
+        }
+        // The first thing written: the lock on this job's frames (another job on any of
+        // them stops here), released when `_lock` drops, whatever way the run ends.
+        _lock = Some(OutputLock::acquire(&job.output, &job.frames)?);
+        let outputs: Vec<PathBuf> = job.frames.iter().map(|&f| job.output.path(f)).collect();
+        stale = remove_stale_temporaries(&outputs);
     }
-    // The first thing written: the lock on this job's frames (another job on any of them
-    // stops here), released when `_lock` drops, whatever way the run ends.
-    let _lock = OutputLock::acquire(&job.output, &job.frames)?;
-    let outputs: Vec<PathBuf> = job.frames.iter().map(|&f| job.output.path(f)).collect();
-    let stale = remove_stale_temporaries(&outputs);
     if !stale.is_empty() {
         warn(
             &mut report,
@@ -494,9 +506,9 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     }
     let mut todo = Vec::with_capacity(plans.len());
     let mut todo_others = Vec::with_capacity(plans.len());
-    for (plan, other_views) in plans.into_iter().zip(others) {
+    for ((plan, other_views), existing) in plans.into_iter().zip(others).zip(existing) {
         let (frame, path) = (plan.frame, job.output.path(plan.frame));
-        match existing_output(job, &plan, &path, &views) {
+        match existing {
             Existing::Whole => {
                 report.frames_skipped += 1;
                 report.skipped.push(Output {
@@ -683,10 +695,10 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                             warn(&mut report, on_event, format!("{}: {note}", job.output.raw));
                         }
                         let t = Instant::now();
-                        // Folders are made only when a frame is ready to go in them, so a run
-                        // that fails earlier leaves the file system as it was.
-                        let written = create_parent(&path, frame)
-                            .and_then(|()| write_views(&path, out, &job.output_options, frame));
+                        // The output folder is the lock's, made with it (and removed with it
+                        // while empty), never made again here: gone, the frames written in it
+                        // went with it, and the write stops the run for a rerun (exit 75).
+                        let written = write_views(&path, out, &job.output_options, frame);
                         report.write_seconds += t.elapsed().as_secs_f64();
                         match written {
                             Ok(()) => {
@@ -764,21 +776,5 @@ fn views_to_write(job: &Job, every_channel: bool) -> Vec<Option<String>> {
             names.into_iter().map(Some).collect()
         }
         _ => vec![None],
-    }
-}
-
-fn create_parent(path: &Path, frame: Option<i64>) -> std::result::Result<(), Problem> {
-    match path.parent() {
-        Some(parent) if !parent.as_os_str().is_empty() => {
-            std::fs::create_dir_all(parent).map_err(|e| {
-                Problem::new(
-                    ProblemKind::of_output_error(&e),
-                    parent,
-                    format!("cannot create the output folder: {e}"),
-                )
-                .frame(frame)
-            })
-        }
-        _ => Ok(()),
     }
 }
