@@ -101,6 +101,41 @@ fn a_signal_removes_the_temporary_file(name: &str, code: i32) {
     );
 }
 
+/// `--json` stopped by a signal: the error object on stdout, as for any run that fails (an
+/// outside probe: stdout was empty, so a farm's parser failed on it).
+#[test]
+fn a_signal_under_json_prints_the_error_object() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = sequence(dir.path(), 12, 320, 240);
+    let out_dir = dir.path().join("out");
+    let out = format!("{}/o.####.exr", out_dir.display());
+    let args = [
+        "blur",
+        "--color",
+        &color,
+        "-o",
+        &out,
+        "--threads",
+        "1",
+        "--json",
+    ];
+    let mut child = spawn(&args);
+    assert!(
+        wait_for_name(&mut child, &out_dir, |n| n.ends_with(".tmp")),
+        "the run ended before a temporary file was seen"
+    );
+    signal(&child, "TERM");
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(143), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(report["ok"], false, "{report}");
+    assert_eq!(report["command"], "blur", "{report}");
+    assert_eq!(report["error"]["kind"], "interrupted", "{report}");
+    assert_eq!(report["error"]["exit_code"], 143, "{report}");
+    let message = report["error"]["message"].as_str().unwrap();
+    assert!(message.starts_with("stopped by SIGTERM"), "{message}");
+}
+
 #[test]
 fn sigterm_removes_the_temporary_file() {
     a_signal_removes_the_temporary_file("TERM", 143);

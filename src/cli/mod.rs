@@ -91,7 +91,7 @@ fn parse_and_run() -> i32 {
     if let Err(error) = check_thread_variable() {
         return failed(&error, error.exit_code());
     }
-    stop_cleanly_on_signals();
+    stop_cleanly_on_signals(json.then_some(command));
     let result = match cli.command {
         Command::Blur(args) => blur::blur(*args, false),
         Command::Dof(args) => blur::blur(*args, true),
@@ -232,7 +232,7 @@ pub const STOPPING_SIGNALS: [(i32, &str); 9] = {
 /// whole; `--skip-existing` finishes the run. A thread of its own waits for the signal
 /// (signal-hook), so the cleanup is ordinary code, not a signal handler's.
 #[cfg(unix)]
-fn stop_cleanly_on_signals() {
+fn stop_cleanly_on_signals(json: Option<&'static str>) {
     let numbers = STOPPING_SIGNALS.map(|(number, _)| number);
     let Ok(mut signals) = signal_hook::iterator::Signals::new(numbers) else {
         // Without the handler the default applies: the process dies, and the next run over
@@ -246,19 +246,35 @@ fn stop_cleanly_on_signals() {
                 .find(|(number, _)| *number == signal)
                 .map_or("a signal", |(_, name)| name);
             let abandoned = crate::io::abandon();
-            eprintln!(
-                "shutter: stopped by {name}: {} unfinished temporary file{} removed, frames \
-                 written before are whole; rerun with --skip-existing to finish",
+            let message = format!(
+                "stopped by {name}: {} unfinished temporary file{} removed, frames written \
+                 before are whole; rerun with --skip-existing to finish",
                 abandoned.temporaries,
                 if abandoned.temporaries == 1 { "" } else { "s" }
             );
+            eprintln!("shutter: {message}");
+            // `--json`: the error object a caller reads, as for any run that fails (an
+            // outside probe: stdout was empty, and a farm's parser failed on it).
+            if let Some(command) = json {
+                let _ = out_json(&serde_json::json!({
+                    "schema": crate::JSON_SCHEMA,
+                    "command": command,
+                    "ok": false,
+                    "error": {
+                        "exit_code": 128 + signal,
+                        "kind": "interrupted",
+                        "message": message,
+                        "problems": [],
+                    }
+                }));
+            }
             std::process::exit(128 + signal);
         }
     });
 }
 
 #[cfg(not(unix))]
-fn stop_cleanly_on_signals() {}
+fn stop_cleanly_on_signals(_json: Option<&'static str>) {}
 
 /// `shutter frames`: a frame spec expanded and cut into chunks, each printed as a spec.
 fn frames(args: args::FramesArgs) -> Result<()> {
@@ -293,8 +309,11 @@ fn frames(args: args::FramesArgs) -> Result<()> {
 static JSON_PRINTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 /// Prints a `--json` document on stdout (see [`out`]).
+/// Only the first is printed: a signal stopping the run as it ends must not add a second.
 fn out_json(document: &impl serde::Serialize) -> Result<()> {
-    JSON_PRINTED.store(true, std::sync::atomic::Ordering::Relaxed);
+    if JSON_PRINTED.swap(true, std::sync::atomic::Ordering::SeqCst) {
+        return Ok(());
+    }
     out(&(serde_json::to_string_pretty(document).unwrap_or_default() + "\n"))
 }
 

@@ -69,8 +69,10 @@ impl PathPattern {
         let name = name_start(raw);
         let placeholder =
             find(&raw[name..]).map(|(start, end, width)| (name + start, name + end, width));
-        if let Some((_, end, _)) = placeholder {
-            if find(&raw[end..]).is_some() {
+        // Another placeholder before the one found (the kinds are looked for one after
+        // another: `a.%04d.####.exr` found `####` and wrote `a.%04d.0001.exr`) or after it.
+        if let Some((start, end, _)) = placeholder {
+            if find(&raw[name..start]).is_some() || find(&raw[end..]).is_some() {
                 return Err(Error::usage(format!(
                     "'{raw}' holds more than one frame placeholder; use one '####' or '%04d'"
                 )));
@@ -272,7 +274,8 @@ pub fn holes(found: &[i64]) -> Vec<i64> {
 }
 
 /// Frame numbers beyond ±this are refused: far beyond any shot's numbering, and small
-/// enough that a frame's byte in the output lock ([`crate::io::lock`]) stays a plain offset.
+/// enough that a frame's number fits the 30 bits the output lock keeps of a file's number
+/// ([`crate::io::lock`]), so that a sequence's frames have consecutive bytes there.
 pub const MAX_FRAME_NUMBER: i64 = 999_999_999;
 
 /// Parses a frame spec: comma-separated items, each `N`, `A-B`, or a range with a step,
@@ -458,6 +461,9 @@ mod tests {
     #[test]
     fn two_placeholders_are_refused() {
         assert!(PathPattern::parse("a.####.%04d.exr").is_err());
+        assert!(PathPattern::parse("a.%04d.####.exr").is_err());
+        assert!(PathPattern::parse("a.$F4.####.exr").is_err());
+        assert!(PathPattern::parse("a.@@.%d.exr").is_err());
         assert!(PathPattern::parse("a.$F4.@@@@.exr").is_err());
     }
 
