@@ -716,3 +716,133 @@ fn zip_outputs_read_as_their_uncompressed_twin_in_openexr_and_the_exr_crate() {
         }
     }
 }
+
+/// A two-part EXR of `w`×`h` laid out as OpenEXR writes it: part `beauty` flat (A, B, G, R
+/// float, uncompressed, a line a chunk) holding `rgba`, and part `deep` of deep scan lines
+/// (Z float, one sample a pixel, the depth 2). Written byte by byte: neither the exr crate
+/// nor OpenEXR's Python module writes deep data.
+fn exr_with_a_deep_part(path: &Path, (w, h): (usize, usize), rgba: &[[f32; 4]]) {
+    fn attr(out: &mut Vec<u8>, name: &str, kind: &str, value: &[u8]) {
+        for text in [name, kind] {
+            out.extend(text.as_bytes());
+            out.push(0);
+        }
+        out.extend((value.len() as i32).to_le_bytes());
+        out.extend(value);
+    }
+    let ints = |v: &[i32]| v.iter().flat_map(|i| i.to_le_bytes()).collect::<Vec<u8>>();
+    let header = |out: &mut Vec<u8>, name: &str, channels: &[&str], deep: bool| {
+        let mut list = Vec::new();
+        for channel in channels {
+            list.extend(channel.as_bytes());
+            list.push(0);
+            // Type float, pLinear 0 and three reserved bytes, sampling 1×1.
+            list.extend(ints(&[2, 0, 1, 1]));
+        }
+        list.push(0);
+        let window = ints(&[0, 0, w as i32 - 1, h as i32 - 1]);
+        attr(out, "channels", "chlist", &list);
+        attr(out, "compression", "compression", &[0]);
+        attr(out, "dataWindow", "box2i", &window);
+        attr(out, "displayWindow", "box2i", &window);
+        attr(out, "lineOrder", "lineOrder", &[0]);
+        attr(out, "pixelAspectRatio", "float", &1f32.to_le_bytes());
+        attr(out, "screenWindowCenter", "v2f", &[0; 8]);
+        attr(out, "screenWindowWidth", "float", &1f32.to_le_bytes());
+        attr(out, "name", "string", name.as_bytes());
+        let kind = if deep {
+            "deepscanline"
+        } else {
+            "scanlineimage"
+        };
+        attr(out, "type", "string", kind.as_bytes());
+        attr(out, "chunkCount", "int", &(h as i32).to_le_bytes());
+        if deep {
+            attr(out, "version", "int", &1i32.to_le_bytes());
+            attr(out, "maxSamplesPerPixel", "int", &1i32.to_le_bytes());
+        }
+        out.push(0);
+    };
+    let mut bytes = vec![0x76, 0x2f, 0x31, 0x01];
+    bytes.extend((2u32 | 0x800 | 0x1000).to_le_bytes());
+    header(&mut bytes, "beauty", &["A", "B", "G", "R"], false);
+    header(&mut bytes, "deep", &["Z"], true);
+    bytes.push(0);
+    let floats = |v: &[f32]| v.iter().flat_map(|f| f.to_le_bytes()).collect::<Vec<u8>>();
+    let mut chunks = Vec::new();
+    for y in 0..h {
+        let row = &rgba[y * w..(y + 1) * w];
+        let mut data = Vec::new();
+        for c in [3, 2, 1, 0] {
+            data.extend(floats(&row.iter().map(|p| p[c]).collect::<Vec<_>>()));
+        }
+        let mut chunk = ints(&[0, y as i32, data.len() as i32]);
+        chunk.extend(data);
+        chunks.push(chunk);
+    }
+    for y in 0..h {
+        let counts = ints(&(1..=w as i32).collect::<Vec<_>>());
+        let samples = floats(&vec![2.0; w]);
+        let mut chunk = ints(&[1, y as i32]);
+        for size in [counts.len(), samples.len(), samples.len()] {
+            chunk.extend((size as u64).to_le_bytes());
+        }
+        chunk.extend(counts);
+        chunk.extend(samples);
+        chunks.push(chunk);
+    }
+    let mut at = bytes.len() + 8 * chunks.len();
+    for chunk in &chunks {
+        bytes.extend((at as u64).to_le_bytes());
+        at += chunk.len();
+    }
+    bytes.extend(chunks.concat());
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// A multi-part render with a deep part beside its flat beauty: the deep part is left out
+/// with a warning and the rest is read and written (an outside probe: the whole file was
+/// refused, "deep data is not supported"); `info` shows its channels as not read.
+#[test]
+fn a_deep_part_beside_a_flat_one_is_left_out_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (8, 4);
+    let rgba: Vec<[f32; 4]> = (0..w * h)
+        .map(|i| [i as f32 / 32.0, 0.5, 1.0 - i as f32 / 32.0, 1.0])
+        .collect();
+    let input = dir.path().join("deep.exr");
+    exr_with_a_deep_part(&input, (w, h), &rgba);
+    if let Some(text) = oiiotool_info(&input) {
+        assert!(text.contains("2 subimages"), "not a valid file: {text}");
+    }
+    let output = dir.path().join("out.exr");
+    let o = shutter(&["blur", "--color", &s(&input), "-o", &s(&output)]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("part deep of the colour file") && err.contains("deep data"),
+        "{err}"
+    );
+    let read = read_exr_reference(&output);
+    for (c, name) in ["R", "G", "B", "A"].iter().enumerate() {
+        let expected: Vec<f32> = rgba.iter().map(|p| p[c]).collect();
+        assert_exact(channel(&read, name), &expected, name);
+    }
+    assert!(
+        !read.iter().any(|(name, _)| name.contains('Z')),
+        "{:?}",
+        read.len()
+    );
+    if let Some(text) = oiiotool_info(&output) {
+        assert!(text.contains("4 channel"), "{text}");
+    }
+
+    let o = shutter(&["info", &s(&input)]);
+    let text = stdout(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let z = text
+        .lines()
+        .find(|l| l.contains("deep.Z"))
+        .unwrap_or_default();
+    assert!(z.contains("not read"), "{text}");
+}

@@ -191,11 +191,12 @@ fn info_text(shown: &Shown) -> String {
             (Some(_), None) => "  no view".to_string(),
             _ => String::new(),
         };
-        let line = format!(
-            "    {name:<28} {:<4} {:<6}{in_view}",
-            c.sample_type,
-            class_of(info, c, layers).name()
-        );
+        // A part shutter cannot read (deep data) is left out of a run, with a warning.
+        let class = match info.unreadable(c) {
+            Some(_) => "not read",
+            None => class_of(info, c, layers).name(),
+        };
+        let line = format!("    {name:<28} {:<4} {class:<6}{in_view}", c.sample_type);
         text.push_str(line.trim_end());
         text.push('\n');
     }
@@ -295,6 +296,7 @@ fn info_json(shown: &Shown) -> serde_json::Value {
             "type": c.sample_type,
             "class": class_of(info, c, layers).name(),
             "part": c.part,
+            "unread": info.unreadable(c),
             "view": c.view,
         })).collect::<Vec<_>>(),
         "attributes": attribute_rows(info).into_iter().map(|(part, rows)| serde_json::json!({

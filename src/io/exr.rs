@@ -50,9 +50,63 @@ pub fn read_meta(path: &Path) -> exr::error::Result<MetaData> {
 }
 
 /// Checks headers as the exr crate's decoding reader does (non-strictly): windows not
-/// inverted, channels present, sorted and sampled at 1×1, and the rest.
+/// inverted, channels present, sorted and sampled at 1×1, and the rest. A deep part (which
+/// the crate refuses whole, and shutter leaves out) is checked as the same part flat.
 pub fn validate(meta: &MetaData) -> exr::error::Result<()> {
-    MetaData::validate(&meta.headers, false).map(|_| ())
+    if !meta.headers.iter().any(|h| h.deep) {
+        return MetaData::validate(&meta.headers, false).map(|_| ());
+    }
+    let mut long_names = false;
+    for header in &meta.headers {
+        let mut flat = header.clone();
+        flat.deep = false;
+        flat.validate(meta.headers.len() > 1, &mut long_names, false)?;
+    }
+    Ok(())
+}
+
+/// The chunks of `parts` (full resolution only) of a file with a deep part, which the exr
+/// crate's reader refuses whole: read by the offset tables (which preflight checked:
+/// `check_chunk_table`), each chunk by the crate.
+fn chunks_beside_deep(
+    file: std::fs::File,
+    meta: &MetaData,
+    parts: &[usize],
+) -> exr::error::Result<Vec<Chunk>> {
+    let mut counting = CountingReader {
+        inner: BufReader::new(file),
+        count: 0,
+    };
+    MetaData::read_from_buffered(&mut counting, true)?;
+    let mut offsets = Vec::new();
+    for (part, header) in meta.headers.iter().enumerate() {
+        for _ in 0..header.chunk_count {
+            let mut bytes = [0u8; 8];
+            counting.read_exact(&mut bytes)?;
+            if parts.contains(&part) {
+                offsets.push(u64::from_le_bytes(bytes));
+            }
+        }
+    }
+    let mut file = counting.inner;
+    offsets.sort_unstable();
+    let mut chunks = Vec::with_capacity(offsets.len());
+    for offset in offsets {
+        file.seek(SeekFrom::Start(offset))?;
+        let chunk = Chunk::read(&mut file, meta)?;
+        if !parts.contains(&chunk.layer_index) {
+            return Err(invalid("chunk part number"));
+        }
+        let header = &meta.headers[chunk.layer_index];
+        if header
+            .get_block_data_indices(&chunk.compressed_block)?
+            .level_index
+            == Vec2(0, 0)
+        {
+            chunks.push(chunk);
+        }
+    }
+    Ok(chunks)
 }
 
 /// The name of a compression method as users write it on the command line.
@@ -188,31 +242,45 @@ pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<(), String> {
         let header = &meta.headers[part];
         let tiled = matches!(header.blocks, BlockDescription::Tiles(_));
         // Chunk layout: [part number: i32 when multi-part] then the block coordinates (y for
-        // scan lines, four i32 for tiles), then the data size as i32, then the data.
+        // scan lines, four i32 for tiles), then the data size as i32, then the data. A deep
+        // part's chunk has three u64 instead of the size (its sample-count table's packed
+        // size, its samples' packed and unpacked sizes), then the table and the samples.
         let coordinates = if tiled { 16 } else { 4 };
         let skip = if multipart { 4 } else { 0 } + coordinates;
+        let sizes = if header.deep { 24 } else { 4 };
         let size_at = offset.checked_add(skip).ok_or("chunk offset overflows")?;
-        if size_at + 4 > file_len {
+        if size_at + sizes > file_len {
             return Err(format!(
                 "the file is truncated: a chunk starts at byte {offset} of {file_len}"
             ));
         }
         file.seek(SeekFrom::Start(offset))
             .map_err(|e| e.to_string())?;
-        let mut bytes = vec![0u8; skip as usize + 4];
+        let mut bytes = vec![0u8; (skip + sizes) as usize];
         file.read_exact(&mut bytes).map_err(|e| e.to_string())?;
+        let (bytes, size_bytes) = bytes.split_at(skip as usize);
         let words: Vec<i32> = bytes
             .chunks_exact(4)
             .map(|w| i32::from_le_bytes([w[0], w[1], w[2], w[3]]))
             .collect();
-        let (words, size) = words.split_at(words.len() - 1);
-        let size = size[0];
-        if size < 0 {
+        let size = if header.deep {
+            let word = |i: usize| {
+                let mut w = [0u8; 8];
+                w.copy_from_slice(&size_bytes[i * 8..i * 8 + 8]);
+                u64::from_le_bytes(w)
+            };
+            word(0).checked_add(word(1)).filter(|&s| s <= file_len)
+        } else {
+            let size =
+                i32::from_le_bytes([size_bytes[0], size_bytes[1], size_bytes[2], size_bytes[3]]);
+            u64::try_from(size).ok()
+        };
+        let Some(size) = size else {
             return Err(format!(
-                "a chunk at byte {offset} has an invalid size ({size}); the file is damaged"
+                "a chunk at byte {offset} has an invalid size; the file is damaged"
             ));
-        }
-        let end = size_at + 4 + size as u64;
+        };
+        let end = size_at + sizes + size;
         if end > file_len {
             return Err(format!(
                 "the file is truncated: a chunk at byte {offset} needs {size} bytes, the file has {file_len}"
@@ -227,7 +295,7 @@ pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<(), String> {
             }
             &words[1..]
         } else {
-            words
+            &words[..]
         };
         let key = if tiled {
             let mut key = [0usize; 4];
@@ -398,9 +466,24 @@ pub fn read_channels_checked(
     wanted: &[ChannelRef],
     check: impl FnOnce(&MetaData) -> Result<(), String>,
 ) -> exr::error::Result<ReadChannels> {
-    let file = crate::io::input::open_input(path)?;
-    let reader = exr::block::read(BufReader::new(file), false)?;
-    let meta = reader.meta_data().clone();
+    let mut file = crate::io::input::open_input(path)?;
+    // A file with a deep part: the exr crate's reader refuses it whole, so its other parts'
+    // chunks are read by the offset tables (`chunks_beside_deep`).
+    let deep = (MetaData::read_from_buffered(BufReader::new(&mut file), true)?
+        .headers
+        .iter())
+    .any(|h| h.deep);
+    file.seek(SeekFrom::Start(0))?;
+    let (reader, meta) = if deep {
+        let meta = MetaData::read_from_buffered(BufReader::new(&mut file), true)?;
+        validate(&meta)?;
+        file.seek(SeekFrom::Start(0))?;
+        (None, meta)
+    } else {
+        let reader = exr::block::read(BufReader::new(file.try_clone()?), false)?;
+        let meta = reader.meta_data().clone();
+        (Some(reader), meta)
+    };
     check(&meta).map_err(|e| exr::error::Error::Invalid(format!("{CHANGED}{e}").into()))?;
 
     let first = wanted.first().map_or(0, |c| c.part);
@@ -452,11 +535,14 @@ pub fn read_channels_checked(
         parts.dedup();
         parts
     };
-    let chunks: Vec<Chunk> = reader
-        .filter_chunks(false, |_, tile, block| {
-            tile.level_index == Vec2(0, 0) && parts.contains(&block.layer)
-        })?
-        .collect::<exr::error::Result<_>>()?;
+    let chunks: Vec<Chunk> = match reader {
+        Some(reader) => reader
+            .filter_chunks(false, |_, tile, block| {
+                tile.level_index == Vec2(0, 0) && parts.contains(&block.layer)
+            })?
+            .collect::<exr::error::Result<_>>()?,
+        None => chunks_beside_deep(file, &meta, &parts)?,
+    };
 
     // Group the chunks into bands of rows that do not overlap, so each band can be written by
     // its own task without locks. A chunk that starts inside a band joins it and the band

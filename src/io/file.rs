@@ -163,7 +163,7 @@ impl FileInfo {
             let mut parts: Vec<usize> = self
                 .channels
                 .iter()
-                .filter(|c| c.name == *name)
+                .filter(|c| c.name == *name && self.unreadable(c).is_none())
                 .map(|c| c.part)
                 .collect();
             parts.sort_unstable();
@@ -217,16 +217,27 @@ impl FileInfo {
         Ok(())
     }
 
-    /// Index of the channel with this name (stored name first, then part-qualified alias).
+    /// Index of the channel with this name (stored name first, then part-qualified alias),
+    /// of the parts shutter can read: a deep part's `A` is not the beauty's alpha.
     pub fn find(&self, name: &str) -> Option<usize> {
+        let readable = |c: &ChannelInfo| self.unreadable(c).is_none();
         self.channels
             .iter()
-            .position(|c| c.name == name)
+            .position(|c| c.name == name && readable(c))
             .or_else(|| {
                 self.channels
                     .iter()
-                    .position(|c| c.alias.as_deref() == Some(name))
+                    .position(|c| c.alias.as_deref() == Some(name) && readable(c))
             })
+    }
+
+    /// Why the part holding `channel` cannot be read (deep data, HTJ2K, subsampled
+    /// channels), where it cannot: its channels are left out.
+    pub fn unreadable(&self, channel: &ChannelInfo) -> Option<String> {
+        let FileKind::Exr { headers, .. } = &self.kind else {
+            return None;
+        };
+        exr_io::unsupported_reason(headers.get(channel.part)?)
     }
 
     /// The file as one view reads it (`io::view`): `view`, or the file's default view when
@@ -324,7 +335,13 @@ impl FileInfo {
         }
         self.channels
             .iter()
-            .map(|c| c.alias.clone().unwrap_or_else(|| c.name.clone()))
+            .map(|c| {
+                let name = c.alias.clone().unwrap_or_else(|| c.name.clone());
+                match self.unreadable(c) {
+                    Some(_) => format!("{name} (in a part not read)"),
+                    None => name,
+                }
+            })
             .collect::<Vec<_>>()
             .join(", ")
     }
@@ -520,17 +537,21 @@ fn probe_exr(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
             format!("cannot read the EXR header: {other}"),
         ),
     })?;
-    let Some(first) = meta.headers.first() else {
+    if meta.headers.is_empty() {
         return Err(Problem::new(ProblemKind::Corrupt, path, "no parts"));
-    };
+    }
     for header in &meta.headers {
         check_size(path, header.layer_size.0, header.layer_size.1, max_pixels)?;
     }
-    for header in &meta.headers {
-        if let Some(reason) = exr_io::unsupported_reason(header) {
-            return Err(Problem::new(ProblemKind::Unsupported, path, reason));
-        }
-    }
+    // A part shutter cannot read (deep data, HTJ2K, subsampled channels) beside parts it can
+    // is left out of what is read, with a warning (`passes::parts`), and refused only where a
+    // pass's channel lies in it (`plan`): a file of no other part is refused whole. (Before,
+    // a render's deep part refused the whole file.)
+    let Some(first) = (meta.headers.iter()).find(|h| exr_io::unsupported_reason(h).is_none())
+    else {
+        let reason = exr_io::unsupported_reason(&meta.headers[0]).unwrap_or_default();
+        return Err(Problem::new(ProblemKind::Unsupported, path, reason));
+    };
     exr_io::validate(&meta).map_err(|e| {
         Problem::new(
             ProblemKind::Corrupt,
