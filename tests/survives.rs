@@ -908,6 +908,63 @@ fn data_under_a_dwa_output_goes_to_a_lossless_part_of_its_own() {
     }
 }
 
+/// Under B44 and B44A (lossy for half channels) and PXR24 (float to 24 bits), the data those
+/// would store lossily goes to a lossless part of its own, as under DWA (an outside probe:
+/// `--compression b44` wrote half depth and vectors through B44, 15 px off, with no word);
+/// data they keep exactly (float under B44, u32 IDs) stays in its part, and nothing moves
+/// where nothing would be lossy.
+#[test]
+fn data_b44_or_pxr24_would_store_lossily_goes_to_a_lossless_part() {
+    use crate::support::{assert_same_bits, channel, read_exr_reference};
+    use exr::meta::attribute::SampleType;
+    let dir = tempfile::tempdir().unwrap();
+    let color = dir.path().join("color.exr");
+    write_layered(&color, SampleType::F32);
+    write_passes(dir.path());
+    let before = read_exr_reference(&color);
+    for (method, half, compression) in [
+        ("b44", true, Compression::B44),
+        ("b44a", true, Compression::B44A),
+        ("pxr24", false, Compression::PXR24),
+    ] {
+        let name = format!("out-{method}.exr");
+        let mut extra = vec!["--compression", method];
+        if half {
+            extra.push("--half");
+        }
+        blur(dir.path(), &name, &extra);
+        let out = dir.path().join(&name);
+        let parts = parts_of(&out);
+        assert_eq!(parts.len(), 2, "{method}: {parts:?}");
+        assert_eq!(parts[0].1, compression, "{method}: {parts:?}");
+        assert!(
+            parts[0].2.contains(&"id".to_string()),
+            "{method}: {parts:?}"
+        );
+        assert_eq!(parts[1].0, "data", "{method}");
+        assert_eq!(parts[1].1, Compression::ZIP16, "{method}");
+        assert_eq!(parts[1].2, ["Z", "velocity.X", "velocity.Y"], "{method}");
+        let after = read_exr_reference(&out);
+        for data in ["Z", "velocity.X", "velocity.Y", "id"] {
+            let expected: Vec<f32> = channel(&before, data)
+                .iter()
+                .map(|&v| match half && data != "id" {
+                    true => f16::from_f32(v).to_f32(),
+                    false => v,
+                })
+                .collect();
+            assert_same_bits(
+                channel(&after, data),
+                &expected,
+                &format!("{method} {data}"),
+            );
+        }
+    }
+    // Float data under B44 is kept exactly: one part, as before.
+    blur(dir.path(), "out-float.exr", &["--compression", "b44"]);
+    assert_eq!(parts_of(&dir.path().join("out-float.exr")).len(), 1);
+}
+
 #[test]
 fn passes_are_placed_by_their_data_windows() {
     use shutter::frame::{Window, Windows};

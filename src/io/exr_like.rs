@@ -30,14 +30,16 @@
 use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
 
 use exr::compression::Compression;
-use exr::image::{AnyChannel, AnyChannels, Blocks, Encoding, FlatSamples, Image, Layer};
+use exr::image::{AnyChannels, Blocks, Encoding, Image, Layer};
 use exr::math::Vec2;
-use exr::meta::attribute::{AttributeValue, IntegerBounds, SampleType, Text};
+use exr::meta::attribute::{AttributeValue, IntegerBounds, Text};
 use exr::meta::header::{standard_names, Header, ImageAttributes, LayerAttributes};
 use exr::meta::BlockDescription;
-use exr::prelude::{f16, LineOrder};
+use exr::prelude::LineOrder;
 
-use crate::frame::{LayerClass, Plane, Window};
+use crate::frame::Window;
+pub use crate::io::exr_channels::OutChannel;
+use crate::io::exr_channels::{channels_like, lossy_for};
 
 /// How an EXR output is encoded where it does not follow its input.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -78,23 +80,6 @@ pub enum Views {
     One,
     /// Every view: the input's view attributes are kept.
     Every,
-}
-
-/// One channel to write.
-#[derive(Clone, Debug)]
-pub struct OutChannel {
-    pub name: String,
-    pub plane: Plane,
-    /// Whether it is data (a DWA part keeps its data apart, lossless).
-    pub class: LayerClass,
-    /// A u32 channel's values as read, exactly (`CarriedChannel::exact`): written when the
-    /// channel goes out as u32.
-    pub exact: Option<Vec<u32>>,
-    /// Its name as the input part stores it, where that is not `name` (a view's channel
-    /// written as a file of one view: `id.right.v` written `id.v`): its pixel type and
-    /// pLinear flag are that channel's, not those of a channel of another view (or none)
-    /// that the output name happens to match.
-    pub source: Option<String>,
 }
 
 /// Writes `parts` as one EXR over the display window `display`, each part made like its
@@ -146,9 +131,10 @@ pub fn write_like(
                 .or_else(|| Some(p.input?.own_attributes.layer_name.as_ref()?.to_string()))
         })
         .collect();
-    // Each part, and the lossless part its data needs under DWA.
+    // Each part, and the lossless part its data needs under a lossy compression.
     let goes_apart = |part: &OutPart, c: &OutChannel| {
-        is_dwa(encoding_like(part.input, output).compression) && c.class.is_data()
+        let compression = encoding_like(part.input, output).compression;
+        lossy_for(compression, c, part.input, output.half)
     };
     // Whether the file will have several parts: then a part that has no name of its own and
     // holds channels of several view layers is split by layer, so each part can be named by
@@ -164,7 +150,7 @@ pub fn write_like(
         let (kept, apart): (Vec<_>, Vec<_>) = part
             .channels
             .into_iter()
-            .partition(|c| !(is_dwa(encoding.compression) && c.class.is_data()));
+            .partition(|c| !lossy_for(encoding.compression, c, part.input, output.half));
         let mut attributes = attributes_like(part.input, part.data, record, views);
         if let Some(name) = &part.name {
             attributes.layer_name = Some(latin1(name));
@@ -236,7 +222,7 @@ pub fn write_like(
                     (data.width, data.height),
                     attributes,
                     encoding,
-                    AnyChannels::sort(channels_like(channels, input, output).into()),
+                    AnyChannels::sort(channels_like(channels, input, output.half).into()),
                 )
             },
         )
@@ -360,10 +346,6 @@ fn is_layout(name: &Text) -> bool {
     }
 }
 
-fn is_dwa(compression: Compression) -> bool {
-    matches!(compression, Compression::DWAA(_) | Compression::DWAB(_))
-}
-
 /// The input part's attributes, minus the preview (and the views where one is written), at
 /// the part's data window, with shutter's record.
 fn attributes_like(
@@ -467,83 +449,6 @@ fn as_read(value: &mut AttributeValue) {
         }
         _ => {}
     }
-}
-
-/// Whether every finite value of `plane` is within half's range (its infinities are half's
-/// too).
-fn fits_half(plane: &[f32]) -> bool {
-    plane
-        .iter()
-        .all(|v| !v.is_finite() || v.abs() <= f32::from(f16::MAX))
-}
-
-/// Each channel's samples in the pixel type its input part stored it in (half with `half`).
-fn channels_like(
-    channels: Vec<OutChannel>,
-    input: Option<&Header>,
-    output: &ExrOutput,
-) -> Vec<AnyChannel<FlatSamples>> {
-    let described = |name: &str| {
-        input.and_then(|h| h.channels.list.iter().find(|c| c.name.to_string() == name))
-    };
-    let stored = |name: &str| described(name).map(|c| c.sample_type);
-    channels
-        .into_iter()
-        .map(|channel| {
-            let OutChannel {
-                name,
-                plane,
-                exact,
-                class,
-                source,
-            } = channel;
-            let read_as = source.as_deref().unwrap_or(&name);
-            // Half for every float channel with `half`; a u32 channel (IDs) stays u32, which
-            // half would destroy (every ID over 2048), and so does one read exactly as u32.
-            let kind = match stored(read_as) {
-                _ if exact.is_some() => SampleType::U32,
-                Some(SampleType::U32) => SampleType::U32,
-                // A data channel that half cannot hold (a depth of 1e10 for empty pixels, a
-                // world position of −7e4) stays float: half would make it ±∞, where colour
-                // saturates (below).
-                _ if output.half && class != LayerClass::Colour && !fits_half(&plane) => {
-                    SampleType::F32
-                }
-                _ if output.half => SampleType::F16,
-                stored => stored.unwrap_or(SampleType::F32),
-            };
-            let samples = match kind {
-                // Colour (blurred: finite by the numeric policy) saturates at half's largest
-                // value instead of overflowing to ±Inf: a half plate with an infinite or huge
-                // pixel, clamped to ±1e30 and blurred, must not come back with infinities
-                // around it. Data goes back as it came (an infinite depth stays infinite).
-                SampleType::F16 if class == LayerClass::Colour => FlatSamples::F16(
-                    plane
-                        .into_iter()
-                        .map(crate::numeric::half_saturated)
-                        .collect(),
-                ),
-                SampleType::F16 => FlatSamples::F16(plane.into_iter().map(f16::from_f32).collect()),
-                // Integer channels are ids and counts: they come back as they were read, to
-                // the bit where they were read exactly (IDs over 2²⁴).
-                SampleType::U32 => FlatSamples::U32(match exact {
-                    Some(values) => values,
-                    // A u32 classed colour by a preset (blurred): to the nearest integer.
-                    None => plane.into_iter().map(|v| v.round() as u32).collect(),
-                }),
-                SampleType::F32 => FlatSamples::F32(plane),
-            };
-            // The channel's pLinear flag as the input stored it (OpenEXR's default, off, for
-            // a channel it did not have). The exr crate guesses it from the name, on for all
-            // but R, G, B, L, Y, X and Z: B44 then encodes `A`, `velocity.X` or `diffuse.R`
-            // through its perceptual curve, which writes every negative value as 0.
-            let linear = described(read_as).is_some_and(|c| c.quantize_linearly);
-            AnyChannel {
-                quantize_linearly: linear,
-                ..AnyChannel::new(Text::from(name.as_str()), samples)
-            }
-        })
-        .collect()
 }
 
 /// The input's compression, blocks and line order, where the exr crate can write them and
