@@ -191,8 +191,8 @@ pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
     })
 }
 
-/// The header of a grey float TIFF, which the image crate refuses ([`tiff_float`]); `None`
-/// for any other file.
+/// The header of a grey TIFF the image crate refuses (float, or grey and alpha:
+/// [`tiff_float`]); `None` for any other file.
 fn grey_float_header(path: &Path, format: &'static str) -> Option<ImageHeader> {
     let header = (format == "tiff")
         .then(|| tiff_float::header(path))
@@ -202,8 +202,8 @@ fn grey_float_header(path: &Path, format: &'static str) -> Option<ImageHeader> {
         width: width as usize,
         height: height as usize,
         channels: channel_names(header.samples as u8),
-        bits: 32,
-        float: true,
+        bits: if header.float { 32 } else { header.bits },
+        float: header.float,
         format,
     })
 }
@@ -279,7 +279,8 @@ pub fn read_planes(
     let mut decoder = match reader.into_decoder() {
         Ok(decoder) => decoder,
         Err(e) => {
-            // A grey float TIFF, read by the tiff crate within the same allowance.
+            // A grey TIFF the image crate refuses, read by the tiff crate within the same
+            // allowance.
             let header = tiff.then(|| tiff_float::header(path)).flatten();
             let Some(header) = header else {
                 return Err(image_error(e));

@@ -1,11 +1,12 @@
-//! Grey float TIFFs: one IEEE float sample a pixel (16, 32 or 64 bits), or grey and alpha.
-//! The image crate's TIFF decoder reads floats only as 32-bit RGB or RGBA and refuses these as
-//! an unknown colour type, yet a depth map written by a depth estimator, or a 32-bit grey
-//! image saved from an editor, is such a file. The tiff crate (the image crate's own TIFF
-//! codec) reads them here; their planes are turned upright by their Orientation tag, as
-//! [`super::read_planes`] turns what the image crate reads. Of the other TIFFs the image
-//! crate refuses, a YCbCr (JPEG-compressed) or indexed-colour one is named as such, with what
-//! to do ([`unread_kind`]); the rest keep its error.
+//! Grey TIFFs the image crate refuses as an unknown colour type: one IEEE float sample a
+//! pixel (16, 32 or 64 bits), or grey and alpha, float or 8/16-bit integer. Its TIFF decoder
+//! reads floats only as 32-bit RGB or RGBA, and grey with alpha not at all, yet a depth map
+//! written by a depth estimator, a 32-bit grey image saved from an editor, or a grey scan with
+//! a mask is such a file. The tiff crate (the image crate's own TIFF codec) reads them here;
+//! their planes are turned upright by their Orientation tag, as [`super::read_planes`] turns
+//! what the image crate reads. Of the other TIFFs the image crate refuses, a YCbCr
+//! (JPEG-compressed) or indexed-colour one is named as such, with what to do
+//! ([`unread_kind`]); the rest keep its error.
 
 use std::path::Path;
 
@@ -16,13 +17,17 @@ use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 use tiff::ColorType;
 
-/// A grey float TIFF's header.
+/// A grey TIFF's header.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Header {
     /// The size as stored (before it is turned upright).
     pub(super) stored: (u32, u32),
     /// 1 (grey) or 2 (grey and alpha).
     pub(super) samples: usize,
+    /// Bits a sample: 16, 32 or 64 for floats, 8 or 16 for integers.
+    pub(super) bits: u8,
+    /// IEEE floats; else unsigned integers, read normalised to [0, 1].
+    pub(super) float: bool,
     pub(super) orientation: Orientation,
 }
 
@@ -33,22 +38,41 @@ fn open(path: &Path, limits: Limits) -> Option<Decoder<std::io::BufReader<std::f
     Some(decoder.with_limits(limits))
 }
 
-/// The header of a grey float TIFF; `None` for any other TIFF, and for one whose header the
-/// tiff crate cannot read (the image crate's error about it then stands).
+/// The header of a grey TIFF the image crate refuses (float grey, or grey and alpha); `None`
+/// for any other TIFF, and for one whose header the tiff crate cannot read (the image crate's
+/// error about it then stands).
 pub(super) fn header(path: &Path) -> Option<Header> {
     let mut limits = Limits::default();
     limits.ifd_value_size = super::HEADER_ROOM as usize;
     let mut decoder = open(path, limits)?;
-    let samples = match decoder.colortype().ok()? {
-        ColorType::Gray(16 | 32 | 64) => 1,
-        ColorType::GrayA(16 | 32 | 64) => 2,
+    // The tiff crate gives grey and alpha as two bands (`Multiband`), not `GrayA`.
+    let (samples, bits) = match decoder.colortype().ok()? {
+        ColorType::Gray(bits @ (16 | 32 | 64)) => (1, bits),
+        ColorType::GrayA(bits @ (8 | 16 | 32 | 64))
+        | ColorType::Multiband {
+            bit_depth: bits @ (8 | 16 | 32 | 64),
+            num_samples: 2,
+        } => (2, bits),
         _ => return None,
     };
-    // SampleFormat 3: IEEE floating point, for every sample.
+    // The second band is alpha: PhotometricInterpretation 1, grey with black as 0.
+    let photometric = decoder.find_tag_unsigned::<u16>(Tag::PhotometricInterpretation);
+    if samples == 2 && !matches!(photometric, Ok(Some(1))) {
+        return None;
+    }
+    // SampleFormat 3: IEEE floating point, for every sample; 1 (the default): unsigned
+    // integers, which the image crate reads but for grey and alpha.
     let formats = decoder
         .find_tag_unsigned_vec::<u16>(Tag::SampleFormat)
-        .ok()??;
-    if formats.is_empty() || formats.iter().any(|&f| f != 3) {
+        .ok()
+        .flatten()
+        .unwrap_or_else(|| vec![1]);
+    let float = match (formats.first(), samples, bits) {
+        (Some(3), _, 16 | 32 | 64) => true,
+        (Some(1), 2, 8 | 16) => false,
+        _ => return None,
+    };
+    if formats.iter().any(|&f| Some(&f) != formats.first()) {
         return None;
     }
     let orientation = decoder
@@ -60,6 +84,8 @@ pub(super) fn header(path: &Path) -> Option<Header> {
     Some(Header {
         stored: decoder.dimensions().ok()?,
         samples,
+        bits,
+        float,
         orientation,
     })
 }
@@ -91,9 +117,9 @@ pub(super) fn upright_size(header: &Header) -> (u32, u32) {
     super::upright(header.stored, header.orientation)
 }
 
-/// The planes of the grey float TIFF `header` describes (grey, then alpha), as stored (a half
-/// or a double as the nearest f32), turned upright. The decoder holds at most `max_bytes` of
-/// samples.
+/// The planes of the grey TIFF `header` describes (grey, then alpha), as stored (a half or a
+/// double as the nearest f32, an integer normalised to [0, 1], no transfer function
+/// applied), turned upright. The decoder holds at most `max_bytes` of samples.
 pub(super) fn read(
     path: &Path,
     header: &Header,
@@ -109,7 +135,9 @@ pub(super) fn read(
         DecodingResult::F16(v) => v.iter().map(|x| x.to_f32()).collect(),
         DecodingResult::F32(v) => v,
         DecodingResult::F64(v) => v.iter().map(|&x| x as f32).collect(),
-        _ => return Err("the TIFF's samples are not the floats its header declares".into()),
+        DecodingResult::U8(v) if !header.float => v.iter().map(|&x| x as f32 / 255.0).collect(),
+        DecodingResult::U16(v) if !header.float => v.iter().map(|&x| x as f32 / 65535.0).collect(),
+        _ => return Err("the TIFF's samples are not of the kind its header declares".into()),
     };
     let (width, height) = (header.stored.0 as usize, header.stored.1 as usize);
     let count = header.samples;
