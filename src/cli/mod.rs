@@ -23,8 +23,19 @@ use args::{Cli, Command};
 
 /// Parses the command line, runs it and returns the process exit code, stdout flushed.
 pub fn main() -> i32 {
-    flush_stdout(parse_and_run())
+    let code = flush_stdout(parse_and_run());
+    // A signal being handled ends the process itself, with its own code and (`--json`) its
+    // own document: the run must not end first with another.
+    if STOPPING.load(std::sync::atomic::Ordering::SeqCst) {
+        loop {
+            std::thread::park();
+        }
+    }
+    code
 }
+
+/// Set once a stopping signal is being handled ([`stop_cleanly_on_signals`]).
+static STOPPING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 fn parse_and_run() -> i32 {
     let cli = match Cli::try_parse() {
@@ -241,6 +252,11 @@ fn stop_cleanly_on_signals(json: Option<&'static str>) {
     };
     std::thread::spawn(move || {
         if let Some(signal) = signals.forever().next() {
+            STOPPING.store(true, std::sync::atomic::Ordering::SeqCst);
+            // The `--json` document is this one (unless the run printed its own already):
+            // claimed before the writes are stopped, whose failures the run would report.
+            let json =
+                json.filter(|_| !JSON_PRINTED.swap(true, std::sync::atomic::Ordering::SeqCst));
             let name = STOPPING_SIGNALS
                 .iter()
                 .find(|(number, _)| *number == signal)
@@ -256,7 +272,7 @@ fn stop_cleanly_on_signals(json: Option<&'static str>) {
             // `--json`: the error object a caller reads, as for any run that fails (an
             // outside probe: stdout was empty, and a farm's parser failed on it).
             if let Some(command) = json {
-                let _ = out_json(&serde_json::json!({
+                let _ = print_json(&serde_json::json!({
                     "schema": crate::JSON_SCHEMA,
                     "command": command,
                     "ok": false,
@@ -314,6 +330,11 @@ fn out_json(document: &impl serde::Serialize) -> Result<()> {
     if JSON_PRINTED.swap(true, std::sync::atomic::Ordering::SeqCst) {
         return Ok(());
     }
+    print_json(document)
+}
+
+/// Prints a `--json` document, the slot claimed.
+fn print_json(document: &impl serde::Serialize) -> Result<()> {
     out(&(serde_json::to_string_pretty(document).unwrap_or_default() + "\n"))
 }
 

@@ -63,6 +63,8 @@ struct Held {
     keys: Keys,
     /// Folders made for the lock file, deepest first: removed again if still empty.
     created: Vec<PathBuf>,
+    /// The output folder as it was when the lock was taken ([`folder_id`]).
+    folder: Option<(u64, u64)>,
 }
 
 static HELD: Mutex<Vec<Held>> = Mutex::new(Vec::new());
@@ -100,13 +102,16 @@ impl OutputLock {
             let mut waits = 0;
             let mut attempt = 0;
             'attempts: while attempt < ATTEMPTS {
-                let file = OpenOptions::new()
-                    .read(true)
-                    .write(true)
-                    .create(true)
-                    .truncate(false)
-                    .open(&path)
-                    .map_err(|e| fail_with(&e, format!("cannot open the lock file: {e}")))?;
+                let file = open_shared(&path).map_err(|e| {
+                    fail_with(
+                        &e,
+                        format!(
+                            "cannot open the lock file: {e} (one for every job writing in the \
+                             folder, whoever runs it: made writable to all by shutter; one \
+                             another user made otherwise may be removed while no job runs)"
+                        ),
+                    )
+                })?;
                 for &(start, len) in &keys.ranges {
                     match platform::lock_range(&file, start, len) {
                         Ok(true) => {}
@@ -153,6 +158,7 @@ impl OutputLock {
         match result {
             Ok(file) => {
                 held().push(Held {
+                    folder: folder_id(folder),
                     path: path.clone(),
                     file,
                     keys,
@@ -208,10 +214,11 @@ pub fn verify_held() -> Result<(), WriteFailure> {
                 lock.path.display()
             )
         };
-        // Gone with its folder, the outputs written into it went too: the run stops so that
-        // a rerun writes them again, rather than make the folder again and end well without
-        // them ([`crate::io::output`]'s `folder_gone`).
-        if let Some(folder) = lock.path.parent().filter(|f| !f.is_dir()) {
+        // Gone with its folder (made again or not: another folder), the outputs written
+        // into it went too: the run stops so that a rerun writes them again, rather than
+        // make the folder again and end well without them.
+        let folder = lock.path.parent().unwrap_or(Path::new("."));
+        if lock.folder.is_some() && folder_id(folder) != lock.folder {
             return Err(WriteFailure::transient(format!(
                 "the output folder {} was removed while this run wrote into it, and the \
                  frames written into it before with it; run again (with --skip-existing) to \
@@ -219,12 +226,7 @@ pub fn verify_held() -> Result<(), WriteFailure> {
                 folder.display()
             )));
         }
-        let file = OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .open(&lock.path)
+        let file = open_shared(&lock.path)
             .map_err(|e| WriteFailure::of_io(&e, lost(format!("it cannot be made again: {e}"))))?;
         for &(start, len) in &lock.keys.ranges {
             match platform::lock_range(&file, start, len) {
@@ -298,12 +300,19 @@ impl Keys {
             .map(|&frame| {
                 let path = output.path(frame);
                 let name = path.file_name().unwrap_or(path.as_os_str());
-                (name_byte(&name_bytes(name)), frame)
+                // Case folded: on a file system that folds case (macOS, SMB shares)
+                // `Shot.0001.exr` and `shot.0001.exr` are one file. (Where it does not, two
+                // such names only wait for each other.)
+                (name_byte(&name_bytes(name).to_ascii_lowercase()), frame)
             })
             .collect();
         keyed.sort_unstable();
         keyed.dedup_by_key(|k| k.0);
         let mut ranges: Vec<(u64, u64)> = Vec::new();
+        // Without byte-range locks the whole file is locked, once: a second lock through the
+        // same handle would refuse the job itself (Windows).
+        #[cfg(not(unix))]
+        keyed.truncate(1);
         for &(byte, _) in &keyed {
             match ranges.last_mut() {
                 Some((start, len)) if *start + *len == byte => *len += 1,
@@ -340,7 +349,7 @@ fn name_bytes(name: &std::ffi::OsStr) -> Vec<u8> {
 /// the name hashed (64-bit FNV-1a, 28 bits kept), so that one sequence's consecutive frames
 /// have consecutive bytes; a name without such a number (none, or one longer than 15 digits
 /// or over 2^30) is hashed whole. `[hash: 28 bits][digits: 4][number: 30]`, plus one: below
-/// 2^62, inside any `off_t`. Two names share a byte only when they are the same name, or by
+/// 2^62, inside a 64-bit `off_t`. Two names share a byte only when they are the same name, or by
 /// a hash collision (one chance in 2^28 for two sequences in one folder, and then only on
 /// frames of the same number), which makes a job wait, never two jobs write one file.
 fn name_byte(name: &[u8]) -> u64 {
@@ -362,8 +371,19 @@ fn name_byte(name: &[u8]) -> u64 {
         let hash = fnv1a(&[name]);
         (hash, hash & NUMBER)
     });
-    1 + ((hash >> 36) << 34 | low)
+    let byte = (hash >> 36) << 34 | low;
+    // Where a lock offset has 32 bits (a 32-bit target's `off_t`), folded into them: a
+    // sequence's frames stay consecutive, other names share bytes more often (and wait).
+    match std::mem::size_of::<OffT>() {
+        4 => 1 + byte % (i32::MAX as u64 - 1),
+        _ => 1 + byte,
+    }
 }
+
+#[cfg(unix)]
+type OffT = nix::libc::off_t;
+#[cfg(not(unix))]
+type OffT = i64;
 
 /// 64-bit FNV-1a over the parts, one after another (stable across runs and machines, as
 /// names on disk must be).
@@ -397,6 +417,67 @@ fn remove_empty(folders: &[PathBuf]) {
         if std::fs::remove_dir(folder).is_err() {
             break;
         }
+    }
+}
+
+/// Opens the lock file for locking, making it where it is missing writable to every user
+/// (mode 0666, whatever the umask): one lock file serves every job writing in the folder,
+/// and a job of another user must be able to lock it too (an `fcntl` write lock needs the
+/// file open for writing).
+fn open_shared(path: &Path) -> std::io::Result<File> {
+    let open = || {
+        OpenOptions::new()
+            .read(true)
+            .write(true)
+            .truncate(false)
+            .open(path)
+    };
+    // A few times: a file found there may be unlinked by a job releasing it before it opens.
+    let mut tries = 0;
+    loop {
+        tries += 1;
+        let made = OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create_new(true)
+            .open(path);
+        match made {
+            Ok(file) => {
+                #[cfg(unix)]
+                {
+                    use std::os::unix::fs::PermissionsExt;
+                    let _ = file.set_permissions(std::fs::Permissions::from_mode(0o666));
+                }
+                return Ok(file);
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => match open() {
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound && tries < 5 => continue,
+                opened => return opened,
+            },
+            Err(e) => return Err(e),
+        }
+    }
+}
+
+/// What `folder` is (device and inode, Unix), while it is a folder that is still linked
+/// (a removed working folder still answers to `.`, with no link left); `None` otherwise, and
+/// elsewhere than Unix (where a removed folder is told by its path alone).
+fn folder_id(folder: &Path) -> Option<(u64, u64)> {
+    let folder = if folder.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        folder
+    };
+    let meta = std::fs::metadata(folder).ok().filter(|m| m.is_dir())?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        (meta.nlink() > 0).then_some((meta.dev(), meta.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = meta;
+        Some((0, 0))
     }
 }
 
@@ -528,6 +609,8 @@ mod tests {
             keys("out/o.-###.exr", &[Some(234)]),
             keys("out/o.####.exr", &[Some(234)])
         );
+        // Case folded, as file systems that fold it see one file.
+        assert_eq!(keys("out/O.####.EXR", &[Some(1234)]), four);
         // Names without a number, or with one too long to keep, are hashed whole.
         assert_ne!(keys("o.exr", &[None]), keys("p.exr", &[None]));
         let long = keys("o.12345678901234567890.exr", &[None]);
@@ -574,6 +657,13 @@ mod tests {
             PathPattern::parse(&format!("{}/new/o.####.exr", dir.path().display())).unwrap();
         let lock = OutputLock::acquire(&output, &[Some(1), Some(2)]).unwrap();
         assert!(lock.path().exists());
+        // Writable to every user whatever the umask: one file serves every job in the folder.
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(lock.path()).unwrap().permissions().mode();
+            assert_eq!(mode & 0o777, 0o666);
+        }
         drop(lock);
         assert!(!dir.path().join("new/.shutter.lock").exists());
         // The folder made for the lock was empty, so it went too.

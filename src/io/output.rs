@@ -144,9 +144,7 @@ impl Temporary {
             .create(true)
             .truncate(true)
             .open(&path)
-            .map_err(|e| {
-                folder_gone(&path, &e).unwrap_or_else(|| WriteFailure::of_io(&e, e.to_string()))
-            })?;
+            .map_err(failed_write)?;
         in_flight.temporaries.push(path.clone());
         Ok((
             Temporary {
@@ -158,29 +156,10 @@ impl Temporary {
     }
 
     fn rename_to(mut self, path: &Path) -> Result<(), WriteFailure> {
-        std::fs::rename(&self.path, path).map_err(|e| {
-            folder_gone(path, &e).unwrap_or_else(|| WriteFailure::of_io(&e, e.to_string()))
-        })?;
+        std::fs::rename(&self.path, path).map_err(failed_write)?;
         self.renamed = true;
         Ok(())
     }
-}
-
-/// A write that failed because the output folder is gone (removed while the run wrote into
-/// it, by hand or by a cleanup): transient, so that a farm reruns the job, which makes the
-/// folder again and, with `--skip-existing`, writes again every frame that went with it.
-/// (An outside probe: exit 1, "No such file or directory", read by a farm as a job to fix.)
-/// Made again and carried on instead, the run would end with exit 0 and the frames it wrote
-/// before gone.
-fn folder_gone(path: &Path, error: &std::io::Error) -> Option<WriteFailure> {
-    let folder = path.parent().filter(|f| !f.as_os_str().is_empty())?;
-    (error.kind() == std::io::ErrorKind::NotFound && !folder.is_dir()).then(|| {
-        WriteFailure::transient(format!(
-            "the output folder {} was removed while this run wrote into it, and the frames \
-             written into it before with it; run again (with --skip-existing) to write them",
-            folder.display()
-        ))
-    })
 }
 
 impl Drop for Temporary {
@@ -274,6 +253,18 @@ pub fn write_atomic_classed(
     // job may be writing this frame.
     crate::io::lock::verify_held()?;
     temporary.rename_to(path)
+}
+
+/// A failure to make or rename a file: for want of its folder, the output folder may have
+/// been removed (or removed and made again) under the run, taking the frames written there
+/// with it, which the held lock tells ([`crate::io::lock::verify_held`]: transient, so that
+/// a rerun writes them again; an outside probe: exit 1, "No such file or directory").
+fn failed_write(e: std::io::Error) -> WriteFailure {
+    let failure = WriteFailure::of_io(&e, e.to_string());
+    match e.kind() {
+        std::io::ErrorKind::NotFound => crate::io::lock::verify_held().err().unwrap_or(failure),
+        _ => failure,
+    }
 }
 
 /// [`write_atomic_classed`], the failure as text alone.

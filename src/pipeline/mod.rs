@@ -478,7 +478,15 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     // (a delivered sequence made read-only) nor the lock (an outside probe: it failed as
     // "not writable").
     let (mut _lock, mut stale) = (None, Vec::new());
-    if !existing.iter().all(|e| matches!(e, Existing::Whole)) {
+    if existing.iter().all(|e| matches!(e, Existing::Whole)) {
+        // What a killed run left is still removed where the lock can be had (never a file
+        // a job on another host may be writing): not in a folder made read-only.
+        _lock = OutputLock::acquire(&job.output, &job.frames).ok();
+        if _lock.is_some() {
+            let outputs: Vec<PathBuf> = job.frames.iter().map(|&f| job.output.path(f)).collect();
+            stale = remove_stale_temporaries(&outputs);
+        }
+    } else {
         // Output folders no file can be created in, tried with a probe file now that
         // nothing else can fail first (the probe changes the folder's modification time).
         let unwritable = output_folder_problems(&job.output, &job.frames, true);
