@@ -857,6 +857,30 @@ fn a_grey_photo_comes_out_grey_with_its_gray_profile() {
     }
 }
 
+/// A grey JPEG carrying an RGB profile (a converter's slip): it goes out grey, without the
+/// profile, which cannot describe grey, and the run says so (an outside probe: the profile
+/// was dropped without a word).
+#[test]
+fn a_grey_jpeg_with_an_rgb_profile_says_the_profile_is_left_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (40u32, 24u32);
+    let input = dir.path().join("grey.jpg");
+    let pixels: Vec<u8> = (0..w * h).map(|i| (i % w * 6) as u8).collect();
+    let mut encoder = jpeg_encoder::Encoder::new_file(&input, 95).unwrap();
+    encoder.add_icc_profile(&adobe_icc()).unwrap();
+    encoder
+        .encode(&pixels, w as u16, h as u16, jpeg_encoder::ColorType::Luma)
+        .unwrap();
+    let out = dir.path().join("out.png");
+    let o = dof_still(&input, &out, &[]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("RGB ICC profile is left out"), "{err}");
+    let mut read = decoder(&out);
+    assert_eq!(read.color_type(), image::ColorType::L8);
+    assert_eq!(read.icc_profile().unwrap(), None);
+}
+
 /// A CMYK JPEG with a CMYK profile: the decoder turns its colour into RGB without the
 /// profile, and an RGB output cannot embed a CMYK profile: the note says both, not that the
 /// profile is kept.

@@ -609,6 +609,16 @@ pub fn output_notes(path: &Path, frame: &Frame, options: &OutputOptions) -> Vec<
             "the input's Gray ICC profile is left out: this output is RGB ({why})"
         ));
     }
+    // A grey photo carrying an RGB profile (a converter's slip): grey out, with no profile
+    // (an RGB one does not describe grey), said (an outside probe: dropped without a word).
+    if transfer.as_ref().is_some_and(|t| t.embeds && !t.grey) && grey {
+        notes.push(
+            "the input's RGB ICC profile is left out: this output is grey, as the colour file \
+             is, and an RGB profile does not describe grey (the grey was read through its \
+             curves)"
+                .into(),
+        );
+    }
     if float_out && icc.is_some() && !float_in {
         notes.push(
             "a float TIFF holds linear light: the input's ICC profile, which describes its \
