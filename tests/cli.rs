@@ -720,6 +720,53 @@ fn help_documents_every_blur_flag() {
     }
 }
 
+/// Damage found decoding a pass file names the pass besides the file and frame (an outside
+/// probe: a damaged depth file's error named only the file and frame).
+#[test]
+fn damage_found_decoding_a_pass_file_names_the_pass() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (64, 64);
+    let smooth: Vec<f32> = (0..w * h)
+        .map(|k| 1.0 + (k % w) as f32 / w as f32)
+        .collect();
+    let plane = |name| (name, smooth.clone());
+    write_exr(
+        &dir.path().join("C.exr"),
+        w,
+        h,
+        vec![plane("R"), plane("G"), plane("B")],
+    );
+    let depth = dir.path().join("D.exr");
+    write_exr(&depth, w, h, vec![plane("Z")]);
+    let mut bytes = std::fs::read(&depth).unwrap();
+    let middle = bytes.len() / 2;
+    for b in &mut bytes[middle..middle + 16] {
+        *b ^= 0xFF;
+    }
+    std::fs::write(&depth, &bytes).unwrap();
+    let o = shutter(&[
+        "dof",
+        "--color",
+        &s(&dir.path().join("C.exr")),
+        "--depth",
+        &s(&depth),
+        "--focal-length",
+        "50",
+        "--f-stop",
+        "2",
+        "--focus-distance",
+        "1.5",
+        "-o",
+        &s(&dir.path().join("out.exr")),
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("corrupt file") && err.contains("D.exr") && err.contains("depth pass"),
+        "{err}"
+    );
+}
+
 #[test]
 fn damage_inside_compressed_data_stops_the_run_without_a_partial_frame() {
     let dir = tempfile::tempdir().unwrap();

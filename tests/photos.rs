@@ -402,12 +402,30 @@ impl tiff::encoder::colortype::ColorType for GreyAlpha<u16> {
     }
 }
 
+/// Writes `samples` (grey and alpha, interleaved) as a TIFF of colour type `C`, its second
+/// band declared unassociated alpha.
+fn write_grey_alpha<C: tiff::encoder::colortype::ColorType>(
+    path: &Path,
+    (w, h): (u32, u32),
+    samples: &[C::Inner],
+) where
+    [C::Inner]: tiff::encoder::TiffValue,
+{
+    let file = std::fs::File::create(path).unwrap();
+    let mut encoder = tiff::encoder::TiffEncoder::new(file).unwrap();
+    let mut image = encoder.new_image::<C>(w, h).unwrap();
+    image
+        .encoder()
+        .write_tag(tiff::tags::Tag::ExtraSamples, &[2u16][..])
+        .unwrap();
+    image.write_data(samples).unwrap();
+}
+
 /// A TIFF of grey and alpha, 8 or 16 bits (an outside probe: refused, "the color type
 /// Unknown(16)", as the image crate reads no such TIFF), reads as the PNG of the same grey
 /// and alpha: still, it comes out as it went in.
 #[test]
 fn a_grey_and_alpha_tiff_reads_as_the_same_png() {
-    use tiff::encoder::TiffEncoder;
     let dir = tempfile::tempdir().unwrap();
     let (w, h) = (12u32, 8u32);
     let velocity = dir.path().join("v.png");
@@ -417,13 +435,7 @@ fn a_grey_and_alpha_tiff_reads_as_the_same_png() {
         .flat_map(|i| [(i * 2) as u8, if i % 2 == 0 { 255 } else { 128 }])
         .collect();
     let input = dir.path().join("ga8.tif");
-    let mut encoder = TiffEncoder::new(std::fs::File::create(&input).unwrap()).unwrap();
-    let mut image = encoder.new_image::<GreyAlpha<u8>>(w, h).unwrap();
-    image
-        .encoder()
-        .write_tag(tiff::tags::Tag::ExtraSamples, &[2u16][..])
-        .unwrap();
-    image.write_data(&grey8).unwrap();
+    write_grey_alpha::<GreyAlpha<u8>>(&input, (w, h), &grey8);
     let out = dir.path().join("ga8.png");
     blur(&input, &velocity, &out, &[]);
     let read = image::open(&out).unwrap();
@@ -434,13 +446,7 @@ fn a_grey_and_alpha_tiff_reads_as_the_same_png() {
         .flat_map(|i| [(i * 600) as u16, 65535 - (i * 7) as u16])
         .collect();
     let input = dir.path().join("ga16.tif");
-    let mut encoder = TiffEncoder::new(std::fs::File::create(&input).unwrap()).unwrap();
-    let mut image = encoder.new_image::<GreyAlpha<u16>>(w, h).unwrap();
-    image
-        .encoder()
-        .write_tag(tiff::tags::Tag::ExtraSamples, &[2u16][..])
-        .unwrap();
-    image.write_data(&grey16).unwrap();
+    write_grey_alpha::<GreyAlpha<u16>>(&input, (w, h), &grey16);
     let out = dir.path().join("ga16.png");
     blur(&input, &velocity, &out, &[]);
     let read = image::open(&out).unwrap();

@@ -63,10 +63,12 @@ pub fn read_frame_keeping(
             .filter(|slot| slot.file == index)
             .map(|slot| file.channels[slot.entry])
             .collect();
-        let mut planes = file
-            .info
-            .read_bits(&file.channels, &bits)
-            .map_err(|p| p.frame(plan.frame))?;
+        let mut planes = file.info.read_bits(&file.channels, &bits).map_err(|p| {
+            match (p.pass, pass_of(plan, index)) {
+                (None, Some(pass)) => p.frame(plan.frame).pass(pass),
+                _ => p.frame(plan.frame),
+            }
+        })?;
         // A pass whose data window is larger than the colour's (overscan) is cut to it; the
         // plan made sure it covers it.
         let own = DataWindow::of(&file.info);
@@ -280,6 +282,31 @@ pub fn read_frame_keeping(
         }
     }
     Ok((frame, notes, kept))
+}
+
+/// The pass file `index` of the plan is read for, first of those it serves (a colour file
+/// holding the depth and vectors is the colour's): what a decoding error names beside the
+/// file and frame (an outside probe: a damaged depth file's error named neither).
+fn pass_of(plan: &FramePlan, index: usize) -> Option<&'static str> {
+    let vectors = [
+        ("velocity", &plan.velocity),
+        ("prev", &plan.prev),
+        ("next", &plan.next),
+    ];
+    if plan.color.as_ref().is_some_and(|c| c.rgb[0].file == index) {
+        Some("color")
+    } else if plan
+        .depth
+        .as_ref()
+        .is_some_and(|(slot, _)| slot.file == index)
+    {
+        Some("depth")
+    } else {
+        vectors
+            .into_iter()
+            .find(|(_, v)| v.as_ref().is_some_and(|v| v.x.file == index))
+            .map(|(name, _)| name)
+    }
 }
 
 fn plan_slots(plan: &FramePlan) -> Vec<Slot> {
