@@ -157,6 +157,59 @@ fn a_jpeg_comes_out_with_its_profile_exif_and_subsampling() {
     assert_eq!(tags["Orientation"], 1, "{tags}");
 }
 
+/// A float TIFF of an 8-bit Adobe RGB photo holds linear light in Adobe RGB's primaries: it
+/// carries a linear profile of them, which exiftool reads with the input's colorants and a
+/// curve of gamma 1 (an outside probe: it carried no profile, so viewers showed it as linear
+/// sRGB, Adobe's greens shifted).
+#[test]
+fn a_float_tiff_of_an_adobe_rgb_photo_carries_a_linear_profile_of_its_primaries() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16u32, 8u32);
+    let input = dir.path().join("adobe.png");
+    let pixels: Vec<u8> = (0..w * h).flat_map(|i| [(i * 2) as u8, 200, 60]).collect();
+    let mut png = Vec::new();
+    let mut encoder = image::codecs::png::PngEncoder::new(&mut png);
+    encoder.set_icc_profile(adobe_icc()).unwrap();
+    encoder
+        .write_image(&pixels, w, h, image::ExtendedColorType::Rgb8)
+        .unwrap();
+    std::fs::write(&input, png).unwrap();
+    let out = dir.path().join("out.tif");
+    let o = dof_still(&input, &out, &["--bit-depth", "32"]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(!err.contains("not embedded"), "{err}");
+    let file = std::fs::File::open(&out).unwrap();
+    let mut tiff = tiff::decoder::Decoder::new(file).unwrap();
+    assert!(
+        tiff.get_tag_u8_vec(tiff::tags::Tag::IccProfile).is_ok(),
+        "no profile"
+    );
+    let (Some(before), Some(after)) = (exiftool(&input), exiftool(&out)) else {
+        return;
+    };
+    assert_eq!(
+        after["ProfileDescription"], "Linear light (shutter)",
+        "{after}"
+    );
+    assert_eq!(after["ColorSpaceData"].as_str().map(str::trim), Some("RGB"));
+    // A fixed date, so the same frame gives the same bytes (moxcms writes the time of day).
+    assert_eq!(after["ProfileDateTime"], "2000:01:01 00:00:00", "{after}");
+    for column in ["RedMatrixColumn", "GreenMatrixColumn", "BlueMatrixColumn"] {
+        let numbers = |v: &serde_json::Value| -> Vec<f64> {
+            let text = v[column].as_str().unwrap_or_default().to_string();
+            text.split_whitespace()
+                .map(|n| n.parse().unwrap())
+                .collect()
+        };
+        let (a, b) = (numbers(&before), numbers(&after));
+        assert_eq!(a.len(), 3, "{column}: {before}");
+        for (a, b) in a.iter().zip(&b) {
+            assert!((a - b).abs() < 2e-3, "{column}: {a} against {b}");
+        }
+    }
+}
+
 /// Blurred in the profile's own linear light: red and green hold the same pattern inverted
 /// (full on one column, off the next), so whatever weights the blur gives a pixel, its red and
 /// green in linear light add up to full: with Adobe RGB's pure gamma, G = (1 − (R/255)^γ)^(1/γ)

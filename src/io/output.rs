@@ -619,7 +619,9 @@ pub fn output_notes(path: &Path, frame: &Frame, options: &OutputOptions) -> Vec<
                 .into(),
         );
     }
-    if float_out && icc.is_some() && !float_in {
+    // (An RGB matrix profile's primaries go out in a linear profile instead: `write_photo`.)
+    let linear = icc.and_then(image_io::linear_profile_of).is_some() && !grey;
+    if float_out && icc.is_some() && !float_in && !linear {
         notes.push(
             "a float TIFF holds linear light: the input's ICC profile, which describes its \
              8/16-bit codes, is not embedded"

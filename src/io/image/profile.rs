@@ -399,6 +399,18 @@ fn png_profile(colour: &PngColour, grey: bool) -> Option<Vec<u8>> {
     made_profile(curve, xy, grey, format!("A PNG's {gamma} and {chrm}"))
 }
 
+/// A profile of linear light in the primaries and white of the RGB matrix profile `icc`: what
+/// a float TIFF of an 8/16-bit photo holds (its codes turned to linear light through `icc`'s
+/// curves), so a viewer shows an Adobe RGB or ProPhoto photo in its own colours and not as
+/// linear sRGB (an outside probe: such a TIFF carried no profile). `None` for a profile that
+/// gives no primaries (LUT-based, grey, CMYK).
+pub fn linear_profile_of(icc: &[u8]) -> Option<Vec<u8>> {
+    let [(rx, ry), (gx, gy), (bx, by), (wx, wy)] = chromaticities(icc)?;
+    let xy = [wx, wy, rx, ry, gx, gy, bx, by].map(|v| v as f32);
+    let gamma_one = ToneReprCurve::Parametric(vec![1.0]);
+    made_profile(gamma_one, xy, false, "Linear light (shutter)".into())
+}
+
 /// An ICC profile of one `curve` for every channel and the white and primaries `xy` (x, y
 /// of white, red, green, blue), described as `description`. Built by moxcms: the colorants
 /// adapted to D50 by Bradford, a `chad` that adapts the white to D50 (moxcms's own is its
@@ -443,10 +455,14 @@ fn made_profile(
     )]));
     profile.copyright = None;
     // 2000-01-01 00:00:00.
-    profile.creation_date_time =
-        ColorDateTime::new_from_slice(&[7, 208, 0, 1, 0, 1, 0, 0, 0, 0, 0, 0]).ok()?;
+    const DATE: [u8; 12] = [7, 208, 0, 1, 0, 1, 0, 0, 0, 0, 0, 0];
+    profile.creation_date_time = ColorDateTime::new_from_slice(&DATE).ok()?;
     let mut icc = profile.encode().ok()?;
     icc.get_mut(68..80)?.copy_from_slice(&D50_HEADER);
+    // moxcms 0.8 writes the time of encoding as the header's date whatever the profile says:
+    // the fixed date in its place (bytes 24 to 35), or the same frame would give other bytes
+    // each second.
+    icc.get_mut(24..36)?.copy_from_slice(&DATE);
     Some(icc)
 }
 

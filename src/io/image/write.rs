@@ -175,6 +175,16 @@ pub fn write_photo(
         (false, true) => transfer.grey,
         (false, false) => transfer.embeds,
     });
+    // A float TIFF of an 8/16-bit photo holds linear light in the photo's primaries: a
+    // linear profile of them (where its profile gives them).
+    let linear = (float && !grey && transfer.embeds && photo.is_some_and(|p| p.bits != 32))
+        .then(|| {
+            profile
+                .as_deref()
+                .and_then(super::profile::linear_profile_of)
+        })
+        .flatten();
+    let icc = linear.as_deref().or(icc);
     // Into a PNG, a made profile goes out as the chunks it was made from; beside a cICP,
     // the iCCP the PNG came with goes out again as it came, where it describes what is
     // written (one from gAMA and cHRM had none).
