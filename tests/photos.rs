@@ -157,6 +157,17 @@ fn a_jpeg_comes_out_with_its_profile_exif_and_subsampling() {
     assert_eq!(tags["Orientation"], 1, "{tags}");
 }
 
+/// Writes 8-bit RGB `pixels` as a PNG carrying the Adobe RGB profile.
+fn write_adobe_png(path: &Path, (w, h): (u32, u32), pixels: &[u8]) {
+    let mut png = Vec::new();
+    let mut encoder = image::codecs::png::PngEncoder::new(&mut png);
+    encoder.set_icc_profile(adobe_icc()).unwrap();
+    encoder
+        .write_image(pixels, w, h, image::ExtendedColorType::Rgb8)
+        .unwrap();
+    std::fs::write(path, png).unwrap();
+}
+
 /// A float TIFF of an 8-bit Adobe RGB photo holds linear light in Adobe RGB's primaries: it
 /// carries a linear profile of them, which exiftool reads with the input's colorants and a
 /// curve of gamma 1 (an outside probe: it carried no profile, so viewers showed it as linear
@@ -167,13 +178,7 @@ fn a_float_tiff_of_an_adobe_rgb_photo_carries_a_linear_profile_of_its_primaries(
     let (w, h) = (16u32, 8u32);
     let input = dir.path().join("adobe.png");
     let pixels: Vec<u8> = (0..w * h).flat_map(|i| [(i * 2) as u8, 200, 60]).collect();
-    let mut png = Vec::new();
-    let mut encoder = image::codecs::png::PngEncoder::new(&mut png);
-    encoder.set_icc_profile(adobe_icc()).unwrap();
-    encoder
-        .write_image(&pixels, w, h, image::ExtendedColorType::Rgb8)
-        .unwrap();
-    std::fs::write(&input, png).unwrap();
+    write_adobe_png(&input, (w, h), &pixels);
     let out = dir.path().join("out.tif");
     let o = dof_still(&input, &out, &["--bit-depth", "32"]);
     let err = stderr(&o);
@@ -229,13 +234,7 @@ fn an_adobe_rgb_photo_blurs_in_its_own_linear_light() {
             }
         })
         .collect();
-    let mut png = Vec::new();
-    let mut encoder = image::codecs::png::PngEncoder::new(&mut png);
-    encoder.set_icc_profile(adobe_icc()).unwrap();
-    encoder
-        .write_image(&pixels, w, h, image::ExtendedColorType::Rgb8)
-        .unwrap();
-    std::fs::write(&input, png).unwrap();
+    write_adobe_png(&input, (w, h), &pixels);
     let velocity = dir.path().join("v.png");
     velocity_map(&velocity, w, h, |_, _| 9.0);
     let out = dir.path().join("out.png");
