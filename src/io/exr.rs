@@ -467,22 +467,26 @@ pub fn read_channels_checked(
     check: impl FnOnce(&MetaData) -> Result<(), String>,
 ) -> exr::error::Result<ReadChannels> {
     let mut file = crate::io::input::open_input(path)?;
-    // A file with a deep part: the exr crate's reader refuses it whole, so its other parts'
-    // chunks are read by the offset tables (`chunks_beside_deep`).
-    let deep = (MetaData::read_from_buffered(BufReader::new(&mut file), true)?
-        .headers
-        .iter())
-    .any(|h| h.deep);
-    file.seek(SeekFrom::Start(0))?;
-    let (reader, meta) = if deep {
-        let meta = MetaData::read_from_buffered(BufReader::new(&mut file), true)?;
-        validate(&meta)?;
-        file.seek(SeekFrom::Start(0))?;
-        (None, meta)
-    } else {
-        let reader = exr::block::read(BufReader::new(file.try_clone()?), false)?;
-        let meta = reader.meta_data().clone();
-        (Some(reader), meta)
+    // The exr crate's reader refuses a file with a deep part whole ("not supported"): only
+    // then are its headers read again, checked as `validate` checks them, and its other
+    // parts' chunks read by the offset tables (`chunks_beside_deep`). Every other file is
+    // read once, by the crate's reader, as before.
+    let (reader, meta) = match exr::block::read(BufReader::new(file.try_clone()?), false) {
+        Ok(reader) => {
+            let meta = reader.meta_data().clone();
+            (Some(reader), meta)
+        }
+        Err(refused @ exr::error::Error::NotSupported(_)) => {
+            file.seek(SeekFrom::Start(0))?;
+            let meta = MetaData::read_from_buffered(BufReader::new(&mut file), true)?;
+            if !meta.headers.iter().any(|h| h.deep) {
+                return Err(refused);
+            }
+            validate(&meta)?;
+            file.seek(SeekFrom::Start(0))?;
+            (None, meta)
+        }
+        Err(other) => return Err(other),
     };
     check(&meta).map_err(|e| exr::error::Error::Invalid(format!("{CHANGED}{e}").into()))?;
 
