@@ -134,8 +134,11 @@
 //! exposure normalisation): 2^(24 − 49) ≈ 3·10⁻⁸ of a unit colour for the ordinary deposits
 //! beside it (tests/gpu_scatter.rs's firefly tests measure it against the CPU, on the streak
 //! and off it). A firefly 2^b brighter than its neighbours leaves them 62 − ⌈log₂ N⌉ − w − b
-//! fractional bits of their own magnitude (25 beside 10⁷): only one beyond ~10¹² coarsens
-//! them to a thousandth, and only within its own reach.
+//! fractional bits of their own magnitude (25 beside 10⁷). Beyond 2²⁴ that would run out
+//! (beside 10³⁰, none: every ordinary pixel in its reach black), so a frame with any colour
+//! beyond 2²⁴ is split into bands of 2²⁴ ([`bands`]), each carried as a light layer with
+//! fixed points of its own and added back: an ordinary pixel's sums are then band 0's,
+//! whatever lies in reach.
 //!
 //! *The cost.* A deposit reads its tile's factor (one word, the beauty's colour and alpha
 //! bytes) and scales its weight by it; `reach` counts each curve into its block, building
@@ -171,6 +174,7 @@
 //! lavapipe, a 4K frame), or a device with fewer than [`STORAGE_BUFFERS`] storage buffers per
 //! stage, runs on the CPU, counted and warned about, as every twin does.
 
+mod bands;
 mod pass;
 
 use crate::frame::{Color, Positions};
@@ -203,9 +207,33 @@ impl Gpu {
         if config.width == 0 || config.height == 0 {
             return Ok(color.clone());
         }
+        if let Some(split) = bands::split(color, &[]) {
+            return self.scatter_banded(config, split, (depth, positions, fringe), &mut [], order);
+        }
         let inputs = (depth, positions, fringe);
         let (beauty, _) = self.run_scatter(config, color, inputs, order, &[])?;
         Ok(beauty)
+    }
+
+    /// A frame whose colours lie beyond band 0 ([`bands`]): band 0 of the beauty and of
+    /// `layers` in their places, the bands above carried beside them, the outputs added back.
+    fn scatter_banded(
+        &self,
+        config: &ScatterConfig,
+        mut split: bands::Split,
+        (depth, positions, fringe): Inputs,
+        layers: &mut [Color],
+        order: Order,
+    ) -> Result<Color, StageError> {
+        let mut outputs = std::mem::take(&mut split.layers);
+        let beauty = self.carrying(
+            config,
+            &split.beauty,
+            (depth, positions, fringe),
+            &mut outputs,
+            order,
+        )?;
+        Ok(split.join(beauty, outputs, layers))
     }
 
     /// [`crate::motion::scatter::stages_carrying`] on the GPU: the beauty's output, and the
@@ -229,6 +257,22 @@ impl Gpu {
             return self.try_scatter(config, color, depth, positions, fringe, order);
         }
         let inputs = (depth, positions, fringe);
+        if let Some(split) = bands::split(color, layers) {
+            return self.scatter_banded(config, split, inputs, layers, order);
+        }
+        self.carrying(config, color, inputs, layers, order)
+    }
+
+    /// [`Gpu::try_scatter_carrying`] of colours within band 0, `layers` not empty.
+    fn carrying(
+        &self,
+        config: &ScatterConfig,
+        color: &Color,
+        inputs: Inputs,
+        layers: &mut [Color],
+        order: Order,
+    ) -> Result<Color, StageError> {
+        let pixels = config.width as usize * config.height as usize;
         // A run that fails on the device (out of memory, a driver refusing the carrying
         // module) is tried again with half as many layers a run, down to each layer alone in
         // the beauty's place, before the frame goes to the CPU.
