@@ -406,6 +406,19 @@ pub struct Photo {
     /// A TIFF holding more images after its first (pages, or a reduced-size preview): only
     /// the first is read and written, and the run says so.
     pub more_images: bool,
+    /// The straight colour (linear) of the pixels alpha 0 hides, where it is not black:
+    /// premultiplying on read loses it, and an output pixel that nothing covers (alpha 0
+    /// still) holds it again (a cut-out's background, a texture's bleed), as Pillow keeps it.
+    pub hidden: Option<Hidden>,
+}
+
+/// The straight colour under a photo's alpha 0 ([`Photo::hidden`]): the frame's size, and
+/// each such pixel's index with its R, G and B.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Hidden {
+    pub width: usize,
+    pub height: usize,
+    pub pixels: Vec<(u32, [f32; 3])>,
 }
 
 impl Frame {

@@ -1364,3 +1364,62 @@ fn a_pngs_international_text_keeps_its_language() {
         ("Description", "de-CH", "Beschreibung", "Été ✓")
     );
 }
+
+/// A straight-alpha photo's colour under alpha 0 (a cut-out's background, a texture's
+/// bleed) comes out as it came where nothing covers the pixel, as Pillow keeps it (`oiiotool`
+/// premultiplies as it reads, and drops it): 8- and 16-bit PNG and a JPEG (which holds the
+/// straight colour), on a frame that does not blur. Premultiplied on read, it had come out
+/// black.
+#[test]
+fn a_photos_colour_under_alpha_0_comes_out_as_it_came() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (32u32, 8u32);
+    let hidden = |i: u32| i % w < 12;
+    let rgba8: Vec<u8> = (0..w * h)
+        .flat_map(|i| {
+            if hidden(i) {
+                [200, 50, (i % 7 * 30) as u8, 0]
+            } else {
+                [90, 160, 220, (128 + i % 3 * 60) as u8]
+            }
+        })
+        .collect();
+    let input8 = dir.path().join("in8.png");
+    image::save_buffer(&input8, &rgba8, w, h, image::ColorType::Rgba8).unwrap();
+    let rgba16: Vec<u16> = rgba8.iter().map(|&v| v as u16 * 257 + 3).collect();
+    let rgba16: Vec<u16> = (rgba16.chunks(4))
+        .flat_map(|p| [p[0], p[1], p[2], if p[3] == 3 { 0 } else { p[3] }])
+        .collect();
+    let bytes: Vec<u8> = rgba16.iter().flat_map(|v| v.to_ne_bytes()).collect();
+    let input16 = dir.path().join("in16.png");
+    image::save_buffer(&input16, &bytes, w, h, image::ColorType::Rgba16).unwrap();
+    let out = dir.path().join("out8.png");
+    let o = dof_still(&input8, &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let got = image::open(&out).unwrap().to_rgba8();
+    for (i, (g, want)) in got.pixels().zip(rgba8.chunks(4)).enumerate() {
+        assert_eq!(&g.0[..], want, "8-bit, pixel {i}");
+    }
+    let out = dir.path().join("out16.png");
+    let o = dof_still(&input16, &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let got = image::open(&out).unwrap().to_rgba16();
+    for (i, (g, want)) in got.pixels().zip(rgba16.chunks(4)).enumerate() {
+        let close = g.0.iter().zip(want).all(|(&g, &w)| g.abs_diff(w) <= 1);
+        assert!(close, "16-bit, pixel {i}: {:?} for {want:?}", g.0);
+    }
+    let out = dir.path().join("out.jpg");
+    let o = dof_still(&input8, &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let got = image::open(&out).unwrap().to_rgb8();
+    // R and G's means away from the edge (B varies from pixel to pixel, and JPEG smooths
+    // colour: up to 9 codes a pixel here).
+    let region: Vec<[u8; 3]> = (1..8)
+        .flat_map(|x| (0..h).map(move |y| (x, y)))
+        .map(|(x, y)| got.get_pixel(x, y).0)
+        .collect();
+    for (c, want) in [(0, 200.0), (1, 50.0)] {
+        let mean = region.iter().map(|p| p[c] as f64).sum::<f64>() / region.len() as f64;
+        assert!((mean - want).abs() <= 4.0, "JPEG, channel {c}: mean {mean}");
+    }
+}

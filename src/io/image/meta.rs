@@ -126,6 +126,7 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
         resolution,
         premultiplied,
         more_images,
+        hidden: None,
     })
 }
 
@@ -159,6 +160,7 @@ fn grey_float_photo(path: &Path, header: &super::tiff_float::Header) -> Photo {
         resolution,
         premultiplied,
         more_images,
+        hidden: None,
     }
 }
 

@@ -229,16 +229,9 @@ pub fn write_photo(
     let channels = colours + usize::from(kept_alpha.is_some());
     let mut codes = vec![0u16; n * channels];
     for i in 0..n {
-        let a = alpha.map_or(1.0, |a| {
-            let a = a[i];
-            if a.is_finite() {
-                a.clamp(0.0, 1.0)
-            } else {
-                0.0
-            }
-        });
+        let a = alpha.map_or(1.0, |a| written_alpha(a[i]));
         // Unpremultiply (a JPEG too, which leaves the alpha out); where alpha is 0 the colour
-        // is 0.
+        // is 0, or what alpha 0 hid there in the input (below).
         let unpremultiply = if a > 0.0 { 1.0 / a } else { 0.0 };
         for c in 0..colours {
             let v = if alpha.is_some() {
@@ -250,6 +243,20 @@ pub fn write_photo(
         }
         if kept_alpha.is_some() {
             codes[i * channels + colours] = (a * max as f32 + 0.5) as u16;
+        }
+    }
+    // Where alpha 0 hid a colour in the input and nothing covers the pixel now, that colour
+    // again (the loop above wrote 0).
+    if let (Some(hidden), Some(alpha)) = (photo.and_then(|p| p.hidden.as_ref()), alpha) {
+        if (hidden.width, hidden.height) == (width, height) {
+            for &(i, colour) in &hidden.pixels {
+                let i = i as usize;
+                if written_alpha(alpha[i]) == 0.0 {
+                    for c in 0..colours {
+                        codes[i * channels + c] = encoder.encode(colour[c], c) as u16;
+                    }
+                }
+            }
         }
     }
     match format {
@@ -268,6 +275,15 @@ pub fn write_photo(
             };
             write_jpeg(writer, jpeg, options.jpeg_quality, icc, photo)
         }
+    }
+}
+
+/// The alpha an integer image holds for `a`: clamped to [0, 1], not finite as 0.
+fn written_alpha(a: f32) -> f32 {
+    if a.is_finite() {
+        a.clamp(0.0, 1.0)
+    } else {
+        0.0
     }
 }
 

@@ -226,6 +226,18 @@ pub fn read_frame_keeping(
             frame.carried.photo = Some(photo);
         }
         if let (true, Some(a)) = (plan_color.premultiply, &a) {
+            // What premultiplying loses: the straight colour under alpha 0, for the output.
+            if let Some(photo) = frame.carried.photo.as_mut() {
+                let pixels: Vec<(u32, [f32; 3])> = (a.iter().enumerate())
+                    .filter(|&(i, &a)| a == 0.0 && (r[i] != 0.0 || g[i] != 0.0 || b[i] != 0.0))
+                    .map(|(i, _)| (i as u32, [r[i], g[i], b[i]]))
+                    .collect();
+                photo.hidden = (!pixels.is_empty()).then_some(crate::frame::Hidden {
+                    width: frame.width,
+                    height: frame.height,
+                    pixels,
+                });
+            }
             for plane in [&mut r, &mut g, &mut b] {
                 plane.iter_mut().zip(a).for_each(|(v, a)| *v *= a);
             }
