@@ -255,13 +255,22 @@ pub fn holes(found: &[i64]) -> Vec<i64> {
     if found.len() < 2 {
         return Vec::new();
     }
-    // The smallest step between neighbours is the sequence's.
-    let step = found
-        .windows(2)
-        .map(|w| w[1] - w[0])
-        .min()
-        .unwrap_or(1)
-        .max(1);
+    // The step most neighbours keep is the sequence's (the smallest of the commonest): the
+    // smallest of all would make a sequence on twos with one frame between (…, 5, 6, 7, 9, …)
+    // a sequence on ones, every odd frame a hole.
+    let mut steps: Vec<i64> = found.windows(2).map(|w| (w[1] - w[0]).max(1)).collect();
+    steps.sort_unstable();
+    let (mut step, mut most, mut run) = (steps[0], 0, 0);
+    for (k, &s) in steps.iter().enumerate() {
+        run = if k > 0 && steps[k - 1] == s {
+            run + 1
+        } else {
+            1
+        };
+        if run > most {
+            (step, most) = (s, run);
+        }
+    }
     let mut holes = Vec::new();
     for w in found.windows(2) {
         let mut f = w[0] + step;
@@ -472,6 +481,10 @@ mod tests {
         assert_eq!(holes(&[1, 2, 3, 6, 7, 9]), [4, 5, 8]);
         // On twos: no holes at the odd frames, one at 7.
         assert_eq!(holes(&[1, 3, 5, 9, 11]), [7]);
+        // On twos with a frame between two of them: the step is still 2.
+        assert_eq!(holes(&[1, 3, 5, 6, 7, 9, 13, 15]), [11]);
+        // Ties go to the smaller step.
+        assert_eq!(holes(&[10, 12, 13, 16]), [11, 14, 15]);
         assert!(holes(&[4]).is_empty());
     }
 
