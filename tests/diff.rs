@@ -730,6 +730,34 @@ fn a_part_of_another_data_window_is_named_as_not_compared() {
         "{}",
         stderr(&o)
     );
+    // Not compared is a warning (`--warn-exit`: 4, where it had exited 0), and a candidate
+    // without the part lost it (exit 1, where it had passed). Found by an outside probe.
+    let o = shutter(&["diff", &a, &b, "--warn-exit"]);
+    assert_eq!(o.status.code(), Some(4), "{}", stderr(&o));
+    let alone = dir.path().join("alone.exr");
+    let mut layer = Layer::new(
+        (8, 6),
+        LayerAttributes::named(Text::from("rgba")),
+        Encoding::default(),
+        AnyChannels::sort(
+            ["R", "G", "B"]
+                .iter()
+                .map(|c| AnyChannel::new(*c, FlatSamples::F32(vec![0.5; 48])))
+                .collect(),
+        ),
+    );
+    layer.attributes.layer_position = Vec2(0, 0);
+    Image::from_layers(
+        ImageAttributes::new(IntegerBounds::new((0, 0), (8, 6))),
+        vec![layer],
+    )
+    .write()
+    .to_file(&alone)
+    .unwrap();
+    let o = shutter(&["diff", &a, &s(&alone), "--json"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let missing = json(&o)["frames"][0]["missing_channels"].to_string();
+    assert!(missing.contains("part light"), "{missing}");
 }
 
 /// The same pixels at another place are another picture: a data window moved by (5, 3) px, or
@@ -1294,4 +1322,158 @@ fn what_reading_a_file_took_for_granted_is_warned_once_naming_the_files() {
         "{err}"
     );
     assert_eq!(err.matches("no input file holds views").count(), 1, "{err}");
+}
+
+/// A candidate that lost a channel of the reference's beauty fails (exit 1), as a lost `Z`
+/// does: its alpha (it had passed, read as 1, exit 0), its B (it had stopped as "could not
+/// compare", exit 3), its R, G and B read from a luminance `Y` (it had passed, warned as
+/// grey). A reference without alpha against a candidate with one is warned (the candidate's
+/// alpha is compared against 1). Found by an outside probe.
+#[test]
+fn a_candidate_that_lost_a_beauty_channel_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (12, 8);
+    let plane = |seed| noise(w * h, seed, 0.0, 1.0);
+    let write = |name: &str, channels: &[&str]| {
+        let path = dir.path().join(name);
+        let planes = channels
+            .iter()
+            .enumerate()
+            .map(|(k, &c)| (c, plane(k as u32 + 1)))
+            .collect();
+        write_exr(&path, w, h, planes);
+        s(&path)
+    };
+    let rgba = write("rgba.exr", &["R", "G", "B", "A"]);
+    let rgb = write("rgb.exr", &["R", "G", "B"]);
+    let rga = write("rga.exr", &["R", "G", "A"]);
+    let ya = write("ya.exr", &["Y", "A"]);
+    for (candidate, lost) in [(&rgb, &["A"][..]), (&rga, &["B"]), (&ya, &["R", "G", "B"])] {
+        let o = shutter(&["diff", &rgba, candidate, "--json"]);
+        assert_eq!(o.status.code(), Some(1), "{candidate}: {}", stderr(&o));
+        let report = json(&o);
+        let missing = &report["frames"][0]["missing_channels"];
+        for name in lost {
+            assert!(
+                missing.as_array().unwrap().iter().any(|m| m == name),
+                "{candidate}: {missing} lacks {name}"
+            );
+        }
+        assert_eq!(report["failed"], true);
+    }
+    let o = shutter(&["diff", &rgb, &rgba, "--json", "--warn-exit"]);
+    assert_eq!(o.status.code(), Some(4), "{}", stderr(&o));
+    assert_eq!(json(&o)["frames"][0]["extra_channels"][0], "A");
+}
+
+/// A sequence whose candidate lacks a frame stops before anything is written (exit 3, no
+/// heatmap, no report): it had written the other frames' heatmaps and thumbnails, then
+/// stopped with no report. Found by an outside probe.
+#[test]
+fn a_frame_missing_from_the_candidate_stops_the_run_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    for n in 1..=3 {
+        pair(dir.path(), &format!("a.{n:04}.exr"), 8, 6, n, 0.0);
+        if n != 2 {
+            pair(dir.path(), &format!("b.{n:04}.exr"), 8, 6, n, 0.0);
+        }
+    }
+    let (a, b) = (
+        format!("{}/a.####.exr", dir.path().display()),
+        format!("{}/b.####.exr", dir.path().display()),
+    );
+    let heat = format!("{}/h.####.png", dir.path().display());
+    let report = dir.path().join("report");
+    let o = shutter(&[
+        "diff",
+        &a,
+        &b,
+        "--frames",
+        "1-3",
+        "--heatmap",
+        &heat,
+        "--report",
+        &s(&report),
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(stderr(&o).contains("b.0002.exr"), "{}", stderr(&o));
+    for n in 1..=3 {
+        assert!(
+            !dir.path().join(format!("h.{n:04}.png")).exists(),
+            "h.{n:04}.png"
+        );
+    }
+    assert!(!report.exists(), "a report folder was made");
+}
+
+/// The largest difference is named at its pixel in the file's coordinates (the data window's
+/// origin added), as `idiff` names it: (−6, −2) in a data window from (−10, −5), where it had
+/// said (4, 3). Found by an outside probe.
+#[test]
+fn the_largest_difference_is_named_in_the_file_s_coordinates() {
+    use shutter::frame::{Window, Windows};
+    use shutter::io::exr::{write_channels, ExrOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16usize, 10usize);
+    let windows = Windows {
+        data_origin: (-10, -5),
+        display: Window {
+            x: 0,
+            y: 0,
+            width: 8,
+            height: 6,
+        },
+    };
+    let write = |name: &str, bump: f32| {
+        let path = dir.path().join(name);
+        let file = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
+        let mut g = vec![0.25; w * h];
+        g[3 * w + 4] += bump;
+        let channels = [("R", vec![0.5; w * h]), ("G", g), ("B", vec![0.1; w * h])]
+            .into_iter()
+            .map(|(c, p)| (c.to_string(), p))
+            .collect();
+        write_channels(file, w, h, windows, channels, ExrOptions::default()).unwrap();
+        s(&path)
+    };
+    let (a, b) = (write("a.exr", 0.0), write("b.exr", 2.0));
+    let o = shutter(&["diff", &a, &b, "--json"]);
+    let report = json(&o);
+    let largest = &report["frames"][0]["largest"];
+    assert_eq!(
+        (largest["x"].as_i64(), largest["y"].as_i64()),
+        (Some(-6), Some(-2)),
+        "{largest}"
+    );
+    let o = shutter(&["diff", &a, &b]);
+    assert!(stdout(&o).contains("at (-6, -2) G"), "{}", stdout(&o));
+}
+
+/// An ID stored as u32 in the reference and as float in the candidate is compared as stored,
+/// and the change of type is warned: 16777217 against 16777216 (one f32) fails
+/// `--data-fail-pixel 0`, where it had passed, rounded through f32. Found by an outside
+/// probe.
+#[test]
+fn a_u32_channel_against_a_float_one_is_compared_as_stored_and_warned() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (8, 4);
+    let a = dir.path().join("a.exr");
+    ids_exr(&a, w, h, vec![16_777_217; w * h]);
+    let b = dir.path().join("b.exr");
+    let grey = vec![0.5; w * h];
+    let channels = vec![
+        ("R", grey.clone()),
+        ("G", grey.clone()),
+        ("B", grey),
+        ("id", vec![16_777_216.0; w * h]),
+    ];
+    write_exr(&b, w, h, channels);
+    let o = shutter(&["diff", &s(&a), &s(&b), "--data-fail-pixel", "0", "--json"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let report = json(&o);
+    assert!(
+        report["warnings"].to_string().contains("id stored as u32"),
+        "{}",
+        report["warnings"]
+    );
 }

@@ -463,8 +463,9 @@ pub struct DiffArgs {
     #[arg(long)]
     pub warn_exit: bool,
 
-    /// Behave as OpenImageIO's idiff for drop-in use: its exit codes (0 pass, 1 warn, 2 fail,
-    /// 3 sizes or channels differ, 4 an input unreadable) and, unless given, its thresholds
+    /// Behave as OpenImageIO's idiff for drop-in use: its exit codes as Debian's idiff 2.4
+    /// answers them (0 pass, 1 warn, 2 fail, sizes or channel sets that differ, 4 an input
+    /// unreadable or an output unwritable) and, unless given, its thresholds
     /// (--fail-pixel 1e-6 --warn-pixel 1e-6, on data channels too).
     #[arg(long)]
     pub idiff: bool,

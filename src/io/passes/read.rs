@@ -394,6 +394,18 @@ impl FramePlan {
         })
     }
 
+    /// The colour channels' names (R, G, B and, where read, A), as the colour file lists
+    /// them.
+    pub fn colour_channel_names(&self) -> Vec<String> {
+        let Some(color) = &self.color else {
+            return Vec::new();
+        };
+        let file = &self.files[color.rgb[0].file];
+        (color.rgb.iter().chain(&color.a))
+            .map(|slot| file.info.channels[file.channels[slot.entry]].name.clone())
+            .collect()
+    }
+
     /// The views of the colour file, where it is a multi-view EXR.
     pub fn colour_views(&self) -> Option<&crate::io::view::Views> {
         let file = self.color.as_ref()?.rgb[0].file;

@@ -23,8 +23,10 @@ use crate::frame::{Frame, LayerClass};
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Largest {
     pub error: f64,
-    pub x: usize,
-    pub y: usize,
+    /// The pixel, in the file's coordinates (the data window's origin added, as `idiff`
+    /// gives it).
+    pub x: i64,
+    pub y: i64,
     /// The channel's name as the file stores it.
     pub channel: String,
     /// The reference's value there, and the tested image's.
@@ -126,6 +128,8 @@ pub struct Compared {
     /// The channels only the candidate has that hold a NaN (or, in a colour channel, an
     /// infinity), with how many: counted in `non_finite`.
     pub extra_non_finite: Vec<(String, usize)>,
+    /// Channels stored as u32 on one side and as float on the other (compared all the same).
+    pub retyped: Vec<String>,
 }
 
 /// The beauty's layer name in the figures: no channel's layer is named so (a channel name
@@ -139,19 +143,24 @@ struct Pair<'a> {
     class: LayerClass,
     a: &'a [f32],
     b: &'a [f32],
-    /// Both sides' u32 values as stored, where both read them exactly (IDs): compared as
-    /// they are, not through f32, which rounds over 2²⁴.
-    exact: Option<(&'a [u32], &'a [u32])>,
+    /// Each side's u32 values as stored, where it reads them exactly (IDs): compared as they
+    /// are, not through f32, which rounds over 2²⁴ (against the other side's float where
+    /// only one is u32).
+    exact: (Option<&'a [u32]>, Option<&'a [u32]>),
 }
 
+/// The channels only one side holds: the reference's (lost: a failure), the candidate's
+/// with their index among its carried channels (none for the beauty's), and the beauty's
+/// the candidate gained.
+type OneSided = (Vec<String>, Vec<(String, usize)>, Vec<String>);
+
 /// The channels to compare, grouped by layer in the reference's order, and the names only
-/// one side holds. The beauty's alpha, when one side lacks it, reads as 1 (opaque).
-fn pairs<'a>(
-    a: &'a Frame,
-    b: &'a Frame,
-    ones: &'a [f32],
-) -> (Vec<Pair<'a>>, Vec<String>, Vec<(String, usize)>) {
+/// one side holds. The beauty's alpha the reference lacks reads as 1 (opaque) and is
+/// compared so; the reference's alpha the candidate lacks is lost, as are its R, G and B
+/// where the candidate's are read from a luminance Y.
+fn pairs<'a>(a: &'a Frame, b: &'a Frame, ones: &'a [f32]) -> (Vec<Pair<'a>>, OneSided) {
     let mut out = Vec::new();
+    let (mut lost, mut gained) = (Vec::new(), Vec::new());
     let names = |f: &Frame| -> Vec<String> {
         if f.carried.beauty.is_empty() {
             ["R", "G", "B", "A"].map(String::from).to_vec()
@@ -161,22 +170,40 @@ fn pairs<'a>(
     };
     if let (Some(ca), Some(cb)) = (&a.color, &b.color) {
         let (pa, pb) = (ca.planes(), cb.planes());
-        let na = names(a);
+        let (na, nb) = (names(a), names(b));
+        let name_of = |names: &[String], c: usize| {
+            names
+                .get(c)
+                .cloned()
+                .unwrap_or_else(|| "RGBA"[c..c + 1].to_string())
+        };
+        // A channel's own name, past its layer's (`R` of `rgba.R`).
+        let leaf = |name: String| name.rsplit('.').next().unwrap_or_default().to_string();
         for c in 0..4 {
             let (x, y) = (pa.get(c).copied(), pb.get(c).copied());
             if c == 3 && x.is_none() && y.is_none() {
                 continue;
             }
+            let name = name_of(&na, c);
+            if c == 3 && y.is_none() {
+                lost.push(name);
+                continue;
+            }
+            if c == 3 && x.is_none() {
+                gained.push(name_of(&nb, c));
+            } else if leaf(name_of(&nb, c)) == "Y" && leaf(name.clone()) != "Y" {
+                // The candidate's grey read from its luminance, where the reference has
+                // colour (the reverse, a luminance golden of a grey candidate, is warned as
+                // the read's own warning).
+                lost.push(name.clone());
+            }
             out.push(Pair {
-                name: na
-                    .get(c)
-                    .cloned()
-                    .unwrap_or_else(|| "RGBA"[c..c + 1].to_string()),
+                name,
                 layer: BEAUTY.to_string(),
                 class: LayerClass::Colour,
                 a: x.unwrap_or(ones),
                 b: y.unwrap_or(ones),
-                exact: None,
+                exact: (None, None),
             });
         }
     }
@@ -222,7 +249,7 @@ fn pairs<'a>(
             matched[j] = true;
         }
     }
-    let mut missing = Vec::new();
+    let mut missing = lost;
     for (i, channel) in a.carried.channels.iter().enumerate() {
         let name = keys_a[i].clone();
         match found[i] {
@@ -238,10 +265,10 @@ fn pairs<'a>(
                     class: channel.class,
                     a: &channel.plane,
                     b: &b.carried.channels[j].plane,
-                    exact: channel
-                        .exact
-                        .as_deref()
-                        .zip(b.carried.channels[j].exact.as_deref()),
+                    exact: (
+                        channel.exact.as_deref(),
+                        b.carried.channels[j].exact.as_deref(),
+                    ),
                 });
             }
             None => missing.push(name),
@@ -262,7 +289,7 @@ fn pairs<'a>(
         }
     }
     out.sort_by_key(|p| order.iter().position(|l| *l == p.layer));
-    (out, missing, extra)
+    (out, (missing, extra, gained))
 }
 
 /// Whether a sample's difference `d` (of values `x`, `y`) is over `threshold` and over
@@ -275,7 +302,7 @@ fn over(d: f64, x: f64, y: f64, threshold: f64, relative: f64) -> bool {
 pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
     let n = a.width * a.height;
     let ones = vec![1.0f32; n];
-    let (pairs, missing, extra) = pairs(a, b, &ones);
+    let (pairs, (missing, extra, gained)) = pairs(a, b, &ones);
     // A channel only the candidate has is not compared, but a NaN in it (or an infinity in
     // a colour channel: an infinite depth is a depth) is the candidate's fault all the same.
     let extra_non_finite: Vec<(String, usize)> = extra
@@ -291,7 +318,17 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
             (c.exact.is_none() && bad > 0).then(|| (name.clone(), bad))
         })
         .collect();
-    let extra: Vec<String> = extra.into_iter().map(|(name, _)| name).collect();
+    let extra: Vec<String> = gained
+        .into_iter()
+        .chain(extra.into_iter().map(|(name, _)| name))
+        .collect();
+    // Channels stored as u32 on one side and as float on the other: compared, and named.
+    let retyped: Vec<String> = pairs
+        .iter()
+        .filter(|p| p.exact.0.is_some() != p.exact.1.is_some())
+        .map(|p| p.name.clone())
+        .collect();
+    let (ox, oy) = a.windows.data_origin;
     // Per pixel: bit 0 fails, bit 1 warns (any layer).
     let mut flags = vec![0u8; n];
     let mut errors = vec![0.0f32; n];
@@ -318,7 +355,12 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
             let data = pair.class.is_data();
             for i in 0..n {
                 let (x, y) = (pair.a[i], pair.b[i]);
-                if pair.exact.is_none() && (!x.is_finite() || !y.is_finite()) {
+                let (ea, eb) = (
+                    pair.exact.0.map(|e| e[i] as f64),
+                    pair.exact.1.map(|e| e[i] as f64),
+                );
+                let finite = (ea.is_some() || x.is_finite()) && (eb.is_some() || y.is_finite());
+                if !finite {
                     // An infinity written alike in both is no change in a data channel (a
                     // depth of the sky); a NaN never is, in either image.
                     let alike = x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan());
@@ -339,10 +381,7 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
                     }
                     continue;
                 }
-                let (x, y) = match pair.exact {
-                    Some((ea, eb)) => (ea[i] as f64, eb[i] as f64),
-                    None => (x as f64, y as f64),
-                };
+                let (x, y) = (ea.unwrap_or(x as f64), eb.unwrap_or(y as f64));
                 let d = (x - y).abs();
                 errors[i] = errors[i].max(d as f32);
                 l_abs += d;
@@ -359,21 +398,22 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
                 }
                 // Ties go to the first pixel in reading order (then the first channel of
                 // the layer in the file's order).
+                let (px, py) = (
+                    (i % a.width.max(1)) as i64 + ox as i64,
+                    (i / a.width.max(1)) as i64 + oy as i64,
+                );
                 let better = |best: &Largest| {
-                    d > best.error
-                        || (d == best.error
-                            && d > 0.0
-                            && (i / a.width.max(1), i % a.width.max(1)) < (best.y, best.x))
+                    d > best.error || (d == best.error && d > 0.0 && (py, px) < (best.y, best.x))
                 };
                 if better(&l_largest) {
                     l_largest = Largest {
                         error: d,
-                        x: i % a.width.max(1),
-                        y: i / a.width.max(1),
+                        x: px,
+                        y: py,
                         channel: pair.name.clone(),
                         a: x,
                         b: y,
-                        integer: pair.exact.is_some(),
+                        integer: pair.exact.0.is_some() && pair.exact.1.is_some(),
                     };
                 }
             }
@@ -434,5 +474,6 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
         missing,
         extra,
         extra_non_finite,
+        retyped,
     }
 }

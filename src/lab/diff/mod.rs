@@ -317,6 +317,24 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
             })
         })
         .collect();
+    // Every entry's files found and planned from their headers before any is compared, so a
+    // frame missing from either sequence stops the run before a heatmap or thumbnail is
+    // written. (A candidate lacking the reference's colour channels is compared: a lost
+    // channel, which fails its frame.)
+    let inputs = |entry: &Entry| {
+        let (frame, view) = (entry.frame, entry.view);
+        let patterns = [Some(&job.a), Some(&job.b), job.sharp.as_ref()];
+        patterns
+            .into_iter()
+            .flatten()
+            .filter_map(|pattern| plan(pattern, frame, view, job, &preset).err())
+            .filter(|p| p.kind != ProblemKind::MissingChannel || p.path != job.b.path(frame))
+            .collect::<Vec<_>>()
+    };
+    problems.extend(entries.par_iter().flat_map(inputs).collect::<Vec<_>>());
+    if !problems.is_empty() {
+        return Err(Error::Files(problems));
+    }
     let results: Vec<std::result::Result<FrameDiff, Problem>> = entries
         .par_iter()
         .map(|entry| compare(job, &preset, entry))
@@ -421,6 +439,45 @@ struct Entry<'a> {
     extra: &'a [String],
 }
 
+/// The entry of a frame whose candidate lacks the reference's colour channels (`problem`,
+/// its plan's): failed, no figure made.
+fn lost_colour(job: &DiffJob, entry: &Entry, a: &FramePlan, problem: Problem) -> FrameDiff {
+    let frame = entry.frame;
+    // The reference's colour channels the candidate's file does not hold (all of them where
+    // it cannot be listed).
+    let held = crate::io::file::FileInfo::probe(&job.b.path(frame)).ok();
+    let colour = (a.colour_channel_names().into_iter())
+        .filter(|name| held.as_ref().is_none_or(|info| info.find(name).is_none()))
+        .collect();
+    FrameDiff {
+        frame,
+        view: entry.view.map(str::to_string),
+        a: job.a.path(frame),
+        b: job.b.path(frame),
+        whole: Scores::default(),
+        region: None,
+        value: f64::NAN,
+        largest: Largest::default(),
+        every_channel: EveryChannel::default(),
+        layers: Vec::new(),
+        missing_channels: colour,
+        extra_channels: Vec::new(),
+        extra_views: entry.extra.to_vec(),
+        pixels_over_fail: 0,
+        pixels_over_warn: 0,
+        samples_over_hard: 0,
+        warned: false,
+        failed: true,
+        why: Some(format!(
+            "the candidate lacks the reference's colour, not compared: {}",
+            problem.detail
+        )),
+        notes: Vec::new(),
+        thumbnails: None,
+        read_warnings: Vec::new(),
+    }
+}
+
 /// Compares one entry: sizes and windows from the headers, then every channel.
 fn compare(
     job: &DiffJob,
@@ -430,10 +487,14 @@ fn compare(
     let (frame, view) = (entry.frame, entry.view);
     // Sizes from the headers, before anything is decoded: two large images of
     // different sizes are told apart in milliseconds.
-    let (a, b) = (
-        plan(&job.a, frame, view, job, preset)?,
-        plan(&job.b, frame, view, job, preset)?,
-    );
+    let a = plan(&job.a, frame, view, job, preset)?;
+    let b = match plan(&job.b, frame, view, job, preset) {
+        Ok(b) => b,
+        Err(problem) if problem.kind == ProblemKind::MissingChannel => {
+            return Ok(lost_colour(job, entry, &a, problem));
+        }
+        Err(problem) => return Err(problem),
+    };
     let sharp = job
         .sharp
         .as_ref()
@@ -545,6 +606,14 @@ fn compare(
                 }),
         );
     }
+    // A part the reference's read leaves out that the candidate's does not hold alike (gone,
+    // or moved to the beauty's window) is a change no figure shows: lost.
+    let parts_lost: Vec<String> = a
+        .parts_left_out
+        .iter()
+        .filter(|part| !b.parts_left_out.contains(part))
+        .cloned()
+        .collect();
     let (a, b) = (read_frame(&a)?, read_frame(&b)?);
     let (ra, rb) = (
         Rgb::of(&a).expect("colour read"),
@@ -570,7 +639,14 @@ fn compare(
     let value = job.metric.of(&whole);
     // Every channel: the beauty's alpha (a missing alpha reads as opaque), every light
     // and data layer, each against its class's gate.
-    let compared = channels::compare(&a, &b, &job.gates);
+    let mut compared = channels::compare(&a, &b, &job.gates);
+    compared.missing.extend(parts_lost);
+    if !compared.retyped.is_empty() {
+        notes.push(format!(
+            "{} stored as u32 in one file and as float in the other: compared as stored",
+            compared.retyped.join(", ")
+        ));
+    }
     let thumbnails = job
         .report
         .as_ref()
@@ -592,7 +668,8 @@ fn compare(
         warned: job.warn.is_some_and(|w| job.metric.exceeds(value, w))
             || compared.pixels_over_warn > 0
             || !compared.extra.is_empty()
-            || !entry.extra.is_empty(),
+            || !entry.extra.is_empty()
+            || !notes.is_empty(),
         every_channel: compared.every,
         layers: compared.layers,
         missing_channels: compared.missing,
