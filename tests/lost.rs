@@ -1123,3 +1123,42 @@ fn an_output_folder_removed_under_a_run_stops_it_for_a_rerun() {
         assert_eq!(names(&out_dir), expected);
     }
 }
+
+/// Standard error that cannot be written (a farm's log on a full disk, a log reader gone)
+/// loses its lines and nothing else: the frames are written and the exit code is the work's
+/// (0 for a run, 2 for a usage error, 1 for a missing input). Found by an outside probe:
+/// every line went through `eprintln!`, which panics there, so each of these exited 101, the
+/// run stopped before its first frame.
+#[test]
+fn standard_error_on_a_full_disk_loses_its_lines_and_nothing_else() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = sequence(dir.path(), 3, 4, 4);
+    let out = format!("{}/o/o.####.exr", dir.path().display());
+    let missing = format!("{}/none.####.exr", dir.path().display());
+    let cases: Vec<(Vec<&str>, i32)> = vec![
+        (vec!["blur", "--color", &color, "-o", &out, "--verbose"], 0),
+        (vec!["frames", "1-3", "--chunk-size", "0"], 2),
+        (
+            vec!["blur", "--color", &missing, "-o", &out, "--frames", "1"],
+            1,
+        ),
+    ];
+    for (args, code) in cases {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .expect("/dev/full");
+        let o = Command::new(env!("CARGO_BIN_EXE_shutter"))
+            .args(&args)
+            .stderr(full)
+            .output()
+            .expect("run shutter");
+        assert_eq!(o.status.code(), Some(code), "{args:?}");
+    }
+    for n in 1..=3 {
+        assert!(
+            dir.path().join(format!("o/o.{n:04}.exr")).exists(),
+            "frame {n}"
+        );
+    }
+}

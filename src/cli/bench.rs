@@ -33,9 +33,9 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         layers: args.layers,
     };
     let started = std::time::Instant::now();
-    let report = crate::lab::bench::run(&options, &mut |line| eprintln!("shutter: bench: {line}"))?;
+    let report = crate::lab::bench::run(&options, &mut |line| say!("shutter: bench: {line}"))?;
     out(&crate::lab::bench::markdown(&report))?;
-    eprintln!(
+    say!(
         "shutter: bench: {} rows in {:.1} s; wrote {}/bench.json, bench.md, pareto.svg, pareto.png, contact/",
         report.rows.len(),
         started.elapsed().as_secs_f64(),

@@ -48,7 +48,7 @@ pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
                 );
                 bar = Some(b);
             } else if verbose {
-                eprintln!("shutter: {frames} frames to write");
+                say!("shutter: {frames} frames to write");
             }
         }
         Event::Written { path, .. } => match &bar {
@@ -57,19 +57,19 @@ pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
                 let seconds = b.elapsed().as_secs_f64().max(1e-9);
                 b.set_message(format!("{:.2} frames/s", b.position() as f64 / seconds));
             }
-            None if verbose => eprintln!("shutter: wrote {}", path.display()),
+            None if verbose => say!("shutter: wrote {}", path.display()),
             None => {}
         },
         Event::Skipped { path, .. } => {
             if verbose || terminal {
-                eprintln!("shutter: skipped {} (exists)", path.display());
+                say!("shutter: skipped {} (exists)", path.display());
             }
         }
         // Every warning, one line, on a terminal or a pipe (a farm's log), unless --quiet.
         Event::Warning(_) if quiet => {}
         Event::Warning(message) => match &bar {
             Some(b) => b.println(format!("shutter: warning: {message}")),
-            None => eprintln!("shutter: warning: {message}"),
+            None => say!("shutter: warning: {message}"),
         },
     };
     let result = run(&job, &mut on_event);
@@ -95,7 +95,7 @@ pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
             .collect();
         out(&text)?;
     } else if verbose || terminal {
-        eprintln!(
+        say!(
             "shutter: {} frames written, {} skipped in {:.2} s (read {:.2} s, process {:.2} s, write {:.2} s)",
             report.frames_written,
             report.frames_skipped,

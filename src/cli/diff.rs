@@ -282,7 +282,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
     }
     if !args.quiet {
         for warning in &report.warnings {
-            eprintln!("shutter: warning: {warning}");
+            say!("shutter: warning: {warning}");
         }
     }
     let warned = report.frames.iter().any(|f| f.warned);
@@ -297,7 +297,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
         let at = first
             .name()
             .map_or(String::new(), |name| format!(" (first: {name})"));
-        eprintln!(
+        say!(
             "shutter: FAIL: {} of {} {} fail{at}: {}",
             failed.len(),
             report.frames.len(),

@@ -2,6 +2,16 @@
 //! flags over preset values, frames listed), run one of the commands (a module each), and
 //! report. Only this module prints.
 
+/// A line on stderr, as `eprintln!` writes it, where a write that fails (a full disk under a
+/// farm's log, a log reader gone) is let go: the line is lost, the run goes on, and its exit
+/// code is its work's. (`eprintln!` panics there: exit 101, the run stopped.)
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 pub mod args;
 mod attributes;
 mod bench;
@@ -268,7 +278,7 @@ fn stop_cleanly_on_signals(json: Option<&'static str>) {
                 abandoned.temporaries,
                 if abandoned.temporaries == 1 { "" } else { "s" }
             );
-            eprintln!("shutter: {message}");
+            say!("shutter: {message}");
             // `--json`: the error object a caller reads, as for any run that fails (an
             // outside probe: stdout was empty, and a farm's parser failed on it).
             if let Some(command) = json {
@@ -386,19 +396,19 @@ const MAX_PRINTED_PROBLEMS: usize = 20;
 
 fn print_error(error: &Error) {
     match error {
-        Error::Usage(message) | Error::Device(message) => eprintln!("shutter: error: {message}"),
+        Error::Usage(message) | Error::Device(message) => say!("shutter: error: {message}"),
         Error::Files(problems) => {
             for problem in problems.iter().take(MAX_PRINTED_PROBLEMS) {
-                eprintln!("shutter: error: {problem}");
+                say!("shutter: error: {problem}");
             }
             if problems.len() > MAX_PRINTED_PROBLEMS {
-                eprintln!(
+                say!(
                     "shutter: error: ... and {} more problems",
                     problems.len() - MAX_PRINTED_PROBLEMS
                 );
             }
             if problems.len() > 1 {
-                eprintln!(
+                say!(
                     "shutter: {} problems found; nothing was written for the frames concerned",
                     problems.len()
                 );

@@ -30,12 +30,12 @@ pub fn scene(args: SceneArgs) -> Result<()> {
         &options,
         &mut |frame, _| {
             if verbose {
-                eprintln!("shutter: scene {} frame {frame} written", args.name);
+                say!("shutter: scene {} frame {frame} written", args.name);
             }
         },
     )?;
     if verbose {
-        eprintln!(
+        say!(
             "shutter: {} frames of {} in {}",
             description.frames,
             description.scene,

@@ -309,7 +309,7 @@ pub fn vectors(args: VectorsArgs) -> Result<i32> {
             Ok(0)
         }
         (Some(file), None) => {
-            eprintln!(
+            say!(
                 "shutter: no preset written to {}: {}",
                 file.display(),
                 result.why.as_deref().unwrap_or("no reading chosen")
