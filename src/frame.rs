@@ -403,6 +403,10 @@ pub struct Photo {
     /// associated alpha): the read divides it out before anything else. Outputs are written
     /// with straight alpha, declared as such, whatever the input held.
     pub premultiplied: bool,
+    /// The file's alpha is unassociated (a TIFF whose ExtraSamples says 2): a float TIFF's
+    /// colour, which is read as it is stored, is premultiplied on read (an 8/16-bit photo's
+    /// always is).
+    pub straight: bool,
     /// A TIFF holding more images after its first (pages, or a reduced-size preview): only
     /// the first is read and written, and the run says so.
     pub more_images: bool,

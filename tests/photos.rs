@@ -1471,3 +1471,40 @@ fn a_subsampled_jpeg_keeps_its_chroma_in_place() {
         "Cb moved {shift}, {off} codes a channel"
     );
 }
+
+/// A float TIFF of straight alpha (ExtraSamples = 2) is premultiplied as it is read, as an
+/// 8/16-bit one is: a still frame comes back as the colour the file means. It had been read
+/// as premultiplied already, so its float TIFF came back declared associated with colour
+/// above its alpha (four times too bright under alpha 0.25), and a PNG of it four times too
+/// bright. Found by an outside probe (oiiotool premultiplies the same file on read). The same
+/// file declared associated comes back as stored.
+#[test]
+fn a_float_tiff_of_straight_alpha_is_premultiplied_as_it_is_read() {
+    use tiff::encoder::{colortype, TiffEncoder};
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (8u32, 4u32);
+    let pixels: Vec<f32> = (0..w * h).flat_map(|_| [0.8, 0.4, 0.2, 0.25]).collect();
+    for (extra, name) in [(2u16, "straight"), (1, "associated")] {
+        let input = dir.path().join(format!("{name}.tif"));
+        let mut tiff = TiffEncoder::new(std::fs::File::create(&input).unwrap()).unwrap();
+        let mut image = tiff.new_image::<colortype::RGBA32Float>(w, h).unwrap();
+        image
+            .encoder()
+            .write_tag(tiff::tags::Tag::ExtraSamples, &[extra][..])
+            .unwrap();
+        image.write_data(&pixels).unwrap();
+        let out = dir.path().join(format!("{name}.out.tif"));
+        let o = dof_still(&input, &out, &[]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let mut decoder = tiff::decoder::Decoder::new(std::fs::File::open(&out).unwrap()).unwrap();
+        let tiff::decoder::DecodingResult::F32(got) = decoder.read_image().unwrap() else {
+            panic!("{name}: not float");
+        };
+        let scale = if extra == 2 { 0.25 } else { 1.0 };
+        let want = [0.8 * scale, 0.4 * scale, 0.2 * scale, 0.25];
+        for p in got.chunks(4) {
+            let close = p.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-6);
+            assert!(close, "{name}: {p:?} for {want:?}");
+        }
+    }
+}

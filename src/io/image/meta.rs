@@ -65,7 +65,7 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
     let mut exif = decoder.exif_metadata().ok().flatten();
     let mut xmp = decoder.xmp_metadata().ok().flatten();
     let (mut icc, mut iptc) = (decoder.icc_profile().ok().flatten(), None);
-    let (mut premultiplied, mut more_images) = (false, false);
+    let (mut extra, mut more_images) = (None, false);
     if jpeg {
         iptc = decoder.iptc_metadata().ok().flatten();
     }
@@ -89,13 +89,9 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
         // The image crate's TIFF reader gives no profile stored as UNDEFINED (as exiftool
         // and Photoshop store it), refuses XMP under its limits and gives no EXIF: the tiff
         // crate reads them.
-        (
-            [icc, exif, xmp, iptc],
-            premultiplied,
-            resolution,
-            more_images,
-        ) = tiff_blocks(path);
+        ([icc, exif, xmp, iptc], extra, resolution, more_images) = tiff_blocks(path);
     }
+    let (premultiplied, straight) = (extra == Some(1), extra == Some(2));
     if let Some(exif) = &mut exif {
         super::upright::make_upright(exif, orientation as u16, size);
     }
@@ -125,6 +121,7 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
         png_colour,
         resolution,
         premultiplied,
+        straight,
         more_images,
         hidden: None,
     })
@@ -134,8 +131,7 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
 /// reads a TIFF's: its profile, EXIF, XMP and IPTC (the EXIF made true of the upright
 /// pixels), its resolution, and whether its alpha is associated.
 fn grey_float_photo(path: &Path, header: &super::tiff_float::Header) -> Photo {
-    let ([icc, mut exif, mut xmp, iptc], premultiplied, mut resolution, more_images) =
-        tiff_blocks(path);
+    let ([icc, mut exif, mut xmp, iptc], extra, mut resolution, more_images) = tiff_blocks(path);
     let orientation = header.orientation.to_exif();
     let size = super::tiff_float::upright_size(header);
     if let Some(exif) = &mut exif {
@@ -158,7 +154,8 @@ fn grey_float_photo(path: &Path, header: &super::tiff_float::Header) -> Photo {
         sampling: None,
         png_colour: None,
         resolution,
-        premultiplied,
+        premultiplied: extra == Some(1),
+        straight: extra == Some(2),
         more_images,
         hidden: None,
     }
@@ -241,11 +238,11 @@ fn png_chunks(
 /// A TIFF's profile (tag 34675), EXIF (its IFD0's descriptive tags and the directories they
 /// point to, as one block: `tiff_meta`), XMP (tag 700) and Photoshop resource blocks (tag
 /// 34377, where IPTC sits beside its JPEG form; bare IPTC, tag 33723, wrapped as one where
-/// they hold none), each as its bytes; whether its alpha is associated (ExtraSamples = 1:
-/// the colour is premultiplied); its resolution; and whether it holds more images after
-/// its first.
+/// they hold none), each as its bytes; its first extra sample's kind (ExtraSamples: 1
+/// associated alpha, the colour premultiplied; 2 unassociated, straight); its resolution;
+/// and whether it holds more images after its first.
 #[allow(clippy::type_complexity)]
-fn tiff_blocks(path: &Path) -> ([Option<Vec<u8>>; 4], bool, Option<Resolution>, bool) {
+fn tiff_blocks(path: &Path) -> ([Option<Vec<u8>>; 4], Option<u16>, Option<Resolution>, bool) {
     use super::tiff_meta;
     use tiff::tags::{Tag, Type, ValueBuffer};
     let Ok(mut decoder) = crate::io::input::open_input(path)
@@ -253,7 +250,7 @@ fn tiff_blocks(path: &Path) -> ([Option<Vec<u8>>; 4], bool, Option<Resolution>, 
         .map_err(tiff::TiffError::from)
         .and_then(tiff::decoder::Decoder::new)
     else {
-        return ([None, None, None, None], false, None, false);
+        return ([None, None, None, None], None, None, false);
     };
     // Each value's bytes as stored, whatever its type (exiftool types tag 33723 LONG).
     let [icc, xmp, photoshop, bare] = [34675, 700, 34377, 33723].map(|tag| {
@@ -273,11 +270,11 @@ fn tiff_blocks(path: &Path) -> ([Option<Vec<u8>>; 4], bool, Option<Resolution>, 
     };
     let resolution = super::resolution::tiff_density(&mut decoder);
     let extra = decoder.find_tag_unsigned_vec::<u16>(Tag::ExtraSamples);
-    let associated = extra.ok().flatten().is_some_and(|e| e.first() == Some(&1));
+    let extra = extra.ok().flatten().and_then(|e| e.first().copied());
     let room = crate::io::image::HEADER_ROOM as usize;
     let exif = tiff_meta::exif_of_tiff(&mut decoder, room).map(|e| tiff_meta::to_block(&e));
     let more = decoder.more_images();
-    ([icc, exif, xmp, iptc], associated, resolution, more)
+    ([icc, exif, xmp, iptc], extra, resolution, more)
 }
 
 /// A PNG's header chunks as the png crate reads them (`Info`): those before its image data,

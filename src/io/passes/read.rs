@@ -223,6 +223,12 @@ pub fn read_frame_keeping(
                 Problem::new(ProblemKind::Corrupt, &colour_file.path, d).frame(plan.frame)
             })?;
             notes.extend(crate::io::image::more_images_note(&photo));
+            // Straight alpha, as its ExtraSamples says: premultiplied here, as shutter works.
+            if let (true, Some(a)) = (photo.straight, &a) {
+                for plane in [&mut r, &mut g, &mut b] {
+                    plane.iter_mut().zip(a).for_each(|(v, a)| *v *= a);
+                }
+            }
             frame.carried.photo = Some(photo);
         }
         if let (true, Some(a)) = (plan_color.premultiply, &a) {
