@@ -95,6 +95,22 @@ fn threads_above_the_limit_fail_at_once() {
     // At the floor of the limit, a run still goes through.
     let (o, wrote) = copy_through(dir.path(), &input, "exr", &["--threads", "4"]);
     assert!(o.status.success() && wrote, "{}", stderr(&o));
+
+    // `--threads` sets the count over the variable, and `frames` runs no pool: neither is
+    // refused for the variable (an outside probe: both exited 2, which broke the farm
+    // scripts' chunking under a bad environment).
+    let shutter_with = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_shutter"))
+            .args(args)
+            .env("RAYON_NUM_THREADS", "100000")
+            .output()
+            .unwrap()
+    };
+    let o = shutter_with(&["blur", "--color", &input, "-o", &pattern, "--threads", "2"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = shutter_with(&["frames", "1-10", "--chunk-size", "3", "--count"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(stdout(&o).trim(), "4");
 }
 
 #[test]

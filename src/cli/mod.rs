@@ -109,8 +109,17 @@ fn parse_and_run() -> i32 {
         }
         code
     };
-    if let Err(error) = check_thread_variable() {
-        return failed(&error, error.exit_code());
+    // `--threads` sets the count itself (over the variable), and `frames` and `presets` run
+    // no pool.
+    let own_count = match &cli.command {
+        Command::Blur(args) | Command::Dof(args) => args.threads.is_some(),
+        Command::Frames(_) | Command::Presets(_) => true,
+        _ => false,
+    };
+    if !own_count {
+        if let Err(error) = check_thread_variable() {
+            return failed(&error, error.exit_code());
+        }
     }
     stop_cleanly_on_signals(json.then_some(command));
     let result = match cli.command {
