@@ -89,6 +89,7 @@ fn a_signal_removes_the_temporary_file(name: &str, code: i32) {
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(code), "{:?}: {err}", o.status);
     assert!(err.contains(&format!("stopped by SIG{name}")), "{err}");
+    assert!(err.contains("rerun with --skip-existing"), "{err}");
     assert_eq!(err.lines().count(), 1, "{err}");
     let left = names(&out_dir);
     assert!(left.iter().all(|n| !n.starts_with('.')), "{left:?}");
@@ -1161,4 +1162,36 @@ fn standard_error_on_a_full_disk_loses_its_lines_and_nothing_else() {
             "frame {n}"
         );
     }
+}
+
+/// `scene` stopped by a signal says to run it again, not to rerun with `--skip-existing`,
+/// which it does not take (an outside probe: the advice ended in a usage error).
+#[test]
+fn a_scene_stopped_by_a_signal_gives_advice_it_can_take() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("scene");
+    let args = [
+        "scene",
+        "pan",
+        "-o",
+        &s(&out_dir),
+        "--size",
+        "320x180",
+        "--samples",
+        "1",
+        "--frames",
+        "400",
+    ];
+    let mut child = spawn(&args);
+    assert!(
+        wait_for_name(&mut child, &out_dir, |n| n.ends_with(".exr")),
+        "the run ended before a frame was seen"
+    );
+    signal(&child, "INT");
+    let o = child.wait_with_output().unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(err.contains("stopped by SIGINT"), "{err}");
+    assert!(!err.contains("--skip-existing"), "{err}");
+    assert!(err.contains("run it again"), "{err}");
 }

@@ -121,7 +121,7 @@ fn parse_and_run() -> i32 {
             return failed(&error, error.exit_code());
         }
     }
-    stop_cleanly_on_signals(json.then_some(command));
+    stop_cleanly_on_signals(command, json);
     let result = match cli.command {
         Command::Blur(args) => blur::blur(*args, false),
         Command::Dof(args) => blur::blur(*args, true),
@@ -262,7 +262,14 @@ pub const STOPPING_SIGNALS: [(i32, &str); 9] = {
 /// whole; `--skip-existing` finishes the run. A thread of its own waits for the signal
 /// (signal-hook), so the cleanup is ordinary code, not a signal handler's.
 #[cfg(unix)]
-fn stop_cleanly_on_signals(json: Option<&'static str>) {
+fn stop_cleanly_on_signals(command: &'static str, json: bool) {
+    let json = json.then_some(command);
+    // Only blur and dof take --skip-existing; another command is run again whole.
+    let finish = if matches!(command, "blur" | "dof") {
+        "rerun with --skip-existing to finish"
+    } else {
+        "run it again to finish"
+    };
     let numbers = STOPPING_SIGNALS.map(|(number, _)| number);
     let Ok(mut signals) = signal_hook::iterator::Signals::new(numbers) else {
         // Without the handler the default applies: the process dies, and the next run over
@@ -283,7 +290,7 @@ fn stop_cleanly_on_signals(json: Option<&'static str>) {
             let abandoned = crate::io::abandon();
             let message = format!(
                 "stopped by {name}: {} unfinished temporary file{} removed, frames written \
-                 before are whole; rerun with --skip-existing to finish",
+                 before are whole; {finish}",
                 abandoned.temporaries,
                 if abandoned.temporaries == 1 { "" } else { "s" }
             );
@@ -309,7 +316,7 @@ fn stop_cleanly_on_signals(json: Option<&'static str>) {
 }
 
 #[cfg(not(unix))]
-fn stop_cleanly_on_signals(_json: Option<&'static str>) {}
+fn stop_cleanly_on_signals(_command: &'static str, _json: bool) {}
 
 /// `shutter frames`: a frame spec expanded and cut into chunks, each printed as a spec.
 fn frames(args: args::FramesArgs) -> Result<()> {
