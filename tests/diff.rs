@@ -1477,3 +1477,46 @@ fn a_u32_channel_against_a_float_one_is_compared_as_stored_and_warned() {
         report["warnings"]
     );
 }
+
+/// Files that hold no colour image are compared channel by channel as data: a depth pass on
+/// its own (it had stopped, "missing channel", exit 3, even against itself; `--idiff` 4), and
+/// a vector pass of `X` and `Y`, whose `Y` had been read as a luminance beauty, so a change
+/// to it passed `--data-fail-pixel 0` and the every-channel figures counted it three times
+/// beside a made-up alpha. Their figures are idiff's: worked out here. Found by an outside
+/// probe.
+#[test]
+fn files_of_no_colour_image_are_compared_as_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (12, 8);
+    let z = noise(w * h, 3, 1.0, 50.0);
+    let (za, zb) = (dir.path().join("za.exr"), dir.path().join("zb.exr"));
+    write_exr(&za, w, h, vec![("Z", z.clone())]);
+    let mut changed = z.clone();
+    changed[5] += 0.001;
+    write_exr(&zb, w, h, vec![("Z", changed)]);
+    let o = shutter(&["diff", &s(&za), &s(&za)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = shutter(&["diff", "--idiff", &s(&za), &s(&za)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = shutter(&["diff", &s(&za), &s(&zb), "--data-fail-pixel", "0"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+
+    let (x, y) = (noise(w * h, 4, -3.0, 3.0), noise(w * h, 5, -3.0, 3.0));
+    let (va, vb) = (dir.path().join("va.exr"), dir.path().join("vb.exr"));
+    write_exr(&va, w, h, vec![("X", x.clone()), ("Y", y.clone())]);
+    let mut moved = y.clone();
+    moved[10] += 0.5;
+    write_exr(&vb, w, h, vec![("X", x), ("Y", moved)]);
+    let o = shutter(&["diff", &s(&va), &s(&vb), "--data-fail-pixel", "0", "--json"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let report = json(&o);
+    let every = &report["frames"][0]["every_channel"];
+    assert_eq!(every["channels"], 2, "{every}");
+    // One sample of 2 · 96 off by 0.5.
+    let samples = (2 * w * h) as f64;
+    let mean = every["mean_error"].as_f64().unwrap();
+    let rms = every["rms_error"].as_f64().unwrap();
+    assert!((mean - 0.5 / samples).abs() < 1e-9, "{every}");
+    assert!((rms - (0.25 / samples).sqrt()).abs() < 1e-9, "{every}");
+    assert_eq!(report["frames"][0]["largest"]["channel"], "Y");
+}

@@ -3,6 +3,7 @@
 //! values, channels lost), a heatmap of the per-pixel error and an HTML report (`report`).
 
 pub mod channels;
+mod data;
 pub mod report;
 pub mod views;
 
@@ -328,7 +329,12 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
             .into_iter()
             .flatten()
             .filter_map(|pattern| plan(pattern, frame, view, job, &preset).err())
-            .filter(|p| p.kind != ProblemKind::MissingChannel || p.path != job.b.path(frame))
+            .filter(|p| {
+                // (A candidate lacking colour is a lost channel; a reference of none is
+                // compared as data.)
+                let data = p.path == job.a.path(frame) && data::holds_no_colour(&p.path, None);
+                p.kind != ProblemKind::MissingChannel || !(p.path == job.b.path(frame) || data)
+            })
             .collect::<Vec<_>>()
     };
     problems.extend(entries.par_iter().flat_map(inputs).collect::<Vec<_>>());
@@ -487,7 +493,21 @@ fn compare(
     let (frame, view) = (entry.frame, entry.view);
     // Sizes from the headers, before anything is decoded: two large images of
     // different sizes are told apart in milliseconds.
-    let a = plan(&job.a, frame, view, job, preset)?;
+    // A reference that holds no colour image (a depth, vector or ID pass on its own) is
+    // compared channel by channel as data.
+    let a = match plan(&job.a, frame, view, job, preset) {
+        Ok(a) if data::holds_no_colour(&job.a.path(frame), Some(&a.colour_channel_names())) => {
+            return data::compare(job, entry);
+        }
+        Ok(a) => a,
+        Err(problem)
+            if problem.kind == ProblemKind::MissingChannel
+                && data::holds_no_colour(&job.a.path(frame), None) =>
+        {
+            return data::compare(job, entry);
+        }
+        Err(problem) => return Err(problem),
+    };
     let b = match plan(&job.b, frame, view, job, preset) {
         Ok(b) => b,
         Err(problem) if problem.kind == ProblemKind::MissingChannel => {
