@@ -1035,6 +1035,9 @@ fn frame_numbers_beyond_the_limit_are_named_not_discovered() {
         "{warnings}"
     );
     assert!(!warnings.contains("missing"), "{warnings}");
+    // The backend asked for is said, none used (an outside probe: both were empty).
+    assert_eq!(report["backend"]["requested"], "cpu", "{report}");
+    assert_eq!(report["backend"]["used"], "", "{report}");
     // Nothing but such files: no frames, and the error says why.
     let far = tempfile::tempdir().unwrap();
     flat_frame(&far.path().join("c.-1000000000.exr"), 0.5);

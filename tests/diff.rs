@@ -221,9 +221,17 @@ fn a_nan_fails_the_gate_unless_allowed() {
         "{}",
         stderr(&o)
     );
-    // No gate asked for: a NaN still fails.
+    // No gate asked for: a NaN still fails. The largest difference names where it is (an
+    // outside probe: it said 0 at (0, 0) in no channel).
     let o = shutter(&["diff", &a, &b]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stdout(&o).contains("at (17, 0) G"), "{}", stdout(&o));
+    let o = shutter(&["diff", &a, &b, "--json"]);
+    let largest = &json(&o)["frames"][0]["largest"];
+    assert_eq!(
+        (largest["x"].as_i64(), largest["channel"].as_str()),
+        (Some(17), Some("G"))
+    );
     let o = shutter(&["diff", &a, &b, "--fail", "0.01", "--allow-nonfinite"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }

@@ -433,6 +433,8 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     }
     report.preflight_seconds = preflight_start.elapsed().as_secs_f64();
     if job.dry_run {
+        // Nothing runs: the backend asked for is said, none used.
+        report.backend.requested = job.backend.name().to_string();
         for plan in &plans {
             let (frame, output) = (plan.frame, job.output.path(plan.frame));
             let (action, why) = match existing_output(job, plan, &output, &views) {

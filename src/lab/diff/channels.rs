@@ -84,7 +84,8 @@ pub struct LayerDiff {
     pub channels: Vec<String>,
     pub rmse: f64,
     pub mae: f64,
-    /// The largest finite difference of one sample, where and what.
+    /// The largest difference of one sample, where and what (infinite at the first sample
+    /// that became NaN or infinite, or stopped being so, where one counts).
     pub largest: Largest,
     /// Samples non-finite in either side (for data layers: where the two differ).
     pub non_finite: usize,
@@ -360,6 +361,10 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
                     pair.exact.1.map(|e| e[i] as f64),
                 );
                 let finite = (ea.is_some() || x.is_finite()) && (eb.is_some() || y.is_finite());
+                let (px, py) = (
+                    (i % a.width.max(1)) as i64 + ox as i64,
+                    (i / a.width.max(1)) as i64 + oy as i64,
+                );
                 if !finite {
                     // An infinity written alike in both is no change in a data channel (a
                     // depth of the sky); a NaN never is, in either image.
@@ -372,6 +377,19 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
                     // became NaN or infinite (or stopped being so) differs from it by more
                     // than any gate, whatever the allowances.
                     if !gates.allow_nonfinite || !alike {
+                        // The first such sample is the largest difference (an infinite one:
+                        // `null` in JSON), so the report names where a value went bad.
+                        if l_largest.error.is_finite() {
+                            l_largest = Largest {
+                                error: f64::INFINITY,
+                                x: px,
+                                y: py,
+                                channel: pair.name.clone(),
+                                a: x as f64,
+                                b: y as f64,
+                                integer: false,
+                            };
+                        }
                         errors[i] = f32::INFINITY;
                         layer_flags[i] |=
                             u8::from(fail.is_some()) | (u8::from(warn.is_some()) << 1);
@@ -398,10 +416,6 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
                 }
                 // Ties go to the first pixel in reading order (then the first channel of
                 // the layer in the file's order).
-                let (px, py) = (
-                    (i % a.width.max(1)) as i64 + ox as i64,
-                    (i / a.width.max(1)) as i64 + oy as i64,
-                );
                 let better = |best: &Largest| {
                     d > best.error || (d == best.error && d > 0.0 && (py, px) < (best.y, best.x))
                 };

@@ -137,7 +137,8 @@ pub struct FrameDiff {
     pub region: Option<Scores>,
     /// The gating metric's value for this frame.
     pub value: f64,
-    /// The largest difference of one sample of any channel (finite samples), where and what.
+    /// The largest difference of one sample of any channel, where and what (infinite, `null`
+    /// in JSON, at the first sample that became NaN or infinite where one counts).
     pub largest: Largest,
     /// Every channel at once, as idiff gives its figures.
     pub every_channel: EveryChannel,
