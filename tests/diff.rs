@@ -1484,6 +1484,13 @@ fn a_u32_channel_against_a_float_one_is_compared_as_stored_and_warned() {
         "{}",
         report["warnings"]
     );
+    // Both values printed as they are (a review: both printed 16777216).
+    let o = shutter(&["diff", &s(&a), &s(&b)]);
+    assert!(
+        stdout(&o).contains("16777217 against 16777216"),
+        "{}",
+        stdout(&o)
+    );
 }
 
 /// Files that hold no colour image are compared channel by channel as data: a depth pass on
@@ -1508,6 +1515,30 @@ fn files_of_no_colour_image_are_compared_as_data() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let o = shutter(&["diff", &s(&za), &s(&zb), "--data-fail-pixel", "0"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    // SSIM and FLIP cannot score it: their gates are not applied, and it says so (a
+    // review: the file failed against itself, its unscored NaN "worse" than any gate).
+    let o = shutter(&[
+        "diff",
+        &s(&za),
+        &s(&za),
+        "--metric",
+        "ssim",
+        "--fail",
+        "0.9",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stderr(&o).contains("not scored"), "{}", stderr(&o));
+    // A Cryptomatte layer's R, G, B, A are IDs and coverage: such a file is data too.
+    let crypto = dir.path().join("crypto.exr");
+    let planes =
+        ["R", "G", "B", "A"].map(|c| (format!("CryptoObject00.{c}"), noise(w * h, 7, 0.0, 1.0)));
+    let planes = planes
+        .iter()
+        .map(|(n, p)| (n.as_str(), p.clone()))
+        .collect();
+    write_exr(&crypto, w, h, planes);
+    let o = shutter(&["diff", &s(&crypto), &s(&crypto), "--data-fail-pixel", "0"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 
     let (x, y) = (noise(w * h, 4, -3.0, 3.0), noise(w * h, 5, -3.0, 3.0));
     let (va, vb) = (dir.path().join("va.exr"), dir.path().join("vb.exr"));
@@ -1527,4 +1558,53 @@ fn files_of_no_colour_image_are_compared_as_data() {
     assert!((mean - 0.5 / samples).abs() < 1e-9, "{every}");
     assert!((rms - (0.25 / samples).sqrt()).abs() < 1e-9, "{every}");
     assert_eq!(report["frames"][0]["largest"]["channel"], "Y");
+}
+
+/// A file of no colour image whose parts have other data windows (a depth part, and an ID
+/// part cropped to its objects): the parts at the first part's window are compared, the
+/// other is named as not compared, a warning (a review: the file was refused as corrupt,
+/// exit 3, even against itself).
+#[test]
+fn a_data_file_s_part_of_another_window_is_left_out_and_named() {
+    use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
+    use exr::math::Vec2;
+    use exr::meta::attribute::{IntegerBounds, Text};
+    use exr::meta::header::{ImageAttributes, LayerAttributes};
+    use exr::prelude::WritableImage;
+    let dir = tempfile::tempdir().unwrap();
+    let layer = |part: &str, channel: &str, size: (usize, usize), at: (i32, i32)| {
+        let n = size.0 * size.1;
+        let samples = FlatSamples::F32(noise(n, 3, 1.0, 9.0));
+        let mut layer = Layer::new(
+            size,
+            LayerAttributes::named(Text::from(part)),
+            Encoding::default(),
+            AnyChannels::sort(vec![AnyChannel::new(channel, samples)].into()),
+        );
+        layer.attributes.layer_position = Vec2(at.0, at.1);
+        layer
+    };
+    let path = dir.path().join("data.exr");
+    Image::from_layers(
+        ImageAttributes::new(IntegerBounds::new((0, 0), (8, 6))),
+        vec![
+            layer("depth", "Z", (8, 6), (0, 0)),
+            layer("ids", "id", (4, 2), (2, 1)),
+        ],
+    )
+    .write()
+    .to_file(&path)
+    .unwrap();
+    let o = shutter(&["diff", &s(&path), &s(&path), "--json", "--warn-exit"]);
+    assert_eq!(o.status.code(), Some(4), "{}", stderr(&o));
+    let report = json(&o);
+    let warnings = report["warnings"].to_string();
+    assert!(
+        warnings.contains("not compared") && warnings.contains("id"),
+        "{warnings}"
+    );
+    assert_eq!(
+        report["frames"][0]["every_channel"]["channels"], 1,
+        "{report}"
+    );
 }

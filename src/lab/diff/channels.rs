@@ -32,18 +32,18 @@ pub struct Largest {
     /// The reference's value there, and the tested image's.
     pub a: f64,
     pub b: f64,
-    /// Whether `a` and `b` are a u32 channel's values, compared as stored: integers that
-    /// print as such (an f32 rounds them over 2²⁴: 16777217 would print 16777216).
+    /// Whether `a` or `b` is a u32 channel's value, compared as stored: printed exactly (an
+    /// f32 rounds them over 2²⁴: 16777217 would print 16777216).
     #[serde(skip)]
     pub integer: bool,
 }
 
 impl Largest {
-    /// `a` or `b` as text: a u32 channel's value as the integer it is, a float channel's as
-    /// the shortest text that reads back as its f32.
+    /// `a` or `b` as text: beside a u32 channel's value, each as the number it is (an integer
+    /// prints as one); a float channel's as the shortest text that reads back as its f32.
     pub fn value_text(&self, value: f64) -> String {
         if self.integer {
-            format!("{}", value as u64)
+            format!("{value}")
         } else {
             format!("{}", value as f32)
         }
@@ -427,7 +427,7 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
                         channel: pair.name.clone(),
                         a: x,
                         b: y,
-                        integer: pair.exact.0.is_some() && pair.exact.1.is_some(),
+                        integer: pair.exact.0.is_some() || pair.exact.1.is_some(),
                     };
                 }
             }

@@ -13,44 +13,71 @@ use crate::lab::metrics::{Metric, Scores};
 use super::{channels, failure, write_heatmap, DiffJob, Entry, FrameDiff};
 
 /// Whether a reference whose colour read found `colour` (none: the read found no colour
-/// channel) is such a file: it holds no channel named R, G, B or Y in any layer, or its `Y`
-/// was read as a luminance beside an `X` (a vector pass, as `info` reads it).
+/// channel) is such a file: no layer of it holds R, G and B (a Cryptomatte layer's are IDs
+/// and coverage, not colour), or its `Y` was read as a luminance beside an `X` (a vector
+/// pass, as `info` reads it).
 pub(super) fn holds_no_colour(path: &Path, colour: Option<&[String]>) -> bool {
-    let leaf = |name: &str| {
-        name.rsplit('.')
-            .next()
-            .unwrap_or_default()
-            .to_ascii_lowercase()
-    };
+    if let Some(colour) = colour {
+        // (The header is read only where the colour is a luminance.)
+        let grey = colour
+            .first()
+            .is_some_and(|c| c.rsplit('.').next() == Some("Y"));
+        return grey && FileInfo::probe(path).is_ok_and(|info| info.find("X").is_some());
+    }
     let Ok(info) = FileInfo::probe(path) else {
         return false;
     };
-    match colour {
-        None => !(info.channels.iter()).any(|c| ["r", "g", "b", "y"].contains(&&*leaf(&c.name))),
-        Some(colour) => {
-            colour
-                .first()
-                .is_some_and(|c| c.rsplit('.').next() == Some("Y"))
-                && info.find("X").is_some()
-        }
-    }
+    let split = |name: &str| match name.rsplit_once('.') {
+        Some((layer, leaf)) => (layer.to_string(), leaf.to_ascii_lowercase()),
+        None => (String::new(), name.to_ascii_lowercase()),
+    };
+    let names: Vec<(String, String)> = info.channels.iter().map(|c| split(&c.name)).collect();
+    let colour_layer = |layer: &str| {
+        !layer.to_ascii_lowercase().contains("crypto")
+            && ["r", "g", "b"]
+                .iter()
+                .all(|want| names.iter().any(|(l, leaf)| l == layer && leaf == want))
+    };
+    !names.iter().any(|(layer, _)| colour_layer(layer))
 }
 
-/// One file of `entry` read whole, every channel as data (u32 channels exactly).
-fn read(path: &Path, entry: &Entry) -> Result<Frame, Problem> {
+/// One file of `entry` read whole, every channel as data (u32 channels exactly), and the
+/// channels left out (of a part of another window, deep, or not decodable).
+fn read(path: &Path, entry: &Entry) -> Result<(Frame, Vec<String>), Problem> {
     let frame = entry.frame;
     let info = FileInfo::probe(path).map_err(|p| p.frame(frame))?;
     let info = info
         .in_view(entry.view)
         .map_err(|d| Problem::new(ProblemKind::MissingChannel, path, d).frame(frame))?;
-    let all: Vec<usize> = (0..info.channels.len()).collect();
+    // The channels of the parts that share the first part's window (another window, or a
+    // deep part, is left out and named, as the colour read leaves such parts out).
+    let window = |part: usize| match &info.kind {
+        crate::io::file::FileKind::Exr { headers, .. } => headers
+            .get(part)
+            .map(|h| (h.layer_size, h.own_attributes.layer_position, h.deep)),
+        _ => None,
+    };
+    let first = info.channels.first().map_or(0, |c| c.part);
+    let mut left_out: Vec<String> = Vec::new();
+    let all: Vec<usize> = (0..info.channels.len())
+        .filter(|&i| {
+            let channel = &info.channels[i];
+            let same = window(channel.part) == window(first)
+                && window(channel.part).is_none_or(|(_, _, deep)| !deep)
+                && info.unreadable(channel).is_none();
+            if !same && !left_out.contains(&channel.name) {
+                left_out.push(channel.name.clone());
+            }
+            same
+        })
+        .collect();
     let bits: Vec<usize> = (all.iter().copied())
         .filter(|&i| info.channels[i].sample_type == "u32")
         .collect();
     let planes = info.read_bits(&all, &bits).map_err(|p| p.frame(frame))?;
     let mut out = Frame::new(info.width, info.height);
     out.windows = info.windows;
-    for (i, plane) in planes.into_iter().enumerate() {
+    for (&i, plane) in all.iter().zip(planes) {
         let channel = &info.channels[i];
         let exact: Option<Vec<u32>> = bits
             .contains(&i)
@@ -70,14 +97,14 @@ fn read(path: &Path, entry: &Entry) -> Result<Frame, Problem> {
             window: None,
         });
     }
-    Ok(out)
+    Ok((out, left_out))
 }
 
 /// Compares an entry whose reference holds no colour image ([`holds_no_colour`]).
 pub(super) fn compare(job: &DiffJob, entry: &Entry) -> Result<FrameDiff, Problem> {
     let frame = entry.frame;
     let (pa, pb) = (job.a.path(frame), job.b.path(frame));
-    let (a, b) = (read(&pa, entry)?, read(&pb, entry)?);
+    let ((a, out_a), (b, out_b)) = (read(&pa, entry)?, read(&pb, entry)?);
     if (a.width, a.height, a.windows) != (b.width, b.height, b.windows) {
         let w = &b.windows;
         return Err(Problem::new(
@@ -104,33 +131,64 @@ pub(super) fn compare(job: &DiffJob, entry: &Entry) -> Result<FrameDiff, Problem
         "{} holds no colour image: every channel compared as data",
         pa.display()
     )];
+    // What a warning is made of (`--warn-exit`): channels not compared, types that differ.
+    let mut doubts = Vec::new();
+    for (left, path) in [(&out_a, &pa), (&out_b, &pb)] {
+        if !left.is_empty() {
+            doubts.push(format!(
+                "{} of {}: another data window, deep data, or data shutter does not decode: \
+                 not compared",
+                left.join(", "),
+                path.display()
+            ));
+        }
+    }
+    if !compared.retyped.is_empty() {
+        doubts.push(format!(
+            "{} stored as u32 in one file and as float in the other: compared as stored",
+            compared.retyped.join(", ")
+        ));
+    }
+    if job.sharp.is_some() {
+        notes.push("--sharp scores a colour image: not used".to_string());
+    }
     // PSNR for a peak of 1.0, as the beauty's is.
     let psnr = if every.rms_error == 0.0 {
         f64::INFINITY
     } else {
         -20.0 * every.rms_error.log10()
     };
-    let value = match job.metric {
-        Metric::Rmse => every.rms_error,
-        Metric::Psnr => psnr,
+    let (value, scored) = match job.metric {
+        Metric::Rmse => (every.rms_error, true),
+        Metric::Psnr => (psnr, true),
         Metric::Ssim | Metric::Flip => {
             notes.push(format!(
-                "--metric {} needs a colour image: not scored",
+                "--metric {} needs a colour image: not scored, --fail and --warn not applied",
                 job.metric.name()
             ));
-            f64::NAN
+            (f64::NAN, false)
         }
     };
+    // Unscored, the metric's gates do not apply (the per-pixel and channel gates do).
+    let gated = DiffJob {
+        fail: job.fail.filter(|_| scored),
+        warn: job.warn.filter(|_| scored),
+        ..job.clone()
+    };
     if let Some(heatmap) = &job.heatmap {
-        let most = compared.errors.iter().copied().fold(1e-12f32, f32::max);
-        let map: Vec<f32> = compared.errors.iter().map(|e| e / most).collect();
+        // Scaled to the largest finite error; a non-finite one is the top of the scale.
+        let finite = compared.errors.iter().copied().filter(|e| e.is_finite());
+        let most = finite.fold(1e-12f32, f32::max);
+        let map: Vec<f32> = (compared.errors.iter())
+            .map(|e| if e.is_finite() { e / most } else { 1.0 })
+            .collect();
         let path = heatmap.path(frame);
         let path = entry
             .output
             .map_or_else(|| path.clone(), |v| super::views::output_path(&path, v));
         write_heatmap(&path, a.width, a.height, &map).map_err(|e| e.problems()[0].clone())?;
     }
-    let why = failure(job, &compared, value, a.width * a.height);
+    let why = failure(&gated, &compared, value, a.width * a.height);
     let whole = Scores {
         rmse: every.rms_error,
         mae: every.mean_error,
@@ -152,16 +210,17 @@ pub(super) fn compare(job: &DiffJob, entry: &Entry) -> Result<FrameDiff, Problem
         pixels_over_fail: compared.pixels_over_fail,
         pixels_over_warn: compared.pixels_over_warn,
         samples_over_hard: compared.over_hard,
-        warned: job.warn.is_some_and(|w| job.metric.exceeds(value, w))
+        warned: gated.warn.is_some_and(|w| job.metric.exceeds(value, w))
             || compared.pixels_over_warn > 0
-            || !compared.extra.is_empty(),
+            || !compared.extra.is_empty()
+            || !doubts.is_empty(),
         every_channel: compared.every,
         layers: compared.layers,
         missing_channels: compared.missing,
         extra_channels: compared.extra,
         extra_views: entry.extra.to_vec(),
         thumbnails: None,
-        notes,
+        notes: notes.into_iter().chain(doubts).collect(),
         read_warnings: Vec::new(),
         failed: why.is_some(),
         why,

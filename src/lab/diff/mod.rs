@@ -461,7 +461,15 @@ fn lost_colour(job: &DiffJob, entry: &Entry, a: &FramePlan, problem: Problem) ->
         view: entry.view.map(str::to_string),
         a: job.a.path(frame),
         b: job.b.path(frame),
-        whole: Scores::default(),
+        // Not scored: no figure stands for it.
+        whole: Scores {
+            rmse: f64::NAN,
+            mae: f64::NAN,
+            psnr: f64::NAN,
+            ssim: f64::NAN,
+            flip: f64::NAN,
+            ..Scores::default()
+        },
         region: None,
         value: f64::NAN,
         largest: Largest::default(),
@@ -606,6 +614,9 @@ fn compare(
             read_warnings.push((pattern.raw.clone(), warning.clone()));
         }
     }
+    // Parts not compared, and (below) types that differ, are warnings (`--warn-exit`); the
+    // other notes say what was read.
+    let mut doubtful = !notes.is_empty();
     let mut notes = notes;
     // A multi-view candidate of a reference of one view or none is compared in its default
     // view: say so, and how to compare another.
@@ -663,6 +674,7 @@ fn compare(
     let mut compared = channels::compare(&a, &b, &job.gates);
     compared.missing.extend(parts_lost);
     if !compared.retyped.is_empty() {
+        doubtful = true;
         notes.push(format!(
             "{} stored as u32 in one file and as float in the other: compared as stored",
             compared.retyped.join(", ")
@@ -690,7 +702,7 @@ fn compare(
             || compared.pixels_over_warn > 0
             || !compared.extra.is_empty()
             || !entry.extra.is_empty()
-            || !notes.is_empty(),
+            || doubtful,
         every_channel: compared.every,
         layers: compared.layers,
         missing_channels: compared.missing,
