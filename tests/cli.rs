@@ -392,6 +392,20 @@ fn an_argument_that_is_not_utf8_is_a_usage_error_not_a_panic() {
     assert_eq!(report["ok"], false, "{report}");
 }
 
+/// `--json` with required arguments missing names them in the error object (an outside
+/// probe: the message ended at "were not provided:"), as the line on stderr does.
+#[test]
+fn json_names_the_required_arguments_not_given() {
+    let o = shutter(&["blur", "--json"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let message = report["error"]["message"].as_str().unwrap();
+    assert!(
+        message.contains("--color") && message.contains("--output"),
+        "{message}"
+    );
+}
+
 #[test]
 fn output_equal_to_input_is_refused() {
     let dir = tempfile::tempdir().unwrap();

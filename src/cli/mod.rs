@@ -73,13 +73,22 @@ fn parse_and_run() -> i32 {
             }
             // --json asked for: the error object on stdout, as for any failed run.
             if code != 0 && args.iter().any(|a| a == "--json") {
+                // Its first line, and where that ends in a colon, the lines it introduces
+                // (the required arguments not given), up to the blank line before the usage.
                 let rendered = e.to_string();
-                let message = rendered
-                    .lines()
+                let mut lines = rendered.lines();
+                let mut message = lines
                     .next()
                     .unwrap_or_default()
                     .trim_start_matches("error: ")
                     .to_string();
+                if message.ends_with(':') {
+                    let listed: Vec<&str> = lines
+                        .take_while(|l| !l.trim().is_empty())
+                        .map(str::trim)
+                        .collect();
+                    message = format!("{} {}", message, listed.join(", "));
+                }
                 let error = Error::usage(format!("{message} (see shutter {command} --help)"));
                 if let Err(lost) = out_json(&error_json(command, &error, code)) {
                     print_error(&lost);
