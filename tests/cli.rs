@@ -681,6 +681,12 @@ fn info_prints_size_channels_compression_and_matching_preset() {
     let o = shutter(&["info", "no/such/file.exr"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("missing file"));
+    // --view of a file of no views is warned, as blur warns it (an outside probe: nothing
+    // was said).
+    let shot = format!("{root}/fixtures/blender/shot.0001.exr");
+    let o = shutter(&["info", "--view", "left", &shot]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("holds no views"), "{}", stderr(&o));
 }
 
 #[test]

@@ -40,6 +40,13 @@ pub fn info(args: InfoArgs) -> Result<()> {
         // Presets are matched in the view a run would read: --view, else the default. A
         // view the file does not hold is an error; a file that names no default is described,
         // with no match until a view is chosen.
+        if let (Some(view), None) = (&args.view, &info.views) {
+            // As blur warns it: a file of no views reads the same in any.
+            say!(
+                "shutter: warning: view {view}: {} holds no views: --view has no effect",
+                path.display()
+            );
+        }
         let seen = match info.in_view(args.view.as_deref()) {
             Ok(seen) => Some(seen),
             Err(detail) if args.view.is_some() => {
