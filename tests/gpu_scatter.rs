@@ -1004,6 +1004,15 @@ fn the_fringe_s_curves_on_the_gpu_match_the_cpu() {
     }
 }
 
+/// The firefly tests' frames, each with the pixel its firefly goes in: a rotor without alpha
+/// and curved motion with alpha.
+fn firefly_frames() -> [(&'static str, Frame, usize); 2] {
+    [
+        ("rotor", rotor(64, 48, 0.5, 8.0), 10 * 64 + 8),
+        ("curving", curving(48, 40, 21, 12.0), 9 * 48 + 12),
+    ]
+}
+
 /// A firefly: `frame` with pixel `at` set to `value` in `channels` (0 R, 1 G, 2 B), as a
 /// renderer's stray sample leaves one in an ordinary frame.
 fn with_firefly(frame: &Frame, at: usize, channels: &[usize], value: f32) -> Frame {
@@ -1090,10 +1099,7 @@ fn a_firefly_changes_only_its_own_streak_on_the_gpu() {
     if gpu().is_none() {
         return;
     }
-    let frames = [
-        ("rotor", rotor(64, 48, 0.5, 8.0), 10 * 64 + 8),
-        ("curving", curving(48, 40, 21, 12.0), 9 * 48 + 12),
-    ];
+    let frames = firefly_frames();
     let (mut whole, mut off) = (Parity::default(), Parity::default());
     for (what, frame, at) in &frames {
         for (hot, channels) in [("in R", &[0][..]), ("white", &[0, 1, 2][..])] {
@@ -1134,10 +1140,7 @@ fn a_firefly_in_a_light_layer_changes_only_its_own_streak_on_the_gpu() {
     if gpu().is_none() {
         return;
     }
-    let frames = [
-        ("rotor", rotor(64, 48, 0.5, 8.0), 10 * 64 + 8),
-        ("curving", curving(48, 40, 21, 12.0), 9 * 48 + 12),
-    ];
+    let frames = firefly_frames();
     let (mut whole, mut off) = (Parity::default(), Parity::default());
     for (what, frame, at) in &frames {
         let plain_layers = layers_for(frame, 2);
@@ -1194,10 +1197,7 @@ fn a_firefly_of_the_largest_colour_changes_only_its_own_streak_on_the_gpu() {
     if gpu().is_none() {
         return;
     }
-    let frames = [
-        ("rotor", rotor(64, 48, 0.5, 8.0), 10 * 64 + 8),
-        ("curving", curving(48, 40, 21, 12.0), 9 * 48 + 12),
-    ];
+    let frames = firefly_frames();
     let mut off = Parity::default();
     for (what, frame, at) in &frames {
         let mut cases = vec![
