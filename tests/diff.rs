@@ -1273,6 +1273,20 @@ fn single_part_multi_view_files_are_compared_in_every_view() {
     let o = shutter(&["diff", &a, &left]);
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     assert!(stderr(&o).contains("right"), "{}", stderr(&o));
+    // A reference of no views against a stereo candidate: compared in the candidate's
+    // default view and warned; under --idiff, channel sets that differ, as idiff fails them
+    // (exit 2: an outside probe found it passing).
+    let mono = d.join("mono.exr");
+    let planes = ["R", "G", "B"]
+        .into_iter()
+        .enumerate()
+        .map(|(i, c)| (c, noise(n, 3 + i as u32, 0.0, 1.0)))
+        .collect();
+    write_exr(&mono, w, h, planes);
+    let o = shutter(&["diff", &s(&mono), &a]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = shutter(&["diff", "--idiff", &s(&mono), &a]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 }
 
 #[test]

@@ -287,7 +287,10 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
     }
     let warned = report.frames.iter().any(|f| f.warned);
     let channels_differ = report.frames.iter().any(|f| {
-        !f.missing_channels.is_empty() || !f.extra_channels.is_empty() || !f.extra_views.is_empty()
+        !f.missing_channels.is_empty()
+            || !f.extra_channels.is_empty()
+            || !f.extra_views.is_empty()
+            || f.candidate_views
     });
     let code = Codes::of(&args).verdict(report.failed, warned, channels_differ);
     if report.failed {

@@ -219,6 +219,7 @@ pub(super) fn compare(job: &DiffJob, entry: &Entry) -> Result<FrameDiff, Problem
         missing_channels: compared.missing,
         extra_channels: compared.extra,
         extra_views: entry.extra.to_vec(),
+        candidate_views: false,
         thumbnails: None,
         notes: notes.into_iter().chain(doubts).collect(),
         read_warnings: Vec::new(),

@@ -151,6 +151,10 @@ pub struct FrameDiff {
     /// entry of the frame.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub extra_views: Vec<String>,
+    /// The candidate holds views where the reference holds one or none (compared in its
+    /// default view, and warned): channel sets that differ, for `--idiff`.
+    #[serde(skip)]
+    pub candidate_views: bool,
     /// Pixels with a channel over its gate (`--fail-pixel` for colour, `--data-fail-pixel`
     /// for data), and over the warning thresholds.
     pub pixels_over_fail: usize,
@@ -478,6 +482,7 @@ fn lost_colour(job: &DiffJob, entry: &Entry, a: &FramePlan, problem: Problem) ->
         missing_channels: colour,
         extra_channels: Vec::new(),
         extra_views: entry.extra.to_vec(),
+        candidate_views: false,
         pixels_over_fail: 0,
         pixels_over_warn: 0,
         samples_over_hard: 0,
@@ -532,6 +537,7 @@ fn compare(
     // The view in the report: each of a multi-view reference's, or the one --view names in
     // one; none where the reference is not multi-view (its entries as they always were).
     let multi_view = a.colour_views().is_some_and(|v| v.names.len() > 1);
+    let candidate_views = !multi_view && b.colour_views().is_some_and(|v| v.names.len() > 1);
     let named = view.filter(|_| entry.output.is_some() || multi_view);
     let in_view = |detail: String| match named {
         Some(view) => format!("view {view}: {detail}"),
@@ -708,6 +714,7 @@ fn compare(
         missing_channels: compared.missing,
         extra_channels: compared.extra,
         extra_views: entry.extra.to_vec(),
+        candidate_views,
         thumbnails,
         notes,
         read_warnings,
