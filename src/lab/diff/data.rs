@@ -8,25 +8,24 @@ use std::path::Path;
 use crate::error::{Problem, ProblemKind};
 use crate::frame::{CarriedChannel, Frame, LayerClass};
 use crate::io::file::FileInfo;
+use crate::io::passes::{passes_found, FramePlan};
+use crate::io::preset::Preset;
 use crate::lab::metrics::{Metric, Scores};
 
 use super::{channels, failure, write_heatmap, DiffJob, Entry, FrameDiff};
 
-/// Whether a reference whose colour read found `colour` (none: the read found no colour
-/// channel) is such a file: no layer of it holds R, G and B (a Cryptomatte layer's are IDs
-/// and coverage, not colour), or its `Y` was read as a luminance beside an `X` (a vector
-/// pass, as `info` reads it).
-pub(super) fn holds_no_colour(path: &Path, colour: Option<&[String]>) -> bool {
-    if let Some(colour) = colour {
-        // (The header is read only where the colour is a luminance.)
-        let grey = colour
-            .first()
-            .is_some_and(|c| c.rsplit('.').next() == Some("Y"));
-        return grey && FileInfo::probe(path).is_ok_and(|info| info.find("X").is_some());
-    }
+/// Whether the reference at `path` is such a file. Where the colour read found a luminance
+/// `Y` (`luminance`), as `info` reads the file: `preset` finds no colour in it
+/// (`passes_found`: a `Y` beside an `X` is a vector pass). Where the colour read found
+/// nothing: no layer holds R, G and B (a Cryptomatte layer's are IDs and coverage; a file of
+/// view layers with colour is refused as the read refuses it, asking for `--layer`).
+pub(super) fn holds_no_colour(path: &Path, preset: &Preset, luminance: bool) -> bool {
     let Ok(info) = FileInfo::probe(path) else {
         return false;
     };
+    if luminance {
+        return !passes_found(&info, preset).contains(&"color");
+    }
     let split = |name: &str| match name.rsplit_once('.') {
         Some((layer, leaf)) => (layer.to_string(), leaf.to_ascii_lowercase()),
         None => (String::new(), name.to_ascii_lowercase()),
@@ -39,6 +38,11 @@ pub(super) fn holds_no_colour(path: &Path, colour: Option<&[String]>) -> bool {
                 .all(|want| names.iter().any(|(l, leaf)| l == layer && leaf == want))
     };
     !names.iter().any(|(layer, _)| colour_layer(layer))
+}
+
+/// Whether the colour `plan` reads is a luminance `Y` read as grey.
+pub(super) fn luminance(plan: &FramePlan) -> bool {
+    (plan.colour_channel_names().first()).is_some_and(|c| c.rsplit('.').next() == Some("Y"))
 }
 
 /// One file of `entry` read whole, every channel as data (u32 channels exactly), and the

@@ -337,7 +337,8 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
             .filter(|p| {
                 // (A candidate lacking colour is a lost channel; a reference of none is
                 // compared as data.)
-                let data = p.path == job.a.path(frame) && data::holds_no_colour(&p.path, None);
+                let data =
+                    p.path == job.a.path(frame) && data::holds_no_colour(&p.path, &preset, false);
                 p.kind != ProblemKind::MissingChannel || !(p.path == job.b.path(frame) || data)
             })
             .collect::<Vec<_>>()
@@ -510,13 +511,15 @@ fn compare(
     // A reference that holds no colour image (a depth, vector or ID pass on its own) is
     // compared channel by channel as data.
     let a = match plan(&job.a, frame, view, job, preset) {
-        Ok(a) if data::holds_no_colour(&job.a.path(frame), Some(&a.colour_channel_names())) => {
+        // (Only a colour read from a luminance `Y` may be a vector pass's: the header is
+        // read again for no other.)
+        Ok(a) if data::luminance(&a) && data::holds_no_colour(&job.a.path(frame), preset, true) => {
             return data::compare(job, entry);
         }
         Ok(a) => a,
         Err(problem)
             if problem.kind == ProblemKind::MissingChannel
-                && data::holds_no_colour(&job.a.path(frame), None) =>
+                && data::holds_no_colour(&job.a.path(frame), preset, false) =>
         {
             return data::compare(job, entry);
         }
