@@ -401,6 +401,101 @@ fn a_tiff_comes_out_compressed_with_its_alpha_declared() {
     }
 }
 
+/// Every value a TIFF output keeps outside its directory entry, and every directory, begins
+/// at an even offset (TIFF 6.0, section 2): the tiff crate's encoder wrote its own tags after
+/// the last strip wherever it ended, so an odd-length strip left `BitsPerSample`,
+/// `SampleFormat` and IFD0 at odd offsets (`exiftool -validate`: "Odd offset for IFD0 tag").
+/// Sixteen outputs of noise of different sizes, kinds and bit depths: their strips end odd
+/// and even.
+#[test]
+fn every_tiff_value_and_directory_begins_at_a_word_boundary() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut checked = 0;
+    for case in 0..16u32 {
+        let (w, h) = (17 + case * 3, 9 + case % 5);
+        let input = dir.path().join(format!("in{case}.tif"));
+        let n = (w * h) as usize;
+        let values = noise(n * 4, case + 1, 0.0, 1.0);
+        // Grey, RGB and RGBA; 8 and 16 bits (the extra flags choose float for some).
+        let (colour, channels) = match case % 3 {
+            0 => (image::ExtendedColorType::L8, 1),
+            1 => (image::ExtendedColorType::Rgb8, 3),
+            _ => (image::ExtendedColorType::Rgba8, 4),
+        };
+        let bytes: Vec<u8> = values[..n * channels]
+            .iter()
+            .map(|v| (v * 255.0) as u8)
+            .collect();
+        let file = std::fs::File::create(&input).unwrap();
+        image::codecs::tiff::TiffEncoder::new(file)
+            .write_image(&bytes, w, h, colour)
+            .unwrap();
+        let velocity = dir.path().join(format!("v{case}.png"));
+        velocity_map(&velocity, w, h, |x, _| (x % 4) as f32);
+        let out = dir.path().join(format!("out{case}.tif"));
+        let depth = ["8", "16", "32"][case as usize % 3];
+        blur(&input, &velocity, &out, &["--bit-depth", depth]);
+        let bytes = std::fs::read(&out).unwrap();
+        let little = match &bytes[..2] {
+            b"II" => true,
+            b"MM" => false,
+            other => panic!("not a TIFF: {other:?}"),
+        };
+        let u16_at = |at: usize| {
+            let b = [bytes[at], bytes[at + 1]];
+            if little {
+                u16::from_le_bytes(b)
+            } else {
+                u16::from_be_bytes(b)
+            }
+        };
+        let u32_at = |at: usize| {
+            let b = [bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]];
+            if little {
+                u32::from_le_bytes(b)
+            } else {
+                u32::from_be_bytes(b)
+            }
+        };
+        // IFD0 and the directories its Exif (34665) and GPS (34853) pointers lead to.
+        let mut directories = vec![u32_at(4) as usize];
+        let mut seen = 0;
+        while let Some(&ifd) = directories.get(seen) {
+            seen += 1;
+            assert_eq!(ifd % 2, 0, "case {case}: a directory at odd offset {ifd}");
+            for e in 0..u16_at(ifd) as usize {
+                let at = ifd + 2 + 12 * e;
+                let (tag, kind, count) = (u16_at(at), u16_at(at + 2), u32_at(at + 4));
+                let unit = match kind {
+                    1 | 2 | 6 | 7 => 1,
+                    3 | 8 => 2,
+                    4 | 9 | 11 | 13 => 4,
+                    _ => 8,
+                };
+                if tag == 34665 || tag == 34853 {
+                    directories.push(u32_at(at + 8) as usize);
+                }
+                if unit * count as usize > 4 {
+                    let value = u32_at(at + 8);
+                    assert_eq!(value % 2, 0, "case {case}: tag {tag} at odd offset {value}");
+                    checked += 1;
+                }
+            }
+        }
+        if let Some(warnings) = tool("exiftool", &["-validate", "-warning", "-a", &s(&out)]) {
+            assert!(!warnings.contains("Odd offset"), "case {case}: {warnings}");
+        }
+        // The pixels read back by the tiff crate as what was written (the strips deflated and
+        // differenced as the tags say).
+        let back = image::open(&out).unwrap();
+        assert_eq!((back.width(), back.height()), (w, h), "case {case}");
+    }
+    assert!(
+        checked >= 16 * 2,
+        "values outside their entries checked: {checked}"
+    );
+}
+
 /// A TIFF of associated alpha (ExtraSamples = 1, its colour premultiplied as stored) reads as
 /// the colour it means: written straight, a still frame gives back the straight colour.
 #[test]

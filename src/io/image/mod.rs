@@ -17,6 +17,7 @@ mod profile;
 mod resolution;
 mod tiff_float;
 mod tiff_meta;
+mod tiff_write;
 mod upright;
 mod write;
 

@@ -9,12 +9,12 @@
 //!   kind (a profile made from a cICP, or from gAMA and cHRM, `profile::profile_of`, goes
 //!   out as those chunks, not as an iCCP; in a JPEG or TIFF, which have no such chunks, as
 //!   the profile). IPTC is not written (PNG has no settled place for it).
-//! - TIFF (tiff crate): deflate with the horizontal predictor (lossless, and what every TIFF
-//!   reader reads; LZW compresses photos less), `ExtraSamples` = 2 (unassociated alpha: the
-//!   file holds straight alpha), the profile in tag 34675, XMP in tag 700, IPTC's datasets
-//!   bare in tag 33723 (where exiftool writes them and libtiff's readers, OpenImageIO's among
-//!   them, look) and any other Photoshop resources in tag 34377, each value at a word
-//!   boundary (the encoder's own tags are not always). EXIF is spread out as a TIFF holds it
+//! - TIFF (`tiff_write`, the tiff crate's directory encoder): deflate with the horizontal
+//!   predictor (lossless, and what every TIFF reader reads; LZW compresses photos less),
+//!   `ExtraSamples` = 2 (unassociated alpha: the file holds straight alpha), the profile in
+//!   tag 34675, XMP in tag 700, IPTC's datasets bare in tag 33723 (where exiftool writes them
+//!   and libtiff's readers, OpenImageIO's among them, look) and any other Photoshop resources
+//!   in tag 34377, every value and directory at a word boundary. EXIF is spread out as a TIFF holds it
 //!   (`tiff_meta`): its descriptive IFD0 tags in the image's IFD0, its Exif and GPS
 //!   directories as directories of their own that IFD0 points to.
 //! - JPEG (jpeg-encoder): the quality asked for, the input's chroma subsampling (any of
@@ -33,8 +33,9 @@ use std::io::{Seek, Write};
 use crate::frame::{Photo, PngColour};
 
 use super::profile::{profile_is_made, profile_of, Transfer};
+use super::resolution;
+use super::tiff_write::{write_tiff, Samples};
 use super::ImageFormat;
-use super::{resolution, tiff_meta};
 
 /// How a photo is written.
 #[derive(Clone, Copy, Debug)]
@@ -87,18 +88,6 @@ pub fn jpeg_left_out(photo: &Photo) -> Vec<(&'static str, usize)> {
     .collect()
 }
 
-/// The TIFF tags of what a photo carries: its ICC profile (ICC.1, annex B.4), XMP (Adobe XMP
-/// part 3, 1.1.6), Photoshop image resources (TIFF/EP) and bare IPTC (IPTC-NAA, TIFF/EP).
-const TIFF_ICC: u16 = 34675;
-const TIFF_XMP: u16 = 700;
-const TIFF_PHOTOSHOP: u16 = 34377;
-const TIFF_IPTC: u16 = 33723;
-
-/// `ExtraSamples` values for associated (premultiplied) and unassociated (straight) alpha
-/// (TIFF 6.0, section 18).
-const ASSOCIATED_ALPHA: u16 = 1;
-const UNASSOCIATED_ALPHA: u16 = 2;
-
 /// Whether a frame goes out grey: its input was grey, the format holds grey with the alpha
 /// that goes out with it (the tiff crate writes no grey with alpha, integer or float), and
 /// its three planes are still equal (the blur gives each the same weights).
@@ -135,12 +124,6 @@ pub fn out_of_range(rgb: [&[f32]; 3], alpha: Option<&[f32]>) -> (bool, bool) {
         }
     }
     (above, below)
-}
-
-/// A TIFF's samples: integer codes (16-bit or not) or float values.
-enum Samples<'a> {
-    Codes(&'a [u16], bool),
-    Float(&'a [f32]),
 }
 
 /// Writes premultiplied linear colour as an integer image with straight alpha (or a float
@@ -401,102 +384,6 @@ fn png_colour(info: &mut png::Info, colour: &PngColour) {
             3 => Some(png::SrgbRenderingIntent::AbsoluteColorimetric),
             _ => None,
         });
-    }
-}
-
-#[allow(clippy::too_many_arguments)]
-fn write_tiff(
-    writer: impl Write + Seek,
-    width: u32,
-    height: u32,
-    channels: usize,
-    samples: Samples,
-    icc: Option<&[u8]>,
-    photo: Option<&Photo>,
-) -> Result<(), String> {
-    use tiff::encoder::{colortype, Compression, DeflateLevel, Predictor, TiffEncoder};
-    use tiff::tags::{Tag, Type};
-    let error = |e: tiff::TiffError| e.to_string();
-    let float = matches!(samples, Samples::Float(_));
-    // The horizontal predictor differences integers; floats would need predictor 3, which
-    // the tiff crate does not write: they go deflated as they are.
-    let predictor = if float {
-        Predictor::None
-    } else {
-        Predictor::Horizontal
-    };
-    let alpha_kind = if float {
-        ASSOCIATED_ALPHA
-    } else {
-        UNASSOCIATED_ALPHA
-    };
-    let mut encoder = TiffEncoder::new(writer)
-        .map_err(error)?
-        .with_compression(Compression::Deflate(DeflateLevel::Balanced))
-        .with_predictor(predictor);
-    let xmp = photo.and_then(|p| p.xmp.as_deref());
-    let iptc = photo.and_then(|p| p.iptc.as_deref());
-    // IPTC's datasets in tag 33723, the other Photoshop resources (if any) in 34377.
-    let records = iptc.and_then(tiff_meta::iptc_records);
-    let resources = iptc.map(tiff_meta::without_iptc).filter(|r| !r.is_empty());
-    // EXIF's directories below IFD0 go before the image, whose IFD0 points to them.
-    let exif = photo
-        .and_then(|p| p.exif.as_deref())
-        .and_then(tiff_meta::parse);
-    let pointers = match &exif {
-        Some(exif) => tiff_meta::write_sub_directories(&mut encoder, exif).map_err(error)?,
-        None => Vec::new(),
-    };
-    // The tags beside the pixels: alpha declared, then what the photo came with.
-    macro_rules! write_image {
-        ($color:ty, $data:expr) => {{
-            let mut image = encoder.new_image::<$color>(width, height).map_err(error)?;
-            let tags = image.encoder();
-            if channels == 4 {
-                tags.write_tag(Tag::ExtraSamples, &[alpha_kind][..])
-                    .map_err(error)?;
-            }
-            // The profile UNDEFINED, as the ICC's TIFF embedding gives it (written BYTE,
-            // `exiftool -validate` called it non-standard); XMP and the Photoshop blocks BYTE.
-            for (tag, kind, block) in [
-                (TIFF_ICC, Type::UNDEFINED, icc),
-                (TIFF_XMP, Type::BYTE, xmp),
-                (TIFF_PHOTOSHOP, Type::BYTE, resources.as_deref()),
-            ] {
-                if let Some(block) = block {
-                    tiff_meta::write_raw(tags, tag, kind, block).map_err(error)?;
-                }
-            }
-            if let Some(records) = records {
-                let longs = tiff_meta::iptc_as_longs(records);
-                tiff_meta::write_raw(tags, TIFF_IPTC, Type::LONG, &longs).map_err(error)?;
-            }
-            if let Some(exif) = &exif {
-                tiff_meta::write_ifd0(tags, exif, &pointers).map_err(error)?;
-            }
-            // The photo's own resolution, over the encoder's none and any in its EXIF (a
-            // JPEG's EXIF may say 72 dpi beside the JFIF density it is shown at).
-            if let Some(resolution) = photo.and_then(|p| p.resolution.as_ref()) {
-                let (x, y, unit) = resolution::to_tiff(resolution);
-                tags.write_tag(Tag::XResolution, x).map_err(error)?;
-                tags.write_tag(Tag::YResolution, y).map_err(error)?;
-                tags.write_tag(Tag::ResolutionUnit, unit.to_u16())
-                    .map_err(error)?;
-            }
-            image.write_data($data).map_err(error)
-        }};
-    }
-    let bytes = |codes: &[u16]| codes.iter().map(|&c| c as u8).collect::<Vec<u8>>();
-    match (channels, samples) {
-        (1, Samples::Codes(codes, false)) => write_image!(colortype::Gray8, &bytes(codes)),
-        (1, Samples::Codes(codes, true)) => write_image!(colortype::Gray16, codes),
-        (3, Samples::Codes(codes, false)) => write_image!(colortype::RGB8, &bytes(codes)),
-        (3, Samples::Codes(codes, true)) => write_image!(colortype::RGB16, codes),
-        (1, Samples::Float(values)) => write_image!(colortype::Gray32Float, values),
-        (3, Samples::Float(values)) => write_image!(colortype::RGB32Float, values),
-        (_, Samples::Codes(codes, false)) => write_image!(colortype::RGBA8, &bytes(codes)),
-        (_, Samples::Codes(codes, true)) => write_image!(colortype::RGBA16, codes),
-        (_, Samples::Float(values)) => write_image!(colortype::RGBA32Float, values),
     }
 }
 
