@@ -2366,6 +2366,14 @@ fn half_keeps_data_that_half_cannot_hold_as_float() {
             ("Z", z.clone()),
             ("P.X", vec![-7e4; n]),
             ("N.X", noise(n, 6, -1.0, 1.0)),
+            // An object index past 2048 (Blender writes IndexOB as float): half would make
+            // 3001 into 3000. Small indices fit half exactly and go half.
+            ("IndexOB.X", (0..n).map(|i| (3000 + i % 3) as f32).collect()),
+            ("IndexMA.X", (0..n).map(|i| (i % 7) as f32).collect()),
+            // A Cryptomatte ID is a hash in a float's bits: half made 1.2e-20 into 0 (an
+            // outside probe), and any other into another ID.
+            ("CryptoObject00.R", vec![1.234_567_8e-20; n]),
+            ("CryptoObject00.G", vec![0.5; n]),
         ],
     );
     write_passes(dir.path());
@@ -2386,6 +2394,10 @@ fn half_keeps_data_that_half_cannot_hold_as_float() {
         ("Z", SampleType::F32),
         ("P.X", SampleType::F32),
         ("N.X", SampleType::F16),
+        ("IndexOB.X", SampleType::F32),
+        ("IndexMA.X", SampleType::F16),
+        ("CryptoObject00.R", SampleType::F32),
+        ("CryptoObject00.G", SampleType::F32),
     ] {
         assert_eq!(kind(name), want, "{name}");
     }
@@ -2393,4 +2405,8 @@ fn half_keeps_data_that_half_cannot_hold_as_float() {
     let plane = |name: &str| &read.iter().find(|(n, _)| n == name).unwrap().1;
     assert_eq!(plane("Z")[3], 1e10);
     assert!(plane("P.X").iter().all(|&v| v == -7e4));
+    assert_eq!(plane("IndexOB.X")[1], 3001.0);
+    assert!(plane("CryptoObject00.R")
+        .iter()
+        .all(|&v| v == 1.234_567_8e-20));
 }

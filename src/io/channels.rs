@@ -87,11 +87,7 @@ pub fn preset_class(
 pub fn class_of(name: &str, crypto_layers: &[String]) -> LayerClass {
     let (layer, component) = split(name);
     let lower = layer.to_ascii_lowercase();
-    let is_crypto = crypto_layers
-        .iter()
-        .any(|c| !c.is_empty() && layer.starts_with(c.as_str()))
-        || lower.split('.').any(|part| part.starts_with("crypto"));
-    if is_crypto || lower.split('.').any(|part| DATA_LAYERS.contains(&part)) {
+    if is_crypto(name, crypto_layers) || lower.split('.').any(|part| DATA_LAYERS.contains(&part)) {
         return LayerClass::Data;
     }
     if COLOUR_COMPONENTS.contains(&component.to_ascii_lowercase().as_str()) {
@@ -99,6 +95,19 @@ pub fn class_of(name: &str, crypto_layers: &[String]) -> LayerClass {
     } else {
         LayerClass::Data
     }
+}
+
+/// Whether channel `name` is a Cryptomatte layer's: a layer `crypto_layers` (the file's
+/// `cryptomatte/<key>/name` attributes) names, or one named `crypto…`.
+pub fn is_crypto(name: &str, crypto_layers: &[String]) -> bool {
+    let (layer, _) = split(name);
+    crypto_layers
+        .iter()
+        .any(|c| !c.is_empty() && layer.starts_with(c.as_str()))
+        || layer
+            .to_ascii_lowercase()
+            .split('.')
+            .any(|part| part.starts_with("crypto"))
 }
 
 /// The layer names a header's `cryptomatte/<key>/name` attributes give (the Cryptomatte

@@ -9,6 +9,7 @@ use exr::meta::header::Header;
 use exr::prelude::f16;
 
 use crate::frame::{LayerClass, Plane};
+use crate::io::channels;
 
 /// One channel to write.
 #[derive(Clone, Debug)]
@@ -58,8 +59,14 @@ fn stored_as(channel: &OutChannel, input: Option<&Header>, half: bool) -> Sample
         _ if channel.exact.is_some() => SampleType::U32,
         Some(SampleType::U32) => SampleType::U32,
         // A data channel that half cannot hold (a depth of 1e10 for empty pixels, a world
-        // position of −7e4) stays float: half would make it ±∞, where colour saturates.
-        _ if half && channel.class != LayerClass::Colour && !fits_half(&channel.plane) => {
+        // position of −7e4, an object index of 3001) stays float: half would make it ±∞, where
+        // colour saturates, or another index. So does Cryptomatte's, whose IDs are hashes
+        // stored in a float's bits (its specification: 32-bit float), which half would make
+        // other IDs or 0.
+        _ if half
+            && channel.class != LayerClass::Colour
+            && (!fits_half(&channel.plane) || is_crypto(channel, input)) =>
+        {
             SampleType::F32
         }
         _ if half => SampleType::F16,
@@ -79,12 +86,21 @@ fn stored(input: Option<&Header>, name: &str) -> Option<SampleType> {
     described(input, name).map(|c| c.sample_type)
 }
 
-/// Whether every finite value of `plane` is within half's range (its infinities are half's
-/// too).
+/// Whether half holds what `plane` means: every finite value within half's range (its
+/// infinities are half's too), and, where every finite value is a whole number (an index, a
+/// count), each of them exactly (half's are whole up to 2048).
 fn fits_half(plane: &[f32]) -> bool {
-    plane
-        .iter()
-        .all(|v| !v.is_finite() || v.abs() <= f32::from(f16::MAX))
+    let finite = || plane.iter().filter(|v| v.is_finite());
+    let in_range = finite().all(|v| v.abs() <= f32::from(f16::MAX));
+    let whole = finite().all(|v| v.fract() == 0.0);
+    in_range && (!whole || finite().all(|&v| f16::from_f32(v).to_f32() == v))
+}
+
+/// Whether `channel` is a Cryptomatte layer's: by its name, or by the input header's
+/// `cryptomatte/<key>/name` attributes.
+fn is_crypto(channel: &OutChannel, input: Option<&Header>) -> bool {
+    let named = input.map(channels::crypto_layers).unwrap_or_default();
+    channels::is_crypto(&channel.name, &named)
 }
 
 /// Each channel's samples in the pixel type its input part stored it in (half with `half`:

@@ -639,9 +639,10 @@ pub const DEFS: &[Def] = &[
         applies: &[],
         value_name: "",
         help: "write every float EXR channel as 16-bit half float, u32 channels (IDs) as \
-               they are, and a data channel holding values half cannot (a depth of 1e10, a \
-               position of −7e4) as float rather than ±∞ (off: each as the colour file \
-               stores it; 32-bit float when it is not an EXR)",
+               they are, and as float a data channel holding values half cannot (a depth \
+               of 1e10, a position of −7e4, an object index over 2048) and Cryptomatte's \
+               IDs (hashes in a float's bits) (off: each as the colour file stores it; \
+               32-bit float when it is not an EXR)",
         kind: Kind::Switch,
         unset: "",
         get: |s| Value::Switch(s.output.exr.half),
