@@ -179,6 +179,50 @@ fn a_cut_jpeg_stream_is_an_error_not_a_padded_frame() {
     assert!(problem.detail.contains("cut short"), "{problem}");
 }
 
+/// A PNG cut short is refused from its chunks' heads before anything is written: its header
+/// read fine, so `info` called it whole and a sequence wrote the frames before it and stopped
+/// there (an outside probe). Cut inside its image data, and cut at its IEND alone.
+#[test]
+fn a_cut_png_is_refused_before_any_frame_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (64u32, 48u32);
+    let pixels: Vec<u8> = noise((w * h * 3) as usize, 7, 0.0, 255.0)
+        .iter()
+        .map(|&v| v as u8)
+        .collect();
+    let whole = dir.path().join("p.0001.png");
+    image::save_buffer(&whole, &pixels, w, h, image::ColorType::Rgb8).unwrap();
+    let bytes = std::fs::read(&whole).unwrap();
+    std::fs::write(dir.path().join("p.0003.png"), &bytes).unwrap();
+    for (cut, want) in [
+        (bytes.len() / 2, "IDAT chunk"),
+        (bytes.len() - 12, "no IEND chunk"),
+    ] {
+        let frame2 = dir.path().join("p.0002.png");
+        std::fs::write(&frame2, &bytes[..cut]).unwrap();
+        let info = shutter(&["info", &s(&frame2)]);
+        assert_eq!(info.status.code(), Some(1), "{}", stderr(&info));
+        assert!(stderr(&info).contains(want), "{}", stderr(&info));
+        let out = dir.path().join("out");
+        let o = shutter(&[
+            "blur",
+            "--algorithm",
+            "none",
+            "--color",
+            &s(&dir.path().join("p.####.png")),
+            "-o",
+            &s(&out.join("o.####.png")),
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        let err = stderr(&o);
+        assert!(
+            err.contains("p.0002.png, frame 2") && err.contains("truncated"),
+            "{err}"
+        );
+        assert!(!out.exists(), "frames were written before the cut one");
+    }
+}
+
 #[test]
 fn an_offset_table_pointing_every_line_at_one_chunk_is_an_error_not_black_lines() {
     // Before: every entry of the table pointing at the first chunk read as a frame whose

@@ -161,6 +161,11 @@ pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
     } else {
         None
     };
+    if format == "png" {
+        if let Some(why) = png_mend::png_cut_short(path) {
+            return Err(why);
+        }
+    }
     let mut decoder = match reader.into_decoder() {
         Ok(decoder) => decoder,
         Err(e) => {

@@ -91,6 +91,45 @@ pub fn cicp_matrix(file: &mut (impl Read + Seek)) -> Option<u8> {
     }
 }
 
+/// Where a PNG is cut short, in words: a chunk that runs past the end of the file, or no IEND
+/// chunk before it ends (the header alone reads fine, so a sequence stopped at such a frame
+/// after writing the ones before: an outside probe). Reads the chunks' heads only, seeking
+/// past their data; `None` for a whole PNG or a file that is not one.
+pub fn png_cut_short(path: &Path) -> Option<String> {
+    let file = crate::io::input::open_input(path).ok()?;
+    let size = file.metadata().ok()?.len();
+    let mut file = BufReader::new(file);
+    let mut head = [0u8; 8];
+    file.read_exact(&mut head).ok()?;
+    if head != *b"\x89PNG\r\n\x1a\n" {
+        return None;
+    }
+    let mut at = 8u64;
+    loop {
+        if at + 8 > size {
+            return Some(format!(
+                "the file is truncated: it ends at byte {size} with no IEND chunk"
+            ));
+        }
+        file.read_exact(&mut head).ok()?;
+        let length = u64::from(u32::from_be_bytes(head[..4].try_into().ok()?));
+        let end = at + 12 + length;
+        if end > size {
+            let kind = String::from_utf8_lossy(&head[4..]);
+            return Some(format!(
+                "the file is truncated: its {kind} chunk at byte {at} needs {} bytes, the \
+                 file has {size}",
+                end
+            ));
+        }
+        if &head[4..] == b"IEND" {
+            return None;
+        }
+        file.seek_relative(length as i64 + 4).ok()?;
+        at = end;
+    }
+}
+
 /// Sets the matrix coefficients of a PNG's first cICP (before its image data) to 0 and its
 /// CRC to match, in `bytes`; the value it held, where that was not 0.
 fn mend(bytes: &mut [u8]) -> Option<u8> {
