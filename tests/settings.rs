@@ -174,6 +174,77 @@ fn a_flag_for_another_algorithm_is_warned_about() {
     );
 }
 
+/// Depth of field's flags that would not be read (an outside probe: each ran silently, the
+/// output the same as without it, and the lens given beside a map was even recorded in the
+/// output's settings): `--coc-scale` with a lens, `--passes` with the pyramid, warned about;
+/// a lens beside `--coc-map`, refused as `--depth` beside it is.
+#[test]
+fn dof_flags_that_would_not_be_read_are_warned_about_or_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 8, 6);
+    let (c, z) = (dir.path().join("C.exr"), dir.path().join("Z.exr"));
+    let out = dir.path().join("out.exr");
+    let lens = [
+        "--focal-length",
+        "50",
+        "--f-stop",
+        "1.4",
+        "--focus-distance",
+        "3",
+    ];
+    let dof = |extra: &[&str], depth: &[&str]| {
+        let mut args = vec![
+            "dof",
+            "--color",
+            c.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend(depth);
+        args.extend(extra);
+        shutter(&args)
+    };
+    let with_depth = ["--depth", z.to_str().unwrap()];
+    for (extra, warning) in [
+        (
+            &["--coc-scale", "200"][..],
+            "--coc-scale applies to a painted map",
+        ),
+        (
+            &["--method", "blend", "--passes", "7"][..],
+            "--passes applies to blend's talk form",
+        ),
+    ] {
+        let mut args = lens.to_vec();
+        args.extend(extra);
+        let o = dof(&args, &with_depth);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(stderr(&o).contains(warning), "{extra:?}: {}", stderr(&o));
+    }
+    // The talk's form reads --passes: no warning.
+    let mut args = lens.to_vec();
+    args.extend(["--method", "blend", "--blend-form", "talk", "--passes", "7"]);
+    let o = dof(&args, &with_depth);
+    assert!(
+        o.status.success() && !stderr(&o).contains("--passes"),
+        "{}",
+        stderr(&o)
+    );
+    // A lens beside a painted map.
+    std::fs::remove_file(&out).unwrap();
+    let o = dof(
+        &["--focus-distance", "3"],
+        &["--coc-map", z.to_str().unwrap()],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--focus-distance would not be read"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+}
+
 #[test]
 fn switches_turn_their_default_over() {
     let jitter = shutter::settings::def("jitter").unwrap();

@@ -143,7 +143,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         }
     }
     preset.check_complete()?;
-    let (settings, warnings) = settings::resolve(&args.settings.0, &preset)?;
+    let (settings, mut warnings) = settings::resolve(&args.settings.0, &preset)?;
     let dof = settings::dof_params(&settings, args.coc_map.is_some())?;
     if args.coc_map.is_some() {
         // A CoC map is read through the depth pass with its stored values kept as they are.
@@ -161,6 +161,26 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         return Err(Error::usage(
             "--coc-map is read in place of depth: give --coc-map or --depth, not both",
         ));
+    }
+    // A painted map is the blur: a lens given beside it would not be read (a preset's lens
+    // may stay, unread, under a map given for one shot).
+    let given = &args.settings.0;
+    let lens: Vec<String> = ["focal-length", "f-stop", "focus-distance", "sensor-width"]
+        .iter()
+        .filter(|name| given.get(name).is_some())
+        .map(|name| format!("--{name}"))
+        .collect();
+    if args.coc_map.is_some() && !lens.is_empty() {
+        return Err(Error::usage(format!(
+            "--coc-map paints each pixel's blur in place of a lens and depth: {} would not be \
+             read; give the lens (with depth) or --coc-map, not both",
+            lens.join(", ")
+        )));
+    }
+    if args.coc_map.is_none() && given.get("coc-scale").is_some() {
+        warnings.push(
+            "--coc-scale applies to a painted map (--coc-map), not a lens: it has no effect".into(),
+        );
     }
     // One colour file, or one a layer (a stack rendered one file per layer): each other pass
     // given not at all (found in the colour file), or once per colour file.
@@ -224,7 +244,6 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
             args.output
         )));
     }
-    let mut warnings = warnings;
     warnings.extend(displace_warning);
     warnings.extend(output_warnings(&args.settings.0, format));
     if let Some(layer) = &args.layer {

@@ -121,6 +121,13 @@ pub fn resolve(given: &Given, preset: &Preset) -> Result<(Settings, Vec<String>)
                 def.flag(),
                 def.applies.join(" and ")
             ));
+        } else if def.name == "passes" && settings.dof.blend_form != crate::dof::BlendForm::Talk {
+            // The pyramid's levels follow the CoC; only the talk's copies take passes.
+            warnings.push(
+                "--passes applies to blend's talk form (--blend-form talk), not the pyramid: \
+                 it has no effect"
+                    .into(),
+            );
         }
     }
     Ok((settings, warnings))
