@@ -68,6 +68,16 @@ fn not_subnormal(v: f32) -> bool {
 }
 
 /// A finite colour value as half, saturated at half's largest magnitude (65504) where f16
+/// A number as a message shows it: plainly where that is short, in exponent form beyond
+/// (`{}` of 5e-324 or 1e308 is over 300 digits).
+pub fn shown(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e15).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
 /// would overflow to ±Inf; NaN stays NaN (the numeric policy leaves none in colour).
 pub fn half_saturated(v: f32) -> exr::prelude::f16 {
     use exr::prelude::f16;

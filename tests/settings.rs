@@ -245,6 +245,64 @@ fn dof_flags_that_would_not_be_read_are_warned_about_or_refused() {
     assert!(!out.exists());
 }
 
+/// A number a message shows is short (an outside probe: 5e-324 and 1e308 came back as 300
+/// digits), and an unbounded range says it wants a finite number (inf is "above 0" and was
+/// refused as not).
+#[test]
+fn numbers_in_messages_are_short_and_ranges_say_finite() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 8, 6);
+    let c = dir.path().join("C.exr");
+    let z = dir.path().join("Z.exr");
+    let out = dir.path().join("out.exr");
+    let dof = |focus: &str| {
+        shutter(&[
+            "dof",
+            "--color",
+            &s(&c),
+            "--depth",
+            &s(&z),
+            "-o",
+            &s(&out),
+            "--focal-length",
+            "50",
+            "--f-stop",
+            "1.4",
+            "--focus-distance",
+            focus,
+        ])
+    };
+    let o = dof("5e-324");
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("focus distance 5e-324:"),
+        "{}",
+        stderr(&o)
+    );
+    let o = dof("inf");
+    assert!(
+        stderr(&o).contains("a finite number above 0"),
+        "{}",
+        stderr(&o)
+    );
+    std::fs::write(dir.path().join("p.toml"), "[blur]\nshutter = 1e308\n").unwrap();
+    let o = shutter(&[
+        "blur",
+        "--preset",
+        &s(&dir.path().join("p.toml")),
+        "--color",
+        &s(&c),
+        "-o",
+        &s(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("shutter = 1e308: use"),
+        "{}",
+        stderr(&o)
+    );
+}
+
 #[test]
 fn switches_turn_their_default_over() {
     let jitter = shutter::settings::def("jitter").unwrap();

@@ -19,6 +19,7 @@ use rayon::prelude::*;
 
 use super::{CocSource, DofParams};
 use crate::frame::Frame;
+use crate::numeric::shown;
 
 /// A thin lens. Distances (focus and depth) in metres, the focal length's unit once it is
 /// out of millimetres: depth in other units is scaled on read (a preset's `[depth] scale`).
@@ -69,23 +70,26 @@ impl Lens {
         if !positive(self.focal_mm) {
             return Err(format!(
                 "focal length {} mm: use a positive length",
-                self.focal_mm
+                shown(self.focal_mm)
             ));
         }
         if !positive(self.f_number) {
-            return Err(format!("f-stop {}: use a positive f-number", self.f_number));
+            return Err(format!(
+                "f-stop {}: use a positive f-number",
+                shown(self.f_number)
+            ));
         }
         if !positive(self.sensor_mm) {
             return Err(format!(
                 "sensor width {} mm: use a positive width",
-                self.sensor_mm
+                shown(self.sensor_mm)
             ));
         }
         if !(self.focus.is_finite() && self.focus > self.focal_mm / 1000.0) {
             return Err(format!(
                 "focus distance {}: use a distance beyond the focal length ({} m)",
-                self.focus,
-                self.focal_mm / 1000.0
+                shown(self.focus),
+                shown(self.focal_mm / 1000.0)
             ));
         }
         Ok(())

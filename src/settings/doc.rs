@@ -53,7 +53,12 @@ impl Def {
                 whole,
                 ..
             } => {
-                let what = if whole { "a whole number" } else { "a number" };
+                // An unbounded range still asks for a finite number (inf is refused).
+                let what = match (whole, max.is_finite()) {
+                    (true, _) => "a whole number",
+                    (false, true) => "a number",
+                    (false, false) => "a finite number",
+                };
                 match (above, max.is_finite()) {
                     (true, true) => format!("{what} above {min} and at most {max}"),
                     (true, false) => format!("{what} above {min}"),

@@ -140,6 +140,10 @@ fn preset_value(def: &Def, preset: &Preset) -> Result<Option<Value>> {
         return Ok(None);
     };
     def.read_toml(raw).map(Some).map_err(|expect| {
+        let raw = match raw {
+            toml::Value::Float(v) => crate::numeric::shown(*v),
+            other => other.to_string(),
+        };
         Error::usage(format!(
             "preset {}: [{}] {key} = {raw}: use {expect}",
             preset.origin(def.section, &key),
