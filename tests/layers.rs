@@ -636,21 +636,11 @@ fn parts_of(path: &Path) -> Vec<(String, Vec<String>)> {
         .collect()
 }
 
-/// Blender 5 writes view layers as a multi-part file, a part a pass (`FG.Combined` holding
-/// `FG.Combined.R`, …), and reads a part's channels that lack a layer name as the part's
-/// (its reader puts the part's name before them). The merged beauty (`R`, `G`, `B`, `A`) in the
-/// `FG.Combined` part made Blender 5.2 see an eight-channel Combined pass in FG and lose FG's
-/// Combined altogether; it goes out in a part of its own, first, under Blender's name for the
-/// composite (`Composite.Combined`), and comes out the same as from the single-part file.
-#[test]
-fn a_multi_part_stack_gives_the_merged_beauty_a_part_of_its_own() {
-    let dir = tempfile::tempdir().unwrap();
-    let single = dir.path().join("single.exr");
-    let layers = vec![foreground_moving(-8.0, 1e10, 0.0), background()];
-    write(&single, layers.clone());
-    let multi = dir.path().join("multi.exr");
+/// The parts Blender 5 writes for `layers` (named `names`): a part a pass, `FG.Combined`
+/// holding `FG.Combined.R`, ….
+fn blender5_parts(layers: Vec<Vec<(String, Vec<f32>)>>, names: &[&str]) -> Vec<Part> {
     let mut parts = Vec::new();
-    for (layer, name) in layers.into_iter().zip(["FG", "BG"]) {
+    for (layer, name) in layers.into_iter().zip(names) {
         for pass in ["Combined", "Depth", "Vector"] {
             let prefix = format!("{name}.{pass}.");
             let channels: Vec<_> = (layer.iter())
@@ -666,7 +656,98 @@ fn a_multi_part_stack_gives_the_merged_beauty_a_part_of_its_own() {
             });
         }
     }
-    write_parts(&multi, (W, H), parts);
+    parts
+}
+
+/// A file's own composite (Blender's `Composite.Combined` part, under either naming of its
+/// channels) was made before the blur: a stack's merged beauty replaces it, in its part and
+/// under its name, with a warning. It was kept beside the merged beauty, which went out as
+/// `Composite.Combined2` (bare R, G, B, A in it were dropped), and a chain of passes
+/// alternated the name and dropped a composite at each step.
+#[test]
+fn a_stack_s_merged_beauty_replaces_the_file_s_composite_under_its_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let layers = vec![foreground_moving(-8.0, 1e10, 0.0), background()];
+    let single = dir.path().join("single.exr");
+    write(&single, layers.clone());
+    let args = ["--algorithm", "reconstruct", "--layers", "FG,BG"];
+    let from_single = run("blur", &single, dir.path().join("s.exr"), &args);
+    let stale = vec![7.0; W * H];
+    for (k, names) in [
+        ["R", "G", "B", "A"],
+        [
+            "Composite.Combined.R",
+            "Composite.Combined.G",
+            "Composite.Combined.B",
+            "Composite.Combined.A",
+        ],
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let input = dir.path().join(format!("composite{k}.exr"));
+        let mut parts = blender5_parts(layers.clone(), &["FG", "BG"]);
+        parts.push(Part {
+            name: Some("Composite.Combined"),
+            view: None,
+            multi_view: None,
+            channels: names
+                .iter()
+                .map(|n| (n.to_string(), stale.clone()))
+                .collect(),
+        });
+        write_parts(&input, (W, H), parts);
+        let mut input = input;
+        // The output of one pass is the input of the next: the name holds.
+        for pass in 0..2 {
+            let out = dir.path().join(format!("out{k}_{pass}.exr"));
+            let mut all = vec![
+                "blur",
+                "--preset",
+                "blender",
+                "--color",
+                input.to_str().unwrap(),
+            ];
+            let o_str = out.to_str().unwrap().to_string();
+            all.extend(["-o", &o_str]);
+            all.extend(args);
+            let o = shutter(&all);
+            assert!(o.status.success(), "{all:?}: {}", stderr(&o));
+            let stored = parts_of(&out);
+            let names: Vec<&str> = stored.iter().map(|(p, _)| p.as_str()).collect();
+            assert_eq!(names[0], "Composite.Combined", "{names:?}");
+            assert_eq!(stored[0].1, ["A", "B", "G", "R"]);
+            assert_eq!(stored.len(), 7, "{names:?}");
+            assert!(
+                stderr(&o).contains("Composite.Combined (its composite, made before the blur)"),
+                "{}",
+                stderr(&o)
+            );
+            if pass == 0 {
+                let merged = read_exr_reference(&out);
+                for c in ["R", "G", "B", "A"] {
+                    assert_same_bits(channel(&merged, c), channel(&from_single, c), c);
+                }
+            }
+            input = out;
+        }
+    }
+}
+
+/// Blender 5 writes view layers as a multi-part file, a part a pass (`FG.Combined` holding
+/// `FG.Combined.R`, …), and reads a part's channels that lack a layer name as the part's
+/// (its reader puts the part's name before them). The merged beauty (`R`, `G`, `B`, `A`) in the
+/// `FG.Combined` part made Blender 5.2 see an eight-channel Combined pass in FG and lose FG's
+/// Combined altogether; it goes out in a part of its own, first, under Blender's name for the
+/// composite (`Composite.Combined`), and comes out the same as from the single-part file.
+#[test]
+fn a_multi_part_stack_gives_the_merged_beauty_a_part_of_its_own() {
+    let dir = tempfile::tempdir().unwrap();
+    let single = dir.path().join("single.exr");
+    let layers = vec![foreground_moving(-8.0, 1e10, 0.0), background()];
+    write(&single, layers.clone());
+    let multi = dir.path().join("multi.exr");
+    write_parts(&multi, (W, H), blender5_parts(layers, &["FG", "BG"]));
     let args = ["--algorithm", "reconstruct", "--layers", "FG,BG"];
     let from_single = run("blur", &single, dir.path().join("s.exr"), &args);
     let out = dir.path().join("m.exr");

@@ -365,7 +365,12 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             (others.iter_mut()).flat_map(|o| o.iter_mut().enumerate().map(|(i, p)| (p, i + 1))),
         ) {
             match (shared.get(layer), &job.layer) {
-                (Some(own), _) => plan.read_layer_channels(own, &shared, layer == 0),
+                (Some(own), _) => {
+                    if layer == 0 {
+                        plan.leave_out_composite();
+                    }
+                    plan.read_layer_channels(own, &shared, layer == 0)
+                }
                 // One view layer of a file of several (`--layer`): the others come back as
                 // they came, not blurred with this one's weights.
                 (None, Some(own)) if job.stack.is_empty() => {

@@ -5,7 +5,13 @@
 //! multi-view colour file a run leaves out.
 
 use super::parts::PartApart;
-use super::plan::{FramePlan, Slot};
+use super::plan::{FramePlan, PlannedFile, Slot};
+use crate::io::exr_parts::MERGED_PART;
+
+/// The index into the file's channels of `slot`.
+fn file_channel(files: &[PlannedFile], slot: Slot) -> usize {
+    files[slot.file].channels[slot.entry]
+}
 
 impl FramePlan {
     /// The warning that a multi-view colour file's other views are not written, when one view
@@ -87,6 +93,41 @@ impl FramePlan {
                 file.info.channels[file.channels[slot.entry]].name.clone()
             })
             .collect()
+    }
+
+    /// Leaves out of a stack's output the colour file's composite, its part named
+    /// [`MERGED_PART`] (Blender's): composited before the blur, it is stale, and the stack's
+    /// merged beauty takes its place and its name. Keeping it beside the merged beauty gave
+    /// the file two composites and the merged one a name of its own (`Composite.Combined2`),
+    /// which the next pass of a chain then dropped. Says so in a warning. Call before
+    /// [`FramePlan::read_layer_channels`].
+    pub fn leave_out_composite(&mut self) {
+        let Some(color) = &mut self.color else {
+            return;
+        };
+        let info = &self.files[color.rgb[0].file].info;
+        let crate::io::file::FileKind::Exr { headers, .. } = &info.kind else {
+            return;
+        };
+        let composite: Vec<usize> = (0..headers.len())
+            .filter(|&p| {
+                headers.len() > 1
+                    && p != info.channels[file_channel(&self.files, color.rgb[0])].part
+                    && (headers[p].own_attributes.layer_name.as_ref())
+                        .is_some_and(|n| n.as_slice() == MERGED_PART.as_bytes())
+            })
+            .collect();
+        if composite.is_empty() {
+            return;
+        }
+        color
+            .others
+            .retain(|&c| !composite.contains(&info.channels[c].part));
+        color.apart.retain(|p| !composite.contains(p));
+        self.warnings.push(format!(
+            "the colour file's part {MERGED_PART} (its composite, made before the blur) is \
+             not written: the stack's merged beauty replaces it, under its name"
+        ));
     }
 
     /// [`FramePlan::read_every_channel`] and [`FramePlan::read_parts_apart`] for layer `own`
