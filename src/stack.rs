@@ -14,6 +14,7 @@
 //! the layer's own surfaces and spread nothing from the empty space
 //! ([`prepare_for_dof`]).
 
+use crate::error::{Problem, ProblemKind};
 use crate::frame::{pixel_centre, CarriedChannel, Color, Frame, LayerClass, Plane};
 use crate::gpu::Gpu;
 use crate::motion::Algorithm;
@@ -32,6 +33,28 @@ pub const EDGE_REACH: f32 = 2.0;
 
 /// The names the merged beauty goes out under (an EXR output): a file's main RGBA layer.
 pub const MERGED: [&str; 4] = ["R", "G", "B", "A"];
+
+/// Why a stack does not read `path`, a file of several `views` (the default first), when its
+/// output would hold every view (an EXR without `--view`): a stack is read from one view, so
+/// such a run wrote the default view alone and left the others out with no word of them.
+/// Carrying each view through the stack is for later; one run per view does it now.
+pub fn views_problem(path: &std::path::Path, views: &[Option<String>]) -> Problem {
+    let names: Vec<&str> = views.iter().flatten().map(String::as_str).collect();
+    Problem::new(
+        ProblemKind::View,
+        path,
+        format!(
+            "the colour file holds views {}, and a stack of view layers is read from one \
+             view: an EXR output without --view would hold one of them and lose the others; \
+             give --view {} (one run per view, each to its own output, e.g. --view {} -o \
+             {}/…), or --layer NAME to blur one view layer in every view",
+            names.join(", "),
+            names.join(" or --view "),
+            names.first().unwrap_or(&"NAME"),
+            names.first().unwrap_or(&"NAME"),
+        ),
+    )
+}
 
 /// Blurs each layer of `layers` (front first) with `algorithm` and `params` and merges them
 /// front over back ([`merge`]).
