@@ -1340,3 +1340,194 @@ fn stretch_leaves_no_hole_beside_a_moving_rim_on_wgpu() {
     let out = stack_on("blur", &input, out, "wgpu", &["--algorithm", "stretch"]);
     band_within_its_exposure("wgpu", channel(&out, "FG.Combined.A"), &exact, w);
 }
+
+/// A part of a multi-part EXR at a data window of its own: its name, the window's corner
+/// and size, and its channels (planes of that size).
+type WindowedPart = (
+    &'static str,
+    (i32, i32),
+    (usize, usize),
+    Vec<(String, Vec<f32>)>,
+);
+
+/// Writes `parts` as one multi-part EXR whose display window is W×H at (0, 0).
+fn write_windowed_parts(path: &Path, parts: Vec<WindowedPart>) {
+    use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
+    use exr::math::Vec2;
+    use exr::meta::attribute::{IntegerBounds, Text};
+    use exr::meta::header::{ImageAttributes, LayerAttributes};
+    use exr::prelude::{Blocks, LineOrder, WritableImage};
+    let layers: Vec<_> = (parts.into_iter())
+        .map(|(name, (x, y), size, channels)| {
+            let attributes = LayerAttributes {
+                layer_name: Some(Text::from(name)),
+                layer_position: Vec2(x, y),
+                ..LayerAttributes::default()
+            };
+            let channels = (channels.into_iter())
+                .map(|(n, p)| AnyChannel::new(n.as_str(), FlatSamples::F32(p)))
+                .collect();
+            let encoding = Encoding {
+                blocks: Blocks::ScanLines,
+                line_order: LineOrder::Increasing,
+                ..Encoding::default()
+            };
+            Layer::new(size, attributes, encoding, AnyChannels::sort(channels))
+        })
+        .collect();
+    let attributes = ImageAttributes::new(IntegerBounds::new((0, 0), (W, H)));
+    Image::from_layers(attributes, layers)
+        .write()
+        .to_file(path)
+        .unwrap();
+}
+
+/// The overscan of [`overscanned`]: this many pixels beyond each side (x, y).
+const OVERSCAN: (usize, usize) = (4, 2);
+
+/// `channels` (W×H planes) at the overscan's window, the pixels beyond the frame filled with
+/// a value no pixel of the frame holds.
+fn overscanned(channels: &[(String, Vec<f32>)]) -> Vec<(String, Vec<f32>)> {
+    let (ox, oy) = OVERSCAN;
+    let w = W + 2 * ox;
+    (channels.iter())
+        .map(|(n, p)| {
+            let mut plane = vec![-77.0; w * (H + 2 * oy)];
+            for y in 0..H {
+                plane[(y + oy) * w + ox..][..W].copy_from_slice(&p[y * W..][..W]);
+            }
+            (n.clone(), plane)
+        })
+        .collect()
+}
+
+/// A multi-part file's parts may have data windows of their own: each pass is placed by its
+/// part's window in the file's coordinates and the frame is the colour's part's. The frame's
+/// size and window were the first part's, so a depth part with overscan before the colour
+/// (`depth` then `rgba`) stopped the run ("the parts holding the wanted channels differ in
+/// size", or "the file changed after the preflight checked it", rerun as often as one
+/// liked); the same parts the other way round were read. Either order now gives the same
+/// frame, bit for bit, as a one-part file of the colour's window; the output's data window is
+/// the colour's.
+#[test]
+fn a_pass_part_with_overscan_before_the_colour_s_part_is_placed_by_its_own_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = W * H;
+    let named = |names: &[&str], planes: Vec<Vec<f32>>| -> Vec<(String, Vec<f32>)> {
+        names.iter().map(|s| s.to_string()).zip(planes).collect()
+    };
+    let rgba = named(
+        &["R", "G", "B", "A"],
+        vec![
+            noise(n, 1, 0.0, 1.0),
+            noise(n, 2, 0.0, 1.0),
+            noise(n, 3, 0.0, 1.0),
+            vec![1.0; n],
+        ],
+    );
+    let data = named(
+        &["Z", "velocity.X", "velocity.Y"],
+        vec![
+            noise(n, 4, 1.0, 9.0),
+            noise(n, 5, -6.0, 6.0),
+            noise(n, 6, -2.0, 2.0),
+        ],
+    );
+    let one_part = dir.path().join("one.exr");
+    write(&one_part, vec![rgba.clone(), data.clone()]);
+    let over = (-(OVERSCAN.0 as i32), -(OVERSCAN.1 as i32));
+    let over_size = (W + 2 * OVERSCAN.0, H + 2 * OVERSCAN.1);
+    let depth_part = ("depth", over, over_size, overscanned(&data));
+    let rgba_part = ("rgba", (0, 0), (W, H), rgba);
+    let depth_first = dir.path().join("depth_first.exr");
+    write_windowed_parts(&depth_first, vec![depth_part.clone(), rgba_part.clone()]);
+    let rgba_first = dir.path().join("rgba_first.exr");
+    write_windowed_parts(&rgba_first, vec![rgba_part, depth_part]);
+    let blur = |input: &Path, out: &str| {
+        let out = dir.path().join(out);
+        let o = shutter(&[
+            "blur",
+            "--algorithm",
+            "reconstruct",
+            "--color",
+            &s(input),
+            "-o",
+            &s(&out),
+        ]);
+        assert!(o.status.success(), "{}: {}", input.display(), stderr(&o));
+        out
+    };
+    let expected = read_exr_reference(&blur(&one_part, "one_out.exr"));
+    for input in [&depth_first, &rgba_first] {
+        let out = blur(input, "out.exr");
+        let got = read_exr_reference(&out);
+        for c in ["R", "G", "B", "A"] {
+            assert_same_bits(channel(&got, c), channel(&expected, c), c);
+        }
+        let beauty = (read_exr_layers(&out).into_iter())
+            .find(|l| {
+                l.channel_data
+                    .list
+                    .iter()
+                    .any(|c| c.name.to_string() == "R")
+            })
+            .unwrap();
+        assert_eq!(beauty.attributes.layer_position, exr::math::Vec2(0, 0));
+        assert_eq!(beauty.size, exr::math::Vec2(W, H));
+    }
+}
+
+/// In a stack of view layers from one multi-part file, a layer's depth and vector parts with
+/// overscan come first (the file's first part): the frame was that part's size and the read
+/// of the colour stopped as "changed". Each layer now reads its colour at its part's window
+/// and the merge is that of the one-part file, bit for bit. Layers whose colours lie at
+/// different windows are refused by name, each window given.
+#[test]
+fn a_stack_reads_each_part_at_its_own_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let layers = vec![foreground_moving(-8.0, 1e10, 0.0), background()];
+    let single = dir.path().join("single.exr");
+    write(&single, layers.clone());
+    let args = ["--algorithm", "reconstruct", "--layers", "FG,BG"];
+    let from_single = run("blur", &single, dir.path().join("s.exr"), &args);
+    let over = (-(OVERSCAN.0 as i32), -(OVERSCAN.1 as i32));
+    let over_size = (W + 2 * OVERSCAN.0, H + 2 * OVERSCAN.1);
+    let mut parts: Vec<WindowedPart> = Vec::new();
+    for part in blender5_parts(layers.clone(), &["FG", "BG"]) {
+        let name = part.name.unwrap();
+        if name.starts_with("BG.") && !name.ends_with("Combined") {
+            parts.insert(0, (name, over, over_size, overscanned(&part.channels)));
+        } else {
+            parts.push((name, (0, 0), (W, H), part.channels));
+        }
+    }
+    let input = dir.path().join("overscan.exr");
+    write_windowed_parts(&input, parts.clone());
+    let merged = run("blur", &input, dir.path().join("o.exr"), &args);
+    for c in ["R", "G", "B", "A", "FG.Combined.R", "BG.Combined.G"] {
+        assert_same_bits(channel(&merged, c), channel(&from_single, c), c);
+    }
+    // BG's colour at the overscan's window too: not the foreground's picture.
+    for part in &mut parts {
+        if part.0 == "BG.Combined" {
+            *part = (part.0, over, over_size, overscanned(&part.3));
+        }
+    }
+    write_windowed_parts(&input, parts);
+    let out = dir.path().join("x.exr");
+    let mut all = vec!["blur", "--preset", "blender", "--color"];
+    let (i, o) = (s(&input), s(&out));
+    all.extend([i.as_str(), "-o", o.as_str()]);
+    all.extend(args);
+    let o = shutter(&all);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    for needle in [
+        "layer BG's colour is",
+        "(-4, -2) - (99, 17)",
+        "(0, 0) - (95, 15)",
+    ] {
+        assert!(err.contains(needle), "'{needle}' not in: {err}");
+    }
+    assert!(!out.exists());
+}

@@ -307,16 +307,34 @@ pub fn stack_problem(
             );
         }
     }
+    // Merged pixel for pixel: each layer's colour at the same data window (its part's: a
+    // multi-part file's parts may differ).
+    let window = |plan: &FramePlan| {
+        let origin = plan.windows().map_or((0, 0), |w| w.data_origin);
+        super::window::DataWindow {
+            origin,
+            width: plan.width,
+            height: plan.height,
+        }
+    };
     for (plan, name) in rest.iter().zip(&stack[1..]) {
-        if (plan.width, plan.height) != (first.width, first.height) {
+        if window(plan) != window(first) {
             return Some(
                 Problem::new(
                     ProblemKind::SizeMismatch,
                     path(plan),
                     format!(
-                        "layer {name} is {}x{}, layer {} {}x{}: a stack's layers are one \
-                         picture, the same size",
-                        plan.width, plan.height, stack[0], first.width, first.height
+                        "layer {name}'s colour is {}x{} at {}, layer {}'s {}x{} at {}: a \
+                         stack's layers are one picture, merged pixel for pixel, so each \
+                         layer's colour needs the same data window (render them without a \
+                         crop to the bounding box)",
+                        plan.width,
+                        plan.height,
+                        window(plan).describe(),
+                        stack[0],
+                        first.width,
+                        first.height,
+                        window(first).describe()
                     ),
                 )
                 .frame(plan.frame),
