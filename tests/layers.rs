@@ -1531,3 +1531,31 @@ fn a_stack_reads_each_part_at_its_own_window() {
     }
     assert!(!out.exists());
 }
+
+/// A view layer without a depth of its own read the file's plain `Z` (the preset's
+/// fallback) without a word: where some other render's surfaces are, not the layer's. The
+/// run still reads it (a file of one layer beside its plain passes means it so) and warns,
+/// naming the layer and the channel; a layer with its own depth is not named.
+#[test]
+fn a_layer_reading_a_depth_not_its_own_is_named_in_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut fg = foreground_moving(-8.0, 1e10, 0.0);
+    let depth = fg.iter().position(|(n, _)| n == "FG.Depth.Z").unwrap();
+    let (_, plane) = fg.remove(depth);
+    fg.push(("Z".to_string(), plane));
+    let input = dir.path().join("plain_z.exr");
+    write(&input, vec![fg, background()]);
+    let out = dir.path().join("o.exr");
+    let mut all = vec!["blur", "--preset", "blender", "--color"];
+    let (i, o) = (s(&input), s(&out));
+    all.extend([i.as_str(), "-o", o.as_str(), "--layers", "FG,BG"]);
+    all.extend(["--algorithm", "reconstruct"]);
+    let o = shutter(&all);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("view layer FG has no depth of its own: it reads Z"),
+        "{err}"
+    );
+    assert!(!err.contains("view layer BG has no depth"), "{err}");
+}

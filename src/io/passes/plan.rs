@@ -245,6 +245,13 @@ pub fn plan_frame(
             match find_channels(&info, &alts, 1, skip, options.layer) {
                 Ok(Some(found)) => {
                     let channel = found[0].expect("required");
+                    let c = &info.channels[channel];
+                    if let Some(layer) = options.layer.filter(|_| own.is_none()) {
+                        let names = std::iter::once(&c.name).chain(&c.alias);
+                        if names.clone().all(|n| !n.starts_with(&format!("{layer}."))) {
+                            plan.warnings.push(not_the_layers(layer, "depth", &c.name));
+                        }
+                    }
                     let info = part_view(&info, channel);
                     planner.check_size(&info, "depth");
                     let file = planner.add_file(info);
@@ -609,6 +616,18 @@ impl Planner<'_> {
             });
         Slot { file, entry }
     }
+}
+
+/// The warning that view layer `layer` reads `pass` from `channel`, a channel not of its own
+/// (the file's plain `Z`, a preset's fallback): that is where some other render's surfaces
+/// are, not the layer's, and was read without a word. A warning, not a refusal: a file of one
+/// layer beside its plain passes reads them rightly so.
+fn not_the_layers(layer: &str, pass: &str, channel: &str) -> String {
+    format!(
+        "view layer {layer} has no {pass} of its own: it reads {channel}, which is not the \
+         layer's; render the layer's own {pass} pass (Blender: the view layer's Z pass) if \
+         the blur looks wrong"
+    )
 }
 
 /// How `channel`'s part compresses it lossily, if it does ([`exr_io::keeps_exactly`]).
