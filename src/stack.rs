@@ -386,6 +386,7 @@ pub fn prepare_for_dof(layer: &mut Frame, _coverage: &[f32], surface: &[bool], n
 /// with the merged colour as its beauty (an EXR output names it [`MERGED`]); each layer's own
 /// blurred beauty and the channels it carried go out beside it, under their names.
 pub fn merge(layers: Vec<Frame>) -> Frame {
+    let like = merged_like(&layers);
     let mut layers = layers.into_iter();
     let Some(mut merged) = layers.next() else {
         return Frame::new(0, 0);
@@ -412,10 +413,37 @@ pub fn merge(layers: Vec<Frame>) -> Frame {
     merged.carried.beauty = MERGED.map(String::from).to_vec();
     merged.carried.beauty_stored = merged.carried.beauty.clone();
     merged.carried.merged = true;
+    merged.carried.merged_like = like;
     // A channel of the file under the merged beauty's names is the one it replaces.
     channels.retain(|c| !MERGED.contains(&c.name.as_str()));
     merged.carried.channels = channels;
     merged
+}
+
+/// For each channel of the merged beauty (R, G, B, A), the first layer's name for it, where
+/// every layer stores that channel of its beauty in one pixel type (as its colour part's header
+/// says): the merged beauty is written in it, so layers all in half make a half merge. It went
+/// out in float whatever the layers were, named as no channel of the part it is made like.
+fn merged_like(layers: &[Frame]) -> Vec<Option<String>> {
+    let type_of = |layer: &Frame, k: usize| {
+        let carried = &layer.carried;
+        let name = carried.beauty_stored.get(k)?;
+        let header = carried.headers.get(carried.colour_part)?;
+        // A layer of a file of its own is named by the stack (`name_layer`: `fg.R` of `R`).
+        let unnamed = name.split_once('.').map_or(name.as_str(), |(_, rest)| rest);
+        let found = [name.as_str(), unnamed]
+            .into_iter()
+            .find_map(|n| header.channels.list.iter().find(|c| c.name.eq(n)))?;
+        Some((found.name.to_string(), found.sample_type))
+    };
+    (0..MERGED.len())
+        .map(|k| {
+            let (name, kind) = type_of(layers.first()?, k)?;
+            (layers.iter().skip(1))
+                .all(|l| type_of(l, k).is_some_and(|(_, t)| t == kind))
+                .then_some(name)
+        })
+        .collect()
 }
 
 /// `behind` under what is merged so far (`color`, `alpha`).

@@ -1559,3 +1559,37 @@ fn a_layer_reading_a_depth_not_its_own_is_named_in_a_warning() {
     );
     assert!(!err.contains("view layer BG has no depth"), "{err}");
 }
+
+/// A stack whose layers' colours are all half writes its merged beauty in half, as a plain
+/// run keeps a half beauty half; it went out in float whatever the layers were (named as no
+/// channel of the part it is made like). Each layer's own beauty keeps its type too.
+#[test]
+fn a_stack_of_half_layers_writes_a_half_merged_beauty() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("half.exr");
+    let channels: Vec<(String, Vec<f32>)> = vec![foreground_moving(-8.0, 1e10, 0.0), background()]
+        .into_iter()
+        .flatten()
+        .collect();
+    let options = shutter::io::exr::ExrOptions {
+        half: true,
+        ..Default::default()
+    };
+    let channels = channels
+        .iter()
+        .map(|(n, p)| (n.as_str(), p.clone()))
+        .collect();
+    write_exr_with(&input, W, H, channels, options);
+    let out = dir.path().join("o.exr");
+    run("blur", &input, out.clone(), &["--layers", "FG,BG"]);
+    let half = |name: &str| {
+        (read_exr_layers(&out).iter())
+            .flat_map(|l| l.channel_data.list.iter())
+            .find(|c| c.name.to_string() == name)
+            .map(|c| matches!(c.sample_data, exr::image::FlatSamples::F16(_)))
+            .unwrap_or_else(|| panic!("no channel {name}"))
+    };
+    for c in ["R", "G", "B", "A", "FG.Combined.R", "BG.Combined.A"] {
+        assert!(half(c), "{c} is not half");
+    }
+}

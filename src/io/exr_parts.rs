@@ -86,15 +86,21 @@ pub fn exr_parts(
             carried.colour_part.min(count - 1)
         };
         windows[part].get_or_insert(data);
-        parts[part].extend(names.into_iter().zip(planes).map(|(name, plane)| {
-            exr_like::OutChannel {
-                name,
-                plane,
-                class: LayerClass::Colour,
-                exact: None,
-                source: None,
-            }
-        }));
+        // A merged beauty takes its layers' pixel type where they agree (`stack::merge`).
+        let like = |k: usize| carried.merged_like.get(k).cloned().flatten();
+        parts[part].extend(
+            names
+                .into_iter()
+                .zip(planes)
+                .enumerate()
+                .map(|(k, (name, plane))| exr_like::OutChannel {
+                    name,
+                    plane,
+                    class: LayerClass::Colour,
+                    exact: None,
+                    source: like(k),
+                }),
+        );
         for c in carried.channels {
             // The channels of no view are each view's: written once.
             if every && c.shared && v > 0 {
