@@ -17,6 +17,7 @@
 use crate::error::{Problem, ProblemKind};
 use crate::frame::{pixel_centre, CarriedChannel, Color, Frame, LayerClass, Plane};
 use crate::gpu::Gpu;
+use crate::io::sequence::PathPattern;
 use crate::motion::Algorithm;
 use crate::numeric::DepthKind;
 use crate::process::{depth_kind, process_on, Params};
@@ -54,6 +55,60 @@ pub fn views_problem(path: &std::path::Path, views: &[Option<String>]) -> Proble
             names.first().unwrap_or(&"NAME"),
         ),
     )
+}
+
+/// The names of a stack's layers read from files of their own (`--color` given once a layer,
+/// no `--layers`), from their colour files' names: the file's name without its frame
+/// number's placeholder, up to its first period, without separators (`_`, `-`, `.`, space)
+/// at either end: `fg.####.exr`, `fg_####.exr` and `####-fg.exr` are all `fg`. (Up to the
+/// first period alone named `fg_####.exr`'s layer `fg_####`, the frame's placeholder and
+/// all.) Where two files give one name, or one gives none, every layer is named by its place
+/// (`layer1`, …), and the warning returned says so: that fallback was silent.
+pub fn file_layer_names(patterns: &[&PathPattern]) -> (Vec<String>, Option<String>) {
+    let stems: Vec<String> = (patterns.iter())
+        .map(|pattern| {
+            let raw = if pattern.is_sequence() {
+                pattern.with_hashes()
+            } else {
+                pattern.raw.clone()
+            };
+            let path = std::path::Path::new(&raw);
+            let name = path.file_name().map_or(String::new(), |n| {
+                let name = n.to_string_lossy();
+                match pattern.is_sequence() {
+                    // The placeholder, as `with_hashes` writes it: the first run of `#`.
+                    true => match name.find('#') {
+                        Some(at) => {
+                            let end = name[at..].find(|c| c != '#').map_or(name.len(), |e| at + e);
+                            format!("{}{}", &name[..at], &name[end..])
+                        }
+                        None => name.to_string(),
+                    },
+                    false => name.to_string(),
+                }
+            });
+            let separator = |c: char| matches!(c, '_' | '-' | '.' | ' ');
+            let name = name.trim_start_matches(separator);
+            let stem = name.split('.').next().unwrap_or_default();
+            stem.trim_matches(separator).to_string()
+        })
+        .collect();
+    let clash = (0..stems.len()).find(|&i| stems[i].is_empty() || stems[..i].contains(&stems[i]));
+    let Some(i) = clash else {
+        return (stems, None);
+    };
+    let names: Vec<String> = (1..=stems.len()).map(|k| format!("layer{k}")).collect();
+    let why = if stems[i].is_empty() {
+        format!("{} gives no name", patterns[i].raw)
+    } else {
+        format!("{} and another give the name {}", patterns[i].raw, stems[i])
+    };
+    let warning = format!(
+        "the stack's layers are named {} by their place: {why}; name them with --layers \
+         (front first, one name a --color)",
+        names.join(", ")
+    );
+    (names, Some(warning))
 }
 
 /// Blurs each layer of `layers` (front first) with `algorithm` and `params` and merges them

@@ -1593,3 +1593,69 @@ fn a_stack_of_half_layers_writes_a_half_merged_beauty() {
         assert!(half(c), "{c} is not half");
     }
 }
+
+/// A stack of files given by `--color` alone names each layer by its file: the name without
+/// the frame's placeholder, up to its first period, without separators at its ends
+/// (`fg_####.exr`: `fg`, where it was `fg_####`). Two files that give one name make layers
+/// named by their place (`layer1`, `layer2`), now with a warning that says why.
+#[test]
+fn a_stack_of_files_is_named_by_them_without_the_frame_number() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = W * H;
+    let passes = |seed: u32, alpha: f32| {
+        vec![
+            ("R", noise(n, seed, 0.0, 1.0)),
+            ("G", noise(n, seed + 1, 0.0, 1.0)),
+            ("B", noise(n, seed + 2, 0.0, 1.0)),
+            ("A", vec![alpha; n]),
+            ("Z", vec![2.0 + seed as f32; n]),
+            ("velocity.X", vec![3.0; n]),
+            ("velocity.Y", vec![0.0; n]),
+        ]
+    };
+    let files = [("fg_0001.exr", 1, 0.5), ("bg_0001.exr", 10, 1.0)];
+    for (name, seed, alpha) in files {
+        write_exr(&dir.path().join(name), W, H, passes(seed, alpha));
+        let other = dir.path().join("other").join(name.replace("fg_", "bg_"));
+        write_exr(&other, W, H, passes(seed, alpha));
+    }
+    let out_name =
+        |out: &Path| (out.file_name().unwrap().to_string_lossy()).replace("####", "0001");
+    let stack = |colors: [String; 2], out: &str| {
+        let out = dir.path().join(out);
+        let o = shutter(&[
+            "blur",
+            "--algorithm",
+            "reconstruct",
+            "--frames",
+            "1",
+            "--color",
+            &colors[0],
+            "--color",
+            &colors[1],
+            "-o",
+            &s(&out),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let written = dir.path().join(out_name(&out));
+        let names: Vec<String> = read_exr_reference(&written)
+            .into_iter()
+            .map(|(n, _)| n)
+            .collect();
+        (names, stderr(&o))
+    };
+    let pattern =
+        |folder: &str, stem: &str| s(&dir.path().join(folder).join(format!("{stem}_####.exr")));
+    let (names, err) = stack([pattern("", "fg"), pattern("", "bg")], "o.####.exr");
+    for c in ["fg.R", "fg.A", "bg.R", "bg.A", "R"] {
+        assert!(names.iter().any(|n| n == c), "no {c} in {names:?}");
+    }
+    assert!(!err.contains("by their place"), "{err}");
+    // `bg_####.exr` in two folders: one name twice.
+    let (names, err) = stack([pattern("other", "bg"), pattern("", "bg")], "p.####.exr");
+    for c in ["layer1.R", "layer2.R"] {
+        assert!(names.iter().any(|n| n == c), "no {c} in {names:?}");
+    }
+    assert!(err.contains("named layer1, layer2 by their place"), "{err}");
+    assert!(err.contains("give the name bg"), "{err}");
+}
