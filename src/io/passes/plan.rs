@@ -579,9 +579,10 @@ impl Planner<'_> {
             )
         } else {
             format!(
-                "its data window {} does not cover the color pass's {}",
+                "its data window {} does not cover the color pass's {}: it has no pixel at {}",
                 own.describe(),
-                colour.describe()
+                colour.describe(),
+                own.uncovered_in(&colour)
             )
         };
         self.problem(Problem::new(ProblemKind::SizeMismatch, &info.path, detail).pass(pass));
