@@ -259,6 +259,10 @@ pub struct Carried {
     /// The beauty is a stack's merge of its layers (`stack::merge`): a multi-part EXR output
     /// gives it a part of its own (`io::exr_parts`).
     pub merged: bool,
+    /// A merged beauty's channels (R, G, B, A): for each, the name in the first layer's
+    /// colour part whose pixel type it is written in, where every layer stores that channel
+    /// of its beauty in one type (`stack::merge`); else none (float, or the part's own).
+    pub merged_like: Vec<Option<String>>,
 }
 
 /// What a carried channel holds ([`crate::io::channels`] sorts them).

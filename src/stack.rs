@@ -14,8 +14,10 @@
 //! the layer's own surfaces and spread nothing from the empty space
 //! ([`prepare_for_dof`]).
 
+use crate::error::{Problem, ProblemKind};
 use crate::frame::{pixel_centre, CarriedChannel, Color, Frame, LayerClass, Plane};
 use crate::gpu::Gpu;
+use crate::io::sequence::PathPattern;
 use crate::motion::Algorithm;
 use crate::numeric::DepthKind;
 use crate::process::{depth_kind, process_on, Params};
@@ -32,6 +34,82 @@ pub const EDGE_REACH: f32 = 2.0;
 
 /// The names the merged beauty goes out under (an EXR output): a file's main RGBA layer.
 pub const MERGED: [&str; 4] = ["R", "G", "B", "A"];
+
+/// Why a stack does not read `path`, a file of several `views` (the default first), when its
+/// output would hold every view (an EXR without `--view`): a stack is read from one view, so
+/// such a run wrote the default view alone and left the others out with no word of them.
+/// Carrying each view through the stack is for later; one run per view does it now.
+pub fn views_problem(path: &std::path::Path, views: &[Option<String>]) -> Problem {
+    let names: Vec<&str> = views.iter().flatten().map(String::as_str).collect();
+    Problem::new(
+        ProblemKind::View,
+        path,
+        format!(
+            "the colour file holds views {}, and a stack of view layers is read from one \
+             view: an EXR output without --view would hold one of them and lose the others; \
+             give --view {} (one run per view, each to its own output, e.g. --view {} -o \
+             {}/…), or --layer NAME to blur one view layer in every view",
+            names.join(", "),
+            names.join(" or --view "),
+            names.first().unwrap_or(&"NAME"),
+            names.first().unwrap_or(&"NAME"),
+        ),
+    )
+}
+
+/// The names of a stack's layers read from files of their own (`--color` given once a layer,
+/// no `--layers`), from their colour files' names: the file's name without its frame
+/// number's placeholder, up to its first period, without separators (`_`, `-`, `.`, space)
+/// at either end: `fg.####.exr`, `fg_####.exr` and `####-fg.exr` are all `fg`. (Up to the
+/// first period alone named `fg_####.exr`'s layer `fg_####`, the frame's placeholder and
+/// all.) Where two files give one name, or one gives none, every layer is named by its place
+/// (`layer1`, …), and the warning returned says so: that fallback was silent.
+pub fn file_layer_names(patterns: &[&PathPattern]) -> (Vec<String>, Option<String>) {
+    let stems: Vec<String> = (patterns.iter())
+        .map(|pattern| {
+            let raw = if pattern.is_sequence() {
+                pattern.with_hashes()
+            } else {
+                pattern.raw.clone()
+            };
+            let path = std::path::Path::new(&raw);
+            let name = path.file_name().map_or(String::new(), |n| {
+                let name = n.to_string_lossy();
+                match pattern.is_sequence() {
+                    // The placeholder, as `with_hashes` writes it: the first run of `#`.
+                    true => match name.find('#') {
+                        Some(at) => {
+                            let end = name[at..].find(|c| c != '#').map_or(name.len(), |e| at + e);
+                            format!("{}{}", &name[..at], &name[end..])
+                        }
+                        None => name.to_string(),
+                    },
+                    false => name.to_string(),
+                }
+            });
+            let separator = |c: char| matches!(c, '_' | '-' | '.' | ' ');
+            let name = name.trim_start_matches(separator);
+            let stem = name.split('.').next().unwrap_or_default();
+            stem.trim_matches(separator).to_string()
+        })
+        .collect();
+    let clash = (0..stems.len()).find(|&i| stems[i].is_empty() || stems[..i].contains(&stems[i]));
+    let Some(i) = clash else {
+        return (stems, None);
+    };
+    let names: Vec<String> = (1..=stems.len()).map(|k| format!("layer{k}")).collect();
+    let why = if stems[i].is_empty() {
+        format!("{} gives no name", patterns[i].raw)
+    } else {
+        format!("{} and another give the name {}", patterns[i].raw, stems[i])
+    };
+    let warning = format!(
+        "the stack's layers are named {} by their place: {why}; name them with --layers \
+         (front first, one name a --color)",
+        names.join(", ")
+    );
+    (names, Some(warning))
+}
 
 /// Blurs each layer of `layers` (front first) with `algorithm` and `params` and merges them
 /// front over back ([`merge`]).
@@ -363,6 +441,7 @@ pub fn prepare_for_dof(layer: &mut Frame, _coverage: &[f32], surface: &[bool], n
 /// with the merged colour as its beauty (an EXR output names it [`MERGED`]); each layer's own
 /// blurred beauty and the channels it carried go out beside it, under their names.
 pub fn merge(layers: Vec<Frame>) -> Frame {
+    let like = merged_like(&layers);
     let mut layers = layers.into_iter();
     let Some(mut merged) = layers.next() else {
         return Frame::new(0, 0);
@@ -389,10 +468,37 @@ pub fn merge(layers: Vec<Frame>) -> Frame {
     merged.carried.beauty = MERGED.map(String::from).to_vec();
     merged.carried.beauty_stored = merged.carried.beauty.clone();
     merged.carried.merged = true;
+    merged.carried.merged_like = like;
     // A channel of the file under the merged beauty's names is the one it replaces.
     channels.retain(|c| !MERGED.contains(&c.name.as_str()));
     merged.carried.channels = channels;
     merged
+}
+
+/// For each channel of the merged beauty (R, G, B, A), the first layer's name for it, where
+/// every layer stores that channel of its beauty in one pixel type (as its colour part's header
+/// says): the merged beauty is written in it, so layers all in half make a half merge. It went
+/// out in float whatever the layers were, named as no channel of the part it is made like.
+fn merged_like(layers: &[Frame]) -> Vec<Option<String>> {
+    let type_of = |layer: &Frame, k: usize| {
+        let carried = &layer.carried;
+        let name = carried.beauty_stored.get(k)?;
+        let header = carried.headers.get(carried.colour_part)?;
+        // A layer of a file of its own is named by the stack (`name_layer`: `fg.R` of `R`).
+        let unnamed = name.split_once('.').map_or(name.as_str(), |(_, rest)| rest);
+        let found = [name.as_str(), unnamed]
+            .into_iter()
+            .find_map(|n| header.channels.list.iter().find(|c| c.name.eq(n)))?;
+        Some((found.name.to_string(), found.sample_type))
+    };
+    (0..MERGED.len())
+        .map(|k| {
+            let (name, kind) = type_of(layers.first()?, k)?;
+            (layers.iter().skip(1))
+                .all(|l| type_of(l, k).is_some_and(|(_, t)| t == kind))
+                .then_some(name)
+        })
+        .collect()
 }
 
 /// `behind` under what is merged so far (`color`, `alpha`).

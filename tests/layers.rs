@@ -636,21 +636,11 @@ fn parts_of(path: &Path) -> Vec<(String, Vec<String>)> {
         .collect()
 }
 
-/// Blender 5 writes view layers as a multi-part file, a part a pass (`FG.Combined` holding
-/// `FG.Combined.R`, …), and reads a part's channels that lack a layer name as the part's
-/// (its reader puts the part's name before them). The merged beauty (`R`, `G`, `B`, `A`) in the
-/// `FG.Combined` part made Blender 5.2 see an eight-channel Combined pass in FG and lose FG's
-/// Combined altogether; it goes out in a part of its own, first, under Blender's name for the
-/// composite (`Composite.Combined`), and comes out the same as from the single-part file.
-#[test]
-fn a_multi_part_stack_gives_the_merged_beauty_a_part_of_its_own() {
-    let dir = tempfile::tempdir().unwrap();
-    let single = dir.path().join("single.exr");
-    let layers = vec![foreground_moving(-8.0, 1e10, 0.0), background()];
-    write(&single, layers.clone());
-    let multi = dir.path().join("multi.exr");
+/// The parts Blender 5 writes for `layers` (named `names`): a part a pass, `FG.Combined`
+/// holding `FG.Combined.R`, ….
+fn blender5_parts(layers: Vec<Vec<(String, Vec<f32>)>>, names: &[&str]) -> Vec<Part> {
     let mut parts = Vec::new();
-    for (layer, name) in layers.into_iter().zip(["FG", "BG"]) {
+    for (layer, name) in layers.into_iter().zip(names) {
         for pass in ["Combined", "Depth", "Vector"] {
             let prefix = format!("{name}.{pass}.");
             let channels: Vec<_> = (layer.iter())
@@ -666,7 +656,98 @@ fn a_multi_part_stack_gives_the_merged_beauty_a_part_of_its_own() {
             });
         }
     }
-    write_parts(&multi, (W, H), parts);
+    parts
+}
+
+/// A file's own composite (Blender's `Composite.Combined` part, under either naming of its
+/// channels) was made before the blur: a stack's merged beauty replaces it, in its part and
+/// under its name, with a warning. It was kept beside the merged beauty, which went out as
+/// `Composite.Combined2` (bare R, G, B, A in it were dropped), and a chain of passes
+/// alternated the name and dropped a composite at each step.
+#[test]
+fn a_stack_s_merged_beauty_replaces_the_file_s_composite_under_its_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let layers = vec![foreground_moving(-8.0, 1e10, 0.0), background()];
+    let single = dir.path().join("single.exr");
+    write(&single, layers.clone());
+    let args = ["--algorithm", "reconstruct", "--layers", "FG,BG"];
+    let from_single = run("blur", &single, dir.path().join("s.exr"), &args);
+    let stale = vec![7.0; W * H];
+    for (k, names) in [
+        ["R", "G", "B", "A"],
+        [
+            "Composite.Combined.R",
+            "Composite.Combined.G",
+            "Composite.Combined.B",
+            "Composite.Combined.A",
+        ],
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let input = dir.path().join(format!("composite{k}.exr"));
+        let mut parts = blender5_parts(layers.clone(), &["FG", "BG"]);
+        parts.push(Part {
+            name: Some("Composite.Combined"),
+            view: None,
+            multi_view: None,
+            channels: names
+                .iter()
+                .map(|n| (n.to_string(), stale.clone()))
+                .collect(),
+        });
+        write_parts(&input, (W, H), parts);
+        let mut input = input;
+        // The output of one pass is the input of the next: the name holds.
+        for pass in 0..2 {
+            let out = dir.path().join(format!("out{k}_{pass}.exr"));
+            let mut all = vec![
+                "blur",
+                "--preset",
+                "blender",
+                "--color",
+                input.to_str().unwrap(),
+            ];
+            let o_str = out.to_str().unwrap().to_string();
+            all.extend(["-o", &o_str]);
+            all.extend(args);
+            let o = shutter(&all);
+            assert!(o.status.success(), "{all:?}: {}", stderr(&o));
+            let stored = parts_of(&out);
+            let names: Vec<&str> = stored.iter().map(|(p, _)| p.as_str()).collect();
+            assert_eq!(names[0], "Composite.Combined", "{names:?}");
+            assert_eq!(stored[0].1, ["A", "B", "G", "R"]);
+            assert_eq!(stored.len(), 7, "{names:?}");
+            assert!(
+                stderr(&o).contains("Composite.Combined (its composite, made before the blur)"),
+                "{}",
+                stderr(&o)
+            );
+            if pass == 0 {
+                let merged = read_exr_reference(&out);
+                for c in ["R", "G", "B", "A"] {
+                    assert_same_bits(channel(&merged, c), channel(&from_single, c), c);
+                }
+            }
+            input = out;
+        }
+    }
+}
+
+/// Blender 5 writes view layers as a multi-part file, a part a pass (`FG.Combined` holding
+/// `FG.Combined.R`, …), and reads a part's channels that lack a layer name as the part's
+/// (its reader puts the part's name before them). The merged beauty (`R`, `G`, `B`, `A`) in the
+/// `FG.Combined` part made Blender 5.2 see an eight-channel Combined pass in FG and lose FG's
+/// Combined altogether; it goes out in a part of its own, first, under Blender's name for the
+/// composite (`Composite.Combined`), and comes out the same as from the single-part file.
+#[test]
+fn a_multi_part_stack_gives_the_merged_beauty_a_part_of_its_own() {
+    let dir = tempfile::tempdir().unwrap();
+    let single = dir.path().join("single.exr");
+    let layers = vec![foreground_moving(-8.0, 1e10, 0.0), background()];
+    write(&single, layers.clone());
+    let multi = dir.path().join("multi.exr");
+    write_parts(&multi, (W, H), blender5_parts(layers, &["FG", "BG"]));
     let args = ["--algorithm", "reconstruct", "--layers", "FG,BG"];
     let from_single = run("blur", &single, dir.path().join("s.exr"), &args);
     let out = dir.path().join("m.exr");
@@ -1258,4 +1339,323 @@ fn stretch_leaves_no_hole_beside_a_moving_rim_on_wgpu() {
     let out = dir.path().join("out.exr");
     let out = stack_on("blur", &input, out, "wgpu", &["--algorithm", "stretch"]);
     band_within_its_exposure("wgpu", channel(&out, "FG.Combined.A"), &exact, w);
+}
+
+/// A part of a multi-part EXR at a data window of its own: its name, the window's corner
+/// and size, and its channels (planes of that size).
+type WindowedPart = (
+    &'static str,
+    (i32, i32),
+    (usize, usize),
+    Vec<(String, Vec<f32>)>,
+);
+
+/// Writes `parts` as one multi-part EXR whose display window is W×H at (0, 0).
+fn write_windowed_parts(path: &Path, parts: Vec<WindowedPart>) {
+    use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
+    use exr::math::Vec2;
+    use exr::meta::attribute::{IntegerBounds, Text};
+    use exr::meta::header::{ImageAttributes, LayerAttributes};
+    use exr::prelude::{Blocks, LineOrder, WritableImage};
+    let layers: Vec<_> = (parts.into_iter())
+        .map(|(name, (x, y), size, channels)| {
+            let attributes = LayerAttributes {
+                layer_name: Some(Text::from(name)),
+                layer_position: Vec2(x, y),
+                ..LayerAttributes::default()
+            };
+            let channels = (channels.into_iter())
+                .map(|(n, p)| AnyChannel::new(n.as_str(), FlatSamples::F32(p)))
+                .collect();
+            let encoding = Encoding {
+                blocks: Blocks::ScanLines,
+                line_order: LineOrder::Increasing,
+                ..Encoding::default()
+            };
+            Layer::new(size, attributes, encoding, AnyChannels::sort(channels))
+        })
+        .collect();
+    let attributes = ImageAttributes::new(IntegerBounds::new((0, 0), (W, H)));
+    Image::from_layers(attributes, layers)
+        .write()
+        .to_file(path)
+        .unwrap();
+}
+
+/// The overscan of [`overscanned`]: this many pixels beyond each side (x, y).
+const OVERSCAN: (usize, usize) = (4, 2);
+
+/// `channels` (W×H planes) at the overscan's window, the pixels beyond the frame filled with
+/// a value no pixel of the frame holds.
+fn overscanned(channels: &[(String, Vec<f32>)]) -> Vec<(String, Vec<f32>)> {
+    let (ox, oy) = OVERSCAN;
+    let w = W + 2 * ox;
+    (channels.iter())
+        .map(|(n, p)| {
+            let mut plane = vec![-77.0; w * (H + 2 * oy)];
+            for y in 0..H {
+                plane[(y + oy) * w + ox..][..W].copy_from_slice(&p[y * W..][..W]);
+            }
+            (n.clone(), plane)
+        })
+        .collect()
+}
+
+/// A multi-part file's parts may have data windows of their own: each pass is placed by its
+/// part's window in the file's coordinates and the frame is the colour's part's. The frame's
+/// size and window were the first part's, so a depth part with overscan before the colour
+/// (`depth` then `rgba`) stopped the run ("the parts holding the wanted channels differ in
+/// size", or "the file changed after the preflight checked it", rerun as often as one
+/// liked); the same parts the other way round were read. Either order now gives the same
+/// frame, bit for bit, as a one-part file of the colour's window; the output's data window is
+/// the colour's.
+#[test]
+fn a_pass_part_with_overscan_before_the_colour_s_part_is_placed_by_its_own_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = W * H;
+    let named = |names: &[&str], planes: Vec<Vec<f32>>| -> Vec<(String, Vec<f32>)> {
+        names.iter().map(|s| s.to_string()).zip(planes).collect()
+    };
+    let rgba = named(
+        &["R", "G", "B", "A"],
+        vec![
+            noise(n, 1, 0.0, 1.0),
+            noise(n, 2, 0.0, 1.0),
+            noise(n, 3, 0.0, 1.0),
+            vec![1.0; n],
+        ],
+    );
+    let data = named(
+        &["Z", "velocity.X", "velocity.Y"],
+        vec![
+            noise(n, 4, 1.0, 9.0),
+            noise(n, 5, -6.0, 6.0),
+            noise(n, 6, -2.0, 2.0),
+        ],
+    );
+    let one_part = dir.path().join("one.exr");
+    write(&one_part, vec![rgba.clone(), data.clone()]);
+    let over = (-(OVERSCAN.0 as i32), -(OVERSCAN.1 as i32));
+    let over_size = (W + 2 * OVERSCAN.0, H + 2 * OVERSCAN.1);
+    let depth_part = ("depth", over, over_size, overscanned(&data));
+    let rgba_part = ("rgba", (0, 0), (W, H), rgba);
+    let depth_first = dir.path().join("depth_first.exr");
+    write_windowed_parts(&depth_first, vec![depth_part.clone(), rgba_part.clone()]);
+    let rgba_first = dir.path().join("rgba_first.exr");
+    write_windowed_parts(&rgba_first, vec![rgba_part, depth_part]);
+    let blur = |input: &Path, out: &str| {
+        let out = dir.path().join(out);
+        let o = shutter(&[
+            "blur",
+            "--algorithm",
+            "reconstruct",
+            "--color",
+            &s(input),
+            "-o",
+            &s(&out),
+        ]);
+        assert!(o.status.success(), "{}: {}", input.display(), stderr(&o));
+        out
+    };
+    let expected = read_exr_reference(&blur(&one_part, "one_out.exr"));
+    for input in [&depth_first, &rgba_first] {
+        let out = blur(input, "out.exr");
+        let got = read_exr_reference(&out);
+        for c in ["R", "G", "B", "A"] {
+            assert_same_bits(channel(&got, c), channel(&expected, c), c);
+        }
+        let beauty = (read_exr_layers(&out).into_iter())
+            .find(|l| {
+                l.channel_data
+                    .list
+                    .iter()
+                    .any(|c| c.name.to_string() == "R")
+            })
+            .unwrap();
+        assert_eq!(beauty.attributes.layer_position, exr::math::Vec2(0, 0));
+        assert_eq!(beauty.size, exr::math::Vec2(W, H));
+    }
+}
+
+/// In a stack of view layers from one multi-part file, a layer's depth and vector parts with
+/// overscan come first (the file's first part): the frame was that part's size and the read
+/// of the colour stopped as "changed". Each layer now reads its colour at its part's window
+/// and the merge is that of the one-part file, bit for bit. Layers whose colours lie at
+/// different windows are refused by name, each window given.
+#[test]
+fn a_stack_reads_each_part_at_its_own_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let layers = vec![foreground_moving(-8.0, 1e10, 0.0), background()];
+    let single = dir.path().join("single.exr");
+    write(&single, layers.clone());
+    let args = ["--algorithm", "reconstruct", "--layers", "FG,BG"];
+    let from_single = run("blur", &single, dir.path().join("s.exr"), &args);
+    let over = (-(OVERSCAN.0 as i32), -(OVERSCAN.1 as i32));
+    let over_size = (W + 2 * OVERSCAN.0, H + 2 * OVERSCAN.1);
+    let mut parts: Vec<WindowedPart> = Vec::new();
+    for part in blender5_parts(layers.clone(), &["FG", "BG"]) {
+        let name = part.name.unwrap();
+        if name.starts_with("BG.") && !name.ends_with("Combined") {
+            parts.insert(0, (name, over, over_size, overscanned(&part.channels)));
+        } else {
+            parts.push((name, (0, 0), (W, H), part.channels));
+        }
+    }
+    let input = dir.path().join("overscan.exr");
+    write_windowed_parts(&input, parts.clone());
+    let merged = run("blur", &input, dir.path().join("o.exr"), &args);
+    for c in ["R", "G", "B", "A", "FG.Combined.R", "BG.Combined.G"] {
+        assert_same_bits(channel(&merged, c), channel(&from_single, c), c);
+    }
+    // BG's colour at the overscan's window too: not the foreground's picture.
+    for part in &mut parts {
+        if part.0 == "BG.Combined" {
+            *part = (part.0, over, over_size, overscanned(&part.3));
+        }
+    }
+    write_windowed_parts(&input, parts);
+    let out = dir.path().join("x.exr");
+    let mut all = vec!["blur", "--preset", "blender", "--color"];
+    let (i, o) = (s(&input), s(&out));
+    all.extend([i.as_str(), "-o", o.as_str()]);
+    all.extend(args);
+    let o = shutter(&all);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    for needle in [
+        "layer BG's colour is",
+        "(-4, -2) - (99, 17)",
+        "(0, 0) - (95, 15)",
+    ] {
+        assert!(err.contains(needle), "'{needle}' not in: {err}");
+    }
+    assert!(!out.exists());
+}
+
+/// A view layer without a depth of its own read the file's plain `Z` (the preset's
+/// fallback) without a word: where some other render's surfaces are, not the layer's. The
+/// run still reads it (a file of one layer beside its plain passes means it so) and warns,
+/// naming the layer and the channel; a layer with its own depth is not named.
+#[test]
+fn a_layer_reading_a_depth_not_its_own_is_named_in_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut fg = foreground_moving(-8.0, 1e10, 0.0);
+    let depth = fg.iter().position(|(n, _)| n == "FG.Depth.Z").unwrap();
+    let (_, plane) = fg.remove(depth);
+    fg.push(("Z".to_string(), plane));
+    let input = dir.path().join("plain_z.exr");
+    write(&input, vec![fg, background()]);
+    let out = dir.path().join("o.exr");
+    let mut all = vec!["blur", "--preset", "blender", "--color"];
+    let (i, o) = (s(&input), s(&out));
+    all.extend([i.as_str(), "-o", o.as_str(), "--layers", "FG,BG"]);
+    all.extend(["--algorithm", "reconstruct"]);
+    let o = shutter(&all);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("view layer FG has no depth of its own: it reads Z"),
+        "{err}"
+    );
+    assert!(!err.contains("view layer BG has no depth"), "{err}");
+}
+
+/// A stack whose layers' colours are all half writes its merged beauty in half, as a plain
+/// run keeps a half beauty half; it went out in float whatever the layers were (named as no
+/// channel of the part it is made like). Each layer's own beauty keeps its type too.
+#[test]
+fn a_stack_of_half_layers_writes_a_half_merged_beauty() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("half.exr");
+    let channels: Vec<(String, Vec<f32>)> = vec![foreground_moving(-8.0, 1e10, 0.0), background()]
+        .into_iter()
+        .flatten()
+        .collect();
+    let options = shutter::io::exr::ExrOptions {
+        half: true,
+        ..Default::default()
+    };
+    let channels = channels
+        .iter()
+        .map(|(n, p)| (n.as_str(), p.clone()))
+        .collect();
+    write_exr_with(&input, W, H, channels, options);
+    let out = dir.path().join("o.exr");
+    run("blur", &input, out.clone(), &["--layers", "FG,BG"]);
+    let half = |name: &str| {
+        (read_exr_layers(&out).iter())
+            .flat_map(|l| l.channel_data.list.iter())
+            .find(|c| c.name.to_string() == name)
+            .map(|c| matches!(c.sample_data, exr::image::FlatSamples::F16(_)))
+            .unwrap_or_else(|| panic!("no channel {name}"))
+    };
+    for c in ["R", "G", "B", "A", "FG.Combined.R", "BG.Combined.A"] {
+        assert!(half(c), "{c} is not half");
+    }
+}
+
+/// A stack of files given by `--color` alone names each layer by its file: the name without
+/// the frame's placeholder, up to its first period, without separators at its ends
+/// (`fg_####.exr`: `fg`, where it was `fg_####`). Two files that give one name make layers
+/// named by their place (`layer1`, `layer2`), now with a warning that says why.
+#[test]
+fn a_stack_of_files_is_named_by_them_without_the_frame_number() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = W * H;
+    let passes = |seed: u32, alpha: f32| {
+        vec![
+            ("R", noise(n, seed, 0.0, 1.0)),
+            ("G", noise(n, seed + 1, 0.0, 1.0)),
+            ("B", noise(n, seed + 2, 0.0, 1.0)),
+            ("A", vec![alpha; n]),
+            ("Z", vec![2.0 + seed as f32; n]),
+            ("velocity.X", vec![3.0; n]),
+            ("velocity.Y", vec![0.0; n]),
+        ]
+    };
+    let files = [("fg_0001.exr", 1, 0.5), ("bg_0001.exr", 10, 1.0)];
+    for (name, seed, alpha) in files {
+        write_exr(&dir.path().join(name), W, H, passes(seed, alpha));
+        let other = dir.path().join("other").join(name.replace("fg_", "bg_"));
+        write_exr(&other, W, H, passes(seed, alpha));
+    }
+    let out_name =
+        |out: &Path| (out.file_name().unwrap().to_string_lossy()).replace("####", "0001");
+    let stack = |colors: [String; 2], out: &str| {
+        let out = dir.path().join(out);
+        let o = shutter(&[
+            "blur",
+            "--algorithm",
+            "reconstruct",
+            "--frames",
+            "1",
+            "--color",
+            &colors[0],
+            "--color",
+            &colors[1],
+            "-o",
+            &s(&out),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let written = dir.path().join(out_name(&out));
+        let names: Vec<String> = read_exr_reference(&written)
+            .into_iter()
+            .map(|(n, _)| n)
+            .collect();
+        (names, stderr(&o))
+    };
+    let pattern =
+        |folder: &str, stem: &str| s(&dir.path().join(folder).join(format!("{stem}_####.exr")));
+    let (names, err) = stack([pattern("", "fg"), pattern("", "bg")], "o.####.exr");
+    for c in ["fg.R", "fg.A", "bg.R", "bg.A", "R"] {
+        assert!(names.iter().any(|n| n == c), "no {c} in {names:?}");
+    }
+    assert!(!err.contains("by their place"), "{err}");
+    // `bg_####.exr` in two folders: one name twice.
+    let (names, err) = stack([pattern("other", "bg"), pattern("", "bg")], "p.####.exr");
+    for c in ["layer1.R", "layer2.R"] {
+        assert!(names.iter().any(|n| n == c), "no {c} in {names:?}");
+    }
+    assert!(err.contains("named layer1, layer2 by their place"), "{err}");
+    assert!(err.contains("give the name bg"), "{err}");
 }

@@ -1113,3 +1113,61 @@ fn a_view_written_alone_keeps_its_own_channels_pixel_types() {
         other => panic!("id.v is not u32: {other:?}"),
     }
 }
+
+/// A stereo render of two view layers (`FG`, `BG`), as Blender 5 writes it: a part a pass a
+/// view layer a view (`FG.Combined-left`).
+fn stereo_of_two_layers(path: &Path) {
+    let mut parts = Vec::new();
+    for (view, seed) in [("left", LEFT), ("right", RIGHT)] {
+        for (layer, offset) in [("FG", 0), ("BG", 7)] {
+            let passes: Vec<(String, Vec<f32>)> = (blender_view(seed + offset).into_iter())
+                .map(|(n, p)| (n.replacen("ViewLayer", layer, 1), p))
+                .collect();
+            for pass in ["Combined", "Depth", "Vector"] {
+                let pass = format!("{layer}.{pass}");
+                let name = Box::leak(format!("{pass}-{view}").into_boxed_str());
+                let view: &'static str = if view == "left" { "left" } else { "right" };
+                parts.push(part(Some(name), Some(view), None, of_pass(&passes, &pass)));
+            }
+        }
+    }
+    write_parts(path, (W, H), parts);
+}
+
+/// A stack of view layers is read from one view. From a stereo file, an EXR output (which
+/// without `--view` holds every view) held the default view alone, with a warning that blamed
+/// a `--view` not given: the run now stops before anything is written, naming the file and
+/// its views and the `--view` that writes each. `--view right` writes that view's stack.
+#[test]
+fn a_stack_of_a_stereo_file_needs_view_and_writes_nothing_without_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let stereo = d.join("stereo.exr");
+    stereo_of_two_layers(&stereo);
+    let out = d.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let before = snapshot(&out);
+    let stack = ["--preset", "blender", "--layers", "FG,BG"];
+    let o = blur(&s(&stereo), &out.join("o.exr"), &stack);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    for needle in [
+        s(&stereo).as_str(),
+        "left, right",
+        "--view left",
+        "--view right",
+    ] {
+        assert!(err.contains(needle), "'{needle}' not in: {err}");
+    }
+    assert_eq!(snapshot(&out), before);
+    let mut one = stack.to_vec();
+    one.extend(["--view", "right"]);
+    let o = blur(&s(&stereo), &out.join("right.exr"), &one);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let parts = parts_of(&out.join("right.exr"));
+    assert_eq!(
+        parts[0].0.as_deref(),
+        Some("Composite.Combined"),
+        "{parts:?}"
+    );
+}

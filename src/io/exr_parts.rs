@@ -86,15 +86,21 @@ pub fn exr_parts(
             carried.colour_part.min(count - 1)
         };
         windows[part].get_or_insert(data);
-        parts[part].extend(names.into_iter().zip(planes).map(|(name, plane)| {
-            exr_like::OutChannel {
-                name,
-                plane,
-                class: LayerClass::Colour,
-                exact: None,
-                source: None,
-            }
-        }));
+        // A merged beauty takes its layers' pixel type where they agree (`stack::merge`).
+        let like = |k: usize| carried.merged_like.get(k).cloned().flatten();
+        parts[part].extend(
+            names
+                .into_iter()
+                .zip(planes)
+                .enumerate()
+                .map(|(k, (name, plane))| exr_like::OutChannel {
+                    name,
+                    plane,
+                    class: LayerClass::Colour,
+                    exact: None,
+                    source: like(k),
+                }),
+        );
         for c in carried.channels {
             // The channels of no view are each view's: written once.
             if every && c.shared && v > 0 {
@@ -117,6 +123,8 @@ pub fn exr_parts(
             });
         }
     }
+    // The parts of the file written again (a part none of whose channels were carried is not).
+    let written: Vec<bool> = windows.iter().map(Option::is_some).collect();
     let mut out: Vec<exr_like::OutPart> = parts
         .into_iter()
         .zip(windows)
@@ -126,7 +134,7 @@ pub fn exr_parts(
             Some(exr_like::OutPart {
                 // The merged part is made like the beauty's, under a name of its own.
                 input: headers.get(if merged { colour_part } else { p }),
-                name: merged.then(|| merged_part_name(headers)),
+                name: merged.then(|| merged_part_name(headers, &written)),
                 // A merged beauty in a one-part file's one part: its own name should the part
                 // be split (DWA, its data apart).
                 bare: (count == 1 && merged_beauty).then_some(MERGED_PART),
@@ -155,11 +163,13 @@ pub fn exr_parts(
     out
 }
 
-/// [`MERGED_PART`], or where the file has a part of that name already, the first of
-/// `Composite.Combined2`, … it has not.
-fn merged_part_name(headers: &[exr::meta::header::Header]) -> String {
-    let taken: Vec<String> = (headers.iter())
-        .filter_map(|h| Some(h.own_attributes.layer_name.as_ref()?.to_string()))
+/// [`MERGED_PART`], or where a part of the file `written` again has that name, the first of
+/// `Composite.Combined2`, … none has (a stack's colour file's own composite is left out,
+/// `FramePlan::leave_out_composite`, so the merged beauty takes its name).
+fn merged_part_name(headers: &[exr::meta::header::Header], written: &[bool]) -> String {
+    let taken: Vec<String> = (headers.iter().zip(written))
+        .filter(|(_, &w)| w)
+        .filter_map(|(h, _)| Some(h.own_attributes.layer_name.as_ref()?.to_string()))
         .collect();
     exr_like::fresh(MERGED_PART, &taken)
 }

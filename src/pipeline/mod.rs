@@ -298,12 +298,14 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         && !job.output_options.beauty_only;
     // And every view of a multi-view colour file, each planned, read and processed as that
     // view alone (the first is the default), then written into one file.
-    // A stack of layers is read from one view.
-    let views = if job.stack.is_empty() {
-        views_to_write(job, every_channel)
-    } else {
-        vec![job.view.clone()]
-    };
+    // A stack of layers is read from one view: a multi-view file's EXR output would hold
+    // one of its views, so one must be asked for.
+    let views = views_to_write(job, every_channel);
+    if !job.stack.is_empty() && views.len() > 1 {
+        let path = job.inputs.color.path(job.frames.first().copied().flatten());
+        let problem = crate::stack::views_problem(&path, &views);
+        return Err(crate::Error::Files(vec![problem]));
+    }
     let options = PlanOptions {
         preset: &job.preset,
         layer: job
@@ -365,7 +367,12 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             (others.iter_mut()).flat_map(|o| o.iter_mut().enumerate().map(|(i, p)| (p, i + 1))),
         ) {
             match (shared.get(layer), &job.layer) {
-                (Some(own), _) => plan.read_layer_channels(own, &shared, layer == 0),
+                (Some(own), _) => {
+                    if layer == 0 {
+                        plan.leave_out_composite();
+                    }
+                    plan.read_layer_channels(own, &shared, layer == 0)
+                }
                 // One view layer of a file of several (`--layer`): the others come back as
                 // they came, not blurred with this one's weights.
                 (None, Some(own)) if job.stack.is_empty() => {

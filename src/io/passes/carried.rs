@@ -5,7 +5,13 @@
 //! multi-view colour file a run leaves out.
 
 use super::parts::PartApart;
-use super::plan::{FramePlan, Slot};
+use super::plan::{FramePlan, PlannedFile, Slot};
+use crate::io::exr_parts::MERGED_PART;
+
+/// The index into the file's channels of `slot`.
+fn file_channel(files: &[PlannedFile], slot: Slot) -> usize {
+    files[slot.file].channels[slot.entry]
+}
 
 impl FramePlan {
     /// The warning that a multi-view colour file's other views are not written, when one view
@@ -87,6 +93,41 @@ impl FramePlan {
                 file.info.channels[file.channels[slot.entry]].name.clone()
             })
             .collect()
+    }
+
+    /// Leaves out of a stack's output the colour file's composite, its part named
+    /// [`MERGED_PART`] (Blender's): composited before the blur, it is stale, and the stack's
+    /// merged beauty takes its place and its name. Keeping it beside the merged beauty gave
+    /// the file two composites and the merged one a name of its own (`Composite.Combined2`),
+    /// which the next pass of a chain then dropped. Says so in a warning. Call before
+    /// [`FramePlan::read_layer_channels`].
+    pub fn leave_out_composite(&mut self) {
+        let Some(color) = &mut self.color else {
+            return;
+        };
+        let info = &self.files[color.rgb[0].file].info;
+        let crate::io::file::FileKind::Exr { headers, .. } = &info.kind else {
+            return;
+        };
+        let composite: Vec<usize> = (0..headers.len())
+            .filter(|&p| {
+                headers.len() > 1
+                    && p != info.channels[file_channel(&self.files, color.rgb[0])].part
+                    && (headers[p].own_attributes.layer_name.as_ref())
+                        .is_some_and(|n| n.as_slice() == MERGED_PART.as_bytes())
+            })
+            .collect();
+        if composite.is_empty() {
+            return;
+        }
+        color
+            .others
+            .retain(|&c| !composite.contains(&info.channels[c].part));
+        color.apart.retain(|p| !composite.contains(p));
+        self.warnings.push(format!(
+            "the colour file's part {MERGED_PART} (its composite, made before the blur) is \
+             not written: the stack's merged beauty replaces it, under its name"
+        ));
     }
 
     /// [`FramePlan::read_every_channel`] and [`FramePlan::read_parts_apart`] for layer `own`
@@ -266,16 +307,34 @@ pub fn stack_problem(
             );
         }
     }
+    // Merged pixel for pixel: each layer's colour at the same data window (its part's: a
+    // multi-part file's parts may differ).
+    let window = |plan: &FramePlan| {
+        let origin = plan.windows().map_or((0, 0), |w| w.data_origin);
+        super::window::DataWindow {
+            origin,
+            width: plan.width,
+            height: plan.height,
+        }
+    };
     for (plan, name) in rest.iter().zip(&stack[1..]) {
-        if (plan.width, plan.height) != (first.width, first.height) {
+        if window(plan) != window(first) {
             return Some(
                 Problem::new(
                     ProblemKind::SizeMismatch,
                     path(plan),
                     format!(
-                        "layer {name} is {}x{}, layer {} {}x{}: a stack's layers are one \
-                         picture, the same size",
-                        plan.width, plan.height, stack[0], first.width, first.height
+                        "layer {name}'s colour is {}x{} at {}, layer {}'s {}x{} at {}: a \
+                         stack's layers are one picture, merged pixel for pixel, so each \
+                         layer's colour needs the same data window (render them without a \
+                         crop to the bounding box)",
+                        plan.width,
+                        plan.height,
+                        window(plan).describe(),
+                        stack[0],
+                        first.width,
+                        first.height,
+                        window(first).describe()
                     ),
                 )
                 .frame(plan.frame),

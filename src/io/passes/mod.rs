@@ -18,7 +18,8 @@
 //!   is read or written;
 //! - [`read`]: the decode, colour and depth conversions;
 //! - [`convert`]: motion from any of the preset's motion sections to the pass needed;
-//! - [`suggest`]: the preset a file most likely needs, and why (`shutter info`);
+//! - [`suggest`]: the preset a file most likely needs, and why (`shutter info`), from the
+//!   passes a preset finds in a file ([`found`]);
 //! - [`memory`]: what a frame costs in memory, from its plan;
 //! - [`validity`]: vectors marked invalid (by the vector file's alpha) take the motion of
 //!   the nearest valid one.
@@ -27,6 +28,7 @@ mod carried;
 mod check;
 mod convert;
 mod fit;
+mod found;
 mod memory;
 mod parts;
 mod plan;

@@ -168,6 +168,13 @@ pub fn plan_frame(
         match found {
             Ok(Some(found)) => {
                 claimed = found.iter().flatten().copied().collect();
+                // The frame is the colour's part's: its size and window, which every pass
+                // is placed against (a multi-part file's parts differ: the first part's, an
+                // overscan depth or another layer's box, made the colour's read "changed").
+                let info = &part_view(info, found[0].expect("required"));
+                (plan.width, plan.height) = (info.width, info.height);
+                plan.color_windows = Some(info.windows);
+                planner.color_window = Some(DataWindow::of(info));
                 if needs.color {
                     let file = planner.add_file(info.clone());
                     let integer = info.is_integer_image();
@@ -224,7 +231,10 @@ pub fn plan_frame(
             None => color_info.clone(),
         };
         if let Some(info) = info {
-            planner.check_size(&info, "depth");
+            // A file of its own: its size; the colour file's parts are each their own.
+            if own.is_some() {
+                planner.check_size(&info, "depth");
+            }
             let alts: Vec<Vec<String>> = preset
                 .depth
                 .channels
@@ -235,6 +245,13 @@ pub fn plan_frame(
             match find_channels(&info, &alts, 1, skip, options.layer) {
                 Ok(Some(found)) => {
                     let channel = found[0].expect("required");
+                    let c = &info.channels[channel];
+                    if let Some(layer) = options.layer.filter(|_| own.is_none()) {
+                        let names = std::iter::once(&c.name).chain(&c.alias);
+                        if names.clone().all(|n| !n.starts_with(&format!("{layer}."))) {
+                            plan.warnings.push(not_the_layers(layer, "depth", &c.name));
+                        }
+                    }
                     let info = part_view(&info, channel);
                     planner.check_size(&info, "depth");
                     let file = planner.add_file(info);
@@ -562,9 +579,10 @@ impl Planner<'_> {
             )
         } else {
             format!(
-                "its data window {} does not cover the color pass's {}",
+                "its data window {} does not cover the color pass's {}: it has no pixel at {}",
                 own.describe(),
-                colour.describe()
+                colour.describe(),
+                own.uncovered_in(&colour)
             )
         };
         self.problem(Problem::new(ProblemKind::SizeMismatch, &info.path, detail).pass(pass));
@@ -599,6 +617,18 @@ impl Planner<'_> {
             });
         Slot { file, entry }
     }
+}
+
+/// The warning that view layer `layer` reads `pass` from `channel`, a channel not of its own
+/// (the file's plain `Z`, a preset's fallback): that is where some other render's surfaces
+/// are, not the layer's, and was read without a word. A warning, not a refusal: a file of one
+/// layer beside its plain passes reads them rightly so.
+fn not_the_layers(layer: &str, pass: &str, channel: &str) -> String {
+    format!(
+        "view layer {layer} has no {pass} of its own: it reads {channel}, which is not the \
+         layer's; render the layer's own {pass} pass (Blender: the view layer's Z pass) if \
+         the blur looks wrong"
+    )
 }
 
 /// How `channel`'s part compresses it lossily, if it does ([`exr_io::keeps_exactly`]).
@@ -705,94 +735,4 @@ pub(super) fn find_layers(info: &FileInfo, template: &str) -> Vec<String> {
     layers.sort();
     layers.dedup();
     layers
-}
-
-/// Passes found, each with the channels (indices into a file's channels) it reads.
-pub(super) type PassesRead = Vec<(&'static str, Vec<usize>)>;
-
-/// The passes a preset finds in one file on its own, each with the channels (indices into
-/// `info.channels`) it reads: colour first, then depth, velocity, prev and next among the
-/// channels colour did not take. A motion section whose encoding cannot read the file's
-/// sample type (RSMB's codes in a float file) finds nothing.
-///
-/// A file with no colour channel the preset names but a `Y` is read both ways, `Y` as grey
-/// colour and not, and the reading that takes more of the file's channels is kept: a
-/// luminance image is colour, a file of `X`, `Y` vectors is not.
-/// In view layer `layer` (`None`: the one the file holds, if any); a file of several is read
-/// layer by layer by `suggest::passes_read`.
-pub(super) fn passes_read_in(info: &FileInfo, preset: &Preset, layer: Option<&str>) -> PassesRead {
-    match find_channels(info, &preset.color.channels, 3, &[], layer) {
-        Ok(None) => {
-            let without = passes_after(info, preset, None, layer);
-            match luminance(info) {
-                Some(grey) => {
-                    let with = passes_after(info, preset, Some(grey), layer);
-                    let count = |read: &[(&str, Vec<usize>)]| {
-                        let mut all: Vec<usize> =
-                            read.iter().flat_map(|(_, c)| c.iter().copied()).collect();
-                        all.sort_unstable();
-                        all.dedup();
-                        all.len()
-                    };
-                    if count(&with) > count(&without) {
-                        with
-                    } else {
-                        without
-                    }
-                }
-                None => without,
-            }
-        }
-        color => passes_after(info, preset, color.ok().flatten(), layer),
-    }
-}
-
-/// The passes a preset finds once colour has taken `color`'s channels (see [`passes_read_in`]).
-fn passes_after(
-    info: &FileInfo,
-    preset: &Preset,
-    color: Option<Vec<Option<usize>>>,
-    layer: Option<&str>,
-) -> PassesRead {
-    let mut found = Vec::new();
-    let mut claimed: Vec<usize> = Vec::new();
-    if let Some(color) = color {
-        for c in color.into_iter().flatten() {
-            if !claimed.contains(&c) {
-                claimed.push(c);
-            }
-        }
-        found.push(("color", claimed.clone()));
-    }
-    let depth: Vec<Vec<String>> = preset
-        .depth
-        .channels
-        .iter()
-        .map(|c| vec![c.clone()])
-        .collect();
-    if let Ok(Some(channels)) = find_channels(info, &depth, 1, &claimed, layer) {
-        found.push(("depth", channels.into_iter().flatten().collect()));
-    }
-    for (name, spec) in [
-        ("velocity", &preset.velocity),
-        ("prev", &preset.prev),
-        ("next", &preset.next),
-    ] {
-        if let Ok(Some(channels)) = find_channels(info, &spec.channels, 2, &claimed, layer) {
-            let read = if spec.meaning.is_position() { 3 } else { 2 };
-            let channels: Vec<usize> = channels.into_iter().take(read).flatten().collect();
-            if decodes(spec, name, info.channels[channels[0]].sample_type) {
-                found.push((name, channels));
-            }
-        }
-    }
-    found
-}
-
-/// Whether a motion section's encoding reads samples of this type, whatever the values only
-/// the user knows (RSMB's Max Displace, which a built-in preset leaves out).
-pub(super) fn decodes(spec: &VectorSpec, pass: &str, sample_type: &str) -> bool {
-    let mut spec = spec.clone();
-    spec.max_displace.get_or_insert(1.0);
-    Decode::resolve(&spec, pass, sample_type).is_ok()
 }

@@ -31,7 +31,8 @@ use serde::Serialize;
 use crate::io::file::{FileInfo, FileKind};
 use crate::io::preset::{Encoding, Meaning, Preset, Units, VectorSpec};
 
-use super::plan::{decodes, find_channels, find_layers, passes_read_in, PassesRead};
+use super::found::{decodes, passes_read_in, PassesRead};
+use super::plan::{find_channels, find_layers};
 
 /// A pass a preset finds, and the channels it reads (as `shutter info` names them).
 #[derive(Clone, Debug, PartialEq, Serialize)]

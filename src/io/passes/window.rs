@@ -61,6 +61,37 @@ impl DataWindow {
         )
     }
 
+    /// The pixels of `colour` this window leaves out, as windows ([`DataWindow::describe`],
+    /// joined with "and"): the bands left and right of it over `colour`'s height, then those
+    /// above and below it between them; `colour` whole where they do not meet.
+    pub fn uncovered_in(&self, colour: &DataWindow) -> String {
+        let (end, c_end) = (self.end(), colour.end());
+        let (x0, y0) = (i64::from(colour.origin.0), i64::from(colour.origin.1));
+        let (sx, sy) = (i64::from(self.origin.0), i64::from(self.origin.1));
+        let band = |x: (i64, i64), y: (i64, i64)| {
+            (x.0 < x.1 && y.0 < y.1).then(|| DataWindow {
+                origin: (x.0 as i32, y.0 as i32),
+                width: (x.1 - x.0) as usize,
+                height: (y.1 - y.0) as usize,
+            })
+        };
+        let meet = sx < c_end.0 && end.0 > x0 && sy < c_end.1 && end.1 > y0;
+        if !meet {
+            return colour.describe();
+        }
+        let inner = (sx.max(x0), end.0.min(c_end.0));
+        let bands = [
+            band((x0, sx.min(c_end.0)), (y0, c_end.1)),
+            band((end.0.max(x0), c_end.0), (y0, c_end.1)),
+            band(inner, (y0, sy.min(c_end.1))),
+            band(inner, (end.1.max(y0), c_end.1)),
+        ];
+        (bands.iter().flatten())
+            .map(DataWindow::describe)
+            .collect::<Vec<_>>()
+            .join(" and ")
+    }
+
     /// `plane` (this window's samples) cut to `to`, which it covers.
     pub fn crop(&self, plane: &[f32], to: &DataWindow) -> Plane {
         let dx = (to.origin.0 - self.origin.0) as usize;
@@ -96,4 +127,39 @@ pub fn part_view(info: &FileInfo, channel: usize) -> FileInfo {
         }
     }
     info.clone()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn window(x0: i32, y0: i32, x1: i32, y1: i32) -> DataWindow {
+        DataWindow {
+            origin: (x0, y0),
+            width: (x1 - x0 + 1) as usize,
+            height: (y1 - y0 + 1) as usize,
+        }
+    }
+
+    #[test]
+    fn a_window_names_the_pixels_of_the_colour_s_it_leaves_out() {
+        let colour = window(0, 0, 159, 89);
+        // A box inside: the bands left and right over the whole height, then above and below.
+        assert_eq!(
+            window(30, 20, 100, 70).uncovered_in(&colour),
+            "(0, 0) - (29, 89) and (101, 0) - (159, 89) and (30, 0) - (100, 19) and \
+             (30, 71) - (100, 89)"
+        );
+        // Short of the right edge alone.
+        assert_eq!(
+            window(-5, -5, 149, 99).uncovered_in(&colour),
+            "(150, 0) - (159, 89)"
+        );
+        // Apart: all of it.
+        assert_eq!(
+            window(200, 0, 250, 89).uncovered_in(&colour),
+            "(0, 0) - (159, 89)"
+        );
+        assert_eq!(colour.uncovered_in(&colour), "");
+    }
 }
