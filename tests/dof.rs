@@ -250,6 +250,190 @@ fn a_bright_highlight_keeps_its_energy_and_takes_the_aperture_shape() {
     assert_eq!(outside_hexagon[1], 0, "a six-blade bokeh stays inside it");
 }
 
+/// A lens that blurs a 128 px wide frame strongly (100 mm f/1.4 focused at 3 m on an 8 mm
+/// sensor): a CoC of 28 px at 10.4 m behind the focus plane and at 1.753 m in front of it.
+const BOKEH: Lens = Lens {
+    focal_mm: 100.0,
+    f_number: 1.4,
+    focus: 3.0,
+    sensor_mm: 8.0,
+};
+
+/// The side of [`highlight`]'s frame (px).
+const HIGHLIGHT_FRAME: usize = 128;
+
+/// What a point's bokeh looks like, from the pixels lit by at least half of a flat bokeh of
+/// the expected shape and radius (their centres inside the shape: the gather's coverage ramp
+/// is ½ at the shape's edge): the area its light is spread over and how far those pixels
+/// reach from the point each way (px).
+#[derive(Debug)]
+struct Bokeh {
+    /// The expected circumradius (px): half the lens's CoC at the point's depth.
+    radius: f32,
+    /// The point's light over the bokeh's level (the median of the lit pixels), as a share
+    /// of the area of the aperture's shape at `radius`.
+    area: f32,
+    left: f32,
+    right: f32,
+    up: f32,
+    down: f32,
+}
+
+/// One pixel of light at the centre of a black [`HIGHLIGHT_FRAME`]² frame, at `depth` m over
+/// a background at `background` m, through the gather with `blades` turned by `rotation`
+/// degrees and rings enough (16, the most) that every bokeh here (radius 16 px at most)
+/// gathers over its whole-pixel grid: the bokeh it makes.
+fn highlight(blades: u32, rotation: f32, depth: f32, background: f32) -> Bokeh {
+    const LIGHT: f32 = 1000.0;
+    let w = HIGHLIGHT_FRAME;
+    let n = w * w;
+    let (cx, cy) = (w / 2, w / 2);
+    let mut f = Frame::new(w, w);
+    let mut r = vec![0.0; n];
+    r[cy * w + cx] = LIGHT;
+    f.color = Some(Color {
+        r,
+        g: vec![0.0; n],
+        b: vec![0.0; n],
+        a: None,
+    });
+    let mut z = vec![background; n];
+    z[cy * w + cx] = depth;
+    f.depth = Some(z);
+    let out = run(
+        &f,
+        DofParams {
+            blades,
+            blade_rotation: rotation,
+            rings: 16,
+            ..DofParams::new(CocSource::Lens(BOKEH))
+        },
+    );
+    let radius = 0.5 * BOKEH.coc(depth as f64, w as f64) as f32;
+    let aperture = shutter::dof::bokeh::Aperture::new(blades, rotation);
+    let shape = aperture.unit_area() * radius * radius;
+    let half = 0.5 * LIGHT / shape;
+    let mut bokeh = Bokeh {
+        radius,
+        area: 0.0,
+        left: 0.0,
+        right: 0.0,
+        up: 0.0,
+        down: 0.0,
+    };
+    let mut lit = Vec::new();
+    for (i, &v) in out.r.iter().enumerate() {
+        if v < half {
+            continue;
+        }
+        let dx = (i % w) as f32 - cx as f32;
+        let dy = (i / w) as f32 - cy as f32;
+        lit.push(v);
+        bokeh.left = bokeh.left.max(-dx);
+        bokeh.right = bokeh.right.max(dx);
+        bokeh.up = bokeh.up.max(-dy);
+        bokeh.down = bokeh.down.max(dy);
+    }
+    lit.sort_by(f32::total_cmp);
+    bokeh.area = LIGHT / lit[lit.len() / 2] / shape;
+    bokeh
+}
+
+/// Whether `bokeh`'s area is its shape's within `tolerance`, and it reaches `expected`
+/// (left, right, up, down, in units of its radius) each way within 1.5 px: the farthest
+/// pixel centre inside a polygon's vertex lies up to a pixel short of it, and the shape cut
+/// by its reflection (the bug this guards) falls 2 px short of a pentagon's vertex and 7 px
+/// of a triangle's at this radius.
+fn bokeh_is(bokeh: &Bokeh, tolerance: f32, expected: [f32; 4], what: &str) {
+    assert!(
+        (bokeh.area - 1.0).abs() <= tolerance,
+        "{what}: area {} of the shape's ({bokeh:?})",
+        bokeh.area
+    );
+    let got = [bokeh.left, bokeh.right, bokeh.up, bokeh.down];
+    for (g, e) in got.iter().zip(expected) {
+        assert!(
+            (g - e * bokeh.radius).abs() <= 1.5,
+            "{what}: reaches {got:?}, expected {:?} ({bokeh:?})",
+            expected.map(|e| e * bokeh.radius)
+        );
+    }
+}
+
+/// How far a regular polygon of circumradius 1 reaches along its axis of symmetry: to the
+/// vertex one way, to the middle of an edge (cos(π/n)) the other.
+fn apothem(blades: u32) -> f32 {
+    (std::f32::consts::PI / blades as f32).cos()
+}
+
+// Tolerance of the bokeh's area. Where the point and its background are one layer, the far
+// field spreads its light evenly over the sum of its taps' coverage, whose ½-pixel ramp at
+// the edge makes that sum the shape's area within a fraction of a percent at a radius of 14
+// px (measured 0.996–1.005 for 0, 3, 4, 5 and 6 blades); in the near field the level is the
+// point's light over the exact area. 2 % leaves room for that and tells the shape cut by its
+// own reflection at the grid's margin (the bug this guards) apart: 0.73 of a triangle's
+// area (a hexagon) and 0.968 of a pentagon's (a decagon).
+const BOKEH_AREA: f32 = 0.02;
+
+#[test]
+fn odd_blades_give_a_far_point_the_aperture_s_own_shape_pointing_as_documented() {
+    // A point 10.4 m away (7.4 m behind the focus plane, CoC 28 px) over a background as far
+    // (one layer):
+    // its bokeh is the aperture as it stands (src/dof/bokeh.rs): at rotation 0 a triangle's
+    // flat edge is on the right and it points left; a pentagon points left too (an edge's
+    // middle at 0°, a vertex at 180°). Turned 90° (clockwise on screen: y grows down), the
+    // triangle stands on its flat edge and points up. Before the fix the taps covered only
+    // the shape at +offset while a far source counts where −offset lies inside it: a
+    // triangle came out a hexagon (its level that of 0.73 of its area, 7 or 8 px of the
+    // 14 each way), a pentagon a decagon (0.968 of its area, 12 px to the left).
+    let (d, bg) = (10.4, 10.4);
+    let t = highlight(3, 0.0, d, bg);
+    bokeh_is(
+        &t,
+        BOKEH_AREA,
+        [1.0, 0.5, apothem(6), apothem(6)],
+        "triangle",
+    );
+    let p = highlight(5, 0.0, d, bg);
+    let side = (0.4 * std::f32::consts::PI).sin();
+    bokeh_is(&p, BOKEH_AREA, [1.0, apothem(5), side, side], "pentagon");
+    let turned = highlight(3, 90.0, d, bg);
+    bokeh_is(
+        &turned,
+        BOKEH_AREA,
+        [apothem(6), apothem(6), 1.0, 0.5],
+        "triangle turned 90°",
+    );
+    // A round and a square aperture are their own reflections: the same either way.
+    bokeh_is(&highlight(0, 0.0, d, bg), BOKEH_AREA, [1.0; 4], "round");
+    bokeh_is(
+        &highlight(4, 0.0, d, bg),
+        BOKEH_AREA,
+        [apothem(4); 4],
+        "square",
+    );
+}
+
+#[test]
+fn odd_blades_turn_the_bokeh_over_in_the_near_field() {
+    // Light from a point in front of the focus plane meets the sensor before it converges:
+    // its bokeh is the aperture turned 180° (a triangle pointing right where a point behind
+    // focus makes one pointing left). The gather turns it over by field: a source counted in
+    // the near field (in front of a sharp background) is turned, one in the far field (behind
+    // focus) is not (`dof::bokeh`, "Orientation"). Before, the triangle came out a hexagon in
+    // both.
+    let front = 1.753;
+    let turned = [0.5, 1.0, apothem(6), apothem(6)];
+    let upright = [1.0, 0.5, apothem(6), apothem(6)];
+    for (depth, background, expected, what) in [
+        (front, 3.0, turned, "in front, over a sharp background"),
+        (10.4, 10.4, upright, "behind focus, one layer"),
+    ] {
+        let t = highlight(3, 0.0, depth, background);
+        bokeh_is(&t, BOKEH_AREA, expected, what);
+    }
+}
+
 #[test]
 fn same_bytes_for_one_and_two_threads() {
     for method in [
