@@ -25,18 +25,7 @@ pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
             .num_threads(threads)
             .build_global();
     }
-    let mut job = resolve(&args)?;
-    // A stack of files named by them (no --layers): by the rule of `stack::file_layer_names`.
-    let files: Vec<_> = (job.stack.iter())
-        .filter_map(|l| Some(&l.inputs.as_ref()?.color))
-        .collect();
-    if args.layers.is_empty() && files.len() > 1 && files.len() == job.stack.len() {
-        let (names, warning) = crate::stack::file_layer_names(&files);
-        for (layer, name) in job.stack.iter_mut().zip(names) {
-            layer.name = name;
-        }
-        job.warnings.extend(warning);
-    }
+    let job = resolve(&args)?;
     if dof && job.params.dof.is_none() {
         return Err(Error::usage(
             "shutter dof needs a lens (--focal-length, --f-stop and --focus-distance) or a \

@@ -256,7 +256,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         }
     }
 
-    let stack = stack_of(args, &preset, &layer_inputs)?;
+    let stack = stack_of(args, &preset, &layer_inputs, &mut warnings)?;
     let frames: Vec<Option<i64>> = match (&args.frames, inputs.is_sequence()) {
         (Some(_), false) => {
             return Err(Error::usage(
@@ -386,7 +386,12 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
 /// The stack of view layers a job blurs and merges (`crate::stack`), front first: one file a
 /// layer (`--color` repeated; `--layers` names them, else each file's name does), or the view
 /// layers `--layers` names in one file. Empty: no stack.
-fn stack_of(args: &BlurArgs, preset: &Preset, inputs: &[Inputs]) -> Result<Vec<StackLayer>> {
+fn stack_of(
+    args: &BlurArgs,
+    preset: &Preset,
+    inputs: &[Inputs],
+    warnings: &mut Vec<String>,
+) -> Result<Vec<StackLayer>> {
     let by_layer = preset.channel_names().any(|n| n.contains("{layer}"));
     let names = &args.layers;
     if let Some(name) = (0..names.len())
@@ -405,24 +410,15 @@ fn stack_of(args: &BlurArgs, preset: &Preset, inputs: &[Inputs]) -> Result<Vec<S
                 inputs.len()
             )));
         }
-        // Each file's name up to its first period (`fg.####.exr`: fg), unless two share one.
-        let stems: Vec<String> = (inputs.iter())
-            .map(|i| {
-                let path = std::path::Path::new(&i.color.raw);
-                let name = path.file_name().map(|n| n.to_string_lossy().to_string());
-                name.and_then(|n| n.split('.').next().map(str::to_string))
-                    .unwrap_or_default()
-            })
-            .collect();
-        let distinct =
-            (0..stems.len()).all(|i| !stems[i].is_empty() && !stems[..i].contains(&stems[i]));
+        // Named by their files where --layers does not name them (`stack::file_layer_names`).
+        let colours: Vec<&PathPattern> = inputs.iter().map(|i| &i.color).collect();
+        let (stems, warning) = crate::stack::file_layer_names(&colours);
+        if names.is_empty() {
+            warnings.extend(warning);
+        }
         return Ok((inputs.iter().enumerate())
             .map(|(k, inputs)| StackLayer {
-                name: match (names.get(k), distinct) {
-                    (Some(name), _) => name.clone(),
-                    (None, true) => stems[k].clone(),
-                    (None, false) => format!("layer{}", k + 1),
-                },
+                name: names.get(k).unwrap_or(&stems[k]).clone(),
                 inputs: Some(inputs.clone()),
                 layer: names.get(k).filter(|_| by_layer).cloned(),
             })
