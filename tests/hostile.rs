@@ -223,6 +223,69 @@ fn a_cut_png_is_refused_before_any_frame_is_written() {
     }
 }
 
+/// What the numeric policy replaced is named by the pass's kind and file: a painted CoC map's
+/// negative values were warned about as "depth values NaN or negative read as far or 0", with
+/// no file (an outside probe); a map's NaN is in focus, not far.
+#[test]
+fn replaced_values_are_named_by_their_pass_and_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16, 12);
+    let n = w * h;
+    let grey = vec![0.3; n];
+    let mut z = vec![3.0; n];
+    z[5] = f32::NAN;
+    let colour = dir.path().join("c.exr");
+    write_exr(
+        &colour,
+        w,
+        h,
+        vec![
+            ("R", grey.clone()),
+            ("G", grey.clone()),
+            ("B", grey),
+            ("Z", z),
+        ],
+    );
+    let map = dir.path().join("map.exr");
+    write_exr(&map, w, h, vec![("Y", vec![-1.0; n])]);
+    let out = dir.path().join("out.exr");
+    let o = shutter(&[
+        "dof",
+        "--color",
+        &s(&colour),
+        "--coc-map",
+        &s(&map),
+        "-o",
+        &s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("CoC map values NaN or negative read as 0 (in focus) in")
+            && err.contains("map.exr")
+            && !err.contains("depth values"),
+        "{err}"
+    );
+    let lens = [
+        "--focal-length",
+        "50",
+        "--f-stop",
+        "2",
+        "--focus-distance",
+        "3",
+    ];
+    let (colour, out) = (s(&colour), s(&out));
+    let mut args = vec!["dof", "--color", &colour, "-o", &out];
+    args.extend(lens);
+    let o = shutter(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("depth values NaN read as far, negative as 0 in") && err.contains("c.exr"),
+        "{err}"
+    );
+}
+
 #[test]
 fn an_offset_table_pointing_every_line_at_one_chunk_is_an_error_not_black_lines() {
     // Before: every entry of the table pointing at the first chunk read as a frame whose

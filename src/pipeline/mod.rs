@@ -29,7 +29,9 @@ use crate::numeric::Replaced;
 use crate::process::{depth_kind, process_on, Params};
 
 mod memory;
+mod warnings;
 pub use memory::{memory_limit, peak_rss_mib};
+use warnings::replaced_warnings;
 
 /// A blur job, fully resolved (preset merged, flags applied, frames listed).
 #[derive(Clone, Debug)]
@@ -169,51 +171,6 @@ fn warn(report: &mut Report, on_event: &mut dyn FnMut(Event), message: String) {
     if report.warnings.len() < MAX_WARNINGS && !report.warnings.contains(&message) {
         report.warnings.push(message.clone());
         on_event(Event::Warning(message));
-    }
-}
-
-/// Warns, the first time each pass has values replaced by the numeric policy, what they became.
-fn warn_replaced(
-    report: &mut Report,
-    on_event: &mut dyn FnMut(Event),
-    replaced: &Replaced,
-    frame: Option<i64>,
-) {
-    let seen = report.replaced;
-    let at = frame.map_or(String::new(), |f| format!(" (first in frame {f})"));
-    use crate::numeric::{HUGE, POSITION_LIMIT, VELOCITY_LIMIT};
-    let cases = [
-        (
-            replaced.color,
-            seen.color,
-            format!("colour values NaN or beyond ±{HUGE:e} read as 0 or clamped"),
-        ),
-        (
-            replaced.depth,
-            seen.depth,
-            "depth values NaN or negative read as far or 0".to_string(),
-        ),
-        (
-            replaced.velocity,
-            seen.velocity,
-            format!(
-                "velocity values NaN or beyond ±{VELOCITY_LIMIT:e} px read as still or clamped"
-            ),
-        ),
-        (
-            replaced.positions,
-            seen.positions,
-            format!("positions NaN or beyond ±{POSITION_LIMIT:e} px read as still or clamped"),
-        ),
-    ];
-    for (now, before, what) in cases {
-        if now > 0 && before == 0 {
-            warn(
-                report,
-                on_event,
-                format!("{what}{at}; the JSON summary counts them"),
-            );
-        }
     }
 }
 
@@ -704,7 +661,12 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                         for note in notes {
                             warn(&mut report, on_event, note);
                         }
-                        warn_replaced(&mut report, on_event, &replaced, frame);
+                        let (inputs, layered) = (&job.inputs, job.stack.len() > 1);
+                        let kind = depth_kind(&job.params);
+                        let seen = report.replaced;
+                        for w in replaced_warnings(&replaced, &seen, frame, inputs, layered, kind) {
+                            warn(&mut report, on_event, w);
+                        }
                         report.replaced.add(replaced);
                         let path = job.output.path(frame);
                         let notes = output_notes(&path, &out[0], &job.output_options);
