@@ -846,3 +846,95 @@ fn a_deep_part_beside_a_flat_one_is_left_out_with_a_warning() {
         .unwrap_or_default();
     assert!(z.contains("not read"), "{text}");
 }
+
+/// Writes a single-part EXR whose channels are named by the UTF-8 of `channels` (through
+/// the exr crate's bytes, not its Latin-1 `Text::from`), as OpenEXR 3 and Blender write them.
+fn write_utf8_named(path: &Path, (w, h): (usize, usize), channels: Vec<(String, Vec<f32>)>) {
+    let channels = channels
+        .into_iter()
+        .map(|(name, plane)| {
+            let name = exr::meta::attribute::Text::from_slice_unchecked(name.as_bytes());
+            AnyChannel::new(name, FlatSamples::F32(plane))
+        })
+        .collect();
+    let layer = layer_with(
+        None,
+        (w, h),
+        Blocks::ScanLines,
+        Compression::ZIP16,
+        channels,
+    );
+    Image::from_layer(layer).write().to_file(path).unwrap();
+}
+
+/// Channel and layer names are UTF-8 (an outside probe: Blender's view layer `Vordergrund_ü`
+/// was read as `Vordergrund_Ã¼`, so `--layers Vordergrund_ü,Hintergrund` found no such
+/// layer, and `info` suggested the garbled name): the layer is found, and the output names
+/// its channels with the same bytes.
+#[test]
+fn utf8_layer_names_are_found_and_written_back_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16, 8);
+    let n = w * h;
+    let inside = |i: usize| (4..10).contains(&(i % w)) && (2..6).contains(&(i / w));
+    let mut channels = Vec::new();
+    for (layer, depth) in [("Vordergrund_ü", 5.0), ("Hintergrund", 20.0)] {
+        let front = layer != "Hintergrund";
+        let alpha: Vec<f32> = (0..n)
+            .map(|i| if !front || inside(i) { 1.0 } else { 0.0 })
+            .collect();
+        for c in ["R", "G", "B", "A"] {
+            channels.push((format!("{layer}.Combined.{c}"), alpha.clone()));
+        }
+        channels.push((format!("{layer}.Depth.Z"), vec![depth; n]));
+        for c in ["X", "Y", "Z", "W"] {
+            channels.push((format!("{layer}.Vector.{c}"), vec![0.0; n]));
+        }
+    }
+    let input = dir.path().join("layers.exr");
+    write_utf8_named(&input, (w, h), channels);
+
+    let o = shutter(&["info", &s(&input)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("view layers Hintergrund, Vordergrund_ü:"),
+        "{}",
+        stdout(&o)
+    );
+
+    let output = dir.path().join("out.exr");
+    let o = shutter(&[
+        "blur",
+        "--preset",
+        "blender",
+        "--layers",
+        "Vordergrund_ü,Hintergrund",
+        "--algorithm",
+        "none",
+        "--color",
+        &s(&input),
+        "-o",
+        &s(&output),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // The names as the file stores them: bytes, read by the exr crate without decoding.
+    let names: Vec<Vec<u8>> = read_exr_layers(&output)
+        .iter()
+        .flat_map(|l| l.channel_data.list.iter())
+        .map(|c| c.name.bytes().to_vec())
+        .collect();
+    for name in [
+        "Vordergrund_ü.Combined.R",
+        "Vordergrund_ü.Depth.Z",
+        "Hintergrund.Vector.X",
+    ] {
+        assert!(
+            names.iter().any(|n| n == name.as_bytes()),
+            "{name} not in {:?}",
+            names
+                .iter()
+                .map(|n| String::from_utf8_lossy(n))
+                .collect::<Vec<_>>()
+        );
+    }
+}

@@ -28,13 +28,11 @@ pub fn text_of(t: &exr::meta::attribute::Text) -> String {
     String::from_utf8(t.bytes().to_vec()).unwrap_or_else(|_| t.to_string())
 }
 
-/// A name as shutter holds it (a char a byte of the file's text, so that it is written back
-/// byte for byte) shown as UTF-8 where its bytes are UTF-8 (`lumière.R`, not `lumiÃ¨re.R`).
+/// A name as shutter holds it, shown: as it is, since [`crate::io::channels::name_of`]
+/// reads names as UTF-8 already (`lumière.R`, not `lumiÃ¨re.R`; a byte that is not UTF-8
+/// shows as its escape char).
 pub fn shown_name(name: &str) -> String {
-    let bytes: Option<Vec<u8>> = name.chars().map(|c| u8::try_from(c).ok()).collect();
-    bytes
-        .and_then(|b| String::from_utf8(b).ok())
-        .unwrap_or_else(|| name.to_string())
+    name.to_string()
 }
 
 /// An attribute's type name, its value in text and in JSON.
@@ -144,7 +142,9 @@ fn value(value: &AttributeValue) -> (&'static str, String, Value) {
             ("string", text.to_string(), json!(text))
         }
         A::ChannelList(list) => {
-            let names: Vec<String> = list.list.iter().map(|c| c.name.to_string()).collect();
+            let names: Vec<String> = (list.list.iter())
+                .map(|c| crate::io::channels::name_of(&c.name))
+                .collect();
             ("chlist", names.join(", "), json!(names))
         }
         A::Bytes { type_hint, bytes } => {

@@ -123,7 +123,7 @@ pub fn crypto_layers(header: &exr::meta::header::Header) -> Vec<String> {
             key.starts_with("cryptomatte/") && key.ends_with("/name")
         })
         .filter_map(|(_, value)| match value {
-            exr::meta::attribute::AttributeValue::Text(text) => Some(text.to_string()),
+            exr::meta::attribute::AttributeValue::Text(text) => Some(name_of(text)),
             _ => None,
         })
         .collect();
@@ -131,9 +131,93 @@ pub fn crypto_layers(header: &exr::meta::header::Header) -> Vec<String> {
     names
 }
 
+/// The first of the chars that stand for a byte of a name that is not UTF-8: byte `b`
+/// (0x80 to 0xFF; ASCII is always UTF-8) is `ESCAPE_BASE + b`, U+F800 to U+F87F in the
+/// private use area (the "UTF-8b" escape of Python's `surrogateescape`, moved out of the
+/// surrogates, which a Rust `char` cannot hold).
+const ESCAPE_BASE: u32 = 0xF780;
+
+/// The char that stands for byte `byte` of a name that is not UTF-8.
+fn escaped(byte: u8) -> char {
+    char::from_u32(ESCAPE_BASE + u32::from(byte)).unwrap_or(char::REPLACEMENT_CHARACTER)
+}
+
+/// The byte char `c` stands for, where it is one of the escapes of [`name_of`].
+fn unescaped(c: char) -> Option<u8> {
+    u32::from(c)
+        .checked_sub(ESCAPE_BASE)
+        .and_then(|b| u8::try_from(b).ok())
+        .filter(|b| *b >= 0x80)
+}
+
+/// A channel's, layer's, part's or view's name as its file stores it (EXR text, which
+/// OpenEXR 3 writes as UTF-8), as shutter holds it: the UTF-8 decoded (`Vordergrund_ü.R`,
+/// `前景.R`), so that `--layers`, presets and messages see the name the user typed. The exr
+/// crate's `Display` reads a char a byte (Latin-1): `Vordergrund_Ã¼.R`, which nothing typed
+/// matched. A byte that is not part of UTF-8 (a Latin-1 writer's `beaut\xE9.R`) becomes
+/// the escape char U+F780 + byte, and an escape char the file really holds is escaped byte
+/// by byte too, so [`name_text`] gives back the file's bytes exactly, whatever they are.
+pub fn name_of(text: &exr::meta::attribute::Text) -> String {
+    let mut name = String::with_capacity(text.bytes().len());
+    for chunk in text.bytes().utf8_chunks() {
+        for c in chunk.valid().chars() {
+            if unescaped(c).is_some() {
+                let mut utf8 = [0; 4];
+                name.extend(c.encode_utf8(&mut utf8).bytes().map(escaped));
+            } else {
+                name.push(c);
+            }
+        }
+        name.extend(chunk.invalid().iter().copied().map(escaped));
+    }
+    name
+}
+
+/// A name as the EXR text a file stores: its UTF-8, each escape char of [`name_of`] the one
+/// byte it stands for. `name_text(&name_of(t)) == t` for every text `t`. Never panics (the
+/// exr crate's `Text::from(&str)` writes Latin-1 and panics above U+00FF).
+pub fn name_text(name: &str) -> exr::meta::attribute::Text {
+    let mut bytes = exr::meta::attribute::TextBytes::new();
+    for c in name.chars() {
+        match unescaped(c) {
+            Some(byte) => bytes.push(byte),
+            None => bytes.extend_from_slice(c.encode_utf8(&mut [0; 4]).as_bytes()),
+        }
+    }
+    exr::meta::attribute::Text::from_bytes_unchecked(bytes)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn names_round_trip_as_the_bytes_the_file_holds() {
+        use exr::meta::attribute::Text;
+        for (bytes, name) in [
+            (
+                "Vordergrund_ü.Combined.R".as_bytes(),
+                "Vordergrund_ü.Combined.R",
+            ),
+            ("前景.R".as_bytes(), "前景.R"),
+            ("beauté.R".as_bytes(), "beauté.R"),
+            (b"Z".as_slice(), "Z"),
+            // Latin-1, not UTF-8: each byte escaped, the rest as it is.
+            (b"beaut\xE9.R".as_slice(), "beaut\u{F869}.R"),
+            (b"\xFF\x80".as_slice(), "\u{F87F}\u{F800}"),
+            // A valid escape char is escaped byte by byte, so it too comes back.
+            ("a\u{F800}".as_bytes(), "a\u{F86F}\u{F820}\u{F800}"),
+            // Cut-short UTF-8.
+            (b"\xE5\x89".as_slice(), "\u{F865}\u{F809}"),
+        ] {
+            let text = Text::from_slice_unchecked(bytes);
+            assert_eq!(name_of(&text), name, "{bytes:?}");
+            assert_eq!(name_text(name).bytes(), bytes, "{name:?}");
+            assert_eq!(name_text(&name_of(&text)), text);
+        }
+        // What the exr crate would have panicked on.
+        assert_eq!(name_text("前景.R").bytes(), "前景.R".as_bytes());
+    }
     use LayerClass::{Colour, Data};
 
     #[test]

@@ -18,7 +18,7 @@ use exr::block::chunk::{Chunk, CompressedBlock};
 use exr::block::lines::LineIndex;
 use exr::compression::Compression;
 use exr::math::Vec2;
-use exr::meta::attribute::{IntegerBounds, SampleType, Text};
+use exr::meta::attribute::{IntegerBounds, SampleType};
 use exr::meta::header::{Header, ImageAttributes, LayerAttributes};
 use exr::meta::{BlockDescription, MetaData};
 use exr::prelude::f16;
@@ -709,7 +709,7 @@ pub fn write_channels(
             // `exr_like::channels_like`).
             AnyChannel {
                 quantize_linearly: false,
-                ..AnyChannel::new(Text::from(name.as_str()), samples)
+                ..AnyChannel::new(crate::io::channels::name_text(&name), samples)
             }
         })
         .collect();

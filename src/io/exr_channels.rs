@@ -4,12 +4,12 @@
 
 use exr::compression::Compression;
 use exr::image::{AnyChannel, FlatSamples};
-use exr::meta::attribute::{SampleType, Text};
+use exr::meta::attribute::SampleType;
 use exr::meta::header::Header;
 use exr::prelude::f16;
 
 use crate::frame::{LayerClass, Plane};
-use crate::io::channels;
+use crate::io::channels::{self, name_of, name_text};
 
 /// One channel to write.
 #[derive(Clone, Debug)]
@@ -79,7 +79,7 @@ fn described<'h>(
     input: Option<&'h Header>,
     name: &str,
 ) -> Option<&'h exr::meta::attribute::ChannelDescription> {
-    input.and_then(|h| h.channels.list.iter().find(|c| c.name.to_string() == name))
+    input.and_then(|h| h.channels.list.iter().find(|c| name_of(&c.name) == name))
 }
 
 fn stored(input: Option<&Header>, name: &str) -> Option<SampleType> {
@@ -150,7 +150,7 @@ pub fn channels_like(
             let linear = described(input, read_as).is_some_and(|c| c.quantize_linearly);
             AnyChannel {
                 quantize_linearly: linear,
-                ..AnyChannel::new(Text::from(name.as_str()), samples)
+                ..AnyChannel::new(name_text(&name), samples)
             }
         })
         .collect()

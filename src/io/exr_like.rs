@@ -38,6 +38,7 @@ use exr::meta::BlockDescription;
 use exr::prelude::LineOrder;
 
 use crate::frame::Window;
+use crate::io::channels::{name_of, name_text};
 pub use crate::io::exr_channels::OutChannel;
 use crate::io::exr_channels::{channels_like, lossy_for};
 
@@ -127,8 +128,7 @@ pub fn write_like(
     let mut taken: Vec<String> = parts
         .iter()
         .filter_map(|p| {
-            (p.name.clone())
-                .or_else(|| Some(p.input?.own_attributes.layer_name.as_ref()?.to_string()))
+            (p.name.clone()).or_else(|| Some(name_of(p.input?.own_attributes.layer_name.as_ref()?)))
         })
         .collect();
     // Each part, and the lossless part its data needs under a lossy compression.
@@ -153,7 +153,7 @@ pub fn write_like(
             .partition(|c| !lossy_for(encoding.compression, c, part.input, output.half));
         let mut attributes = attributes_like(part.input, part.data, record, views);
         if let Some(name) = &part.name {
-            attributes.layer_name = Some(latin1(name));
+            attributes.layer_name = Some(name_text(name));
         }
         let data_encoding = Encoding {
             compression: DEFAULT_COMPRESSION,
@@ -179,7 +179,7 @@ pub fn write_like(
                 let name = fresh(common_prefix(&group).as_deref().unwrap_or(usual), &taken);
                 taken.push(name.clone());
                 let mut attributes = attributes.clone();
-                attributes.layer_name = Some(latin1(&name));
+                attributes.layer_name = Some(name_text(&name));
                 layers.push((attributes, encoding, part.input, part.data, group));
             }
         } else {
@@ -193,7 +193,7 @@ pub fn write_like(
                 _ => data_part_name(attributes.layer_name.as_ref(), &taken),
             };
             taken.push(name.clone());
-            data_attributes.layer_name = Some(latin1(&name));
+            data_attributes.layer_name = Some(name_text(&name));
             layers.push((data_attributes, data_encoding, part.input, part.data, group));
         }
     }
@@ -257,7 +257,7 @@ pub fn write_like(
 /// a number after it where even that name is taken. Readers find a channel by its own
 /// name, whatever its part (`shutter diff` and the passes' lookup among them).
 fn data_part_name(part: Option<&Text>, taken: &[String]) -> String {
-    let part = part.map(|n| n.to_string());
+    let part = part.map(name_of);
     let main = part
         .as_deref()
         .is_none_or(|n| crate::io::file::FileInfo::MAIN_PARTS.contains(&n));
@@ -369,9 +369,9 @@ fn attributes_like(
             // with that, and Blender reads the channels of a part whose name they do not
             // begin with as of a view layer named by the whole part name.
             if let (Some(view), Some(name)) = (kept.view_name.take(), &kept.layer_name) {
-                let view = view.to_string();
-                let plain = crate::io::view::part_name_without_view(&name.to_string(), Some(&view));
-                kept.layer_name = Some(latin1(&plain));
+                let view = name_of(&view);
+                let plain = crate::io::view::part_name_without_view(&name_of(name), Some(&view));
+                kept.layer_name = Some(name_text(&plain));
             }
         }
         kept
@@ -385,13 +385,15 @@ fn attributes_like(
     for value in attributes.other.values_mut() {
         as_read(value);
     }
+    // As UTF-8, as OpenEXR 3 reads its strings (it was Latin-1, `--layers Vordergrund_ü`
+    // written as byte 0xFC: OpenEXR's Python module then refused to open the file).
     for (name, value) in [
         ("shutter/version", env!("CARGO_PKG_VERSION")),
         ("shutter/settings", record),
     ] {
         attributes
             .other
-            .insert(Text::from(name), AttributeValue::Text(latin1(value)));
+            .insert(Text::from(name), AttributeValue::Text(name_text(value)));
     }
     attributes
 }
@@ -476,16 +478,6 @@ fn encoding_like(input: Option<&Header>, output: &ExrOutput) -> Encoding {
         blocks,
         line_order,
     }
-}
-
-/// `text` as an EXR text attribute: EXR text is bytes, read as Latin-1 by OpenEXR's tools;
-/// a character outside it becomes `?`.
-fn latin1(text: &str) -> Text {
-    let bytes: Vec<u8> = text
-        .chars()
-        .map(|c| u8::try_from(u32::from(c)).unwrap_or(b'?'))
-        .collect();
-    Text::from_slice_unchecked(&bytes)
 }
 
 /// Puts the attributes of every header of the EXR in `file` in name order, in place, and

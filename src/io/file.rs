@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Problem, ProblemKind};
 use crate::frame::{Plane, Windows};
+use crate::io::channels::name_of;
 use crate::io::view::Views;
 use crate::io::{exr as exr_io, image as image_io};
 
@@ -153,7 +154,7 @@ impl FileInfo {
             headers
                 .get(part)
                 .and_then(|h| h.own_attributes.layer_name.as_ref())
-                .map_or(format!("part {part}"), |n| n.to_string())
+                .map_or(format!("part {part}"), name_of)
         };
         for (name, index) in names.iter().zip(found.iter_mut()) {
             let Some(at) = *index else { continue };
@@ -433,7 +434,7 @@ impl FileInfo {
             let Some(stored) = was.channels.list.get(info.index) else {
                 continue;
             };
-            let name = stored.name.to_string();
+            let name = name_of(&stored.name);
             let found = now.channels.list.get(info.index);
             if found.is_none_or(|c| c.name != stored.name) {
                 let moved = now.channels.list.iter().any(|c| c.name == stored.name);
@@ -566,15 +567,11 @@ fn probe_exr(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
     let mut channels = Vec::new();
     for (part, header) in meta.headers.iter().enumerate() {
         // A multi-view part's name without its view (Blender's `ViewLayer.Combined-left`).
-        let view = header
-            .own_attributes
-            .view_name
-            .as_ref()
-            .map(|v| v.to_string());
+        let view = header.own_attributes.view_name.as_ref().map(name_of);
         let part_name = (header.own_attributes.layer_name.as_ref())
-            .map(|n| crate::io::view::part_name_without_view(&n.to_string(), view.as_deref()));
+            .map(|n| crate::io::view::part_name_without_view(&name_of(n), view.as_deref()));
         for (index, channel) in header.channels.list.iter().enumerate() {
-            let name = channel.name.to_string();
+            let name = name_of(&channel.name);
             let alias = match &part_name {
                 Some(part_name) if multipart && !name.starts_with(&format!("{part_name}.")) => {
                     Some(format!("{part_name}.{name}"))

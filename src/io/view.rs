@@ -72,7 +72,7 @@ pub fn part_name_without_view(name: &str, view: Option<&str>) -> String {
 impl Views {
     /// Finds the views of a file from its headers (parts), or `None` for a file of no views.
     pub fn of(headers: &[Header]) -> Option<Views> {
-        let text = |t: &exr::meta::attribute::Text| t.to_string();
+        let text = crate::io::channels::name_of;
         let part_views: Vec<Option<String>> = headers
             .iter()
             .map(|h| h.own_attributes.view_name.as_ref().map(text))

@@ -61,7 +61,9 @@ pub(super) fn other_channels(
                 .own_attributes
                 .layer_name
                 .as_ref()
-                .map_or(format!("part {p}"), |n| format!("part {n}"));
+                .map_or(format!("part {p}"), |n| {
+                    format!("part {}", crate::io::channels::name_of(n))
+                });
             (readable(p).then_some(p), name)
         })
         .unzip();

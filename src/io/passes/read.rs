@@ -428,5 +428,8 @@ fn stored_name(
     headers
         .get(channel.part)
         .and_then(|h| h.channels.list.get(channel.index))
-        .map_or_else(|| channel.name.clone(), |c| c.name.to_string())
+        .map_or_else(
+            || channel.name.clone(),
+            |c| crate::io::channels::name_of(&c.name),
+        )
 }
