@@ -486,10 +486,10 @@ fn merged_like(layers: &[Frame]) -> Vec<Option<String>> {
         let header = carried.headers.get(carried.colour_part)?;
         // A layer of a file of its own is named by the stack (`name_layer`: `fg.R` of `R`).
         let unnamed = name.split_once('.').map_or(name.as_str(), |(_, rest)| rest);
-        let found = [name.as_str(), unnamed]
-            .into_iter()
-            .find_map(|n| header.channels.list.iter().find(|c| c.name.eq(n)))?;
-        Some((found.name.to_string(), found.sample_type))
+        let found = [name.as_str(), unnamed].into_iter().find_map(|n| {
+            (header.channels.list.iter()).find(|c| crate::io::channels::name_of(&c.name) == n)
+        })?;
+        Some((crate::io::channels::name_of(&found.name), found.sample_type))
     };
     (0..MERGED.len())
         .map(|k| {

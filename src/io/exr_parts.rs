@@ -11,6 +11,7 @@
 //! part is named the same (`OutPart::bare`).
 
 use crate::frame::{Frame, LayerClass, Window};
+use crate::io::channels::name_of;
 use crate::io::exr_like;
 
 /// The name of a stack's merged beauty's own part.
@@ -169,7 +170,7 @@ pub fn exr_parts(
 fn merged_part_name(headers: &[exr::meta::header::Header], written: &[bool]) -> String {
     let taken: Vec<String> = (headers.iter().zip(written))
         .filter(|(_, &w)| w)
-        .filter_map(|(h, _)| Some(h.own_attributes.layer_name.as_ref()?.to_string()))
+        .filter_map(|(h, _)| Some(name_of(h.own_attributes.layer_name.as_ref()?)))
         .collect();
     exr_like::fresh(MERGED_PART, &taken)
 }

@@ -220,7 +220,7 @@ fn pairs<'a>(a: &'a Frame, b: &'a Frame, ones: &'a [f32]) -> (Vec<Pair<'a>>, One
             .then(|| f.carried.headers.get(c.part))
             .flatten()
             .and_then(|h| h.own_attributes.layer_name.as_ref())
-            .map(|n| n.to_string());
+            .map(crate::io::channels::name_of);
         match part {
             Some(part) if !c.name.starts_with(&format!("{part}.")) => format!("{part}.{}", c.name),
             _ => c.name.clone(),
