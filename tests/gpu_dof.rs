@@ -540,15 +540,9 @@ mod with_gpu {
         }
     }
 
-    /// A near disc's rim over a fine far checker (disc CoC −14: its tiles take the rings of
-    /// 7 px; the checker's 4 px bokeh reads the dense grid there): the twin picks the dense
-    /// grid per pixel as the CPU picks it per lane, within the gather's tolerance (1e-5 of
-    /// the range), beauty and carried alike.
-    #[test]
-    fn dof_gather_reads_the_dense_grid_in_a_near_rim_s_tiles_as_the_cpu_does() {
-        let Some(gpu) = gpu() else { return };
-        use shutter::dof::gather::{gather, gather_carrying, plan};
-        use shutter::dof::DofConfig;
+    /// A near disc's rim over a fine far checker, 96×64: the colour (the disc 0.3, the
+    /// checker 0 and 1, G its complement) and the CoC plane (the disc −14, the checker 8).
+    fn near_rim_over_checker() -> (usize, usize, shutter::frame::Color, Vec<f32>) {
         let (w, h) = (96, 64);
         let disc = |x: usize, y: usize| {
             let (dx, dy) = (x as f32 + 0.5 - 14.0, y as f32 + 0.5 - 14.0);
@@ -569,9 +563,22 @@ mod with_gpu {
             b: plane,
             a: Some(vec![1.0; w * h]),
         };
-        let coc: Vec<f32> = (0..w * h)
+        let coc = (0..w * h)
             .map(|i| if disc(i % w, i / w) { -14.0 } else { 8.0 })
             .collect();
+        (w, h, color, coc)
+    }
+
+    /// A near disc's rim over a fine far checker (disc CoC −14: its tiles take the rings of
+    /// 7 px; the checker's 4 px bokeh reads the dense grid there): the twin picks the dense
+    /// grid per pixel as the CPU picks it per lane, within the gather's tolerance (1e-5 of
+    /// the range), beauty and carried alike.
+    #[test]
+    fn dof_gather_reads_the_dense_grid_in_a_near_rim_s_tiles_as_the_cpu_does() {
+        let Some(gpu) = gpu() else { return };
+        use shutter::dof::gather::{gather, gather_carrying, plan};
+        use shutter::dof::DofConfig;
+        let (w, h, color, coc) = near_rim_over_checker();
         let config = DofConfig::new(w, h, &DofParams::default());
         let t = tiles(&TilesConfig::new(w, h, config.epsilon), &coc);
         assert!(plan(&config, &t).tiles.iter().any(|t| t.dense_count > 0));
@@ -628,29 +635,7 @@ mod with_gpu {
             assert!(d.mean <= 1e-7 * range as f64, "{what}: mean {}", d.mean);
         };
         // The near rim over the checker, as the CoC plane.
-        let (w, h) = (96, 64);
-        let disc = |x: usize, y: usize| {
-            let (dx, dy) = (x as f32 + 0.5 - 14.0, y as f32 + 0.5 - 14.0);
-            dx * dx + dy * dy < 8.0 * 8.0
-        };
-        let plane: Vec<f32> = (0..w * h)
-            .map(|i| {
-                if disc(i % w, i / w) {
-                    0.3
-                } else {
-                    ((i % w + i / w) % 2) as f32
-                }
-            })
-            .collect();
-        let rim = shutter::frame::Color {
-            r: plane.clone(),
-            g: plane.iter().map(|v| 1.0 - v).collect(),
-            b: plane,
-            a: Some(vec![1.0; w * h]),
-        };
-        let rim_coc: Vec<f32> = (0..w * h)
-            .map(|i| if disc(i % w, i / w) { -14.0 } else { 8.0 })
-            .collect();
+        let (w, h, rim, rim_coc) = near_rim_over_checker();
         // The stress depth frame under a lens of CoC up to 48 px, over noise.
         let (sw, sh) = (160, 90);
         let lens = Lens {

@@ -144,7 +144,12 @@ thread_local! {
 /// A block's bytes as OpenEXR's ZIP stores them: split into even and odd bytes, each byte
 /// the difference from the one before (plus 128, wrapping), deflated with a zlib wrapper.
 fn deflate(bytes: &[u8]) -> Vec<u8> {
-    let predicted = predict(bytes);
+    zlib(&predict(bytes))
+}
+
+/// `bytes` deflated with a zlib wrapper by this thread's compressor (libdeflate, level
+/// [`LEVEL`]): OpenEXR's ZIP blocks, and a TIFF's deflate strips (`image::tiff_write`).
+pub fn zlib(predicted: &[u8]) -> Vec<u8> {
     COMPRESSOR.with_borrow_mut(|slot| {
         let compressor = slot.get_or_insert_with(|| {
             libdeflater::Compressor::new(
@@ -153,7 +158,7 @@ fn deflate(bytes: &[u8]) -> Vec<u8> {
         });
         let mut out = vec![0u8; compressor.zlib_compress_bound(predicted.len())];
         let size = compressor
-            .zlib_compress(&predicted, &mut out)
+            .zlib_compress(predicted, &mut out)
             .expect("the bound libdeflate gives holds its output");
         out.truncate(size);
         out

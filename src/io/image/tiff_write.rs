@@ -1,5 +1,6 @@
-//! Writing a TIFF: the image's directory laid out here, its strips deflated by libdeflate, its
-//! metadata's directories by [`tiff_meta`] through the tiff crate's directory encoder.
+//! Writing a TIFF: the image's directory laid out here, its strips deflated by EXR's ZIP
+//! compressor (libdeflate, `exr_zip::zlib`), its metadata's directories by [`tiff_meta`]
+//! through the tiff crate's directory encoder.
 //!
 //! The tiff crate's image encoder writes each value where the last one ended, so after a
 //! strip of odd length its sample format, strip offsets and the directory itself begin at odd
@@ -36,9 +37,6 @@ const UNASSOCIATED_ALPHA: u16 = 2;
 const DEFLATE: u16 = 8;
 const NO_PREDICTOR: u16 = 1;
 const HORIZONTAL: u16 = 2;
-
-/// The deflate level: what the tiff crate's `Balanced` asked of its deflater.
-const LEVEL: i32 = 6;
 
 /// Uncompressed bytes a strip holds at most (whole rows; one row where a row is larger).
 const STRIP_BYTES: usize = 1_000_000;
@@ -132,20 +130,12 @@ pub(super) fn write_tiff(
     let rows_per_strip = STRIP_BYTES.div_ceil(row_bytes).min(height as usize);
     // Each strip deflated on its own (in parallel: each strip's bytes depend on it alone).
     let strips: Vec<Vec<u8>> = (0..height as usize)
-        .step_by(rows_per_strip)
-        .collect::<Vec<_>>()
         .into_par_iter()
+        .step_by(rows_per_strip)
         .map(|y| {
             let rows = rows_per_strip.min(height as usize - y);
             let raw = strip_bytes(&samples, y * row..(y + rows) * row, row, channels);
-            let level = libdeflater::CompressionLvl::new(LEVEL).expect("a level libdeflate has");
-            let mut compressor = libdeflater::Compressor::new(level);
-            let mut out = vec![0; compressor.zlib_compress_bound(raw.len())];
-            let n = compressor
-                .zlib_compress(&raw, &mut out)
-                .expect("the bound holds the stream");
-            out.truncate(n);
-            out
+            crate::io::exr_zip::zlib(&raw)
         })
         .collect();
 
