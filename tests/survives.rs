@@ -1076,6 +1076,87 @@ fn passes_are_placed_by_their_data_windows() {
     );
 }
 
+/// A pass whose display window is not the colour's was framed for another picture (rendered
+/// at another resolution): placed by its data window, it is read without error, so the run
+/// says so. An overscan pass (the same display window, a wider data window) is not warned of.
+#[test]
+fn a_pass_framed_for_another_picture_is_warned_of() {
+    use shutter::frame::{Window, Windows};
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, origin: (i32, i32), (w, h): (usize, usize), display: Window, names| {
+        let file = std::io::BufWriter::new(std::fs::File::create(dir.path().join(name)).unwrap());
+        let windows = Windows {
+            data_origin: origin,
+            display,
+        };
+        let channels = Vec::from_iter(
+            (names as Vec<&str>)
+                .into_iter()
+                .map(|c| (c.to_string(), noise(w * h, 61, 1.0, 5.0))),
+        );
+        shutter::io::exr::write_channels(
+            file,
+            w,
+            h,
+            windows,
+            channels,
+            shutter::io::exr::ExrOptions::default(),
+        )
+        .unwrap();
+    };
+    let picture = |width, height| Window {
+        x: 0,
+        y: 0,
+        width,
+        height,
+    };
+    write(
+        "color.exr",
+        (0, 0),
+        (W, H),
+        picture(W, H),
+        vec!["R", "G", "B", "velocity.X", "velocity.Y"],
+    );
+    // Depth with 8 px of overscan each side; depth rendered at twice the resolution.
+    write(
+        "over.exr",
+        (-8, -8),
+        (W + 16, H + 16),
+        picture(W, H),
+        vec!["Z"],
+    );
+    write(
+        "twice.exr",
+        (0, 0),
+        (2 * W, 2 * H),
+        picture(2 * W, 2 * H),
+        vec!["Z"],
+    );
+    let run = |depth: &str| {
+        let o = shutter(&[
+            "blur",
+            "--algorithm",
+            "reconstruct",
+            "--color",
+            &s(&dir.path().join("color.exr")),
+            "--depth",
+            &s(&dir.path().join(depth)),
+            "-o",
+            &s(&dir.path().join(format!("out-{depth}"))),
+        ]);
+        assert!(o.status.success(), "{depth}: {}", stderr(&o));
+        stderr(&o)
+    };
+    let warned = "display window";
+    let over = run("over.exr");
+    assert!(!over.contains(warned), "{over}");
+    let twice = run("twice.exr");
+    assert!(
+        twice.contains("depth: the file's display window (0, 0) - (79, 47) is not the color pass's (0, 0) - (39, 23)"),
+        "{twice}"
+    );
+}
+
 #[test]
 fn a_presets_layers_table_overrides_a_layers_class() {
     use crate::support::{channel, read_exr_reference};
@@ -1102,6 +1183,33 @@ fn a_presets_layers_table_overrides_a_layers_class() {
         channel(&before, "velocity.X")
     );
     assert_ne!(channel(&after, "diffuse.R"), channel(&before, "diffuse.R"));
+    // A key one typo from a layer of the file is warned of, naming the layer it meant;
+    // a key naming a layer the file lacks (one preset for shots of other AOVs) is not.
+    let typo = dir.path().join("typo.toml");
+    std::fs::write(&typo, "[layers]\nspecualr = \"data\"\nnormal = \"data\"\n").unwrap();
+    let passes = ["depth", "velocity", "prev", "next"]
+        .map(|p| [format!("--{p}"), s(&dir.path().join(format!("{p}.exr")))]);
+    let mut args = vec!["blur".to_string(), "--color".into(), s(&color)];
+    args.extend(passes.into_iter().flatten());
+    args.extend(
+        [
+            "-o",
+            &s(&dir.path().join("typo.exr")),
+            "--preset",
+            &s(&typo),
+        ]
+        .map(String::from),
+    );
+    let o = shutter(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let said = stderr(&o);
+    assert!(
+        said.contains(
+            "[layers] names specualr, which is no layer of the colour file: did you mean specular?"
+        ),
+        "{said}"
+    );
+    assert!(!said.contains("names normal"), "{said}");
     // `shutter info --preset` shows the classes the run gave them.
     let o = shutter(&["info", &s(&color), "--json", "--preset", &s(&preset)]);
     assert!(o.status.success(), "{}", stderr(&o));

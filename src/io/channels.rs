@@ -82,6 +82,61 @@ pub fn preset_class(
     }
 }
 
+/// The keys of a preset's `[layers]` table that name no layer of a file whose channels are
+/// `names` but nearly name one, each with the layer it likely meant: the same but for case,
+/// or one edit away (two for names of eight letters or more) from a layer of four letters or
+/// more. A key naming a layer the file lacks is not a mistake (one preset serves shots
+/// rendered with different AOVs); a near miss is a typo that leaves the meant layer in its
+/// default class without a word.
+pub fn near_misses<'a>(
+    keys: impl IntoIterator<Item = &'a String>,
+    names: &[&str],
+) -> Vec<(String, String)> {
+    let layers: std::collections::BTreeSet<&str> = names
+        .iter()
+        .map(|n| match split(n) {
+            ("", own) => own,
+            (layer, _) => layer,
+        })
+        .collect();
+    let mut misses = Vec::new();
+    for key in keys {
+        if layers.contains(key.as_str()) {
+            continue;
+        }
+        let near = layers.iter().find(|layer| {
+            let allowed = match layer.chars().count() {
+                0..=3 => 0,
+                4..=7 => 1,
+                _ => 2,
+            };
+            layer.eq_ignore_ascii_case(key) || edits(layer, key) <= allowed
+        });
+        if let Some(layer) = near {
+            misses.push((key.clone(), layer.to_string()));
+        }
+    }
+    misses
+}
+
+/// The Levenshtein distance between `a` and `b`, by characters.
+fn edits(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let next = (diagonal + usize::from(ca != cb))
+                .min(row[j] + 1)
+                .min(row[j + 1] + 1);
+            diagonal = row[j + 1];
+            row[j + 1] = next;
+        }
+    }
+    row[b.len()]
+}
+
 /// The class of channel `name`; `crypto_layers` are the layer names the file's
 /// `cryptomatte/<key>/name` attributes give.
 pub fn class_of(name: &str, crypto_layers: &[String]) -> LayerClass {
@@ -190,6 +245,49 @@ pub fn name_text(name: &str) -> exr::meta::attribute::Text {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_layers_key_one_typo_from_a_layer_is_a_near_miss() {
+        let names = [
+            "R",
+            "G",
+            "B",
+            "specular.R",
+            "ViewLayer.DiffCol.G",
+            "Z",
+            "albedo.R",
+        ];
+        let keys: Vec<String> = [
+            "specualr",
+            "specular",
+            "viewlayer.diffcol",
+            "ViewLayer.DifCol",
+            "normal",
+            "z",
+            "Y",
+            "albedos",
+            "alb",
+        ]
+        .map(String::from)
+        .into();
+        let pairs = |v: &[(&str, &str)]| -> Vec<(String, String)> {
+            v.iter()
+                .map(|(a, b)| (a.to_string(), b.to_string()))
+                .collect()
+        };
+        // Present keys, far keys (normal), and one letter off a name under four letters (Y
+        // against R, G, B; alb against nothing) are not near misses.
+        assert_eq!(
+            near_misses(&keys, &names),
+            pairs(&[
+                ("specualr", "specular"),
+                ("viewlayer.diffcol", "ViewLayer.DiffCol"),
+                ("ViewLayer.DifCol", "ViewLayer.DiffCol"),
+                ("z", "Z"),
+                ("albedos", "albedo"),
+            ])
+        );
+    }
 
     #[test]
     fn names_round_trip_as_the_bytes_the_file_holds() {

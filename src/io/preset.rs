@@ -417,6 +417,12 @@ impl Preset {
         if self.channel_names().any(|n| n.trim().is_empty()) {
             return bad("a channel name is empty".into());
         }
+        if let Some(name) = self.channel_names().find(|n| miswritten_placeholder(n)) {
+            return bad(format!(
+                "channel name '{name}' has a placeholder written otherwise than {{layer}} \
+                 (lower case, no spaces), so it would be looked for as written"
+            ));
+        }
         if self
             .color
             .channels
@@ -485,6 +491,24 @@ impl Preset {
     pub fn to_toml(&self) -> String {
         toml::to_string_pretty(self).unwrap_or_default()
     }
+}
+
+/// Whether channel name `name` has `{layer}` written another way (`{LAYER}`, `{ Layer }`):
+/// read as a literal name, it matches no channel, and the run would say the file lacks a pass
+/// it has. Other braces are left alone (a channel may be named anything).
+fn miswritten_placeholder(name: &str) -> bool {
+    let mut rest = name;
+    while let Some(open) = rest.find('{') {
+        let Some(close) = rest[open..].find('}') else {
+            break;
+        };
+        let inner = &rest[open + 1..open + close];
+        if inner != "layer" && inner.trim().eq_ignore_ascii_case("layer") {
+            return true;
+        }
+        rest = &rest[open + close + 1..];
+    }
+    false
 }
 
 #[cfg(test)]
@@ -570,5 +594,29 @@ mod tests {
         std::fs::write(&path, "[velocity]\nmeanin = \"to_prev\"\n").unwrap();
         let err = Preset::load(&[path.display().to_string()]).unwrap_err();
         assert!(err.to_string().contains("meanin"), "{err}");
+    }
+
+    #[test]
+    fn a_placeholder_written_otherwise_than_layer_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let load = |names: &str| {
+            let path = dir.path().join("layered.toml");
+            let channels = ["R", "G", "B"]
+                .map(|c| format!("\"{names}.{c}\""))
+                .join(", ");
+            std::fs::write(&path, format!("[color]\nchannels = [[{channels}]]\n")).unwrap();
+            Preset::load(&[path.display().to_string()])
+        };
+        for miswritten in ["{LAYER}.Combined", "{ layer }.Combined", "x.{Layer}"] {
+            let err = load(miswritten).unwrap_err().to_string();
+            assert!(
+                err.contains(&format!("'{miswritten}.R'")) && err.contains("{layer}"),
+                "{miswritten}: {err}"
+            );
+        }
+        // The placeholder itself, and braces around anything else, are channel names.
+        for kept in ["{layer}.Combined", "{layers}.Combined", "{}", "{LAYER"] {
+            assert!(load(kept).is_ok(), "{kept}");
+        }
     }
 }

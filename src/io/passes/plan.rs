@@ -12,7 +12,7 @@ use crate::io::sequence::PathPattern;
 
 use super::convert::Decode;
 use super::parts::{other_channels, PartApart};
-use super::window::{part_view, DataWindow};
+use super::window::{display_warning, part_view, DataWindow};
 use super::Inputs;
 
 /// A channel to read: which planned file, which entry of that file's read list.
@@ -190,6 +190,7 @@ pub fn plan_frame(
                         .map(|(name, _)| name.clone())
                         .collect();
                     plan.parts_left_out = left;
+                    plan.warnings.extend(layers_near_misses(info, preset));
                     plan.color = Some(ColorPlan {
                         rgb: [
                             slots[0].expect("required"),
@@ -464,6 +465,12 @@ pub fn plan_frame(
     for (pass, slot) in data {
         let file = &planner.files[slot.file];
         let channel = &file.info.channels[file.channels[slot.entry]];
+        let framed = plan.color_windows.as_ref();
+        if let Some(warning) = framed.and_then(|c| display_warning(pass, &file.info, c)) {
+            if !plan.warnings.contains(&warning) {
+                plan.warnings.push(warning);
+            }
+        }
         if let Some(method) = stored_lossily(&file.info, channel) {
             let warning = format!(
                 "{pass}: channel {} is compressed with {method}, which keeps a {} channel of \
@@ -617,6 +624,25 @@ impl Planner<'_> {
             });
         Slot { file, entry }
     }
+}
+
+/// The warnings that the preset's `[layers]` names a layer the colour file lacks, one typo
+/// away from one it has ([`crate::io::channels::near_misses`]). Without the file's name, so a
+/// sequence warns once.
+fn layers_near_misses(info: &FileInfo, preset: &Preset) -> Vec<String> {
+    let names: Vec<&str> = (info.channels.iter())
+        .map(|c| c.alias.as_ref().unwrap_or(&c.name).as_str())
+        .collect();
+    crate::io::channels::near_misses(preset.layers.keys(), &names)
+        .into_iter()
+        .map(|(key, layer)| {
+            format!(
+                "preset {}: [layers] names {key}, which is no layer of the colour file: did \
+                 you mean {layer}? {layer} keeps its default class",
+                preset.name
+            )
+        })
+        .collect()
 }
 
 /// The warning that view layer `layer` reads `pass` from `channel`, a channel not of its own

@@ -3,7 +3,7 @@
 //! it (depth rendered with overscan beside an auto-bbox beauty), one that does not is refused
 //! by the plan, naming both windows.
 
-use crate::frame::Plane;
+use crate::frame::{Plane, Windows};
 use crate::io::file::FileInfo;
 
 /// Where a file's pixels lie in the file's coordinates: its data window.
@@ -103,6 +103,33 @@ impl DataWindow {
         }
         out
     }
+}
+
+/// The warning that `pass`, read from `info`, was framed for another picture than the colour
+/// pass: its display window differs from the colour's (`colour`). Its pixels are still placed
+/// by their data window in the file's coordinates, as EXR places them, which is right for an
+/// overscan render (the display window kept, the data window widened) but not for a pass
+/// rendered at another resolution or framing, whose pixels then land on the wrong ones
+/// without a word. `None` for a file with no display window of its own (an image) or the
+/// same one.
+pub fn display_warning(pass: &str, info: &FileInfo, colour: &Windows) -> Option<String> {
+    let display = info.windows.display;
+    let exr = matches!(info.kind, crate::io::file::FileKind::Exr { .. });
+    (exr && display != colour.display).then(|| {
+        let text = |w: &crate::frame::Window| {
+            DataWindow {
+                origin: (w.x, w.y),
+                width: w.width,
+                height: w.height,
+            }
+            .describe()
+        };
+        format!(
+            "{pass}: the file's display window {} is not the color pass's {}: its pixels are              placed by their data window in the file's coordinates, right for an overscan              render of the same picture, wrong for one rendered at another resolution or              framing",
+            text(&display),
+            text(&colour.display)
+        )
+    })
 }
 
 /// `info` as the part holding its channel `channel` sees it: the size and windows of that
