@@ -1048,6 +1048,54 @@ fn a_reversed_stack_is_named_in_a_warning() {
     }
 }
 
+/// A NaN in one view layer of a stack is warned of naming that layer (and its file), the
+/// first time each layer has one: BG's colour in frame 2, FG's in frame 3, BG's again in 3.
+#[test]
+fn a_stack_s_replaced_values_are_named_by_their_layer() {
+    let dir = tempfile::tempdir().unwrap();
+    let with_nan = |mut layer: Vec<(String, Vec<f32>)>| {
+        layer[0].1[W + 3] = f32::NAN;
+        layer
+    };
+    for frame in 1..=3 {
+        let fg = foreground(1e10, 0.0);
+        let (fg, bg) = match frame {
+            1 => (fg, background()),
+            2 => (fg, with_nan(background())),
+            _ => (with_nan(fg), with_nan(background())),
+        };
+        write(
+            &dir.path().join(format!("layers.{frame:04}.exr")),
+            vec![fg, bg],
+        );
+    }
+    let o = shutter(&[
+        "blur",
+        "--preset",
+        "blender",
+        "--algorithm",
+        "reconstruct",
+        "--layers",
+        "FG,BG",
+        "--color",
+        &format!("{}/layers.####.exr", dir.path().display()),
+        "-o",
+        &format!("{}/o.####.exr", dir.path().display()),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let said = stderr(&o);
+    let named = |layer: &str, frame: i64| {
+        format!(
+            "colour values NaN or beyond ±1e30 read as 0 or clamped in {}/layers.{frame:04}.exr \
+             (view layer {layer}), first in frame {frame}",
+            dir.path().display()
+        )
+    };
+    assert_eq!(said.matches(&named("BG", 2)).count(), 1, "{said}");
+    assert_eq!(said.matches(&named("FG", 3)).count(), 1, "{said}");
+    assert_eq!(said.matches("colour values NaN").count(), 2, "{said}");
+}
+
 /// A disc of radius 8 moving (7, 2.5) px a frame (image axes, y down) in a layer `FG` over
 /// empty space, before a still grey `BG`: its pixels' alpha their coverage (8×8 points a
 /// pixel), depth and motion sampled at their centres, as Blender writes them. Returns the

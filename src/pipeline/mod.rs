@@ -547,9 +547,9 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             // The read stage applies the numeric policy, so its scan overlaps processing.
             // A frame (each view's), what the numeric policy replaced in it, and the read's
             // notes.
-            type Read = (Vec<Frame>, Replaced, Vec<String>);
+            type Read = (Vec<Frame>, Vec<Replaced>, Vec<String>);
             let (read_tx, read_rx) = mpsc::sync_channel::<std::result::Result<Read, Problem>>(0);
-            type Done = (Option<i64>, Vec<Frame>, Replaced, Vec<String>);
+            type Done = (Option<i64>, Vec<Frame>, Vec<Replaced>, Vec<String>);
             let (done_tx, done_rx) = mpsc::sync_channel::<std::result::Result<Done, Problem>>(0);
 
             let reader = scope.spawn(move || {
@@ -566,7 +566,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                                 notes.extend(c.offer(index, &frame, stored));
                                 check_seconds += t.elapsed().as_secs_f64();
                             }
-                            (vec![frame], replaced, notes)
+                            (vec![frame], vec![replaced], notes)
                         });
                     // The other views of the frame, read alike (the vector check has seen
                     // the first).
@@ -576,7 +576,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                         };
                         match read_frame_keeping(view, false) {
                             Ok((mut read, more, _)) => {
-                                replaced.add(crate::numeric::sanitize(
+                                replaced.push(crate::numeric::sanitize(
                                     &mut read,
                                     depth_kind(&job.params),
                                 ));
@@ -655,19 +655,23 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             });
 
             let mut failure = None;
+            // What earlier frames replaced, each stack layer's apart.
+            let mut seen_each = Vec::new();
             for message in done_rx {
                 match message {
                     Ok((frame, out, replaced, notes)) => {
                         for note in notes {
                             warn(&mut report, on_event, note);
                         }
-                        let (inputs, layered) = (&job.inputs, job.stack.len() > 1);
-                        let kind = depth_kind(&job.params);
-                        let seen = report.replaced;
-                        for w in replaced_warnings(&replaced, &seen, frame, inputs, layered, kind) {
+                        let (inputs, kind) = (&job.inputs, depth_kind(&job.params));
+                        let layers: Vec<(&str, &Inputs)> = (job.stack.iter())
+                            .map(|l| (l.name.as_str(), l.inputs.as_ref().unwrap_or(inputs)))
+                            .collect();
+                        let seen = &mut seen_each;
+                        for w in replaced_warnings(&replaced, seen, frame, inputs, &layers, kind) {
                             warn(&mut report, on_event, w);
                         }
-                        report.replaced.add(replaced);
+                        replaced.into_iter().for_each(|r| report.replaced.add(r));
                         let path = job.output.path(frame);
                         let notes = output_notes(&path, &out[0], &job.output_options);
                         for note in notes {

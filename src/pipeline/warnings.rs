@@ -6,22 +6,49 @@ use crate::io::sequence::PathPattern;
 use crate::numeric::{DepthKind, Replaced, HUGE, POSITION_LIMIT, VELOCITY_LIMIT};
 
 /// The warnings, the first time each pass has values replaced by the numeric policy, of what
-/// they became, in which file (where the job reads one file a pass: a stack's layers each
-/// have their own, `layered`) and from which frame. `seen`: what earlier frames replaced.
+/// they became, in which file and from which frame. `each`: what each frame read replaced (a
+/// frame's views summed as one; a stack's layers each apart, named with the file they were
+/// read from, `layers` giving each its name and inputs); `seen`: what earlier frames replaced,
+/// each layer's apart, updated here.
 pub(super) fn replaced_warnings(
+    each: &[Replaced],
+    seen: &mut Vec<Replaced>,
+    frame: Option<i64>,
+    inputs: &Inputs,
+    layers: &[(&str, &Inputs)],
+    kind: DepthKind,
+) -> Vec<String> {
+    let mut whole = Replaced::default();
+    let reads: Vec<(Replaced, Option<&str>, &Inputs)> = if layers.is_empty() {
+        each.iter().for_each(|r| whole.add(*r));
+        vec![(whole, None, inputs)]
+    } else {
+        (each.iter().zip(layers))
+            .map(|(r, (name, inputs))| (*r, Some(*name), *inputs))
+            .collect()
+    };
+    seen.resize(reads.len().max(seen.len()), Replaced::default());
+    let mut warnings = Vec::new();
+    for ((replaced, layer, inputs), seen) in reads.into_iter().zip(seen.iter_mut()) {
+        warnings.extend(replaced_in(&replaced, seen, frame, inputs, layer, kind));
+        seen.add(replaced);
+    }
+    warnings
+}
+
+/// [`replaced_warnings`] of one read: the job's frame, or the stack's view layer `layer`.
+fn replaced_in(
     replaced: &Replaced,
     seen: &Replaced,
     frame: Option<i64>,
     inputs: &Inputs,
-    layered: bool,
+    layer: Option<&str>,
     kind: DepthKind,
 ) -> Vec<String> {
     let file = |pattern: Option<&PathPattern>| {
         let pattern = pattern.unwrap_or(&inputs.color);
-        match layered {
-            true => String::new(),
-            false => format!(" in {}", pattern.path(frame).display()),
-        }
+        let layer = layer.map_or(String::new(), |l| format!(" (view layer {l})"));
+        format!(" in {}{layer}", pattern.path(frame).display())
     };
     let at = frame.map_or(String::new(), |f| format!(", first in frame {f}"));
     let depth = match kind {
