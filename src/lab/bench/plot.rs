@@ -44,6 +44,66 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
     front
 }
 
+/// A label's size in pixels at 11 px DejaVu Sans Mono: 0.6 em a character, one em high.
+fn label_size(text: &str) -> (i32, i32) {
+    ((text.chars().count() as f64 * 6.6).ceil() as i32, 11)
+}
+
+/// Where each point's label goes, in `order`: the first place around its point (right, then
+/// left; above, beside, below; then the same moved up and down by one, two and three label
+/// heights, drawn with a leader) whose box lies in `bounds` (x0, y0, x1, y1) and overlaps no
+/// label placed before it and no point's dot; a label with no such place is left out (bench.md's
+/// table has every row). Returns (the point's index, the label's top-left corner, whether it
+/// needs a leader), in `order`.
+fn place_labels(
+    points: &[(i32, i32)],
+    texts: &[&str],
+    order: &[usize],
+    bounds: (i32, i32, i32, i32),
+) -> Vec<(usize, (i32, i32), bool)> {
+    type Rect = (i32, i32, i32, i32);
+    let overlap = |a: &Rect, b: &Rect| a.0 < b.2 && b.0 < a.2 && a.1 < b.3 && b.1 < a.3;
+    let dots: Vec<Rect> = points
+        .iter()
+        .map(|&(x, y)| (x - 4, y - 4, x + 5, y + 5))
+        .collect();
+    let mut placed: Vec<Rect> = Vec::new();
+    let mut labels = Vec::new();
+    for &i in order {
+        let (x, y) = points[i];
+        let (w, h) = label_size(texts[i]);
+        let near = [
+            (x + 6, y - 6 - h / 2),
+            (x + 7, y - h / 2),
+            (x + 6, y + 4),
+            (x - 6 - w, y - 6 - h / 2),
+            (x - 7 - w, y - h / 2),
+            (x - 6 - w, y + 4),
+            (x - w / 2, y - 8 - h),
+            (x - w / 2, y + 8),
+        ];
+        let places = (0..4).flat_map(|step| {
+            let d = step * (h + 2);
+            near.into_iter()
+                .flat_map(move |(left, top)| [(left, top - d), (left, top + d)])
+                .map(move |p| (p, step > 0))
+        });
+        let free = places.into_iter().find(|&((left, top), _)| {
+            let rect = (left, top, left + w, top + h);
+            let inside =
+                left >= bounds.0 && top >= bounds.1 && rect.2 <= bounds.2 && rect.3 <= bounds.3;
+            inside
+                && !placed.iter().any(|p| overlap(p, &rect))
+                && !(dots.iter().enumerate()).any(|(j, d)| j != i && overlap(d, &rect))
+        });
+        if let Some(((left, top), leader)) = free {
+            placed.push((left, top, left + w, top + h));
+            labels.push((i, (left, top), leader));
+        }
+    }
+    labels
+}
+
 fn draw<DB: DrawingBackend>(
     root: DrawingArea<DB, plotters::coord::Shift>,
     report: &BenchReport,
@@ -75,12 +135,33 @@ fn draw<DB: DrawingBackend>(
             .draw()
             .map_err(|e| e.to_string())?;
         chart
-            .draw_series(points.iter().zip(&rows).map(|(&(x, y), row)| {
-                EmptyElement::at((x, y))
-                    + Circle::new((0, 0), 4, BLUE.filled())
-                    + Text::new(row.setting.clone(), (6, -6), ("sans-serif", 11))
-            }))
+            .draw_series((points.iter()).map(|&(x, y)| Circle::new((x, y), 4, BLUE.filled())))
             .map_err(|e| e.to_string())?;
+        // Labels where they overlap no other label, point or the panel's edge, the defaults'
+        // and the front's first; one with no free place is left to bench.md's table.
+        let pixels: Vec<(i32, i32)> = points.iter().map(|p| chart.backend_coord(p)).collect();
+        let front = pareto_front(&points);
+        let mut order: Vec<usize> = (0..rows.len()).collect();
+        order.sort_by_key(|&i| (!rows[i].default, !front.contains(&i)));
+        let texts: Vec<&str> = rows.iter().map(|r| r.setting.as_str()).collect();
+        let bounds = chart.plotting_area().get_pixel_range();
+        let bounds = (bounds.0.start, bounds.1.start, bounds.0.end, bounds.1.end);
+        for (i, at, leader) in place_labels(&pixels, &texts, &order, bounds) {
+            // In the backend's pixels, as `backend_coord` gives them: drawn on the root.
+            let label = Text::new(texts[i], at, ("sans-serif", 11));
+            root.draw(&label).map_err(|e| e.to_string())?;
+            if leader {
+                // From the point to the middle of the label's nearer side.
+                let (w, h) = label_size(texts[i]);
+                let side = if at.0 > pixels[i].0 {
+                    at.0 - 1
+                } else {
+                    at.0 + w + 1
+                };
+                let line = PathElement::new(vec![pixels[i], (side, at.1 + h / 2)], BLACK.mix(0.4));
+                root.draw(&line).map_err(|e| e.to_string())?;
+            }
+        }
         // The defaults, what a user gets: a green square around the point.
         chart
             .draw_series(points.iter().zip(&rows).filter(|(_, row)| row.default).map(
@@ -207,5 +288,52 @@ mod tests {
     fn pareto_front_keeps_only_undominated_points() {
         let points = [(1.0, 5.0), (2.0, 3.0), (3.0, 4.0), (4.0, 1.0), (0.5, 9.0)];
         assert_eq!(pareto_front(&points), [4, 0, 1, 3]);
+    }
+
+    #[test]
+    fn labels_overlap_neither_each_other_nor_points_nor_the_edge() {
+        // A cluster of six points 3 px apart, and two points alone.
+        let mut points: Vec<(i32, i32)> = (0..6).map(|k| (100 + 3 * k, 100 + 2 * k)).collect();
+        points.extend([(300, 40), (20, 250)]);
+        let texts = [
+            "reconstruct",
+            "scatter",
+            "stretch",
+            "2012 k 4",
+            "gather R6",
+            "blend",
+            "alone",
+            "corner",
+        ];
+        let order: Vec<usize> = (0..points.len()).collect();
+        let bounds = (10, 10, 400, 280);
+        let placed = place_labels(&points, &texts, &order, bounds);
+        let rect = |&(i, (x, y), _): &(usize, (i32, i32), bool)| {
+            let (w, h) = label_size(texts[i]);
+            (x, y, x + w, y + h)
+        };
+        let overlap = |a: (i32, i32, i32, i32), b: (i32, i32, i32, i32)| {
+            a.0 < b.2 && b.0 < a.2 && a.1 < b.3 && b.1 < a.3
+        };
+        for (n, a) in placed.iter().enumerate() {
+            let r = rect(a);
+            assert!(r.0 >= 10 && r.1 >= 10 && r.2 <= 400 && r.3 <= 280, "{r:?}");
+            for b in &placed[n + 1..] {
+                assert!(!overlap(r, rect(b)), "{a:?} {b:?}");
+            }
+            for (j, &(x, y)) in points.iter().enumerate() {
+                assert!(
+                    j == a.0 || !overlap(r, (x - 4, y - 4, x + 5, y + 5)),
+                    "{a:?} on {j}"
+                );
+            }
+        }
+        // The points alone and most of the cluster get their labels.
+        let labelled: Vec<usize> = placed.iter().map(|p| p.0).collect();
+        assert!(
+            labelled.contains(&6) && labelled.contains(&7),
+            "{labelled:?}"
+        );
+        assert_eq!(labelled.len(), 8, "{labelled:?}");
     }
 }

@@ -96,6 +96,12 @@ pub fn markdown(report: &BenchReport) -> String {
         ));
     }
     text.push_str(
+        "\n**(default)** marks each algorithm's defaults, what `--algorithm NAME` (and, for \
+         depth of field, `--method NAME` with the lens) gives with no other flag, alone and \
+         as a `--layers` stack: so a scene has one for each algorithm. `shutter blur` with no \
+         flag at all runs reconstruct's, `shutter dof` the bokeh gather's.\n",
+    );
+    text.push_str(
         "\n| scene | setting | peer | compute ms | end-to-end ms | peak RSS MiB | region px | RMSE | RMSE corr. | PSNR dB | SSIM | FLIP | RMSE whole |\n\
          |---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
