@@ -1906,3 +1906,60 @@ fn a_subsampled_uncompressed_ycbcr_tiff_is_refused_saying_how_to_convert_it() {
         assert!(err.contains(part), "{part}: {err}");
     }
 }
+
+/// A painted map of one value a pixel (a CoC map, a depth map) saved as RGB: grey (R = G = B)
+/// is read without a word; in colour, its R is read (as before) and a warning names the file
+/// and the channel read. Both kinds of map, both cases; the CoC map's R is what blurs.
+#[test]
+fn a_painted_map_in_colour_says_which_channel_is_read_and_a_grey_one_says_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (32u32, 16u32);
+    let color = dir.path().join("photo.png");
+    let pixels: Vec<u8> = (0..w * h * 3).map(|i| (i * 7 % 256) as u8).collect();
+    image::save_buffer(&color, &pixels, w, h, image::ColorType::Rgb8).unwrap();
+    let map = |name: &str, rgb: fn(u32) -> [u8; 3]| {
+        let path = dir.path().join(name);
+        let bytes: Vec<u8> = (0..w * h).flat_map(|i| rgb(i % w)).collect();
+        image::save_buffer(&path, &bytes, w, h, image::ColorType::Rgb8).unwrap();
+        path
+    };
+    // No blur in R: a map in colour whose R is 0 leaves the photo as it is.
+    let grey = map("grey.png", |x| [(x * 8) as u8; 3]);
+    let colour = map("colour.png", |x| [0, (x * 8) as u8, 255]);
+    for (kind, flag, extra) in [
+        ("coc", "--coc-map", &[][..]),
+        (
+            "depth",
+            "--depth",
+            &[
+                "--preset",
+                "painted",
+                "--focal-length",
+                "50",
+                "--f-stop",
+                "2",
+                "--focus-distance",
+                "10",
+            ][..],
+        ),
+    ] {
+        for (map, differs) in [(&grey, false), (&colour, true)] {
+            let out = dir.path().join(format!("{kind}.out.png"));
+            let (c, m, o) = (s(&color), s(map), s(&out));
+            let mut args = vec!["dof", "--color", &c, flag, &m, "-o", &o, "--json"];
+            args.extend(extra);
+            let run = shutter(&args);
+            assert!(run.status.success(), "{kind}: {}", stderr(&run));
+            let warnings = json_warnings(&run);
+            let named = warnings.contains(&s(map)) && warnings.contains("its R channel is read");
+            assert_eq!(named, differs, "{kind} {}: {warnings}", s(map));
+            if kind == "coc" && differs {
+                let got = image::open(&out).unwrap().to_rgb8().into_raw();
+                assert_eq!(
+                    got, pixels,
+                    "the CoC map's R (0 everywhere) is not what was read"
+                );
+            }
+        }
+    }
+}
