@@ -395,12 +395,11 @@ impl Seek for Patched {
 /// Where the value of the first directory's PhotometricInterpretation lies (a SHORT or a
 /// LONG, in the entry itself), and its bytes for 1 (grey, black is zero) in the file's byte
 /// order; `None` where the header or directory cannot be walked, or the tag is not there.
-fn photometric_as_grey(file: &mut impl Read) -> Option<(u64, Vec<u8>)> {
-    let mut bytes = Vec::new();
-    // A directory is found within the first 64 KiB, or (rarely: after the pixels) read to.
-    file.by_ref().take(1 << 16).read_to_end(&mut bytes).ok()?;
-    let mut more = Vec::new();
-    let little = match bytes.get(..2)? {
+/// Reads the header and the directory's entries, wherever the directory lies.
+fn photometric_as_grey(file: &mut (impl Read + Seek)) -> Option<(u64, Vec<u8>)> {
+    let mut header = [0u8; 16];
+    file.read_exact(&mut header[..8]).ok()?;
+    let little = match &header[..2] {
         b"II" => true,
         b"MM" => false,
         _ => return None,
@@ -414,46 +413,43 @@ fn photometric_as_grey(file: &mut impl Read) -> Option<(u64, Vec<u8>)> {
         }
         Some(v)
     };
-    let big = match get(&bytes, 2, 2)? {
+    let big = match get(&header, 2, 2)? {
         42 => false,
         43 => true,
         _ => return None,
     };
     let directory = if big {
-        get(&bytes, 8, 8)?
+        file.read_exact(&mut header[8..]).ok()?;
+        get(&header, 8, 8)?
     } else {
-        get(&bytes, 4, 4)?
+        get(&header, 4, 4)?
     };
     // Entries: tag, type, count, value (12 bytes; BigTIFF's 20, its count 8 bytes).
     let (count_len, entry_len, value_at) = if big { (8, 20, 12) } else { (2, 12, 8) };
-    let directory = usize::try_from(directory).ok()?;
-    if directory >= bytes.len() {
-        // Past the first 64 KiB: read on to it, and 64 KiB beyond (4 096 entries and more).
-        let end = directory.checked_add(1 << 16)?;
-        file.by_ref()
-            .take((end - bytes.len()) as u64)
-            .read_to_end(&mut more)
-            .ok()?;
-        bytes.append(&mut more);
-    }
-    let count = get(&bytes, directory, count_len)?.min(1 << 16) as usize;
-    for k in 0..count {
-        let entry = directory + count_len + k * entry_len;
-        if get(&bytes, entry, 2)? != Tag::PhotometricInterpretation.to_u16() as u64 {
+    file.seek(SeekFrom::Start(directory)).ok()?;
+    let mut count = [0u8; 8];
+    file.read_exact(&mut count[..count_len]).ok()?;
+    // Tags come in ascending order: 262 is among the first dozen; a directory of more than
+    // 4 096 entries is read no further.
+    let count = get(&count, 0, count_len)?.min(1 << 12) as usize;
+    let mut entries = Vec::new();
+    file.by_ref()
+        .take((count * entry_len) as u64)
+        .read_to_end(&mut entries)
+        .ok()?;
+    for (k, entry) in entries.chunks_exact(entry_len).enumerate() {
+        if get(entry, 0, 2)? != Tag::PhotometricInterpretation.to_u16() as u64 {
             continue;
         }
-        let width = match get(&bytes, entry + 2, 2)? {
-            3 => 2,
-            4 => 4,
+        let one: Vec<u8> = match (get(entry, 2, 2)?, little) {
+            (3, true) => 1u16.to_le_bytes().to_vec(),
+            (3, false) => 1u16.to_be_bytes().to_vec(),
+            (4, true) => 1u32.to_le_bytes().to_vec(),
+            (4, false) => 1u32.to_be_bytes().to_vec(),
             _ => return None,
         };
-        let one: Vec<u8> = match (little, width) {
-            (true, 2) => 1u16.to_le_bytes().to_vec(),
-            (false, 2) => 1u16.to_be_bytes().to_vec(),
-            (true, _) => 1u32.to_le_bytes().to_vec(),
-            (false, _) => 1u32.to_be_bytes().to_vec(),
-        };
-        return Some(((entry + value_at) as u64, one));
+        let at = directory + (count_len + k * entry_len + value_at) as u64;
+        return Some((at, one));
     }
     None
 }
