@@ -845,7 +845,16 @@ fn a_jpegs_exif_comes_out_in_a_tiff() {
 /// Runs `shutter dof` on `color` with a black blurriness map of its size (nothing blurs: the
 /// frame comes back as it was read), writing `out`; the run's output, whatever its exit.
 fn dof_still(color: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
-    let (w, h) = image::image_dimensions(color).unwrap();
+    dof_still_of(color, image::image_dimensions(color).unwrap(), out, extra)
+}
+
+/// [`dof_still`] for a `color` of size `(w, h)` (one the image crate does not read).
+fn dof_still_of(
+    color: &Path,
+    (w, h): (u32, u32),
+    out: &Path,
+    extra: &[&str],
+) -> std::process::Output {
     let coc = color.with_file_name("coc0.png");
     image::save_buffer(
         &coc,
@@ -1600,6 +1609,357 @@ fn a_float_tiff_of_straight_alpha_is_premultiplied_as_it_is_read() {
         for p in got.chunks(4) {
             let close = p.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-6);
             assert!(close, "{name}: {p:?} for {want:?}");
+        }
+    }
+}
+
+/// Indexed colour: one 8-bit index a pixel into the file's ColorMap, as the tiff crate writes
+/// no such file.
+struct Palette8;
+
+impl tiff::encoder::colortype::ColorType for Palette8 {
+    type Inner = u8;
+    const TIFF_VALUE: tiff::tags::PhotometricInterpretation =
+        tiff::tags::PhotometricInterpretation::RGBPalette;
+    const BITS_PER_SAMPLE: &'static [u16] = &[8];
+    const SAMPLE_FORMAT: &'static [tiff::tags::SampleFormat] = &[tiff::tags::SampleFormat::Uint];
+    fn horizontal_predict(_: &[u8], _: &mut Vec<u8>) {
+        unreachable!("written without a predictor")
+    }
+}
+
+/// The bits a sample and the colour type of a TIFF, and whether it holds a ColorMap.
+fn tiff_coding(path: &Path) -> (tiff::ColorType, bool) {
+    let mut decoder = tiff::decoder::Decoder::new(std::fs::File::open(path).unwrap()).unwrap();
+    let map = decoder.find_tag(tiff::tags::Tag::ColorMap).unwrap();
+    (decoder.colortype().unwrap(), map.is_some())
+}
+
+/// An indexed-colour TIFF (Pillow's mode 'P', a GIF converted) is read through its ColorMap
+/// and comes out RGB, with its profile: refused before ("an indexed-colour (palette) TIFF,
+/// which the TIFF decoder does not read"). Three maps: 8-bit values widened as v·257 (LZW,
+/// with an Adobe RGB profile) and as v·256 (as Pillow writes them), both 8-bit codes (their
+/// high bytes, as libtiff and Pillow read them) in an 8-bit output; and a map of finer
+/// values, in a 16-bit output holding them exactly. Expected: the map's entries, as written.
+#[test]
+fn a_palette_tiff_reads_through_its_colour_map_and_comes_out_rgb() {
+    use tiff::encoder::{Compression, TiffEncoder};
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (32u32, 16u32);
+    let indices: Vec<u8> = (0..w * h).map(|i| (i * 37 % 256) as u8).collect();
+    let entry = |i: usize| [(i * 7 % 256) as u16, 255 - i as u16, (i * 13 % 256) as u16];
+    let fine = |i: usize| {
+        [
+            i as u16 * 251 + 3,
+            65535 - i as u16 * 199,
+            (i as u16) << 8 | 0x5A,
+        ]
+    };
+    let icc = adobe_icc();
+    for (name, widen, lzw) in [("v257", Some(257u16), true), ("v256", Some(256), false)]
+        .into_iter()
+        .chain([("fine", None, false)])
+    {
+        // All the reds, then the greens, then the blues (TIFF 6.0, ColorMap).
+        let map: Vec<u16> = (0..3)
+            .flat_map(|c| {
+                (0..256).map(move |i| match widen {
+                    Some(k) => entry(i)[c] * k,
+                    None => fine(i)[c],
+                })
+            })
+            .collect();
+        let input = dir.path().join(format!("{name}.tif"));
+        let file = std::fs::File::create(&input).unwrap();
+        let mut tiff = TiffEncoder::new(file).unwrap();
+        if lzw {
+            tiff = tiff.with_compression(Compression::Lzw);
+        }
+        let mut image = tiff.new_image::<Palette8>(w, h).unwrap();
+        let directory = image.encoder();
+        directory
+            .write_tag(tiff::tags::Tag::ColorMap, &map[..])
+            .unwrap();
+        if widen == Some(257) {
+            directory
+                .write_tag(tiff::tags::Tag::Unknown(34675), &icc[..])
+                .unwrap();
+        }
+        image.write_data(&indices).unwrap();
+        let out = dir.path().join(format!("{name}.out.tif"));
+        let o = dof_still_of(&input, (w, h), &out, &[]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let (coding, has_map) = tiff_coding(&out);
+        assert!(!has_map, "{name}: the output carries a ColorMap");
+        let read = image::open(&out).unwrap();
+        match widen {
+            Some(_) => {
+                assert_eq!(coding, tiff::ColorType::RGB(8), "{name}");
+                let got = read.to_rgb8();
+                for (k, p) in got.pixels().enumerate() {
+                    let want = entry(indices[k] as usize).map(|v| v as i32);
+                    // The Adobe profile's curve there and back: within a code.
+                    let off = (0..3).map(|c| (p[c] as i32 - want[c]).abs()).max().unwrap();
+                    assert!(
+                        off <= (widen == Some(257)) as i32,
+                        "{name} {k}: {p:?} {want:?}"
+                    );
+                }
+            }
+            None => {
+                assert_eq!(coding, tiff::ColorType::RGB(16), "{name}");
+                let got = read.to_rgb16();
+                for (k, p) in got.pixels().enumerate() {
+                    assert_eq!(p.0, fine(indices[k] as usize), "{name} {k}");
+                }
+            }
+        }
+        if widen == Some(257) {
+            let file = std::fs::File::open(&out).unwrap();
+            let mut decoder = tiff::decoder::Decoder::new(file).unwrap();
+            let profile = decoder.get_tag_u8_vec(tiff::tags::Tag::Unknown(34675));
+            assert_eq!(profile.unwrap(), icc, "{name}: its profile");
+        }
+    }
+}
+
+/// YCbCr, sampled 1×1 and stored uncompressed, with BT.709's coefficients and video range
+/// (ReferenceBlackWhite 16–235, chroma 16–240) in its tags, comes out RGB as TIFF 6.0
+/// (section 22) converts it: against that conversion written out here, and against
+/// OpenImageIO's read of the file (libtiff's `TIFFYCbCrToRGB`, whose tables truncate the
+/// full-range luma to an integer) within 2 codes, 1 on average (0.54 measured). Refused before ("a YCbCr TIFF
+/// …, which the TIFF decoder does not read").
+#[test]
+fn a_ycbcr_tiff_comes_out_rgb_by_its_coefficients_and_reference_black_and_white() {
+    use tiff::encoder::{colortype, Rational, TiffEncoder};
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (24u32, 16u32);
+    let ycc: Vec<u8> = (0..w * h)
+        .flat_map(|i| {
+            let (x, y) = (i % w, i / w);
+            [
+                16 + (x * 9) as u8,
+                16 + (y * 14) as u8,
+                128 + (x as u8 * 4) - 40,
+            ]
+        })
+        .collect();
+    let input = dir.path().join("ycc.tif");
+    let mut tiff = TiffEncoder::new(std::fs::File::create(&input).unwrap()).unwrap();
+    let mut image = tiff.new_image::<colortype::YCbCr8>(w, h).unwrap();
+    let rational = |n: u32, d: u32| Rational { n, d };
+    let coefficients = [
+        rational(2126, 10000),
+        rational(7152, 10000),
+        rational(722, 10000),
+    ];
+    let reference = [16, 235, 128, 240, 128, 240].map(|v| rational(v, 1));
+    let directory = image.encoder();
+    directory
+        .write_tag(tiff::tags::Tag::Unknown(529), &coefficients[..])
+        .unwrap();
+    directory
+        .write_tag(tiff::tags::Tag::Unknown(532), &reference[..])
+        .unwrap();
+    image.write_data(&ycc).unwrap();
+    let out = dir.path().join("ycc.out.tif");
+    let o = dof_still_of(&input, (w, h), &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(tiff_coding(&out).0, tiff::ColorType::RGB(8));
+    let got = image::open(&out).unwrap().to_rgb8();
+    // Full range: Y' = (Y − 16)·255/219, Cb' = (Cb − 128)·127/112; then the section's
+    // R = Y' + Cr'(2 − 2·0.2126), B = Y' + Cb'(2 − 2·0.0722), G = (Y' − 0.0722 B − 0.2126 R)
+    // / 0.7152.
+    for (k, p) in got.pixels().enumerate() {
+        let [y, cb, cr] = [0, 1, 2].map(|c| ycc[3 * k + c] as f64);
+        let y = (y - 16.0) * 255.0 / 219.0;
+        let (cb, cr) = ((cb - 128.0) * 127.0 / 112.0, (cr - 128.0) * 127.0 / 112.0);
+        let r = y + cr * (2.0 - 2.0 * 0.2126);
+        let b = y + cb * (2.0 - 2.0 * 0.0722);
+        let g = (y - 0.0722 * b - 0.2126 * r) / 0.7152;
+        let want = [r, g, b].map(|v| v.clamp(0.0, 255.0));
+        for c in 0..3 {
+            assert!((p[c] as f64 - want[c]).abs() <= 0.51, "{k}: {p:?} {want:?}");
+        }
+    }
+    let reference = dir.path().join("ref.png");
+    let converted = run_tool(
+        "oiiotool",
+        &[
+            &s(&input),
+            "--ch",
+            "R,G,B",
+            "-d",
+            "uint8",
+            "-o",
+            &s(&reference),
+        ],
+    );
+    if converted.is_some_and(|o| o.status.success()) {
+        let want = image::open(&reference).unwrap().to_rgb8();
+        let (mut most, mut sum) = (0u8, 0u64);
+        for (p, q) in got.pixels().zip(want.pixels()) {
+            for c in 0..3 {
+                most = most.max(p[c].abs_diff(q[c]));
+                sum += p[c].abs_diff(q[c]) as u64;
+            }
+        }
+        let mean = sum as f64 / (3 * w * h) as f64;
+        assert!(
+            most <= 2 && mean <= 1.0,
+            "off by {most} at most, {mean} on average"
+        );
+    }
+}
+
+/// A JPEG-compressed YCbCr TIFF, its chroma subsampled 2×2 (what `tiffcp -c jpeg`, cameras
+/// and `oiiotool --compression jpeg` write) comes out RGB: against OpenImageIO's read of the
+/// same file (libjpeg's upsampling and conversion) within 8 codes, 1 on average (zune-jpeg
+/// upsamples chroma otherwise: 4 and 0.4 measured on this picture). Refused before.
+#[test]
+fn a_jpeg_compressed_ycbcr_tiff_reads_as_libjpeg_reads_it() {
+    use tiff::encoder::{colortype, TiffEncoder};
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (64u32, 48u32);
+    let rgb: Vec<u8> = (0..w * h)
+        .flat_map(|i| {
+            let (x, y) = (i % w, i / w);
+            match (x / 16 + y / 16) % 4 {
+                0 => [220, 40, 30],
+                1 => [(x * 4) as u8, (y * 5) as u8, 128],
+                2 => [30, 200, 60],
+                _ => [250, 250, (x * 3) as u8],
+            }
+        })
+        .collect();
+    let plain = dir.path().join("rgb.tif");
+    let mut tiff = TiffEncoder::new(std::fs::File::create(&plain).unwrap()).unwrap();
+    tiff.write_image::<colortype::RGB8>(w, h, &rgb).unwrap();
+    let input = dir.path().join("jpeg.tif");
+    let made = run_tool(
+        "tiffcp",
+        &["-c", "jpeg:90", "-r", "16", &s(&plain), &s(&input)],
+    );
+    let Some(made) = made else { return };
+    assert!(made.status.success(), "{}", stderr(&made));
+    let mut decoder = tiff::decoder::Decoder::new(std::fs::File::open(&input).unwrap()).unwrap();
+    let photometric = decoder.get_tag_u32(tiff::tags::Tag::PhotometricInterpretation);
+    assert_eq!(photometric.unwrap(), 6, "tiffcp wrote no YCbCr");
+    let out = dir.path().join("jpeg.out.tif");
+    let o = dof_still_of(&input, (w, h), &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(tiff_coding(&out).0, tiff::ColorType::RGB(8));
+    let got = image::open(&out).unwrap().to_rgb8();
+    let reference = dir.path().join("ref.png");
+    let converted = run_tool(
+        "oiiotool",
+        &[
+            &s(&input),
+            "--ch",
+            "R,G,B",
+            "-d",
+            "uint8",
+            "-o",
+            &s(&reference),
+        ],
+    );
+    let Some(converted) = converted else { return };
+    assert!(converted.status.success(), "{}", stderr(&converted));
+    let want = image::open(&reference).unwrap().to_rgb8();
+    let (mut most, mut sum) = (0u8, 0u64);
+    for (p, q) in got.pixels().zip(want.pixels()) {
+        for c in 0..3 {
+            most = most.max(p[c].abs_diff(q[c]));
+            sum += p[c].abs_diff(q[c]) as u64;
+        }
+    }
+    let mean = sum as f64 / (3 * w * h) as f64;
+    assert!(
+        most <= 8 && mean <= 1.0,
+        "off by {most} at most, {mean} on average"
+    );
+}
+
+/// A YCbCr TIFF subsampled 2×2 and not JPEG-compressed, whose layout the TIFF decoder does
+/// not deliver, is refused naming the file, what it is and the command that converts it.
+#[test]
+fn a_subsampled_uncompressed_ycbcr_tiff_is_refused_saying_how_to_convert_it() {
+    use tiff::encoder::{colortype, TiffEncoder};
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("ycc22.tif");
+    let mut tiff = TiffEncoder::new(std::fs::File::create(&input).unwrap()).unwrap();
+    let mut image = tiff.new_image::<colortype::YCbCr8>(8, 4).unwrap();
+    image
+        .encoder()
+        .write_tag(tiff::tags::Tag::ChromaSubsampling, &[2u16, 2][..])
+        .unwrap();
+    image.write_data(&[128u8; 8 * 4 * 3]).unwrap();
+    let o = dof_still_of(&input, (8, 4), &dir.path().join("out.tif"), &[]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    for part in [
+        "ycc22.tif",
+        "subsampled 2×2",
+        "not JPEG-compressed",
+        "oiiotool in.tif",
+    ] {
+        assert!(err.contains(part), "{part}: {err}");
+    }
+}
+
+/// A painted map of one value a pixel (a CoC map, a depth map) saved as RGB: grey (R = G = B)
+/// is read without a word; in colour, its R is read (as before) and a warning names the file
+/// and the channel read. Both kinds of map, both cases; the CoC map's R is what blurs.
+#[test]
+fn a_painted_map_in_colour_says_which_channel_is_read_and_a_grey_one_says_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (32u32, 16u32);
+    let color = dir.path().join("photo.png");
+    let pixels: Vec<u8> = (0..w * h * 3).map(|i| (i * 7 % 256) as u8).collect();
+    image::save_buffer(&color, &pixels, w, h, image::ColorType::Rgb8).unwrap();
+    let map = |name: &str, rgb: fn(u32) -> [u8; 3]| {
+        let path = dir.path().join(name);
+        let bytes: Vec<u8> = (0..w * h).flat_map(|i| rgb(i % w)).collect();
+        image::save_buffer(&path, &bytes, w, h, image::ColorType::Rgb8).unwrap();
+        path
+    };
+    // No blur in R: a map in colour whose R is 0 leaves the photo as it is.
+    let grey = map("grey.png", |x| [(x * 8) as u8; 3]);
+    let colour = map("colour.png", |x| [0, (x * 8) as u8, 255]);
+    for (kind, flag, extra) in [
+        ("coc", "--coc-map", &[][..]),
+        (
+            "depth",
+            "--depth",
+            &[
+                "--preset",
+                "painted",
+                "--focal-length",
+                "50",
+                "--f-stop",
+                "2",
+                "--focus-distance",
+                "10",
+            ][..],
+        ),
+    ] {
+        for (map, differs) in [(&grey, false), (&colour, true)] {
+            let out = dir.path().join(format!("{kind}.out.png"));
+            let (c, m, o) = (s(&color), s(map), s(&out));
+            let mut args = vec!["dof", "--color", &c, flag, &m, "-o", &o, "--json"];
+            args.extend(extra);
+            let run = shutter(&args);
+            assert!(run.status.success(), "{kind}: {}", stderr(&run));
+            let warnings = json_warnings(&run);
+            let named = warnings.contains(&s(map)) && warnings.contains("its R channel is read");
+            assert_eq!(named, differs, "{kind} {}: {warnings}", s(map));
+            if kind == "coc" && differs {
+                let got = image::open(&out).unwrap().to_rgb8().into_raw();
+                assert_eq!(
+                    got, pixels,
+                    "the CoC map's R (0 everywhere) is not what was read"
+                );
+            }
         }
     }
 }

@@ -48,7 +48,8 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
     let mut decoder = match reader.into_decoder() {
         Ok(decoder) => decoder,
         Err(e) => {
-            // A grey TIFF the image crate refuses, which the tiff crate reads (`tiff_float`).
+            // A grey, palette or YCbCr TIFF the image crate refuses, which the tiff crate
+            // reads (`tiff_float`).
             let header = tiff.then(|| super::tiff_float::header(path)).flatten();
             return header
                 .map(|header| grey_float_photo(path, &header))
@@ -127,7 +128,8 @@ pub fn read_photo(path: &Path) -> Result<Photo, String> {
     })
 }
 
-/// What a grey TIFF the image crate refuses ([`super::tiff_float`]) holds besides its pixels, as [`read_photo`]
+/// What a grey, palette or YCbCr TIFF the image crate refuses ([`super::tiff_float`]) holds
+/// besides its pixels, as [`read_photo`]
 /// reads a TIFF's: its profile, EXIF, XMP and IPTC (the EXIF made true of the upright
 /// pixels), its resolution, and whether its alpha is associated.
 fn grey_float_photo(path: &Path, header: &super::tiff_float::Header) -> Photo {
@@ -150,7 +152,7 @@ fn grey_float_photo(path: &Path, header: &super::tiff_float::Header) -> Photo {
         iptc,
         texts: Vec::new(),
         bits: if header.float { 32 } else { header.bits },
-        grey: true,
+        grey: header.samples <= 2,
         sampling: None,
         png_colour: None,
         resolution,

@@ -15,6 +15,7 @@ mod meta;
 mod png_mend;
 mod profile;
 mod resolution;
+mod tiff_colour;
 mod tiff_float;
 mod tiff_meta;
 mod tiff_write;
@@ -198,8 +199,8 @@ pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
     })
 }
 
-/// The header of a grey TIFF the image crate refuses (float, or grey and alpha:
-/// [`tiff_float`]); `None` for any other file.
+/// The header of a TIFF the image crate refuses that the tiff crate reads (float grey, grey
+/// and alpha, palette or YCbCr: [`tiff_float`]); `None` for any other file.
 fn grey_float_header(path: &Path, format: &'static str) -> Option<ImageHeader> {
     let header = (format == "tiff")
         .then(|| tiff_float::header(path))
@@ -286,8 +287,8 @@ pub fn read_planes(
     let mut decoder = match reader.into_decoder() {
         Ok(decoder) => decoder,
         Err(e) => {
-            // A grey TIFF the image crate refuses, read by the tiff crate within the same
-            // allowance.
+            // A grey, palette or YCbCr TIFF the image crate refuses, read by the tiff crate
+            // within the same allowance.
             let header = tiff.then(|| tiff_float::header(path)).flatten();
             let Some(header) = header else {
                 return Err(image_error(e));

@@ -4,9 +4,10 @@
 //! written by a depth estimator, a 32-bit grey image saved from an editor, or a grey scan with
 //! a mask is such a file. The tiff crate (the image crate's own TIFF codec) reads them here;
 //! their planes are turned upright by their Orientation tag, as [`super::read_planes`] turns
-//! what the image crate reads. Of the other TIFFs the image crate refuses, a YCbCr
-//! (JPEG-compressed) or indexed-colour one is named as such, with what to do
-//! ([`unread_kind`]); the rest keep its error.
+//! what the image crate reads. A palette or YCbCr TIFF (as a JPEG-compressed TIFF stores its
+//! colour), which the image crate refuses too, is read here as RGB ([`super::tiff_colour`]);
+//! one of those of a layout the tiff crate does not deliver is named as such, with what to do
+//! ([`unread_kind`]); the rest keep the image crate's error.
 
 use std::path::Path;
 
@@ -17,18 +18,21 @@ use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 use tiff::ColorType;
 
-/// A grey TIFF's header.
-#[derive(Clone, Copy, Debug)]
+/// The header of a grey TIFF, or of a palette or YCbCr one read as RGB.
+#[derive(Clone, Debug)]
 pub(super) struct Header {
     /// The size as stored (before it is turned upright).
     pub(super) stored: (u32, u32),
-    /// 1 (grey) or 2 (grey and alpha).
+    /// 1 (grey), 2 (grey and alpha) or 3 (RGB, from a palette or YCbCr: `colour`).
     pub(super) samples: usize,
-    /// Bits a sample: 16, 32 or 64 for floats, 8 or 16 for integers.
+    /// Bits a sample: 16, 32 or 64 for floats, 8 or 16 for integers (for `colour`, those its
+    /// RGB deserves).
     pub(super) bits: u8,
     /// IEEE floats; else unsigned integers, read normalised to [0, 1].
     pub(super) float: bool,
     pub(super) orientation: Orientation,
+    /// How a palette or YCbCr TIFF codes its colour; `None` for grey.
+    pub(super) colour: Option<super::tiff_colour::Coding>,
 }
 
 /// The TIFF's first image, its decoder limited as the caller says.
@@ -38,13 +42,29 @@ fn open(path: &Path, limits: Limits) -> Option<Decoder<std::io::BufReader<std::f
     Some(decoder.with_limits(limits))
 }
 
-/// The header of a grey TIFF the image crate refuses (float grey, or grey and alpha); `None`
-/// for any other TIFF, and for one whose header the tiff crate cannot read (the image crate's
-/// error about it then stands).
+/// The header of a TIFF the image crate refuses that is read here: float grey, grey and
+/// alpha, palette or YCbCr; `None` for any other TIFF, and for one whose header the tiff
+/// crate cannot read (the image crate's error about it then stands).
 pub(super) fn header(path: &Path) -> Option<Header> {
     let mut limits = Limits::default();
     limits.ifd_value_size = super::HEADER_ROOM as usize;
     let mut decoder = open(path, limits)?;
+    let orientation = decoder
+        .find_tag_unsigned::<u8>(Tag::Orientation)
+        .ok()
+        .flatten()
+        .and_then(Orientation::from_exif)
+        .unwrap_or(Orientation::NoTransforms);
+    if let Some((coding, bits)) = super::tiff_colour::coding(path) {
+        return Some(Header {
+            stored: decoder.dimensions().ok()?,
+            samples: 3,
+            bits,
+            float: false,
+            orientation,
+            colour: Some(coding),
+        });
+    }
     // The tiff crate gives grey and alpha as two bands (`Multiband`), not `GrayA`.
     let (samples, bits) = match decoder.colortype().ok()? {
         ColorType::Gray(bits @ (16 | 32 | 64)) => (1, bits),
@@ -75,41 +95,22 @@ pub(super) fn header(path: &Path) -> Option<Header> {
     if formats.iter().any(|&f| Some(&f) != formats.first()) {
         return None;
     }
-    let orientation = decoder
-        .find_tag_unsigned::<u8>(Tag::Orientation)
-        .ok()
-        .flatten()
-        .and_then(Orientation::from_exif)
-        .unwrap_or(Orientation::NoTransforms);
     Some(Header {
         stored: decoder.dimensions().ok()?,
         samples,
         bits,
         float,
         orientation,
+        colour: None,
     })
 }
 
 /// What a TIFF the decoders do not read is, and what to do, in words, for the kinds photos
-/// come in: YCbCr (as a JPEG-compressed TIFF stores its colour) and indexed colour. `None`
-/// for any other TIFF (the image crate's words then stand).
+/// come in: a YCbCr or palette one of a layout the tiff crate does not deliver
+/// ([`super::tiff_colour::unread`]). `None` for any other TIFF (the image crate's words then
+/// stand).
 pub(super) fn unread_kind(path: &Path) -> Option<String> {
-    let mut limits = Limits::default();
-    limits.ifd_value_size = super::HEADER_ROOM as usize;
-    let mut decoder = open(path, limits)?;
-    // PhotometricInterpretation (TIFF 6.0, section 8): 6 YCbCr, 3 palette colour.
-    let photometric = decoder
-        .find_tag_unsigned::<u16>(Tag::PhotometricInterpretation)
-        .ok()??;
-    let what = match photometric {
-        6 => "a YCbCr TIFF (as a JPEG-compressed TIFF stores its colour)",
-        3 => "an indexed-colour (palette) TIFF",
-        _ => return None,
-    };
-    Some(format!(
-        "{what}, which the TIFF decoder does not read: save it as RGB, with LZW, ZIP or no \
-         compression"
-    ))
+    super::tiff_colour::unread(path)
 }
 
 /// The size of `header`'s image once turned upright.
@@ -129,6 +130,10 @@ pub(super) fn read(
     limits.ifd_value_size = super::HEADER_ROOM as usize;
     limits.decoding_buffer_size = usize::try_from(max_bytes).unwrap_or(usize::MAX);
     limits.intermediate_buffer_size = limits.decoding_buffer_size;
+    if let Some(coding) = &header.colour {
+        let planes = super::tiff_colour::read(path, coding, header.stored, max_bytes)?;
+        return Ok(upright_planes(planes, header));
+    }
     let mut decoder =
         open(path, limits).ok_or_else(|| "the TIFF could not be opened again".to_string())?;
     let values: Vec<f32> = match decoder.read_image().map_err(|e| e.to_string())? {
@@ -153,14 +158,19 @@ pub(super) fn read(
     for (i, &v) in values[..n * count].iter().enumerate() {
         planes[i % count].push(v);
     }
-    let mut size = (width, height);
+    Ok(upright_planes(planes, header))
+}
+
+/// The planes of `header`'s image as stored, turned upright, with their upright size.
+fn upright_planes(mut planes: Vec<Vec<f32>>, header: &Header) -> (usize, usize, Vec<Vec<f32>>) {
+    let (mut width, mut height) = (header.stored.0 as usize, header.stored.1 as usize);
     for plane in &mut planes {
         let (turned, w, h) =
             upright_plane(std::mem::take(plane), header.stored, header.orientation);
         *plane = turned;
-        size = (w, h);
+        (width, height) = (w, h);
     }
-    Ok((size.0, size.1, planes))
+    (width, height, planes)
 }
 
 /// One plane of size `(width, height)` turned as `orientation` says (the image crate's

@@ -29,6 +29,7 @@ mod check;
 mod convert;
 mod fit;
 mod found;
+mod grey_map;
 mod memory;
 mod parts;
 mod plan;

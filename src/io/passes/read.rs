@@ -57,18 +57,25 @@ pub fn read_frame_keeping(
         .filter(|(_, &exact)| exact)
         .map(|(slot, _)| *slot)
         .collect();
+    // A depth map in an RGB image: its G and B read too, to tell grey from colour.
+    let grey = super::grey_map::check(plan);
     for (index, file) in plan.files.iter().enumerate() {
         let bits: Vec<usize> = exact
             .iter()
             .filter(|slot| slot.file == index)
             .map(|slot| file.channels[slot.entry])
             .collect();
-        let mut planes = file.info.read_bits(&file.channels, &bits).map_err(|p| {
+        let grey = grey.as_ref().filter(|c| c.file == index);
+        let channels = grey.map_or(&file.channels, |c| &c.channels);
+        let mut planes = file.info.read_bits(channels, &bits).map_err(|p| {
             match (p.pass, pass_of(plan, index)) {
                 (None, Some(pass)) => p.frame(plan.frame).pass(pass),
                 _ => p.frame(plan.frame),
             }
         })?;
+        if let Some(grey) = grey {
+            notes.extend(grey.note(&mut planes, &file.info.path, file.info.width));
+        }
         // A pass whose data window is larger than the colour's (overscan) is cut to it; the
         // plan made sure it covers it.
         let own = DataWindow::of(&file.info);
