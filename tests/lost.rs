@@ -405,6 +405,50 @@ fn a_second_job_on_the_same_outputs_fails_at_once() {
     );
 }
 
+/// A `--skip-existing` retry beside a job still rewriting frames the retry finds whole locks
+/// only what it writes: it writes its missing frames and skips those, where it was stopped
+/// as busy on a frame it would have skipped.
+#[test]
+fn a_skip_existing_retry_does_not_lock_the_frames_it_skips() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = sequence(dir.path(), 5, 320, 240);
+    let out_dir = dir.path().join("out");
+    let out = format!("{}/o.####.exr", out_dir.display());
+    let job = |frames: &str, extra: &[&str]| {
+        let mut args = vec!["blur", "--color", &color, "-o", &out, "--frames", frames];
+        args.extend(["--threads", "1"]);
+        args.extend(extra);
+        args.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let run = |args: Vec<String>| shutter(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    let o = run(job("4-5", &[]));
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Frames 4-5 rewritten by a job held while it writes.
+    let rewrite = job("4-5", &[]);
+    let mut first = spawn(&rewrite.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(
+        wait_for_name(&mut first, &out_dir, |n| n.ends_with(".tmp")),
+        "the rewrite ended before it wrote anything"
+    );
+    signal(&first, "STOP");
+    let o = run(job("1-5", &["--skip-existing", "--json"]));
+    let err = stderr(&o);
+    signal(&first, "CONT");
+    assert!(o.status.success(), "{err}");
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(
+        (
+            report["frames_written"].as_u64(),
+            report["frames_skipped"].as_u64()
+        ),
+        (Some(3), Some(2)),
+        "{report}"
+    );
+    assert!(first.wait_with_output().unwrap().status.success());
+    let expected: Vec<String> = (1..=5).map(|f| format!("o.{f:04}.exr")).collect();
+    assert_eq!(names(&out_dir), expected);
+}
+
 /// A seeded fraction in [0, 1) for iteration `i` (splitmix64).
 fn fraction(i: u64) -> f64 {
     let mut z = i.wrapping_add(0x9E37_79B9_7F4A_7C15);

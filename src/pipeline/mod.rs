@@ -455,14 +455,20 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     } else {
         // Output folders no file can be created in, tried with a probe file now that
         // nothing else can fail first (the probe changes the folder's modification time).
-        let unwritable = output_folder_problems(&job.output, &job.frames, true);
+        // Of the frames to write: those found whole are skipped, not locked, so a retry
+        // beside a job still writing is stopped by (and names) a frame it would write.
+        let writes: Vec<Option<i64>> = (plans.iter().zip(&existing))
+            .filter(|(_, e)| !matches!(e, Existing::Whole))
+            .map(|(plan, _)| plan.frame)
+            .collect();
+        let unwritable = output_folder_problems(&job.output, &writes, true);
         if !unwritable.is_empty() {
             return Err(crate::Error::Files(unwritable));
         }
-        // The first thing written: the lock on this job's frames (another job on any of
-        // them stops here), released when `_lock` drops, whatever way the run ends.
-        _lock = Some(OutputLock::acquire(&job.output, &job.frames)?);
-        let outputs: Vec<PathBuf> = job.frames.iter().map(|&f| job.output.path(f)).collect();
+        // The first thing written: the lock on the frames this job writes (another job on
+        // any of them stops here), released when `_lock` drops, whatever way the run ends.
+        _lock = Some(OutputLock::acquire(&job.output, &writes)?);
+        let outputs: Vec<PathBuf> = writes.iter().map(|&f| job.output.path(f)).collect();
         stale = remove_stale_temporaries(&outputs);
     }
     if !stale.is_empty() {
