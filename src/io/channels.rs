@@ -85,7 +85,8 @@ pub fn preset_class(
 /// The keys of a preset's `[layers]` table that name no layer of a file whose channels are
 /// `names` but nearly name one, each with the layer it likely meant: the same but for case,
 /// or one edit away (two for names of eight letters or more) from a layer of four letters or
-/// more. A key naming a layer the file lacks is not a mistake (one preset serves shots
+/// more, or the end of a layer's name after a dot (`DiffCol` for `ViewLayer.DiffCol`: a key
+/// names a layer whole). A key naming a layer the file lacks is not a mistake (one preset serves shots
 /// rendered with different AOVs); a near miss is a typo that leaves the meant layer in its
 /// default class without a word.
 pub fn near_misses<'a>(
@@ -110,7 +111,9 @@ pub fn near_misses<'a>(
                 4..=7 => 1,
                 _ => 2,
             };
-            layer.eq_ignore_ascii_case(key) || edits(layer, key) <= allowed
+            layer.eq_ignore_ascii_case(key)
+                || edits(layer, key) <= allowed
+                || (layer.to_ascii_lowercase()).ends_with(&format!(".{}", key.to_ascii_lowercase()))
         });
         if let Some(layer) = near {
             misses.push((key.clone(), layer.to_string()));
@@ -267,6 +270,7 @@ mod tests {
             "Y",
             "albedos",
             "alb",
+            "diffcol",
         ]
         .map(String::from)
         .into();
@@ -285,6 +289,7 @@ mod tests {
                 ("ViewLayer.DifCol", "ViewLayer.DiffCol"),
                 ("z", "Z"),
                 ("albedos", "albedo"),
+                ("diffcol", "ViewLayer.DiffCol"),
             ])
         );
     }
