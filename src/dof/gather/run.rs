@@ -161,11 +161,20 @@ impl Padded {
     pub(super) fn level(&self, side: usize, (width, height): (usize, usize)) -> Level {
         let (stride, rows) = (self.stride, self.rows());
         let ia = &self.planes[5];
-        let sum = box_sum(ia, stride, rows, side);
-        let colour = |k: usize| -> Vec<f32> {
+        // Scratch planes reused by every box sum: fresh planes a sum cost more in page faults
+        // than the sums themselves (perf, the 1080p `dof` bench frame).
+        let mut across = vec![0.0f32; stride * rows];
+        let mut sum = vec![0.0f32; stride * rows];
+        box_sum(ia, stride, side, &mut across, &mut sum);
+        let mut products = vec![0.0f32; stride * rows];
+        let mut weighted = vec![0.0f32; stride * rows];
+        let mut colour = |k: usize| -> Vec<f32> {
             let plane = &self.planes[k];
-            let products: Vec<f32> = ia.par_iter().zip(plane).map(|(a, v)| a * v).collect();
-            let weighted = box_sum(&products, stride, rows, side);
+            products
+                .par_iter_mut()
+                .zip(ia.par_iter().zip(plane))
+                .for_each(|(p, (a, v))| *p = a * v);
+            box_sum(&products, stride, side, &mut across, &mut weighted);
             weighted
                 .par_iter()
                 .zip(&sum)
@@ -206,13 +215,16 @@ impl Padded {
     }
 }
 
-/// The sums over boxes of `side` × `side` of a padded plane of row length `stride` and `rows`
-/// rows (0 beyond it), each at the box's pixel ([`Level`]): across, then down, each box's
-/// values added in order (left to right, top to bottom) as the GPU twin adds them.
-fn box_sum(values: &[f32], stride: usize, rows: usize, side: usize) -> Vec<f32> {
+/// The sums over boxes of `side` × `side` of a padded plane of row length `stride` (0 beyond
+/// it), each at the box's pixel ([`Level`]), into `out` (`across` is scratch of the same
+/// size): across, then down, each box's values added in order (left to right, top to bottom)
+/// as the GPU twin adds them.
+fn box_sum(values: &[f32], stride: usize, side: usize, across: &mut [f32], out: &mut [f32]) {
+    let rows = values.len() / stride;
     let lo = (side / 2) as isize;
     let offsets = || (0..side as isize).map(move |o| o - lo);
-    let mut across = vec![0.0f32; stride * rows];
+    across.par_iter_mut().for_each(|v| *v = 0.0);
+    out.par_iter_mut().for_each(|v| *v = 0.0);
     across
         .par_chunks_mut(stride)
         .zip(values.par_chunks(stride))
@@ -226,7 +238,7 @@ fn box_sum(values: &[f32], stride: usize, rows: usize, side: usize) -> Vec<f32> 
                 }
             }
         });
-    let mut out = vec![0.0f32; stride * rows];
+    let across = &*across;
     out.par_chunks_mut(stride).enumerate().for_each(|(y, out)| {
         for shift in offsets() {
             let sy = y as isize + shift;
@@ -238,7 +250,6 @@ fn box_sum(values: &[f32], stride: usize, rows: usize, side: usize) -> Vec<f32> 
             }
         }
     });
-    out
 }
 
 impl Level {
@@ -262,7 +273,9 @@ impl Level {
                     }
                 }
             });
-        let weighted = box_sum(&products, stride, padded.rows(), self.side);
+        let mut across = vec![0.0f32; products.len()];
+        let mut weighted = vec![0.0f32; products.len()];
+        box_sum(&products, stride, self.side, &mut across, &mut weighted);
         (0..plane.len())
             .into_par_iter()
             .map(|j| {
