@@ -600,6 +600,94 @@ mod with_gpu {
         }
     }
 
+    /// The prefilter levels on the twin: a lone highlight (50) and a one-pixel checker under
+    /// a 42 px CoC (ring taps reading a box of 4 px), beside a near disc (CoC −40) over a far
+    /// field of CoC 9 (both fields, and fields apart with the far taps on the planes
+    /// themselves): the twin's `prefilter` makes the CPU's levels and its taps read them as
+    /// the CPU's do, beauty and carried, within the gather's tolerance (1e-5 of the range per
+    /// pixel, `dof_gather_matches_the_cpu_within_rounding`). With the twin reading single
+    /// pixels where the CPU reads levels, the highlight's pixels differ by 8× the disc's level.
+    #[test]
+    fn dof_gather_reads_the_prefilter_levels_as_the_cpu_does() {
+        let Some(gpu) = gpu() else { return };
+        use shutter::dof::gather::{gather, gather_carrying, plan};
+        use shutter::dof::DofConfig;
+        let (w, h) = (160, 96);
+        let n = w * h;
+        let disc = |x: usize, y: usize| {
+            let (dx, dy) = (x as f32 - 40.0, y as f32 - 48.0);
+            dx * dx + dy * dy < 18.0 * 18.0
+        };
+        let coc: Vec<f32> = (0..n)
+            .map(|i| match (i % w, i / w) {
+                (x, y) if disc(x, y) => -40.0,
+                (x, _) if x > 100 => 42.0,
+                _ => 9.0,
+            })
+            .collect();
+        let paint = |i: usize, k: usize| match (i % w, i / w) {
+            (135, 48) => 50.0,
+            (x, y) if disc(x, y) => 0.3 + 0.1 * k as f32,
+            (x, y) => ((x + y + k) % 2) as f32,
+        };
+        let color = shutter::frame::Color {
+            r: (0..n).map(|i| paint(i, 0)).collect(),
+            g: (0..n).map(|i| paint(i, 1)).collect(),
+            b: (0..n).map(|i| paint(i, 2)).collect(),
+            a: Some(
+                (0..n)
+                    .map(|i| if disc(i % w, i / w) { 1.0 } else { 0.5 })
+                    .collect(),
+            ),
+        };
+        let config = DofConfig::new(w, h, &DofParams::default());
+        let t = tiles(&TilesConfig::new(w, h, config.epsilon), &coc);
+        let p = plan(&config, &t);
+        assert!(!p.sides.is_empty());
+        assert!(p.tiles.iter().any(|t| t.fields == 1 && t.level > 0));
+        assert!(p.tiles.iter().any(|t| t.fields != 1 && t.level > 0));
+        let cpu = gather(&config, &color, &coc, &t);
+        let got = gpu
+            .try_dof_gather(&config, &color, &coc, &t)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let carried = gpu
+            .try_dof_gather_carrying(&config, &[&color, &color], &coc, &t)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let (cpu_beauty, cpu_carried) =
+            gather_carrying(&config, &color, &coc, &t, vec![color.r.clone()]);
+        assert_eq!(cpu_beauty, cpu);
+        let range = cpu.r.iter().fold(0.0f32, |m, &v| m.max(v.abs()));
+        let tolerance = 1e-5 * range;
+        for (what, out) in [
+            ("gather", &got),
+            ("carrying 0", &carried[0]),
+            ("carrying 1", &carried[1]),
+        ] {
+            let planes = [
+                ("r", &out.r, &cpu.r),
+                ("g", &out.g, &cpu.g),
+                ("b", &out.b, &cpu.b),
+                ("a", out.a.as_ref().unwrap(), cpu.a.as_ref().unwrap()),
+            ];
+            for (name, g, c) in planes {
+                for (i, (g, c)) in g.iter().zip(c.iter()).enumerate() {
+                    assert!(
+                        (g - c).abs() <= tolerance,
+                        "{what} {name} at ({}, {}): GPU {g}, CPU {c}",
+                        i % w,
+                        i / w
+                    );
+                }
+            }
+        }
+        // The CPU's carried plane is the beauty's red within its own rounding (32 ulps of
+        // the plane's largest value, 50, as src/dof/gather/carry.rs holds it).
+        for (i, (c, r)) in cpu_carried[0].iter().zip(&cpu.r).enumerate() {
+            let bound = 32.0 * f32::EPSILON * 50.0;
+            assert!((c - r).abs() <= bound, "carried at {i}: {c}, beauty {r}");
+        }
+    }
+
     /// Odd blade counts on the twin. Three and five blades (turned 0° and 20°) have no
     /// centre of symmetry: a source's bokeh is the aperture behind the focus plane and the
     /// aperture turned over in front of it, and a tile's taps cover both (src/dof/bokeh.rs).
@@ -697,8 +785,9 @@ mod with_gpu {
 
     /// The gather carrying light layers (`gather_carrying`): ten colours (two dispatches of at
     /// most eight) against the CPU's carried gather, each colour within the tolerance the
-    /// gather's own parity test states (1e-5 of its range per pixel, mean 1e-7), on two
-    /// lenses with and without alpha; the beauty carried equals the beauty gathered alone on
+    /// gather's own parity test states (1e-5 of its range per pixel, mean 1e-7; the light
+    /// layers, carried in the CPU's other form, mean 3e-7), on two lenses with and without
+    /// alpha; the beauty carried equals the beauty gathered alone on
     /// the GPU within the same bound.
     #[test]
     fn dof_gather_carrying_layers_matches_the_cpu_within_rounding() {
@@ -773,8 +862,17 @@ mod with_gpu {
                     "lens {k} {what}: {} > 1e-5 of {range}",
                     d.max
                 );
+                // The light layers come through the CPU's carried form (one weight a tap,
+                // fused multiply-adds) against the twin's sums of the beauty's form, and where
+                // ring taps read the prefilter levels each sample is itself a box's sums,
+                // which a driver may fuse: measured 1.9e-7 of the range on lavapipe.
+                let mean_bound = if what.starts_with("layer") {
+                    3e-7
+                } else {
+                    1e-7
+                };
                 assert!(
-                    d.mean <= 1e-7 * range as f64,
+                    d.mean <= mean_bound * range as f64,
                     "lens {k} {what}: mean {}",
                     d.mean
                 );

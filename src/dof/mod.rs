@@ -91,7 +91,9 @@ pub struct DofParams {
     /// gather: rotation of the diaphragm, degrees. Default 0.
     pub blade_rotation: f32,
     /// gather: rings of taps (ring k has 8k taps). Default 6 (169 taps): at 640×360 on
-    /// `layers` 6 rings err 20 % less than 4 (BENCHMARKS.md).
+    /// `layers` 6 rings err 20 % less than 4 (BENCHMARKS.md). Bokehs up to `rings` px in
+    /// radius gather every pixel; larger ones the rings, each tap reading a box the size of
+    /// the ring step (radius / rings) so that a lone highlight fills its bokeh.
     pub rings: usize,
     /// blend, the talk's form: passes n of the 3×3 filter for the first copy (the second has
     /// 2n); `None` chooses n so the 2n copy has the blur of a CoC of E.

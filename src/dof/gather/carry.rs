@@ -24,6 +24,10 @@ type Lanes = [f32; TILE];
 pub(super) struct Folded {
     pub(super) centre: Lanes,
     pub(super) taps: Vec<(isize, Lanes)>,
+    /// The taps that read the far taps' prefilter level and those that read the taps' level
+    /// ([`super::run::Level`]; empty where they read the planes themselves).
+    pub(super) far_level: Vec<(isize, Lanes)>,
+    pub(super) level: Vec<(isize, Lanes)>,
 }
 
 /// Folds the weights [`super::run::gather_run`] kept for a tile row into one weight a tap and lane, the
@@ -45,10 +49,13 @@ pub(super) fn fold(
 ) {
     let (start, span) = (row.start, row.span);
     let ia = &padded.planes[5];
+    let radius = &padded.planes[4];
     let mut near = [0.0f32; TILE];
     let mut ring = [0.0f32; TILE];
     let mut dense = [0.0f32; TILE];
     let mut centre = [0.0f32; TILE];
+    // Lanes whose own sample is the far level's box (as in `gather_run`), its weight.
+    let mut boxed = [0.0f32; TILE];
     for x in 0..span {
         let far = weights.far_scale[x];
         near[x] = weights.near_scale[x];
@@ -57,35 +64,51 @@ pub(super) fn fold(
         } else {
             ring[x] = far;
         }
-        centre[x] = far * ia[start + x];
+        if row.far_level && radius[start + x].abs() > row.small {
+            boxed[x] = far * row.far_planes[5][start + x];
+        } else {
+            centre[x] = far * ia[start + x];
+        }
     }
     folded.centre = centre;
     folded.taps.clear();
+    folded.far_level.clear();
+    folded.level.clear();
     let stride = stride as isize;
-    let mut push = |(dx, dy): (i32, i32), w: Lanes| {
+    // Where a tap's weight goes: 0 the planes themselves, 1 the far level, 2 the taps' level.
+    let mut push = |to: usize, (dx, dy): (i32, i32), w: Lanes| {
         if counts(&w) {
-            folded.taps.push((dy as isize * stride + dx as isize, w));
+            let list = match to {
+                1 => &mut folded.far_level,
+                2 => &mut folded.level,
+                _ => &mut folded.taps,
+            };
+            list.push((dy as isize * stride + dx as isize, w));
         }
     };
+    let far_to = if row.far_level { 1 } else { 0 };
+    let main_to = if row.level { 2 } else { 0 };
+    push(far_to, (0, 0), boxed);
     let scaled = |scale: &Lanes, w: &Lanes| -> Lanes { std::array::from_fn(|x| scale[x] * w[x]) };
     if row.fields == Fields::Both {
         // One list of taps, each lane's weight far or near (the other 0).
         for ((offset, wf), (_, wn)) in weights.far.iter().zip(&weights.near) {
             push(
+                main_to,
                 *offset,
                 std::array::from_fn(|x| ring[x] * wf[x] + near[x] * wn[x]),
             );
         }
     } else {
         for (offset, wf) in &weights.far {
-            push(*offset, scaled(&ring, wf));
+            push(far_to, *offset, scaled(&ring, wf));
         }
         for (offset, wn) in &weights.near {
-            push(*offset, scaled(&near, wn));
+            push(main_to, *offset, scaled(&near, wn));
         }
     }
     for (offset, wf) in &weights.dense {
-        push(*offset, scaled(&dense, wf));
+        push(0, *offset, scaled(&dense, wf));
     }
 }
 
@@ -165,27 +188,33 @@ fn lanes(plane: &[f32], base: usize) -> &Lanes {
 /// in registers. `out[k][row]` is plane k's row.
 #[inline(always)]
 fn carry_group<const N: usize>(
-    planes: [&[f32]; N],
+    planes: [[&[f32]; N]; 3],
     (origin, stride): (usize, usize),
     folded: &[Folded],
     out: &mut [Vec<Lanes>],
 ) {
     for (ly, row) in folded.iter().enumerate() {
         let start = origin + ly * stride;
-        let mut acc = planes.map(|plane| {
+        let mut acc = planes[0].map(|plane| {
             let c = lanes(plane, start);
             let v: Lanes = std::array::from_fn(|x| row.centre[x] * c[x]);
             v
         });
-        for (step, w) in &row.taps {
-            let base = (start as isize + step) as usize;
-            for k in 0..N {
-                let s = lanes(planes[k], base);
-                let mut v = acc[k];
-                for x in 0..TILE {
-                    v[x] = w[x].mul_add(s[x], v[x]);
+        // The taps over the planes themselves, then those over the levels.
+        for (set, taps) in [&row.taps, &row.far_level, &row.level]
+            .into_iter()
+            .enumerate()
+        {
+            for (step, w) in taps {
+                let base = (start as isize + step) as usize;
+                for k in 0..N {
+                    let s = lanes(planes[set][k], base);
+                    let mut v = acc[k];
+                    for x in 0..TILE {
+                        v[x] = w[x].mul_add(s[x], v[x]);
+                    }
+                    acc[k] = v;
                 }
-                acc[k] = v;
             }
         }
         for (o, a) in out.iter_mut().zip(acc) {
@@ -214,38 +243,63 @@ const MOST_PLANES: usize = 3;
 /// count gives the same bits.
 #[multiversion::multiversion(targets("x86_64+avx512f+avx512vl+fma", "x86_64+avx2+fma"))]
 pub(super) fn carry_tile(
-    planes: &[Vec<f32>],
+    planes: [&[Vec<f32>]; 3],
     size: (usize, usize),
     tile: &TileCopy,
     folded: &[Folded],
     scratch: &mut Vec<f32>,
     out: &mut [Vec<Lanes>],
 ) {
-    let groups = planes.len().div_ceil(MOST_PLANES);
+    let count = planes[0].len();
+    let groups = count.div_ceil(MOST_PLANES);
     let len = tile.len();
     let at = tile.origin(size.0);
+    // Which of the three sets the tile's taps read (a level's planes are empty where no tap
+    // reads it: the planes themselves stand in).
+    let used: [bool; 3] = std::array::from_fn(|set| {
+        set == 0
+            || folded
+                .iter()
+                .any(|row| !(if set == 1 { &row.far_level } else { &row.level }).is_empty())
+    });
     let mut from = 0;
     for g in 0..groups {
-        // The first `planes.len() % groups` groups take one plane more.
-        let n = planes.len() / groups + usize::from(g < planes.len() % groups);
+        // The first `count % groups` groups take one plane more.
+        let n = count / groups + usize::from(g < count % groups);
         if !tile.direct {
-            scratch.resize(n * len, 0.0);
-            for (k, copy) in scratch.chunks_exact_mut(len).enumerate() {
-                tile.copy(&planes[from + k], size, copy);
+            scratch.resize(3 * n * len, 0.0);
+            for set in 0..3 {
+                if used[set] {
+                    for k in 0..n {
+                        let copy = &mut scratch[(set * n + k) * len..(set * n + k + 1) * len];
+                        tile.copy(&planes[set][from + k], size, copy);
+                    }
+                }
             }
         }
-        let read = |k: usize| -> &[f32] {
+        let read = |set: usize, k: usize| -> &[f32] {
+            let set = if used[set] { set } else { 0 };
             if tile.direct {
-                &planes[from + k]
+                &planes[set][from + k]
             } else {
-                &scratch[k * len..(k + 1) * len]
+                &scratch[(set * n + k) * len..(set * n + k + 1) * len]
             }
         };
         let outs = &mut out[from..from + n];
         match n {
-            1 => carry_group([read(0)], at, folded, outs),
-            2 => carry_group([read(0), read(1)], at, folded, outs),
-            _ => carry_group([read(0), read(1), read(2)], at, folded, outs),
+            1 => carry_group([0, 1, 2].map(|s| [read(s, 0)]), at, folded, outs),
+            2 => carry_group(
+                [0, 1, 2].map(|s| [read(s, 0), read(s, 1)]),
+                at,
+                folded,
+                outs,
+            ),
+            _ => carry_group(
+                [0, 1, 2].map(|s| [read(s, 0), read(s, 1), read(s, 2)]),
+                at,
+                folded,
+                outs,
+            ),
         }
         from += n;
     }

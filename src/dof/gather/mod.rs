@@ -27,6 +27,14 @@
 //!    field is the average of the in-frame taps, renormalised, and the near field counts
 //!    the near pixels the frame holds ([`Padded`] says what was measured against mirroring).
 //!
+//!    Ring taps are a ring step (R / rings) apart, so each reads a prefilter level: the
+//!    planes box-averaged over that step ([`level_side`], `run::Level`), colour weighted by
+//!    1 / bokeh area. Single-pixel taps left a lone highlight under a 21 px bokeh as dotted
+//!    rings (pixels inside its disc from 0 to 9.4× its level) and kept 0.13 of a 1 px
+//!    checker's contrast; with the levels, 0.6× to 1.8× and 0.001 (BENCH-NOTE of the rings
+//!    branch: a box of two steps erred less on the truth scenes but widened every bokeh's
+//!    rim by a step).
+//!
 //!    Where a larger bokeh than the tile's own sets its radius (a near field reaching over
 //!    it), the far field is gathered apart over the taps of the tile's own largest radius:
 //!    a far sample counts only within the pixel's own bokeh, and the large radius's rings
@@ -113,26 +121,50 @@ fn grid_taps(radius: usize, norms: &Norms, stride: isize) -> Vec<PixelTap> {
         .collect()
 }
 
+/// The side (px) of the prefilter box ([`run::Level`]) the rings of gather radius `radius`
+/// read: the ring step, R / rings, rounded, at most [`MOST_SIDE`]; 1 (no prefilter) where the
+/// grids go.
+pub fn level_side(radius: f32, rings: usize) -> usize {
+    if radius.ceil() as usize <= rings {
+        return 1;
+    }
+    ((radius / rings as f32).round() as usize).clamp(1, MOST_SIDE)
+}
+
+/// The largest prefilter box (px): a level costs its side in additions a pixel and plane on
+/// the CPU and its square on the GPU (which sums each box whole), so a bokeh far larger than
+/// the rings can fill keeps the work bounded (a 16 px box under the default six rings: a
+/// 96 px bokeh radius; beyond it the taps' boxes leave gaps again).
+const MOST_SIDE: usize = 16;
+
 /// The taps of a tile whose gather radius is `radius`, larger than the grids go: the rings
 /// scaled to the radius and snapped to whole pixels, taps landing on the same pixel merged
 /// (their areas summed). Norms are those of the whole-pixel offset, so distances are exact.
-/// The centre is left out (p counts itself).
-fn ring_taps(radius: f32, rings: &[Tap], norms: &Norms, stride: isize) -> Vec<PixelTap> {
+/// The centre is left out (p counts itself). With a prefilter box of even `side` the taps
+/// snap to the box's centre, half a pixel up and left of its pixel.
+fn ring_taps(
+    radius: f32,
+    rings: &[Tap],
+    norms: &Norms,
+    stride: isize,
+    side: usize,
+) -> Vec<PixelTap> {
     let whole = radius.ceil() as usize;
+    let shift = if side.is_multiple_of(2) { 0.5 } else { 0.0 };
     let mut offsets: Vec<((isize, isize), f32)> = Vec::new();
     // Which entry of `offsets` each whole-pixel offset went to, on a square a pixel wider
     // than the radius each way (a lookup instead of a search; the same entries in the same
     // order, their areas summed in tap order).
-    let half = whole as isize + 1;
-    let side = (2 * half + 1) as usize;
-    let mut entry = vec![usize::MAX; side * side];
+    let half = whole as isize + 2;
+    let side_len = (2 * half + 1) as usize;
+    let mut entry = vec![usize::MAX; side_len * side_len];
     for tap in &rings[1..] {
         let key = (
-            (tap.dx * radius + 0.5).floor() as isize,
-            (tap.dy * radius + 0.5).floor() as isize,
+            (tap.dx * radius + 0.5 + shift).floor() as isize,
+            (tap.dy * radius + 0.5 + shift).floor() as isize,
         );
         let area = tap.area * radius * radius;
-        let slot = &mut entry[((key.1 + half) as usize) * side + (key.0 + half) as usize];
+        let slot = &mut entry[((key.1 + half) as usize) * side_len + (key.0 + half) as usize];
         match offsets.get_mut(*slot) {
             Some((_, a)) => *a += area,
             None => {
@@ -144,12 +176,20 @@ fn ring_taps(radius: f32, rings: &[Tap], norms: &Norms, stride: isize) -> Vec<Pi
     offsets
         .into_iter()
         .filter(|(key, _)| *key != (0, 0))
-        .map(|(key, area)| pixel_tap(key, area, norms, stride))
+        .map(|(key, area)| {
+            let mut t = pixel_tap(key, area, norms, stride);
+            if shift > 0.0 {
+                let (cx, cy) = (key.0 as f32 - shift, key.1 as f32 - shift);
+                t.norm_far = norms.aperture.norm(-cx, -cy);
+                t.norm_near = norms.aperture.norm(cx, cy);
+            }
+            t
+        })
         .collect()
 }
 
 /// The taps of a gather radius: the whole-pixel grid up to `rings` px, the snapped rings
-/// beyond (made into `made`).
+/// beyond (made into `made`), and the side of the prefilter box they read.
 fn taps_for<'a>(
     radius: f32,
     grids: &'a [Vec<PixelTap>],
@@ -157,12 +197,13 @@ fn taps_for<'a>(
     norms: &Norms,
     stride: isize,
     made: &'a mut Vec<PixelTap>,
-) -> &'a [PixelTap] {
+) -> (&'a [PixelTap], usize) {
     match grids.get(radius.ceil() as usize) {
-        Some(grid) => grid,
+        Some(grid) => (grid, 1),
         None => {
-            *made = ring_taps(radius, rings, norms, stride);
-            made
+            let side = level_side(radius, grids.len() - 1);
+            *made = ring_taps(radius, rings, norms, stride, side);
+            (made, side)
         }
     }
 }
@@ -229,11 +270,13 @@ pub struct GatherConfig {
     /// The largest bokeh radius (px) that gathers its far field over a tile's dense grid
     /// ([`TileTaps::dense_start`]): `rings`, the grid's radius.
     pub small: f32,
-    pub _pad: u32,
+    /// The prefilter levels the tiles' taps read ([`TilePlan::sides`]).
+    pub levels: u32,
 }
 
 impl GatherConfig {
-    /// The uniform for gathering a frame of `config` with alpha or without.
+    /// The uniform for gathering a frame of `config` with alpha or without (no levels: the
+    /// plan's count goes in `levels`).
     pub fn new(config: &DofConfig, has_alpha: bool) -> Self {
         GatherConfig {
             width: config.width as u32,
@@ -243,7 +286,7 @@ impl GatherConfig {
             layer: LAYER,
             colours: 1,
             small: config.rings as f32,
-            _pad: 0,
+            levels: 0,
         }
     }
 }
@@ -281,6 +324,12 @@ pub struct TileTaps {
     /// [`GatherConfig::small`] gathers its far field instead (count 0 elsewhere).
     pub dense_start: u32,
     pub dense_count: u32,
+    /// The prefilter level the taps read and the one the far taps read: 0 the planes
+    /// themselves, k level k − 1 of [`TilePlan::sides`] (the far taps' own where both fields
+    /// share the taps). Where the far taps read a level, a pixel that gathers them takes its
+    /// own sample from it too.
+    pub level: u32,
+    pub far_level: u32,
 }
 
 /// What [`gather`] decides per tile, as the GPU twin reads it: every tile's choice and the
@@ -289,6 +338,29 @@ pub struct TileTaps {
 pub struct TilePlan {
     pub taps: Vec<OffsetTap>,
     pub tiles: Vec<TileTaps>,
+    /// The prefilter levels' box sides (px), in the order [`TileTaps::level`] counts them.
+    pub sides: Vec<u32>,
+}
+
+/// The prefilter levels' box sides ([`level_side`]) the tiles' ring taps read, each once, in
+/// the order the tiles first need them.
+fn level_sides(config: &DofConfig, tiles: &Tiles) -> Vec<usize> {
+    let half_focus = (0.5 * config.epsilon).max(SMALLEST_RADIUS);
+    let mut sides: Vec<usize> = Vec::new();
+    for t in 0..tiles.reach.len() {
+        if let Some(choice) = choose(tiles.reach[t], tiles.own[t], tiles.far_only[t], half_focus) {
+            for radius in [Some(choice.radius), choice.far_radius]
+                .into_iter()
+                .flatten()
+            {
+                let side = level_side(radius, config.rings);
+                if side > 1 && !sides.contains(&side) {
+                    sides.push(side);
+                }
+            }
+        }
+    }
+    sides
 }
 
 /// The plan [`gather`] follows for `tiles`: the same choices and the same taps, in order.
@@ -308,9 +380,18 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
         .map(|r| grid_taps(r, &norms, STRIDE))
         .collect();
     let half_focus = (0.5 * config.epsilon).max(SMALLEST_RADIUS);
+    let sides = level_sides(config, tiles);
+    let level = |radius: f32| {
+        let side = level_side(radius, rings_count);
+        sides
+            .iter()
+            .position(|&s| s == side)
+            .map_or(0, |l| l as u32 + 1)
+    };
     let mut plan = TilePlan {
         taps: Vec::new(),
         tiles: Vec::with_capacity(tiles.reach.len()),
+        sides: sides.iter().map(|&s| s as u32).collect(),
     };
     // Tap lists already in `plan.taps`, by the radius that made them (a grid's whole radius,
     // or a ring radius's bits).
@@ -322,7 +403,7 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
         };
         *lists.entry(key).or_insert_with(|| {
             let mut made = Vec::new();
-            let found = taps_for(radius, &grids, &rings, &norms, STRIDE, &mut made);
+            let (found, _) = taps_for(radius, &grids, &rings, &norms, STRIDE, &mut made);
             let start = plan.taps.len() as u32;
             plan.taps.extend(found.iter().map(|t| {
                 let (dx, dy) = offset(t.step);
@@ -347,6 +428,8 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
                 far_count: 0,
                 dense_start: 0,
                 dense_count: 0,
+                level: 0,
+                far_level: 0,
             },
             Some(choice) => {
                 let main = list(choice.radius, &mut plan);
@@ -373,6 +456,12 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
                     far_count: far[1],
                     dense_start: dense[0],
                     dense_count: dense[1],
+                    level: level(choice.radius),
+                    far_level: match choice.far_radius {
+                        None => level(choice.radius),
+                        Some(0.0) => 0,
+                        Some(own) => level(own),
+                    },
                 }
             }
         };
@@ -423,6 +512,23 @@ pub fn gather_carrying(
         .collect();
     let tiles_x = width.div_ceil(TILE);
     let half_focus = (0.5 * config.epsilon).max(SMALLEST_RADIUS);
+    // The prefilter levels the tiles' rings read, each made once.
+    let sides = level_sides(config, tiles);
+    let levels: Vec<run::Level> = sides
+        .iter()
+        .map(|&side| padded.level(side, (width, height)))
+        .collect();
+    // The carried planes at each level, prefiltered as the beauty's colour is.
+    let carried_levels: Vec<Vec<Vec<f32>>> = levels
+        .iter()
+        .map(|level| {
+            extra
+                .iter()
+                .map(|plane| level.carried(&padded, plane, width))
+                .collect()
+        })
+        .collect();
+    let level_of = |side: usize| levels.iter().position(|l| l.side == side);
 
     // Output planes r, g, b, a, and the carried planes, filled a band of tile rows at a time.
     let mut out = [0, 1, 2, 3].map(|_| vec![0.0f32; width * height]);
@@ -479,12 +585,21 @@ pub fn gather_carrying(
                         continue;
                     };
                     let mut made = Vec::new();
-                    let taps = taps_for(choice.radius, &grids, &rings, &norms, stride, &mut made);
+                    let (taps, side) =
+                        taps_for(choice.radius, &grids, &rings, &norms, stride, &mut made);
                     let mut made_far = Vec::new();
-                    let far_taps = match choice.far_radius {
-                        None => taps,
-                        Some(0.0) => &[][..],
+                    let (far_taps, far_side) = match choice.far_radius {
+                        None => (taps, side),
+                        Some(0.0) => (&[][..], 1),
                         Some(own) => taps_for(own, &grids, &rings, &norms, stride, &mut made_far),
+                    };
+                    let planes_of = |side: usize| match level_of(side) {
+                        Some(l) => &levels[l].planes,
+                        None => &padded.planes,
+                    };
+                    let carried_of = |side: usize| match level_of(side) {
+                        Some(l) => &carried_levels[l][..],
+                        None => &extra[..],
                     };
                     let mode = choice.fields;
                     let dense = far_rings(&choice, rings_count);
@@ -511,6 +626,10 @@ pub fn gather_carrying(
                             fields: mode,
                             grids: if dense { &grids } else { &[] },
                             small: rings_count as f32,
+                            far_planes: planes_of(far_side),
+                            planes: planes_of(side),
+                            far_level: far_side > 1,
+                            level: side > 1,
                         };
                         let mut result = [[0.0f32; TILE]; 4];
                         gather_run(&padded, &run, &mut result, &mut weights);
@@ -524,7 +643,7 @@ pub fn gather_carrying(
                     }
                     if carrying {
                         carry_tile(
-                            &extra,
+                            [&extra[..], carried_of(far_side), carried_of(side)],
                             (width, height),
                             &copy,
                             &folded[..rows],
@@ -552,182 +671,4 @@ pub fn gather_carrying(
 }
 
 #[cfg(test)]
-mod field_tests {
-    use super::*;
-    use crate::dof::tiles::{tiles, TilesConfig};
-    use crate::dof::DofParams;
-    use crate::numeric::close;
-
-    /// A grey frame from `paint` with the signed CoC plane `coc`, gathered.
-    fn run(w: usize, h: usize, paint: &dyn Fn(usize, usize) -> f32, coc: &[f32]) -> Vec<f32> {
-        let plane: Vec<f32> = (0..w * h).map(|i| paint(i % w, i / w)).collect();
-        let color = Color {
-            r: plane.clone(),
-            g: plane.clone(),
-            b: plane,
-            a: None,
-        };
-        let config = DofConfig::new(w, h, &DofParams::default());
-        let t = tiles(&TilesConfig::new(w, h, config.epsilon), coc);
-        gather(&config, &color, coc, &t).r
-    }
-
-    #[test]
-    fn a_fine_far_texture_beside_a_large_near_bokeh_keeps_its_own_blur() {
-        // A one-pixel checker far behind (CoC 8 px), and a disc far in front (CoC −60 px) in
-        // the left part of the frame. The disc's bokeh sets the gather radius (30 px) of the
-        // tiles around it, whose far pixels have a 4 px bokeh of their own: sampled with the
-        // 30 px rings, they would keep the few ring taps inside 4 px and the checker would
-        // come out as a grid of marks. Wherever the disc's bokeh cannot reach, the far field
-        // must be what it is with no disc at all.
-        let (w, h) = (192, 96);
-        let checker = |x: usize, y: usize| ((x + y) % 2) as f32;
-        let disc = |x: usize, y: usize| {
-            let (dx, dy) = (x as f32 - 24.0, y as f32 - 48.0);
-            dx * dx + dy * dy < 16.0 * 16.0
-        };
-        let paint = |x: usize, y: usize| if disc(x, y) { 0.3 } else { checker(x, y) };
-        let coc: Vec<f32> = (0..w * h)
-            .map(|i| if disc(i % w, i / w) { -60.0 } else { 8.0 })
-            .collect();
-        let with = run(w, h, &paint, &coc);
-        let without = run(w, h, &checker, &vec![8.0; w * h]);
-        let mut checked = 0;
-        for y in 0..h {
-            for x in 0..w {
-                let (dx, dy) = (x as f32 - 24.0, y as f32 - 48.0);
-                // Beyond the disc's edge (16 px) plus its bokeh (30 px) and the far bokeh
-                // (4 px) plus a pixel: nothing of the disc reaches.
-                if (dx * dx + dy * dy).sqrt() < 16.0 + 30.0 + 4.0 + 1.0 {
-                    continue;
-                }
-                let i = y * w + x;
-                assert!(
-                    close(with[i], without[i], 1e-5),
-                    "({x}, {y}): {} with the disc, {} without",
-                    with[i],
-                    without[i]
-                );
-                checked += 1;
-            }
-        }
-        // The comparison covers tiles whose radius the disc sets (within 30 px of it).
-        assert!(checked > 1000);
-        // And the blurred checker has no pattern left: a 4 px bokeh over a one-pixel checker
-        // is within a few percent of its mean everywhere away from the frame's edge.
-        for y in 8..h - 8 {
-            for x in 100..w - 8 {
-                let v = with[y * w + x];
-                assert!(close(v, 0.5, 0.05), "({x}, {y}): {v}");
-            }
-        }
-    }
-
-    #[test]
-    fn a_fine_far_texture_in_a_near_rim_s_tiles_keeps_its_own_blur() {
-        // A one-pixel checker far behind (CoC 8 px: a 4 px bokeh) and a disc in front (CoC
-        // −14: a 7 px bokeh, beyond the 6 px the grids go to, so the four tiles it lies in
-        // take the rings of 7 px) of radius 8 px. In those tiles the far checker's pixels
-        // beyond the disc's bokeh must come out as they do with no disc at all: their far
-        // field over every pixel of their 4 px bokeh. With the rings of the disc's radius, a
-        // 4 px bokeh kept a few scattered taps and the pattern came out as marks.
-        let (w, h) = (96, 64);
-        let checker = |x: usize, y: usize| ((x + y) % 2) as f32;
-        let (cx, cy) = (14.0, 14.0);
-        let disc = |x: usize, y: usize| {
-            let (dx, dy) = (x as f32 + 0.5 - cx, y as f32 + 0.5 - cy);
-            dx * dx + dy * dy < 8.0 * 8.0
-        };
-        let paint = |x: usize, y: usize| if disc(x, y) { 0.3 } else { checker(x, y) };
-        let coc: Vec<f32> = (0..w * h)
-            .map(|i| if disc(i % w, i / w) { -14.0 } else { 8.0 })
-            .collect();
-        let with = run(w, h, &paint, &coc);
-        let without = run(w, h, &checker, &vec![8.0; w * h]);
-        let tile_of = |x: usize, y: usize| (x / TILE, y / TILE);
-        let disc_tiles: std::collections::BTreeSet<_> = (0..w * h)
-            .filter(|&i| disc(i % w, i / w))
-            .map(|i| tile_of(i % w, i / w))
-            .collect();
-        let mut checked = 0;
-        for y in 0..h {
-            for x in 0..w {
-                let (dx, dy) = (x as f32 + 0.5 - cx, y as f32 + 0.5 - cy);
-                // Beyond the disc's edge (8 px) plus its bokeh (7) and the far bokeh (4)
-                // plus a pixel, inside a tile the disc lies in.
-                if (dx * dx + dy * dy).sqrt() < 8.0 + 7.0 + 4.0 + 1.0
-                    || !disc_tiles.contains(&tile_of(x, y))
-                {
-                    continue;
-                }
-                let i = y * w + x;
-                assert!(
-                    close(with[i], without[i], 1e-5),
-                    "({x}, {y}): {} with the disc, {} without",
-                    with[i],
-                    without[i]
-                );
-                checked += 1;
-            }
-        }
-        assert_eq!(disc_tiles.len(), 4);
-        assert!(checked > 40, "{checked}");
-    }
-
-    /// A checker of `cell` px, 0.1 and 0.9 (mean 0.5), from the frame's top-left corner, so
-    /// that whole cells meet every edge.
-    fn checker(cell: usize) -> impl Fn(usize, usize) -> f32 {
-        move |x, y| 0.1 + 0.8 * ((x / cell + y / cell) % 2) as f32
-    }
-
-    #[test]
-    fn a_fine_checker_meeting_the_frame_edge_keeps_its_mean_within_the_first_coc_radius() {
-        // Issue 34: a fine far texture meeting the frame's edges, in both orientations (the
-        // checker meets the top and bottom rows and the left and right columns alike).
-        // Blurred, it is its mean, 0.5, up to the edge: what lies beyond is unknown, and the
-        // gather must not make structure of it. Mirroring the frame about its edge doubled
-        // the edge cell, and within the first CoC radius (corners included) the output swung
-        // to 0.304 off the mean (4 px cells, CoC 9) and 0.260 (5 px, CoC 12); with the taps
-        // outside weighing nothing it stays within 0.213 and 0.181. Inside, the discrete
-        // bokeh's own ripple over such cells is up to 0.07.
-        let (w, h) = (160, 96);
-        for (cell, coc) in [(4, 9.0f32), (5, 12.0)] {
-            let out = run(w, h, &checker(cell), &vec![coc; w * h]);
-            let radius = (0.5 * coc).ceil() as usize;
-            let mut checked = 0;
-            for y in 0..h {
-                for x in 0..w {
-                    if x.min(w - 1 - x).min(y).min(h - 1 - y) >= radius {
-                        continue;
-                    }
-                    let v = out[y * w + x];
-                    assert!(
-                        (v - 0.5).abs() <= 0.25,
-                        "cell {cell}, CoC {coc}: ({x}, {y}): {v}"
-                    );
-                    checked += 1;
-                }
-            }
-            assert_eq!(checked, w * h - (w - 2 * radius) * (h - 2 * radius));
-        }
-    }
-
-    #[test]
-    fn a_fine_texture_keeps_its_mean_up_to_the_frame_edge() {
-        // Stripes of one pixel (0, 1, 0, 1, …) blurred by a 12 px CoC (a 6 px bokeh, which
-        // gathers every pixel of its neighbourhood): the world beyond the frame is unknown,
-        // but the frame's own texture says its mean is ½. Mirroring keeps that mean at the
-        // edges (within the one column the reflection repeats: 7 zeros to 6 ones across the
-        // bokeh, 0.46); clamping to the edge would fill the bokeh's outer part with the edge
-        // column's value (over 0.2 off).
-        let (w, h) = (96, 48);
-        let stripes = |x: usize, _y: usize| (x % 2) as f32;
-        let out = run(w, h, &stripes, &vec![12.0; w * h]);
-        for y in 0..h {
-            for x in 0..w {
-                let v = out[y * w + x];
-                assert!(close(v, 0.5, 0.06), "({x}, {y}): {v}");
-            }
-        }
-    }
-}
+mod field_tests;

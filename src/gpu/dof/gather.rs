@@ -8,7 +8,10 @@
 //! [`crate::dof::gather::gather_carrying`]. Bindings, in order: the [`GatherConfig`] uniform; the colour planes
 //! r, g, b, a one after the other (a zero without alpha); the CoC plane followed by each
 //! pixel's 1 / bokeh area; the taps ([`crate::dof::gather::OffsetTap`]); the tiles' plan
-//! ([`crate::dof::gather::TileTaps`]); then the output planes r, g, b, a.
+//! ([`crate::dof::gather::TileTaps`]); the prefilter levels' box sides; then the output
+//! planes r, g, b, a, and the levels themselves (scratch), which entry `prefilter` makes first
+//! (one dispatch, a level per z) as the CPU's `Padded::level` does, and which the ring taps
+//! read.
 //!
 //! What each tile gathers and over which taps is the CPU's own decision,
 //! [`crate::dof::gather::plan`], made on the host (a few thousand tiles; every tap list once)
@@ -33,18 +36,18 @@ pub const SHADER: &str = concat!(include_str!("../prelude.wgsl"), include_str!("
 /// Most colours one dispatch of `gather_carrying` gathers (`MOST_COLOURS` in the shader).
 pub const MOST_COLOURS: usize = 8;
 
-/// The compiled stage: bindings config, color, coc, taps, tiles, then out; entries `gather`
-/// and `gather_carrying`.
+/// The compiled stage: bindings config, color, coc, taps, tiles, sides, then out and the
+/// prefilter levels (scratch); entries `gather`, `gather_carrying` and `prefilter`.
 pub(crate) fn stage(device: &wgpu::Device) -> Stage {
     Stage::new(
         device,
         "gather",
         SHADER,
-        &["gather", "gather_carrying"],
+        &["gather", "gather_carrying", "prefilter"],
         std::mem::size_of::<GatherConfig>(),
-        4,
+        5,
+        2,
         1,
-        0,
     )
 }
 
@@ -71,7 +74,10 @@ impl Gpu {
         let mut radii = Vec::with_capacity(2 * n);
         radii.extend_from_slice(&coc[..n]);
         radii.extend(coc[..n].iter().map(|&c| inverse_area(c, unit_area)));
-        let uniform = GatherConfig::new(config, has_alpha);
+        let uniform = GatherConfig {
+            levels: plan.sides.len() as u32,
+            ..GatherConfig::new(config, has_alpha)
+        };
         let mut out = self.dispatch_gather(&uniform, 0, &planes, &radii, &plan)?;
         let a = has_alpha.then(|| out.split_off(3 * n));
         out.truncate(3 * n);
@@ -101,8 +107,10 @@ impl Gpu {
         let mut radii = Vec::with_capacity(2 * n);
         radii.extend_from_slice(&coc[..n]);
         radii.extend(coc[..n].iter().map(|&c| inverse_area(c, unit_area)));
-        // As many colours a dispatch as one binding holds (16 bytes a pixel each).
-        let fit = (self.max_binding() / (16 * n as u64)).max(1) as usize;
+        // As many colours a dispatch as one binding holds (16 bytes a pixel each, and as
+        // much again a prefilter level).
+        let levels = plan.sides.len() as u64;
+        let fit = (self.max_binding() / (16 * n as u64 * levels.max(1))).max(1) as usize;
         let per_dispatch = MOST_COLOURS.min(fit);
         let mut gathered = Vec::with_capacity(colours.len());
         for chunk in colours.chunks(per_dispatch) {
@@ -112,6 +120,7 @@ impl Gpu {
             }
             let uniform = GatherConfig {
                 colours: chunk.len() as u32,
+                levels: plan.sides.len() as u32,
                 ..GatherConfig::new(config, chunk[0].a.is_some())
             };
             let out = self.dispatch_gather(&uniform, 1, &planes, &radii, &plan)?;
@@ -132,7 +141,8 @@ impl Gpu {
 impl Gpu {
     /// One dispatch of the gather's entry `entry` (0 `gather`, 1 `gather_carrying`) over the
     /// colours' `planes` (four a colour, `uniform.colours` of them), with the CoC and bokeh
-    /// areas (`radii`) and the plan; returns the output planes.
+    /// areas (`radii`) and the plan, after the `prefilter` of the plan's levels; returns the
+    /// output planes.
     fn dispatch_gather(
         &self,
         uniform: &GatherConfig,
@@ -142,6 +152,9 @@ impl Gpu {
         plan: &TilePlan,
     ) -> Result<Vec<f32>, StageError> {
         let groups = [uniform.columns, uniform.height.div_ceil(TILE as u32), 1];
+        let levels = plan.sides.len() as u32;
+        let n = (uniform.width * uniform.height) as u64;
+        let level_bytes = levels as u64 * (1 + 4 * uniform.colours as u64) * n * 4;
         let mut out = self.compiled("gather", stage).run(
             self,
             bytemuck::bytes_of(uniform),
@@ -150,12 +163,19 @@ impl Gpu {
                 bytemuck::cast_slice(radii),
                 bytemuck::cast_slice(&plan.taps),
                 bytemuck::cast_slice(&plan.tiles),
+                bytemuck::cast_slice(&plan.sides),
             ],
-            &[(planes.len() * 4) as u64],
+            &[(planes.len() * 4) as u64, level_bytes],
             &[],
-            &[Dispatch { entry, groups }],
+            &[
+                Dispatch {
+                    entry: 2,
+                    groups: [groups[0], groups[1], levels],
+                },
+                Dispatch { entry, groups },
+            ],
         )?;
-        Ok(floats(out.pop().expect("one output")))
+        Ok(floats(out.swap_remove(0)))
     }
 }
 
@@ -178,14 +198,14 @@ mod tests {
 
     #[test]
     fn the_shared_structs_are_the_shader_s() {
-        // The uniform is eight 4-byte fields (a multiple of 16), a tap five and a tile seven
+        // The uniform is eight 4-byte fields (a multiple of 16), a tap five and a tile nine
         // (their array stride in a storage buffer).
         assert_eq!(std::mem::align_of::<OffsetTap>(), 4);
         crate::gpu::layout::assert_same_layout!(
             GatherConfig,
             SHADER,
             "GatherConfig",
-            [width, height, columns, has_alpha, layer, colours, small]
+            [width, height, columns, has_alpha, layer, colours, small, levels]
         );
         crate::gpu::layout::assert_same_layout!(
             OffsetTap,
@@ -204,7 +224,9 @@ mod tests {
                 far_start,
                 far_count,
                 dense_start,
-                dense_count
+                dense_count,
+                level,
+                far_level
             ]
         );
     }

@@ -1,0 +1,180 @@
+//! The bokeh gather's fields and what it makes of fine textures ([`super`]): the far field
+//! beside a near one, at the frame's edge, and under the prefilter's levels.
+
+use super::*;
+use crate::dof::tiles::{tiles, TilesConfig};
+use crate::dof::DofParams;
+use crate::numeric::close;
+
+/// A grey frame from `paint` with the signed CoC plane `coc`, gathered.
+fn run(w: usize, h: usize, paint: &dyn Fn(usize, usize) -> f32, coc: &[f32]) -> Vec<f32> {
+    let plane: Vec<f32> = (0..w * h).map(|i| paint(i % w, i / w)).collect();
+    let color = Color {
+        r: plane.clone(),
+        g: plane.clone(),
+        b: plane,
+        a: None,
+    };
+    let config = DofConfig::new(w, h, &DofParams::default());
+    let t = tiles(&TilesConfig::new(w, h, config.epsilon), coc);
+    gather(&config, &color, coc, &t).r
+}
+
+#[test]
+fn a_fine_far_texture_beside_a_large_near_bokeh_keeps_its_own_blur() {
+    // A one-pixel checker far behind (CoC 8 px), and a disc far in front (CoC −60 px) in
+    // the left part of the frame. The disc's bokeh sets the gather radius (30 px) of the
+    // tiles around it, whose far pixels have a 4 px bokeh of their own: sampled with the
+    // 30 px rings, they would keep the few ring taps inside 4 px and the checker would
+    // come out as a grid of marks. Wherever the disc's bokeh cannot reach, the far field
+    // must be what it is with no disc at all.
+    let (w, h) = (192, 96);
+    let checker = |x: usize, y: usize| ((x + y) % 2) as f32;
+    let disc = |x: usize, y: usize| {
+        let (dx, dy) = (x as f32 - 24.0, y as f32 - 48.0);
+        dx * dx + dy * dy < 16.0 * 16.0
+    };
+    let paint = |x: usize, y: usize| if disc(x, y) { 0.3 } else { checker(x, y) };
+    let coc: Vec<f32> = (0..w * h)
+        .map(|i| if disc(i % w, i / w) { -60.0 } else { 8.0 })
+        .collect();
+    let with = run(w, h, &paint, &coc);
+    let without = run(w, h, &checker, &vec![8.0; w * h]);
+    let mut checked = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let (dx, dy) = (x as f32 - 24.0, y as f32 - 48.0);
+            // Beyond the disc's edge (16 px) plus its bokeh (30 px) and the far bokeh
+            // (4 px) plus a pixel: nothing of the disc reaches.
+            if (dx * dx + dy * dy).sqrt() < 16.0 + 30.0 + 4.0 + 1.0 {
+                continue;
+            }
+            let i = y * w + x;
+            assert!(
+                close(with[i], without[i], 1e-5),
+                "({x}, {y}): {} with the disc, {} without",
+                with[i],
+                without[i]
+            );
+            checked += 1;
+        }
+    }
+    // The comparison covers tiles whose radius the disc sets (within 30 px of it).
+    assert!(checked > 1000);
+    // And the blurred checker has no pattern left: a 4 px bokeh over a one-pixel checker
+    // is within a few percent of its mean everywhere away from the frame's edge.
+    for y in 8..h - 8 {
+        for x in 100..w - 8 {
+            let v = with[y * w + x];
+            assert!(close(v, 0.5, 0.05), "({x}, {y}): {v}");
+        }
+    }
+}
+
+#[test]
+fn a_fine_far_texture_in_a_near_rim_s_tiles_keeps_its_own_blur() {
+    // A one-pixel checker far behind (CoC 8 px: a 4 px bokeh) and a disc in front (CoC
+    // −14: a 7 px bokeh, beyond the 6 px the grids go to, so the four tiles it lies in
+    // take the rings of 7 px) of radius 8 px. In those tiles the far checker's pixels
+    // beyond the disc's bokeh must come out as they do with no disc at all: their far
+    // field over every pixel of their 4 px bokeh. With the rings of the disc's radius, a
+    // 4 px bokeh kept a few scattered taps and the pattern came out as marks.
+    let (w, h) = (96, 64);
+    let checker = |x: usize, y: usize| ((x + y) % 2) as f32;
+    let (cx, cy) = (14.0, 14.0);
+    let disc = |x: usize, y: usize| {
+        let (dx, dy) = (x as f32 + 0.5 - cx, y as f32 + 0.5 - cy);
+        dx * dx + dy * dy < 8.0 * 8.0
+    };
+    let paint = |x: usize, y: usize| if disc(x, y) { 0.3 } else { checker(x, y) };
+    let coc: Vec<f32> = (0..w * h)
+        .map(|i| if disc(i % w, i / w) { -14.0 } else { 8.0 })
+        .collect();
+    let with = run(w, h, &paint, &coc);
+    let without = run(w, h, &checker, &vec![8.0; w * h]);
+    let tile_of = |x: usize, y: usize| (x / TILE, y / TILE);
+    let disc_tiles: std::collections::BTreeSet<_> = (0..w * h)
+        .filter(|&i| disc(i % w, i / w))
+        .map(|i| tile_of(i % w, i / w))
+        .collect();
+    let mut checked = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let (dx, dy) = (x as f32 + 0.5 - cx, y as f32 + 0.5 - cy);
+            // Beyond the disc's edge (8 px) plus its bokeh (7) and the far bokeh (4)
+            // plus a pixel, inside a tile the disc lies in.
+            if (dx * dx + dy * dy).sqrt() < 8.0 + 7.0 + 4.0 + 1.0
+                || !disc_tiles.contains(&tile_of(x, y))
+            {
+                continue;
+            }
+            let i = y * w + x;
+            assert!(
+                close(with[i], without[i], 1e-5),
+                "({x}, {y}): {} with the disc, {} without",
+                with[i],
+                without[i]
+            );
+            checked += 1;
+        }
+    }
+    assert_eq!(disc_tiles.len(), 4);
+    assert!(checked > 40, "{checked}");
+}
+
+/// A checker of `cell` px, 0.1 and 0.9 (mean 0.5), from the frame's top-left corner, so
+/// that whole cells meet every edge.
+fn checker(cell: usize) -> impl Fn(usize, usize) -> f32 {
+    move |x, y| 0.1 + 0.8 * ((x / cell + y / cell) % 2) as f32
+}
+
+#[test]
+fn a_fine_checker_meeting_the_frame_edge_keeps_its_mean_within_the_first_coc_radius() {
+    // Issue 34: a fine far texture meeting the frame's edges, in both orientations (the
+    // checker meets the top and bottom rows and the left and right columns alike).
+    // Blurred, it is its mean, 0.5, up to the edge: what lies beyond is unknown, and the
+    // gather must not make structure of it. Mirroring the frame about its edge doubled
+    // the edge cell, and within the first CoC radius (corners included) the output swung
+    // to 0.304 off the mean (4 px cells, CoC 9) and 0.260 (5 px, CoC 12); with the taps
+    // outside weighing nothing it stays within 0.213 and 0.181. Inside, the discrete
+    // bokeh's own ripple over such cells is up to 0.07.
+    let (w, h) = (160, 96);
+    for (cell, coc) in [(4, 9.0f32), (5, 12.0)] {
+        let out = run(w, h, &checker(cell), &vec![coc; w * h]);
+        let radius = (0.5 * coc).ceil() as usize;
+        let mut checked = 0;
+        for y in 0..h {
+            for x in 0..w {
+                if x.min(w - 1 - x).min(y).min(h - 1 - y) >= radius {
+                    continue;
+                }
+                let v = out[y * w + x];
+                assert!(
+                    (v - 0.5).abs() <= 0.25,
+                    "cell {cell}, CoC {coc}: ({x}, {y}): {v}"
+                );
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, w * h - (w - 2 * radius) * (h - 2 * radius));
+    }
+}
+
+#[test]
+fn a_fine_texture_keeps_its_mean_up_to_the_frame_edge() {
+    // Stripes of one pixel (0, 1, 0, 1, …) blurred by a 12 px CoC (a 6 px bokeh, which
+    // gathers every pixel of its neighbourhood): the world beyond the frame is unknown,
+    // but the frame's own texture says its mean is ½. Mirroring keeps that mean at the
+    // edges (within the one column the reflection repeats: 7 zeros to 6 ones across the
+    // bokeh, 0.46); clamping to the edge would fill the bokeh's outer part with the edge
+    // column's value (over 0.2 off).
+    let (w, h) = (96, 48);
+    let stripes = |x: usize, _y: usize| (x % 2) as f32;
+    let out = run(w, h, &stripes, &vec![12.0; w * h]);
+    for y in 0..h {
+        for x in 0..w {
+            let v = out[y * w + x];
+            assert!(close(v, 0.5, 0.06), "({x}, {y}): {v}");
+        }
+    }
+}
