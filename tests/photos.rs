@@ -1782,34 +1782,37 @@ fn a_ycbcr_tiff_comes_out_rgb_by_its_coefficients_and_reference_black_and_white(
             assert!((p[c] as f64 - want[c]).abs() <= 0.51, "{k}: {p:?} {want:?}");
         }
     }
-    let reference = dir.path().join("ref.png");
-    let converted = run_tool(
-        "oiiotool",
-        &[
-            &s(&input),
-            "--ch",
-            "R,G,B",
-            "-d",
-            "uint8",
-            "-o",
-            &s(&reference),
-        ],
-    );
-    if converted.is_some_and(|o| o.status.success()) {
-        let want = image::open(&reference).unwrap().to_rgb8();
-        let (mut most, mut sum) = (0u8, 0u64);
-        for (p, q) in got.pixels().zip(want.pixels()) {
-            for c in 0..3 {
-                most = most.max(p[c].abs_diff(q[c]));
-                sum += p[c].abs_diff(q[c]) as u64;
-            }
-        }
-        let mean = sum as f64 / (3 * w * h) as f64;
+    if let Some((most, mean)) = against_oiiotool(&input, &got, &dir.path().join("ref.png")) {
         assert!(
             most <= 2 && mean <= 1.0,
             "off by {most} at most, {mean} on average"
         );
     }
+}
+
+/// How far `got` lies from OpenImageIO's 8-bit RGB read of `input` (written to `reference`):
+/// the largest difference in codes and the mean; `None` where oiiotool is not installed.
+fn against_oiiotool(input: &Path, got: &image::RgbImage, reference: &Path) -> Option<(u8, f64)> {
+    let args = [
+        &s(input),
+        "--ch",
+        "R,G,B",
+        "-d",
+        "uint8",
+        "-o",
+        &s(reference),
+    ];
+    let converted = run_tool("oiiotool", &args)?;
+    assert!(converted.status.success(), "{}", stderr(&converted));
+    let want = image::open(reference).unwrap().to_rgb8();
+    let (mut most, mut sum) = (0u8, 0u64);
+    for (p, q) in got.pixels().zip(want.pixels()) {
+        for c in 0..3 {
+            most = most.max(p[c].abs_diff(q[c]));
+            sum += p[c].abs_diff(q[c]) as u64;
+        }
+    }
+    Some((most, sum as f64 / (3 * got.width() * got.height()) as f64))
 }
 
 /// A JPEG-compressed YCbCr TIFF, its chroma subsampled 2×2 (what `tiffcp -c jpeg`, cameras
@@ -1851,29 +1854,9 @@ fn a_jpeg_compressed_ycbcr_tiff_reads_as_libjpeg_reads_it() {
     assert_eq!(tiff_coding(&out).0, tiff::ColorType::RGB(8));
     let got = image::open(&out).unwrap().to_rgb8();
     let reference = dir.path().join("ref.png");
-    let converted = run_tool(
-        "oiiotool",
-        &[
-            &s(&input),
-            "--ch",
-            "R,G,B",
-            "-d",
-            "uint8",
-            "-o",
-            &s(&reference),
-        ],
-    );
-    let Some(converted) = converted else { return };
-    assert!(converted.status.success(), "{}", stderr(&converted));
-    let want = image::open(&reference).unwrap().to_rgb8();
-    let (mut most, mut sum) = (0u8, 0u64);
-    for (p, q) in got.pixels().zip(want.pixels()) {
-        for c in 0..3 {
-            most = most.max(p[c].abs_diff(q[c]));
-            sum += p[c].abs_diff(q[c]) as u64;
-        }
-    }
-    let mean = sum as f64 / (3 * w * h) as f64;
+    let Some((most, mean)) = against_oiiotool(&input, &got, &reference) else {
+        return;
+    };
     assert!(
         most <= 8 && mean <= 1.0,
         "off by {most} at most, {mean} on average"

@@ -967,7 +967,7 @@ fn data_b44_or_pxr24_would_store_lossily_goes_to_a_lossless_part() {
 
 #[test]
 fn passes_are_placed_by_their_data_windows() {
-    use shutter::frame::{Window, Windows};
+    use shutter::frame::Window;
     let dir = tempfile::tempdir().unwrap();
     let display = Window {
         x: 0,
@@ -975,21 +975,8 @@ fn passes_are_placed_by_their_data_windows() {
         width: W,
         height: H,
     };
-    let write = |name: &str, (ox, oy): (i32, i32), (w, h): (usize, usize), channels| {
-        let file = std::io::BufWriter::new(std::fs::File::create(dir.path().join(name)).unwrap());
-        let windows = Windows {
-            data_origin: (ox, oy),
-            display,
-        };
-        shutter::io::exr::write_channels(
-            file,
-            w,
-            h,
-            windows,
-            channels,
-            shutter::io::exr::ExrOptions::default(),
-        )
-        .unwrap();
+    let write = |name: &str, origin: (i32, i32), size: (usize, usize), channels| {
+        write_windowed(&dir.path().join(name), origin, size, display, channels);
     };
     // The beauty: an auto-bbox from (4, 2), 20×10 of the 40×24 picture.
     let (cw, ch) = (20, 10);
@@ -1076,33 +1063,35 @@ fn passes_are_placed_by_their_data_windows() {
     );
 }
 
+/// An EXR of `channels` (each w × h) at data window origin `origin` in a picture `display`.
+fn write_windowed(
+    path: &Path,
+    origin: (i32, i32),
+    (w, h): (usize, usize),
+    display: shutter::frame::Window,
+    channels: Vec<(String, Vec<f32>)>,
+) {
+    let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    let windows = shutter::frame::Windows {
+        data_origin: origin,
+        display,
+    };
+    let options = shutter::io::exr::ExrOptions::default();
+    shutter::io::exr::write_channels(file, w, h, windows, channels, options).unwrap();
+}
+
 /// A pass whose display window is not the colour's was framed for another picture (rendered
 /// at another resolution): placed by its data window, it is read without error, so the run
 /// says so. An overscan pass (the same display window, a wider data window) is not warned of.
 #[test]
 fn a_pass_framed_for_another_picture_is_warned_of() {
-    use shutter::frame::{Window, Windows};
+    use shutter::frame::Window;
     let dir = tempfile::tempdir().unwrap();
-    let write = |name: &str, origin: (i32, i32), (w, h): (usize, usize), display: Window, names| {
-        let file = std::io::BufWriter::new(std::fs::File::create(dir.path().join(name)).unwrap());
-        let windows = Windows {
-            data_origin: origin,
-            display,
-        };
+    let write = |name: &str, origin, (w, h): (usize, usize), display, names: Vec<&str>| {
         let channels = Vec::from_iter(
-            (names as Vec<&str>)
-                .into_iter()
-                .map(|c| (c.to_string(), noise(w * h, 61, 1.0, 5.0))),
+            (names.into_iter()).map(|c| (c.to_string(), noise(w * h, 61, 1.0, 5.0))),
         );
-        shutter::io::exr::write_channels(
-            file,
-            w,
-            h,
-            windows,
-            channels,
-            shutter::io::exr::ExrOptions::default(),
-        )
-        .unwrap();
+        write_windowed(&dir.path().join(name), origin, (w, h), display, channels);
     };
     let picture = |width, height| Window {
         x: 0,
