@@ -529,9 +529,22 @@ fn a_deleted_lock_file_stops_the_job_that_lost_it() {
         wait_for_name(&mut first, &out_dir, |n| n.ends_with(".tmp")),
         "the first run ended before it wrote a frame"
     );
+    // The first held while its lock file goes and the second starts; the second held while
+    // it writes its first frame, so that the first, going on, finds its frames the second's
+    // (unheld, the second could end first: the first then locks a new file and goes on).
+    signal(&first, "STOP");
     std::fs::remove_file(&lock).unwrap();
-    let second = spawn(&args).wait_with_output().unwrap();
+    let mut second = spawn(&args);
+    let writing = format!(".{}.tmp", second.id());
+    assert!(
+        wait_for_name(&mut second, &out_dir, |n| n.ends_with(&writing)),
+        "the second run ended before it wrote a frame"
+    );
+    signal(&second, "STOP");
+    signal(&first, "CONT");
     let first = first.wait_with_output().unwrap();
+    signal(&second, "CONT");
+    let second = second.wait_with_output().unwrap();
     let (e1, e2) = (stderr(&first), stderr(&second));
     assert!(second.status.success(), "the second job: {e2}");
     assert_eq!(first.status.code(), Some(75), "the first job: {e1}");
