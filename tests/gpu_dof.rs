@@ -67,6 +67,11 @@ mod with_gpu {
         worst: usize,
     }
 
+    /// The least and greatest of `values` (MAX, MIN where there are none).
+    fn bounds<'a>(values: impl IntoIterator<Item = &'a f32>) -> (f32, f32) {
+        (values.into_iter()).fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)))
+    }
+
     fn diff(gpu: &[f32], cpu: &[f32]) -> Diff {
         assert_eq!(gpu.len(), cpu.len());
         let mut d = Diff {
@@ -292,9 +297,7 @@ mod with_gpu {
             for name in ["R", "G", "B"] {
                 let cpu = channel(&outputs[0], name);
                 let got = channel(&outputs[1], name);
-                let (lo, hi) = cpu
-                    .iter()
-                    .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+                let (lo, hi) = bounds(cpu);
                 let d = diff(got, cpu);
                 let _ = writeln!(
                     std::io::stderr(),
@@ -393,10 +396,7 @@ mod with_gpu {
                         // output is itself huge (a stress value's light) is held to 1e-5 of
                         // its own magnitude instead.
                         const ORDINARY: f32 = 1e6;
-                        let (lo, hi) = cpu
-                            .iter()
-                            .filter(|v| v.abs() <= ORDINARY)
-                            .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+                        let (lo, hi) = bounds(cpu.iter().filter(|v| v.abs() <= ORDINARY));
                         let range = (hi - lo).max(f32::MIN_POSITIVE);
                         let d = diff(got, cpu);
                         let what = format!("lens {j} {w}x{h} blades {blades} rings {rings} {name}");
@@ -707,9 +707,7 @@ mod with_gpu {
         use shutter::numeric::{sanitize, DepthKind};
         // Every pixel within 1e-5 of the CPU plane's range, the mean within 1e-7.
         let within = |got: &[f32], cpu: &[f32], what: &str| {
-            let (lo, hi) = cpu
-                .iter()
-                .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+            let (lo, hi) = bounds(cpu);
             let range = (hi - lo).max(f32::MIN_POSITIVE);
             let d = diff(got, cpu);
             assert!(
@@ -852,9 +850,7 @@ mod with_gpu {
                 want.push(("layer b", &layer.b, &cpu_layers[3 * j + 2]));
             }
             for (what, got, cpu) in want {
-                let (lo, hi) = cpu
-                    .iter()
-                    .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+                let (lo, hi) = bounds(cpu);
                 let range = (hi - lo).max(f32::MIN_POSITIVE);
                 let d = diff(got, cpu);
                 assert!(
@@ -909,9 +905,7 @@ mod with_gpu {
         for name in ["R", "G", "B"] {
             let cpu = channel(&outputs[0], name);
             let got = channel(&outputs[1], name);
-            let (lo, hi) = cpu
-                .iter()
-                .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+            let (lo, hi) = bounds(cpu);
             let d = diff(got, cpu);
             assert!(
                 d.max <= 1e-5 * (hi - lo),
@@ -1013,10 +1007,7 @@ mod with_gpu {
                     // The range of the values the blur combines: the input plane's ordinary
                     // pixels (a heavy blur narrows the output's own range).
                     const ORDINARY: f32 = 1e6;
-                    let (lo, hi) = input
-                        .iter()
-                        .filter(|v| v.abs() <= ORDINARY)
-                        .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+                    let (lo, hi) = bounds(input.iter().filter(|v| v.abs() <= ORDINARY));
                     let range = (hi - lo).max(f32::MIN_POSITIVE);
                     // A pixel a stress value's light reaches is a sum of terms as large as
                     // the largest input (±1e30, which cancel in part): its rounding is

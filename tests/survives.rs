@@ -1033,17 +1033,7 @@ fn passes_are_placed_by_their_data_windows() {
     // (depth file, its origin and size, the words expected).
     let refused = |name: &str, origin: (i32, i32), (w, h): (usize, usize), expected: &str| {
         write(name, origin, (w, h), vec![("Z".into(), vec![5.0; w * h])]);
-        let run = shutter(&[
-            "blur",
-            "--algorithm",
-            "reconstruct",
-            "--color",
-            &s(&dir.path().join("color.exr")),
-            "--depth",
-            &s(&dir.path().join(name)),
-            "-o",
-            &s(&dir.path().join("out.exr")),
-        ]);
+        let run = blur_with_depth(dir.path(), name, "out.exr");
         assert_eq!(run.status.code(), Some(1), "{name}: {}", stderr(&run));
         assert!(stderr(&run).contains(expected), "{name}: {}", stderr(&run));
     };
@@ -1061,6 +1051,14 @@ fn passes_are_placed_by_their_data_windows() {
         (cw, ch),
         "its data window (5, 2) - (24, 11) does not cover",
     );
+}
+
+/// `shutter blur --algorithm reconstruct` of `dir`'s color.exr with the depth file `depth`
+/// of `dir`, to `out` in `dir`.
+fn blur_with_depth(dir: &Path, depth: &str, out: &str) -> std::process::Output {
+    let [color, depth, out] = ["color.exr", depth, out].map(|n| s(&dir.join(n)));
+    let args = ["blur", "--algorithm", "reconstruct", "--color", &color];
+    shutter(&[&args[..], &["--depth", &depth, "-o", &out]].concat())
 }
 
 /// An EXR of `channels` (each w × h) at data window origin `origin` in a picture `display`.
@@ -1122,17 +1120,7 @@ fn a_pass_framed_for_another_picture_is_warned_of() {
         vec!["Z"],
     );
     let run = |depth: &str| {
-        let o = shutter(&[
-            "blur",
-            "--algorithm",
-            "reconstruct",
-            "--color",
-            &s(&dir.path().join("color.exr")),
-            "--depth",
-            &s(&dir.path().join(depth)),
-            "-o",
-            &s(&dir.path().join(format!("out-{depth}"))),
-        ]);
+        let o = blur_with_depth(dir.path(), depth, &format!("out-{depth}"));
         assert!(o.status.success(), "{depth}: {}", stderr(&o));
         stderr(&o)
     };

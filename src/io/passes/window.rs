@@ -14,6 +14,16 @@ pub struct DataWindow {
     pub height: usize,
 }
 
+impl From<crate::frame::Window> for DataWindow {
+    fn from(w: crate::frame::Window) -> Self {
+        DataWindow {
+            origin: (w.x, w.y),
+            width: w.width,
+            height: w.height,
+        }
+    }
+}
+
 impl DataWindow {
     pub fn of(info: &FileInfo) -> Self {
         DataWindow {
@@ -116,14 +126,7 @@ pub fn display_warning(pass: &str, info: &FileInfo, colour: &Windows) -> Option<
     let display = info.windows.display;
     let exr = matches!(info.kind, crate::io::file::FileKind::Exr { .. });
     (exr && display != colour.display).then(|| {
-        let text = |w: &crate::frame::Window| {
-            DataWindow {
-                origin: (w.x, w.y),
-                width: w.width,
-                height: w.height,
-            }
-            .describe()
-        };
+        let text = |w: &crate::frame::Window| DataWindow::from(*w).describe();
         format!(
             "{pass}: the file's display window {} is not the color pass's {}: its pixels are              placed by their data window in the file's coordinates, right for an overscan              render of the same picture, wrong for one rendered at another resolution or              framing",
             text(&display),
