@@ -5,6 +5,7 @@ use std::path::Path;
 use std::sync::Once;
 
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{register_font, FontStyle};
 
 use super::report::BenchReport;
@@ -147,17 +148,22 @@ fn draw<DB: DrawingBackend>(
         let bounds = chart.plotting_area().get_pixel_range();
         let bounds = (bounds.0.start, bounds.1.start, bounds.0.end, bounds.1.end);
         for (i, at, leader) in place_labels(&pixels, &texts, &order, bounds) {
-            // In the backend's pixels, as `backend_coord` gives them: drawn on the root.
-            let label = Text::new(texts[i], at, ("sans-serif", 11));
-            root.draw(&label).map_err(|e| e.to_string())?;
+            // In the backend's pixels, as `backend_coord` gives them: drawn on the root. A
+            // label left of its point is anchored at its right end, so that it ends where it
+            // was placed in whatever font a viewer draws an SVG's text with.
+            let (w, h) = label_size(texts[i]);
+            let right = at.0 + w <= pixels[i].0;
+            let (anchor, x) = match right {
+                true => (HPos::Right, at.0 + w),
+                false => (HPos::Left, at.0),
+            };
+            let style =
+                TextStyle::from(("sans-serif", 11).into_font()).pos(Pos::new(anchor, VPos::Top));
+            root.draw(&Text::new(texts[i], (x, at.1), style))
+                .map_err(|e| e.to_string())?;
             if leader {
                 // From the point to the middle of the label's nearer side.
-                let (w, h) = label_size(texts[i]);
-                let side = if at.0 > pixels[i].0 {
-                    at.0 - 1
-                } else {
-                    at.0 + w + 1
-                };
+                let side = if right { x + 1 } else { x - 1 };
                 let line = PathElement::new(vec![pixels[i], (side, at.1 + h / 2)], BLACK.mix(0.4));
                 root.draw(&line).map_err(|e| e.to_string())?;
             }
