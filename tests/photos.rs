@@ -1946,3 +1946,35 @@ fn a_painted_map_in_colour_says_which_channel_is_read_and_a_grey_one_says_nothin
         }
     }
 }
+
+/// A sequence of painted maps in colour is noted once, at the first frame found so, not once
+/// a file (each note named its own file, so a 100-frame run said it 100 times).
+#[test]
+fn a_sequence_of_maps_in_colour_is_noted_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16u32, 8u32);
+    for frame in 1..=3 {
+        let pixels: Vec<u8> = (0..w * h * 3).map(|i| (i * 5 % 256) as u8).collect();
+        let color = dir.path().join(format!("photo.{frame:04}.png"));
+        image::save_buffer(&color, &pixels, w, h, image::ColorType::Rgb8).unwrap();
+        let map: Vec<u8> = (0..w * h)
+            .flat_map(|i| [0, (i % w * 8) as u8, 200])
+            .collect();
+        let path = dir.path().join(format!("coc.{frame:04}.png"));
+        image::save_buffer(&path, &map, w, h, image::ColorType::Rgb8).unwrap();
+    }
+    let (c, m) = (
+        s(&dir.path().join("photo.####.png")),
+        s(&dir.path().join("coc.####.png")),
+    );
+    let o = s(&dir.path().join("out.####.png"));
+    let run = shutter(&["dof", "--color", &c, "--coc-map", &m, "-o", &o, "--json"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&run)).unwrap();
+    let notes: Vec<&str> = (report["warnings"].as_array().unwrap().iter())
+        .filter_map(|w| w.as_str())
+        .filter(|w| w.contains("saved in colour"))
+        .collect();
+    assert_eq!(notes.len(), 1, "{notes:?}");
+    assert!(notes[0].contains("coc.0001.png") && notes[0].contains("frame 1"));
+}

@@ -560,11 +560,13 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
 
             let reader = scope.spawn(move || {
                 let (mut seconds, mut check_seconds) = (0.0, 0.0);
+                // A painted map in colour is noted at the first frame it is found in.
+                let mut grey_noted = false;
                 for (index, plan) in plans.iter().enumerate() {
                     let t = Instant::now();
                     let keep = check.as_ref().is_some_and(|c| c.keeps(index));
-                    let mut frame =
-                        read_frame_keeping(plan, keep).map(|(mut frame, mut notes, stored)| {
+                    let mut frame = read_frame_keeping(plan, keep, &mut grey_noted).map(
+                        |(mut frame, mut notes, stored)| {
                             let replaced =
                                 crate::numeric::sanitize(&mut frame, depth_kind(&job.params));
                             if let Some(c) = check.as_mut().filter(|c| !c.done()) {
@@ -573,14 +575,15 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                                 check_seconds += t.elapsed().as_secs_f64();
                             }
                             (vec![frame], vec![replaced], notes)
-                        });
+                        },
+                    );
                     // The other views of the frame, read alike (the vector check has seen
                     // the first).
                     for view in &others[index] {
                         let Ok((frames, replaced, notes)) = &mut frame else {
                             break;
                         };
-                        match read_frame_keeping(view, false) {
+                        match read_frame_keeping(view, false, &mut grey_noted) {
                             Ok((mut read, more, _)) => {
                                 replaced.push(crate::numeric::sanitize(
                                     &mut read,

@@ -21,7 +21,7 @@ pub fn read_frame(plan: &FramePlan) -> Result<Frame, Problem> {
 /// could not foresee (vectors marked invalid, filled or read as still). A note's text does
 /// not name the frame, so a sequence reports each kind once.
 pub fn read_frame_noted(plan: &FramePlan) -> Result<(Frame, Vec<String>), Problem> {
-    read_frame_keeping(plan, false).map(|(frame, notes, _)| (frame, notes))
+    read_frame_keeping(plan, false, &mut false).map(|(frame, notes, _)| (frame, notes))
 }
 
 /// The stored values of a frame's first motion pass ([velocity], else [prev], else [next]),
@@ -34,10 +34,13 @@ pub struct StoredVectors {
 }
 
 /// [`read_frame_noted`], keeping a copy of the stored vectors with `keep` (the one frame the
-/// vector check fits).
+/// vector check fits). `grey_noted` is a run's: once a frame's painted map has been found in
+/// colour (and said so, naming its file), later frames' maps are not compared again, so a
+/// sequence of such maps is noted once, not once a file.
 pub fn read_frame_keeping(
     plan: &FramePlan,
     keep: bool,
+    grey_noted: &mut bool,
 ) -> Result<(Frame, Vec<String>, Option<StoredVectors>), Problem> {
     let mut kept = None;
     let mut notes = Vec::new();
@@ -58,7 +61,7 @@ pub fn read_frame_keeping(
         .map(|(slot, _)| *slot)
         .collect();
     // A depth map in an RGB image: its G and B read too, to tell grey from colour.
-    let grey = super::grey_map::check(plan);
+    let grey = super::grey_map::check(plan).filter(|_| !*grey_noted);
     for (index, file) in plan.files.iter().enumerate() {
         let bits: Vec<usize> = exact
             .iter()
@@ -74,7 +77,12 @@ pub fn read_frame_keeping(
             }
         })?;
         if let Some(grey) = grey {
-            notes.extend(grey.note(&mut planes, &file.info.path, file.info.width));
+            let note = grey.note(&mut planes, &file.info.path, file.info.width);
+            *grey_noted |= note.is_some();
+            notes.extend(note.map(|n| match plan.frame {
+                Some(f) => format!("{n} (frame {f}; later frames' maps are not compared)"),
+                None => n,
+            }));
         }
         // A pass whose data window is larger than the colour's (overscan) is cut to it; the
         // plan made sure it covers it.
