@@ -275,3 +275,60 @@ fn a_smear_is_not_drawn_over_its_own_pre_blurred_surface() {
         }
     }
 }
+
+/// Motion past the mesh's cut (MAX_SHIFT px over the longer side of the exposure) is cut the
+/// same in every stage, so every speed beyond it gives one picture. The pre-blur read the
+/// uncut motion (an outside tester's finding): a box moving 2,000 px a frame came out 0.84
+/// red at its centre, 20,000 the background alone and 100,000 the box sharp, while the mesh
+/// drew the same cut smear for all three.
+#[test]
+fn motion_beyond_the_cut_gives_one_picture_whatever_its_speed() {
+    let (w, h) = (96, 40);
+    let n = w * h;
+    let boxed = |i: usize| (30..60).contains(&(i % w)) && (12..28).contains(&(i / w));
+    let checker = |i: usize| {
+        if (i % w / 4 + i / w / 4).is_multiple_of(2) {
+            0.2
+        } else {
+            0.6
+        }
+    };
+    let blurred = |speed: f32| {
+        let mut f = Frame::new(w, h);
+        f.color = Some(shutter::frame::Color {
+            r: (0..n)
+                .map(|i| if boxed(i) { 1.0 } else { checker(i) })
+                .collect(),
+            g: (0..n)
+                .map(|i| if boxed(i) { 0.2 } else { checker(i) })
+                .collect(),
+            b: (0..n)
+                .map(|i| if boxed(i) { 0.0 } else { checker(i) })
+                .collect(),
+            a: None,
+        });
+        f.depth = Some((0..n).map(|i| if boxed(i) { 2.0 } else { 10.0 }).collect());
+        f.velocity = Some(Velocity {
+            x: (0..n).map(|i| if boxed(i) { speed } else { 0.0 }).collect(),
+            y: vec![0.0; n],
+        });
+        let out = shutter::motion::stretch::stretch(f, &StretchParams::default(), 0.5);
+        out.color.unwrap()
+    };
+    let cut = blurred(1_000.0);
+    let centre = 20 * w + 45;
+    assert!(
+        cut.r[centre] < 0.9,
+        "the box's centre is blurred: {}",
+        cut.r[centre]
+    );
+    for speed in [2_000.0, 20_000.0, 100_000.0] {
+        let got = blurred(speed);
+        assert!(
+            got.r == cut.r && got.g == cut.g && got.b == cut.b,
+            "{speed} px a frame: centre {} where 1000 px gives {}",
+            got.r[centre],
+            cut.r[centre]
+        );
+    }
+}

@@ -171,8 +171,10 @@ fn texture_blur(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let t0 = config.t0;
     let t1 = config.t1;
-    let vx = v[i].x;
-    let vy = v[i].y;
+    // Along the motion the mesh gives its fragments, cut as theirs is (the CPU's).
+    let cut = swept_motion(v[i]);
+    let vx = cut.x;
+    let vy = cut.y;
     let length = norm(vec2<f32>(vx, vy)) * (t1 - t0);
     let samples = clamp(u32(min(ceil(length), 1.0e6)) + 1u, 2u, MOST_SAMPLES);
     var sum = array<f32, 4>(0.0, 0.0, 0.0, 0.0);

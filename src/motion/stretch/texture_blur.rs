@@ -5,6 +5,7 @@
 use rayon::prelude::*;
 
 use super::config::{StretchConfig, MOST_SAMPLES};
+use super::mesh::swept_motion;
 
 /// Stage 1: each moving pixel's colour averaged along its own motion over the exposure
 /// (bilinear samples, leaving out nearer surfaces), clamped to the frame's range per channel;
@@ -106,6 +107,10 @@ fn blur<const CARRY: bool>(
                 if !config.moving(v[i]) {
                     continue;
                 }
+                // Along the motion the mesh gives its fragments, cut to MAX_SHIFT as theirs
+                // is: an uncut motion of thousands of pixels read its samples off the frame
+                // (the pixel kept its sharp colour) or spread over it (background only).
+                let vi = swept_motion(config, v[i]);
                 let own: [f32; 4] = std::array::from_fn(|c| planes[c][i]);
                 let mut sum = [0.0f32; 4];
                 let mut total = 0.0f32;
@@ -122,14 +127,14 @@ fn blur<const CARRY: bool>(
                         taps.push((j, w));
                     }
                 };
-                if kernel.as_ref().is_none_or(|k| !k.serves(v[i]))
+                if kernel.as_ref().is_none_or(|k| !k.serves(vi))
                     && x > 0
                     && v[i - 1].map(f32::to_bits) == v[i].map(f32::to_bits)
                 {
-                    kernel = Some(Kernel::new(config, v[i], &mut scratch));
+                    kernel = Some(Kernel::new(config, vi, &mut scratch));
                 }
                 match &kernel {
-                    Some(k) if k.serves(v[i]) => {
+                    Some(k) if k.serves(vi) => {
                         for &(ox, oy, weight) in &k.taps {
                             if let Some(j) =
                                 tap_at(config, (x, y), (ox, oy), z[i], |j| texels[j][4])
@@ -138,7 +143,7 @@ fn blur<const CARRY: bool>(
                             }
                         }
                     }
-                    _ => for_each_tap(config, (x, y), v[i], z[i], |j| texels[j][4], add),
+                    _ => for_each_tap(config, (x, y), vi, z[i], |j| texels[j][4], add),
                 }
                 if total > 0.0 {
                     for c in 0..4 {
