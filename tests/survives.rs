@@ -2495,3 +2495,47 @@ fn half_keeps_data_that_half_cannot_hold_as_float() {
         .iter()
         .all(|&v| v == 1.234_567_8e-20));
 }
+
+/// Depth of field on a plate whose pixels are not square says that its bokeh is round in
+/// pixels, so stretched once shown at the plate's aspect (an outside tester found it said
+/// nothing); a motion blur, or square pixels, say nothing of it.
+#[test]
+fn depth_of_field_on_pixels_that_are_not_square_is_warned_of() {
+    let dir = plate_frame(Blocks::ScanLines, LineOrder::Increasing);
+    let lens = [
+        "--focal-length",
+        "50",
+        "--f-stop",
+        "2",
+        "--focus-distance",
+        "3",
+        "--json",
+    ];
+    let warned = |stdout: Vec<u8>| -> bool {
+        let report: serde_json::Value = serde_json::from_slice(&stdout).unwrap();
+        report["warnings"].to_string().contains("pixelAspectRatio")
+    };
+    let mut dof = vec!["dof"];
+    dof.extend(lens);
+    assert!(warned(blur_with(dir.path(), "dof.exr", &dof, &[])));
+    assert!(!warned(blur_with(dir.path(), "blur.exr", &["--json"], &[])));
+    let n = W * H;
+    let square = dir.path().join("square.exr");
+    let grey = || noise(n, 9, 0.0, 1.0);
+    write_exr(
+        &square,
+        W,
+        H,
+        vec![("R", grey()), ("G", grey()), ("B", grey())],
+    );
+    let (c, d, o) = (
+        s(&square),
+        s(&dir.path().join("depth.exr")),
+        s(&dir.path().join("square.out.exr")),
+    );
+    let mut args = vec!["dof", "--color", &c, "--depth", &d, "-o", &o];
+    args.extend(lens);
+    let run = shutter(&args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(!warned(run.stdout));
+}

@@ -342,6 +342,20 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             }
         }
     }
+    // Depth of field draws a lens's disc round in pixels: on pixels that are not square it
+    // comes out stretched once the picture is shown at its aspect.
+    let aspect = plans.first().and_then(FramePlan::pixel_aspect);
+    if let Some(aspect) = aspect.filter(|a| job.params.dof.is_some() && (a - 1.0).abs() > 1e-3) {
+        let path = plans[0].paths().first().map(|p| p.display().to_string());
+        warn(
+            &mut report,
+            on_event,
+            format!(
+                "{}: its pixels are {aspect}:1 (pixelAspectRatio), and depth of field draws each                  bokeh round in pixels, so shown at that aspect it comes out {aspect} times as                  wide as tall; resize to square pixels first for a round one",
+                path.unwrap_or_default()
+            ),
+        );
+    }
     if views.len() == 1 {
         if let Some(warning) = plans.first().and_then(FramePlan::unwritten_views) {
             warn(&mut report, on_event, warning);

@@ -99,6 +99,18 @@ impl FramePlan {
     pub fn windows(&self) -> Option<crate::frame::Windows> {
         self.color_windows
     }
+
+    /// The colour file's pixel aspect ratio (an EXR's `pixelAspectRatio`: a pixel's width
+    /// over its height), where it says one.
+    pub fn pixel_aspect(&self) -> Option<f32> {
+        let color = self.color.as_ref()?;
+        match &self.files[color.rgb[0].file].info.kind {
+            FileKind::Exr { headers, .. } => {
+                headers.first().map(|h| h.shared_attributes.pixel_aspect)
+            }
+            _ => None,
+        }
+    }
 }
 
 /// Options for planning.
