@@ -1007,7 +1007,8 @@ fn max_displace_on_the_command_line_equals_the_preset_key() {
 /// The presets written from the documented facts (issue 32): V-Ray's velocity element
 /// (p(+1) − p(0), pixels, y up), Unreal's MRQ pass (0.5 = still, normalised to the screen),
 /// Arnold's raw motionvector (over a half-frame shutter: scale 2), each read back to the
-/// motion written.
+/// motion written; and the depth each reads: `Z`, but MRQ's WorldDepth pass in centimetres,
+/// read in metres (F8: the unreal preset named no depth MRQ writes).
 #[test]
 fn vray_unreal_and_arnold_presets() {
     let t = Truth::new();
@@ -1017,11 +1018,12 @@ fn vray_unreal_and_arnold_presets() {
     let (vx, vy): (Vec<f32>, Vec<f32>) = (0..n)
         .map(|k| ((k % W) as f32 * 0.5 - 3.0, 2.0 - (k / W) as f32 * 0.25))
         .unzip();
-    for (name, [x, y], stored) in [
+    for (name, [x, y], stored, (depth, unit)) in [
         (
             "vray",
             ["VRayVelocity.R", "VRayVelocity.G"],
             (vx.clone(), vy.iter().map(|v| -v).collect::<Vec<f32>>()),
+            ("Z", 1.0),
         ),
         (
             "unreal",
@@ -1033,6 +1035,7 @@ fn vray_unreal_and_arnold_presets() {
                 vx.iter().map(|v| 0.5 + v / W as f32).collect(),
                 vy.iter().map(|v| 0.5 + v / H as f32).collect(),
             ),
+            ("FinalImageMovieRenderQueue_WorldDepth.R", 100.0),
         ),
         (
             "arnold",
@@ -1041,19 +1044,23 @@ fn vray_unreal_and_arnold_presets() {
                 vx.iter().map(|v| v / 2.0).collect(),
                 vy.iter().map(|v| v / 2.0).collect(),
             ),
+            ("Z", 1.0),
         ),
     ] {
         let path = dir.path().join(format!("{name}.exr"));
+        let stored_depth = t.depth.iter().map(|d| d * unit).collect();
         write_exr(
             &path,
             W,
             H,
             t.with_colour(
                 false,
-                vec![("Z", t.depth.clone()), (x, stored.0), (y, stored.1)],
+                vec![(depth, stored_depth), (x, stored.0), (y, stored.1)],
             ),
         );
         let frame = read_all(&Preset::builtin(name).unwrap(), &inputs(&path));
+        let metres = frame.depth.as_ref().unwrap();
+        assert_close(metres, &t.depth, 1e-4, &format!("{name} depth"));
         let velocity = frame.velocity.as_ref().unwrap();
         assert_close(&velocity.x, &vx, 1e-4, &format!("{name} velocity x"));
         assert_close(&velocity.y, &vy, 1e-4, &format!("{name} velocity y"));

@@ -2747,3 +2747,70 @@ fn a_layer_a_preset_reads_a_pass_from_is_data_unless_its_layers_table_says_other
     let blurred = crate::support::channel(&after, "smear.R");
     assert_ne!(blurred, crate::support::channel(&input, "smear.R"));
 }
+
+/// F8 and F12 on Movie Render Queue's frame: the MotionVectors pass (0.5 = still, screen
+/// fractions) and the WorldDepth pass (centimetres in R, G, B) beside the beauty. The unreal
+/// preset read no depth (it named shutter's `Z`, which MRQ never writes), so no algorithm
+/// ran; it reads WorldDepth now, and both passes come back bit for bit. Without the depth
+/// pass the error says what to add in Unreal.
+#[test]
+fn a_movie_render_queue_frame_blurs_under_the_unreal_preset() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = dir.path().join("mrq.exr");
+    let mv = "FinalImageMovieRenderQueue_MotionVectors";
+    let depth = "FinalImageMovieRenderQueue_WorldDepth";
+    let names = |layer: &str| ["R", "G", "B", "A"].map(|c| format!("{layer}.{c}"));
+    let [mr, mg, mb, ma] = names(mv);
+    let [dg, db, da] = [1, 2, 3].map(|k| names(depth)[k].clone());
+    let input = write_renderer_frame(
+        &color,
+        &[
+            (&mr, 0.5 + 8.0 / W as f32, 0.5),
+            (&mg, 0.5, 0.5),
+            (&mb, 0.0, 0.0),
+            (&ma, 1.0, 1.0),
+        ],
+        (&names(depth)[0], 100.0),
+        &[dg.as_str(), db.as_str(), da.as_str()],
+    );
+    let out = dir.path().join("out.exr");
+    let o = shutter(&[
+        "blur",
+        "--preset",
+        "unreal",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &s(&color),
+        "-o",
+        &s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_data_back(&input, &out, &[&format!("{mv}."), &format!("{depth}.")]);
+
+    // Without WorldDepth: refused, naming the channel and the pass to add in Unreal.
+    let bare = dir.path().join("bare.exr");
+    let kept: Vec<(&str, Vec<f32>)> = (input.iter())
+        .filter(|(name, _)| !name.starts_with(depth))
+        .map(|(name, plane)| (name.as_str(), plane.clone()))
+        .collect();
+    write_exr(&bare, W, H, kept);
+    let o = shutter(&[
+        "blur",
+        "--preset",
+        "unreal",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &s(&bare),
+        "-o",
+        &s(&dir.path().join("bare-out.exr")),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("FinalImageMovieRenderQueue_WorldDepth.R")
+            && err.contains("MovieRenderQueue_WorldDepth, 32-bit"),
+        "{err}"
+    );
+}
