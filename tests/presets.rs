@@ -1007,7 +1007,8 @@ fn max_displace_on_the_command_line_equals_the_preset_key() {
 /// The presets written from the documented facts (issue 32): V-Ray's velocity element
 /// (p(+1) − p(0), pixels, y up), Unreal's MRQ pass (0.5 = still, normalised to the screen),
 /// Arnold's raw motionvector (over a half-frame shutter: scale 2), each read back to the
-/// motion written.
+/// motion written; and the depth each reads: `Z`, but MRQ's WorldDepth pass in centimetres,
+/// read in metres (F8: the unreal preset named no depth MRQ writes).
 #[test]
 fn vray_unreal_and_arnold_presets() {
     let t = Truth::new();
@@ -1017,11 +1018,12 @@ fn vray_unreal_and_arnold_presets() {
     let (vx, vy): (Vec<f32>, Vec<f32>) = (0..n)
         .map(|k| ((k % W) as f32 * 0.5 - 3.0, 2.0 - (k / W) as f32 * 0.25))
         .unzip();
-    for (name, [x, y], stored) in [
+    for (name, [x, y], stored, (depth, unit)) in [
         (
             "vray",
             ["VRayVelocity.R", "VRayVelocity.G"],
             (vx.clone(), vy.iter().map(|v| -v).collect::<Vec<f32>>()),
+            ("Z", 1.0),
         ),
         (
             "unreal",
@@ -1033,6 +1035,7 @@ fn vray_unreal_and_arnold_presets() {
                 vx.iter().map(|v| 0.5 + v / W as f32).collect(),
                 vy.iter().map(|v| 0.5 + v / H as f32).collect(),
             ),
+            ("FinalImageMovieRenderQueue_WorldDepth.R", 100.0),
         ),
         (
             "arnold",
@@ -1041,19 +1044,23 @@ fn vray_unreal_and_arnold_presets() {
                 vx.iter().map(|v| v / 2.0).collect(),
                 vy.iter().map(|v| v / 2.0).collect(),
             ),
+            ("Z", 1.0),
         ),
     ] {
         let path = dir.path().join(format!("{name}.exr"));
+        let stored_depth = t.depth.iter().map(|d| d * unit).collect();
         write_exr(
             &path,
             W,
             H,
             t.with_colour(
                 false,
-                vec![("Z", t.depth.clone()), (x, stored.0), (y, stored.1)],
+                vec![(depth, stored_depth), (x, stored.0), (y, stored.1)],
             ),
         );
         let frame = read_all(&Preset::builtin(name).unwrap(), &inputs(&path));
+        let metres = frame.depth.as_ref().unwrap();
+        assert_close(metres, &t.depth, 1e-4, &format!("{name} depth"));
         let velocity = frame.velocity.as_ref().unwrap();
         assert_close(&velocity.x, &vx, 1e-4, &format!("{name} velocity x"));
         assert_close(&velocity.y, &vy, 1e-4, &format!("{name} velocity y"));
@@ -1133,4 +1140,104 @@ fn a_grey_depth_map_is_read_by_its_only_channel_under_the_shutter_preset() {
         err.contains("depth pass") && err.contains("R, G, B"),
         "{err}"
     );
+}
+
+/// F3: a preset's depth mapping keys are checked when it loads, as every other numeric key
+/// is: `[depth] scale = 0` (and NaN, negative, subnormal) read every depth as 0 or NaN and
+/// blurred the whole frame without a word, `near = far` (a painted map's) likewise; and
+/// `[velocity] dead_zone = nan` was taken while -1 was refused as "not finite". Each is
+/// refused before any file is read (exit 2), naming the preset file, the key and what it
+/// takes; nothing is written.
+#[test]
+fn a_presets_depth_mapping_and_dead_zone_are_checked_when_it_loads() {
+    let dir = tempfile::tempdir().unwrap();
+    let t = Truth::new();
+    let color = dir.path().join("cm.exr");
+    let in_cm = t.depth.iter().map(|d| d * 100.0).collect();
+    write_exr(&color, W, H, t.with_colour(true, vec![("Z", in_cm)]));
+    let out = dir.path().join("out.exr");
+    let preset = dir.path().join("p.toml");
+    let run = |text: &str, over: Option<&str>| {
+        std::fs::write(&preset, text).unwrap();
+        let mut args = vec!["dof"];
+        if let Some(name) = over {
+            args.extend(["--preset", name]);
+        }
+        let (color, preset, out) = (s(&color), s(&preset), s(&out));
+        let tail = [
+            "--preset",
+            &preset,
+            "--color",
+            &color,
+            "--focal-length",
+            "50",
+            "--f-stop",
+            "1.4",
+            "--focus-distance",
+            "2",
+            "-o",
+            &out,
+        ];
+        args.extend(tail);
+        shutter(&args)
+    };
+    for (text, over, said) in [
+        (
+            "[depth]\nscale = 0.0\n",
+            None,
+            "[depth] scale = 0: use a number from 1e-6 to 1000000",
+        ),
+        ("[depth]\nscale = nan\n", None, "[depth] scale = NaN"),
+        ("[depth]\nscale = -0.01\n", None, "[depth] scale = -0.01"),
+        ("[depth]\nscale = 1e-40\n", None, "[depth] scale = 1e-40"),
+        (
+            "[depth]\nnear = 0.0\nfar = 0.0\n",
+            Some("painted"),
+            "[depth] far = 0: use a finite distance",
+        ),
+        (
+            "[depth]\nnear = -1.0\nfar = 10.0\n",
+            None,
+            "[depth] near = -1",
+        ),
+        (
+            "[depth]\nnear = 2.0\n",
+            None,
+            "[depth] near = 2: use it with far",
+        ),
+        (
+            "[velocity]\ndead_zone = nan\n",
+            None,
+            "[velocity] dead_zone = NaN: use a finite number of 0 or more",
+        ),
+        (
+            "[velocity]\ndead_zone = -1.0\n",
+            None,
+            "[velocity] dead_zone = -1: use a finite number of 0 or more",
+        ),
+        (
+            "[prev]\nzero = inf\n",
+            None,
+            "[prev] zero = inf: use a finite number",
+        ),
+    ] {
+        let o = run(text, over);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{text}: {err}");
+        assert!(
+            err.contains(&format!("preset {}: {said}", s(&preset))),
+            "{text}: {err}"
+        );
+        assert!(!out.exists(), "{text}: an output was written");
+    }
+    // What the keys are for is still taken: centimetres read as metres, a map whose white
+    // is near (near above far), a dead zone of 0.
+    for text in [
+        "[depth]\nscale = 0.01\n",
+        "[depth]\nscale = 0.01\nnear = 100.0\nfar = 1.0\n",
+        "[velocity]\ndead_zone = 0.0\n",
+    ] {
+        let o = run(text, None);
+        assert!(o.status.success(), "{text}: {}", stderr(&o));
+    }
 }

@@ -2538,4 +2538,322 @@ fn depth_of_field_on_pixels_that_are_not_square_is_warned_of() {
     let run = shutter(&args);
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(!warned(run.stdout));
+
+/// A renderer's frame of `W` x `H`: a bright box (columns `W/3` to `W/2`) at depth 2 before a
+/// noisy wall at 10, moving `speed` px a frame to the right; `vectors` gives the box's
+/// stored vector channels from that speed, `extra` more channels of data (normals, depth).
+fn write_renderer_frame(
+    path: &Path,
+    vectors: &[(&str, f32, f32)],
+    depth: (&str, f32),
+    extra: &[&str],
+) -> Vec<(String, Vec<f32>)> {
+    let n = W * H;
+    let boxed = |i: usize| (W / 3..W / 2).contains(&(i % W));
+    let wall = noise(n, 7, 0.1, 0.4);
+    let light = |k: usize| -> Vec<f32> {
+        (0..n)
+            .map(|i| {
+                if boxed(i) {
+                    1.0 - 0.2 * k as f32
+                } else {
+                    wall[i]
+                }
+            })
+            .collect()
+    };
+    let mut channels: Vec<(String, Vec<f32>)> = vec![
+        ("R".into(), light(0)),
+        ("G".into(), light(1)),
+        ("B".into(), light(2)),
+        ("A".into(), vec![1.0; n]),
+    ];
+    let (depth_name, unit) = depth;
+    let z = (0..n).map(|i| if boxed(i) { 2.0 } else { 10.0 } * unit);
+    channels.push((depth_name.into(), z.collect()));
+    for &(name, moving, still) in vectors {
+        let v = (0..n).map(|i| if boxed(i) { moving } else { still });
+        channels.push((name.into(), v.collect()));
+    }
+    for (k, name) in extra.iter().enumerate() {
+        channels.push((name.to_string(), noise(n, 11 + k as u32, -1.0, 1.0)));
+    }
+    let refs = (channels.iter())
+        .map(|(name, plane)| (name.as_str(), plane.clone()))
+        .collect();
+    write_exr(path, W, H, refs);
+    channels
+}
+
+/// V-Ray's Velocity element (`VRayVelocity.R/G/B`, p(+1) − p(0), y up) and Z-depth and
+/// Normals elements, beside the beauty.
+fn write_vray(path: &Path) -> Vec<(String, Vec<f32>)> {
+    write_renderer_frame(
+        path,
+        &[
+            ("VRayVelocity.R", 8.0, 0.0),
+            ("VRayVelocity.G", 0.0, 0.0),
+            ("VRayVelocity.B", 0.25, 0.0),
+        ],
+        ("Z", 1.0),
+        &[
+            "VRayZDepth.R",
+            "VRayZDepth.G",
+            "VRayZDepth.B",
+            "VRayNormals.R",
+            "VRayNormals.G",
+            "VRayNormals.B",
+        ],
+    )
+}
+
+/// The channels of `input` whose names start with one of `layers`, each as it came in the
+/// output `out` (bit for bit) — what README's "What survives" promises of data layers.
+fn assert_data_back(input: &[(String, Vec<f32>)], out: &Path, layers: &[&str]) {
+    use crate::support::{assert_same_bits, channel, read_exr_reference};
+    let after = read_exr_reference(out);
+    let mut seen = 0;
+    for (name, before) in input {
+        if layers.iter().any(|l| name.starts_with(l)) {
+            assert_same_bits(channel(&after, name), before, name);
+            seen += 1;
+        }
+    }
+    assert!(seen > 0, "no channel of {layers:?}");
+    assert_ne!(channel(&after, "R"), channel(input, "R"), "nothing blurred");
+}
+
+/// F12: under `--preset vray` the preset's own vector pass, `VRayVelocity`, was classed as
+/// light by its channels' letters (R, G, B) and blurred with the beauty's weights (476
+/// pixels changed in a tester's frame); V-Ray's Z-depth and Normals elements too. A layer a
+/// pass is read from is data whatever its name, and V-Ray's names are data by the name rule:
+/// each comes back bit for bit.
+#[test]
+fn a_vray_frames_velocity_depth_and_normals_come_back_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = dir.path().join("vray.exr");
+    let input = write_vray(&color);
+    let out = dir.path().join("out.exr");
+    let o = shutter(&[
+        "blur",
+        "--preset",
+        "vray",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &s(&color),
+        "-o",
+        &s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_data_back(
+        &input,
+        &out,
+        &["VRayVelocity.", "VRayZDepth.", "VRayNormals."],
+    );
+}
+
+/// F12: under DWAA (lossy for channels named R, G, B, float ones too) V-Ray's velocity
+/// element stayed in the DWA part with the beauty, up to 0.17 px off; data goes to a
+/// lossless part of its own, as `Z` did.
+#[test]
+fn a_vray_frames_velocity_leaves_a_dwa_part() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = dir.path().join("vray.exr");
+    let input = write_vray(&color);
+    let out = dir.path().join("out.exr");
+    let o = shutter(&[
+        "blur",
+        "--preset",
+        "vray",
+        "--algorithm",
+        "reconstruct",
+        "--compression",
+        "dwaa",
+        "--color",
+        &s(&color),
+        "-o",
+        &s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let parts = parts_of(&out);
+    for (part, compression, channels) in &parts {
+        let lossy = matches!(compression, Compression::DWAA(_) | Compression::DWAB(_));
+        for name in channels {
+            let data = !["R", "G", "B", "A"].contains(&name.as_str());
+            assert!(
+                !(lossy && data),
+                "{name} is in the DWA part {part:?}: {parts:?}"
+            );
+        }
+    }
+    assert_data_back(
+        &input,
+        &out,
+        &["VRayVelocity.", "VRayZDepth.", "VRayNormals.", "Z"],
+    );
+}
+
+/// F12: `shutter info --preset vray` showed the element layers as colour; a run with the
+/// preset treats them as data, and `info` says what the run does.
+#[test]
+fn info_with_a_renderers_preset_shows_its_passes_as_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = dir.path().join("vray.exr");
+    write_vray(&color);
+    let o = shutter(&["info", "--preset", "vray", &s(&color)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = crate::support::stdout(&o);
+    let class = |name: &str| -> String {
+        (text.lines())
+            .find(|l| l.split_whitespace().next() == Some(name))
+            .and_then(|l| l.split_whitespace().last())
+            .unwrap_or_else(|| panic!("no line for {name}: {text}"))
+            .to_string()
+    };
+    for name in [
+        "VRayVelocity.R",
+        "VRayVelocity.B",
+        "VRayZDepth.G",
+        "VRayNormals.B",
+        "Z",
+    ] {
+        assert_eq!(class(name), "data", "{name}: {text}");
+    }
+    assert_eq!(class("R"), "colour", "{text}");
+}
+
+/// F12 at its root: a layer a run's preset reads a pass from is data in that run whatever its
+/// name (`smear`, which the name rule reads as light by its R, G), in the output and in
+/// `info --preset`; unless the preset's `[layers]` says otherwise, explicitly.
+#[test]
+fn a_layer_a_preset_reads_a_pass_from_is_data_unless_its_layers_table_says_otherwise() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = dir.path().join("smear.exr");
+    let input = write_renderer_frame(
+        &color,
+        &[
+            ("smear.R", 6.0, 0.0),
+            ("smear.G", 0.0, 0.0),
+            ("smear.B", 0.5, 0.0),
+        ],
+        ("Z", 1.0),
+        &[],
+    );
+    let preset = dir.path().join("smear.toml");
+    std::fs::write(
+        &preset,
+        "[velocity]\nchannels = [[\"smear.R\", \"smear.G\"]]\nmeaning = \"velocity\"\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out.exr");
+    let blur = |presets: &[&Path]| {
+        let mut args = vec![
+            "blur".to_string(),
+            "--algorithm".into(),
+            "reconstruct".into(),
+        ];
+        for p in presets {
+            args.extend(["--preset".to_string(), s(p)]);
+        }
+        args.extend(["--color".to_string(), s(&color), "-o".into(), s(&out)]);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = shutter(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+    };
+    blur(&[&preset]);
+    assert_data_back(&input, &out, &["smear."]);
+    let info = |presets: &[&Path]| {
+        let mut args = vec!["info".to_string()];
+        for p in presets {
+            args.extend(["--preset".to_string(), s(p)]);
+        }
+        args.push(s(&color));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = shutter(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let text = crate::support::stdout(&o);
+        (text.lines())
+            .find(|l| l.split_whitespace().next() == Some("smear.B"))
+            .and_then(|l| l.split_whitespace().last())
+            .unwrap_or_else(|| panic!("no smear.B: {text}"))
+            .to_string()
+    };
+    assert_eq!(info(&[&preset]), "data");
+
+    // Said otherwise: `[layers] smear = "colour"` blurs it with the beauty.
+    let colour = dir.path().join("colour.toml");
+    std::fs::write(&colour, "[layers]\nsmear = \"colour\"\n").unwrap();
+    assert_eq!(info(&[&preset, &colour]), "colour");
+    blur(&[&preset, &colour]);
+    let after = crate::support::read_exr_reference(&out);
+    let blurred = crate::support::channel(&after, "smear.R");
+    assert_ne!(blurred, crate::support::channel(&input, "smear.R"));
+}
+
+/// F8 and F12 on Movie Render Queue's frame: the MotionVectors pass (0.5 = still, screen
+/// fractions) and the WorldDepth pass (centimetres in R, G, B) beside the beauty. The unreal
+/// preset read no depth (it named shutter's `Z`, which MRQ never writes), so no algorithm
+/// ran; it reads WorldDepth now, and both passes come back bit for bit. Without the depth
+/// pass the error says what to add in Unreal.
+#[test]
+fn a_movie_render_queue_frame_blurs_under_the_unreal_preset() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = dir.path().join("mrq.exr");
+    let mv = "FinalImageMovieRenderQueue_MotionVectors";
+    let depth = "FinalImageMovieRenderQueue_WorldDepth";
+    let names = |layer: &str| ["R", "G", "B", "A"].map(|c| format!("{layer}.{c}"));
+    let [mr, mg, mb, ma] = names(mv);
+    let [dg, db, da] = [1, 2, 3].map(|k| names(depth)[k].clone());
+    let input = write_renderer_frame(
+        &color,
+        &[
+            (&mr, 0.5 + 8.0 / W as f32, 0.5),
+            (&mg, 0.5, 0.5),
+            (&mb, 0.0, 0.0),
+            (&ma, 1.0, 1.0),
+        ],
+        (&names(depth)[0], 100.0),
+        &[dg.as_str(), db.as_str(), da.as_str()],
+    );
+    let out = dir.path().join("out.exr");
+    let o = shutter(&[
+        "blur",
+        "--preset",
+        "unreal",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &s(&color),
+        "-o",
+        &s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_data_back(&input, &out, &[&format!("{mv}."), &format!("{depth}.")]);
+
+    // Without WorldDepth: refused, naming the channel and the pass to add in Unreal.
+    let bare = dir.path().join("bare.exr");
+    let kept: Vec<(&str, Vec<f32>)> = (input.iter())
+        .filter(|(name, _)| !name.starts_with(depth))
+        .map(|(name, plane)| (name.as_str(), plane.clone()))
+        .collect();
+    write_exr(&bare, W, H, kept);
+    let o = shutter(&[
+        "blur",
+        "--preset",
+        "unreal",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &s(&bare),
+        "-o",
+        &s(&dir.path().join("bare-out.exr")),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("FinalImageMovieRenderQueue_WorldDepth.R")
+            && err.contains("MovieRenderQueue_WorldDepth, 32-bit"),
+        "{err}"
+    );
 }

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use crate::error::{Error, Problem, ProblemKind, Result};
 use crate::io::channels::{self, LayerClass};
 use crate::io::file::{ChannelInfo, FileInfo, FileKind};
-use crate::io::passes::{passes_found, suggest, Suggestion};
+use crate::io::passes::{pass_layers, passes_found, suggest, Suggestion};
 use crate::io::preset::{Preset, BUILTIN};
 
 use super::args::InfoArgs;
@@ -17,16 +17,12 @@ pub fn info(args: InfoArgs) -> Result<()> {
         .filter(|(name, _)| crate::io::preset::is_convention(name))
         .map(|(name, _)| Preset::builtin(name))
         .collect::<Result<_>>()?;
-    // A preset's `[layers]` table, as a run with it classes the channels.
-    let layers: BTreeMap<String, LayerClass> = if args.preset.is_empty() {
-        BTreeMap::new()
-    } else {
-        Preset::load(&args.preset)?
-            .layers
-            .iter()
-            .map(|(layer, class)| (layer.clone(), class.class()))
-            .collect()
-    };
+    // The channels classed as a run with the preset classes them: by its `[layers]` table,
+    // the layers its passes are read from, then the name rule (`shutter` without --preset).
+    let preset = Preset::load(&args.preset)?;
+    let layers: BTreeMap<String, LayerClass> = (preset.layers.iter())
+        .map(|(layer, class)| (layer.clone(), class.class()))
+        .collect();
     let mut problems = Vec::new();
     let mut documents = Vec::new();
     for path in &args.files {
@@ -68,8 +64,10 @@ pub fn info(args: InfoArgs) -> Result<()> {
             }
             None => (Vec::new(), None),
         };
+        let pass_layers = pass_layers(seen.as_ref().unwrap_or(&info), &preset);
         let shown = Shown {
             layers: &layers,
+            pass_layers: &pass_layers,
             info: &info,
             view: seen.as_ref().and_then(|s| s.view.as_deref()),
             matches: &matches,
@@ -110,6 +108,8 @@ pub fn info(args: InfoArgs) -> Result<()> {
 struct Shown<'a> {
     /// A preset's classes of layers by name, over the name rule.
     layers: &'a BTreeMap<String, LayerClass>,
+    /// The layers the preset reads passes from in the file: data (`passes::pass_layers`).
+    pass_layers: &'a std::collections::BTreeSet<String>,
     info: &'a FileInfo,
     /// The view presets were matched in (multi-view files).
     view: Option<&'a str>,
@@ -154,6 +154,7 @@ fn describe_kind(info: &FileInfo) -> String {
 fn info_text(shown: &Shown) -> String {
     let Shown {
         layers,
+        pass_layers,
         info,
         view,
         matches,
@@ -201,7 +202,7 @@ fn info_text(shown: &Shown) -> String {
         // A part shutter cannot read (deep data) is left out of a run, with a warning.
         let class = match info.unreadable(c) {
             Some(_) => "not read",
-            None => class_of(info, c, layers).name(),
+            None => class_of(info, c, layers, pass_layers).name(),
         };
         let line = format!("    {name:<28} {:<4} {class:<6}{in_view}", c.sample_type);
         text.push_str(line.trim_end());
@@ -278,6 +279,7 @@ fn attribute_rows(info: &FileInfo) -> Vec<(Option<String>, Vec<super::attributes
 fn info_json(shown: &Shown) -> serde_json::Value {
     let Shown {
         layers,
+        pass_layers,
         info,
         view,
         matches,
@@ -301,7 +303,7 @@ fn info_json(shown: &Shown) -> serde_json::Value {
         "channels": info.channels.iter().map(|c| serde_json::json!({
             "name": super::attributes::shown_name(c.alias.as_ref().unwrap_or(&c.name)),
             "type": c.sample_type,
-            "class": class_of(info, c, layers).name(),
+            "class": class_of(info, c, layers, pass_layers).name(),
             "part": c.part,
             "unread": info.unreadable(c),
             "view": c.view,
@@ -325,11 +327,15 @@ fn class_of(
     info: &FileInfo,
     channel: &ChannelInfo,
     layers: &BTreeMap<String, LayerClass>,
+    pass_layers: &std::collections::BTreeSet<String>,
 ) -> LayerClass {
     // As the read classes it: by `part.channel` where the part has a name (`diffuse.R`).
     let qualified = channel.alias.as_ref().unwrap_or(&channel.name);
     if let Some(class) = channels::preset_class(layers, qualified) {
         return class;
+    }
+    if pass_layers.contains(channels::layer_key(qualified)) {
+        return LayerClass::Data;
     }
     let crypto = match &info.kind {
         FileKind::Exr { headers, .. } => headers

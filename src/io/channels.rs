@@ -8,12 +8,21 @@
 //!
 //! The rule, in order:
 //! 1. a channel of a layer that a `cryptomatte/<key>/name` attribute names (or whose layer
-//!    starts with `crypto`) is data: its values are IDs and coverage ranks, not light;
-//! 2. a channel any of whose layer's dot-separated names is a known data name (`depth`, `z`,
-//!    `mist`, `vector`, `velocity`, `motion`, `motionvector`, `forward`, `backward`,
-//!    `position`, `p`, `pref`, `pworld`, `n`, `normal`, `nworld`, `uv`, `st`, `id`,
-//!    `objectid`, `materialid`, `indexob`, `indexma`, any case) is data — Arnold writes its
-//!    normals as `N.R`, `N.G`, `N.B`, colour by their letters alone;
+//!    starts with `crypto`, after a renderer's prefix, or is Unreal's `ActorHitProxyMask…`)
+//!    is data: its values are IDs and coverage ranks, not light;
+//! 2. a channel any of whose layer's dot-separated names is a known data name is data —
+//!    Arnold writes its normals as `N.R`, `N.G`, `N.B`, colour by their letters alone. A name
+//!    is compared in lower case, without leading underscores (RenderMan's `__Pworld`), `_`
+//!    and `-` (`object_id`, `Op_Id`), and without a renderer's prefix (V-Ray's `VRay…`,
+//!    Unreal Movie Render Queue's `FinalImageMovieRenderQueue_…`), against [`DATA_LAYERS`]:
+//!    depth (`z`, `depth`, `zdepth`, `mist`, `worlddepth`, `scenedepth`, Mantra's `pz`),
+//!    motion (`velocity`, `vel`, `mv`, `vector`, `motionvector(s)`, `forward`, `backward`,
+//!    Nuke's `disparityL`/`R`), positions and normals (`p`, `position`, `worldposition`,
+//!    `pref`, `pworld`, `n`, `nn`, `ng`, `normal(s)`, `bumpnormals`, `nworld`, V-Ray's
+//!    `samplerinfo`, RenderMan's `dpdtime`), texture coordinates (`uv`, `uvw`, `st`), IDs
+//!    (`id`, `objectid`, `materialid`, `mtlid`, `renderid`, `primid`, `opid`, `indexob`,
+//!    `indexma`) and the counts a renderer keeps per pixel
+//!    (`coverage`, `cputime`, `raycount`);
 //! 3. a channel whose own name is R, G, B, A or Y (any case; `red`, `green`, `blue`,
 //!    `alpha` too) is colour: `diffuse.R`, `ViewLayer.Emit.G`, a layer's own `specular.A`;
 //! 4. every other channel is data: `Z`, `velocity.X`, `ViewLayer.Normal.X`, `uv.U`.
@@ -21,41 +30,106 @@
 //! A rule that cannot see a layer's meaning by its name errs towards data, which comes back
 //! as it was: a light layer misread as data is left sharp (and visible as such), while data
 //! misread as colour would be averaged into values that mean nothing.
+//!
+//! Masks and mattes (`mask`, `matte`, V-Ray's MultiMatte, Redshift's PuzzleMatte) are
+//! colour: each is the coverage of some of the beauty's objects, as alpha is of all of them,
+//! and averages as alpha does, so blurred with the beauty's weights it still cuts out the
+//! blurred object (a sharp matte would leave the object's streak outside it). V-Ray's
+//! `coverage` is not: it belongs to the render ID beside it (the share of the pixel that ID
+//! covers), and the IDs, data, stay sharp, so it stays sharp with them, as Cryptomatte's
+//! ranks do. `albedo` is the surface's colour and blurs with it.
+//!
+//! Whatever a name says, a channel that a run's preset reads as a pass (depth, vectors) is
+//! data in that run, with the rest of its layer (`io::passes::carried`); a preset's
+//! `[layers]` table overrides both.
 
 pub use crate::frame::LayerClass;
 
-/// The known names of data layers (rule 2), lower case.
+/// The known names of data layers (rule 2), as [`normalised`] gives them.
 const DATA_LAYERS: &[&str] = &[
+    // Depth.
     "depth",
     "z",
     "zdepth",
     "mist",
+    "worlddepth",
+    "scenedepth",
+    "pz",
+    "volumez",
+    // Motion.
     "vector",
     "vectors",
     "velocity",
+    "vel",
+    "mv",
     "motion",
     "motionvector",
     "motionvectors",
     "forward",
     "backward",
+    "disparity",
+    "disparityl",
+    "disparityr",
+    "dpdtime",
+    "dpcameradtime",
+    // Positions and normals.
     "position",
+    "worldposition",
     "p",
     "pref",
     "pworld",
     "n",
+    "nn",
+    "ng",
     "normal",
     "normals",
+    "worldnormal",
+    "bumpnormals",
     "nworld",
+    "samplerinfo",
+    // Texture coordinates.
     "uv",
+    "uvw",
     "st",
+    // IDs, and what a renderer counts per pixel.
     "id",
     "objectid",
-    "object_id",
     "materialid",
-    "material_id",
+    "mtlid",
+    "renderid",
+    "primid",
+    "opid",
     "indexob",
     "indexma",
+    "coverage",
+    "cputime",
+    "raycount",
 ];
+
+/// The prefixes renderers put before a pass's name, lower case, without `_`: V-Ray's render
+/// elements (`VRayVelocity`, `VRayZDepth`, `VRayNormals`), Unreal Movie Render Queue's
+/// post-process passes (`FinalImageMovieRenderQueue_WorldDepth`), longest first.
+const RENDERER_PREFIXES: &[&str] = &["finalimagemovierenderqueue", "movierenderqueue", "vray"];
+
+/// One dot-separated name of a layer as rule 2 compares it: lower case, without leading
+/// underscores, `_` and `-`, and without a renderer's prefix ([`RENDERER_PREFIXES`]).
+fn normalised(part: &str) -> String {
+    let bare: String = (part.trim_start_matches('_').chars())
+        .filter(|c| !matches!(c, '_' | '-'))
+        .flat_map(char::to_lowercase)
+        .collect();
+    RENDERER_PREFIXES
+        .iter()
+        .find_map(|prefix| bare.strip_prefix(prefix).filter(|rest| !rest.is_empty()))
+        .map_or(bare.clone(), str::to_string)
+}
+
+/// Whether a layer (`ViewLayer.Normal`, `VRayVelocity`) holds data by its names (rule 2).
+fn is_data_layer(layer: &str) -> bool {
+    layer
+        .split('.')
+        .any(|part| DATA_LAYERS.contains(&normalised(part).as_str()))
+}
 
 /// The names of colour components (rule 3), lower case.
 const COLOUR_COMPONENTS: &[&str] = &["r", "g", "b", "a", "y", "red", "green", "blue", "alpha"];
@@ -76,10 +150,7 @@ pub fn preset_class(
     layers: &std::collections::BTreeMap<String, LayerClass>,
     name: &str,
 ) -> Option<LayerClass> {
-    match split(name) {
-        ("", own) => layers.get(own).copied(),
-        (layer, _) => layers.get(layer).copied(),
-    }
+    layers.get(layer_key(name)).copied()
 }
 
 /// The keys of a preset's `[layers]` table that name no layer of a file whose channels are
@@ -144,8 +215,7 @@ fn edits(a: &str, b: &str) -> usize {
 /// `cryptomatte/<key>/name` attributes give.
 pub fn class_of(name: &str, crypto_layers: &[String]) -> LayerClass {
     let (layer, component) = split(name);
-    let lower = layer.to_ascii_lowercase();
-    if is_crypto(name, crypto_layers) || lower.split('.').any(|part| DATA_LAYERS.contains(&part)) {
+    if is_crypto(name, crypto_layers) || is_data_layer(layer) {
         return LayerClass::Data;
     }
     if COLOUR_COMPONENTS.contains(&component.to_ascii_lowercase().as_str()) {
@@ -156,16 +226,28 @@ pub fn class_of(name: &str, crypto_layers: &[String]) -> LayerClass {
 }
 
 /// Whether channel `name` is a Cryptomatte layer's: a layer `crypto_layers` (the file's
-/// `cryptomatte/<key>/name` attributes) names, or one named `crypto…`.
+/// `cryptomatte/<key>/name` attributes) names, or one named `crypto…` after a renderer's
+/// prefix (`VRayCryptomatte`), or Unreal's `ActorHitProxyMask…` (Movie Render Queue's
+/// Object ID pass, written to the Cryptomatte specification).
 pub fn is_crypto(name: &str, crypto_layers: &[String]) -> bool {
     let (layer, _) = split(name);
     crypto_layers
         .iter()
         .any(|c| !c.is_empty() && layer.starts_with(c.as_str()))
         || layer
-            .to_ascii_lowercase()
             .split('.')
-            .any(|part| part.starts_with("crypto"))
+            .map(normalised)
+            .any(|part| part.starts_with("crypto") || part.starts_with("actorhitproxymask"))
+}
+
+/// The key a channel's layer goes by, in a preset's `[layers]` table and among the layers a
+/// run reads passes from: its layer's name (`diffuse` for `diffuse.R`), or, for a channel of
+/// no layer (`Z`), its own name.
+pub fn layer_key(name: &str) -> &str {
+    match split(name) {
+        ("", own) => own,
+        (layer, _) => layer,
+    }
 }
 
 /// The layer names a header's `cryptomatte/<key>/name` attributes give (the Cryptomatte
@@ -347,6 +429,42 @@ mod tests {
             ("id.R", Data),
             ("ViewLayer.CryptoObject00.R", Data),
             ("crypto_material.G", Data),
+            // What renderers name their data (F12: these were colour, and blurred).
+            ("VRayVelocity.R", Data),
+            ("VRayZDepth.R", Data),
+            ("VRayNormals.G", Data),
+            ("VRayBumpNormals.B", Data),
+            ("VRayRenderID.R", Data),
+            ("VRayMtlID.G", Data),
+            ("VRaySamplerInfo.R", Data),
+            ("VRayCryptomatte00.R", Data),
+            ("VRayCoverage.R", Data),
+            ("FinalImageMovieRenderQueue_MotionVectors.R", Data),
+            ("FinalImageMovieRenderQueue_WorldDepth.G", Data),
+            ("ActorHitProxyMask00.R", Data),
+            ("Nn.R", Data),
+            ("Ng.B", Data),
+            ("mv.R", Data),
+            ("vel.G", Data),
+            ("disparityL.R", Data),
+            ("__Pworld.R", Data),
+            ("__depth.R", Data),
+            ("Op_Id.R", Data),
+            ("Pz.R", Data),
+            ("motion_vector.G", Data),
+            ("WorldPosition.B", Data),
+            ("coverage.R", Data),
+            // Light, whatever prefix it has; mattes blur with the beauty (module doc).
+            ("VRayLighting.R", Colour),
+            ("VRayReflection.G", Colour),
+            ("VRayDenoiser.B", Colour),
+            ("FinalImageMovieRenderQueue_Beauty.R", Colour),
+            ("mask.R", Colour),
+            ("matte.G", Colour),
+            ("VRayMultiMatte.B", Colour),
+            ("albedo.R", Colour),
+            ("Nothing.R", Colour),
+            ("vray.R", Colour),
         ] {
             assert_eq!(class_of(name, &[]), class, "{name}");
         }

@@ -317,18 +317,42 @@ fn load_table(name_or_path: &str) -> Result<toml::Table> {
     )))
 }
 
-/// Records `name` as the origin of every settings key in `table`.
+/// The tables of a preset that describe its passes, whose keys are checked when it loads.
+const PASS_TABLES: [&str; 5] = ["color", "depth", "velocity", "prev", "next"];
+
+/// Records `name` as the origin of every settings key in `table`, and of every key of its
+/// pass tables (`depth.scale` → `cm.toml`), for messages.
 fn note_origins(
     table: &toml::Table,
     name: &str,
     origins: &mut std::collections::BTreeMap<String, String>,
 ) {
-    for section in Section::ALL {
-        if let Some(toml::Value::Table(keys)) = table.get(section.table()) {
+    let tables = Section::ALL
+        .map(Section::table)
+        .into_iter()
+        .chain(PASS_TABLES);
+    for section in tables {
+        if let Some(toml::Value::Table(keys)) = table.get(section) {
             for key in keys.keys() {
-                origins.insert(format!("{}.{key}", section.table()), name.to_string());
+                origins.insert(format!("{section}.{key}"), name.to_string());
             }
         }
+    }
+}
+
+/// The least and the largest `[depth] scale`: a conversion between any two units of length
+/// a renderer writes depth in (micrometres to kilometres, 1e-6 to 1e3, with room either
+/// side) lies within; beyond is a mistake, not a unit (1e-40 read every depth as 0, the
+/// lens then blurring the whole frame without a word).
+pub const DEPTH_SCALE: (f32, f32) = (1e-6, 1e6);
+
+/// A preset's number as its message shows it: as written where that is short (`1e-40`, not
+/// the f64 the f32 widens to), in exponent form beyond.
+fn shown(v: f32) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e15).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
     }
 }
 
@@ -388,8 +412,13 @@ impl Preset {
 
     /// The preset (name or path) that set a settings key of a section.
     pub fn origin(&self, section: Section, key: &str) -> &str {
+        self.origin_of(section.table(), key)
+    }
+
+    /// The preset (name or path) that set key `key` of table `table` (`depth`, `blur`).
+    pub fn origin_of(&self, table: &str, key: &str) -> &str {
         self.origins
-            .get(&format!("{}.{key}", section.table()))
+            .get(&format!("{table}.{key}"))
             .map_or(self.name.as_str(), String::as_str)
     }
 
@@ -441,8 +470,23 @@ impl Preset {
                     "each {pass} alternative needs 2 or 3 channel names"
                 ));
             }
-            if !spec.scale.is_finite() || !spec.zero.is_finite() || spec.dead_zone < 0.0 {
-                return bad(format!("{pass}: scale, zero and dead_zone must be finite"));
+            for (key, value, allowed) in [
+                ("scale", spec.scale, spec.scale.is_finite()),
+                ("zero", spec.zero, spec.zero.is_finite()),
+                // NaN compares false with everything: tested as what it must be.
+                (
+                    "dead_zone",
+                    spec.dead_zone,
+                    spec.dead_zone.is_finite() && spec.dead_zone >= 0.0,
+                ),
+            ] {
+                if !allowed {
+                    let expect = match key {
+                        "dead_zone" => "a finite number of 0 or more",
+                        _ => "a finite number",
+                    };
+                    return self.refused(pass, key, &shown(value), expect);
+                }
             }
             if let Some(max) = spec.max_displace {
                 if !(max.is_finite() && max > 0.0) {
@@ -463,12 +507,71 @@ impl Preset {
                 return bad(format!("[{pass}] a validity_alpha channel name is empty"));
             }
         }
-        if let (Some(near), Some(far)) = (self.depth.near, self.depth.far) {
-            if !(near.is_finite() && far.is_finite()) {
-                return bad("depth near and far must be finite".into());
+        self.validate_depth()
+    }
+
+    /// Refuses `[depth]` mapping keys that would read no depth (F3: `scale = 0`, NaN, a
+    /// negative or a subnormal scale, `near = far`, were read without a word, the lens then
+    /// blurring everything, or a warning blaming the input file for NaN it does not hold).
+    fn validate_depth(&self) -> Result<()> {
+        let DepthSpec {
+            near, far, scale, ..
+        } = self.depth;
+        let (least, most) = DEPTH_SCALE;
+        if !(least..=most).contains(&scale) {
+            return self.refused(
+                "depth",
+                "scale",
+                &shown(scale),
+                &format!(
+                    "a number from {} to {} (what stored depth is multiplied by: 0.01 reads \
+                     centimetres as metres)",
+                    shown(least),
+                    shown(most)
+                ),
+            );
+        }
+        let distance = |v: f32| v.is_finite() && v >= 0.0;
+        match (near, far) {
+            (None, None) => Ok(()),
+            (Some(_), None) | (None, Some(_)) => {
+                let (set, unset) = if near.is_some() {
+                    ("near", "far")
+                } else {
+                    ("far", "near")
+                };
+                let value = near.or(far).unwrap_or_default();
+                self.refused(
+                    "depth",
+                    set,
+                    &shown(value),
+                    &format!(
+                        "it with {unset}, or neither: near and far map a grey map's black and \
+                         white to depths, and one alone maps nothing"
+                    ),
+                )
+            }
+            (Some(near), Some(far)) => {
+                let expect = "a finite distance of 0 or more, near and far different \
+                              (the depths a grey map's black and white stand for)";
+                if !distance(near) {
+                    self.refused("depth", "near", &shown(near), expect)
+                } else if !distance(far) || far == near {
+                    self.refused("depth", "far", &shown(far), expect)
+                } else {
+                    Ok(())
+                }
             }
         }
-        Ok(())
+    }
+
+    /// The error for key `key` of table `table` set to `shown`, naming the preset (file) that
+    /// set it and what it takes, as a settings key's is (`settings::parse`).
+    fn refused(&self, table: &str, key: &str, shown: &str, expect: &str) -> Result<()> {
+        Err(Error::usage(format!(
+            "preset {}: [{table}] {key} = {shown}: use {expect}",
+            self.origin_of(table, key)
+        )))
     }
 
     /// Refuses a preset that leaves out a value only the user knows (RSMB's Max Displace),

@@ -40,6 +40,7 @@ impl FramePlan {
     /// do not, and `diff` and `bench` read colour alone).
     pub fn read_every_channel(&mut self) {
         let passes = self.pass_slots();
+        let pass_layers = self.pass_layers();
         let Some(color) = &mut self.color else {
             return;
         };
@@ -70,7 +71,14 @@ impl FramePlan {
         color.other_classes = color
             .other_slots
             .iter()
-            .map(|slot| carried_class(&color.layer_classes, headers, channel_of(slot)))
+            .map(|slot| {
+                carried_class(
+                    &color.layer_classes,
+                    &pass_layers,
+                    headers,
+                    channel_of(slot),
+                )
+            })
             .collect();
         color.other_exact = color
             .other_slots
@@ -200,6 +208,7 @@ impl FramePlan {
     /// with the motion) is placed on the beauty's window, where the passes work, and
     /// written there.
     pub fn read_parts_apart(&mut self) {
+        let pass_layers = self.pass_layers();
         let Some(color) = &mut self.color else {
             return;
         };
@@ -216,7 +225,14 @@ impl FramePlan {
                     .filter(|&i| info.channels[i].part == part)
                     .collect();
                 let classes = (channels.iter())
-                    .map(|&i| carried_class(&color.layer_classes, headers, &info.channels[i]))
+                    .map(|&i| {
+                        carried_class(
+                            &color.layer_classes,
+                            &pass_layers,
+                            headers,
+                            &info.channels[i],
+                        )
+                    })
                     .collect();
                 PartApart {
                     part,
@@ -225,6 +241,37 @@ impl FramePlan {
                 }
             })
             .collect();
+    }
+
+    /// The layers of the colour file that the passes read depth and motion from, each by its
+    /// [`channels::layer_key`](crate::io::channels::layer_key) (`VRayVelocity` for
+    /// `VRayVelocity.R`, `Z` for `Z`): data in this run whatever their names say, with
+    /// every channel of theirs (a velocity layer's unread B too), so that a preset's own
+    /// passes come back bit for bit and out of a lossy DWA part (F12: V-Ray's `VRayVelocity`
+    /// and MRQ's `…_MotionVectors`, colour by their names' letters, were blurred like light).
+    /// A validity alpha is left out: it may be a layer of light's alpha.
+    fn pass_layers(&self) -> std::collections::BTreeSet<String> {
+        let Some(color) = &self.color else {
+            return Default::default();
+        };
+        let path = &self.files[color.rgb[0].file].info.path;
+        let mut slots: Vec<Slot> = self.depth.iter().map(|(slot, _)| *slot).collect();
+        for v in [&self.velocity, &self.prev, &self.next]
+            .into_iter()
+            .flatten()
+        {
+            slots.extend([v.x, v.y]);
+            slots.extend(v.z);
+        }
+        (slots.into_iter())
+            .map(|slot| (&self.files[slot.file], slot.entry))
+            .filter(|(file, _)| file.info.path == *path)
+            .map(|(file, entry)| {
+                let channel = &file.info.channels[file.channels[entry]];
+                let name = channel.alias.as_ref().unwrap_or(&channel.name);
+                crate::io::channels::layer_key(name).to_string()
+            })
+            .collect()
     }
 
     /// The slots the passes read: colour, depth, motion (a u32 depth in the colour's part
@@ -249,10 +296,12 @@ impl FramePlan {
 }
 
 /// The class of a channel carried beside the beauty: the preset's for its layer
-/// (`[layers]`), else data for a u32 channel, else `io::channels`' rule; a channel of a
+/// (`[layers]`), else data for a layer a pass is read from (`pass_layers`,
+/// [`FramePlan::pass_layers`]) or a u32 channel, else `io::channels`' rule; a channel of a
 /// named part is classed as `part.channel` (`diffuse.R`).
 fn carried_class(
     layer_classes: &std::collections::BTreeMap<String, crate::frame::LayerClass>,
+    pass_layers: &std::collections::BTreeSet<String>,
     headers: &[exr::meta::header::Header],
     channel: &crate::io::file::ChannelInfo,
 ) -> crate::frame::LayerClass {
@@ -264,6 +313,10 @@ fn carried_class(
     let qualified = channel.alias.as_ref().unwrap_or(&channel.name);
     match channels::preset_class(layer_classes, qualified) {
         Some(class) => class,
+        // What a pass reads is depth or motion, whatever its name says.
+        None if pass_layers.contains(channels::layer_key(qualified)) => {
+            crate::frame::LayerClass::Data
+        }
         // Integers hold IDs and counts, never light (a u32 `obj.R` included).
         None if channel.sample_type == "u32" => crate::frame::LayerClass::Data,
         None => channels::class_of(qualified, &crypto),

@@ -89,6 +89,22 @@ fn passes_after(
     found
 }
 
+/// The layers a preset reads depth and motion from in one file on its own (each by its
+/// [`layer_key`](crate::io::channels::layer_key)): data whatever their names say, as a run
+/// with that preset classes them (`FramePlan::pass_layers`); what `shutter info --preset`
+/// shows.
+pub fn pass_layers(info: &FileInfo, preset: &Preset) -> std::collections::BTreeSet<String> {
+    (passes_read_in(info, preset, None).into_iter())
+        .filter(|(pass, _)| *pass != "color")
+        .flat_map(|(_, channels)| channels)
+        .map(|c| {
+            let channel = &info.channels[c];
+            let name = channel.alias.as_ref().unwrap_or(&channel.name);
+            crate::io::channels::layer_key(name).to_string()
+        })
+        .collect()
+}
+
 /// Whether a motion section's encoding reads samples of this type, whatever the values only
 /// the user knows (RSMB's Max Displace, which a built-in preset leaves out).
 pub(super) fn decodes(spec: &VectorSpec, pass: &str, sample_type: &str) -> bool {

@@ -42,6 +42,7 @@ mod window;
 pub use carried::stack_problem;
 pub use check::{luma, CheckReport, VectorCheck};
 pub use fit::{describe as describe_reading, fit, Fit, FitInput, Reading, FIT_POINTS};
+pub use found::pass_layers;
 pub use memory::BASE as BASE_MEMORY;
 pub use plan::{plan_frame, FramePlan, PlanOptions};
 pub use preflight::{output_folder_problems, outputs_over_inputs, preflight};

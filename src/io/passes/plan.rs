@@ -550,12 +550,19 @@ impl Planner<'_> {
             ProblemKind::MissingChannel,
             &info.path,
             format!(
-                "not in the file with preset {}{}; the file has {}",
+                "not in the file with preset {}{}; the file has {}{}",
                 self.options.preset.name,
                 (self.options.layer)
                     .filter(|_| wanted.contains("{layer}"))
                     .map_or(String::new(), |l| format!(" for view layer {l}")),
-                info.channel_list()
+                info.channel_list(),
+                // What the renderer must write for the preset (F8: MRQ's depth pass).
+                Some(&self.options.preset.expects)
+                    .filter(|e| !e.is_empty())
+                    .map_or(String::new(), |e| format!(
+                        "; preset {} expects {e}",
+                        self.options.preset.name
+                    )),
             ),
         )
         .pass(pass)
