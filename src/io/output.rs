@@ -421,6 +421,25 @@ pub fn existing_frame_problem(
     }
 }
 
+/// The settings an EXR output records it was made with (`shutter/settings`, its first
+/// part's that holds them), which `--skip-existing` holds against the run's own; `None` for
+/// a picture (it records none), an EXR another program made, or one that cannot be read.
+pub fn recorded_settings(path: &Path) -> Option<String> {
+    if OutputFormat::from_path(path) != Some(OutputFormat::Exr) {
+        return None;
+    }
+    let meta = exr_io::read_meta(path).ok()?;
+    let name = exr::meta::attribute::Text::from("shutter/settings");
+    meta.headers
+        .iter()
+        .find_map(|header| match header.own_attributes.other.get(&name)? {
+            exr::meta::attribute::AttributeValue::Text(text) => {
+                Some(crate::io::channels::name_of(text))
+            }
+            _ => None,
+        })
+}
+
 /// Writes every pass `frame` holds as a canonical pass file (the `shutter` preset's channel
 /// names, f32, the default compression), atomically: colour as R, G, B, A (A = 1 where the
 /// frame has no alpha), depth as Z, velocity as X, Y and positions as X, Y (, Z), each to
