@@ -584,7 +584,9 @@ pub fn output_notes(path: &Path, frame: &Frame, options: &OutputOptions) -> Vec<
     let float_out = bits == 32 && format == ImageFormat::Tiff;
     let rgb = [&color.r[..], &color.g[..], &color.b[..]];
     let alpha = color.a.as_deref();
-    let (above, below) = image_io::out_of_range(rgb, alpha);
+    // A JPEG holds the colour premultiplied (over black), not over its alpha.
+    let straight = alpha.filter(|_| format != ImageFormat::Jpeg);
+    let (above, below) = image_io::out_of_range(rgb, straight);
     if !float_out && (above || below || float_in) {
         let clipped = match (above, below) {
             (true, true) => "values above 1 and below 0 are clipped",
@@ -608,9 +610,9 @@ pub fn output_notes(path: &Path, frame: &Frame, options: &OutputOptions) -> Vec<
     }
     if format == ImageFormat::Jpeg && alpha.is_some_and(|a| a.iter().any(|&a| a < OPAQUE)) {
         notes.push(
-            "JPEG holds no alpha: the alpha is left out, and the colour written straight (as \
-             a PNG holds it, not composited over any background; black where alpha is 0); a \
-             .png or .tif output keeps the alpha"
+            "JPEG holds no alpha: the alpha is left out, and the colour written as it is, \
+             premultiplied: composited over black, as oiiotool and a compositor write it \
+             (light where alpha is 0 stays); a .png or .tif output keeps the alpha"
                 .into(),
         );
     }

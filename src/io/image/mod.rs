@@ -8,7 +8,8 @@
 //! image is turned upright by its orientation tag as it is read (the header's size is the
 //! upright size), so a map painted on the upright view lines up. Integer files hold straight
 //! (unassociated) alpha; shutter works premultiplied, so colour is premultiplied on read and
-//! divided back on write.
+//! divided back on write where alpha is above 0 (where it is 0, written as it is, as
+//! oiiotool does; a JPEG's is written premultiplied: over black).
 
 mod jpeg;
 mod meta;
