@@ -546,6 +546,29 @@ fn photo_chromaticities(photo: &Photo) -> Option<exr::meta::attribute::Chromatic
     })
 }
 
+/// The ICC profile a picture made from an EXR carries: its `chromaticities` (the first
+/// part's), with the curve the picture's codes are encoded with (sRGB's; linear light's
+/// with `--linear` or in a float TIFF). `Ok(None)` where the frame came from a photo, or
+/// the EXR says no primaries or Rec. 709's; `Err` where its primaries make no profile.
+fn exr_picture_profile(
+    frame: &Frame,
+    format: ImageFormat,
+    bits: u8,
+    options: &OutputOptions,
+) -> Result<Option<Vec<u8>>, String> {
+    if frame.carried.photo.is_some() {
+        return Ok(None);
+    }
+    let header = frame.carried.headers.first();
+    let Some(c) = header.and_then(|h| h.shared_attributes.chromaticities) else {
+        return Ok(None);
+    };
+    let xy = [c.white, c.red, c.green, c.blue].map(|v| [v.0, v.1]);
+    let linear = !options.srgb || (bits == 32 && format == ImageFormat::Tiff);
+    let [[wx, wy], [rx, ry], [gx, gy], [bx, by]] = xy;
+    image_io::primaries_profile([wx, wy, rx, ry, gx, gy, bx, by], linear)
+}
+
 /// What writing `frame` to `path` leaves out or changes, in words for the run's warnings (the
 /// caller names the output): blocks too large for a JPEG's segments, values an integer
 /// output clips (a float input's above all), an alpha a JPEG cannot hold, a profile that
@@ -580,6 +603,12 @@ pub fn output_notes(path: &Path, frame: &Frame, options: &OutputOptions) -> Vec<
         }
     }
     let bits = picture_bits(photo, format, options);
+    if let Err(why) = exr_picture_profile(frame, format, bits, options) {
+        notes.push(format!(
+            "the EXR's chromaticities make no ICC profile ({why}): the picture carries none, \
+             and readers take its codes for sRGB's"
+        ));
+    }
     let float_in = photo.is_some_and(|p| p.bits == 32);
     let float_out = bits == 32 && format == ImageFormat::Tiff;
     let rgb = [&color.r[..], &color.g[..], &color.b[..]];
@@ -729,11 +758,17 @@ pub fn write_views(
             let alpha = color.a.as_deref().map(on_display);
             // What the input photo held, held again; its bit depth unless told otherwise.
             let photo = frame.carried.photo.as_ref();
+            let bits = picture_bits(photo, format, options);
+            // An EXR's primaries, as a profile of the curve its codes are encoded with.
+            let exr_icc = exr_picture_profile(frame, format, bits, options)
+                .ok()
+                .flatten();
             let photo_options = image_io::PhotoOptions {
-                bits: picture_bits(photo, format, options),
+                bits,
                 linear: !options.srgb,
                 jpeg_quality: options.jpeg_quality,
                 photo,
+                icc: exr_icc.as_deref(),
             };
             image_io::write_photo(
                 writer,

@@ -34,8 +34,8 @@ use crate::frame::{Photo, Plane};
 pub use jpeg::sampling as jpeg_sampling;
 pub use meta::read_photo;
 pub use profile::{
-    chromaticities, cicp_profile_of, colour_source, linear_profile_of, profile_of, ColourSource,
-    Transfer,
+    chromaticities, cicp_profile_of, colour_source, linear_profile_of, primaries_profile,
+    profile_of, ColourSource, Transfer,
 };
 pub use upright::exif_orientation;
 pub use write::{goes_out_grey, jpeg_left_out, out_of_range, write_photo, PhotoOptions};
@@ -505,6 +505,7 @@ pub fn write_color(
         linear: !srgb,
         jpeg_quality: 95,
         photo: None,
+        icc: None,
     };
     write_photo(writer, format, width, height, rgb, alpha, &options)
 }

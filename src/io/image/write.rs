@@ -53,6 +53,9 @@ pub struct PhotoOptions<'a> {
     pub jpeg_quality: u8,
     /// What the input photo held, to hold again.
     pub photo: Option<&'a Photo>,
+    /// The profile of the codes of a frame that carries no photo (an EXR's `chromaticities`
+    /// as a profile: `profile::primaries_profile`), embedded as a photo's is.
+    pub icc: Option<&'a [u8]>,
 }
 
 /// The XMP packet's keyword in a PNG iTXt chunk (XMP specification part 3, 1.1.5).
@@ -187,6 +190,7 @@ pub fn write_photo(
     } else {
         icc
     };
+    let icc = icc.or(options.icc.filter(|_| photo.is_none()));
     let (w, h) = (width as u32, height as u32);
     let n = width * height;
     if float {
