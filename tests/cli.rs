@@ -536,6 +536,99 @@ fn skip_existing_resumes_a_run() {
     );
 }
 
+/// A frame another run made with other settings is not this run's (a farm job resubmitted
+/// with another algorithm over the same folder passes `--skip-existing` on every task): an
+/// EXR whose `shutter/settings` differ from this run's is written again, said once a run
+/// (naming both settings and how many frames), and `--dry-run` says "redo" with why. The
+/// same settings again skip every frame. It skipped them all, silently, keeping the old
+/// algorithm's frames.
+#[test]
+fn skip_existing_writes_again_frames_made_with_other_settings() {
+    let dir = tempfile::tempdir().unwrap();
+    for frame in 1..=3 {
+        write_canonical_frame(dir.path(), Some(frame), 6, 4);
+    }
+    let d = dir.path().display();
+    let (color, depth, velocity) = (
+        format!("{d}/C.####.exr"),
+        format!("{d}/Z.####.exr"),
+        format!("{d}/V.####.exr"),
+    );
+    let out = format!("{d}/out/o.####.exr");
+    let run = |extra: &[&str]| {
+        let args = [
+            "blur",
+            "--color",
+            &color,
+            "--depth",
+            &depth,
+            "--velocity",
+            &velocity,
+            "-o",
+            &out,
+        ];
+        shutter(&[&args[..], extra].concat())
+    };
+    let o = run(&["--algorithm", "reconstruct"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let first = dir.path().join("out/o.0001.exr");
+    let before = std::fs::read(&first).unwrap();
+    let other = [
+        "--algorithm",
+        "scatter",
+        "--shutter",
+        "0.25",
+        "--skip-existing",
+        "--json",
+    ];
+    let o = run(&[&other[..], &["--dry-run"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    for planned in report["planned"].as_array().unwrap() {
+        assert_eq!(planned["action"], "redo", "{report}");
+        let why = planned["why"].as_str().unwrap();
+        assert!(
+            why.contains("other settings") && why.contains("--algorithm reconstruct"),
+            "{why}"
+        );
+    }
+    assert_eq!(std::fs::read(&first).unwrap(), before, "a dry run wrote");
+    let o = run(&other);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(report["frames_written"], 3, "{report}");
+    assert_eq!(report["frames_skipped"], 0, "{report}");
+    let said: Vec<&str> = (report["warnings"].as_array().unwrap().iter())
+        .filter_map(|w| w.as_str())
+        .filter(|w| w.contains("other settings"))
+        .collect();
+    assert_eq!(said.len(), 1, "once a run: {said:?}");
+    assert!(
+        said[0].contains("o.0001.exr")
+            && said[0].contains("--algorithm reconstruct")
+            && said[0].contains("--shutter 0.25")
+            && said[0].contains("2 more frames"),
+        "{}",
+        said[0]
+    );
+    assert_ne!(std::fs::read(&first).unwrap(), before, "frame 1 kept");
+    // OpenImageIO, which nobody here wrote, reads what the new frame records.
+    if let Some(info) = oiiotool_info(&first) {
+        assert!(
+            info.contains("--algorithm scatter --shutter 0.25"),
+            "{info}"
+        );
+    }
+    // The same settings again: every frame is this run's.
+    let o = run(&other);
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(report["frames_skipped"], 3, "{report}");
+    assert!(
+        !report["warnings"].to_string().contains("written again"),
+        "{report}"
+    );
+}
+
 #[test]
 fn no_temporary_files_are_left_behind() {
     let dir = tempfile::tempdir().unwrap();

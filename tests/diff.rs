@@ -965,6 +965,56 @@ fn a_heatmap_that_names_an_input_is_refused_before_anything_is_written() {
     assert!(dir.path().join("h.0002.png").exists());
 }
 
+/// A FIFO where `--heatmap` or one of `--report`'s files would go (an outside probe: each
+/// was replaced by a regular file, exit 0, where blur's `-o` refuses "something that is not
+/// a file"): refused before anything is written, with diff's code for an output that cannot
+/// be written (3), naming the file and the flag; the FIFO stays a FIFO.
+#[cfg(unix)]
+#[test]
+fn a_fifo_where_a_heatmap_or_report_would_go_is_refused_before_anything_is_written() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().unwrap();
+    let a = pair(dir.path(), "a.exr", 12, 8, 1, 0.0);
+    let b = pair(dir.path(), "b.exr", 12, 8, 2, 0.0);
+    let mkfifo = |path: &std::path::Path| {
+        let status = std::process::Command::new("mkfifo").arg(path).status();
+        assert!(status.unwrap().success(), "mkfifo {}", path.display());
+    };
+    let heat = dir.path().join("h.png");
+    mkfifo(&heat);
+    let report = dir.path().join("rep");
+    std::fs::create_dir(&report).unwrap();
+    let page = report.join("index.html");
+    mkfifo(&page);
+    let elsewhere = dir.path().join("ok.png");
+    let (heat_s, report_s, elsewhere_s) = (s(&heat), s(&report), s(&elsewhere));
+    let cases: [(Vec<&str>, &std::path::Path, &str); 2] = [
+        (vec!["--heatmap", &heat_s], &heat, "--heatmap"),
+        (
+            vec!["--report", &report_s, "--heatmap", &elsewhere_s],
+            &page,
+            "--report",
+        ),
+    ];
+    for (extra, fifo, flag) in cases {
+        let o = shutter(&[&["diff", &a, &b][..], &extra].concat());
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(3), "{flag}: {err}");
+        assert!(
+            err.contains(&s(fifo)) && err.contains("not a file") && err.contains(flag),
+            "{err}"
+        );
+        let kind = std::fs::symlink_metadata(fifo).unwrap().file_type();
+        assert!(kind.is_fifo(), "{} was replaced", fifo.display());
+        assert!(!elsewhere.exists(), "a heatmap was written");
+        assert!(!report.join("thumbs").exists(), "thumbnails were written");
+        assert!(
+            !report.join("report.json").exists(),
+            "report.json was written"
+        );
+    }
+}
+
 /// An EXR of grey R, G, B (f32) and an object ID `id` (u32) holding `ids`.
 fn ids_exr(path: &std::path::Path, w: usize, h: usize, ids: Vec<u32>) {
     use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};

@@ -835,3 +835,125 @@ fn a_pngs_cicp_with_matrix_coefficients_1_is_read_as_0_and_said_so() {
     assert!(!err.contains("corrupt"), "{err}");
     assert!(!out.exists());
 }
+
+/// An EXR of `chromaticities` (x, y of red, green, blue, white) holding a grey ramp.
+fn write_exr_of_primaries(path: &Path, [r, g, b, w]: [(f32, f32); 4]) {
+    use exr::prelude::*;
+    let (width, height) = (16usize, 8usize);
+    let ramp: Vec<f32> = (0..width * height)
+        .map(|i| (i % width) as f32 / 16.0)
+        .collect();
+    let channel = |name: &str| AnyChannel::new(name, FlatSamples::F32(ramp.clone()));
+    let mut attributes = ImageAttributes::new(IntegerBounds::from_dimensions((width, height)));
+    let xy = |(x, y): (f32, f32)| Vec2(x, y);
+    attributes.chromaticities = Some(exr::meta::attribute::Chromaticities {
+        red: xy(r),
+        green: xy(g),
+        blue: xy(b),
+        white: xy(w),
+    });
+    let channels = AnyChannels::sort(vec![channel("R"), channel("G"), channel("B")].into());
+    let layer = Layer::new(
+        (width, height),
+        LayerAttributes::default(),
+        Encoding::default(),
+        channels,
+    );
+    let image = Image {
+        attributes,
+        layer_data: layer,
+    };
+    image.write().to_file(path).unwrap();
+}
+
+/// `shutter blur` of a colour file alone (no motion: its colour as it is) to `out`.
+fn blur_exr(input: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    shutter(&[&["blur", "--color", &s(input), "-o", &s(out)][..], extra].concat())
+}
+
+/// A 3 × 3 matrix's inverse (the test's own, by cofactors).
+fn inverse(m: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let c = |r: usize, k: usize| {
+        let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
+        let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+        m[r1][k1] * m[r2][k2] - m[r1][k2] * m[r2][k1]
+    };
+    let det: f64 = (0..3).map(|k| m[0][k] * c(0, k)).sum();
+    let mut out = [[0.0; 3]; 3];
+    for r in 0..3 {
+        for k in 0..3 {
+            out[r][k] = c(k, r) / det;
+        }
+    }
+    out
+}
+
+/// An EXR's `chromaticities` (ACEScg's AP1 primaries, the ACES white) go into a PNG, TIFF
+/// or JPEG made from it as an ICC profile of those primaries: exiftool reads its colorants
+/// (stored adapted to D50) and its `chad`; undone here, the colorants' chromaticities are
+/// the EXR's. They were dropped without a word, and a viewer showed AP1 light as sRGB's.
+/// An EXR of Rec. 709's primaries gets no profile (sRGB's, as before); primaries on one line
+/// make none, and the run says so.
+#[test]
+fn an_exrs_chromaticities_go_into_a_picture_as_an_icc_profile() {
+    let dir = tempfile::tempdir().unwrap();
+    let ap1 = [
+        (0.713, 0.293),
+        (0.165, 0.830),
+        (0.128, 0.044),
+        (0.32168, 0.33767),
+    ];
+    let input = dir.path().join("acescg.exr");
+    write_exr_of_primaries(&input, ap1);
+    for name in ["o.png", "o.tif", "o.jpg"] {
+        let out = dir.path().join(name);
+        let o = blur_exr(&input, &out, &["--json"]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let Some(tags) = exiftool(&out) else { return };
+        let numbers = |tag: &str| -> Vec<f64> {
+            let value = &tags[format!("ICC_Profile:{tag}")];
+            let text = value
+                .as_str()
+                .unwrap_or_else(|| panic!("{name}: no {tag}: {tags}"));
+            text.split_whitespace()
+                .map(|v| v.parse().unwrap())
+                .collect()
+        };
+        let chad = numbers("ChromaticAdaptation");
+        let chad = [0, 1, 2].map(|r| [0, 1, 2].map(|k| chad[r * 3 + k]));
+        let undo = inverse(chad);
+        for (tag, (x, y)) in ["RedMatrixColumn", "GreenMatrixColumn", "BlueMatrixColumn"]
+            .iter()
+            .zip(ap1)
+        {
+            let d50 = numbers(tag);
+            let xyz = [0, 1, 2].map(|r| (0..3).map(|k| undo[r][k] * d50[k]).sum::<f64>());
+            let sum: f64 = xyz.iter().sum();
+            let (gx, gy) = (xyz[0] / sum, xyz[1] / sum);
+            assert!(
+                (gx - f64::from(x)).abs() < 2e-3 && (gy - f64::from(y)).abs() < 2e-3,
+                "{name}: {tag} is at ({gx}, {gy}), the EXR says ({x}, {y})"
+            );
+        }
+    }
+    // Rec. 709's own: no profile, as before.
+    let rec709 = [(0.64, 0.33), (0.30, 0.60), (0.15, 0.06), (0.3127, 0.3290)];
+    let input = dir.path().join("rec709.exr");
+    write_exr_of_primaries(&input, rec709);
+    let out = dir.path().join("rec709.png");
+    let o = blur_exr(&input, &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    if let Some(tags) = exiftool(&out) {
+        assert!(tags.get("ICC_Profile:RedMatrixColumn").is_none(), "{tags}");
+    }
+    // Primaries on one line make no profile: said.
+    let flat = [(0.2, 0.2), (0.4, 0.4), (0.6, 0.6), (0.3127, 0.3290)];
+    let input = dir.path().join("flat.exr");
+    write_exr_of_primaries(&input, flat);
+    let out = dir.path().join("flat.png");
+    let o = blur_exr(&input, &out, &["--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let warnings = report["warnings"].to_string();
+    assert!(warnings.contains("chromaticities"), "{warnings}");
+}

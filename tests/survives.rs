@@ -715,6 +715,84 @@ fn a_picture_from_an_exr_is_its_display_window_not_its_overscan() {
     }
 }
 
+/// `--skip-existing` finds a picture made from an EXR whole when its data window is not its
+/// display window: overscan (data beyond the picture) and an auto bounding box (data inside
+/// it, fewer pixels than the picture). The picture is the display window; it was held
+/// against the data window's size, so every rerun wrote every frame again, saying it was
+/// "16x10, the frame is 24x14" (or, for the box, that 160 pixels were above a pixel limit
+/// nobody set). `--dry-run` says "skip" alike.
+#[test]
+fn skip_existing_finds_a_picture_of_an_overscan_or_bbox_exr_whole() {
+    use shutter::frame::Window;
+    let dir = tempfile::tempdir().unwrap();
+    let display = Window {
+        x: 0,
+        y: 0,
+        width: 16,
+        height: 10,
+    };
+    // (name, data window origin, data window size)
+    let cases = [
+        ("overscan", (-4, -2), (24usize, 14usize)),
+        ("bbox", (5, 3), (6usize, 4usize)),
+    ];
+    for (name, origin, (w, h)) in cases {
+        let n = w * h;
+        let channels = ["R", "G", "B", "A", "Z", "velocity.X", "velocity.Y"]
+            .iter()
+            .zip([
+                noise(n, 3, 0.0, 1.0),
+                noise(n, 4, 0.0, 1.0),
+                noise(n, 5, 0.0, 1.0),
+                vec![1.0; n],
+                vec![5.0; n],
+                vec![2.0; n],
+                vec![0.0; n],
+            ])
+            .map(|(c, v)| (c.to_string(), v))
+            .collect();
+        let input = dir.path().join(format!("{name}.exr"));
+        write_windowed(&input, origin, (w, h), display, channels);
+        for ext in ["png", "tif", "jpg"] {
+            let out = s(&dir.path().join(format!("{name}.{ext}")));
+            let args = [
+                "blur",
+                "--algorithm",
+                "reconstruct",
+                "--color",
+                &s(&input),
+                "-o",
+                &out,
+            ];
+            let first = shutter(&args);
+            assert!(first.status.success(), "{name}.{ext}: {}", stderr(&first));
+            let (w, h) = image::image_dimensions(&out).unwrap();
+            assert_eq!((w, h), (16, 10), "{name}.{ext}: the display window");
+            let before = std::fs::read(&out).unwrap();
+            let again = [&args[..], &["--skip-existing", "--json"]].concat();
+            let o = shutter(&again);
+            assert!(o.status.success(), "{name}.{ext}: {}", stderr(&o));
+            let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+            assert_eq!(report["frames_skipped"], 1, "{name}.{ext}: {report}");
+            assert_eq!(report["frames_written"], 0, "{name}.{ext}: {report}");
+            let warnings = report["warnings"].to_string();
+            assert!(
+                !warnings.contains("written again"),
+                "{name}.{ext}: {warnings}"
+            );
+            assert_eq!(std::fs::read(&out).unwrap(), before, "{name}.{ext}");
+            let dry = [&again[..], &["--dry-run"]].concat();
+            let o = shutter(&dry);
+            assert!(o.status.success(), "{name}.{ext}: {}", stderr(&o));
+            let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+            assert_eq!(
+                report["planned"][0]["action"], "skip",
+                "{name}.{ext}: {report}"
+            );
+        }
+    }
+}
+
 /// A multi-part frame as Nuke writes one: the beauty (`rgba`, PIZ half), a light layer as a
 /// part of its own (`diffuse`, channels R, G, B, equal to the beauty), and the data in a ZIP
 /// part (`data`: Z, velocity.X, velocity.Y).

@@ -421,6 +421,25 @@ pub fn existing_frame_problem(
     }
 }
 
+/// The settings an EXR output records it was made with (`shutter/settings`, its first
+/// part's that holds them), which `--skip-existing` holds against the run's own; `None` for
+/// a picture (it records none), an EXR another program made, or one that cannot be read.
+pub fn recorded_settings(path: &Path) -> Option<String> {
+    if OutputFormat::from_path(path) != Some(OutputFormat::Exr) {
+        return None;
+    }
+    let meta = exr_io::read_meta(path).ok()?;
+    let name = exr::meta::attribute::Text::from("shutter/settings");
+    meta.headers
+        .iter()
+        .find_map(|header| match header.own_attributes.other.get(&name)? {
+            exr::meta::attribute::AttributeValue::Text(text) => {
+                Some(crate::io::channels::name_of(text))
+            }
+            _ => None,
+        })
+}
+
 /// Writes every pass `frame` holds as a canonical pass file (the `shutter` preset's channel
 /// names, f32, the default compression), atomically: colour as R, G, B, A (A = 1 where the
 /// frame has no alpha), depth as Z, velocity as X, Y and positions as X, Y (, Z), each to
@@ -527,6 +546,29 @@ fn photo_chromaticities(photo: &Photo) -> Option<exr::meta::attribute::Chromatic
     })
 }
 
+/// The ICC profile a picture made from an EXR carries: its `chromaticities` (the first
+/// part's), with the curve the picture's codes are encoded with (sRGB's; linear light's
+/// with `--linear` or in a float TIFF). `Ok(None)` where the frame came from a photo, or
+/// the EXR says no primaries or Rec. 709's; `Err` where its primaries make no profile.
+fn exr_picture_profile(
+    frame: &Frame,
+    format: ImageFormat,
+    bits: u8,
+    options: &OutputOptions,
+) -> Result<Option<Vec<u8>>, String> {
+    if frame.carried.photo.is_some() {
+        return Ok(None);
+    }
+    let header = frame.carried.headers.first();
+    let Some(c) = header.and_then(|h| h.shared_attributes.chromaticities) else {
+        return Ok(None);
+    };
+    let xy = [c.white, c.red, c.green, c.blue].map(|v| [v.0, v.1]);
+    let linear = !options.srgb || (bits == 32 && format == ImageFormat::Tiff);
+    let [[wx, wy], [rx, ry], [gx, gy], [bx, by]] = xy;
+    image_io::primaries_profile([wx, wy, rx, ry, gx, gy, bx, by], linear)
+}
+
 /// What writing `frame` to `path` leaves out or changes, in words for the run's warnings (the
 /// caller names the output): blocks too large for a JPEG's segments, values an integer
 /// output clips (a float input's above all), an alpha a JPEG cannot hold, a profile that
@@ -561,11 +603,19 @@ pub fn output_notes(path: &Path, frame: &Frame, options: &OutputOptions) -> Vec<
         }
     }
     let bits = picture_bits(photo, format, options);
+    if let Err(why) = exr_picture_profile(frame, format, bits, options) {
+        notes.push(format!(
+            "the EXR's chromaticities make no ICC profile ({why}): the picture carries none, \
+             and readers take its codes for sRGB's"
+        ));
+    }
     let float_in = photo.is_some_and(|p| p.bits == 32);
     let float_out = bits == 32 && format == ImageFormat::Tiff;
     let rgb = [&color.r[..], &color.g[..], &color.b[..]];
     let alpha = color.a.as_deref();
-    let (above, below) = image_io::out_of_range(rgb, alpha);
+    // A JPEG holds the colour premultiplied (over black), not over its alpha.
+    let straight = alpha.filter(|_| format != ImageFormat::Jpeg);
+    let (above, below) = image_io::out_of_range(rgb, straight);
     if !float_out && (above || below || float_in) {
         let clipped = match (above, below) {
             (true, true) => "values above 1 and below 0 are clipped",
@@ -589,9 +639,9 @@ pub fn output_notes(path: &Path, frame: &Frame, options: &OutputOptions) -> Vec<
     }
     if format == ImageFormat::Jpeg && alpha.is_some_and(|a| a.iter().any(|&a| a < OPAQUE)) {
         notes.push(
-            "JPEG holds no alpha: the alpha is left out, and the colour written straight (as \
-             a PNG holds it, not composited over any background; black where alpha is 0); a \
-             .png or .tif output keeps the alpha"
+            "JPEG holds no alpha: the alpha is left out, and the colour written as it is, \
+             premultiplied: composited over black, as oiiotool and a compositor write it \
+             (light where alpha is 0 stays); a .png or .tif output keeps the alpha"
                 .into(),
         );
     }
@@ -708,11 +758,17 @@ pub fn write_views(
             let alpha = color.a.as_deref().map(on_display);
             // What the input photo held, held again; its bit depth unless told otherwise.
             let photo = frame.carried.photo.as_ref();
+            let bits = picture_bits(photo, format, options);
+            // An EXR's primaries, as a profile of the curve its codes are encoded with.
+            let exr_icc = exr_picture_profile(frame, format, bits, options)
+                .ok()
+                .flatten();
             let photo_options = image_io::PhotoOptions {
-                bits: picture_bits(photo, format, options),
+                bits,
                 linear: !options.srgb,
                 jpeg_quality: options.jpeg_quality,
                 photo,
+                icc: exr_icc.as_deref(),
             };
             image_io::write_photo(
                 writer,

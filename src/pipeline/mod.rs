@@ -15,8 +15,7 @@ use crate::frame::Frame;
 use crate::gpu::{Backend, BackendReport};
 use crate::io::lock::OutputLock;
 use crate::io::output::{
-    existing_frame_problem, output_notes, remove_stale_temporaries, write_views, OutputFormat,
-    OutputOptions,
+    output_notes, remove_stale_temporaries, write_views, OutputFormat, OutputOptions,
 };
 use crate::io::passes::{
     output_folder_problems, preflight, read_frame_keeping, FramePlan, Inputs, PlanOptions,
@@ -28,8 +27,10 @@ use crate::motion::Algorithm;
 use crate::numeric::Replaced;
 use crate::process::{depth_kind, process_on, Params};
 
+mod existing;
 mod memory;
 mod warnings;
+use existing::{existing_output, made_otherwise_warning, other_settings, Existing};
 pub use memory::{memory_limit, peak_rss_mib};
 use warnings::replaced_warnings;
 
@@ -174,39 +175,6 @@ fn warn(report: &mut Report, on_event: &mut dyn FnMut(Event), message: String) {
     }
 }
 
-/// What is at a frame's output before the run writes it.
-enum Existing {
-    /// Nothing.
-    None,
-    /// Something, and no --skip-existing: it is overwritten.
-    Kept,
-    /// With --skip-existing, a whole frame of the plan's size and the output's format: skipped.
-    Whole,
-    /// With --skip-existing, something else (empty, cut short, another size): written again.
-    Broken(String),
-}
-
-/// The one judgement of an existing output, for the run and for --dry-run alike.
-fn existing_output(
-    job: &Job,
-    plan: &crate::io::passes::FramePlan,
-    output: &Path,
-    views: &[Option<String>],
-) -> Existing {
-    if std::fs::symlink_metadata(output).is_err() {
-        return Existing::None;
-    }
-    if !job.skip_existing {
-        return Existing::Kept;
-    }
-    let views: Vec<&str> = views.iter().flatten().map(String::as_str).collect();
-    let views = if views.len() > 1 { &views[..] } else { &[] };
-    match existing_frame_problem(output, plan.width, plan.height, plan.largest_part(), views) {
-        None => Existing::Whole,
-        Some(why) => Existing::Broken(why),
-    }
-}
-
 /// A painted CoC map is read through the depth pass: its problems name it as the user gave
 /// it (`coc-map`), not as `depth`. Depth looked up in the colour file and not found: the
 /// problem names every other way to give it (`suggest::other_ways_to_depth`).
@@ -247,6 +215,8 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         ..Report::default()
     };
 
+    // What the outputs record of the settings that made them (`shutter/settings`).
+    let record = job.output_options.record.as_str();
     // Every frame is planned, those --skip-existing may skip included: the plan gives the
     // size their output must have.
     let preflight_start = Instant::now();
@@ -415,12 +385,14 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         report.backend.requested = job.backend.name().to_string();
         for plan in &plans {
             let (frame, output) = (plan.frame, job.output.path(plan.frame));
-            let (action, why) = match existing_output(job, plan, &output, &views) {
-                Existing::None => ("write", None),
-                Existing::Kept => ("overwrite", None),
-                Existing::Whole => ("skip", None),
-                Existing::Broken(why) => ("redo", Some(why)),
-            };
+            let (action, why) =
+                match existing_output(job.skip_existing, record, plan, &output, &views) {
+                    Existing::None => ("write", None),
+                    Existing::Kept => ("overwrite", None),
+                    Existing::Whole => ("skip", None),
+                    Existing::Broken(why) => ("redo", Some(why)),
+                    Existing::Other(recorded) => ("redo", Some(other_settings(&recorded, record))),
+                };
             let inputs = plan.paths().into_iter().map(Path::to_path_buf).collect();
             report.planned.push(Planned {
                 frame,
@@ -452,7 +424,10 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     // outputs are only ever replaced by whole frames.
     let existing: Vec<Existing> = plans
         .iter()
-        .map(|plan| existing_output(job, plan, &job.output.path(plan.frame), &views))
+        .map(|plan| {
+            let output = job.output.path(plan.frame);
+            existing_output(job.skip_existing, record, plan, &output, &views)
+        })
         .collect();
     // A finished run run again writes nothing: it needs neither a folder it may write in
     // (a delivered sequence made read-only) nor the lock (an outside probe: it failed as
@@ -498,6 +473,16 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             ),
         );
     }
+    // Frames made with other settings are said once a run.
+    let made_otherwise: Vec<(Option<i64>, &String)> = (plans.iter().zip(&existing))
+        .filter_map(|(plan, e)| match e {
+            Existing::Other(recorded) => Some((plan.frame, recorded)),
+            _ => None,
+        })
+        .collect();
+    if let Some(message) = made_otherwise_warning(&made_otherwise, &job.output, record) {
+        warn(&mut report, on_event, message);
+    }
     let mut todo = Vec::with_capacity(plans.len());
     let mut todo_others = Vec::with_capacity(plans.len());
     for ((plan, other_views), existing) in plans.into_iter().zip(others).zip(existing) {
@@ -520,7 +505,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                     format!("{}{at} exists but is written again: {why}", path.display()),
                 );
             }
-            Existing::None | Existing::Kept => {}
+            Existing::None | Existing::Kept | Existing::Other(_) => {}
         }
         todo.push(plan);
         todo_others.push(other_views);

@@ -8,7 +8,8 @@
 //! image is turned upright by its orientation tag as it is read (the header's size is the
 //! upright size), so a map painted on the upright view lines up. Integer files hold straight
 //! (unassociated) alpha; shutter works premultiplied, so colour is premultiplied on read and
-//! divided back on write.
+//! divided back on write where alpha is above 0 (where it is 0, written as it is, as
+//! oiiotool does; a JPEG's is written premultiplied: over black).
 
 mod jpeg;
 mod meta;
@@ -33,8 +34,8 @@ use crate::frame::{Photo, Plane};
 pub use jpeg::sampling as jpeg_sampling;
 pub use meta::read_photo;
 pub use profile::{
-    chromaticities, cicp_profile_of, colour_source, linear_profile_of, profile_of, ColourSource,
-    Transfer,
+    chromaticities, cicp_profile_of, colour_source, linear_profile_of, primaries_profile,
+    profile_of, ColourSource, Transfer,
 };
 pub use upright::exif_orientation;
 pub use write::{goes_out_grey, jpeg_left_out, out_of_range, write_photo, PhotoOptions};
@@ -504,6 +505,7 @@ pub fn write_color(
         linear: !srgb,
         jpeg_quality: 95,
         photo: None,
+        icc: None,
     };
     write_photo(writer, format, width, height, rgb, alpha, &options)
 }

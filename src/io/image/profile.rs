@@ -399,6 +399,41 @@ fn png_profile(colour: &PngColour, grey: bool) -> Option<Vec<u8>> {
     made_profile(curve, xy, grey, format!("A PNG's {gamma} and {chrm}"))
 }
 
+/// The profile of a picture made from an EXR of the primaries and white `xy` (x, y of white,
+/// red, green, blue: its `chromaticities`), encoded with sRGB's curve, or holding linear
+/// light (`linear`: `--linear`, a float TIFF), so a viewer shows ACEScg or P3 light in its
+/// own colours and not as sRGB's. `Ok(None)` for Rec. 709's primaries and D65 (sRGB's: the
+/// picture needs no profile, as before); `Err`, saying why, for primaries that make no
+/// profile (not finite, outside 0 to 1, or on one line).
+pub fn primaries_profile(xy: [f32; 8], linear: bool) -> Result<Option<Vec<u8>>, String> {
+    if xy.iter().zip(SRGB_CHRM).all(|(a, b)| (a - b).abs() < 1e-3) {
+        return Ok(None);
+    }
+    let [wx, wy, rx, ry, gx, gy, bx, by] = xy.map(f64::from);
+    let area = ((gx - rx) * (by - ry) - (bx - rx) * (gy - ry)).abs() / 2.0;
+    let inside = xy.iter().all(|v| v.is_finite() && *v > 0.0 && *v < 1.0);
+    if !inside || wx + wy >= 1.0 {
+        return Err("a primary or the white is not within 0 to 1".into());
+    }
+    if area < 1e-4 {
+        return Err("the primaries lie on one line".into());
+    }
+    let unmade = || "moxcms made no profile of them".to_string();
+    let curve = if linear {
+        ToneReprCurve::Parametric(vec![1.0])
+    } else {
+        ColorProfile::new_srgb().red_trc.ok_or_else(unmade)?
+    };
+    let description = if linear {
+        "Linear light in the EXR's chromaticities (shutter)"
+    } else {
+        "sRGB's curve in the EXR's chromaticities (shutter)"
+    };
+    made_profile(curve, xy, false, description.into())
+        .map(Some)
+        .ok_or_else(unmade)
+}
+
 /// A profile of linear light in the primaries and white of the RGB matrix profile `icc`: what
 /// a float TIFF of an 8/16-bit photo holds (its codes turned to linear light through `icc`'s
 /// curves), so a viewer shows an Adobe RGB or ProPhoto photo in its own colours and not as

@@ -20,8 +20,13 @@
 //! - JPEG (jpeg-encoder): the quality asked for, the input's chroma subsampling (any of
 //!   4:4:4, 4:4:0, 4:2:2, 4:2:0, 4:1:1, 4:4:1; 4:4:4 for a file that is not a JPEG), the
 //!   profile in APP2 segments, EXIF and XMP in APP1, IPTC in APP13. No alpha (the colour is
-//!   written straight, as a PNG of it would hold it, not composited over any background; the
-//!   run says the alpha was left out), 8 bits only.
+//!   written premultiplied, as it is: composited over black, as oiiotool and a compositor
+//!   write RGBA into a JPEG, so light where alpha is 0 stays; the run says the alpha was
+//!   left out), 8 bits only.
+//!
+//! Straight colour is premultiplied colour over its alpha where alpha is above 0; where it
+//! is 0 the colour is written as it is (premultiplied light of no coverage: a glow, an
+//! additive effect), as oiiotool writes it, not made black.
 //!
 //! A grey input (with its Gray profile, if any) goes out grey while its three planes stay
 //! equal ([`goes_out_grey`]). A float TIFF is written by `--bit-depth 32` (the default for a
@@ -48,6 +53,9 @@ pub struct PhotoOptions<'a> {
     pub jpeg_quality: u8,
     /// What the input photo held, to hold again.
     pub photo: Option<&'a Photo>,
+    /// The profile of the codes of a frame that carries no photo (an EXR's `chromaticities`
+    /// as a profile: `profile::primaries_profile`), embedded as a photo's is.
+    pub icc: Option<&'a [u8]>,
 }
 
 /// The XMP packet's keyword in a PNG iTXt chunk (XMP specification part 3, 1.1.5).
@@ -115,10 +123,9 @@ pub fn out_of_range(rgb: [&[f32]; 3], alpha: Option<&[f32]>) -> (bool, bool) {
     let (mut above, mut below) = (false, false);
     for plane in rgb {
         for (i, &v) in plane.iter().enumerate() {
-            let a = alpha.map_or(1.0, |a| a[i]);
-            if a.is_nan() || a <= 0.0 {
-                continue;
-            }
+            // Where alpha is 0 the colour is written as it is ([`write_photo`]).
+            let a = alpha.map_or(1.0, |a| written_alpha(a[i]));
+            let a = if a > 0.0 { a } else { 1.0 };
             above |= v > (1.0 + CLIP_SLACK) * a;
             below |= v < -CLIP_SLACK * a;
         }
@@ -128,7 +135,7 @@ pub fn out_of_range(rgb: [&[f32]; 3], alpha: Option<&[f32]>) -> (bool, bool) {
 
 /// Writes premultiplied linear colour as an integer image with straight alpha (or a float
 /// TIFF, premultiplied). JPEG has no alpha and no 16-bit: it is written 8-bit, its colour
-/// straight.
+/// premultiplied (over black).
 #[allow(clippy::too_many_arguments)]
 pub fn write_photo(
     writer: impl Write + Seek,
@@ -183,6 +190,7 @@ pub fn write_photo(
     } else {
         icc
     };
+    let icc = icc.or(options.icc.filter(|_| photo.is_none()));
     let (w, h) = (width as u32, height as u32);
     let n = width * height;
     if float {
@@ -213,11 +221,12 @@ pub fn write_photo(
     let mut codes = vec![0u16; n * channels];
     for i in 0..n {
         let a = alpha.map_or(1.0, |a| written_alpha(a[i]));
-        // Unpremultiply (a JPEG too, which leaves the alpha out); where alpha is 0 the colour
-        // is 0, or what alpha 0 hid there in the input (below).
-        let unpremultiply = if a > 0.0 { 1.0 / a } else { 0.0 };
+        // Unpremultiply where alpha is above 0, as oiiotool does; where it is 0 the colour
+        // stays as it is (light of no coverage), or what alpha 0 hid there in the input
+        // (below). A JPEG, which leaves the alpha out, holds the colour over black.
+        let unpremultiply = if a > 0.0 { 1.0 / a } else { 1.0 };
         for c in 0..colours {
-            let v = if alpha.is_some() {
+            let v = if kept_alpha.is_some() {
                 rgb[c][i] * unpremultiply
             } else {
                 rgb[c][i]
@@ -230,7 +239,7 @@ pub fn write_photo(
     }
     // Where alpha 0 hid a colour in the input and nothing covers the pixel now, that colour
     // again (the loop above wrote 0).
-    if let (Some(hidden), Some(alpha)) = (photo.and_then(|p| p.hidden.as_ref()), alpha) {
+    if let (Some(hidden), Some(alpha)) = (photo.and_then(|p| p.hidden.as_ref()), kept_alpha) {
         if (hidden.width, hidden.height) == (width, height) {
             for &(i, colour) in &hidden.pixels {
                 let i = i as usize;

@@ -45,7 +45,7 @@ pub use fit::{describe as describe_reading, fit, Fit, FitInput, Reading, FIT_POI
 pub use found::pass_layers;
 pub use memory::BASE as BASE_MEMORY;
 pub use plan::{plan_frame, FramePlan, PlanOptions};
-pub use preflight::{output_folder_problems, outputs_over_inputs, preflight};
+pub use preflight::{in_the_way, output_folder_problems, outputs_over_inputs, preflight};
 pub use read::{
     plan_color, plan_color_in, read_color, read_frame, read_frame_keeping, read_frame_noted,
     StoredVectors,

@@ -108,18 +108,25 @@ pub fn outputs_over_inputs(writes: &[(&Path, Vec<PathBuf>)]) -> Vec<(usize, Path
         .collect()
 }
 
-/// A folder (or anything but a file) where a frame's output would go: it cannot be
-/// replaced, so the run would stop at that frame.
-fn output_in_the_way(output: &Path, frame: Option<i64>) -> Option<Problem> {
+/// What stands where an output would go that a rename cannot replace: a folder, or
+/// something that is not a file (a device, a FIFO, a socket); `None` where nothing, a file
+/// or a symbolic link is (blur's outputs, and the files `diff` writes, are refused alike).
+pub fn in_the_way(output: &Path) -> Option<&'static str> {
     let meta = std::fs::symlink_metadata(output).ok()?;
     if meta.is_file() || meta.file_type().is_symlink() {
         return None;
     }
-    let what = if meta.is_dir() {
+    Some(if meta.is_dir() {
         "a folder"
     } else {
         "something that is not a file"
-    };
+    })
+}
+
+/// A folder (or anything but a file) where a frame's output would go: it cannot be
+/// replaced, so the run would stop at that frame.
+fn output_in_the_way(output: &Path, frame: Option<i64>) -> Option<Problem> {
+    let what = in_the_way(output)?;
     Some(
         Problem::new(
             ProblemKind::Output,

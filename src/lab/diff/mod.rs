@@ -284,6 +284,49 @@ pub fn write_heatmap(path: &Path, width: usize, height: usize, map: &[f32]) -> R
     crate::lab::bench::plot::write_png(path, width, height, &bytes)
 }
 
+/// The files a run would write (heatmaps; the report's pages and thumbnails) where a
+/// folder or something that is not a file (a device, a FIFO) stands, and a report's folders
+/// where something else does: refused before anything is written, as blur refuses its
+/// outputs (a rename would put a file in a FIFO's or a device's place).
+fn outputs_in_the_way(job: &DiffJob, entries: &[Entry]) -> Vec<Problem> {
+    let mut writes: Vec<(Option<i64>, PathBuf, &str)> = Vec::new();
+    for entry in entries {
+        if let Some(heatmap) = &job.heatmap {
+            let path = heatmap.path(entry.frame);
+            let path =
+                (entry.output).map_or_else(|| path.clone(), |v| views::output_path(&path, v));
+            writes.push((entry.frame, path, "--heatmap"));
+        }
+        if let Some(dir) = &job.report {
+            let names = report::Thumbnails::of(entry.frame, entry.output);
+            for name in names.all() {
+                writes.push((entry.frame, dir.join(name), "--report"));
+            }
+        }
+    }
+    let mut problems = Vec::new();
+    if let Some(dir) = &job.report {
+        for name in report::PAGES {
+            writes.push((None, dir.join(name), "--report"));
+        }
+        for folder in [dir.clone(), dir.join("thumbs")] {
+            if std::fs::metadata(&folder).is_ok_and(|m| !m.is_dir()) {
+                let detail = "the report's folder is not a folder; choose another --report";
+                problems.push(Problem::new(ProblemKind::Output, &folder, detail));
+            }
+        }
+    }
+    problems.extend(writes.into_iter().filter_map(|(frame, path, flag)| {
+        let what = crate::io::passes::in_the_way(&path)?;
+        let detail = format!(
+            "{what} is in the way of this output and cannot be replaced; move it away, or \
+             choose another {flag}"
+        );
+        Some(Problem::new(ProblemKind::Output, &path, detail).frame(frame))
+    }));
+    problems
+}
+
 /// Compares every frame, each view of a multi-view reference apart ([`views`]). Unreadable
 /// inputs, views the candidate lacks and size mismatches are errors (all of them reported);
 /// metric results, warnings and failures are in the report.
@@ -344,6 +387,7 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
             .collect::<Vec<_>>()
     };
     problems.extend(entries.par_iter().flat_map(inputs).collect::<Vec<_>>());
+    problems.extend(outputs_in_the_way(job, &entries));
     if !problems.is_empty() {
         return Err(Error::Files(problems));
     }

@@ -29,6 +29,29 @@ pub struct Thumbnails {
     pub heatmap: PathBuf,
 }
 
+impl Thumbnails {
+    /// The names of a frame's (and view's) thumbnails.
+    pub fn of(frame: Option<i64>, view: Option<&str>) -> Thumbnails {
+        let stem = frame.map_or("still".to_string(), |n| format!("{n:06}"));
+        let stem = match view {
+            Some(view) => format!("{stem}-{view}"),
+            None => stem,
+        };
+        Thumbnails {
+            reference: PathBuf::from(format!("thumbs/{stem}-reference.png")),
+            candidate: PathBuf::from(format!("thumbs/{stem}-candidate.png")),
+            heatmap: PathBuf::from(format!("thumbs/{stem}-heatmap.png")),
+        }
+    }
+
+    pub fn all(&self) -> [&Path; 3] {
+        [&self.reference, &self.candidate, &self.heatmap]
+    }
+}
+
+/// The files [`write`] writes in the report's folder, beside the thumbnails.
+pub const PAGES: [&str; 2] = ["report.json", "index.html"];
+
 /// An interleaved 8-bit RGB image shrunk by a box filter to at most [`THUMB_WIDTH`] wide.
 fn shrink(rgb: &[u8], width: usize, height: usize) -> (Vec<u8>, usize, usize) {
     let step = width.div_ceil(THUMB_WIDTH).max(1);
@@ -74,11 +97,6 @@ pub fn thumbnails(
 ) -> std::result::Result<Thumbnails, Problem> {
     let thumbs = dir.join("thumbs");
     create_dir(&thumbs).map_err(|e| e.problems()[0].clone())?;
-    let stem = frame.map_or("still".to_string(), |n| format!("{n:06}"));
-    let stem = match view {
-        Some(view) => format!("{stem}-{view}"),
-        None => stem,
-    };
     let (w, h) = (a.width, a.height);
     let max = errors
         .iter()
@@ -91,11 +109,7 @@ pub fn thumbnails(
         .map(|&e| if e.is_finite() { e / max } else { 1.0 })
         .collect();
     let heat = super::magma(&map);
-    let names = Thumbnails {
-        reference: PathBuf::from(format!("thumbs/{stem}-reference.png")),
-        candidate: PathBuf::from(format!("thumbs/{stem}-candidate.png")),
-        heatmap: PathBuf::from(format!("thumbs/{stem}-heatmap.png")),
-    };
+    let names = Thumbnails::of(frame, view);
     for (name, rgb) in [
         (&names.reference, metrics::display_rgb8(a)),
         (&names.candidate, metrics::display_rgb8(b)),
