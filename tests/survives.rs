@@ -2616,6 +2616,7 @@ fn depth_of_field_on_pixels_that_are_not_square_is_warned_of() {
     let run = shutter(&args);
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(!warned(run.stdout));
+}
 
 /// A renderer's frame of `W` x `H`: a bright box (columns `W/3` to `W/2`) at depth 2 before a
 /// noisy wall at 10, moving `speed` px a frame to the right; `vectors` gives the box's
