@@ -8,10 +8,11 @@
 //! Each box sum adds the same values in the same order as it did when a level was made over
 //! the whole frame a plane at a time (across, then down, each box's values left to right and
 //! top to bottom, as the GPU twin adds them), so every level value a tap reads has the same
-//! bits. Measured (BENCH-NOTE of the `levels` branch, the 1080p `dof` bench frame, one level
-//! of side 3): made a plane at a time over the whole frame, with frame-sized temporaries, the
-//! beauty's level took ~35 ms and the eighteen planes of six RGB light layers ~113 ms more,
-//! mostly in page faults of the fresh planes.
+//! bits. Measured (the 1080p `dof` bench frame, one level of side 3; the levels' CPU time in
+//! the process, old and new alternated; BENCH-NOTE of the `levels` branch): made a plane at
+//! a time over the whole frame through frame-sized temporaries, 50–57 ms for the beauty and
+//! 256–264 ms with six RGB light layers; made so, 25–31 and 120–150 ms. Most of what is left
+//! is the first touch of the levels' own planes (page faults) and reading the carried planes.
 
 use rayon::prelude::*;
 
