@@ -178,3 +178,123 @@ fn a_fine_texture_keeps_its_mean_up_to_the_frame_edge() {
         }
     }
 }
+
+/// A frame in focus but for a strip and a near disc, whose tiles read prefilter levels of
+/// three sides (the disc's, its rim's far field apart, and the strip's): its colour, signed
+/// CoC and three carried planes.
+fn strip_and_disc(w: usize, h: usize) -> (Color, Vec<f32>, Vec<Vec<f32>>) {
+    let wave = |k: f32| -> Vec<f32> { (0..w * h).map(|i| (i as f32 * k).sin()).collect() };
+    let coc: Vec<f32> = (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32, (i / w) as f32);
+            if (x - 130.0).powi(2) + (y - 60.0).powi(2) < 15.0 * 15.0 {
+                -62.0
+            } else if (40.0..60.0).contains(&x) {
+                27.0
+            } else if x > 100.0 {
+                40.0
+            } else {
+                0.3
+            }
+        })
+        .collect();
+    let color = Color {
+        r: wave(0.37),
+        g: wave(0.21),
+        b: wave(0.05),
+        a: Some(wave(0.013)),
+    };
+    (color, coc, [0.11, 0.7, 0.003].map(wave).into())
+}
+
+/// The gather's config and tiles for the frame `coc` with `blades` blades.
+fn setup(w: usize, h: usize, coc: &[f32], blades: u32) -> (DofConfig, Tiles) {
+    let params = DofParams {
+        blades,
+        blade_rotation: 10.0,
+        ..DofParams::default()
+    };
+    let config = DofConfig::new(w, h, &params);
+    let t = tiles(&TilesConfig::new(w, h, config.epsilon), coc);
+    assert!(level_sides(&config, &t).len() >= 3);
+    (config, t)
+}
+
+#[test]
+fn every_level_pixel_a_tap_reads_is_made() {
+    // The levels are made only around the tiles that read them, as far as their taps
+    // reach: every pixel that a tile's taps (and, where its far taps read a level, its
+    // pixels' own box) read in a level must be among those made, for each of a tile's 16
+    // lanes, round and with six blades.
+    let (w, h) = (176, 112);
+    let (color, coc, _) = strip_and_disc(w, h);
+    for blades in [0, 6] {
+        let (config, t) = setup(w, h, &coc, blades);
+        let aperture = Aperture::new(config.blades, config.blade_rotation);
+        let rings = taps(config.rings, &aperture);
+        let norms = norms_for(aperture, largest_reach(&t));
+        let pad = largest_reach(&t).ceil() as usize + 2;
+        let padded = Padded::new(&color, &coc, (w, h), pad, aperture.unit_area());
+        let sides = level_sides(&config, &t);
+        let reads = level_reads(&config, &t, &padded, &sides, &rings, &norms, false);
+        let plan = plan(&config, &t);
+        let columns = w.div_ceil(TILE);
+        let mut checked = 0;
+        for (i, tile) in plan.tiles.iter().enumerate() {
+            let (x0, y0) = (i % columns * TILE, i / columns * TILE);
+            let list =
+                |start: u32, count: u32| &plan.taps[start as usize..(start + count) as usize];
+            let centre = [OffsetTap {
+                dx: 0,
+                dy: 0,
+                norm_far: 0.0,
+                norm_near: 0.0,
+                area: 0.0,
+            }];
+            for (level, offsets) in [
+                (tile.level, list(tile.taps_start, tile.taps_count)),
+                (tile.far_level, list(tile.far_start, tile.far_count)),
+                (tile.far_level, &centre[..]),
+            ] {
+                if level == 0 {
+                    continue;
+                }
+                for tap in offsets {
+                    for y in y0..(y0 + TILE).min(h) {
+                        for x in x0..x0 + TILE {
+                            let px = (x + pad) as isize + tap.dx as isize;
+                            let py = (y + pad) as isize + tap.dy as isize;
+                            assert!(
+                                reads[level as usize - 1].is_read(px as usize, py as usize),
+                                "{blades} blades, tile {i}, level {level}: ({px}, {py})"
+                            );
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 0);
+    }
+}
+
+#[test]
+fn levels_made_only_where_their_taps_read_give_the_bits_of_levels_over_the_whole_frame() {
+    // Against levels made over the whole padded frame (as they were), the beauty and every
+    // carried plane must keep their bits, round and with six blades.
+    let (w, h) = (176, 112);
+    let (color, coc, extra) = strip_and_disc(w, h);
+    for blades in [0, 6] {
+        let (config, t) = setup(w, h, &coc, blades);
+        let bits = |(c, carried): (Color, Vec<Vec<f32>>)| {
+            let mut all = vec![c.r, c.g, c.b, c.a.unwrap_or_default()];
+            all.extend(carried);
+            all.iter()
+                .map(|p| p.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
+                .collect::<Vec<_>>()
+        };
+        let read = gather_levels_where(&config, &color, &coc, &t, extra.clone(), false);
+        let whole = gather_levels_where(&config, &color, &coc, &t, extra.clone(), true);
+        assert!(bits(read) == bits(whole), "{blades} blades");
+    }
+}

@@ -28,7 +28,7 @@
 //!    the near pixels the frame holds ([`Padded`] says what was measured against mirroring).
 //!
 //!    Ring taps are a ring step (R / rings) apart, so each reads a prefilter level: the
-//!    planes box-averaged over that step ([`level_side`], `run::Level`), colour weighted by
+//!    planes box-averaged over that step ([`level_side`], `levels::Level`), colour weighted by
 //!    1 / bokeh area. Single-pixel taps left a lone highlight under a 21 px bokeh as dotted
 //!    rings (pixels inside its disc from 0 to 9.4× its level) and kept 0.13 of a 1 px
 //!    checker's contrast; with the levels, 0.6× to 1.8× and 0.001 (BENCH-NOTE of the rings
@@ -63,6 +63,7 @@
 //! (the same bits for any thread count).
 
 mod carry;
+mod levels;
 mod run;
 
 use rayon::prelude::*;
@@ -121,7 +122,7 @@ fn grid_taps(radius: usize, norms: &Norms, stride: isize) -> Vec<PixelTap> {
         .collect()
 }
 
-/// The side (px) of the prefilter box ([`run::Level`]) the rings of gather radius `radius`
+/// The side (px) of the prefilter box ([`levels::Level`]) the rings of gather radius `radius`
 /// read: the ring step, R / rings, rounded, at most [`MOST_SIDE`]; 1 (no prefilter) where the
 /// grids go.
 pub fn level_side(radius: f32, rings: usize) -> usize {
@@ -470,6 +471,61 @@ pub fn plan(config: &DofConfig, tiles: &Tiles) -> TilePlan {
     plan
 }
 
+/// Where the tiles' taps read each prefilter level of `sides` ([`levels::Reads`]): around each
+/// tile that reads one, as far as its taps that read it reach (the ring taps' extent, found
+/// once a radius); with `everywhere`, over the whole padded frame.
+fn level_reads(
+    config: &DofConfig,
+    tiles: &Tiles,
+    padded: &Padded,
+    sides: &[usize],
+    rings: &[Tap],
+    norms: &Norms,
+    everywhere: bool,
+) -> Vec<levels::Reads> {
+    let (width, height) = (config.width, config.height);
+    let mut reads: Vec<levels::Reads> = sides
+        .iter()
+        .map(|_| levels::Reads::new(padded, height))
+        .collect();
+    if everywhere {
+        let all = |w: usize| (-(padded.pad as isize), (w + padded.pad + TILE) as isize);
+        for r in &mut reads {
+            r.mark(all(width), all(height));
+        }
+        return reads;
+    }
+    let tiles_x = width.div_ceil(TILE);
+    let half_focus = (0.5 * config.epsilon).max(SMALLEST_RADIUS);
+    let mut extents: std::collections::HashMap<u32, isize> = Default::default();
+    for t in 0..tiles.reach.len() {
+        let Some(choice) = choose(tiles.reach[t], tiles.own[t], tiles.far_only[t], half_focus)
+        else {
+            continue;
+        };
+        let (x0, y0) = (t % tiles_x * TILE, t / tiles_x * TILE);
+        let rows = TILE.min(height - y0);
+        for radius in [Some(choice.radius), choice.far_radius]
+            .into_iter()
+            .flatten()
+        {
+            let side = level_side(radius, config.rings);
+            if let Some(l) = sides.iter().position(|&s| s == side && side > 1) {
+                let e = *extents.entry(radius.to_bits()).or_insert_with(|| {
+                    let taps = ring_taps(radius, rings, norms, padded.stride as isize, side);
+                    extent(&taps) as isize
+                });
+                let (x0, y0) = (x0 as isize, y0 as isize);
+                reads[l].mark(
+                    (x0 - e, x0 + (TILE as isize) + e),
+                    (y0 - e, y0 + rows as isize + e),
+                );
+            }
+        }
+    }
+    reads
+}
+
 /// Depth of field by gathering; `coc` is the signed CoC plane (px, diameter), `tiles` its
 /// tile min/max ([`super::tiles::tiles`]).
 pub fn gather(config: &DofConfig, color: &Color, coc: &[f32], tiles: &Tiles) -> Color {
@@ -492,6 +548,19 @@ pub fn gather_carrying(
     tiles: &Tiles,
     extra: Vec<Vec<f32>>,
 ) -> (Color, Vec<Vec<f32>>) {
+    gather_levels_where(config, color, coc, tiles, extra, false)
+}
+
+/// [`gather_carrying`], its prefilter levels made where the taps read them, or over the whole
+/// frame with `everywhere` (the tests' reference: the same bits).
+fn gather_levels_where(
+    config: &DofConfig,
+    color: &Color,
+    coc: &[f32],
+    tiles: &Tiles,
+    extra: Vec<Vec<f32>>,
+    everywhere: bool,
+) -> (Color, Vec<Vec<f32>>) {
     let (width, height) = (config.width, config.height);
     let rings_count = config.rings;
     let aperture = Aperture::new(config.blades, config.blade_rotation);
@@ -512,22 +581,10 @@ pub fn gather_carrying(
         .collect();
     let tiles_x = width.div_ceil(TILE);
     let half_focus = (0.5 * config.epsilon).max(SMALLEST_RADIUS);
-    // The prefilter levels the tiles' rings read, each made once.
+    // The prefilter levels the tiles' rings read, each made once, where their taps read it.
     let sides = level_sides(config, tiles);
-    let levels: Vec<run::Level> = sides
-        .iter()
-        .map(|&side| padded.level(side, (width, height)))
-        .collect();
-    // The carried planes at each level, prefiltered as the beauty's colour is.
-    let carried_levels: Vec<Vec<Vec<f32>>> = levels
-        .iter()
-        .map(|level| {
-            extra
-                .iter()
-                .map(|plane| level.carried(&padded, plane, width))
-                .collect()
-        })
-        .collect();
+    let reads = level_reads(config, tiles, &padded, &sides, &rings, &norms, everywhere);
+    let levels = levels::build(&padded, &sides, &reads, &extra, has_alpha, (width, height));
     let level_of = |side: usize| levels.iter().position(|l| l.side == side);
 
     // Output planes r, g, b, a, and the carried planes, filled a band of tile rows at a time.
@@ -594,11 +651,11 @@ pub fn gather_carrying(
                         Some(own) => taps_for(own, &grids, &rings, &norms, stride, &mut made_far),
                     };
                     let planes_of = |side: usize| match level_of(side) {
-                        Some(l) => &levels[l].planes,
-                        None => &padded.planes,
+                        Some(l) => levels[l].planes(&padded),
+                        None => padded.planes.each_ref().map(|p| p.as_slice()),
                     };
                     let carried_of = |side: usize| match level_of(side) {
-                        Some(l) => &carried_levels[l][..],
+                        Some(l) => &levels[l].carried[..],
                         None => &extra[..],
                     };
                     let mode = choice.fields;

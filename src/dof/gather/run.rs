@@ -156,151 +156,6 @@ impl Padded {
     pub(super) fn index(&self, x: usize, y: usize) -> usize {
         (y + self.pad) * self.stride + x + self.pad
     }
-
-    /// The prefilter level of box side `side` ([`Level`]) of a frame of `width` × `height`.
-    pub(super) fn level(&self, side: usize, (width, height): (usize, usize)) -> Level {
-        let (stride, rows) = (self.stride, self.rows());
-        let ia = &self.planes[5];
-        // Scratch planes reused by every box sum: fresh planes a sum cost more in page faults
-        // than the sums themselves (perf, the 1080p `dof` bench frame).
-        let mut across = vec![0.0f32; stride * rows];
-        let mut sum = vec![0.0f32; stride * rows];
-        box_sum(ia, stride, side, &mut across, &mut sum);
-        let mut products = vec![0.0f32; stride * rows];
-        let mut weighted = vec![0.0f32; stride * rows];
-        let mut colour = |k: usize| -> Vec<f32> {
-            let plane = &self.planes[k];
-            products
-                .par_iter_mut()
-                .zip(ia.par_iter().zip(plane))
-                .for_each(|(p, (a, v))| *p = a * v);
-            box_sum(&products, stride, side, &mut across, &mut weighted);
-            weighted
-                .par_iter()
-                .zip(&sum)
-                .zip(plane)
-                .map(|((&s, &w), &own)| if w > 0.0 { s / w } else { own })
-                .collect()
-        };
-        let area = (side * side) as f32;
-        let mut weight = vec![0.0f32; stride * rows];
-        let pad = self.pad;
-        weight
-            .par_chunks_mut(stride)
-            .zip(sum.par_chunks(stride))
-            .enumerate()
-            .for_each(|(y, (out, sums))| {
-                if (pad..pad + height).contains(&y) {
-                    for (o, &w) in out[pad..pad + width]
-                        .iter_mut()
-                        .zip(&sums[pad..pad + width])
-                    {
-                        *o = w / area;
-                    }
-                }
-            });
-        let planes = [
-            colour(0),
-            colour(1),
-            colour(2),
-            colour(3),
-            self.planes[4].clone(),
-            weight,
-        ];
-        Level { side, planes, sum }
-    }
-
-    fn rows(&self) -> usize {
-        self.planes[0].len() / self.stride
-    }
-}
-
-/// The sums over boxes of `side` × `side` of a padded plane of row length `stride` (0 beyond
-/// it), each at the box's pixel ([`Level`]), into `out` (`across` is scratch of the same
-/// size): across, then down, each box's values added in order (left to right, top to bottom)
-/// as the GPU twin adds them.
-fn box_sum(values: &[f32], stride: usize, side: usize, across: &mut [f32], out: &mut [f32]) {
-    let rows = values.len() / stride;
-    let lo = (side / 2) as isize;
-    let offsets = || (0..side as isize).map(move |o| o - lo);
-    across.par_iter_mut().for_each(|v| *v = 0.0);
-    out.par_iter_mut().for_each(|v| *v = 0.0);
-    across
-        .par_chunks_mut(stride)
-        .zip(values.par_chunks(stride))
-        .for_each(|(out, row)| {
-            for shift in offsets() {
-                let from = (-shift).max(0) as usize;
-                let to = (stride as isize - shift).min(stride as isize).max(0) as usize;
-                let source = &row[(from as isize + shift) as usize..];
-                for (o, &v) in out[from..to].iter_mut().zip(source) {
-                    *o += v;
-                }
-            }
-        });
-    let across = &*across;
-    out.par_chunks_mut(stride).enumerate().for_each(|(y, out)| {
-        for shift in offsets() {
-            let sy = y as isize + shift;
-            if sy >= 0 && (sy as usize) < rows {
-                let source = &across[sy as usize * stride..(sy as usize + 1) * stride];
-                for (o, &v) in out.iter_mut().zip(source) {
-                    *o += v;
-                }
-            }
-        }
-    });
-}
-
-impl Level {
-    /// A carried plane (the frame's own, `width` × `height`) prefiltered as the beauty's
-    /// colour is at this level, on the frame's own pixels: its box average weighted by
-    /// 1 / bokeh area, the same sums in the same order as the beauty's.
-    pub(super) fn carried(&self, padded: &Padded, plane: &[f32], width: usize) -> Vec<f32> {
-        let ia = &padded.planes[5];
-        let (stride, pad) = (padded.stride, padded.pad);
-        let height = plane.len() / width.max(1);
-        let mut products = vec![0.0f32; ia.len()];
-        products
-            .par_chunks_mut(stride)
-            .enumerate()
-            .for_each(|(y, out)| {
-                if (pad..pad + height).contains(&y) {
-                    let source = &plane[(y - pad) * width..(y - pad + 1) * width];
-                    let weights = &ia[y * stride + pad..y * stride + pad + width];
-                    for ((o, &a), &v) in out[pad..pad + width].iter_mut().zip(weights).zip(source) {
-                        *o = a * v;
-                    }
-                }
-            });
-        let mut across = vec![0.0f32; products.len()];
-        let mut weighted = vec![0.0f32; products.len()];
-        box_sum(&products, stride, self.side, &mut across, &mut weighted);
-        (0..plane.len())
-            .into_par_iter()
-            .map(|j| {
-                let i = padded.index(j % width, j / width);
-                let w = self.sum[i];
-                if w > 0.0 {
-                    weighted[i] / w
-                } else {
-                    plane[j]
-                }
-            })
-            .collect()
-    }
-}
-
-/// The padded planes prefiltered by a box of `side` × `side` px, for taps that stand for
-/// about that area each: colour the box's average weighted by 1 / bokeh area, the signed
-/// radius the box's own pixel's, 1 / bokeh area the box's mean (0 where the box's pixel is
-/// outside the frame). An even box covers offsets −side/2 ..= side/2 − 1: its centre lies half
-/// a pixel up and left of its pixel.
-pub(super) struct Level {
-    pub(super) side: usize,
-    pub(super) planes: [Vec<f32>; 6],
-    /// The box's sum of 1 / bokeh area, for the carried planes ([`Level::carried`]).
-    sum: Vec<f32>,
 }
 
 /// One tile row's run: `span` (≤ [`TILE`]) consecutive pixels from padded index `start`, the
@@ -318,14 +173,15 @@ pub(super) struct Row<'a> {
     /// elsewhere.
     pub(super) grids: &'a [Vec<PixelTap>],
     pub(super) small: f32,
-    /// The planes `far_taps` read and those `taps` read: the padded planes themselves, or a
-    /// prefilter [`Level`] of them where the taps are rings sparser than a pixel.
-    pub(super) far_planes: &'a [Vec<f32>; 6],
-    pub(super) planes: &'a [Vec<f32>; 6],
-    /// Whether the far taps read a [`Level`]: then a lane that gathers them (its bokeh
-    /// beyond `small`) takes its own sample from the level too (the centre tap's box).
+    /// The planes `far_taps` read and those `taps` read ([`Padded::planes`]' order): the
+    /// padded planes themselves, or a prefilter level of them (`super::levels::Level`) where
+    /// the taps are rings sparser than a pixel.
+    pub(super) far_planes: [&'a [f32]; 6],
+    pub(super) planes: [&'a [f32]; 6],
+    /// Whether the far taps read a level: then a lane that gathers them (its bokeh beyond
+    /// `small`) takes its own sample from the level too (the centre tap's box).
     pub(super) far_level: bool,
-    /// Whether `taps` read a [`Level`].
+    /// Whether `taps` read a level.
     pub(super) level: bool,
 }
 
