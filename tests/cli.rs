@@ -1543,14 +1543,7 @@ fn dof_without_depth_names_every_way_to_give_it() {
     let out_dir = dir.path().join("out");
     std::fs::create_dir_all(&out_dir).unwrap();
     let out = s(&out_dir.join("o.exr"));
-    let lens = [
-        "--focal-length",
-        "50",
-        "--f-stop",
-        "2",
-        "--focus-distance",
-        "3",
-    ];
+    let lens = LENS_ARGS;
     let run = |color: &std::path::Path, expect: &[&str]| {
         let color = s(color);
         let mut args = vec!["dof", "--preset", "painted", "--color", &color, "-o", &out];

@@ -266,14 +266,7 @@ fn replaced_values_are_named_by_their_pass_and_file() {
             && !err.contains("depth values"),
         "{err}"
     );
-    let lens = [
-        "--focal-length",
-        "50",
-        "--f-stop",
-        "2",
-        "--focus-distance",
-        "3",
-    ];
+    let lens = LENS_ARGS;
     let (colour, out) = (s(&colour), s(&out));
     let mut args = vec!["dof", "--color", &colour, "-o", &out];
     args.extend(lens);

@@ -1110,7 +1110,7 @@ fn linear8(code: u8) -> f64 {
 /// "What survives" table gives it; it is to become
 /// `a_jpeg_of_an_rgba_photo_holds_it_over_black_and_says_alpha_is_dropped` with the row.
 #[test]
-fn a_jpeg_of_an_rgba_photo_holds_its_straight_colour_and_says_alpha_is_dropped() {
+fn a_jpeg_of_an_rgba_photo_holds_it_over_black_and_says_alpha_is_dropped() {
     let dir = tempfile::tempdir().unwrap();
     let (w, h) = (64u32, 16u32);
     let input = dir.path().join("rgba.png");

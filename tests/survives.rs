@@ -12,7 +12,7 @@ use exr::meta::header::{ImageAttributes, LayerAttributes};
 use exr::meta::{BlockDescription, MetaData};
 use exr::prelude::{f16, Blocks, Compression, LineOrder, WritableImage};
 
-use crate::support::{noise, oiiotool_info, s, shutter, stderr, write_exr};
+use crate::support::{noise, oiiotool_info, s, shutter, stderr, write_exr, LENS_ARGS};
 
 const W: usize = 40;
 const H: usize = 24;
@@ -2580,21 +2580,13 @@ fn half_keeps_data_that_half_cannot_hold_as_float() {
 #[test]
 fn depth_of_field_on_pixels_that_are_not_square_is_warned_of() {
     let dir = plate_frame(Blocks::ScanLines, LineOrder::Increasing);
-    let lens = [
-        "--focal-length",
-        "50",
-        "--f-stop",
-        "2",
-        "--focus-distance",
-        "3",
-        "--json",
-    ];
+    let lens = [&LENS_ARGS[..], &["--json"]].concat();
     let warned = |stdout: Vec<u8>| -> bool {
         let report: serde_json::Value = serde_json::from_slice(&stdout).unwrap();
         report["warnings"].to_string().contains("pixelAspectRatio")
     };
     let mut dof = vec!["dof"];
-    dof.extend(lens);
+    dof.extend(&lens);
     assert!(warned(blur_with(dir.path(), "dof.exr", &dof, &[])));
     assert!(!warned(blur_with(dir.path(), "blur.exr", &["--json"], &[])));
     let n = W * H;
@@ -2612,7 +2604,7 @@ fn depth_of_field_on_pixels_that_are_not_square_is_warned_of() {
         s(&dir.path().join("square.out.exr")),
     );
     let mut args = vec!["dof", "--color", &c, "--depth", &d, "-o", &o];
-    args.extend(lens);
+    args.extend(&lens);
     let run = shutter(&args);
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(!warned(run.stdout));
@@ -2664,6 +2656,21 @@ fn write_renderer_frame(
     channels
 }
 
+/// A V-Ray frame ([`write_vray`]) in `dir` blurred by reconstruct under `--preset vray` with
+/// `extra`: the input's channels and the output's path.
+fn blur_vray(dir: &Path, extra: &[&str]) -> (Vec<(String, Vec<f32>)>, std::path::PathBuf) {
+    let color = dir.join("vray.exr");
+    let input = write_vray(&color);
+    let out = dir.join("out.exr");
+    let (c, o) = (s(&color), s(&out));
+    let mut args = vec!["blur", "--preset", "vray", "--algorithm", "reconstruct"];
+    args.extend(extra);
+    args.extend(["--color", &c, "-o", &o]);
+    let run = shutter(&args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    (input, out)
+}
+
 /// V-Ray's Velocity element (`VRayVelocity.R/G/B`, p(+1) − p(0), y up) and Z-depth and
 /// Normals elements, beside the beauty.
 fn write_vray(path: &Path) -> Vec<(String, Vec<f32>)> {
@@ -2710,21 +2717,7 @@ fn assert_data_back(input: &[(String, Vec<f32>)], out: &Path, layers: &[&str]) {
 #[test]
 fn a_vray_frames_velocity_depth_and_normals_come_back_bit_for_bit() {
     let dir = tempfile::tempdir().unwrap();
-    let color = dir.path().join("vray.exr");
-    let input = write_vray(&color);
-    let out = dir.path().join("out.exr");
-    let o = shutter(&[
-        "blur",
-        "--preset",
-        "vray",
-        "--algorithm",
-        "reconstruct",
-        "--color",
-        &s(&color),
-        "-o",
-        &s(&out),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let (input, out) = blur_vray(dir.path(), &[]);
     assert_data_back(
         &input,
         &out,
@@ -2738,23 +2731,7 @@ fn a_vray_frames_velocity_depth_and_normals_come_back_bit_for_bit() {
 #[test]
 fn a_vray_frames_velocity_leaves_a_dwa_part() {
     let dir = tempfile::tempdir().unwrap();
-    let color = dir.path().join("vray.exr");
-    let input = write_vray(&color);
-    let out = dir.path().join("out.exr");
-    let o = shutter(&[
-        "blur",
-        "--preset",
-        "vray",
-        "--algorithm",
-        "reconstruct",
-        "--compression",
-        "dwaa",
-        "--color",
-        &s(&color),
-        "-o",
-        &s(&out),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let (input, out) = blur_vray(dir.path(), &["--compression", "dwaa"]);
     let parts = parts_of(&out);
     for (part, compression, channels) in &parts {
         let lossy = matches!(compression, Compression::DWAA(_) | Compression::DWAB(_));

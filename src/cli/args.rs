@@ -192,7 +192,8 @@ pub struct BlurArgs {
     pub linear: bool,
 
     /// Skip frames whose output already exists as a whole frame of the right size and
-    /// format, so a rerun resumes; anything else is written again, with a warning.
+    /// format (an EXR also made with this run's settings), so a rerun resumes; anything else
+    /// is written again, with a warning.
     #[arg(long)]
     pub skip_existing: bool,
 

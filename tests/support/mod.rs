@@ -858,3 +858,13 @@ fn parity_range(cpu: &[f32]) -> f32 {
         1.0
     }
 }
+
+/// A lens for depth of field tests: 50 mm at f/2, focused at 3 m.
+pub const LENS_ARGS: [&str; 6] = [
+    "--focal-length",
+    "50",
+    "--f-stop",
+    "2",
+    "--focus-distance",
+    "3",
+];
