@@ -129,7 +129,8 @@ pub const DEFS: &[Def] = &[
         value_name: "MIB",
         help: "the most memory a run may need, in MiB, estimated from every input's header \
                before anything is decoded (a frame's decoded passes, five times over for the \
-               frames in flight and the passes' buffers, and a decoder's own); a run over it \
+               frames in flight and the passes' buffers, 1.5 times more for the bokeh \
+               gather, a decoder's own, and 3 MiB a thread); a run over it \
                stops in the preflight, naming the frame",
         kind: whole(64.0, 1_073_741_824.0),
         unset: "half the machine's memory, within the process's address-space and cgroup limits",
