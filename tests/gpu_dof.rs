@@ -576,21 +576,13 @@ mod with_gpu {
     #[test]
     fn dof_gather_reads_the_dense_grid_in_a_near_rim_s_tiles_as_the_cpu_does() {
         let Some(gpu) = gpu() else { return };
-        use shutter::dof::gather::{gather, gather_carrying, plan};
+        use shutter::dof::gather::plan;
         use shutter::dof::DofConfig;
         let (w, h, color, coc) = near_rim_over_checker();
         let config = DofConfig::new(w, h, &DofParams::default());
         let t = tiles(&TilesConfig::new(w, h, config.epsilon), &coc);
         assert!(plan(&config, &t).tiles.iter().any(|t| t.dense_count > 0));
-        let cpu = gather(&config, &color, &coc, &t);
-        let got = gpu
-            .try_dof_gather(&config, &color, &coc, &t)
-            .unwrap_or_else(|e| panic!("{e}"));
-        let carried = gpu
-            .try_dof_gather_carrying(&config, &[&color, &color], &coc, &t)
-            .unwrap_or_else(|e| panic!("{e}"));
-        let (cpu_carried, _) = gather_carrying(&config, &color, &coc, &t, vec![color.r.clone()]);
-        assert_eq!(cpu_carried, cpu);
+        let (cpu, got, carried, _) = gathered(gpu, &config, &color, &coc, &t);
         for out in [&got, &carried[0], &carried[1]] {
             for (name, g, c) in [("r", &out.r, &cpu.r), ("g", &out.g, &cpu.g)] {
                 for (i, (g, c)) in g.iter().zip(c.iter()).enumerate() {
@@ -598,6 +590,36 @@ mod with_gpu {
                 }
             }
         }
+    }
+
+    /// `color` gathered on the CPU, and on the twin alone and carried twice over (two copies
+    /// as carried colours); the CPU's carrying gather, carrying `color`'s red, checked to
+    /// give the beauty it gives alone. The CPU's, the twin's, the twin's carried, and the
+    /// CPU's carried plane.
+    fn gathered(
+        gpu: &shutter::gpu::Gpu,
+        config: &shutter::dof::DofConfig,
+        color: &shutter::frame::Color,
+        coc: &[f32],
+        t: &shutter::dof::tiles::Tiles,
+    ) -> (
+        shutter::frame::Color,
+        shutter::frame::Color,
+        Vec<shutter::frame::Color>,
+        Vec<Vec<f32>>,
+    ) {
+        use shutter::dof::gather::{gather, gather_carrying};
+        let cpu = gather(config, color, coc, t);
+        let got = gpu
+            .try_dof_gather(config, color, coc, t)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let carried = gpu
+            .try_dof_gather_carrying(config, &[color, color], coc, t)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let (cpu_beauty, cpu_carried) =
+            gather_carrying(config, color, coc, t, vec![color.r.clone()]);
+        assert_eq!(cpu_beauty, cpu);
+        (cpu, got, carried, cpu_carried)
     }
 
     /// The prefilter levels on the twin: a lone highlight (50) and a one-pixel checker under
@@ -610,7 +632,7 @@ mod with_gpu {
     #[test]
     fn dof_gather_reads_the_prefilter_levels_as_the_cpu_does() {
         let Some(gpu) = gpu() else { return };
-        use shutter::dof::gather::{gather, gather_carrying, plan};
+        use shutter::dof::gather::plan;
         use shutter::dof::DofConfig;
         let (w, h) = (160, 96);
         let n = w * h;
@@ -646,16 +668,7 @@ mod with_gpu {
         assert!(!p.sides.is_empty());
         assert!(p.tiles.iter().any(|t| t.fields == 1 && t.level > 0));
         assert!(p.tiles.iter().any(|t| t.fields != 1 && t.level > 0));
-        let cpu = gather(&config, &color, &coc, &t);
-        let got = gpu
-            .try_dof_gather(&config, &color, &coc, &t)
-            .unwrap_or_else(|e| panic!("{e}"));
-        let carried = gpu
-            .try_dof_gather_carrying(&config, &[&color, &color], &coc, &t)
-            .unwrap_or_else(|e| panic!("{e}"));
-        let (cpu_beauty, cpu_carried) =
-            gather_carrying(&config, &color, &coc, &t, vec![color.r.clone()]);
-        assert_eq!(cpu_beauty, cpu);
+        let (cpu, got, carried, cpu_carried) = gathered(gpu, &config, &color, &coc, &t);
         let range = cpu.r.iter().fold(0.0f32, |m, &v| m.max(v.abs()));
         let tolerance = 1e-5 * range;
         for (what, out) in [

@@ -911,21 +911,8 @@ fn stretch_counts_its_copy_of_the_light_layers_in_the_memory_a_run_needs() {
         .collect();
     crate::support::write_exr(&path, w, h, channels);
     let needs = |algorithm: &str| -> u64 {
-        let o = shutter(&[
-            "blur",
-            "--algorithm",
-            algorithm,
-            "--color",
-            &s(&path),
-            "-o",
-            &s(&dir.path().join("o.exr")),
-            "--max-memory",
-            "64",
-        ]);
-        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-        let err = stderr(&o);
-        let at = err.find("needs about ").expect("the estimate") + "needs about ".len();
-        err[at..].split(' ').next().unwrap().parse().unwrap()
+        let (c, o) = (s(&path), s(&dir.path().join("o.exr")));
+        estimate_mib(&["blur", "--algorithm", algorithm, "--color", &c, "-o", &o])
     };
     assert_eq!(needs("stretch") - needs("reconstruct"), 30);
 }
@@ -1028,14 +1015,20 @@ fn the_memory_estimate_counts_the_gathers_planes_and_every_thread() {
     let needs = |method: &str, threads: &str| -> u64 {
         let mut args = vec!["dof", "--method", method, "--threads", threads];
         let (c, o) = (s(&path), s(&dir.path().join("o.exr")));
-        args.extend(["--color", &c, "-o", &o, "--max-memory", "64"]);
+        args.extend(["--color", &c, "-o", &o]);
         args.extend(LENS_ARGS);
-        let run = shutter(&args);
-        assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
-        let err = stderr(&run);
-        let at = err.find("needs about ").expect("the estimate") + "needs about ".len();
-        err[at..].split(' ').next().unwrap().parse().unwrap()
+        estimate_mib(&args)
     };
     assert_eq!(needs("gather", "2") - needs("blend", "2"), 6);
     assert_eq!(needs("blend", "10") - needs("blend", "2"), 24);
+}
+
+/// The memory the preflight says a run of `args` needs, in MiB: the run made to stop there
+/// with `--max-memory 64`.
+fn estimate_mib(args: &[&str]) -> u64 {
+    let run = shutter(&[args, &["--max-memory", "64"]].concat());
+    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+    let err = stderr(&run);
+    let at = err.find("needs about ").expect("the estimate") + "needs about ".len();
+    err[at..].split(' ').next().unwrap().parse().unwrap()
 }

@@ -49,6 +49,18 @@ impl Method {
             Method::Gather => "gather",
         }
     }
+
+    /// What the method holds in memory besides the frame's buffers that the preflight's
+    /// planes factor counts, for a frame whose passes decode to `decoded` bytes: the
+    /// gather's padded planes and the prefilter levels its tiles read, 1.5× (a 4K frame,
+    /// three in flight, peaked 134 MiB over the rest of the estimate, 0.85× its planes);
+    /// the blend's pyramid, nothing more (BENCHMARKS.md, the evening of 2026-12-07).
+    pub fn memory_besides(self, decoded: u64) -> u64 {
+        match self {
+            Method::Blend => 0,
+            Method::Gather => decoded.saturating_mul(3) / 2,
+        }
+    }
 }
 
 /// blend: how the blurred images are made and mixed.

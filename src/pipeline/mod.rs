@@ -352,17 +352,12 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             0
         };
         let layers = job.algorithm.layer_copies() * plan.light_layer_bytes();
-        // The bokeh gather holds its padded planes and the prefilter levels its tiles read
-        // besides: up to 1.5× the decoded planes (a 4K frame, three in flight, peaked 134 MiB
-        // over the rest of the estimate, 0.85× its planes).
-        let gather = match &job.params.dof {
-            Some(dof) if dof.method == crate::dof::Method::Gather => plan.decoded_bytes() * 3 / 2,
-            _ => 0,
-        };
+        let dof =
+            (job.params.dof.as_ref()).map_or(0, |d| d.method.memory_besides(plan.decoded_bytes()));
         plan.memory_needed(gpu)
             .saturating_add(check)
             .saturating_add(layers)
-            .saturating_add(gather)
+            .saturating_add(dof)
     };
     // Each thread's own (its stack and allocator arena as touched: 1.7–2.1 MiB a thread
     // measured from 2 to 64 threads, 1080p and 4K).

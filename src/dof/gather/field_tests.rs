@@ -20,6 +20,33 @@ fn run(w: usize, h: usize, paint: &dyn Fn(usize, usize) -> f32, coc: &[f32]) -> 
     gather(&config, &color, coc, &t).r
 }
 
+/// Asserts that `with` and `without` (frames `w` wide and `h` tall) agree within 1e-5 at
+/// every pixel `compared` keeps; how many it kept.
+fn same_where(
+    (w, h): (usize, usize),
+    with: &[f32],
+    without: &[f32],
+    compared: impl Fn(usize, usize) -> bool,
+) -> usize {
+    let mut checked = 0;
+    for y in 0..h {
+        for x in 0..w {
+            if !compared(x, y) {
+                continue;
+            }
+            let i = y * w + x;
+            assert!(
+                close(with[i], without[i], 1e-5),
+                "({x}, {y}): {} with the disc, {} without",
+                with[i],
+                without[i]
+            );
+            checked += 1;
+        }
+    }
+    checked
+}
+
 #[test]
 fn a_fine_far_texture_beside_a_large_near_bokeh_keeps_its_own_blur() {
     // A one-pixel checker far behind (CoC 8 px), and a disc far in front (CoC −60 px) in
@@ -40,25 +67,12 @@ fn a_fine_far_texture_beside_a_large_near_bokeh_keeps_its_own_blur() {
         .collect();
     let with = run(w, h, &paint, &coc);
     let without = run(w, h, &checker, &vec![8.0; w * h]);
-    let mut checked = 0;
-    for y in 0..h {
-        for x in 0..w {
-            let (dx, dy) = (x as f32 - 24.0, y as f32 - 48.0);
-            // Beyond the disc's edge (16 px) plus its bokeh (30 px) and the far bokeh
-            // (4 px) plus a pixel: nothing of the disc reaches.
-            if (dx * dx + dy * dy).sqrt() < 16.0 + 30.0 + 4.0 + 1.0 {
-                continue;
-            }
-            let i = y * w + x;
-            assert!(
-                close(with[i], without[i], 1e-5),
-                "({x}, {y}): {} with the disc, {} without",
-                with[i],
-                without[i]
-            );
-            checked += 1;
-        }
-    }
+    let checked = same_where((w, h), &with, &without, |x, y| {
+        let (dx, dy) = (x as f32 - 24.0, y as f32 - 48.0);
+        // Beyond the disc's edge (16 px) plus its bokeh (30 px) and the far bokeh (4 px)
+        // plus a pixel: nothing of the disc reaches.
+        (dx * dx + dy * dy).sqrt() >= 16.0 + 30.0 + 4.0 + 1.0
+    });
     // The comparison covers tiles whose radius the disc sets (within 30 px of it).
     assert!(checked > 1000);
     // And the blurred checker has no pattern left: a 4 px bokeh over a one-pixel checker
@@ -97,27 +111,12 @@ fn a_fine_far_texture_in_a_near_rim_s_tiles_keeps_its_own_blur() {
         .filter(|&i| disc(i % w, i / w))
         .map(|i| tile_of(i % w, i / w))
         .collect();
-    let mut checked = 0;
-    for y in 0..h {
-        for x in 0..w {
-            let (dx, dy) = (x as f32 + 0.5 - cx, y as f32 + 0.5 - cy);
-            // Beyond the disc's edge (8 px) plus its bokeh (7) and the far bokeh (4)
-            // plus a pixel, inside a tile the disc lies in.
-            if (dx * dx + dy * dy).sqrt() < 8.0 + 7.0 + 4.0 + 1.0
-                || !disc_tiles.contains(&tile_of(x, y))
-            {
-                continue;
-            }
-            let i = y * w + x;
-            assert!(
-                close(with[i], without[i], 1e-5),
-                "({x}, {y}): {} with the disc, {} without",
-                with[i],
-                without[i]
-            );
-            checked += 1;
-        }
-    }
+    let checked = same_where((w, h), &with, &without, |x, y| {
+        let (dx, dy) = (x as f32 + 0.5 - cx, y as f32 + 0.5 - cy);
+        // Beyond the disc's edge (8 px) plus its bokeh (7) and the far bokeh (4) plus a
+        // pixel, inside a tile the disc lies in.
+        (dx * dx + dy * dy).sqrt() >= 8.0 + 7.0 + 4.0 + 1.0 && disc_tiles.contains(&tile_of(x, y))
+    });
     assert_eq!(disc_tiles.len(), 4);
     assert!(checked > 40, "{checked}");
 }

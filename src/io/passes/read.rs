@@ -61,7 +61,11 @@ pub fn read_frame_keeping(
         .map(|(slot, _)| *slot)
         .collect();
     // A depth map in an RGB image: its G and B read too, to tell grey from colour.
-    let grey = super::grey_map::check(plan).filter(|_| !*grey_noted);
+    let grey = if *grey_noted {
+        None
+    } else {
+        super::grey_map::check(plan)
+    };
     for (index, file) in plan.files.iter().enumerate() {
         let bits: Vec<usize> = exact
             .iter()
