@@ -544,6 +544,48 @@ fn skip_existing_resumes_a_run() {
 /// algorithm's frames.
 #[test]
 fn skip_existing_writes_again_frames_made_with_other_settings() {
+    frames_made_with_other_settings_are_written_again("exr");
+}
+
+/// The same of pictures, which record their settings where each format keeps such text
+/// (a PNG's text chunks, a TIFF's Software tag, a JPEG's comment): they recorded none, and
+/// every picture another run made was kept (an outside tester's finding).
+#[test]
+fn skip_existing_writes_again_pictures_made_with_other_settings() {
+    for ext in ["png", "tif", "jpg"] {
+        frames_made_with_other_settings_are_written_again(ext);
+    }
+    // A PNG shutter made, blurred again: its record replaced, not carried beside the new.
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 6, 4);
+    let (first, second) = (dir.path().join("a.png"), dir.path().join("b.png"));
+    let color = dir.path().join("C.exr");
+    let o = shutter(&["blur", "--color", &s(&color), "-o", &s(&first)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let args = [
+        "blur",
+        "--color",
+        &s(&first),
+        "--shutter",
+        "0.25",
+        "-o",
+        &s(&second),
+    ];
+    let o = shutter(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    if let Some(info) = oiiotool_info(&second) {
+        let records: Vec<&str> = info.lines().filter(|l| l.contains("shutter/")).collect();
+        assert_eq!(records.len(), 2, "{info}");
+        assert!(
+            records.iter().any(|l| l.contains("--shutter 0.25")),
+            "{info}"
+        );
+    }
+}
+
+/// Three frames written to `o.####.<ext>` by reconstruct, then by scatter at shutter 0.25
+/// with `--skip-existing` (dry and not), then by scatter again.
+fn frames_made_with_other_settings_are_written_again(ext: &str) {
     let dir = tempfile::tempdir().unwrap();
     for frame in 1..=3 {
         write_canonical_frame(dir.path(), Some(frame), 6, 4);
@@ -554,7 +596,7 @@ fn skip_existing_writes_again_frames_made_with_other_settings() {
         format!("{d}/Z.####.exr"),
         format!("{d}/V.####.exr"),
     );
-    let out = format!("{d}/out/o.####.exr");
+    let out = format!("{d}/out/o.####.{ext}");
     let run = |extra: &[&str]| {
         let args = [
             "blur",
@@ -570,8 +612,8 @@ fn skip_existing_writes_again_frames_made_with_other_settings() {
         shutter(&[&args[..], extra].concat())
     };
     let o = run(&["--algorithm", "reconstruct"]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let first = dir.path().join("out/o.0001.exr");
+    assert!(o.status.success(), "{ext}: {}", stderr(&o));
+    let first = dir.path().join(format!("out/o.0001.{ext}"));
     let before = std::fs::read(&first).unwrap();
     let other = [
         "--algorithm",
@@ -604,7 +646,7 @@ fn skip_existing_writes_again_frames_made_with_other_settings() {
         .collect();
     assert_eq!(said.len(), 1, "once a run: {said:?}");
     assert!(
-        said[0].contains("o.0001.exr")
+        said[0].contains(&format!("o.0001.{ext}"))
             && said[0].contains("--algorithm reconstruct")
             && said[0].contains("--shutter 0.25")
             && said[0].contains("2 more frames"),
@@ -613,16 +655,15 @@ fn skip_existing_writes_again_frames_made_with_other_settings() {
     );
     assert_ne!(std::fs::read(&first).unwrap(), before, "frame 1 kept");
     // OpenImageIO, which nobody here wrote, reads what the new frame records.
+    // (a PNG's `shutter/settings`, a TIFF's `Software`, a JPEG's comment as `ImageDescription`).
     if let Some(info) = oiiotool_info(&first) {
-        assert!(
-            info.contains("--algorithm scatter --shutter 0.25"),
-            "{info}"
-        );
+        let text = "--preset shutter --algorithm scatter --shutter 0.25";
+        assert!(info.contains(text), "{ext}: {info}");
     }
     // The same settings again: every frame is this run's.
     let o = run(&other);
     let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
-    assert_eq!(report["frames_skipped"], 3, "{report}");
+    assert_eq!(report["frames_skipped"], 3, "{ext}: {report}");
     assert!(
         !report["warnings"].to_string().contains("written again"),
         "{report}"

@@ -421,12 +421,14 @@ pub fn existing_frame_problem(
     }
 }
 
-/// The settings an EXR output records it was made with (`shutter/settings`, its first
-/// part's that holds them), which `--skip-existing` holds against the run's own; `None` for
-/// a picture (it records none), an EXR another program made, or one that cannot be read.
+/// The settings an output records it was made with, which `--skip-existing` holds against
+/// the run's own: an EXR's `shutter/settings` (its first part's that holds them), a
+/// picture's where its format keeps them (`image::record`, as that format holds them:
+/// [`image_io::record_as_held`]); `None` for a file another program made, or one that
+/// cannot be read.
 pub fn recorded_settings(path: &Path) -> Option<String> {
-    if OutputFormat::from_path(path) != Some(OutputFormat::Exr) {
-        return None;
+    if let OutputFormat::Image(format) = OutputFormat::from_path(path)? {
+        return image_io::recorded_settings(path, format);
     }
     let meta = exr_io::read_meta(path).ok()?;
     let name = exr::meta::attribute::Text::from("shutter/settings");
@@ -769,6 +771,7 @@ pub fn write_views(
                 jpeg_quality: options.jpeg_quality,
                 photo,
                 icc: exr_icc.as_deref(),
+                record: &options.record,
             };
             image_io::write_photo(
                 writer,

@@ -56,8 +56,13 @@ pub(super) fn existing_output(
     }
     // A frame another run made with other settings (a farm job resubmitted with another
     // algorithm over the same folder) is not this run's frame.
+    // A TIFF holds them in ASCII (`io::image::record`).
+    let held = match OutputFormat::from_path(output) {
+        Some(OutputFormat::Image(format)) => crate::io::image::record_as_held(record, format),
+        _ => record.to_string(),
+    };
     match recorded_settings(output) {
-        Some(recorded) if !record.is_empty() && recorded != record => Existing::Other(recorded),
+        Some(recorded) if !record.is_empty() && recorded != held => Existing::Other(recorded),
         _ => Existing::Whole,
     }
 }

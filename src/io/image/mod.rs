@@ -15,6 +15,7 @@ mod jpeg;
 mod meta;
 mod png_mend;
 mod profile;
+mod record;
 mod resolution;
 mod tiff_colour;
 mod tiff_float;
@@ -37,6 +38,7 @@ pub use profile::{
     chromaticities, cicp_profile_of, colour_source, linear_profile_of, primaries_profile,
     profile_of, ColourSource, Transfer,
 };
+pub use record::{as_held as record_as_held, recorded as recorded_settings};
 pub use upright::exif_orientation;
 pub use write::{goes_out_grey, jpeg_left_out, out_of_range, write_photo, PhotoOptions};
 
@@ -506,6 +508,7 @@ pub fn write_color(
         jpeg_quality: 95,
         photo: None,
         icc: None,
+        record: "",
     };
     write_photo(writer, format, width, height, rgb, alpha, &options)
 }

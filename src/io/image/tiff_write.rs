@@ -99,7 +99,9 @@ fn strip_bytes(
 }
 
 /// Writes a photo's frame as a TIFF: `channels` interleaved samples a pixel (grey or RGB,
-/// and alpha after them when there are 2 or 4), its profile and metadata beside.
+/// and alpha after them when there are 2 or 4), its profile and metadata beside, and
+/// `software` (what made it: ASCII) in the Software tag.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn write_tiff(
     writer: impl Write + Seek,
     width: u32,
@@ -108,6 +110,7 @@ pub(super) fn write_tiff(
     samples: Samples,
     icc: Option<&[u8]>,
     photo: Option<&Photo>,
+    software: Option<&str>,
 ) -> Result<(), String> {
     let error = |e: tiff::TiffError| e.to_string();
     let (bits, format, alpha_kind) = match samples {
@@ -211,6 +214,10 @@ pub(super) fn write_tiff(
         tags.write_tag(Tag::ResolutionUnit, 1u16)?;
         if let Some(exif) = &exif {
             tiff_meta::write_ifd0(&mut tags, exif, &pointers)?;
+        }
+        // What made the file, over the photo's own (`record`).
+        if let Some(software) = software {
+            aligned_tag(&mut tags, Tag::Software, software)?;
         }
         if let Some(resolution) = photo.and_then(|p| p.resolution.as_ref()) {
             let (x, y, unit) = resolution::to_tiff(resolution);

@@ -38,6 +38,7 @@ use std::io::{Seek, Write};
 use crate::frame::{Photo, PngColour};
 
 use super::profile::{profile_is_made, profile_of, Transfer};
+use super::record;
 use super::resolution;
 use super::tiff_write::{write_tiff, Samples};
 use super::ImageFormat;
@@ -56,6 +57,9 @@ pub struct PhotoOptions<'a> {
     /// The profile of the codes of a frame that carries no photo (an EXR's `chromaticities`
     /// as a profile: `profile::primaries_profile`), embedded as a photo's is.
     pub icc: Option<&'a [u8]>,
+    /// The settings that made the frame, as `shutter blur` flags (`record`: where each
+    /// format keeps them); empty: none recorded.
+    pub record: &'a str,
 }
 
 /// The XMP packet's keyword in a PNG iTXt chunk (XMP specification part 3, 1.1.5).
@@ -193,6 +197,11 @@ pub fn write_photo(
     let icc = icc.or(options.icc.filter(|_| photo.is_none()));
     let (w, h) = (width as u32, height as u32);
     let n = width * height;
+    // What made the frame, in the TIFF's Software tag and the JPEG's comment (`record`).
+    let software = Some(options.record)
+        .filter(|r| !r.is_empty())
+        .map(|r| record::software(r, format));
+    let software = software.as_deref();
     if float {
         // Grey (one channel: a grey input goes out with no alpha in a TIFF), or RGB(A).
         let colours = if grey { 1 } else { 3 };
@@ -207,7 +216,7 @@ pub fn write_photo(
             }
         }
         let samples = Samples::Float(&samples);
-        return write_tiff(writer, w, h, channels, samples, icc, photo);
+        return write_tiff(writer, w, h, channels, samples, icc, photo, software);
     }
     let transfer = if options.linear {
         Transfer::linear()
@@ -252,10 +261,19 @@ pub fn write_photo(
         }
     }
     match format {
-        ImageFormat::Png => write_png(writer, w, h, channels, sixteen_bit, &codes, icc, photo),
+        ImageFormat::Png => {
+            let png = PngImage {
+                width: w,
+                height: h,
+                channels,
+                sixteen_bit,
+                codes: &codes,
+            };
+            write_png(writer, png, icc, photo, options.record)
+        }
         ImageFormat::Tiff => {
             let samples = Samples::Codes(&codes, sixteen_bit);
-            write_tiff(writer, w, h, channels, samples, icc, photo)
+            write_tiff(writer, w, h, channels, samples, icc, photo, software)
         }
         ImageFormat::Jpeg => {
             let bytes: Vec<u8> = codes.iter().map(|&c| c as u8).collect();
@@ -265,7 +283,7 @@ pub fn write_photo(
                 samples: &bytes,
                 grey,
             };
-            write_jpeg(writer, jpeg, options.jpeg_quality, icc, photo)
+            write_jpeg(writer, jpeg, options.jpeg_quality, icc, photo, software)
         }
     }
 }
@@ -287,17 +305,29 @@ struct JpegImage<'a> {
     grey: bool,
 }
 
-#[allow(clippy::too_many_arguments)]
-fn write_png(
-    writer: impl Write,
+/// A PNG's samples: `channels` a pixel, 8- or 16-bit codes.
+struct PngImage<'a> {
     width: u32,
     height: u32,
     channels: usize,
     sixteen_bit: bool,
-    codes: &[u16],
+    codes: &'a [u16],
+}
+
+fn write_png(
+    writer: impl Write,
+    image: PngImage,
     icc: Option<&[u8]>,
     photo: Option<&Photo>,
+    settings: &str,
 ) -> Result<(), String> {
+    let PngImage {
+        width,
+        height,
+        channels,
+        sixteen_bit,
+        codes,
+    } = image;
     let mut info = png::Info::with_size(width, height);
     info.color_type = match channels {
         1 => png::ColorType::Grayscale,
@@ -325,10 +355,30 @@ fn write_png(
             .add_itxt_chunk(PNG_XMP_KEYWORD.into(), text)
             .map_err(|e| e.to_string())?;
     }
+    // What made the frame (`record`), in place of what a PNG shutter made said of it.
+    let ours = [
+        (record::PNG_VERSION, env!("CARGO_PKG_VERSION")),
+        (record::PNG_SETTINGS, settings),
+    ];
+    let mut international = Vec::new();
+    if !settings.is_empty() {
+        for (keyword, text) in ours {
+            let latin1 = text
+                .chars()
+                .all(|c| matches!(c, ' '..='~' | '\u{a1}'..='\u{ff}'));
+            if latin1 {
+                encoder
+                    .add_text_chunk(keyword.into(), text.into())
+                    .map_err(|e| e.to_string())?;
+            } else {
+                international.push(png::text_metadata::ITXtChunk::new(keyword, text));
+            }
+        }
+    }
     // The input PNG's text chunks, each in its own kind (one the encoder refuses, a keyword
     // over 79 bytes say, is left out rather than losing the frame).
-    let mut international = Vec::new();
-    for t in photo.map_or(&[][..], |p| &p.texts[..]) {
+    let carried = photo.map_or(&[][..], |p| &p.texts[..]).iter();
+    for t in carried.filter(|t| settings.is_empty() || !ours.iter().any(|o| o.0 == t.keyword)) {
         use crate::frame::TextKind;
         let (keyword, text) = (t.keyword.clone(), t.text.clone());
         let _ = match t.kind {
@@ -397,11 +447,12 @@ fn png_colour(info: &mut png::Info, colour: &PngColour) {
 }
 
 fn write_jpeg(
-    writer: impl Write,
+    mut writer: impl Write,
     image: JpegImage,
     quality: u8,
     icc: Option<&[u8]>,
     photo: Option<&Photo>,
+    comment: Option<&str>,
 ) -> Result<(), String> {
     use jpeg_encoder::{ChromaSubsamplingMethod, ColorType, Encoder, SamplingFactor};
     let error = |e: jpeg_encoder::EncodingError| e.to_string();
@@ -412,7 +463,9 @@ fn write_jpeg(
             "{width}x{height} is larger than JPEG allows (65535 a side)"
         ));
     };
-    let mut encoder = Encoder::new(writer, quality);
+    // Made whole first: the encoder writes no comment, which goes in after its APP segments.
+    let mut bytes = Vec::new();
+    let mut encoder = Encoder::new(&mut bytes, quality);
     let sampling = photo
         .and_then(|p| p.sampling)
         .and_then(|(h, v)| SamplingFactor::from_factors(h, v))
@@ -458,5 +511,9 @@ fn write_jpeg(
     } else {
         ColorType::Rgb
     };
-    encoder.encode(image.samples, w, h, color).map_err(error)
+    encoder.encode(image.samples, w, h, color).map_err(error)?;
+    if let Some(comment) = comment {
+        bytes = record::with_jpeg_comment(bytes, comment);
+    }
+    writer.write_all(&bytes).map_err(|e| e.to_string())
 }
