@@ -1032,3 +1032,68 @@ fn estimate_mib(args: &[&str]) -> u64 {
     let at = err.find("needs about ").expect("the estimate") + "needs about ".len();
     err[at..].split(' ').next().unwrap().parse().unwrap()
 }
+
+/// A channel named with an ESC sequence, a quote and a newline (an outside tester's
+/// `Z"\x1b[31m\n`): `info` printed it raw, colouring the terminal and breaking the table's
+/// line, where it escapes values; a missing-channel error quoting the file's channels printed
+/// it raw too. Both now show it escaped as values are, each on one line; JSON carries the name
+/// itself.
+#[test]
+fn a_channel_name_with_control_characters_is_printed_escaped() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("ctl.exr");
+    let hostile = "Z\"\u{1b}[31m\n";
+    write_exr(
+        &path,
+        4,
+        2,
+        vec![
+            ("R", vec![0.5; 8]),
+            ("G", vec![0.5; 8]),
+            ("B", vec![0.5; 8]),
+            (hostile, vec![1.0; 8]),
+        ],
+    );
+    let o = shutter(&["info", &s(&path)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(
+        !text.contains('\u{1b}'),
+        "an ESC reached the terminal:\n{text}"
+    );
+    let line = (text.lines().find(|l| l.trim_start().starts_with("Z\"")))
+        .unwrap_or_else(|| panic!("no line for the channel:\n{text}"));
+    assert!(
+        line.contains("Z\"\\u{1b}[31m\\n") && line.contains("f32"),
+        "{line}"
+    );
+
+    let o = shutter(&["info", &s(&path), "--json"]);
+    let document: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let names: Vec<&str> = (document["files"][0]["channels"].as_array().unwrap().iter())
+        .filter_map(|c| c["name"].as_str())
+        .collect();
+    assert!(names.contains(&hostile), "{names:?}");
+
+    let out = dir.path().join("o.exr");
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &s(&path),
+        "-o",
+        &s(&out),
+        "--algorithm",
+        "reconstruct",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        !err.contains('\u{1b}'),
+        "an ESC reached the terminal:\n{err}"
+    );
+    assert!(err.contains("Z\"\\u{1b}[31m\\n"), "{err}");
+    assert!(
+        err.lines().all(|l| l.starts_with("shutter: ")),
+        "a line was broken:\n{err}"
+    );
+}

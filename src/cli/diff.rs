@@ -2,12 +2,12 @@
 
 use std::path::Path;
 
-use crate::error::{Error, Result};
+use crate::error::{printable, Error, Result};
 use crate::io::preset::Preset;
 use crate::io::sequence::{parse_frames, PathPattern};
 
 use super::args::DiffArgs;
-use super::out;
+use super::out_text;
 
 /// Frames for a pair of patterns: `--frames`, else those on disk for the first (with a
 /// warning for the holes between them).
@@ -231,7 +231,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
                     m.error,
                     m.x,
                     m.y,
-                    m.channel,
+                    printable(&m.channel),
                     m.value_text(m.a),
                     m.value_text(m.b)
                 );
@@ -240,14 +240,14 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
                 if layer.largest.error > 0.0 || layer.non_finite > 0 {
                     text += &format!(
                         "{label}layer {} ({}): rmse {:.6}  mae {:.6}  largest {:.6} at ({}, {}) {}{}\n",
-                        layer.layer,
+                        printable(&layer.layer),
                         layer.class,
                         layer.rmse,
                         layer.mae,
                         layer.largest.error,
                         layer.largest.x,
                         layer.largest.y,
-                        layer.largest.channel,
+                        printable(&layer.largest.channel),
                         if layer.non_finite > 0 {
                             format!(", {} non-finite", layer.non_finite)
                         } else {
@@ -259,7 +259,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
             if !f.missing_channels.is_empty() {
                 text += &format!(
                     "{label}missing from the candidate: {}\n",
-                    f.missing_channels.join(", ")
+                    printable(&f.missing_channels.join(", "))
                 );
             }
             if let Some(region) = &f.region {
@@ -275,7 +275,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
                 report.entries()
             );
         }
-        out(&text)?;
+        out_text(&text)?;
     }
     if let Some(dir) = &args.report {
         crate::lab::diff::report::write(dir, &report)?;

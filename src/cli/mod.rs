@@ -4,11 +4,14 @@
 
 /// A line on stderr, as `eprintln!` writes it, where a write that fails (a full disk under a
 /// farm's log, a log reader gone) is let go: the line is lost, the run goes on, and its exit
-/// code is its work's. (`eprintln!` panics there: exit 101, the run stopped.)
+/// code is its work's. (`eprintln!` panics there: exit 101, the run stopped.) Every line is
+/// one line, its control characters escaped (`error::printable`): a name a file gave a
+/// message cannot colour the terminal or break the line.
 macro_rules! say {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        let _ = writeln!(std::io::stderr(), $($arg)*);
+        let line = $crate::error::printable(&format!($($arg)*));
+        let _ = writeln!(std::io::stderr(), "{line}");
     }};
 }
 
@@ -384,6 +387,13 @@ fn out(text: &str) -> Result<()> {
         .write_all(text.as_bytes())
         .and_then(|()| stdout.flush())
         .map_err(stdout_error)
+}
+
+/// Writes a command's text that quotes names from files (`info`, `diff`, `vectors`, a dry
+/// run's list) as [`out`] does, the control characters in each line escaped
+/// (`error::printable_lines`): the guard for a name that was not escaped where it was put in.
+fn out_text(text: &str) -> Result<()> {
+    out(&crate::error::printable_lines(text))
 }
 
 /// A failed write or flush of stdout, as the file problem it is: what was printed there is
