@@ -183,12 +183,20 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
     others.extend(sharp.as_ref());
     let (frames, hole_warnings) = frames_for(&a, &others, args.frames.as_deref())?;
     // A heatmap that names an input is refused by the run, before anything is written,
-    // with each view's name (`lab::diff::views`).
+    // with each view's name (`lab::diff::views`). Its form follows the inputs', as blur's
+    // -o does: a pattern of single files would be written under its placeholder's name
+    // (`one.####.png`).
     if let Some(heatmap) = &heatmap {
         if frames.len() > 1 && !heatmap.is_sequence() {
             return Err(Error::usage(
                 "--heatmap must be a pattern with #### or %04d when comparing sequences",
             ));
+        }
+        if !a.is_sequence() && heatmap.is_sequence() {
+            return Err(Error::usage(format!(
+                "--heatmap '{}' is a frame pattern but the inputs are single files; give a                  file name ending in .png (or input patterns and --frames)",
+                heatmap.raw
+            )));
         }
     }
     let job = crate::lab::diff::DiffJob {
@@ -223,7 +231,11 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
             let m = &f.largest;
             text += &format!(
                 "{label}every channel ({}): mean error {:.6}  rms error {:.6}  psnr {:.2} dB (peak {})\n",
-                e.channels, e.mean_error, e.rms_error, e.psnr, e.psnr_peak
+                e.channels,
+                e.mean_error,
+                e.rms_error,
+                e.psnr,
+                crate::numeric::shown_sample(e.psnr_peak)
             );
             if m.error > 0.0 {
                 text += &format!(

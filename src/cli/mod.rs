@@ -112,7 +112,7 @@ fn parse_and_run() -> i32 {
         Command::Vectors(a) => ("vectors", a.json),
     };
     let failed = |error: &Error, code: i32| {
-        print_error(error);
+        print_error_of(command, error);
         // Unless the command printed its own document with the error in it (info).
         if json && !JSON_PRINTED.load(std::sync::atomic::Ordering::Relaxed) {
             if let Err(lost) = out_json(&error_json(command, error, code)) {
@@ -430,6 +430,13 @@ fn flush_stdout(code: i32) -> i32 {
 const MAX_PRINTED_PROBLEMS: usize = 20;
 
 fn print_error(error: &Error) {
+    print_error_of("", error);
+}
+
+/// [`print_error`] of a failed `command`, whose summary of several problems says what the
+/// command left undone in its own words: blur writes no frame a problem concerns; diff
+/// compares nothing when an input cannot be read (it writes no output of a run it stops).
+fn print_error_of(command: &str, error: &Error) {
     match error {
         Error::Usage(message) | Error::Device(message) => say!("shutter: error: {message}"),
         Error::Files(problems) => {
@@ -443,10 +450,12 @@ fn print_error(error: &Error) {
                 );
             }
             if problems.len() > 1 {
-                say!(
-                    "shutter: {} problems found; nothing was written for the frames concerned",
-                    problems.len()
-                );
+                let left = match command {
+                    "blur" | "dof" => "; nothing was written for the frames concerned",
+                    "diff" => "; nothing was compared",
+                    _ => "",
+                };
+                say!("shutter: {} problems found{left}", problems.len());
             }
         }
     }
