@@ -5,6 +5,41 @@
 use std::fmt;
 use std::path::PathBuf;
 
+/// `text` as a terminal may be given it: every control character (ESC, a newline, a tab,
+/// DEL, the C1 controls) and every bidirectional override or isolate written as Rust's escape
+/// of it (`\u{1b}`, `\n`), everything else as it is (`lumière.R`, `"`, `\`). A name read from
+/// a file is printed through this, so that a hostile channel `Z\x1b[31m\n` shows as
+/// `Z\u{1b}[31m\n` on one line instead of colouring the terminal and breaking the line;
+/// `shutter info` shows values the same way (`{:?}`).
+pub fn printable(text: &str) -> String {
+    let mut shown = String::with_capacity(text.len());
+    for c in text.chars() {
+        if c.is_control() || is_bidi_control(c) {
+            shown.extend(c.escape_debug());
+        } else {
+            shown.push(c);
+        }
+    }
+    shown
+}
+
+/// [`printable`] of each line of `text`, the line breaks kept: a command's output of many
+/// lines, whose names were escaped where they were put in (this is the guard for any that
+/// were not).
+pub fn printable_lines(text: &str) -> String {
+    text.split('\n')
+        .map(printable)
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The Unicode format chars that reorder the text around them (U+200E/F marks, U+202A to
+/// U+202E embeddings and overrides, U+2066 to U+2069 isolates): a name holding one could show
+/// as another ("Trojan Source").
+fn is_bidi_control(c: char) -> bool {
+    matches!(c, '\u{200e}' | '\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
+}
+
 /// What kind of problem a file has. Tests and callers match on this, users read the message.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ProblemKind {
@@ -208,7 +243,7 @@ impl fmt::Display for Problem {
             ProblemKind::WriteFailed => "cannot write",
             ProblemKind::Changed => "changed",
         };
-        write!(f, "{what}: {}", self.path.display())?;
+        write!(f, "{what}: {}", printable(&self.path.display().to_string()))?;
         if let Some(frame) = self.frame {
             write!(f, ", frame {frame}")?;
         }
@@ -216,10 +251,11 @@ impl fmt::Display for Problem {
             write!(f, ", {pass} pass")?;
         }
         if let Some(channel) = &self.channel {
-            write!(f, ", channel {channel}")?;
+            write!(f, ", channel {}", printable(channel))?;
         }
-        // Keep the message on one line whatever the underlying error printed.
-        let detail = self.detail.replace('\n', " ");
+        // Keep the message on one line whatever the underlying error printed, and a name from
+        // a file that holds control characters from reaching the terminal raw.
+        let detail = printable(&self.detail.replace('\n', " "));
         write!(f, ": {detail}")
     }
 }
@@ -300,6 +336,26 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A hostile name's ESC, newline and bidirectional override are escaped; what a name may
+    /// hold besides (UTF-8, quotes, backslashes, spaces) is left as it is.
+    #[test]
+    fn printable_escapes_control_characters_only() {
+        assert_eq!(printable("Z\"\u{1b}[31m\n"), "Z\"\\u{1b}[31m\\n");
+        assert_eq!(printable("a\tb\u{7f}\u{9b}"), "a\\tb\\u{7f}\\u{9b}");
+        assert_eq!(printable("x\u{202e}y"), "x\\u{202e}y");
+        assert_eq!(
+            printable("lumière.R \"q\" a\\b 前景"),
+            "lumière.R \"q\" a\\b 前景"
+        );
+        assert_eq!(printable_lines("a\u{1b}\nb\n"), "a\\u{1b}\nb\n");
+        let problem = Problem::new(ProblemKind::MissingChannel, "f.exr", "has Z\u{1b}[0m")
+            .channel("V\u{1b}".to_string());
+        assert_eq!(
+            problem.to_string(),
+            "missing channel: f.exr, channel V\\u{1b}: has Z\\u{1b}[0m"
+        );
+    }
 
     /// The rule README's exit codes give: errno by errno, which write failures a retry may
     /// cure (75) and which it cannot (1).

@@ -78,6 +78,28 @@ pub fn shown(v: f64) -> String {
     }
 }
 
+/// [`shown`] of an `f32`: as short as reads back as the same f32 (`1.3`, not the
+/// `1.2999999523162842` of the f64 it widens to).
+pub fn shown_f32(v: f32) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e15).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// A figure taken from an image's samples and held as f64 (idiff's PSNR peak, the largest
+/// magnitude in either image): as [`shown_f32`] where it is an f32 sample widened, else as
+/// [`shown`] (a u32 ID beyond 2^24, which no f32 holds).
+pub fn shown_sample(v: f64) -> String {
+    let narrow = v as f32;
+    if f64::from(narrow) == v {
+        shown_f32(narrow)
+    } else {
+        shown(v)
+    }
+}
+
 /// would overflow to ±Inf; NaN stays NaN (the numeric policy leaves none in colour).
 pub fn half_saturated(v: f32) -> exr::prelude::f16 {
     use exr::prelude::f16;

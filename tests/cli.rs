@@ -1619,3 +1619,40 @@ fn dof_without_depth_names_every_way_to_give_it() {
     let err = assert_fails_cleanly(&args, &out_dir, &["depth pass", "--depth FILE"]);
     assert!(!err.contains("--coc-map"), "{err}");
 }
+
+/// `%%` in a path is one `%` as printf writes it: `-o 'b.%%d.exr'` for a single input wrote
+/// `b.%1.exr` (the `%d` after the escape taken for a frame placeholder); a sequence's
+/// `o.%%.%04d.exr` writes `o.%.0001.exr`.
+#[test]
+fn a_doubled_percent_in_a_path_is_one_percent_sign() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 8, 6);
+    let copy = |color: &str, out: &str, extra: &[&str]| {
+        let mut args = vec!["blur", "--algorithm", "none", "--color", color, "-o", out];
+        args.extend(extra);
+        shutter(&args)
+    };
+    let out = dir.path().join("b");
+    let o = copy(
+        &s(&dir.path().join("C.exr")),
+        &s(&out.join("b.%%d.exr")),
+        &[],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let written: Vec<String> = (std::fs::read_dir(&out).unwrap().flatten())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| !n.starts_with('.'))
+        .collect();
+    assert_eq!(written, ["b.%d.exr"]);
+    for frame in [1, 2] {
+        write_canonical_frame(dir.path(), Some(frame), 8, 6);
+    }
+    let seq = dir.path().join("s");
+    let o = copy(
+        &s(&dir.path().join("C.%04d.exr")),
+        &s(&seq.join("o.%%.%04d.exr")),
+        &["--frames", "1-2"],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(seq.join("o.%.0001.exr").exists() && seq.join("o.%.0002.exr").exists());
+}

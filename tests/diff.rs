@@ -1672,3 +1672,84 @@ fn a_data_file_s_part_of_another_window_is_left_out_and_named() {
         "{report}"
     );
 }
+
+/// diff's errors in diff's words (an outside tester): a file that could not be read was named
+/// by blur's "color pass" (diff reads no passes), the summary said "nothing was written for
+/// the frames concerned" (diff compares; it stopped before comparing anything), and one bad
+/// file given as both inputs printed the same line twice.
+#[test]
+fn diff_s_errors_are_its_own_and_said_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = pair(dir.path(), "good.exr", 12, 8, 1, 0.0);
+    let bytes = std::fs::read(&good).unwrap();
+    let (bad, other) = (dir.path().join("bad.exr"), dir.path().join("other.exr"));
+    std::fs::write(&bad, &bytes[..40]).unwrap();
+    std::fs::write(&other, &bytes[..60]).unwrap();
+    let errors = |err: &str| {
+        err.lines()
+            .filter(|l| l.starts_with("shutter: error:"))
+            .count()
+    };
+    let o = shutter(&["diff", &s(&bad), &s(&bad)]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert_eq!(errors(&err), 1, "{err}");
+    assert!(err.contains("bad.exr") && !err.contains("pass"), "{err}");
+    assert!(!err.contains("problems found"), "{err}");
+    let o = shutter(&["diff", &s(&bad), &s(&other)]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert_eq!(errors(&err), 2, "{err}");
+    assert!(!err.contains("pass") && !err.contains("written"), "{err}");
+    assert!(
+        err.contains("shutter: 2 problems found; nothing was compared"),
+        "{err}"
+    );
+}
+
+/// idiff's peak was printed as the f64 the f32 sample widens to ("peak 1.2999999523162842");
+/// it is printed as short as reads back as the sample.
+#[test]
+fn the_psnr_peak_is_printed_as_the_sample_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (4, 2);
+    let colour = |r: f32| {
+        vec![
+            ("R", vec![r; w * h]),
+            ("G", vec![0.5; w * h]),
+            ("B", vec![0.5; w * h]),
+        ]
+    };
+    let (a, b) = (dir.path().join("a.exr"), dir.path().join("b.exr"));
+    write_exr(&a, w, h, colour(1.3));
+    write_exr(&b, w, h, colour(1.2));
+    let o = shutter(&["diff", &s(&a), &s(&b)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("(peak 1.3)"), "{text}");
+    assert!(!text.contains("1.29999"), "{text}");
+}
+
+/// `--heatmap 'hm/one.####.png'` comparing two single files wrote a file named
+/// `one.####.png`; as blur refuses a pattern `-o` for single inputs (and diff a heatmap that
+/// is no pattern for sequences), it is refused, nothing written.
+#[test]
+fn a_heatmap_pattern_for_single_files_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = pair(dir.path(), "a.exr", 12, 8, 1, 0.0);
+    let b = pair(dir.path(), "b.exr", 12, 8, 2, 0.0);
+    let folder = dir.path().join("hm");
+    for heatmap in ["one.####.png", "one.%04d.png"] {
+        let o = shutter(&["diff", &a, &b, "--heatmap", &s(&folder.join(heatmap))]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        let err = stderr(&o);
+        assert!(
+            err.contains("--heatmap") && err.contains("single files"),
+            "{err}"
+        );
+        assert!(!folder.exists(), "{heatmap}: something was written");
+    }
+    let o = shutter(&["diff", &a, &b, "--heatmap", &s(&folder.join("one.png"))]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(folder.join("one.png").exists());
+}

@@ -1032,3 +1032,149 @@ fn estimate_mib(args: &[&str]) -> u64 {
     let at = err.find("needs about ").expect("the estimate") + "needs about ".len();
     err[at..].split(' ').next().unwrap().parse().unwrap()
 }
+
+/// A channel named with an ESC sequence, a quote and a newline (an outside tester's
+/// `Z"\x1b[31m\n`): `info` printed it raw, colouring the terminal and breaking the table's
+/// line, where it escapes values; a missing-channel error quoting the file's channels printed
+/// it raw too. Both now show it escaped as values are, each on one line; JSON carries the name
+/// itself.
+#[test]
+fn a_channel_name_with_control_characters_is_printed_escaped() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("ctl.exr");
+    let hostile = "Z\"\u{1b}[31m\n";
+    write_exr(
+        &path,
+        4,
+        2,
+        vec![
+            ("R", vec![0.5; 8]),
+            ("G", vec![0.5; 8]),
+            ("B", vec![0.5; 8]),
+            (hostile, vec![1.0; 8]),
+        ],
+    );
+    let o = shutter(&["info", &s(&path)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(
+        !text.contains('\u{1b}'),
+        "an ESC reached the terminal:\n{text}"
+    );
+    let line = (text.lines().find(|l| l.trim_start().starts_with("Z\"")))
+        .unwrap_or_else(|| panic!("no line for the channel:\n{text}"));
+    assert!(
+        line.contains("Z\"\\u{1b}[31m\\n") && line.contains("f32"),
+        "{line}"
+    );
+
+    let o = shutter(&["info", &s(&path), "--json"]);
+    let document: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let names: Vec<&str> = (document["files"][0]["channels"].as_array().unwrap().iter())
+        .filter_map(|c| c["name"].as_str())
+        .collect();
+    assert!(names.contains(&hostile), "{names:?}");
+
+    let out = dir.path().join("o.exr");
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &s(&path),
+        "-o",
+        &s(&out),
+        "--algorithm",
+        "reconstruct",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        !err.contains('\u{1b}'),
+        "an ESC reached the terminal:\n{err}"
+    );
+    assert!(err.contains("Z\"\\u{1b}[31m\\n"), "{err}");
+    assert!(
+        err.lines().all(|l| l.starts_with("shutter: ")),
+        "a line was broken:\n{err}"
+    );
+}
+
+/// A TIFF cut short said "failed to fill whole buffer" (the standard library's words for a
+/// read past the end), where a cut PNG, JPEG or EXR says it is truncated (an outside
+/// tester's deflate TIFF). Both cuts: one through the image data after the header (a
+/// deflated strip, the directory first), one through the directory a writer put after the
+/// data (the tiff crate's LZW).
+#[test]
+fn a_truncated_tiff_is_named_truncated() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (32u16, 32u16);
+    let pixels: Vec<u8> = (noise(w as usize * h as usize * 3, 5, 0.0, 255.0).iter())
+        .map(|&v| v as u8)
+        .collect();
+    // Little-endian TIFF, its directory at byte 8 and the deflated strip after it.
+    let strip = miniz_oxide::deflate::compress_to_vec_zlib(&pixels, 6);
+    let (bits_at, data_at) = (8 + 2 + 10 * 12 + 4, 8 + 2 + 10 * 12 + 4 + 6);
+    let mut deflated = b"II*\0\x08\0\0\0".to_vec();
+    deflated.extend(10u16.to_le_bytes());
+    let short = |tag: u16, count: u32, value: u32| (tag, 3u16, count, value);
+    for (tag, kind, count, value) in [
+        short(256, 1, w.into()),
+        short(257, 1, h.into()),
+        short(258, 3, bits_at as u32),
+        short(259, 1, 8),
+        short(262, 1, 2),
+        (273, 4, 1, data_at as u32),
+        short(277, 1, 3),
+        short(278, 1, h.into()),
+        (279, 4, 1, strip.len() as u32),
+        short(284, 1, 1),
+    ] {
+        deflated.extend(tag.to_le_bytes());
+        deflated.extend(kind.to_le_bytes());
+        deflated.extend(count.to_le_bytes());
+        deflated.extend(value.to_le_bytes());
+    }
+    deflated.extend(0u32.to_le_bytes());
+    deflated.extend([8, 0, 8, 0, 8, 0]);
+    assert_eq!(deflated.len(), data_at);
+    deflated.extend(&strip);
+    let mut lzw = std::io::Cursor::new(Vec::new());
+    (tiff::encoder::TiffEncoder::new(&mut lzw).unwrap())
+        .with_compression(tiff::encoder::Compression::Lzw)
+        .write_image::<tiff::encoder::colortype::RGB8>(w.into(), h.into(), &pixels)
+        .unwrap();
+    let lzw = lzw.into_inner();
+    for (name, bytes) in [("deflated.tif", deflated), ("lzw.tif", lzw)] {
+        // Whole, it is read.
+        let path = dir.path().join(name);
+        std::fs::write(&path, &bytes).unwrap();
+        let out = dir.path().join("o.png");
+        let blur = |path: &std::path::Path| {
+            let args = [
+                "blur",
+                "--color",
+                &s(path),
+                "-o",
+                &s(&out),
+                "--algorithm",
+                "none",
+            ];
+            shutter(&args)
+        };
+        let o = blur(&path);
+        assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
+        std::fs::remove_file(&out).unwrap();
+        let cut = dir.path().join(format!("cut_{name}"));
+        std::fs::write(&cut, &bytes[..bytes.len() * 2 / 3]).unwrap();
+        let info = shutter(&["info", &s(&cut)]);
+        let o = blur(&cut);
+        assert_eq!(o.status.code(), Some(1), "{name}: {}", stderr(&o));
+        for err in [stderr(&o), stderr(&info)].iter().filter(|e| !e.is_empty()) {
+            assert!(
+                err.contains(&format!("cut_{name}")) && err.contains("truncated"),
+                "{name}: {err}"
+            );
+            assert!(!err.contains("fill whole buffer"), "{name}: {err}");
+        }
+        assert!(!out.exists(), "{name}: written from a cut file");
+    }
+}

@@ -28,11 +28,13 @@ pub fn text_of(t: &exr::meta::attribute::Text) -> String {
     String::from_utf8(t.bytes().to_vec()).unwrap_or_else(|_| t.to_string())
 }
 
-/// A name as shutter holds it, shown: as it is, since [`crate::io::channels::name_of`]
+/// A name as shutter holds it, shown in text: as it is, since [`crate::io::channels::name_of`]
 /// reads names as UTF-8 already (`lumière.R`, not `lumiÃ¨re.R`; a byte that is not UTF-8
-/// shows as its escape char).
+/// shows as its escape char), but for its control characters, escaped as values are
+/// (`Z\u{1b}[31m\n`: a hostile name neither colours the terminal nor breaks the line).
+/// JSON carries the name itself: its strings escape what they must.
 pub fn shown_name(name: &str) -> String {
-    name.to_string()
+    crate::error::printable(name)
 }
 
 /// An attribute's type name, its value in text and in JSON.

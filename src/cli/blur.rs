@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::pipeline::{run, Event};
 
 use super::args::BlurArgs;
-use super::out;
+use super::out_text;
 use super::resolve;
 
 pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
@@ -68,7 +68,10 @@ pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
         // Every warning, one line, on a terminal or a pipe (a farm's log), unless --quiet.
         Event::Warning(_) if quiet => {}
         Event::Warning(message) => match &bar {
-            Some(b) => b.println(format!("shutter: warning: {message}")),
+            Some(b) => b.println(format!(
+                "shutter: warning: {}",
+                crate::error::printable(&message)
+            )),
             None => say!("shutter: warning: {message}"),
         },
     };
@@ -93,7 +96,7 @@ pub fn blur(args: BlurArgs, dof: bool) -> Result<()> {
                 format!("{frame}: {} {}{why}\n", p.action, p.output.display())
             })
             .collect();
-        out(&text)?;
+        out_text(&text)?;
     } else if verbose || terminal {
         say!(
             "shutter: {} frames written, {} skipped in {:.2} s (read {:.2} s, process {:.2} s, write {:.2} s)",

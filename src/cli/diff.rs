@@ -2,12 +2,12 @@
 
 use std::path::Path;
 
-use crate::error::{Error, Result};
+use crate::error::{printable, Error, Result};
 use crate::io::preset::Preset;
 use crate::io::sequence::{parse_frames, PathPattern};
 
 use super::args::DiffArgs;
-use super::out;
+use super::out_text;
 
 /// Frames for a pair of patterns: `--frames`, else those on disk for the first (with a
 /// warning for the holes between them).
@@ -183,12 +183,20 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
     others.extend(sharp.as_ref());
     let (frames, hole_warnings) = frames_for(&a, &others, args.frames.as_deref())?;
     // A heatmap that names an input is refused by the run, before anything is written,
-    // with each view's name (`lab::diff::views`).
+    // with each view's name (`lab::diff::views`). Its form follows the inputs', as blur's
+    // -o does: a pattern of single files would be written under its placeholder's name
+    // (`one.####.png`).
     if let Some(heatmap) = &heatmap {
         if frames.len() > 1 && !heatmap.is_sequence() {
             return Err(Error::usage(
                 "--heatmap must be a pattern with #### or %04d when comparing sequences",
             ));
+        }
+        if !a.is_sequence() && heatmap.is_sequence() {
+            return Err(Error::usage(format!(
+                "--heatmap '{}' is a frame pattern but the inputs are single files; give a                  file name ending in .png (or input patterns and --frames)",
+                heatmap.raw
+            )));
         }
     }
     let job = crate::lab::diff::DiffJob {
@@ -223,7 +231,11 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
             let m = &f.largest;
             text += &format!(
                 "{label}every channel ({}): mean error {:.6}  rms error {:.6}  psnr {:.2} dB (peak {})\n",
-                e.channels, e.mean_error, e.rms_error, e.psnr, e.psnr_peak
+                e.channels,
+                e.mean_error,
+                e.rms_error,
+                e.psnr,
+                crate::numeric::shown_sample(e.psnr_peak)
             );
             if m.error > 0.0 {
                 text += &format!(
@@ -231,7 +243,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
                     m.error,
                     m.x,
                     m.y,
-                    m.channel,
+                    printable(&m.channel),
                     m.value_text(m.a),
                     m.value_text(m.b)
                 );
@@ -240,14 +252,14 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
                 if layer.largest.error > 0.0 || layer.non_finite > 0 {
                     text += &format!(
                         "{label}layer {} ({}): rmse {:.6}  mae {:.6}  largest {:.6} at ({}, {}) {}{}\n",
-                        layer.layer,
+                        printable(&layer.layer),
                         layer.class,
                         layer.rmse,
                         layer.mae,
                         layer.largest.error,
                         layer.largest.x,
                         layer.largest.y,
-                        layer.largest.channel,
+                        printable(&layer.largest.channel),
                         if layer.non_finite > 0 {
                             format!(", {} non-finite", layer.non_finite)
                         } else {
@@ -259,7 +271,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
             if !f.missing_channels.is_empty() {
                 text += &format!(
                     "{label}missing from the candidate: {}\n",
-                    f.missing_channels.join(", ")
+                    printable(&f.missing_channels.join(", "))
                 );
             }
             if let Some(region) = &f.region {
@@ -275,7 +287,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
                 report.entries()
             );
         }
-        out(&text)?;
+        out_text(&text)?;
     }
     if let Some(dir) = &args.report {
         crate::lab::diff::report::write(dir, &report)?;

@@ -9,7 +9,8 @@ use crate::io::passes::{pass_layers, passes_found, suggest, Suggestion};
 use crate::io::preset::{Preset, BUILTIN};
 
 use super::args::InfoArgs;
-use super::out;
+use super::attributes::shown_name;
+use super::out_text;
 
 pub fn info(args: InfoArgs) -> Result<()> {
     let presets: Vec<Preset> = BUILTIN
@@ -76,7 +77,7 @@ pub fn info(args: InfoArgs) -> Result<()> {
         if args.json {
             documents.push(info_json(&shown));
         } else {
-            out(&info_text(&shown))?;
+            out_text(&info_text(&shown))?;
         }
     }
     if args.json {
@@ -183,19 +184,20 @@ fn info_text(shown: &Shown) -> String {
     ));
     if let Some(views) = &info.views {
         let read = match view {
-            Some(view) => format!("; presets matched in view {view}"),
+            Some(view) => format!("; presets matched in view {}", shown_name(view)),
             None => format!(
                 "; no default view ({}): choose one with --view",
-                views.no_default.as_deref().unwrap_or("none named")
+                shown_name(views.no_default.as_deref().unwrap_or("none named"))
             ),
         };
-        text.push_str(&format!("  views:          {}{read}\n", views.list()));
+        let list = shown_name(&views.list());
+        text.push_str(&format!("  views:          {list}{read}\n"));
     }
     text.push_str("  channels:\n");
     for c in &info.channels {
-        let name = super::attributes::shown_name(c.alias.as_ref().unwrap_or(&c.name));
+        let name = shown_name(c.alias.as_ref().unwrap_or(&c.name));
         let in_view = match (&info.views, &c.view) {
-            (Some(_), Some(v)) => format!("  view {v}"),
+            (Some(_), Some(v)) => format!("  view {}", shown_name(v)),
             (Some(_), None) => "  no view".to_string(),
             _ => String::new(),
         };
@@ -210,13 +212,15 @@ fn info_text(shown: &Shown) -> String {
     }
     for (part, rows) in attribute_rows(info) {
         text.push_str(&match part {
-            Some(name) => format!("  attributes ({name}):\n"),
+            Some(name) => format!("  attributes ({}):\n", shown_name(&name)),
             None => "  attributes:\n".to_string(),
         });
         for row in rows {
             text.push_str(&format!(
                 "    {:<28} {:<15} {}\n",
-                row.name, row.kind, row.text
+                shown_name(&row.name),
+                row.kind,
+                row.text
             ));
         }
     }
@@ -301,7 +305,7 @@ fn info_json(shown: &Shown) -> serde_json::Value {
             "read": view,
         })),
         "channels": info.channels.iter().map(|c| serde_json::json!({
-            "name": super::attributes::shown_name(c.alias.as_ref().unwrap_or(&c.name)),
+            "name": c.alias.as_ref().unwrap_or(&c.name),
             "type": c.sample_type,
             "class": class_of(info, c, layers, pass_layers).name(),
             "part": c.part,

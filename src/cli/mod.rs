@@ -4,11 +4,14 @@
 
 /// A line on stderr, as `eprintln!` writes it, where a write that fails (a full disk under a
 /// farm's log, a log reader gone) is let go: the line is lost, the run goes on, and its exit
-/// code is its work's. (`eprintln!` panics there: exit 101, the run stopped.)
+/// code is its work's. (`eprintln!` panics there: exit 101, the run stopped.) Every line is
+/// one line, its control characters escaped (`error::printable`): a name a file gave a
+/// message cannot colour the terminal or break the line.
 macro_rules! say {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        let _ = writeln!(std::io::stderr(), $($arg)*);
+        let line = $crate::error::printable(&format!($($arg)*));
+        let _ = writeln!(std::io::stderr(), "{line}");
     }};
 }
 
@@ -109,7 +112,7 @@ fn parse_and_run() -> i32 {
         Command::Vectors(a) => ("vectors", a.json),
     };
     let failed = |error: &Error, code: i32| {
-        print_error(error);
+        print_error_of(command, error);
         // Unless the command printed its own document with the error in it (info).
         if json && !JSON_PRINTED.load(std::sync::atomic::Ordering::Relaxed) {
             if let Err(lost) = out_json(&error_json(command, error, code)) {
@@ -386,6 +389,13 @@ fn out(text: &str) -> Result<()> {
         .map_err(stdout_error)
 }
 
+/// Writes a command's text that quotes names from files (`info`, `diff`, `vectors`, a dry
+/// run's list) as [`out`] does, the control characters in each line escaped
+/// (`error::printable_lines`): the guard for a name that was not escaped where it was put in.
+fn out_text(text: &str) -> Result<()> {
+    out(&crate::error::printable_lines(text))
+}
+
 /// A failed write or flush of stdout, as the file problem it is: what was printed there is
 /// lost.
 fn stdout_error(error: std::io::Error) -> Error {
@@ -420,6 +430,13 @@ fn flush_stdout(code: i32) -> i32 {
 const MAX_PRINTED_PROBLEMS: usize = 20;
 
 fn print_error(error: &Error) {
+    print_error_of("", error);
+}
+
+/// [`print_error`] of a failed `command`, whose summary of several problems says what the
+/// command left undone in its own words: blur writes no frame a problem concerns; diff
+/// compares nothing when an input cannot be read (it writes no output of a run it stops).
+fn print_error_of(command: &str, error: &Error) {
     match error {
         Error::Usage(message) | Error::Device(message) => say!("shutter: error: {message}"),
         Error::Files(problems) => {
@@ -433,10 +450,12 @@ fn print_error(error: &Error) {
                 );
             }
             if problems.len() > 1 {
-                say!(
-                    "shutter: {} problems found; nothing was written for the frames concerned",
-                    problems.len()
-                );
+                let left = match command {
+                    "blur" | "dof" => "; nothing was written for the frames concerned",
+                    "diff" => "; nothing was compared",
+                    _ => "",
+                };
+                say!("shutter: {} problems found{left}", problems.len());
             }
         }
     }

@@ -297,7 +297,7 @@ pub fn vectors(args: VectorsArgs) -> Result<i32> {
             (None, Some(why)) => out += &format!("undecided: {why}\n"),
             (None, None) => {}
         }
-        super::out(&out)?;
+        super::out_text(&out)?;
     }
     match (&args.write_preset, &text) {
         (Some(file), Some(text)) => {

@@ -337,7 +337,8 @@ impl FileInfo {
         self.channels
             .iter()
             .map(|c| {
-                let name = c.alias.clone().unwrap_or_else(|| c.name.clone());
+                // Escaped: a name is a file's, and this list goes into messages.
+                let name = crate::error::printable(c.alias.as_ref().unwrap_or(&c.name));
                 match self.unreadable(c) {
                     Some(_) => format!("{name} (in a part not read)"),
                     None => name,

@@ -349,11 +349,7 @@ pub const DEPTH_SCALE: (f32, f32) = (1e-6, 1e6);
 /// A preset's number as its message shows it: as written where that is short (`1e-40`, not
 /// the f64 the f32 widens to), in exponent form beyond.
 fn shown(v: f32) -> String {
-    if v == 0.0 || !v.is_finite() || (1e-4..1e15).contains(&v.abs()) {
-        format!("{v}")
-    } else {
-        format!("{v:e}")
-    }
+    crate::numeric::shown_f32(v)
 }
 
 /// Merges `over` into `base`: tables merge key by key, everything else is replaced.

@@ -49,8 +49,8 @@ impl Discovered {
 pub struct PathPattern {
     /// The path as the user gave it.
     pub raw: String,
-    /// Text before and after the placeholder, and the zero-padded width; `None` when the path
-    /// names one file.
+    /// Text before and after the placeholder (a `%%` of the file name as the `%` it stands
+    /// for), and the zero-padded width; `None` when the path names one file.
     placeholder: Option<(String, String, usize)>,
 }
 
@@ -59,6 +59,12 @@ impl PathPattern {
     /// or more `@`, one per digit: a single `@` is left alone, as in `icon@2x.png`) in the file
     /// name part of a path: the same characters in a folder's name (`take#2/`) are part of
     /// that name.
+    ///
+    /// The file name is read as ffmpeg reads its image-sequence patterns, printf's rules where
+    /// a pipeline expects them: `%%` is one `%` (`b.%%d.exr` names the file `b.%d.exr`, not a
+    /// sequence `b.%1.exr`), and `%Nd` pads with zeros as `%0Nd` does, not with printf's
+    /// spaces (a frame number padded with spaces is no renderer's or compositor's file name;
+    /// Nuke and ffmpeg users write `%04d`, and `%4d` meant the same to them).
     pub fn parse(raw: &str) -> Result<Self> {
         let find = |raw: &str| {
             find_hashes(raw)
@@ -81,7 +87,7 @@ impl PathPattern {
         Ok(PathPattern {
             raw: raw.to_string(),
             placeholder: placeholder.map(|(start, end, width)| {
-                (raw[..start].to_string(), raw[end..].to_string(), width)
+                (literal(&raw[..start]), raw[end..].replace("%%", "%"), width)
             }),
         })
     }
@@ -96,7 +102,7 @@ impl PathPattern {
             (Some((before, after, width)), Some(frame)) => {
                 PathBuf::from(format!("{before}{frame:0width$}{after}"))
             }
-            _ => PathBuf::from(&self.raw),
+            _ => PathBuf::from(literal(&self.raw)),
         }
     }
 
@@ -105,7 +111,7 @@ impl PathPattern {
     pub fn with_hashes(&self) -> String {
         match &self.placeholder {
             Some((before, after, width)) => format!("{before}{}{after}", "#".repeat(*width)),
-            None => self.raw.clone(),
+            None => literal(&self.raw),
         }
     }
 
@@ -182,6 +188,13 @@ fn frame_spelled(text: &str, width: usize) -> Option<std::result::Result<i64, Be
 #[derive(Debug, PartialEq, Eq)]
 struct Beyond;
 
+/// `path` with each `%%` of its file name written as the one `%` it stands for (printf's
+/// escape; [`PathPattern::parse`]); a folder's name is left as it is, as for placeholders.
+fn literal(path: &str) -> String {
+    let (folder, name) = path.split_at(name_start(path));
+    format!("{folder}{}", name.replace("%%", "%"))
+}
+
 /// Where the file name starts in `path`: after its last separator.
 pub(crate) fn name_start(path: &str) -> usize {
     path.rfind(std::path::is_separator).map_or(0, |i| i + 1)
@@ -224,10 +237,16 @@ fn find_ats(raw: &str) -> Option<(usize, usize, usize)> {
     None
 }
 
+/// `%0Nd`, `%Nd` (zero-padded to N digits either way) or `%d`; a `%%` is a `%` and starts
+/// none (`%%d` is the text `%d`).
 fn find_printf(raw: &str) -> Option<(usize, usize, usize)> {
     let bytes = raw.as_bytes();
     let mut i = 0;
     while i < bytes.len() {
+        if bytes[i] == b'%' && bytes.get(i + 1) == Some(&b'%') {
+            i += 2;
+            continue;
+        }
         if bytes[i] == b'%' {
             let mut j = i + 1;
             while j < bytes.len() && bytes[j].is_ascii_digit() {
@@ -458,6 +477,49 @@ mod tests {
         assert_eq!(p.path(Some(42)), PathBuf::from("a_0042.png"));
         let p = PathPattern::parse("a_%d.png").unwrap();
         assert_eq!(p.path(Some(42)), PathBuf::from("a_42.png"));
+    }
+
+    /// `%%` is one `%`, as printf and ffmpeg write it: `b.%%d.exr` was read as `b.%` and a
+    /// `%d` placeholder, and wrote `b.%1.exr`. A `%` of neither stays itself; a folder's name
+    /// is left as it is, as for every placeholder.
+    #[test]
+    fn a_doubled_percent_is_one_percent_sign() {
+        for (raw, single) in [
+            ("out/b.%%d.exr", "out/b.%d.exr"),
+            ("50%.exr", "50%.exr"),
+            ("a%%/c.%%04d.exr", "a%%/c.%04d.exr"),
+        ] {
+            let p = PathPattern::parse(raw).unwrap();
+            assert!(!p.is_sequence(), "{raw}");
+            assert_eq!(p.path(None), PathBuf::from(single), "{raw}");
+            assert_eq!(p.with_hashes(), single, "{raw}");
+        }
+        for (raw, frame_7, hashes) in [
+            ("b.%%.%04d.exr", "b.%.0007.exr", "b.%.####.exr"),
+            ("b.%%%04d.exr", "b.%0007.exr", "b.%####.exr"),
+            ("50%%_####.exr", "50%_0007.exr", "50%_####.exr"),
+        ] {
+            let p = PathPattern::parse(raw).unwrap();
+            assert_eq!(p.path(Some(7)), PathBuf::from(frame_7), "{raw}");
+            assert_eq!(p.with_hashes(), hashes, "{raw}");
+        }
+        assert!(PathPattern::parse("a.%04d.%%d.%d.exr").is_err());
+        // Discovery matches the names written.
+        let dir = tempfile::tempdir().unwrap();
+        for name in ["b.%.0001.exr", "b.%.0002.exr", "b.%%.0003.exr"] {
+            std::fs::write(dir.path().join(name), b"").unwrap();
+        }
+        let p = PathPattern::parse(&format!("{}/b.%%.%04d.exr", dir.path().display())).unwrap();
+        assert_eq!(p.discover().unwrap().frames, [1, 2]);
+    }
+
+    /// `%4d` pads with zeros as `%04d` does: ffmpeg's reading of its image-sequence patterns,
+    /// not printf's spaces (a frame number padded with spaces is nobody's file name).
+    #[test]
+    fn a_printf_width_without_a_zero_pads_with_zeros() {
+        let p = PathPattern::parse("a_%4d.png").unwrap();
+        assert_eq!(p.path(Some(42)), PathBuf::from("a_0042.png"));
+        assert_eq!(p.with_hashes(), "a_####.png");
     }
 
     #[test]

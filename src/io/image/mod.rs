@@ -18,6 +18,7 @@ mod profile;
 mod record;
 mod resolution;
 mod tiff_colour;
+mod tiff_cut;
 mod tiff_float;
 mod tiff_meta;
 mod tiff_write;
@@ -82,11 +83,22 @@ pub const NOT_SUPPORTED: &str = "not supported: ";
 
 /// The image crate's error in words, [`NOT_SUPPORTED`] first where it says the file uses a
 /// feature its decoder lacks (a TIFF of 32-bit integers) rather than that the file is bad.
+/// A read that met the end of the file is said as the truncation it is (the standard
+/// library's "failed to fill whole buffer" named no cause).
 fn image_error(e: image::ImageError) -> String {
     match e {
         image::ImageError::Unsupported(what) => format!("{NOT_SUPPORTED}{what}"),
+        image::ImageError::IoError(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+            "the file is truncated: it ends before the data its header declares".into()
+        }
         other => other.to_string(),
     }
+}
+
+/// [`image_error`] of a failed read of the image at `path`, where a TIFF cut short is said
+/// as such ([`tiff_cut::tiff_cut_short`]) whatever its decoder met at the cut.
+fn read_error(path: &Path, tiff: bool, e: image::ImageError) -> String {
+    (tiff.then(|| tiff_cut::tiff_cut_short(path)).flatten()).unwrap_or_else(|| image_error(e))
 }
 
 /// Why a JPEG cannot be read though it may be valid, from its frame header: a precision
@@ -165,10 +177,13 @@ pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
     } else {
         None
     };
-    if format == "png" {
-        if let Some(why) = png_mend::png_cut_short(path) {
-            return Err(why);
-        }
+    let cut = match format {
+        "png" => png_mend::png_cut_short(path),
+        "tiff" => tiff_cut::tiff_cut_short(path),
+        _ => None,
+    };
+    if let Some(why) = cut {
+        return Err(why);
     }
     let mut decoder = match reader.into_decoder() {
         Ok(decoder) => decoder,
@@ -294,16 +309,17 @@ pub fn read_planes(
             // within the same allowance.
             let header = tiff.then(|| tiff_float::header(path)).flatten();
             let Some(header) = header else {
-                return Err(image_error(e));
+                return Err(read_error(path, tiff, e));
             };
             let allowed = (declared.0 as u64)
                 .saturating_mul(declared.1 as u64)
                 .saturating_mul(LARGEST_PIXEL);
-            return tiff_float::read(path, &header, allowed);
+            return tiff_float::read(path, &header, allowed)
+                .map_err(|why| tiff_cut::tiff_cut_short(path).unwrap_or(why));
         }
     };
     let orientation = orientation(&mut decoder, path, png);
-    let mut image = DynamicImage::from_decoder(decoder).map_err(image_error)?;
+    let mut image = DynamicImage::from_decoder(decoder).map_err(|e| read_error(path, tiff, e))?;
     image.apply_orientation(orientation);
     let (width, height) = (image.width() as usize, image.height() as usize);
     let count = image.color().channel_count() as usize;

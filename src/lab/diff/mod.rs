@@ -327,6 +327,20 @@ fn outputs_in_the_way(job: &DiffJob, entries: &[Entry]) -> Vec<Problem> {
     problems
 }
 
+/// The error of a run stopped by `problems`, in diff's words: no pass named (the colour it
+/// compares is read as blur reads a colour pass, but diff has none: the file says which
+/// input it is), and a problem said once (one bad file given as both inputs was said twice).
+fn stopped(problems: Vec<Problem>) -> Error {
+    let mut said: Vec<Problem> = Vec::with_capacity(problems.len());
+    for mut problem in problems {
+        problem.pass = None;
+        if !said.contains(&problem) {
+            said.push(problem);
+        }
+    }
+    Error::Files(said)
+}
+
 /// Compares every frame, each view of a multi-view reference apart ([`views`]). Unreadable
 /// inputs, views the candidate lacks and size mismatches are errors (all of them reported);
 /// metric results, warnings and failures are in the report.
@@ -353,7 +367,7 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
     }
     problems.extend(views::heatmaps_over_inputs(job, &planned));
     if !problems.is_empty() {
-        return Err(Error::Files(problems));
+        return Err(stopped(problems));
     }
     let entries: Vec<Entry> = planned
         .iter()
@@ -389,7 +403,7 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
     problems.extend(entries.par_iter().flat_map(inputs).collect::<Vec<_>>());
     problems.extend(outputs_in_the_way(job, &entries));
     if !problems.is_empty() {
-        return Err(Error::Files(problems));
+        return Err(stopped(problems));
     }
     let results: Vec<std::result::Result<FrameDiff, Problem>> = entries
         .par_iter()
@@ -403,7 +417,7 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
         }
     }
     if !problems.is_empty() {
-        return Err(Error::Files(problems));
+        return Err(stopped(problems));
     }
     let worst = frames
         .iter()
