@@ -774,8 +774,8 @@ fn assert_upright(out: &Path) {
 
 /// A TIFF whose EXIF (IFD0's tags, its Exif and GPS directories), XMP and IPTC exiftool wrote,
 /// stored on its side with orientation 6: a TIFF, a JPEG and a PNG out of it hold them all
-/// again (but IPTC in a PNG, which has no place for it), as exiftool and OpenImageIO read
-/// them, the pixels turned upright once.
+/// again (but IPTC in a PNG, which has no place for it: the run says so), as exiftool and
+/// OpenImageIO read them, the pixels turned upright once.
 #[test]
 fn a_tiffs_exif_xmp_and_iptc_come_out_in_a_tiff_a_jpeg_and_a_png_turned_upright_once() {
     let dir = tempfile::tempdir().unwrap();
@@ -793,7 +793,10 @@ fn a_tiffs_exif_xmp_and_iptc_come_out_in_a_tiff_a_jpeg_and_a_png_turned_upright_
     velocity_map(&velocity, sh, sw, |_, _| 0.0);
     for (name, iptc) in [("out.tif", true), ("out.jpg", true), ("out.png", false)] {
         let out = dir.path().join(name);
-        blur(&input, &velocity, &out, &[]);
+        let o = blur(&input, &velocity, &out, &[]);
+        // What a PNG cannot hold is said, not dropped silently.
+        let said = stderr(&o).contains("IPTC");
+        assert_eq!(said, !iptc, "{name}: {}", stderr(&o));
         assert_upright(&out);
         assert_tagged(&exiftool(&out).unwrap(), iptc);
         if let Some(info) = oiiotool_info(&out) {

@@ -2583,7 +2583,10 @@ fn depth_of_field_on_pixels_that_are_not_square_is_warned_of() {
     let lens = [&LENS_ARGS[..], &["--json"]].concat();
     let warned = |stdout: Vec<u8>| -> bool {
         let report: serde_json::Value = serde_json::from_slice(&stdout).unwrap();
-        report["warnings"].to_string().contains("pixelAspectRatio")
+        let warnings = report["warnings"].to_string();
+        // One sentence, its lines joined by single spaces (a run of spaces was printed).
+        assert!(!warnings.contains("  "), "{warnings}");
+        warnings.contains("pixelAspectRatio")
     };
     let mut dof = vec!["dof"];
     dof.extend(&lens);

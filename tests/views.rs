@@ -300,6 +300,17 @@ fn a_view_comes_out_with_every_channel_its_mono_file_gives_and_the_others_are_na
         let mut got = read_exr_reference(&out);
         got.sort_by(|a, b| a.0.cmp(&b.0));
         assert_eq!(&got, want, "{view} of {stereo:?}");
+        // Run again with --skip-existing, it writes nothing and leaves no view out: nothing
+        // to say (an outside tester found it said it all the same).
+        let o = blur(
+            &s(stereo),
+            &out,
+            &["--view", view, "--json", "--skip-existing"],
+        );
+        let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        assert_eq!(report["frames_skipped"], 1, "{report}");
+        let warnings = report["warnings"].to_string();
+        assert!(!warnings.contains("other views"), "{warnings}");
     }
 }
 

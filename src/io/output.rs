@@ -572,7 +572,8 @@ fn exr_picture_profile(
 }
 
 /// What writing `frame` to `path` leaves out or changes, in words for the run's warnings (the
-/// caller names the output): blocks too large for a JPEG's segments, values an integer
+/// caller names the output): blocks too large for a JPEG's segments, IPTC a PNG cannot
+/// hold, values an integer
 /// output clips (a float input's above all), an alpha a JPEG cannot hold, a profile that
 /// cannot go with what is written, primaries an EXR cannot be told.
 pub fn output_notes(path: &Path, frame: &Frame, options: &OutputOptions) -> Vec<String> {
@@ -603,6 +604,13 @@ pub fn output_notes(path: &Path, frame: &Frame, options: &OutputOptions) -> Vec<
                 bytes.div_ceil(1024)
             ));
         }
+    }
+    // PNG has no settled place for IPTC (exiftool and libpng agree on none).
+    if let (ImageFormat::Png, Some(iptc)) = (format, photo.and_then(|p| p.iptc.as_ref())) {
+        notes.push(format!(
+            "the input's IPTC ({} bytes: captions, keywords, credits) has no place in a PNG:              the output leaves it out (a TIFF or JPEG output keeps it)",
+            iptc.len()
+        ));
     }
     let bits = picture_bits(photo, format, options);
     if let Err(why) = exr_picture_profile(frame, format, bits, options) {

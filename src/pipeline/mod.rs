@@ -324,16 +324,17 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             &mut report,
             on_event,
             format!(
-                "{}: its pixels are {aspect}:1 (pixelAspectRatio), and depth of field draws each                  bokeh round in pixels, so shown at that aspect it comes out {aspect} times as                  wide as tall; resize to square pixels first for a round one",
+                "{}: its pixels are {aspect}:1 (pixelAspectRatio), and depth of field draws each \
+                 bokeh round in pixels, so shown at that aspect it comes out {aspect} times as \
+                 wide as tall; resize to square pixels first for a round one",
                 path.unwrap_or_default()
             ),
         );
     }
-    if views.len() == 1 {
-        if let Some(warning) = plans.first().and_then(FramePlan::unwritten_views) {
-            warn(&mut report, on_event, warning);
-        }
-    }
+    // Said once the run knows it writes a frame (not by a rerun that skips them all).
+    let unwritten_views = (views.len() == 1)
+        .then(|| plans.first().and_then(FramePlan::unwritten_views))
+        .flatten();
     // What the frames need in memory, from their headers, against the limit.
     let (limit, said) = match job.max_memory {
         Some(limit) => (limit, String::new()),
@@ -411,6 +412,11 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                 inputs,
             });
         }
+        if report.planned.iter().any(|p| p.action != "skip") {
+            if let Some(warning) = unwritten_views {
+                warn(&mut report, on_event, warning);
+            }
+        }
         for warning in &job.warnings {
             warn(&mut report, on_event, warning.clone());
         }
@@ -438,6 +444,11 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             existing_output(job.skip_existing, record, plan, &output, &views)
         })
         .collect();
+    if !existing.iter().all(|e| matches!(e, Existing::Whole)) {
+        if let Some(warning) = unwritten_views {
+            warn(&mut report, on_event, warning);
+        }
+    }
     // A finished run run again writes nothing: it needs neither a folder it may write in
     // (a delivered sequence made read-only) nor the lock (an outside probe: it failed as
     // "not writable").
