@@ -381,6 +381,37 @@ fn no_source_file_is_over_800_lines() {
     assert!(long.is_empty(), "over {MOST_LINES} lines: {long:?}");
 }
 
+/// A message's lines joined in the source with a lost `\` continuation hold the next
+/// line's indentation: "draws each                  bokeh round" was printed so. No string
+/// literal on one line of `src/` holds a run of twelve spaces or more after a word (tables
+/// of `shutter info` align with fewer).
+#[test]
+fn no_message_holds_a_run_of_spaces_where_its_lines_were_joined() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut found = Vec::new();
+    for file in source_files() {
+        let code = std::fs::read_to_string(src.join(&file)).unwrap();
+        for (n, line) in code.lines().enumerate() {
+            if line.trim_start().starts_with("//") {
+                continue;
+            }
+            // The parts of the line inside quotes (every other part, split at each `"`).
+            let quoted = line.split('"').skip(1).step_by(2);
+            let run = " ".repeat(12);
+            let joined = quoted
+                .into_iter()
+                .any(|text| text.trim_start().contains(&run));
+            if joined {
+                found.push(format!("{}:{}", file.display(), n + 1));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "lines joined with their indentation: {found:?}"
+    );
+}
+
 /// docs/ARCHITECTURE.md's "Every file" section: the files it names, each resolved against the
 /// folder heading above it (a line that starts with `` `src/…/` ``).
 fn files_the_architecture_names() -> BTreeSet<PathBuf> {

@@ -194,7 +194,8 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
         }
         if !a.is_sequence() && heatmap.is_sequence() {
             return Err(Error::usage(format!(
-                "--heatmap '{}' is a frame pattern but the inputs are single files; give a                  file name ending in .png (or input patterns and --frames)",
+                "--heatmap '{}' is a frame pattern but the inputs are single files; give a \
+                 file name ending in .png (or input patterns and --frames)",
                 heatmap.raw
             )));
         }

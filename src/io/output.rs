@@ -608,7 +608,8 @@ pub fn output_notes(path: &Path, frame: &Frame, options: &OutputOptions) -> Vec<
     // PNG has no settled place for IPTC (exiftool and libpng agree on none).
     if let (ImageFormat::Png, Some(iptc)) = (format, photo.and_then(|p| p.iptc.as_ref())) {
         notes.push(format!(
-            "the input's IPTC ({} bytes: captions, keywords, credits) has no place in a PNG:              the output leaves it out (a TIFF or JPEG output keeps it)",
+            "the input's IPTC ({} bytes: captions, keywords, credits) has no place in a PNG: \
+             the output leaves it out (a TIFF or JPEG output keeps it)",
             iptc.len()
         ));
     }

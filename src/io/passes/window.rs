@@ -128,7 +128,10 @@ pub fn display_warning(pass: &str, info: &FileInfo, colour: &Windows) -> Option<
     (exr && display != colour.display).then(|| {
         let text = |w: &crate::frame::Window| DataWindow::from(*w).describe();
         format!(
-            "{pass}: the file's display window {} is not the color pass's {}: its pixels are              placed by their data window in the file's coordinates, right for an overscan              render of the same picture, wrong for one rendered at another resolution or              framing",
+            "{pass}: the file's display window {} is not the color pass's {}: its pixels are \
+             placed by their data window in the file's coordinates, right for an overscan \
+             render of the same picture, wrong for one rendered at another resolution or \
+             framing",
             text(&display),
             text(&colour.display)
         )
