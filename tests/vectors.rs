@@ -332,6 +332,69 @@ fn what_the_frames_cannot_tell_is_reported_not_chosen() {
     assert!(!preset.exists());
 }
 
+/// F5, a real Cycles render in small (160×90): a flat grey square moving 35 px a frame before
+/// a still checker wall of 22-pixel squares, its vectors stored as Blender stores them. The
+/// square has nothing to follow, so nothing fits better than no motion, and no motion is
+/// printed by the readings' own measure (each point's error capped at a pixel). Before, the
+/// wall's covered and uncovered points matched the checker a period away and no motion
+/// printed as an uncapped 7 px, beside "readings" of scale 0.02 that moved nothing.
+#[test]
+fn a_flat_square_before_a_checker_wall_is_reported_as_no_motion() {
+    let (cw, ch) = (160, 90);
+    let dir = tempfile::tempdir().unwrap();
+    for t in 1..=3i64 {
+        let corner = (25.0 + 35.0 * (t - 1) as f32, 24.0 + (t - 1) as f32);
+        let mut grey = vec![0.0; cw * ch];
+        let mut stored = (vec![0.0; cw * ch], vec![0.0; cw * ch]);
+        for y in 0..ch {
+            for x in 0..cw {
+                let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
+                let i = y * cw + x;
+                let on_square = (corner.0..corner.0 + 40.0).contains(&cx)
+                    && (corner.1..corner.1 + 40.0).contains(&cy);
+                grey[i] = if on_square {
+                    // to_prev, y up: where the square was a frame before, relative to now.
+                    stored.0[i] = -35.0;
+                    stored.1[i] = 1.0;
+                    0.45
+                } else if ((cx / 22.0).floor() as i64 + (cy / 22.0).floor() as i64) % 2 == 0 {
+                    0.8
+                } else {
+                    0.2
+                };
+            }
+        }
+        write_exr(
+            &dir.path().join(format!("c.{t:04}.exr")),
+            cw,
+            ch,
+            vec![
+                ("R", grey.clone()),
+                ("G", grey.clone()),
+                ("B", grey),
+                ("mv.x", stored.0),
+                ("mv.y", stored.1),
+            ],
+        );
+    }
+    let preset = dir.path().join("p.toml");
+    let o = fit(dir.path(), &preset);
+    let out = stdout(&o);
+    assert_eq!(o.status.code(), Some(1), "{out}");
+    assert!(
+        out.contains("undecided: nothing fits clearly better than no motion"),
+        "{out}"
+    );
+    let no_motion: f64 = out
+        .split("no motion fits to ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no motion's figure: {out}"));
+    assert!(no_motion <= 1.0, "{out}");
+    assert!(!preset.exists());
+}
+
 /// `blur` checks the preset's reading before it blurs: a wrong y axis is warned about, naming
 /// the reading that fits; the right one is not; `--check-vectors off` skips the check.
 #[test]

@@ -279,17 +279,24 @@ pub fn vectors(args: VectorsArgs) -> Result<i32> {
         }))?;
     } else {
         let mut out = format!(
-            "frame {frame}: motion measured at {} points ({:.2} s); no motion fits to {} px\n",
+            "frame {frame}: motion measured at {} points ({:.2} s); no motion fits to {} px \
+             (each point's error capped at {} px, as the readings' are)\n",
             result.points,
             seconds,
-            round(result.no_motion)
+            round(result.no_motion),
+            crate::io::passes::FIT_TRUNCATE
         );
         for (i, r) in result.readings.iter().take(4).enumerate() {
             out += &format!(
-                "  {} {} px  {}\n",
+                "  {} {} px  {}{}\n",
                 if i == 0 { "best" } else { "    " },
                 round(r.residual),
-                crate::io::passes::describe_reading(r)
+                crate::io::passes::describe_reading(r),
+                if r.is_still() {
+                    format!(" - moves the points {} px: no motion", round(r.motion))
+                } else {
+                    String::new()
+                }
             );
         }
         match (&text, &result.why) {

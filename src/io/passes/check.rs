@@ -351,6 +351,7 @@ fn stated(spec: &VectorSpec) -> Reading {
         scale: spec.scale,
         units: spec.units,
         residual: 0.0,
+        motion: 0.0,
         fitted_scale: [0.0; 2],
         consistent: true,
     }

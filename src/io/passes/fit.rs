@@ -9,10 +9,15 @@
 //!
 //! In: the luma of frame n and of n−1 and/or n+1, and the two stored components at n. Out:
 //! every reading's fit (its residual in pixels over the points, robust to occlusion: a point
-//! off by more than a pixel counts as a pixel), the residual of no motion, and a verdict: a
-//! reading chosen,
-//! or why none is (nothing fits better than no motion; two readings fit alike; an axis
-//! never moves, so its sign and scale are not seen).
+//! off by more than a pixel counts as a pixel), the residual of no motion by that same
+//! measure, and a verdict: a reading chosen, or why none is (nothing fits better than no
+//! motion; two readings fit alike; an axis never moves, so its sign and scale are not seen).
+//!
+//! No motion is scored like a reading (F5): as an uncapped RMS, the few points a tracker
+//! gets wrong (a point covered in the neighbour, matched to a look-alike tens of pixels
+//! away) made it several pixels, and any reading, even one of scale 0.02 that moves nothing,
+//! passed for "clearly better". A reading whose own motion is under the floor below which
+//! measured motion counts as none ([`STILL`]) is no motion, whatever it scores.
 
 use serde::Serialize;
 
@@ -43,9 +48,12 @@ pub struct Reading {
     pub zero: f32,
     pub scale: f32,
     pub units: Units,
-    /// RMS distance in pixels between the motion this reading gives and the motion measured
-    /// (the best four fifths of the points).
+    /// RMS distance in pixels between the motion this reading gives and the motion measured,
+    /// each point's distance capped at [`TRUNCATE`].
     pub residual: f64,
+    /// RMS in pixels of the motion this reading gives at the points (not capped): under
+    /// [`STILL`] the reading says no motion.
+    pub motion: f64,
     /// The scale fitted (one for both axes) in pixels per stored unit on each axis (the
     /// units' factor applied), before rounding.
     pub fitted_scale: [f64; 2],
@@ -58,7 +66,9 @@ pub struct Reading {
 pub struct Fit {
     /// Every reading, best first.
     pub readings: Vec<Reading>,
-    /// RMS of the measured motion: the residual of reading no motion at all.
+    /// The residual of reading no motion at all, by the readings' measure (each point's
+    /// motion capped at [`TRUNCATE`]), toward the neighbour the best reading looks to (of
+    /// all the points where there is no reading).
     pub no_motion: f64,
     /// Points where motion was measured.
     pub points: usize,
@@ -222,6 +232,13 @@ fn track(a: &[Level], b: &[Level], (x, y): (usize, usize), texture: f32) -> Opti
                 }
             }
         }
+        // A best on the rim of the coarsest search is no match: the true one may lie beyond
+        // it, or be hidden (a point uncovered or covered by the motion), and what the rim
+        // offers is a look-alike (on a periodic wall, the pattern one period away: F5's
+        // checker, whose 22-pixel squares matched at (±22, ±22), the rim at 160×90).
+        if level == top && (best.1 .0.abs() == radius || best.1 .1.abs() == radius) {
+            return None;
+        }
         d = best.1;
     }
     let (la, lb) = (&a[0], &b[0]);
@@ -291,7 +308,11 @@ fn points(l: &Level, max_points: usize) -> Vec<((usize, usize), f32)> {
 }
 
 /// A distance beyond which a point counts as not fitting at all (occlusion, a mismatch).
-const TRUNCATE: f64 = 1.0;
+pub const TRUNCATE: f64 = 1.0;
+
+/// Motion under this (pixels, RMS over the points, uncapped) is no motion: the sub-pixel
+/// refinement's error on a real render, and what a reading of near-zero scale gives.
+pub const STILL: f64 = 0.25;
 
 /// The RMS of per-point distances, each at most [`TRUNCATE`]: robust to the few points
 /// that match nothing, while a reading that misses a whole motion (a layer) pays for every
@@ -304,7 +325,7 @@ fn robust_rms(distances: &[f64]) -> f64 {
     (sum / distances.len() as f64).sqrt()
 }
 
-/// The RMS of the motion itself, the residual of reading no motion (not truncated).
+/// The plain RMS (not truncated): how much motion there is, not how well it fits.
 fn rms(distances: &[f64]) -> f64 {
     if distances.is_empty() {
         return 0.0;
@@ -359,12 +380,14 @@ pub fn fit(input: &FitInput) -> Fit {
         .collect();
     let mut readings = Vec::new();
     let mut samples = Vec::new();
-    let mut no_motion = Vec::new();
+    // Per neighbour measured (forward): each point's measured motion, all points' together.
+    let mut still: Vec<(bool, Vec<f64>)> = Vec::new();
     let mut used = 0;
     for (side, (forward, _)) in sides.iter().enumerate() {
         let mut s = [Vec::new(), Vec::new()];
         let mut m = [Vec::new(), Vec::new()];
         let mut c = [Vec::new(), Vec::new()];
+        let mut moved = Vec::new();
         for (k, &((x, y), _)) in chosen_points.iter().enumerate() {
             let Some((mx, my)) = measured[side][k] else {
                 continue;
@@ -379,8 +402,9 @@ pub fn fit(input: &FitInput) -> Fit {
             m[1].push(my as f64);
             c[0].push(x as f64 + 0.5);
             c[1].push(y as f64 + 0.5);
-            no_motion.push(((mx * mx + my * my) as f64).sqrt());
+            moved.push((mx as f64).hypot(my as f64));
         }
+        still.push((*forward, moved));
         used = used.max(s[0].len());
         if s[0].len() < 8 {
             continue;
@@ -415,7 +439,20 @@ pub fn fit(input: &FitInput) -> Fit {
     // A negative scale is the opposite sign's reading, fitted there.
     readings.retain(|r| r.consistent);
     readings.sort_by(|a, b| a.residual.total_cmp(&b.residual));
-    let no_motion = rms(&no_motion);
+    // No motion toward the best reading's neighbour, scored as the readings are; the plain
+    // RMS there says whether anything moved at all.
+    let moved: Vec<f64> = match readings.first() {
+        Some(best) => still
+            .iter()
+            .find(|(forward, _)| *forward != best.meaning.is_backward())
+            .map(|(_, moved)| moved.clone())
+            .unwrap_or_default(),
+        None => still
+            .iter()
+            .flat_map(|(_, moved)| moved.iter().copied())
+            .collect(),
+    };
+    let no_motion = robust_rms(&moved);
     // Each stored component must vary where the motion was measured, or its axis's sign
     // and scale are not seen (the values are finite there: points with others are dropped).
     let varies = |axis: usize| {
@@ -429,7 +466,7 @@ pub fn fit(input: &FitInput) -> Fit {
         })
     };
     let varying = [varies(0), varies(1)];
-    let (chosen, why) = decide(&readings, no_motion, varying);
+    let (chosen, why) = decide(&readings, [no_motion, rms(&moved)], used, varying);
     Fit {
         readings,
         no_motion,
@@ -439,6 +476,14 @@ pub fn fit(input: &FitInput) -> Fit {
         why,
         samples,
         size: (w, h),
+    }
+}
+
+impl Reading {
+    /// Whether the reading moves the points by less than measured motion must to count
+    /// ([`STILL`]): a scale near zero, no motion whatever it scores.
+    pub fn is_still(&self) -> bool {
+        self.motion < STILL
     }
 }
 
@@ -586,6 +631,9 @@ impl Candidate {
         let (kz, _) = best.expect("two zeros tried");
         let k = simple(kz.0);
         let distances = self.distances(s, m, c, size, (k, kz.1));
+        // The reading's own motion: its distance from the motion of a still point.
+        let zero = [vec![0.0; n], vec![0.0; n]];
+        let motion = rms(&self.distances(s, &zero, c, size, (k, kz.1)));
         let meaning = match (self.forward, self.absolute, self.signs.0 > 0.0) {
             (false, false, true) => Meaning::ToPrev,
             (false, false, false) => Meaning::Velocity,
@@ -602,6 +650,7 @@ impl Candidate {
             scale: k as f32,
             units: self.units,
             residual: robust_rms(&distances),
+            motion,
             fitted_scale: [kz.0 * factor[0], kz.0 * factor[1]],
             consistent: k > 0.0,
         }
@@ -609,24 +658,41 @@ impl Candidate {
 }
 
 /// The verdict: the best reading, unless nothing fits clearly better than no motion, a
-/// different reading fits about as well, or an axis never moves.
+/// different reading fits about as well, or an axis never moves. `no_motion` is no motion's
+/// residual toward the best reading's neighbour, capped as the readings' are, and the plain
+/// RMS of the motion measured there; `points` the points measured.
 fn decide(
     readings: &[Reading],
-    no_motion: f64,
+    [no_motion, moved]: [f64; 2],
+    points: usize,
     varying: [bool; 2],
 ) -> (Option<Reading>, Option<String>) {
+    let nothing = |best: &str| {
+        Some(format!(
+            "nothing fits clearly better than no motion ({best} against {no_motion:.2} px \
+             without motion, each point's error capped at {TRUNCATE} px)"
+        ))
+    };
     let Some(best) = readings.first() else {
+        if points >= 8 {
+            // Points were followed, but every reading's scale came out negative or zero.
+            return (None, nothing("no reading has a positive scale"));
+        }
         return (
             None,
             Some("no textured point could be followed to a neighbouring frame: give frames with detail and a neighbour on each side".into()),
         );
     };
-    if no_motion < 0.25 || best.residual > 0.5 * no_motion {
+    if moved < STILL || best.residual > 0.5 * no_motion {
+        return (None, nothing(&format!("best {:.2} px", best.residual)));
+    }
+    if best.is_still() {
         return (
             None,
-            Some(format!(
-                "nothing fits clearly better than no motion (best {:.2} px against {:.2} px without motion)",
-                best.residual, no_motion
+            nothing(&format!(
+                "the best reading fits to {:.2} px but moves the points by {:.2} px: it is no \
+                 motion itself",
+                best.residual, best.motion
             )),
         );
     }
@@ -692,3 +758,6 @@ pub fn describe(r: &Reading) -> String {
     .replace("PrevPosition", "prev_position")
     .replace("NextPosition", "next_position")
 }
+
+#[cfg(test)]
+mod tests;

@@ -41,7 +41,9 @@ mod window;
 
 pub use carried::stack_problem;
 pub use check::{luma, CheckReport, VectorCheck};
-pub use fit::{describe as describe_reading, fit, Fit, FitInput, Reading, FIT_POINTS};
+pub use fit::{
+    describe as describe_reading, fit, Fit, FitInput, Reading, FIT_POINTS, TRUNCATE as FIT_TRUNCATE,
+};
 pub use found::pass_layers;
 pub use memory::BASE as BASE_MEMORY;
 pub use plan::{plan_frame, FramePlan, PlanOptions};
