@@ -1077,6 +1077,20 @@ fn holes_unmatched_patterns_and_houdini_tokens() {
         "{}",
         stderr(&o)
     );
+    // Frames padded otherwise than the pattern (`#` one digit, as Nuke reads it; four to
+    // oiiotool and RV): the error names a file found and the pattern for it (an outside
+    // tester: it said nothing of them).
+    for short in ["C.###.exr", "C.#####.exr", "C.%d.exr"] {
+        let color = format!("{}/{short}", dir.path().display());
+        let o = shutter(&["blur", "--color", &color, "-o", &out]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        let err = stderr(&o);
+        assert!(
+            err.contains("'C.0001.exr' is padded to 4 digits")
+                && err.contains("/C.####.exr'"),
+            "{short}: {err}"
+        );
+    }
     for (input, output) in [("C.$F4.exr", "h/o.$F4.exr"), ("C.@@@@.exr", "a/o.@@@@.exr")] {
         let input = format!("{}/{input}", dir.path().display());
         let output = format!("{}/{output}", dir.path().display());

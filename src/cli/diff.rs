@@ -31,13 +31,14 @@ fn frames_for(
         (None, true) => {
             let discovered = first.discover()?;
             let beyond = discovered.beyond_note(first);
+            let padding = discovered.padding_note(first);
             let found = discovered.frames;
             if found.is_empty() {
                 // Nothing to compare: the files are not there (not a bad command line).
                 return Err(Error::Files(vec![crate::error::Problem::new(
                     crate::error::ProblemKind::MissingFile,
                     std::path::Path::new(&first.raw),
-                    super::resolve::no_match(beyond),
+                    super::resolve::no_match(beyond.or(padding)),
                 )]));
             }
             let holes = crate::io::sequence::holes(&found);

@@ -273,13 +273,14 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
                 .expect("is_sequence");
             let discovered = source.discover()?;
             let beyond = discovered.beyond_note(source);
+            let padding = discovered.padding_note(source);
             let found = discovered.frames;
             if found.is_empty() {
                 // Bad input (exit 1), not a bad command: the files are not there.
                 return Err(Error::Files(vec![crate::error::Problem::new(
                     crate::error::ProblemKind::MissingFile,
                     std::path::Path::new(&source.raw),
-                    no_match(beyond),
+                    no_match(beyond.or(padding)),
                 )]));
             }
             warnings.extend(beyond);

@@ -1,7 +1,7 @@
 //! Frame sequences: path patterns (`shot.####.exr`, `shot.%04d.exr`) and frame specs
 //! (`1001-1100`, `1-99x2`, `1,5,9-12`).
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
@@ -19,6 +19,9 @@ pub struct Discovered {
     /// ±[`MAX_FRAME_NUMBER`], sorted: not frames of the sequence (`--frames` refuses such
     /// numbers too, and the output lock has no byte for them).
     pub beyond: Vec<String>,
+    /// A name spelled as a frame of the pattern but for its padding, by its width (`c.001.exr`
+    /// beside `c.####.exr`), the first found of each width.
+    pub other_widths: BTreeMap<usize, String>,
 }
 
 impl Discovered {
@@ -41,6 +44,25 @@ impl Discovered {
             pattern.raw,
             if more == 0 { "it" } else { "them" },
         ))
+    }
+
+    /// Why nothing matched, where files are the pattern's frames but for their padding (Nuke
+    /// reads `#` as one digit, oiiotool and RV `#` as four): the first of each width found and
+    /// the pattern to write for it. `None` when there are none.
+    pub fn padding_note(&self, pattern: &PathPattern) -> Option<String> {
+        let (before, after, _) = pattern.placeholder.as_ref()?;
+        let found: Vec<String> = (self.other_widths.iter())
+            .map(|(&width, name)| {
+                let hashes = "#".repeat(width);
+                format!("'{name}' is padded to {width} digits: '{before}{hashes}{after}'")
+            })
+            .collect();
+        (!found.is_empty()).then(|| {
+            format!(
+                "{}; one # is one digit, as %04d is four",
+                found.join("; ")
+            )
+        })
     }
 }
 
@@ -139,6 +161,7 @@ impl PathPattern {
         })?;
         let mut frames = BTreeSet::new();
         let mut beyond = BTreeSet::new();
+        let mut other_widths = BTreeMap::new();
         for entry in entries.flatten() {
             let name = entry.file_name().to_string_lossy().into_owned();
             match name
@@ -152,12 +175,22 @@ impl PathPattern {
                 Some(Err(Beyond)) => {
                     beyond.insert(name);
                 }
-                None => {}
+                None => {
+                    // Digits alone where the placeholder stands: a frame of another padding.
+                    let number = (name.strip_prefix(prefix))
+                        .and_then(|rest| rest.strip_suffix(after.as_str()))
+                        .filter(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
+                    if let Some(number) = number {
+                        let first = other_widths.entry(number.len()).or_insert(name.clone());
+                        *first = name.clone().min(first.clone());
+                    }
+                }
             }
         }
         Ok(Discovered {
             frames: frames.into_iter().collect(),
             beyond: beyond.into_iter().collect(),
+            other_widths,
         })
     }
 }
@@ -601,7 +634,7 @@ mod tests {
         );
         let nothing_beyond = Discovered {
             frames: vec![1],
-            beyond: Vec::new(),
+            ..Discovered::default()
         };
         assert_eq!(nothing_beyond.beyond_note(&p), None);
     }
