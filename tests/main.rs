@@ -35,5 +35,6 @@ mod structure;
 mod suggest;
 mod survives;
 mod truth;
+mod unknown_compression;
 mod vectors;
 mod views;

@@ -162,13 +162,26 @@ fn value(value: &AttributeValue) -> (&'static str, String, Value) {
 
 /// Every attribute of one EXR part but its channel list (which `info` lists with each
 /// channel's class), sorted by name.
+///
+/// A part in a compression the exr crate does not know shows the compression it stores, not
+/// the stand-in the crate was shown (`io::exr_unknown`).
 pub fn of_header(header: &exr::meta::header::Header) -> Vec<Shown> {
+    let stored = crate::io::exr_unknown::stored_compression(header);
     let mut shown: Vec<Shown> = header
         .all_named_attributes()
         .map(|(name, v)| (String::from_utf8_lossy(name).into_owned(), v))
-        .filter(|(name, _)| name != "channels")
+        .filter(|(name, v)| {
+            name != "channels" && !(stored.is_some() && matches!(v, AttributeValue::Compression(_)))
+        })
         .map(|(name, v)| {
-            let (kind, text, json) = value(&v);
+            let (kind, text, json) = match (stored, &v) {
+                (Some(id), AttributeValue::Custom { .. }) if name == "compression" => {
+                    let text = crate::io::exr_unknown::name_of_id(id)
+                        .map_or_else(|| format!("{id} (unknown)"), String::from);
+                    ("compression", text.clone(), json!(text))
+                }
+                _ => value(&v),
+            };
             Shown {
                 name,
                 kind,

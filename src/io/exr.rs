@@ -25,6 +25,7 @@ use exr::prelude::f16;
 use rayon::prelude::*;
 
 use crate::frame::{Plane, Windows};
+use crate::io::exr_unknown::{self, stored_compression, View};
 
 /// What starts the text of an error of [`read_channels_checked`]'s check.
 pub const CHANGED: &str = "changed since the preflight: ";
@@ -43,21 +44,37 @@ pub struct ChannelRef {
 /// Reads the headers only, as the exr crate's reader does when it decodes: every attribute
 /// must parse (a line order out of range, a chunk count that does not match the data
 /// window, are errors there). [`validate`] then checks them as decoding does, so preflight
-/// refuses exactly the headers decoding would.
+/// refuses exactly the headers decoding would. A part in a compression the crate does not
+/// know is read as `exr_unknown` shows it, and marked.
 pub fn read_meta(path: &Path) -> exr::error::Result<MetaData> {
+    meta_of(&mut View::open(crate::io::input::open_input(path)?)?)
+}
+
+/// The headers read through `view` from where it stands, marked (`View::mark`).
+fn meta_of(view: &mut View<std::fs::File>) -> exr::error::Result<MetaData> {
     // The exr crate's decoding reader reads attributes with its `pedantic` turned over.
-    MetaData::read_from_buffered(BufReader::new(crate::io::input::open_input(path)?), true)
+    let mut meta = MetaData::read_from_buffered(BufReader::new(&mut *view), true)?;
+    view.mark(&mut meta);
+    Ok(meta)
 }
 
 /// Checks headers as the exr crate's decoding reader does (non-strictly): windows not
 /// inverted, channels present, sorted and sampled at 1×1, and the rest. A deep part (which
-/// the crate refuses whole, and shutter leaves out) is checked as the same part flat.
+/// the crate refuses whole, and shutter leaves out) is checked as the same part flat; a
+/// part in a compression the crate does not know, as the crate parsed it.
 pub fn validate(meta: &MetaData) -> exr::error::Result<()> {
-    if !meta.headers.iter().any(|h| h.deep) {
-        return MetaData::validate(&meta.headers, false).map(|_| ());
+    let parsed: Vec<Header>;
+    let headers = if meta.headers.iter().any(|h| stored_compression(h).is_some()) {
+        parsed = meta.headers.iter().map(exr_unknown::as_parsed).collect();
+        &parsed[..]
+    } else {
+        &meta.headers[..]
+    };
+    if !headers.iter().any(|h| h.deep) {
+        return MetaData::validate(headers, false).map(|_| ());
     }
     let mut long_names = false;
-    for header in &meta.headers {
+    for header in headers {
         let mut flat = header.clone();
         flat.deep = false;
         flat.validate(meta.headers.len() > 1, &mut long_names, false)?;
@@ -66,10 +83,11 @@ pub fn validate(meta: &MetaData) -> exr::error::Result<()> {
 }
 
 /// The chunks of `parts` (full resolution only) of a file with a deep part, which the exr
-/// crate's reader refuses whole: read by the offset tables (which preflight checked:
-/// `check_chunk_table`), each chunk by the crate.
-fn chunks_beside_deep(
-    file: std::fs::File,
+/// crate's reader refuses whole, or a part in a compression it does not know (whose offset
+/// table it would misread): read by the offset tables (which preflight checked:
+/// `check_chunk_table`) as `meta` counts them, each chunk by the crate.
+fn chunks_by_tables(
+    file: View<std::fs::File>,
     meta: &MetaData,
     parts: &[usize],
 ) -> exr::error::Result<Vec<Chunk>> {
@@ -163,10 +181,22 @@ pub fn parse_compression(name: &str) -> Option<Compression> {
     })
 }
 
+/// The name of a part's compression: [`compression_name`], or OpenEXR's where the exr crate
+/// does not know it (`exr_unknown`; `unknown` where OpenEXR 3.5 does not either).
+pub fn part_compression_name(header: &Header) -> &'static str {
+    match stored_compression(header) {
+        Some(id) => exr_unknown::name_of_id(id).unwrap_or("unknown"),
+        None => compression_name(header.compression),
+    }
+}
+
 /// Why a file cannot be read, found from its header alone.
 pub fn unsupported_reason(header: &Header) -> Option<String> {
     if header.deep {
         return Some("deep data is not supported; flatten the image first".into());
+    }
+    if let Some(id) = stored_compression(header) {
+        return Some(exr_unknown::reason(id));
     }
     if matches!(
         header.compression,
@@ -197,8 +227,9 @@ pub fn unsupported_reason(header: &Header) -> Option<String> {
 /// and half-copied files, and tables that point several entries at one chunk, which a
 /// decoder would otherwise turn into a frame with black lines, before any output is written.
 pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<(), String> {
-    let mut file = crate::io::input::open_input(path).map_err(|e| e.to_string())?;
+    let file = crate::io::input::open_input(path).map_err(|e| e.to_string())?;
     let file_len = file.metadata().map_err(|e| e.to_string())?.len();
+    let mut file = View::open(file).map_err(|e| e.to_string())?;
     let mut counting = CountingReader {
         inner: BufReader::new(&mut file),
         count: 0,
@@ -223,13 +254,17 @@ pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<(), String> {
     file.read_exact(&mut header).map_err(|e| e.to_string())?;
     check_windows(&header)?;
     // Each part's blocks, as (tile x, tile y, level x, level y); a scan-line block is tile
-    // (0, k) of level (0, 0).
+    // (0, k) of level (0, 0). A part in a compression the exr crate does not know has blocks
+    // of lines shutter does not know: its chunks are only checked to lie in the file, apart.
+    let unknown = |part: usize| stored_compression(&meta.headers[part]).is_some();
     let mut blocks: Vec<std::collections::HashMap<[usize; 4], bool>> = meta
         .headers
         .iter()
         .map(|header| {
+            let known = stored_compression(header).is_none();
             header
                 .blocks_increasing_y_order()
+                .filter(|_| known)
                 .map(|b| {
                     let (t, l) = (b.location.tile_index, b.location.level_index);
                     ([t.0, t.1, l.0, l.1], false)
@@ -297,6 +332,10 @@ pub fn check_chunk_table(path: &Path, meta: &MetaData) -> Result<(), String> {
         } else {
             &words[..]
         };
+        if unknown(part) {
+            spans.push((offset, end));
+            continue;
+        }
         let key = if tiled {
             let mut key = [0usize; 4];
             for (k, &w) in key.iter_mut().zip(words) {
@@ -466,27 +505,34 @@ pub fn read_channels_checked(
     wanted: &[ChannelRef],
     check: impl FnOnce(&MetaData) -> Result<(), String>,
 ) -> exr::error::Result<ReadChannels> {
-    let mut file = crate::io::input::open_input(path)?;
-    // The exr crate's reader refuses a file with a deep part whole ("not supported"): only
-    // then are its headers read again, checked as `validate` checks them, and its other
-    // parts' chunks read by the offset tables (`chunks_beside_deep`). Every other file is
-    // read once, by the crate's reader, as before.
-    let (reader, meta) = match exr::block::read(BufReader::new(file.try_clone()?), false) {
+    let mut file = View::open(crate::io::input::open_input(path)?)?;
+    // The exr crate's reader refuses a file with a deep part whole ("not supported"), and
+    // would misread the offset table of a part in a compression it does not know
+    // (`exr_unknown`): only for those are the headers read again, checked as `validate`
+    // checks them, and the other parts' chunks read by the offset tables
+    // (`chunks_by_tables`). Every other file is read once, by the crate's reader, as before.
+    let read = match file.has_unknown() {
+        true => Err(None),
+        false => exr::block::read(BufReader::new(file.try_clone()?), false).map_err(Some),
+    };
+    let (reader, meta) = match read {
         Ok(reader) => {
             let meta = reader.meta_data().clone();
             (Some(reader), meta)
         }
-        Err(refused @ exr::error::Error::NotSupported(_)) => {
+        Err(refused @ (None | Some(exr::error::Error::NotSupported(_)))) => {
             file.seek(SeekFrom::Start(0))?;
-            let meta = MetaData::read_from_buffered(BufReader::new(&mut file), true)?;
-            if !meta.headers.iter().any(|h| h.deep) {
-                return Err(refused);
+            let meta = meta_of(&mut file)?;
+            let beside = |h: &Header| h.deep || stored_compression(h).is_some();
+            if !meta.headers.iter().any(beside) {
+                return Err(refused
+                    .unwrap_or_else(|| unsupported("a compression the exr crate does not know")));
             }
             validate(&meta)?;
             file.seek(SeekFrom::Start(0))?;
             (None, meta)
         }
-        Err(other) => return Err(other),
+        Err(Some(other)) => return Err(other),
     };
     check(&meta).map_err(|e| exr::error::Error::Invalid(format!("{CHANGED}{e}").into()))?;
 
@@ -545,7 +591,7 @@ pub fn read_channels_checked(
                 tile.level_index == Vec2(0, 0) && parts.contains(&block.layer)
             })?
             .collect::<exr::error::Result<_>>()?,
-        None => chunks_beside_deep(file, &meta, &parts)?,
+        None => chunks_by_tables(file, &meta, &parts)?,
     };
 
     // Group the chunks into bands of rows that do not overlap, so each band can be written by

@@ -241,6 +241,29 @@ impl FileInfo {
         exr_io::unsupported_reason(headers.get(channel.part)?)
     }
 
+    /// Where one of `names` (as stored, or part-qualified) is a channel of a part shutter
+    /// cannot read: which, in which part, and why ([`FileInfo::unreadable`]), for an error
+    /// that says what to do rather than that the channel is missing.
+    pub fn unread_among(&self, names: &[&str]) -> Option<String> {
+        let FileKind::Exr { headers, .. } = &self.kind else {
+            return None;
+        };
+        let named = |n: &str, c: &ChannelInfo| c.name == n || c.alias.as_deref() == Some(n);
+        let (channel, why) = names.iter().find_map(|&n| {
+            let c = self.channels.iter().find(|c| named(n, c))?;
+            Some((c, self.unreadable(c)?))
+        })?;
+        let part = (headers.get(channel.part))
+            .and_then(|h| h.own_attributes.layer_name.as_ref())
+            .map_or(format!("part {}", channel.part), |n| {
+                format!("part {}", name_of(n))
+            });
+        Some(format!(
+            "channel {} is in {part}, which shutter does not read: {why}",
+            channel.alias.as_ref().unwrap_or(&channel.name)
+        ))
+    }
+
     /// The file as one view reads it (`io::view`): `view`, or the file's default view when
     /// `None`; the channels of that view named without it, and those of no view. A file of
     /// no views is returned as it is, whatever `view` says. Fails, with a message listing
@@ -596,7 +619,7 @@ fn probe_exr(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
             compression: meta
                 .headers
                 .iter()
-                .map(|h| exr_io::compression_name(h.compression))
+                .map(exr_io::part_compression_name)
                 .collect(),
             tiled: meta
                 .headers

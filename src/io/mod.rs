@@ -6,6 +6,7 @@ pub mod exr;
 pub mod exr_channels;
 pub mod exr_like;
 pub mod exr_parts;
+pub mod exr_unknown;
 pub mod exr_zip;
 pub mod file;
 pub mod image;

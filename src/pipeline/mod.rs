@@ -554,7 +554,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
         warn(&mut report, on_event, warning.clone());
     }
     for plan in plans.iter().chain(others.iter().flatten()) {
-        for warning in plan.warnings.iter().cloned().chain(plan.unread_warning()) {
+        for warning in plan.warnings.iter().cloned().chain(plan.unread_warnings()) {
             warn(&mut report, on_event, warning);
         }
     }

@@ -26,15 +26,15 @@ impl PartApart {
 /// The channels of an EXR colour file other than the beauty's (`beauty`, indices into
 /// `info.channels`): those of the beauty's part, and of every other part whose data window is
 /// the beauty's; then the parts left out of those (by name: `part N` or `part NAME`), each
-/// with its index when it can be read apart (its data window is another; `None`: deep data,
-/// or data the exr crate does not decode). None for an integer image, whose channels are all
+/// with its index when it can be read apart (its data window is another), or why it cannot
+/// be read at all (deep data, or data the exr crate does not decode: `exr::unsupported_reason`). None for an integer image, whose channels are all
 /// the beauty's. A multi-view file is seen as the view read ([`FileInfo::in_view`]): its
 /// channels and those of no view, named without the view, so it comes out as a file of that
 /// view.
 pub(super) fn other_channels(
     info: &FileInfo,
     beauty: &[usize],
-) -> (Vec<usize>, Vec<Option<usize>>, Vec<String>) {
+) -> (Vec<usize>, Vec<Result<usize, String>>, Vec<String>) {
     let crate::io::file::FileKind::Exr { headers, .. } = &info.kind else {
         return Default::default();
     };
@@ -42,7 +42,8 @@ pub(super) fn other_channels(
         return Default::default();
     };
     let colour = &headers[info.channels[first].part];
-    let readable = |part: usize| crate::io::exr::unsupported_reason(&headers[part]).is_none();
+    let unreadable = |part: usize| crate::io::exr::unsupported_reason(&headers[part]);
+    let readable = |part: usize| unreadable(part).is_none();
     let alike = |part: usize| {
         let h = &headers[part];
         h.layer_size == colour.layer_size
@@ -64,7 +65,7 @@ pub(super) fn other_channels(
                 .map_or(format!("part {p}"), |n| {
                     format!("part {}", crate::io::channels::name_of(n))
                 });
-            (readable(p).then_some(p), name)
+            (unreadable(p).map_or(Ok(p), Err), name)
         })
         .unzip();
     (others, apart, left)

@@ -82,8 +82,8 @@ pub struct FramePlan {
     /// deep data), by name: named by `diff` as not compared.
     pub parts_left_out: Vec<String>,
     /// Those of them that cannot be read at all (deep data, or data shutter does not
-    /// decode): `blur` warns of them ([`FramePlan::unread_warning`]).
-    pub parts_unread: Vec<String>,
+    /// decode), each with why: `blur` warns of them ([`FramePlan::unread_warnings`]).
+    pub parts_unread: Vec<(String, String)>,
     /// The colour file's windows: the frame's (every pass is cut to its data window).
     pub(super) color_windows: Option<crate::frame::Windows>,
 }
@@ -198,8 +198,7 @@ pub fn plan_frame(
                     plan.parts_unread = left
                         .iter()
                         .zip(&apart)
-                        .filter(|(_, part)| part.is_none())
-                        .map(|(name, _)| name.clone())
+                        .filter_map(|(name, part)| Some((name.clone(), part.clone().err()?)))
                         .collect();
                     plan.parts_left_out = left;
                     plan.warnings.extend(layers_near_misses(info, preset));
@@ -546,6 +545,13 @@ impl Planner<'_> {
     }
 
     fn missing_problem(&self, info: &FileInfo, pass: &'static str, wanted: &str) -> Problem {
+        // In a part shutter cannot read (HTJ2K, ZSTD, deep data): not missing, unsupported.
+        let names: Vec<&str> = wanted.split(" or ").flat_map(|a| a.split(',')).collect();
+        if let Some(detail) = info.unread_among(&names) {
+            return Problem::new(ProblemKind::Unsupported, &info.path, detail)
+                .pass(pass)
+                .channel(wanted.to_string());
+        }
         Problem::new(
             ProblemKind::MissingChannel,
             &info.path,

@@ -408,15 +408,25 @@ pub fn plan_color_in(
 }
 
 impl FramePlan {
-    /// The warning `blur` gives of the colour file's parts it cannot read, where it has any.
-    pub fn unread_warning(&self) -> Option<String> {
-        (!self.parts_unread.is_empty()).then(|| {
-            format!(
-                "{} of the colour file: deep data, or data shutter does not decode, not \
-                 written to the output",
-                self.parts_unread.join(", ")
-            )
-        })
+    /// The warnings `blur` gives of the colour file's parts it cannot read: one for each
+    /// reason, naming the parts, why and what to do (`exr::unsupported_reason`).
+    pub fn unread_warnings(&self) -> Vec<String> {
+        let mut reasons: Vec<&str> = self.parts_unread.iter().map(|(_, r)| &r[..]).collect();
+        reasons.sort_unstable();
+        reasons.dedup();
+        reasons
+            .into_iter()
+            .map(|reason| {
+                let parts: Vec<&str> = (self.parts_unread.iter())
+                    .filter(|(_, r)| r == reason)
+                    .map(|(name, _)| &name[..])
+                    .collect();
+                format!(
+                    "{} of the colour file not read, nor written to the output: {reason}",
+                    parts.join(", ")
+                )
+            })
+            .collect()
     }
 
     /// The colour channels' names (R, G, B and, where read, A), as the colour file lists
