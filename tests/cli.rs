@@ -1086,8 +1086,7 @@ fn holes_unmatched_patterns_and_houdini_tokens() {
         assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
         let err = stderr(&o);
         assert!(
-            err.contains("'C.0001.exr' is padded to 4 digits")
-                && err.contains("/C.####.exr'"),
+            err.contains("'C.0001.exr' is padded to 4 digits") && err.contains("/C.####.exr'"),
             "{short}: {err}"
         );
     }

@@ -57,12 +57,8 @@ impl Discovered {
                 format!("'{name}' is padded to {width} digits: '{before}{hashes}{after}'")
             })
             .collect();
-        (!found.is_empty()).then(|| {
-            format!(
-                "{}; one # is one digit, as %04d is four",
-                found.join("; ")
-            )
-        })
+        (!found.is_empty())
+            .then(|| format!("{}; one # is one digit, as %04d is four", found.join("; ")))
     }
 }
 
