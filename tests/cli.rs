@@ -1080,6 +1080,19 @@ fn holes_unmatched_patterns_and_houdini_tokens() {
     // Frames padded otherwise than the pattern (`#` one digit, as Nuke reads it; four to
     // oiiotool and RV): the error names a file found and the pattern for it (an outside
     // tester: it said nothing of them).
+    // Unpadded frames are all frames of one `#`, whatever their length.
+    for name in ["U.7.exr", "U.12.exr"] {
+        std::fs::copy(dir.path().join("C.0001.exr"), dir.path().join(name)).unwrap();
+    }
+    let color = format!("{}/U.####.exr", dir.path().display());
+    let o = shutter(&["blur", "--color", &color, "-o", &out]);
+    let err = stderr(&o);
+    assert!(
+        err.contains("'U.12.exr' is not padded")
+            && err.contains("/U.#.exr'")
+            && !err.contains("padded to"),
+        "{err}"
+    );
     for short in ["C.###.exr", "C.#####.exr", "C.%d.exr"] {
         let color = format!("{}/{short}", dir.path().display());
         let o = shutter(&["blur", "--color", &color, "-o", &out]);

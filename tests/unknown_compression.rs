@@ -10,8 +10,9 @@ use std::path::Path;
 use crate::support::*;
 
 const W: usize = 8;
-/// Taller than one chunk of the stand-in the crate is shown (256 lines), so that a part after
-/// the unknown one is found only where its offset table is read as stored (a line a chunk).
+/// More chunks (RLE: a line each, 20) than the stand-in the crate is shown would give this
+/// part (256 lines a chunk: one), so that a part after the unknown one is found only where
+/// its offset table is read as stored.
 const H: usize = 20;
 
 /// Sets the compression of part `part` (in the order the headers list them) to `id`.
@@ -192,8 +193,9 @@ fn the_colour_in_a_zstd_part_is_refused_naming_the_part_and_the_compression() {
 }
 
 /// A damaged file is refused as damaged where its damage lies in the part of unknown
-/// compression too: cut short, or two of the part's table entries at one chunk. Never a
-/// panic, nothing written.
+/// compression too: cut short, two of the part's table entries at one chunk, or a chunk
+/// count its lines cannot have (a review: it was taken as stored, or as 0). Never a panic,
+/// nothing written.
 #[test]
 fn a_damaged_zstd_part_is_refused_as_damaged() {
     let dir = tempfile::tempdir().unwrap();
@@ -209,6 +211,18 @@ fn a_damaged_zstd_part_is_refused_as_damaged() {
     let mut twice = bytes.clone();
     let spec = tables + 8 * H;
     twice.copy_within(spec..spec + 8, spec + 8);
+    // The unknown part's own chunk count, which only shutter reads, impossible for its lines.
+    let counts = |value: i32| {
+        let key = b"chunkCount\0int\0\x04\0\0\0";
+        let mut bytes = bytes.clone();
+        let at = (0..bytes.len() - key.len())
+            .filter(|&p| bytes[p..].starts_with(key))
+            .nth(1)
+            .unwrap()
+            + key.len();
+        bytes[at..at + 4].copy_from_slice(&value.to_le_bytes());
+        bytes
+    };
     for (name, damaged, says) in [
         (
             "cut.exr",
@@ -216,6 +230,8 @@ fn a_damaged_zstd_part_is_refused_as_damaged() {
             "truncated",
         ),
         ("twice.exr", twice, "overlap"),
+        ("none.exr", counts(-1), "chunkCount -1"),
+        ("more.exr", counts(i32::MAX), "chunkCount 2147483647"),
     ] {
         let path = dir.path().join(name);
         std::fs::write(&path, damaged).unwrap();

@@ -143,6 +143,16 @@ impl<R: Read + Seek> View<R> {
                     format!("{which}{}", reason(id)).into(),
                 ));
             };
+            // The count read as stored must be one a part of its lines can have (each chunk a
+            // line or more): the crate checks the stand-in's, never this one, and the tables
+            // of every later part are found by it.
+            if let (false, Some(height)) = (scanned.tiled, scanned.height) {
+                if chunks < 1 || i64::from(chunks) > height {
+                    return Err(exr::error::Error::Invalid(
+                        format!("chunkCount {chunks} of a part of {height} lines").into(),
+                    ));
+                }
+            }
             let mut stand_in = Vec::new();
             STAND_IN.write(&mut stand_in)?;
             view.patches.push((at, stand_in[0]));

@@ -20,7 +20,8 @@ pub struct Discovered {
     /// numbers too, and the output lock has no byte for them).
     pub beyond: Vec<String>,
     /// A name spelled as a frame of the pattern but for its padding, by its width (`c.001.exr`
-    /// beside `c.####.exr`), the first found of each width.
+    /// beside `c.####.exr`; 1 for numbers with no zero first, `c.5.exr`, `c.12.exr`, all
+    /// frames of `c.#.exr`), the first found of each width.
     pub other_widths: BTreeMap<usize, String>,
 }
 
@@ -54,7 +55,11 @@ impl Discovered {
         let found: Vec<String> = (self.other_widths.iter())
             .map(|(&width, name)| {
                 let hashes = "#".repeat(width);
-                format!("'{name}' is padded to {width} digits: '{before}{hashes}{after}'")
+                let padded = match width {
+                    1 => "is not padded".to_string(),
+                    _ => format!("is padded to {width} digits"),
+                };
+                format!("'{name}' {padded}: '{before}{hashes}{after}'")
             })
             .collect();
         (!found.is_empty())
@@ -177,7 +182,12 @@ impl PathPattern {
                         .and_then(|rest| rest.strip_suffix(after.as_str()))
                         .filter(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
                     if let Some(number) = number {
-                        let first = other_widths.entry(number.len()).or_insert(name.clone());
+                        // Unpadded numbers (no zero first) are all frames of one `#`.
+                        let width = match number.starts_with('0') {
+                            true => number.len(),
+                            false => 1,
+                        };
+                        let first = other_widths.entry(width).or_insert(name.clone());
                         *first = name.clone().min(first.clone());
                     }
                 }

@@ -98,7 +98,7 @@ fn image_error(e: image::ImageError) -> String {
 /// [`image_error`] of a failed read of the image at `path`, where a TIFF cut short is said
 /// as such ([`tiff_cut::tiff_cut_short`]) whatever its decoder met at the cut.
 fn read_error(path: &Path, tiff: bool, e: image::ImageError) -> String {
-    (tiff.then(|| tiff_cut::tiff_cut_short(path)).flatten()).unwrap_or_else(|| image_error(e))
+    (tiff.then(|| tiff_cut::tiff_cut_short(path, true)).flatten()).unwrap_or_else(|| image_error(e))
 }
 
 /// Why a JPEG cannot be read though it may be valid, from its frame header: a precision
@@ -179,7 +179,7 @@ pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
     };
     let cut = match format {
         "png" => png_mend::png_cut_short(path),
-        "tiff" => tiff_cut::tiff_cut_short(path),
+        "tiff" => tiff_cut::tiff_cut_short(path, false),
         _ => None,
     };
     if let Some(why) = cut {
@@ -315,7 +315,7 @@ pub fn read_planes(
                 .saturating_mul(declared.1 as u64)
                 .saturating_mul(LARGEST_PIXEL);
             return tiff_float::read(path, &header, allowed)
-                .map_err(|why| tiff_cut::tiff_cut_short(path).unwrap_or(why));
+                .map_err(|why| tiff_cut::tiff_cut_short(path, true).unwrap_or(why));
         }
     };
     let orientation = orientation(&mut decoder, path, png);

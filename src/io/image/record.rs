@@ -21,20 +21,26 @@ pub const PNG_VERSION: &str = "shutter/version";
 /// The PNG keyword of the settings.
 pub const PNG_SETTINGS: &str = "shutter/settings";
 
-/// The text a TIFF's Software tag or a JPEG's comment holds for `record`.
-pub fn software(record: &str, format: ImageFormat) -> String {
-    let text = format!("shutter {}: {record}", env!("CARGO_PKG_VERSION"));
-    match format {
-        ImageFormat::Tiff => ascii(&text),
-        _ => text,
-    }
+/// The most text a JPEG comment segment holds (its length field counts itself).
+const JPEG_COMMENT_MOST: usize = 65533;
+
+/// What a TIFF's Software tag or a JPEG's comment starts with, before the settings.
+fn prefix() -> String {
+    format!("shutter {}: ", env!("CARGO_PKG_VERSION"))
 }
 
-/// `text` with every character outside printable ASCII written as `\u{…}` (as Rust's
-/// escapes write it), so that it fits a TIFF ASCII field.
+/// The text a TIFF's Software tag or a JPEG's comment holds for `record`.
+pub fn software(record: &str, format: ImageFormat) -> String {
+    prefix() + &as_held(record, format)
+}
+
+/// `text` with a backslash doubled and every character outside printable ASCII written as
+/// `\u{…}` (as Rust's escapes write it), so that it fits a TIFF ASCII field and two texts
+/// stay two (`è` and a typed `\u{e8}`).
 fn ascii(text: &str) -> String {
     text.chars()
         .map(|c| match c {
+            '\\' => "\\\\".to_string(),
             ' '..='~' => c.to_string(),
             _ => format!("\\u{{{:x}}}", c as u32),
         })
@@ -42,11 +48,20 @@ fn ascii(text: &str) -> String {
 }
 
 /// The settings as a picture of `format` holds them: what [`recorded`] reads back from a
-/// picture written with `record`.
+/// picture written with `record` (in a TIFF in ASCII; in a JPEG cut to what one comment
+/// segment holds, at a character).
 pub fn as_held(record: &str, format: ImageFormat) -> String {
     match format {
         ImageFormat::Tiff => ascii(record),
-        _ => record.to_string(),
+        ImageFormat::Jpeg => {
+            let most = JPEG_COMMENT_MOST - prefix().len();
+            let mut end = record.len().min(most);
+            while !record.is_char_boundary(end) {
+                end -= 1;
+            }
+            record[..end].to_string()
+        }
+        ImageFormat::Png => record.to_string(),
     }
 }
 
@@ -187,6 +202,19 @@ mod tests {
     }
 
     #[test]
+    fn settings_too_long_for_a_comment_are_held_cut_as_written() {
+        let record = format!("--layer {}", "é".repeat(40_000));
+        let text = software(&record, ImageFormat::Jpeg);
+        assert!(text.len() <= JPEG_COMMENT_MOST, "{}", text.len());
+        let jpeg = vec![0xFF, 0xD8, 0xFF, 0xDA, 0, 2, 0xFF, 0xD9];
+        let with = with_jpeg_comment(jpeg, &text);
+        let comments = jpeg_comments(&with);
+        let read = settings_of(&String::from_utf8_lossy(comments[0]));
+        assert_eq!(read, Some(as_held(&record, ImageFormat::Jpeg)));
+        assert_ne!(read.as_deref(), Some(&record[..]));
+    }
+
+    #[test]
     fn another_program_s_software_records_no_settings() {
         assert_eq!(settings_of("Adobe Photoshop 25.0 (Windows)"), None);
         assert_eq!(
@@ -205,6 +233,9 @@ mod tests {
         let record = "--preset shutter --layer 'Vue lumière'";
         let held = as_held(record, ImageFormat::Tiff);
         assert_eq!(held, "--preset shutter --layer 'Vue lumi\\u{e8}re'");
+        // A layer typed with the escape is another layer, and held as another.
+        let typed = "--preset shutter --layer 'Vue lumi\\u{e8}re'";
+        assert_ne!(as_held(typed, ImageFormat::Tiff), held);
         assert!(software(record, ImageFormat::Tiff).is_ascii());
         assert_eq!(
             settings_of(&software(record, ImageFormat::Tiff)),

@@ -17,8 +17,11 @@ use tiff::TiffError;
 /// that puts the directory after the image data, as libtiff and the tiff crate do, loses it
 /// first), or before the last byte of the strips or tiles that directory points to. `None`
 /// for a whole TIFF, a file that is not one, and a directory that is bad in another way (the
-/// decoder's error about it then stands).
-pub(super) fn tiff_cut_short(path: &Path) -> Option<String> {
+/// decoder's error about it then stands). `strips_whole`: the strips must end within the
+/// file (said after a decode failed); else only a strip that begins past its end counts (the
+/// header's check: some writers overstate StripByteCounts, which libtiff and the tiff crate
+/// read past, so a count alone refuses no file that decodes).
+pub(super) fn tiff_cut_short(path: &Path, strips_whole: bool) -> Option<String> {
     let file = crate::io::input::open_input(path).ok()?;
     let size = file.metadata().ok()?.len();
     let mut decoder = match Decoder::new(std::io::BufReader::new(file)) {
@@ -39,7 +42,11 @@ pub(super) fn tiff_cut_short(path: &Path) -> Option<String> {
         ),
     };
     let end = (offsets.iter().zip(&counts))
-        .map(|(offset, count)| offset.saturating_add(*count))
+        .filter(|(_, &count)| count > 0)
+        .map(|(&offset, &count)| match strips_whole {
+            true => offset.saturating_add(count),
+            false => offset.saturating_add(1),
+        })
         .max()?;
     (end > size).then(|| {
         format!(
@@ -66,10 +73,10 @@ mod tests {
         let bytes = bytes.into_inner();
         let path = dir.path().join("t.tif");
         std::fs::write(&path, &bytes).unwrap();
-        assert_eq!(tiff_cut_short(&path), None);
+        assert_eq!(tiff_cut_short(&path, true), None);
         // The tiff crate writes its directory after the data: cut, it is lost.
         std::fs::write(&path, &bytes[..bytes.len() - 20]).unwrap();
-        let why = tiff_cut_short(&path).expect("a cut directory");
+        let why = tiff_cut_short(&path, false).expect("a cut directory");
         assert!(
             why.contains("truncated") && why.contains("directory"),
             "{why}"
@@ -84,13 +91,26 @@ mod tests {
         let mut longer = bytes.clone();
         longer[at + 8..at + 12].copy_from_slice(&(bytes.len() as u32 * 2).to_le_bytes());
         std::fs::write(&path, &longer).unwrap();
-        let why = tiff_cut_short(&path).expect("cut data");
+        let why = tiff_cut_short(&path, true).expect("cut data");
         assert!(
             why.contains("truncated") && why.contains("image data"),
             "{why}"
         );
+        // A count overstated, the strip beginning inside the file: not refused by the
+        // header's check (writers overstate counts; the decoder reads what it needs).
+        assert_eq!(tiff_cut_short(&path, false), None);
+        // A strip that begins past the end: the data was cut, said by the header's check.
+        let at = (0..entries)
+            .map(|e| ifd + 2 + 12 * e)
+            .find(|&at| u16::from_le_bytes([bytes[at], bytes[at + 1]]) == 273)
+            .expect("StripOffsets");
+        let mut past = bytes.clone();
+        past[at + 8..at + 12].copy_from_slice(&(bytes.len() as u32 + 8).to_le_bytes());
+        std::fs::write(&path, &past).unwrap();
+        let why = tiff_cut_short(&path, false).expect("data past the end");
+        assert!(why.contains("truncated"), "{why}");
         // Not a TIFF: not this check's to say.
         std::fs::write(&path, b"not a tiff at all").unwrap();
-        assert_eq!(tiff_cut_short(&path), None);
+        assert_eq!(tiff_cut_short(&path, true), None);
     }
 }

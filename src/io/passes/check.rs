@@ -388,7 +388,9 @@ fn judge_fit(
         stored: [x, y],
         max_points: CHECK_POINTS,
     });
-    let Some(best) = result.readings.first() else {
+    // The best reading that moves the points: one that moves them less is no motion, which
+    // `shutter vectors` would not choose either.
+    let Some(best) = result.readings.iter().find(|r| !r.is_still()) else {
         return Verdict::Silent;
     };
     let stated = stated(&stored.spec);
