@@ -1453,21 +1453,8 @@ fn a_missing_pass_names_the_flag_that_gives_it() {
         );
     }
     // Depth of field with no depth: the flag is --depth.
-    let args = [
-        "dof",
-        "--preset",
-        "painted",
-        "--color",
-        &photo,
-        "--focal-length",
-        "50",
-        "--f-stop",
-        "2",
-        "--focus-distance",
-        "3",
-        "-o",
-        &out,
-    ];
+    let before = ["dof", "--preset", "painted", "--color", &photo];
+    let args = [&before[..], &LENS_ARGS, &["-o", &out]].concat();
     assert_fails_cleanly(
         &args,
         &out_dir,

@@ -612,19 +612,11 @@ fn none_and_in_focus_depth_of_field_write_finite_frames_and_count_what_they_repl
         ),
         (
             "in focus",
-            vec![
-                "dof",
-                "--color",
-                &colour,
-                "--depth",
-                &depth,
-                "--focal-length",
-                "50",
-                "--f-stop",
-                "2",
-                "--focus-distance",
-                "3",
-            ],
+            [
+                &["dof", "--color", &colour, "--depth", &depth][..],
+                &LENS_ARGS,
+            ]
+            .concat(),
         ),
     ];
     for (what, mut args) in runs {

@@ -110,43 +110,18 @@ pub fn recorded(path: &Path, format: ImageFormat) -> Option<String> {
                 .ok()?;
             settings_of(text.trim_end_matches('\0'))
         }
-        ImageFormat::Jpeg => {
-            let bytes = std::fs::read(path).ok()?;
-            jpeg_comments(&bytes)
-                .into_iter()
-                .find_map(|c| settings_of(&String::from_utf8_lossy(c)))
-        }
+        ImageFormat::Jpeg => jpeg_settings(&std::fs::read(path).ok()?),
     }
 }
 
-/// The comment segments (COM) of a JPEG, before its first scan.
-fn jpeg_comments(bytes: &[u8]) -> Vec<&[u8]> {
-    let mut comments = Vec::new();
-    if !bytes.starts_with(&[0xFF, 0xD8]) {
-        return comments;
-    }
-    let mut at = 2;
-    while at + 4 <= bytes.len() && bytes[at] == 0xFF {
-        let marker = bytes[at + 1];
-        // Fill bytes before a marker.
-        if marker == 0xFF {
-            at += 1;
-            continue;
-        }
-        // The start of a scan, or the end: no more headers.
-        if marker == 0xDA || marker == 0xD9 {
-            break;
-        }
-        let length = usize::from(u16::from_be_bytes([bytes[at + 2], bytes[at + 3]]));
-        let Some(body) = bytes.get(at + 4..at + 2 + length).filter(|_| length >= 2) else {
-            break;
-        };
-        if marker == 0xFE {
-            comments.push(body);
-        }
-        at += 2 + length;
-    }
-    comments
+/// The settings the first comment segment (COM) of a JPEG that shutter wrote holds, before
+/// its scan (the walk `meta` and `resolution` share: `jpeg::segment`).
+fn jpeg_settings(bytes: &[u8]) -> Option<String> {
+    super::jpeg::segment(bytes, |marker, body| {
+        (marker == 0xFE)
+            .then(|| settings_of(&String::from_utf8_lossy(body)))
+            .flatten()
+    })
 }
 
 /// `jpeg` (a whole JPEG file) with a comment segment of `text` after the APP segments that
@@ -192,13 +167,11 @@ mod tests {
         assert_eq!(&with[..16], &jpeg[..16]);
         assert_eq!(&with[16..18], &[0xFF, 0xFE]);
         assert_eq!(&with[20 + text.len()..], &jpeg[16..]);
-        let comments = jpeg_comments(&with);
-        assert_eq!(comments, vec![text.as_bytes()]);
         assert_eq!(
-            settings_of(&String::from_utf8_lossy(comments[0])).as_deref(),
+            jpeg_settings(&with).as_deref(),
             Some("--preset shutter --algorithm scatter")
         );
-        assert!(jpeg_comments(&jpeg).is_empty());
+        assert_eq!(jpeg_settings(&jpeg), None);
     }
 
     #[test]
@@ -208,8 +181,7 @@ mod tests {
         assert!(text.len() <= JPEG_COMMENT_MOST, "{}", text.len());
         let jpeg = vec![0xFF, 0xD8, 0xFF, 0xDA, 0, 2, 0xFF, 0xD9];
         let with = with_jpeg_comment(jpeg, &text);
-        let comments = jpeg_comments(&with);
-        let read = settings_of(&String::from_utf8_lossy(comments[0]));
+        let read = jpeg_settings(&with);
         assert_eq!(read, Some(as_held(&record, ImageFormat::Jpeg)));
         assert_ne!(read.as_deref(), Some(&record[..]));
     }
