@@ -17,7 +17,7 @@
 //! gets wrong (a point covered in the neighbour, matched to a look-alike tens of pixels
 //! away) made it several pixels, and any reading, even one of scale 0.02 that moves nothing,
 //! passed for "clearly better". A reading whose own motion is under the floor below which
-//! measured motion counts as none ([`STILL`]) is no motion, whatever it scores.
+//! measured motion counts as none ([`verdict::STILL`]) is no motion, whatever it scores.
 
 use serde::Serialize;
 
@@ -36,29 +36,6 @@ pub struct FitInput<'a> {
     /// Points sampled at most, on a grid ([`FIT_POINTS`] for `shutter vectors`; fewer for
     /// the check before a blur, which only has to tell a clearly wrong reading).
     pub max_points: usize,
-}
-
-/// One reading of the stored values and how well it fits.
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct Reading {
-    pub meaning: Meaning,
-    /// The file's second component is x.
-    pub swap: bool,
-    pub y_up: bool,
-    pub zero: f32,
-    pub scale: f32,
-    pub units: Units,
-    /// RMS distance in pixels between the motion this reading gives and the motion measured,
-    /// each point's distance capped at [`TRUNCATE`].
-    pub residual: f64,
-    /// RMS in pixels of the motion this reading gives at the points (not capped): under
-    /// [`STILL`] the reading says no motion.
-    pub motion: f64,
-    /// The scale fitted (one for both axes) in pixels per stored unit on each axis (the
-    /// units' factor applied), before rounding.
-    pub fitted_scale: [f64; 2],
-    /// Whether the reading's scale is positive (else no preset can state it).
-    pub consistent: bool,
 }
 
 /// The outcome.
@@ -307,13 +284,6 @@ fn points(l: &Level, max_points: usize) -> Vec<((usize, usize), f32)> {
     out
 }
 
-/// A distance beyond which a point counts as not fitting at all (occlusion, a mismatch).
-pub const TRUNCATE: f64 = 1.0;
-
-/// Motion under this (pixels, RMS over the points, uncapped) is no motion: the sub-pixel
-/// refinement's error on a real render, and what a reading of near-zero scale gives.
-pub const STILL: f64 = 0.25;
-
 /// The RMS of per-point distances, each at most [`TRUNCATE`]: robust to the few points
 /// that match nothing, while a reading that misses a whole motion (a layer) pays for every
 /// point of it.
@@ -476,14 +446,6 @@ pub fn fit(input: &FitInput) -> Fit {
         why,
         samples,
         size: (w, h),
-    }
-}
-
-impl Reading {
-    /// Whether the reading moves the points by less than measured motion must to count
-    /// ([`STILL`]): a scale near zero, no motion whatever it scores.
-    pub fn is_still(&self) -> bool {
-        self.motion < STILL
     }
 }
 
@@ -657,107 +619,9 @@ impl Candidate {
     }
 }
 
-/// The verdict: the best reading, unless nothing fits clearly better than no motion, a
-/// different reading fits about as well, or an axis never moves. `no_motion` is no motion's
-/// residual toward the best reading's neighbour, capped as the readings' are, and the plain
-/// RMS of the motion measured there; `points` the points measured.
-fn decide(
-    readings: &[Reading],
-    [no_motion, moved]: [f64; 2],
-    points: usize,
-    varying: [bool; 2],
-) -> (Option<Reading>, Option<String>) {
-    let nothing = |best: &str| {
-        Some(format!(
-            "nothing fits clearly better than no motion ({best} against {no_motion:.2} px \
-             without motion, each point's error capped at {TRUNCATE} px)"
-        ))
-    };
-    let Some(best) = readings.first() else {
-        if points >= 8 {
-            // Points were followed, but every reading's scale came out negative or zero.
-            return (None, nothing("no reading has a positive scale"));
-        }
-        return (
-            None,
-            Some("no textured point could be followed to a neighbouring frame: give frames with detail and a neighbour on each side".into()),
-        );
-    };
-    if moved < STILL || best.residual > 0.5 * no_motion {
-        return (None, nothing(&format!("best {:.2} px", best.residual)));
-    }
-    if best.is_still() {
-        return (
-            None,
-            nothing(&format!(
-                "the best reading fits to {:.2} px but moves the points by {:.2} px: it is no \
-                 motion itself",
-                best.residual, best.motion
-            )),
-        );
-    }
-    if !best.consistent {
-        return (
-            None,
-            Some("the best reading has no positive scale: no preset states it".into()),
-        );
-    }
-    if !varying[0] || !varying[1] {
-        return (
-            None,
-            Some(
-                "one stored component never changes: that axis's sign and scale cannot be seen \
-                 (a pan along one axis says nothing of the other); give frames where both move"
-                    .into(),
-            ),
-        );
-    }
-    let alike = readings.iter().skip(1).find(|r| {
-        r.residual <= best.residual * 1.25 + 0.05
-            && (r.meaning != best.meaning || r.swap != best.swap || r.y_up != best.y_up)
-    });
-    if let Some(other) = alike {
-        let reason = if other.meaning.is_backward() != best.meaning.is_backward() {
-            " (the motion is the same before and after this frame, so backward and forward \
-             readings fit alike: a frame whose motion changes tells them apart)"
-        } else {
-            ""
-        };
-        return (
-            None,
-            Some(format!(
-                "two readings fit alike: {} ({:.3} px) and {} ({:.3} px){reason}",
-                describe(best),
-                best.residual,
-                describe(other),
-                other.residual
-            )),
-        );
-    }
-    (Some(best.clone()), None)
-}
-
-/// A reading in words.
-pub fn describe(r: &Reading) -> String {
-    format!(
-        "{:?}{}{}, zero {}, scale {} ({})",
-        r.meaning,
-        if r.swap { ", x/y swapped" } else { "" },
-        if r.y_up { ", y up" } else { ", y down" },
-        r.zero,
-        r.scale,
-        match r.units {
-            Units::Pixels => "pixels",
-            Units::Normalized => "normalised",
-        }
-    )
-    .replace("ToPrev", "to_prev")
-    .replace("ToNext", "to_next")
-    .replace("FromNext", "from_next")
-    .replace("Velocity", "velocity")
-    .replace("PrevPosition", "prev_position")
-    .replace("NextPosition", "next_position")
-}
+mod verdict;
+use verdict::decide;
+pub use verdict::{describe, Reading, TRUNCATE};
 
 #[cfg(test)]
 mod tests;

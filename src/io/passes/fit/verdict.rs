@@ -1,0 +1,185 @@
+//! The fit's verdict ([`super`]): its readings, which is chosen, or why none is, in words.
+
+use serde::Serialize;
+
+use crate::io::preset::{Meaning, Units};
+
+/// One reading of the stored values and how well it fits.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Reading {
+    pub meaning: Meaning,
+    /// The file's second component is x.
+    pub swap: bool,
+    pub y_up: bool,
+    pub zero: f32,
+    pub scale: f32,
+    pub units: Units,
+    /// RMS distance in pixels between the motion this reading gives and the motion measured,
+    /// each point's distance capped at [`TRUNCATE`].
+    pub residual: f64,
+    /// RMS in pixels of the motion this reading gives at the points (not capped): under
+    /// [`STILL`] the reading says no motion.
+    pub motion: f64,
+    /// The scale fitted (one for both axes) in pixels per stored unit on each axis (the
+    /// units' factor applied), before rounding.
+    pub fitted_scale: [f64; 2],
+    /// Whether the reading's scale is positive (else no preset can state it).
+    pub consistent: bool,
+}
+
+/// A distance beyond which a point counts as not fitting at all (occlusion, a mismatch).
+pub const TRUNCATE: f64 = 1.0;
+
+/// Motion under this (pixels, RMS over the points, uncapped) is no motion: the sub-pixel
+/// refinement's error on a real render, and what a reading of near-zero scale gives.
+pub const STILL: f64 = 0.25;
+
+impl Reading {
+    /// Whether the reading moves the points by less than measured motion must to count
+    /// ([`STILL`]): a scale near zero, no motion whatever it scores.
+    pub fn is_still(&self) -> bool {
+        self.motion < STILL
+    }
+}
+
+/// The verdict: the best reading, unless nothing fits clearly better than no motion, a
+/// different reading fits about as well, or an axis never moves. `no_motion` is no motion's
+/// residual toward the best reading's neighbour, capped as the readings' are, and the plain
+/// RMS of the motion measured there; `points` the points measured.
+pub(super) fn decide(
+    readings: &[Reading],
+    [no_motion, moved]: [f64; 2],
+    points: usize,
+    varying: [bool; 2],
+) -> (Option<Reading>, Option<String>) {
+    let nothing = |best: &str| {
+        Some(format!(
+            "nothing fits clearly better than no motion ({best} against {no_motion:.2} px \
+             without motion, each point's error capped at {TRUNCATE} px)"
+        ))
+    };
+    let Some(best) = readings.first() else {
+        if points >= 8 {
+            // Points were followed, but every reading's scale came out negative or zero.
+            return (None, nothing("no reading has a positive scale"));
+        }
+        return (
+            None,
+            Some("no textured point could be followed to a neighbouring frame: give frames with detail and a neighbour on each side".into()),
+        );
+    };
+    if moved < STILL || best.residual > 0.5 * no_motion {
+        return (None, nothing(&format!("best {:.2} px", best.residual)));
+    }
+    if best.is_still() {
+        return (
+            None,
+            nothing(&format!(
+                "the best reading fits to {:.2} px but moves the points by {:.2} px: it is no \
+                 motion itself",
+                best.residual, best.motion
+            )),
+        );
+    }
+    if !best.consistent {
+        return (
+            None,
+            Some("the best reading has no positive scale: no preset states it".into()),
+        );
+    }
+    if !varying[0] || !varying[1] {
+        return (
+            None,
+            Some(
+                "one stored component never changes: that axis's sign and scale cannot be seen \
+                 (a pan along one axis says nothing of the other); give frames where both move"
+                    .into(),
+            ),
+        );
+    }
+    let alike = readings.iter().skip(1).find(|r| {
+        r.residual <= best.residual * 1.25 + 0.05
+            && (r.meaning != best.meaning || r.swap != best.swap || r.y_up != best.y_up)
+    });
+    if let Some(other) = alike {
+        let reason = if other.meaning.is_backward() != best.meaning.is_backward() {
+            before_and_after(best, other)
+        } else {
+            String::new()
+        };
+        return (
+            None,
+            Some(format!(
+                "two readings fit alike: {} ({:.3} px) and {} ({:.3} px){reason}",
+                describe(best),
+                best.residual,
+                describe(other),
+                other.residual
+            )),
+        );
+    }
+    (Some(best.clone()), None)
+}
+
+/// Why a backward and a forward reading fit alike. Each fits its own scale, so wherever the
+/// motion before the frame is the motion after it times one factor at every point followed
+/// (the same motion, factor 1; or one object speeding up or slowing down over a still
+/// background; −1 where it turns back), the scale takes up the factor. The factor is the
+/// ratio of their scales, signed by their directions, where both are offsets in the same
+/// units from the same zero (a position's scale says nothing of it); otherwise the reason
+/// is left unsaid.
+fn before_and_after(best: &Reading, other: &Reading) -> String {
+    let (backward, forward) = match best.meaning.is_backward() {
+        true => (best, other),
+        false => (other, best),
+    };
+    let comparable = backward.units == forward.units
+        && backward.zero == forward.zero
+        && !backward.meaning.is_position()
+        && !forward.meaning.is_position()
+        && forward.scale > 0.0;
+    // Each as the displacement over its frame step (p − p_prev, p_next − p) per stored unit:
+    // velocity and to_next are those, to_prev and from_next their negatives.
+    let signed = |r: &Reading| match r.meaning {
+        Meaning::ToPrev | Meaning::FromNext => -r.scale,
+        _ => r.scale,
+    };
+    let factor = signed(backward) / signed(forward);
+    if !comparable {
+        return String::new();
+    }
+    if (factor - 1.0).abs() <= 0.05 {
+        return " (the motion is the same before and after this frame, so backward and \
+                 forward readings fit alike: a frame whose motion changes tells them apart)"
+            .into();
+    }
+    format!(
+        " (the motion before this frame is the motion after it times {factor:.3} at every \
+         point followed, as when the only thing moving speeds up or slows down, and each \
+         reading's scale takes up that factor, so backward and forward readings fit alike: \
+         a frame where things change their motion unlike one another, two objects or a \
+         turn, tells them apart)"
+    )
+}
+
+/// A reading in words.
+pub fn describe(r: &Reading) -> String {
+    format!(
+        "{:?}{}{}, zero {}, scale {} ({})",
+        r.meaning,
+        if r.swap { ", x/y swapped" } else { "" },
+        if r.y_up { ", y up" } else { ", y down" },
+        r.zero,
+        r.scale,
+        match r.units {
+            Units::Pixels => "pixels",
+            Units::Normalized => "normalised",
+        }
+    )
+    .replace("ToPrev", "to_prev")
+    .replace("ToNext", "to_next")
+    .replace("FromNext", "from_next")
+    .replace("Velocity", "velocity")
+    .replace("PrevPosition", "prev_position")
+    .replace("NextPosition", "next_position")
+}
