@@ -778,14 +778,7 @@ fn views_to_write(job: &Job, every_channel: bool) -> Vec<Option<String>> {
         return vec![None];
     };
     match info.views {
-        Some(views) if views.names.len() > 1 => {
-            let mut names = views.names.clone();
-            if let Some(default) = &views.default {
-                names.retain(|n| n != default);
-                names.insert(0, default.clone());
-            }
-            names.into_iter().map(Some).collect()
-        }
+        Some(views) if views.names.len() > 1 => views.in_order().into_iter().map(Some).collect(),
         _ => vec![None],
     }
 }
