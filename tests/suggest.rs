@@ -379,7 +379,10 @@ fn missing_motion_names_the_presets_that_find_vectors_and_not_the_colours_channe
             .map(String::from)
             .chain(["R", "G", "B"].map(|c| format!("{vectors}.{c}")))
             .collect();
-        exr(&color, &names.iter().map(String::as_str).collect::<Vec<_>>());
+        exr(
+            &color,
+            &names.iter().map(String::as_str).collect::<Vec<_>>(),
+        );
         let out = dir.path().join("out.exr");
         for algorithm in ["reconstruct", "scatter"] {
             let o = shutter(&[
@@ -396,7 +399,10 @@ fn missing_motion_names_the_presets_that_find_vectors_and_not_the_colours_channe
             assert!(!out.exists());
             let hint = format!("--preset vray ({channels} as velocity)");
             assert!(err.contains(&hint), "{algorithm}: no {hint}: {err}");
-            assert!(!err.contains("R,G"), "{algorithm}: offers the colour's R,G: {err}");
+            assert!(
+                !err.contains("R,G"),
+                "{algorithm}: offers the colour's R,G: {err}"
+            );
             // The preset that did not find it is not offered again.
             assert!(!err.contains("--preset shutter"), "{err}");
         }
