@@ -361,3 +361,50 @@ fn ties_go_to_the_fixed_order_and_say_so() {
     assert!(suggestion["preset"].is_null());
     assert!(suggestion["reason"].as_str().unwrap().contains("diffuse.r"));
 }
+
+/// A run that finds no motion names the presets that would find it in the file, as
+/// `shutter info` suggests them (QA L7: V-Ray's `VRayVelocity.R/G` under the default preset
+/// got no hint of `--preset vray`, as a missing depth gets one), and does not offer the
+/// colour's own `R,G` as the vectors it looked for.
+#[test]
+fn missing_motion_names_the_presets_that_find_vectors_and_not_the_colours_channels() {
+    let dir = tempfile::tempdir().unwrap();
+    for (vectors, channels) in [
+        ("VRayVelocity", "VRayVelocity.R, VRayVelocity.G"),
+        ("velocity", "velocity.R, velocity.G"),
+    ] {
+        let color = dir.path().join(format!("{vectors}.exr"));
+        let names: Vec<String> = ["R", "G", "B", "A", "Z"]
+            .into_iter()
+            .map(String::from)
+            .chain(["R", "G", "B"].map(|c| format!("{vectors}.{c}")))
+            .collect();
+        exr(
+            &color,
+            &names.iter().map(String::as_str).collect::<Vec<_>>(),
+        );
+        let out = dir.path().join("out.exr");
+        for algorithm in ["reconstruct", "scatter"] {
+            let o = shutter(&[
+                "blur",
+                "--algorithm",
+                algorithm,
+                "--color",
+                &s(&color),
+                "-o",
+                &s(&out),
+            ]);
+            let err = stderr(&o);
+            assert_eq!(o.status.code(), Some(1), "{err}");
+            assert!(!out.exists());
+            let hint = format!("--preset vray ({channels} as velocity)");
+            assert!(err.contains(&hint), "{algorithm}: no {hint}: {err}");
+            assert!(
+                !err.contains("R,G"),
+                "{algorithm}: offers the colour's R,G: {err}"
+            );
+            // The preset that did not find it is not offered again.
+            assert!(!err.contains("--preset shutter"), "{err}");
+        }
+    }
+}

@@ -1182,3 +1182,111 @@ fn a_stack_of_a_stereo_file_needs_view_and_writes_nothing_without_it() {
         "{parts:?}"
     );
 }
+
+/// The parts of an EXR output as (view, lossy, channels sorted: name and values), the
+/// file's order.
+type ViewPart = (Option<String>, bool, Vec<(String, Vec<f32>)>);
+
+fn view_parts(path: &Path) -> Vec<ViewPart> {
+    use exr::compression::Compression;
+    (crate::support::read_exr_layers(path).into_iter())
+        .map(|l| {
+            let view = l.attributes.view_name.as_ref().map(|t| t.to_string());
+            let lossy = matches!(
+                l.encoding.compression,
+                Compression::DWAA(_) | Compression::DWAB(_)
+            );
+            let mut channels: Vec<(String, Vec<f32>)> = (l.channel_data.list.into_iter())
+                .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+                .collect();
+            channels.sort_by(|a, b| a.0.cmp(&b.0));
+            (view, lossy, channels)
+        })
+        .collect()
+}
+
+/// DWA keeps data in lossless parts of its own, so a single-part stereo file comes out in
+/// several parts: then in OpenEXR's multi-part scheme (MultiViewOpenEXR.html), each part
+/// holding one view's channels, named without the view, and saying the view in its `view`
+/// attribute, none a `multiView`; each view's colour in a DWA part, its depth and vectors in
+/// a lossless part of its own, just as that view written alone has them; the default
+/// view's part first, the part names unique. (QA L14: every part had `multiView` and none
+/// `view`, right's depth in a part `data` beside left's and its vectors in one named
+/// `velocity.right`.)
+#[test]
+fn dwa_writes_a_single_part_stereo_file_in_parts_of_one_view_each() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let stereo = d.join("stereo.exr");
+    single_part_stereo(&stereo);
+    let run = |out: &Path, extra: &[&str]| {
+        let o = blur(
+            &s(&stereo),
+            out,
+            &[&["--compression", "dwaa"], extra].concat(),
+        );
+        assert!(o.status.success(), "{out:?}: {}", stderr(&o));
+    };
+    let every = d.join("every.exr");
+    run(&every, &[]);
+    let layers = crate::support::read_exr_layers(&every);
+    let mut names = Vec::new();
+    for layer in &layers {
+        let a = &layer.attributes;
+        let name = a.layer_name.as_ref().map(|t| t.to_string());
+        assert!(a.multi_view_names.is_none(), "{name:?} has multiView");
+        assert!(a.view_name.is_some(), "{name:?} has no view");
+        assert!(!names.contains(&name), "two parts named {name:?}");
+        names.push(name);
+    }
+    let parts = view_parts(&every);
+    assert_eq!(
+        parts[0].0.as_deref(),
+        Some("left"),
+        "the default view first"
+    );
+    // Each view's parts: what the view written alone holds, bit for bit.
+    let channels = |parts: &[ViewPart]| {
+        let mut names: Vec<(bool, Vec<String>)> = (parts.iter())
+            .map(|(_, lossy, c)| (*lossy, c.iter().map(|c| c.0.clone()).collect()))
+            .collect();
+        names.sort();
+        names
+    };
+    for view in ["left", "right"] {
+        let alone = d.join(format!("{view}.exr"));
+        run(&alone, &["--view", view]);
+        let mut want = view_parts(&alone);
+        for part in &mut want {
+            part.0 = Some(view.to_string());
+        }
+        let mut got: Vec<ViewPart> = (parts.iter())
+            .filter(|p| p.0.as_deref() == Some(view))
+            .cloned()
+            .collect();
+        let colour = ["A", "B", "G", "R"].map(String::from).to_vec();
+        let data = ["Z", "velocity.X", "velocity.Y"].map(String::from).to_vec();
+        assert_eq!(channels(&got), [(false, data), (true, colour)], "{view}");
+        got.sort_by_key(|p| p.1);
+        want.sort_by_key(|p| p.1);
+        assert!(
+            got == want,
+            "{view}: the values differ from the view written alone"
+        );
+    }
+    // Read back as the same two views, by shutter and by OpenImageIO.
+    let o = shutter(&["info", &s(&every)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("left (default), right"),
+        "{}",
+        stdout(&o)
+    );
+    if let Some(o) = crate::support::run_tool("oiiotool", &["--info", "-v", "-a", &s(&every)]) {
+        let info = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{info}");
+        assert!(!info.contains("multiView"), "{info}");
+        assert_eq!(info.matches("view: \"left\"").count(), 2, "{info}");
+        assert_eq!(info.matches("view: \"right\"").count(), 2, "{info}");
+    }
+}

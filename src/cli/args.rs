@@ -456,6 +456,11 @@ pub struct DiffArgs {
     #[arg(long, value_name = "P", default_value_t = 0.0)]
     pub fail_percent: f64,
 
+    /// What share of a frame's pixels (percent) may be over the per-pixel warning thresholds
+    /// (--warn-pixel, --data-warn-pixel) before the frame warns (idiff's -warnpercent).
+    #[arg(long, value_name = "P", default_value_t = 0.0)]
+    pub warn_percent: f64,
+
     /// Let NaN and infinite values through (by default any in either image fails the frame).
     #[arg(long)]
     pub allow_nonfinite: bool,

@@ -158,8 +158,13 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
             return Err(Error::usage(format!("{flag} must not be negative")));
         }
     }
-    if !(0.0..=100.0).contains(&args.fail_percent) {
-        return Err(Error::usage("--fail-percent must be between 0 and 100"));
+    for (flag, percent) in [
+        ("--fail-percent", args.fail_percent),
+        ("--warn-percent", args.warn_percent),
+    ] {
+        if !(0.0..=100.0).contains(&percent) {
+            return Err(Error::usage(format!("{flag} must be between 0 and 100")));
+        }
     }
     let a = PathPattern::parse(&args.a)?;
     let b = PathPattern::parse(&args.b)?;
@@ -217,6 +222,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
         gates: gates(&args),
         allow_pixels: args.allow_pixels,
         fail_percent: args.fail_percent,
+        warn_percent: args.warn_percent,
         allow_nonfinite: args.allow_nonfinite,
         report: args.report.clone(),
     };

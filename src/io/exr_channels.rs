@@ -26,6 +26,11 @@ pub struct OutChannel {
     /// pLinear flag are that channel's, not those of a channel of another view (or none)
     /// that the output name happens to match.
     pub source: Option<String>,
+    /// In an output of every view of a file whose channel names say their views (OpenEXR's
+    /// single-part scheme): the channel's view and its name in that view (`right` and `R`
+    /// for `right.R`), for a multi-part output, whose parts say their views instead (see
+    /// `exr_like::write_like`); `None`: a channel of no view, or a file not of that scheme.
+    pub view: Option<(String, String)>,
 }
 
 /// Whether `channel` is data that `compression` would store lossily in the output: every data
@@ -120,6 +125,7 @@ pub fn channels_like(
                 exact,
                 class,
                 source,
+                view: _,
             } = channel;
             let read_as = source.as_deref().unwrap_or(&name);
             let samples = match kind {

@@ -13,6 +13,7 @@
 use crate::frame::{Frame, LayerClass, Window};
 use crate::io::channels::name_of;
 use crate::io::exr_like;
+use crate::io::view::{Scheme, Views as View};
 
 /// The name of a stack's merged beauty's own part.
 pub const MERGED_PART: &str = "Composite.Combined";
@@ -35,6 +36,31 @@ pub fn exr_parts(
         .map_or(0, |f| f.carried.colour_part.min(count - 1));
     let mut parts: Vec<Vec<exr_like::OutChannel>> = vec![Vec::new(); count + own_part as usize];
     let mut windows: Vec<Option<Window>> = vec![None; count + own_part as usize];
+    // Where the file says its views in its channels' names (OpenEXR's single-part scheme),
+    // each channel's view and its name in that view, in case the output is multi-part
+    // (`exr_like::write_like` then writes it in the multi-part scheme). The frames come in
+    // the order the run read the views (`Views::in_order`). A channel of no view that every
+    // other view has one of its own in place of (`velocity.X` beside `velocity.right.X`) is
+    // the default view's alone, as each view reads it (`io::view`).
+    let by_names = every
+        .then(|| View::of(headers))
+        .flatten()
+        .filter(|v| v.scheme == Scheme::Names);
+    let order = by_names.as_ref().map(View::in_order).unwrap_or_default();
+    let own: Vec<Vec<String>> = (views.iter().skip(1))
+        .map(|f| {
+            (f.carried.channels.iter())
+                .filter(|c| !c.shared)
+                .map(|c| c.name.clone())
+                .collect()
+        })
+        .collect();
+    let view_of = |v: usize, shared: bool, name: &str| {
+        let file = by_names.as_ref()?;
+        let view = order.get(if shared { 0 } else { v })?;
+        let defaults = shared && v == 0 && own.iter().all(|names| names.iter().any(|n| n == name));
+        (!shared || defaults).then(|| (view.clone(), file.strip(name, view)))
+    };
     for (v, frame) in views.into_iter().enumerate() {
         let carried = frame.carried;
         let color = frame.color.expect("checked");
@@ -95,6 +121,7 @@ pub fn exr_parts(
                 .zip(planes)
                 .enumerate()
                 .map(|(k, (name, plane))| exr_like::OutChannel {
+                    view: view_of(v, false, &name),
                     name,
                     plane,
                     class: LayerClass::Colour,
@@ -116,6 +143,7 @@ pub fn exr_parts(
                 (c.name, Some(c.stored))
             };
             parts[part].push(exr_like::OutChannel {
+                view: view_of(v, c.shared, &name),
                 name,
                 plane: c.plane,
                 class: c.class,

@@ -232,6 +232,29 @@ impl FileInfo {
             })
     }
 
+    /// A pass's `alternatives` (each a list of names, its first `required` the ones it needs)
+    /// but those that need one of the channels `taken` (the colour's: `R,G` are no vectors
+    /// to offer where R and G are the beauty); all of them where that leaves none.
+    pub fn not_taken(
+        &self,
+        alternatives: &[Vec<String>],
+        required: usize,
+        taken: &[usize],
+    ) -> Vec<Vec<String>> {
+        let needs_taken = |names: &Vec<String>| {
+            (names.iter().take(required)).any(|n| self.find(n).is_some_and(|c| taken.contains(&c)))
+        };
+        let free: Vec<Vec<String>> = (alternatives.iter())
+            .filter(|names| !needs_taken(names))
+            .cloned()
+            .collect();
+        if free.is_empty() {
+            alternatives.to_vec()
+        } else {
+            free
+        }
+    }
+
     /// Why the part holding `channel` cannot be read (deep data, HTJ2K, subsampled
     /// channels), where it cannot: its channels are left out.
     pub fn unreadable(&self, channel: &ChannelInfo) -> Option<String> {

@@ -5,6 +5,7 @@ pub mod channels;
 pub mod exr;
 pub mod exr_channels;
 pub mod exr_like;
+pub mod exr_order;
 pub mod exr_parts;
 pub mod exr_unknown;
 pub mod exr_zip;

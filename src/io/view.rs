@@ -157,6 +157,17 @@ impl Views {
         components.join(".")
     }
 
+    /// The views, the default first (then in the file's order): the order in which a run
+    /// reads every view, and an output of every view holds them.
+    pub fn in_order(&self) -> Vec<String> {
+        let mut names = self.names.clone();
+        if let Some(default) = &self.default {
+            names.retain(|n| n != default);
+            names.insert(0, default.clone());
+        }
+        names
+    }
+
     /// The views for messages: `left (default), right`.
     pub fn list(&self) -> String {
         self.names

@@ -28,6 +28,7 @@ use crate::numeric::Replaced;
 use crate::process::{depth_kind, process_on, Params};
 
 mod existing;
+mod hints;
 mod memory;
 mod warnings;
 use existing::{existing_output, made_otherwise_warning, other_settings, Existing};
@@ -178,28 +179,11 @@ fn warn(report: &mut Report, on_event: &mut dyn FnMut(Event), message: String) {
     }
 }
 
-/// A painted CoC map is read through the depth pass: its problems name it as the user gave
-/// it (`coc-map`), not as `depth`. Depth looked up in the colour file and not found: the
-/// problem names every other way to give it (`suggest::other_ways_to_depth`).
+/// The problems of a preflight with what they miss named as the user gives it, and the
+/// other ways to give it (`hints::name_pass`).
 fn name_pass(job: &Job, error: crate::Error) -> crate::Error {
-    let crate::Error::Files(mut problems) = error else {
-        return error;
-    };
     let coc_map = depth_kind(&job.params) == crate::numeric::DepthKind::CocMap;
-    for problem in problems.iter_mut().filter(|p| p.pass == Some("depth")) {
-        if coc_map {
-            problem.pass = Some("coc-map");
-        } else if problem.kind == ProblemKind::MissingChannel
-            && problem.detail.ends_with("or give --depth FILE")
-        {
-            if let Ok(info) = crate::io::file::FileInfo::probe(&problem.path) {
-                let dof = job.params.dof.is_some();
-                let ways = crate::io::passes::other_ways_to_depth(&info, &job.preset, dof);
-                problem.detail.push_str(&ways);
-            }
-        }
-    }
-    crate::Error::Files(problems)
+    hints::name_pass(error, &job.preset, coc_map, job.params.dof.is_some())
 }
 
 /// Runs the job: preflight (every input header, every output place), the output lock and
@@ -778,14 +762,7 @@ fn views_to_write(job: &Job, every_channel: bool) -> Vec<Option<String>> {
         return vec![None];
     };
     match info.views {
-        Some(views) if views.names.len() > 1 => {
-            let mut names = views.names.clone();
-            if let Some(default) = &views.default {
-                names.retain(|n| n != default);
-                names.insert(0, default.clone());
-            }
-            names.into_iter().map(Some).collect()
-        }
+        Some(views) if views.names.len() > 1 => views.in_order().into_iter().map(Some).collect(),
         _ => vec![None],
     }
 }

@@ -52,7 +52,9 @@ pub use read::{
     plan_color, plan_color_in, read_color, read_frame, read_frame_keeping, read_frame_noted,
     StoredVectors,
 };
-pub use suggest::{other_ways_to_depth, passes_found, suggest, Candidate, Found, Suggestion};
+pub use suggest::{
+    other_ways_to_depth, other_ways_to_motion, passes_found, suggest, Candidate, Found, Suggestion,
+};
 
 use crate::io::sequence::PathPattern;
 

@@ -420,8 +420,9 @@ pub fn plan_frame(
             no_motion = true;
             let (name, spec, _) = sections[0];
             if let Some(info) = &color_info {
-                let mut problem =
-                    planner.missing_problem(info, name, &alternatives(&spec.channels));
+                // The colour's own channels are no vectors to offer.
+                let offered = info.not_taken(&spec.channels, 2, &claimed);
+                let mut problem = planner.missing_problem(info, name, &alternatives(&offered));
                 problem.detail.push_str("; or give --velocity FILE");
                 if target != 0 {
                     problem.detail.push_str(

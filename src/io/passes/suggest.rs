@@ -133,17 +133,7 @@ pub fn other_ways_to_depth(info: &FileInfo, preset: &Preset, dof: bool) -> Strin
             ", or --coc-map FILE (a painted map of each pixel's blur, read in place of depth)",
         );
     }
-    let finding: Vec<String> = crate::io::preset::BUILTIN
-        .iter()
-        .filter(|(name, _)| crate::io::preset::is_convention(name) && *name != preset.name)
-        .filter_map(|(name, _)| Preset::builtin(name).ok())
-        .filter_map(|other| {
-            let read = passes_read(info, &other);
-            let (_, channels) = read.into_iter().find(|(pass, _)| *pass == "depth")?;
-            let channels: Vec<String> = channels.iter().map(|&c| shown(info, c)).collect();
-            Some(format!("{} ({})", other.name, channels.join(", ")))
-        })
-        .collect();
+    let finding = presets_finding(info, preset, &["depth"]);
     if finding.is_empty() {
         ways.push_str(
             ", or a preset whose [depth] channels name the file's depth channel \
@@ -151,11 +141,55 @@ pub fn other_ways_to_depth(info: &FileInfo, preset: &Preset, dof: bool) -> Strin
         );
     } else {
         ways.push_str(&format!(
-            ", or --preset NAME, one that finds depth in it: {}",
-            finding.join(", ")
+            ", or a preset that finds depth in it: {}",
+            finding.join(" or ")
         ));
     }
     ways
+}
+
+/// The ways besides `--velocity FILE` (`--prev`, `--next`) to give the motion a colour file
+/// (`info`, read with `preset`) does not hold, as a missing motion pass's problem ends with
+/// them: the convention presets that find vectors in the file (a velocity, or previous or
+/// next positions: each pass is derived from whichever a preset finds), each with the
+/// channels it reads and as what (`--preset vray (VRayVelocity.R, VRayVelocity.G as
+/// velocity)`);
+/// else a preset of one's own whose channels name them.
+pub fn other_ways_to_motion(info: &FileInfo, preset: &Preset) -> String {
+    let finding = presets_finding(info, preset, &["velocity", "prev", "next"]);
+    if finding.is_empty() {
+        ", or a preset whose [velocity] channels name the file's vector channels \
+         (--preset FILE)"
+            .to_string()
+    } else {
+        format!(
+            ", or a preset that finds vectors in it: {}",
+            finding.join(" or ")
+        )
+    }
+}
+
+/// The convention presets besides `preset` that find one of `passes` in the file on its
+/// own, in the fixed order, each as the flag that chooses it with the channels it reads for
+/// the first of them it finds (`--preset shutter (depth.Z)`; where `passes` are several,
+/// which one: `--preset vray (VRayVelocity.R, VRayVelocity.G as velocity)`).
+fn presets_finding(info: &FileInfo, preset: &Preset, passes: &[&str]) -> Vec<String> {
+    (crate::io::preset::BUILTIN.iter())
+        .filter(|(name, _)| crate::io::preset::is_convention(name) && *name != preset.name)
+        .filter_map(|(name, _)| Preset::builtin(name).ok())
+        .filter_map(|other| {
+            let read = passes_read(info, &other);
+            let (pass, channels) = read.into_iter().find(|(pass, _)| passes.contains(pass))?;
+            let channels: Vec<String> = channels.iter().map(|&c| shown(info, c)).collect();
+            let what = if passes.len() > 1 {
+                format!(" as {pass}")
+            } else {
+                String::new()
+            };
+            let channels = channels.join(", ");
+            Some(format!("--preset {} ({channels}{what})", other.name))
+        })
+        .collect()
 }
 
 /// The name `shutter info` shows for a channel.

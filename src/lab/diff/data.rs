@@ -12,7 +12,7 @@ use crate::io::passes::{passes_found, FramePlan};
 use crate::io::preset::Preset;
 use crate::lab::metrics::{Metric, Scores};
 
-use super::{channels, failure, write_heatmap, DiffJob, Entry, FrameDiff};
+use super::{channels, failure, warns_by_pixels, write_heatmap, DiffJob, Entry, FrameDiff};
 
 /// Whether the reference at `path` is such a file. Where the colour read found a luminance
 /// `Y` (`luminance`), as `info` reads the file: `preset` finds no colour in it
@@ -215,7 +215,7 @@ pub(super) fn compare(job: &DiffJob, entry: &Entry) -> Result<FrameDiff, Problem
         pixels_over_warn: compared.pixels_over_warn,
         samples_over_hard: compared.over_hard,
         warned: gated.warn.is_some_and(|w| job.metric.exceeds(value, w))
-            || compared.pixels_over_warn > 0
+            || warns_by_pixels(job, compared.pixels_over_warn, a.width * a.height)
             || !compared.extra.is_empty()
             || !doubts.is_empty(),
         every_channel: compared.every,

@@ -45,6 +45,9 @@ pub struct DiffJob {
     /// How many pixels may fail `fail_pixel`: a count, or a share of the frame (the larger).
     pub allow_pixels: usize,
     pub fail_percent: f64,
+    /// What share of a frame's pixels (percent) may be over the per-pixel warning
+    /// thresholds before the frame warns (idiff's `-warnpercent`).
+    pub warn_percent: f64,
     /// Non-finite values (NaN, ±∞) in either image do not fail the frame.
     pub allow_nonfinite: bool,
     /// A folder for the HTML report and its thumbnails (`report`).
@@ -114,6 +117,12 @@ fn failure(
         }
     }
     None
+}
+
+/// Whether `over` pixels of `pixels` over the per-pixel warning thresholds warn: more than
+/// `warn_percent` of them, as idiff's `-warnpercent` (none by default).
+fn warns_by_pixels(job: &DiffJob, over: usize, pixels: usize) -> bool {
+    over > (job.warn_percent / 100.0 * pixels as f64).floor() as usize
 }
 
 /// How many pixels of `pixels` may fail the per-pixel gate.
@@ -441,10 +450,11 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
                 job.warn.unwrap_or_default()
             ));
         }
-        if f.pixels_over_warn > 0 {
+        if warns_by_pixels(job, f.pixels_over_warn, f.whole.pixels) {
             warnings.push(format!(
-                "{label}{} pixels over the per-pixel warning (--warn-pixel / --data-warn-pixel)",
-                f.pixels_over_warn
+                "{label}{} pixels over the per-pixel warning (--warn-pixel / \
+                 --data-warn-pixel), more than --warn-percent {} allows",
+                f.pixels_over_warn, job.warn_percent
             ));
         }
         for note in &f.notes {
@@ -766,7 +776,7 @@ fn compare(
         pixels_over_warn: compared.pixels_over_warn,
         samples_over_hard: compared.over_hard,
         warned: job.warn.is_some_and(|w| job.metric.exceeds(value, w))
-            || compared.pixels_over_warn > 0
+            || warns_by_pixels(job, compared.pixels_over_warn, wa * ha)
             || !compared.extra.is_empty()
             || !entry.extra.is_empty()
             || doubtful,
