@@ -357,7 +357,12 @@ fn warn_percent_lets_a_share_of_pixels_over_the_warning_as_idiff_does() {
         }
         let path = dir.path().join(name);
         let flat = vec![0.5f32; w * h];
-        write_exr(&path, w, h, vec![("R", r), ("G", flat.clone()), ("B", flat)]);
+        write_exr(
+            &path,
+            w,
+            h,
+            vec![("R", r), ("G", flat.clone()), ("B", flat)],
+        );
         s(&path)
     };
     let a = write("a.exr", 0);
@@ -384,13 +389,27 @@ fn warn_percent_lets_a_share_of_pixels_over_the_warning_as_idiff_does() {
             warn_percent,
         ];
         if let Some(idiff) = tool("idiff", &[&theirs[..], &[&a, &b]].concat()) {
-            assert_eq!(idiff.status.code(), Some(expected), "idiff, {warn_percent} %");
+            assert_eq!(
+                idiff.status.code(),
+                Some(expected),
+                "idiff, {warn_percent} %"
+            );
         }
         let o = shutter(&[&["diff", "--idiff"], &ours[..], &[&a, &b]].concat());
-        assert_eq!(o.status.code(), Some(expected), "{warn_percent} %: {}", stderr(&o));
+        assert_eq!(
+            o.status.code(),
+            Some(expected),
+            "{warn_percent} %: {}",
+            stderr(&o)
+        );
         let o = shutter(&[&["diff", "--warn-exit"], &ours[..], &[&a, &b]].concat());
         let code = if expected == 1 { 4 } else { 0 };
-        assert_eq!(o.status.code(), Some(code), "{warn_percent} %: {}", stderr(&o));
+        assert_eq!(
+            o.status.code(),
+            Some(code),
+            "{warn_percent} %: {}",
+            stderr(&o)
+        );
     }
     let o = shutter(&["diff", "--warn-percent", "101", &a, &b]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));

@@ -408,3 +408,64 @@ fn missing_motion_names_the_presets_that_find_vectors_and_not_the_colours_channe
         }
     }
 }
+
+/// The presets a missing pass's problem offers are those that find it in the view being
+/// read, not anywhere in the file (review: with `--view right` of a stereo file whose
+/// `velocity.X/Y` are the default view's alone, the hint offered `--preset shutter`, which
+/// fails the same way; likewise a `Z` of the default view alone, as every preset's depth
+/// for `right`); and a preset that reads picture codes (`painted`: vectors about 0.5,
+/// depth as grey) is not offered for a float file's `X`, `Y`.
+#[test]
+fn missing_pass_hints_look_in_the_view_read_and_skip_picture_code_presets() {
+    let dir = tempfile::tempdir().unwrap();
+    let stereo = dir.path().join("stereo.exr");
+    let mut channels: Vec<(String, Vec<f32>)> = ["R", "G", "B", "A", "Z", "velocity.X"]
+        .into_iter()
+        .chain(["velocity.Y"])
+        .map(|c| (c.to_string(), plane(0.5)))
+        .collect();
+    // right writes the velocity layer as its own (its Z alone), so left's velocity.X/Y are
+    // the default view's, not right's (OpenEXR's one-part scheme, as `io::view` reads it).
+    for c in [
+        "right.R",
+        "right.G",
+        "right.B",
+        "right.A",
+        "velocity.right.Z",
+    ] {
+        channels.push((c.to_string(), plane(0.5)));
+    }
+    write_parts(
+        &stereo,
+        (W, H),
+        vec![Part {
+            name: None,
+            view: None,
+            multi_view: Some(&["left", "right"]),
+            channels,
+        }],
+    );
+    let out = dir.path().join("out.exr");
+    let run = |color: &Path, extra: &[&str]| {
+        let mut args = vec!["blur", "--algorithm", "reconstruct", "--color"];
+        let color = s(color);
+        args.push(&color);
+        let out = s(&out);
+        args.extend(["-o", &out]);
+        args.extend(extra);
+        let o = shutter(&args);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        stderr(&o)
+    };
+    // right has neither depth nor vectors: no preset finds them there.
+    let err = run(&stereo, &["--view", "right", "--preset", "vray"]);
+    assert!(!err.contains("--preset shutter"), "{err}");
+    assert!(!err.contains("--preset blender (Z)"), "{err}");
+    assert!(err.contains("(--preset FILE)"), "{err}");
+    // A float file's X, Y: the shutter preset reads them, painted would decode them as codes.
+    let xy = dir.path().join("xy.exr");
+    exr(&xy, &["R", "G", "B", "A", "Z", "X", "Y"]);
+    let err = run(&xy, &["--preset", "vray"]);
+    assert!(err.contains("--preset shutter (X, Y as velocity)"), "{err}");
+    assert!(!err.contains("painted"), "{err}");
+}

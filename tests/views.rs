@@ -1290,3 +1290,79 @@ fn dwa_writes_a_single_part_stereo_file_in_parts_of_one_view_each() {
         assert_eq!(info.matches("view: \"right\"").count(), 2, "{info}");
     }
 }
+
+/// The same layout where the views' channel sets differ: a default view with a layer
+/// `diffuse` (R, G, B, A), another view writing that layer as its own but without A
+/// (`diffuse.right.R`, G, B), a third with no `diffuse` at all. As the reader reads them,
+/// `diffuse.A` is the default view's alone (its layer is one `right` writes as its own)
+/// and `diffuse.R`, G, B are no view's but the default's too (no other view reads them):
+/// each view's parts, with the parts of no view, hold what that view written alone holds.
+/// (Review: `diffuse.A` went to a part of no view, which `right` then read as its own,
+/// and `center` gained `diffuse.R`, G, B.)
+#[test]
+fn dwa_splits_views_whose_channels_differ_as_each_view_reads_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let stereo = d.join("three.exr");
+    let n = W * H;
+    let mut channels = named(view_passes(LEFT), |n| n.to_string());
+    channels.extend(named(view_passes(RIGHT), in_view("right")));
+    channels.extend(named(view_passes(RIGHT + 20), in_view("center")));
+    for (k, channel) in ["R", "G", "B", "A"].into_iter().enumerate() {
+        channels.push((
+            format!("diffuse.{channel}"),
+            noise(n, 90 + k as u32, 0.0, 1.0),
+        ));
+        if channel != "A" {
+            let name = format!("diffuse.right.{channel}");
+            channels.push((name, noise(n, 95 + k as u32, 0.0, 1.0)));
+        }
+    }
+    write_parts(
+        &stereo,
+        (W, H),
+        vec![Part {
+            name: None,
+            view: None,
+            multi_view: Some(&["left", "right", "center"]),
+            channels,
+        }],
+    );
+    let run = |out: &Path, extra: &[&str]| {
+        let o = blur(
+            &s(&stereo),
+            out,
+            &[&["--compression", "dwaa"], extra].concat(),
+        );
+        assert!(o.status.success(), "{out:?}: {}", stderr(&o));
+    };
+    let every = d.join("every.exr");
+    run(&every, &[]);
+    let parts = view_parts(&every);
+    let sorted = |mut c: Vec<(String, Vec<f32>)>| {
+        c.sort_by(|a, b| a.0.cmp(&b.0));
+        c
+    };
+    for (view, diffuse) in [("left", 4), ("right", 3), ("center", 0)] {
+        let alone = d.join(format!("{view}.exr"));
+        run(&alone, &["--view", view]);
+        let want = sorted(view_parts(&alone).into_iter().flat_map(|p| p.2).collect());
+        let got = sorted(
+            (parts.iter())
+                .filter(|p| p.0.is_none() || p.0.as_deref() == Some(view))
+                .flat_map(|p| p.2.clone())
+                .collect(),
+        );
+        let names = |c: &[(String, Vec<f32>)]| c.iter().map(|c| c.0.clone()).collect::<Vec<_>>();
+        assert_eq!(names(&got), names(&want), "{view}");
+        let layer = names(&want)
+            .iter()
+            .filter(|n| n.starts_with("diffuse."))
+            .count();
+        assert_eq!(layer, diffuse, "{view} written alone: {:?}", names(&want));
+        assert!(
+            got == want,
+            "{view}: the values differ from the view written alone"
+        );
+    }
+}

@@ -13,7 +13,7 @@
 use crate::frame::{Frame, LayerClass, Window};
 use crate::io::channels::name_of;
 use crate::io::exr_like;
-use crate::io::view::{Scheme, Views as View};
+use crate::io::view::{layer_of, Scheme, Views as View};
 
 /// The name of a stack's merged beauty's own part.
 pub const MERGED_PART: &str = "Composite.Combined";
@@ -39,9 +39,11 @@ pub fn exr_parts(
     // Where the file says its views in its channels' names (OpenEXR's single-part scheme),
     // each channel's view and its name in that view, in case the output is multi-part
     // (`exr_like::write_like` then writes it in the multi-part scheme). The frames come in
-    // the order the run read the views (`Views::in_order`). A channel of no view that every
-    // other view has one of its own in place of (`velocity.X` beside `velocity.right.X`) is
-    // the default view's alone, as each view reads it (`io::view`).
+    // the order the run read the views (`Views::in_order`). A channel of no view is the
+    // default view's alone where no other view reads it, as the reader decides (`FileInfo`):
+    // every other view has one of its own in its place (`velocity.X` beside
+    // `velocity.right.X`), or its layer is one another view writes as its own (`diffuse.A`
+    // beside `diffuse.right.R`, `view::layer_of`).
     let by_names = every
         .then(|| View::of(headers))
         .flatten()
@@ -55,10 +57,15 @@ pub fn exr_parts(
                 .collect()
         })
         .collect();
+    let own_layers: std::collections::BTreeSet<&str> =
+        own.iter().flatten().filter_map(|n| layer_of(n)).collect();
     let view_of = |v: usize, shared: bool, name: &str| {
         let file = by_names.as_ref()?;
         let view = order.get(if shared { 0 } else { v })?;
-        let defaults = shared && v == 0 && own.iter().all(|names| names.iter().any(|n| n == name));
+        let layered = layer_of(name).is_some_and(|l| own_layers.contains(l));
+        let defaults = shared
+            && v == 0
+            && (layered || own.iter().all(|names| names.iter().any(|n| n == name)));
         (!shared || defaults).then(|| (view.clone(), file.strip(name, view)))
     };
     for (v, frame) in views.into_iter().enumerate() {

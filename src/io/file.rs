@@ -316,8 +316,8 @@ impl FileInfo {
         // In the one-part scheme, a layer another view writes as its own (`diffuse.right.R`)
         // is a layer of each view: its plain channels (`diffuse.R`, `diffuse.A`) are the
         // default view's, even where the other view lacks one of them (OpenEXR writes the
-        // default view's channels without its name).
-        let layer = |name: &str| name.rsplit_once('.').map(|(layer, _)| layer.to_string());
+        // default view's channels without its name; `view::layer_of`).
+        let layer = |name: &str| crate::io::view::layer_of(name).map(str::to_string);
         let per_view: std::collections::BTreeSet<String> = self
             .channels
             .iter()

@@ -69,6 +69,16 @@ pub fn part_name_without_view(name: &str, view: Option<&str>) -> String {
         .to_string()
 }
 
+/// The layer of a channel's name, OpenEXR's way: all before its last period (`diffuse` of
+/// `diffuse.R`, none of `R`). In the one-part scheme a layer that a view other than the
+/// default writes as its own (`diffuse.right.R`) is a layer of each view, so its channels
+/// of no view (`diffuse.R`, `diffuse.A`) are the default view's alone, even where the
+/// other view lacks one of them: the reader (`FileInfo`'s view planning) and the writer
+/// (`exr_parts`, a stereo file split into parts by view) both go by it.
+pub fn layer_of(name: &str) -> Option<&str> {
+    name.rsplit_once('.').map(|(layer, _)| layer)
+}
+
 impl Views {
     /// Finds the views of a file from its headers (parts), or `None` for a file of no views.
     pub fn of(headers: &[Header]) -> Option<Views> {

@@ -181,9 +181,14 @@ fn warn(report: &mut Report, on_event: &mut dyn FnMut(Event), message: String) {
 
 /// The problems of a preflight with what they miss named as the user gives it, and the
 /// other ways to give it (`hints::name_pass`).
-fn name_pass(job: &Job, error: crate::Error) -> crate::Error {
+fn name_pass(job: &Job, error: crate::Error, view: Option<&str>) -> crate::Error {
     let coc_map = depth_kind(&job.params) == crate::numeric::DepthKind::CocMap;
-    hints::name_pass(error, &job.preset, coc_map, job.params.dof.is_some())
+    hints::name_pass(
+        error,
+        &job.preset,
+        (coc_map, job.params.dof.is_some()),
+        view,
+    )
 }
 
 /// Runs the job: preflight (every input header, every output place), the output lock and
@@ -232,7 +237,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     };
     // A stack's first layer's files are the job's inputs.
     let mut plans = preflight(&job.inputs, &job.output, &job.frames, &options)
-        .map_err(|e| name_pass(job, e))?;
+        .map_err(|e| name_pass(job, e, options.view))?;
     // The other views' (or the stack's other layers') plans, frame by frame.
     let mut others: Vec<Vec<FramePlan>> = plans.iter().map(|_| Vec::new()).collect();
     let more: Vec<(&Inputs, PlanOptions)> = if job.stack.is_empty() {
@@ -257,8 +262,8 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             .collect()
     };
     for (inputs, options) in &more {
-        let unit_plans =
-            preflight(inputs, &job.output, &job.frames, options).map_err(|e| name_pass(job, e))?;
+        let unit_plans = preflight(inputs, &job.output, &job.frames, options)
+            .map_err(|e| name_pass(job, e, options.view))?;
         for (frame, plan) in others.iter_mut().zip(unit_plans) {
             frame.push(plan);
         }
@@ -720,7 +725,7 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             let (read_seconds, vector_check) = reader.join().unwrap_or((0.0, None));
             let process_seconds = processor.join().unwrap_or(0.0);
             match failure {
-                Some(problem) => Err(name_pass(job, problem.into())),
+                Some(problem) => Err(name_pass(job, problem.into(), views[0].as_deref())),
                 None => Ok((read_seconds, process_seconds, vector_check)),
             }
         })?;

@@ -180,6 +180,11 @@ fn presets_finding(info: &FileInfo, preset: &Preset, passes: &[&str]) -> Vec<Str
         .filter_map(|other| {
             let read = passes_read(info, &other);
             let (pass, channels) = read.into_iter().find(|(pass, _)| passes.contains(pass))?;
+            // A preset that reads the pass as a picture's codes (grey 0..1 as near..far,
+            // vectors about 0.5: `painted`) is no way to read a float file's.
+            if codes(&other, pass) && !info.is_integer_image() {
+                return None;
+            }
             let channels: Vec<String> = channels.iter().map(|&c| shown(info, c)).collect();
             let what = if passes.len() > 1 {
                 format!(" as {pass}")
@@ -190,6 +195,18 @@ fn presets_finding(info: &FileInfo, preset: &Preset, passes: &[&str]) -> Vec<Str
             Some(format!("--preset {} ({channels}{what})", other.name))
         })
         .collect()
+}
+
+/// Whether `preset` reads `pass` as a picture's codes: depth as grey mapped onto near..far,
+/// vectors stored about a zero that is not 0.
+fn codes(preset: &Preset, pass: &str) -> bool {
+    match pass {
+        "depth" => preset.depth.near.is_some() && preset.depth.far.is_some(),
+        "velocity" => preset.velocity.zero != 0.0,
+        "prev" => preset.prev.zero != 0.0,
+        "next" => preset.next.zero != 0.0,
+        _ => false,
+    }
 }
 
 /// The name `shutter info` shows for a channel.

@@ -451,10 +451,15 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
             ));
         }
         if warns_by_pixels(job, f.pixels_over_warn, f.whole.pixels) {
+            // The allowance named only where one was given (and -0 said as 0).
+            let allowed = match job.warn_percent > 0.0 {
+                true => format!(", more than --warn-percent {} allows", job.warn_percent),
+                false => String::new(),
+            };
             warnings.push(format!(
                 "{label}{} pixels over the per-pixel warning (--warn-pixel / \
-                 --data-warn-pixel), more than --warn-percent {} allows",
-                f.pixels_over_warn, job.warn_percent
+                 --data-warn-pixel){allowed}",
+                f.pixels_over_warn
             ));
         }
         for note in &f.notes {

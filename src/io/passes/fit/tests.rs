@@ -251,10 +251,11 @@ fn no_reading_of_positive_scale_is_no_motion_fitting_best() {
 /// The tester's L15: one textured square speeding up over a still wall (12 px then 20 px a
 /// frame, stored as to_next): velocity read off the previous frame with scale 0.6 fits as
 /// well as to_next with scale 1, so the fit is rightly undecided; but its reason said the
-/// motion was the same before and after the frame, which is false here. It now names the
-/// factor the scales take up.
+/// motion was the same before and after the frame, which is false here. It now says how
+/// the motion changed (20 / 12 = 1.667), as it does for a square turning back and one
+/// bouncing off a floor (its y reversed), and keeps the old reason for a steady square.
 #[test]
-fn a_square_speeding_up_is_undecided_for_the_factor_it_changes_by() {
+fn a_square_changing_its_motion_is_undecided_for_the_change_it_makes() {
     let scene = |corner| Scene {
         w: 128,
         h: 96,
@@ -263,15 +264,37 @@ fn a_square_speeding_up_is_undecided_for_the_factor_it_changes_by() {
         wall: |x, y| noise(x, y, 3),
         square: |x, y| noise(x, y, 7),
     };
-    let speeding = scene([(20.0, 14.0), (32.0, 20.0), (52.0, 30.0)]);
-    let f = speeding.fit(&speeding.stored(|_| [20.0, 10.0], |_| [0.0, 0.0]));
-    assert!(f.chosen.is_none(), "{:?}", f.chosen.as_ref().map(describe));
-    let why = f.why.as_deref().unwrap_or_default();
-    assert!(why.contains("times 0.600"), "{why}");
-    assert!(!why.contains("the same before and after"), "{why}");
-    // The same square at one speed keeps the old reason, which is true there.
-    let steady = scene([(20.0, 14.0), (32.0, 20.0), (44.0, 26.0)]);
-    let f = steady.fit(&steady.stored(|_| [12.0, 6.0], |_| [0.0, 0.0]));
-    let why = f.why.as_deref().unwrap_or_default();
-    assert!(why.contains("the same before and after"), "{why}");
+    // The square's corner in each frame, its motion to the next frame, the reason.
+    type Case = ([(f32, f32); 3], [f32; 2], &'static str);
+    let cases: [Case; 4] = [
+        (
+            [(20.0, 14.0), (32.0, 20.0), (52.0, 30.0)],
+            [20.0, 10.0],
+            "times 1.667",
+        ),
+        (
+            [(30.0, 20.0), (42.0, 26.0), (30.0, 20.0)],
+            [-12.0, -6.0],
+            "before it reversed",
+        ),
+        (
+            [(30.0, 20.0), (42.0, 26.0), (54.0, 20.0)],
+            [12.0, -6.0],
+            "with its y reversed",
+        ),
+        (
+            [(20.0, 14.0), (32.0, 20.0), (44.0, 26.0)],
+            [12.0, 6.0],
+            "the same before and after",
+        ),
+    ];
+    for (corner, next, reason) in cases {
+        let square = scene(corner);
+        let f = square.fit(&square.stored(|_| next, |_| [0.0, 0.0]));
+        assert!(f.chosen.is_none(), "{:?}", f.chosen.as_ref().map(describe));
+        let why = f.why.as_deref().unwrap_or_default();
+        assert!(why.contains(reason), "{corner:?}: {why}");
+        let steady = reason.contains("the same");
+        assert_eq!(why.contains("the same before and after"), steady, "{why}");
+    }
 }

@@ -121,13 +121,14 @@ pub(super) fn decide(
     (Some(best.clone()), None)
 }
 
-/// Why a backward and a forward reading fit alike. Each fits its own scale, so wherever the
-/// motion before the frame is the motion after it times one factor at every point followed
-/// (the same motion, factor 1; or one object speeding up or slowing down over a still
-/// background; −1 where it turns back), the scale takes up the factor. The factor is the
-/// ratio of their scales, signed by their directions, where both are offsets in the same
-/// units from the same zero (a position's scale says nothing of it); otherwise the reason
-/// is left unsaid.
+/// Why a backward and a forward reading fit alike. Each fits its own scale and axes, so
+/// wherever the motion before the frame is the motion after it changed the same way at
+/// every point followed (not at all; scaled, as one object speeding up or slowing down
+/// over a still background; reversed, one object turning back; one axis reversed, a
+/// bounce), the readings' scales and axes take the change up. The change is read off the
+/// two readings: the ratio of their scales signed by their directions, and which of the
+/// y axis and the x/y swap they differ in, where both are offsets in the same units from
+/// the same zero (a position's scale says nothing of it); otherwise it is left unsaid.
 fn before_and_after(best: &Reading, other: &Reading) -> String {
     let (backward, forward) = match best.meaning.is_backward() {
         true => (best, other),
@@ -138,6 +139,9 @@ fn before_and_after(best: &Reading, other: &Reading) -> String {
         && !backward.meaning.is_position()
         && !forward.meaning.is_position()
         && forward.scale > 0.0;
+    if !comparable {
+        return String::new();
+    }
     // Each as the displacement over its frame step (p − p_prev, p_next − p) per stored unit:
     // velocity and to_next are those, to_prev and from_next their negatives.
     let signed = |r: &Reading| match r.meaning {
@@ -145,20 +149,36 @@ fn before_and_after(best: &Reading, other: &Reading) -> String {
         _ => r.scale,
     };
     let factor = signed(backward) / signed(forward);
-    if !comparable {
-        return String::new();
+    let x_reversed = factor < 0.0;
+    let y_reversed = x_reversed != (backward.y_up != forward.y_up);
+    let mut change = Vec::new();
+    if (factor.abs() - 1.0).abs() > 0.05 {
+        change.push(format!("times {:.3}", 1.0 / factor.abs()));
     }
-    if (factor - 1.0).abs() <= 0.05 {
+    if backward.swap != forward.swap {
+        change.push("with x and y swapped".to_string());
+    }
+    change.push(
+        match (x_reversed, y_reversed) {
+            (true, true) => "reversed",
+            (true, false) => "with its x reversed",
+            (false, true) => "with its y reversed",
+            (false, false) => "",
+        }
+        .to_string(),
+    );
+    change.retain(|c| !c.is_empty());
+    if change.is_empty() {
         return " (the motion is the same before and after this frame, so backward and \
                  forward readings fit alike: a frame whose motion changes tells them apart)"
             .into();
     }
     format!(
-        " (the motion before this frame is the motion after it times {factor:.3} at every \
-         point followed, as when the only thing moving speeds up or slows down, and each \
-         reading's scale takes up that factor, so backward and forward readings fit alike: \
-         a frame where things change their motion unlike one another, two objects or a \
-         turn, tells them apart)"
+        " (the motion after this frame is the motion before it {} at every point followed, \
+         which the readings' scales and axes take up, so backward and forward readings fit \
+         alike: a frame where things change their motion unlike one another, two objects \
+         moving differently, tells them apart)",
+        change.join(", ")
     )
 }
 
