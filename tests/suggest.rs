@@ -468,4 +468,18 @@ fn missing_pass_hints_look_in_the_view_read_and_skip_picture_code_presets() {
     let err = run(&xy, &["--preset", "vray"]);
     assert!(err.contains("--preset shutter (X, Y as velocity)"), "{err}");
     assert!(!err.contains("painted"), "{err}");
+    // Unreal's float vectors are stored about 0.5 too, but are no picture's codes: its
+    // preset is still offered (second review: it had been left out with painted).
+    let mrq = dir.path().join("mrq.exr");
+    let vectors = "FinalImageMovieRenderQueue_MotionVectors";
+    let names: Vec<String> = ["R", "G", "B", "A"]
+        .into_iter()
+        .map(String::from)
+        .chain(["R", "G", "B", "A"].map(|c| format!("{vectors}.{c}")))
+        .chain(["FinalImageMovieRenderQueue_WorldDepth.R".to_string()])
+        .collect();
+    exr(&mrq, &names.iter().map(String::as_str).collect::<Vec<_>>());
+    let err = run(&mrq, &["--preset", "vray"]);
+    let hint = format!("--preset unreal ({vectors}.R, {vectors}.G as velocity)");
+    assert!(err.contains(&hint), "{err}");
 }

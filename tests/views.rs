@@ -1303,7 +1303,6 @@ fn dwa_writes_a_single_part_stereo_file_in_parts_of_one_view_each() {
 fn dwa_splits_views_whose_channels_differ_as_each_view_reads_them() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let stereo = d.join("three.exr");
     let n = W * H;
     let mut channels = named(view_passes(LEFT), |n| n.to_string());
     channels.extend(named(view_passes(RIGHT), in_view("right")));
@@ -1318,13 +1317,34 @@ fn dwa_splits_views_whose_channels_differ_as_each_view_reads_them() {
             channels.push((name, noise(n, 95 + k as u32, 0.0, 1.0)));
         }
     }
+    let counts =
+        dwa_split_as_each_view_reads(d, channels, &["left", "right", "center"], "diffuse.");
+    assert_eq!(
+        counts,
+        [4, 3, 0],
+        "diffuse's channels in left, right, center written alone"
+    );
+}
+
+/// Writes `channels` as one part of `views` (the first the default), blurs it into an EXR
+/// with DWA (every view, split into parts by view) and each view alone (`--view V`), and
+/// asserts each view's parts with the parts of no view hold what that view alone holds,
+/// name for name and bit for bit. Returns, per view, how many channels of the view alone
+/// begin with `prefix`.
+fn dwa_split_as_each_view_reads(
+    d: &Path,
+    channels: Vec<(String, Vec<f32>)>,
+    views: &'static [&'static str],
+    prefix: &str,
+) -> Vec<usize> {
+    let stereo = d.join("views.exr");
     write_parts(
         &stereo,
         (W, H),
         vec![Part {
             name: None,
             view: None,
-            multi_view: Some(&["left", "right", "center"]),
+            multi_view: Some(views),
             channels,
         }],
     );
@@ -1343,7 +1363,9 @@ fn dwa_splits_views_whose_channels_differ_as_each_view_reads_them() {
         c.sort_by(|a, b| a.0.cmp(&b.0));
         c
     };
-    for (view, diffuse) in [("left", 4), ("right", 3), ("center", 0)] {
+    let names = |c: &[(String, Vec<f32>)]| c.iter().map(|c| c.0.clone()).collect::<Vec<_>>();
+    let mut counts = Vec::new();
+    for &view in views {
         let alone = d.join(format!("{view}.exr"));
         run(&alone, &["--view", view]);
         let want = sorted(view_parts(&alone).into_iter().flat_map(|p| p.2).collect());
@@ -1353,16 +1375,50 @@ fn dwa_splits_views_whose_channels_differ_as_each_view_reads_them() {
                 .flat_map(|p| p.2.clone())
                 .collect(),
         );
-        let names = |c: &[(String, Vec<f32>)]| c.iter().map(|c| c.0.clone()).collect::<Vec<_>>();
         assert_eq!(names(&got), names(&want), "{view}");
-        let layer = names(&want)
-            .iter()
-            .filter(|n| n.starts_with("diffuse."))
-            .count();
-        assert_eq!(layer, diffuse, "{view} written alone: {:?}", names(&want));
         assert!(
             got == want,
             "{view}: the values differ from the view written alone"
         );
+        counts.push(
+            names(&want)
+                .iter()
+                .filter(|n| n.starts_with(prefix))
+                .count(),
+        );
     }
+    counts
+}
+
+/// The same where the layer is the beauty's: `rgba.R`, G, B, A in every view and a `rgba.Z`
+/// of no view. `right` writes the `rgba` layer as its own (its beauty), so `rgba.Z` is the
+/// default view's alone, as the reader reads it (second review: the writer counted each
+/// view's other channels but not its beauty, and put `rgba.Z` in a part of no view).
+#[test]
+fn dwa_split_counts_each_view_s_beauty_among_its_own_layers() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let n = W * H;
+    let mut channels = Vec::new();
+    for (view, seed) in [("", LEFT), ("right.", RIGHT)] {
+        for (k, c) in ["R", "G", "B", "A"].into_iter().enumerate() {
+            let value = if c == "A" {
+                vec![1.0; n]
+            } else {
+                noise(n, seed + k as u32, 0.0, 1.0)
+            };
+            let name = match view {
+                "" => format!("rgba.{c}"),
+                _ => format!("rgba.right.{c}"),
+            };
+            channels.push((name, value));
+        }
+    }
+    channels.push(("rgba.Z".to_string(), noise(n, 70, 1.0, 5.0)));
+    // Each view's depth and motion, the passes a blur reads.
+    let passes = |seed| view_passes(seed).into_iter().skip(4);
+    channels.extend(named(passes(LEFT).collect(), |n| n.to_string()));
+    channels.extend(named(passes(RIGHT).collect(), in_view("right")));
+    let counts = dwa_split_as_each_view_reads(d, channels, &["left", "right"], "rgba.Z");
+    assert_eq!(counts, [1, 0], "rgba.Z in left, right written alone");
 }

@@ -49,11 +49,18 @@ pub fn exr_parts(
         .flatten()
         .filter(|v| v.scheme == Scheme::Names);
     let order = by_names.as_ref().map(View::in_order).unwrap_or_default();
+    // Each other view's own channels, its beauty's among them (`rgba.R` beside the default
+    // view's `rgba.Z` makes `rgba` a layer of each view, as the reader counts every channel).
     let own: Vec<Vec<String>> = (views.iter().skip(1))
         .map(|f| {
+            let beauty = match f.carried.beauty.is_empty() {
+                true => ["R", "G", "B", "A"].map(String::from).to_vec(),
+                false => f.carried.beauty.clone(),
+            };
             (f.carried.channels.iter())
                 .filter(|c| !c.shared)
                 .map(|c| c.name.clone())
+                .chain(beauty)
                 .collect()
         })
         .collect();

@@ -198,13 +198,14 @@ fn presets_finding(info: &FileInfo, preset: &Preset, passes: &[&str]) -> Vec<Str
 }
 
 /// Whether `preset` reads `pass` as a picture's codes: depth as grey mapped onto near..far,
-/// vectors stored about a zero that is not 0.
+/// vectors quantised to codes (a dead zone about their zero: `painted`'s 8-bit steps). A
+/// zero of 0.5 alone says nothing of it: Unreal's float vectors are stored about 0.5.
 fn codes(preset: &Preset, pass: &str) -> bool {
     match pass {
         "depth" => preset.depth.near.is_some() && preset.depth.far.is_some(),
-        "velocity" => preset.velocity.zero != 0.0,
-        "prev" => preset.prev.zero != 0.0,
-        "next" => preset.next.zero != 0.0,
+        "velocity" => preset.velocity.dead_zone > 0.0,
+        "prev" => preset.prev.dead_zone > 0.0,
+        "next" => preset.next.dead_zone > 0.0,
         _ => false,
     }
 }

@@ -451,7 +451,7 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
             ));
         }
         if warns_by_pixels(job, f.pixels_over_warn, f.whole.pixels) {
-            // The allowance named only where one was given (and -0 said as 0).
+            // The allowance named only where one was given.
             let allowed = match job.warn_percent > 0.0 {
                 true => format!(", more than --warn-percent {} allows", job.warn_percent),
                 false => String::new(),

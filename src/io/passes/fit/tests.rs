@@ -252,8 +252,10 @@ fn no_reading_of_positive_scale_is_no_motion_fitting_best() {
 /// frame, stored as to_next): velocity read off the previous frame with scale 0.6 fits as
 /// well as to_next with scale 1, so the fit is rightly undecided; but its reason said the
 /// motion was the same before and after the frame, which is false here. It now says how
-/// the motion changed (20 / 12 = 1.667), as it does for a square turning back and one
-/// bouncing off a floor (its y reversed), and keeps the old reason for a steady square.
+/// the motion changed (20 / 12 = 1.667), as it does for a square turning back, one turning a
+/// quarter (its x and y swapped, the new x the old y reversed, stored y down or y up: the
+/// swapped readings' y axes decide which is reversed) and one bouncing off a floor (its y
+/// reversed), and keeps the old reason for a steady square.
 #[test]
 fn a_square_changing_its_motion_is_undecided_for_the_change_it_makes() {
     let scene = |corner| Scene {
@@ -266,11 +268,22 @@ fn a_square_changing_its_motion_is_undecided_for_the_change_it_makes() {
     };
     // The square's corner in each frame, its motion to the next frame, the reason.
     type Case = ([(f32, f32); 3], [f32; 2], &'static str);
-    let cases: [Case; 4] = [
+    let cases: [Case; 6] = [
         (
             [(20.0, 14.0), (32.0, 20.0), (52.0, 30.0)],
             [20.0, 10.0],
             "times 1.667",
+        ),
+        // A quarter turn: (12, 4) then (−4, 12), stored y down and y up.
+        (
+            [(40.0, 30.0), (52.0, 34.0), (48.0, 46.0)],
+            [-4.0, 12.0],
+            "with x and y swapped, with its x reversed",
+        ),
+        (
+            [(40.0, 30.0), (52.0, 34.0), (48.0, 46.0)],
+            [-4.0, -12.0],
+            "with x and y swapped, with its x reversed",
         ),
         (
             [(30.0, 20.0), (42.0, 26.0), (30.0, 20.0)],

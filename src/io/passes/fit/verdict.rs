@@ -134,7 +134,10 @@ fn before_and_after(best: &Reading, other: &Reading) -> String {
         true => (best, other),
         false => (other, best),
     };
+    // Normalised units scale x by the width and y by the height, so where one reading swaps
+    // and the other does not, no one factor relates them.
     let comparable = backward.units == forward.units
+        && (backward.units == Units::Pixels || backward.swap == forward.swap)
         && backward.zero == forward.zero
         && !backward.meaning.is_position()
         && !forward.meaning.is_position()
@@ -149,13 +152,26 @@ fn before_and_after(best: &Reading, other: &Reading) -> String {
         _ => r.scale,
     };
     let factor = signed(backward) / signed(forward);
-    let x_reversed = factor < 0.0;
-    let y_reversed = x_reversed != (backward.y_up != forward.y_up);
+    // A reading swaps, then mirrors y. Where both or neither swap, the motion after is the
+    // motion before times 1/factor on x and, where their y axes differ, mirrored on y;
+    // where one swaps, the after's x is the before's y mirrored by the backward reading's
+    // y axis, its y the before's x mirrored by the forward reading's.
+    let swapped = backward.swap != forward.swap;
+    let (x_reversed, y_reversed) = match swapped {
+        false => (
+            factor < 0.0,
+            (factor < 0.0) != (backward.y_up != forward.y_up),
+        ),
+        true => (
+            (factor < 0.0) != backward.y_up,
+            (factor < 0.0) != forward.y_up,
+        ),
+    };
     let mut change = Vec::new();
     if (factor.abs() - 1.0).abs() > 0.05 {
         change.push(format!("times {:.3}", 1.0 / factor.abs()));
     }
-    if backward.swap != forward.swap {
+    if swapped {
         change.push("with x and y swapped".to_string());
     }
     change.push(
