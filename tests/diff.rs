@@ -1289,16 +1289,7 @@ fn single_part_multi_view_files_are_compared_in_every_view() {
             }
         }
         let path = d.join(file);
-        write_parts(
-            &path,
-            (w, h),
-            vec![Part {
-                name: None,
-                view: None,
-                multi_view: Some(views),
-                channels,
-            }],
-        );
+        write_views(&path, (w, h), views, channels);
         s(&path)
     };
     let a = write("a.exr", 0.0, &["left", "right"]);

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use crate::support::{s, shutter, stderr, stdout, write_exr, write_parts, Part};
+use crate::support::{s, shutter, stderr, stdout, write_exr, write_parts, write_views, Part};
 
 const W: usize = 8;
 const H: usize = 6;
@@ -435,16 +435,7 @@ fn missing_pass_hints_look_in_the_view_read_and_skip_picture_code_presets() {
     ] {
         channels.push((c.to_string(), plane(0.5)));
     }
-    write_parts(
-        &stereo,
-        (W, H),
-        vec![Part {
-            name: None,
-            view: None,
-            multi_view: Some(&["left", "right"]),
-            channels,
-        }],
-    );
+    write_views(&stereo, (W, H), &["left", "right"], channels);
     let out = dir.path().join("out.exr");
     let run = |color: &Path, extra: &[&str]| {
         let mut args = vec!["blur", "--algorithm", "reconstruct", "--color"];

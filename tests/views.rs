@@ -7,7 +7,8 @@
 use std::path::{Path, PathBuf};
 
 use crate::support::{
-    noise, read_exr_reference, s, shutter, snapshot, stderr, stdout, write_exr, write_parts, Part,
+    noise, read_exr_reference, s, shutter, snapshot, stderr, stdout, write_exr, write_parts,
+    write_views, Part,
 };
 
 const W: usize = 32;
@@ -50,16 +51,7 @@ fn in_view(view: &str) -> impl Fn(&str) -> String + '_ {
 fn single_part_stereo(path: &Path) {
     let mut channels = named(view_passes(LEFT), |n| n.to_string());
     channels.extend(named(view_passes(RIGHT), in_view("right")));
-    write_parts(
-        path,
-        (W, H),
-        vec![Part {
-            name: None,
-            view: None,
-            multi_view: Some(&["left", "right"]),
-            channels,
-        }],
-    );
+    write_views(path, (W, H), &["left", "right"], channels);
 }
 
 /// Each view as a plain file of one view, to compare with.
@@ -493,16 +485,7 @@ fn a_part_of_no_view_comes_out_and_the_default_views_own_layers_stay_its_own() {
     {
         channels.push((name.to_string(), noise(n, 90 + k as u32, 0.0, 1.0)));
     }
-    write_parts(
-        &names,
-        (W, H),
-        vec![Part {
-            name: None,
-            view: None,
-            multi_view: Some(&["left", "right"]),
-            channels,
-        }],
-    );
+    write_views(&names, (W, H), &["left", "right"], channels);
     let written = |view: &str| {
         let out = d.join("out").join(format!("names-{view}.exr"));
         let o = blur(&s(&names), &out, &["--view", view]);
@@ -923,6 +906,15 @@ fn of_pass(passes: &[(String, Vec<f32>)], prefix: &str) -> Vec<(String, Vec<f32>
 /// A part of an EXR output: its name, its view and its channels.
 type OutPart = (Option<String>, Option<String>, Vec<(String, Vec<f32>)>);
 
+/// A part's channels, names and values, in its order.
+fn channels_of(
+    layer: exr::image::Layer<exr::image::AnyChannels<exr::image::FlatSamples>>,
+) -> Vec<(String, Vec<f32>)> {
+    (layer.channel_data.list.into_iter())
+        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+        .collect()
+}
+
 /// The parts of an EXR output, in order.
 fn parts_of(path: &Path) -> Vec<OutPart> {
     crate::support::read_exr_layers(path)
@@ -931,10 +923,7 @@ fn parts_of(path: &Path) -> Vec<OutPart> {
             let a = &l.attributes;
             let name = a.layer_name.as_ref().map(|t| t.to_string());
             let view = a.view_name.as_ref().map(|t| t.to_string());
-            let channels = (l.channel_data.list.into_iter())
-                .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
-                .collect();
-            (name, view, channels)
+            (name, view, channels_of(l))
         })
         .collect()
 }
@@ -1196,9 +1185,7 @@ fn view_parts(path: &Path) -> Vec<ViewPart> {
                 l.encoding.compression,
                 Compression::DWAA(_) | Compression::DWAB(_)
             );
-            let mut channels: Vec<(String, Vec<f32>)> = (l.channel_data.list.into_iter())
-                .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
-                .collect();
+            let mut channels = channels_of(l);
             channels.sort_by(|a, b| a.0.cmp(&b.0));
             (view, lossy, channels)
         })
@@ -1338,16 +1325,7 @@ fn dwa_split_as_each_view_reads(
     prefix: &str,
 ) -> Vec<usize> {
     let stereo = d.join("views.exr");
-    write_parts(
-        &stereo,
-        (W, H),
-        vec![Part {
-            name: None,
-            view: None,
-            multi_view: Some(views),
-            channels,
-        }],
-    );
+    write_views(&stereo, (W, H), views, channels);
     let run = |out: &Path, extra: &[&str]| {
         let o = blur(
             &s(&stereo),

@@ -139,11 +139,17 @@ pub struct DepthSpec {
 }
 
 impl DepthSpec {
+    /// The `near` and `far` a grey map's codes (0 to 1) are mapped between, where both are
+    /// given (a preset for painted maps).
+    pub fn grey_range(&self) -> Option<(f32, f32)> {
+        self.near.zip(self.far)
+    }
+
     /// How a grey map's codes (0 to 1) are taken as depth under this preset, for the run's
     /// warnings: as they are, in scene units, where it gives no `near` and `far` (which a
     /// painted map rarely means); `None` where it maps them between the two.
     pub fn grey_note(&self, preset: &str) -> Option<String> {
-        (self.near.is_none() || self.far.is_none()).then(|| {
+        self.grey_range().is_none().then(|| {
             format!(
                 "depth: the grey of an 8/16-bit map is read as depth 0 to 1 in scene units \
                  (metres for the lens) under preset {preset}; --preset painted reads black to \

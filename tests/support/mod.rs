@@ -51,6 +51,23 @@ pub struct Part {
     pub channels: Vec<(String, Vec<f32>)>,
 }
 
+/// Writes `channels` as one part of `views` (OpenEXR's one-part multi-view scheme: a
+/// `multiView` list, the first the default, channels named with their view).
+pub fn write_views(
+    path: &Path,
+    size: (usize, usize),
+    views: &'static [&'static str],
+    channels: Vec<(String, Vec<f32>)>,
+) {
+    let part = Part {
+        name: None,
+        view: None,
+        multi_view: Some(views),
+        channels,
+    };
+    write_parts(path, size, vec![part]);
+}
+
 /// Writes the parts as one EXR (several parts make a multi-part file) through the exr
 /// crate, which writes `multiView` and `view` from its layer attributes.
 pub fn write_parts(path: &Path, (w, h): (usize, usize), parts: Vec<Part>) {

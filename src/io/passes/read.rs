@@ -271,7 +271,7 @@ pub fn read_frame_keeping(
     }
     if let Some((slot, spec)) = &plan.depth {
         let mut depth = take(*slot, &mut decoded);
-        if let (Some(near), Some(far)) = (spec.near, spec.far) {
+        if let Some((near, far)) = spec.grey_range() {
             depth.iter_mut().for_each(|d| *d = near + *d * (far - near));
         }
         if spec.scale != 1.0 {

@@ -202,7 +202,7 @@ fn presets_finding(info: &FileInfo, preset: &Preset, passes: &[&str]) -> Vec<Str
 /// zero of 0.5 alone says nothing of it: Unreal's float vectors are stored about 0.5.
 fn codes(preset: &Preset, pass: &str) -> bool {
     match pass {
-        "depth" => preset.depth.near.is_some() && preset.depth.far.is_some(),
+        "depth" => preset.depth.grey_range().is_some(),
         "velocity" => preset.velocity.dead_zone > 0.0,
         "prev" => preset.prev.dead_zone > 0.0,
         "next" => preset.next.dead_zone > 0.0,
@@ -394,7 +394,7 @@ fn candidates(info: &FileInfo, presets: &[Preset]) -> Vec<Candidate> {
     }
     if grey {
         for preset in presets {
-            let (Some(near), Some(far)) = (preset.depth.near, preset.depth.far) else {
+            let Some((near, far)) = preset.depth.grey_range() else {
                 continue;
             };
             if let Some(c) = preset.depth.channels.iter().find_map(|n| info.find(n)) {
