@@ -1192,6 +1192,16 @@ fn view_parts(path: &Path) -> Vec<ViewPart> {
         .collect()
 }
 
+/// Blurs `stereo` into `out` with `--compression dwaa` and `extra`, which must succeed.
+fn blur_dwaa(stereo: &Path, out: &Path, extra: &[&str]) {
+    let o = blur(
+        &s(stereo),
+        out,
+        &[&["--compression", "dwaa"], extra].concat(),
+    );
+    assert!(o.status.success(), "{out:?}: {}", stderr(&o));
+}
+
 /// DWA keeps data in lossless parts of its own, so a single-part stereo file comes out in
 /// several parts: then in OpenEXR's multi-part scheme (MultiViewOpenEXR.html), each part
 /// holding one view's channels, named without the view, and saying the view in its `view`
@@ -1206,14 +1216,7 @@ fn dwa_writes_a_single_part_stereo_file_in_parts_of_one_view_each() {
     let d = dir.path();
     let stereo = d.join("stereo.exr");
     single_part_stereo(&stereo);
-    let run = |out: &Path, extra: &[&str]| {
-        let o = blur(
-            &s(&stereo),
-            out,
-            &[&["--compression", "dwaa"], extra].concat(),
-        );
-        assert!(o.status.success(), "{out:?}: {}", stderr(&o));
-    };
+    let run = |out: &Path, extra: &[&str]| blur_dwaa(&stereo, out, extra);
     let every = d.join("every.exr");
     run(&every, &[]);
     let layers = crate::support::read_exr_layers(&every);
@@ -1326,14 +1329,7 @@ fn dwa_split_as_each_view_reads(
 ) -> Vec<usize> {
     let stereo = d.join("views.exr");
     write_views(&stereo, (W, H), views, channels);
-    let run = |out: &Path, extra: &[&str]| {
-        let o = blur(
-            &s(&stereo),
-            out,
-            &[&["--compression", "dwaa"], extra].concat(),
-        );
-        assert!(o.status.success(), "{out:?}: {}", stderr(&o));
-    };
+    let run = |out: &Path, extra: &[&str]| blur_dwaa(&stereo, out, extra);
     let every = d.join("every.exr");
     run(&every, &[]);
     let parts = view_parts(&every);
