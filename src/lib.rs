@@ -21,7 +21,9 @@
 //! - [`lab`]: the measuring lab — truth scenes, metrics, `diff`, `bench` — which the product
 //!   never imports.
 //! - [`cli`]: the command line, the only part that prints.
+//! - [`alloc`]: the process's allocator (the system's, large buffers advised to huge pages).
 
+pub mod alloc;
 pub mod cli;
 pub mod dof;
 pub mod error;
