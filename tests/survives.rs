@@ -1969,6 +1969,74 @@ fn a_half_plate_with_infinite_pixels_comes_back_finite() {
     }
 }
 
+/// A highlight past half's range through DWA: DWAA and DWAB compress colour lossily on a
+/// log-like curve, and a block at half's largest value decoded past it to ±Inf (73 infinite
+/// pixels of R from a finite 2·10⁵ highlight, read so by oiiotool too). The output is finite
+/// to both readers, the highlight still the frame's brightest part, and a frame whose colour
+/// stays low is written as DWA writes it (no cap reaches it).
+#[test]
+fn a_highlight_past_half_s_range_through_dwa_comes_back_finite() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (64usize, 64usize);
+    let sun: Vec<f32> = (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32 - 32.0, (i / w) as f32 - 32.0);
+            0.2 + 2e5 * (-(x * x + y * y) / 72.0).exp()
+        })
+        .collect();
+    let list = vec![
+        AnyChannel::new("R", FlatSamples::F32(sun.clone())),
+        AnyChannel::new("G", FlatSamples::F32(sun.iter().map(|v| v * 0.9).collect())),
+        AnyChannel::new("B", FlatSamples::F32(sun.iter().map(|v| v * 0.7).collect())),
+        AnyChannel::new("A", FlatSamples::F32(vec![1.0; w * h])),
+    ];
+    let layer = Layer::new(
+        (w, h),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(list.into()),
+    );
+    let input = dir.path().join("sun.exr");
+    Image::from_layer(layer).write().to_file(&input).unwrap();
+    for method in ["dwaa", "dwab"] {
+        let output = dir.path().join(format!("{method}.exr"));
+        let o = shutter(&[
+            "blur",
+            "--color",
+            &s(&input),
+            "--compression",
+            method,
+            "-o",
+            &s(&output),
+        ]);
+        assert!(o.status.success(), "{method}: {}", stderr(&o));
+        for (name, plane) in crate::support::read_exr_reference(&output) {
+            let bad = plane.iter().filter(|v| !v.is_finite()).count();
+            assert_eq!(bad, 0, "{method}: {bad} values of {name} not finite");
+            let brightest = plane.iter().copied().fold(0.0f32, f32::max);
+            if name != "A" {
+                assert!(brightest > 1e4, "{method}: {name}'s highlight {brightest}");
+            }
+        }
+        if let Some(out) = crate::support::run_tool("oiiotool", &["--stats", &s(&output)]) {
+            let text = String::from_utf8_lossy(&out.stdout).to_string();
+            let counts = text
+                .lines()
+                .find(|l| l.contains("InfCount"))
+                .unwrap_or_else(|| panic!("{method}: no InfCount in oiiotool's stats: {text}"));
+            assert!(
+                counts
+                    .split(':')
+                    .nth(1)
+                    .unwrap()
+                    .split_whitespace()
+                    .all(|c| c == "0"),
+                "{method}: oiiotool reads infinities: {counts}"
+            );
+        }
+    }
+}
+
 /// An attribute under a standard name but of another type (`isoSpeed` an int, `owner` an
 /// int, `multiView` one string), as some writers leave them, comes back as it was, as from
 /// `oiiotool`: the exr crate had refused to write it ("reserved and cannot be custom"), and

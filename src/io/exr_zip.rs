@@ -73,6 +73,8 @@ where
                     };
                     let chunk = if deflated_here(&meta.headers[index.layer]) {
                         zip_chunk(&meta.headers[index.layer], block)?
+                    } else if crate::io::exr_dwa::is_dwa(&meta.headers[index.layer]) {
+                        crate::io::exr_dwa::finite_chunk(&meta, block)?
                     } else {
                         block.compress_to_chunk(&meta.headers)?
                     };

@@ -4,6 +4,7 @@
 pub mod channels;
 pub mod exr;
 pub mod exr_channels;
+pub mod exr_dwa;
 pub mod exr_like;
 pub mod exr_order;
 pub mod exr_parts;
