@@ -279,6 +279,67 @@ fn skip_existing_redoes_an_empty_or_truncated_frame() {
     assert!(std::fs::read(out_dir.join("o.png")).unwrap() == png);
 }
 
+/// A whole frame of the right size that shutter did not make (the plate copied to the output's
+/// name, another tool's output) is written again, with a warning, not kept: it holds no
+/// `shutter/settings` record. (It was skipped as this run's frame.)
+#[test]
+fn skip_existing_redoes_a_whole_frame_shutter_did_not_make() {
+    let dir = tempfile::tempdir().unwrap();
+    let color = sequence(dir.path(), 3, 24, 16);
+    let (reference, out_dir) = (dir.path().join("reference"), dir.path().join("out"));
+    let run = |out: &Path, extra: &[&str]| {
+        let out = s(out);
+        let mut args = vec!["blur", "--color", &color, "-o", &out];
+        args.extend(extra);
+        shutter(&args)
+    };
+    let o = run(&reference.join("o.####.exr"), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = run(&out_dir.join("o.####.exr"), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // The unblurred plate in frame 2's place: a whole EXR of the frame's size.
+    std::fs::copy(dir.path().join("C.0002.exr"), out_dir.join("o.0002.exr")).unwrap();
+    let o = run(&out_dir.join("o.####.exr"), &["--skip-existing", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(report["frames_skipped"], 2, "{report}");
+    assert_eq!(report["frames_written"], 1, "{report}");
+    let needle = "o.0002.exr, frame 2 exists but is written again: it holds no record of the \
+                  settings that made it";
+    let warnings = report["warnings"].to_string();
+    assert!(warnings.contains(needle), "'{needle}' not in {warnings}");
+    for frame in 1..=3 {
+        let name = format!("o.{frame:04}.exr");
+        assert!(
+            std::fs::read(out_dir.join(&name)).unwrap()
+                == std::fs::read(reference.join(&name)).unwrap(),
+            "{name} differs from a run's own"
+        );
+    }
+
+    // Likewise a PNG of the right size that another tool wrote.
+    let still = s(&dir.path().join("C.0001.exr"));
+    let png = |path: &Path, extra: &[&str]| {
+        let path = s(path);
+        let mut args = vec!["blur", "--color", &still, "-o", &path];
+        args.extend(extra);
+        shutter(&args)
+    };
+    let o = png(&reference.join("o.png"), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    image::RgbImage::from_pixel(24, 16, image::Rgb([9, 9, 9]))
+        .save(out_dir.join("o.png"))
+        .unwrap();
+    let o = png(&out_dir.join("o.png"), &["--skip-existing", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(report["frames_written"], 1, "{report}");
+    assert!(
+        std::fs::read(out_dir.join("o.png")).unwrap()
+            == std::fs::read(reference.join("o.png")).unwrap()
+    );
+}
+
 #[test]
 fn a_folder_named_like_an_output_fails_in_preflight() {
     let dir = tempfile::tempdir().unwrap();

@@ -61,8 +61,15 @@ pub(super) fn existing_output(
         Some(OutputFormat::Image(format)) => crate::io::image::record_as_held(record, format),
         _ => record.to_string(),
     };
+    // A frame with no record at all was not made by shutter (the plate copied in, another
+    // tool's output of the same size): not this run's frame either.
     match recorded_settings(output) {
         Some(recorded) if !record.is_empty() && recorded != held => Existing::Other(recorded),
+        None if !record.is_empty() => Existing::Broken(
+            "it holds no record of the settings that made it (shutter/settings), so it is \
+             not a frame shutter made"
+                .into(),
+        ),
         _ => Existing::Whole,
     }
 }
