@@ -396,6 +396,42 @@ fn flags_the_output_format_cannot_use_are_warned_about() {
     assert!(json_warnings(&o).is_empty(), "{:?}", json_warnings(&o));
 }
 
+/// A preset over the defaults that lists no velocity channel (`[velocity] channels = []`):
+/// the run needs vectors, and the problem says the preset lists none, where it said a
+/// channel of no name was not in the file ("channel : not in the file").
+#[test]
+fn a_preset_listing_no_channels_for_a_pass_it_needs_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    colour_sequence(dir.path(), 16, 8, ExrOptions::default());
+    let preset = dir.path().join("novectors.toml");
+    std::fs::write(&preset, "[velocity]\nchannels = []\n").unwrap();
+    let input = format!("{}/C.####.exr", dir.path().display());
+    let out = dir.path().join("out");
+    let pattern = format!("{}/o.####.exr", out.display());
+    let (preset, algorithm) = (s(&preset), "reconstruct");
+    let o = shutter(&[
+        "blur",
+        "--algorithm",
+        algorithm,
+        "--preset",
+        &preset,
+        "--color",
+        &input,
+        "-o",
+        &pattern,
+    ]);
+    let wrote = std::fs::read_dir(&out).is_ok_and(|mut d| d.next().is_some());
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("velocity pass: preset")
+            && err.contains("lists no channels for this pass ([velocity] channels is empty)"),
+        "{err}"
+    );
+    assert!(!err.contains("channel :"), "{err}");
+    assert!(!wrote);
+}
+
 #[test]
 fn a_preset_without_colour_channels_is_a_preset_error() {
     // Before: `[color] channels = []` failed per frame as "channel : not in the file".

@@ -1972,8 +1972,9 @@ fn a_half_plate_with_infinite_pixels_comes_back_finite() {
 /// A highlight past half's range through DWA: DWAA and DWAB compress colour lossily on a
 /// log-like curve, and a block at half's largest value decoded past it to ±Inf (73 infinite
 /// pixels of R from a finite 2·10⁵ highlight, read so by oiiotool too). The output is finite
-/// to both readers, the highlight still the frame's brightest part, and a frame whose colour
-/// stays low is written as DWA writes it (no cap reaches it).
+/// to both readers, and the highlight still the frame's brightest part; an infinite pixel
+/// (read as 10³⁰) does not stop the write; a lower-case `spec.r`, which DWA stores exactly,
+/// keeps its 2·10⁵.
 #[test]
 fn a_highlight_past_half_s_range_through_dwa_comes_back_finite() {
     let dir = tempfile::tempdir().unwrap();
@@ -1984,8 +1985,11 @@ fn a_highlight_past_half_s_range_through_dwa_comes_back_finite() {
             0.2 + 2e5 * (-(x * x + y * y) / 72.0).exp()
         })
         .collect();
+    let mut red = sun.clone();
+    red[3 * w + 3] = f32::INFINITY;
     let list = vec![
-        AnyChannel::new("R", FlatSamples::F32(sun.clone())),
+        AnyChannel::new("R", FlatSamples::F32(red)),
+        AnyChannel::new("spec.r", FlatSamples::F32(sun.clone())),
         AnyChannel::new("G", FlatSamples::F32(sun.iter().map(|v| v * 0.9).collect())),
         AnyChannel::new("B", FlatSamples::F32(sun.iter().map(|v| v * 0.7).collect())),
         AnyChannel::new("A", FlatSamples::F32(vec![1.0; w * h])),
@@ -2014,7 +2018,10 @@ fn a_highlight_past_half_s_range_through_dwa_comes_back_finite() {
             let bad = plane.iter().filter(|v| !v.is_finite()).count();
             assert_eq!(bad, 0, "{method}: {bad} values of {name} not finite");
             let brightest = plane.iter().copied().fold(0.0f32, f32::max);
-            if name != "A" {
+            if name == "spec.r" {
+                let peak = sun.iter().copied().fold(0.0f32, f32::max);
+                assert_eq!(brightest, peak, "{method}: spec.r, stored exactly");
+            } else if name != "A" {
                 assert!(brightest > 1e4, "{method}: {name}'s highlight {brightest}");
             }
         }

@@ -56,6 +56,14 @@ pub fn lossy_by_name(name: &str) -> bool {
     ["r", "g", "b", "y", "by", "ry"].contains(&suffix.as_str())
 }
 
+/// Whether the exr crate's DWA encoder, which writes shutter's output, compresses a channel
+/// of this name lossily: its suffix exactly R, G, B, Y, BY or RY (its rules, as OpenEXR's
+/// current ones, are case-sensitive: a `spec.r` is stored exactly).
+fn encoded_lossily(name: &str) -> bool {
+    let suffix = name.rsplit('.').next().unwrap_or("");
+    ["R", "G", "B", "Y", "BY", "RY"].contains(&suffix)
+}
+
 /// Visits the samples of `block` in the channels DWA compresses lossily (each one's byte
 /// offset and type); false, visiting none, where a channel is subsampled (its lines are not
 /// all there).
@@ -74,7 +82,7 @@ fn each_lossy(
     let lossy: Vec<bool> = channels
         .iter()
         .map(|channel| {
-            channel.sample_type != SampleType::U32 && lossy_by_name(&channel.name.to_string())
+            channel.sample_type != SampleType::U32 && encoded_lossily(&channel.name.to_string())
         })
         .collect();
     let width = block.index.pixel_size.width();
@@ -129,7 +137,8 @@ pub fn finite_chunk(meta: &MetaData, block: UncompressedBlock) -> exr::error::Re
         .collect();
     let index = block.index;
     let mut data = block.data;
-    let mut cap = largest;
+    // (The encoder clamps a lossy sample to half's range: a cap above it changes nothing.)
+    let mut cap = largest.min(f32::from(f16::MAX));
     for _ in 0..=MOST_RETRIES {
         let chunk = UncompressedBlock {
             data: data.clone(),
@@ -137,10 +146,11 @@ pub fn finite_chunk(meta: &MetaData, block: UncompressedBlock) -> exr::error::Re
         }
         .compress_to_chunk(&meta.headers)?;
         let decoded = UncompressedBlock::decompress_chunk(chunk.clone(), meta, false)?;
-        let fine = samples
-            .iter()
-            .zip(&finite_in)
-            .all(|(&s, &finite)| !finite || sample(&decoded.data, s).abs() <= LARGEST);
+        let fine = samples.iter().zip(&finite_in).all(|(&s, &finite)| {
+            // A sample the codec kept as it was (a block it stored raw) is fine as it is.
+            let (before, after) = (sample(&data, s), sample(&decoded.data, s));
+            !finite || after.abs() <= LARGEST || after.to_bits() == before.to_bits()
+        });
         if fine {
             return Ok(chunk);
         }

@@ -546,6 +546,15 @@ impl Planner<'_> {
     }
 
     fn missing_problem(&self, info: &FileInfo, pass: &'static str, wanted: &str) -> Problem {
+        // A preset listing no channel for the pass (`channels = []`) looks for nothing.
+        if wanted.trim().is_empty() {
+            let (preset, list) = (&self.options.preset.name, info.channel_list());
+            let why = format!(
+                "preset {preset} lists no channels for this pass ([{pass}] channels is \
+                 empty); the file has {list}"
+            );
+            return Problem::new(ProblemKind::MissingChannel, &info.path, why).pass(pass);
+        }
         // In a part shutter cannot read (HTJ2K, ZSTD, deep data): not missing, unsupported.
         let names: Vec<&str> = wanted.split(" or ").flat_map(|a| a.split(',')).collect();
         if let Some(detail) = info.unread_among(&names) {
