@@ -287,12 +287,13 @@ fn skip_existing_redoes_a_whole_frame_shutter_did_not_make() {
     let dir = tempfile::tempdir().unwrap();
     let color = sequence(dir.path(), 3, 24, 16);
     let (reference, out_dir) = (dir.path().join("reference"), dir.path().join("out"));
-    let run = |out: &Path, extra: &[&str]| {
+    let blur = |input: &str, out: &Path, extra: &[&str]| {
         let out = s(out);
-        let mut args = vec!["blur", "--color", &color, "-o", &out];
+        let mut args = vec!["blur", "--color", input, "-o", &out];
         args.extend(extra);
         shutter(&args)
     };
+    let run = |out: &Path, extra: &[&str]| blur(&color, out, extra);
     let o = run(&reference.join("o.####.exr"), &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     let o = run(&out_dir.join("o.####.exr"), &[]);
@@ -319,12 +320,7 @@ fn skip_existing_redoes_a_whole_frame_shutter_did_not_make() {
 
     // Likewise a PNG of the right size that another tool wrote.
     let still = s(&dir.path().join("C.0001.exr"));
-    let png = |path: &Path, extra: &[&str]| {
-        let path = s(path);
-        let mut args = vec!["blur", "--color", &still, "-o", &path];
-        args.extend(extra);
-        shutter(&args)
-    };
+    let png = |path: &Path, extra: &[&str]| blur(&still, path, extra);
     let o = png(&reference.join("o.png"), &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     image::RgbImage::from_pixel(24, 16, image::Rgb([9, 9, 9]))
