@@ -359,6 +359,53 @@ fn three_layers_merge_in_order() {
 }
 
 /// `--layers` asks for a preset that names channels by view layer, and for each layer once.
+/// Layer files of different sizes in every frame: the preflight names every frame's mismatch
+/// (it named frame 1's alone) and writes nothing.
+#[test]
+fn a_stack_whose_layers_differ_in_size_names_every_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    for frame in 1..=2 {
+        for (name, width) in [("fg", 8usize), ("bg", 10)] {
+            let n = width * 4;
+            let path = dir.path().join(format!("{name}.{frame:04}.exr"));
+            let channels = ["R", "G", "B", "A", "Z", "velocity.X", "velocity.Y"]
+                .into_iter()
+                .map(|c| (c, vec![if c == "velocity.Y" { 0.0 } else { 1.0 }; n]))
+                .collect();
+            write_exr(&path, width, 4, channels);
+        }
+    }
+    let (fg, bg) = (
+        dir.path().join("fg.####.exr"),
+        dir.path().join("bg.####.exr"),
+    );
+    let out = dir.path().join("out");
+    let o = shutter(&[
+        "blur",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &s(&fg),
+        "--color",
+        &s(&bg),
+        "-o",
+        &s(&out.join("o.####.exr")),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    for frame in ["bg.0001.exr, frame 1", "bg.0002.exr, frame 2"] {
+        assert!(
+            err.contains(&format!(
+                "size mismatch: {}",
+                dir.path().join(frame).display()
+            )),
+            "{err}"
+        );
+    }
+    assert!(err.contains("2 problems found"), "{err}");
+    assert!(!out.exists() || std::fs::read_dir(&out).unwrap().next().is_none());
+}
+
 #[test]
 fn layers_need_a_preset_of_view_layers_and_each_layer_once() {
     let dir = tempfile::tempdir().unwrap();

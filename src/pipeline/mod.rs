@@ -276,9 +276,14 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     };
     if !job.stack.is_empty() {
         let names: Vec<String> = job.stack.iter().map(|l| l.name.clone()).collect();
-        for (first, rest) in plans.iter().zip(&others) {
-            crate::io::passes::stack_problem(first, rest, &names, !shared.is_empty())
-                .map_or(Ok(()), |p| Err(crate::Error::Files(vec![p])))?;
+        // Every frame's problem, as the preflight lists them.
+        let problems: Vec<_> = (plans.iter().zip(&others))
+            .filter_map(|(first, rest)| {
+                crate::io::passes::stack_problem(first, rest, &names, !shared.is_empty())
+            })
+            .collect();
+        if !problems.is_empty() {
+            return Err(crate::Error::Files(problems));
         }
     }
     if every_channel {
