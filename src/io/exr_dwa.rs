@@ -3,11 +3,11 @@
 //! so a block near half's largest value (a sun, a light) can decode past it, to ±Inf, from
 //! finite colour (`shutter blur --compression dwaa` on a highlight of 2·10⁵ gave 73
 //! infinite pixels; oiiotool reads them so too). Every DWA chunk that holds a bright sample
-//! ([`CALM`]) is therefore decoded again as it is written; where a lossy channel comes back from a finite sample non-finite or
-//! within a margin of half's largest value ([`LARGEST`]), the chunk is compressed again with
-//! its lossy samples capped at 0.8 of the largest magnitude it holds, and so on until it
-//! decodes within it: the highlight loses what the codec could not hold, never the frame its
-//! finiteness.
+//! ([`CALM`]) is therefore decoded again as it is written; where a lossy channel comes back
+//! from a finite sample non-finite or within a margin of half's largest value ([`LARGEST`]),
+//! the chunk is compressed again with its lossy samples capped at 0.8 of the largest
+//! magnitude it holds (at most half's largest), and so on until it decodes within it: the
+//! highlight loses what the codec could not hold, never the frame its finiteness.
 //!
 //! In: the part's headers and meta data, one uncompressed block. Out: its chunk. Blocks of
 //! other compressions never come here.
