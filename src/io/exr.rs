@@ -150,8 +150,9 @@ pub fn compression_name(compression: Compression) -> &'static str {
 /// case) as colour, whatever its pixel type (OpenEXR's rule: a vector's `velocity.Y` is
 /// one); B44 and B44A every half channel; PXR24 every float one (to 24 bits).
 pub fn keeps_exactly(method: &str, name: &str, sample_type: &str) -> bool {
+    let suffix = name.rsplit('.').next().unwrap_or("").to_ascii_lowercase();
     !match method {
-        "dwaa" | "dwab" => crate::io::exr_dwa::lossy_by_name(name),
+        "dwaa" | "dwab" => ["r", "g", "b", "y", "by", "ry"].contains(&suffix.as_str()),
         "b44" | "b44a" => sample_type == "f16",
         "pxr24" => sample_type == "f32",
         _ => false,

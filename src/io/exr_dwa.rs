@@ -48,14 +48,6 @@ pub fn is_dwa(header: &Header) -> bool {
     )
 }
 
-/// Whether DWAA and DWAB compress a channel of this name lossily: one whose name ends in R,
-/// G, B or Y (BY, RY; any case), as colour, whatever its pixel type (OpenEXR's rule: a
-/// vector's `velocity.Y` is one).
-pub fn lossy_by_name(name: &str) -> bool {
-    let suffix = name.rsplit('.').next().unwrap_or("").to_ascii_lowercase();
-    ["r", "g", "b", "y", "by", "ry"].contains(&suffix.as_str())
-}
-
 /// Whether the exr crate's DWA encoder, which writes shutter's output, compresses a channel
 /// of this name lossily: its suffix exactly R, G, B, Y, BY or RY (its rules, as OpenEXR's
 /// current ones, are case-sensitive: a `spec.r` is stored exactly).
