@@ -433,6 +433,56 @@ fn a_preset_listing_no_channels_for_a_pass_it_needs_says_so() {
 }
 
 #[test]
+fn a_depth_channel_the_colour_pass_reads_is_said_to_be_taken_not_missing() {
+    // Before: "channel Z …: not in the file …; the file has A, B, G, R, Z".
+    let dir = tempfile::tempdir().unwrap();
+    let n = 16 * 8;
+    write_exr_with(
+        &dir.path().join("C.0001.exr"),
+        16,
+        8,
+        vec![
+            ("R", noise(n, 1, 0.0, 1.0)),
+            ("G", noise(n, 2, 0.0, 1.0)),
+            ("B", noise(n, 3, 0.0, 1.0)),
+            ("Z", vec![2.0; n]),
+        ],
+        ExrOptions::default(),
+    );
+    let preset = dir.path().join("zgrey.toml");
+    std::fs::write(&preset, "[color]\nchannels = [[\"Z\", \"Z\", \"Z\"]]\n").unwrap();
+    let input = format!("{}/C.####.exr", dir.path().display());
+    let out = dir.path().join("out");
+    let pattern = format!("{}/o.####.exr", out.display());
+    let preset = s(&preset);
+    let o = shutter(&[
+        "dof",
+        "--preset",
+        &preset,
+        "--color",
+        &input,
+        "--f-stop",
+        "2",
+        "--focal-length",
+        "50",
+        "--focus-distance",
+        "3",
+        "-o",
+        &pattern,
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("depth pass")
+            && err.contains("Z is in the file, but preset")
+            && err.contains("[color] channels read it as colour"),
+        "{err}"
+    );
+    assert!(!err.contains("not in the file"), "{err}");
+    assert!(!out.exists());
+}
+
+#[test]
 fn a_preset_without_colour_channels_is_a_preset_error() {
     // Before: `[color] channels = []` failed per frame as "channel : not in the file".
     let dir = tempfile::tempdir().unwrap();

@@ -2014,6 +2014,14 @@ fn a_highlight_past_half_s_range_through_dwa_comes_back_finite() {
             &s(&output),
         ]);
         assert!(o.status.success(), "{method}: {}", stderr(&o));
+        // The highlight comes back dimmer, and the run says so, naming the frame.
+        let err = stderr(&o);
+        assert!(
+            err.contains(&format!("{method}.exr: "))
+                && err.contains("DWA block")
+                && err.contains("capped at"),
+            "{method}: {err}"
+        );
         for (name, plane) in crate::support::read_exr_reference(&output) {
             let bad = plane.iter().filter(|v| !v.is_finite()).count();
             assert_eq!(bad, 0, "{method}: {bad} values of {name} not finite");
@@ -2042,6 +2050,42 @@ fn a_highlight_past_half_s_range_through_dwa_comes_back_finite() {
             );
         }
     }
+    // A bright frame DWA holds as it is (its brightest 2000, decoded again as it is written)
+    // is written without a word.
+    let list = vec![
+        AnyChannel::new(
+            "R",
+            FlatSamples::F32(sun.iter().map(|v| v / 100.0).collect()),
+        ),
+        AnyChannel::new(
+            "G",
+            FlatSamples::F32(sun.iter().map(|v| v / 110.0).collect()),
+        ),
+        AnyChannel::new(
+            "B",
+            FlatSamples::F32(sun.iter().map(|v| v / 140.0).collect()),
+        ),
+    ];
+    let layer = Layer::new(
+        (w, h),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(list.into()),
+    );
+    let calm = dir.path().join("calm.exr");
+    Image::from_layer(layer).write().to_file(&calm).unwrap();
+    let output = dir.path().join("calm_dwaa.exr");
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &s(&calm),
+        "--compression",
+        "dwaa",
+        "-o",
+        &s(&output),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("DWA block"), "{}", stderr(&o));
 }
 
 /// An attribute under a standard name but of another type (`isoSpeed` an int, `owner` an

@@ -781,7 +781,8 @@ pub fn write_channels(
         )),
         layer_data: layer,
     };
-    crate::io::exr_zip::write(&image, writer, true)
+    // (Scenes and maps: a capped DWA highlight is not reported here.)
+    crate::io::exr_zip::write(&image, writer, true).map(|_| ())
 }
 
 fn invalid(message: impl Into<std::borrow::Cow<'static, str>>) -> exr::error::Error {

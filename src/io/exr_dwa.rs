@@ -19,6 +19,7 @@ use exr::meta::attribute::SampleType;
 use exr::meta::header::Header;
 use exr::meta::MetaData;
 use exr::prelude::f16;
+use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 
 /// A block whose lossy samples are all within this magnitude is not decoded again: on DWA's
 /// curve (`1 + ln(v)/2.2` above 1) 512 lies 2.0 below [`LARGEST`], ten times the largest
@@ -107,9 +108,53 @@ fn set(data: &mut [u8], (at, kind): (usize, SampleType), value: f32) {
     }
 }
 
+/// What [`finite_chunk`] capped over one file's blocks, for the run's warnings: a highlight
+/// written dimmer than it came must be said.
+pub struct Capped {
+    blocks: AtomicUsize,
+    /// The lowest cap a block was written with, as its bits (positive: ordered as the values).
+    lowest: AtomicU32,
+}
+
+impl Capped {
+    pub fn new() -> Capped {
+        Capped {
+            blocks: AtomicUsize::new(0),
+            lowest: AtomicU32::new(f32::INFINITY.to_bits()),
+        }
+    }
+
+    /// How many blocks were capped, and the lowest cap; `None` where none was.
+    pub fn report(&self) -> Option<(usize, f32)> {
+        let blocks = self.blocks.load(Ordering::Relaxed);
+        (blocks > 0).then(|| (blocks, f32::from_bits(self.lowest.load(Ordering::Relaxed))))
+    }
+}
+
+impl Default for Capped {
+    fn default() -> Self {
+        Capped::new()
+    }
+}
+
+/// The warning for DWA blocks written with their highlights capped (`Capped::report`).
+pub fn capped_warning((blocks, cap): (usize, f32)) -> String {
+    format!(
+        "{blocks} DWA block{} held a highlight that DWA decodes past half's range (to \
+         infinity): written with its colour capped at {cap:.0}, so the file reads finite but \
+         the highlight dimmer; write ZIP or PIZ (--compression) to keep it",
+        if blocks == 1 { "" } else { "s" }
+    )
+}
+
 /// `block` compressed as its part's DWA, decoding finite wherever the block is finite (see
-/// the module's doc); an error where no cap makes it so.
-pub fn finite_chunk(meta: &MetaData, block: UncompressedBlock) -> exr::error::Result<Chunk> {
+/// the module's doc); an error where no cap makes it so. A block written capped is counted in
+/// `capped`.
+pub fn finite_chunk(
+    meta: &MetaData,
+    block: UncompressedBlock,
+    capped: &Capped,
+) -> exr::error::Result<Chunk> {
     let header = &meta.headers[block.index.layer];
     let mut largest = 0.0f32;
     let whole = each_lossy(header, &block, |s| {
@@ -131,7 +176,7 @@ pub fn finite_chunk(meta: &MetaData, block: UncompressedBlock) -> exr::error::Re
     let mut data = block.data;
     // (The encoder clamps a lossy sample to half's range: a cap above it changes nothing.)
     let mut cap = largest.min(f32::from(f16::MAX));
-    for _ in 0..=MOST_RETRIES {
+    for retry in 0..=MOST_RETRIES {
         let chunk = UncompressedBlock {
             data: data.clone(),
             index,
@@ -144,6 +189,10 @@ pub fn finite_chunk(meta: &MetaData, block: UncompressedBlock) -> exr::error::Re
             !finite || after.abs() <= LARGEST || after.to_bits() == before.to_bits()
         });
         if fine {
+            if retry > 0 {
+                capped.blocks.fetch_add(1, Ordering::Relaxed);
+                capped.lowest.fetch_min(cap.to_bits(), Ordering::Relaxed);
+            }
             return Ok(chunk);
         }
         cap *= STEP;

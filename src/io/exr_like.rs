@@ -102,7 +102,8 @@ pub enum Views {
 /// colour (`velocity.Y`, `N.R`), a part's data channels go to a part of their own, with ZIP:
 /// data is never written lossily, and a layer's channels stay together. That part is named
 /// `data` beside the main part (see [`data_part_name`]); a part that holds data alone stays
-/// itself, under its own name, with ZIP.
+/// itself, under its own name, with ZIP. Returns what DWA capped, as
+/// [`crate::io::exr_zip::write`] does.
 pub fn write_like(
     writer: &mut BufWriter<impl Read + Write + Seek>,
     display: Window,
@@ -110,7 +111,7 @@ pub fn write_like(
     output: &ExrOutput,
     record: &str,
     views: Views,
-) -> Result<(), String> {
+) -> Result<Option<(usize, f32)>, String> {
     let display = IntegerBounds::new((display.x, display.y), (display.width, display.height));
     let image_attributes = match parts.first().and_then(|p| p.input) {
         Some(h) => {
@@ -320,10 +321,12 @@ pub fn write_like(
             .layer_data
             .iter()
             .any(|layer| reserved(&layer.attributes.other));
-    crate::io::exr_zip::write(&image, &mut *writer, !keeps_odd_types).map_err(|e| e.to_string())?;
+    let capped = crate::io::exr_zip::write(&image, &mut *writer, !keeps_odd_types)
+        .map_err(|e| e.to_string())?;
     writer.flush().map_err(|e| e.to_string())?;
     crate::io::exr_order::sort_attributes(writer.get_mut(), &random_y)
-        .map_err(|e| format!("sorting its attributes: {e}"))
+        .map_err(|e| format!("sorting its attributes: {e}"))?;
+    Ok(capped)
 }
 
 /// The name of the part that takes the data channels of the part named `part` under DWA,

@@ -29,7 +29,7 @@ use exr::block::chunk::{
 use exr::block::writer::ChunksWriter;
 use exr::block::{BlockIndex, UncompressedBlock};
 use exr::compression::Compression;
-use exr::error::{Error, UnitResult};
+use exr::error::Error;
 use exr::image::write::layers::{LayersWriter, WritableLayers};
 use exr::image::Image;
 use exr::math::Vec2;
@@ -52,13 +52,19 @@ const LEVEL: i32 = 7;
 const BLOCKS_PER_THREAD: usize = 4;
 
 /// Writes `image` to `write` (buffered), as `image.write().to_buffered(write)` does with the
-/// compatibility checks on where `checked`.
-pub fn write<L>(image: &Image<L>, write: impl Write + Seek, checked: bool) -> UnitResult
+/// compatibility checks on where `checked`. Returns how many DWA blocks were written with
+/// their highlights capped, and the lowest cap ([`crate::io::exr_dwa::Capped`]), if any were.
+pub fn write<L>(
+    image: &Image<L>,
+    write: impl Write + Seek,
+    checked: bool,
+) -> exr::error::Result<Option<(usize, f32)>>
 where
     L: for<'a> WritableLayers<'a>,
 {
     let headers = image.layer_data.infer_headers(&image.attributes);
     let layers = image.layer_data.create_writer(&headers);
+    let capped = crate::io::exr_dwa::Capped::new();
     exr::block::write(write, headers, checked, |meta, chunks| {
         let order: Vec<(usize, BlockIndex)> =
             meta.enumerate_ordered_header_block_indices().collect();
@@ -74,7 +80,7 @@ where
                     let chunk = if deflated_here(&meta.headers[index.layer]) {
                         zip_chunk(&meta.headers[index.layer], block)?
                     } else if crate::io::exr_dwa::is_dwa(&meta.headers[index.layer]) {
-                        crate::io::exr_dwa::finite_chunk(&meta, block)?
+                        crate::io::exr_dwa::finite_chunk(&meta, block, &capped)?
                     } else {
                         block.compress_to_chunk(&meta.headers)?
                     };
@@ -87,7 +93,8 @@ where
             }
         }
         Ok(())
-    })
+    })?;
+    Ok(capped.report())
 }
 
 /// Whether a part's blocks are deflated here: ZIP or ZIPS, flat (not deep) data, on a

@@ -15,6 +15,7 @@ pub mod image;
 pub mod input;
 pub mod lock;
 pub mod output;
+pub mod output_notes;
 pub mod passes;
 pub mod preset;
 pub mod sequence;

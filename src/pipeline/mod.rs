@@ -14,9 +14,8 @@ use crate::error::{Problem, ProblemKind, Result};
 use crate::frame::Frame;
 use crate::gpu::{Backend, BackendReport};
 use crate::io::lock::OutputLock;
-use crate::io::output::{
-    output_notes, remove_stale_temporaries, write_views, OutputFormat, OutputOptions,
-};
+use crate::io::output::{remove_stale_temporaries, write_views, OutputFormat, OutputOptions};
+use crate::io::output_notes::output_notes;
 use crate::io::passes::{
     output_folder_problems, preflight, read_frame_keeping, FramePlan, Inputs, PlanOptions,
     VectorCheck,
@@ -706,7 +705,14 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                         let written = write_views(&path, out, &job.output_options, frame);
                         report.write_seconds += t.elapsed().as_secs_f64();
                         match written {
-                            Ok(()) => {
+                            Ok(notes) => {
+                                for note in notes {
+                                    warn(
+                                        &mut report,
+                                        on_event,
+                                        format!("{}: {note}", path.display()),
+                                    );
+                                }
                                 report.frames_written += 1;
                                 report.outputs.push(Output {
                                     frame,

@@ -31,6 +31,7 @@ mod fit;
 mod found;
 mod grey_map;
 mod memory;
+mod missing;
 mod parts;
 mod plan;
 mod preflight;

@@ -140,6 +140,7 @@ pub fn plan_frame(
         problems: Vec::new(),
         probed: Vec::new(),
         color_window: None,
+        colour_took: (PathBuf::new(), Vec::new()),
     };
     let color_path = inputs.color.path(frame);
     let color_info = planner.probe(&color_path, "color");
@@ -180,6 +181,7 @@ pub fn plan_frame(
         match found {
             Ok(Some(found)) => {
                 claimed = found.iter().flatten().copied().collect();
+                planner.colour_took = (info.path.clone(), claimed.clone());
                 // The frame is the colour's part's: its size and window, which every pass
                 // is placed against (a multi-part file's parts differ: the first part's, an
                 // overscan depth or another layer's box, made the colour's read "changed").
@@ -517,6 +519,8 @@ struct Planner<'a> {
     probed: Vec<(PathBuf, Option<FileInfo>)>,
     /// The colour file's data window, once its header has been read.
     color_window: Option<DataWindow>,
+    /// The colour file and the channels of it the colour pass reads.
+    colour_took: (PathBuf, Vec<usize>),
 }
 
 impl Planner<'_> {
@@ -546,43 +550,13 @@ impl Planner<'_> {
     }
 
     fn missing_problem(&self, info: &FileInfo, pass: &'static str, wanted: &str) -> Problem {
-        // A preset listing no channel for the pass (`channels = []`) looks for nothing.
-        if wanted.trim().is_empty() {
-            let (preset, list) = (&self.options.preset.name, info.channel_list());
-            let why = format!(
-                "preset {preset} lists no channels for this pass ([{pass}] channels is \
-                 empty); the file has {list}"
-            );
-            return Problem::new(ProblemKind::MissingChannel, &info.path, why).pass(pass);
-        }
-        // In a part shutter cannot read (HTJ2K, ZSTD, deep data): not missing, unsupported.
-        let names: Vec<&str> = wanted.split(" or ").flat_map(|a| a.split(',')).collect();
-        if let Some(detail) = info.unread_among(&names) {
-            return Problem::new(ProblemKind::Unsupported, &info.path, detail)
-                .pass(pass)
-                .channel(wanted.to_string());
-        }
-        Problem::new(
-            ProblemKind::MissingChannel,
-            &info.path,
-            format!(
-                "not in the file with preset {}{}; the file has {}{}",
-                self.options.preset.name,
-                (self.options.layer)
-                    .filter(|_| wanted.contains("{layer}"))
-                    .map_or(String::new(), |l| format!(" for view layer {l}")),
-                info.channel_list(),
-                // What the renderer must write for the preset (F8: MRQ's depth pass).
-                Some(&self.options.preset.expects)
-                    .filter(|e| !e.is_empty())
-                    .map_or(String::new(), |e| format!(
-                        "; preset {} expects {e}",
-                        self.options.preset.name
-                    )),
-            ),
-        )
-        .pass(pass)
-        .channel(wanted.to_string())
+        let took = if info.path == self.colour_took.0 {
+            &self.colour_took.1[..]
+        } else {
+            &[]
+        };
+        let preset = (self.options.preset, self.options.layer);
+        super::missing::missing_problem(preset, info, pass, wanted, took)
     }
 
     fn missing(&mut self, info: &FileInfo, pass: &'static str, wanted: &str) {
