@@ -583,6 +583,65 @@ fn skip_existing_writes_again_pictures_made_with_other_settings() {
     }
 }
 
+/// The transfer 8/16-bit colour is read and written with is part of what made a picture: a
+/// photo's frame made without --linear is made again by a run with it (an outside tester's
+/// finding: it was kept, 74 codes off, as the record named the preset alone, whose file may
+/// say `[color] transfer`). An output setting this -o cannot use (a JPEG's quality on a PNG)
+/// is no part of it: a rerun giving one skips the frame.
+#[test]
+fn skip_existing_redoes_a_picture_made_with_the_other_transfer_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    write_canonical_frame(dir.path(), None, 6, 4);
+    let photo = dir.path().join("photo.png");
+    let o = shutter(&[
+        "blur",
+        "--color",
+        &s(&dir.path().join("C.exr")),
+        "-o",
+        &s(&photo),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = dir.path().join("out.png");
+    let run = |extra: &[&str]| {
+        let args = ["blur", "--color", &s(&photo), "-o", &s(&out)];
+        shutter(&[&args[..], extra].concat())
+    };
+    let o = run(&[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let action = |extra: &[&str]| {
+        let dry = ["--skip-existing", "--dry-run", "--json"];
+        let o = run(&[extra, &dry[..]].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+        let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        report["planned"][0].clone()
+    };
+    let planned = action(&["--linear"]);
+    assert_eq!(planned["action"], "redo", "{planned}");
+    assert!(
+        planned["why"].as_str().unwrap().contains("--linear"),
+        "{planned}"
+    );
+    // The same preset file, its transfer changed between the runs.
+    let preset = dir.path().join("mine.toml");
+    std::fs::write(&preset, "[color]\ntransfer = \"srgb\"\n").unwrap();
+    let o = run(&["--preset", &s(&preset)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(action(&["--preset", &s(&preset)])["action"], "skip");
+    std::fs::write(&preset, "[color]\ntransfer = \"linear\"\n").unwrap();
+    let planned = action(&["--preset", &s(&preset)]);
+    assert_eq!(planned["action"], "redo", "{planned}");
+    let o = run(&[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for unused in [
+        &["--jpeg-quality", "50"][..],
+        &["--half"],
+        &["--compression", "piz"],
+    ] {
+        let planned = action(unused);
+        assert_eq!(planned["action"], "skip", "{unused:?}: {planned}");
+    }
+}
+
 /// Three frames written to `o.####.<ext>` by reconstruct, then by scatter at shutter 0.25
 /// with `--skip-existing` (dry and not), then by scatter again.
 fn frames_made_with_other_settings_are_written_again(ext: &str) {
@@ -1050,6 +1109,36 @@ fn a_sequence_warns_once_about_derived_motion() {
     );
 }
 
+/// A render on ones that lost every other frame in a stretch (a farm's second worker failing:
+/// 1, 2, 3, 5, 7, 9) is warned about by `blur` and by `diff`, the mixed steps said: the
+/// commonest step, 2, had made it a complete sequence on twos, without a word (an outside
+/// tester's finding).
+#[test]
+fn a_sequence_that_lost_every_other_frame_in_a_stretch_is_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    for frame in [1, 2, 3, 5, 7, 9] {
+        write_canonical_frame(dir.path(), Some(frame), 4, 4);
+    }
+    let color = format!("{}/C.####.exr", dir.path().display());
+    let out = format!("{}/out/o.####.exr", dir.path().display());
+    let o = shutter(&["blur", "--color", &color, "-o", &out, "--dry-run", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let warnings = report["warnings"].to_string();
+    assert!(
+        warnings.contains("has no frames 4-8:2: 3 frames are missing between 1 and 9")
+            && warnings.contains("step by 2 mostly, by 1 in places"),
+        "{warnings}"
+    );
+    let o = shutter(&["diff", &color, &color]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("has no frames 4-8:2 between 1 and 9"),
+        "{}",
+        stderr(&o)
+    );
+}
+
 /// A sequence on disk with a frame missing is warned about (issue 31: it was skipped without
 /// a word); a pattern that matches nothing is bad input, exit 1 (it was a usage error, 2);
 /// Houdini's `$F4` and `@@@@` name the frames as `####` does.
@@ -1217,7 +1306,7 @@ fn frame_numbers_beyond_the_limit_are_named_not_discovered() {
     assert!(!warnings.contains("missing"), "{warnings}");
     // The backend asked for is said, none used (an outside probe: both were empty).
     assert_eq!(report["backend"]["requested"], "cpu", "{report}");
-    assert_eq!(report["backend"]["used"], "", "{report}");
+    assert_eq!(report["backend"]["used"], "none", "{report}");
     // Nothing but such files: no frames, and the error says why.
     let far = tempfile::tempdir().unwrap();
     flat_frame(&far.path().join("c.-1000000000.exr"), 0.5);
@@ -1668,4 +1757,54 @@ fn a_doubled_percent_in_a_path_is_one_percent_sign() {
     );
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(seq.join("o.%.0001.exr").exists() && seq.join("o.%.0002.exr").exists());
+}
+
+/// Four messages an outside tester found unclear: `info` given a pattern (it said only "no
+/// such file"), `--frames` over the limit (the limit unnamed), a dry run's backend (`used`
+/// was an empty string) and a failed preflight (it said "nothing was written for the frames
+/// concerned", as if the others were).
+#[test]
+fn four_messages_say_what_they_mean() {
+    let dir = tempfile::tempdir().unwrap();
+    for frame in 1..=2 {
+        write_canonical_frame(dir.path(), Some(frame), 4, 4);
+    }
+    let color = format!("{}/C.####.exr", dir.path().display());
+    let o = shutter(&["info", &color]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("info reads files, not patterns"),
+        "{}",
+        stderr(&o)
+    );
+    let o = shutter(&["frames", "1-2000000"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("more than 1000000 frames"),
+        "{}",
+        stderr(&o)
+    );
+    let out = format!("{}/out/o.####.exr", dir.path().display());
+    let o = shutter(&["blur", "--color", &color, "-o", &out, "--dry-run", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(report["backend"]["used"], "none", "{report}");
+    // Depth and motion missing in both frames: four problems, and no frame is written.
+    let depth = format!("{}/nothing.####.exr", dir.path().display());
+    let args = [
+        "blur",
+        "--color",
+        &color,
+        "--depth",
+        &depth,
+        "--algorithm",
+        "reconstruct",
+    ];
+    let o = shutter(&[&args[..], &["-o", &out]].concat());
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("4 problems found; nothing was written (every frame is checked"),
+        "{}",
+        stderr(&o)
+    );
 }

@@ -209,7 +209,9 @@ fn edited(dir: &std::path::Path, edit: impl Fn(&mut [Vec<f32>; 3])) -> (String, 
 }
 
 /// A NaN in the candidate fails the gate (issue 31): it was counted, shown, then treated as
-/// 0, so `--fail 0.01` passed it; `--allow-nonfinite` lets it through.
+/// 0, so `--fail 0.01` passed it. `--allow-nonfinite` lets through only a NaN the reference
+/// holds alike: one the candidate gained fails all the same (an outside tester's finding: it
+/// passed, and the every-channel figures said `psnr inf`).
 #[test]
 fn a_nan_fails_the_gate_unless_allowed() {
     let dir = tempfile::tempdir().unwrap();
@@ -233,7 +235,53 @@ fn a_nan_fails_the_gate_unless_allowed() {
         (Some(17), Some("G"))
     );
     let o = shutter(&["diff", &a, &b, "--fail", "0.01", "--allow-nonfinite"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o)
+            .contains("1 samples became or stopped being NaN or infinite, the first at (17, 0) G"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(
+        stdout(&o).contains("over the finite samples (1 non-finite left out)"),
+        "{}",
+        stdout(&o)
+    );
+    // The same NaN in both: let through.
+    let o = shutter(&["diff", &b, &b, "--fail", "0.01", "--allow-nonfinite"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+/// Where a figure is `null` in JSON (an infinite PSNR), `identical` says which way; a frame
+/// that differs passes with no gate given, and a warning says that nothing gated it; a
+/// difference of 1e-7 prints as such, not as 0.000000 (an outside tester's findings).
+#[test]
+fn identical_no_gate_and_small_differences_are_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = edited(dir.path(), |p| p[0][3] += 1e-6);
+    let o = shutter(&["diff", &a, &a, "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let same = json(&o);
+    assert_eq!(same["frames"][0]["identical"], true, "{same}");
+    assert!(same["frames"][0]["whole"]["psnr"].is_null(), "{same}");
+    assert_eq!(same["warnings"], serde_json::json!([]), "{same}");
+    let o = shutter(&["diff", &a, &b, "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let differ = json(&o);
+    assert_eq!(differ["frames"][0]["identical"], false, "{differ}");
+    assert!(
+        differ["warnings"][0]
+            .as_str()
+            .unwrap()
+            .contains("1 of 1 frames differ and pass: no gate"),
+        "{differ}"
+    );
+    let o = shutter(&["diff", &a, &b, "--hard-fail", "0.5"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("no gate"), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(!text.contains("0.000000"), "{text}");
+    assert!(text.contains("largest difference 1.00e-6"), "{text}");
 }
 
 /// A 10×10 block brightened by 0.5 (issue 31): the whole-frame RMSE (0.144 on this 40×30
@@ -625,9 +673,10 @@ fn allowed_nonfinite_values_alike_pass_every_gate_and_a_changed_one_fails_them()
         assert_eq!(o.status.code(), Some(1), "{gate:?}: {}", stderr(&o));
         assert_eq!(json(&o)["frames"][0]["whole"]["non_finite"], 1);
     }
-    // No value gate asked for, and the non-finite one off: nothing fails it.
+    // No value gate asked for: the non-finite one, let through for values alike in both,
+    // fails the NaN the candidate gained.
     let o = shutter(&["diff", &a, &b, "--allow-nonfinite"]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
 }
 
 /// A NaN fails a diff wherever it is: in a data channel though both images hold it alike

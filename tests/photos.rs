@@ -346,6 +346,32 @@ fn an_orientation_6_jpeg_lines_up_with_a_map_painted_upright() {
             (32.into(), 48.into())
         );
     }
+    // A map painted on the photo as stored (48 × 32) is refused, the orientation said: the
+    // error had read "32x48 but the color pass is 48x32"... the other way round, unexplained.
+    let stored_map = dir.path().join("stored.png");
+    velocity_map(&stored_map, sw, sh, |_, _| 4.0);
+    let o = shutter(&[
+        "blur",
+        "--preset",
+        "painted",
+        "--algorithm",
+        "reconstruct",
+        "--color",
+        &s(&input),
+        "--velocity",
+        &s(&stored_map),
+        "-o",
+        &s(&dir.path().join("no.png")),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(
+            "48x32 but the color pass is 32x48 (upright by its EXIF orientation; stored 48x32): \
+             a map is matched to the picture as it is shown, upright"
+        ),
+        "{}",
+        stderr(&o)
+    );
 }
 
 /// A 16-bit TIFF with straight alpha and a profile: out 16-bit, deflate or LZW, its alpha

@@ -461,7 +461,8 @@ pub struct DiffArgs {
     #[arg(long, value_name = "P", default_value_t = 0.0)]
     pub warn_percent: f64,
 
-    /// Let NaN and infinite values through (by default any in either image fails the frame).
+    /// Let NaN and infinite values alike in both images through (by default any in either
+    /// image fails the frame); one that became or stopped being NaN or infinite still fails.
     #[arg(long)]
     pub allow_nonfinite: bool,
 

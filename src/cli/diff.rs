@@ -41,17 +41,19 @@ fn frames_for(
                     super::resolve::no_match(beyond.or(padding)),
                 )]));
             }
-            let holes = crate::io::sequence::holes(&found);
+            let holes = crate::io::holes::holes(&found);
             let mut warnings: Vec<String> = beyond.into_iter().collect();
             if !holes.is_empty() {
                 warnings.push(format!(
-                    "'{}' has no frame{} {} between {} and {}: not compared (--frames names \
+                    "'{}' has no frame{} {} between {} and {}{}: not compared (--frames names \
                      every frame wanted and makes a missing one an error)",
                     first.raw,
                     if holes.len() == 1 { "" } else { "s" },
                     crate::io::sequence::format_frames(&holes),
                     found[0],
-                    found[found.len() - 1]
+                    found[found.len() - 1],
+                    crate::io::holes::mixed_steps(&found)
+                        .map_or(String::new(), |m| format!(" ({m})"))
                 ));
             }
             Ok((found.into_iter().map(Some).collect(), warnings))
@@ -60,11 +62,21 @@ fn frames_for(
     }
 }
 
+/// A difference in the text output: six decimals, or three significant digits where it is
+/// not 0 yet under 0.0001, so that a real difference of 1e-7 never prints as 0.000000.
+fn figure(v: f64) -> String {
+    if v != 0.0 && v.abs() < 1e-4 {
+        format!("{v:.2e}")
+    } else {
+        format!("{v:.6}")
+    }
+}
+
 fn format_scores(s: &crate::lab::metrics::Scores) -> String {
     format!(
-        "rmse {:.6}  mae {:.6}  psnr {:.2} dB (peak 1)  ssim {:.5}  flip {:.5}  ({} px{})",
-        s.rmse,
-        s.mae,
+        "rmse {}  mae {}  psnr {:.2} dB (peak 1)  ssim {:.5}  flip {:.5}  ({} px{})",
+        figure(s.rmse),
+        figure(s.mae),
         s.psnr,
         s.ssim,
         s.flip,
@@ -228,6 +240,28 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
     };
     let mut report = crate::lab::diff::run(&job)?;
     report.warnings.splice(0..0, hole_warnings);
+    // With no gate, a picture that changed passes: said, so that `shutter diff golden out`
+    // in CI is not taken for a check of the pixels (an outside tester's finding).
+    let gates = &job.gates;
+    // (A warning threshold is a choice too: a run that asks only to be warned is told so.)
+    let gated = job.fail.is_some()
+        || job.warn.is_some()
+        || [gates.fail, gates.data_fail, gates.hard_fail]
+            .iter()
+            .chain([&gates.warn, &gates.data_warn])
+            .any(Option::is_some);
+    let differ = (report.frames.iter())
+        .filter(|f| !f.identical && !f.failed)
+        .count();
+    if !gated && differ > 0 {
+        report.warnings.push(format!(
+            "{differ} of {} {} differ and pass: no gate was given (--fail, --fail-pixel, \
+             --data-fail-pixel or --hard-fail), so only non-finite values and lost channels \
+             fail a frame",
+            report.frames.len(),
+            report.entries()
+        ));
+    }
     if args.json {
         super::out_json(&report)?;
     } else {
@@ -237,18 +271,26 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
             text += &format!("{label}{}\n", format_scores(&f.whole));
             let e = &f.every_channel;
             let m = &f.largest;
+            // The figures are over the finite samples: said, where some were left out, so
+            // that "psnr inf" beside a NaN does not read as identical.
+            let left_out: usize = f.layers.iter().map(|l| l.non_finite).sum();
             text += &format!(
-                "{label}every channel ({}): mean error {:.6}  rms error {:.6}  psnr {:.2} dB (peak {})\n",
+                "{label}every channel ({}): mean error {}  rms error {}  psnr {:.2} dB (peak {}){}\n",
                 e.channels,
-                e.mean_error,
-                e.rms_error,
+                figure(e.mean_error),
+                figure(e.rms_error),
                 e.psnr,
-                crate::numeric::shown_sample(e.psnr_peak)
+                crate::numeric::shown_sample(e.psnr_peak),
+                if left_out > 0 {
+                    format!(", over the finite samples ({left_out} non-finite left out)")
+                } else {
+                    String::new()
+                }
             );
             if m.error > 0.0 {
                 text += &format!(
-                    "{label}largest difference {:.6} at ({}, {}) {}: {} against {}\n",
-                    m.error,
+                    "{label}largest difference {} at ({}, {}) {}: {} against {}\n",
+                    figure(m.error),
                     m.x,
                     m.y,
                     printable(&m.channel),
@@ -259,12 +301,12 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
             for layer in f.layers.iter().skip(1) {
                 if layer.largest.error > 0.0 || layer.non_finite > 0 {
                     text += &format!(
-                        "{label}layer {} ({}): rmse {:.6}  mae {:.6}  largest {:.6} at ({}, {}) {}{}\n",
+                        "{label}layer {} ({}): rmse {}  mae {}  largest {} at ({}, {}) {}{}\n",
                         printable(&layer.layer),
                         layer.class,
-                        layer.rmse,
-                        layer.mae,
-                        layer.largest.error,
+                        figure(layer.rmse),
+                        figure(layer.mae),
+                        figure(layer.largest.error),
                         layer.largest.x,
                         layer.largest.y,
                         printable(&layer.largest.channel),

@@ -29,7 +29,15 @@ pub fn info(args: InfoArgs) -> Result<()> {
     for path in &args.files {
         let info = match FileInfo::probe(path) {
             Ok(info) => info,
-            Err(problem) => {
+            Err(mut problem) => {
+                // A sequence's pattern is no file: say which to give.
+                let pattern = crate::io::sequence::PathPattern::parse(&path.to_string_lossy());
+                if pattern.is_ok_and(|p| p.is_sequence()) && !path.exists() {
+                    problem.detail.push_str(
+                        "; shutter info reads files, not patterns: give one frame's file \
+                         (shot.0001.exr for shot.####.exr)",
+                    );
+                }
                 problems.push(problem);
                 continue;
             }
@@ -144,6 +152,7 @@ fn describe_kind(info: &FileInfo) -> String {
             format,
             bits,
             float,
+            ..
         } => format!(
             "{}, {bits}-bit {}",
             format.to_uppercase(),

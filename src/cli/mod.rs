@@ -451,7 +451,9 @@ fn print_error_of(command: &str, error: &Error) {
             }
             if problems.len() > 1 {
                 let left = match command {
-                    "blur" | "dof" => "; nothing was written for the frames concerned",
+                    "blur" | "dof" => {
+                        "; nothing was written (every frame is checked before any is)"
+                    }
                     "diff" => "; nothing was compared",
                     _ => "",
                 };

@@ -285,10 +285,10 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
             }
             warnings.extend(beyond);
             // Holes in a sequence found on disk: a render that left frames out.
-            let holes = crate::io::sequence::holes(&found);
+            let holes = crate::io::holes::holes(&found);
             if !holes.is_empty() {
                 warnings.push(format!(
-                    "'{}' has no frame{} {}: {} frame{} missing between {} and {} (they are \
+                    "'{}' has no frame{} {}: {} frame{} missing between {} and {}{} (they are \
                      not written; --frames names every frame wanted and makes a missing one \
                      an error)",
                     source.raw,
@@ -297,7 +297,9 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
                     holes.len(),
                     if holes.len() == 1 { " is" } else { "s are" },
                     found[0],
-                    found[found.len() - 1]
+                    found[found.len() - 1],
+                    crate::io::holes::mixed_steps(&found)
+                        .map_or(String::new(), |m| format!("; {m}"))
                 ));
             }
             found.into_iter().map(Some).collect()
@@ -322,14 +324,36 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
     // that is not its default, as flags. Not how the job ran (threads, frame ranges, paths,
     // the backend, the pixel limit): a frame the GPU's fallback made on the CPU is the CPU's
     // frame, byte for byte.
+    // Nor an output setting this -o cannot use (a JPEG's quality on a PNG, --half on a
+    // TIFF), which changes nothing: recorded, dropping it would redo every frame.
     let mut record = vec![format!("--preset {}", preset.name)];
     let defaults = settings::Settings::default();
-    record.extend(settings::flags(&settings::Settings {
+    let mut made = settings::Settings {
         backend: defaults.backend,
         max_pixels: defaults.max_pixels,
         max_memory: defaults.max_memory,
         ..settings.clone()
-    }));
+    };
+    if format != OutputFormat::Exr {
+        made.output.exr = defaults.output.exr;
+        made.output.beauty_only = defaults.output.beauty_only;
+    }
+    if format != OutputFormat::Image(ImageFormat::Jpeg) {
+        made.output.jpeg_quality = defaults.output.jpeg_quality;
+    }
+    if matches!(
+        format,
+        OutputFormat::Exr | OutputFormat::Image(ImageFormat::Jpeg)
+    ) {
+        made.output.bit_depth = defaults.output.bit_depth;
+    }
+    record.extend(settings::flags(&made));
+    // The transfer 8/16-bit colour is read and written with (--linear, or a preset's
+    // [color] transfer, which its name alone does not say), where an 8/16-bit file has one.
+    let picture_in = !(inputs.color.raw.to_ascii_lowercase()).ends_with(".exr");
+    if preset.color.transfer == Transfer::Linear && (picture_in || format != OutputFormat::Exr) {
+        record.push("--linear".into());
+    }
     // Which view layers made it: one read alone, or a stack, front first (a name with a
     // space quoted, as a shell would need it: Blender's "View Layer").
     let quoted = |v: String| {

@@ -128,7 +128,7 @@ impl Backend {
 pub struct BackendReport {
     /// `--backend` as resolved: cpu, wgpu or auto.
     pub requested: String,
-    /// Where the GPU-capable stages ran: cpu or wgpu.
+    /// Where the GPU-capable stages ran: cpu or wgpu; none in a dry run.
     pub used: String,
     /// The adapter: name, wgpu backend, device type and driver; `None` on the CPU.
     pub adapter: Option<String>,

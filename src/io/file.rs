@@ -58,6 +58,9 @@ pub enum FileKind {
         format: &'static str,
         bits: u8,
         float: bool,
+        /// Turned upright by its EXIF (or TIFF) orientation to another shape: its size is
+        /// the upright picture's, stored the other way round.
+        turned: bool,
     },
 }
 
@@ -404,6 +407,11 @@ impl FileInfo {
         matches!(self.kind, FileKind::Image { .. })
     }
 
+    /// A picture turned upright by its orientation to another shape (see [`FileKind::Image`]).
+    pub fn is_turned(&self) -> bool {
+        matches!(self.kind, FileKind::Image { turned: true, .. })
+    }
+
     /// The problem of a file that is no longer what the preflight checked: `what` changed.
     /// An EXR's `channels` (indices into `channels`, all in parts of one data window),
     /// `bits` as in [`FileInfo::read_bits`], at their parts' window: the colour's, or that of
@@ -683,6 +691,7 @@ fn probe_image(path: &Path, max_pixels: usize) -> Result<FileInfo, Problem> {
             format: header.format,
             bits: header.bits,
             float: header.float,
+            turned: header.turned,
         },
         width: header.width,
         height: header.height,

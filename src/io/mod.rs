@@ -11,6 +11,7 @@ pub mod exr_parts;
 pub mod exr_unknown;
 pub mod exr_zip;
 pub mod file;
+pub mod holes;
 pub mod image;
 pub mod input;
 pub mod lock;

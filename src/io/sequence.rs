@@ -306,40 +306,6 @@ fn find_printf(raw: &str) -> Option<(usize, usize, usize)> {
     None
 }
 
-/// The frames missing between the first and last of `found` (sorted, distinct), at the
-/// step most of them keep (a sequence rendered on twos has no holes at the odd frames); at
-/// most [`MAX_FRAMES`] listed.
-pub fn holes(found: &[i64]) -> Vec<i64> {
-    if found.len() < 2 {
-        return Vec::new();
-    }
-    // The step most neighbours keep is the sequence's (the smallest of the commonest): the
-    // smallest of all would make a sequence on twos with one frame between (…, 5, 6, 7, 9, …)
-    // a sequence on ones, every odd frame a hole.
-    let mut steps: Vec<i64> = found.windows(2).map(|w| (w[1] - w[0]).max(1)).collect();
-    steps.sort_unstable();
-    let (mut step, mut most, mut run) = (steps[0], 0, 0);
-    for (k, &s) in steps.iter().enumerate() {
-        run = if k > 0 && steps[k - 1] == s {
-            run + 1
-        } else {
-            1
-        };
-        if run > most {
-            (step, most) = (s, run);
-        }
-    }
-    let mut holes = Vec::new();
-    for w in found.windows(2) {
-        let mut f = w[0] + step;
-        while f < w[1] && holes.len() < MAX_FRAMES {
-            holes.push(f);
-            f += step;
-        }
-    }
-    holes
-}
-
 /// Frame numbers beyond ±this are refused: far beyond any shot's numbering, and small
 /// enough that a frame's number fits the 30 bits the output lock keeps of a file's number
 /// ([`crate::io::lock`]), so that a sequence's frames have consecutive bytes there.
@@ -363,14 +329,14 @@ pub fn parse_frames(spec: &str) -> Result<Vec<i64>> {
         let (first, last, step) = parse_item(item).map_err(|why| bad(why.to_string()))?;
         let count = (last as i128 - first as i128) / step as i128 + 1;
         if count > MAX_FRAMES as i128 {
-            return Err(bad("too many frames".into()));
+            return Err(bad(format!("more than {MAX_FRAMES} frames")));
         }
         for k in 0..count as i64 {
             let frame = first + k * step;
             if seen.insert(frame) {
                 frames.push(frame);
                 if frames.len() > MAX_FRAMES {
-                    return Err(bad("too many frames".into()));
+                    return Err(bad(format!("more than {MAX_FRAMES} frames")));
                 }
             }
         }
@@ -575,18 +541,6 @@ mod tests {
         assert!(PathPattern::parse("a.$F4.####.exr").is_err());
         assert!(PathPattern::parse("a.@@.%d.exr").is_err());
         assert!(PathPattern::parse("a.$F4.@@@@.exr").is_err());
-    }
-
-    #[test]
-    fn holes_are_the_frames_missing_at_the_sequence_s_step() {
-        assert_eq!(holes(&[1, 2, 3, 6, 7, 9]), [4, 5, 8]);
-        // On twos: no holes at the odd frames, one at 7.
-        assert_eq!(holes(&[1, 3, 5, 9, 11]), [7]);
-        // On twos with a frame between two of them: the step is still 2.
-        assert_eq!(holes(&[1, 3, 5, 6, 7, 9, 13, 15]), [11]);
-        // Ties go to the smaller step.
-        assert_eq!(holes(&[10, 12, 13, 16]), [11, 14, 15]);
-        assert!(holes(&[4]).is_empty());
     }
 
     #[test]

@@ -384,8 +384,10 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
     }
     report.preflight_seconds = preflight_start.elapsed().as_secs_f64();
     if job.dry_run {
-        // Nothing runs: the backend asked for is said, none used.
+        // Nothing runs: the backend asked for is said, none used ("none", not an empty
+        // string a script cannot tell from a missing value).
         report.backend.requested = job.backend.name().to_string();
+        report.backend.used = "none".to_string();
         for plan in &plans {
             let (frame, output) = (plan.frame, job.output.path(plan.frame));
             let (action, why) =

@@ -54,6 +54,8 @@ pub struct ImageHeader {
     pub bits: u8,
     pub float: bool,
     pub format: &'static str,
+    /// Turned upright by its orientation to another shape: stored `height`×`width`.
+    pub turned: bool,
 }
 
 /// Channel names and the decoded plane each reads. A grey image also answers to R, G and B
@@ -199,6 +201,7 @@ pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
     };
     let turn = orientation(&mut decoder, path, format == "png");
     let (width, height) = upright(decoder.dimensions(), turn);
+    let turned = (width, height) != decoder.dimensions();
     // Past the pixel limit the caller's size check speaks first.
     let within = (width as u64).saturating_mul(height as u64) <= max_pixels as u64;
     if let (Some(bytes), true) = (&jpeg, within) {
@@ -214,6 +217,7 @@ pub fn probe(path: &Path, max_pixels: usize) -> Result<ImageHeader, String> {
         bits,
         float,
         format,
+        turned,
     })
 }
 
@@ -231,6 +235,7 @@ fn grey_float_header(path: &Path, format: &'static str) -> Option<ImageHeader> {
         bits: if header.float { 32 } else { header.bits },
         float: header.float,
         format,
+        turned: (width, height) != header.stored,
     })
 }
 

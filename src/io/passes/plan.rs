@@ -141,10 +141,12 @@ pub fn plan_frame(
         probed: Vec::new(),
         color_window: None,
         colour_took: (PathBuf::new(), Vec::new()),
+        color_turned: false,
     };
     let color_path = inputs.color.path(frame);
     let color_info = planner.probe(&color_path, "color");
     planner.color_window = color_info.as_ref().map(DataWindow::of);
+    planner.color_turned = color_info.as_ref().is_some_and(FileInfo::is_turned);
     let mut plan = FramePlan {
         frame,
         width: color_info.as_ref().map_or(0, |i| i.width),
@@ -521,6 +523,8 @@ struct Planner<'a> {
     color_window: Option<DataWindow>,
     /// The colour file and the channels of it the colour pass reads.
     colour_took: (PathBuf, Vec<usize>),
+    /// The colour file is a picture turned upright by its orientation to another shape.
+    color_turned: bool,
 }
 
 impl Planner<'_> {
@@ -589,9 +593,24 @@ impl Planner<'_> {
         }
         let detail = if !placed || own.origin == colour.origin || (own.width, own.height) == (0, 0)
         {
+            // Maps are matched to the upright picture: where either was turned by its
+            // orientation, say so, or a map the size of the stored photo reads as nonsense.
+            let turned = |yes: bool, (w, h): (usize, usize)| match yes {
+                true => format!(" (upright by its EXIF orientation; stored {h}x{w})"),
+                false => String::new(),
+            };
             format!(
-                "{}x{} but the color pass is {}x{}",
-                info.width, info.height, colour.width, colour.height
+                "{}x{}{} but the color pass is {}x{}{}{}",
+                info.width,
+                info.height,
+                turned(info.is_turned(), (info.width, info.height)),
+                colour.width,
+                colour.height,
+                turned(self.color_turned, (colour.width, colour.height)),
+                match info.is_turned() || self.color_turned {
+                    true => ": a map is matched to the picture as it is shown, upright",
+                    false => "",
+                }
             )
         } else {
             format!(

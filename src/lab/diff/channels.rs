@@ -120,6 +120,9 @@ pub struct Compared {
     pub over_hard: usize,
     /// Non-finite samples that count (every layer's).
     pub non_finite: usize,
+    /// Of those, the ones not alike in both images (a value that became or stopped being NaN
+    /// or infinite, or an infinity of the other sign): what `--allow-nonfinite` still fails.
+    pub non_finite_changed: usize,
     /// Per pixel, the largest difference of any channel (+∞ where a counted sample is
     /// non-finite).
     pub errors: Vec<f32>,
@@ -131,6 +134,18 @@ pub struct Compared {
     pub extra_non_finite: Vec<(String, usize)>,
     /// Channels stored as u32 on one side and as float on the other (compared all the same).
     pub retyped: Vec<String>,
+}
+
+impl Compared {
+    /// Whether every channel both frames hold is the same (NaN and infinities alike in
+    /// both) and neither holds a channel the other lacks: what a script reads where a figure
+    /// is `null` in JSON (the PSNR of identical images, +∞, and of an overflowed RMSE, −∞).
+    pub fn identical(&self) -> bool {
+        self.every.rms_error == 0.0
+            && self.non_finite_changed == 0
+            && self.missing.is_empty()
+            && self.extra.is_empty()
+    }
 }
 
 /// The beauty's layer name in the figures: no channel's layer is named so (a channel name
@@ -339,6 +354,7 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
     let mut every_largest = Largest::default();
     let mut over_hard = 0;
     let mut non_finite_total = 0;
+    let mut non_finite_changed = 0;
     let mut start = 0;
     while start < pairs.len() {
         let layer = &pairs[start].layer;
@@ -376,6 +392,7 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
                     // `--allow-nonfinite` lets through what is alike in both; a value that
                     // became NaN or infinite (or stopped being so) differs from it by more
                     // than any gate, whatever the allowances.
+                    non_finite_changed += usize::from(!alike);
                     if !gates.allow_nonfinite || !alike {
                         // The first such sample is the largest difference (an infinite one:
                         // `null` in JSON), so the report names where a value went bad.
@@ -483,6 +500,7 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
         pixels_over_warn: flags.iter().filter(|&&f| f & 2 != 0).count(),
         over_hard,
         non_finite: non_finite_total + extra_non_finite.iter().map(|(_, n)| n).sum::<usize>(),
+        non_finite_changed,
         layers,
         errors,
         missing,

@@ -12,7 +12,8 @@ use crate::io::passes::{passes_found, FramePlan};
 use crate::io::preset::Preset;
 use crate::lab::metrics::{Metric, Scores};
 
-use super::{channels, failure, warns_by_pixels, write_heatmap, DiffJob, Entry, FrameDiff};
+use super::verdict::{failure, warns_by_pixels};
+use super::{channels, write_heatmap, DiffJob, Entry, FrameDiff};
 
 /// Whether the reference at `path` is such a file. Where the colour read found a luminance
 /// `Y` (`luminance`), as `info` reads the file: `preset` finds no colour in it
@@ -210,6 +211,7 @@ pub(super) fn compare(job: &DiffJob, entry: &Entry) -> Result<FrameDiff, Problem
         whole,
         region: None,
         value,
+        identical: compared.identical(),
         largest: every.max_error.clone(),
         pixels_over_fail: compared.pixels_over_fail,
         pixels_over_warn: compared.pixels_over_warn,

@@ -5,6 +5,7 @@
 pub mod channels;
 mod data;
 pub mod report;
+mod verdict;
 pub mod views;
 
 use std::path::{Path, PathBuf};
@@ -54,83 +55,6 @@ pub struct DiffJob {
     pub report: Option<PathBuf>,
 }
 
-/// Why a frame fails, in words, or `None`.
-fn failure(
-    job: &DiffJob,
-    compared: &channels::Compared,
-    value: f64,
-    pixels: usize,
-) -> Option<String> {
-    if compared.non_finite > 0 && !job.allow_nonfinite {
-        let layers: Vec<&str> = compared
-            .layers
-            .iter()
-            .filter(|l| l.non_finite > 0)
-            .map(|l| l.layer.as_str())
-            .chain(compared.extra_non_finite.iter().map(|(c, _)| c.as_str()))
-            .collect();
-        return Some(format!(
-            "{} non-finite samples in {} (NaN or infinite; --allow-nonfinite lets them through)",
-            compared.non_finite,
-            layers.join(", ")
-        ));
-    }
-    if !compared.missing.is_empty() {
-        return Some(format!(
-            "the candidate lacks {} channel{} of the reference: {}",
-            compared.missing.len(),
-            if compared.missing.len() == 1 { "" } else { "s" },
-            compared.missing.join(", ")
-        ));
-    }
-    if let Some(hard) = job.gates.hard_fail {
-        if compared.over_hard > 0 {
-            let m = &compared.every.max_error;
-            return Some(format!(
-                "{} samples differ by more than --hard-fail {hard} (largest {:.6} at ({}, {}) {})",
-                compared.over_hard, m.error, m.x, m.y, m.channel
-            ));
-        }
-    }
-    if let Some(limit) = job.fail {
-        if job.metric.exceeds(value, limit) {
-            return Some(format!(
-                "{} {value:.6} worse than --fail {limit}",
-                job.metric.name()
-            ));
-        }
-    }
-    if job.gates.fail.is_some() || job.gates.data_fail.is_some() {
-        let allowed = allowed_pixels(job, pixels);
-        let over = compared.pixels_over_fail;
-        if over > allowed {
-            let layers: Vec<String> = compared
-                .layers
-                .iter()
-                .filter(|l| l.pixels_over_fail > 0)
-                .map(|l| format!("{} {}", l.layer, l.pixels_over_fail))
-                .collect();
-            return Some(format!(
-                "{over} pixels over the per-pixel gate (allowed: {allowed}; by layer: {})",
-                layers.join(", ")
-            ));
-        }
-    }
-    None
-}
-
-/// Whether `over` pixels of `pixels` over the per-pixel warning thresholds warn: more than
-/// `warn_percent` of them, as idiff's `-warnpercent` (none by default).
-fn warns_by_pixels(job: &DiffJob, over: usize, pixels: usize) -> bool {
-    over > (job.warn_percent / 100.0 * pixels as f64).floor() as usize
-}
-
-/// How many pixels of `pixels` may fail the per-pixel gate.
-fn allowed_pixels(job: &DiffJob, pixels: usize) -> usize {
-    job.allow_pixels
-        .max((job.fail_percent / 100.0 * pixels as f64).floor() as usize)
-}
-
 /// Scores of one frame.
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameDiff {
@@ -146,6 +70,10 @@ pub struct FrameDiff {
     pub region: Option<Scores>,
     /// The gating metric's value for this frame.
     pub value: f64,
+    /// Every channel the same in both, NaN and infinities alike, none lacking
+    /// ([`channels::Compared::identical`]): where a figure is `null` in JSON, this says which
+    /// way.
+    pub identical: bool,
     /// The largest difference of one sample of any channel, where and what (infinite, `null`
     /// in JSON, at the first sample that became NaN or infinite where one counts).
     pub largest: Largest,
@@ -450,7 +378,7 @@ pub fn run(job: &DiffJob) -> Result<DiffReport> {
                 job.warn.unwrap_or_default()
             ));
         }
-        if warns_by_pixels(job, f.pixels_over_warn, f.whole.pixels) {
+        if verdict::warns_by_pixels(job, f.pixels_over_warn, f.whole.pixels) {
             // The allowance named only where one was given.
             let allowed = match job.warn_percent > 0.0 {
                 true => format!(", more than --warn-percent {} allows", job.warn_percent),
@@ -550,6 +478,7 @@ fn lost_colour(job: &DiffJob, entry: &Entry, a: &FramePlan, problem: Problem) ->
         },
         region: None,
         value: f64::NAN,
+        identical: false,
         largest: Largest::default(),
         every_channel: EveryChannel::default(),
         layers: Vec::new(),
@@ -767,7 +696,7 @@ fn compare(
         .as_ref()
         .map(|dir| report::thumbnails(dir, frame, entry.output, &ra, &rb, &compared.errors))
         .transpose()?;
-    let why = failure(job, &compared, value, wa * ha);
+    let why = verdict::failure(job, &compared, value, wa * ha);
     Ok(FrameDiff {
         frame,
         view: named.map(str::to_string),
@@ -776,12 +705,13 @@ fn compare(
         whole,
         region,
         value,
+        identical: compared.identical(),
         largest: compared.every.max_error.clone(),
         pixels_over_fail: compared.pixels_over_fail,
         pixels_over_warn: compared.pixels_over_warn,
         samples_over_hard: compared.over_hard,
         warned: job.warn.is_some_and(|w| job.metric.exceeds(value, w))
-            || warns_by_pixels(job, compared.pixels_over_warn, wa * ha)
+            || verdict::warns_by_pixels(job, compared.pixels_over_warn, wa * ha)
             || !compared.extra.is_empty()
             || !entry.extra.is_empty()
             || doubtful,
