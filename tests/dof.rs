@@ -537,6 +537,16 @@ fn dof_needs_a_lens_or_a_map_and_says_so() {
     let o = shutter(&args);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("focus distance"), "{}", stderr(&o));
+    // Focus at infinity, refused, says what to give (an outside tester: it said only "use a
+    // finite number above 0").
+    *args.last_mut().unwrap() = "inf";
+    let o = shutter(&args);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("to focus at infinity"),
+        "{}",
+        stderr(&o)
+    );
     assert!(!dir.path().join("o.0001.exr").exists());
 }
 

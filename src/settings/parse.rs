@@ -83,7 +83,15 @@ impl Def {
 fn flag_error(def: &Def, raw: &str, expect: String) -> Error {
     match def.kind {
         Kind::Switch => Error::usage(format!("--{}: {expect}", def.flag())),
-        _ => Error::usage(format!("--{} {raw}: use {expect}", def.flag())),
+        _ => Error::usage(format!(
+            "--{} {raw}: use {expect}{}",
+            def.flag(),
+            // Focus at infinity, a photographer's setting: what to give instead.
+            match def.name == "focus-distance" && raw.parse::<f64>().is_ok_and(f64::is_infinite) {
+                true => " (to focus at infinity, give a distance far beyond the scene's, as 1e6)",
+                false => "",
+            }
+        )),
     }
 }
 
