@@ -2018,7 +2018,7 @@ fn a_highlight_past_half_s_range_through_dwa_comes_back_finite() {
         let err = stderr(&o);
         assert!(
             err.contains(&format!("{method}.exr: "))
-                && err.contains("DWA block")
+                && err.contains("DWA chunk")
                 && err.contains("capped at"),
             "{method}: {err}"
         );
@@ -2085,7 +2085,7 @@ fn a_highlight_past_half_s_range_through_dwa_comes_back_finite() {
         &s(&output),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(!stderr(&o).contains("DWA block"), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("DWA chunk"), "{}", stderr(&o));
 }
 
 /// An attribute under a standard name but of another type (`isoSpeed` an int, `owner` an

@@ -271,7 +271,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
             text += &format!("{label}{}\n", format_scores(&f.whole));
             let e = &f.every_channel;
             let m = &f.largest;
-            // The figures are over the finite samples: said, where some were left out, so
+            // The figures count a non-finite sample as 0: said, where there are some, so
             // that "psnr inf" beside a NaN does not read as identical.
             let left_out: usize = f.layers.iter().map(|l| l.non_finite).sum();
             text += &format!(
@@ -282,7 +282,7 @@ pub fn diff(args: DiffArgs) -> Result<i32> {
                 e.psnr,
                 crate::numeric::shown_sample(e.psnr_peak),
                 if left_out > 0 {
-                    format!(", over the finite samples ({left_out} non-finite left out)")
+                    format!(", {left_out} non-finite samples counted as 0")
                 } else {
                     String::new()
                 }

@@ -350,7 +350,10 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
     record.extend(settings::flags(&made));
     // The transfer 8/16-bit colour is read and written with (--linear, or a preset's
     // [color] transfer, which its name alone does not say), where an 8/16-bit file has one.
-    let picture_in = !(inputs.color.raw.to_ascii_lowercase()).ends_with(".exr");
+    // (Every colour file a stack's layers read included: one PNG layer among EXRs is enough.)
+    let picture_in = (stack.iter().filter_map(|l| l.inputs.as_ref()))
+        .chain([&inputs])
+        .any(|i| !i.color.raw.to_ascii_lowercase().ends_with(".exr"));
     if preset.color.transfer == Transfer::Linear && (picture_in || format != OutputFormat::Exr) {
         record.push("--linear".into());
     }

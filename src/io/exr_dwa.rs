@@ -140,9 +140,9 @@ impl Default for Capped {
 /// The warning for DWA blocks written with their highlights capped (`Capped::report`).
 pub fn capped_warning((blocks, cap): (usize, f32)) -> String {
     format!(
-        "{blocks} DWA block{} held a highlight that DWA decodes past half's range (to \
+        "{blocks} DWA chunk{} held a highlight that DWA decodes past half's range (to \
          infinity): written with its colour capped at {cap:.0}, so the file reads finite but \
-         the highlight dimmer; write ZIP or PIZ (--compression) to keep it",
+         the highlight dimmer; a lossless --compression (zip, piz) keeps it",
         if blocks == 1 { "" } else { "s" }
     )
 }

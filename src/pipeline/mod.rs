@@ -680,6 +680,9 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
             let mut failure = None;
             // What earlier frames replaced, each stack layer's apart.
             let mut seen_each = Vec::new();
+            // What writing found (a DWA highlight capped), said for the first frame alone: a
+            // warning a frame would crowd out the run's others.
+            let mut written_said = false;
             for message in done_rx {
                 match message {
                     Ok((frame, out, replaced, notes)) => {
@@ -708,13 +711,16 @@ pub fn run(job: &Job, on_event: &mut dyn FnMut(Event)) -> Result<Report> {
                         report.write_seconds += t.elapsed().as_secs_f64();
                         match written {
                             Ok(notes) => {
-                                for note in notes {
+                                for note in notes.iter().filter(|_| !written_said) {
+                                    let (path, first) = (path.display(), frame.is_some());
+                                    let later = [" (and maybe later frames: said once)", ""];
                                     warn(
                                         &mut report,
                                         on_event,
-                                        format!("{}: {note}", path.display()),
+                                        format!("{path}: {note}{}", later[usize::from(!first)]),
                                     );
                                 }
+                                written_said |= !notes.is_empty();
                                 report.frames_written += 1;
                                 report.outputs.push(Output {
                                     frame,

@@ -87,7 +87,9 @@ fn flag_error(def: &Def, raw: &str, expect: String) -> Error {
             "--{} {raw}: use {expect}{}",
             def.flag(),
             // Focus at infinity, a photographer's setting: what to give instead.
-            match def.name == "focus-distance" && raw.parse::<f64>().is_ok_and(f64::is_infinite) {
+            match def.name == "focus-distance"
+                && raw.parse::<f64>().is_ok_and(|v| v == f64::INFINITY)
+            {
                 true => " (to focus at infinity, give a distance far beyond the scene's, as 1e6)",
                 false => "",
             }

@@ -138,8 +138,7 @@ pub struct Compared {
 
 impl Compared {
     /// Whether every channel both frames hold is the same (NaN and infinities alike in
-    /// both) and neither holds a channel the other lacks: what a script reads where a figure
-    /// is `null` in JSON (the PSNR of identical images, +∞, and of an overflowed RMSE, −∞).
+    /// both) and neither holds a channel the other lacks.
     pub fn identical(&self) -> bool {
         self.every.rms_error == 0.0
             && self.non_finite_changed == 0
@@ -500,7 +499,9 @@ pub fn compare(a: &Frame, b: &Frame, gates: &Gates) -> Compared {
         pixels_over_warn: flags.iter().filter(|&&f| f & 2 != 0).count(),
         over_hard,
         non_finite: non_finite_total + extra_non_finite.iter().map(|(_, n)| n).sum::<usize>(),
-        non_finite_changed,
+        // A NaN in a channel the reference lacks is alike in nothing.
+        non_finite_changed: non_finite_changed
+            + extra_non_finite.iter().map(|(_, n)| n).sum::<usize>(),
         layers,
         errors,
         missing,

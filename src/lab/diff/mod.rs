@@ -71,8 +71,7 @@ pub struct FrameDiff {
     /// The gating metric's value for this frame.
     pub value: f64,
     /// Every channel the same in both, NaN and infinities alike, none lacking
-    /// ([`channels::Compared::identical`]): where a figure is `null` in JSON, this says which
-    /// way.
+    /// ([`channels::Compared::identical`]).
     pub identical: bool,
     /// The largest difference of one sample of any channel, where and what (infinite, `null`
     /// in JSON, at the first sample that became NaN or infinite where one counts).

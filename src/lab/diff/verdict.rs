@@ -28,15 +28,27 @@ pub(super) fn failure(
     // infinite (or stopped being so) is a change no allowance covers.
     if compared.non_finite_changed > 0 && job.allow_nonfinite {
         let m = &compared.every.max_error;
+        // The first compared sample that changed, else a channel only the candidate has.
+        let first = match compared.extra_non_finite.first() {
+            Some((channel, _)) if !m.error.is_infinite() => {
+                format!(
+                    "in {}, which the reference lacks",
+                    crate::error::printable(channel)
+                )
+            }
+            _ => format!(
+                "the first at ({}, {}) {}: {} against {}",
+                m.x,
+                m.y,
+                crate::error::printable(&m.channel),
+                m.value_text(m.a),
+                m.value_text(m.b)
+            ),
+        };
         return Some(format!(
-            "{} samples became or stopped being NaN or infinite, the first at ({}, {}) {}: {} \
-             against {} (--allow-nonfinite lets through only values alike in both)",
+            "{} samples became or stopped being NaN or infinite, {first} (--allow-nonfinite \
+             lets through only values alike in both)",
             compared.non_finite_changed,
-            m.x,
-            m.y,
-            crate::error::printable(&m.channel),
-            m.value_text(m.a),
-            m.value_text(m.b)
         ));
     }
     if !compared.missing.is_empty() {
