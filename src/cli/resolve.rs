@@ -88,34 +88,40 @@ fn as_pattern(path: &str) -> String {
 fn output_warnings(given: &settings::Given, format: OutputFormat) -> Vec<String> {
     let typed = |name: &str| given.get(name).is_some();
     let mut warnings = Vec::new();
-    let exr = format == OutputFormat::Exr;
-    for flag in ["half", "compression"] {
-        if typed(flag) && !exr {
-            warnings.push(format!(
-                "--{flag} applies to EXR output, not this -o: it has no effect"
-            ));
+    for flag in ["half", "compression", "jpeg-quality", "bit-depth"] {
+        if !typed(flag) || applies(flag, format) {
+            continue;
         }
-    }
-    if typed("jpeg-quality") && format != OutputFormat::Image(ImageFormat::Jpeg) {
-        warnings
-            .push("--jpeg-quality applies to JPEG output, not this -o: it has no effect".into());
-    }
-    if typed("bit-depth") {
-        match format {
-            OutputFormat::Exr => warnings.push(
-                "--bit-depth applies to PNG and TIFF output, not EXR (use --half): it has no \
-                 effect"
-                    .into(),
-            ),
-            OutputFormat::Image(ImageFormat::Jpeg) => warnings.push(
-                "--bit-depth applies to PNG and TIFF output; JPEG is always 8-bit: it has no \
-                 effect"
-                    .into(),
-            ),
-            OutputFormat::Image(_) => {}
-        }
+        warnings.push(match (flag, format) {
+            ("half" | "compression", _) => {
+                format!("--{flag} applies to EXR output, not this -o: it has no effect")
+            }
+            ("jpeg-quality", _) => {
+                "--jpeg-quality applies to JPEG output, not this -o: it has no effect".into()
+            }
+            (_, OutputFormat::Exr) => "--bit-depth applies to PNG and TIFF output, not EXR (use \
+                                      --half): it has no effect"
+                .into(),
+            _ => "--bit-depth applies to PNG and TIFF output; JPEG is always 8-bit: it has no \
+                  effect"
+                .into(),
+        });
     }
     warnings
+}
+
+/// Whether the output setting `flag` changes what a `format` output holds: EXR's --half,
+/// --compression and --beauty-only, JPEG's --jpeg-quality, PNG's and TIFF's --bit-depth. One
+/// that does not is warned about when given, and left out of the settings record.
+fn applies(flag: &str, format: OutputFormat) -> bool {
+    let exr = format == OutputFormat::Exr;
+    let jpeg = format == OutputFormat::Image(ImageFormat::Jpeg);
+    match flag {
+        "half" | "compression" | "beauty-only" => exr,
+        "jpeg-quality" => jpeg,
+        "bit-depth" => !exr && !jpeg,
+        _ => true,
+    }
 }
 
 pub fn resolve(args: &BlurArgs) -> Result<Job> {
@@ -334,17 +340,16 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
         max_memory: defaults.max_memory,
         ..settings.clone()
     };
-    if format != OutputFormat::Exr {
+    if !applies("half", format) {
         made.output.exr = defaults.output.exr;
+    }
+    if !applies("beauty-only", format) {
         made.output.beauty_only = defaults.output.beauty_only;
     }
-    if format != OutputFormat::Image(ImageFormat::Jpeg) {
+    if !applies("jpeg-quality", format) {
         made.output.jpeg_quality = defaults.output.jpeg_quality;
     }
-    if matches!(
-        format,
-        OutputFormat::Exr | OutputFormat::Image(ImageFormat::Jpeg)
-    ) {
+    if !applies("bit-depth", format) {
         made.output.bit_depth = defaults.output.bit_depth;
     }
     record.extend(settings::flags(&made));
@@ -353,7 +358,7 @@ pub fn resolve(args: &BlurArgs) -> Result<Job> {
     // (Every colour file a stack's layers read included: one PNG layer among EXRs is enough.)
     let picture_in = (stack.iter().filter_map(|l| l.inputs.as_ref()))
         .chain([&inputs])
-        .any(|i| !i.color.raw.to_ascii_lowercase().ends_with(".exr"));
+        .any(|i| OutputFormat::from_path(&i.color.path(None)) != Some(OutputFormat::Exr));
     if preset.color.transfer == Transfer::Linear && (picture_in || format != OutputFormat::Exr) {
         record.push("--linear".into());
     }
